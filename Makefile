@@ -1,0 +1,28 @@
+# The two commands: `make run` lints the shipped model, `make test` runs the whole test suite.
+# Both fetch MuJoCo 3.17.0 (from the official `mujoco` wheel on PyPI) into .mujoco/ on first use.
+MUJOCO := .mujoco/lib/libmujoco.so
+CARGO ?= cargo
+
+.PHONY: run test build bench docs clean-mujoco
+
+$(MUJOCO): scripts/setup-mujoco.sh
+	./scripts/setup-mujoco.sh
+
+build: $(MUJOCO)
+	$(CARGO) build --release --locked
+
+# Exit code 1 only means "findings were reported"; make fails only on exit 2 (modellint could not run).
+run: build
+	@./target/release/modellint models/asimov.xml; s=$$?; [ $$s -le 1 ]
+
+test: $(MUJOCO)
+	$(CARGO) test --release --locked
+
+bench: build
+	./bench/run.sh
+
+docs: build
+	./target/release/modellint gen-docs --out docs/rules
+
+clean-mujoco:
+	rm -rf .mujoco

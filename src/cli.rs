@@ -1,0 +1,181 @@
+//! Command line: thin glue from arguments to the library, and exit codes
+//! (0 clean, 1 findings at or above --fail-on, 2 could not do the job).
+
+use std::io::{IsTerminal, Write};
+use std::path::PathBuf;
+
+use clap::{Args, Parser, Subcommand};
+
+use crate::finding::Severity;
+use crate::lint::{LintInput, exit_code, load, run_rules};
+use crate::output::{self, Format};
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "modellint",
+    version,
+    about = "Find the robot-model mistakes that break sim-to-real transfer, and prove them in MuJoCo.",
+    long_about = "modellint checks a MuJoCo MJCF (or URDF) robot model against the real hardware it stands for:\n\
+armature vs reflected rotor inertia, PD gains that make joints underdamped, tilted toes, mesh feet,\n\
+training ranges that use the hard stops, missing action delay, and more. Each finding can be\n\
+confirmed by a short MuJoCo probe simulation. `modellint gap` and `modellint fit` compare the model\n\
+with real recordings, name the physics it is missing and fit it.\n\n\
+Hardware facts come from a TOML spec beside the model (models/asimov.toml for models/asimov.xml)\n\
+or --spec; rule settings from modellint.toml beside the model or in the working directory.\n\n\
+Exit codes: 0 no finding at or above --fail-on; 1 findings; 2 modellint could not do its job.",
+    after_help = "Examples:\n  modellint models/asimov.xml\n  modellint robot.xml --spec robot.toml --format sarif > modellint.sarif\n  modellint robot.xml --no-probe --fail-on warning     # pre-commit speed\n  modellint rules                                      # list rule ids\n  modellint rule underdamped-pd-gains                  # a rule's documentation",
+    args_conflicts_with_subcommands = true
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub cmd: Option<Cmd>,
+    #[command(flatten)]
+    pub check: CheckArgs,
+}
+
+#[derive(Args, Debug, Clone)]
+pub struct CheckArgs {
+    /// Model to lint: MJCF (.xml) or URDF (.urdf).
+    pub model: Option<PathBuf>,
+    /// Hardware spec (TOML). Default: <model>.toml beside the model, if present.
+    #[arg(long)]
+    pub spec: Option<PathBuf>,
+    /// Rule configuration. Default: modellint.toml beside the model or in the working directory.
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+    /// Output format. Default: github when GITHUB_ACTIONS=true, else text.
+    #[arg(long, value_enum)]
+    pub format: Option<Format>,
+    /// Lowest severity that makes the exit code 1.
+    #[arg(long, value_parser = ["error", "warning", "info"])]
+    pub fail_on: Option<String>,
+    /// Run only these rules or groups (comma-separated or repeated).
+    #[arg(long, value_delimiter = ',')]
+    pub select: Vec<String>,
+    /// Skip these rules or groups.
+    #[arg(long, value_delimiter = ',')]
+    pub ignore: Vec<String>,
+    /// Static pass only: skip the MuJoCo probe simulations (for pre-commit hooks).
+    #[arg(long)]
+    pub no_probe: bool,
+    /// Colour in text output: auto, always, never.
+    #[arg(long, default_value = "auto", value_parser = ["auto", "always", "never"])]
+    pub color: String,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Cmd {
+    /// List every rule: id, group, default level, probe.
+    Rules,
+    /// Show one rule's documentation.
+    Rule {
+        /// Rule id, e.g. underdamped-pd-gains.
+        id: String,
+    },
+    /// Write docs/rules/<id>.md for every rule (from the rules' doc comments).
+    GenDocs {
+        /// Output directory.
+        #[arg(long, default_value = "docs/rules")]
+        out: PathBuf,
+        /// Only check that the files are current; exit 1 when not.
+        #[arg(long)]
+        check: bool,
+    },
+}
+
+fn use_color(choice: &str) -> bool {
+    match choice {
+        "always" => true,
+        "never" => false,
+        _ => std::io::stdout().is_terminal() && std::env::var_os("NO_COLOR").is_none(),
+    }
+}
+
+pub fn run() -> i32 {
+    let cli = Cli::parse();
+    match cli.cmd {
+        Some(Cmd::Rules) => {
+            let mut out = String::new();
+            for m in crate::rules::all_meta() {
+                out.push_str(&format!(
+                    "{:<28} {:<10} {:<8} {}\n",
+                    m.id,
+                    m.group,
+                    m.default_level.as_str(),
+                    m.probe.map(|p| format!("probe: {p}")).unwrap_or_default()
+                ));
+            }
+            print!("{out}");
+            0
+        }
+        Some(Cmd::Rule { id }) => match crate::rules::find_meta(&id) {
+            Some(m) => {
+                print!("{}", crate::rules::doc_page(m));
+                0
+            }
+            None => {
+                let ids: Vec<String> = crate::rules::all_meta().iter().map(|m| m.id.to_string()).collect();
+                eprintln!("modellint: no rule `{id}`; near: {}", crate::util::near_matches(&id, &ids).join(", "));
+                2
+            }
+        },
+        Some(Cmd::GenDocs { out, check }) => gen_docs(&out, check),
+        None => check(cli.check),
+    }
+}
+
+fn gen_docs(out: &std::path::Path, check: bool) -> i32 {
+    let mut stale = Vec::new();
+    for m in crate::rules::all_meta() {
+        let path = out.join(format!("{}.md", m.id));
+        let body = format!("<!-- generated by `modellint gen-docs` from src/rules; do not edit -->\n{}", crate::rules::doc_page(m));
+        if check {
+            if std::fs::read_to_string(&path).ok().as_deref() != Some(body.as_str()) {
+                stale.push(path.display().to_string());
+            }
+        } else if let Err(e) = std::fs::create_dir_all(out).and_then(|_| std::fs::write(&path, body)) {
+            eprintln!("modellint: cannot write {}: {e}", path.display());
+            return 2;
+        }
+    }
+    if !stale.is_empty() {
+        eprintln!("modellint: stale rule docs (run `modellint gen-docs`): {}", stale.join(", "));
+        return 1;
+    }
+    0
+}
+
+fn check(a: CheckArgs) -> i32 {
+    let color = use_color(&a.color);
+    let Some(model) = a.model.clone() else {
+        eprintln!("modellint: no model given. Usage: modellint <MODEL.xml> [--spec SPEC.toml]; see --help");
+        return 2;
+    };
+    let input = LintInput { model: model.clone(), spec: a.spec, config: a.config, select: a.select, ignore: a.ignore };
+    let loaded = match load(&input) {
+        Ok(l) => l,
+        Err(e) => {
+            eprint!("{}", output::text::render_error(&e, color && std::io::stderr().is_terminal()));
+            return 2;
+        }
+    };
+    let mut findings = run_rules(&loaded);
+    if !a.no_probe {
+        crate::probe::confirm_all(&loaded, &mut findings);
+    }
+    let format = a.format.unwrap_or_else(|| {
+        if std::env::var("GITHUB_ACTIONS").is_ok_and(|v| v == "true") { Format::Github } else { Format::Text }
+    });
+    let fail_on = a
+        .fail_on
+        .as_deref()
+        .and_then(Severity::parse)
+        .or(loaded.config.fail_on)
+        .unwrap_or(Severity::Error);
+    let text = output::render(format, &loaded.sources, &model.display().to_string(), &findings, color);
+    let mut stdout = std::io::stdout().lock();
+    if stdout.write_all(text.as_bytes()).is_err() {
+        return 2;
+    }
+    exit_code(&findings, fail_on)
+}

@@ -1,0 +1,142 @@
+//! One lint run: load model, spec and config; run the enabled rules; apply suppressions.
+
+use std::path::{Path, PathBuf};
+
+use crate::config::Config;
+use crate::error::LoadError;
+use crate::finding::{Finding, Severity};
+use crate::model::Robot;
+use crate::model::source::SourceMap;
+use crate::rules::{Context, meta_rules, registry};
+use crate::spec::Spec;
+
+pub struct LintInput {
+    pub model: PathBuf,
+    pub spec: Option<PathBuf>,
+    pub config: Option<PathBuf>,
+    pub select: Vec<String>,
+    pub ignore: Vec<String>,
+}
+
+pub struct Loaded {
+    pub sources: SourceMap,
+    pub robot: Robot,
+    pub spec: Option<Spec>,
+    pub config: Config,
+}
+
+/// Loads everything a lint run needs; every failure is a located `LoadError` (exit 2).
+pub fn load(input: &LintInput) -> Result<Loaded, LoadError> {
+    let mut sources = SourceMap::default();
+    let config = match input.config.clone().or_else(|| crate::config::discover(&input.model)) {
+        Some(p) => crate::config::load(&mut sources, &p)?,
+        None => Config::default(),
+    };
+    let mut config = config;
+    config.add_cli(&input.select, &input.ignore).map_err(|m| LoadError::plain(Path::new("<command line>"), m))?;
+    let spec_path = input.spec.clone().or_else(|| crate::spec::beside(&input.model));
+    if let Some(p) = &input.spec {
+        if !p.is_file() {
+            return Err(LoadError::plain(p, "spec file not found".into()));
+        }
+    }
+    // The spec may name the keyframe, so read its robot table before compiling the model.
+    let keyframe = spec_path.as_ref().and_then(|p| peek_keyframe(p));
+    let robot = crate::model::load(&mut sources, &input.model, keyframe.as_deref())?;
+    let names: Vec<String> = robot.joints.iter().map(|j| j.name.clone()).collect();
+    let spec = match spec_path {
+        Some(p) => Some(crate::spec::load(&mut sources, &p, &names)?),
+        None => None,
+    };
+    Ok(Loaded { sources, robot, spec, config })
+}
+
+fn peek_keyframe(path: &Path) -> Option<String> {
+    let text = std::fs::read_to_string(path).ok()?;
+    let v: toml::Table = toml::from_str(&text).ok()?;
+    v.get("robot")?.get("keyframe")?.as_str().map(str::to_string)
+}
+
+/// Runs the static rules and applies inline suppressions.
+pub fn run_rules(l: &Loaded) -> Vec<Finding> {
+    let mut findings = Vec::new();
+    for rule in registry() {
+        let meta = rule.meta();
+        if !l.config.enabled(meta) {
+            continue;
+        }
+        let cx = Context {
+            robot: &l.robot,
+            spec: l.spec.as_ref(),
+            sources: &l.sources,
+            options: l.config.options(meta),
+            meta,
+            level: l.config.level(meta),
+        };
+        rule.check(&cx, &mut findings);
+    }
+    apply_suppressions(l, findings)
+}
+
+fn apply_suppressions(l: &Loaded, findings: Vec<Finding>) -> Vec<Finding> {
+    let idx = &l.robot.src;
+    let mut used = vec![false; idx.suppressions.len()];
+    let known: Vec<&str> = crate::rules::all_meta().iter().map(|m| m.id).collect();
+    let mut out = Vec::new();
+    'f: for f in findings {
+        for elems in idx.elems.values() {
+            for e in elems {
+                let covers = |loc: crate::model::source::Loc| loc.file == e.full.file && loc.start >= e.full.start && loc.end <= e.full.end;
+                if !(covers(f.primary) || f.element_loc.is_some_and(covers)) {
+                    continue;
+                }
+                for &s in &e.suppressions {
+                    if idx.suppressions[s].rules.iter().any(|r| r == f.rule) {
+                        used[s] = true;
+                        continue 'f;
+                    }
+                }
+            }
+        }
+        out.push(f);
+    }
+    let unused = &meta_rules::UnusedSuppression::META;
+    let invalid = &meta_rules::InvalidSuppression::META;
+    for (i, s) in idx.suppressions.iter().enumerate() {
+        for r in &s.rules {
+            if !known.contains(&r.as_str()) {
+                if l.config.enabled(invalid) {
+                    out.push(
+                        Finding::new(invalid.id, l.config.level(invalid), format!("suppression names unknown rule `{r}`"), s.loc)
+                            .help("use an id from `modellint rules`"),
+                    );
+                }
+            } else if !used[i] && l.config.enabled(unused) && l.config.enabled(crate::rules::find_meta(r).unwrap_or(unused)) {
+                out.push(
+                    Finding::new(unused.id, l.config.level(unused), format!("suppression of `{r}` matched no finding"), s.loc)
+                        .note(format!("reason given: {}", s.reason))
+                        .help("remove the comment if the problem was fixed"),
+                );
+            }
+        }
+    }
+    for (loc, msg) in &idx.bad_suppressions {
+        if l.config.enabled(invalid) {
+            out.push(Finding::new(invalid.id, l.config.level(invalid), msg.clone(), *loc));
+        }
+    }
+    sort_findings(&mut out);
+    out
+}
+
+/// Deterministic order: file, position, rule id, message.
+pub fn sort_findings(v: &mut [Finding]) {
+    v.sort_by(|a, b| {
+        (a.primary.file, a.primary.start, a.rule, &a.message).cmp(&(b.primary.file, b.primary.start, b.rule, &b.message))
+    });
+}
+
+/// Exit status for a set of findings: 1 when any is at or above `fail_on`.
+pub fn exit_code(findings: &[Finding], fail_on: Severity) -> i32 {
+    if findings.iter().any(|f| f.severity >= fail_on) { 1 } else { 0 }
+}

@@ -1,0 +1,608 @@
+//! Loading robot models: MuJoCo's compiled model is the semantic truth (defaults, includes,
+//! units are resolved by MuJoCo itself); the XML source index supplies spans for diagnostics.
+
+pub mod mj;
+pub mod mjcf;
+pub mod source;
+
+use std::path::{Path, PathBuf};
+
+use mujoco_rs::prelude::*;
+
+use crate::error::LoadError;
+use mjcf::{ElemKind, ElemSrc, SourceIndex};
+use source::{Loc, SourceMap, XNode};
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Format {
+    Mjcf,
+    Urdf,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum JointType {
+    Free,
+    Ball,
+    Slide,
+    Hinge,
+}
+
+#[derive(Debug, Clone)]
+pub struct Joint {
+    pub id: usize,
+    pub name: String,
+    pub jtype: JointType,
+    pub body: usize,
+    pub qposadr: usize,
+    pub dofadr: usize,
+    pub limited: bool,
+    pub range: [f64; 2],
+    pub armature: f64,
+    pub damping: f64,
+    pub stiffness: f64,
+    pub frictionloss: f64,
+    pub springref: f64,
+    pub axis: [f64; 3],
+}
+
+impl Joint {
+    /// Hinge and slide joints: one scalar DoF a motor can drive.
+    pub fn is_scalar(&self) -> bool {
+        matches!(self.jtype, JointType::Hinge | JointType::Slide)
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Transmission {
+    Joint,
+    JointInParent,
+    Tendon,
+    SliderCrank,
+    Site,
+    Body,
+}
+
+/// How an actuator turns `ctrl` into force, classified from the compiled gain/bias parameters.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[serde(rename_all = "snake_case", tag = "kind")]
+pub enum ActuatorKind {
+    /// force = kp·(ctrl − q) − kv·q̇
+    Position { kp: f64, kv: f64 },
+    /// force = gear·ctrl
+    Motor,
+    /// force = kv·(ctrl − q̇)
+    Velocity { kv: f64 },
+    Other,
+}
+
+#[derive(Debug, Clone)]
+pub struct Actuator {
+    pub id: usize,
+    pub name: String,
+    pub trn: Transmission,
+    /// Joint/tendon/site/body id the transmission targets (−1 when missing).
+    pub target: i32,
+    pub gear: f64,
+    pub kind: ActuatorKind,
+    pub gainprm: [f64; 3],
+    pub biasprm: [f64; 3],
+    pub ctrllimited: bool,
+    pub ctrlrange: [f64; 2],
+    pub forcelimited: bool,
+    pub forcerange: [f64; 2],
+    pub delay: f64,
+}
+
+#[derive(Debug, Clone)]
+pub struct Body {
+    pub id: usize,
+    pub name: String,
+    pub parent: usize,
+    pub mass: f64,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum GeomType {
+    Plane,
+    Hfield,
+    Sphere,
+    Capsule,
+    Ellipsoid,
+    Cylinder,
+    Box,
+    Mesh,
+    Sdf,
+    Other,
+}
+
+#[derive(Debug, Clone)]
+pub struct Geom {
+    pub id: usize,
+    pub name: String,
+    pub body: usize,
+    pub gtype: GeomType,
+    pub size: [f64; 3],
+    pub contype: i32,
+    pub conaffinity: i32,
+    pub condim: i32,
+    pub friction: [f64; 3],
+    pub group: i32,
+    pub mesh: i32,
+    pub rbound: f64,
+}
+
+impl Geom {
+    /// Takes part in collisions at all.
+    pub fn collides(&self) -> bool {
+        self.contype != 0 || self.conaffinity != 0
+    }
+}
+
+/// State of the model at the standing keyframe (or qpos0): kinematics and inertia.
+#[derive(Debug, Clone, Default)]
+pub struct KeyState {
+    pub key: Option<usize>,
+    pub key_name: Option<String>,
+    pub qpos: Vec<f64>,
+    pub ctrl: Vec<f64>,
+    /// Diagonal of the joint-space inertia matrix M (armature included by MuJoCo), per DoF.
+    pub m_diag: Vec<f64>,
+    pub geom_xpos: Vec<[f64; 3]>,
+    /// Row-major 3×3 rotation per geom.
+    pub geom_xmat: Vec<[f64; 9]>,
+    pub body_xpos: Vec<[f64; 3]>,
+}
+
+/// Gravity, timestep, integrator.
+#[derive(Debug, Clone)]
+pub struct Options {
+    pub timestep: f64,
+    pub integrator: i32,
+    pub gravity: [f64; 3],
+}
+
+/// A loaded robot model.
+pub struct Robot {
+    pub path: PathBuf,
+    pub format: Format,
+    pub tree: XNode,
+    pub src: SourceIndex,
+    pub mj: MjModel,
+    pub joints: Vec<Joint>,
+    pub actuators: Vec<Actuator>,
+    pub bodies: Vec<Body>,
+    pub geoms: Vec<Geom>,
+    pub keys: Vec<String>,
+    pub opt: Options,
+    pub key: KeyState,
+    pub meshes: Vec<String>,
+    pub tendons: Vec<String>,
+    pub equalities: Vec<Equality>,
+}
+
+#[derive(Debug, Clone)]
+pub struct Equality {
+    pub id: usize,
+    pub name: String,
+    /// 0 connect, 1 weld, 2 joint, 3 tendon, ...
+    pub etype: i32,
+    pub obj1: i32,
+    pub obj2: i32,
+}
+
+impl std::fmt::Debug for Robot {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Robot").field("path", &self.path).field("joints", &self.joints.len()).finish()
+    }
+}
+
+impl Robot {
+    pub fn joint(&self, name: &str) -> Option<&Joint> {
+        self.joints.iter().find(|j| j.name == name)
+    }
+    pub fn body_name(&self, id: usize) -> &str {
+        self.bodies.get(id).map(|b| b.name.as_str()).unwrap_or("")
+    }
+    /// Actuators whose transmission reaches joint `j` (directly, or through a fixed tendon).
+    pub fn actuators_on_joint(&self, j: usize) -> Vec<&Actuator> {
+        let r = mj::raw(&self.mj);
+        self.actuators
+            .iter()
+            .filter(|a| match a.trn {
+                Transmission::Joint | Transmission::JointInParent => a.target == j as i32,
+                Transmission::Tendon if a.target >= 0 => {
+                    let t = a.target as usize;
+                    let adr = mj::slice(r.tendon_adr, r.ntendon as usize)[t] as usize;
+                    let num = mj::slice(r.tendon_num, r.ntendon as usize)[t] as usize;
+                    let wt = mj::slice(r.wrap_type, r.nwrap as usize);
+                    let wo = mj::slice(r.wrap_objid, r.nwrap as usize);
+                    (adr..adr + num).any(|w| wt.get(w) == Some(&1) && wo.get(w) == Some(&(j as i32)))
+                }
+                _ => false,
+            })
+            .collect()
+    }
+
+    /// Source element of a compiled object, matched by name, else by compiled order.
+    pub fn elem(&self, kind: ElemKind, id: usize, name: &str) -> Option<&ElemSrc> {
+        if !name.is_empty() {
+            if let Some(e) = self.src.by_name(kind, name) {
+                return Some(e);
+            }
+        }
+        let list = self.src.list(kind);
+        // Compiled order matches source order only when every element was indexed.
+        let expected = match kind {
+            ElemKind::Joint => self.joints.len(),
+            ElemKind::Geom => self.geoms.len(),
+            ElemKind::Body => self.bodies.len().saturating_sub(1),
+            ElemKind::Actuator => self.actuators.len(),
+            ElemKind::Key => self.keys.len(),
+            _ => usize::MAX,
+        };
+        let idx = if kind == ElemKind::Body { id.checked_sub(1)? } else { id };
+        if list.len() == expected { list.get(idx) } else { None }
+    }
+
+    /// Tightest location for attribute `attr` of an object (falls back to the element, then the
+    /// model root), and the default class it was inherited from, if any.
+    pub fn attr_loc(&self, kind: ElemKind, id: usize, name: &str, attr: &str) -> (Loc, Option<String>) {
+        match self.elem(kind, id, name) {
+            Some(e) => match e.attrs.get(attr) {
+                Some(o) => (o.loc, o.class.clone()),
+                None => (e.loc, None),
+            },
+            None => (self.root_loc(), None),
+        }
+    }
+
+    pub fn elem_loc(&self, kind: ElemKind, id: usize, name: &str) -> Loc {
+        self.elem(kind, id, name).map(|e| e.loc).unwrap_or_else(|| self.root_loc())
+    }
+
+    pub fn root_loc(&self) -> Loc {
+        self.src.root.unwrap_or(Loc { file: 0, start: 0, end: 0 })
+    }
+
+    pub fn total_mass(&self) -> f64 {
+        self.bodies.iter().map(|b| b.mass).sum()
+    }
+}
+
+/// Attributes that hold names or paths, never numbers (skipped by the NaN/inf check).
+const STRING_ATTRS: &[&str] = &[
+    "name", "class", "childclass", "file", "joint", "joint1", "joint2", "body", "body1", "body2", "geom", "geom1",
+    "geom2", "site", "site1", "site2", "tendon", "tendon1", "tendon2", "mesh", "material", "texture", "hfield",
+    "target", "objname", "objtype", "type", "meshdir", "texturedir", "assetdir", "model", "prefix", "content_type",
+    "refsite", "cranksite", "slidersite", "actuator", "plugin", "instance", "key", "mode", "link", "parent", "child",
+    "filename", "version",
+];
+
+fn check_numbers(map: &SourceMap, n: &XNode) -> Result<(), LoadError> {
+    for a in &n.attrs {
+        if STRING_ATTRS.contains(&a.name.as_str()) {
+            continue;
+        }
+        let toks: Vec<&str> = a.value.split_whitespace().collect();
+        if toks.is_empty() {
+            continue;
+        }
+        let parsed: Vec<Option<f64>> = toks.iter().map(|t| t.parse::<f64>().ok()).collect();
+        if parsed.iter().all(Option::is_some) && parsed.iter().any(|v| !v.unwrap_or(0.0).is_finite()) {
+            return Err(LoadError::at(
+                map,
+                a.loc,
+                format!("<{}> attribute `{}` is not a finite number: \"{}\"", n.tag, a.name, a.value),
+            ));
+        }
+    }
+    for c in &n.children {
+        check_numbers(map, c)?;
+    }
+    Ok(())
+}
+
+/// Checks that every asset file the model names exists, pointing at the attribute when not.
+fn check_assets(map: &SourceMap, root: &XNode, model_dir: &Path) -> Result<(), LoadError> {
+    let mut meshdir = None;
+    let mut texturedir = None;
+    for c in root.children_tagged("compiler") {
+        if let Some(d) = c.get("assetdir") {
+            meshdir.get_or_insert(d.to_string());
+            texturedir.get_or_insert(d.to_string());
+        }
+        if let Some(d) = c.get("meshdir") {
+            meshdir = Some(d.to_string());
+        }
+        if let Some(d) = c.get("texturedir") {
+            texturedir = Some(d.to_string());
+        }
+    }
+    for asset in root.children_tagged("asset") {
+        for a in &asset.children {
+            let dir = match a.tag.as_str() {
+                "mesh" | "hfield" | "skin" => &meshdir,
+                "texture" => &texturedir,
+                _ => continue,
+            };
+            if let Some(f) = a.attr("file") {
+                let p = Path::new(&f.value);
+                let full = if p.is_absolute() { p.to_path_buf() } else { model_dir.join(dir.as_deref().unwrap_or("")).join(p) };
+                if !full.is_file() {
+                    return Err(LoadError::at(
+                        map,
+                        f.loc,
+                        format!("<{}> file not found: {} (looked for {})", a.tag, f.value, full.display()),
+                    ));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+fn geom_type(t: i32) -> GeomType {
+    match t {
+        0 => GeomType::Plane,
+        1 => GeomType::Hfield,
+        2 => GeomType::Sphere,
+        3 => GeomType::Capsule,
+        4 => GeomType::Ellipsoid,
+        5 => GeomType::Cylinder,
+        6 => GeomType::Box,
+        7 => GeomType::Mesh,
+        8 => GeomType::Sdf,
+        _ => GeomType::Other,
+    }
+}
+
+/// Loads an MJCF or URDF model. `keyframe` names the standing keyframe, when known.
+pub fn load(map: &mut SourceMap, path: &Path, keyframe: Option<&str>) -> Result<Robot, LoadError> {
+    let first = map.files.len();
+    let tree = source::parse_xml_tree(map, path, true)?;
+    let format = match tree.tag.as_str() {
+        "mujoco" => Format::Mjcf,
+        "robot" => Format::Urdf,
+        other => {
+            return Err(LoadError::at(
+                map,
+                tree.loc,
+                format!("root element <{other}> is neither MJCF (<mujoco>) nor URDF (<robot>)"),
+            ));
+        }
+    };
+    check_numbers(map, &tree)?;
+    let model_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    if format == Format::Mjcf {
+        check_assets(map, &tree, &model_dir)?;
+    }
+    let src = match format {
+        Format::Mjcf => mjcf::index_mjcf(&tree),
+        Format::Urdf => mjcf::index_urdf(&tree),
+    };
+    let mj = MjModel::from_xml(path).map_err(|e| {
+        let msg = format!("MuJoCo could not compile the model: {e}");
+        mujoco_error_location(map, first, &msg).unwrap_or_else(|| LoadError::plain(path, msg))
+    })?;
+    let mut robot = extract(path, format, tree, src, mj);
+    let key = choose_key(&robot.keys, keyframe);
+    if let Some(want) = keyframe {
+        if key.is_none() {
+            return Err(LoadError::plain(path, format!("keyframe `{want}` named by the spec is not in the model (keyframes: {:?})", robot.keys)));
+        }
+    }
+    robot.key = key_state(&robot.mj, key, &robot.keys);
+    Ok(robot)
+}
+
+/// MuJoCo reports XML problems as "... line N, column M" or with a file name; map them back.
+fn mujoco_error_location(map: &SourceMap, first_file: usize, msg: &str) -> Option<LoadError> {
+    let lower = msg.to_lowercase();
+    let li = lower.find("line ")?;
+    let rest = &msg[li + 5..];
+    let line: usize = rest.split(|c: char| !c.is_ascii_digit()).next()?.parse().ok()?;
+    let col = lower.find("column ").and_then(|ci| msg[ci + 7..].split(|c: char| !c.is_ascii_digit()).next()?.parse().ok());
+    // Prefer the file MuJoCo names, else the top-level model.
+    let file = (first_file..map.files.len())
+        .find(|&i| map.file(i).path.file_name().and_then(|f| f.to_str()).is_some_and(|f| msg.contains(f)))
+        .unwrap_or(first_file);
+    Some(LoadError::at_line(map, file, line, col.unwrap_or(1), msg.to_string()))
+}
+
+fn choose_key(keys: &[String], want: Option<&str>) -> Option<usize> {
+    if let Some(w) = want {
+        return keys.iter().position(|k| k == w);
+    }
+    for pref in ["stand", "standing", "home", "default", "init"] {
+        if let Some(i) = keys.iter().position(|k| k.eq_ignore_ascii_case(pref)) {
+            return Some(i);
+        }
+    }
+    if keys.is_empty() { None } else { Some(0) }
+}
+
+fn extract(path: &Path, format: Format, tree: XNode, src: SourceIndex, mj: MjModel) -> Robot {
+    let r = mj::raw(&mj);
+    let (njnt, nu, nbody, ngeom, nkey) = (r.njnt as usize, r.nu as usize, r.nbody as usize, r.ngeom as usize, r.nkey as usize);
+    let jt = mj::slice(r.jnt_type, njnt);
+    let jb = mj::slice(r.jnt_bodyid, njnt);
+    let jq = mj::slice(r.jnt_qposadr, njnt);
+    let jd = mj::slice(r.jnt_dofadr, njnt);
+    let jl = mj::slice(r.jnt_limited, njnt);
+    let jr = mj::slice(r.jnt_range, 2 * njnt);
+    let js = mj::slice(r.jnt_stiffness, njnt);
+    let jax = mj::slice(r.jnt_axis, 3 * njnt);
+    let nv = r.nv as usize;
+    let darm = mj::slice(r.dof_armature, nv);
+    let ddamp = mj::slice(r.dof_damping, nv);
+    let dfl = mj::slice(r.dof_frictionloss, nv);
+    let qspring = mj::slice(r.qpos_spring, r.nq as usize);
+    let joints = (0..njnt)
+        .map(|i| {
+            let d = jd[i].max(0) as usize;
+            Joint {
+                id: i,
+                name: mj::name_at(&mj, r.name_jntadr, njnt, i),
+                jtype: match jt[i] {
+                    0 => JointType::Free,
+                    1 => JointType::Ball,
+                    2 => JointType::Slide,
+                    _ => JointType::Hinge,
+                },
+                body: jb[i].max(0) as usize,
+                qposadr: jq[i].max(0) as usize,
+                dofadr: d,
+                limited: jl[i],
+                range: [jr[2 * i], jr[2 * i + 1]],
+                armature: darm.get(d).copied().unwrap_or(0.0),
+                damping: ddamp.get(d).copied().unwrap_or(0.0),
+                stiffness: js[i],
+                frictionloss: dfl.get(d).copied().unwrap_or(0.0),
+                springref: qspring.get(jq[i].max(0) as usize).copied().unwrap_or(0.0),
+                axis: [jax[3 * i], jax[3 * i + 1], jax[3 * i + 2]],
+            }
+        })
+        .collect();
+    let trn = mj::slice(r.actuator_trntype, nu);
+    let trnid = mj::slice(r.actuator_trnid, 2 * nu);
+    let gear = mj::slice(r.actuator_gear, 6 * nu);
+    let gt = mj::slice(r.actuator_gaintype, nu);
+    let bt = mj::slice(r.actuator_biastype, nu);
+    let gp = mj::slice(r.actuator_gainprm, 10 * nu);
+    let bp = mj::slice(r.actuator_biasprm, 10 * nu);
+    let cl = mj::slice(r.actuator_ctrllimited, nu);
+    let cr = mj::slice(r.actuator_ctrlrange, 2 * nu);
+    let fl = mj::slice(r.actuator_forcelimited, nu);
+    let fr = mj::slice(r.actuator_forcerange, 2 * nu);
+    let dl = mj::slice(r.actuator_delay, nu);
+    let actuators = (0..nu)
+        .map(|i| {
+            let g = [gp[10 * i], gp[10 * i + 1], gp[10 * i + 2]];
+            let b = [bp[10 * i], bp[10 * i + 1], bp[10 * i + 2]];
+            // gaintype 0 = fixed; biastype 0 = none, 1 = affine.
+            let kind = if gt[i] == 0 && bt[i] == 0 && g[0] != 0.0 {
+                ActuatorKind::Motor
+            } else if gt[i] == 0 && bt[i] == 1 && g[0] > 0.0 && (b[1] + g[0]).abs() <= 1e-9 * g[0].abs().max(1.0) && b[0] == 0.0 {
+                ActuatorKind::Position { kp: g[0], kv: -b[2] }
+            } else if gt[i] == 0 && bt[i] == 1 && b[1] == 0.0 && (b[2] + g[0]).abs() <= 1e-9 * g[0].abs().max(1.0) {
+                ActuatorKind::Velocity { kv: g[0] }
+            } else {
+                ActuatorKind::Other
+            };
+            Actuator {
+                id: i,
+                name: mj::name_at(&mj, r.name_actuatoradr, nu, i),
+                trn: match trn[i] {
+                    0 => Transmission::Joint,
+                    1 => Transmission::JointInParent,
+                    2 => Transmission::SliderCrank,
+                    3 => Transmission::Tendon,
+                    4 => Transmission::Site,
+                    _ => Transmission::Body,
+                },
+                target: trnid[2 * i],
+                gear: gear[6 * i],
+                kind,
+                gainprm: g,
+                biasprm: b,
+                ctrllimited: cl[i],
+                ctrlrange: [cr[2 * i], cr[2 * i + 1]],
+                forcelimited: fl[i],
+                forcerange: [fr[2 * i], fr[2 * i + 1]],
+                delay: dl.get(i).copied().unwrap_or(0.0),
+            }
+        })
+        .collect();
+    let bp_ = mj::slice(r.body_parentid, nbody);
+    let bm = mj::slice(r.body_mass, nbody);
+    let bodies = (0..nbody)
+        .map(|i| Body { id: i, name: mj::name_at(&mj, r.name_bodyadr, nbody, i), parent: bp_[i].max(0) as usize, mass: bm[i] })
+        .collect();
+    let gtp = mj::slice(r.geom_type, ngeom);
+    let gb = mj::slice(r.geom_bodyid, ngeom);
+    let gs = mj::slice(r.geom_size, 3 * ngeom);
+    let gct = mj::slice(r.geom_contype, ngeom);
+    let gca = mj::slice(r.geom_conaffinity, ngeom);
+    let gcd = mj::slice(r.geom_condim, ngeom);
+    let gf = mj::slice(r.geom_friction, 3 * ngeom);
+    let gg = mj::slice(r.geom_group, ngeom);
+    let gd = mj::slice(r.geom_dataid, ngeom);
+    let grb = mj::slice(r.geom_rbound, ngeom);
+    let geoms = (0..ngeom)
+        .map(|i| Geom {
+            id: i,
+            name: mj::name_at(&mj, r.name_geomadr, ngeom, i),
+            body: gb[i].max(0) as usize,
+            gtype: geom_type(gtp[i]),
+            size: [gs[3 * i], gs[3 * i + 1], gs[3 * i + 2]],
+            contype: gct[i],
+            conaffinity: gca[i],
+            condim: gcd[i],
+            friction: [gf[3 * i], gf[3 * i + 1], gf[3 * i + 2]],
+            group: gg[i],
+            mesh: if gtp[i] == 7 { gd[i] } else { -1 },
+            rbound: grb[i],
+        })
+        .collect();
+    let keys = (0..nkey).map(|i| mj::name_at(&mj, r.name_keyadr, nkey, i)).collect();
+    let nmesh = r.nmesh as usize;
+    let meshes = (0..nmesh).map(|i| mj::name_at(&mj, r.name_meshadr, nmesh, i)).collect();
+    let ntendon = r.ntendon as usize;
+    let tendons = (0..ntendon).map(|i| mj::name_at(&mj, r.name_tendonadr, ntendon, i)).collect();
+    let neq = r.neq as usize;
+    let et = mj::slice(r.eq_type, neq);
+    let e1 = mj::slice(r.eq_obj1id, neq);
+    let e2 = mj::slice(r.eq_obj2id, neq);
+    let equalities = (0..neq)
+        .map(|i| Equality { id: i, name: mj::name_at(&mj, r.name_eqadr, neq, i), etype: et[i], obj1: e1[i], obj2: e2[i] })
+        .collect();
+    let opt = Options { timestep: r.opt.timestep, integrator: r.opt.integrator as i32, gravity: r.opt.gravity };
+    Robot {
+        path: path.to_path_buf(),
+        format,
+        tree,
+        src,
+        mj,
+        joints,
+        actuators,
+        bodies,
+        geoms,
+        keys,
+        opt,
+        key: KeyState::default(),
+        meshes,
+        tendons,
+        equalities,
+    }
+}
+
+/// Runs mj_forward at the keyframe (or qpos0) and records what static rules need.
+pub fn key_state(m: &MjModel, key: Option<usize>, keys: &[String]) -> KeyState {
+    let mut d = MjData::new(m);
+    if let Some(k) = key {
+        let _ = d.reset_keyframe(k);
+    }
+    d.forward();
+    let r = mj::raw(m);
+    let dr = d.ffi();
+    let (nq, nv, nu, ngeom, nbody) = (r.nq as usize, r.nv as usize, r.nu as usize, r.ngeom as usize, r.nbody as usize);
+    let full = mj::full_mass_matrix(m, &d);
+    let m_diag = (0..nv).map(|i| full[i * nv + i]).collect();
+    let gx = mj::slice(dr.geom_xpos, 3 * ngeom);
+    let gm = mj::slice(dr.geom_xmat, 9 * ngeom);
+    let bx = mj::slice(dr.xpos, 3 * nbody);
+    KeyState {
+        key,
+        key_name: key.and_then(|k| keys.get(k).cloned()),
+        qpos: mj::slice(dr.qpos, nq).to_vec(),
+        ctrl: mj::slice(dr.ctrl, nu).to_vec(),
+        m_diag,
+        geom_xpos: (0..ngeom).map(|i| [gx[3 * i], gx[3 * i + 1], gx[3 * i + 2]]).collect(),
+        geom_xmat: (0..ngeom).map(|i| std::array::from_fn(|k| gm[9 * i + k])).collect(),
+        body_xpos: (0..nbody).map(|i| [bx[3 * i], bx[3 * i + 1], bx[3 * i + 2]]).collect(),
+    }
+}

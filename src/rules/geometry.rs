@@ -1,0 +1,4 @@
+//! Rules of the `geometry` group.
+pub mod mirror_asymmetry;
+pub mod self_collision_at_keyframe;
+pub mod collision_visual_mismatch;

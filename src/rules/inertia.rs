@@ -1,0 +1,3 @@
+//! Rules of the `inertia` group.
+pub mod armature_mismatch;
+pub mod parallel_ankle_armature;

@@ -1,0 +1,236 @@
+//! The rule engine. One rule per file under `src/rules/<group>/`; each is declared with
+//! `declare_rule!`, whose doc comment *is* the rule's documentation (`modellint rule <id>`,
+//! `docs/rules/<id>.md`), and registered with one line in `registry()`.
+
+use std::collections::BTreeMap;
+
+use crate::finding::{Finding, Severity};
+use crate::model::Robot;
+use crate::model::mjcf::ElemKind;
+use crate::model::source::{Loc, SourceMap};
+use crate::spec::Spec;
+
+pub mod contact;
+pub mod control;
+pub mod geometry;
+pub mod inertia;
+pub mod limits;
+pub mod mapping;
+
+/// A configurable threshold of a rule: `[rules.<id>] <name> = <value>` in modellint.toml.
+#[derive(Debug, Clone, Copy)]
+pub struct RuleOption {
+    pub name: &'static str,
+    pub default: f64,
+    pub unit: &'static str,
+    pub help: &'static str,
+}
+
+#[derive(Debug, Clone, Copy)]
+pub struct RuleMeta {
+    /// Stable kebab-case id naming the problem.
+    pub id: &'static str,
+    pub group: &'static str,
+    pub default_level: Severity,
+    /// Name of the probe simulation that can confirm the rule's findings, if any.
+    pub probe: Option<&'static str>,
+    pub options: &'static [RuleOption],
+    /// Markdown from the rule's doc comment.
+    pub docs: &'static str,
+}
+
+/// Everything a rule may read. Rules are pure: same context, same findings.
+pub struct Context<'a> {
+    pub robot: &'a Robot,
+    pub spec: Option<&'a Spec>,
+    pub sources: &'a SourceMap,
+    pub options: BTreeMap<String, f64>,
+    pub meta: &'static RuleMeta,
+    pub level: Severity,
+}
+
+impl Context<'_> {
+    /// A threshold: from `[rules.<id>]` in the config, else the rule's default.
+    pub fn opt(&self, name: &str) -> f64 {
+        if let Some(v) = self.options.get(name) {
+            return *v;
+        }
+        self.meta.options.iter().find(|o| o.name == name).map(|o| o.default).unwrap_or(f64::NAN)
+    }
+    /// Starts a finding of this rule at its configured level.
+    pub fn finding(&self, message: impl Into<String>, primary: Loc) -> Finding {
+        Finding::new(self.meta.id, self.level, message, primary)
+    }
+    /// Finding on an attribute of a compiled object, pointing at the value that set it and, when
+    /// inherited, labelling the `<default class>` it came from.
+    pub fn at_attr(&self, kind: ElemKind, id: usize, name: &str, attr: &str, message: impl Into<String>) -> Finding {
+        let (loc, class) = self.robot.attr_loc(kind, id, name, attr);
+        let eloc = self.robot.elem_loc(kind, id, name);
+        let mut f = self.finding(message, loc).element(format!("{} {}", kind_word(kind), display_name(name, id)), eloc);
+        if let Some(c) = class {
+            f = f.secondary(eloc, format!("{} inherits `{attr}` from <default class=\"{c}\">", kind_word(kind)));
+        }
+        f
+    }
+    pub fn at_elem(&self, kind: ElemKind, id: usize, name: &str, message: impl Into<String>) -> Finding {
+        let eloc = self.robot.elem_loc(kind, id, name);
+        self.finding(message, eloc).element(format!("{} {}", kind_word(kind), display_name(name, id)), eloc)
+    }
+    /// Spec facts for a joint, if a spec is present and mentions it.
+    pub fn facts(&self, joint: &str) -> Option<crate::spec::JointFacts> {
+        self.spec.and_then(|s| s.joint(joint))
+    }
+}
+
+pub fn kind_word(kind: ElemKind) -> &'static str {
+    match kind {
+        ElemKind::Body => "body",
+        ElemKind::Joint => "joint",
+        ElemKind::Geom => "geom",
+        ElemKind::Site => "site",
+        ElemKind::Actuator => "actuator",
+        ElemKind::Tendon => "tendon",
+        ElemKind::Equality => "equality",
+        ElemKind::Key => "key",
+        ElemKind::Mesh => "mesh",
+    }
+}
+
+pub fn display_name(name: &str, id: usize) -> String {
+    if name.is_empty() { format!("#{id}") } else { name.to_string() }
+}
+
+pub trait Rule: Sync {
+    fn meta(&self) -> &'static RuleMeta;
+    fn check(&self, cx: &Context, out: &mut Vec<Finding>);
+}
+
+/// Declares a rule type whose doc comment is its documentation.
+#[macro_export]
+macro_rules! declare_rule {
+    (
+        $(#[doc = $doc:expr])*
+        pub $name:ident {
+            id: $id:expr,
+            group: $group:expr,
+            level: $lvl:expr,
+            probe: $probe:expr,
+            options: [$($opt:expr),* $(,)?] $(,)?
+        }
+    ) => {
+        $(#[doc = $doc])*
+        pub struct $name;
+        impl $name {
+            pub const META: $crate::rules::RuleMeta = $crate::rules::RuleMeta {
+                id: $id,
+                group: $group,
+                default_level: $lvl,
+                probe: $probe,
+                options: &[$($opt),*],
+                docs: concat!($($doc, "\n"),*),
+            };
+        }
+    };
+}
+
+/// Shorthand for a rule option.
+pub const fn opt(name: &'static str, default: f64, unit: &'static str, help: &'static str) -> RuleOption {
+    RuleOption { name, default, unit, help }
+}
+
+/// Every rule, in documentation order. Registering a rule is one line here.
+pub fn registry() -> Vec<&'static dyn Rule> {
+    vec![
+        &mapping::actuator_mapping::ActuatorMapping,
+        &inertia::armature_mismatch::ArmatureMismatch,
+        &inertia::parallel_ankle_armature::ParallelAnkleArmature,
+        &contact::toe_tilt::ToeTilt,
+        &contact::foot_collision_geometry::FootCollisionGeometry,
+        &limits::soft_limits::SoftLimits,
+        &control::underdamped_pd_gains::UnderdampedPdGains,
+        &limits::effort_limit_mismatch::EffortLimitMismatch,
+        &mapping::passive_joint_spring::PassiveJointSpring,
+        &control::gains_unstable_for_timestep::GainsUnstableForTimestep,
+        &geometry::mirror_asymmetry::MirrorAsymmetry,
+        &control::missing_action_delay::MissingActionDelay,
+        &geometry::self_collision_at_keyframe::SelfCollisionAtKeyframe,
+        &geometry::collision_visual_mismatch::CollisionVisualMismatch,
+        &mapping::urdf_mjcf_drift::UrdfMjcfDrift,
+    ]
+}
+
+/// Engine-level diagnostics that are not model rules but still have ids and docs.
+pub mod meta_rules {
+    use super::*;
+    declare_rule! {
+        /// ## What it does
+        /// Reports a `<!-- modellint: ignore[<id>] reason -->` comment that suppressed nothing.
+        ///
+        /// ## Why is this bad?
+        /// A stale suppression hides the next real finding on that element and tells readers a
+        /// problem exists where none does.
+        ///
+        /// ## How it is confirmed
+        /// Static: the engine records which suppressions matched a finding in this run.
+        ///
+        /// ## How to fix
+        /// Delete the comment, or correct the rule id it names.
+        pub UnusedSuppression { id: "unused-suppression", group: "engine", level: Severity::Warning, probe: None, options: [] }
+    }
+    declare_rule! {
+        /// ## What it does
+        /// Reports a malformed `modellint:` comment: an unknown directive, a missing reason, or an
+        /// unknown rule id.
+        ///
+        /// ## Why is this bad?
+        /// A suppression must say why the finding does not apply; one without a reason cannot be
+        /// reviewed, and one with a misspelled id silently suppresses nothing.
+        ///
+        /// ## How it is confirmed
+        /// Static: parsed from the XML comments directly before each element.
+        ///
+        /// ## How to fix
+        /// Write `<!-- modellint: ignore[<rule-id>] <why this is fine> -->` directly before the
+        /// element.
+        pub InvalidSuppression { id: "invalid-suppression", group: "engine", level: Severity::Error, probe: None, options: [] }
+    }
+    pub fn all() -> Vec<&'static RuleMeta> {
+        vec![&UnusedSuppression::META, &InvalidSuppression::META]
+    }
+}
+
+/// All rule metadata: model rules then engine rules.
+pub fn all_meta() -> Vec<&'static RuleMeta> {
+    let mut v: Vec<&'static RuleMeta> = registry().into_iter().map(|r| r.meta()).collect();
+    v.extend(meta_rules::all());
+    v
+}
+
+pub fn find_meta(id: &str) -> Option<&'static RuleMeta> {
+    all_meta().into_iter().find(|m| m.id == id)
+}
+
+/// Render a rule's documentation page (the source of `docs/rules/<id>.md`).
+pub fn doc_page(m: &RuleMeta) -> String {
+    let mut s = format!("# `{}`\n\n", m.id);
+    s.push_str(&format!(
+        "Group: `{}` · default level: `{}` · probe: {}\n\n",
+        m.group,
+        m.default_level.as_str(),
+        m.probe.map(|p| format!("`{p}`")).unwrap_or_else(|| "none (static only)".into())
+    ));
+    // Doc comments arrive with one leading space per line.
+    for line in m.docs.lines() {
+        s.push_str(line.strip_prefix(' ').unwrap_or(line));
+        s.push('\n');
+    }
+    if !m.options.is_empty() {
+        s.push_str("\n## Options\n\nSet in `modellint.toml` under `[rules.");
+        s.push_str(m.id);
+        s.push_str("]`.\n\n| option | default | unit | meaning |\n|---|---|---|---|\n");
+        for o in m.options {
+            s.push_str(&format!("| `{}` | {} | {} | {} |\n", o.name, o.default, o.unit, o.help));
+        }
+    }
+    s
+}
