@@ -9,5 +9,6 @@ pub mod model;
 pub mod output;
 pub mod probe;
 pub mod rules;
+pub mod sim2real;
 pub mod spec;
 pub mod util;

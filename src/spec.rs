@@ -191,9 +191,10 @@ pub fn load(map: &mut SourceMap, path: &Path, joint_names: &[String]) -> Result<
         ] {
             if let Some(s) = val {
                 let x = *s.get_ref();
-                let ok = x.is_finite() && if key.starts_with("friction") { x >= 0.0 } else { x > 0.0 };
+                let strict = matches!(key, "gear_ratio" | "peak_torque" | "velocity_limit" | "saturation_torque" | "kd_max");
+                let ok = x.is_finite() && if strict { x > 0.0 } else { x >= 0.0 };
                 if !ok {
-                    return Err(bad(s.span(), format!("motors.{name}.{key} must be a finite {} number, got {x}", if key.starts_with("friction") { "non-negative" } else { "positive" })));
+                    return Err(bad(s.span(), format!("motors.{name}.{key} must be a finite {} number, got {x}", if strict { "positive" } else { "non-negative" })));
                 }
             }
         }

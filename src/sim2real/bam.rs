@@ -1,0 +1,316 @@
+//! Importer for the servo logs of Rhoban's BAM project (JSON, one Dynamixel servo swinging a
+//! pendulum): top-level `mass` [kg], `length` [m], `kp` (firmware units), `vin` [V], `motor`,
+//! `trajectory`, and `entries`, each with `timestamp` [s], `position` [rad], `speed` [rad/s],
+//! `goal_position` [rad], `torque_enable` (bool), `load` (raw register), `input_volts`, `temp`.
+//!
+//! The log becomes a [`Recording`] with one joint named [`BAM_JOINT`]: `position` → `q`,
+//! `speed` → `qd`, `goal_position` → `q_cmd`, `torque_enable` → `enabled`. `load` is a raw
+//! register of unspecified units and is not imported. Timestamps are kept as given and must be
+//! strictly increasing; an entry that exactly repeats the previous one (every field equal) is
+//! dropped and counted in meta `dropped_duplicates`; two entries with the same timestamp but
+//! different data are an error naming the entry index.
+
+use super::recording::{JointTrace, ParseOptions, Recording, RecordingError};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// Name of the single joint of an imported BAM log.
+pub const BAM_JOINT: &str = "servo";
+
+/// A BAM log: the rig description and the recording.
+#[derive(Debug, Clone, Serialize)]
+pub struct BamLog {
+    pub mass: f64,
+    pub length: f64,
+    pub kp: f64,
+    pub vin: f64,
+    pub motor: String,
+    pub trajectory: String,
+    pub recording: Recording,
+}
+
+#[derive(Deserialize)]
+struct RawLog {
+    mass: f64,
+    length: f64,
+    kp: f64,
+    vin: f64,
+    motor: String,
+    trajectory: String,
+    entries: Vec<RawEntry>,
+}
+
+#[derive(Deserialize, PartialEq)]
+struct RawEntry {
+    timestamp: f64,
+    position: f64,
+    speed: f64,
+    goal_position: f64,
+    torque_enable: BoolLike,
+    // Not imported, only compared when looking for exact duplicates.
+    #[serde(default)]
+    load: Option<f64>,
+    #[serde(default)]
+    input_volts: Option<f64>,
+    #[serde(default)]
+    temp: Option<f64>,
+}
+
+#[derive(Deserialize, PartialEq, Clone, Copy)]
+#[serde(untagged)]
+enum BoolLike {
+    Bool(bool),
+    Num(f64),
+}
+
+impl BoolLike {
+    fn get(self) -> bool {
+        match self {
+            BoolLike::Bool(b) => b,
+            BoolLike::Num(x) => x != 0.0,
+        }
+    }
+}
+
+/// Cheap sniff: does this text look like a BAM log (a JSON object with `entries` holding
+/// `timestamp` and `goal_position`)? Does not validate.
+pub fn is_bam_json(text: &str) -> bool {
+    let t = text.trim_start_matches('\u{feff}').trim_start();
+    t.starts_with('{')
+        && t.contains("\"entries\"")
+        && t.contains("\"timestamp\"")
+        && t.contains("\"goal_position\"")
+}
+
+pub fn read_bam(path: &Path) -> Result<BamLog, RecordingError> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| RecordingError::new(path, None, None, format!("cannot read file: {e}")))?;
+    parse_bam(path, &text)
+}
+
+pub fn parse_bam(path: &Path, text: &str) -> Result<BamLog, RecordingError> {
+    let err = |msg: String| RecordingError::new(path, None, None, msg);
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    if text.trim().is_empty() {
+        return Err(RecordingError::new(path, Some(1), None, "empty file"));
+    }
+    let raw: RawLog = serde_json::from_str(text).map_err(|e| {
+        RecordingError::new(
+            path,
+            Some(e.line().max(1)),
+            None,
+            format!("not a BAM log: {e}"),
+        )
+    })?;
+    let mut t = Vec::with_capacity(raw.entries.len());
+    let mut q = Vec::with_capacity(raw.entries.len());
+    let mut qd = Vec::with_capacity(raw.entries.len());
+    let mut q_cmd = Vec::with_capacity(raw.entries.len());
+    let mut enabled = Vec::with_capacity(raw.entries.len());
+    let mut dropped = 0usize;
+    for (i, e) in raw.entries.iter().enumerate() {
+        if i > 0 {
+            let prev = &raw.entries[i - 1];
+            if e == prev {
+                dropped += 1;
+                continue;
+            }
+            if e.timestamp == prev.timestamp {
+                return Err(err(format!(
+                    "entries {} and {i} share timestamp {} but differ",
+                    i - 1,
+                    e.timestamp
+                )));
+            }
+            if e.timestamp < prev.timestamp {
+                return Err(err(format!(
+                    "timestamp not increasing: entry {i} has {} after entry {} with {}",
+                    e.timestamp,
+                    i - 1,
+                    prev.timestamp
+                )));
+            }
+        }
+        t.push(e.timestamp);
+        q.push(e.position);
+        qd.push(e.speed);
+        q_cmd.push(e.goal_position);
+        enabled.push(e.torque_enable.get());
+    }
+    let mut meta = BTreeMap::new();
+    meta.insert("source_format".to_string(), "bam".to_string());
+    meta.insert("mass".to_string(), raw.mass.to_string());
+    meta.insert("length".to_string(), raw.length.to_string());
+    meta.insert("kp".to_string(), raw.kp.to_string());
+    meta.insert("vin".to_string(), raw.vin.to_string());
+    meta.insert("motor".to_string(), raw.motor.clone());
+    meta.insert("trajectory".to_string(), raw.trajectory.clone());
+    if dropped > 0 {
+        meta.insert("dropped_duplicates".to_string(), dropped.to_string());
+    }
+    let mut joint = JointTrace::new(BAM_JOINT, q);
+    joint.qd = Some(qd);
+    joint.q_cmd = Some(q_cmd);
+    joint.enabled = Some(enabled);
+    let recording = Recording {
+        source: path.to_path_buf(),
+        meta,
+        control_rate_hz: None,
+        control_t0_s: None,
+        t,
+        joints: vec![joint],
+        base: None,
+    };
+    recording.check(&ParseOptions::default())?;
+    Ok(BamLog {
+        mass: raw.mass,
+        length: raw.length,
+        kp: raw.kp,
+        vin: raw.vin,
+        motor: raw.motor,
+        trajectory: raw.trajectory,
+        recording,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::PathBuf;
+
+    /// `$MODELLINT_SHARED_DATA`, else `<crate>/../shared/data`.
+    fn shared_data() -> Option<PathBuf> {
+        let dir = std::env::var_os("MODELLINT_SHARED_DATA")
+            .map(PathBuf::from)
+            .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data"));
+        dir.is_dir().then_some(dir)
+    }
+
+    fn entry(t: f64, q: f64) -> String {
+        format!(
+            r#"{{"position": {q}, "speed": 0.5, "load": 65530, "input_volts": 7.3, "temp": 28, "timestamp": {t}, "goal_position": 0.1, "torque_enable": true}}"#
+        )
+    }
+
+    fn log(entries: &[String]) -> String {
+        format!(
+            r#"{{"mass": 0.49, "length": 0.1, "kp": 400, "vin": 7.4, "motor": "xl330", "trajectory": "sin_sin", "entries": [{}]}}"#,
+            entries.join(", ")
+        )
+    }
+
+    #[test]
+    fn parses_synthetic_log() {
+        let text = log(&[
+            entry(0.0035, -0.003),
+            entry(0.0087, -0.0015),
+            entry(0.0139, 0.0),
+        ]);
+        assert!(is_bam_json(&text));
+        let b = parse_bam(Path::new("x.json"), &text).expect("parses");
+        assert_eq!((b.mass, b.length, b.kp, b.vin), (0.49, 0.1, 400.0, 7.4));
+        assert_eq!(
+            (b.motor.as_str(), b.trajectory.as_str()),
+            ("xl330", "sin_sin")
+        );
+        let r = &b.recording;
+        assert_eq!(r.t, vec![0.0035, 0.0087, 0.0139]);
+        let j = r.joint(BAM_JOINT).expect("servo joint");
+        assert_eq!(j.q, vec![-0.003, -0.0015, 0.0]);
+        assert_eq!(j.qd, Some(vec![0.5; 3]));
+        assert_eq!(j.q_cmd, Some(vec![0.1; 3]));
+        assert_eq!(j.enabled, Some(vec![true; 3]));
+        assert!(j.tau.is_none());
+        assert_eq!(r.meta.get("kp").map(String::as_str), Some("400"));
+        assert_eq!(
+            r.meta.get("trajectory").map(String::as_str),
+            Some("sin_sin")
+        );
+        assert!(!r.meta.contains_key("dropped_duplicates"));
+    }
+
+    #[test]
+    fn duplicates_dropped_conflicts_and_disorder_rejected() {
+        let p = Path::new("x.json");
+        let text = log(&[
+            entry(0.0, 0.0),
+            entry(0.005, 0.1),
+            entry(0.005, 0.1),
+            entry(0.01, 0.2),
+        ]);
+        let b = parse_bam(p, &text).expect("parses");
+        assert_eq!(b.recording.t.len(), 3);
+        assert_eq!(
+            b.recording
+                .meta
+                .get("dropped_duplicates")
+                .map(String::as_str),
+            Some("1")
+        );
+        let text = log(&[entry(0.0, 0.0), entry(0.005, 0.1), entry(0.005, 0.2)]);
+        let e = parse_bam(p, &text).expect_err("conflict");
+        assert!(
+            e.message.contains("entries 1 and 2 share timestamp 0.005"),
+            "{e}"
+        );
+        let text = log(&[entry(0.0, 0.0), entry(0.005, 0.1), entry(0.004, 0.2)]);
+        let e = parse_bam(p, &text).expect_err("disorder");
+        assert!(e.message.contains("entry 2"), "{e}");
+        let e = parse_bam(p, &log(&[entry(0.0, 0.0)])).expect_err("too short");
+        assert!(e.message.contains("at least 2"), "{e}");
+        let e = parse_bam(p, "{\"mass\": 1,\n \"entries\": []}").expect_err("missing fields");
+        assert!(e.message.contains("missing field"), "{e}");
+        assert!(parse_bam(p, "{\"mass\": ").is_err());
+        assert!(!is_bam_json("t,a.q\n0,1\n"));
+    }
+
+    #[test]
+    fn all_real_logs_load() {
+        let Some(data) = shared_data() else {
+            eprintln!("skipping: ../shared absent (set MODELLINT_SHARED_DATA)");
+            return;
+        };
+        let dir = data.join("recordings/bam_xl330");
+        let mut files: Vec<PathBuf> = match std::fs::read_dir(&dir) {
+            Ok(rd) => rd
+                .filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|p| p.extension().is_some_and(|x| x == "json"))
+                .collect(),
+            Err(e) => panic!("{}: {e}", dir.display()),
+        };
+        files.sort();
+        assert_eq!(files.len(), 16, "expected 16 BAM logs in {}", dir.display());
+        let mut kps = std::collections::BTreeSet::new();
+        for f in &files {
+            let text = std::fs::read_to_string(f).expect("readable");
+            assert!(is_bam_json(&text), "{}", f.display());
+            let b = read_bam(f).unwrap_or_else(|e| panic!("{e}"));
+            let r = &b.recording;
+            assert!(r.t.len() > 1000, "{}: {} samples", f.display(), r.t.len());
+            assert!(
+                (r.duration() - 6.0).abs() < 0.1,
+                "{}: duration {}",
+                f.display(),
+                r.duration()
+            );
+            assert_eq!(
+                (b.mass, b.length, b.vin, b.motor.as_str()),
+                (0.49, 0.1, 7.4, "xl330")
+            );
+            kps.insert(b.kp as i64);
+            let j = r.joint(BAM_JOINT).expect("servo");
+            assert!(j.q.iter().all(|x| x.abs() < 4.0));
+            if b.trajectory == "lift_and_drop" {
+                assert!(
+                    j.enabled.as_ref().is_some_and(|e| e.iter().any(|x| !x)),
+                    "torque goes off"
+                );
+            }
+        }
+        assert_eq!(
+            kps.into_iter().collect::<Vec<_>>(),
+            vec![100, 200, 400, 800]
+        );
+    }
+}

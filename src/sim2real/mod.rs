@@ -1,0 +1,8 @@
+//! Sim-to-real gap measurement: recordings, importers, the seed study's metrics, spectra and
+//! error localisation.
+
+pub mod bam;
+pub mod locate;
+pub mod metrics;
+pub mod recording;
+pub mod spectral;
