@@ -4,6 +4,7 @@ pub mod cli;
 pub mod config;
 pub mod error;
 pub mod finding;
+pub mod fit;
 pub mod lint;
 pub mod model;
 pub mod output;

@@ -1,0 +1,3 @@
+//! Fitting: name the missing physics, add it, fit it, show the held-out improvement.
+pub mod optim;
+pub mod stats;
