@@ -2,3 +2,4 @@
 pub mod mirror_asymmetry;
 pub mod self_collision_at_keyframe;
 pub mod collision_visual_mismatch;
+pub mod shapes;

@@ -1,16 +1,276 @@
 use crate::declare_rule;
-use crate::finding::{Finding, Severity};
-use crate::rules::{Context, Rule, RuleMeta};
+use crate::finding::{Finding, Severity, Subject};
+use crate::model::mjcf::ElemKind;
+use crate::model::{GeomType, Robot};
+use crate::rules::contact::feet::{Foot, feet};
+use crate::rules::geometry::shapes::{Placed, hull_area};
+use crate::rules::{Context, Rule, RuleMeta, opt};
+use crate::util::fmt_num;
 
 declare_rule! {
     /// ## What it does
-    /// PLACEHOLDER — not implemented yet.
-    pub FootCollisionGeometry { id: "foot-collision-geometry", group: "contact", level: Severity::Warning, probe: None, options: [] }
+    /// Checks the collision geometry of each foot (its foot and toe bodies): contact must use
+    /// primitives, not meshes — capsules or spheres, and boxes unless `allow_boxes = 0`; capsule,
+    /// sphere and cylinder radii within [`min_radius`, `max_radius`] (about 12 mm); `condim` 3;
+    /// sliding friction within `friction_tolerance` of `friction`; at least three non-collinear
+    /// ground contact points whose support polygon reaches both the heel and the toe third of the
+    /// foot; and left and right feet with the same number and sizes of geoms. Problems are
+    /// reported once per foot, listing the geoms, at the first offending geom's attribute.
+    ///
+    /// Foot bodies come from the spec's `robot.foot_bodies` globs; without them, from body names
+    /// containing `foot`, `ankle_roll`, `toe` or `sole`; failing that, the leaf bodies whose
+    /// collision geoms reach within 3 cm of the robot's lowest point.
+    ///
+    /// ## Why is this bad?
+    /// Contact is system identification too. Mesh contact against the floor produces few,
+    /// jumping contact points whose number changes with tiny pose changes, so the policy learns
+    /// artifacts of the mesh; mesh-vs-mesh contact is worse. A foot with fewer than three
+    /// non-collinear contact points, or none at heel or toe, has a degenerate support polygon.
+    /// condim ≠ 3 changes the friction model (1: frictionless, 4/6: torsional and rolling
+    /// friction), and friction far from the identified ≈0.6 changes slip. Mismatched left and
+    /// right feet make the gait asymmetric.
+    ///
+    /// ## How it is confirmed
+    /// Static; probe `stance-settle` settles the robot in the keyframe pose and counts the
+    /// active foot contacts and their spread.
+    ///
+    /// ## How to fix
+    /// Replace mesh foot collision with several capsules (radius ≈12 mm) at heel, midfoot and
+    /// toe, keep the mesh as a visual geom (`contype="0" conaffinity="0"`), set `condim="3"` and
+    /// `friction="0.6"` on them — note MuJoCo uses the larger friction of the two geoms, so the
+    /// floor must not be higher — and make the left and right feet mirror images.
+    pub FootCollisionGeometry {
+        id: "foot-collision-geometry",
+        group: "contact",
+        level: Severity::Warning,
+        probe: Some("stance-settle"),
+        options: [
+            opt("allow_boxes", 1.0, "bool", "1: box feet are acceptable primitives; 0: only capsules and spheres"),
+            opt("min_radius", 0.008, "m", "smallest capsule/sphere radius"),
+            opt("max_radius", 0.02, "m", "largest capsule/sphere radius"),
+            opt("friction", 0.6, "", "expected sliding friction of foot geoms"),
+            opt("friction_tolerance", 0.2, "", "allowed deviation from `friction`"),
+            opt("contact_window", 0.005, "m", "geom points within this of the foot's lowest point count as ground contacts"),
+        ],
+    }
+}
+
+fn gname(robot: &Robot, g: usize) -> String {
+    let n = &robot.geoms[g].name;
+    if n.is_empty() { format!("#{g}") } else { n.clone() }
+}
+
+fn list(robot: &Robot, gs: &[usize]) -> String {
+    let mut v: Vec<String> = gs.iter().take(6).map(|&g| format!("`{}`", gname(robot, g))).collect();
+    if gs.len() > 6 {
+        v.push(format!("and {} more", gs.len() - 6));
+    }
+    v.join(", ")
+}
+
+fn type_word(t: GeomType) -> &'static str {
+    match t {
+        GeomType::Capsule => "capsule",
+        GeomType::Sphere => "sphere",
+        GeomType::Box => "box",
+        GeomType::Cylinder => "cylinder",
+        GeomType::Ellipsoid => "ellipsoid",
+        GeomType::Mesh => "mesh",
+        _ => "geom",
+    }
+}
+
+/// Masks allow a contact between two geoms.
+fn may_collide(robot: &Robot, a: usize, b: usize) -> bool {
+    let (x, y) = (&robot.geoms[a], &robot.geoms[b]);
+    (x.contype & y.conaffinity) != 0 || (y.contype & x.conaffinity) != 0
+}
+
+/// A comparable signature of a foot's geoms: (type, size rounded to 0.1 mm), sorted.
+fn signature(robot: &Robot, f: &Foot) -> Vec<(u8, [i64; 3])> {
+    let mut v: Vec<(u8, [i64; 3])> = f
+        .geoms
+        .iter()
+        .map(|&g| {
+            let geom = &robot.geoms[g];
+            (geom.gtype as u8, geom.size.map(|s| (s * 1e4).round() as i64))
+        })
+        .collect();
+    v.sort();
+    v
 }
 
 impl Rule for FootCollisionGeometry {
     fn meta(&self) -> &'static RuleMeta {
         &Self::META
     }
-    fn check(&self, _cx: &Context, _out: &mut Vec<Finding>) {}
+    fn check(&self, cx: &Context, out: &mut Vec<Finding>) {
+        let robot = cx.robot;
+        let allow_boxes = cx.opt("allow_boxes") != 0.0;
+        let (rmin, rmax) = (cx.opt("min_radius"), cx.opt("max_radius"));
+        let (mu, mu_tol) = (cx.opt("friction"), cx.opt("friction_tolerance"));
+        let window = cx.opt("contact_window");
+        let all_feet = feet(robot, cx.spec);
+        for foot in &all_feet {
+            let label = foot.label(robot);
+            let subj = Subject::Foot(foot.root);
+            // Meshes.
+            let meshes: Vec<usize> = foot.geoms.iter().copied().filter(|&g| robot.geoms[g].gtype == GeomType::Mesh).collect();
+            if let Some(&g0) = meshes.first() {
+                let partners: Vec<usize> = robot
+                    .geoms
+                    .iter()
+                    .filter(|o| o.gtype == GeomType::Mesh && o.collides() && !foot.geoms.contains(&o.id) && meshes.iter().any(|&m| may_collide(robot, m, o.id)))
+                    .map(|o| o.id)
+                    .collect();
+                let mut f = cx
+                    .at_attr(ElemKind::Geom, g0, &robot.geoms[g0].name, "type", format!("{label} collides through mesh geoms: {}", list(robot, &meshes)))
+                    .label("mesh foot collision")
+                    .note("mesh-floor contact yields few, jumping contact points that change with tiny pose changes; policies learn artifacts of the mesh instead of the foot")
+                    .help("collide with several capsules (radius ≈12 mm) at heel, midfoot and toe; keep the mesh as a visual geom with contype=\"0\" conaffinity=\"0\"")
+                    .subject(subj)
+                    .with("mesh_geoms", meshes.len() as f64);
+                if cx.level >= Severity::Warning {
+                    f.severity = Severity::Error;
+                }
+                if !partners.is_empty() {
+                    f.message.push_str(&format!("; it can also touch other meshes mesh-to-mesh ({})", list(robot, &partners)));
+                }
+                out.push(f);
+            }
+            // Non-preferred primitives.
+            let odd: Vec<usize> = foot
+                .geoms
+                .iter()
+                .copied()
+                .filter(|&g| match robot.geoms[g].gtype {
+                    GeomType::Capsule | GeomType::Sphere | GeomType::Mesh => false,
+                    GeomType::Box => !allow_boxes,
+                    _ => true,
+                })
+                .collect();
+            if let Some(&g0) = odd.first() {
+                out.push(
+                    cx.at_attr(ElemKind::Geom, g0, &robot.geoms[g0].name, "type", format!("{label} collides through {} geoms: {}", type_word(robot.geoms[g0].gtype), list(robot, &odd)))
+                        .label("not a capsule or sphere")
+                        .note("box and cylinder contacts with the floor switch between corner, edge and face contact as the foot rolls, which makes contact forces less repeatable than capsule contact")
+                        .help("use capsules (radius ≈12 mm) at heel, midfoot and toe, or set `allow_boxes = 1` for this rule if box feet are intended")
+                        .subject(subj),
+                );
+            }
+            // Radius.
+            let bad_r: Vec<usize> = foot
+                .geoms
+                .iter()
+                .copied()
+                .filter(|&g| matches!(robot.geoms[g].gtype, GeomType::Capsule | GeomType::Sphere | GeomType::Cylinder))
+                .filter(|&g| {
+                    let r = robot.geoms[g].size[0];
+                    r < rmin || r > rmax
+                })
+                .collect();
+            if let Some(&g0) = bad_r.first() {
+                let r = robot.geoms[g0].size[0];
+                out.push(
+                    cx.at_attr(ElemKind::Geom, g0, &robot.geoms[g0].name, "size", format!("{label} has contact radius {} mm outside {}–{} mm: {}", fmt_num(r * 1000.0, 3), fmt_num(rmin * 1000.0, 3), fmt_num(rmax * 1000.0, 3), list(robot, &bad_r)))
+                        .label(format!("radius {} mm", fmt_num(r * 1000.0, 3)))
+                        .note("the contact radius sets where the contact point sits and how the foot rolls over an edge; the identified foot model used capsules of about 12 mm")
+                        .help("set the capsule/sphere radius to about 12 mm")
+                        .subject(subj)
+                        .measured(r, "m")
+                        .expected(0.5 * (rmin + rmax), "m"),
+                );
+            }
+            // condim.
+            let bad_c: Vec<usize> = foot.geoms.iter().copied().filter(|&g| robot.geoms[g].condim != 3).collect();
+            if let Some(&g0) = bad_c.first() {
+                let c = robot.geoms[g0].condim;
+                let why = match c {
+                    1 => "condim 1 is frictionless contact: the foot slides freely",
+                    4 | 6 => "condim 4/6 adds torsional/rolling friction that the identified contact model did not have",
+                    _ => "only condim 3 (normal force plus 2-D sliding friction) matches the identified contact model",
+                };
+                out.push(
+                    cx.at_attr(ElemKind::Geom, g0, &robot.geoms[g0].name, "condim", format!("{label} uses condim {c} (expected 3): {}", list(robot, &bad_c)))
+                        .label(format!("condim {c}"))
+                        .note(format!("{why}; MuJoCo uses the larger condim of the two contacting geoms"))
+                        .help("set condim=\"3\" on foot and toe geoms (and not higher on the floor)")
+                        .subject(subj)
+                        .measured(c as f64, "")
+                        .expected(3.0, ""),
+                );
+            }
+            // Friction.
+            let bad_f: Vec<usize> = foot.geoms.iter().copied().filter(|&g| (robot.geoms[g].friction[0] - mu).abs() > mu_tol).collect();
+            if let Some(&g0) = bad_f.first() {
+                let v = robot.geoms[g0].friction[0];
+                out.push(
+                    cx.at_attr(ElemKind::Geom, g0, &robot.geoms[g0].name, "friction", format!("{label} has sliding friction {} (expected {} ± {}): {}", fmt_num(v, 3), fmt_num(mu, 3), fmt_num(mu_tol, 3), list(robot, &bad_f)))
+                        .label(format!("friction {}", fmt_num(v, 3)))
+                        .note("foot friction decides when the foot slips; a policy trained on grippier feet than the hardware's learns pushes that slip on the real floor")
+                        .help(format!("set friction=\"{} …\" on the foot and toe geoms; MuJoCo combines friction by the maximum of the two geoms, so the floor's friction must not exceed it", fmt_num(mu, 3)))
+                        .subject(subj)
+                        .measured(v, "")
+                        .expected(mu, ""),
+                );
+            }
+            // Support polygon.
+            let placed: Vec<(usize, Placed)> = foot.geoms.iter().map(|&g| (g, Placed::of(robot, g))).collect();
+            let zmin = placed.iter().map(|(_, p)| p.lowest()[2]).fold(f64::INFINITY, f64::min);
+            let mut pts: Vec<[f64; 3]> = Vec::new();
+            for (_, p) in &placed {
+                if p.lowest()[2] <= zmin + window {
+                    pts.extend(p.ground_points(zmin + window - p.lowest()[2]));
+                    pts.push(p.lowest());
+                }
+            }
+            let xs: Vec<f64> = placed.iter().flat_map(|(_, p)| [p.support([1.0, 0.0, 0.0])[0], p.support([-1.0, 0.0, 0.0])[0]]).collect();
+            let (x0, x1) = (xs.iter().copied().fold(f64::INFINITY, f64::min), xs.iter().copied().fold(f64::NEG_INFINITY, f64::max));
+            let third = (x1 - x0) / 3.0;
+            let heel = pts.iter().any(|p| p[0] <= x0 + third);
+            let toe = pts.iter().any(|p| p[0] >= x1 - third);
+            let area = hull_area(&pts.iter().map(|p| [p[0], p[1]]).collect::<Vec<_>>());
+            let degenerate = area < 1e-6;
+            if degenerate || !heel || !toe {
+                let g0 = placed.iter().find(|(_, p)| p.lowest()[2] <= zmin + window).map(|x| x.0).unwrap_or(foot.geoms[0]);
+                let what = if degenerate {
+                    format!("{label} touches the ground along a line or at a point (support polygon {} cm²)", fmt_num(area * 1e4, 3))
+                } else {
+                    format!("{label} has no ground contact at the {}", if !heel { "heel" } else { "toe" })
+                };
+                out.push(
+                    cx.at_elem(ElemKind::Geom, g0, &robot.geoms[g0].name, what)
+                        .label("lowest foot geom")
+                        .note("a foot needs at least three non-collinear contact points spread from heel to toe for a stable support polygon; otherwise it tips about the contact line and the policy learns to balance on it")
+                        .help("add capsules so heel, midfoot and toe all touch the ground in the standing pose")
+                        .subject(subj)
+                        .measured(area, "m²")
+                        .with("ground_points", pts.len() as f64),
+                );
+            }
+        }
+        // Left/right match.
+        let left: Vec<&Foot> = all_feet.iter().filter(|f| f.side == Some(crate::rules::contact::feet::Side::Left)).collect();
+        let right: Vec<&Foot> = all_feet.iter().filter(|f| f.side == Some(crate::rules::contact::feet::Side::Right)).collect();
+        if let (Some(l), Some(r)) = (left.first(), right.first()) {
+            let (sl, sr) = (signature(robot, l), signature(robot, r));
+            if sl != sr {
+                let g0 = r.geoms[0];
+                let msg = if l.geoms.len() != r.geoms.len() {
+                    format!("left and right feet differ: {} has {} collision geoms, {} has {}", robot.body_name(l.root), l.geoms.len(), robot.body_name(r.root), r.geoms.len())
+                } else {
+                    format!("left and right feet differ in collision geom types or sizes ({} vs {})", robot.body_name(l.root), robot.body_name(r.root))
+                };
+                let lloc = robot.elem_loc(ElemKind::Body, l.root, robot.body_name(l.root));
+                out.push(
+                    cx.at_elem(ElemKind::Geom, g0, &robot.geoms[g0].name, msg)
+                        .label("right foot geometry")
+                        .secondary(lloc, "left foot")
+                        .note("asymmetric foot contact makes the two legs behave differently, and the policy learns a limp the hardware does not need")
+                        .help("make the right foot's collision geoms the mirror image of the left's")
+                        .subject(Subject::Foot(r.root)),
+                );
+            }
+        }
+    }
 }

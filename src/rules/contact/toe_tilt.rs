@@ -1,16 +1,179 @@
 use crate::declare_rule;
-use crate::finding::{Finding, Severity};
-use crate::rules::{Context, Rule, RuleMeta};
+use crate::finding::{Finding, Severity, Subject};
+use crate::model::mjcf::ElemKind;
+use crate::model::{GeomType, Robot};
+use crate::rules::contact::feet::{Foot, feet};
+use crate::rules::geometry::shapes::{Placed, tilt};
+use crate::rules::{Context, Rule, RuleMeta, opt};
+use crate::util::fmt_num;
 
 declare_rule! {
     /// ## What it does
-    /// PLACEHOLDER — not implemented yet.
-    pub ToeTilt { id: "toe-tilt", group: "contact", level: Severity::Warning, probe: None, options: [] }
+    /// At the standing keyframe (or `qpos0` when the model has none), checks that every foot's
+    /// collision geoms form one flat sole: the lowest points of the foot and toe geoms that touch
+    /// down (those within `contact_window` of the foot's lowest point) lie within
+    /// `max_height_spread` of the sole height (the median of the foot body's own geoms), and every
+    /// flat contact feature — a toe capsule's axis, a lateral (side-to-side) capsule or cylinder,
+    /// a box's bottom face, a standing cylinder's cap — is parallel to the ground within
+    /// `max_tilt`. Lowest points are computed analytically from the compiled pose and size
+    /// (capsule, sphere, box, cylinder, ellipsoid) or from the compiled mesh vertices.
+    ///
+    /// Heel-to-toe capsules on the foot body itself may be sloped on purpose (an arch, as in the
+    /// Unitree H1's V-shaped sole capsules); only their lowest points are held to the band.
+    ///
+    /// Foot bodies come from the spec's `robot.foot_bodies` globs; without them, from body names
+    /// containing `foot`, `ankle_roll`, `toe` or `sole`; failing that, the leaf bodies whose
+    /// collision geoms reach within 3 cm of the robot's lowest point. Bodies below a foot body
+    /// are its toes.
+    ///
+    /// ## Why is this bad?
+    /// A toe capsule a few millimetres below the sole turns a flat foot into a rocker: the robot
+    /// stands on the toe and the heel alternately, and the policy learns to balance on a contact
+    /// pattern the real foot does not have. A tilted toe touches with one end only. A policy
+    /// trained on a model whose toes were accidentally tilted stopped learning forward-balance
+    /// recovery, although gains and rewards were fine.
+    ///
+    /// ## How it is confirmed
+    /// Static geometry at the keyframe; probe `stance-settle` drops the robot onto the floor in
+    /// the keyframe pose and records which geoms carry the load and how the foot rolls.
+    ///
+    /// ## How to fix
+    /// Move the offending geom (its `pos`/`fromto`) so its lowest point is level with the other
+    /// sole geoms, and make toe capsule axes and box faces horizontal in the standing pose (or
+    /// fix the keyframe if the foot itself is not flat).
+    pub ToeTilt {
+        id: "toe-tilt",
+        group: "contact",
+        level: Severity::Warning,
+        probe: Some("stance-settle"),
+        options: [
+            opt("max_height_spread", 0.001, "m", "largest height difference of a sole geom's lowest point from the sole height"),
+            opt("max_tilt", 0.5, "deg", "largest angle between a flat contact feature and the ground"),
+            opt("contact_window", 0.01, "m", "geoms whose lowest point is within this of the foot's lowest point count as sole geoms"),
+        ],
+    }
+}
+
+fn kind_name(robot: &Robot, foot: &Foot, g: usize) -> String {
+    let part = if foot.is_toe_geom(robot, g) { "toe" } else { "foot" };
+    let shape = match robot.geoms[g].gtype {
+        GeomType::Capsule => "capsule",
+        GeomType::Sphere => "sphere",
+        GeomType::Box => "box",
+        GeomType::Cylinder => "cylinder",
+        GeomType::Ellipsoid => "ellipsoid",
+        GeomType::Mesh => "mesh",
+        _ => "geom",
+    };
+    let name = &robot.geoms[g].name;
+    if name.is_empty() { format!("{part} {shape} #{g}") } else { format!("{part} {shape} `{name}`") }
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n == 0 {
+        f64::NAN
+    } else if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+fn pose_word(robot: &Robot) -> String {
+    match &robot.key.key_name {
+        Some(k) if !k.is_empty() => format!("keyframe `{k}`"),
+        Some(_) => "the keyframe".into(),
+        None => "qpos0".into(),
+    }
 }
 
 impl Rule for ToeTilt {
     fn meta(&self) -> &'static RuleMeta {
         &Self::META
     }
-    fn check(&self, _cx: &Context, _out: &mut Vec<Finding>) {}
+    fn check(&self, cx: &Context, out: &mut Vec<Finding>) {
+        let robot = cx.robot;
+        let spread = cx.opt("max_height_spread");
+        let max_tilt = cx.opt("max_tilt");
+        let window = cx.opt("contact_window");
+        let pose = pose_word(robot);
+        for foot in feet(robot, cx.spec) {
+            let low: Vec<(usize, f64)> = foot.geoms.iter().map(|&g| (g, Placed::of(robot, g).lowest()[2])).collect();
+            let zmin = low.iter().map(|x| x.1).fold(f64::INFINITY, f64::min);
+            let sole: Vec<(usize, f64)> = low.iter().copied().filter(|x| x.1 <= zmin + window).collect();
+            let own: Vec<f64> = sole.iter().filter(|x| !foot.is_toe_geom(robot, x.0)).map(|x| x.1).collect();
+            let zref = if own.is_empty() { median(sole.iter().map(|x| x.1).collect()) } else { median(own) };
+            let others = |g: usize| sole.iter().filter(|x| x.0 != g).count();
+            for &(g, z) in &sole {
+                let geom = &robot.geoms[g];
+                let dz = z - zref;
+                let what = kind_name(robot, &foot, g);
+                if dz.abs() > spread && others(g) > 0 {
+                    let (dir, effect) = if dz < 0.0 {
+                        ("below", "makes a flat foot rock on it: the foot stands on this geom and pivots instead of resting on the whole sole")
+                    } else {
+                        ("above", "leaves it off the ground in stance: the foot rests on the other geoms and this one only touches once the foot rolls")
+                    };
+                    let msg = format!(
+                        "{what} sits {} mm {dir} the sole of the {} at {pose}",
+                        fmt_num(dz.abs() * 1000.0, 3),
+                        foot.label(robot)
+                    );
+                    out.push(
+                        cx.at_elem(ElemKind::Geom, g, &geom.name, msg)
+                            .label(format!("lowest point {} mm {dir} the sole", fmt_num(dz.abs() * 1000.0, 3)))
+                            .note(format!(
+                                "a {what} {} mm {dir} the sole {effect}; the sole height is the median lowest point of the foot's own geoms (z = {:.1} mm), band ±{} mm",
+                                fmt_num(dz.abs() * 1000.0, 3),
+                                zref * 1000.0 + 0.0,
+                                fmt_num(spread * 1000.0, 3)
+                            ))
+                            .help("move the geom (its `pos` or `fromto`) so its lowest point is level with the other sole geoms in the standing pose")
+                            .subject(Subject::Geom(g))
+                            .measured(dz * 1000.0, "mm")
+                            .expected(0.0, "mm")
+                            .with("height_offset_m", dz)
+                            .with("tilt_deg", tilt(geom.gtype, &robot.key.geom_xmat[g]).map(f64::to_degrees).unwrap_or(0.0))
+                            .with("foot_body", foot.root as f64),
+                    );
+                }
+                // Tilt of flat features.
+                let mat = &robot.key.geom_xmat[g];
+                let Some(t) = tilt(geom.gtype, mat) else { continue };
+                let axis = [mat[2], mat[5], mat[8]];
+                let lying = matches!(geom.gtype, GeomType::Capsule | GeomType::Cylinder) && axis[2].abs() < std::f64::consts::FRAC_1_SQRT_2;
+                let longitudinal = lying && axis[0].abs() > axis[1].abs();
+                if longitudinal && !foot.is_toe_geom(robot, g) {
+                    continue;
+                }
+                let deg = t.to_degrees();
+                if deg > max_tilt {
+                    let feature = match geom.gtype {
+                        GeomType::Box => "bottom face",
+                        _ if lying => "axis",
+                        _ => "cap face",
+                    };
+                    let msg = format!("{what} {feature} is tilted {}° from the ground at {pose}", fmt_num(deg, 3));
+                    out.push(
+                        cx.at_elem(ElemKind::Geom, g, &geom.name, msg)
+                            .label(format!("{feature} tilted {}°", fmt_num(deg, 3)))
+                            .note(format!(
+                                "a {what} whose {feature} is tilted {}° (limit {}°) touches the floor along one edge or at one end instead of lying flat, so the contact patch and the foot's rocking behaviour differ from the real foot",
+                                fmt_num(deg, 3),
+                                fmt_num(max_tilt, 3)
+                            ))
+                            .help("rotate the geom (its `quat`/`euler`/`fromto`) so the feature is horizontal in the standing pose, or fix the keyframe if the whole foot is tilted")
+                            .subject(Subject::Geom(g))
+                            .measured(deg, "°")
+                            .expected(max_tilt, "°")
+                            .with("height_offset_m", dz)
+                            .with("tilt_deg", deg)
+                            .with("foot_body", foot.root as f64),
+                    );
+                }
+            }
+        }
+    }
 }

@@ -1,16 +1,232 @@
+use parry3d::math::{Pose, Vector};
+use parry3d::query::PointQuery;
+use parry3d::shape::ConvexPolyhedron;
+
 use crate::declare_rule;
-use crate::finding::{Finding, Severity};
-use crate::rules::{Context, Rule, RuleMeta};
+use crate::finding::{Finding, Severity, Subject};
+use crate::model::mjcf::ElemKind;
+use crate::model::{Geom, GeomType, Robot};
+use crate::rules::contact::feet::feet;
+use crate::rules::geometry::shapes::{Placed, V3, add, hull_area, norm, scale, sub, to_local_dir};
+use crate::rules::{Context, Rule, RuleMeta, opt};
+use crate::util::fmt_num;
 
 declare_rule! {
     /// ## What it does
-    /// PLACEHOLDER — not implemented yet.
-    pub CollisionVisualMismatch { id: "collision-visual-mismatch", group: "geometry", level: Severity::Warning, probe: None, options: [] }
+    /// For every body that has a visual mesh (a mesh geom with `contype = conaffinity = 0`),
+    /// compares its collision geoms with the visual mesh at the keyframe: a collision geom whose
+    /// surface sticks out of the visual mesh's bounding box (in the mesh's own principal frame)
+    /// by more than `tolerance` is reported; when its centre also lies outside the mesh's convex
+    /// hull (parry3d) by more than `tolerance`, it is reported as misplaced rather than oversized.
+    /// For foot bodies it also compares the support polygon of
+    /// the collision geoms (the xy hull of their ground points) with the xy hull of the visual
+    /// sole (visual vertices within 5 mm of its bottom); coverage below `min_sole_coverage` is
+    /// reported. Bodies without a visual mesh are skipped, and a collision mesh that is the
+    /// visual mesh itself always matches.
+    ///
+    /// ## Why is this bad?
+    /// Collision geometry is what the simulator feels. A collision primitive that is larger than
+    /// the part, or left at the wrong place after an edit, makes the simulated robot hit itself
+    /// and the ground where the real one does not (and the other way round); a foot whose contact
+    /// points cover a small part of the real sole has a smaller support polygon than the
+    /// hardware, so balance learned in simulation does not transfer.
+    ///
+    /// ## How it is confirmed
+    /// Static geometry at the keyframe.
+    ///
+    /// ## How to fix
+    /// Resize or move the collision geom to fit inside the visual mesh (use the mesh in the
+    /// viewer with collision geoms shown, group 3), and spread foot contact geoms over the whole
+    /// sole: heel, midfoot and toe, inner and outer edge.
+    pub CollisionVisualMismatch {
+        id: "collision-visual-mismatch",
+        group: "geometry",
+        level: Severity::Warning,
+        probe: None,
+        options: [
+            opt("tolerance", 0.01, "m", "how far a collision geom may extend outside the visual mesh's hull"),
+            opt("min_sole_coverage", 0.6, "ratio", "smallest fraction of the visual sole's area the foot's support polygon must cover"),
+        ],
+    }
+}
+
+fn is_visual_mesh(g: &Geom) -> bool {
+    g.gtype == GeomType::Mesh && g.mesh >= 0 && !g.collides()
+}
+
+/// 26 unit directions: cube faces, edges and corners.
+fn directions() -> Vec<V3> {
+    let mut v = Vec::new();
+    for x in [-1.0, 0.0, 1.0] {
+        for y in [-1.0, 0.0, 1.0] {
+            for z in [-1.0, 0.0, 1.0] {
+                let d: V3 = [x, y, z];
+                let n = norm(d);
+                if n > 0.0 {
+                    v.push(scale(d, 1.0 / n));
+                }
+            }
+        }
+    }
+    v
+}
+
+/// The visual mesh's bounding box in the frame of its (first) visual geom — MuJoCo aligns a
+/// compiled mesh frame with the mesh's principal axes, so the box is tight — plus its convex hull
+/// (parry3d) for misplacement checks.
+struct Bounds {
+    pos: V3,
+    mat: [f64; 9],
+    lo: V3,
+    hi: V3,
+    centre: V3,
+    poly: Option<ConvexPolyhedron>,
+}
+
+impl Bounds {
+    fn new(pos: V3, mat: [f64; 9], verts: &[V3]) -> Option<Bounds> {
+        if verts.len() < 4 {
+            return None;
+        }
+        let local: Vec<V3> = verts.iter().map(|v| to_local_dir(&mat, sub(*v, pos))).collect();
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        for v in &local {
+            for k in 0..3 {
+                lo[k] = lo[k].min(v[k]);
+                hi[k] = hi[k].max(v[k]);
+            }
+        }
+        let centre = scale(verts.iter().fold([0.0; 3], |a, v| add(a, *v)), 1.0 / verts.len() as f64);
+        let pts: Vec<Vector> = verts.iter().map(|v| Vector::new((v[0] - centre[0]) as f32, (v[1] - centre[1]) as f32, (v[2] - centre[2]) as f32)).collect();
+        Some(Bounds { pos, mat, lo, hi, centre, poly: ConvexPolyhedron::from_convex_hull(&pts) })
+    }
+    /// Distance of a world point outside the bounding box (0 inside).
+    fn outside_box(&self, p: V3) -> f64 {
+        let l = to_local_dir(&self.mat, sub(p, self.pos));
+        let d: V3 = std::array::from_fn(|k| (self.lo[k] - l[k]).max(l[k] - self.hi[k]).max(0.0));
+        norm(d)
+    }
+    /// Distance of a world point outside the convex hull (0 inside; box distance without a hull).
+    fn outside_hull(&self, p: V3) -> f64 {
+        match &self.poly {
+            Some(poly) => {
+                let q = sub(p, self.centre);
+                poly.distance_to_point(&Pose::IDENTITY, Vector::new(q[0] as f32, q[1] as f32, q[2] as f32), true) as f64
+            }
+            None => self.outside_box(p),
+        }
+    }
+}
+
+fn gname(robot: &Robot, g: usize) -> String {
+    let n = &robot.geoms[g].name;
+    if n.is_empty() { format!("#{g}") } else { format!("`{n}`") }
 }
 
 impl Rule for CollisionVisualMismatch {
     fn meta(&self) -> &'static RuleMeta {
         &Self::META
     }
-    fn check(&self, _cx: &Context, _out: &mut Vec<Finding>) {}
+    fn check(&self, cx: &Context, out: &mut Vec<Finding>) {
+        let robot = cx.robot;
+        let tol = cx.opt("tolerance");
+        let min_cov = cx.opt("min_sole_coverage");
+        let dirs = directions();
+        let foot_bodies: Vec<usize> = feet(robot, cx.spec).iter().map(|f| f.root).collect();
+        for body in 1..robot.bodies.len() {
+            let visuals: Vec<&Geom> = robot.geoms.iter().filter(|g| g.body == body && is_visual_mesh(g)).collect();
+            if visuals.is_empty() {
+                continue;
+            }
+            let verts: Vec<V3> = visuals.iter().flat_map(|g| Placed::of(robot, g.id).verts).collect();
+            let v0 = visuals[0].id;
+            let Some(hull) = Bounds::new(robot.key.geom_xpos[v0], robot.key.geom_xmat[v0], &verts) else { continue };
+            let bname = robot.body_name(body);
+            let colliders: Vec<&Geom> =
+                robot.geoms.iter().filter(|g| g.body == body && g.collides() && !matches!(g.gtype, GeomType::Plane | GeomType::Hfield)).collect();
+            for g in &colliders {
+                if g.gtype == GeomType::Mesh && visuals.iter().any(|v| v.mesh == g.mesh) {
+                    continue;
+                }
+                let p = Placed::of(robot, g.id);
+                let centre_out = hull.outside_hull(p.pos);
+                let (worst, wdir) = dirs.iter().map(|d| (hull.outside_box(p.support(*d)), *d)).fold((0.0, [0.0; 3]), |a, b| if b.0 > a.0 { b } else { a });
+                if worst <= tol {
+                    continue;
+                }
+                let dir_word = {
+                    let axis = ["x", "y", "z"];
+                    let mut parts = Vec::new();
+                    for k in 0..3 {
+                        if wdir[k].abs() > 0.1 {
+                            parts.push(format!("{}{}", if wdir[k] > 0.0 { "+" } else { "−" }, axis[k]));
+                        }
+                    }
+                    parts.join("")
+                };
+                let (msg, label, note) = if centre_out > tol {
+                    (
+                        format!("collision geom {} of body `{bname}` is centred {} mm outside the body's visual mesh", gname(robot, g.id), fmt_num(centre_out * 1000.0, 3)),
+                        format!("centre {} mm outside the visual mesh", fmt_num(centre_out * 1000.0, 3)),
+                        "a collision geom whose centre lies outside the part it stands for is misplaced (a wrong `pos`, or a geom left on the wrong body): the simulated robot collides where the real one has no material",
+                    )
+                } else {
+                    (
+                        format!("collision geom {} of body `{bname}` sticks out of the body's visual mesh by {} mm (towards world {dir_word})", gname(robot, g.id), fmt_num(worst * 1000.0, 3)),
+                        format!("{} mm outside the visual mesh", fmt_num(worst * 1000.0, 3)),
+                        "a collision geom larger than the part makes the simulated robot touch itself and the ground where the real one does not",
+                    )
+                };
+                out.push(
+                    cx.at_attr(ElemKind::Geom, g.id, &g.name, "size", msg)
+                        .label(label)
+                        .note(note)
+                        .help(format!("resize or move the geom to fit inside the visual mesh (tolerance {} mm)", fmt_num(tol * 1000.0, 3)))
+                        .subject(Subject::Geom(g.id))
+                        .measured(worst, "m")
+                        .expected(tol, "m")
+                        .with("outside_m", worst)
+                        .with("centre_outside_m", centre_out),
+                );
+            }
+            // Sole coverage of feet.
+            if foot_bodies.contains(&body) && !colliders.is_empty() {
+                let zmin = verts.iter().map(|v| v[2]).fold(f64::INFINITY, f64::min);
+                let sole: Vec<[f64; 2]> = verts.iter().filter(|v| v[2] <= zmin + 0.005).map(|v| [v[0], v[1]]).collect();
+                let sole_area = hull_area(&sole);
+                let placed: Vec<Placed> = colliders.iter().map(|g| Placed::of(robot, g.id)).collect();
+                let cmin = placed.iter().map(|p| p.lowest()[2]).fold(f64::INFINITY, f64::min);
+                let pts: Vec<[f64; 2]> = placed
+                    .iter()
+                    .filter(|p| p.lowest()[2] <= cmin + 0.005)
+                    .flat_map(|p| {
+                        let mut v = p.ground_points(cmin + 0.005 - p.lowest()[2]);
+                        v.push(p.lowest());
+                        v
+                    })
+                    .map(|v| [v[0], v[1]])
+                    .collect();
+                let area = hull_area(&pts);
+                if sole_area > 1e-5 {
+                    let cov = area / sole_area;
+                    if cov < min_cov {
+                        let g0 = colliders[0];
+                        out.push(
+                            cx.at_elem(ElemKind::Geom, g0.id, &g0.name, format!(
+                                "foot `{bname}` support polygon covers {}% of the visual sole ({} of {} cm²)",
+                                fmt_num(cov * 100.0, 3), fmt_num(area * 1e4, 3), fmt_num(sole_area * 1e4, 3)))
+                                .label("foot collision geoms")
+                                .note("the simulated foot balances on a smaller support polygon than the real sole, so the centre-of-pressure limits and tipping behaviour learned in simulation do not match the hardware")
+                                .help("spread the foot's contact geoms over the sole: heel, midfoot and toe, at the inner and outer edges")
+                                .subject(Subject::Foot(body))
+                                .measured(cov, "ratio")
+                                .expected(min_cov, "ratio")
+                                .with("sole_coverage", cov),
+                        );
+                    }
+                }
+            }
+        }
+    }
 }

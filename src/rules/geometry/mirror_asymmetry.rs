@@ -1,16 +1,207 @@
 use crate::declare_rule;
-use crate::finding::{Finding, Severity};
-use crate::rules::{Context, Rule, RuleMeta};
+use crate::finding::{Finding, Severity, Subject};
+use crate::model::mjcf::ElemKind;
+use crate::model::{ActuatorKind, Robot};
+use crate::rules::contact::feet::{Side, mirror};
+use crate::rules::{Context, Rule, RuleMeta, opt};
+use crate::util::fmt_num;
 
 declare_rule! {
     /// ## What it does
-    /// PLACEHOLDER — not implemented yet.
-    pub MirrorAsymmetry { id: "mirror-asymmetry", group: "geometry", level: Severity::Warning, probe: None, options: [] }
+    /// Pairs left and right joints, actuators and bodies by swapping the side markers in their
+    /// names (the spec's `robot.left`/`robot.right` first, then `left_`/`right_`, `Left_`/`Right_`,
+    /// `l_`/`r_` prefixes and `_l`/`_r` suffixes, and `Left`/`Right` anywhere) and reports
+    /// differences: joint armature, damping, stiffness and frictionloss, joint range (accepted
+    /// when equal or mirrored, `[a, b]` ↔ `[−b, −a]`, as for roll and yaw joints), actuator
+    /// kp/kv and gear, actuator force and control ranges (equal or mirrored), body masses, and
+    /// the types and sizes of each body pair's collision geoms (which covers the feet).
+    /// Scalars are compared with relative `tolerance`, ranges with absolute `range_tolerance`.
+    ///
+    /// ## Why is this bad?
+    /// Real humanoids are built mirror-symmetric; an asymmetry in the model is almost always a
+    /// typo or a half-applied edit. The policy learns to exploit it — a stiffer, lighter or
+    /// stronger leg — and the learned gait limps or drifts on the symmetric hardware.
+    ///
+    /// ## How it is confirmed
+    /// Static comparison of the compiled values.
+    ///
+    /// ## How to fix
+    /// Copy the correct value to the other side (prefer a shared `<default class>` for both
+    /// sides so they cannot drift apart), or mirror the range if it was copied unmirrored.
+    pub MirrorAsymmetry {
+        id: "mirror-asymmetry",
+        group: "geometry",
+        level: Severity::Warning,
+        probe: None,
+        options: [
+            opt("tolerance", 0.01, "ratio", "relative difference tolerated between mirrored scalars"),
+            opt("range_tolerance", 0.001, "rad or m", "absolute difference tolerated between mirrored range ends"),
+        ],
+    }
+}
+
+fn differs(a: f64, b: f64, tol: f64) -> bool {
+    (a - b).abs() > tol * a.abs().max(b.abs()) && (a - b).abs() > 1e-12
+}
+
+fn range_matches(a: [f64; 2], b: [f64; 2], tol: f64) -> bool {
+    let same = (a[0] - b[0]).abs() <= tol && (a[1] - b[1]).abs() <= tol;
+    let mirrored = (a[0] + b[1]).abs() <= tol && (a[1] + b[0]).abs() <= tol;
+    same || mirrored
+}
+
+fn r(v: [f64; 2]) -> String {
+    format!("[{}, {}]", fmt_num(v[0], 4), fmt_num(v[1], 4))
+}
+
+struct Pair<'a> {
+    kind: ElemKind,
+    left: (usize, &'a str),
+    right: (usize, &'a str),
+}
+
+impl Pair<'_> {
+    fn finding(&self, cx: &Context, attr: &str, what: &str, lv: String, rv: String, unit: &str) -> Finding {
+        let kw = crate::rules::kind_word(self.kind);
+        let msg = format!("{kw} `{}` {what} {rv}{unit} differs from its mirror `{}` ({lv}{unit})", self.right.1, self.left.1);
+        let lloc = cx.robot.elem_loc(self.kind, self.left.0, self.left.1);
+        let (lattr, _) = cx.robot.attr_loc(self.kind, self.left.0, self.left.1, attr);
+        let subject = match self.kind {
+            ElemKind::Joint => Subject::Joint(self.right.0),
+            ElemKind::Actuator => Subject::Actuator(self.right.0),
+            ElemKind::Body => Subject::Body(self.right.0),
+            _ => Subject::Model,
+        };
+        cx.at_attr(self.kind, self.right.0, self.right.1, attr, msg)
+            .label(format!("{what} {rv}{unit}"))
+            .secondary(if lattr == cx.robot.root_loc() { lloc } else { lattr }, format!("mirror `{}` has {lv}{unit}", self.left.1))
+            .note("mirror-symmetric hardware should have a mirror-symmetric model; a policy exploits the stronger, stiffer or lighter side and limps on the real robot")
+            .help("use the same value on both sides, ideally from one shared <default class>")
+            .subject(subject)
+    }
+}
+
+/// (left id, right id) pairs among `names`.
+fn pairs<'a>(names: &'a [String], cx: &Context) -> Vec<(usize, usize)> {
+    let mut v = Vec::new();
+    for (i, n) in names.iter().enumerate() {
+        if n.is_empty() {
+            continue;
+        }
+        if let Some((Side::Left, m)) = mirror(n, cx.spec) {
+            if let Some(j) = names.iter().position(|x| *x == m) {
+                if j != i {
+                    v.push((i, j));
+                }
+            }
+        }
+    }
+    v
+}
+
+fn geom_signature(robot: &Robot, body: usize) -> Vec<(u8, [i64; 3])> {
+    let mut v: Vec<(u8, [i64; 3])> =
+        robot.geoms.iter().filter(|g| g.body == body && g.collides()).map(|g| (g.gtype as u8, g.size.map(|s| (s * 1e4).round() as i64))).collect();
+    v.sort();
+    v
+}
+
+/// "2 × capsule 12/30 mm, box 100/50/15 mm".
+fn sig_str(sig: &[(u8, [i64; 3])]) -> String {
+    const NAMES: [&str; 9] = ["plane", "hfield", "sphere", "capsule", "ellipsoid", "cylinder", "box", "mesh", "sdf"];
+    let mut parts: Vec<(usize, String)> = Vec::new();
+    for (t, s) in sig {
+        let sizes: Vec<String> = s.iter().filter(|&&x| x != 0).map(|&x| fmt_num(x as f64 / 10.0, 4)).collect();
+        let d = format!("{} {} mm", NAMES.get(*t as usize).unwrap_or(&"geom"), sizes.join("/"));
+        match parts.last_mut() {
+            Some((n, last)) if *last == d => *n += 1,
+            _ => parts.push((1, d)),
+        }
+    }
+    if parts.is_empty() {
+        return "none".into();
+    }
+    let v: Vec<String> = parts.into_iter().map(|(n, d)| if n > 1 { format!("{n} × {d}") } else { d }).collect();
+    format!("[{}]", v.join(", "))
 }
 
 impl Rule for MirrorAsymmetry {
     fn meta(&self) -> &'static RuleMeta {
         &Self::META
     }
-    fn check(&self, _cx: &Context, _out: &mut Vec<Finding>) {}
+    fn check(&self, cx: &Context, out: &mut Vec<Finding>) {
+        let robot = cx.robot;
+        let tol = cx.opt("tolerance");
+        let rtol = cx.opt("range_tolerance");
+        let n4 = |x: f64| fmt_num(x, 4);
+        // Joints.
+        let jn: Vec<String> = robot.joints.iter().map(|j| j.name.clone()).collect();
+        for (l, rr) in pairs(&jn, cx) {
+            let (a, b) = (&robot.joints[l], &robot.joints[rr]);
+            let p = Pair { kind: ElemKind::Joint, left: (l, &a.name), right: (rr, &b.name) };
+            for (attr, what, x, y, unit) in [
+                ("armature", "armature", a.armature, b.armature, " kg·m²"),
+                ("damping", "damping", a.damping, b.damping, " N·m·s/rad"),
+                ("stiffness", "stiffness", a.stiffness, b.stiffness, " N·m/rad"),
+                ("frictionloss", "frictionloss", a.frictionloss, b.frictionloss, " N·m"),
+            ] {
+                if differs(x, y, tol) {
+                    out.push(p.finding(cx, attr, what, n4(x), n4(y), unit).measured(y, unit.trim()).expected(x, unit.trim()));
+                }
+            }
+            if (a.limited || b.limited) && !range_matches(a.range, b.range, rtol) {
+                out.push(
+                    p.finding(cx, "range", "range", r(a.range), r(b.range), " rad")
+                        .note("ranges of mirrored joints must be equal (pitch) or mirrored, [a, b] ↔ [−b, −a] (roll, yaw); this one is neither, so one leg can move further than the other"),
+                );
+            }
+        }
+        // Actuators.
+        let an: Vec<String> = robot.actuators.iter().map(|a| a.name.clone()).collect();
+        for (l, rr) in pairs(&an, cx) {
+            let (a, b) = (&robot.actuators[l], &robot.actuators[rr]);
+            let p = Pair { kind: ElemKind::Actuator, left: (l, &a.name), right: (rr, &b.name) };
+            if let (ActuatorKind::Position { kp: kpa, kv: kva }, ActuatorKind::Position { kp: kpb, kv: kvb }) = (a.kind, b.kind) {
+                if differs(kpa, kpb, tol) {
+                    out.push(p.finding(cx, "kp", "kp", n4(kpa), n4(kpb), " N·m/rad").measured(kpb, "N·m/rad").expected(kpa, "N·m/rad"));
+                }
+                if differs(kva, kvb, tol) {
+                    out.push(p.finding(cx, "kv", "kv", n4(kva), n4(kvb), " N·m·s/rad").measured(kvb, "N·m·s/rad").expected(kva, "N·m·s/rad"));
+                }
+            } else if a.gainprm[0] != 0.0 && differs(a.gainprm[0], b.gainprm[0], tol) {
+                out.push(p.finding(cx, "gainprm", "gain", n4(a.gainprm[0]), n4(b.gainprm[0]), ""));
+            }
+            if differs(a.gear.abs(), b.gear.abs(), tol) {
+                out.push(p.finding(cx, "gear", "gear", n4(a.gear), n4(b.gear), ""));
+            }
+            if (a.forcelimited || b.forcelimited) && !range_matches(a.forcerange, b.forcerange, tol * a.forcerange[1].abs().max(a.forcerange[0].abs()).max(1e-9)) {
+                out.push(p.finding(cx, "forcerange", "forcerange", r(a.forcerange), r(b.forcerange), " N·m"));
+            }
+            if (a.ctrllimited || b.ctrllimited) && !range_matches(a.ctrlrange, b.ctrlrange, rtol.max(tol * a.ctrlrange[1].abs().max(a.ctrlrange[0].abs()))) {
+                out.push(p.finding(cx, "ctrlrange", "ctrlrange", r(a.ctrlrange), r(b.ctrlrange), ""));
+            }
+        }
+        // Bodies: mass and collision geometry.
+        let bn: Vec<String> = robot.bodies.iter().map(|b| b.name.clone()).collect();
+        for (l, rr) in pairs(&bn, cx) {
+            let (a, b) = (&robot.bodies[l], &robot.bodies[rr]);
+            let p = Pair { kind: ElemKind::Body, left: (l, &a.name), right: (rr, &b.name) };
+            if differs(a.mass, b.mass, tol) {
+                out.push(
+                    p.finding(cx, "mass", "mass", n4(a.mass), n4(b.mass), " kg")
+                        .measured(b.mass, "kg")
+                        .expected(a.mass, "kg")
+                        .with("mass_ratio", b.mass / a.mass.max(1e-12)),
+                );
+            }
+            let (sa, sb) = (geom_signature(robot, l), geom_signature(robot, rr));
+            if sa != sb {
+                out.push(
+                    p.finding(cx, "name", "collision geoms", sig_str(&sa), sig_str(&sb), "")
+                        .label("collision geometry differs from the mirror body")
+                        .note("the mirrored bodies' collision geoms differ in number, type or size (compared after sorting, to 0.1 mm); for feet this changes the contact patch of one leg"),
+                );
+            }
+        }
+    }
 }

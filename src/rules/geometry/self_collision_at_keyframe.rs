@@ -1,16 +1,113 @@
+use std::collections::BTreeMap;
+
+use mujoco_rs::prelude::*;
+
 use crate::declare_rule;
-use crate::finding::{Finding, Severity};
-use crate::rules::{Context, Rule, RuleMeta};
+use crate::finding::{Finding, Severity, Subject};
+use crate::model::mjcf::ElemKind;
+use crate::model::{GeomType, Robot, mj};
+use crate::rules::{Context, Rule, RuleMeta, opt};
+use crate::util::fmt_num;
 
 declare_rule! {
     /// ## What it does
-    /// PLACEHOLDER — not implemented yet.
-    pub SelfCollisionAtKeyframe { id: "self-collision-at-keyframe", group: "geometry", level: Severity::Warning, probe: None, options: [] }
+    /// Reports pairs of the robot's own collision geoms that penetrate each other at the standing
+    /// keyframe (or `qpos0`) by at least `min_depth`. The pairs are MuJoCo's own contact list
+    /// after `mj_forward` at the keyframe, so every filter MuJoCo applies is honoured: same body,
+    /// parent/child bodies (unless `filterparent` is disabled), welded bodies,
+    /// contype/conaffinity masks and `<exclude>` pairs. Contacts with the world body (the floor
+    /// plane, terrain) are ignored: ground contact in stance is expected.
+    ///
+    /// ## Why is this bad?
+    /// Geoms that overlap in the initial pose produce large repulsive forces on the first step:
+    /// the robot jumps or twitches at every reset, training episodes start from a state the
+    /// hardware never sees, and the solver spends its iterations on an internal fight. Usually
+    /// the cause is an oversized collision primitive, a wrong `pos`, or a missing `<exclude>`
+    /// between adjacent links that cannot actually touch.
+    ///
+    /// ## How it is confirmed
+    /// Static (MuJoCo collision at the keyframe); probe `whole-model-sanity` steps the model from
+    /// the keyframe and measures the jump in kinetic energy caused by the penetration.
+    ///
+    /// ## How to fix
+    /// Shrink or move the overlapping collision geoms so they clear each other in the keyframe
+    /// pose; if the two links can never touch on the hardware, add
+    /// `<contact><exclude body1=".." body2=".."/></contact>` or set contype/conaffinity so the
+    /// pair is filtered.
+    pub SelfCollisionAtKeyframe {
+        id: "self-collision-at-keyframe",
+        group: "geometry",
+        level: Severity::Warning,
+        probe: Some("whole-model-sanity"),
+        options: [opt("min_depth", 0.001, "m", "smallest penetration depth reported")],
+    }
+}
+
+/// Deepest penetration per geom pair (geom ids ascending) at the keyframe, floor/world excluded.
+pub fn keyframe_penetrations(robot: &Robot) -> BTreeMap<(usize, usize), f64> {
+    let m = &robot.mj;
+    let mut d = MjData::new(m);
+    if let Some(k) = robot.key.key {
+        let _ = d.reset_keyframe(k);
+    }
+    d.forward();
+    let dr = mj::data_raw(&d);
+    let cons = mj::slice(dr.contact, dr.ncon.max(0) as usize);
+    let mut out: BTreeMap<(usize, usize), f64> = BTreeMap::new();
+    for c in cons {
+        let (a, b) = (c.geom1, c.geom2);
+        if a < 0 || b < 0 {
+            continue;
+        }
+        let (a, b) = (a.min(b) as usize, a.max(b) as usize);
+        let (ga, gb) = (&robot.geoms[a], &robot.geoms[b]);
+        let ground = |g: &crate::model::Geom| g.body == 0 || matches!(g.gtype, GeomType::Plane | GeomType::Hfield);
+        if ground(ga) || ground(gb) {
+            continue;
+        }
+        let depth = -c.dist;
+        let e = out.entry((a, b)).or_insert(f64::NEG_INFINITY);
+        *e = e.max(depth);
+    }
+    out
+}
+
+fn gdesc(robot: &Robot, g: usize) -> String {
+    let geom = &robot.geoms[g];
+    let name = if geom.name.is_empty() { format!("#{g}") } else { format!("`{}`", geom.name) };
+    format!("{name} (body {})", robot.body_name(geom.body))
 }
 
 impl Rule for SelfCollisionAtKeyframe {
     fn meta(&self) -> &'static RuleMeta {
         &Self::META
     }
-    fn check(&self, _cx: &Context, _out: &mut Vec<Finding>) {}
+    fn check(&self, cx: &Context, out: &mut Vec<Finding>) {
+        let robot = cx.robot;
+        let min_depth = cx.opt("min_depth");
+        let pose = match &robot.key.key_name {
+            Some(k) if !k.is_empty() => format!("keyframe `{k}`"),
+            Some(_) => "the keyframe".to_string(),
+            None => "qpos0".to_string(),
+        };
+        for ((a, b), depth) in keyframe_penetrations(robot) {
+            if depth < min_depth {
+                continue;
+            }
+            let gb = &robot.geoms[b];
+            let msg = format!("collision geoms {} and {} penetrate by {} mm at {pose}", gdesc(robot, a), gdesc(robot, b), fmt_num(depth * 1000.0, 3));
+            out.push(
+                cx.at_elem(ElemKind::Geom, a, &robot.geoms[a].name, msg)
+                    .label(format!("penetrates {} by {} mm", gdesc(robot, b), fmt_num(depth * 1000.0, 3)))
+                    .secondary(robot.elem_loc(ElemKind::Geom, b, &gb.name), "the other geom")
+                    .note("overlapping geoms in the initial pose push apart with large contact forces on the first step, so every episode starts with a jolt the hardware never experiences")
+                    .help("shrink or move the geoms so they clear each other in this pose, or filter the pair with <contact><exclude body1=.. body2=../></contact> or contype/conaffinity if the links cannot touch on the hardware")
+                    .subject(Subject::Geom(a))
+                    .measured(depth, "m")
+                    .expected(0.0, "m")
+                    .with("depth_m", depth)
+                    .with("geom2", b as f64),
+            );
+        }
+    }
 }
