@@ -92,6 +92,7 @@ fn use_color(choice: &str) -> bool {
 }
 
 pub fn run() -> i32 {
+    crate::model::mj::silence_warnings();
     let cli = Cli::parse();
     match cli.cmd {
         Some(Cmd::Rules) => {

@@ -67,3 +67,15 @@ pub fn full_mass_matrix(m: &MjModel, d: &MjData<&MjModel>) -> Vec<f64> {
     }
     out
 }
+
+unsafe extern "C" fn quiet_warning(_msg: *const std::os::raw::c_char) {}
+
+/// MuJoCo prints warnings to stdout/stderr by default; modellint reads them from
+/// `mjData.warning` instead and reports them as findings, so silence the printing.
+pub fn silence_warnings() {
+    // SAFETY: a plain function-pointer store into MuJoCo's global hook, done before any
+    // simulation starts (called from the CLI entry point and probe/replay setup).
+    unsafe {
+        c::mju_user_warning = Some(quiet_warning);
+    }
+}

@@ -1,0 +1,138 @@
+//! The test bench every probe runs on: a private copy of the compiled model, put in a known
+//! state (keyframe, targets held), with optional isolation of one joint.
+
+use mujoco_rs::prelude::*;
+
+use crate::model::{Robot, mj};
+
+/// How to prepare the copy.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Setup {
+    /// Freeze every DoF except this one (armature 1e7 on the others, reset each step): the
+    /// probed joint then sees exactly its own row of the mass matrix, as on a fixed test stand.
+    pub isolate_dof: Option<usize>,
+    /// Freeze only the floating base (free joints), as if the robot hung on a stand.
+    pub pin_base: bool,
+    pub no_contact: bool,
+    pub no_gravity: bool,
+}
+
+pub const FROZEN_ARMATURE: f64 = 1e7;
+
+pub struct Bench {
+    pub m: MjModel,
+    frozen: Vec<(usize, f64)>, // (qpos index, value) to hold
+    frozen_dofs: Vec<usize>,
+}
+
+impl Bench {
+    pub fn new(robot: &Robot, s: Setup) -> Option<Bench> {
+        let mut m = robot.mj.clone();
+        let nv = mj::raw(&m).nv as usize;
+        let mut frozen_dofs: Vec<usize> = Vec::new();
+        let mut frozen = Vec::new();
+        for j in &robot.joints {
+            let ndof = match j.jtype {
+                crate::model::JointType::Free => 6,
+                crate::model::JointType::Ball => 3,
+                _ => 1,
+            };
+            let nq = match j.jtype {
+                crate::model::JointType::Free => 7,
+                crate::model::JointType::Ball => 4,
+                _ => 1,
+            };
+            let freeze = match s.isolate_dof {
+                Some(d) => !(j.dofadr <= d && d < j.dofadr + ndof),
+                None => s.pin_base && j.jtype == crate::model::JointType::Free,
+            };
+            if freeze {
+                frozen_dofs.extend(j.dofadr..j.dofadr + ndof);
+                for k in 0..nq {
+                    frozen.push((j.qposadr + k, robot.key.qpos.get(j.qposadr + k).copied().unwrap_or(0.0)));
+                }
+            }
+        }
+        {
+            let r = mj::raw_mut(&mut m);
+            let arm = mj::slice_mut(r.dof_armature, nv);
+            for &d in &frozen_dofs {
+                arm[d] = FROZEN_ARMATURE;
+            }
+            if s.no_contact {
+                r.opt.disableflags |= 1 << 4;
+            }
+            if s.no_gravity {
+                r.opt.disableflags |= 1 << 7;
+            }
+        }
+        Some(Bench { m, frozen, frozen_dofs })
+    }
+
+    /// Fresh data at the robot's standing keyframe (or qpos0), ctrl = keyframe ctrl.
+    pub fn data(&self, robot: &Robot) -> MjData<&MjModel> {
+        let mut d = MjData::new(&self.m);
+        if let Some(k) = robot.key.key {
+            let _ = d.reset_keyframe(k);
+        }
+        // Pre-fill actuator delay buffers with the held command so a delayed actuator does not
+        // see a zero target for its first `delay` seconds.
+        let nu = mj::raw(&self.m).nu as usize;
+        let ctrl = mj::slice(d.ffi().ctrl, nu).to_vec();
+        let hadr = mj::slice(mj::raw(&self.m).actuator_historyadr, nu).to_vec();
+        for (i, &c) in ctrl.iter().enumerate() {
+            if hadr.get(i).copied().unwrap_or(-1) >= 0 {
+                let _ = d.init_ctrl_history(i, None, &[c]);
+            }
+        }
+        d.forward();
+        d
+    }
+
+    /// One physics step, then re-impose the frozen coordinates.
+    pub fn step(&self, d: &mut MjData<&MjModel>) {
+        d.step();
+        let r = mj::raw(&self.m);
+        let (nq, nv) = (r.nq as usize, r.nv as usize);
+        let dr = mj::data_raw_mut(d);
+        let qpos = mj::slice_mut(dr.qpos, nq);
+        for &(i, v) in &self.frozen {
+            qpos[i] = v;
+        }
+        let qvel = mj::slice_mut(dr.qvel, nv);
+        for &k in &self.frozen_dofs {
+            qvel[k] = 0.0;
+        }
+    }
+
+    pub fn dt(&self) -> f64 {
+        mj::raw(&self.m).opt.timestep
+    }
+}
+
+/// Total number of MuJoCo warnings raised so far (bad qacc/qvel/qpos, full contact buffers, …).
+pub fn warnings(d: &MjData<&MjModel>) -> i32 {
+    d.ffi().warning.iter().map(|w| w.number).sum()
+}
+
+pub fn qpos(d: &MjData<&MjModel>, i: usize) -> f64 {
+    let n = mj::raw(d.model()).nq as usize;
+    mj::slice(d.ffi().qpos, n).get(i).copied().unwrap_or(f64::NAN)
+}
+
+pub fn qvel(d: &MjData<&MjModel>, i: usize) -> f64 {
+    let n = mj::raw(d.model()).nv as usize;
+    mj::slice(d.ffi().qvel, n).get(i).copied().unwrap_or(f64::NAN)
+}
+
+pub fn set_ctrl(d: &mut MjData<&MjModel>, a: usize, v: f64) {
+    let n = mj::raw(d.model()).nu as usize;
+    if let Some(c) = mj::slice_mut(mj::data_raw_mut(d).ctrl, n).get_mut(a) {
+        *c = v;
+    }
+}
+
+pub fn ctrl(d: &MjData<&MjModel>, a: usize) -> f64 {
+    let n = mj::raw(d.model()).nu as usize;
+    mj::slice(d.ffi().ctrl, n).get(a).copied().unwrap_or(f64::NAN)
+}

@@ -1,0 +1,53 @@
+//! Probe `actuator-direction`: drive one actuator alone by a small positive command and record
+//! which joints move and in which direction.
+//!
+//! * Drives: one actuator (position: target + 0.05 in actuator units; motor: +5 % of its force or
+//!   control range), every other actuator held at the keyframe; floating base pinned, gravity and
+//!   contacts off so only the actuator moves anything.
+//! * Measures: displacement of every hinge/slide joint after 0.3 s.
+//! * Confirms: a sign flip against the spec's `direction`, an actuator that moves nothing.
+//! * Budget: 0.3 s at the model's timestep.
+
+use super::bench::{self, Bench, Setup};
+use crate::model::{ActuatorKind, Robot};
+
+#[derive(Debug, Clone)]
+pub struct Direction {
+    pub steps: usize,
+    /// (joint id, displacement in rad or m) for joints that moved more than 1e-4.
+    pub moved: Vec<(usize, f64)>,
+}
+
+pub fn run(robot: &Robot, act: usize) -> Option<Direction> {
+    let a = robot.actuators.get(act)?;
+    let b = Bench::new(robot, Setup { pin_base: true, no_contact: true, no_gravity: true, ..Default::default() })?;
+    let mut d = b.data(robot);
+    let c0 = bench::ctrl(&d, act);
+    let cmd = match a.kind {
+        ActuatorKind::Position { .. } => c0 + 0.05,
+        _ => {
+            let span = if a.forcelimited {
+                a.forcerange[1].abs().max(a.forcerange[0].abs()) / a.gear.abs().max(1e-9)
+            } else if a.ctrllimited {
+                (a.ctrlrange[1] - a.ctrlrange[0]).abs() / 2.0
+            } else {
+                1.0
+            };
+            c0 + 0.05 * span
+        }
+    };
+    let q0: Vec<f64> = robot.joints.iter().map(|j| bench::qpos(&d, j.qposadr)).collect();
+    let n = (0.3 / b.dt()).ceil() as usize;
+    for _ in 0..n {
+        bench::set_ctrl(&mut d, act, cmd);
+        b.step(&mut d);
+    }
+    let moved = robot
+        .joints
+        .iter()
+        .filter(|j| j.is_scalar())
+        .map(|j| (j.id, bench::qpos(&d, j.qposadr) - q0[j.id]))
+        .filter(|(_, dq)| dq.abs() > 1e-4 || !dq.is_finite())
+        .collect();
+    Some(Direction { steps: n, moved })
+}

@@ -1,0 +1,197 @@
+//! Probe `impulse-response`: a small step in one joint's position target on a fixed test stand.
+//!
+//! * Drives: the joint's own actuator (a position servo, or the spec's PD gains applied through
+//!   a motor), target stepped by δ after a 1 s settle; every other DoF frozen (the probed joint
+//!   sees its own row of MuJoCo's mass matrix, armature included), contacts off, gravity on.
+//! * Measures: overshoot, logarithmic decrement between successive peaks → damping ratio ζ,
+//!   damped period → natural frequency ω_n, and the effective inertia kp/ω_n² it implies.
+//! * Confirms: underdamped gains when measured ζ is below the threshold; an armature mismatch
+//!   when the measured inertia differs from the hardware's by more than the tolerance;
+//!   instability when the response diverges (NaN, MuJoCo warnings, growth).
+//! * Budget: 1 s settle + 2 s response at the model's timestep.
+
+use std::collections::BTreeMap;
+
+use super::bench::{self, Bench, Setup};
+use crate::model::{ActuatorKind, Robot};
+
+#[derive(Debug, Clone)]
+pub struct StepResponse {
+    pub steps: usize,
+    pub diverged: bool,
+    pub overshoot: f64,
+    /// Damping ratio (log decrement when two peaks exist, else from overshoot); None when the
+    /// response does not overshoot (ζ ≳ 1).
+    pub zeta: Option<f64>,
+    pub omega_n: Option<f64>,
+    pub inertia: Option<f64>,
+    pub kp: f64,
+    pub kd: f64,
+}
+
+/// PD gains acting on a joint: from its position actuator, else from the spec (through a motor).
+pub fn gains(robot: &Robot, joint: usize, spec_kp_kd: Option<(f64, f64)>) -> Option<(usize, f64, f64, bool)> {
+    let j = &robot.joints[joint];
+    for a in robot.actuators_on_joint(joint) {
+        if let ActuatorKind::Position { kp, kv } = a.kind {
+            let g2 = a.gear * a.gear;
+            return Some((a.id, kp * g2, kv * g2 + j.damping, true));
+        }
+    }
+    let (kp, kd) = spec_kp_kd?;
+    let a = robot.actuators_on_joint(joint).into_iter().find(|a| matches!(a.kind, ActuatorKind::Motor))?;
+    Some((a.id, kp, kd + j.damping, false))
+}
+
+pub fn step_response(robot: &Robot, joint: usize, spec_kp_kd: Option<(f64, f64)>) -> Option<StepResponse> {
+    let j = robot.joints.get(joint)?;
+    if !j.is_scalar() {
+        return None;
+    }
+    let (act, kp, kd, is_position) = gains(robot, joint, spec_kp_kd)?;
+    let gear = robot.actuators[act].gear;
+    let b = Bench::new(robot, Setup { isolate_dof: Some(j.dofadr), no_contact: true, ..Default::default() })?;
+    let mut d = b.data(robot);
+    let dt = b.dt();
+    let q0 = bench::qpos(&d, j.qposadr);
+    let mut target = if is_position { bench::ctrl(&d, act) } else { q0 };
+    let settle = (1.0 / dt).ceil() as usize;
+    let resp = (2.0 / dt).ceil() as usize;
+    let mut steps = 0;
+    let pd = |d: &mut mujoco_rs::prelude::MjData<&mujoco_rs::prelude::MjModel>, tgt: f64| {
+        if !is_position {
+            let q = bench::qpos(d, j.qposadr);
+            let v = bench::qvel(d, j.dofadr);
+            bench::set_ctrl(d, act, (kp * (tgt - q) - (kd - j.damping) * v) / gear);
+        }
+    };
+    if !is_position {
+        target = q0;
+    }
+    for _ in 0..settle {
+        pd(&mut d, target);
+        b.step(&mut d);
+        steps += 1;
+    }
+    let q_eq = bench::qpos(&d, j.qposadr);
+    // Step of 0.05 rad (or 5 % of the range) towards the side with more room.
+    let (lo, hi) = if j.limited { (j.range[0], j.range[1]) } else { (-1e9, 1e9) };
+    let mut delta = 0.05f64.min(0.05 * (hi - lo).abs().max(1e-3));
+    if q_eq + delta > hi - delta && q_eq - delta > lo {
+        delta = -delta;
+    }
+    let new_target = if is_position { target + delta / gear } else { target + delta };
+    let mut y = Vec::with_capacity(resp);
+    let warn0 = bench::warnings(&d);
+    let mut diverged = false;
+    for _ in 0..resp {
+        if is_position {
+            bench::set_ctrl(&mut d, act, new_target);
+        } else {
+            pd(&mut d, new_target);
+        }
+        b.step(&mut d);
+        steps += 1;
+        let q = bench::qpos(&d, j.qposadr);
+        if !q.is_finite() || bench::warnings(&d) > warn0 || (q - q_eq).abs() > 100.0 * delta.abs() + 10.0 {
+            diverged = true;
+            break;
+        }
+        y.push((q - q_eq) / delta);
+    }
+    if diverged {
+        return Some(StepResponse { steps, diverged, overshoot: f64::NAN, zeta: None, omega_n: None, inertia: None, kp, kd });
+    }
+    Some(analyse(&y, dt, kp, kd, steps))
+}
+
+/// Second-order identification from a normalised step response.
+pub fn analyse(y: &[f64], dt: f64, kp: f64, kd: f64, steps: usize) -> StepResponse {
+    let n = y.len();
+    let tail = &y[n - n / 10..];
+    let yf = tail.iter().sum::<f64>() / tail.len().max(1) as f64;
+    let e: Vec<f64> = y.iter().map(|v| v / yf - 1.0).collect();
+    let peak = e.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+    let overshoot = peak.max(0.0);
+    // Local maxima of the error above a noise floor.
+    let floor = 1e-4;
+    let mut peaks = Vec::new();
+    for i in 1..n.saturating_sub(1) {
+        if e[i] > floor && e[i] >= e[i - 1] && e[i] > e[i + 1] {
+            peaks.push((i, e[i]));
+        }
+    }
+    let mut zeta = None;
+    let mut omega_n = None;
+    if overshoot > floor {
+        let z_os = {
+            let l = overshoot.ln();
+            -l / (std::f64::consts::PI.powi(2) + l * l).sqrt()
+        };
+        let mut z = z_os;
+        if peaks.len() >= 2 && peaks[1].1 > floor * 2.0 {
+            let dl = (peaks[0].1 / peaks[1].1).ln();
+            z = dl / (4.0 * std::f64::consts::PI.powi(2) + dl * dl).sqrt();
+            let td = (peaks[1].0 - peaks[0].0) as f64 * dt;
+            let wd = 2.0 * std::f64::consts::PI / td;
+            omega_n = Some(wd / (1.0 - z * z).max(1e-9).sqrt());
+        } else if let Some(&(i, _)) = peaks.first() {
+            // Only one peak: the first peak of a step response is at t = π/ω_d.
+            let wd = std::f64::consts::PI / (i as f64 * dt);
+            omega_n = Some(wd / (1.0 - z * z).max(1e-9).sqrt());
+        }
+        zeta = Some(z);
+    }
+    let inertia = omega_n.map(|w| kp / (w * w));
+    StepResponse { steps, diverged: false, overshoot, zeta, omega_n, inertia, kp, kd }
+}
+
+pub fn measured_map(r: &StepResponse) -> BTreeMap<String, f64> {
+    let mut m = BTreeMap::new();
+    m.insert("overshoot".into(), r.overshoot);
+    if let Some(z) = r.zeta {
+        m.insert("zeta".into(), z);
+    }
+    if let Some(w) = r.omega_n {
+        m.insert("omega_n".into(), w);
+    }
+    if let Some(i) = r.inertia {
+        m.insert("inertia".into(), i);
+    }
+    m.insert("kp".into(), r.kp);
+    m.insert("kd".into(), r.kd);
+    m
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Exact second-order step response sampled at dt.
+    fn second_order(zeta: f64, wn: f64, dt: f64, n: usize) -> Vec<f64> {
+        let wd = wn * (1.0 - zeta * zeta).sqrt();
+        (1..=n)
+            .map(|k| {
+                let t = k as f64 * dt;
+                1.0 - (-zeta * wn * t).exp() * ((wd * t).cos() + zeta / (1.0 - zeta * zeta).sqrt() * (wd * t).sin())
+            })
+            .collect()
+    }
+
+    #[test]
+    fn identifies_zeta_and_omega_from_a_clean_response() {
+        for &(z, w) in &[(0.1, 10.0), (0.3, 20.0), (0.6, 8.0)] {
+            let y = second_order(z, w, 0.001, 4000);
+            let r = analyse(&y, 0.001, 65.0, 1.0, 4000);
+            assert!((r.zeta.unwrap() - z).abs() < 0.01 * z.max(0.1), "zeta {z}: {:?}", r.zeta);
+            assert!((r.omega_n.unwrap() - w).abs() < 0.02 * w, "omega {w}: {:?}", r.omega_n);
+        }
+    }
+
+    #[test]
+    fn overdamped_has_no_zeta() {
+        let dt = 0.001;
+        let y: Vec<f64> = (1..4000).map(|k| 1.0 - (-(k as f64) * dt * 5.0).exp()).collect();
+        assert!(analyse(&y, dt, 1.0, 1.0, 4000).zeta.is_none());
+    }
+}

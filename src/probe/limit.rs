@@ -1,0 +1,59 @@
+//! Probe `limit-approach`: command one joint to the extreme of its actuator's control range and
+//! record whether it reaches the hard stop.
+//!
+//! * Drives: the joint's position actuator to the end of its ctrlrange nearer the joint limit
+//!   (both ends tried), other DoFs frozen, contacts off, gravity on.
+//! * Measures: whether MuJoCo's joint-limit constraint becomes active with force, and the joint
+//!   velocity at the first moment it does (the impact velocity).
+//! * Confirms `soft-limits` when the commanded extreme drives the joint into the hard stop.
+//! * Budget: 2 × 1 s at the model's timestep.
+
+use super::bench::{self, Bench, Setup};
+use crate::model::{Robot, mj};
+
+#[derive(Debug, Clone)]
+pub struct LimitHit {
+    pub steps: usize,
+    pub hit: bool,
+    pub impact_velocity: f64,
+    pub max_limit_force: f64,
+}
+
+pub fn run(robot: &Robot, act: usize) -> Option<LimitHit> {
+    let a = robot.actuators.get(act)?;
+    if a.target < 0 {
+        return None;
+    }
+    let j = robot.joints.get(a.target as usize)?;
+    if !j.is_scalar() {
+        return None;
+    }
+    let b = Bench::new(robot, Setup { isolate_dof: Some(j.dofadr), no_contact: true, ..Default::default() })?;
+    let (lo, hi) = if a.ctrllimited { (a.ctrlrange[0], a.ctrlrange[1]) } else { (j.range[0] * a.gear, j.range[1] * a.gear) };
+    let mut out = LimitHit { steps: 0, hit: false, impact_velocity: 0.0, max_limit_force: 0.0 };
+    for target in [lo, hi] {
+        let mut d = b.data(robot);
+        let n = (1.0 / b.dt()).ceil() as usize;
+        let mut first = true;
+        for _ in 0..n {
+            bench::set_ctrl(&mut d, act, target);
+            b.step(&mut d);
+            out.steps += 1;
+            let nefc = d.ffi().nefc.max(0) as usize;
+            let ty = mj::slice(d.ffi().efc_type, nefc);
+            let id = mj::slice(d.ffi().efc_id, nefc);
+            let f = mj::slice(d.ffi().efc_force, nefc);
+            for k in 0..nefc {
+                if ty[k] == 3 && id[k] == j.id as i32 && f[k].abs() > 1e-9 {
+                    if first {
+                        out.impact_velocity = out.impact_velocity.max(bench::qvel(&d, j.dofadr).abs());
+                        first = false;
+                    }
+                    out.hit = true;
+                    out.max_limit_force = out.max_limit_force.max(f[k].abs());
+                }
+            }
+        }
+    }
+    Some(out)
+}

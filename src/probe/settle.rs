@@ -1,0 +1,119 @@
+//! Probe `stance-settle`: the robot at its standing keyframe on the floor, position targets
+//! held, simulated for 1 s with full contact dynamics.
+//!
+//! * Measures, per collision geom: mean normal contact force over the last 0.3 s; per foot:
+//!   tilt of the foot body from level, contact chatter (contacts appearing or disappearing per
+//!   second over the last 0.5 s), deepest penetration; per passive joint: deflection from the
+//!   keyframe.
+//! * Confirms `toe-tilt` when a foot contact geom carries (almost) no load or the foot rocks;
+//!   `foot-collision-geometry` when contacts chatter or penetrate; `passive-joint-spring` when a
+//!   passive joint collapses (deflects > 0.2 rad or reaches its limit).
+//! * Budget: 1 s at the model's timestep.
+
+use std::collections::{BTreeMap, BTreeSet};
+
+use super::bench::{Bench, Setup};
+use crate::model::{Robot, mj};
+
+#[derive(Debug, Clone, Default)]
+pub struct Settle {
+    pub steps: usize,
+    pub diverged: bool,
+    /// Mean normal force per geom id over the last 0.3 s, N.
+    pub geom_load: BTreeMap<usize, f64>,
+    /// Contact set changes per second over the last 0.5 s, per body id of the robot-side geom.
+    pub chatter_per_s: BTreeMap<usize, f64>,
+    /// Deepest penetration per robot-side body, m.
+    pub penetration: BTreeMap<usize, f64>,
+    /// Final tilt of each body from its keyframe orientation, degrees.
+    pub body_tilt_deg: BTreeMap<usize, f64>,
+    /// Final qpos per joint id minus keyframe.
+    pub joint_deflection: BTreeMap<usize, f64>,
+    /// Final base height minus keyframe, m.
+    pub base_drop: f64,
+}
+
+pub fn run(robot: &Robot) -> Option<Settle> {
+    let b = Bench::new(robot, Setup::default())?;
+    let mut d = b.data(robot);
+    let dt = b.dt();
+    let n = (1.0 / dt).ceil() as usize;
+    let load_from = n - (0.3 / dt).ceil() as usize;
+    let chatter_from = n - (0.5 / dt).ceil() as usize;
+    let r = mj::raw(&b.m);
+    let (nbody, ngeom) = (r.nbody as usize, r.ngeom as usize);
+    let gbody = mj::slice(r.geom_bodyid, ngeom).to_vec();
+    let x0: Vec<f64> = mj::slice(d.ffi().xmat, 9 * nbody).to_vec();
+    let base_z0 = robot.joints.iter().find(|j| j.jtype == crate::model::JointType::Free).map(|j| robot.key.qpos[j.qposadr + 2]);
+    let mut out = Settle::default();
+    let mut load_sum: BTreeMap<usize, f64> = BTreeMap::new();
+    let mut prev: BTreeSet<(usize, usize)> = BTreeSet::new();
+    let mut changes: BTreeMap<usize, usize> = BTreeMap::new();
+    let warn0 = super::bench::warnings(&d);
+    for step in 0..n {
+        b.step(&mut d);
+        out.steps += 1;
+        if super::bench::warnings(&d) > warn0 {
+            out.diverged = true;
+            return Some(out);
+        }
+        let ncon = d.ffi().ncon.max(0) as usize;
+        let cons = mj::slice(d.ffi().contact, ncon);
+        let mut now = BTreeSet::new();
+        for (ci, c) in cons.iter().enumerate() {
+            let (g1, g2) = (c.geom[0], c.geom[1]);
+            if g1 < 0 || g2 < 0 {
+                continue;
+            }
+            let (g1, g2) = (g1 as usize, g2 as usize);
+            now.insert((g1.min(g2), g1.max(g2)));
+            for g in [g1, g2] {
+                let body = gbody[g].max(0) as usize;
+                if body == 0 {
+                    continue;
+                }
+                let pen = (-c.dist).max(0.0);
+                let e = out.penetration.entry(body).or_insert(0.0);
+                *e = e.max(pen);
+                if step >= load_from {
+                    let f = d.contact_force(ci);
+                    *load_sum.entry(g).or_insert(0.0) += f[0].abs();
+                }
+            }
+        }
+        if step >= chatter_from {
+            for &(g1, g2) in now.symmetric_difference(&prev) {
+                for g in [g1, g2] {
+                    let body = gbody[g].max(0) as usize;
+                    if body != 0 {
+                        *changes.entry(body).or_insert(0) += 1;
+                    }
+                }
+            }
+        }
+        prev = now;
+    }
+    let nload = (n - load_from) as f64;
+    out.geom_load = load_sum.into_iter().map(|(g, s)| (g, s / nload)).collect();
+    let window = (n - chatter_from) as f64 * dt;
+    out.chatter_per_s = changes.into_iter().map(|(b, c)| (b, c as f64 / window)).collect();
+    let x1 = mj::slice(d.ffi().xmat, 9 * nbody);
+    for bi in 1..nbody {
+        // Angle between the body's z axis now and at the keyframe.
+        let z0 = [x0[9 * bi + 2], x0[9 * bi + 5], x0[9 * bi + 8]];
+        let z1 = [x1[9 * bi + 2], x1[9 * bi + 5], x1[9 * bi + 8]];
+        let dot = (z0[0] * z1[0] + z0[1] * z1[1] + z0[2] * z1[2]).clamp(-1.0, 1.0);
+        out.body_tilt_deg.insert(bi, dot.acos().to_degrees());
+    }
+    let nq = r.nq as usize;
+    let q = mj::slice(d.ffi().qpos, nq);
+    for j in &robot.joints {
+        if j.is_scalar() {
+            out.joint_deflection.insert(j.id, q[j.qposadr] - robot.key.qpos.get(j.qposadr).copied().unwrap_or(0.0));
+        }
+    }
+    if let (Some(z0), Some(fj)) = (base_z0, robot.joints.iter().find(|j| j.jtype == crate::model::JointType::Free)) {
+        out.base_drop = z0 - q[fj.qposadr + 2];
+    }
+    Some(out)
+}
