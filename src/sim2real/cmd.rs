@@ -194,3 +194,15 @@ pub fn run_convert(input: &Path, output: &Path) -> i32 {
     }
     0
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn firmware_gain_matches_the_rig_actuator() {
+        // fixtures/bam_xl330/rig.xml: gainprm = 0.8199237503 for kp 400, vin 7.4.
+        assert!((xl330_kp_si(400.0, 7.4) - 0.8199237503).abs() < 1e-9);
+        assert!((xl330_kp_si(800.0, 7.4) - 2.0 * 0.8199237503).abs() < 1e-9);
+    }
+}

@@ -672,3 +672,24 @@ impl GapReport {
         o
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn regions_from_t1_names() {
+        for (n, r) in [
+            ("Left_Knee_Pitch", "legs"),
+            ("Right_Hip_Roll", "legs"),
+            ("Left_Elbow_Yaw", "arms"),
+            ("Right_Shoulder_Pitch", "arms"),
+            ("AAHead_yaw", "head"),
+            ("Head_pitch", "head"),
+            ("Waist", "torso"),
+            ("servo", "other"),
+        ] {
+            assert_eq!(region_from_name(n), r, "{n}");
+        }
+    }
+}
