@@ -81,6 +81,39 @@ pub enum Cmd {
         #[arg(long)]
         check: bool,
     },
+    /// Replay real recordings in MuJoCo and measure the sim-to-real gap (seed study §4.4, §5).
+    Gap(GapCmd),
+    /// Convert a BAM servo log (JSON) to the CSV recording format (adds the servo.kp column).
+    Convert {
+        /// BAM JSON log.
+        input: PathBuf,
+        /// CSV file to write.
+        output: PathBuf,
+    },
+}
+
+#[derive(Args, Debug)]
+pub struct GapCmd {
+    /// Model (MJCF or URDF).
+    pub model: PathBuf,
+    /// Recordings: CSV files, BAM JSON logs, or directories (their *.csv/*.json, sorted).
+    #[arg(required = true)]
+    pub recordings: Vec<PathBuf>,
+    /// Hardware spec (TOML) for joint regions. Default: <model>.toml beside the model.
+    #[arg(long)]
+    pub spec: Option<PathBuf>,
+    /// Control rate [Hz]; default: the recording's control_rate_hz, else 100.
+    #[arg(long)]
+    pub control_hz: Option<f64>,
+    /// Floating base: fixed (pinned), recorded (driven from base.* columns) or free.
+    #[arg(long, default_value = "fixed", value_parser = ["fixed", "recorded", "free"])]
+    pub base: String,
+    /// Output format.
+    #[arg(long, default_value = "text", value_parser = ["text", "json"])]
+    pub format: String,
+    /// Write an HTML report (inline SVG) into this directory.
+    #[arg(long)]
+    pub report: Option<PathBuf>,
 }
 
 fn use_color(choice: &str) -> bool {
@@ -121,6 +154,23 @@ pub fn run() -> i32 {
             }
         },
         Some(Cmd::GenDocs { out, check }) => gen_docs(&out, check),
+        Some(Cmd::Gap(g)) => {
+            use crate::sim2real::replay::BaseMode;
+            crate::sim2real::cmd::run_gap(crate::sim2real::cmd::GapArgs {
+                model: g.model,
+                recordings: g.recordings,
+                spec: g.spec,
+                control_hz: g.control_hz,
+                base: match g.base.as_str() {
+                    "recorded" => BaseMode::Recorded,
+                    "free" => BaseMode::Free,
+                    _ => BaseMode::Fixed,
+                },
+                json: g.format == "json",
+                report: g.report,
+            })
+        }
+        Some(Cmd::Convert { input, output }) => crate::sim2real::cmd::run_convert(&input, &output),
         None => check(cli.check),
     }
 }

@@ -6,3 +6,7 @@ pub mod locate;
 pub mod metrics;
 pub mod recording;
 pub mod spectral;
+pub mod replay;
+pub mod gap;
+pub mod cmd;
+pub mod report;

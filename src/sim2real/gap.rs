@@ -1,0 +1,695 @@
+//! The sim-to-real gap of a dataset: the seed study's metrics (§5, eqs 2–12) per joint, body
+//! region, episode and dataset, plus error localisation. [`GapReport`] is the reusable result
+//! (the fit command prints one before and one after fitting).
+//!
+//! * Position/velocity MAE, RMSE, max (eqs 2–4) are pooled over all samples (Σ|e|/N), per joint
+//!   over its episodes, per region over its joints, for the dataset over everything.
+//! * Correlation (eq 5) is computed per joint and episode; a joint's `corr` is the mean over its
+//!   episodes, `correlation_mean` (ρ̄ of eq 8) the mean over joints.
+//! * Gap scores (eqs 6–9) from the pooled position RMSE, velocity RMSE and ρ̄ with
+//!   [`GapConstants`].
+//! * Spectra (eqs 10–12): positions resampled to one uniform rate (the dataset's mean sample
+//!   rate, rounded), Welch PSD with 256-sample Hann windows and 50 % overlap per episode,
+//!   averaged over episodes weighted by their samples; symmetric KL between the averaged real
+//!   and simulated PSDs, band powers (0–2, 2–10, ≥10 Hz), dominant frequency.
+//! * Localisation: joints and regions ranked by their share of the total squared position
+//!   error, the frequency band with the largest band-power mismatch, motion phases
+//!   (locate::phase_errors), and per joint the bias / lag / gain / residual decomposition
+//!   (locate::decompose) naming the dominant component.
+//!
+//! Diverged episodes are excluded from every pooled number and listed in `diverged`.
+
+use serde::Serialize;
+
+use crate::sim2real::locate::{self, Explained};
+use crate::sim2real::metrics::{self, Accum, ErrorStats, GapConstants};
+use crate::sim2real::recording::{Recording, derivative};
+use crate::sim2real::replay::Episode;
+use crate::sim2real::spectral::{self, BandPower};
+
+#[derive(Debug, Clone)]
+pub struct GapOptions {
+    pub constants: GapConstants,
+    /// Welch segment length (samples) and overlap fraction.
+    pub nperseg: usize,
+    pub overlap: f64,
+    /// Uniform rate for spectra and decomposition; default: mean sample rate of the dataset.
+    pub uniform_rate_hz: Option<f64>,
+    /// Lag search range of the decomposition [s].
+    pub max_lag_s: f64,
+}
+
+impl Default for GapOptions {
+    fn default() -> Self {
+        GapOptions { constants: GapConstants::default(), nperseg: 256, overlap: 0.5, uniform_rate_hz: None, max_lag_s: 0.25 }
+    }
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct BandPowers {
+    pub real: BandPower,
+    pub sim: BandPower,
+}
+
+/// Error decomposition of one joint, pooled over episodes (sample-weighted means).
+#[derive(Debug, Clone, Serialize)]
+pub struct Decomposition {
+    pub bias: f64,
+    pub lag_s: f64,
+    pub gain: f64,
+    pub residual_rms: f64,
+    pub total_rms: f64,
+    /// Dominant component (the one carrying most squared error over episodes).
+    pub dominant: Explained,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct Phases {
+    pub reversal: ErrorStats,
+    pub high_accel: ErrorStats,
+    pub high_load: Option<ErrorStats>,
+    pub other: ErrorStats,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct JointGap {
+    pub name: String,
+    pub region: String,
+    pub samples: usize,
+    pub mae: f64,
+    pub rmse: f64,
+    pub max: f64,
+    pub corr: Option<f64>,
+    pub vel_mae: f64,
+    pub vel_rmse: f64,
+    pub spectral_kl: f64,
+    pub dominant_hz_real: f64,
+    pub dominant_hz_sim: f64,
+    pub band_power: BandPowers,
+    pub decomposition: Decomposition,
+    pub phases: Phases,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct RegionGap {
+    pub region: String,
+    pub joints: usize,
+    pub mae: f64,
+    pub rmse: f64,
+    pub max: f64,
+    pub corr: Option<f64>,
+    pub vel_mae: f64,
+    pub vel_rmse: f64,
+    pub spectral_kl: f64,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct EpisodeJoint {
+    pub name: String,
+    pub mae: f64,
+    pub rmse: f64,
+    pub corr: Option<f64>,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct EpisodeGap {
+    pub source: String,
+    pub samples: usize,
+    pub duration_s: f64,
+    pub position_mae: f64,
+    pub position_rmse: f64,
+    pub position_max: f64,
+    pub velocity_mae: f64,
+    pub velocity_rmse: f64,
+    pub correlation_mean: Option<f64>,
+    pub gap_overall: f64,
+    pub diverged: Option<String>,
+    pub per_joint: Vec<EpisodeJoint>,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct Share {
+    pub name: String,
+    pub rmse: f64,
+    /// Fraction of the dataset's total squared position error.
+    pub share: f64,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct BandMismatch {
+    pub band: String,
+    pub real: f64,
+    pub sim: f64,
+    /// |sim − real| as a fraction of the total real power (all bands).
+    pub mismatch: f64,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct PhaseShare {
+    pub phase: String,
+    pub rmse: f64,
+    pub mae: f64,
+    pub samples: usize,
+    /// RMSE in this phase over RMSE outside all phases.
+    pub ratio_to_other: f64,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct JointCause {
+    pub name: String,
+    pub dominant: Explained,
+    pub bias: f64,
+    pub lag_s: f64,
+    pub gain: f64,
+    pub summary: String,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct Localisation {
+    pub joints: Vec<Share>,
+    pub regions: Vec<Share>,
+    pub worst_band: Option<String>,
+    pub bands: Vec<BandMismatch>,
+    pub phases: Vec<PhaseShare>,
+    pub causes: Vec<JointCause>,
+}
+
+/// Averaged PSDs of one joint (for plots; not serialised).
+#[derive(Debug, Clone, Default)]
+pub struct JointPsd {
+    pub freqs: Vec<f64>,
+    pub real: Vec<f64>,
+    pub sim: Vec<f64>,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct GapReport {
+    pub position_mae: f64,
+    pub position_rmse: f64,
+    pub position_max: f64,
+    pub velocity_mae: f64,
+    pub velocity_rmse: f64,
+    pub correlation_mean: f64,
+    pub gap_kinematic: f64,
+    pub gap_dynamic: f64,
+    pub gap_control: f64,
+    pub gap_overall: f64,
+    pub spectral_kl: f64,
+    pub episodes: usize,
+    pub samples: usize,
+    pub duration_s: f64,
+    pub uniform_rate_hz: f64,
+    pub constants: GapConstants,
+    pub per_joint: Vec<JointGap>,
+    pub per_region: Vec<RegionGap>,
+    pub per_episode: Vec<EpisodeGap>,
+    pub localisation: Localisation,
+    /// Sources of episodes that diverged (excluded from pooled metrics).
+    pub diverged: Vec<String>,
+    #[serde(skip)]
+    pub psd: Vec<JointPsd>,
+}
+
+/// Body region of a joint from its name: legs, arms, head, torso, else "other".
+pub fn region_from_name(name: &str) -> String {
+    let n = name.to_lowercase();
+    let has = |ws: &[&str]| ws.iter().any(|w| n.contains(w));
+    if has(&["hip", "knee", "ankle", "toe", "foot", "leg"]) {
+        "legs"
+    } else if has(&["shoulder", "elbow", "wrist", "hand", "arm", "finger", "gripper"]) {
+        "arms"
+    } else if has(&["head", "neck"]) {
+        "head"
+    } else if has(&["waist", "torso", "trunk", "pelvis", "spine", "chest"]) {
+        "torso"
+    } else {
+        "other"
+    }
+    .to_string()
+}
+
+#[derive(Default)]
+struct JointAcc {
+    name: String,
+    pos: Accum,
+    vel: Accum,
+    corrs: Vec<f64>,
+    psd_w: f64,
+    psd: JointPsd,
+    dec_w: f64,
+    bias: f64,
+    lag: f64,
+    gain: f64,
+    res_sq: f64,
+    tot_sq: f64,
+    votes: Vec<(Explained, f64)>,
+    ph: [Accum; 4],
+    has_load: bool,
+}
+
+fn stats_to_accum(s: &ErrorStats) -> Accum {
+    let mut a = Accum::new();
+    if s.n > 0 {
+        let n = s.n as f64;
+        a.sum_abs = s.mae * n;
+        a.sum_sq = s.rmse * s.rmse * n;
+        a.max = s.max;
+        a.n = s.n;
+    }
+    a
+}
+
+fn mean(v: &[f64]) -> Option<f64> {
+    (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
+}
+
+/// Computes the report for episodes replayed from `recs` (paired by index). `region` maps a
+/// joint name to its region (spec, else [`region_from_name`]).
+pub fn compute(recs: &[Recording], eps: &[Episode], region: &dyn Fn(&str) -> String, opts: &GapOptions) -> GapReport {
+    let c = &opts.constants;
+    // Uniform rate: mean sample rate over the non-diverged dataset.
+    let ok: Vec<usize> = (0..recs.len().min(eps.len())).filter(|&i| eps[i].diverged.is_none()).collect();
+    let (mut tot_int, mut tot_dur) = (0usize, 0.0);
+    for &i in &ok {
+        tot_int += recs[i].t.len().saturating_sub(1);
+        tot_dur += recs[i].duration();
+    }
+    let fs = opts.uniform_rate_hz.unwrap_or_else(|| if tot_dur > 0.0 { (tot_int as f64 / tot_dur).round().max(1.0) } else { 100.0 });
+
+    let mut joints: Vec<JointAcc> = Vec::new();
+    let mut per_episode = Vec::new();
+    let mut diverged = Vec::new();
+    let (mut all_pos, mut all_vel) = (Accum::new(), Accum::new());
+    let (mut samples, mut duration) = (0usize, 0.0);
+    for (ei, (rec, ep)) in recs.iter().zip(eps).enumerate() {
+        let src = rec.source.display().to_string();
+        let is_ok = ep.diverged.is_none();
+        if !is_ok {
+            diverged.push(format!("{src}: {}", ep.diverged.as_deref().unwrap_or("")));
+        } else {
+            samples += rec.t.len();
+            duration += rec.duration();
+        }
+        let (mut ep_pos, mut ep_vel) = (Accum::new(), Accum::new());
+        let mut ep_corr = Vec::new();
+        let mut ep_joints = Vec::new();
+        for (k, name) in ep.joints.iter().enumerate() {
+            let Some(jt) = rec.joint(name) else { continue };
+            let qs = &ep.q_sim[k];
+            let qds = &ep.qd_sim[k];
+            let qd_real_owned;
+            let qd_real: &[f64] = match &jt.qd {
+                Some(v) => v,
+                None => {
+                    qd_real_owned = derivative(&rec.t, &jt.q);
+                    &qd_real_owned
+                }
+            };
+            let st = metrics::error_stats(qs, &jt.q);
+            let corr = metrics::pearson(qs, &jt.q);
+            ep_joints.push(EpisodeJoint { name: name.clone(), mae: st.mae, rmse: st.rmse, corr });
+            ep_pos.add(qs, &jt.q);
+            ep_vel.add(qds, qd_real);
+            if let Some(r) = corr {
+                ep_corr.push(r);
+            }
+            if !is_ok {
+                continue;
+            }
+            let _ = ei;
+            let ji = match joints.iter().position(|j| j.name == *name) {
+                Some(i) => i,
+                None => {
+                    joints.push(JointAcc { name: name.clone(), ..Default::default() });
+                    joints.len() - 1
+                }
+            };
+            let ja = &mut joints[ji];
+            ja.pos.add(qs, &jt.q);
+            ja.vel.add(qds, qd_real);
+            if let Some(r) = corr {
+                ja.corrs.push(r);
+            }
+            // Uniform resampling for spectra and decomposition.
+            let (_, ru) = metrics::resample_uniform(&rec.t, &jt.q, fs);
+            let (_, su) = metrics::resample_uniform(&rec.t, qs, fs);
+            let (f, pr) = spectral::welch_psd(&ru, fs, opts.nperseg, opts.overlap);
+            let (_, ps) = spectral::welch_psd(&su, fs, opts.nperseg, opts.overlap);
+            if !f.is_empty() {
+                let w = ru.len() as f64;
+                // Episodes shorter than a segment have a different grid: they only count when no
+                // full-length episode exists (the longest short one wins).
+                let full = ru.len() >= opts.nperseg;
+                let cur_full = ja.psd.freqs.len() == opts.nperseg / 2 + 1;
+                if ja.psd.freqs.is_empty() || (full && !cur_full) || (!full && !cur_full && f.len() > ja.psd.freqs.len()) {
+                    ja.psd = JointPsd { freqs: f, real: pr.iter().map(|x| x * w).collect(), sim: ps.iter().map(|x| x * w).collect() };
+                    ja.psd_w = w;
+                } else if f.len() == ja.psd.freqs.len() && full {
+                    for (a, b) in ja.psd.real.iter_mut().zip(&pr) {
+                        *a += b * w;
+                    }
+                    for (a, b) in ja.psd.sim.iter_mut().zip(&ps) {
+                        *a += b * w;
+                    }
+                    ja.psd_w += w;
+                }
+            }
+            let d = locate::decompose(1.0 / fs, &su, &ru, opts.max_lag_s);
+            let w = su.len().min(ru.len()) as f64;
+            if d.total_rms.is_finite() && w > 0.0 {
+                ja.dec_w += w;
+                ja.bias += d.bias * w;
+                ja.lag += d.lag_s * w;
+                ja.gain += d.gain * w;
+                ja.res_sq += if d.residual_rms.is_finite() { d.residual_rms.powi(2) * w } else { 0.0 };
+                ja.tot_sq += d.total_rms.powi(2) * w;
+                match ja.votes.iter_mut().find(|v| v.0 == d.explained) {
+                    Some(v) => v.1 += d.total_rms.powi(2) * w,
+                    None => ja.votes.push((d.explained, d.total_rms.powi(2) * w)),
+                }
+            }
+            let ph = locate::phase_errors(&rec.t, &jt.q, qd_real, jt.q_cmd.as_deref(), jt.tau.as_deref(), qs);
+            ja.ph[0].merge(&stats_to_accum(&ph.reversal));
+            ja.ph[1].merge(&stats_to_accum(&ph.high_accel));
+            if let Some(h) = &ph.high_load {
+                ja.ph[2].merge(&stats_to_accum(h));
+                ja.has_load = true;
+            }
+            ja.ph[3].merge(&stats_to_accum(&ph.other));
+        }
+        let ps = ep_pos.finish();
+        let vs = ep_vel.finish();
+        let cm = mean(&ep_corr);
+        let g = metrics::gap_scores(ps.rmse, vs.rmse, cm.unwrap_or(0.0), c);
+        per_episode.push(EpisodeGap {
+            source: src,
+            samples: rec.t.len(),
+            duration_s: rec.duration(),
+            position_mae: ps.mae,
+            position_rmse: ps.rmse,
+            position_max: ps.max,
+            velocity_mae: vs.mae,
+            velocity_rmse: vs.rmse,
+            correlation_mean: cm,
+            gap_overall: g.overall,
+            diverged: ep.diverged.clone(),
+            per_joint: ep_joints,
+        });
+        if is_ok {
+            all_pos.merge(&ep_pos);
+            all_vel.merge(&ep_vel);
+        }
+    }
+
+    let mut per_joint = Vec::new();
+    let mut psd = Vec::new();
+    for ja in &joints {
+        let p = ja.pos.finish();
+        let v = ja.vel.finish();
+        let w = ja.psd_w.max(1e-300);
+        let pr: Vec<f64> = ja.psd.real.iter().map(|x| x / w).collect();
+        let pss: Vec<f64> = ja.psd.sim.iter().map(|x| x / w).collect();
+        let f = &ja.psd.freqs;
+        let dw = ja.dec_w.max(1e-300);
+        let dominant = ja.votes.iter().cloned().fold(None::<(Explained, f64)>, |b, v| match b {
+            Some(b) if b.1 >= v.1 => Some(b),
+            _ => Some(v),
+        });
+        per_joint.push(JointGap {
+            name: ja.name.clone(),
+            region: region(&ja.name),
+            samples: p.n,
+            mae: p.mae,
+            rmse: p.rmse,
+            max: p.max,
+            corr: mean(&ja.corrs),
+            vel_mae: v.mae,
+            vel_rmse: v.rmse,
+            spectral_kl: spectral::symmetric_kl(&pr, &pss),
+            dominant_hz_real: spectral::dominant_frequency(f, &pr),
+            dominant_hz_sim: spectral::dominant_frequency(f, &pss),
+            band_power: BandPowers { real: spectral::band_power(f, &pr), sim: spectral::band_power(f, &pss) },
+            decomposition: Decomposition {
+                bias: ja.bias / dw,
+                lag_s: ja.lag / dw,
+                gain: ja.gain / dw,
+                residual_rms: (ja.res_sq / dw).sqrt(),
+                total_rms: (ja.tot_sq / dw).sqrt(),
+                dominant: dominant.map_or(Explained::None, |d| d.0),
+            },
+            phases: Phases {
+                reversal: ja.ph[0].finish(),
+                high_accel: ja.ph[1].finish(),
+                high_load: ja.has_load.then(|| ja.ph[2].finish()),
+                other: ja.ph[3].finish(),
+            },
+        });
+        psd.push(JointPsd { freqs: f.clone(), real: pr, sim: pss });
+    }
+
+    // Regions, in first-seen order.
+    let mut per_region: Vec<RegionGap> = Vec::new();
+    let mut region_sq: Vec<(String, f64, usize)> = Vec::new();
+    let mut names: Vec<String> = Vec::new();
+    for j in &per_joint {
+        if !names.contains(&j.region) {
+            names.push(j.region.clone());
+        }
+    }
+    for r in &names {
+        let members: Vec<usize> = (0..per_joint.len()).filter(|&i| per_joint[i].region == *r).collect();
+        let (mut pa, mut va) = (Accum::new(), Accum::new());
+        for &i in &members {
+            pa.merge(&joints[i].pos);
+            va.merge(&joints[i].vel);
+        }
+        let (p, v) = (pa.finish(), va.finish());
+        let corrs: Vec<f64> = members.iter().filter_map(|&i| per_joint[i].corr).collect();
+        let kls: Vec<f64> = members.iter().map(|&i| per_joint[i].spectral_kl).filter(|x| x.is_finite()).collect();
+        region_sq.push((r.clone(), pa.sum_sq, pa.n));
+        per_region.push(RegionGap {
+            region: r.clone(),
+            joints: members.len(),
+            mae: p.mae,
+            rmse: p.rmse,
+            max: p.max,
+            corr: mean(&corrs),
+            vel_mae: v.mae,
+            vel_rmse: v.rmse,
+            spectral_kl: mean(&kls).unwrap_or(f64::NAN),
+        });
+    }
+
+    let pos = all_pos.finish();
+    let vel = all_vel.finish();
+    let corrs: Vec<f64> = per_joint.iter().filter_map(|j| j.corr).collect();
+    let corr_mean = mean(&corrs).unwrap_or(f64::NAN);
+    let g = metrics::gap_scores(pos.rmse, vel.rmse, corr_mean, c);
+    let kls: Vec<f64> = per_joint.iter().map(|j| j.spectral_kl).filter(|x| x.is_finite()).collect();
+
+    // Localisation.
+    let total_sq = all_pos.sum_sq.max(1e-300);
+    let mut jshare: Vec<Share> = joints
+        .iter()
+        .zip(&per_joint)
+        .map(|(a, j)| Share { name: j.name.clone(), rmse: j.rmse, share: a.pos.sum_sq / total_sq })
+        .collect();
+    jshare.sort_by(|a, b| b.share.total_cmp(&a.share));
+    let mut rshare: Vec<Share> = region_sq
+        .iter()
+        .map(|(r, sq, n)| Share { name: r.clone(), rmse: (sq / (*n).max(1) as f64).sqrt(), share: sq / total_sq })
+        .collect();
+    rshare.sort_by(|a, b| b.share.total_cmp(&a.share));
+    let (mut br, mut bs) = ([0.0; 3], [0.0; 3]);
+    for j in &per_joint {
+        let (r, s) = (&j.band_power.real, &j.band_power.sim);
+        for (k, (x, y)) in [(r.low, s.low), (r.mid, s.mid), (r.high, s.high)].into_iter().enumerate() {
+            if x.is_finite() && y.is_finite() {
+                br[k] += x;
+                bs[k] += y;
+            }
+        }
+    }
+    let real_total = br.iter().sum::<f64>().max(1e-300);
+    let mut bands: Vec<BandMismatch> = ["0-2 Hz", "2-10 Hz", ">10 Hz"]
+        .iter()
+        .enumerate()
+        .map(|(k, b)| BandMismatch { band: b.to_string(), real: br[k], sim: bs[k], mismatch: (bs[k] - br[k]).abs() / real_total })
+        .collect();
+    bands.sort_by(|a, b| b.mismatch.total_cmp(&a.mismatch));
+    let worst_band = bands.first().filter(|b| b.mismatch > 0.0).map(|b| b.band.clone());
+    let mut ph_all = [Accum::new(), Accum::new(), Accum::new(), Accum::new()];
+    for ja in &joints {
+        for k in 0..4 {
+            ph_all[k].merge(&ja.ph[k]);
+        }
+    }
+    let other_rmse = ph_all[3].finish().rmse;
+    let mut phases: Vec<PhaseShare> = ["velocity reversal", "high commanded acceleration", "high load"]
+        .iter()
+        .enumerate()
+        .filter(|(k, _)| ph_all[*k].n > 0)
+        .map(|(k, name)| {
+            let s = ph_all[k].finish();
+            PhaseShare { phase: name.to_string(), rmse: s.rmse, mae: s.mae, samples: s.n, ratio_to_other: s.rmse / other_rmse }
+        })
+        .collect();
+    phases.sort_by(|a, b| b.ratio_to_other.total_cmp(&a.ratio_to_other));
+    let causes = jshare
+        .iter()
+        .filter_map(|s| per_joint.iter().find(|j| j.name == s.name))
+        .map(|j| {
+            let d = &j.decomposition;
+            let summary = match d.dominant {
+                Explained::Offset => format!("constant offset: real − sim = {:+.2}°", d.bias.to_degrees()),
+                Explained::Lag => format!("time lag: real lags sim by {:.1} ms", d.lag_s * 1e3),
+                Explained::Amplitude => format!("amplitude: real/sim = {:.3}", d.gain),
+                Explained::Residual => format!(
+                    "unexplained residual ({:.2}° of {:.2}° RMS): not a simple offset, lag or gain",
+                    d.residual_rms.to_degrees(),
+                    d.total_rms.to_degrees()
+                ),
+                Explained::None => "no significant error".to_string(),
+            };
+            JointCause { name: j.name.clone(), dominant: d.dominant, bias: d.bias, lag_s: d.lag_s, gain: d.gain, summary }
+        })
+        .collect();
+
+    GapReport {
+        position_mae: pos.mae,
+        position_rmse: pos.rmse,
+        position_max: pos.max,
+        velocity_mae: vel.mae,
+        velocity_rmse: vel.rmse,
+        correlation_mean: corr_mean,
+        gap_kinematic: g.kinematic,
+        gap_dynamic: g.dynamic,
+        gap_control: g.control,
+        gap_overall: g.overall,
+        spectral_kl: mean(&kls).unwrap_or(f64::NAN),
+        episodes: ok.len(),
+        samples,
+        duration_s: duration,
+        uniform_rate_hz: fs,
+        constants: c.clone(),
+        per_joint,
+        per_region,
+        per_episode,
+        localisation: Localisation { joints: jshare, regions: rshare, worst_band, bands, phases, causes },
+        diverged,
+        psd,
+    }
+}
+
+fn deg(x: f64) -> String {
+    if x.is_finite() { format!("{:.2}°", x.to_degrees()) } else { "n/a".into() }
+}
+fn num(x: f64, p: usize) -> String {
+    if x.is_finite() { format!("{x:.p$}") } else { "n/a".into() }
+}
+
+impl GapReport {
+    /// Human summary (angles in degrees). `title` heads the block ("gap", "before", "after").
+    pub fn to_text(&self, title: &str) -> String {
+        let mut o = String::new();
+        o.push_str(&format!(
+            "{title}: {} episode(s), {} samples, {:.1} s (spectra at {} Hz)\n",
+            self.episodes, self.samples, self.duration_s, self.uniform_rate_hz
+        ));
+        o.push_str(&format!(
+            "  position  MAE {}  RMSE {}  max {}\n  velocity  MAE {} rad/s  RMSE {} rad/s\n  correlation mean {}   spectral KL {}\n",
+            deg(self.position_mae),
+            deg(self.position_rmse),
+            deg(self.position_max),
+            num(self.velocity_mae, 3),
+            num(self.velocity_rmse, 3),
+            num(self.correlation_mean, 3),
+            num(self.spectral_kl, 3)
+        ));
+        o.push_str(&format!(
+            "  gap  kinematic {}  dynamic {}  control {}  overall {}\n",
+            num(self.gap_kinematic, 3),
+            num(self.gap_dynamic, 3),
+            num(self.gap_control, 3),
+            num(self.gap_overall, 3)
+        ));
+        o.push_str(&format!(
+            "\n  {:<24} {:<6} {:>8} {:>8} {:>8} {:>6} {:>9} {:>7} {:>13}\n",
+            "joint", "region", "MAE", "RMSE", "max", "corr", "vel RMSE", "KL", "dom Hz r/s"
+        ));
+        for s in &self.localisation.joints {
+            let Some(j) = self.per_joint.iter().find(|j| j.name == s.name) else { continue };
+            o.push_str(&format!(
+                "  {:<24} {:<6} {:>8} {:>8} {:>8} {:>6} {:>9} {:>7} {:>6}/{:<6}\n",
+                j.name,
+                j.region,
+                deg(j.mae),
+                deg(j.rmse),
+                deg(j.max),
+                j.corr.map_or("n/a".into(), |c| format!("{c:.2}")),
+                num(j.vel_rmse, 3),
+                num(j.spectral_kl, 3),
+                num(j.dominant_hz_real, 1),
+                num(j.dominant_hz_sim, 1)
+            ));
+        }
+        if self.per_region.len() > 1 {
+            o.push_str("\n  region   joints      MAE     RMSE   corr\n");
+            for r in &self.per_region {
+                o.push_str(&format!(
+                    "  {:<8} {:>6} {:>8} {:>8} {:>6}\n",
+                    r.region,
+                    r.joints,
+                    deg(r.mae),
+                    deg(r.rmse),
+                    r.corr.map_or("n/a".into(), |c| format!("{c:.2}"))
+                ));
+            }
+        }
+        let l = &self.localisation;
+        o.push_str("\n  where the gap is:\n");
+        for s in l.joints.iter().take(5) {
+            o.push_str(&format!("    {:>5.1} % of squared error  {}\n", 100.0 * s.share, s.name));
+        }
+        for s in l.regions.iter().take(4) {
+            o.push_str(&format!("    {:>5.1} % region {}\n", 100.0 * s.share, s.name));
+        }
+        if let Some(b) = &l.worst_band {
+            o.push_str(&format!("    largest PSD mismatch in band {b}\n"));
+        }
+        for p in l.phases.iter().take(3) {
+            o.push_str(&format!("    {}: RMSE {} ({:.2}× outside phases)\n", p.phase, deg(p.rmse), p.ratio_to_other));
+        }
+        for c in l.causes.iter().take(8) {
+            o.push_str(&format!("    {:<24} {}\n", c.name, c.summary));
+        }
+        if !self.diverged.is_empty() {
+            o.push_str(&format!("\n  {} episode(s) DIVERGED and are excluded:\n", self.diverged.len()));
+            for d in &self.diverged {
+                o.push_str(&format!("    {d}\n"));
+            }
+        }
+        o
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn regions_from_t1_names() {
+        for (n, r) in [
+            ("Left_Knee_Pitch", "legs"),
+            ("Right_Hip_Roll", "legs"),
+            ("Left_Elbow_Yaw", "arms"),
+            ("Right_Shoulder_Pitch", "arms"),
+            ("AAHead_yaw", "head"),
+            ("Head_pitch", "head"),
+            ("Waist", "torso"),
+            ("servo", "other"),
+        ] {
+            assert_eq!(region_from_name(n), r, "{n}");
+        }
+    }
+}

@@ -1,0 +1,296 @@
+//! Replay + gap metrics: closed-form checks on a synthetic "real" recording, the 16 BAM servo
+//! logs on the pendulum rig, and the CLI's error handling and JSON output.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use modellint::model::{Robot, source::SourceMap};
+use modellint::sim2real::gap::{self, GapOptions};
+use modellint::sim2real::locate::Explained;
+use modellint::sim2real::metrics::interp_at;
+use modellint::sim2real::recording::{self, JointTrace, Recording};
+use modellint::sim2real::replay::{self, ReplayOptions};
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn load(path: &Path) -> Robot {
+    let mut map = SourceMap::default();
+    modellint::model::load(&mut map, path, None).expect("model loads")
+}
+
+const JOINTS: [&str; 3] = ["shoulder_pitch", "elbow_pitch", "wrist_pitch"];
+
+/// Smooth commands starting at rest, on an irregular ~200 Hz time axis (8 s).
+fn command_recording() -> Recording {
+    let n = 1600;
+    let t: Vec<f64> = (0..n).map(|i| i as f64 * 0.005 + 0.0012 * ((i as f64) * 1.7).sin().powi(2)).collect();
+    let s2 = |x: f64| x.sin().powi(2);
+    let cmds: [Vec<f64>; 3] = [
+        t.iter().map(|&x| 0.4 * s2(std::f64::consts::PI * 0.4 * x)).collect(),
+        t.iter().map(|&x| 0.5 * s2(std::f64::consts::PI * 0.6 * x)).collect(),
+        t.iter().map(|&x| 0.4 * s2(std::f64::consts::PI * 0.5 * x) - 0.15 * s2(std::f64::consts::PI * 1.1 * x)).collect(),
+    ];
+    let joints = JOINTS
+        .iter()
+        .zip(cmds)
+        .map(|(name, c)| {
+            let mut j = JointTrace::new(*name, c.clone());
+            j.qd = Some(vec![0.0; n]);
+            j.q_cmd = Some(c);
+            j
+        })
+        .collect();
+    Recording {
+        source: PathBuf::from("synthetic.csv"),
+        meta: Default::default(),
+        control_rate_hz: Some(100.0),
+        control_t0_s: None,
+        t,
+        joints,
+        base: None,
+    }
+}
+
+#[test]
+fn closed_form_metrics_and_localisation() {
+    let robot = load(&root().join("fixtures/gap/arm3.xml"));
+    let opts = ReplayOptions::default();
+    let cmd = command_recording();
+    let ep = replay::replay(&robot, &cmd, &opts, None).expect("replay");
+    assert!(ep.diverged.is_none());
+
+    // "Real" = the simulation itself, through the CSV format.
+    let mut real = cmd.clone();
+    for (k, j) in real.joints.iter_mut().enumerate() {
+        j.q = ep.q_sim[k].clone();
+        j.qd = Some(ep.qd_sim[k].clone());
+    }
+    let real = recording::parse_csv(Path::new("real.csv"), &recording::write_csv(&real)).expect("round trip");
+    let ep2 = replay::replay(&robot, &real, &opts, None).expect("replay real");
+    let r0 = gap::compute(std::slice::from_ref(&real), std::slice::from_ref(&ep2), &gap::region_from_name, &GapOptions::default());
+    assert!(r0.position_mae < 1e-9, "unperturbed replay must reproduce itself, MAE {}", r0.position_mae);
+    assert!(r0.velocity_mae < 1e-9, "velocity MAE {}", r0.velocity_mae);
+
+    // Perturb: A offset 0.05 rad, B delayed 40 ms, C amplitude ×1.2 about its mean.
+    let mut pert = real.clone();
+    pert.source = PathBuf::from("perturbed.csv");
+    {
+        let a = &mut pert.joints[0];
+        a.q.iter_mut().for_each(|x| *x += 0.05);
+    }
+    {
+        let b = &mut pert.joints[1];
+        let (q, qd) = (b.q.clone(), b.qd.clone().unwrap());
+        b.q = real.t.iter().map(|&t| interp_at(&real.t, &q, t - 0.04)).collect();
+        b.qd = Some(real.t.iter().map(|&t| interp_at(&real.t, &qd, t - 0.04)).collect());
+    }
+    {
+        let c = &mut pert.joints[2];
+        let m = c.q.iter().sum::<f64>() / c.q.len() as f64;
+        c.q.iter_mut().for_each(|x| *x = m + 1.2 * (*x - m));
+        c.qd.as_mut().unwrap().iter_mut().for_each(|x| *x *= 1.2);
+    }
+    let ep3 = replay::replay(&robot, &pert, &opts, None).expect("replay perturbed");
+    let r = gap::compute(std::slice::from_ref(&pert), std::slice::from_ref(&ep3), &gap::region_from_name, &GapOptions::default());
+    eprintln!("{}", r.to_text("perturbed"));
+    let j = |n: &str| r.per_joint.iter().find(|j| j.name == n).unwrap();
+    let (a, b, c) = (j("shoulder_pitch"), j("elbow_pitch"), j("wrist_pitch"));
+    assert!((a.mae - 0.05).abs() < 1e-3, "A MAE {}", a.mae);
+    assert!((a.rmse - 0.05).abs() < 1e-3, "A RMSE {}", a.rmse);
+    assert!(a.corr.unwrap() > 0.999, "offset keeps the shape: corr {:?}", a.corr);
+    assert!(c.corr.unwrap() > 0.999, "amplitude keeps the shape: corr {:?}", c.corr);
+    assert!(b.corr.unwrap() > 0.9 && b.corr.unwrap() < 0.9999, "lag lowers corr a little: {:?}", b.corr);
+    assert_eq!(a.decomposition.dominant, Explained::Offset);
+    assert!((a.decomposition.bias - 0.05).abs() < 2e-3, "bias {}", a.decomposition.bias);
+    assert_eq!(b.decomposition.dominant, Explained::Lag);
+    assert!((b.decomposition.lag_s - 0.04).abs() < 0.005, "lag {}", b.decomposition.lag_s);
+    assert_eq!(c.decomposition.dominant, Explained::Amplitude);
+    assert!((c.decomposition.gain - 1.2).abs() < 0.03, "gain {}", c.decomposition.gain);
+    // Regions from names: all three are arm joints.
+    assert!(r.per_joint.iter().all(|j| j.region == "arms"));
+    // JSON keys.
+    let v = serde_json::to_value(&r).unwrap();
+    for k in ["position_mae", "gap_overall", "spectral_kl", "per_joint", "per_region", "per_episode", "localisation"] {
+        assert!(v.get(k).is_some(), "missing {k}");
+    }
+}
+
+#[test]
+fn hook_can_replace_the_actuator() {
+    // A hook implementing the same PD law as the model's actuator reproduces the plain replay.
+    struct Pd;
+    impl replay::ActuatorHook for Pd {
+        fn reset(&mut self, _j: &[String], _dt: f64) {}
+        fn replaces_actuator(&self, _i: usize) -> bool {
+            true
+        }
+        fn before_step(&mut self, _t: f64, _i: usize, q: f64, qd: f64, target: f64, out: &mut replay::StepIo) {
+            out.tau = out.kp * (target - q) - out.kd * qd;
+        }
+    }
+    let robot = load(&root().join("fixtures/gap/arm3.xml"));
+    let cmd = command_recording();
+    let opts = ReplayOptions::default();
+    let a = replay::replay(&robot, &cmd, &opts, None).unwrap();
+    let mut h = Pd;
+    let b = replay::replay(&robot, &cmd, &opts, Some(&mut h)).unwrap();
+    for k in 0..3 {
+        let e = a.q_sim[k].iter().zip(&b.q_sim[k]).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
+        assert!(e < 1e-9, "joint {k}: hook PD differs by {e}");
+    }
+}
+
+/// `$MODELLINT_SHARED_DATA`, else the first `shared/data` beside the crate or an ancestor
+/// (`../shared/data` for a checkout, `../../shared/data` for a worktree under `wt/`).
+fn shared_data() -> Option<PathBuf> {
+    if let Some(d) = std::env::var_os("MODELLINT_SHARED_DATA") {
+        let d = PathBuf::from(d);
+        return d.is_dir().then_some(d);
+    }
+    root().ancestors().skip(1).take(3).map(|a| a.join("shared/data")).find(|d| d.is_dir())
+}
+
+fn shared_bam() -> Option<PathBuf> {
+    let d = shared_data()?.join("recordings/bam_xl330");
+    d.is_dir().then_some(d)
+}
+
+#[test]
+fn bam_logs_replay_on_the_rig() {
+    let Some(dir) = shared_bam() else {
+        eprintln!("SKIPPED bam_logs_replay_on_the_rig: ../shared/data/recordings/bam_xl330 is absent");
+        return;
+    };
+    let robot = load(&root().join("fixtures/bam_xl330/rig.xml"));
+    let files = modellint::sim2real::cmd::expand_inputs(&[dir]).unwrap();
+    assert_eq!(files.len(), 16);
+    let recs: Vec<Recording> = files.iter().map(|f| modellint::sim2real::cmd::read_recording(f).unwrap()).collect();
+    let rp = replay::Replayer::new(&robot);
+    let eps: Vec<_> = replay::replay_all(&rp, &recs, &ReplayOptions::default(), None).into_iter().map(|e| e.unwrap()).collect();
+    let r = gap::compute(&recs, &eps, &gap::region_from_name, &GapOptions::default());
+    eprintln!("{:<26} {:>5} {:<16} {:>8} {:>8} {:>6}", "log", "kp", "trajectory", "MAE°", "RMSE°", "corr");
+    let mut sum = 0.0;
+    for (rec, e) in recs.iter().zip(&r.per_episode) {
+        eprintln!(
+            "{:<26} {:>5} {:<16} {:>8.2} {:>8.2} {:>6.3}",
+            rec.source.file_name().unwrap().to_string_lossy(),
+            rec.meta["kp"],
+            rec.meta["trajectory"],
+            e.position_mae.to_degrees(),
+            e.position_rmse.to_degrees(),
+            e.correlation_mean.unwrap_or(f64::NAN)
+        );
+        assert!(e.diverged.is_none());
+        assert!(e.position_mae.is_finite() && e.position_rmse.is_finite() && e.velocity_mae.is_finite());
+        assert!(e.position_mae.to_degrees() < 40.0, "{}: MAE {}°", e.source, e.position_mae.to_degrees());
+        sum += e.position_mae.to_degrees();
+    }
+    eprintln!("mean of per-log MAE: {:.2}°   pooled MAE: {:.2}°", sum / 16.0, r.position_mae.to_degrees());
+    assert!(r.gap_overall.is_finite());
+}
+
+// ---------------------------------------------------------------- CLI
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_modellint"))
+}
+
+fn tmp(name: &str, text: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("modellint-gap-test-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+fn arm() -> String {
+    root().join("fixtures/gap/arm3.xml").display().to_string()
+}
+
+#[test]
+fn cli_truncated_csv_is_exit_2_with_line() {
+    let p = tmp("trunc.csv", "t,shoulder_pitch.q,shoulder_pitch.q_cmd\n0,0,0\n0.01,0.1,0.1\n0.02,0.2\n");
+    let o = bin().args(["gap", &arm()]).arg(&p).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "stderr: {err}");
+    assert!(err.contains("trunc.csv:4"), "stderr: {err}");
+    assert!(o.stdout.is_empty());
+}
+
+#[test]
+fn cli_non_monotonic_time_is_exit_2_with_line() {
+    let p = tmp("nonmono.csv", "# control_rate_hz: 100\nt,shoulder_pitch.q\n0,0\n0.02,0.1\n0.01,0.2\n");
+    let o = bin().args(["gap", &arm()]).arg(&p).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "stderr: {err}");
+    assert!(err.contains("nonmono.csv:5"), "stderr: {err}");
+}
+
+#[test]
+fn cli_unknown_joint_lists_near_matches() {
+    let p = tmp("unknown.csv", "t,shoulder_pich.q\n0,0\n0.01,0.1\n");
+    let o = bin().args(["gap", &arm()]).arg(&p).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "stderr: {err}");
+    assert!(err.contains("shoulder_pich") && err.contains("'shoulder_pitch'"), "stderr: {err}");
+}
+
+#[test]
+fn cli_missing_file_is_exit_2() {
+    let o = bin().args(["gap", &arm(), "/nonexistent/rec.csv"]).output().unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("/nonexistent/rec.csv"));
+}
+
+#[test]
+fn cli_json_has_the_keys() {
+    let rec = command_recording();
+    let p = tmp("ok.csv", &recording::write_csv(&rec));
+    let report = std::env::temp_dir().join(format!("modellint-gap-report-{}", std::process::id()));
+    let o = bin().args(["gap", &arm()]).arg(&p).args(["--format", "json", "--report"]).arg(&report).output().unwrap();
+    assert_eq!(o.status.code(), Some(0), "stderr: {}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    for k in [
+        "position_mae",
+        "position_rmse",
+        "position_max",
+        "velocity_mae",
+        "velocity_rmse",
+        "correlation_mean",
+        "gap_kinematic",
+        "gap_dynamic",
+        "gap_control",
+        "gap_overall",
+        "spectral_kl",
+        "per_joint",
+        "per_region",
+        "per_episode",
+        "localisation",
+    ] {
+        assert!(v.get(k).is_some(), "missing key {k}");
+    }
+    let j = &v["per_joint"][0];
+    for k in ["mae", "rmse", "max", "corr", "vel_mae", "vel_rmse", "spectral_kl", "dominant_hz_real", "dominant_hz_sim", "band_power"] {
+        assert!(j.get(k).is_some(), "per_joint missing {k}");
+    }
+    let html = std::fs::read_to_string(report.join("index.html")).unwrap();
+    assert!(html.contains("<svg") && !html.contains("<script"));
+}
+
+#[test]
+fn cli_convert_bam() {
+    let Some(dir) = shared_bam() else {
+        eprintln!("SKIPPED cli_convert_bam: ../shared/data absent");
+        return;
+    };
+    let input = modellint::sim2real::cmd::expand_inputs(&[dir]).unwrap()[0].clone();
+    let out = std::env::temp_dir().join(format!("modellint-convert-{}.csv", std::process::id()));
+    let o = bin().arg("convert").arg(&input).arg(&out).output().unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+    let rec = recording::read_csv(&out).unwrap();
+    let kp = rec.joints[0].kp.as_ref().expect("servo.kp column");
+    assert!(kp[0] > 0.1 && kp[0] < 2.0);
+    assert_eq!(rec.control_rate_hz, Some(1000.0));
+}
