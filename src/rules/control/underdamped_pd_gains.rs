@@ -221,7 +221,7 @@ mod tests {
         // Critically damped: kd = 2√(kp I).
         assert!((damping_ratio(100.0, 2.0 * (100.0f64 * 0.25).sqrt(), 0.25) - 1.0).abs() < 1e-12);
         // kp that reaches ζ_min with kd = kd_max: (kd_max/(2ζ))²/I.
-        let (kd_max, zmin, i) = (3.0, 0.7, 0.5);
+        let (kd_max, zmin, i): (f64, f64, f64) = (3.0, 0.7, 0.5);
         let kp = (kd_max / (2.0 * zmin)).powi(2) / i;
         assert!((damping_ratio(kp, kd_max, i) - zmin).abs() < 1e-12);
     }
