@@ -81,7 +81,10 @@ pub fn parallel_issue(cx: &Context, spec: &Spec, j: &Joint, facts: &JointFacts, 
     if !(a > 0.0) || close(a, single, tol) {
         return None;
     }
-    if close(a, 2.0 * single, tol) {
+    // One value copy-pasted onto every actuated joint is `armature-mismatch`'s uniform finding,
+    // not a doubling, even when it happens to be twice some family's value.
+    let uniform = cx.robot.joints.iter().filter(|o| o.is_scalar() && spec.joint(&o.name).is_some_and(|f| f.motor.is_some() && !f.passive)).all(|o| o.armature == a);
+    if !uniform && close(a, 2.0 * single, tol) {
         return Some(Issue::DoubledOwn { single });
     }
     for other in &cx.robot.joints {
