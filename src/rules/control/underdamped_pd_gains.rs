@@ -1,16 +1,228 @@
 use crate::declare_rule;
-use crate::finding::{Finding, Severity};
-use crate::rules::{Context, Rule, RuleMeta};
+use crate::finding::{Finding, Severity, Subject};
+use crate::model::mjcf::ElemKind;
+use crate::model::{ActuatorKind, Robot, Transmission};
+use crate::rules::{Context, Rule, RuleMeta, opt};
+use crate::spec::v;
+use crate::util::fmt_num;
 
 declare_rule! {
     /// ## What it does
-    /// PLACEHOLDER — not implemented yet.
-    pub UnderdampedPdGains { id: "underdamped-pd-gains", group: "control", level: Severity::Warning, probe: None, options: [] }
+    /// For every joint under PD control (a `<position>` actuator, or a `<motor>` actuator whose
+    /// motor family in the spec gives `kp`/`kd`), computes the closed-loop damping ratio
+    /// ζ = kd / (2·√(kp·I)) and natural frequency ω_n = √(kp/I), where kd = actuator kv + joint
+    /// damping and I is the joint's diagonal entry of the mass matrix at the standing keyframe
+    /// (MuJoCo includes armature in it). Reports joints with ζ below `min_damping_ratio`. The
+    /// armature-only bound kd / (2·√(kp·armature)) is reported alongside.
+    ///
+    /// ## Why is this bad?
+    /// A policy trained on an underdamped simulated joint learns to behave like an underdamped
+    /// controller: its corrections overshoot, and on hardware each overshoot triggers a larger
+    /// correction on the next cycle, exciting sustained oscillation (seed 001 §3). The real motor
+    /// controllers were fine; the simulated data domain was wrong.
+    ///
+    /// ## How it is confirmed
+    /// Probe `impulse-response`: the joint is kicked at the keyframe with the base fixed and the
+    /// damping ratio is fitted from the decay of the oscillation, then compared with the
+    /// predicted ζ.
+    ///
+    /// ## How to fix
+    /// Raise kd (actuator `kv` or joint `damping`) to at least 2·ζ_min·√(kp·I), or lower kp.
+    /// When the firmware caps kd (`kd_max` in the spec), lower kp to (kd_max / (2·ζ_min))² / I.
+    pub UnderdampedPdGains {
+        id: "underdamped-pd-gains",
+        group: "control",
+        level: Severity::Error,
+        probe: Some("impulse-response"),
+        options: [opt("min_damping_ratio", 0.7, "", "smallest acceptable closed-loop damping ratio ζ")],
+    }
+}
+
+/// Where a joint's PD gains come from.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum GainSource {
+    /// A position actuator (index).
+    Actuator(usize),
+    /// A motor actuator (index) with kp/kd from the spec's motor family.
+    SpecMotor(usize),
+}
+
+/// One PD-controlled scalar joint, with gains referred to the joint.
+#[derive(Debug, Clone)]
+pub struct PdJoint {
+    pub joint: usize,
+    pub source: GainSource,
+    pub kp: f64,
+    /// Velocity gain of the controller (actuator kv·gear², or spec kd).
+    pub kd_ctrl: f64,
+    /// Total damping: kd_ctrl + joint damping.
+    pub kd: f64,
+    /// M[i,i] at the keyframe (armature included).
+    pub inertia: f64,
+    pub armature: f64,
+    pub family: Option<String>,
+}
+
+impl PdJoint {
+    pub fn zeta(&self) -> f64 {
+        damping_ratio(self.kp, self.kd, self.inertia)
+    }
+    pub fn omega_n(&self) -> f64 {
+        (self.kp / self.inertia).sqrt()
+    }
+}
+
+pub fn damping_ratio(kp: f64, kd: f64, inertia: f64) -> f64 {
+    kd / (2.0 * (kp * inertia).sqrt())
+}
+
+/// Every scalar joint driven by exactly one PD controller (position actuator on a joint
+/// transmission, or motor actuator with spec kp/kd).
+pub fn pd_joints(robot: &Robot, spec: Option<&crate::spec::Spec>) -> Vec<PdJoint> {
+    let mut out = Vec::new();
+    for j in &robot.joints {
+        if !j.is_scalar() {
+            continue;
+        }
+        let acts: Vec<_> = robot
+            .actuators_on_joint(j.id)
+            .into_iter()
+            .filter(|a| matches!(a.trn, Transmission::Joint | Transmission::JointInParent))
+            .collect();
+        if acts.len() != 1 {
+            continue;
+        }
+        let a = acts[0];
+        let inertia = robot.key.m_diag.get(j.dofadr).copied().unwrap_or(f64::NAN);
+        if !(inertia > 0.0) {
+            continue;
+        }
+        let facts = spec.and_then(|s| s.joint(&j.name));
+        let family = facts.as_ref().and_then(|f| f.motor.clone());
+        let g2 = a.gear * a.gear;
+        let (source, kp, kd_ctrl) = match a.kind {
+            ActuatorKind::Position { kp, kv } => (GainSource::Actuator(a.id), kp * g2, kv * g2),
+            ActuatorKind::Motor => {
+                let m = family.as_deref().and_then(|f| spec?.motor(f));
+                match m.and_then(|m| Some((v(&m.kp)?, v(&m.kd).unwrap_or(0.0)))) {
+                    Some((kp, kd)) => (GainSource::SpecMotor(a.id), kp, kd),
+                    None => continue,
+                }
+            }
+            _ => continue,
+        };
+        if !(kp > 0.0) {
+            continue;
+        }
+        out.push(PdJoint {
+            joint: j.id,
+            source,
+            kp,
+            kd_ctrl,
+            kd: kd_ctrl + j.damping,
+            inertia,
+            armature: j.armature,
+            family,
+        });
+    }
+    out
 }
 
 impl Rule for UnderdampedPdGains {
     fn meta(&self) -> &'static RuleMeta {
         &Self::META
     }
-    fn check(&self, _cx: &Context, _out: &mut Vec<Finding>) {}
+    fn check(&self, cx: &Context, out: &mut Vec<Finding>) {
+        let zmin = cx.opt("min_damping_ratio");
+        for p in pd_joints(cx.robot, cx.spec) {
+            let z = p.zeta();
+            if !(z < zmin) {
+                continue;
+            }
+            let j = &cx.robot.joints[p.joint];
+            let w = p.omega_n();
+            let z_arm = if p.armature > 0.0 { Some(damping_ratio(p.kp, p.kd, p.armature)) } else { None };
+            let kd_max = p.family.as_deref().and_then(|f| cx.spec?.motor(f)).and_then(|m| v(&m.kd_max));
+            let kd_need = 2.0 * zmin * (p.kp * p.inertia).sqrt();
+            let msg = format!(
+                "joint `{}` is underdamped under PD control: ζ = {} (kp {} N·m/rad, kd {} N·m·s/rad, I {} kg·m², ω_n {} rad/s), below {}",
+                j.name,
+                fmt_num(z, 3),
+                fmt_num(p.kp, 4),
+                fmt_num(p.kd, 4),
+                fmt_num(p.inertia, 4),
+                fmt_num(w, 4),
+                fmt_num(zmin, 3)
+            );
+            let mut f = match p.source {
+                GainSource::Actuator(aid) => {
+                    let a = &cx.robot.actuators[aid];
+                    cx.at_attr(ElemKind::Actuator, aid, &a.name, if a.biasprm[2] != 0.0 { "kv" } else { "kp" }, msg)
+                }
+                GainSource::SpecMotor(_) => cx.at_elem(ElemKind::Joint, j.id, &j.name, msg),
+            };
+            if let (GainSource::SpecMotor(_), Some(loc)) = (p.source, cx.facts(&j.name).and_then(|x| x.motor_loc)) {
+                f = f.secondary(loc, "kp/kd come from this motor family in the spec");
+            }
+            let arm_note = match z_arm {
+                Some(za) => format!(
+                    " With the armature alone ({} kg·m²) ζ would be {}; the link inertia makes it worse.",
+                    fmt_num(p.armature, 4),
+                    fmt_num(za, 3)
+                ),
+                None => " The joint has no armature, so nothing but the link inertia sets I.".into(),
+            };
+            f = f.note(format!(
+                "An underdamped simulated joint teaches the policy to behave like an underdamped controller; on hardware its corrections overshoot and it oscillates (seed 001 §3).{arm_note}"
+            ));
+            let help = match kd_max {
+                // The cap limits the controller's kd; joint damping adds to it.
+                Some(cap) if kd_need - j.damping > cap => format!(
+                    "reaching ζ = {} needs a controller kd ≥ {} N·m·s/rad, above the firmware cap kd_max = {} N·m·s/rad, so it is impossible at this kp; lower kp to {} N·m/rad (with kd = kd_max + joint damping)",
+                    fmt_num(zmin, 3),
+                    fmt_num(kd_need - j.damping, 4),
+                    fmt_num(cap, 4),
+                    fmt_num(((cap + j.damping) / (2.0 * zmin)).powi(2) / p.inertia, 4)
+                ),
+                _ => format!(
+                    "raise kd to ≥ {} N·m·s/rad (actuator kv + joint damping), or lower kp to ≤ {} N·m/rad at the current kd",
+                    fmt_num(kd_need, 4),
+                    fmt_num((p.kd / (2.0 * zmin)).powi(2) / p.inertia, 4)
+                ),
+            };
+            f = f
+                .help(help)
+                .label(format!("ζ = {}", fmt_num(z, 3)))
+                .subject(Subject::Joint(j.id))
+                .measured(z, "")
+                .expected(zmin, "")
+                .with("zeta", z)
+                .with("omega_n", w)
+                .with("kp", p.kp)
+                .with("kd", p.kd)
+                .with("inertia", p.inertia);
+            if let Some(za) = z_arm {
+                f = f.with("zeta_armature_only", za);
+            }
+            out.push(f);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    #[test]
+    fn damping_ratio_known_values() {
+        // Seed 001: kp 65, kd 5 on the hip armature 0.095625 alone.
+        let z = damping_ratio(65.0, 5.0, 0.095625);
+        assert!((z - 5.0 / (2.0 * (65.0f64 * 0.095625).sqrt())).abs() < 1e-12);
+        assert!((z - 1.0025).abs() < 1e-3, "{z}");
+        // Critically damped: kd = 2√(kp I).
+        assert!((damping_ratio(100.0, 2.0 * (100.0f64 * 0.25).sqrt(), 0.25) - 1.0).abs() < 1e-12);
+        // kp that reaches ζ_min with kd = kd_max: (kd_max/(2ζ))²/I.
+        let (kd_max, zmin, i): (f64, f64, f64) = (3.0, 0.7, 0.5);
+        let kp = (kd_max / (2.0 * zmin)).powi(2) / i;
+        assert!((damping_ratio(kp, kd_max, i) - zmin).abs() < 1e-12);
+    }
 }

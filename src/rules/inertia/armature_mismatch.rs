@@ -1,16 +1,157 @@
+use std::collections::BTreeMap;
+
 use crate::declare_rule;
-use crate::finding::{Finding, Severity};
-use crate::rules::{Context, Rule, RuleMeta};
+use crate::finding::{Finding, Severity, Subject};
+use crate::model::mjcf::ElemKind;
+use crate::rules::inertia::parallel_ankle_armature::parallel_issue;
+use crate::rules::{Context, Rule, RuleMeta, opt};
+use crate::spec::v;
+use crate::util::fmt_num;
 
 declare_rule! {
     /// ## What it does
-    /// PLACEHOLDER — not implemented yet.
-    pub ArmatureMismatch { id: "armature-mismatch", group: "inertia", level: Severity::Warning, probe: None, options: [] }
+    /// For every joint the spec says a motor drives, compares the compiled `armature` with the
+    /// reflected rotor inertia rotor_inertia × gear_ratio² × count of its motor family. Reports
+    /// zero armature (error) and values off by more than `tolerance` (joints that share the value
+    /// through one `<default class>` and family are reported together). Also reports, once, an
+    /// armature that is identical on every actuated joint while the spec's families expect
+    /// different values — the sign of one number copy-pasted everywhere. Joints driven by several
+    /// motors (count > 1) are left to `parallel-ankle-armature`.
+    ///
+    /// ## Why is this bad?
+    /// Armature here is the reflected inertia of motor and gearbox seen at the joint (seed 001
+    /// §2). It often dominates the link inertia of distal joints and sets their closed-loop
+    /// bandwidth and damping; a wrong value trains the policy on a joint that accelerates
+    /// differently from the hardware.
+    ///
+    /// ## How it is confirmed
+    /// Static: compiled `dof_armature` against the spec's motor families.
+    ///
+    /// ## How to fix
+    /// Set each joint's armature to rotor_inertia × gear_ratio² × count of its motor, e.g. one
+    /// `<default class>` per motor family.
+    pub ArmatureMismatch {
+        id: "armature-mismatch",
+        group: "inertia",
+        level: Severity::Warning,
+        probe: None,
+        options: [opt("tolerance", 0.05, "fraction", "allowed relative difference from the expected reflected inertia")],
+    }
+}
+
+struct Entry {
+    joint: usize,
+    expected: f64,
+    family: String,
 }
 
 impl Rule for ArmatureMismatch {
     fn meta(&self) -> &'static RuleMeta {
         &Self::META
     }
-    fn check(&self, _cx: &Context, _out: &mut Vec<Finding>) {}
+    fn check(&self, cx: &Context, out: &mut Vec<Finding>) {
+        let Some(spec) = cx.spec else { return };
+        let tol = cx.opt("tolerance");
+        let robot = cx.robot;
+        let mut actuated: Vec<(usize, f64, String)> = Vec::new();
+        // (default-class span or joint id, family, zero?) → joints
+        let mut groups: BTreeMap<(usize, usize, usize, String, bool), Vec<Entry>> = BTreeMap::new();
+        for j in robot.joints.iter().filter(|j| j.is_scalar()) {
+            let Some(facts) = spec.joint(&j.name) else { continue };
+            let Some(fam) = facts.motor.clone() else { continue };
+            if facts.passive {
+                continue;
+            }
+            let Some(expected) = spec.expected_armature(&facts) else { continue };
+            actuated.push((j.id, expected, fam.clone()));
+            if facts.count > 1 || parallel_issue(cx, spec, j, &facts, tol).is_some() {
+                continue;
+            }
+            let a = j.armature;
+            let zero = !(a > 0.0);
+            if !zero && (a - expected).abs() <= tol * expected {
+                continue;
+            }
+            let (loc, class) = robot.attr_loc(ElemKind::Joint, j.id, &j.name, "armature");
+            let key = if class.is_some() { (loc.file, loc.start, loc.end, fam.clone(), zero) } else { (usize::MAX, j.id, 0, fam.clone(), zero) };
+            groups.entry(key).or_default().push(Entry { joint: j.id, expected, family: fam });
+        }
+        for ((.., zero), es) in groups {
+            let first = &robot.joints[es[0].joint];
+            let (a, e, fam) = (first.armature, es[0].expected, es[0].family.as_str());
+            let m = spec.motor(fam);
+            let (ri, g) = (m.and_then(|m| v(&m.rotor_inertia)).unwrap_or(f64::NAN), m.and_then(|m| v(&m.gear_ratio)).unwrap_or(f64::NAN));
+            let ri_s = if ri.abs() < 1e-3 { format!("{ri:e}") } else { fmt_num(ri, 4) };
+            let formula = format!("{ri_s} × {}² = {} kg·m²", fmt_num(g, 4), fmt_num(e, 4));
+            let who = if es.len() == 1 {
+                format!("joint `{}`", first.name)
+            } else {
+                let names: Vec<&str> = es.iter().map(|x| robot.joints[x.joint].name.as_str()).collect();
+                format!("{} `{fam}` joints ({})", es.len(), names.join(", "))
+            };
+            let msg = if zero {
+                format!("{who} {} no armature, but the `{fam}` motor reflects rotor_inertia × gear² = {formula}", if es.len() == 1 { "has" } else { "have" })
+            } else {
+                format!(
+                    "armature {} kg·m² on {who} is {}% {} the `{fam}` motor's reflected inertia {formula}",
+                    fmt_num(a, 4),
+                    fmt_num(((a - e) / e).abs() * 100.0, 3),
+                    if a < e { "below" } else { "above" }
+                )
+            };
+            let mut f = cx
+                .at_attr(ElemKind::Joint, first.id, &first.name, "armature", msg)
+                .label(format!("armature {} kg·m²", fmt_num(a, 4)))
+                .note("armature stands for the motor and gearbox inertia reflected to the joint (seed 001 §2); it sets how fast the joint accelerates under the PD controller, so a wrong value trains the policy on a joint unlike the hardware")
+                .help(format!("set armature=\"{}\" for the `{fam}` joints (rotor_inertia × gear_ratio² × count)", fmt_num(e, 6)))
+                .subject(Subject::Joint(first.id))
+                .measured(a, "kg·m²")
+                .expected(e, "kg·m²")
+                .with("armature", a)
+                .with("expected_armature", e);
+            if zero && cx.level == cx.meta.default_level {
+                f.severity = Severity::Error;
+            }
+            if let Some(l) = spec.joint(&first.name).and_then(|x| x.motor_loc) {
+                f = f.secondary(l, format!("spec motor family `{fam}`"));
+            }
+            out.push(f);
+        }
+        // Copy-paste sign: one value everywhere while the families differ.
+        if actuated.len() >= 2 {
+            let a0 = robot.joints[actuated[0].0].armature;
+            let same = actuated.iter().all(|(j, ..)| (robot.joints[*j].armature - a0).abs() <= 1e-9 * a0.abs().max(1e-12));
+            let mut fams: BTreeMap<&str, f64> = BTreeMap::new();
+            for (_, e, fam) in &actuated {
+                fams.entry(fam.as_str()).or_insert(*e);
+            }
+            let mut vals: Vec<f64> = fams.values().copied().collect();
+            vals.sort_by(f64::total_cmp);
+            let distinct = vals.windows(2).any(|w| (w[1] - w[0]).abs() > tol * w[1]);
+            if same && fams.len() >= 2 && distinct {
+                let j = &robot.joints[actuated[0].0];
+                let list: Vec<String> = fams.iter().map(|(k, e)| format!("{k} {}", fmt_num(*e, 4))).collect();
+                let f = cx
+                    .at_attr(
+                        ElemKind::Joint,
+                        j.id,
+                        &j.name,
+                        "armature",
+                        format!(
+                            "every one of the {} actuated joints has the same armature {} kg·m², but the spec's {} motor families expect different values (kg·m²: {})",
+                            actuated.len(),
+                            fmt_num(a0, 4),
+                            fams.len(),
+                            list.join(", ")
+                        ),
+                    )
+                    .label("one value for every motor")
+                    .note("one number everywhere is the sign of a copy-pasted placeholder rather than per-family reflected inertia")
+                    .help("give each motor family its own default class with armature = rotor_inertia × gear_ratio² × count")
+                    .subject(Subject::Model)
+                    .with("armature", a0);
+                out.push(f);
+            }
+        }
+    }
 }

@@ -1,16 +1,225 @@
+use std::collections::BTreeMap;
+
 use crate::declare_rule;
-use crate::finding::{Finding, Severity};
-use crate::rules::{Context, Rule, RuleMeta};
+use crate::finding::{Finding, Severity, Subject};
+use crate::model::mjcf::ElemKind;
+use crate::model::{ActuatorKind, Robot, mj};
+use crate::rules::{Context, Rule, RuleMeta, opt};
+use crate::spec::v;
+use crate::util::fmt_num;
 
 declare_rule! {
     /// ## What it does
-    /// PLACEHOLDER — not implemented yet.
-    pub EffortLimitMismatch { id: "effort-limit-mismatch", group: "limits", level: Severity::Warning, probe: None, options: [] }
+    /// For every actuated hinge/slide joint, finds the largest torque the model lets the
+    /// actuators apply: the actuator's `forcerange` (× gear), the joint's `actuatorfrcrange`, or
+    /// for a `<motor>` its `ctrlrange` × gain × gear — the tightest that applies. Reports joints
+    /// with no force limit at all (error), and limits that differ from the spec's motor
+    /// `peak_torque` by more than `tolerance`. When the spec gives a motor family's
+    /// `velocity_limit` or `saturation_torque`, reports once per family (info) that MuJoCo cannot
+    /// express the speed–torque curve, so the training stack must apply it.
+    ///
+    /// ## Why is this bad?
+    /// Effort limits are part of the identified actuator model (seed 001 §4). A joint without a
+    /// limit, or with a higher one than the motor's peak, lets the policy learn motions that need
+    /// torque the hardware cannot produce; a lower one hides real capability.
+    ///
+    /// ## How it is confirmed
+    /// Static: compares compiled force limits with the spec.
+    ///
+    /// ## How to fix
+    /// Set `actuatorfrcrange="-peak peak"` on the joint (or `forcerange` on the actuator) to the
+    /// motor's peak torque; apply the speed–torque saturation in the training environment's
+    /// actuator model.
+    pub EffortLimitMismatch {
+        id: "effort-limit-mismatch",
+        group: "limits",
+        level: Severity::Warning,
+        probe: None,
+        options: [opt("tolerance", 0.05, "fraction", "allowed relative difference between model force limit and spec peak_torque")],
+    }
+}
+
+/// Where a joint's force limit comes from.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum LimitSource {
+    Joint,
+    ActuatorForce(usize),
+    MotorCtrl(usize),
+}
+
+/// The tightest symmetric torque limit (max |bound|) the model applies to joint `j`.
+pub fn joint_torque_limit(robot: &Robot, j: usize) -> Option<(f64, LimitSource)> {
+    let r = mj::raw(&robot.mj);
+    let njnt = r.njnt as usize;
+    let lim = mj::slice(r.jnt_actfrclimited, njnt);
+    let rng = mj::slice(r.jnt_actfrcrange, 2 * njnt);
+    let mut best: Option<(f64, LimitSource)> = None;
+    let mut take = |x: f64, s: LimitSource| {
+        if x.is_finite() && best.is_none_or(|(b, _)| x < b) {
+            best = Some((x, s));
+        }
+    };
+    if lim.get(j).copied().unwrap_or(false) {
+        take(rng[2 * j].abs().max(rng[2 * j + 1].abs()), LimitSource::Joint);
+    }
+    let acts = robot.actuators_on_joint(j);
+    // Several actuators add up; only a single one gives a per-actuator bound here.
+    if acts.len() == 1 {
+        let a = acts[0];
+        let g = a.gear.abs();
+        if a.forcelimited {
+            take(g * a.forcerange[0].abs().max(a.forcerange[1].abs()), LimitSource::ActuatorForce(a.id));
+        }
+        if a.kind == ActuatorKind::Motor && a.ctrllimited {
+            take(g * a.gainprm[0].abs() * a.ctrlrange[0].abs().max(a.ctrlrange[1].abs()), LimitSource::MotorCtrl(a.id));
+        }
+    }
+    best
 }
 
 impl Rule for EffortLimitMismatch {
     fn meta(&self) -> &'static RuleMeta {
         &Self::META
     }
-    fn check(&self, _cx: &Context, _out: &mut Vec<Finding>) {}
+    fn check(&self, cx: &Context, out: &mut Vec<Finding>) {
+        let tol = cx.opt("tolerance");
+        let robot = cx.robot;
+        let mut missing = Vec::new();
+        let mut used_families: BTreeMap<String, usize> = BTreeMap::new();
+        for j in robot.joints.iter().filter(|j| j.is_scalar()) {
+            let acts = robot.actuators_on_joint(j.id);
+            let facts = cx.facts(&j.name);
+            let spec_actuated = facts.as_ref().is_some_and(|f| f.motor.is_some() && !f.passive);
+            if acts.is_empty() && !spec_actuated {
+                continue;
+            }
+            if let Some(fam) = facts.as_ref().and_then(|f| f.motor.clone()) {
+                used_families.entry(fam).or_insert(j.id);
+            }
+            if acts.is_empty() {
+                continue; // actuator-mapping reports the missing actuator
+            }
+            let unit = if j.jtype == crate::model::JointType::Slide { "N" } else { "N·m" };
+            let Some((lim, src)) = joint_torque_limit(robot, j.id) else {
+                missing.push(j.id);
+                continue;
+            };
+            let Some(fam) = facts.as_ref().and_then(|f| f.motor.clone()) else { continue };
+            let Some(m) = cx.spec.and_then(|s| s.motor(&fam)) else { continue };
+            let Some(peak) = v(&m.peak_torque) else { continue };
+            let rel = (lim - peak) / peak;
+            if rel.abs() <= tol {
+                continue;
+            }
+            let msg = format!(
+                "joint `{}` force limit {} {unit} {} the `{fam}` motor's peak torque {} {unit} by {}%",
+                j.name,
+                fmt_num(lim, 4),
+                if rel > 0.0 { "exceeds" } else { "is below" },
+                fmt_num(peak, 4),
+                fmt_num(rel.abs() * 100.0, 3)
+            );
+            let mut f = match src {
+                LimitSource::Joint => cx.at_attr(ElemKind::Joint, j.id, &j.name, "actuatorfrcrange", msg),
+                LimitSource::ActuatorForce(a) => cx.at_attr(ElemKind::Actuator, a, &robot.actuators[a].name, "forcerange", msg),
+                LimitSource::MotorCtrl(a) => cx.at_attr(ElemKind::Actuator, a, &robot.actuators[a].name, "ctrlrange", msg),
+            };
+            if let Some(s) = cx.spec {
+                if let Some(p) = &m.peak_torque {
+                    f = f.secondary(s.loc(p.span()), format!("spec peak_torque of `{fam}`"));
+                }
+            }
+            f = f
+                .label(format!("±{} {unit}", fmt_num(lim, 4)))
+                .note(if rel > 0.0 {
+                    "the policy can learn motions that need more torque than the motor can give; on hardware they saturate and the motion fails"
+                } else {
+                    "the model withholds torque the motor has; the policy learns an artificially weak robot"
+                })
+                .help(format!("set actuatorfrcrange=\"-{p} {p}\" on the joint (or forcerange on the actuator)", p = fmt_num(peak, 4)))
+                .subject(Subject::Joint(j.id))
+                .measured(lim, unit)
+                .expected(peak, unit)
+                .with("force_limit", lim)
+                .with("peak_torque", peak);
+            out.push(f);
+        }
+        // Missing limits: one finding when no actuated joint has one, else one per joint.
+        let n_act = robot.joints.iter().filter(|j| j.is_scalar() && !robot.actuators_on_joint(j.id).is_empty()).count();
+        let err = |mut f: Finding| {
+            if cx.level == cx.meta.default_level {
+                f.severity = Severity::Error;
+            }
+            f
+        };
+        let note = "without a force limit the simulated actuator delivers any torque the controller asks for; the policy learns motions the real motors cannot produce";
+        if missing.len() >= 2 && missing.len() == n_act {
+            let j = &robot.joints[missing[0]];
+            let names: Vec<&str> = missing.iter().map(|&i| robot.joints[i].name.as_str()).collect();
+            let f = cx
+                .at_elem(ElemKind::Joint, j.id, &j.name, format!("none of the {} actuated joints has a force limit: {}", missing.len(), names.join(", ")))
+                .label("no actuatorfrcrange / forcerange")
+                .note(note)
+                .help("give each joint actuatorfrcrange=\"-peak peak\" with its motor's peak torque (or forcerange on the actuators)")
+                .subject(Subject::Joint(j.id));
+            out.push(err(f));
+        } else {
+            for &ji in &missing {
+                let j = &robot.joints[ji];
+                let peak = cx.facts(&j.name).and_then(|f| f.motor).and_then(|fam| cx.spec?.motor(&fam)).and_then(|m| v(&m.peak_torque));
+                let f = cx
+                    .at_elem(ElemKind::Joint, j.id, &j.name, format!("actuated joint `{}` has no force limit", j.name))
+                    .label("no actuatorfrcrange / forcerange")
+                    .note(note)
+                    .help(match peak {
+                        Some(p) => format!("set actuatorfrcrange=\"-{p} {p}\" (spec peak torque)", p = fmt_num(p, 4)),
+                        None => "set actuatorfrcrange=\"-peak peak\" with the motor's peak torque".into(),
+                    })
+                    .subject(Subject::Joint(j.id));
+                out.push(err(f));
+            }
+        }
+        // Speed–torque saturation: one info per motor family that states it.
+        let Some(spec) = cx.spec else { return };
+        for (fam, &jid) in &used_families {
+            let Some(m) = spec.motor(fam) else { continue };
+            let (vl, st) = (v(&m.velocity_limit), v(&m.saturation_torque));
+            let Some(span) = m.velocity_limit.as_ref().map(|s| s.span()).or(m.saturation_torque.as_ref().map(|s| s.span())) else { continue };
+            let mut parts = Vec::new();
+            if let Some(x) = vl {
+                parts.push(format!("velocity limit {} rad/s", fmt_num(x, 4)));
+            }
+            if let Some(x) = st {
+                parts.push(format!("saturation torque {} N·m", fmt_num(x, 4)));
+            }
+            let joints: Vec<&str> = robot
+                .joints
+                .iter()
+                .filter(|j| cx.facts(&j.name).and_then(|f| f.motor).as_deref() == Some(fam.as_str()))
+                .map(|j| j.name.as_str())
+                .collect();
+            let mut f = cx
+                .finding(
+                    format!(
+                        "motor family `{fam}` has a speed–torque limit ({}) that MuJoCo actuators cannot express; it must be applied in the training stack ({} joints: {})",
+                        parts.join(", "),
+                        joints.len(),
+                        joints.join(", ")
+                    ),
+                    spec.loc(span),
+                )
+                .label("not representable in MJCF")
+                .note("a real motor's available torque falls with speed (seed 001 §4: speed–torque saturation); MuJoCo applies only a constant force range, so fast motions in simulation get more torque than the hardware")
+                .help(match (st, vl, v(&m.peak_torque)) {
+                    (Some(s), Some(w), _) => format!("in the actuator model clamp |τ| ≤ min(peak, {s}·(1 − |q̇|/{w})) N·m", s = fmt_num(s, 4), w = fmt_num(w, 4)),
+                    (None, Some(w), Some(p)) => format!("in the actuator model clamp |τ| ≤ {p}·(1 − |q̇|/{w}) N·m, or at least limit joint speed to {w} rad/s", p = fmt_num(p, 4), w = fmt_num(w, 4)),
+                    _ => "apply the speed–torque saturation in the training environment's actuator model".into(),
+                })
+                .subject(Subject::Joint(jid));
+            if cx.level == cx.meta.default_level {
+                f.severity = Severity::Info;
+            }
+            out.push(f);
+        }
+    }
 }

@@ -1,16 +1,209 @@
 use crate::declare_rule;
-use crate::finding::{Finding, Severity};
+use crate::finding::{Finding, Severity, Subject};
+use crate::model::mjcf::ElemKind;
+use crate::model::{ActuatorKind, Transmission};
 use crate::rules::{Context, Rule, RuleMeta};
+use crate::util::fmt_num;
 
 declare_rule! {
     /// ## What it does
-    /// PLACEHOLDER — not implemented yet.
-    pub ActuatorMapping { id: "actuator-mapping", group: "mapping", level: Severity::Warning, probe: None, options: [] }
+    /// Checks the joint ↔ actuator mapping against the spec: every joint with a motor family has
+    /// an actuator (joint or tendon transmission; up to `count` for parallel drives); no actuator
+    /// drives a joint the spec marks passive; no second, force-unlimited actuator reaches a joint
+    /// that already has a limited one; the numbers of actuated and passive joints match
+    /// `robot.actuated` / `robot.passive`; the gear sign agrees with the spec `direction`.
+    /// Without a spec it still checks that actuator targets exist and that a position
+    /// actuator's ctrlrange does not reach outside its joint's range (a ctrlrange covering the
+    /// whole range is `soft-limits`' finding). Missing force limits are `effort-limit-mismatch`'s.
+    ///
+    /// ## Why is this bad?
+    /// Hardware mapping comes first (seed 001 §1): a joint driven in simulation but passive on
+    /// the robot, a missing or doubled actuator, or a flipped sign produce unstable or seemingly
+    /// random policy behaviour that no reward tuning fixes.
+    ///
+    /// ## How it is confirmed
+    /// Probe `actuator-direction` for sign findings: the actuator is driven and the direction of
+    /// the joint's motion compared with the spec. The other checks are static.
+    ///
+    /// ## How to fix
+    /// Add, remove or retarget actuators so each motor of the real robot has exactly one, flip
+    /// `gear` where the direction disagrees, and keep position targets inside the joint range.
+    pub ActuatorMapping {
+        id: "actuator-mapping",
+        group: "mapping",
+        level: Severity::Error,
+        probe: Some("actuator-direction"),
+        options: [],
+    }
 }
 
 impl Rule for ActuatorMapping {
     fn meta(&self) -> &'static RuleMeta {
         &Self::META
     }
-    fn check(&self, _cx: &Context, _out: &mut Vec<Finding>) {}
+    fn check(&self, cx: &Context, out: &mut Vec<Finding>) {
+        let robot = cx.robot;
+        let warn = |mut f: Finding| {
+            if cx.level == cx.meta.default_level {
+                f.severity = Severity::Warning;
+            }
+            f
+        };
+        // Targets exist.
+        for a in &robot.actuators {
+            if a.target < 0 {
+                let f = cx
+                    .at_elem(ElemKind::Actuator, a.id, &a.name, format!("actuator `{}` has no transmission target", a.name))
+                    .label("no target")
+                    .note("an actuator that drives nothing is a mapping error: the policy's action for it has no effect")
+                    .help("point the actuator at the joint (or tendon) of its motor, or remove it")
+                    .subject(Subject::Actuator(a.id));
+                out.push(f);
+            }
+        }
+        // Actuators whose gear sign contradicts the spec: their shifted ctrlrange is a consequence.
+        let flipped = |a: &crate::model::Actuator| {
+            a.target >= 0
+                && cx.facts(&robot.joints[a.target as usize].name).and_then(|f| f.direction).is_some_and(|d| a.gear * f64::from(d) < 0.0)
+        };
+        // Position targets outside the joint range (partial overlap; full coverage is soft-limits').
+        for a in &robot.actuators {
+            if flipped(a) {
+                continue;
+            }
+            if !matches!(a.kind, ActuatorKind::Position { .. }) || !matches!(a.trn, Transmission::Joint | Transmission::JointInParent) || !a.ctrllimited || a.target < 0 {
+                continue;
+            }
+            let j = &robot.joints[a.target as usize];
+            if !j.is_scalar() || !j.limited {
+                continue;
+            }
+            let g = if a.gear != 0.0 { a.gear } else { 1.0 };
+            let (x, y) = (a.ctrlrange[0] / g, a.ctrlrange[1] / g);
+            let c = [x.min(y), x.max(y)];
+            let r = j.range;
+            let eps = 1e-9 * (r[1] - r[0]).abs().max(1.0);
+            let below = c[0] < r[0] - eps;
+            let above = c[1] > r[1] + eps;
+            let covers = c[0] <= r[0] + eps && c[1] >= r[1] - eps;
+            if (below || above) && !covers {
+                let u = if j.jtype == crate::model::JointType::Slide { "m" } else { "rad" };
+                let f = cx
+                    .at_attr(
+                        ElemKind::Actuator,
+                        a.id,
+                        &a.name,
+                        "ctrlrange",
+                        format!(
+                            "position actuator `{}` ctrlrange [{}, {}] {u} reaches outside joint `{}`'s range [{}, {}] {u}",
+                            a.name,
+                            fmt_num(c[0], 4),
+                            fmt_num(c[1], 4),
+                            j.name,
+                            fmt_num(r[0], 4),
+                            fmt_num(r[1], 4)
+                        ),
+                    )
+                    .label("outside the joint range")
+                    .note("targets beyond the hard stop can never be reached: the controller pushes the joint into its limit, and a ctrlrange shifted off the joint's range usually means the actuator drives the wrong joint or uses the wrong zero")
+                    .help("make ctrlrange a centred sub-range of the joint range (see soft-limits), or check the actuator's joint and the joint's zero")
+                    .subject(Subject::Actuator(a.id));
+                out.push(warn(f));
+            }
+        }
+        let Some(spec) = cx.spec else { return };
+        let (mut n_act, mut n_passive) = (0usize, 0usize);
+        for j in robot.joints.iter().filter(|j| j.is_scalar()) {
+            let acts = robot.actuators_on_joint(j.id);
+            if acts.is_empty() {
+                n_passive += 1;
+            } else {
+                n_act += 1;
+            }
+            let Some(facts) = spec.joint(&j.name) else { continue };
+            let spec_label = |f: Finding| match facts.locs.first() {
+                Some(&l) => f.secondary(l, "spec entry for this joint"),
+                None => f,
+            };
+            if facts.passive {
+                if let Some(a) = acts.first() {
+                    let f = cx
+                        .at_elem(ElemKind::Actuator, a.id, &a.name, format!("actuator `{}` drives joint `{}`, which the spec marks passive", a.name, j.name))
+                        .label("drives a passive joint")
+                        .note("the real joint has no motor (e.g. a spring toe); a simulated actuator lets the policy use torque that does not exist")
+                        .help("remove the actuator and model the joint's spring and damping instead")
+                        .subject(Subject::Actuator(a.id));
+                    out.push(spec_label(f));
+                }
+                continue;
+            }
+            let Some(fam) = facts.motor.clone() else { continue };
+            if acts.is_empty() {
+                let f = cx
+                    .at_elem(ElemKind::Joint, j.id, &j.name, format!("joint `{}` has a `{fam}` motor on the robot but no actuator in the model", j.name))
+                    .label("no actuator")
+                    .note("the simulated joint is passive while the real one is driven; the policy cannot learn to use it")
+                    .help("add an actuator (joint or tendon transmission) for this joint with the motor's force limit")
+                    .subject(Subject::Joint(j.id));
+                out.push(spec_label(f));
+                continue;
+            }
+            // A force-unlimited extra actuator on a joint that already has a limited one.
+            let limited = |a: &&crate::model::Actuator| a.forcelimited || (a.kind == ActuatorKind::Motor && a.ctrllimited);
+            if acts.len() > 1 && acts.iter().any(limited) {
+                if let Some(a) = acts.iter().find(|a| !limited(a)) {
+                    let f = cx
+                        .at_elem(ElemKind::Actuator, a.id, &a.name, format!("actuator `{}` reaches joint `{}` without a force limit, beside a limited actuator", a.name, j.name))
+                        .label("unlimited second actuator")
+                        .note("the extra actuator adds torque past the motor's limit, so the joint's effort limit is no longer enforced")
+                        .help("remove the extra actuator or give it a forcerange")
+                        .subject(Subject::Actuator(a.id));
+                    out.push(spec_label(f));
+                    continue;
+                }
+            }
+            if acts.len() > facts.count as usize {
+                let names: Vec<&str> = acts.iter().map(|a| a.name.as_str()).collect();
+                let a = acts[1];
+                let f = cx
+                    .at_elem(ElemKind::Actuator, a.id, &a.name, format!("joint `{}` is driven by {} actuators ({}), but the spec gives it {} motor(s)", j.name, acts.len(), names.join(", "), facts.count))
+                    .label("extra actuator")
+                    .note("duplicate actuators add their torques, doubling the joint's strength and gains relative to the hardware")
+                    .help("keep one actuator per real motor")
+                    .subject(Subject::Actuator(a.id));
+                out.push(warn(spec_label(f)));
+            }
+            if let Some(d) = facts.direction {
+                for a in acts.iter().filter(|a| matches!(a.trn, Transmission::Joint | Transmission::JointInParent)) {
+                    if a.gear * d as f64 >= 0.0 {
+                        continue;
+                    }
+                    let f = cx
+                        .at_attr(ElemKind::Actuator, a.id, &a.name, "gear", format!("actuator `{}` gear {} drives joint `{}` opposite to the spec direction {}", a.name, fmt_num(a.gear, 4), j.name, d))
+                        .label(format!("gear {}", fmt_num(a.gear, 4)))
+                        .note("a flipped actuator sign makes every command move the joint the wrong way relative to the hardware's convention; the deployed policy drives the real joint backwards")
+                        .help(format!("set gear=\"{}\" (or fix the spec's direction)", fmt_num(-a.gear, 4)))
+                        .subject(Subject::Actuator(a.id))
+                        .with("gear", a.gear)
+                        .with("direction", d as f64);
+                    out.push(spec_label(f));
+                }
+            }
+        }
+        for (what, count, want) in [("actuated", n_act, &spec.robot.actuated), ("passive", n_passive, &spec.robot.passive)] {
+            let Some(w) = want else { continue };
+            if count == *w.get_ref() {
+                continue;
+            }
+            let f = cx
+                .finding(format!("the model has {count} {what} joints, the spec says robot.{what} = {}", w.get_ref()), spec.loc(w.span()))
+                .label(format!("model: {count}"))
+                .element("model", robot.root_loc())
+                .note("a different number of driven joints than the hardware means a joint is mapped wrongly; the policy's action and observation spaces will not match the robot")
+                .help(format!("check which joints have actuators (hinge/slide joints with no actuator count as passive){}", if what == "passive" { "" } else { ", or correct the spec" }))
+                .subject(Subject::Model)
+                .with(what, count as f64);
+            out.push(f);
+        }
+    }
 }
