@@ -27,6 +27,7 @@ pub struct Loaded {
 
 /// Loads everything a lint run needs; every failure is a located `LoadError` (exit 2).
 pub fn load(input: &LintInput) -> Result<Loaded, LoadError> {
+    crate::model::mj::silence_warnings();
     let mut sources = SourceMap::default();
     let config = match input.config.clone().or_else(|| crate::config::discover(&input.model)) {
         Some(p) => crate::config::load(&mut sources, &p)?,
