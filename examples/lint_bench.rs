@@ -46,11 +46,28 @@ fn bench(model: &str, spec: Option<&str>) {
         d.step();
     }
     let bare = n as f64 / t.elapsed().as_secs_f64();
+    // Per-rule cost on a loaded model.
+    let l = load(&input).unwrap();
+    let mut per_rule = Vec::new();
+    for rule in modellint::rules::registry() {
+        let meta = rule.meta();
+        let cx = modellint::rules::Context { robot: &l.robot, spec: l.spec.as_ref(), sources: &l.sources, options: Default::default(), meta, level: meta.default_level };
+        let t = Instant::now();
+        let mut out = Vec::new();
+        for _ in 0..3 {
+            out.clear();
+            rule.check(&cx, &mut out);
+        }
+        per_rule.push((t.elapsed().as_secs_f64() / 3.0, meta.id));
+    }
+    per_rule.sort_by(|a, b| b.0.total_cmp(&a.0));
     let (c, l, p) = (median(compile), median(lint), median(probes));
     println!("{model}");
     println!("  MuJoCo compile alone      {:8.1} ms", c * 1e3);
     println!("  static lint (load+rules)  {:8.1} ms  ({:.2}× the compile)", l * 1e3, l / c);
     println!("  probes                    {:8.1} ms  ({probe_steps} steps, {:.0} steps/s)", p * 1e3, probe_steps as f64 / p.max(1e-9));
+    let top: Vec<String> = per_rule.iter().take(3).map(|(t, id)| format!("{id} {:.1} ms", t * 1e3)).collect();
+    println!("  costliest rules           {}", top.join(", "));
     println!("  bare mj_step loop         {:8.0} steps/s (probe throughput {:.2}× of it)", bare, probe_steps as f64 / p.max(1e-9) / bare);
 }
 

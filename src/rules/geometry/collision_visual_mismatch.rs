@@ -80,7 +80,10 @@ struct Bounds {
     lo: V3,
     hi: V3,
     centre: V3,
-    poly: Option<ConvexPolyhedron>,
+    /// Points relative to `centre`; the hull is built only when a geom sticks out (it is the
+    /// costly part on mesh-heavy models).
+    pts: Vec<Vector>,
+    poly: std::cell::OnceCell<Option<ConvexPolyhedron>>,
 }
 
 impl Bounds {
@@ -99,7 +102,7 @@ impl Bounds {
         }
         let centre = scale(verts.iter().fold([0.0; 3], |a, v| add(a, *v)), 1.0 / verts.len() as f64);
         let pts: Vec<Vector> = verts.iter().map(|v| Vector::new((v[0] - centre[0]) as f32, (v[1] - centre[1]) as f32, (v[2] - centre[2]) as f32)).collect();
-        Some(Bounds { pos, mat, lo, hi, centre, poly: ConvexPolyhedron::from_convex_hull(&pts) })
+        Some(Bounds { pos, mat, lo, hi, centre, pts, poly: std::cell::OnceCell::new() })
     }
     /// Distance of a world point outside the bounding box (0 inside).
     fn outside_box(&self, p: V3) -> f64 {
@@ -109,7 +112,7 @@ impl Bounds {
     }
     /// Distance of a world point outside the convex hull (0 inside; box distance without a hull).
     fn outside_hull(&self, p: V3) -> f64 {
-        match &self.poly {
+        match self.poly.get_or_init(|| ConvexPolyhedron::from_convex_hull(&self.pts)) {
             Some(poly) => {
                 let q = sub(p, self.centre);
                 poly.distance_to_point(&Pose::IDENTITY, Vector::new(q[0] as f32, q[1] as f32, q[2] as f32), true) as f64
@@ -150,11 +153,11 @@ impl Rule for CollisionVisualMismatch {
                     continue;
                 }
                 let p = Placed::of(robot, g.id);
-                let centre_out = hull.outside_hull(p.pos);
                 let (worst, wdir) = dirs.iter().map(|d| (hull.outside_box(p.support(*d)), *d)).fold((0.0, [0.0; 3]), |a, b| if b.0 > a.0 { b } else { a });
                 if worst <= tol {
                     continue;
                 }
+                let centre_out = hull.outside_hull(p.pos);
                 let dir_word = {
                     let axis = ["x", "y", "z"];
                     let mut parts = Vec::new();
