@@ -156,6 +156,7 @@ pub fn registry() -> Vec<&'static dyn Rule> {
         &geometry::self_collision_at_keyframe::SelfCollisionAtKeyframe,
         &geometry::collision_visual_mismatch::CollisionVisualMismatch,
         &mapping::urdf_mjcf_drift::UrdfMjcfDrift,
+        &limits::ctrlrange_in_degrees::CtrlrangeInDegrees,
     ]
 }
 

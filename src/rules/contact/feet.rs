@@ -113,7 +113,9 @@ fn contact_geoms(robot: &Robot, body: usize) -> impl Iterator<Item = usize> + '_
 pub fn feet(robot: &Robot, spec: Option<&Spec>) -> Vec<Foot> {
     let n = robot.bodies.len();
     let globs = spec.map(|s| s.foot_matchers()).unwrap_or_default();
-    let mut matched: Vec<usize> = if !globs.is_empty() {
+    // A spec that sets `foot_bodies` (even to []) is authoritative.
+    let from_spec = spec.is_some_and(|s| s.robot.foot_bodies.is_some());
+    let mut matched: Vec<usize> = if from_spec {
         (1..n).filter(|&b| globs.iter().any(|m| m.is_match(robot.body_name(b)))).collect()
     } else {
         (1..n)
@@ -123,7 +125,10 @@ pub fn feet(robot: &Robot, spec: Option<&Spec>) -> Vec<Foot> {
             })
             .collect()
     };
-    if matched.is_empty() {
+    // Only a floating-base robot (a legged one) has feet to guess at: a fixed-base arm or a
+    // test rig does not.
+    let floating = robot.joints.iter().any(|j| j.jtype == crate::model::JointType::Free);
+    if matched.is_empty() && !from_spec && floating {
         // Leaf bodies whose collision geoms touch down.
         let lowest = |b: usize| contact_geoms(robot, b).map(|g| Placed::of(robot, g).lowest()[2]).fold(f64::INFINITY, f64::min);
         let zmin = (1..n).map(lowest).fold(f64::INFINITY, f64::min);

@@ -63,6 +63,10 @@ impl Rule for ArmatureMismatch {
                 continue;
             }
             let Some(expected) = spec.expected_armature(&facts) else { continue };
+            // rotor_inertia = 0 means "unknown" (e.g. a hobby servo): nothing to compare against.
+            if !(expected > 0.0) {
+                continue;
+            }
             actuated.push((j.id, expected, fam.clone()));
             if facts.count > 1 || parallel_issue(cx, spec, j, &facts, tol).is_some() {
                 continue;

@@ -77,6 +77,10 @@ impl Rule for SoftLimits {
                 if !matches!(a.kind, ActuatorKind::Position { .. }) || !matches!(a.trn, Transmission::Joint | Transmission::JointInParent) {
                     continue;
                 }
+                // A ctrlrange written in degrees is its own finding (ctrlrange-in-degrees).
+                if super::ctrlrange_in_degrees::looks_like_degrees(cx.robot, a, 0.05) {
+                    continue;
+                }
                 let g = if a.gear != 0.0 { a.gear } else { 1.0 };
                 // Position target is in actuator length = gear·q; refer it to the joint.
                 let c = if a.ctrllimited {

@@ -1,0 +1,111 @@
+use crate::declare_rule;
+use crate::finding::{Finding, Severity, Subject};
+use crate::model::mjcf::ElemKind;
+use crate::model::source::XNode;
+use crate::model::{Actuator, ActuatorKind, JointType, Robot, Transmission};
+use crate::rules::{Context, Rule, RuleMeta, opt};
+use crate::util::fmt_num;
+
+declare_rule! {
+    /// ## What it does
+    /// Finds position actuators on hinge joints whose `ctrlrange` was written in degrees. MuJoCo
+    /// converts joint `range` (and other angles) from degrees when `<compiler angle="degree">` is
+    /// in force — the MJCF default — but never converts `ctrlrange`. A ctrlrange that equals the
+    /// joint range × 180/π, or whose ends lie beyond ±2π while the joint range does not, is
+    /// reported.
+    ///
+    /// ## Why is this bad?
+    /// The policy's action space is scaled to the ctrlrange: a servo target range of ±60 "rad"
+    /// on a ±60° joint means almost every action drives the joint into its hard stops, and
+    /// action normalisation in the training stack is off by a factor of 57.3.
+    ///
+    /// ## How it is confirmed
+    /// Probe `limit-approach`: the actuator is commanded to the ends of its ctrlrange and the
+    /// probe checks whether the joint slams into its hard stop.
+    ///
+    /// ## How to fix
+    /// Write `ctrlrange` in radians (the help gives the converted values), or use
+    /// `inheritrange="0.9"` on the position actuator so MuJoCo derives it from the joint range.
+    pub CtrlrangeInDegrees {
+        id: "ctrlrange-in-degrees",
+        group: "limits",
+        level: Severity::Error,
+        probe: Some("limit-approach"),
+        options: [opt("ratio_tolerance", 0.05, "fraction", "how close ctrlrange/range must be to 180/π to count as degrees")],
+    }
+}
+
+/// Whether the model's `<compiler>` leaves angles in degrees (MJCF's default).
+pub fn degree_mode(robot: &Robot) -> bool {
+    if robot.format != crate::model::Format::Mjcf {
+        return false;
+    }
+    let mut deg = true;
+    let mut visit = |n: &XNode| {
+        if n.tag == "compiler" {
+            if let Some(a) = n.get("angle") {
+                deg = a != "radian";
+            }
+        }
+    };
+    for c in &robot.tree.children {
+        visit(c);
+    }
+    deg
+}
+
+/// The ctrlrange (in joint units) of a position actuator on a limited hinge looks like degrees.
+pub fn looks_like_degrees(robot: &Robot, a: &Actuator, ratio_tol: f64) -> bool {
+    if !matches!(a.kind, ActuatorKind::Position { .. }) || !matches!(a.trn, Transmission::Joint | Transmission::JointInParent) || !a.ctrllimited {
+        return false;
+    }
+    let Some(j) = usize::try_from(a.target).ok().and_then(|t| robot.joints.get(t)) else { return false };
+    if j.jtype != JointType::Hinge || !j.limited || !degree_mode(robot) {
+        return false;
+    }
+    let g = if a.gear != 0.0 { a.gear.abs() } else { 1.0 };
+    let (c0, c1) = (a.ctrlrange[0] / g, a.ctrlrange[1] / g);
+    let k = 180.0 / std::f64::consts::PI;
+    let span_ratio = (c1 - c0) / (j.range[1] - j.range[0]).max(1e-12);
+    let beyond = c0.abs().max(c1.abs()) > 2.0 * std::f64::consts::PI && j.range[0].abs().max(j.range[1].abs()) <= 2.0 * std::f64::consts::PI;
+    ((span_ratio / k) - 1.0).abs() <= ratio_tol || (beyond && span_ratio > 10.0)
+}
+
+impl Rule for CtrlrangeInDegrees {
+    fn meta(&self) -> &'static RuleMeta {
+        &Self::META
+    }
+    fn check(&self, cx: &Context, out: &mut Vec<Finding>) {
+        let tol = cx.opt("ratio_tolerance");
+        for a in &cx.robot.actuators {
+            if !looks_like_degrees(cx.robot, a, tol) {
+                continue;
+            }
+            let j = &cx.robot.joints[a.target as usize];
+            let rad = [a.ctrlrange[0].to_radians(), a.ctrlrange[1].to_radians()];
+            let f: Finding = cx
+                .at_attr(
+                    ElemKind::Actuator,
+                    a.id,
+                    &a.name,
+                    "ctrlrange",
+                    format!(
+                        "ctrlrange [{}, {}] of actuator `{}` is in degrees, but MuJoCo reads it as radians (joint `{}` range is [{}, {}] rad)",
+                        fmt_num(a.ctrlrange[0], 4),
+                        fmt_num(a.ctrlrange[1], 4),
+                        a.name,
+                        j.name,
+                        fmt_num(j.range[0], 4),
+                        fmt_num(j.range[1], 4)
+                    ),
+                )
+                .label("degrees, read as radians")
+                .note("`<compiler angle=\"degree\">` converts joint ranges but never ctrlrange: the servo target range is 57.3× too wide and the policy's action scaling is wrong")
+                .help(format!("ctrlrange=\"{} {}\" (radians), or inheritrange=\"0.9\"", fmt_num(rad[0], 4), fmt_num(rad[1], 4)))
+                .subject(Subject::Actuator(a.id))
+                .measured(a.ctrlrange[1] - a.ctrlrange[0], "rad")
+                .expected(j.range[1] - j.range[0], "rad");
+            out.push(f);
+        }
+    }
+}
