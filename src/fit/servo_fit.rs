@@ -187,6 +187,8 @@ pub struct Trial {
     pub bic: f64,
     pub test_mae: f64,
     pub accepted: bool,
+    /// Fitted parameters of the whole set (current effects + this one).
+    pub x: Vec<f64>,
 }
 
 #[derive(Debug, Clone, serde::Serialize)]
@@ -248,7 +250,7 @@ pub fn forward_select(
         cands.sort_by(|a, b| a.1.bic.total_cmp(&b.1.bic));
         let pick = cands.iter().position(|(_, r)| r.bic < cur.bic && r.test_mae < cur.test_mae);
         for (k, (e, r)) in cands.iter().enumerate() {
-            trials.push(Trial { round, effect: *e, train_mae: r.train_mae, bic: r.bic, test_mae: r.test_mae, accepted: Some(k) == pick });
+            trials.push(Trial { round, effect: *e, train_mae: r.train_mae, bic: r.bic, test_mae: r.test_mae, accepted: Some(k) == pick, x: r.x.clone() });
         }
         let Some(k) = pick else { break };
         let (e, r) = cands.swap_remove(k);
