@@ -68,7 +68,7 @@ fn synthetic_coulomb_and_armature_are_recovered() {
     };
     let logs: Vec<ServoLog> = [(200.0, 0.0), (800.0, 1.0)].iter().map(|&(kp, s)| synthetic_log(&robot, kp, truth, s)).collect();
     let set = EffectSet(vec![Effect::Armature, Effect::Coulomb]);
-    let o = FitOpts { optimiser: Optimiser::NelderMead, max_evals: 200, candidates: vec![], seed: 1 };
+    let o = FitOpts { optimiser: Optimiser::NelderMead, max_evals: 200, candidates: vec![], seed: 1, polish_evals: 0 };
     let x0: Vec<f64> = set.specs().iter().map(|s| s.init).collect();
     let idx = [0usize, 1];
     let (x, f, evals) = servo_fit::fit_set(&robot, &logs, &idx, &set, &x0, &o);
@@ -97,6 +97,7 @@ fn bam_held_out_fold_beats_nominal() {
         max_evals: 40,
         candidates: vec![Effect::Coulomb, Effect::Armature, Effect::LoadMotor],
         seed: 3,
+        polish_evals: 0,
     };
     let f = servo_fit::forward_select(&robot, &logs, &train, &test, &o, &|s| eprintln!("{s}"));
     let (nom, fit) = (f.nominal.test_mae.to_degrees(), f.chosen.test_mae.to_degrees());

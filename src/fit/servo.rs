@@ -243,10 +243,16 @@ pub struct ParamSpec {
     pub lo: f64,
     pub hi: f64,
     pub init: f64,
+    /// Value at which the effect is absent (adding the effect at this value changes nothing).
+    pub neutral: f64,
 }
 
 const fn ps(name: &'static str, unit: &'static str, lo: f64, hi: f64, init: f64) -> ParamSpec {
-    ParamSpec { name, unit, lo, hi, init }
+    ParamSpec { name, unit, lo, hi, init, neutral: lo }
+}
+
+const fn psn(name: &'static str, unit: &'static str, lo: f64, hi: f64, init: f64, neutral: f64) -> ParamSpec {
+    ParamSpec { name, unit, lo, hi, init, neutral }
 }
 
 impl Effect {
@@ -295,7 +301,7 @@ impl Effect {
                 P
             }
             Effect::Stribeck => {
-                const P: &[ParamSpec] = &[ps("Fs-Fc", "N·m", 0.0, 0.3, 0.03), ps("v_s", "rad/s", 0.005, 1.0, 0.1)];
+                const P: &[ParamSpec] = &[ps("Fs-Fc", "N·m", 0.0, 0.3, 0.03), psn("v_s", "rad/s", 0.005, 1.0, 0.1, 0.1)];
                 P
             }
             Effect::LoadMotor => {
@@ -315,7 +321,7 @@ impl Effect {
                 P
             }
             Effect::Motor => {
-                const P: &[ParamSpec] = &[ps("kt", "N·m/A", 0.2, 0.8, XL330_KT), ps("R", "Ω", 2.0, 10.0, XL330_R)];
+                const P: &[ParamSpec] = &[psn("kt", "N·m/A", 0.2, 0.8, XL330_KT, XL330_KT), psn("R", "Ω", 2.0, 10.0, XL330_R, XL330_R)];
                 P
             }
         }

@@ -86,11 +86,13 @@ pub struct FitOpts {
     /// Effects forward selection may add, in this order of consideration.
     pub candidates: Vec<Effect>,
     pub seed: u64,
+    /// Evaluations of the final refit of the chosen set (0: none).
+    pub polish_evals: usize,
 }
 
 impl Default for FitOpts {
     fn default() -> Self {
-        FitOpts { optimiser: Optimiser::NelderMead, max_evals: 120, candidates: Effect::ALL.to_vec(), seed: 7 }
+        FitOpts { optimiser: Optimiser::NelderMead, max_evals: 80, candidates: Effect::ALL.to_vec(), seed: 7, polish_evals: 200 }
     }
 }
 
@@ -203,9 +205,12 @@ pub struct FoldReport {
 }
 
 /// Greedy forward selection: start from the nominal model; each round fits every remaining
-/// candidate added to the current set (warm-started from the current optimum), ranks them by
-/// training BIC and accepts the first whose BIC is below the current one *and* whose held-out
-/// MAE improves; stops when none qualifies.
+/// candidate added to the current set (warm-started from the current optimum with the new
+/// effect at its neutral value, so the training error never gets worse), ranks them by training
+/// BIC and accepts the first whose BIC is below the current one *and* whose held-out MAE
+/// improves; stops when none qualifies. Candidates that did not lower the BIC are dropped for
+/// the following rounds. The chosen set is finally refitted with `polish_evals` evaluations
+/// (kept only when the training objective improves).
 pub fn forward_select(
     robot: &Robot,
     logs: &[ServoLog],
@@ -231,7 +236,7 @@ pub fn forward_select(
             let mut s2 = set.clone();
             s2.0.push(e);
             let mut x0 = x.clone();
-            x0.extend(e.params().iter().map(|p| p.init));
+            x0.extend(e.params().iter().map(|p| p.neutral));
             let (xf, _f, evals) = fit_set(robot, logs, train, &s2, &x0, o);
             let mut r = assess(robot, logs, train, test, &s2, &xf);
             r.evals = evals;
@@ -252,13 +257,34 @@ pub fn forward_select(
         for (k, (e, r)) in cands.iter().enumerate() {
             trials.push(Trial { round, effect: *e, train_mae: r.train_mae, bic: r.bic, test_mae: r.test_mae, accepted: Some(k) == pick, x: r.x.clone() });
         }
+        let cur_bic = cur.bic;
+        let keep: Vec<Effect> = cands.iter().filter(|(_, r)| r.bic < cur_bic).map(|(e, _)| *e).collect();
         let Some(k) = pick else { break };
         let (e, r) = cands.swap_remove(k);
         progress(&format!("  → keep {} (held-out {:.2}°)", e.name(), r.test_mae.to_degrees()));
         set.0.push(e);
         x = r.x.clone();
         cur = r;
-        remaining.retain(|&c| c != e);
+        remaining.retain(|&c| c != e && keep.contains(&c));
+    }
+    if o.polish_evals > 0 && !set.0.is_empty() {
+        let ts = Instant::now();
+        let p = FitOpts { max_evals: o.polish_evals, ..o.clone() };
+        let (xf, f, evals) = fit_set(robot, logs, train, &set, &x, &p);
+        if f < cur.train_mae {
+            let mut r = assess(robot, logs, train, test, &set, &xf);
+            r.evals = evals;
+            r.seconds = ts.elapsed().as_secs_f64();
+            progress(&format!(
+                "  polish: train {:.2}°  held-out {:.2}°  BIC {:.0}  ({} evals, {:.1} s)",
+                r.train_mae.to_degrees(),
+                r.test_mae.to_degrees(),
+                r.bic,
+                evals,
+                r.seconds
+            ));
+            cur = r;
+        }
     }
     FoldReport {
         held_out_kp: test.first().map_or(f64::NAN, |&i| logs[i].kp),
