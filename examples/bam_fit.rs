@@ -98,6 +98,24 @@ fn main() {
             per_log[i] = c.test_mae_per_log[k];
         }
     }
+    println!("\n### Every candidate fitted alone on the nominal model (round 1): what each effect buys\n");
+    println!("| effect | {} |", folds.iter().map(|f| format!("hold-out kp {}: params → train / held-out MAE", f.held_out_kp)).collect::<Vec<_>>().join(" | "));
+    println!("|---|{}", "---|".repeat(folds.len()));
+    for e in &o.candidates {
+        let cells: Vec<String> = folds
+            .iter()
+            .map(|f| match f.trials.iter().find(|t| t.round == 1 && t.effect == *e) {
+                Some(t) => format!(
+                    "{} → {:.2}° / {:.2}°",
+                    e.params().iter().zip(&t.x).map(|(p, v)| format!("{} {:.4}", p.name, v)).collect::<Vec<_>>().join(", "),
+                    t.train_mae.to_degrees(),
+                    t.test_mae.to_degrees()
+                ),
+                None => "–".into(),
+            })
+            .collect();
+        println!("| {} | {} |", e.name(), cells.join(" | "));
+    }
     println!("\n### Held-out MAE per log\n");
     println!("| log | kp | trajectory | linear rig (no clip) | nominal firmware law | fitted (held out) |");
     println!("|---|---|---|---|---|---|");

@@ -206,7 +206,8 @@ pub struct FoldReport {
 
 /// Greedy forward selection: start from the nominal model; each round fits every remaining
 /// candidate added to the current set (warm-started from the current optimum with the new
-/// effect at its neutral value, so the training error never gets worse), ranks them by training
+/// effect at its starting value; when that does not lower the training error the effect is
+/// set to its neutral value, so adding an effect never worsens training), ranks them by training
 /// BIC and accepts the first whose BIC is below the current one *and* whose held-out MAE
 /// improves; stops when none qualifies. Candidates that did not lower the BIC are dropped for
 /// the following rounds. The chosen set is finally refitted with `polish_evals` evaluations
@@ -236,8 +237,14 @@ pub fn forward_select(
             let mut s2 = set.clone();
             s2.0.push(e);
             let mut x0 = x.clone();
-            x0.extend(e.params().iter().map(|p| p.neutral));
-            let (xf, _f, evals) = fit_set(robot, logs, train, &s2, &x0, o);
+            x0.extend(e.params().iter().map(|p| p.init));
+            let (mut xf, f, evals) = fit_set(robot, logs, train, &s2, &x0, o);
+            if !(f < cur.train_mae) {
+                // No training improvement from the exploratory start: the effect at its
+                // neutral value reproduces the current model.
+                xf = x.clone();
+                xf.extend(e.params().iter().map(|p| p.neutral));
+            }
             let mut r = assess(robot, logs, train, test, &s2, &xf);
             r.evals = evals;
             r.seconds = ts.elapsed().as_secs_f64();
