@@ -28,7 +28,14 @@ fn main() {
             _ => dir = Some(PathBuf::from(a)),
         }
     }
-    let dir = dir.unwrap_or_else(|| PathBuf::from("../shared/data/recordings/bam_xl330"));
+    let mut dir = dir.unwrap_or_else(|| PathBuf::from("../shared/data/recordings/bam_xl330"));
+    if !dir.is_dir() && dir.is_relative() {
+        // A worktree under wt/ has the data at ../../shared: look beside the crate's ancestors.
+        let rel: PathBuf = dir.components().skip_while(|c| matches!(c, std::path::Component::ParentDir)).collect();
+        if let Some(d) = PathBuf::from(env!("CARGO_MANIFEST_DIR")).ancestors().skip(1).take(3).map(|a| a.join(&rel)).find(|d| d.is_dir()) {
+            dir = d;
+        }
+    }
     let t0 = Instant::now();
     let rig = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures/bam_xl330/rig.xml");
     let robot = modellint::model::load(&mut SourceMap::default(), &rig, None).expect("rig loads");
