@@ -1,3 +1,7 @@
 //! Fitting: name the missing physics, add it, fit it, show the held-out improvement.
+pub mod diagnose;
+pub mod effects;
 pub mod optim;
+pub mod select;
 pub mod stats;
+pub mod synth;
