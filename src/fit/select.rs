@@ -317,6 +317,47 @@ impl<'a> Engine<'a> {
         (p, f)
     }
 
+    /// Linearised explained mean square of the residual by a probe step of candidate `c`
+    /// (`None` when the probe changes nothing or diverges): returns (explained MS, coefficient).
+    fn sensitivity(&self, train: &[Recording], base: &[Applied], base_err: &Errors, c: &Candidate) -> Option<(f64, f64)> {
+        let effect = effects::by_id(c.effect)?;
+        let t = JointTarget::of(self.robot, &c.joint)?;
+        let m0 = model_with(self.robot, base);
+        let mut p = effect.initial(&m0, &t);
+        let (lo, hi) = effect.bounds(&m0, &t);
+        if effect.id() == "torque_limit" {
+            p[0] = c.evidence.get("tau_p80").copied().filter(|v| *v > lo[0])?;
+        } else {
+            let step = 0.05 * (hi[0] - lo[0]);
+            p[0] = if p[0] + step <= hi[0] { p[0] + step } else { p[0] - step };
+        }
+        let mut a = base.to_vec();
+        a.push(Applied { effect, joints: vec![c.joint.clone()], params: p });
+        let e = self.errors(train, &a)?;
+        let (mut rs, mut ss) = (0.0, 0.0);
+        let mut n = 0usize;
+        for ((rec, e0), e1) in train.iter().zip(&base_err.eps).zip(&e.eps) {
+            for (k, jt) in rec.joints.iter().enumerate() {
+                if !self.joints.contains(&jt.name) {
+                    continue;
+                }
+                for i in 0..rec.t.len() {
+                    let r = jt.q[i] - e0.q_sim[k][i];
+                    let s = e1.q_sim[k][i] - e0.q_sim[k][i];
+                    if r.is_finite() && s.is_finite() {
+                        rs += r * s;
+                        ss += s * s;
+                        n += 1;
+                    }
+                }
+            }
+        }
+        if ss <= 1e-300 || n == 0 {
+            return None;
+        }
+        Some((rs * rs / ss / n as f64, rs / ss))
+    }
+
     /// Linearised standard errors of the fitted parameters of `applied.last()`.
     fn uncertainty(&self, train: &[Recording], applied: &[Applied]) -> (Vec<f64>, bool) {
         let last = applied.last().expect("non-empty");
@@ -414,12 +455,28 @@ pub fn fit(robot: &Robot, recs: &[Recording], opts: &FitOptions) -> FitOutcome {
             break;
         };
         let diag = diagnose(robot, &train, &tr_err.eps, &engine.joints, &allowed);
+        let covered = |id: &str, j: &str| applied.iter().any(|a| a.effect.id() == id && a.joints.iter().any(|x| x == j));
+        // Re-rank the diagnosis by the linearised (Gauss–Newton) explained residual: the
+        // residual projected on the simulated sensitivity to a probe step of the effect.
+        let mut diag = diag;
+        for c in diag.iter_mut() {
+            if covered(c.effect, &c.joint) {
+                c.explained_rms = 0.0;
+                continue;
+            }
+            let sens = engine.sensitivity(&train, &applied, &tr_err, c);
+            if let Some((ems, coef)) = sens {
+                c.evidence.insert("feature_explained_rms".into(), c.explained_rms);
+                c.evidence.insert("sensitivity_coef".into(), coef);
+                c.explained_rms = ems.sqrt();
+            }
+        }
+        diag.sort_by(|a, b| b.explained_rms.total_cmp(&a.explained_rms));
         if round == 0 {
             out.diagnosis = diag.clone();
         }
         // Candidate (effect, group) list, best first.
         let mut cands: Vec<(&'static dyn Effect, Vec<String>, BTreeMap<String, f64>)> = Vec::new();
-        let covered = |id: &str, j: &str| applied.iter().any(|a| a.effect.id() == id && a.joints.iter().any(|x| x == j));
         for c in &diag {
             if cands.len() >= opts.candidates_per_round {
                 break;
