@@ -185,8 +185,8 @@ pub fn split(recs: &[Recording], holdout: usize) -> (Vec<Recording>, Vec<Recordi
 pub struct Errors {
     pub sse: f64,
     pub n: usize,
-    /// Per (episode, window, joint) RMSE.
-    pub windows: Vec<f64>,
+    /// Per (episode, window, joint) RMSE, with the joint's name.
+    pub windows: Vec<(String, f64)>,
     pub eps: Vec<Episode>,
 }
 
@@ -244,7 +244,7 @@ impl<'a> Engine<'a> {
                     }
                     let wi = ((rec.t[i] - t0) / self.opts.window_s) as usize;
                     if wi != w.0 && w.2 > 0 {
-                        win.push((w.1 / w.2 as f64).sqrt());
+                        win.push((jt.name.clone(), (w.1 / w.2 as f64).sqrt()));
                         w = (wi, 0.0, 0);
                     }
                     w.0 = wi;
@@ -254,7 +254,7 @@ impl<'a> Engine<'a> {
                     n += 1;
                 }
                 if w.2 > 0 {
-                    win.push((w.1 / w.2 as f64).sqrt());
+                    win.push((jt.name.clone(), (w.1 / w.2 as f64).sqrt()));
                 }
             }
         }
@@ -302,7 +302,7 @@ impl<'a> Engine<'a> {
                 (vec![x], f)
             }
             2 | 3 => {
-                let o = NelderMeadOpts { max_evals: self.opts.max_evals, xtol: 1e-3, ftol: 1e-9, initial_step: 0.2 };
+                let o = NelderMeadOpts { max_evals: self.opts.max_evals * 2, xtol: 1e-3, ftol: 1e-12, initial_step: 0.1 };
                 let r = nelder_mead(&obj, &x0, &b, &o);
                 (r.x, r.f)
             }
@@ -517,7 +517,14 @@ pub fn fit(robot: &Robot, recs: &[Recording], opts: &FitOptions) -> FitOutcome {
             trial.push(Applied { effect: e, joints: group.clone(), params: p.clone() });
             let (Some(tr_a), Some(ho_a)) = (engine.errors(&train, &trial), engine.errors(&heldout, &trial)) else { continue };
             let bic_after = bic(tr_a.n, tr_a.sse, k_before + e.fitted());
-            let (mean, se, sig) = improvement_beyond_noise(&ho_err.windows, &ho_a.windows);
+            // Paired test on the windows of the candidate's joints (others barely move).
+            let on = |w: &[(String, f64)]| w.iter().filter(|(j, _)| group.contains(j)).map(|(_, v)| *v).collect::<Vec<f64>>();
+            let (wb, wa) = (on(&ho_err.windows), on(&ho_a.windows));
+            let (mean, se, sig_abs) = improvement_beyond_noise(&wb, &wa);
+            // The same test on log errors: robust when a few windows carry the whole effect.
+            let ln = |w: &[f64]| w.iter().map(|v| v.max(1e-12).ln()).collect::<Vec<f64>>();
+            let (_, _, sig_log) = improvement_beyond_noise(&ln(&wb), &ln(&wa));
+            let sig = sig_abs || sig_log;
             let rel = (ho_err.rmse() - ho_a.rmse()) / ho_err.rmse().max(1e-300);
             let keep = sig && rel >= opts.min_rel_improvement && bic_after < bic_before;
             out.tried.push(Tried {

@@ -5,7 +5,7 @@ use super::*;
 pub struct LoadDependentFriction;
 
 const P: &[ParamDef] = &[
-    ParamDef { name: "frictionloss", unit: "N·m", lo: 0.0, hi: 5.0, default: 0.0 },
+    ParamDef { name: "frictionloss", unit: "N·m", lo: 0.0, hi: 2.0, default: 0.0 },
     ParamDef { name: "load_coeff", unit: "", lo: 0.0, hi: 0.5, default: 0.0 },
 ];
 
@@ -21,6 +21,9 @@ impl Effect for LoadDependentFriction {
     }
     fn describe(&self) -> &'static str {
         "dry friction growing with the motor torque: base + load_coeff·|τ_motor|"
+    }
+    fn initial(&self, _m: &MjModel, _t: &JointTarget) -> Vec<f64> {
+        vec![0.02, 0.02]
     }
     fn torque(&self, _st: &mut EffectState, q: f64, qd: f64, _q_target: f64, io: &mut StepIo, _dt: f64, p: &[f64]) {
         let budget = p[0].max(0.0) + p[1].max(0.0) * servo_torque(q, qd, io).abs();
