@@ -83,6 +83,11 @@ pub enum Cmd {
     },
     /// Replay real recordings in MuJoCo and measure the sim-to-real gap (seed study §4.4, §5).
     Gap(GapCmd),
+    /// Name the physics the model is missing from real recordings, fit it, and show the held-out
+    /// improvement (effects: action_delay, coulomb_friction, viscous_damping, armature,
+    /// position_offset, gain_error, stribeck_friction, torque_limit, backlash, joint_stiffness,
+    /// load_dependent_friction).
+    Fit(FitCmd),
     /// Convert a BAM servo log (JSON) to the CSV recording format (adds the servo.kp column).
     Convert {
         /// BAM JSON log.
@@ -112,6 +117,46 @@ pub struct GapCmd {
     #[arg(long, default_value = "text", value_parser = ["text", "json"])]
     pub format: String,
     /// Write an HTML report (inline SVG) into this directory.
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+}
+
+#[derive(Args, Debug)]
+pub struct FitCmd {
+    /// Model (MJCF or URDF).
+    pub model: PathBuf,
+    /// Recordings: CSV files, BAM JSON logs, or directories.
+    #[arg(required = true)]
+    pub recordings: Vec<PathBuf>,
+    /// Hardware spec (TOML) for joint regions. Default: <model>.toml beside the model.
+    #[arg(long)]
+    pub spec: Option<PathBuf>,
+    /// Effects to consider (comma-separated ids); default all.
+    #[arg(long, value_delimiter = ',')]
+    pub effects: Vec<String>,
+    /// Only fit joints matching this glob (e.g. '*knee*').
+    #[arg(long)]
+    pub joints: Option<String>,
+    /// Hold out every N-th episode (a single episode is split in time windows).
+    #[arg(long, default_value_t = 4)]
+    pub holdout: usize,
+    /// Multiple shooting: fit on training windows of this length [s], each started from the
+    /// recorded state.
+    #[arg(long)]
+    pub window: Option<f64>,
+    /// Control rate [Hz]; default: the recording's control_rate_hz, else 100.
+    #[arg(long)]
+    pub control_hz: Option<f64>,
+    /// Output format.
+    #[arg(long, default_value = "text", value_parser = ["text", "json"])]
+    pub format: String,
+    /// Write the model with the MuJoCo-expressible fitted values (MJCF text edited in place).
+    #[arg(long)]
+    pub write_model: Option<PathBuf>,
+    /// Write all fitted effects (incl. hook-only ones) as TOML.
+    #[arg(long)]
+    pub write_actuators: Option<PathBuf>,
+    /// Write HTML gap reports (before/ and after/) into this directory.
     #[arg(long)]
     pub report: Option<PathBuf>,
 }
@@ -170,6 +215,20 @@ pub fn run() -> i32 {
                 report: g.report,
             })
         }
+        Some(Cmd::Fit(f)) => crate::fit::cmd::run_fit(crate::fit::cmd::FitArgs {
+            model: f.model,
+            recordings: f.recordings,
+            spec: f.spec,
+            effects: f.effects,
+            joints: f.joints,
+            holdout: f.holdout,
+            window: f.window,
+            control_hz: f.control_hz,
+            json: f.format == "json",
+            write_model: f.write_model,
+            write_actuators: f.write_actuators,
+            report: f.report,
+        }),
         Some(Cmd::Convert { input, output }) => crate::sim2real::cmd::run_convert(&input, &output),
         None => check(cli.check),
     }

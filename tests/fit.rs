@@ -115,3 +115,96 @@ fn nothing_missing_selects_nothing() {
     }
     assert!(out.selected.is_empty(), "selected {:?}", out.selected.iter().map(|s| (&s.effect, &s.joints)).collect::<Vec<_>>());
 }
+
+#[test]
+fn cli_json_write_model_and_actuators() {
+    let model = root().join("fixtures/gap/arm3.xml");
+    let robot = load(&model);
+    let joints: Vec<String> = JOINTS.iter().map(|s| s.to_string()).collect();
+    let hidden = vec![Applied { effect: effects::by_id("armature").unwrap(), joints: vec!["wrist_pitch".into()], params: vec![0.04] }];
+    let recs = generate(&robot, &joints, &hidden, 6, &SynthOptions { duration_s: 4.0, ..Default::default() }, 3).unwrap();
+    let dir = std::env::temp_dir().join(format!("modellint_fit_cli_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for (i, r) in recs.iter().enumerate() {
+        std::fs::write(dir.join(format!("ep{i:02}.csv")), modellint::sim2real::recording::write_csv(r)).unwrap();
+    }
+    let out_xml = dir.join("fitted.xml");
+    let out_toml = dir.join("act.toml");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_modellint"))
+        .args(["fit", model.to_str().unwrap(), dir.to_str().unwrap(), "--format", "json", "--effects", "armature,viscous_damping,action_delay", "--holdout", "3"])
+        .arg("--write-model")
+        .arg(&out_xml)
+        .arg("--write-actuators")
+        .arg(&out_toml)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(0), "{stderr}");
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let mp = v["missing_physics"].as_array().unwrap();
+    assert_eq!(mp[0]["effect"], "armature", "{v:#}");
+    assert_eq!(mp[0]["joints"][0], "wrist_pitch");
+    let a = mp[0]["params"]["armature"].as_f64().unwrap();
+    assert!((a - 0.04).abs() < 0.004, "armature {a}");
+    assert!(v["before"]["position_rmse"].as_f64().unwrap() > 2.0 * v["after"]["position_rmse"].as_f64().unwrap());
+    for k in ["position_mae", "correlation_mean", "gap_overall", "per_joint"] {
+        assert!(v["after"].get(k).is_some(), "after block lacks {k}");
+    }
+    // The written model: only the wrist joint element changed, and it loads with the new value.
+    let orig = std::fs::read_to_string(&model).unwrap();
+    let new = std::fs::read_to_string(&out_xml).unwrap();
+    let changed: Vec<(&str, &str)> = orig.lines().zip(new.lines()).filter(|(a, b)| a != b).collect();
+    assert_eq!(changed.len(), 1, "{changed:?}");
+    assert!(changed[0].1.contains("<joint name=\"wrist_pitch\" armature=\"0.0"), "{changed:?}");
+    let fitted = load(&out_xml);
+    assert!((fitted.joint("wrist_pitch").unwrap().armature - a).abs() < 1e-5);
+    assert!(std::fs::read_to_string(&out_toml).unwrap().contains("id = \"armature\""));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn mjcf_edit_replaces_and_adds_attributes() {
+    use modellint::fit::select::Selected;
+    let model = root().join("fixtures/gap/arm3.xml");
+    let robot = load(&model);
+    let xml = std::fs::read_to_string(&model).unwrap();
+    let sel = |effect: &str, joint: &str, values: Vec<f64>| Selected {
+        effect: effect.into(),
+        joints: vec![joint.into()],
+        params: Default::default(),
+        stderr: Default::default(),
+        identifiable: true,
+        evidence: Default::default(),
+        heldout_improvement: 0.5,
+        heldout_rmse_before: 0.0,
+        heldout_rmse_after: 0.0,
+        window_improvement: 0.0,
+        window_improvement_se: 0.0,
+        bic_before: 0.0,
+        bic_after: 0.0,
+        values,
+    };
+    let s = vec![
+        sel("action_delay", "elbow_pitch", vec![0.02]),
+        sel("viscous_damping", "elbow_pitch", vec![0.3]),
+        sel("coulomb_friction", "elbow_pitch", vec![0.1]),
+        sel("torque_limit", "shoulder_pitch", vec![2.0, 1e4, 1e4]),
+        sel("gain_error", "wrist_pitch", vec![0.5, 2.0]),
+    ];
+    let (out, _w) = modellint::fit::writeback::edit_mjcf(&xml, &robot, &s).unwrap();
+    assert!(out.contains("<joint name=\"elbow_pitch\" damping=\"0.3\" frictionloss=\"0.1\"/>"), "{out}");
+    assert!(out.contains("<position name=\"elbow_pitch\" joint=\"elbow_pitch\" delay=\"0.02\" nsample=\"20\"/>"), "{out}");
+    assert!(out.contains("<position name=\"shoulder_pitch\" joint=\"shoulder_pitch\" forcelimited=\"true\" forcerange=\"-2 2\"/>"), "{out}");
+    assert!(out.contains("<position name=\"wrist_pitch\" joint=\"wrist_pitch\" kp=\"25\" kv=\"3\"/>"), "{out}");
+    // MuJoCo 3.17 accepts the delay syntax and the values.
+    let tmp = std::env::temp_dir().join(format!("modellint_fit_edit_{}.xml", std::process::id()));
+    std::fs::write(&tmp, &out).unwrap();
+    let r2 = load(&tmp);
+    let _ = std::fs::remove_file(&tmp);
+    let el = r2.actuators.iter().find(|a| a.name == "elbow_pitch").unwrap();
+    assert!((el.delay - 0.02).abs() < 1e-12, "delay {}", el.delay);
+    assert!((r2.joint("elbow_pitch").unwrap().frictionloss - 0.1).abs() < 1e-12);
+    // Everything else byte for byte.
+    let strip = |s: &str| s.lines().filter(|l| !l.contains("name=\"elbow_pitch\"") && !l.contains("<position")).map(str::to_string).collect::<Vec<_>>();
+    assert_eq!(strip(&xml), strip(&out));
+}

@@ -5,3 +5,5 @@ pub mod optim;
 pub mod select;
 pub mod stats;
 pub mod synth;
+pub mod writeback;
+pub mod cmd;
