@@ -88,6 +88,29 @@ pub enum Cmd {
     /// position_offset, gain_error, stribeck_friction, torque_limit, backlash, joint_stiffness,
     /// load_dependent_friction).
     Fit(FitCmd),
+    /// Synthetic recordings from a hidden copy of the model with effects added (chirps, steps,
+    /// smooth random commands; noise, quantisation, ~88 Hz jittered sampling, dropped samples).
+    /// Effects: `effect[@joint_glob]=v1,v2;…`, e.g. `armature@*knee*=0.05;action_delay=0.02`.
+    Synth {
+        /// Model (MJCF or URDF).
+        model: PathBuf,
+        /// Effects to hide, with parameters.
+        #[arg(long)]
+        effects: String,
+        /// Output directory (episode_NNN.csv, truth.toml).
+        #[arg(long)]
+        out: PathBuf,
+        /// Drive only joints matching this glob.
+        #[arg(long)]
+        joints: Option<String>,
+        #[arg(long, default_value_t = 8)]
+        episodes: usize,
+        /// Episode length [s].
+        #[arg(long, default_value_t = 5.0)]
+        duration: f64,
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
     /// Convert a BAM servo log (JSON) to the CSV recording format (adds the servo.kp column).
     Convert {
         /// BAM JSON log.
@@ -229,6 +252,9 @@ pub fn run() -> i32 {
             write_actuators: f.write_actuators,
             report: f.report,
         }),
+        Some(Cmd::Synth { model, effects, out, joints, episodes, duration, seed }) => {
+            crate::fit::cmd::run_synth(crate::fit::cmd::SynthArgs { model, effects, out, joints, episodes, duration, seed })
+        }
         Some(Cmd::Convert { input, output }) => crate::sim2real::cmd::run_convert(&input, &output),
         None => check(cli.check),
     }

@@ -209,3 +209,73 @@ pub fn run_fit(a: FitArgs) -> i32 {
     }
     0
 }
+
+pub struct SynthArgs {
+    pub model: PathBuf,
+    pub effects: String,
+    pub out: PathBuf,
+    pub joints: Option<String>,
+    pub episodes: usize,
+    pub duration: f64,
+    pub seed: u64,
+}
+
+/// `modellint synth`: recordings from a hidden copy of the model with the given effects.
+pub fn run_synth(a: SynthArgs) -> i32 {
+    use crate::fit::synth::{SynthOptions, generate, parse_spec, truth_toml};
+    let input = crate::lint::LintInput { model: a.model.clone(), spec: None, config: None, select: vec![], ignore: vec![] };
+    let loaded = match crate::lint::load(&input) {
+        Ok(l) => l,
+        Err(e) => {
+            eprint!("{}", crate::output::text::render_error(&e, std::io::stderr().is_terminal()));
+            return 2;
+        }
+    };
+    let robot = &loaded.robot;
+    let matcher = match a.joints.as_deref().map(globset::Glob::new) {
+        Some(Ok(g)) => Some(g.compile_matcher()),
+        Some(Err(e)) => return fail(format!("--joints: {e}")),
+        None => None,
+    };
+    let joints: Vec<String> = robot
+        .joints
+        .iter()
+        .filter(|j| j.is_scalar() && !robot.actuators_on_joint(j.id).is_empty())
+        .filter(|j| matcher.as_ref().is_none_or(|m| m.is_match(&j.name)))
+        .map(|j| j.name.clone())
+        .collect();
+    if joints.is_empty() {
+        return fail("no actuated hinge/slide joint selected");
+    }
+    let truth = match parse_spec(&a.effects, &joints) {
+        Ok(t) => t,
+        Err(e) => return fail(format!("--effects: {e}")),
+    };
+    let o = SynthOptions {
+        duration_s: a.duration,
+        sample_hz: 88.0,
+        jitter: 0.3,
+        noise: 2e-4,
+        quantum: 2.0 * std::f64::consts::PI / 4096.0,
+        drop: 0.01,
+        ..Default::default()
+    };
+    let recs = match generate(robot, &joints, &truth, a.episodes, &o, a.seed) {
+        Ok(r) => r,
+        Err(e) => return fail(e),
+    };
+    if let Err(e) = std::fs::create_dir_all(&a.out) {
+        return fail(format!("cannot create {}: {e}", a.out.display()));
+    }
+    for (i, r) in recs.iter().enumerate() {
+        let p = a.out.join(format!("episode_{i:03}.csv"));
+        if let Err(e) = std::fs::write(&p, crate::sim2real::recording::write_csv(r)) {
+            return fail(format!("cannot write {}: {e}", p.display()));
+        }
+    }
+    if let Err(e) = std::fs::write(a.out.join("truth.toml"), truth_toml(&truth, &o, a.seed)) {
+        return fail(format!("cannot write truth.toml: {e}"));
+    }
+    eprintln!("modellint: {} episodes written to {} (truth in truth.toml)", recs.len(), a.out.display());
+    0
+}

@@ -158,3 +158,55 @@ pub fn generate(robot: &Robot, joints: &[String], truth: &[Applied], n: usize, o
     }
     Ok(out)
 }
+
+/// Parses an effect spec `effect[@joint_glob]=v1,v2;…` (parameters in the effect's order, the
+/// rest at their defaults; no glob = every joint in `joints`) into applied effects.
+pub fn parse_spec(spec: &str, joints: &[String]) -> Result<Vec<Applied>, String> {
+    let mut out = Vec::new();
+    for item in spec.split(';').map(str::trim).filter(|s| !s.is_empty()) {
+        let (lhs, rhs) = item.split_once('=').ok_or_else(|| format!("`{item}`: expected effect[@joints]=values"))?;
+        let (id, glob) = match lhs.split_once('@') {
+            Some((a, b)) => (a.trim(), Some(b.trim())),
+            None => (lhs.trim(), None),
+        };
+        let e = crate::fit::effects::by_id(id).ok_or_else(|| format!("unknown effect `{id}`"))?;
+        let mut params: Vec<f64> = e.params().iter().map(|p| p.default).collect();
+        for (k, v) in rhs.split(',').enumerate() {
+            if k >= params.len() {
+                return Err(format!("`{item}`: {id} has {} parameters", params.len()));
+            }
+            params[k] = v.trim().parse().map_err(|_| format!("`{item}`: bad number `{v}`"))?;
+        }
+        let sel: Vec<String> = match glob {
+            Some(g) => {
+                let m = globset::Glob::new(g).map_err(|x| x.to_string())?.compile_matcher();
+                joints.iter().filter(|j| m.is_match(j.as_str())).cloned().collect()
+            }
+            None => joints.to_vec(),
+        };
+        if sel.is_empty() {
+            return Err(format!("`{item}`: no joint matches"));
+        }
+        // One applied entry per joint (independent truth per joint).
+        for j in sel {
+            out.push(Applied { effect: e, joints: vec![j], params: params.clone() });
+        }
+    }
+    Ok(out)
+}
+
+/// The truth file: every hidden effect with its parameters.
+pub fn truth_toml(truth: &[Applied], o: &SynthOptions, seed: u64) -> String {
+    let mut s = format!(
+        "# Hidden effects of this synthetic dataset (modellint synth). `modellint fit` never reads this file.\nseed = {seed}\nnoise_rad = {}\nquantum_rad = {}\nsample_hz = {}\njitter = {}\ndrop = {}\n\n",
+        o.noise, o.quantum, o.sample_hz, o.jitter, o.drop
+    );
+    for a in truth {
+        s.push_str(&format!("[[effect]]\nid = \"{}\"\njoints = [{}]\n[effect.params]\n", a.effect.id(), a.joints.iter().map(|j| format!("\"{j}\"")).collect::<Vec<_>>().join(", ")));
+        for (d, v) in a.effect.params().iter().zip(&a.params) {
+            s.push_str(&format!("{} = {v}\n", d.name));
+        }
+        s.push('\n');
+    }
+    s
+}
