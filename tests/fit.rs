@@ -208,3 +208,31 @@ fn mjcf_edit_replaces_and_adds_attributes() {
     let strip = |s: &str| s.lines().filter(|l| !l.contains("name=\"elbow_pitch\"") && !l.contains("<position")).map(str::to_string).collect::<Vec<_>>();
     assert_eq!(strip(&xml), strip(&out));
 }
+
+#[test]
+fn synth_then_fit_end_to_end() {
+    // `modellint synth` (88 Hz jittered sampling, quantisation, drops) → `modellint fit`.
+    let dir = std::env::temp_dir().join(format!("modellint_synth_{}", std::process::id()));
+    let model = root().join("fixtures/gap/arm3.xml");
+    let bin = env!("CARGO_BIN_EXE_modellint");
+    let o = std::process::Command::new(bin)
+        .args(["synth", model.to_str().unwrap(), "--effects", "position_offset@shoulder*=0.05", "--episodes", "5", "--duration", "4", "--out"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(std::fs::read_to_string(dir.join("truth.toml")).unwrap().contains("offset_rad = 0.05"));
+    std::fs::rename(dir.join("truth.toml"), dir.join("truth.toml.hidden")).unwrap();
+    let o = std::process::Command::new(bin)
+        .args(["fit", model.to_str().unwrap(), dir.to_str().unwrap(), "--format", "json", "--effects", "position_offset,armature,viscous_damping"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let mp = &v["missing_physics"][0];
+    assert_eq!(mp["effect"], "position_offset", "{v:#}");
+    assert_eq!(mp["joints"][0], "shoulder_pitch");
+    let off = mp["params"]["offset_rad"].as_f64().unwrap();
+    assert!((off - 0.05).abs() < 0.005, "offset {off}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

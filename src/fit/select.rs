@@ -587,3 +587,45 @@ pub fn fit(robot: &Robot, recs: &[Recording], opts: &FitOptions) -> FitOutcome {
     }
     out
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sim2real::recording::JointTrace;
+
+    fn rec(n: usize, dt: f64) -> Recording {
+        let t: Vec<f64> = (0..n).map(|i| i as f64 * dt).collect();
+        let mut j = JointTrace::new("a", t.iter().map(|x| x.sin()).collect());
+        j.q_cmd = Some(j.q.clone());
+        Recording { source: "r.csv".into(), meta: Default::default(), control_rate_hz: Some(100.0), control_t0_s: None, t, joints: vec![j], base: None }
+    }
+
+    #[test]
+    fn mirror_names() {
+        assert_eq!(mirror("left_knee").as_deref(), Some("right_knee"));
+        assert_eq!(mirror("r_hip_pitch").as_deref(), Some("l_hip_pitch"));
+        assert_eq!(mirror("hip_L").as_deref(), Some("hip_R"));
+        assert_eq!(mirror("elbow_pitch"), None);
+    }
+
+    #[test]
+    fn windows_cover_the_recording_and_keep_the_tick_phase() {
+        let r = rec(1001, 0.005); // 5 s
+        let w = windows(&r, 1.0);
+        assert_eq!(w.len(), 5);
+        assert_eq!(w.iter().map(|x| x.t.len()).sum::<usize>(), 1001);
+        assert!(w.iter().all(|x| x.control_t0_s == Some(0.0)));
+        assert_eq!(w[2].joints[0].q[0], r.joints[0].q[w[0].t.len() + w[1].t.len()]);
+    }
+
+    #[test]
+    fn split_by_episode_and_by_time() {
+        let recs: Vec<Recording> = (0..8).map(|_| rec(100, 0.01)).collect();
+        let (tr, ho, by_time) = split(&recs, 4);
+        assert_eq!((tr.len(), ho.len(), by_time), (6, 2, false));
+        let (tr, ho, _) = split(&recs[..3], 4);
+        assert_eq!((tr.len(), ho.len()), (2, 1));
+        let (tr, ho, by_time) = split(&[rec(2001, 0.005)], 4);
+        assert!(by_time && !tr.is_empty() && !ho.is_empty(), "{} {}", tr.len(), ho.len());
+    }
+}
