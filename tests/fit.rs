@@ -36,6 +36,8 @@ fn check(effect: &str, truth: &[f64], tol: &[(f64, bool)], allowed: &[&str]) {
     for t in &out.tried {
         eprintln!("  tried {t:?}");
     }
+    let rank = out.diagnosis.iter().position(|c| c.effect == effect && c.joint == "elbow_pitch");
+    assert!(rank.is_some_and(|r| r < 3), "{effect}: diagnosis rank {rank:?}");
     let first = out.selected.first().unwrap_or_else(|| panic!("{effect}: nothing selected; tried {:?}", out.tried));
     assert_eq!(first.effect, effect, "first selected: {first:?}");
     assert_eq!(first.joints, vec!["elbow_pitch".to_string()]);
@@ -80,8 +82,7 @@ fn gain_error_recovered() {
 
 #[test]
 fn stribeck_friction_recovered() {
-    // Only the breakaway/sliding levels are checked tightly; v_stribeck is weakly identifiable.
-    check("stribeck_friction", &[0.3, 0.1, 0.2], &[(0.1, false), (0.1, false), (0.5, false)], &["stribeck_friction", "coulomb_friction", "viscous_damping", "armature", "action_delay", "position_offset"]);
+    check("stribeck_friction", &[0.3, 0.1, 0.2], &[(0.1, false), (0.1, false), (0.1, false)], &[]);
 }
 
 #[test]
@@ -101,7 +102,7 @@ fn joint_stiffness_recovered() {
 
 #[test]
 fn load_dependent_friction_recovered() {
-    check("load_dependent_friction", &[0.05, 0.1], &[(0.1, false), (0.1, false)], &["load_dependent_friction", "coulomb_friction", "viscous_damping", "armature", "action_delay", "gain_error"]);
+    check("load_dependent_friction", &[0.05, 0.1], &[(0.1, false), (0.1, false)], &[]);
 }
 
 #[test]
