@@ -421,6 +421,9 @@ pub fn mirror(name: &str) -> Option<String> {
     None
 }
 
+/// A candidate: effect, joint group, evidence.
+type Cand = (&'static dyn Effect, Vec<String>, BTreeMap<String, f64>);
+
 /// Runs the whole selection on `recs`.
 pub fn fit(robot: &Robot, recs: &[Recording], opts: &FitOptions) -> FitOutcome {
     let engine = Engine::new(robot, recs, opts);
@@ -476,7 +479,7 @@ pub fn fit(robot: &Robot, recs: &[Recording], opts: &FitOptions) -> FitOutcome {
             out.diagnosis = diag.clone();
         }
         // Candidate (effect, group) list, best first.
-        let mut cands: Vec<(&'static dyn Effect, Vec<String>, BTreeMap<String, f64>)> = Vec::new();
+        let mut cands: Vec<Cand> = Vec::new();
         for c in &diag {
             if cands.len() >= opts.candidates_per_round {
                 break;

@@ -102,7 +102,7 @@ pub fn excitation(joints: &[(String, f64)], o: &SynthOptions, seed: u64) -> Reco
             let kind = (seed as usize + k) % 3;
             let steps: Vec<f64> = (0..8).map(|_| 2.0 * rng.uniform() - 1.0).collect();
             let knots: Vec<f64> = (0..((o.duration_s / 0.4) as usize + 3)).map(|_| 2.0 * rng.uniform() - 1.0).collect();
-            let phase = rng.uniform() * 6.28;
+            let phase = rng.uniform() * std::f64::consts::TAU;
             let c: Vec<f64> = t.iter().map(|&ti| q0 + command(kind, ti, o.duration_s, o.amplitude, phase, &steps, &knots)).collect();
             let mut j = JointTrace::new(name.clone(), c.clone());
             j.q_cmd = Some(c);

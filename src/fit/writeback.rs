@@ -105,11 +105,11 @@ pub fn edit_mjcf(xml: &str, robot: &Robot, selected: &[Selected]) -> Result<(Str
         }
         if !insert.is_empty() {
             // After the last attribute (or the tag name): new attributes are appended.
-            let at = node.attributes().last().map_or(start + 1 + node.tag_name().name().len(), |x| x.range().end);
+            let at = node.attributes().next_back().map_or(start + 1 + node.tag_name().name().len(), |x| x.range().end);
             edits.push((at, at, insert));
         }
     }
-    edits.sort_by(|a, b| b.0.cmp(&a.0));
+    edits.sort_by_key(|e| std::cmp::Reverse(e.0));
     let mut out = xml.to_string();
     for (s, e, r) in edits {
         out.replace_range(s..e, &r);

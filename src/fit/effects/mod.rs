@@ -231,7 +231,7 @@ pub fn replay_with(robot: &Robot, model: &MjModel, rec: &Recording, applied: &[A
         .map(|j| {
             applied
                 .iter()
-                .filter(|a| a.effect.entry() == Entry::Measurement && a.joints.iter().any(|n| *n == j.name))
+                .filter(|a| a.effect.entry() == Entry::Measurement && a.joints.contains(&j.name))
                 .map(|a| a.effect.measurement_bias(&a.params))
                 .sum()
         })
