@@ -237,3 +237,33 @@ fn synth_then_fit_end_to_end() {
     assert!((off - 0.05).abs() < 0.005, "offset {off}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn motor_family_is_fitted_as_one_group() {
+    // The same armature error on all three joints of one motor family: the family group (one
+    // shared parameter) must win over any single joint.
+    let robot = load(&root().join("fixtures/gap/arm3.xml"));
+    let joints: Vec<String> = JOINTS.iter().map(|s| s.to_string()).collect();
+    let hidden = vec![Applied { effect: effects::by_id("armature").unwrap(), joints: joints.clone(), params: vec![0.03] }];
+    let recs = generate(&robot, &joints, &hidden, 8, &SynthOptions { duration_s: 4.0, ..Default::default() }, 21).unwrap();
+    let families = joints.iter().map(|j| (j.clone(), "m1".to_string())).collect();
+    let opts = FitOptions { effects: vec!["armature".into(), "viscous_damping".into()], max_rounds: 1, families, ..Default::default() };
+    let out = fit(&robot, &recs, &opts);
+    let first = out.selected.first().expect("selected");
+    assert_eq!(first.effect, "armature");
+    assert_eq!(first.joints.len(), 3, "{:?}", first.joints);
+    assert!((first.values[0] - 0.03).abs() < 0.003, "{:?}", first.values);
+}
+
+#[test]
+fn multiple_shooting_windows_recover_delay() {
+    let robot = load(&root().join("fixtures/gap/arm3.xml"));
+    let joints: Vec<String> = JOINTS.iter().map(|s| s.to_string()).collect();
+    let hidden = vec![Applied { effect: effects::by_id("action_delay").unwrap(), joints: vec!["shoulder_pitch".into()], params: vec![0.03] }];
+    let recs = generate(&robot, &joints, &hidden, 8, &SynthOptions { duration_s: 4.0, ..Default::default() }, 5).unwrap();
+    let opts = FitOptions { effects: vec!["action_delay".into(), "viscous_damping".into()], max_rounds: 1, shooting_s: Some(1.0), ..Default::default() };
+    let out = fit(&robot, &recs, &opts);
+    let first = out.selected.first().expect("selected");
+    assert_eq!((first.effect.as_str(), first.joints[0].as_str()), ("action_delay", "shoulder_pitch"));
+    assert!((first.values[0] - 0.03).abs() <= 0.001, "{:?}", first.values);
+}

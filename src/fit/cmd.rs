@@ -86,7 +86,11 @@ pub fn run_fit(a: FitArgs) -> i32 {
         }
     }
     let replay = ReplayOptions { control_hz: a.control_hz, ..Default::default() };
-    let opts = FitOptions { holdout: a.holdout, effects: a.effects.clone(), joints, replay: replay.clone(), shooting_s: a.window, ..Default::default() };
+    let families = match loaded.spec.as_ref() {
+        Some(s) => names.iter().filter_map(|n| s.joint(n).and_then(|f| f.motor).map(|m| (n.clone(), m))).collect(),
+        None => Default::default(),
+    };
+    let opts = FitOptions { holdout: a.holdout, effects: a.effects.clone(), joints, replay: replay.clone(), shooting_s: a.window, families, ..Default::default() };
     let out = fit(robot, &recs, &opts);
     for w in &out.warnings {
         eprintln!("modellint: warning: {w}");

@@ -47,6 +47,9 @@ pub struct FitOptions {
     pub min_rel_improvement: f64,
     /// Objective evaluations per candidate fit.
     pub max_evals: usize,
+    /// Joint → motor family (from the spec): a family of three or more fitted joints is also
+    /// tried as one group sharing the parameters.
+    pub families: BTreeMap<String, String>,
 }
 
 impl Default for FitOptions {
@@ -62,6 +65,7 @@ impl Default for FitOptions {
             candidates_per_round: 4,
             min_rel_improvement: 0.02,
             max_evals: 60,
+            families: BTreeMap::new(),
         }
     }
 }
@@ -503,7 +507,16 @@ pub fn fit(robot: &Robot, recs: &[Recording], opts: &FitOptions) -> FitOutcome {
             let mut ev = c.evidence.clone();
             ev.insert("explained_rms".into(), c.explained_rms);
             ev.insert("residual_rms".into(), c.residual_rms);
-            cands.push((e, group, ev));
+            // The joint's motor family as one more group (shared parameters).
+            let fam: Vec<String> = match opts.families.get(&c.joint) {
+                Some(f) => engine.joints.iter().filter(|j| opts.families.get(*j) == Some(f) && !covered(c.effect, j)).cloned().collect(),
+                None => vec![],
+            };
+            let fam_new = fam.len() >= 3 && !cands.iter().any(|(e2, g, _)| e2.id() == e.id() && *g == fam);
+            cands.push((e, group, ev.clone()));
+            if fam_new {
+                cands.push((e, fam, ev));
+            }
         }
         if cands.is_empty() {
             break;
