@@ -160,6 +160,17 @@ fn cli_json_write_model_and_actuators() {
     let fitted = load(&out_xml);
     assert!((fitted.joint("wrist_pitch").unwrap().armature - a).abs() < 1e-5);
     assert!(std::fs::read_to_string(&out_toml).unwrap().contains("id = \"armature\""));
+    // Text output and HTML reports.
+    let rep = dir.join("report");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_modellint"))
+        .args(["fit", model.to_str().unwrap(), dir.to_str().unwrap(), "--effects", "armature", "--holdout", "3", "--report"])
+        .arg(&rep)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.starts_with("missing physics\n  armature") && text.contains("wrist_pitch") && text.contains("gap score"), "{text}");
+    assert!(rep.join("before").is_dir() && rep.join("after").is_dir());
     let _ = std::fs::remove_dir_all(&dir);
 }
 
