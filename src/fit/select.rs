@@ -601,7 +601,52 @@ pub fn fit(robot: &Robot, recs: &[Recording], opts: &FitOptions) -> FitOutcome {
         }
         out.selected.push(s);
     }
+    if out.applied.len() >= 2 {
+        polish(&engine, &train, &heldout, &mut out);
+    }
     out
+}
+
+/// Joint re-fit of every kept effect's fitted parameters (Nelder–Mead from the greedy values);
+/// kept only when both the training and the held-out RMSE do not get worse.
+fn polish(engine: &Engine, train: &[Recording], heldout: &[Recording], out: &mut FitOutcome) {
+    let mut slots = Vec::new(); // (applied index, parameter index, lo, hi)
+    for (ai, a) in out.applied.iter().enumerate() {
+        let Some(t) = JointTarget::of(engine.robot, &a.joints[0]) else { return };
+        let m0 = model_with(engine.robot, &out.applied[..ai]);
+        let (lo, hi) = a.effect.bounds(&m0, &t);
+        for k in 0..a.effect.fitted().min(a.params.len()) {
+            slots.push((ai, k, lo[k], hi[k]));
+        }
+    }
+    let make = |x: &[f64]| {
+        let mut a = out.applied.clone();
+        for (&(ai, k, ..), v) in slots.iter().zip(x) {
+            a[ai].params[k] = *v;
+        }
+        a
+    };
+    let x0: Vec<f64> = slots.iter().map(|&(ai, k, ..)| out.applied[ai].params[k]).collect();
+    let b = Bounds { lo: slots.iter().map(|s| s.2).collect(), hi: slots.iter().map(|s| s.3).collect() };
+    let obj = |x: &[f64]| engine.errors(train, &make(x)).map_or(f64::INFINITY, |e| e.rmse());
+    let f0 = obj(&x0);
+    let o = NelderMeadOpts { max_evals: engine.opts.max_evals * 2, xtol: 1e-4, ftol: 1e-12, initial_step: 0.02 };
+    let r = nelder_mead(&obj, &x0, &b, &o);
+    if !(r.f < f0) {
+        return;
+    }
+    let new = make(&r.x);
+    let (Some(h0), Some(h1)) = (engine.errors(heldout, &out.applied), engine.errors(heldout, &new)) else { return };
+    if h1.rmse() > h0.rmse() {
+        return;
+    }
+    for (s, a) in out.selected.iter_mut().zip(&new) {
+        s.values = a.params.clone();
+        for (d, v) in a.effect.params().iter().zip(&a.params).take(a.effect.fitted()) {
+            s.params.insert(d.name.to_string(), *v);
+        }
+    }
+    out.applied = new;
 }
 
 #[cfg(test)]
