@@ -278,3 +278,22 @@ fn multiple_shooting_windows_recover_delay() {
     assert_eq!((first.effect.as_str(), first.joints[0].as_str()), ("action_delay", "shoulder_pitch"));
     assert!((first.values[0] - 0.03).abs() <= 0.001, "{:?}", first.values);
 }
+
+#[test]
+fn two_effects_on_two_joints_are_both_found() {
+    let robot = load(&root().join("fixtures/gap/arm3.xml"));
+    let joints: Vec<String> = JOINTS.iter().map(|s| s.to_string()).collect();
+    let hidden = vec![
+        Applied { effect: effects::by_id("armature").unwrap(), joints: vec!["elbow_pitch".into()], params: vec![0.04] },
+        Applied { effect: effects::by_id("action_delay").unwrap(), joints: vec!["wrist_pitch".into()], params: vec![0.02] },
+    ];
+    let recs = generate(&robot, &joints, &hidden, 8, &SynthOptions { duration_s: 4.0, ..Default::default() }, 9).unwrap();
+    let out = fit(&robot, &recs, &FitOptions { max_rounds: 3, ..Default::default() });
+    let got: Vec<(String, String, f64)> = out.selected.iter().map(|s| (s.effect.clone(), s.joints.join(","), s.values[0])).collect();
+    eprintln!("{got:?}");
+    let find = |e: &str, j: &str| got.iter().find(|g| g.0 == e && g.1 == j).map(|g| g.2);
+    let a = find("armature", "elbow_pitch").expect("armature found");
+    let d = find("action_delay", "wrist_pitch").expect("delay found");
+    assert!((a - 0.04).abs() < 0.004 && (d - 0.02).abs() <= 0.001, "{got:?}");
+    assert!(got.len() <= 3, "spurious effects: {got:?}");
+}

@@ -632,7 +632,7 @@ fn polish(engine: &Engine, train: &[Recording], heldout: &[Recording], out: &mut
     let f0 = obj(&x0);
     let o = NelderMeadOpts { max_evals: engine.opts.max_evals * 2, xtol: 1e-4, ftol: 1e-12, initial_step: 0.02 };
     let r = nelder_mead(&obj, &x0, &b, &o);
-    if !(r.f < f0) {
+    if r.f.is_nan() || r.f >= f0 {
         return;
     }
     let new = make(&r.x);
