@@ -160,6 +160,15 @@ fn cli_json_write_model_and_actuators() {
     let fitted = load(&out_xml);
     assert!((fitted.joint("wrist_pitch").unwrap().armature - a).abs() < 1e-5);
     assert!(std::fs::read_to_string(&out_toml).unwrap().contains("id = \"armature\""));
+    // Bad input: exit 2 with a message naming the known effects / the glob.
+    let bad = |extra: &[&str]| {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_modellint")).args(["fit", model.to_str().unwrap(), dir.to_str().unwrap()]).args(extra).output().unwrap();
+        (o.status.code(), String::from_utf8_lossy(&o.stderr).to_string())
+    };
+    let (c, e) = bad(&["--effects", "magic"]);
+    assert!(c == Some(2) && e.contains("unknown effect `magic`") && e.contains("armature"), "{e}");
+    let (c, e) = bad(&["--joints", "knee*"]);
+    assert!(c == Some(2) && e.contains("matches no recorded joint"), "{e}");
     // Text output and HTML reports.
     let rep = dir.join("report");
     let o = std::process::Command::new(env!("CARGO_BIN_EXE_modellint"))
