@@ -83,6 +83,34 @@ pub enum Cmd {
     },
     /// Replay real recordings in MuJoCo and measure the sim-to-real gap (seed study §4.4, §5).
     Gap(GapCmd),
+    /// Name the physics the model is missing from real recordings, fit it, and show the held-out
+    /// improvement (effects: action_delay, coulomb_friction, viscous_damping, armature,
+    /// position_offset, gain_error, stribeck_friction, torque_limit, backlash, joint_stiffness,
+    /// load_dependent_friction).
+    Fit(FitCmd),
+    /// Synthetic recordings from a hidden copy of the model with effects added (chirps, steps,
+    /// smooth random commands; noise, quantisation, ~88 Hz jittered sampling, dropped samples).
+    /// Effects: `effect[@joint_glob]=v1,v2;…`, e.g. `armature@*knee*=0.05;action_delay=0.02`.
+    Synth {
+        /// Model (MJCF or URDF).
+        model: PathBuf,
+        /// Effects to hide, with parameters.
+        #[arg(long)]
+        effects: String,
+        /// Output directory (episode_NNN.csv, truth.toml).
+        #[arg(long)]
+        out: PathBuf,
+        /// Drive only joints matching this glob.
+        #[arg(long)]
+        joints: Option<String>,
+        #[arg(long, default_value_t = 8)]
+        episodes: usize,
+        /// Episode length [s].
+        #[arg(long, default_value_t = 5.0)]
+        duration: f64,
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
     /// Convert a BAM servo log (JSON) to the CSV recording format (adds the servo.kp column).
     Convert {
         /// BAM JSON log.
@@ -112,6 +140,46 @@ pub struct GapCmd {
     #[arg(long, default_value = "text", value_parser = ["text", "json"])]
     pub format: String,
     /// Write an HTML report (inline SVG) into this directory.
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+}
+
+#[derive(Args, Debug)]
+pub struct FitCmd {
+    /// Model (MJCF or URDF).
+    pub model: PathBuf,
+    /// Recordings: CSV files, BAM JSON logs, or directories.
+    #[arg(required = true)]
+    pub recordings: Vec<PathBuf>,
+    /// Hardware spec (TOML) for joint regions. Default: <model>.toml beside the model.
+    #[arg(long)]
+    pub spec: Option<PathBuf>,
+    /// Effects to consider (comma-separated ids); default all.
+    #[arg(long, value_delimiter = ',')]
+    pub effects: Vec<String>,
+    /// Only fit joints matching this glob (e.g. '*knee*').
+    #[arg(long)]
+    pub joints: Option<String>,
+    /// Hold out every N-th episode (a single episode is split in time windows).
+    #[arg(long, default_value_t = 4)]
+    pub holdout: usize,
+    /// Multiple shooting: fit on training windows of this length [s], each started from the
+    /// recorded state.
+    #[arg(long)]
+    pub window: Option<f64>,
+    /// Control rate [Hz]; default: the recording's control_rate_hz, else 100.
+    #[arg(long)]
+    pub control_hz: Option<f64>,
+    /// Output format.
+    #[arg(long, default_value = "text", value_parser = ["text", "json"])]
+    pub format: String,
+    /// Write the model with the MuJoCo-expressible fitted values (MJCF text edited in place).
+    #[arg(long)]
+    pub write_model: Option<PathBuf>,
+    /// Write all fitted effects (incl. hook-only ones) as TOML.
+    #[arg(long)]
+    pub write_actuators: Option<PathBuf>,
+    /// Write HTML gap reports (before/ and after/) into this directory.
     #[arg(long)]
     pub report: Option<PathBuf>,
 }
@@ -169,6 +237,23 @@ pub fn run() -> i32 {
                 json: g.format == "json",
                 report: g.report,
             })
+        }
+        Some(Cmd::Fit(f)) => crate::fit::cmd::run_fit(crate::fit::cmd::FitArgs {
+            model: f.model,
+            recordings: f.recordings,
+            spec: f.spec,
+            effects: f.effects,
+            joints: f.joints,
+            holdout: f.holdout,
+            window: f.window,
+            control_hz: f.control_hz,
+            json: f.format == "json",
+            write_model: f.write_model,
+            write_actuators: f.write_actuators,
+            report: f.report,
+        }),
+        Some(Cmd::Synth { model, effects, out, joints, episodes, duration, seed }) => {
+            crate::fit::cmd::run_synth(crate::fit::cmd::SynthArgs { model, effects, out, joints, episodes, duration, seed })
         }
         Some(Cmd::Convert { input, output }) => crate::sim2real::cmd::run_convert(&input, &output),
         None => check(cli.check),

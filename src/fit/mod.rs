@@ -1,5 +1,11 @@
 //! Fitting: name the missing physics, add it, fit it, show the held-out improvement.
+pub mod cmd;
+pub mod diagnose;
+pub mod effects;
 pub mod optim;
-pub mod stats;
+pub mod select;
 pub mod servo;
 pub mod servo_fit;
+pub mod stats;
+pub mod synth;
+pub mod writeback;

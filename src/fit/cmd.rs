@@ -1,0 +1,285 @@
+//! `modellint fit`: load the model and recordings, run the selection, print the missing physics
+//! with before → after on the held-out episodes, write the model / actuator TOML / reports.
+//! Exit codes: 0 done, 2 could not do the job.
+
+use std::io::{IsTerminal, Write};
+use std::path::PathBuf;
+
+use serde_json::json;
+
+use crate::fit::effects::{self, simulate};
+use crate::fit::select::{FitOptions, fit};
+use crate::sim2real::gap::{self, GapOptions, GapReport};
+use crate::sim2real::replay::{Episode, ReplayOptions};
+
+pub struct FitArgs {
+    pub model: PathBuf,
+    pub recordings: Vec<PathBuf>,
+    pub spec: Option<PathBuf>,
+    pub effects: Vec<String>,
+    pub joints: Option<String>,
+    pub holdout: usize,
+    pub window: Option<f64>,
+    pub control_hz: Option<f64>,
+    pub json: bool,
+    pub write_model: Option<PathBuf>,
+    pub write_actuators: Option<PathBuf>,
+    pub report: Option<PathBuf>,
+}
+
+fn fail(msg: impl std::fmt::Display) -> i32 {
+    eprintln!("modellint: {msg}");
+    2
+}
+
+pub fn run_fit(a: FitArgs) -> i32 {
+    let input = crate::lint::LintInput { model: a.model.clone(), spec: a.spec.clone(), config: None, select: vec![], ignore: vec![] };
+    let loaded = match crate::lint::load(&input) {
+        Ok(l) => l,
+        Err(e) => {
+            eprint!("{}", crate::output::text::render_error(&e, std::io::stderr().is_terminal()));
+            return 2;
+        }
+    };
+    let robot = &loaded.robot;
+    for e in &a.effects {
+        if effects::by_id(e).is_none() {
+            let ids: Vec<String> = effects::all().iter().map(|e| e.id().to_string()).collect();
+            return fail(format!("unknown effect `{e}`; known: {}", ids.join(", ")));
+        }
+    }
+    if a.holdout < 2 {
+        return fail("--holdout must be at least 2");
+    }
+    let files = match crate::sim2real::cmd::expand_inputs(&a.recordings) {
+        Ok(f) => f,
+        Err(e) => return fail(e),
+    };
+    let names: Vec<String> = robot.joints.iter().map(|j| j.name.clone()).collect();
+    let mut recs = Vec::new();
+    for f in &files {
+        match crate::sim2real::cmd::read_recording(f) {
+            Ok(r) => {
+                if let Err(e) = r.validate_joint_names(&names) {
+                    return fail(e);
+                }
+                recs.push(r);
+            }
+            Err(e) => return fail(e),
+        }
+    }
+    let mut joints = Vec::new();
+    if let Some(g) = &a.joints {
+        let m = match globset::Glob::new(g) {
+            Ok(x) => x.compile_matcher(),
+            Err(e) => return fail(format!("--joints: {e}")),
+        };
+        for r in &recs {
+            for j in &r.joints {
+                if m.is_match(&j.name) && !joints.contains(&j.name) {
+                    joints.push(j.name.clone());
+                }
+            }
+        }
+        if joints.is_empty() {
+            return fail(format!("--joints {g} matches no recorded joint"));
+        }
+    }
+    let replay = ReplayOptions { control_hz: a.control_hz, ..Default::default() };
+    let families = match loaded.spec.as_ref() {
+        Some(s) => names.iter().filter_map(|n| s.joint(n).and_then(|f| f.motor).map(|m| (n.clone(), m))).collect(),
+        None => Default::default(),
+    };
+    let opts = FitOptions { holdout: a.holdout, effects: a.effects.clone(), joints, replay: replay.clone(), shooting_s: a.window, families, ..Default::default() };
+    let out = fit(robot, &recs, &opts);
+    for w in &out.warnings {
+        eprintln!("modellint: warning: {w}");
+    }
+    if out.heldout.is_empty() {
+        return 2;
+    }
+    let spec = loaded.spec.as_ref();
+    let region = |name: &str| spec.and_then(|s| s.joint(name)).and_then(|f| f.region).unwrap_or_else(|| gap::region_from_name(name));
+    let run = |applied| -> Result<(GapReport, Vec<Episode>), String> {
+        let eps: Result<Vec<Episode>, _> = simulate(robot, &out.heldout, applied, &replay).into_iter().collect();
+        let eps = eps.map_err(|e| e.to_string())?;
+        Ok((gap::compute(&out.heldout, &eps, &region, &GapOptions::default()), eps))
+    };
+    let ((before, eps_b), (after, eps_a)) = match (run(&[]), run(&out.applied)) {
+        (Ok(b), Ok(a)) => (b, a),
+        (Err(e), _) | (_, Err(e)) => return fail(e),
+    };
+    if let Some(dir) = &a.report {
+        for (sub, r, eps) in [("before", &before, &eps_b), ("after", &after, &eps_a)] {
+            match crate::sim2real::report::write(&dir.join(sub), r, &out.heldout, eps) {
+                Ok(p) => eprintln!("modellint: report written to {}", p.display()),
+                Err(e) => return fail(format!("cannot write report in {}: {e}", dir.display())),
+            }
+        }
+    }
+    if let Some(path) = &a.write_model {
+        let text = match std::fs::read_to_string(&a.model) {
+            Ok(t) => t,
+            Err(e) => return fail(format!("cannot read {}: {e}", a.model.display())),
+        };
+        match crate::fit::writeback::edit_mjcf(&text, robot, &out.selected) {
+            Ok((t, warns)) => {
+                for w in warns {
+                    eprintln!("modellint: note: {w}");
+                }
+                if let Err(e) = std::fs::write(path, t) {
+                    return fail(format!("cannot write {}: {e}", path.display()));
+                }
+            }
+            Err(e) => return fail(e),
+        }
+    }
+    if let Some(path) = &a.write_actuators
+        && let Err(e) = std::fs::write(path, crate::fit::writeback::actuators_toml(&out.selected))
+    {
+        return fail(format!("cannot write {}: {e}", path.display()));
+    }
+    let text = if a.json {
+        let mp: Vec<_> = out
+            .selected
+            .iter()
+            .map(|s| {
+                json!({
+                    "effect": s.effect, "joints": s.joints, "params": s.params,
+                    "stderr": s.stderr.iter().map(|(k, v)| (k.clone(), if v.is_finite() { json!(v) } else { serde_json::Value::Null })).collect::<serde_json::Map<_, _>>(),
+                    "identifiable": s.identifiable, "evidence": s.evidence, "heldout_improvement": s.heldout_improvement,
+                    "heldout_rmse_before": s.heldout_rmse_before, "heldout_rmse_after": s.heldout_rmse_after,
+                })
+            })
+            .collect();
+        let v = json!({
+            "missing_physics": mp,
+            "before": before,
+            "after": after,
+            "diagnosis": out.diagnosis.iter().take(20).collect::<Vec<_>>(),
+            "tried": out.tried,
+            "split": {"train": out.train.len(), "heldout": out.heldout.len(), "by_time": out.split_by_time},
+            "warnings": out.warnings,
+        });
+        serde_json::to_string_pretty(&v).unwrap_or_default() + "\n"
+    } else {
+        let mut s = String::from("missing physics\n");
+        if out.selected.is_empty() {
+            s.push_str("  nothing: no candidate effect improved the held-out error beyond noise\n");
+        }
+        for x in &out.selected {
+            let e = effects::by_id(&x.effect);
+            let ps: Vec<String> = x
+                .params
+                .iter()
+                .map(|(k, v)| {
+                    let unit = e.and_then(|e| e.params().iter().find(|p| p.name == k)).map_or("", |p| p.unit);
+                    let se = x.stderr.get(k).copied().unwrap_or(f64::INFINITY);
+                    format!("{k} = {v:.4}{}{}{unit}", if se.is_finite() { format!(" ± {se:.2e}") } else { " ± ?".into() }, if unit.is_empty() { "" } else { " " })
+                })
+                .collect();
+            s.push_str(&format!("  {:<24} {:<28} {}\n", x.effect, x.joints.join(","), ps.join(", ")));
+            let ev: Vec<String> = ["corr", "explained_share", "lag_s", "implied_frictionloss", "implied_damping", "implied_armature", "bias_rad"]
+                .iter()
+                .filter_map(|k| x.evidence.get(*k).map(|v| format!("{k} {v:.3}")))
+                .collect();
+            s.push_str(&format!(
+                "      evidence: {}; held-out RMSE {:.4} → {:.4} rad ({:+.0} %){}\n",
+                ev.join(", "),
+                x.heldout_rmse_before,
+                x.heldout_rmse_after,
+                -100.0 * x.heldout_improvement,
+                if x.identifiable { "" } else { "  [not identifiable]" }
+            ));
+        }
+        s.push_str(&format!(
+            "\nheld-out ({} episode{}{}): before → after\n  position MAE   {:.4} → {:.4} rad\n  position RMSE  {:.4} → {:.4} rad\n  correlation    {:.3} → {:.3}\n  gap score      {:.3} → {:.3}\n",
+            out.heldout.len(),
+            if out.heldout.len() == 1 { "" } else { "s" },
+            if out.split_by_time { ", time windows" } else { "" },
+            before.position_mae,
+            after.position_mae,
+            before.position_rmse,
+            after.position_rmse,
+            before.correlation_mean,
+            after.correlation_mean,
+            before.gap_overall,
+            after.gap_overall
+        ));
+        s
+    };
+    if std::io::stdout().lock().write_all(text.as_bytes()).is_err() {
+        return 2;
+    }
+    0
+}
+
+pub struct SynthArgs {
+    pub model: PathBuf,
+    pub effects: String,
+    pub out: PathBuf,
+    pub joints: Option<String>,
+    pub episodes: usize,
+    pub duration: f64,
+    pub seed: u64,
+}
+
+/// `modellint synth`: recordings from a hidden copy of the model with the given effects.
+pub fn run_synth(a: SynthArgs) -> i32 {
+    use crate::fit::synth::{SynthOptions, generate, parse_spec, truth_toml};
+    let input = crate::lint::LintInput { model: a.model.clone(), spec: None, config: None, select: vec![], ignore: vec![] };
+    let loaded = match crate::lint::load(&input) {
+        Ok(l) => l,
+        Err(e) => {
+            eprint!("{}", crate::output::text::render_error(&e, std::io::stderr().is_terminal()));
+            return 2;
+        }
+    };
+    let robot = &loaded.robot;
+    let matcher = match a.joints.as_deref().map(globset::Glob::new) {
+        Some(Ok(g)) => Some(g.compile_matcher()),
+        Some(Err(e)) => return fail(format!("--joints: {e}")),
+        None => None,
+    };
+    let joints: Vec<String> = robot
+        .joints
+        .iter()
+        .filter(|j| j.is_scalar() && !robot.actuators_on_joint(j.id).is_empty())
+        .filter(|j| matcher.as_ref().is_none_or(|m| m.is_match(&j.name)))
+        .map(|j| j.name.clone())
+        .collect();
+    if joints.is_empty() {
+        return fail("no actuated hinge/slide joint selected");
+    }
+    let truth = match parse_spec(&a.effects, &joints) {
+        Ok(t) => t,
+        Err(e) => return fail(format!("--effects: {e}")),
+    };
+    let o = SynthOptions {
+        duration_s: a.duration,
+        sample_hz: 88.0,
+        jitter: 0.3,
+        noise: 2e-4,
+        quantum: 2.0 * std::f64::consts::PI / 4096.0,
+        drop: 0.01,
+        ..Default::default()
+    };
+    let recs = match generate(robot, &joints, &truth, a.episodes, &o, a.seed) {
+        Ok(r) => r,
+        Err(e) => return fail(e),
+    };
+    if let Err(e) = std::fs::create_dir_all(&a.out) {
+        return fail(format!("cannot create {}: {e}", a.out.display()));
+    }
+    for (i, r) in recs.iter().enumerate() {
+        let p = a.out.join(format!("episode_{i:03}.csv"));
+        if let Err(e) = std::fs::write(&p, crate::sim2real::recording::write_csv(r)) {
+            return fail(format!("cannot write {}: {e}", p.display()));
+        }
+    }
+    if let Err(e) = std::fs::write(a.out.join("truth.toml"), truth_toml(&truth, &o, a.seed)) {
+        return fail(format!("cannot write truth.toml: {e}"));
+    }
+    eprintln!("modellint: {} episodes written to {} (truth in truth.toml)", recs.len(), a.out.display());
+    0
+}

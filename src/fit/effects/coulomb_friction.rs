@@ -1,0 +1,36 @@
+//! Coulomb (dry) friction: MuJoCo's `frictionloss` on the joint's DoF (a constraint, exact
+//! sticking).
+use super::*;
+
+pub struct CoulombFriction;
+
+const P: &[ParamDef] = &[ParamDef { name: "frictionloss", unit: "N·m", lo: 0.0, hi: 5.0, default: 0.0 }];
+
+impl Effect for CoulombFriction {
+    fn id(&self) -> &'static str {
+        "coulomb_friction"
+    }
+    fn params(&self) -> &'static [ParamDef] {
+        P
+    }
+    fn entry(&self) -> Entry {
+        Entry::Model
+    }
+    fn describe(&self) -> &'static str {
+        "velocity-independent dry friction (gearbox, seals): dof_frictionloss"
+    }
+    fn initial(&self, m: &MjModel, t: &JointTarget) -> Vec<f64> {
+        let r = mj::raw(m);
+        vec![get(r.dof_frictionloss, r.nv as usize, t.dof)]
+    }
+    fn bounds(&self, m: &MjModel, t: &JointTarget) -> (Vec<f64>, Vec<f64>) {
+        (vec![0.0], vec![P[0].hi.max(10.0 * self.initial(m, t)[0])])
+    }
+    fn apply_model(&self, m: &mut MjModel, t: &JointTarget, p: &[f64]) {
+        let r = mj::raw_mut(m);
+        set(r.dof_frictionloss, r.nv as usize, t.dof, p[0].max(0.0));
+    }
+    fn write_back(&self, p: &[f64]) -> WriteBack {
+        WriteBack::Joint(vec![("frictionloss", p[0])])
+    }
+}

@@ -1,0 +1,284 @@
+//! Effects: pieces of physics a model may be missing, each with named, bounded parameters and a
+//! way into the simulation — an edit of the compiled model copy (MuJoCo-native), a per-physics-
+//! step torque/command hook ([`ActuatorHook`]), or a measurement transform (sensor bias).
+//!
+//! [`simulate`] replays recordings with any set of [`Applied`] effects; the fit engine
+//! ([`crate::fit::select`]) and `modellint synth`-style data generation use the same machinery.
+
+use std::collections::VecDeque;
+
+use mujoco_rs::prelude::*;
+use rayon::prelude::*;
+
+use crate::model::{Robot, mj};
+use crate::sim2real::recording::Recording;
+use crate::sim2real::replay::{ActuatorHook, Episode, ReplayError, ReplayOptions, Replayer, StepIo};
+
+mod action_delay;
+mod armature;
+mod backlash;
+mod coulomb_friction;
+mod gain_error;
+mod joint_stiffness;
+mod load_dependent_friction;
+mod position_offset;
+mod stribeck_friction;
+mod torque_limit;
+mod viscous_damping;
+
+/// One fitted parameter: name, unit, bounds and default (the value meaning "effect absent"
+/// where there is one).
+#[derive(Debug, Clone, Copy)]
+pub struct ParamDef {
+    pub name: &'static str,
+    pub unit: &'static str,
+    pub lo: f64,
+    pub hi: f64,
+    pub default: f64,
+}
+
+/// Where a fitted value goes when written back.
+#[derive(Debug, Clone, PartialEq)]
+pub enum WriteBack {
+    /// MJCF attributes on the `<joint>` element: (attribute, value).
+    Joint(Vec<(&'static str, f64)>),
+    /// MJCF attributes on the joint's `<actuator>` element(s): (attribute, value).
+    Actuator(Vec<(&'static str, f64)>),
+    /// MuJoCo cannot express it: written to the actuator TOML only.
+    TomlOnly,
+}
+
+/// Per-joint, per-episode state of a hook effect (reset at every episode start).
+#[derive(Debug, Clone, Default)]
+pub struct EffectState {
+    pub fifo: VecDeque<f64>,
+    pub s: [f64; 4],
+    pub started: bool,
+}
+
+/// The model-side indices of one joint an effect is applied to.
+#[derive(Debug, Clone)]
+pub struct JointTarget {
+    /// MuJoCo joint id.
+    pub jnt: usize,
+    pub dof: usize,
+    pub qposadr: usize,
+    /// Actuators reaching the joint.
+    pub acts: Vec<usize>,
+    /// Joint position at the keyframe (or qpos0).
+    pub key_q: f64,
+}
+
+impl JointTarget {
+    pub fn of(robot: &Robot, name: &str) -> Option<JointTarget> {
+        let j = robot.joint(name)?;
+        Some(JointTarget {
+            jnt: j.id,
+            dof: j.dofadr,
+            qposadr: j.qposadr,
+            acts: robot.actuators_on_joint(j.id).iter().map(|a| a.id).collect(),
+            key_q: robot.key.qpos.get(j.qposadr).copied().unwrap_or(0.0),
+        })
+    }
+}
+
+/// How an effect enters the simulation.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Entry {
+    /// Edits the compiled model copy.
+    Model,
+    /// Rewrites the command the servo sees (runs before torque hooks).
+    Command,
+    /// Adds joint torque every physics step.
+    Torque,
+    /// Transforms the simulated measurement (sensor effects).
+    Measurement,
+}
+
+pub trait Effect: Sync {
+    fn id(&self) -> &'static str;
+    fn params(&self) -> &'static [ParamDef];
+    fn entry(&self) -> Entry;
+    /// One-line physical description (docs, `--help`).
+    fn describe(&self) -> &'static str;
+    /// Start point of a fit: the model's current value for MuJoCo-native parameters, else the
+    /// defaults.
+    fn initial(&self, _m: &MjModel, _t: &JointTarget) -> Vec<f64> {
+        self.params().iter().map(|p| p.default).collect()
+    }
+    /// Bounds of a fit (defaults from [`ParamDef`]; native parameters widen them around the
+    /// model's value).
+    fn bounds(&self, m: &MjModel, t: &JointTarget) -> (Vec<f64>, Vec<f64>) {
+        let _ = (m, t);
+        (self.params().iter().map(|p| p.lo).collect(), self.params().iter().map(|p| p.hi).collect())
+    }
+    /// MuJoCo-native effects: write `p` into the model copy.
+    fn apply_model(&self, _m: &mut MjModel, _t: &JointTarget, _p: &[f64]) {}
+    /// Hook effects: called every physics step before `mj_step`; may change `io.ctrl` (command
+    /// effects) or add to `io.tau` (torque effects).
+    #[allow(clippy::too_many_arguments)]
+    fn torque(&self, _st: &mut EffectState, _q: f64, _qd: f64, _q_target: f64, _io: &mut StepIo, _dt: f64, _p: &[f64]) {}
+    /// Measurement effects: sensor reading minus true position.
+    fn measurement_bias(&self, _p: &[f64]) -> f64 {
+        0.0
+    }
+    fn write_back(&self, p: &[f64]) -> WriteBack;
+    /// Number of parameters that are actually fitted (the first `n`); the rest stay at default.
+    fn fitted(&self) -> usize {
+        self.params().len()
+    }
+}
+
+/// Every effect, in the fit engine's preference order (simpler first).
+pub fn all() -> Vec<&'static dyn Effect> {
+    vec![
+        &action_delay::ActionDelay,
+        &coulomb_friction::CoulombFriction,
+        &viscous_damping::ViscousDamping,
+        &armature::Armature,
+        &position_offset::PositionOffset,
+        &gain_error::GainError,
+        &stribeck_friction::StribeckFriction,
+        &torque_limit::TorqueLimit,
+        &backlash::Backlash,
+        &joint_stiffness::JointStiffness,
+        &load_dependent_friction::LoadDependentFriction,
+    ]
+}
+
+pub fn by_id(id: &str) -> Option<&'static dyn Effect> {
+    all().into_iter().find(|e| e.id() == id)
+}
+
+/// An effect with parameters on a set of joints (a joint group shares one parameter vector).
+#[derive(Clone)]
+pub struct Applied {
+    pub effect: &'static dyn Effect,
+    pub joints: Vec<String>,
+    pub params: Vec<f64>,
+}
+
+impl std::fmt::Debug for Applied {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}{:?}={:?}", self.effect.id(), self.joints, self.params)
+    }
+}
+
+/// Smooth sign used by friction hooks (ε in rad/s).
+pub fn smooth_sign(v: f64, eps: f64) -> f64 {
+    (v / eps).tanh()
+}
+
+/// Servo torque the position actuator produces for this step's io.
+pub fn servo_torque(q: f64, qd: f64, io: &StepIo) -> f64 {
+    if io.enabled { io.kp * (io.ctrl - q) - io.kd * qd } else { 0.0 }
+}
+
+/// A copy of `robot.mj` with the MuJoCo-native effects of `applied` written in.
+pub fn model_with(robot: &Robot, applied: &[Applied]) -> MjModel {
+    let mut m = robot.mj.clone();
+    for a in applied.iter().filter(|a| a.effect.entry() == Entry::Model) {
+        for name in &a.joints {
+            if let Some(t) = JointTarget::of(robot, name) {
+                a.effect.apply_model(&mut m, &t, &a.params);
+            }
+        }
+    }
+    m
+}
+
+struct Hook<'a> {
+    applied: &'a [Applied],
+    /// Per recorded joint: (index into `applied`, state), command effects first.
+    lists: Vec<Vec<(usize, EffectState)>>,
+    dt: f64,
+}
+
+impl ActuatorHook for Hook<'_> {
+    fn reset(&mut self, joints: &[String], dt: f64) {
+        self.dt = dt;
+        self.lists = joints
+            .iter()
+            .map(|n| {
+                let mut v: Vec<(usize, EffectState)> = self
+                    .applied
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, a)| matches!(a.effect.entry(), Entry::Command | Entry::Torque) && a.joints.iter().any(|j| j == n))
+                    .map(|(i, _)| (i, EffectState::default()))
+                    .collect();
+                v.sort_by_key(|(i, _)| (self.applied[*i].effect.entry() != Entry::Command) as u8);
+                v
+            })
+            .collect();
+    }
+    fn before_step(&mut self, _t: f64, joint_idx: usize, q: f64, qd: f64, q_target: f64, out: &mut StepIo) {
+        let Some(list) = self.lists.get_mut(joint_idx) else { return };
+        for (i, st) in list.iter_mut() {
+            let a = &self.applied[*i];
+            a.effect.torque(st, q, qd, q_target, out, self.dt, &a.params);
+        }
+    }
+}
+
+/// Replays `rec` on `model` (a copy made by [`model_with`]) with the hook and measurement effects
+/// of `applied`.
+pub fn replay_with(robot: &Robot, model: &MjModel, rec: &Recording, applied: &[Applied], opts: &ReplayOptions) -> Result<Episode, ReplayError> {
+    let replayer = Replayer::with_model(robot, model);
+    let bias: Vec<f64> = rec
+        .joints
+        .iter()
+        .map(|j| {
+            applied
+                .iter()
+                .filter(|a| a.effect.entry() == Entry::Measurement && a.joints.contains(&j.name))
+                .map(|a| a.effect.measurement_bias(&a.params))
+                .sum()
+        })
+        .collect();
+    let has_bias = bias.iter().any(|&b| b != 0.0);
+    let shifted;
+    let rec_in = if has_bias {
+        // The sensor reads true + bias: start the true joint at reading − bias.
+        let mut r = rec.clone();
+        for (j, b) in r.joints.iter_mut().zip(&bias) {
+            if let Some(q0) = j.q.first_mut() {
+                *q0 -= b;
+            }
+        }
+        shifted = r;
+        &shifted
+    } else {
+        rec
+    };
+    let hooked = applied.iter().any(|a| matches!(a.effect.entry(), Entry::Command | Entry::Torque));
+    let mut ep = if hooked {
+        let mut h = Hook { applied, lists: vec![], dt: 0.0 };
+        replayer.replay(rec_in, opts, Some(&mut h))?
+    } else {
+        replayer.replay(rec_in, opts, None)?
+    };
+    if has_bias {
+        for (q, b) in ep.q_sim.iter_mut().zip(&bias) {
+            q.iter_mut().for_each(|x| *x += b);
+        }
+    }
+    Ok(ep)
+}
+
+/// Replays every recording (in parallel) with `applied` effects.
+pub fn simulate(robot: &Robot, recs: &[Recording], applied: &[Applied], opts: &ReplayOptions) -> Vec<Result<Episode, ReplayError>> {
+    let m = model_with(robot, applied);
+    recs.par_iter().map(|r| replay_with(robot, &m, r, applied, opts)).collect()
+}
+
+/// Writes `v` into entry `i` of a model array of length `n`.
+pub(crate) fn set(ptr: *mut f64, n: usize, i: usize, v: f64) {
+    if let Some(x) = mj::slice_mut(ptr, n).get_mut(i) {
+        *x = v;
+    }
+}
+
+pub(crate) fn get(ptr: *const f64, n: usize, i: usize) -> f64 {
+    mj::slice(ptr, n).get(i).copied().unwrap_or(0.0)
+}

@@ -1,0 +1,692 @@
+//! Greedy forward selection of missing physics.
+//!
+//! 1. Split the dataset: every `holdout`-th episode is held out (at least one when there are two
+//!    or more); a single episode is cut into time windows instead, every `holdout`-th window
+//!    held out. Optionally, training episodes are cut into multiple-shooting windows (each
+//!    replay starts from the recorded state).
+//! 2. Each round: replay the training set with the effects kept so far, [`diagnose`] the
+//!    residuals, take the top-ranked (effect, joint group) candidates, and fit each one's
+//!    parameters (golden section for one parameter, Nelder–Mead for two or three, CMA-ES above)
+//!    to minimise the position RMSE over the training episodes.
+//! 3. A candidate is kept only when, on the held-out episodes, the paired per-window RMSE
+//!    improvement is beyond noise ([`improvement_beyond_noise`]), the relative RMSE improvement
+//!    is at least `min_rel_improvement`, and the training BIC decreases. Of the kept candidates the
+//!    one with the lowest held-out RMSE wins (a simpler one within 1 % of it is preferred).
+//! 4. Repeat until nothing helps. Uncertainty: finite-difference Jacobian of the residual vector
+//!    at the optimum → [`uncertainty_from_jacobian`].
+
+use std::collections::BTreeMap;
+
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::fit::diagnose::{Candidate, diagnose};
+use crate::fit::effects::{self, Applied, Effect, JointTarget, model_with, replay_with};
+use crate::fit::optim::{Bounds, CmaesOpts, NelderMeadOpts, cmaes, golden_section, nelder_mead};
+use crate::fit::stats::{bic, improvement_beyond_noise, uncertainty_from_jacobian};
+use crate::model::Robot;
+use crate::sim2real::recording::Recording;
+use crate::sim2real::replay::{Episode, ReplayOptions};
+
+#[derive(Debug, Clone)]
+pub struct FitOptions {
+    /// Every N-th episode is held out (N ≥ 2).
+    pub holdout: usize,
+    /// Effect ids to consider (all when empty).
+    pub effects: Vec<String>,
+    /// Joints to fit (all recorded joints when empty).
+    pub joints: Vec<String>,
+    pub replay: ReplayOptions,
+    /// Length of the windows of the held-out paired test [s].
+    pub window_s: f64,
+    /// Multiple shooting: cut training episodes into windows of this length [s].
+    pub shooting_s: Option<f64>,
+    pub max_rounds: usize,
+    pub candidates_per_round: usize,
+    /// Minimum relative held-out RMSE improvement for an effect to be kept.
+    pub min_rel_improvement: f64,
+    /// Objective evaluations per candidate fit.
+    pub max_evals: usize,
+    /// Joint → motor family (from the spec): a family of three or more fitted joints is also
+    /// tried as one group sharing the parameters.
+    pub families: BTreeMap<String, String>,
+}
+
+impl Default for FitOptions {
+    fn default() -> Self {
+        FitOptions {
+            holdout: 4,
+            effects: vec![],
+            joints: vec![],
+            replay: ReplayOptions::default(),
+            window_s: 1.0,
+            shooting_s: None,
+            max_rounds: 4,
+            candidates_per_round: 4,
+            min_rel_improvement: 0.02,
+            max_evals: 60,
+            families: BTreeMap::new(),
+        }
+    }
+}
+
+/// One kept effect.
+#[derive(Debug, Clone, Serialize)]
+pub struct Selected {
+    pub effect: String,
+    pub joints: Vec<String>,
+    pub params: BTreeMap<String, f64>,
+    pub stderr: BTreeMap<String, f64>,
+    /// `false` when some fitted parameter is not determined by the data.
+    pub identifiable: bool,
+    pub evidence: BTreeMap<String, f64>,
+    /// Relative held-out position-RMSE reduction (0.3 = 30 % lower).
+    pub heldout_improvement: f64,
+    pub heldout_rmse_before: f64,
+    pub heldout_rmse_after: f64,
+    /// Mean ± stderr of the paired per-window improvement [rad].
+    pub window_improvement: f64,
+    pub window_improvement_se: f64,
+    pub bic_before: f64,
+    pub bic_after: f64,
+    #[serde(skip)]
+    pub values: Vec<f64>,
+}
+
+/// A candidate that was fitted (kept or not), for the log.
+#[derive(Debug, Clone, Serialize)]
+pub struct Tried {
+    pub round: usize,
+    pub effect: String,
+    pub joints: Vec<String>,
+    pub params: Vec<f64>,
+    pub train_rmse: f64,
+    pub heldout_improvement: f64,
+    pub significant: bool,
+    pub bic_decreased: bool,
+    pub kept: bool,
+}
+
+pub struct FitOutcome {
+    pub train: Vec<Recording>,
+    pub heldout: Vec<Recording>,
+    /// The held-out set is made of time windows of a single episode.
+    pub split_by_time: bool,
+    /// Diagnosis of the first round (the model as given).
+    pub diagnosis: Vec<Candidate>,
+    pub selected: Vec<Selected>,
+    pub applied: Vec<Applied>,
+    pub tried: Vec<Tried>,
+    pub warnings: Vec<String>,
+}
+
+/// Copy of samples `i0..i1` of a recording (the control-tick phase is kept).
+pub fn slice_recording(rec: &Recording, i0: usize, i1: usize) -> Recording {
+    let s = |v: &Vec<f64>| v[i0..i1].to_vec();
+    let mut r = rec.clone();
+    r.t = s(&rec.t);
+    r.control_t0_s = Some(rec.control_t0_s.unwrap_or(rec.t[0]));
+    for (j, o) in r.joints.iter_mut().zip(&rec.joints) {
+        j.q = s(&o.q);
+        j.qd = o.qd.as_ref().map(s);
+        j.q_cmd = o.q_cmd.as_ref().map(s);
+        j.tau = o.tau.as_ref().map(s);
+        j.kp = o.kp.as_ref().map(s);
+        j.kd = o.kd.as_ref().map(s);
+        j.enabled = o.enabled.as_ref().map(|v| v[i0..i1].to_vec());
+    }
+    if let (Some(b), Some(ob)) = (r.base.as_mut(), rec.base.as_ref()) {
+        b.pos = ob.pos[i0..i1].to_vec();
+        b.quat = ob.quat[i0..i1].to_vec();
+    }
+    r.source = format!("{}@{:.2}s", rec.source.display(), rec.t[i0]).into();
+    r
+}
+
+/// Cuts a recording into windows of about `len_s` (the last one absorbs the remainder).
+pub fn windows(rec: &Recording, len_s: f64) -> Vec<Recording> {
+    let n = rec.t.len();
+    let mut out = Vec::new();
+    let mut i0 = 0;
+    while i0 + 2 < n {
+        let tend = rec.t[i0] + len_s;
+        let mut i1 = rec.t.partition_point(|&x| x < tend).max(i0 + 2);
+        if rec.t[n - 1] - rec.t[i1.min(n - 1)] < 0.5 * len_s {
+            i1 = n;
+        }
+        out.push(slice_recording(rec, i0, i1.min(n)));
+        i0 = i1;
+    }
+    out
+}
+
+/// (train, held-out, split by time).
+pub fn split(recs: &[Recording], holdout: usize) -> (Vec<Recording>, Vec<Recording>, bool) {
+    let h = holdout.max(2);
+    if recs.len() == 1 {
+        let d = recs[0].duration();
+        let w = windows(&recs[0], (d / (2 * h) as f64).clamp(0.5, 2.0));
+        let (mut tr, mut ho) = (vec![], vec![]);
+        for (i, r) in w.into_iter().enumerate() {
+            if (i + 1) % h == 0 { ho.push(r) } else { tr.push(r) }
+        }
+        if ho.is_empty() && tr.len() >= 2 {
+            ho.push(tr.pop().unwrap());
+        }
+        return (tr, ho, true);
+    }
+    let (mut tr, mut ho) = (vec![], vec![]);
+    for (i, r) in recs.iter().enumerate() {
+        if (i + 1) % h == 0 { ho.push(r.clone()) } else { tr.push(r.clone()) }
+    }
+    if ho.is_empty() && tr.len() >= 2 {
+        ho.push(tr.pop().unwrap());
+    }
+    (tr, ho, false)
+}
+
+/// Position errors of one simulation of a dataset.
+pub struct Errors {
+    pub sse: f64,
+    pub n: usize,
+    /// Per (episode, window, joint) RMSE, with the joint's name.
+    pub windows: Vec<(String, f64)>,
+    pub eps: Vec<Episode>,
+}
+
+impl Errors {
+    pub fn rmse(&self) -> f64 {
+        if self.n == 0 { f64::INFINITY } else { (self.sse / self.n as f64).sqrt() }
+    }
+}
+
+/// The fit engine's view of a robot and dataset.
+pub struct Engine<'a> {
+    pub robot: &'a Robot,
+    pub opts: &'a FitOptions,
+    /// Joints scored by the objective.
+    pub joints: Vec<String>,
+}
+
+impl<'a> Engine<'a> {
+    pub fn new(robot: &'a Robot, recs: &[Recording], opts: &'a FitOptions) -> Self {
+        let mut joints = Vec::new();
+        for r in recs {
+            for j in &r.joints {
+                if (opts.joints.is_empty() || opts.joints.contains(&j.name)) && !joints.contains(&j.name) {
+                    joints.push(j.name.clone());
+                }
+            }
+        }
+        Engine { robot, opts, joints }
+    }
+
+    /// Simulates `recs` with `applied`; `None` when an episode diverged or failed.
+    pub fn errors(&self, recs: &[Recording], applied: &[Applied]) -> Option<Errors> {
+        let m = model_with(self.robot, applied);
+        let eps: Vec<Episode> = recs
+            .par_iter()
+            .map(|r| replay_with(self.robot, &m, r, applied, &self.opts.replay).ok().filter(|e| e.diverged.is_none()))
+            .collect::<Option<Vec<_>>>()?;
+        let mut sse = 0.0;
+        let mut n = 0usize;
+        let mut win = Vec::new();
+        for (rec, ep) in recs.iter().zip(&eps) {
+            for (k, jt) in rec.joints.iter().enumerate() {
+                if !self.joints.contains(&jt.name) {
+                    continue;
+                }
+                let t0 = rec.t[0];
+                let mut w = (0usize, 0.0, 0usize);
+                for i in 0..rec.t.len() {
+                    let e = jt.q[i] - ep.q_sim[k][i];
+                    if !e.is_finite() {
+                        if jt.q[i].is_finite() {
+                            return None;
+                        }
+                        continue;
+                    }
+                    let wi = ((rec.t[i] - t0) / self.opts.window_s) as usize;
+                    if wi != w.0 && w.2 > 0 {
+                        win.push((jt.name.clone(), (w.1 / w.2 as f64).sqrt()));
+                        w = (wi, 0.0, 0);
+                    }
+                    w.0 = wi;
+                    w.1 += e * e;
+                    w.2 += 1;
+                    sse += e * e;
+                    n += 1;
+                }
+                if w.2 > 0 {
+                    win.push((jt.name.clone(), (w.1 / w.2 as f64).sqrt()));
+                }
+            }
+        }
+        Some(Errors { sse, n, windows: win, eps })
+    }
+
+    /// Residual vector (real − sim) on `joints`, subsampled to at most `max_len` entries.
+    fn residuals(&self, recs: &[Recording], applied: &[Applied], joints: &[String], max_len: usize) -> Option<Vec<f64>> {
+        let e = self.errors(recs, applied)?;
+        let mut out = Vec::new();
+        for (rec, ep) in recs.iter().zip(&e.eps) {
+            for (k, jt) in rec.joints.iter().enumerate() {
+                if joints.contains(&jt.name) {
+                    out.extend(jt.q.iter().zip(&ep.q_sim[k]).map(|(a, b)| a - b).filter(|x| x.is_finite()));
+                }
+            }
+        }
+        let stride = out.len().div_ceil(max_len.max(1)).max(1);
+        Some(out.into_iter().step_by(stride).collect())
+    }
+
+    /// Fits `effect` on `group` on top of `base`: returns the full parameter vector and the
+    /// training RMSE.
+    pub fn fit_one(&self, train: &[Recording], base: &[Applied], effect: &'static dyn Effect, group: &[String]) -> (Vec<f64>, f64) {
+        let Some(t) = JointTarget::of(self.robot, &group[0]) else { return (vec![], f64::INFINITY) };
+        let m0 = model_with(self.robot, base);
+        let full0 = effect.initial(&m0, &t);
+        let (lo, hi) = effect.bounds(&m0, &t);
+        let k = effect.fitted().min(full0.len());
+        let make = |x: &[f64]| {
+            let mut p = full0.clone();
+            p[..k].copy_from_slice(&x[..k]);
+            let mut a = base.to_vec();
+            a.push(Applied { effect, joints: group.to_vec(), params: p });
+            a
+        };
+        let obj = |x: &[f64]| self.errors(train, &make(x)).map_or(f64::INFINITY, |e| e.rmse());
+        let x0: Vec<f64> = (0..k).map(|i| full0[i].clamp(lo[i], hi[i])).collect();
+        let b = Bounds { lo: lo[..k].to_vec(), hi: hi[..k].to_vec() };
+        let (x, f) = match k {
+            0 => (vec![], obj(&[])),
+            1 => {
+                let tol = 2e-4 * (hi[0] - lo[0]);
+                let (x, f) = golden_section(&|v| obj(&[v]), lo[0], hi[0], tol, self.opts.max_evals.min(40));
+                (vec![x], f)
+            }
+            2 | 3 => {
+                let o = NelderMeadOpts { max_evals: self.opts.max_evals * 2, xtol: 1e-3, ftol: 1e-12, initial_step: 0.1 };
+                let r = nelder_mead(&obj, &x0, &b, &o);
+                (r.x, r.f)
+            }
+            _ => {
+                let o = CmaesOpts { max_evals: self.opts.max_evals * 2, ..Default::default() };
+                let r = cmaes(&obj, &x0, &b, &o);
+                (r.x, r.f)
+            }
+        };
+        let mut p = full0.clone();
+        p[..k].copy_from_slice(&x[..k]);
+        (p, f)
+    }
+
+    /// Linearised explained mean square of the residual by a probe step of candidate `c`
+    /// (`None` when the probe changes nothing or diverges): returns (explained MS, coefficient).
+    fn sensitivity(&self, train: &[Recording], base: &[Applied], base_err: &Errors, c: &Candidate) -> Option<(f64, f64)> {
+        let effect = effects::by_id(c.effect)?;
+        let t = JointTarget::of(self.robot, &c.joint)?;
+        let m0 = model_with(self.robot, base);
+        let mut p = effect.initial(&m0, &t);
+        let (lo, hi) = effect.bounds(&m0, &t);
+        if effect.id() == "torque_limit" {
+            p[0] = c.evidence.get("tau_p80").copied().filter(|v| *v > lo[0])?;
+        } else {
+            let step = 0.05 * (hi[0] - lo[0]);
+            p[0] = if p[0] + step <= hi[0] { p[0] + step } else { p[0] - step };
+        }
+        let mut a = base.to_vec();
+        a.push(Applied { effect, joints: vec![c.joint.clone()], params: p });
+        let e = self.errors(train, &a)?;
+        let (mut rs, mut ss) = (0.0, 0.0);
+        let mut n = 0usize;
+        for ((rec, e0), e1) in train.iter().zip(&base_err.eps).zip(&e.eps) {
+            for (k, jt) in rec.joints.iter().enumerate() {
+                if !self.joints.contains(&jt.name) {
+                    continue;
+                }
+                for i in 0..rec.t.len() {
+                    let r = jt.q[i] - e0.q_sim[k][i];
+                    let s = e1.q_sim[k][i] - e0.q_sim[k][i];
+                    if r.is_finite() && s.is_finite() {
+                        rs += r * s;
+                        ss += s * s;
+                        n += 1;
+                    }
+                }
+            }
+        }
+        if ss <= 1e-300 || n == 0 {
+            return None;
+        }
+        Some((rs * rs / ss / n as f64, rs / ss))
+    }
+
+    /// Linearised standard errors of the fitted parameters of `applied.last()`.
+    fn uncertainty(&self, train: &[Recording], applied: &[Applied]) -> (Vec<f64>, bool) {
+        let last = applied.last().expect("non-empty");
+        let effect = last.effect;
+        let t = JointTarget::of(self.robot, &last.joints[0]).expect("joint");
+        let m0 = model_with(self.robot, &applied[..applied.len() - 1]);
+        let (lo, hi) = effect.bounds(&m0, &t);
+        let k = effect.fitted().min(last.params.len());
+        let Some(r0) = self.residuals(train, applied, &last.joints, 20_000) else { return (vec![f64::INFINITY; k], false) };
+        let mut cols = Vec::with_capacity(k);
+        for i in 0..k {
+            let range = hi[i] - lo[i];
+            let mut h = 1e-3 * range.max(1e-9);
+            if last.params[i] + h > hi[i] {
+                h = -h;
+            }
+            let mut a = applied.to_vec();
+            a.last_mut().unwrap().params[i] += h;
+            match self.residuals(train, &a, &last.joints, 20_000) {
+                // Residuals are real − sim, so ∂r/∂p = −∂sim/∂p; the sign does not matter for J^T J.
+                Some(r1) if r1.len() == r0.len() => cols.push(r1.iter().zip(&r0).map(|(a, b)| (a - b) / h).collect::<Vec<f64>>()),
+                _ => return (vec![f64::INFINITY; k], false),
+            }
+        }
+        let jac: Vec<Vec<f64>> = (0..r0.len()).map(|row| cols.iter().map(|c| c[row]).collect()).collect();
+        let ranges: Vec<f64> = (0..k).map(|i| hi[i] - lo[i]).collect();
+        let u = uncertainty_from_jacobian(&jac, &r0, k, &ranges);
+        let ident = u.identifiable.iter().all(|&x| x);
+        (u.stderr, ident)
+    }
+}
+
+/// Partner of a left/right joint name (`left_knee` ↔ `right_knee`, `l_hip` ↔ `r_hip`, `hip_l` ↔
+/// `hip_r`, `L_` ↔ `R_`).
+pub fn mirror(name: &str) -> Option<String> {
+    let pairs = [("left", "right"), ("Left", "Right"), ("LEFT", "RIGHT")];
+    for (a, b) in pairs {
+        if name.contains(a) {
+            return Some(name.replacen(a, b, 1));
+        }
+        if name.contains(b) {
+            return Some(name.replacen(b, a, 1));
+        }
+    }
+    for (a, b) in [("l_", "r_"), ("L_", "R_")] {
+        if let Some(rest) = name.strip_prefix(a) {
+            return Some(format!("{b}{rest}"));
+        }
+        if let Some(rest) = name.strip_prefix(b) {
+            return Some(format!("{a}{rest}"));
+        }
+    }
+    for (a, b) in [("_l", "_r"), ("_L", "_R")] {
+        if let Some(rest) = name.strip_suffix(a) {
+            return Some(format!("{rest}{b}"));
+        }
+        if let Some(rest) = name.strip_suffix(b) {
+            return Some(format!("{rest}{a}"));
+        }
+    }
+    None
+}
+
+/// A candidate: effect, joint group, evidence.
+type Cand = (&'static dyn Effect, Vec<String>, BTreeMap<String, f64>);
+
+/// Runs the whole selection on `recs`.
+pub fn fit(robot: &Robot, recs: &[Recording], opts: &FitOptions) -> FitOutcome {
+    let engine = Engine::new(robot, recs, opts);
+    let (train0, heldout, by_time) = split(recs, opts.holdout);
+    let train: Vec<Recording> = match opts.shooting_s {
+        Some(w) if w > 0.0 => train0.iter().flat_map(|r| windows(r, w)).collect(),
+        _ => train0,
+    };
+    let mut out = FitOutcome {
+        train: train.clone(),
+        heldout: heldout.clone(),
+        split_by_time: by_time,
+        diagnosis: vec![],
+        selected: vec![],
+        applied: vec![],
+        tried: vec![],
+        warnings: vec![],
+    };
+    if train.is_empty() || heldout.is_empty() {
+        out.warnings.push("not enough data for a train/held-out split (need 2 episodes, or one of several seconds)".into());
+        return out;
+    }
+    let allowed: Vec<String> = if opts.effects.is_empty() { effects::all().iter().map(|e| e.id().to_string()).collect() } else { opts.effects.clone() };
+    for round in 0..opts.max_rounds {
+        let applied = out.applied.clone();
+        let Some(tr_err) = engine.errors(&train, &applied) else {
+            out.warnings.push("the training replay diverged with the current model; stopping".into());
+            break;
+        };
+        let Some(ho_err) = engine.errors(&heldout, &applied) else {
+            out.warnings.push("the held-out replay diverged with the current model; stopping".into());
+            break;
+        };
+        let diag = diagnose(robot, &train, &tr_err.eps, &engine.joints, &allowed);
+        let covered = |id: &str, j: &str| applied.iter().any(|a| a.effect.id() == id && a.joints.iter().any(|x| x == j));
+        // Re-rank the diagnosis by the linearised (Gauss–Newton) explained residual: the
+        // residual projected on the simulated sensitivity to a probe step of the effect.
+        let mut diag = diag;
+        for c in diag.iter_mut() {
+            if covered(c.effect, &c.joint) {
+                c.explained_rms = 0.0;
+                continue;
+            }
+            let sens = engine.sensitivity(&train, &applied, &tr_err, c);
+            if let Some((ems, coef)) = sens {
+                c.evidence.insert("feature_explained_rms".into(), c.explained_rms);
+                c.evidence.insert("sensitivity_coef".into(), coef);
+                c.explained_rms = ems.sqrt();
+            }
+        }
+        diag.sort_by(|a, b| b.explained_rms.total_cmp(&a.explained_rms));
+        if round == 0 {
+            out.diagnosis = diag.clone();
+        }
+        // Candidate (effect, group) list, best first.
+        let mut cands: Vec<Cand> = Vec::new();
+        for c in &diag {
+            if cands.len() >= opts.candidates_per_round {
+                break;
+            }
+            if covered(c.effect, &c.joint) || c.explained_rms <= 1e-9 {
+                continue;
+            }
+            let Some(e) = effects::by_id(c.effect) else { continue };
+            let mut group = vec![c.joint.clone()];
+            if let Some(p) = mirror(&c.joint)
+                && engine.joints.contains(&p)
+                && !covered(c.effect, &p)
+                && diag.iter().take(opts.candidates_per_round * 4).any(|d| d.effect == c.effect && d.joint == p)
+            {
+                group.push(p);
+                group.sort();
+            }
+            if cands.iter().any(|(e2, g, _)| e2.id() == e.id() && g.iter().any(|x| group.contains(x))) {
+                continue;
+            }
+            let mut ev = c.evidence.clone();
+            ev.insert("explained_rms".into(), c.explained_rms);
+            ev.insert("residual_rms".into(), c.residual_rms);
+            // The joint's motor family as one more group (shared parameters).
+            let fam: Vec<String> = match opts.families.get(&c.joint) {
+                Some(f) => engine.joints.iter().filter(|j| opts.families.get(*j) == Some(f) && !covered(c.effect, j)).cloned().collect(),
+                None => vec![],
+            };
+            let fam_new = fam.len() >= 3 && !cands.iter().any(|(e2, g, _)| e2.id() == e.id() && *g == fam);
+            cands.push((e, group, ev.clone()));
+            if fam_new {
+                cands.push((e, fam, ev));
+            }
+        }
+        if cands.is_empty() {
+            break;
+        }
+        let k_before: usize = applied.iter().map(|a| a.effect.fitted()).sum();
+        let bic_before = bic(tr_err.n, tr_err.sse, k_before);
+        let mut accepted: Vec<Selected> = Vec::new();
+        for (e, group, ev) in cands {
+            let (p, train_rmse) = engine.fit_one(&train, &applied, e, &group);
+            if p.is_empty() || !train_rmse.is_finite() {
+                continue;
+            }
+            let mut trial = applied.clone();
+            trial.push(Applied { effect: e, joints: group.clone(), params: p.clone() });
+            let (Some(tr_a), Some(ho_a)) = (engine.errors(&train, &trial), engine.errors(&heldout, &trial)) else { continue };
+            let bic_after = bic(tr_a.n, tr_a.sse, k_before + e.fitted());
+            // Paired test on the windows of the candidate's joints (others barely move).
+            let on = |w: &[(String, f64)]| w.iter().filter(|(j, _)| group.contains(j)).map(|(_, v)| *v).collect::<Vec<f64>>();
+            let (wb, wa) = (on(&ho_err.windows), on(&ho_a.windows));
+            let (mean, se, sig_abs) = improvement_beyond_noise(&wb, &wa);
+            // The same test on log errors: robust when a few windows carry the whole effect.
+            let ln = |w: &[f64]| w.iter().map(|v| v.max(1e-12).ln()).collect::<Vec<f64>>();
+            let (_, _, sig_log) = improvement_beyond_noise(&ln(&wb), &ln(&wa));
+            let sig = sig_abs || sig_log;
+            let rel = (ho_err.rmse() - ho_a.rmse()) / ho_err.rmse().max(1e-300);
+            let keep = sig && rel >= opts.min_rel_improvement && bic_after < bic_before;
+            out.tried.push(Tried {
+                round,
+                effect: e.id().into(),
+                joints: group.clone(),
+                params: p.clone(),
+                train_rmse,
+                heldout_improvement: rel,
+                significant: sig,
+                bic_decreased: bic_after < bic_before,
+                kept: false,
+            });
+            if keep {
+                let defs = e.params();
+                accepted.push(Selected {
+                    effect: e.id().into(),
+                    joints: group,
+                    params: defs.iter().zip(&p).take(e.fitted()).map(|(d, v)| (d.name.to_string(), *v)).collect(),
+                    stderr: BTreeMap::new(),
+                    identifiable: true,
+                    evidence: ev,
+                    heldout_improvement: rel,
+                    heldout_rmse_before: ho_err.rmse(),
+                    heldout_rmse_after: ho_a.rmse(),
+                    window_improvement: mean,
+                    window_improvement_se: se,
+                    bic_before,
+                    bic_after,
+                    values: p,
+                });
+            }
+        }
+        let Some(best_rmse) = accepted.iter().map(|s| s.heldout_rmse_after).min_by(|a, b| a.total_cmp(b)) else { break };
+        // Simplest among those within 1 % of the best held-out RMSE.
+        let win = accepted
+            .iter()
+            .enumerate()
+            .filter(|(_, s)| s.heldout_rmse_after <= best_rmse * 1.01)
+            .min_by(|(_, a), (_, b)| {
+                let ka = effects::by_id(&a.effect).map_or(9, |e| e.fitted());
+                let kb = effects::by_id(&b.effect).map_or(9, |e| e.fitted());
+                ka.cmp(&kb).then(a.heldout_rmse_after.total_cmp(&b.heldout_rmse_after))
+            })
+            .map(|(i, _)| i)
+            .expect("non-empty");
+        let mut s = accepted.swap_remove(win);
+        if let Some(t) = out.tried.iter_mut().rev().find(|t| t.round == round && t.effect == s.effect && t.joints == s.joints) {
+            t.kept = true;
+        }
+        let e = effects::by_id(&s.effect).expect("known");
+        out.applied.push(Applied { effect: e, joints: s.joints.clone(), params: s.values.clone() });
+        let (se, ident) = engine.uncertainty(&train, &out.applied);
+        s.stderr = e.params().iter().zip(&se).map(|(d, v)| (d.name.to_string(), *v)).collect();
+        s.identifiable = ident;
+        if !ident {
+            out.warnings.push(format!("{} on {}: parameters not identifiable from this data (excite the joint more)", s.effect, s.joints.join(",")));
+        }
+        out.selected.push(s);
+    }
+    if out.applied.len() >= 2 {
+        polish(&engine, &train, &heldout, &mut out);
+    }
+    out
+}
+
+/// Joint re-fit of every kept effect's fitted parameters (Nelder–Mead from the greedy values);
+/// kept only when both the training and the held-out RMSE do not get worse.
+fn polish(engine: &Engine, train: &[Recording], heldout: &[Recording], out: &mut FitOutcome) {
+    let mut slots = Vec::new(); // (applied index, parameter index, lo, hi)
+    for (ai, a) in out.applied.iter().enumerate() {
+        let Some(t) = JointTarget::of(engine.robot, &a.joints[0]) else { return };
+        let m0 = model_with(engine.robot, &out.applied[..ai]);
+        let (lo, hi) = a.effect.bounds(&m0, &t);
+        for k in 0..a.effect.fitted().min(a.params.len()) {
+            slots.push((ai, k, lo[k], hi[k]));
+        }
+    }
+    let make = |x: &[f64]| {
+        let mut a = out.applied.clone();
+        for (&(ai, k, ..), v) in slots.iter().zip(x) {
+            a[ai].params[k] = *v;
+        }
+        a
+    };
+    let x0: Vec<f64> = slots.iter().map(|&(ai, k, ..)| out.applied[ai].params[k]).collect();
+    let b = Bounds { lo: slots.iter().map(|s| s.2).collect(), hi: slots.iter().map(|s| s.3).collect() };
+    let obj = |x: &[f64]| engine.errors(train, &make(x)).map_or(f64::INFINITY, |e| e.rmse());
+    let f0 = obj(&x0);
+    let o = NelderMeadOpts { max_evals: engine.opts.max_evals * 2, xtol: 1e-4, ftol: 1e-12, initial_step: 0.02 };
+    let r = nelder_mead(&obj, &x0, &b, &o);
+    if r.f.is_nan() || r.f >= f0 {
+        return;
+    }
+    let new = make(&r.x);
+    let (Some(h0), Some(h1)) = (engine.errors(heldout, &out.applied), engine.errors(heldout, &new)) else { return };
+    if h1.rmse() > h0.rmse() {
+        return;
+    }
+    for (s, a) in out.selected.iter_mut().zip(&new) {
+        s.values = a.params.clone();
+        for (d, v) in a.effect.params().iter().zip(&a.params).take(a.effect.fitted()) {
+            s.params.insert(d.name.to_string(), *v);
+        }
+    }
+    out.applied = new;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sim2real::recording::JointTrace;
+
+    fn rec(n: usize, dt: f64) -> Recording {
+        let t: Vec<f64> = (0..n).map(|i| i as f64 * dt).collect();
+        let mut j = JointTrace::new("a", t.iter().map(|x| x.sin()).collect());
+        j.q_cmd = Some(j.q.clone());
+        Recording { source: "r.csv".into(), meta: Default::default(), control_rate_hz: Some(100.0), control_t0_s: None, t, joints: vec![j], base: None }
+    }
+
+    #[test]
+    fn mirror_names() {
+        assert_eq!(mirror("left_knee").as_deref(), Some("right_knee"));
+        assert_eq!(mirror("r_hip_pitch").as_deref(), Some("l_hip_pitch"));
+        assert_eq!(mirror("hip_L").as_deref(), Some("hip_R"));
+        assert_eq!(mirror("elbow_pitch"), None);
+    }
+
+    #[test]
+    fn windows_cover_the_recording_and_keep_the_tick_phase() {
+        let r = rec(1001, 0.005); // 5 s
+        let w = windows(&r, 1.0);
+        assert_eq!(w.len(), 5);
+        assert_eq!(w.iter().map(|x| x.t.len()).sum::<usize>(), 1001);
+        assert!(w.iter().all(|x| x.control_t0_s == Some(0.0)));
+        assert_eq!(w[2].joints[0].q[0], r.joints[0].q[w[0].t.len() + w[1].t.len()]);
+    }
+
+    #[test]
+    fn split_by_episode_and_by_time() {
+        let recs: Vec<Recording> = (0..8).map(|_| rec(100, 0.01)).collect();
+        let (tr, ho, by_time) = split(&recs, 4);
+        assert_eq!((tr.len(), ho.len(), by_time), (6, 2, false));
+        let (tr, ho, _) = split(&recs[..3], 4);
+        assert_eq!((tr.len(), ho.len()), (2, 1));
+        let (tr, ho, by_time) = split(&[rec(2001, 0.005)], 4);
+        assert!(by_time && !tr.is_empty() && !ho.is_empty(), "{} {}", tr.len(), ho.len());
+    }
+}
