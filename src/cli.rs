@@ -148,6 +148,15 @@ pub struct GapCmd {
 pub struct FitCmd {
     /// Model (MJCF or URDF).
     pub model: PathBuf,
+    /// Servo identification mode for BAM servo logs (a directory of them): fit the servo's
+    /// firmware law + friction/inertia/delay effects on the logs of all firmware gains but one,
+    /// evaluate on the held-out gain, rotate every gain; prints the comparison with BAM's
+    /// published anchors. The model is the pendulum rig (fixtures/bam_xl330/rig.xml).
+    #[arg(long, value_parser = ["xl330"])]
+    pub servo: Option<String>,
+    /// Objective evaluations per candidate fit in --servo mode.
+    #[arg(long, default_value_t = 80)]
+    pub servo_evals: usize,
     /// Recordings: CSV files, BAM JSON logs, or directories.
     #[arg(required = true)]
     pub recordings: Vec<PathBuf>,
@@ -238,6 +247,7 @@ pub fn run() -> i32 {
                 report: g.report,
             })
         }
+        Some(Cmd::Fit(f)) if f.servo.is_some() => crate::fit::cmd::run_servo(&f.model, &f.recordings, f.servo_evals),
         Some(Cmd::Fit(f)) => crate::fit::cmd::run_fit(crate::fit::cmd::FitArgs {
             model: f.model,
             recordings: f.recordings,

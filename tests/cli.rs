@@ -130,3 +130,18 @@ fn rule_docs_are_generated_and_current() {
         assert!(out.contains(id), "`modellint rules` lacks {id}");
     }
 }
+
+#[test]
+fn fit_servo_mode_checks_its_input() {
+    // A directory without BAM logs: a precise error, exit 2.
+    let (code, _, err) = modellint(&["fit", "fixtures/bam_xl330/rig.xml", "fixtures/broken", "--servo", "xl330"]);
+    assert_eq!(code, 2, "{err}");
+    let data = std::path::Path::new("../shared/data/recordings/bam_xl330");
+    if !data.is_dir() {
+        eprintln!("skipping the BAM part: ../shared/data is absent");
+        return;
+    }
+    // Nominal pass only (no fitting): loads all 16 logs of 4 gains and replays them.
+    let (code, _, err) = modellint(&["fit", "fixtures/bam_xl330/rig.xml", data.to_str().unwrap(), "--servo", "xl330", "--servo-evals", "0"]);
+    assert_eq!(code, 0, "{err}");
+}

@@ -283,3 +283,46 @@ pub fn run_synth(a: SynthArgs) -> i32 {
     eprintln!("modellint: {} episodes written to {} (truth in truth.toml)", recs.len(), a.out.display());
     0
 }
+
+/// `modellint fit RIG.xml LOGDIR --servo xl330`: held-out-by-gain servo identification.
+pub fn run_servo(model: &std::path::Path, recordings: &[std::path::PathBuf], evals: usize) -> i32 {
+    let mut map = crate::model::source::SourceMap::default();
+    let robot = match crate::model::load(&mut map, model, None) {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("modellint: {e}");
+            return 2;
+        }
+    };
+    let [dir] = recordings else {
+        eprintln!("modellint: --servo takes one directory of BAM logs");
+        return 2;
+    };
+    let logs = match crate::fit::servo_fit::load_logs(dir) {
+        Ok(l) if !l.is_empty() => l,
+        Ok(_) => {
+            eprintln!("modellint: {}: no BAM logs found", dir.display());
+            return 2;
+        }
+        Err(e) => {
+            eprintln!("modellint: {e}");
+            return 2;
+        }
+    };
+    if crate::fit::servo_fit::gains(&logs).len() < 2 {
+        eprintln!("modellint: {}: --servo needs logs of at least two firmware gains to hold one out", dir.display());
+        return 2;
+    }
+    let o = crate::fit::servo_fit::FitOpts { max_evals: evals, ..Default::default() };
+    let quiet = !std::io::IsTerminal::is_terminal(&std::io::stderr());
+    match crate::fit::servo_report::run(&robot, &logs, &o, &|m| if !quiet { eprintln!("{m}") }) {
+        Ok((report, _)) => {
+            print!("{report}");
+            0
+        }
+        Err(e) => {
+            eprintln!("modellint: {e}");
+            2
+        }
+    }
+}

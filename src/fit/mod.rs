@@ -6,6 +6,7 @@ pub mod optim;
 pub mod select;
 pub mod servo;
 pub mod servo_fit;
+pub mod servo_report;
 pub mod stats;
 pub mod synth;
 pub mod writeback;
