@@ -145,3 +145,16 @@ fn fit_servo_mode_checks_its_input() {
     let (code, _, err) = modellint(&["fit", "fixtures/bam_xl330/rig.xml", data.to_str().unwrap(), "--servo", "xl330", "--servo-evals", "0"]);
     assert_eq!(code, 0, "{err}");
 }
+
+#[test]
+fn urdf_models_load_with_spans() {
+    let mut map = modellint::model::source::SourceMap::default();
+    let p = std::path::Path::new("fixtures/rules/urdf-mjcf-drift/urdf/valid.urdf");
+    let r = modellint::model::load(&mut map, p, None).expect("URDF compiles in MuJoCo");
+    assert_eq!(r.format, modellint::model::Format::Urdf);
+    let j = r.joints.iter().find(|j| j.is_scalar()).expect("a hinge joint");
+    assert!(j.limited, "URDF <limit> becomes a MuJoCo range");
+    let loc = r.elem_loc(modellint::model::mjcf::ElemKind::Joint, j.id, &j.name);
+    assert_eq!(map.file(loc.file).path, p, "the joint points into the URDF");
+    assert!(map.file(loc.file).text[loc.start..loc.end].starts_with("joint"));
+}
