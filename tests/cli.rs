@@ -158,3 +158,20 @@ fn urdf_models_load_with_spans() {
     assert_eq!(map.file(loc.file).path, p, "the joint points into the URDF");
     assert!(map.file(loc.file).text[loc.start..loc.end].starts_with("joint"));
 }
+
+#[test]
+fn inline_suppressions_need_a_reason_and_unused_ones_are_reported() {
+    let (_, out, _) = modellint(&["fixtures/suppress/suppressed.xml", "--no-probe", "--format", "json"]);
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let rules: Vec<&str> = v["findings"].as_array().unwrap().iter().map(|f| f["rule"].as_str().unwrap()).collect();
+    assert!(!rules.contains(&"underdamped-pd-gains"), "suppressed with a reason: {rules:?}");
+    assert!(rules.contains(&"unused-suppression"), "the toe-tilt suppression matched nothing: {rules:?}");
+    assert!(rules.contains(&"invalid-suppression"), "a suppression without a reason: {rules:?}");
+    // Without the comment the finding is there: the suppression is what removed it.
+    let text = std::fs::read_to_string("fixtures/suppress/suppressed.xml").unwrap();
+    let without: String = text.lines().filter(|l| !l.contains("ignore[underdamped-pd-gains]")).collect::<Vec<_>>().join("\n");
+    let p = std::env::temp_dir().join(format!("modellint-unsup-{}.xml", std::process::id()));
+    std::fs::write(&p, without).unwrap();
+    let (_, out, _) = modellint(&[p.to_str().unwrap(), "--no-probe", "--format", "json"]);
+    assert!(out.contains("\"underdamped-pd-gains\""));
+}
