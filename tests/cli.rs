@@ -175,3 +175,19 @@ fn inline_suppressions_need_a_reason_and_unused_ones_are_reported() {
     let (_, out, _) = modellint(&[p.to_str().unwrap(), "--no-probe", "--format", "json"]);
     assert!(out.contains("\"underdamped-pd-gains\""));
 }
+
+#[test]
+fn config_thresholds_and_errors() {
+    let m = "fixtures/probes/servo_underdamped.xml";
+    let (_, out, _) = modellint(&[m, "--no-probe", "--format", "json", "--select", "underdamped-pd-gains"]);
+    assert!(out.contains("\"underdamped-pd-gains\""));
+    let (code, out, err) = modellint(&[m, "--no-probe", "--format", "json", "--select", "underdamped-pd-gains", "--config", "fixtures/config/loose.toml"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(!out.contains("\"underdamped-pd-gains\""), "threshold 0.2 < ζ 0.22");
+    let (code, _, err) = modellint(&[m, "--config", "fixtures/config/bad_option.toml"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("bad_option.toml:1:") && err.contains("min_damping"), "{err}");
+    let (code, _, err) = modellint(&[m, "--config", "fixtures/config/bad_rule.toml"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("bad_rule.toml:2:") && err.contains("no-such-rule"), "{err}");
+}
