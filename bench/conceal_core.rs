@@ -133,6 +133,11 @@ pub struct Score {
     pub mae_floor: f64,
     pub secs: f64,
     pub warnings: Vec<String>,
+    /// The fit's log of tried candidates (round, effect, joints, params, held-out improvement,
+    /// significant, BIC decreased, kept), for explaining misses.
+    pub tried: Vec<String>,
+    /// Top of the first-round diagnosis (effect@joint: explained RMS).
+    pub diagnosis: Vec<String>,
 }
 
 impl Score {
@@ -272,6 +277,24 @@ pub fn run(case: &Case, max_rounds: usize) -> Score {
         mae_floor: acc(&s_truth, None),
         secs: t0.elapsed().as_secs_f64(),
         warnings: out.warnings,
+        tried: out
+            .tried
+            .iter()
+            .map(|t| {
+                format!(
+                    "r{} {}@{}={:?} heldout {:+.1} % sig {} bic↓ {} kept {}",
+                    t.round,
+                    t.effect,
+                    t.joints.join("+"),
+                    t.params.iter().map(|v| (v * 1e4).round() / 1e4).collect::<Vec<_>>(),
+                    100.0 * t.heldout_improvement,
+                    t.significant,
+                    t.bic_decreased,
+                    t.kept
+                )
+            })
+            .collect(),
+        diagnosis: out.diagnosis.iter().take(6).map(|c| format!("{}@{}: {:.2e}", c.effect, c.joint, c.explained_rms)).collect(),
     }
 }
 

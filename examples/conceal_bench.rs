@@ -76,6 +76,10 @@ fn main() {
         for w in &s.warnings {
             eprintln!("    warning: {w}");
         }
+        eprintln!("    diagnosis: {}", s.diagnosis.join("; "));
+        for t in &s.tried {
+            eprintln!("    tried {t}");
+        }
         scores.push(s);
     }
     print!("{}", table_header());
