@@ -376,6 +376,8 @@ pub fn summary(scores: &[Score]) -> (String, bool) {
     }
     let t: f64 = scores.iter().map(|s| s.secs).sum();
     let passed = scores.iter().filter(|s| s.pass()).count();
+    // Overall agrees with the per-case verdicts (a case with an invented effect fails).
+    all &= passed == scores.len();
     lines.push(format!("cases passed {passed}/{}; total {t:.0} s; overall: {}", scores.len(), if all { "ALL TARGETS MET" } else { "TARGETS MISSED (see above)" }));
     (lines.join("\n"), all)
 }
