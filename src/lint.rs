@@ -141,3 +141,14 @@ pub fn sort_findings(v: &mut [Finding]) {
 pub fn exit_code(findings: &[Finding], fail_on: Severity) -> i32 {
     if findings.iter().any(|f| f.severity >= fail_on) { 1 } else { 0 }
 }
+
+/// For the subcommands (gap, fit, synth): load a model and its spec with no rule selection, or
+/// print the located error to stderr. `Err` carries the exit code (2).
+pub fn load_for_command(model: &Path, spec: Option<PathBuf>) -> Result<Loaded, i32> {
+    let input = LintInput { model: model.to_path_buf(), spec, config: None, select: vec![], ignore: vec![] };
+    load(&input).map_err(|e| {
+        use std::io::IsTerminal;
+        eprint!("{}", crate::output::text::render_error(&e, std::io::stderr().is_terminal()));
+        2
+    })
+}

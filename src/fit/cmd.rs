@@ -2,7 +2,7 @@
 //! with before → after on the held-out episodes, write the model / actuator TOML / reports.
 //! Exit codes: 0 done, 2 could not do the job.
 
-use std::io::{IsTerminal, Write};
+use std::io::Write;
 use std::path::PathBuf;
 
 use serde_json::json;
@@ -33,13 +33,9 @@ fn fail(msg: impl std::fmt::Display) -> i32 {
 }
 
 pub fn run_fit(a: FitArgs) -> i32 {
-    let input = crate::lint::LintInput { model: a.model.clone(), spec: a.spec.clone(), config: None, select: vec![], ignore: vec![] };
-    let loaded = match crate::lint::load(&input) {
+    let loaded = match crate::lint::load_for_command(&a.model, a.spec.clone()) {
         Ok(l) => l,
-        Err(e) => {
-            eprint!("{}", crate::output::text::render_error(&e, std::io::stderr().is_terminal()));
-            return 2;
-        }
+        Err(code) => return code,
     };
     let robot = &loaded.robot;
     for e in &a.effects {
@@ -227,13 +223,9 @@ pub struct SynthArgs {
 /// `modellint synth`: recordings from a hidden copy of the model with the given effects.
 pub fn run_synth(a: SynthArgs) -> i32 {
     use crate::fit::synth::{SynthOptions, generate, parse_spec, truth_toml};
-    let input = crate::lint::LintInput { model: a.model.clone(), spec: None, config: None, select: vec![], ignore: vec![] };
-    let loaded = match crate::lint::load(&input) {
+    let loaded = match crate::lint::load_for_command(&a.model, None) {
         Ok(l) => l,
-        Err(e) => {
-            eprint!("{}", crate::output::text::render_error(&e, std::io::stderr().is_terminal()));
-            return 2;
-        }
+        Err(code) => return code,
     };
     let robot = &loaded.robot;
     let matcher = match a.joints.as_deref().map(globset::Glob::new) {

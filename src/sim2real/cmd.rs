@@ -85,13 +85,9 @@ pub struct GapArgs {
 }
 
 pub fn run_gap(a: GapArgs) -> i32 {
-    let input = crate::lint::LintInput { model: a.model.clone(), spec: a.spec.clone(), config: None, select: vec![], ignore: vec![] };
-    let loaded = match crate::lint::load(&input) {
+    let loaded = match crate::lint::load_for_command(&a.model, a.spec.clone()) {
         Ok(l) => l,
-        Err(e) => {
-            eprint!("{}", crate::output::text::render_error(&e, std::io::stderr().is_terminal()));
-            return 2;
-        }
+        Err(code) => return code,
     };
     if let Some(hz) = a.control_hz {
         if !(hz.is_finite() && hz > 0.0) {
