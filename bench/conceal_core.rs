@@ -282,8 +282,9 @@ pub fn run(case: &Case, max_rounds: usize) -> Score {
             .iter()
             .map(|t| {
                 format!(
-                    "r{} {}@{}={:?} heldout {:+.1} % sig {} bic↓ {} kept {}",
+                    "r{} {} {}@{}={:?} heldout {:+.1} % sig {} bic↓ {} kept {}",
                     t.round,
+                    t.phase,
                     t.effect,
                     t.joints.join("+"),
                     t.params.iter().map(|v| (v * 1e4).round() / 1e4).collect::<Vec<_>>(),

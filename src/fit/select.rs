@@ -50,6 +50,17 @@ pub struct FitOptions {
     /// Joint → motor family (from the spec): a family of three or more fitted joints is also
     /// tried as one group sharing the parameters.
     pub families: BTreeMap<String, String>,
+    /// Besides the top `candidates_per_round`, also fit the best-ranked joint group of every
+    /// other allowed effect (the linearised ranking misses strongly nonlinear effects).
+    pub every_effect: bool,
+    /// A candidate that cuts the held-out RMSE by at least this fraction, with more than twice
+    /// as many held-out windows improved as worsened, is kept without the paired z test (an
+    /// effect confined to a few windows, e.g. saturation, cannot pass it; noise cannot halve the
+    /// error on unseen episodes).
+    pub decisive_improvement: f64,
+    /// After the greedy rounds: drop kept effects whose removal does not hurt held-out beyond
+    /// noise, and swap each for a simpler effect that explains the data as well.
+    pub simplify: bool,
 }
 
 impl Default for FitOptions {
@@ -59,13 +70,16 @@ impl Default for FitOptions {
             effects: vec![],
             joints: vec![],
             replay: ReplayOptions::default(),
-            window_s: 1.0,
+            window_s: 0.5,
             shooting_s: None,
             max_rounds: 4,
             candidates_per_round: 4,
             min_rel_improvement: 0.02,
             max_evals: 60,
             families: BTreeMap::new(),
+            every_effect: true,
+            decisive_improvement: 0.5,
+            simplify: true,
         }
     }
 }
@@ -97,6 +111,9 @@ pub struct Selected {
 #[derive(Debug, Clone, Serialize)]
 pub struct Tried {
     pub round: usize,
+    /// `add` (greedy round), `drop` (removal test: `kept` = the effect stays) or `swap`
+    /// (replacement by a simpler effect: `kept` = the swap was made).
+    pub phase: &'static str,
     pub effect: String,
     pub joints: Vec<String>,
     pub params: Vec<f64>,
@@ -428,6 +445,59 @@ pub fn mirror(name: &str) -> Option<String> {
 /// A candidate: effect, joint group, evidence.
 type Cand = (&'static dyn Effect, Vec<String>, BTreeMap<String, f64>);
 
+/// z the paired held-out test needs when `m` candidates compete in one round: 2 for up to four,
+/// then growing like a Bonferroni correction (2.35 for 8, 2.69 for 16) so that fitting more
+/// candidates does not buy more false discoveries.
+pub fn z_needed(m: usize) -> f64 {
+    2.0 + 0.5 * (m.max(4) as f64 / 4.0).ln()
+}
+
+/// Held-out comparison of `after` against `before` on the windows of `group`.
+struct Verdict {
+    /// Mean ± s.e. of the paired per-window RMSE improvement [rad].
+    mean: f64,
+    se: f64,
+    /// Relative held-out RMSE improvement over all fitted joints.
+    rel: f64,
+    significant: bool,
+}
+
+/// `significant`: the paired per-window improvement (absolute, or of the log error) exceeds `z`
+/// standard errors, or the improvement is decisive (relative ≥ `decisive`, with more than twice
+/// as many windows improved as worsened).
+fn verdict(before: &Errors, after: &Errors, group: &[String], z: f64, decisive: f64) -> Verdict {
+    let on = |w: &[(String, f64)]| w.iter().filter(|(j, _)| group.contains(j)).map(|(_, v)| *v).collect::<Vec<f64>>();
+    let (wb, wa) = (on(&before.windows), on(&after.windows));
+    let (mean, se, _) = improvement_beyond_noise(&wb, &wa);
+    let ln = |w: &[f64]| w.iter().map(|v| v.max(1e-12).ln()).collect::<Vec<f64>>();
+    let (lmean, lse, _) = improvement_beyond_noise(&ln(&wb), &ln(&wa));
+    let beyond = |m: f64, s: f64| m > 0.0 && m > z * s;
+    let rel = (before.rmse() - after.rmse()) / before.rmse().max(1e-300);
+    let (mut up, mut down) = (0usize, 0usize);
+    for (b, a) in wb.iter().zip(&wa) {
+        let tol = 1e-3 * b.abs();
+        if b - a > tol {
+            up += 1;
+        } else if a - b > tol {
+            down += 1;
+        }
+    }
+    let decisive_ok = rel >= decisive && up > 2 * down;
+    Verdict { mean, se, rel, significant: beyond(mean, se) || beyond(lmean, lse) || decisive_ok }
+}
+
+/// `true` when a fitted parameter of `a` sits on its bound (within 0.5 % of the range): the
+/// effect was stretched to explain something else.
+fn at_bound(engine: &Engine, base: &[Applied], a: &Applied) -> bool {
+    let Some(t) = JointTarget::of(engine.robot, &a.joints[0]) else { return false };
+    let m0 = model_with(engine.robot, base);
+    let (lo, hi) = a.effect.bounds(&m0, &t);
+    (0..a.effect.fitted().min(a.params.len())).any(|k| {
+        let tol = 5e-3 * (hi[k] - lo[k]);
+        a.params[k] <= lo[k] + tol || a.params[k] >= hi[k] - tol
+    })
+}
+
 /// Runs the whole selection on `recs`.
 pub fn fit(robot: &Robot, recs: &[Recording], opts: &FitOptions) -> FitOutcome {
     let engine = Engine::new(robot, recs, opts);
@@ -451,202 +521,571 @@ pub fn fit(robot: &Robot, recs: &[Recording], opts: &FitOptions) -> FitOutcome {
         return out;
     }
     let allowed: Vec<String> = if opts.effects.is_empty() { effects::all().iter().map(|e| e.id().to_string()).collect() } else { opts.effects.clone() };
-    for round in 0..opts.max_rounds {
-        let applied = out.applied.clone();
-        let Some(tr_err) = engine.errors(&train, &applied) else {
-            out.warnings.push("the training replay diverged with the current model; stopping".into());
-            break;
-        };
-        let Some(ho_err) = engine.errors(&heldout, &applied) else {
-            out.warnings.push("the held-out replay diverged with the current model; stopping".into());
-            break;
-        };
-        let diag = diagnose(robot, &train, &tr_err.eps, &engine.joints, &allowed);
-        let covered = |id: &str, j: &str| applied.iter().any(|a| a.effect.id() == id && a.joints.iter().any(|x| x == j));
-        // Re-rank the diagnosis by the linearised (Gauss–Newton) explained residual: the
-        // residual projected on the simulated sensitivity to a probe step of the effect.
-        let mut diag = diag;
-        for c in diag.iter_mut() {
-            if covered(c.effect, &c.joint) {
-                c.explained_rms = 0.0;
-                continue;
-            }
-            let sens = engine.sensitivity(&train, &applied, &tr_err, c);
-            if let Some((ems, coef)) = sens {
-                c.evidence.insert("feature_explained_rms".into(), c.explained_rms);
-                c.evidence.insert("sensitivity_coef".into(), coef);
-                c.explained_rms = ems.sqrt();
-            }
-        }
-        diag.sort_by(|a, b| b.explained_rms.total_cmp(&a.explained_rms));
-        if round == 0 {
-            out.diagnosis = diag.clone();
-        }
-        // Candidate (effect, group) list, best first.
-        let mut cands: Vec<Cand> = Vec::new();
-        for c in &diag {
-            if cands.len() >= opts.candidates_per_round {
+    let mut round = 0;
+    loop {
+        while round < opts.max_rounds {
+            let added = greedy_round(&engine, &train, &heldout, &allowed, round, &mut out);
+            round += 1;
+            if !added {
                 break;
             }
-            if covered(c.effect, &c.joint) || c.explained_rms <= 1e-9 {
-                continue;
-            }
-            let Some(e) = effects::by_id(c.effect) else { continue };
-            let mut group = vec![c.joint.clone()];
-            if let Some(p) = mirror(&c.joint)
-                && engine.joints.contains(&p)
-                && !covered(c.effect, &p)
-                && diag.iter().take(opts.candidates_per_round * 4).any(|d| d.effect == c.effect && d.joint == p)
-            {
-                group.push(p);
-                group.sort();
-            }
-            if cands.iter().any(|(e2, g, _)| e2.id() == e.id() && g.iter().any(|x| group.contains(x))) {
-                continue;
-            }
-            let mut ev = c.evidence.clone();
-            ev.insert("explained_rms".into(), c.explained_rms);
-            ev.insert("residual_rms".into(), c.residual_rms);
-            // The joint's motor family as one more group (shared parameters).
-            let fam: Vec<String> = match opts.families.get(&c.joint) {
-                Some(f) => engine.joints.iter().filter(|j| opts.families.get(*j) == Some(f) && !covered(c.effect, j)).cloned().collect(),
-                None => vec![],
-            };
-            let fam_new = fam.len() >= 3 && !cands.iter().any(|(e2, g, _)| e2.id() == e.id() && *g == fam);
-            cands.push((e, group, ev.clone()));
-            if fam_new {
-                cands.push((e, fam, ev));
-            }
         }
-        if cands.is_empty() {
+        if out.applied.len() >= 2 {
+            polish(&engine, &train, &heldout, &mut out);
+        }
+        if !opts.simplify || out.applied.is_empty() {
             break;
         }
-        let k_before: usize = applied.iter().map(|a| a.effect.fitted()).sum();
-        let bic_before = bic(tr_err.n, tr_err.sse, k_before);
-        let mut accepted: Vec<Selected> = Vec::new();
-        for (e, group, ev) in cands {
-            let (p, train_rmse) = engine.fit_one(&train, &applied, e, &group);
-            if p.is_empty() || !train_rmse.is_finite() {
+        // A change re-opens the greedy search (bounded by `max_rounds`).
+        if !simplify(&engine, &train, &heldout, &allowed, round, &mut out) || round >= opts.max_rounds {
+            break;
+        }
+    }
+    out
+}
+
+/// One greedy round: diagnose, fit the candidates, keep the best that passes the held-out gate.
+/// Returns `true` when an effect was added.
+fn greedy_round(engine: &Engine, train: &[Recording], heldout: &[Recording], allowed: &[String], round: usize, out: &mut FitOutcome) -> bool {
+    let opts = engine.opts;
+    let robot = engine.robot;
+    let applied = out.applied.clone();
+    let Some(tr_err) = engine.errors(train, &applied) else {
+        out.warnings.push("the training replay diverged with the current model; stopping".into());
+        return false;
+    };
+    let Some(ho_err) = engine.errors(heldout, &applied) else {
+        out.warnings.push("the held-out replay diverged with the current model; stopping".into());
+        return false;
+    };
+    let diag = diagnose(robot, train, &tr_err.eps, &engine.joints, allowed);
+    let covered = |id: &str, j: &str| applied.iter().any(|a| a.effect.id() == id && a.joints.iter().any(|x| x == j));
+    // Re-rank the diagnosis by the linearised (Gauss–Newton) explained residual: the
+    // residual projected on the simulated sensitivity to a probe step of the effect.
+    let mut diag = diag;
+    for c in diag.iter_mut() {
+        if covered(c.effect, &c.joint) {
+            c.explained_rms = 0.0;
+            continue;
+        }
+        let sens = engine.sensitivity(train, &applied, &tr_err, c);
+        if let Some((ems, coef)) = sens {
+            c.evidence.insert("feature_explained_rms".into(), c.explained_rms);
+            c.evidence.insert("sensitivity_coef".into(), coef);
+            c.explained_rms = ems.sqrt();
+        }
+    }
+    diag.sort_by(|a, b| b.explained_rms.total_cmp(&a.explained_rms));
+    if round == 0 {
+        out.diagnosis = diag.clone();
+    }
+    // Candidate (effect, group) list, best first.
+    let mut cands: Vec<Cand> = Vec::new();
+    let push = |c: &Candidate, cands: &mut Vec<Cand>| {
+        if covered(c.effect, &c.joint) || c.explained_rms <= 1e-9 {
+            return;
+        }
+        let Some(e) = effects::by_id(c.effect) else { return };
+        let mut group = vec![c.joint.clone()];
+        if let Some(p) = mirror(&c.joint)
+            && engine.joints.contains(&p)
+            && !covered(c.effect, &p)
+            && diag.iter().take(opts.candidates_per_round * 4).any(|d| d.effect == c.effect && d.joint == p)
+        {
+            group.push(p);
+            group.sort();
+        }
+        if cands.iter().any(|(e2, g, _)| e2.id() == e.id() && g.iter().any(|x| group.contains(x))) {
+            return;
+        }
+        let mut ev = c.evidence.clone();
+        ev.insert("explained_rms".into(), c.explained_rms);
+        ev.insert("residual_rms".into(), c.residual_rms);
+        // The joint's motor family as one more group (shared parameters).
+        let fam: Vec<String> = match opts.families.get(&c.joint) {
+            Some(f) => engine.joints.iter().filter(|j| opts.families.get(*j) == Some(f) && !covered(c.effect, j)).cloned().collect(),
+            None => vec![],
+        };
+        let fam_new = fam.len() >= 3 && !cands.iter().any(|(e2, g, _)| e2.id() == e.id() && *g == fam);
+        cands.push((e, group, ev.clone()));
+        if fam_new {
+            cands.push((e, fam, ev));
+        }
+    };
+    for c in &diag {
+        if cands.len() >= opts.candidates_per_round {
+            break;
+        }
+        push(c, &mut cands);
+    }
+    if opts.every_effect {
+        // The best-ranked joint of every other effect: the linearised ranking is only a guide
+        // (a doubled inertia or a saturation is far from linear).
+        for id in allowed {
+            if cands.iter().any(|(e, ..)| e.id() == id) {
                 continue;
             }
-            let mut trial = applied.clone();
-            trial.push(Applied { effect: e, joints: group.clone(), params: p.clone() });
-            let (Some(tr_a), Some(ho_a)) = (engine.errors(&train, &trial), engine.errors(&heldout, &trial)) else { continue };
-            let bic_after = bic(tr_a.n, tr_a.sse, k_before + e.fitted());
-            // Paired test on the windows of the candidate's joints (others barely move).
-            let on = |w: &[(String, f64)]| w.iter().filter(|(j, _)| group.contains(j)).map(|(_, v)| *v).collect::<Vec<f64>>();
-            let (wb, wa) = (on(&ho_err.windows), on(&ho_a.windows));
-            let (mean, se, sig_abs) = improvement_beyond_noise(&wb, &wa);
-            // The same test on log errors: robust when a few windows carry the whole effect.
-            let ln = |w: &[f64]| w.iter().map(|v| v.max(1e-12).ln()).collect::<Vec<f64>>();
-            let (_, _, sig_log) = improvement_beyond_noise(&ln(&wb), &ln(&wa));
-            let sig = sig_abs || sig_log;
-            let rel = (ho_err.rmse() - ho_a.rmse()) / ho_err.rmse().max(1e-300);
-            let keep = sig && rel >= opts.min_rel_improvement && bic_after < bic_before;
-            out.tried.push(Tried {
-                round,
-                effect: e.id().into(),
-                joints: group.clone(),
-                params: p.clone(),
-                train_rmse,
-                heldout_improvement: rel,
-                significant: sig,
-                bic_decreased: bic_after < bic_before,
-                kept: false,
-            });
-            if keep {
-                let defs = e.params();
-                accepted.push(Selected {
+            if let Some(c) = diag.iter().find(|c| c.effect == id && !covered(c.effect, &c.joint) && c.explained_rms > 1e-9) {
+                push(c, &mut cands);
+            }
+        }
+    }
+    if cands.is_empty() {
+        return false;
+    }
+    let z = z_needed(cands.len());
+    let k_before: usize = applied.iter().map(|a| a.effect.fitted()).sum();
+    let bic_before = bic(tr_err.n, tr_err.sse, k_before);
+    let mut accepted: Vec<(Selected, bool)> = Vec::new();
+    for (e, group, ev) in cands {
+        let (p, train_rmse) = engine.fit_one(train, &applied, e, &group);
+        if p.is_empty() || !train_rmse.is_finite() {
+            continue;
+        }
+        let mut trial = applied.clone();
+        trial.push(Applied { effect: e, joints: group.clone(), params: p.clone() });
+        let (Some(tr_a), Some(ho_a)) = (engine.errors(train, &trial), engine.errors(heldout, &trial)) else { continue };
+        let bic_after = bic(tr_a.n, tr_a.sse, k_before + e.fitted());
+        // Paired test on the windows of the candidate's joints (others barely move).
+        let v = verdict(&ho_err, &ho_a, &group, z, opts.decisive_improvement);
+        let keep = v.significant && v.rel >= opts.min_rel_improvement && bic_after < bic_before;
+        out.tried.push(Tried {
+            round,
+            phase: "add",
+            effect: e.id().into(),
+            joints: group.clone(),
+            params: p.clone(),
+            train_rmse,
+            heldout_improvement: v.rel,
+            significant: v.significant,
+            bic_decreased: bic_after < bic_before,
+            kept: false,
+        });
+        if keep {
+            let defs = e.params();
+            let bound = at_bound(engine, &applied, trial.last().expect("pushed"));
+            accepted.push((
+                Selected {
                     effect: e.id().into(),
                     joints: group,
                     params: defs.iter().zip(&p).take(e.fitted()).map(|(d, v)| (d.name.to_string(), *v)).collect(),
                     stderr: BTreeMap::new(),
                     identifiable: true,
                     evidence: ev,
-                    heldout_improvement: rel,
+                    heldout_improvement: v.rel,
                     heldout_rmse_before: ho_err.rmse(),
                     heldout_rmse_after: ho_a.rmse(),
-                    window_improvement: mean,
-                    window_improvement_se: se,
+                    window_improvement: v.mean,
+                    window_improvement_se: v.se,
                     bic_before,
                     bic_after,
                     values: p,
-                });
+                },
+                bound,
+            ));
+        }
+    }
+    let kept_all: Vec<Selected> = accepted.iter().map(|(s, _)| s.clone()).collect();
+    // A candidate with a parameter on its bound only wins when no interior one is kept.
+    if accepted.iter().any(|(_, b)| !b) {
+        accepted.retain(|(_, b)| !b);
+    }
+    let mut accepted: Vec<Selected> = accepted.into_iter().map(|(s, _)| s).collect();
+    let Some(best_rmse) = accepted.iter().map(|s| s.heldout_rmse_after).min_by(|a, b| a.total_cmp(b)) else { return false };
+    // Simplest among those within 1 % of the best held-out RMSE.
+    let win = accepted
+        .iter()
+        .enumerate()
+        .filter(|(_, s)| s.heldout_rmse_after <= best_rmse * 1.01)
+        .min_by(|(_, a), (_, b)| {
+            let ka = effects::by_id(&a.effect).map_or(9, |e| e.fitted());
+            let kb = effects::by_id(&b.effect).map_or(9, |e| e.fitted());
+            ka.cmp(&kb).then(a.heldout_rmse_after.total_cmp(&b.heldout_rmse_after))
+        })
+        .map(|(i, _)| i)
+        .expect("non-empty");
+    let mut s = accepted.swap_remove(win);
+    if let Some(pair) = pair_lookahead(engine, train, heldout, &applied, &kept_all, &s, z, round, out) {
+        for (mut p, a) in pair {
+            out.applied.push(a);
+            set_uncertainty(engine, train, &mut p, &out.applied, &mut out.warnings);
+            out.selected.push(p);
+        }
+        return true;
+    }
+    if let Some(t) = out.tried.iter_mut().rev().find(|t| t.round == round && t.phase == "add" && t.effect == s.effect && t.joints == s.joints) {
+        t.kept = true;
+    }
+    let e = effects::by_id(&s.effect).expect("known");
+    out.applied.push(Applied { effect: e, joints: s.joints.clone(), params: s.values.clone() });
+    set_uncertainty(engine, train, &mut s, &out.applied, &mut out.warnings);
+    out.selected.push(s);
+    true
+}
+
+/// Look-ahead for two effects that only make sense together (extra inertia *and* damping: each
+/// alone is mimicked by a delay or a gain error). The top four kept candidates of the round are
+/// paired when they act on the same joints, each pair is fitted jointly from the two single
+/// fits, and the best pair replaces the single winner when it is ≥ 10 % better on held-out
+/// (and beyond noise), and each member is needed in it (removing either is worse beyond
+/// noise). The pair with fewer parameters wins within 1 %.
+#[allow(clippy::too_many_arguments)]
+fn pair_lookahead(
+    engine: &Engine,
+    train: &[Recording],
+    heldout: &[Recording],
+    applied: &[Applied],
+    kept: &[Selected],
+    single: &Selected,
+    z: f64,
+    round: usize,
+    out: &mut FitOutcome,
+) -> Option<Vec<(Selected, Applied)>> {
+    let opts = engine.opts;
+    let mut top: Vec<&Selected> = kept.iter().collect();
+    top.sort_by(|a, b| a.heldout_rmse_after.total_cmp(&b.heldout_rmse_after));
+    top.truncate(4);
+    let as_applied = |s: &Selected| Applied { effect: effects::by_id(&s.effect).expect("known"), joints: s.joints.clone(), params: s.values.clone() };
+    let mut with_single = applied.to_vec();
+    with_single.push(as_applied(single));
+    let h_single = engine.errors(heldout, &with_single)?;
+    let h_base = engine.errors(heldout, applied)?;
+    let t_base = engine.errors(train, applied)?;
+    let k_before: usize = applied.iter().map(|a| a.effect.fitted()).sum();
+    let mut best: Option<(Vec<Applied>, f64, usize)> = None;
+    for i in 0..top.len() {
+        for j in i + 1..top.len() {
+            let (a, b) = (top[i], top[j]);
+            if a.effect == b.effect || !a.joints.iter().any(|x| b.joints.contains(x)) {
+                continue;
+            }
+            let mut set = applied.to_vec();
+            set.push(as_applied(a));
+            set.push(as_applied(b));
+            let set = polish_set(engine, train, heldout, set, 0.05);
+            let (Some(h), Some(t)) = (engine.errors(heldout, &set), engine.errors(train, &set)) else { continue };
+            let k = effects::by_id(&a.effect).map_or(9, |e| e.fitted()) + effects::by_id(&b.effect).map_or(9, |e| e.fitted());
+            let group: Vec<String> = a.joints.iter().chain(&b.joints).cloned().collect();
+            let v = verdict(&h_single, &h, &group, z, opts.decisive_improvement);
+            let bic_ok = bic(t.n, t.sse, k_before + k) < bic(t_base.n, t_base.sse, k_before);
+            // Each member needed: the pair beats the set without it beyond noise.
+            let needed = (0..2).all(|m| {
+                let mut wo = set.clone();
+                wo.remove(applied.len() + m);
+                engine.errors(heldout, &wo).is_some_and(|hw| {
+                    let vw = verdict(&hw, &h, &set[applied.len() + m].joints, 2.0, opts.decisive_improvement);
+                    vw.significant && vw.rel >= opts.min_rel_improvement
+                })
+            });
+            let ok = h.rmse() < 0.9 * h_single.rmse() && v.significant && bic_ok && needed;
+            out.tried.push(Tried {
+                round,
+                phase: "pair",
+                effect: format!("{}+{}", a.effect, b.effect),
+                joints: group.clone(),
+                params: set[applied.len()..].iter().flat_map(|x| x.params.iter().take(x.effect.fitted()).copied()).collect(),
+                train_rmse: t.rmse(),
+                heldout_improvement: (h_base.rmse() - h.rmse()) / h_base.rmse().max(1e-300),
+                significant: v.significant,
+                bic_decreased: bic_ok,
+                kept: false,
+            });
+            if !ok {
+                continue;
+            }
+            let better = match &best {
+                None => true,
+                Some((_, r, kb)) => (k < *kb && h.rmse() <= r * 1.01) || (h.rmse() < *r && !(k > *kb && h.rmse() > r / 1.01)),
+            };
+            if better {
+                best = Some((set, h.rmse(), k));
             }
         }
-        let Some(best_rmse) = accepted.iter().map(|s| s.heldout_rmse_after).min_by(|a, b| a.total_cmp(b)) else { break };
-        // Simplest among those within 1 % of the best held-out RMSE.
-        let win = accepted
-            .iter()
-            .enumerate()
-            .filter(|(_, s)| s.heldout_rmse_after <= best_rmse * 1.01)
-            .min_by(|(_, a), (_, b)| {
-                let ka = effects::by_id(&a.effect).map_or(9, |e| e.fitted());
-                let kb = effects::by_id(&b.effect).map_or(9, |e| e.fitted());
-                ka.cmp(&kb).then(a.heldout_rmse_after.total_cmp(&b.heldout_rmse_after))
-            })
-            .map(|(i, _)| i)
-            .expect("non-empty");
-        let mut s = accepted.swap_remove(win);
-        if let Some(t) = out.tried.iter_mut().rev().find(|t| t.round == round && t.effect == s.effect && t.joints == s.joints) {
+    }
+    let (set, rmse, _) = best?;
+    let n = applied.len();
+    let label = format!("{}+{}", set[n].effect.id(), set[n + 1].effect.id());
+    if let Some(t) = out.tried.iter_mut().rev().find(|t| t.phase == "pair" && t.effect == label) {
+        t.kept = true;
+    }
+    out.warnings.push(format!(
+        "{} and {} on {} fitted together: held-out RMSE {:.3e} rad, vs {:.3e} with {} alone",
+        set[n].effect.id(),
+        set[n + 1].effect.id(),
+        set[n].joints.join(","),
+        rmse,
+        h_single.rmse(),
+        single.effect
+    ));
+    let t_pair = engine.errors(train, &set)?;
+    let h_pair = engine.errors(heldout, &set)?;
+    let k_pair: usize = set.iter().map(|a| a.effect.fitted()).sum();
+    let mut res = Vec::new();
+    for m in 0..2 {
+        let a = set[n + m].clone();
+        let mut wo = set.clone();
+        wo.remove(n + m);
+        let (hw, tw) = (engine.errors(heldout, &wo)?, engine.errors(train, &wo)?);
+        let v = verdict(&hw, &h_pair, &a.joints, 2.0, opts.decisive_improvement);
+        let s = Selected {
+            effect: a.effect.id().into(),
+            joints: a.joints.clone(),
+            params: a.effect.params().iter().zip(&a.params).take(a.effect.fitted()).map(|(d, v)| (d.name.to_string(), *v)).collect(),
+            stderr: BTreeMap::new(),
+            identifiable: true,
+            evidence: kept.iter().find(|s| s.effect == a.effect.id() && s.joints == a.joints).map(|s| s.evidence.clone()).unwrap_or_default(),
+            heldout_improvement: v.rel,
+            heldout_rmse_before: hw.rmse(),
+            heldout_rmse_after: rmse,
+            window_improvement: v.mean,
+            window_improvement_se: v.se,
+            bic_before: bic(tw.n, tw.sse, k_pair - a.effect.fitted()),
+            bic_after: bic(t_pair.n, t_pair.sse, k_pair),
+            values: a.params.clone(),
+        };
+        res.push((s, a));
+    }
+    // The polish may have moved the effects kept earlier: carry them over.
+    out.applied[..n].clone_from_slice(&set[..n]);
+    sync_selected(out);
+    Some(res)
+}
+
+/// Standard errors of `s`, the effect of `applied.last()`.
+fn set_uncertainty(engine: &Engine, train: &[Recording], s: &mut Selected, applied: &[Applied], warnings: &mut Vec<String>) {
+    let e = applied.last().expect("non-empty").effect;
+    let (se, ident) = engine.uncertainty(train, applied);
+    s.stderr = e.params().iter().zip(&se).map(|(d, v)| (d.name.to_string(), *v)).collect();
+    s.identifiable = ident;
+    if !ident {
+        warnings.push(format!("{} on {}: parameters not identifiable from this data (excite the joint more)", s.effect, s.joints.join(",")));
+    }
+}
+
+/// Copies the parameters of `out.applied` into `out.selected` (same order).
+fn sync_selected(out: &mut FitOutcome) {
+    for (s, a) in out.selected.iter_mut().zip(&out.applied) {
+        s.values = a.params.clone();
+        for (d, v) in a.effect.params().iter().zip(&a.params).take(a.effect.fitted()) {
+            s.params.insert(d.name.to_string(), *v);
+        }
+    }
+}
+
+/// Occam's pass over the kept effects, judged on the held-out set:
+/// * **drop** an effect whose removal does not make the held-out error worse beyond noise (it
+///   was needed only before a later effect explained the same thing);
+/// * **swap** an effect for one with fewer parameters on the same joints (re-fitted, then all
+///   parameters polished together) when the simpler set is not worse beyond noise: held-out
+///   RMSE within min(1 % of it, 5 % of what the effect explains) and no significant paired
+///   difference. Example: Stribeck friction with its velocity scale at the bound is Coulomb
+///   friction; a servo gain error whose only change is kd is joint damping.
+///
+/// Returns `true` when the set changed.
+fn simplify(engine: &Engine, train: &[Recording], heldout: &[Recording], allowed: &[String], round: usize, out: &mut FitOutcome) -> bool {
+    let mut changed = false;
+    // Each swap removes at least one parameter, so this ends.
+    loop {
+        changed |= drop_pass(engine, train, heldout, round, out);
+        if !swap_pass(engine, train, heldout, allowed, round, out) {
+            return changed;
+        }
+        changed = true;
+    }
+}
+
+/// Drops, last kept first. Returns `true` when an effect was dropped.
+fn drop_pass(engine: &Engine, train: &[Recording], heldout: &[Recording], round: usize, out: &mut FitOutcome) -> bool {
+    let opts = engine.opts;
+    let mut changed = false;
+    let mut i = out.applied.len();
+    while i > 0 {
+        i -= 1;
+        let mut without = out.applied.clone();
+        without.remove(i);
+        let (Some(h_full), Some(h_wo), Some(t_full), Some(t_wo)) =
+            (engine.errors(heldout, &out.applied), engine.errors(heldout, &without), engine.errors(train, &out.applied), engine.errors(train, &without))
+        else {
+            continue;
+        };
+        let a = &out.applied[i];
+        let v = verdict(&h_wo, &h_full, &a.joints, 2.0, opts.decisive_improvement);
+        let k_full: usize = out.applied.iter().map(|a| a.effect.fitted()).sum();
+        let bic_dec = bic(t_full.n, t_full.sse, k_full) < bic(t_wo.n, t_wo.sse, k_full - a.effect.fitted());
+        let keep = v.significant && v.rel >= opts.min_rel_improvement;
+        out.tried.push(Tried {
+            round,
+            phase: "drop",
+            effect: a.effect.id().into(),
+            joints: a.joints.clone(),
+            params: a.params.clone(),
+            train_rmse: t_full.rmse(),
+            heldout_improvement: v.rel,
+            significant: v.significant,
+            bic_decreased: bic_dec,
+            kept: keep,
+        });
+        if !keep {
+            out.warnings.push(format!(
+                "{} on {} dropped: with the other effects, removing it changes the held-out RMSE by {:+.1} % (not beyond noise)",
+                a.effect.id(),
+                a.joints.join(","),
+                -100.0 * v.rel
+            ));
+            out.applied.remove(i);
+            out.selected.remove(i);
+            changed = true;
+        }
+    }
+    changed
+}
+
+/// Swaps for simpler effects. Returns `true` when a swap was made.
+fn swap_pass(engine: &Engine, train: &[Recording], heldout: &[Recording], allowed: &[String], round: usize, out: &mut FitOutcome) -> bool {
+    let opts = engine.opts;
+    let mut changed = false;
+    let mut i = 0;
+    while i < out.applied.len() {
+        let cur = out.applied[i].clone();
+        let k_cur = cur.effect.fitted();
+        let mut others = out.applied.clone();
+        others.remove(i);
+        let (Some(h_cur), Some(h_wo)) = (engine.errors(heldout, &out.applied), engine.errors(heldout, &others)) else {
+            i += 1;
+            continue;
+        };
+        let tol = (0.01 * h_cur.rmse()).min(0.05 * (h_wo.rmse() - h_cur.rmse()).max(0.0));
+        let mut best: Option<(Vec<Applied>, f64, usize)> = None;
+        for e in effects::all() {
+            if !allowed.iter().any(|a| a == e.id()) || e.id() == cur.effect.id() || e.fitted() >= k_cur {
+                continue;
+            }
+            if others.iter().any(|a| a.effect.id() == e.id() && a.joints.iter().any(|j| cur.joints.contains(j))) {
+                continue;
+            }
+            let (p, tr) = engine.fit_one(train, &others, e, &cur.joints);
+            if p.is_empty() || !tr.is_finite() {
+                continue;
+            }
+            let mut set = others.clone();
+            set.push(Applied { effect: e, joints: cur.joints.clone(), params: p });
+            let Some(h0) = engine.errors(heldout, &set) else { continue };
+            // Hopeless before polishing: skip the joint re-fit.
+            let set = if h0.rmse() <= h_cur.rmse() * 1.10 && set.len() >= 2 { polish_set(engine, train, heldout, set, 0.02) } else { set };
+            let Some(h1) = engine.errors(heldout, &set) else { continue };
+            // Is the current set better than the swap beyond noise?
+            let worse = verdict(&h1, &h_cur, &cur.joints, 2.0, f64::INFINITY);
+            let ok = h1.rmse() <= h_cur.rmse() + tol && !worse.significant;
+            out.tried.push(Tried {
+                round,
+                phase: "swap",
+                effect: e.id().into(),
+                joints: cur.joints.clone(),
+                params: set.last().expect("pushed").params.clone(),
+                train_rmse: tr,
+                heldout_improvement: (h_cur.rmse() - h1.rmse()) / h_cur.rmse().max(1e-300),
+                significant: worse.significant,
+                bic_decreased: false,
+                kept: false,
+            });
+            let better = match &best {
+                None => true,
+                Some((_, r, k)) => e.fitted() < *k || (e.fitted() == *k && h1.rmse() < *r),
+            };
+            if ok && better {
+                best = Some((set, h1.rmse(), e.fitted()));
+            }
+        }
+        let Some((set, rmse_new, _)) = best else {
+            i += 1;
+            continue;
+        };
+        let new = set.last().expect("non-empty").clone();
+        if let Some(t) = out.tried.iter_mut().rev().find(|t| t.phase == "swap" && t.effect == new.effect.id() && t.joints == new.joints) {
             t.kept = true;
         }
-        let e = effects::by_id(&s.effect).expect("known");
-        out.applied.push(Applied { effect: e, joints: s.joints.clone(), params: s.values.clone() });
-        let (se, ident) = engine.uncertainty(&train, &out.applied);
-        s.stderr = e.params().iter().zip(&se).map(|(d, v)| (d.name.to_string(), *v)).collect();
-        s.identifiable = ident;
-        if !ident {
-            out.warnings.push(format!("{} on {}: parameters not identifiable from this data (excite the joint more)", s.effect, s.joints.join(",")));
-        }
+        out.warnings.push(format!(
+            "{} on {} replaced by the simpler {} (held-out RMSE {:.3e} → {:.3e} rad)",
+            cur.effect.id(),
+            cur.joints.join(","),
+            new.effect.id(),
+            h_cur.rmse(),
+            rmse_new
+        ));
+        let old = out.selected.remove(i);
+        out.applied = set;
+        sync_selected(out);
+        let (Some(t_wo), Some(t_new), Some(h_new)) = (engine.errors(train, &others), engine.errors(train, &out.applied), engine.errors(heldout, &out.applied)) else {
+            // Cannot happen (both were just simulated); keep the old effect's record shape.
+            out.selected.push(old);
+            changed = true;
+            continue;
+        };
+        let k_new: usize = out.applied.iter().map(|a| a.effect.fitted()).sum();
+        let v = verdict(&h_wo, &h_new, &new.joints, 2.0, opts.decisive_improvement);
+        let mut s = Selected {
+            effect: new.effect.id().into(),
+            joints: new.joints.clone(),
+            params: new.effect.params().iter().zip(&new.params).take(new.effect.fitted()).map(|(d, v)| (d.name.to_string(), *v)).collect(),
+            stderr: BTreeMap::new(),
+            identifiable: true,
+            evidence: BTreeMap::from([(format!("replaces_{}", cur.effect.id()), 1.0)]),
+            heldout_improvement: v.rel,
+            heldout_rmse_before: h_wo.rmse(),
+            heldout_rmse_after: h_new.rmse(),
+            window_improvement: v.mean,
+            window_improvement_se: v.se,
+            bic_before: bic(t_wo.n, t_wo.sse, k_new - new.effect.fitted()),
+            bic_after: bic(t_new.n, t_new.sse, k_new),
+            values: new.params.clone(),
+        };
+        set_uncertainty(engine, train, &mut s, &out.applied, &mut out.warnings);
         out.selected.push(s);
+        changed = true;
+        // `i` now holds the next effect; the new one (last) is revisited at the end.
     }
-    if out.applied.len() >= 2 {
-        polish(&engine, &train, &heldout, &mut out);
-    }
-    out
+    changed
 }
 
 /// Joint re-fit of every kept effect's fitted parameters (Nelder–Mead from the greedy values);
 /// kept only when both the training and the held-out RMSE do not get worse.
 fn polish(engine: &Engine, train: &[Recording], heldout: &[Recording], out: &mut FitOutcome) {
+    out.applied = polish_set(engine, train, heldout, std::mem::take(&mut out.applied), 0.02);
+    sync_selected(out);
+}
+
+fn polish_set(engine: &Engine, train: &[Recording], heldout: &[Recording], applied: Vec<Applied>, step: f64) -> Vec<Applied> {
     let mut slots = Vec::new(); // (applied index, parameter index, lo, hi)
-    for (ai, a) in out.applied.iter().enumerate() {
-        let Some(t) = JointTarget::of(engine.robot, &a.joints[0]) else { return };
-        let m0 = model_with(engine.robot, &out.applied[..ai]);
+    for (ai, a) in applied.iter().enumerate() {
+        let Some(t) = JointTarget::of(engine.robot, &a.joints[0]) else { return applied };
+        let m0 = model_with(engine.robot, &applied[..ai]);
         let (lo, hi) = a.effect.bounds(&m0, &t);
         for k in 0..a.effect.fitted().min(a.params.len()) {
             slots.push((ai, k, lo[k], hi[k]));
         }
     }
     let make = |x: &[f64]| {
-        let mut a = out.applied.clone();
+        let mut a = applied.clone();
         for (&(ai, k, ..), v) in slots.iter().zip(x) {
             a[ai].params[k] = *v;
         }
         a
     };
-    let x0: Vec<f64> = slots.iter().map(|&(ai, k, ..)| out.applied[ai].params[k]).collect();
+    let x0: Vec<f64> = slots.iter().map(|&(ai, k, ..)| applied[ai].params[k]).collect();
     let b = Bounds { lo: slots.iter().map(|s| s.2).collect(), hi: slots.iter().map(|s| s.3).collect() };
     let obj = |x: &[f64]| engine.errors(train, &make(x)).map_or(f64::INFINITY, |e| e.rmse());
     let f0 = obj(&x0);
-    let o = NelderMeadOpts { max_evals: engine.opts.max_evals * 2, xtol: 1e-4, ftol: 1e-12, initial_step: 0.02 };
+    let o = NelderMeadOpts { max_evals: engine.opts.max_evals * 2, xtol: 1e-4, ftol: 1e-12, initial_step: step };
     let r = nelder_mead(&obj, &x0, &b, &o);
     if r.f.is_nan() || r.f >= f0 {
-        return;
+        return applied;
     }
     let new = make(&r.x);
-    let (Some(h0), Some(h1)) = (engine.errors(heldout, &out.applied), engine.errors(heldout, &new)) else { return };
+    let (Some(h0), Some(h1)) = (engine.errors(heldout, &applied), engine.errors(heldout, &new)) else { return applied };
     if h1.rmse() > h0.rmse() {
-        return;
+        return applied;
     }
-    for (s, a) in out.selected.iter_mut().zip(&new) {
-        s.values = a.params.clone();
-        for (d, v) in a.effect.params().iter().zip(&a.params).take(a.effect.fitted()) {
-            s.params.insert(d.name.to_string(), *v);
-        }
-    }
-    out.applied = new;
+    new
 }
 
 #[cfg(test)]
