@@ -300,6 +300,12 @@ impl<'a> Engine<'a> {
     /// Fits `effect` on `group` on top of `base`: returns the full parameter vector and the
     /// training RMSE.
     pub fn fit_one(&self, train: &[Recording], base: &[Applied], effect: &'static dyn Effect, group: &[String]) -> (Vec<f64>, f64) {
+        self.fit_budget(train, base, effect, group, self.opts.max_evals)
+    }
+
+    /// [`Engine::fit_one`] with a budget of `max_evals` objective evaluations (twice that above
+    /// one parameter; golden section stops earlier at its tolerance).
+    pub fn fit_budget(&self, train: &[Recording], base: &[Applied], effect: &'static dyn Effect, group: &[String], max_evals: usize) -> (Vec<f64>, f64) {
         let Some(t) = JointTarget::of(self.robot, &group[0]) else { return (vec![], f64::INFINITY) };
         let m0 = model_with(self.robot, base);
         let full0 = effect.initial(&m0, &t);
@@ -319,16 +325,16 @@ impl<'a> Engine<'a> {
             0 => (vec![], obj(&[])),
             1 => {
                 let tol = 2e-4 * (hi[0] - lo[0]);
-                let (x, f) = golden_section(&|v| obj(&[v]), lo[0], hi[0], tol, self.opts.max_evals.min(40));
+                let (x, f) = golden_section(&|v| obj(&[v]), lo[0], hi[0], tol, max_evals.min(40));
                 (vec![x], f)
             }
             2 | 3 => {
-                let o = NelderMeadOpts { max_evals: self.opts.max_evals * 2, xtol: 1e-3, ftol: 1e-12, initial_step: 0.1 };
+                let o = NelderMeadOpts { max_evals: max_evals * 2, xtol: 1e-3, ftol: 1e-12, initial_step: 0.1 };
                 let r = nelder_mead(&obj, &x0, &b, &o);
                 (r.x, r.f)
             }
             _ => {
-                let o = CmaesOpts { max_evals: self.opts.max_evals * 2, ..Default::default() };
+                let o = CmaesOpts { max_evals: max_evals * 2, ..Default::default() };
                 let r = cmaes(&obj, &x0, &b, &o);
                 (r.x, r.f)
             }
@@ -618,14 +624,17 @@ fn greedy_round(engine: &Engine, train: &[Recording], heldout: &[Recording], all
         }
         push(c, &mut cands);
     }
+    let n_top = cands.len();
     if opts.every_effect {
         // The best-ranked joint of every other effect: the linearised ranking is only a guide
         // (a doubled inertia or a saturation is far from linear).
+        // Effects whose best joint explains less than a tenth of the top candidate are left out.
+        let top = diag.iter().filter(|c| !covered(c.effect, &c.joint)).map(|c| c.explained_rms).fold(0.0, f64::max);
         for id in allowed {
             if cands.iter().any(|(e, ..)| e.id() == id) {
                 continue;
             }
-            if let Some(c) = diag.iter().find(|c| c.effect == id && !covered(c.effect, &c.joint) && c.explained_rms > 1e-9) {
+            if let Some(c) = diag.iter().find(|c| c.effect == id && !covered(c.effect, &c.joint) && c.explained_rms > 1e-9 && c.explained_rms >= 0.1 * top) {
                 push(c, &mut cands);
             }
         }
@@ -637,11 +646,34 @@ fn greedy_round(engine: &Engine, train: &[Recording], heldout: &[Recording], all
     let k_before: usize = applied.iter().map(|a| a.effect.fitted()).sum();
     let bic_before = bic(tr_err.n, tr_err.sse, k_before);
     let mut accepted: Vec<(Selected, bool)> = Vec::new();
-    for (e, group, ev) in cands {
+    // Screen for the extra (every-effect) candidates: a coarse fit (10 evaluations) must reach
+    // at least half of the best training improvement of the fully fitted ones.
+    let base_train = tr_err.rmse();
+    let mut best_train = base_train;
+    for (ci, (e, group, ev)) in cands.into_iter().enumerate() {
+        if ci >= n_top {
+            let (p, f) = engine.fit_budget(train, &applied, e, &group, 10);
+            if p.is_empty() || !f.is_finite() || base_train - f < 0.5 * (base_train - best_train) {
+                out.tried.push(Tried {
+                    round,
+                    phase: "screen",
+                    effect: e.id().into(),
+                    joints: group.clone(),
+                    params: p,
+                    train_rmse: f,
+                    heldout_improvement: f64::NAN,
+                    significant: false,
+                    bic_decreased: false,
+                    kept: false,
+                });
+                continue;
+            }
+        }
         let (p, train_rmse) = engine.fit_one(train, &applied, e, &group);
         if p.is_empty() || !train_rmse.is_finite() {
             continue;
         }
+        best_train = best_train.min(train_rmse);
         let mut trial = applied.clone();
         trial.push(Applied { effect: e, joints: group.clone(), params: p.clone() });
         let (Some(tr_a), Some(ho_a)) = (engine.errors(train, &trial), engine.errors(heldout, &trial)) else { continue };
@@ -745,6 +777,10 @@ fn pair_lookahead(
     let mut top: Vec<&Selected> = kept.iter().collect();
     top.sort_by(|a, b| a.heldout_rmse_after.total_cmp(&b.heldout_rmse_after));
     top.truncate(4);
+    // A single effect that leaves under 5 % of the error needs no partner.
+    if single.heldout_improvement >= 0.95 {
+        return None;
+    }
     let as_applied = |s: &Selected| Applied { effect: effects::by_id(&s.effect).expect("known"), joints: s.joints.clone(), params: s.values.clone() };
     let mut with_single = applied.to_vec();
     with_single.push(as_applied(single));
@@ -1098,6 +1134,51 @@ mod tests {
         let mut j = JointTrace::new("a", t.iter().map(|x| x.sin()).collect());
         j.q_cmd = Some(j.q.clone());
         Recording { source: "r.csv".into(), meta: Default::default(), control_rate_hz: Some(100.0), control_t0_s: None, t, joints: vec![j], base: None }
+    }
+
+    fn errs(w: &[f64]) -> Errors {
+        let sse: f64 = w.iter().map(|v| v * v * 10.0).sum();
+        Errors { sse, n: 10 * w.len(), windows: w.iter().map(|v| ("a".to_string(), *v)).collect(), eps: vec![] }
+    }
+
+    #[test]
+    fn z_grows_with_the_number_of_candidates() {
+        assert_eq!(z_needed(1), 2.0);
+        assert_eq!(z_needed(4), 2.0);
+        assert!((z_needed(8) - 2.3466).abs() < 1e-3);
+        assert!(z_needed(16) > z_needed(8));
+    }
+
+    #[test]
+    fn verdict_paired_decisive_and_noise() {
+        let g = vec!["a".to_string()];
+        // Consistent 10 % improvement in every window: significant by the paired test.
+        let before: Vec<f64> = (0..16).map(|i| 1.0 + 0.05 * (i % 3) as f64).collect();
+        let after: Vec<f64> = before.iter().map(|v| 0.9 * v).collect();
+        assert!(verdict(&errs(&before), &errs(&after), &g, 2.0, 0.5).significant);
+        // A saturation event: 3 of 16 windows improve 20-fold, the rest are unchanged. The
+        // paired tests fail (too few informative windows), the decisive path accepts.
+        let mut before = vec![1.0; 16];
+        let mut after = vec![1.0; 16];
+        for (i, big) in [(2, 40.0), (7, 25.0), (11, 60.0)] {
+            before[i] = big;
+            after[i] = 1.0;
+        }
+        assert!(!verdict(&errs(&before), &errs(&after), &g, 2.0, f64::INFINITY).significant);
+        assert!(verdict(&errs(&before), &errs(&after), &g, 2.0, 0.5).significant);
+        // Noise: as many windows worse as better, tiny mean change: not significant.
+        let before: Vec<f64> = (0..16).map(|i| 1.0 + 0.01 * ((i * 7) % 5) as f64).collect();
+        let after: Vec<f64> = before.iter().enumerate().map(|(i, v)| v + if i % 2 == 0 { 0.01 } else { -0.011 }).collect();
+        assert!(!verdict(&errs(&before), &errs(&after), &g, 2.0, 0.5).significant);
+        // A big improvement on one window and worse on most others is not decisive.
+        let mut after = before.clone();
+        after[0] = 0.0;
+        for v in after.iter_mut().skip(1).take(8) {
+            *v *= 1.05;
+        }
+        let mut b2 = before.clone();
+        b2[0] = 10.0;
+        assert!(!verdict(&errs(&b2), &errs(&after), &g, 2.0, 0.5).significant);
     }
 
     #[test]
