@@ -13,14 +13,15 @@ fn report(s: &Score) {
 }
 
 /// Single effect: found (recall 1, nothing invented), parameters within 10 % (delay: 1 physics
-/// step), held-out MAE reduced by at least 80 %.
+/// step), held-out MAE reduced by at least 80 % (of the part above the noise floor when the
+/// floor makes 80 % of the recorded MAE unreachable: `Score::mae_ok`).
 fn single(c: Case) {
     let s = run(&c, 3);
     report(&s);
     assert_eq!(s.recall(), Some(1.0), "{}: not found; detected {:?}", c.name, s.detected);
     assert_eq!(s.fp, 0, "{}: invented effects; detected {:?}", c.name, s.detected);
     assert!(s.params_ok(), "{}: parameter error {:?} / delay {:?} steps; detected {:?}", c.name, s.param_rel, s.delay_steps, s.detected);
-    assert!(s.reduction() >= 0.80, "{}: held-out MAE {} → {} ({:.0} %)", c.name, s.mae_before, s.mae_after, 100.0 * s.reduction());
+    assert!(s.mae_ok(), "{}: held-out MAE {} → {} (floor {}): {:.0} %", c.name, s.mae_before, s.mae_after, s.mae_floor, 100.0 * s.reduction());
 }
 
 #[test]
@@ -44,20 +45,48 @@ fn conceal_rig_coulomb_friction() {
 }
 
 #[test]
-fn conceal_arm3_pair_backlash_position_offset() {
-    // The pair the full benchmark recovers (armature+viscous_damping and
-    // action_delay+coulomb_friction are documented misses in docs/conceal-benchmark.md).
-    let c = arm3_case("arm3 backlash+position_offset", Kind::Pair, vec![("backlash", vec![0.04]), ("position_offset", vec![0.05])], Noise::Real, 13);
+fn conceal_rig_armature() {
+    // Doubles the pendulum's inertia: far from linear, ranked 7th by the linearised diagnosis
+    // (found through the every-effect candidates).
+    single(rig_case("rig armature", Kind::Single, vec![("armature", vec![0.005])], Noise::Real, 5));
+}
+
+#[test]
+fn conceal_arm3_torque_limit() {
+    // Saturation confined to a few held-out windows (accepted by the decisive-improvement path).
+    single(arm3_case("arm3 torque_limit", Kind::Single, vec![("torque_limit", vec![1.0])], Noise::Real, 7));
+}
+
+/// Pair: both found, parameters within target, nothing invented.
+fn pair(c: Case) {
     let s = run(&c, 3);
     report(&s);
-    assert_eq!(s.recall(), Some(1.0), "detected {:?}", s.detected);
-    assert_eq!(s.fp, 0, "invented effects; detected {:?}", s.detected);
-    assert!(s.params_ok(), "parameter error {:?}; detected {:?}", s.param_rel, s.detected);
+    assert_eq!(s.recall(), Some(1.0), "{}: detected {:?}", c.name, s.detected);
+    assert_eq!(s.fp, 0, "{}: invented effects; detected {:?}", c.name, s.detected);
+    assert!(s.params_ok(), "{}: parameter error {:?} / delay {:?} steps; detected {:?}", c.name, s.param_rel, s.delay_steps, s.detected);
+}
+
+#[test]
+fn conceal_arm3_pair_backlash_position_offset() {
+    pair(arm3_case("arm3 backlash+position_offset", Kind::Pair, vec![("backlash", vec![0.04]), ("position_offset", vec![0.05])], Noise::Real, 13));
+}
+
+#[test]
+fn conceal_arm3_pair_armature_viscous_damping() {
+    // Each alone is mimicked by a delay or a gain error on its bound: needs the pair look-ahead.
+    pair(arm3_case("arm3 armature+viscous_damping", Kind::Pair, vec![("armature", vec![0.04]), ("viscous_damping", vec![0.4])], Noise::Real, 13));
 }
 
 #[test]
 fn conceal_control_selects_nothing() {
     let s = run(&arm3_case("arm3 control", Kind::Control, vec![], Noise::Real, 11), 3);
+    report(&s);
+    assert!(s.detected.is_empty(), "invented effects: {:?}", s.detected);
+}
+
+#[test]
+fn conceal_rig_control_selects_nothing() {
+    let s = run(&rig_case("rig control", Kind::Control, vec![], Noise::Real, 11), 3);
     report(&s);
     assert!(s.detected.is_empty(), "invented effects: {:?}", s.detected);
 }

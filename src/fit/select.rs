@@ -645,13 +645,16 @@ fn greedy_round(engine: &Engine, train: &[Recording], heldout: &[Recording], all
     let z = z_needed(cands.len());
     let k_before: usize = applied.iter().map(|a| a.effect.fitted()).sum();
     let bic_before = bic(tr_err.n, tr_err.sse, k_before);
-    let mut accepted: Vec<(Selected, bool)> = Vec::new();
-    // Screen for the extra (every-effect) candidates: a coarse fit (10 evaluations) must reach
-    // at least half of the best training improvement of the fully fitted ones.
+    let mut accepted: Vec<(Selected, bool, Errors)> = Vec::new();
+    // Screen for the extra (every-effect) multi-parameter candidates: a coarse fit (10
+    // evaluations per parameter) must reach at least half of the best training improvement of
+    // the fully fitted ones.
     let base_train = tr_err.rmse();
     let mut best_train = base_train;
     for (ci, (e, group, ev)) in cands.into_iter().enumerate() {
-        if ci >= n_top {
+        // (Only multi-parameter effects: a 1-D fit is a 9-point grid plus golden section anyway,
+        // and a coarse one misses scale parameters near zero, such as a small armature.)
+        if ci >= n_top && e.fitted() >= 2 {
             let (p, f) = engine.fit_budget(train, &applied, e, &group, 10);
             if p.is_empty() || !f.is_finite() || base_train - f < 0.5 * (base_train - best_train) {
                 out.tried.push(Tried {
@@ -714,28 +717,36 @@ fn greedy_round(engine: &Engine, train: &[Recording], heldout: &[Recording], all
                     values: p,
                 },
                 bound,
+                ho_a,
             ));
         }
     }
-    let kept_all: Vec<Selected> = accepted.iter().map(|(s, _)| s.clone()).collect();
+    let kept_all: Vec<Selected> = accepted.iter().map(|(s, ..)| s.clone()).collect();
     // A candidate with a parameter on its bound only wins when no interior one is kept.
-    if accepted.iter().any(|(_, b)| !b) {
-        accepted.retain(|(_, b)| !b);
+    if accepted.iter().any(|(_, b, _)| !b) {
+        accepted.retain(|(_, b, _)| !b);
     }
-    let mut accepted: Vec<Selected> = accepted.into_iter().map(|(s, _)| s).collect();
-    let Some(best_rmse) = accepted.iter().map(|s| s.heldout_rmse_after).min_by(|a, b| a.total_cmp(b)) else { return false };
-    // Simplest among those within 1 % of the best held-out RMSE.
-    let win = accepted
-        .iter()
-        .enumerate()
-        .filter(|(_, s)| s.heldout_rmse_after <= best_rmse * 1.01)
-        .min_by(|(_, a), (_, b)| {
-            let ka = effects::by_id(&a.effect).map_or(9, |e| e.fitted());
-            let kb = effects::by_id(&b.effect).map_or(9, |e| e.fitted());
-            ka.cmp(&kb).then(a.heldout_rmse_after.total_cmp(&b.heldout_rmse_after))
+    let Some(ib) = (0..accepted.len()).min_by(|&a, &b| accepted[a].0.heldout_rmse_after.total_cmp(&accepted[b].0.heldout_rmse_after)) else { return false };
+    // Occam: the simplest candidate within 5 % of the best held-out RMSE that the best does not
+    // beat beyond noise (paired test, z = 2).
+    let (best_s, _, best_e) = &accepted[ib];
+    let equivalent = |i: usize| {
+        let (s, _, e) = &accepted[i];
+        if i == ib {
+            return true;
+        }
+        let group: Vec<String> = s.joints.iter().chain(&best_s.joints).cloned().collect();
+        s.heldout_rmse_after <= best_s.heldout_rmse_after * 1.05 && !verdict(e, best_e, &group, 2.0, f64::INFINITY).significant
+    };
+    let win = (0..accepted.len())
+        .filter(|&i| equivalent(i))
+        .min_by(|&a, &b| {
+            let ka = effects::by_id(&accepted[a].0.effect).map_or(9, |e| e.fitted());
+            let kb = effects::by_id(&accepted[b].0.effect).map_or(9, |e| e.fitted());
+            ka.cmp(&kb).then(accepted[a].0.heldout_rmse_after.total_cmp(&accepted[b].0.heldout_rmse_after))
         })
-        .map(|(i, _)| i)
-        .expect("non-empty");
+        .expect("the best is equivalent to itself");
+    let mut accepted: Vec<Selected> = accepted.into_iter().map(|(s, ..)| s).collect();
     let mut s = accepted.swap_remove(win);
     if let Some(pair) = pair_lookahead(engine, train, heldout, &applied, &kept_all, &s, z, round, out) {
         for (mut p, a) in pair {
@@ -990,7 +1001,9 @@ fn swap_pass(engine: &Engine, train: &[Recording], heldout: &[Recording], allowe
             i += 1;
             continue;
         };
-        let tol = (0.01 * h_cur.rmse()).min(0.05 * (h_wo.rmse() - h_cur.rmse()).max(0.0));
+        // Within 5 % of the current held-out RMSE and not worse beyond noise (as in the greedy
+        // winner's choice).
+        let tol = 0.05 * h_cur.rmse();
         let mut best: Option<(Vec<Applied>, f64, usize)> = None;
         for e in effects::all() {
             if !allowed.iter().any(|a| a == e.id()) || e.id() == cur.effect.id() || e.fitted() >= k_cur {
