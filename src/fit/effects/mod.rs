@@ -158,6 +158,21 @@ pub struct Applied {
     pub params: Vec<f64>,
 }
 
+impl Applied {
+    /// The parameter vector, padded with the effect's defaults when shorter than the effect's
+    /// parameter list (a caller may give only the fitted ones), so that no effect indexes past it.
+    pub fn full_params(&self) -> std::borrow::Cow<'_, [f64]> {
+        let defs = self.effect.params();
+        if self.params.len() >= defs.len() {
+            std::borrow::Cow::Borrowed(&self.params)
+        } else {
+            let mut p = self.params.clone();
+            p.extend(defs[self.params.len()..].iter().map(|d| d.default));
+            std::borrow::Cow::Owned(p)
+        }
+    }
+}
+
 impl std::fmt::Debug for Applied {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(f, "{}{:?}={:?}", self.effect.id(), self.joints, self.params)
@@ -180,7 +195,7 @@ pub fn model_with(robot: &Robot, applied: &[Applied]) -> MjModel {
     for a in applied.iter().filter(|a| a.effect.entry() == Entry::Model) {
         for name in &a.joints {
             if let Some(t) = JointTarget::of(robot, name) {
-                a.effect.apply_model(&mut m, &t, &a.params);
+                a.effect.apply_model(&mut m, &t, &a.full_params());
             }
         }
     }
@@ -216,7 +231,7 @@ impl ActuatorHook for Hook<'_> {
         let Some(list) = self.lists.get_mut(joint_idx) else { return };
         for (i, st) in list.iter_mut() {
             let a = &self.applied[*i];
-            a.effect.torque(st, q, qd, q_target, out, self.dt, &a.params);
+            a.effect.torque(st, q, qd, q_target, out, self.dt, &a.full_params());
         }
     }
 }
@@ -232,7 +247,7 @@ pub fn replay_with(robot: &Robot, model: &MjModel, rec: &Recording, applied: &[A
             applied
                 .iter()
                 .filter(|a| a.effect.entry() == Entry::Measurement && a.joints.contains(&j.name))
-                .map(|a| a.effect.measurement_bias(&a.params))
+                .map(|a| a.effect.measurement_bias(&a.full_params()))
                 .sum()
         })
         .collect();
@@ -281,4 +296,19 @@ pub(crate) fn set(ptr: *mut f64, n: usize, i: usize, v: f64) {
 
 pub(crate) fn get(ptr: *const f64, n: usize, i: usize) -> f64 {
     mj::slice(ptr, n).get(i).copied().unwrap_or(0.0)
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn short_parameter_vectors_are_padded_with_defaults() {
+        let e = super::by_id("torque_limit").expect("known");
+        let a = super::Applied { effect: e, joints: vec!["j".into()], params: vec![1.0] };
+        let p = a.full_params();
+        assert_eq!(p.len(), e.params().len());
+        assert_eq!(p[0], 1.0);
+        assert_eq!(p[1], e.params()[1].default);
+        let full = super::Applied { params: p.to_vec(), ..a.clone() };
+        assert!(matches!(full.full_params(), std::borrow::Cow::Borrowed(_)));
+    }
 }
