@@ -697,28 +697,9 @@ fn greedy_round(engine: &Engine, train: &[Recording], heldout: &[Recording], all
             kept: false,
         });
         if keep {
-            let defs = e.params();
-            let bound = at_bound(engine, &applied, trial.last().expect("pushed"));
-            accepted.push((
-                Selected {
-                    effect: e.id().into(),
-                    joints: group,
-                    params: defs.iter().zip(&p).take(e.fitted()).map(|(d, v)| (d.name.to_string(), *v)).collect(),
-                    stderr: BTreeMap::new(),
-                    identifiable: true,
-                    evidence: ev,
-                    heldout_improvement: v.rel,
-                    heldout_rmse_before: ho_err.rmse(),
-                    heldout_rmse_after: ho_a.rmse(),
-                    window_improvement: v.mean,
-                    window_improvement_se: v.se,
-                    bic_before,
-                    bic_after,
-                    values: p,
-                },
-                bound,
-                ho_a,
-            ));
+            let a = trial.last().expect("pushed");
+            let bound = at_bound(engine, &applied, a);
+            accepted.push((Selected::new(a, ev, &v, ho_err.rmse(), ho_a.rmse(), (bic_before, bic_after)), bound, ho_a));
         }
     }
     let kept_all: Vec<Selected> = accepted.iter().map(|(s, ..)| s.clone()).collect();
@@ -874,22 +855,9 @@ fn pair_lookahead(
         wo.remove(n + m);
         let (hw, tw) = (engine.errors(heldout, &wo)?, engine.errors(train, &wo)?);
         let v = verdict(&hw, &h_pair, &a.joints, 2.0, opts.decisive_improvement);
-        let s = Selected {
-            effect: a.effect.id().into(),
-            joints: a.joints.clone(),
-            params: a.effect.params().iter().zip(&a.params).take(a.effect.fitted()).map(|(d, v)| (d.name.to_string(), *v)).collect(),
-            stderr: BTreeMap::new(),
-            identifiable: true,
-            evidence: kept.iter().find(|s| s.effect == a.effect.id() && s.joints == a.joints).map(|s| s.evidence.clone()).unwrap_or_default(),
-            heldout_improvement: v.rel,
-            heldout_rmse_before: hw.rmse(),
-            heldout_rmse_after: rmse,
-            window_improvement: v.mean,
-            window_improvement_se: v.se,
-            bic_before: bic(tw.n, tw.sse, k_pair - a.effect.fitted()),
-            bic_after: bic(t_pair.n, t_pair.sse, k_pair),
-            values: a.params.clone(),
-        };
+        let evidence = kept.iter().find(|s| s.effect == a.effect.id() && s.joints == a.joints).map(|s| s.evidence.clone()).unwrap_or_default();
+        let bics = (bic(tw.n, tw.sse, k_pair - a.effect.fitted()), bic(t_pair.n, t_pair.sse, k_pair));
+        let s = Selected::new(&a, evidence, &v, hw.rmse(), rmse, bics);
         res.push((s, a));
     }
     // The polish may have moved the effects kept earlier: carry them over.
@@ -909,13 +877,40 @@ fn set_uncertainty(engine: &Engine, train: &[Recording], s: &mut Selected, appli
     }
 }
 
+/// Fitted parameters of `a` by name.
+fn named_params(a: &Applied) -> BTreeMap<String, f64> {
+    a.effect.params().iter().zip(&a.params).take(a.effect.fitted()).map(|(d, v)| (d.name.to_string(), *v)).collect()
+}
+
+impl Selected {
+    /// Record of the kept effect `a`: `v` compares the held-out set without it (RMSE `before`)
+    /// and with it (`after`); `bics` = training BIC (without, with). Standard errors come later
+    /// ([`set_uncertainty`]).
+    fn new(a: &Applied, evidence: BTreeMap<String, f64>, v: &Verdict, before: f64, after: f64, bics: (f64, f64)) -> Self {
+        Selected {
+            effect: a.effect.id().into(),
+            joints: a.joints.clone(),
+            params: named_params(a),
+            stderr: BTreeMap::new(),
+            identifiable: true,
+            evidence,
+            heldout_improvement: v.rel,
+            heldout_rmse_before: before,
+            heldout_rmse_after: after,
+            window_improvement: v.mean,
+            window_improvement_se: v.se,
+            bic_before: bics.0,
+            bic_after: bics.1,
+            values: a.params.clone(),
+        }
+    }
+}
+
 /// Copies the parameters of `out.applied` into `out.selected` (same order).
 fn sync_selected(out: &mut FitOutcome) {
     for (s, a) in out.selected.iter_mut().zip(&out.applied) {
         s.values = a.params.clone();
-        for (d, v) in a.effect.params().iter().zip(&a.params).take(a.effect.fitted()) {
-            s.params.insert(d.name.to_string(), *v);
-        }
+        s.params.extend(named_params(a));
     }
 }
 
@@ -1072,22 +1067,9 @@ fn swap_pass(engine: &Engine, train: &[Recording], heldout: &[Recording], allowe
         };
         let k_new: usize = out.applied.iter().map(|a| a.effect.fitted()).sum();
         let v = verdict(&h_wo, &h_new, &new.joints, 2.0, opts.decisive_improvement);
-        let mut s = Selected {
-            effect: new.effect.id().into(),
-            joints: new.joints.clone(),
-            params: new.effect.params().iter().zip(&new.params).take(new.effect.fitted()).map(|(d, v)| (d.name.to_string(), *v)).collect(),
-            stderr: BTreeMap::new(),
-            identifiable: true,
-            evidence: BTreeMap::from([(format!("replaces_{}", cur.effect.id()), 1.0)]),
-            heldout_improvement: v.rel,
-            heldout_rmse_before: h_wo.rmse(),
-            heldout_rmse_after: h_new.rmse(),
-            window_improvement: v.mean,
-            window_improvement_se: v.se,
-            bic_before: bic(t_wo.n, t_wo.sse, k_new - new.effect.fitted()),
-            bic_after: bic(t_new.n, t_new.sse, k_new),
-            values: new.params.clone(),
-        };
+        let evidence = BTreeMap::from([(format!("replaces_{}", cur.effect.id()), 1.0)]);
+        let bics = (bic(t_wo.n, t_wo.sse, k_new - new.effect.fitted()), bic(t_new.n, t_new.sse, k_new));
+        let mut s = Selected::new(&new, evidence, &v, h_wo.rmse(), h_new.rmse(), bics);
         set_uncertainty(engine, train, &mut s, &out.applied, &mut out.warnings);
         out.selected.push(s);
         changed = true;
