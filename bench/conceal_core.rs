@@ -74,6 +74,8 @@ pub struct Case {
     pub duration_s: f64,
     pub amplitude: f64,
     pub seed: u64,
+    /// Floating base held this far above the keyframe pose [m] (`SynthOptions::suspend_m`).
+    pub suspend_m: f64,
 }
 
 impl Case {
@@ -91,6 +93,7 @@ impl Case {
             noise,
             quantum: 2.0 * std::f64::consts::PI / 4096.0,
             drop,
+            suspend_m: self.suspend_m,
         }
     }
     pub fn truth_label(&self) -> String {
@@ -441,6 +444,7 @@ pub fn arm3_case(name: &str, kind: Kind, truth: Vec<(&'static str, Vec<f64>)>, n
         duration_s: 4.0,
         amplitude: 0.5,
         seed,
+        suspend_m: 0.0,
     }
 }
 
@@ -456,9 +460,13 @@ pub fn rig_case(name: &str, kind: Kind, truth: Vec<(&'static str, Vec<f64>)>, no
         duration_s: 4.0,
         amplitude: 0.8,
         seed,
+        suspend_m: 0.0,
     }
 }
 
 pub fn asimov_case(name: &str, kind: Kind, truth: Vec<(&'static str, Vec<String>, Vec<f64>)>, noise: Noise, seed: u64) -> Case {
-    Case { name: name.into(), kind, model: ASIMOV.into(), joints: asimov_legs(), truth, noise, episodes: 8, duration_s: 4.0, amplitude: 0.15, seed }
+    // On a test stand: base 0.5 m above the standing keyframe, feet in the air (with the base
+    // pinned at the standing pose the feet drag on the floor and the replay is chaotic; see
+    // docs/conceal-benchmark.md).
+    Case { name: name.into(), kind, model: ASIMOV.into(), joints: asimov_legs(), truth, noise, episodes: 8, duration_s: 4.0, amplitude: 0.15, seed, suspend_m: 0.5 }
 }

@@ -54,7 +54,7 @@ fn matrix(quick: bool) -> Vec<Case> {
         let joints = actuated(&robot);
         let knees: Vec<String> = joints.iter().filter(|j| j.to_lowercase().contains("knee")).cloned().collect();
         let group = if knees.is_empty() { vec![joints[0].clone()] } else { knees };
-        let mk = |name: &str, kind, truth| Case { name: name.into(), kind, model: t1.clone(), joints: joints.clone(), truth, noise: Noise::Real, episodes: 8, duration_s: 4.0, amplitude: 0.15, seed: 5 };
+        let mk = |name: &str, kind, truth| Case { name: name.into(), kind, model: t1.clone(), joints: joints.clone(), truth, noise: Noise::Real, episodes: 8, duration_s: 4.0, amplitude: 0.15, seed: 5, suspend_m: 0.0 };
         v.push(mk("t1 knees viscous_damping", Kind::Group, vec![("viscous_damping", group, vec![3.0])]));
         v.push(mk("t1 control", Kind::Control, vec![]));
     } else {

@@ -110,6 +110,12 @@ pub enum Cmd {
         duration: f64,
         #[arg(long, default_value_t = 1)]
         seed: u64,
+        /// Floating-base robots: hold the base this many metres above its keyframe pose (a robot
+        /// on a test stand, feet in the air; written as base.* columns). Default 0: the keyframe
+        /// pose — a standing robot with its base pinned drags its feet on the floor, and that
+        /// replay is chaotic.
+        #[arg(long, default_value_t = 0.0)]
+        suspend: f64,
     },
     /// Convert a BAM servo log (JSON) to the CSV recording format (adds the servo.kp column).
     Convert {
@@ -262,8 +268,8 @@ pub fn run() -> i32 {
             write_actuators: f.write_actuators,
             report: f.report,
         }),
-        Some(Cmd::Synth { model, effects, out, joints, episodes, duration, seed }) => {
-            crate::fit::cmd::run_synth(crate::fit::cmd::SynthArgs { model, effects, out, joints, episodes, duration, seed })
+        Some(Cmd::Synth { model, effects, out, joints, episodes, duration, seed, suspend }) => {
+            crate::fit::cmd::run_synth(crate::fit::cmd::SynthArgs { model, effects, out, joints, episodes, duration, seed, suspend })
         }
         Some(Cmd::Convert { input, output }) => crate::sim2real::cmd::run_convert(&input, &output),
         None => check(cli.check),

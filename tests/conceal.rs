@@ -59,6 +59,20 @@ fn conceal_arm3_torque_limit() {
 }
 
 /// Pair: both found, parameters within target, nothing invented.
+#[test]
+fn conceal_arm3_load_dependent_friction() {
+    // 1 % dropped rows: two training episodes lose a row at a step command; without the gap mask
+    // their transients dominate the objective and k comes out 15 % high.
+    single(arm3_case("arm3 load_dependent_friction", Kind::Single, vec![("load_dependent_friction", vec![0.05, 0.1])], Noise::Real, 7));
+}
+
+#[test]
+fn conceal_arm3_stribeck_friction_high_noise() {
+    // σ 1 mrad, 3 % dropped rows: the held-out test alone cannot tell Stribeck from a 1-parameter
+    // backlash; the training BIC in the Occam choice can.
+    single(arm3_case("arm3 stribeck_friction", Kind::Single, vec![("stribeck_friction", vec![0.3, 0.1, 0.2])], Noise::High, 7));
+}
+
 fn pair(c: Case) {
     let s = run(&c, 3);
     report(&s);

@@ -259,6 +259,35 @@ fn synth_then_fit_end_to_end() {
 }
 
 #[test]
+fn synth_suspend_holds_the_base_above_the_keyframe() {
+    let dir = std::env::temp_dir().join(format!("modellint_synth_suspend_{}", std::process::id()));
+    let model = root().join("models/asimov.xml");
+    let bin = env!("CARGO_BIN_EXE_modellint");
+    let run = |extra: &[&str]| {
+        std::process::Command::new(bin)
+            .args(["synth", model.to_str().unwrap(), "--effects", "armature@*knee*=0.05", "--joints", "*knee*", "--episodes", "1", "--duration", "0.5", "--out"])
+            .arg(&dir)
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let o = run(&["--suspend=-1"]);
+    assert_eq!(o.status.code(), Some(2), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--suspend"), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = run(&["--suspend", "0.5"]);
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+    let csv = std::fs::read_dir(&dir).unwrap().filter_map(|e| e.ok()).map(|e| e.path()).find(|p| p.extension().is_some_and(|x| x == "csv")).unwrap();
+    let rec = modellint::sim2real::recording::read_csv(&csv).unwrap();
+    let robot = load(&model);
+    let free = robot.joints.iter().find(|j| j.jtype == modellint::model::JointType::Free).unwrap();
+    let z_key = robot.key.qpos[free.qposadr + 2];
+    let b = rec.base.as_ref().expect("base columns");
+    assert!(b.pos.iter().all(|p| (p[2] - z_key - 0.5).abs() < 1e-9), "base z {} vs key {z_key}", b.pos[0][2]);
+    assert!(std::fs::read_to_string(dir.join("truth.toml")).unwrap().contains("suspend_m = 0.5"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
 fn motor_family_is_fitted_as_one_group() {
     // The same armature error on all three joints of one motor family: the family group (one
     // shared parameter) must win over any single joint.

@@ -218,11 +218,19 @@ pub struct SynthArgs {
     pub episodes: usize,
     pub duration: f64,
     pub seed: u64,
+    /// Base height above the keyframe pose [m] (`SynthOptions::suspend_m`).
+    pub suspend: f64,
 }
 
 /// `modellint synth`: recordings from a hidden copy of the model with the given effects.
 pub fn run_synth(a: SynthArgs) -> i32 {
     use crate::fit::synth::{SynthOptions, generate, parse_spec, truth_toml};
+    if !(a.suspend.is_finite() && a.suspend >= 0.0) {
+        return fail(format!("--suspend must be a finite height ≥ 0 [m], got {}", a.suspend));
+    }
+    if !(a.duration.is_finite() && a.duration > 0.0) {
+        return fail(format!("--duration must be a positive number of seconds, got {}", a.duration));
+    }
     let loaded = match crate::lint::load_for_command(&a.model, None) {
         Ok(l) => l,
         Err(code) => return code,
@@ -254,6 +262,7 @@ pub fn run_synth(a: SynthArgs) -> i32 {
         noise: 2e-4,
         quantum: 2.0 * std::f64::consts::PI / 4096.0,
         drop: 0.01,
+        suspend_m: a.suspend,
         ..Default::default()
     };
     let recs = match generate(robot, &joints, &truth, a.episodes, &o, a.seed) {

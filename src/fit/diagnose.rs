@@ -26,7 +26,7 @@ use std::collections::BTreeMap;
 use serde::Serialize;
 
 use crate::model::{ActuatorKind, Robot};
-use crate::sim2real::metrics::{interp_at, pearson, zoh_at};
+use crate::sim2real::metrics::{gap_mask, interp_at, pearson, zoh_at};
 use crate::sim2real::recording::{Recording, derivative};
 use crate::sim2real::replay::Episode;
 
@@ -96,7 +96,8 @@ fn percentile(x: &[f64], p: f64) -> f64 {
 
 /// Ranked candidates for every (effect, joint) over the given episodes. `joints`: the joints to
 /// diagnose (all recorded joints when empty). `allowed`: effect ids to consider (all when empty).
-pub fn diagnose(robot: &Robot, recs: &[Recording], eps: &[Episode], joints: &[String], allowed: &[String]) -> Vec<Candidate> {
+/// Samples up to `gap_mask_s` after a gap in a recording are left out ([`gap_mask`]).
+pub fn diagnose(robot: &Robot, recs: &[Recording], eps: &[Episode], joints: &[String], allowed: &[String], gap_mask_s: f64) -> Vec<Candidate> {
     let mut names: Vec<String> = Vec::new();
     for r in recs {
         for j in &r.joints {
@@ -124,7 +125,8 @@ pub fn diagnose(robot: &Robot, recs: &[Recording], eps: &[Episode], joints: &[St
             let jt = &rec.joints[k];
             let cmd = jt.q_cmd.as_deref().unwrap_or(&jt.q);
             let qdd = derivative(&ep.t, &ep.qd_sim[k]);
-            for i in 0..rec.t.len() {
+            let scored = gap_mask(&rec.t, gap_mask_s);
+            for i in (0..rec.t.len()).filter(|&i| scored[i]) {
                 let (qr, qs, qd) = (jt.q[i], ep.q_sim[k][i], ep.qd_sim[k][i]);
                 if !(qr.is_finite() && qs.is_finite() && qd.is_finite() && qdd[i].is_finite()) {
                     continue;

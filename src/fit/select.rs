@@ -25,6 +25,7 @@ use crate::fit::effects::{self, Applied, Effect, JointTarget, model_with, replay
 use crate::fit::optim::{Bounds, CmaesOpts, NelderMeadOpts, cmaes, golden_section, nelder_mead};
 use crate::fit::stats::{bic, improvement_beyond_noise, uncertainty_from_jacobian};
 use crate::model::Robot;
+use crate::sim2real::metrics::gap_mask;
 use crate::sim2real::recording::Recording;
 use crate::sim2real::replay::{Episode, ReplayOptions};
 
@@ -61,6 +62,9 @@ pub struct FitOptions {
     /// After the greedy rounds: drop kept effects whose removal does not hurt held-out beyond
     /// noise, and swap each for a simpler effect that explains the data as well.
     pub simplify: bool,
+    /// Samples up to this long after a gap in a recording (dropped rows) are left out of every
+    /// error sum ([`gap_mask`]): the command during the gap is unknown [s].
+    pub gap_mask_s: f64,
 }
 
 impl Default for FitOptions {
@@ -80,6 +84,7 @@ impl Default for FitOptions {
             every_effect: true,
             decisive_improvement: 0.5,
             simplify: true,
+            gap_mask_s: 0.1,
         }
     }
 }
@@ -255,7 +260,11 @@ impl<'a> Engine<'a> {
                 }
                 let t0 = rec.t[0];
                 let mut w = (0usize, 0.0, 0usize);
+                let scored = gap_mask(&rec.t, self.opts.gap_mask_s);
                 for i in 0..rec.t.len() {
+                    if !scored[i] {
+                        continue;
+                    }
                     let e = jt.q[i] - ep.q_sim[k][i];
                     if !e.is_finite() {
                         if jt.q[i].is_finite() {
@@ -287,9 +296,10 @@ impl<'a> Engine<'a> {
         let e = self.errors(recs, applied)?;
         let mut out = Vec::new();
         for (rec, ep) in recs.iter().zip(&e.eps) {
+            let scored = gap_mask(&rec.t, self.opts.gap_mask_s);
             for (k, jt) in rec.joints.iter().enumerate() {
                 if joints.contains(&jt.name) {
-                    out.extend(jt.q.iter().zip(&ep.q_sim[k]).map(|(a, b)| a - b).filter(|x| x.is_finite()));
+                    out.extend(jt.q.iter().zip(&ep.q_sim[k]).zip(&scored).filter(|(_, s)| **s).map(|((a, b), _)| a - b).filter(|x| x.is_finite()));
                 }
             }
         }
@@ -364,11 +374,12 @@ impl<'a> Engine<'a> {
         let (mut rs, mut ss) = (0.0, 0.0);
         let mut n = 0usize;
         for ((rec, e0), e1) in train.iter().zip(&base_err.eps).zip(&e.eps) {
+            let scored = gap_mask(&rec.t, self.opts.gap_mask_s);
             for (k, jt) in rec.joints.iter().enumerate() {
                 if !self.joints.contains(&jt.name) {
                     continue;
                 }
-                for i in 0..rec.t.len() {
+                for i in (0..rec.t.len()).filter(|&i| scored[i]) {
                     let r = jt.q[i] - e0.q_sim[k][i];
                     let s = e1.q_sim[k][i] - e0.q_sim[k][i];
                     if r.is_finite() && s.is_finite() {
@@ -564,7 +575,7 @@ fn greedy_round(engine: &Engine, train: &[Recording], heldout: &[Recording], all
         out.warnings.push("the held-out replay diverged with the current model; stopping".into());
         return false;
     };
-    let diag = diagnose(robot, train, &tr_err.eps, &engine.joints, allowed);
+    let diag = diagnose(robot, train, &tr_err.eps, &engine.joints, allowed, opts.gap_mask_s);
     let covered = |id: &str, j: &str| applied.iter().any(|a| a.effect.id() == id && a.joints.iter().any(|x| x == j));
     // Re-rank the diagnosis by the linearised (Gauss–Newton) explained residual: the
     // residual projected on the simulated sensitivity to a probe step of the effect.
@@ -651,10 +662,14 @@ fn greedy_round(engine: &Engine, train: &[Recording], heldout: &[Recording], all
     // the fully fitted ones.
     let base_train = tr_err.rmse();
     let mut best_train = base_train;
-    for (ci, (e, group, ev)) in cands.into_iter().enumerate() {
+    let mut ci = 0;
+    while ci < cands.len() {
+        let (e, group, ev) = cands[ci].clone();
+        let extra = ci >= n_top;
+        ci += 1;
         // (Only multi-parameter effects: a 1-D fit is a 9-point grid plus golden section anyway,
         // and a coarse one misses scale parameters near zero, such as a small armature.)
-        if ci >= n_top && e.fitted() >= 2 {
+        if extra && e.fitted() >= 2 {
             let (p, f) = engine.fit_budget(train, &applied, e, &group, 10);
             if p.is_empty() || !f.is_finite() || base_train - f < 0.5 * (base_train - best_train) {
                 out.tried.push(Tried {
@@ -697,6 +712,21 @@ fn greedy_round(engine: &Engine, train: &[Recording], heldout: &[Recording], all
             kept: false,
         });
         if keep {
+            // Mirror completion: a kept one-joint candidate is also fitted on its left/right
+            // pair, which then competes with it on held-out (the diagnosis ranks the two sides
+            // separately and can miss the partner of an effect both sides have).
+            if let [j] = group.as_slice()
+                && let Some(p) = mirror(j)
+                && engine.joints.contains(&p)
+                && !covered(e.id(), &p)
+                && !cands.iter().any(|(e2, g, _)| e2.id() == e.id() && g.contains(&p))
+            {
+                let mut g = vec![j.clone(), p];
+                g.sort();
+                let mut ev2 = ev.clone();
+                ev2.insert("mirror_completion".into(), 1.0);
+                cands.push((e, g, ev2));
+            }
             let a = trial.last().expect("pushed");
             let bound = at_bound(engine, &applied, a);
             accepted.push((Selected::new(a, ev, &v, ho_err.rmse(), ho_a.rmse(), (bic_before, bic_after)), bound, ho_a));
@@ -709,7 +739,9 @@ fn greedy_round(engine: &Engine, train: &[Recording], heldout: &[Recording], all
     }
     let Some(ib) = (0..accepted.len()).min_by(|&a, &b| accepted[a].0.heldout_rmse_after.total_cmp(&accepted[b].0.heldout_rmse_after)) else { return false };
     // Occam: the simplest candidate within 5 % of the best held-out RMSE that the best does not
-    // beat beyond noise (paired test, z = 2).
+    // beat beyond noise (paired test, z = 2) and whose training BIC is not higher (the training
+    // set is larger than the held-out one: a better fit that pays for its parameters there is
+    // not noise).
     let (best_s, _, best_e) = &accepted[ib];
     let equivalent = |i: usize| {
         let (s, _, e) = &accepted[i];
@@ -717,7 +749,9 @@ fn greedy_round(engine: &Engine, train: &[Recording], heldout: &[Recording], all
             return true;
         }
         let group: Vec<String> = s.joints.iter().chain(&best_s.joints).cloned().collect();
-        s.heldout_rmse_after <= best_s.heldout_rmse_after * 1.05 && !verdict(e, best_e, &group, 2.0, f64::INFINITY).significant
+        s.heldout_rmse_after <= best_s.heldout_rmse_after * 1.05
+            && s.bic_after <= best_s.bic_after
+            && !verdict(e, best_e, &group, 2.0, f64::INFINITY).significant
     };
     let win = (0..accepted.len())
         .filter(|&i| equivalent(i))
@@ -996,9 +1030,11 @@ fn swap_pass(engine: &Engine, train: &[Recording], heldout: &[Recording], allowe
             i += 1;
             continue;
         };
-        // Within 5 % of the current held-out RMSE and not worse beyond noise (as in the greedy
-        // winner's choice).
+        // Within 5 % of the current held-out RMSE, not worse beyond noise, and a training BIC
+        // that is not higher (as in the greedy winner's choice).
         let tol = 0.05 * h_cur.rmse();
+        let k_all: usize = out.applied.iter().map(|a| a.effect.fitted()).sum();
+        let bic_cur = engine.errors(train, &out.applied).map_or(f64::NEG_INFINITY, |e| bic(e.n, e.sse, k_all));
         let mut best: Option<(Vec<Applied>, f64, usize)> = None;
         for e in effects::all() {
             if !allowed.iter().any(|a| a == e.id()) || e.id() == cur.effect.id() || e.fitted() >= k_cur {
@@ -1019,7 +1055,9 @@ fn swap_pass(engine: &Engine, train: &[Recording], heldout: &[Recording], allowe
             let Some(h1) = engine.errors(heldout, &set) else { continue };
             // Is the current set better than the swap beyond noise?
             let worse = verdict(&h1, &h_cur, &cur.joints, 2.0, f64::INFINITY);
-            let ok = h1.rmse() <= h_cur.rmse() + tol && !worse.significant;
+            let k_set = k_all - k_cur + e.fitted();
+            let bic_ok = engine.errors(train, &set).is_some_and(|t| bic(t.n, t.sse, k_set) <= bic_cur);
+            let ok = h1.rmse() <= h_cur.rmse() + tol && !worse.significant && bic_ok;
             out.tried.push(Tried {
                 round,
                 phase: "swap",
@@ -1029,7 +1067,7 @@ fn swap_pass(engine: &Engine, train: &[Recording], heldout: &[Recording], allowe
                 train_rmse: tr,
                 heldout_improvement: (h_cur.rmse() - h1.rmse()) / h_cur.rmse().max(1e-300),
                 significant: worse.significant,
-                bic_decreased: false,
+                bic_decreased: bic_ok,
                 kept: false,
             });
             let better = match &best {

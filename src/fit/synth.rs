@@ -6,8 +6,8 @@
 use std::path::PathBuf;
 
 use crate::fit::effects::{Applied, simulate};
-use crate::model::Robot;
-use crate::sim2real::recording::{JointTrace, Recording};
+use crate::model::{JointType, Robot};
+use crate::sim2real::recording::{BaseTrace, JointTrace, Recording};
 use crate::sim2real::replay::{ReplayError, ReplayOptions};
 
 /// Deterministic splitmix64 RNG.
@@ -51,11 +51,15 @@ pub struct SynthOptions {
     pub quantum: f64,
     /// Fraction of samples dropped.
     pub drop: f64,
+    /// Floating-base robots: the base is held this far above its keyframe pose [m] (a robot
+    /// hung on a test stand, feet clear of the ground), written as `base.*` columns. 0: the
+    /// keyframe pose (standing, feet on the floor).
+    pub suspend_m: f64,
 }
 
 impl Default for SynthOptions {
     fn default() -> Self {
-        SynthOptions { duration_s: 5.0, sample_hz: 200.0, jitter: 0.2, control_hz: 100.0, amplitude: 0.5, noise: 1e-4, quantum: 0.0, drop: 0.0 }
+        SynthOptions { duration_s: 5.0, sample_hz: 200.0, jitter: 0.2, control_hz: 100.0, amplitude: 0.5, noise: 1e-4, quantum: 0.0, drop: 0.0, suspend_m: 0.0 }
     }
 }
 
@@ -128,7 +132,19 @@ pub fn generate(robot: &Robot, joints: &[String], truth: &[Applied], n: usize, o
         .iter()
         .map(|j| (j.clone(), robot.joint(j).map_or(0.0, |jj| robot.key.qpos.get(jj.qposadr).copied().unwrap_or(0.0))))
         .collect();
-    let cmds: Vec<Recording> = (0..n).map(|i| excitation(&jq, o, seed.wrapping_mul(1000).wrapping_add(i as u64))).collect();
+    let free = robot.joints.iter().find(|j| j.jtype == JointType::Free).map(|j| j.qposadr);
+    let base = |len: usize| -> Option<BaseTrace> {
+        let qa = free.filter(|_| o.suspend_m > 0.0)?;
+        let k = robot.key.qpos.get(qa..qa + 7)?;
+        Some(BaseTrace { pos: vec![[k[0], k[1], k[2] + o.suspend_m]; len], quat: vec![[k[3], k[4], k[5], k[6]]; len] })
+    };
+    let cmds: Vec<Recording> = (0..n)
+        .map(|i| {
+            let mut r = excitation(&jq, o, seed.wrapping_mul(1000).wrapping_add(i as u64));
+            r.base = base(r.t.len());
+            r
+        })
+        .collect();
     let eps = simulate(robot, &cmds, truth, &ReplayOptions::default());
     let mut out = Vec::new();
     let mut rng = Rng::new(seed ^ 0xABCD);
@@ -148,6 +164,10 @@ pub fn generate(robot: &Robot, joints: &[String], truth: &[Applied], n: usize, o
             let keep: Vec<bool> = (0..rec.t.len()).map(|i| i < 2 || rng.uniform() >= o.drop).collect();
             let f = |v: &Vec<f64>| v.iter().zip(&keep).filter(|(_, k)| **k).map(|(x, _)| *x).collect::<Vec<f64>>();
             rec.t = f(&rec.t);
+            if let Some(b) = rec.base.as_mut() {
+                b.pos = b.pos.iter().zip(&keep).filter(|(_, k)| **k).map(|(x, _)| *x).collect();
+                b.quat = b.quat.iter().zip(&keep).filter(|(_, k)| **k).map(|(x, _)| *x).collect();
+            }
             for j in rec.joints.iter_mut() {
                 j.q = f(&j.q);
                 j.qd = j.qd.as_ref().map(f);
@@ -198,8 +218,8 @@ pub fn parse_spec(spec: &str, joints: &[String]) -> Result<Vec<Applied>, String>
 /// The truth file: every hidden effect with its parameters.
 pub fn truth_toml(truth: &[Applied], o: &SynthOptions, seed: u64) -> String {
     let mut s = format!(
-        "# Hidden effects of this synthetic dataset (modellint synth). `modellint fit` never reads this file.\nseed = {seed}\nnoise_rad = {}\nquantum_rad = {}\nsample_hz = {}\njitter = {}\ndrop = {}\n\n",
-        o.noise, o.quantum, o.sample_hz, o.jitter, o.drop
+        "# Hidden effects of this synthetic dataset (modellint synth). `modellint fit` never reads this file.\nseed = {seed}\nnoise_rad = {}\nquantum_rad = {}\nsample_hz = {}\njitter = {}\ndrop = {}\nsuspend_m = {}\n\n",
+        o.noise, o.quantum, o.sample_hz, o.jitter, o.drop, o.suspend_m
     );
     for a in truth {
         s.push_str(&format!("[[effect]]\nid = \"{}\"\njoints = [{}]\n[effect.params]\n", a.effect.id(), a.joints.iter().map(|j| format!("\"{j}\"")).collect::<Vec<_>>().join(", ")));

@@ -119,7 +119,7 @@ pub fn run_gap(a: GapArgs) -> i32 {
         }
         recs.push(rec);
     }
-    let opts = ReplayOptions { control_hz: a.control_hz, base: a.base, hold_unlisted_at_key: true };
+    let opts = ReplayOptions { control_hz: a.control_hz, base: a.base, ..Default::default() };
     let replayer = Replayer::new(robot);
     let tty = std::io::stderr().is_terminal();
     let total = recs.len();

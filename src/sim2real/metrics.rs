@@ -241,9 +241,109 @@ pub fn interp_at(t: &[f64], x: &[f64], tq: f64) -> f64 {
     lerp(&t[..n], &x[..n], i - 1, tq)
 }
 
+/// Median of the positive finite sample intervals (`None` when there is none).
+pub fn median_interval(t: &[f64]) -> Option<f64> {
+    let mut dts: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).filter(|d| d.is_finite() && *d > 0.0).collect();
+    if dts.is_empty() {
+        return None;
+    }
+    dts.sort_by(f64::total_cmp);
+    Some(dts[dts.len() / 2])
+}
+
+/// Which samples a replay reproduces from known commands: `false` for the samples after a gap
+/// (an interval longer than 1.5× the median) up to `horizon` seconds past its end. The command
+/// in force during a gap is unknown (a dropped row may have held a step); the joint's response
+/// to it lasts about one closed-loop settling time, so those samples are not evidence about the
+/// model. All `true` for regular recordings or `horizon <= 0`.
+pub fn gap_mask(t: &[f64], horizon: f64) -> Vec<bool> {
+    let mut m = vec![true; t.len()];
+    let Some(h) = median_interval(t).filter(|_| horizon > 0.0) else { return m };
+    let mut until = f64::NEG_INFINITY;
+    for i in 1..t.len() {
+        if t[i] - t[i - 1] > 1.5 * h {
+            until = t[i] + horizon;
+        }
+        if t[i] < until {
+            m[i] = false;
+        }
+    }
+    m
+}
+
+/// Rows a gap may hide before it is treated as a pause rather than dropped rows.
+pub const MAX_FILLED_ROWS: usize = 4;
+
+/// Dropped rows of a held signal (a command): an interval longer than 1.5× the median sample
+/// interval, and at most [`MAX_FILLED_ROWS`] + 1 medians long, is taken to have lost
+/// `round(interval / median) − 1` rows at evenly spaced times. Their values are linearly
+/// interpolated between the rows around the gap, so that a zero-order hold of the result holds
+/// each estimated row for its share of the gap instead of holding the row before the gap for
+/// all of it. Longer intervals (a pause) and everything else are returned unchanged, and so is a
+/// trace with fewer than 3 samples or a non-finite neighbour. `t` must be increasing.
+pub fn fill_dropped_rows(t: &[f64], x: &[f64]) -> (Vec<f64>, Vec<f64>) {
+    let n = t.len().min(x.len());
+    let Some(h) = median_interval(&t[..n]).filter(|_| n >= 3) else {
+        return (t[..n].to_vec(), x[..n].to_vec());
+    };
+    let (mut tu, mut xu) = (Vec::with_capacity(n), Vec::with_capacity(n));
+    for i in 0..n {
+        tu.push(t[i]);
+        xu.push(x[i]);
+        if i + 1 == n {
+            break;
+        }
+        let gap = t[i + 1] - t[i];
+        let rows = (gap / h).round() as usize;
+        if !(gap > 1.5 * h) || rows < 2 || rows > MAX_FILLED_ROWS + 1 || !x[i].is_finite() || !x[i + 1].is_finite() {
+            continue;
+        }
+        for r in 1..rows {
+            let a = r as f64 / rows as f64;
+            tu.push(t[i] + a * gap);
+            xu.push(x[i] + a * (x[i + 1] - x[i]));
+        }
+    }
+    (tu, xu)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn gap_mask_covers_the_horizon_after_each_gap_only() {
+        let t = [0.0, 0.01, 0.02, 0.04, 0.05, 0.06, 0.07, 0.20, 0.21];
+        let m = gap_mask(&t, 0.025);
+        assert_eq!(m, vec![true, true, true, false, false, false, true, false, false]);
+        assert!(gap_mask(&t, 0.0).iter().all(|&b| b));
+        assert!(gap_mask(&[0.0, 0.01, 0.02, 0.03], 0.1).iter().all(|&b| b));
+        assert!(gap_mask(&[], 0.1).is_empty());
+    }
+
+    #[test]
+    fn dropped_rows_are_filled_pauses_and_regular_rows_are_not() {
+        // 10 ms rows; the row at 0.03 is missing; a 0.2 s pause after 0.06.
+        let t = [0.0, 0.01, 0.02, 0.04, 0.05, 0.06, 0.26, 0.27];
+        let x = [0.0, 1.0, 2.0, 4.0, 5.0, 6.0, 26.0, 27.0];
+        let (tu, xu) = fill_dropped_rows(&t, &x);
+        assert_eq!(tu.len(), t.len() + 1);
+        assert!((tu[3] - 0.03).abs() < 1e-12 && (xu[3] - 3.0).abs() < 1e-12);
+        assert_eq!(&tu[4..], &t[3..]);
+        // The held value inside the gap is the estimated row, not the row before the gap.
+        assert_eq!(zoh_at(&tu, &xu, 0.035), 3.0);
+        assert_eq!(zoh_at(&t, &x, 0.035), 2.0);
+        // The pause (20 medians) is held, not ramped.
+        assert_eq!(zoh_at(&tu, &xu, 0.16), 6.0);
+        // Regular and short inputs are unchanged.
+        let (a, b) = fill_dropped_rows(&[0.0, 0.01, 0.02], &[1.0, 2.0, 3.0]);
+        assert_eq!((a, b), (vec![0.0, 0.01, 0.02], vec![1.0, 2.0, 3.0]));
+        assert_eq!(fill_dropped_rows(&[0.0, 0.5], &[1.0, 2.0]).0.len(), 2);
+        assert!(fill_dropped_rows(&[], &[]).0.is_empty());
+        // A non-finite neighbour is not interpolated through.
+        let (tn, _) = fill_dropped_rows(&[0.0, 0.01, 0.03, 0.04], &[0.0, f64::NAN, 3.0, 4.0]);
+        assert_eq!(tn.len(), 4);
+    }
 
     fn close(a: f64, b: f64, tol: f64) -> bool {
         (a - b).abs() <= tol

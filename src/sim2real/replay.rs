@@ -25,7 +25,7 @@ use mujoco_rs::prelude::*;
 use rayon::prelude::*;
 
 use crate::model::{ActuatorKind, JointType, Robot, mj};
-use crate::sim2real::metrics::zoh_at;
+use crate::sim2real::metrics::{fill_dropped_rows, zoh_at};
 use crate::sim2real::recording::{Recording, RecordingError, derivative};
 
 /// What the floating base does during replay.
@@ -48,11 +48,15 @@ pub struct ReplayOptions {
     /// Model joints absent from the recording: `true` → their actuators get the keyframe ctrl
     /// (hold the key pose); `false` → ctrl 0.
     pub hold_unlisted_at_key: bool,
+    /// Commands across dropped rows (an interval of 1.5–5.5× the median) are filled in by linear
+    /// interpolation ([`fill_dropped_rows`]) before they are held; `false` holds the row before
+    /// the gap.
+    pub fill_dropped_commands: bool,
 }
 
 impl Default for ReplayOptions {
     fn default() -> Self {
-        ReplayOptions { control_hz: None, base: BaseMode::Fixed, hold_unlisted_at_key: true }
+        ReplayOptions { control_hz: None, base: BaseMode::Fixed, hold_unlisted_at_key: true, fill_dropped_commands: true }
     }
 }
 
@@ -191,7 +195,7 @@ impl<'m> Replayer<'m> {
         // Recorded joint → model joint, command and velocity traces.
         let nj = rec.joints.len();
         let mut jm = Vec::with_capacity(nj);
-        let mut cmd: Vec<&[f64]> = Vec::with_capacity(nj);
+        let mut cmd: Vec<(Vec<f64>, Vec<f64>)> = Vec::with_capacity(nj);
         let mut qd0 = Vec::with_capacity(nj);
         for jt in &rec.joints {
             let ji = self.names.iter().position(|s| *s == jt.name).expect("validated");
@@ -200,7 +204,8 @@ impl<'m> Replayer<'m> {
                 return Err(setup(format!("joint '{}' is not a hinge or slide joint; only scalar joints can be replayed", jt.name)));
             }
             jm.push(ji);
-            cmd.push(jt.q_cmd.as_deref().unwrap_or(&jt.q));
+            let c = jt.q_cmd.as_deref().unwrap_or(&jt.q);
+            cmd.push(if opts.fill_dropped_commands { fill_dropped_rows(&rec.t, c) } else { (rec.t.clone(), c.to_vec()) });
             qd0.push(match &jt.qd {
                 Some(v) => v[0],
                 None => derivative(&rec.t[..n.min(3)], &jt.q[..n.min(3)])[0],
@@ -373,7 +378,7 @@ impl<'m> Replayer<'m> {
                 tick = Some(ti);
                 let tt = tick0 + ti as f64 / rate;
                 for (i, jt) in rec.joints.iter().enumerate() {
-                    target[i] = zoh_at(&rec.t, cmd[i], tt);
+                    target[i] = zoh_at(&cmd[i].0, &cmd[i].1, tt);
                     let nom = nominal[i].first().map(|&(_, g, b1, b2)| (g, -b1, -b2));
                     kp[i] = jt.kp.as_ref().map_or(nom.map_or(0.0, |x| x.0), |v| zoh_at(&rec.t, v, tt));
                     kd[i] = jt.kd.as_ref().map_or(nom.map_or(0.0, |x| x.2), |v| zoh_at(&rec.t, v, tt));
@@ -577,6 +582,35 @@ mod tests {
         let q = *ep.q_sim[0].last().unwrap();
         assert!(q < 0.3 && q > -0.5, "{q}");
         assert!(ep.q_sim[0].iter().all(|x| x.is_finite()));
+    }
+
+    #[test]
+    fn dropped_command_rows_are_filled_before_the_hold() {
+        let mut map = crate::model::source::SourceMap::default();
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/bam_xl330/rig.xml");
+        let robot = crate::model::load(&mut map, &path, None).unwrap();
+        // A 2 rad/s ramp logged at the 100 Hz control rate; then the same log with rows 50–52 lost.
+        let n = 120;
+        let t: Vec<f64> = (0..n).map(|i| i as f64 * 0.01).collect();
+        let c: Vec<f64> = t.iter().map(|&x| 2.0 * x).collect();
+        let rec_of = |keep: &dyn Fn(usize) -> bool| {
+            let idx: Vec<usize> = (0..n).filter(|&i| keep(i)).collect();
+            let mut j = crate::sim2real::recording::JointTrace::new("servo", idx.iter().map(|&i| c[i]).collect());
+            j.q_cmd = Some(idx.iter().map(|&i| c[i]).collect());
+            let t = idx.iter().map(|&i| t[i]).collect();
+            Recording { source: "r.csv".into(), meta: Default::default(), control_rate_hz: Some(100.0), control_t0_s: None, t, joints: vec![j], base: None }
+        };
+        let full = replay(&robot, &rec_of(&|_| true), &ReplayOptions::default(), None).unwrap();
+        let lossy = rec_of(&|i| !(50..53).contains(&i));
+        let err = |fill: bool| {
+            let o = ReplayOptions { fill_dropped_commands: fill, ..Default::default() };
+            let ep = replay(&robot, &lossy, &o, None).unwrap();
+            // Same timestamps after the gap: compare there.
+            (0..lossy.t.len()).filter(|&k| lossy.t[k] > 0.5).map(|k| (ep.q_sim[0][k] - full.q_sim[0][k + 3]).abs()).fold(0.0, f64::max)
+        };
+        let (held, filled) = (err(false), err(true));
+        assert!(held > 1e-3, "holding the row before the gap should lag the ramp: {held}");
+        assert!(filled < 0.2 * held, "filled {filled} vs held {held}");
     }
 
     #[test]
