@@ -38,8 +38,10 @@ fn matrix(quick: bool) -> Vec<Case> {
             v.push(arm3_case(n, Kind::Pair, t.clone(), noise, 13));
         }
     }
-    // Asimov legs, base fixed: effects on the left/right knee pair.
+    // Asimov legs on a test stand: effects on the left/right knee pair, and on one knee only
+    // (must not be smeared over both sides by the mirror grouping).
     let knees = vec!["left_knee".to_string(), "right_knee".to_string()];
+    v.push(asimov_case("asimov left knee viscous_damping", Kind::Single, vec![("viscous_damping", vec!["left_knee".to_string()], vec![3.0])], Noise::Real, 7));
     v.push(asimov_case("asimov knees viscous_damping", Kind::Group, vec![("viscous_damping", knees.clone(), vec![3.0])], Noise::Real, 5));
     v.push(asimov_case("asimov knees armature", Kind::Group, vec![("armature", knees.clone(), vec![0.15])], Noise::Real, 6));
     // Controls: nothing missing.

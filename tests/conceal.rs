@@ -73,6 +73,14 @@ fn conceal_arm3_stribeck_friction_high_noise() {
     single(arm3_case("arm3 stribeck_friction", Kind::Single, vec![("stribeck_friction", vec![0.3, 0.1, 0.2])], Noise::High, 7));
 }
 
+#[test]
+fn conceal_asimov_one_knee_is_not_smeared_over_both() {
+    // Leg joints on a test stand; damping on the left knee only. The mirror completion tries
+    // both knees as a group; held-out must keep the one-joint fit.
+    let c = asimov_case("asimov left knee viscous_damping", Kind::Single, vec![("viscous_damping", vec!["left_knee".to_string()], vec![3.0])], Noise::Real, 7);
+    single(c);
+}
+
 fn pair(c: Case) {
     let s = run(&c, 3);
     report(&s);

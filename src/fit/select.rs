@@ -23,7 +23,7 @@ use serde::Serialize;
 use crate::fit::diagnose::{Candidate, diagnose};
 use crate::fit::effects::{self, Applied, Effect, JointTarget, model_with, replay_with};
 use crate::fit::optim::{Bounds, CmaesOpts, NelderMeadOpts, cmaes, golden_section, nelder_mead};
-use crate::fit::stats::{bic, improvement_beyond_noise, uncertainty_from_jacobian};
+use crate::fit::stats::{ar1_variance_inflation, bic, improvement_beyond_noise, uncertainty_from_jacobian};
 use crate::model::Robot;
 use crate::sim2real::metrics::gap_mask;
 use crate::sim2real::recording::Recording;
@@ -422,6 +422,10 @@ impl<'a> Engine<'a> {
         }
         let jac: Vec<Vec<f64>> = (0..r0.len()).map(|row| cols.iter().map(|c| c[row]).collect()).collect();
         let ranges: Vec<f64> = (0..k).map(|i| hi[i] - lo[i]).collect();
+        // Serially correlated residuals: scaling them by √inflation scales s² (and so the
+        // covariance s²(JᵀJ)⁺ and the identifiability check) by the AR(1) inflation.
+        let c = ar1_variance_inflation(&r0).sqrt();
+        let r0: Vec<f64> = r0.iter().map(|x| x * c).collect();
         let u = uncertainty_from_jacobian(&jac, &r0, k, &ranges);
         let ident = u.identifiable.iter().all(|&x| x);
         (u.stderr, ident)

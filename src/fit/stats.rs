@@ -120,6 +120,24 @@ pub fn uncertainty_from_jacobian(
     ParamUncertainty { stderr, identifiable, condition_number }
 }
 
+/// Variance inflation for serially correlated residuals, modelled as AR(1): `(1 + ρ)/(1 − ρ)`
+/// with ρ the lag-1 autocorrelation of `r` (clamped to [0, 0.99]; 1 for fewer than 3 finite
+/// samples). `s²(JᵀJ)⁺` assumes independent residuals; a replay's residuals are a smooth model
+/// error plus white noise, and n correlated samples carry the information of about
+/// n (1 − ρ)/(1 + ρ) independent ones.
+pub fn ar1_variance_inflation(r: &[f64]) -> f64 {
+    let v: Vec<f64> = r.iter().copied().filter(|x| x.is_finite()).collect();
+    if v.len() < 3 {
+        return 1.0;
+    }
+    let ss: f64 = v.iter().map(|x| x * x).sum();
+    if ss <= 0.0 {
+        return 1.0;
+    }
+    let rho = (v.windows(2).map(|w| w[0] * w[1]).sum::<f64>() / ss).clamp(0.0, 0.99);
+    (1.0 + rho) / (1.0 - rho)
+}
+
 /// Standard deviation (n−1 denominator) of each parameter across bootstrap
 /// refits. `samples[i]` is the parameter vector of refit `i`; rows whose
 /// length differs from the first row are ignored, as are non-finite entries
@@ -198,6 +216,34 @@ pub fn improvement_beyond_noise(before: &[f64], after: &[f64]) -> (f64, f64, boo
     let se = (var / n).sqrt();
     let significant = mean > 0.0 && mean > 2.0 * se;
     (mean, se, significant)
+}
+
+#[cfg(test)]
+mod ar1_tests {
+    use super::*;
+    use crate::fit::optim::Rng;
+
+    #[test]
+    fn ar1_inflation_is_one_for_white_noise_and_large_for_smooth_residuals() {
+        let mut rng = Rng::new(3);
+        let white: Vec<f64> = (0..20_000).map(|_| rng.normal()).collect();
+        let f = ar1_variance_inflation(&white);
+        assert!((f - 1.0).abs() < 0.05, "{f}");
+        // AR(1) with φ = 0.9: (1 + 0.9)/(1 − 0.9) = 19.
+        let mut x = 0.0;
+        let ar: Vec<f64> = (0..20_000)
+            .map(|_| {
+                x = 0.9 * x + rng.normal();
+                x
+            })
+            .collect();
+        let f = ar1_variance_inflation(&ar);
+        assert!((f - 19.0).abs() < 3.0, "{f}");
+        assert_eq!(ar1_variance_inflation(&[1.0, 2.0]), 1.0);
+        assert_eq!(ar1_variance_inflation(&[0.0; 10]), 1.0);
+        // Alternating residuals (ρ < 0) are not deflated.
+        assert_eq!(ar1_variance_inflation(&[1.0, -1.0, 1.0, -1.0]), 1.0);
+    }
 }
 
 #[cfg(test)]
