@@ -135,6 +135,8 @@ pub struct Score {
     /// Noise-only floor of the recorded MAE (noise-free truth vs the recording).
     pub mae_floor: f64,
     pub secs: f64,
+    /// |fitted − true| / reported standard error, per fitted parameter of every matched effect.
+    pub z_err: Vec<f64>,
     pub warnings: Vec<String>,
     /// The fit's log of tried candidates (round, effect, joints, params, held-out improvement,
     /// significant, BIC decreased, kept), for explaining misses.
@@ -253,6 +255,20 @@ pub fn run(case: &Case, max_rounds: usize) -> Score {
             }
         }
     }
+    // Calibration of the reported uncertainty: |fitted − true| / stderr.
+    let mut z_err = Vec::new();
+    for sel in &out.selected {
+        let Some(e) = effects::by_id(&sel.effect) else { continue };
+        let Some((_, _, p)) = truth_pairs.iter().find(|t| t.0 == sel.effect && sel.joints.iter().any(|j| j == t.1)) else { continue };
+        for (i, d) in e.params().iter().take(e.fitted()).enumerate() {
+            if let (Some(v), Some(se), Some(tv)) = (sel.params.get(d.name), sel.stderr.get(d.name), p.get(i))
+                && se.is_finite()
+                && *se > 0.0
+            {
+                z_err.push((v - tv).abs() / se);
+            }
+        }
+    }
     let fp = detected.iter().filter(|d| !truth_pairs.iter().any(|t| t.0 == d.0 && t.1 == d.1)).count();
     let fneg = truth_pairs.len() - tp;
 
@@ -291,6 +307,7 @@ pub fn run(case: &Case, max_rounds: usize) -> Score {
         model_after: acc(&s_after, Some(&s_truth)),
         mae_floor: acc(&s_truth, None),
         secs: t0.elapsed().as_secs_f64(),
+        z_err,
         warnings: out.warnings,
         tried: out
             .tried
@@ -392,6 +409,22 @@ pub fn summary(scores: &[Score]) -> (String, bool) {
         let clean = controls.iter().filter(|s| s.fp == 0).count();
         all &= clean == controls.len();
         lines.push(format!("controls: nothing selected in {clean}/{} [{}]", controls.len(), if clean == controls.len() { "MET" } else { "MISSED" }));
+    }
+    // Reported uncertainty (information, no target): how far the fitted values are from the
+    // truth in units of their standard errors.
+    let mut z: Vec<f64> = scores.iter().flat_map(|s| s.z_err.iter().copied()).collect();
+    if !z.is_empty() {
+        z.sort_by(f64::total_cmp);
+        let within = |k: f64| z.iter().filter(|&&x| x <= k).count();
+        lines.push(format!(
+            "uncertainty: {} fitted parameters of found effects; |fitted − true| ≤ 1 stderr for {}, ≤ 2 for {}, ≤ 3 for {}; median {:.2}, max {:.1} stderr",
+            z.len(),
+            within(1.0),
+            within(2.0),
+            within(3.0),
+            z[z.len() / 2],
+            z[z.len() - 1]
+        ));
     }
     let t: f64 = scores.iter().map(|s| s.secs).sum();
     let passed = scores.iter().filter(|s| s.pass()).count();
