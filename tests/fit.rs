@@ -271,6 +271,9 @@ fn synth_suspend_holds_the_base_above_the_keyframe() {
             .output()
             .unwrap()
     };
+    let o = run(&["--duration=0"]);
+    assert_eq!(o.status.code(), Some(2), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--duration"), "{}", String::from_utf8_lossy(&o.stderr));
     let o = run(&["--suspend=-1"]);
     assert_eq!(o.status.code(), Some(2), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(String::from_utf8_lossy(&o.stderr).contains("--suspend"), "{}", String::from_utf8_lossy(&o.stderr));

@@ -254,13 +254,13 @@ impl<'a> Engine<'a> {
         let mut n = 0usize;
         let mut win = Vec::new();
         for (rec, ep) in recs.iter().zip(&eps) {
+            let scored = gap_mask(&rec.t, self.opts.gap_mask_s);
             for (k, jt) in rec.joints.iter().enumerate() {
                 if !self.joints.contains(&jt.name) {
                     continue;
                 }
                 let t0 = rec.t[0];
                 let mut w = (0usize, 0.0, 0usize);
-                let scored = gap_mask(&rec.t, self.opts.gap_mask_s);
                 for i in 0..rec.t.len() {
                     if !scored[i] {
                         continue;

@@ -162,11 +162,11 @@ pub fn generate(robot: &Robot, joints: &[String], truth: &[Applied], n: usize, o
         }
         if o.drop > 0.0 {
             let keep: Vec<bool> = (0..rec.t.len()).map(|i| i < 2 || rng.uniform() >= o.drop).collect();
-            let f = |v: &Vec<f64>| v.iter().zip(&keep).filter(|(_, k)| **k).map(|(x, _)| *x).collect::<Vec<f64>>();
+            let f = |v: &Vec<f64>| kept_rows(v, &keep);
             rec.t = f(&rec.t);
             if let Some(b) = rec.base.as_mut() {
-                b.pos = b.pos.iter().zip(&keep).filter(|(_, k)| **k).map(|(x, _)| *x).collect();
-                b.quat = b.quat.iter().zip(&keep).filter(|(_, k)| **k).map(|(x, _)| *x).collect();
+                b.pos = kept_rows(&b.pos, &keep);
+                b.quat = kept_rows(&b.quat, &keep);
             }
             for j in rec.joints.iter_mut() {
                 j.q = f(&j.q);
@@ -177,6 +177,11 @@ pub fn generate(robot: &Robot, joints: &[String], truth: &[Applied], n: usize, o
         out.push(rec);
     }
     Ok(out)
+}
+
+/// The rows of `v` whose `keep` flag is set.
+fn kept_rows<T: Copy>(v: &[T], keep: &[bool]) -> Vec<T> {
+    v.iter().zip(keep).filter(|(_, k)| **k).map(|(x, _)| *x).collect()
 }
 
 /// Parses an effect spec `effect[@joint_glob]=v1,v2;…` (parameters in the effect's order, the

@@ -251,6 +251,14 @@ pub fn median_interval(t: &[f64]) -> Option<f64> {
     Some(dts[dts.len() / 2])
 }
 
+/// An interval longer than this many median intervals is a gap (dropped rows or a pause).
+pub const GAP_FACTOR: f64 = 1.5;
+
+/// Whether `t` has a gap ([`GAP_FACTOR`]).
+pub fn has_gap(t: &[f64]) -> bool {
+    median_interval(t).is_some_and(|h| t.windows(2).any(|w| w[1] - w[0] > GAP_FACTOR * h))
+}
+
 /// Which samples a replay reproduces from known commands: `false` for the samples after a gap
 /// (an interval longer than 1.5× the median) up to `horizon` seconds past its end. The command
 /// in force during a gap is unknown (a dropped row may have held a step); the joint's response
@@ -261,7 +269,7 @@ pub fn gap_mask(t: &[f64], horizon: f64) -> Vec<bool> {
     let Some(h) = median_interval(t).filter(|_| horizon > 0.0) else { return m };
     let mut until = f64::NEG_INFINITY;
     for i in 1..t.len() {
-        if t[i] - t[i - 1] > 1.5 * h {
+        if t[i] - t[i - 1] > GAP_FACTOR * h {
             until = t[i] + horizon;
         }
         if t[i] < until {
@@ -295,7 +303,7 @@ pub fn fill_dropped_rows(t: &[f64], x: &[f64]) -> (Vec<f64>, Vec<f64>) {
         }
         let gap = t[i + 1] - t[i];
         let rows = (gap / h).round() as usize;
-        if !(gap > 1.5 * h) || rows < 2 || rows > MAX_FILLED_ROWS + 1 || !x[i].is_finite() || !x[i + 1].is_finite() {
+        if !(gap > GAP_FACTOR * h) || rows < 2 || rows > MAX_FILLED_ROWS + 1 || !x[i].is_finite() || !x[i + 1].is_finite() {
             continue;
         }
         for r in 1..rows {
@@ -319,6 +327,7 @@ mod tests {
         assert!(gap_mask(&t, 0.0).iter().all(|&b| b));
         assert!(gap_mask(&[0.0, 0.01, 0.02, 0.03], 0.1).iter().all(|&b| b));
         assert!(gap_mask(&[], 0.1).is_empty());
+        assert!(has_gap(&t) && !has_gap(&[0.0, 0.01, 0.02, 0.03]) && !has_gap(&[]));
     }
 
     #[test]

@@ -19,13 +19,14 @@
 //! The model is never mutated: an episode that changes gains (kp/kd/enabled columns, or a hook
 //! that replaces actuators) runs on its own copy of the model.
 
+use std::borrow::Cow;
 use std::path::PathBuf;
 
 use mujoco_rs::prelude::*;
 use rayon::prelude::*;
 
 use crate::model::{ActuatorKind, JointType, Robot, mj};
-use crate::sim2real::metrics::{fill_dropped_rows, zoh_at};
+use crate::sim2real::metrics::{fill_dropped_rows, has_gap, zoh_at};
 use crate::sim2real::recording::{Recording, RecordingError, derivative};
 
 /// What the floating base does during replay.
@@ -195,7 +196,9 @@ impl<'m> Replayer<'m> {
         // Recorded joint → model joint, command and velocity traces.
         let nj = rec.joints.len();
         let mut jm = Vec::with_capacity(nj);
-        let mut cmd: Vec<(Vec<f64>, Vec<f64>)> = Vec::with_capacity(nj);
+        // Dropped rows are filled only when the recording has a gap (no copies otherwise).
+        let fill = opts.fill_dropped_commands && has_gap(&rec.t);
+        let mut cmd: Vec<(Cow<[f64]>, Cow<[f64]>)> = Vec::with_capacity(nj);
         let mut qd0 = Vec::with_capacity(nj);
         for jt in &rec.joints {
             let ji = self.names.iter().position(|s| *s == jt.name).expect("validated");
@@ -205,7 +208,12 @@ impl<'m> Replayer<'m> {
             }
             jm.push(ji);
             let c = jt.q_cmd.as_deref().unwrap_or(&jt.q);
-            cmd.push(if opts.fill_dropped_commands { fill_dropped_rows(&rec.t, c) } else { (rec.t.clone(), c.to_vec()) });
+            cmd.push(if fill {
+                let (t, x) = fill_dropped_rows(&rec.t, c);
+                (Cow::Owned(t), Cow::Owned(x))
+            } else {
+                (Cow::Borrowed(&rec.t[..]), Cow::Borrowed(c))
+            });
             qd0.push(match &jt.qd {
                 Some(v) => v[0],
                 None => derivative(&rec.t[..n.min(3)], &jt.q[..n.min(3)])[0],
