@@ -2,6 +2,7 @@
 //! error localisation.
 
 pub mod bam;
+pub mod commands;
 pub mod locate;
 pub mod metrics;
 pub mod recording;

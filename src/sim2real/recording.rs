@@ -31,6 +31,26 @@ pub const KEY_CONTROL_RATE: &str = "control_rate_hz";
 /// Metadata key parsed into [`Recording::control_t0_s`].
 pub const KEY_CONTROL_T0: &str = "control_t0_s";
 
+/// Metadata key naming the episode's role in a fit: `train` or `heldout`.
+pub const KEY_SPLIT: &str = "split";
+
+/// A recording's declared role (metadata `split`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Split {
+    Train,
+    Heldout,
+}
+
+impl Split {
+    pub fn parse(s: &str) -> Option<Split> {
+        match s.trim() {
+            "train" => Some(Split::Train),
+            "heldout" => Some(Split::Heldout),
+            _ => None,
+        }
+    }
+}
+
 const JOINT_SUFFIXES: [&str; 7] = ["q", "qd", "q_cmd", "tau", "kp", "kd", "enabled"];
 const BASE_SUFFIXES: [&str; 7] = ["x", "y", "z", "qw", "qx", "qy", "qz"];
 
@@ -228,6 +248,12 @@ pub fn parse_csv_with(
                 control_t0_s = Some(x);
             }
         } else {
+            if k == KEY_SPLIT && Split::parse(v).is_none() {
+                return Err(err(ln, None, format!("metadata '{k}' must be `train` or `heldout`, found '{v}'")));
+            }
+            if k == crate::sim2real::commands::KEY_COMMAND_TIMING && crate::sim2real::commands::CommandTiming::parse(v).is_none() {
+                return Err(err(ln, None, format!("metadata '{k}' must be `in_force` or `sent_after`, found '{v}'")));
+            }
             meta.insert(k.to_string(), v.to_string());
         }
     }
@@ -717,6 +743,16 @@ impl Recording {
     }
 
     /// Last time minus first time, 0 when there are fewer than two samples.
+    /// The declared `split` (metadata), if any.
+    pub fn split(&self) -> Option<Split> {
+        self.meta.get(KEY_SPLIT).and_then(|v| Split::parse(v))
+    }
+
+    /// The declared `command_timing` (metadata), if any.
+    pub fn command_timing(&self) -> Option<crate::sim2real::commands::CommandTiming> {
+        self.meta.get(crate::sim2real::commands::KEY_COMMAND_TIMING).and_then(|v| crate::sim2real::commands::CommandTiming::parse(v))
+    }
+
     pub fn duration(&self) -> f64 {
         match (self.t.first(), self.t.last()) {
             (Some(a), Some(b)) => b - a,

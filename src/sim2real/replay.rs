@@ -4,10 +4,12 @@
 //! Protocol, per episode:
 //! 1. Initialise: model joints take the keyframe `qpos` (or `qpos0`), recorded joints the first
 //!    recorded `q`, their velocity the first recorded `qd` (or the derivative of `q`).
-//! 2. Control ticks at `control_hz` (option, else the recording's `control_rate_hz`, else
-//!    100 Hz), at times `control_t0_s + k/rate` (`t[0]` when absent). At each tick every recorded
-//!    joint's actuators get the command in force at the tick (zero-order hold of `q_cmd`, or of
-//!    `q` when the recording has no command), held until the next tick. The recorded `kp`/`kd`
+//! 2. Commands: [`crate::sim2real::commands`] reconstructs the command in force at every moment
+//!    from `q_cmd` (or `q` when the recording has no command): with a control rate (`control_hz`
+//!    option, else the recording's `control_rate_hz`) one command per control tick at
+//!    `control_t0_s + k/rate` (`t[0]` when absent), held over the tick; without one, each goal
+//!    held from its own timestamp. Every physics step applies the command in force at the step's
+//!    start to every recorded joint's position actuators. The recorded `kp`/`kd`
 //!    columns (N·m/rad, N·m·s/rad) set the actuator's `gainprm[0] = kp`, `biasprm[1] = −kp`,
 //!    `biasprm[2] = −kd` at the same ticks; `enabled = false` zeroes the actuator's gain and bias
 //!    (torque off, e.g. free fall). Model joints without recording hold their keyframe `ctrl`.
@@ -19,14 +21,14 @@
 //! The model is never mutated: an episode that changes gains (kp/kd/enabled columns, or a hook
 //! that replaces actuators) runs on its own copy of the model.
 
-use std::borrow::Cow;
 use std::path::PathBuf;
 
 use mujoco_rs::prelude::*;
 use rayon::prelude::*;
 
 use crate::model::{ActuatorKind, JointType, Robot, mj};
-use crate::sim2real::metrics::{fill_dropped_rows, has_gap, zoh_at};
+use crate::sim2real::commands::{CommandTiming, reconstruct};
+use crate::sim2real::metrics::zoh_at;
 use crate::sim2real::recording::{Recording, RecordingError, derivative};
 
 /// What the floating base does during replay.
@@ -43,21 +45,24 @@ pub enum BaseMode {
 
 #[derive(Debug, Clone)]
 pub struct ReplayOptions {
-    /// Control rate override [Hz]; else the recording's `control_rate_hz`; else 100.
+    /// Control rate override [Hz]; else the recording's `control_rate_hz`; else none (each goal
+    /// held from its own timestamp).
     pub control_hz: Option<f64>,
+    /// What a row's `q_cmd` means; else the recording's `command_timing` key; else in force.
+    pub command_timing: Option<CommandTiming>,
     pub base: BaseMode,
     /// Model joints absent from the recording: `true` → their actuators get the keyframe ctrl
     /// (hold the key pose); `false` → ctrl 0.
     pub hold_unlisted_at_key: bool,
-    /// Commands across dropped rows (an interval of 1.5–5.5× the median) are filled in by linear
-    /// interpolation ([`fill_dropped_rows`]) before they are held; `false` holds the row before
-    /// the gap.
+    /// Control ticks without a row are interpolated across ramps (and, without a control rate,
+    /// dropped rows' commands are interpolated, [`crate::sim2real::metrics::fill_dropped_rows`]);
+    /// `false` holds the command before the gap.
     pub fill_dropped_commands: bool,
 }
 
 impl Default for ReplayOptions {
     fn default() -> Self {
-        ReplayOptions { control_hz: None, base: BaseMode::Fixed, hold_unlisted_at_key: true, fill_dropped_commands: true }
+        ReplayOptions { control_hz: None, command_timing: None, base: BaseMode::Fixed, hold_unlisted_at_key: true, fill_dropped_commands: true }
     }
 }
 
@@ -185,10 +190,8 @@ impl<'m> Replayer<'m> {
             return Err(setup(format!("need at least 2 samples, found {n}")));
         }
         rec.validate_joint_names(&self.names)?;
-        let rate = opts.control_hz.or(rec.control_rate_hz).unwrap_or(100.0);
-        if !(rate.is_finite() && rate > 0.0) {
-            return Err(setup(format!("control rate must be positive, got {rate} Hz")));
-        }
+        let rate = opts.control_hz.or(rec.control_rate_hz);
+        let timing = opts.command_timing.or_else(|| rec.command_timing()).unwrap_or_default();
         if opts.base == BaseMode::Recorded && rec.base.is_none() && self.free.is_some() {
             return Err(setup("--base recorded needs base.x … base.qz columns; the recording has none".into()));
         }
@@ -196,9 +199,6 @@ impl<'m> Replayer<'m> {
         // Recorded joint → model joint, command and velocity traces.
         let nj = rec.joints.len();
         let mut jm = Vec::with_capacity(nj);
-        // Dropped rows are filled only when the recording has a gap (no copies otherwise).
-        let fill = opts.fill_dropped_commands && has_gap(&rec.t);
-        let mut cmd: Vec<(Cow<[f64]>, Cow<[f64]>)> = Vec::with_capacity(nj);
         let mut qd0 = Vec::with_capacity(nj);
         for jt in &rec.joints {
             let ji = self.names.iter().position(|s| *s == jt.name).expect("validated");
@@ -207,19 +207,15 @@ impl<'m> Replayer<'m> {
                 return Err(setup(format!("joint '{}' is not a hinge or slide joint; only scalar joints can be replayed", jt.name)));
             }
             jm.push(ji);
-            let c = jt.q_cmd.as_deref().unwrap_or(&jt.q);
-            cmd.push(if fill {
-                let (t, x) = fill_dropped_rows(&rec.t, c);
-                (Cow::Owned(t), Cow::Owned(x))
-            } else {
-                (Cow::Borrowed(&rec.t[..]), Cow::Borrowed(c))
-            });
             qd0.push(match &jt.qd {
                 Some(v) => v[0],
                 None => derivative(&rec.t[..n.min(3)], &jt.q[..n.min(3)])[0],
             });
         }
 
+        let cmds: Vec<&[f64]> = rec.joints.iter().map(|jt| jt.q_cmd.as_deref().unwrap_or(&jt.q)).collect();
+        let tick0 = rec.control_t0_s.unwrap_or(rec.t[0]);
+        let schedule = reconstruct(&rec.t, &cmds, rate, tick0, timing, opts.fill_dropped_commands).map_err(|e| setup(e.to_string()))?;
         if let Some(h) = hook.as_deref_mut() {
             let names: Vec<String> = rec.joints.iter().map(|j| j.name.clone()).collect();
             h.reset(&names, mj::raw(self.model).opt.timestep);
@@ -366,7 +362,8 @@ impl<'m> Replayer<'m> {
         let mut cur_qd = prev_qd.clone();
         let mut next_sample = 1usize;
 
-        let tick0 = rec.control_t0_s.unwrap_or(t0);
+        // Gains and torque-enable are re-read at the control ticks (every physics step without a
+        // control rate); commands at every step from the schedule.
         let mut tick: Option<i64> = None;
         let mut target = vec![0.0; nj];
         let mut kp = vec![0.0; nj];
@@ -381,12 +378,19 @@ impl<'m> Replayer<'m> {
 
         for k in 0..nsteps {
             let tk = t0 + k as f64 * dt;
-            let ti = ((tk - tick0) * rate + 1e-6).floor() as i64;
+            for (i, x) in target.iter_mut().enumerate() {
+                *x = schedule.at(i, tk);
+            }
+            let (ti, tt) = match rate {
+                Some(r) => {
+                    let ti = ((tk - tick0) * r + 1e-6).floor() as i64;
+                    (ti, tick0 + ti as f64 / r)
+                }
+                None => (k as i64, tk),
+            };
             if tick != Some(ti) {
                 tick = Some(ti);
-                let tt = tick0 + ti as f64 / rate;
                 for (i, jt) in rec.joints.iter().enumerate() {
-                    target[i] = zoh_at(&cmd[i].0, &cmd[i].1, tt);
                     let nom = nominal[i].first().map(|&(_, g, b1, b2)| (g, -b1, -b2));
                     kp[i] = jt.kp.as_ref().map_or(nom.map_or(0.0, |x| x.0), |v| zoh_at(&rec.t, v, tt));
                     kd[i] = jt.kd.as_ref().map_or(nom.map_or(0.0, |x| x.2), |v| zoh_at(&rec.t, v, tt));
