@@ -136,9 +136,16 @@ pub struct GapCmd {
     /// Hardware spec (TOML) for joint regions. Default: <model>.toml beside the model.
     #[arg(long)]
     pub spec: Option<PathBuf>,
-    /// Control rate [Hz]; default: the recording's control_rate_hz, else 100.
+    /// Control rate [Hz] of the robot's controller: one command per tick at
+    /// control_t0_s + k/rate, taken from the rows inside that tick. Default: the recording's
+    /// `control_rate_hz`; without one, each goal is held from its own timestamp.
     #[arg(long)]
     pub control_hz: Option<f64>,
+    /// What a row's q_cmd is: `in-force` (the command in force at the row's time, the usual
+    /// logger) or `sent-after` (the command sent right after the sample). Default: the
+    /// recording's `command_timing` key, else in-force. See docs/recording-format.md.
+    #[arg(long, value_parser = ["in-force", "sent-after"])]
+    pub command_timing: Option<String>,
     /// Floating base: fixed (pinned), recorded (driven from base.* columns) or free.
     #[arg(long, default_value = "fixed", value_parser = ["fixed", "recorded", "free"])]
     pub base: String,
@@ -175,16 +182,31 @@ pub struct FitCmd {
     /// Only fit joints matching this glob (e.g. '*knee*').
     #[arg(long)]
     pub joints: Option<String>,
-    /// Hold out every N-th episode (a single episode is split in time windows).
+    /// Hold out one episode in N, spread over the sorted list; episodes whose header says
+    /// `split: heldout` are held out instead when there are any (a single episode is split in
+    /// time windows).
     #[arg(long, default_value_t = 4)]
     pub holdout: usize,
     /// Multiple shooting: fit on training windows of this length [s], each started from the
     /// recorded state.
     #[arg(long)]
     pub window: Option<f64>,
-    /// Control rate [Hz]; default: the recording's control_rate_hz, else 100.
+    /// Control rate [Hz] of the robot's controller: one command per tick at
+    /// control_t0_s + k/rate, taken from the rows inside that tick. Default: the recording's
+    /// `control_rate_hz`; without one, each goal is held from its own timestamp.
     #[arg(long)]
     pub control_hz: Option<f64>,
+    /// What a row's q_cmd is: `in-force` (the command in force at the row's time, the usual
+    /// logger) or `sent-after` (the command sent right after the sample). Default: the
+    /// recording's `command_timing` key, else in-force. See docs/recording-format.md.
+    #[arg(long, value_parser = ["in-force", "sent-after"])]
+    pub command_timing: Option<String>,
+    /// Floating base: fixed (pinned), recorded (driven from base.* columns) or free.
+    #[arg(long, default_value = "fixed", value_parser = ["fixed", "recorded", "free"])]
+    pub base: String,
+    /// No progress on stderr.
+    #[arg(long, short)]
+    pub quiet: bool,
     /// Output format.
     #[arg(long, default_value = "text", value_parser = ["text", "json"])]
     pub format: String,
@@ -197,6 +219,15 @@ pub struct FitCmd {
     /// Write HTML gap reports (before/ and after/) into this directory.
     #[arg(long)]
     pub report: Option<PathBuf>,
+}
+
+fn base_mode(s: &str) -> crate::sim2real::replay::BaseMode {
+    use crate::sim2real::replay::BaseMode;
+    match s {
+        "recorded" => BaseMode::Recorded,
+        "free" => BaseMode::Free,
+        _ => BaseMode::Fixed,
+    }
 }
 
 fn use_color(choice: &str) -> bool {
@@ -238,17 +269,13 @@ pub fn run() -> i32 {
         },
         Some(Cmd::GenDocs { out, check }) => gen_docs(&out, check),
         Some(Cmd::Gap(g)) => {
-            use crate::sim2real::replay::BaseMode;
             crate::sim2real::cmd::run_gap(crate::sim2real::cmd::GapArgs {
                 model: g.model,
                 recordings: g.recordings,
                 spec: g.spec,
                 control_hz: g.control_hz,
-                base: match g.base.as_str() {
-                    "recorded" => BaseMode::Recorded,
-                    "free" => BaseMode::Free,
-                    _ => BaseMode::Fixed,
-                },
+                command_timing: g.command_timing.as_deref().and_then(crate::sim2real::commands::CommandTiming::parse),
+                base: base_mode(&g.base),
                 json: g.format == "json",
                 report: g.report,
             })
@@ -263,6 +290,9 @@ pub fn run() -> i32 {
             holdout: f.holdout,
             window: f.window,
             control_hz: f.control_hz,
+            command_timing: f.command_timing.as_deref().and_then(crate::sim2real::commands::CommandTiming::parse),
+            base: base_mode(&f.base),
+            quiet: f.quiet,
             json: f.format == "json",
             write_model: f.write_model,
             write_actuators: f.write_actuators,

@@ -21,6 +21,9 @@ pub struct FitArgs {
     pub holdout: usize,
     pub window: Option<f64>,
     pub control_hz: Option<f64>,
+    pub command_timing: Option<crate::sim2real::commands::CommandTiming>,
+    pub base: crate::sim2real::replay::BaseMode,
+    pub quiet: bool,
     pub json: bool,
     pub write_model: Option<PathBuf>,
     pub write_actuators: Option<PathBuf>,
@@ -81,7 +84,7 @@ pub fn run_fit(a: FitArgs) -> i32 {
             return fail(format!("--joints {g} matches no recorded joint"));
         }
     }
-    let replay = ReplayOptions { control_hz: a.control_hz, ..Default::default() };
+    let replay = ReplayOptions { control_hz: a.control_hz, command_timing: a.command_timing, base: a.base, ..Default::default() };
     let families = match loaded.spec.as_ref() {
         Some(s) => names.iter().filter_map(|n| s.joint(n).and_then(|f| f.motor).map(|m| (n.clone(), m))).collect(),
         None => Default::default(),
@@ -154,7 +157,9 @@ pub fn run_fit(a: FitArgs) -> i32 {
             "after": after,
             "diagnosis": out.diagnosis.iter().take(20).collect::<Vec<_>>(),
             "tried": out.tried,
-            "split": {"train": out.train.len(), "heldout": out.heldout.len(), "by_time": out.split_by_time},
+            "split": {"train": out.train.len(), "heldout": out.heldout.len(), "by_time": out.split_by_time, "note": out.split_note},
+            "floor": out.floors.iter().map(|(j, ms, w)| json!({"joint": j, "residual_rms": ms.sqrt(), "white_floor_rms": w.sqrt()})).collect::<Vec<_>>(),
+            "stopped_at_floor": out.stopped_at_floor,
             "warnings": out.warnings,
         });
         serde_json::to_string_pretty(&v).unwrap_or_default() + "\n"
@@ -202,6 +207,9 @@ pub fn run_fit(a: FitArgs) -> i32 {
             before.gap_overall,
             after.gap_overall
         ));
+        if !out.split_note.is_empty() {
+            s.push_str(&format!("  ({})\n", out.split_note));
+        }
         s
     };
     if std::io::stdout().lock().write_all(text.as_bytes()).is_err() {

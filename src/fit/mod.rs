@@ -7,6 +7,7 @@ pub mod select;
 pub mod servo;
 pub mod servo_fit;
 pub mod servo_report;
+pub mod split;
 pub mod stats;
 pub mod synth;
 pub mod writeback;

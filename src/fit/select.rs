@@ -22,10 +22,11 @@ use serde::Serialize;
 
 use crate::fit::diagnose::{Candidate, diagnose};
 use crate::fit::effects::{self, Applied, Effect, JointTarget, model_with, replay_with};
-use crate::fit::optim::{Bounds, CmaesOpts, NelderMeadOpts, cmaes, golden_section, nelder_mead};
-use crate::fit::stats::{ar1_variance_inflation, bic, improvement_beyond_noise, uncertainty_from_jacobian};
+use crate::fit::optim::{Bounds, CmaesOpts, LmOpts, LmResult, NelderMeadOpts, cmaes, golden_section, levenberg_marquardt, nelder_mead};
+use crate::fit::stats::{ar1_variance_inflation, bic, improvement_beyond_noise, uncertainty_from_jacobian, white_floor};
 use crate::model::Robot;
 use crate::sim2real::metrics::gap_mask;
+use crate::fit::split::{Split, split, windows};
 use crate::sim2real::recording::Recording;
 use crate::sim2real::replay::{Episode, ReplayOptions};
 
@@ -65,6 +66,9 @@ pub struct FitOptions {
     /// Samples up to this long after a gap in a recording (dropped rows) are left out of every
     /// error sum ([`gap_mask`]): the command during the gap is unknown [s].
     pub gap_mask_s: f64,
+    /// The search stops when every fitted joint's training residual has a mean square within
+    /// this factor of its white floor ([`white_floor`]): what is left is noise.
+    pub white_ratio: f64,
 }
 
 impl Default for FitOptions {
@@ -85,6 +89,7 @@ impl Default for FitOptions {
             decisive_improvement: 0.5,
             simplify: true,
             gap_mask_s: 0.1,
+            white_ratio: 1.5,
         }
     }
 }
@@ -134,77 +139,19 @@ pub struct FitOutcome {
     pub heldout: Vec<Recording>,
     /// The held-out set is made of time windows of a single episode.
     pub split_by_time: bool,
+    /// Which episodes were held out and why.
+    pub split_note: String,
+    /// Per fitted joint, of the model as given on the training set: (name, residual mean
+    /// square, white floor) [rad²].
+    pub floors: Vec<(String, f64, f64)>,
+    /// The search ended because the residual reached the white floor on every joint.
+    pub stopped_at_floor: bool,
     /// Diagnosis of the first round (the model as given).
     pub diagnosis: Vec<Candidate>,
     pub selected: Vec<Selected>,
     pub applied: Vec<Applied>,
     pub tried: Vec<Tried>,
     pub warnings: Vec<String>,
-}
-
-/// Copy of samples `i0..i1` of a recording (the control-tick phase is kept).
-pub fn slice_recording(rec: &Recording, i0: usize, i1: usize) -> Recording {
-    let s = |v: &Vec<f64>| v[i0..i1].to_vec();
-    let mut r = rec.clone();
-    r.t = s(&rec.t);
-    r.control_t0_s = Some(rec.control_t0_s.unwrap_or(rec.t[0]));
-    for (j, o) in r.joints.iter_mut().zip(&rec.joints) {
-        j.q = s(&o.q);
-        j.qd = o.qd.as_ref().map(s);
-        j.q_cmd = o.q_cmd.as_ref().map(s);
-        j.tau = o.tau.as_ref().map(s);
-        j.kp = o.kp.as_ref().map(s);
-        j.kd = o.kd.as_ref().map(s);
-        j.enabled = o.enabled.as_ref().map(|v| v[i0..i1].to_vec());
-    }
-    if let (Some(b), Some(ob)) = (r.base.as_mut(), rec.base.as_ref()) {
-        b.pos = ob.pos[i0..i1].to_vec();
-        b.quat = ob.quat[i0..i1].to_vec();
-    }
-    r.source = format!("{}@{:.2}s", rec.source.display(), rec.t[i0]).into();
-    r
-}
-
-/// Cuts a recording into windows of about `len_s` (the last one absorbs the remainder).
-pub fn windows(rec: &Recording, len_s: f64) -> Vec<Recording> {
-    let n = rec.t.len();
-    let mut out = Vec::new();
-    let mut i0 = 0;
-    while i0 + 2 < n {
-        let tend = rec.t[i0] + len_s;
-        let mut i1 = rec.t.partition_point(|&x| x < tend).max(i0 + 2);
-        if rec.t[n - 1] - rec.t[i1.min(n - 1)] < 0.5 * len_s {
-            i1 = n;
-        }
-        out.push(slice_recording(rec, i0, i1.min(n)));
-        i0 = i1;
-    }
-    out
-}
-
-/// (train, held-out, split by time).
-pub fn split(recs: &[Recording], holdout: usize) -> (Vec<Recording>, Vec<Recording>, bool) {
-    let h = holdout.max(2);
-    if recs.len() == 1 {
-        let d = recs[0].duration();
-        let w = windows(&recs[0], (d / (2 * h) as f64).clamp(0.5, 2.0));
-        let (mut tr, mut ho) = (vec![], vec![]);
-        for (i, r) in w.into_iter().enumerate() {
-            if (i + 1) % h == 0 { ho.push(r) } else { tr.push(r) }
-        }
-        if ho.is_empty() && tr.len() >= 2 {
-            ho.push(tr.pop().unwrap());
-        }
-        return (tr, ho, true);
-    }
-    let (mut tr, mut ho) = (vec![], vec![]);
-    for (i, r) in recs.iter().enumerate() {
-        if (i + 1) % h == 0 { ho.push(r.clone()) } else { tr.push(r.clone()) }
-    }
-    if ho.is_empty() && tr.len() >= 2 {
-        ho.push(tr.pop().unwrap());
-    }
-    (tr, ho, false)
 }
 
 /// Position errors of one simulation of a dataset.
@@ -291,6 +238,33 @@ impl<'a> Engine<'a> {
         Some(Errors { sse, n, windows: win, eps })
     }
 
+    /// Per fitted joint: (name, mean square, white floor) of the residual of `recs` simulated
+    /// as `errs` ([`white_floor`], over the runs of samples between gaps).
+    pub fn floors(&self, recs: &[Recording], errs: &Errors) -> Vec<(String, f64, f64)> {
+        self.joints
+            .iter()
+            .map(|name| {
+                let mut runs = Vec::new();
+                for (rec, ep) in recs.iter().zip(&errs.eps) {
+                    let Some(k) = rec.joints.iter().position(|j| &j.name == name) else { continue };
+                    let scored = gap_mask(&rec.t, self.opts.gap_mask_s);
+                    let mut run = Vec::new();
+                    for i in 0..rec.t.len() {
+                        let e = rec.joints[k].q[i] - ep.q_sim[k][i];
+                        if scored[i] && e.is_finite() {
+                            run.push(e);
+                        } else if !run.is_empty() {
+                            runs.push(std::mem::take(&mut run));
+                        }
+                    }
+                    runs.push(run);
+                }
+                let (ms, w) = white_floor(&runs);
+                (name.clone(), ms, w)
+            })
+            .collect()
+    }
+
     /// Residual vector (real − sim) on `joints`, subsampled to at most `max_len` entries.
     fn residuals(&self, recs: &[Recording], applied: &[Applied], joints: &[String], max_len: usize) -> Option<Vec<f64>> {
         let e = self.errors(recs, applied)?;
@@ -333,6 +307,15 @@ impl<'a> Engine<'a> {
         let b = Bounds { lo: lo[..k].to_vec(), hi: hi[..k].to_vec() };
         let (x, f) = match k {
             0 => (vec![], obj(&[])),
+            _ if effect.smooth() => {
+                // Gauss–Newton / Levenberg–Marquardt on the rollout residuals: k + 1 replays per
+                // iteration, converged in a handful (a derivative-free search needs ~40).
+                let res = |x: &[f64]| self.residuals(train, &make(x), &self.joints, usize::MAX).unwrap_or_default();
+                let o = LmOpts { max_iters: (max_evals / (k + 2)).clamp(2, 12), rel_step: 1e-3, tol: 1e-5 };
+                let r = levenberg_marquardt(&res, &x0, &b, &o);
+                let n = res_len(&r);
+                (r.x, if n > 0 { (2.0 * r.cost / n as f64).sqrt() } else { f64::INFINITY })
+            }
             1 => {
                 let tol = 2e-4 * (hi[0] - lo[0]);
                 let (x, f) = golden_section(&|v| obj(&[v]), lo[0], hi[0], tol, max_evals.min(40));
@@ -352,6 +335,15 @@ impl<'a> Engine<'a> {
         let mut p = full0.clone();
         p[..k].copy_from_slice(&x[..k]);
         (p, f)
+    }
+
+    /// `true` when `effect` starts from the same parameter values on every joint of `group`
+    /// (within 1e-9, relative), so that the group can share one parameter vector.
+    pub fn shared_start(&self, effect: &'static dyn Effect, base: &[Applied], group: &[String]) -> bool {
+        let m0 = model_with(self.robot, base);
+        let starts: Vec<Vec<f64>> = group.iter().filter_map(|j| JointTarget::of(self.robot, j)).map(|t| effect.initial(&m0, &t)).collect();
+        starts.len() == group.len()
+            && starts.windows(2).all(|w| w[0].len() == w[1].len() && w[0].iter().zip(&w[1]).all(|(a, b)| (a - b).abs() <= 1e-9 * a.abs().max(b.abs()).max(1.0)))
     }
 
     /// Linearised explained mean square of the residual by a probe step of candidate `c`
@@ -430,6 +422,11 @@ impl<'a> Engine<'a> {
         let ident = u.identifiable.iter().all(|&x| x);
         (u.stderr, ident)
     }
+}
+
+/// Number of residuals behind an [`LmResult`] (the rows of its Jacobian).
+fn res_len(r: &LmResult) -> usize {
+    r.jacobian.len()
 }
 
 /// Partner of a left/right joint name (`left_knee` ↔ `right_knee`, `l_hip` ↔ `r_hip`, `hip_l` ↔
@@ -522,7 +519,7 @@ fn at_bound(engine: &Engine, base: &[Applied], a: &Applied) -> bool {
 /// Runs the whole selection on `recs`.
 pub fn fit(robot: &Robot, recs: &[Recording], opts: &FitOptions) -> FitOutcome {
     let engine = Engine::new(robot, recs, opts);
-    let (train0, heldout, by_time) = split(recs, opts.holdout);
+    let Split { train: train0, heldout, by_time, note } = split(recs, opts.holdout);
     let train: Vec<Recording> = match opts.shooting_s {
         Some(w) if w > 0.0 => train0.iter().flat_map(|r| windows(r, w)).collect(),
         _ => train0,
@@ -531,6 +528,9 @@ pub fn fit(robot: &Robot, recs: &[Recording], opts: &FitOptions) -> FitOutcome {
         train: train.clone(),
         heldout: heldout.clone(),
         split_by_time: by_time,
+        split_note: note,
+        floors: vec![],
+        stopped_at_floor: false,
         diagnosis: vec![],
         selected: vec![],
         applied: vec![],
@@ -579,6 +579,16 @@ fn greedy_round(engine: &Engine, train: &[Recording], heldout: &[Recording], all
         out.warnings.push("the held-out replay diverged with the current model; stopping".into());
         return false;
     };
+    // Nothing left to explain: on every fitted joint the training residual is (nearly) white,
+    // at the floor that noise, quantisation and command reconstruction impose on this dataset.
+    let floors = engine.floors(train, &tr_err);
+    if round == 0 {
+        out.floors = floors.clone();
+    }
+    if floors.iter().all(|(_, ms, w)| *ms <= opts.white_ratio * w) {
+        out.stopped_at_floor = true;
+        return false;
+    }
     let diag = diagnose(robot, train, &tr_err.eps, &engine.joints, allowed, opts.gap_mask_s);
     let covered = |id: &str, j: &str| applied.iter().any(|a| a.effect.id() == id && a.joints.iter().any(|x| x == j));
     // Re-rank the diagnosis by the linearised (Gauss–Newton) explained residual: the
@@ -628,9 +638,23 @@ fn greedy_round(engine: &Engine, train: &[Recording], heldout: &[Recording], all
             None => vec![],
         };
         let fam_new = fam.len() >= 3 && !cands.iter().any(|(e2, g, _)| e2.id() == e.id() && *g == fam);
+        // Every recorded joint as one group sharing the parameters (an effect the whole robot
+        // has, such as a missing damping or friction, a delay or a servo gain error) — when the
+        // model gives those joints the same starting value, so that one knob is meaningful.
+        let all: Vec<String> = engine.joints.iter().filter(|j| !covered(c.effect, j)).cloned().collect();
+        let all_new = all.len() >= 2
+            && all.len() > group.len()
+            && all != fam
+            && !cands.iter().any(|(e2, g, _)| e2.id() == e.id() && *g == all)
+            && engine.shared_start(e, &applied, &all);
         cands.push((e, group, ev.clone()));
         if fam_new {
-            cands.push((e, fam, ev));
+            cands.push((e, fam, ev.clone()));
+        }
+        if all_new {
+            let mut ev = ev;
+            ev.insert("all_joints_group".into(), 1.0);
+            cands.push((e, all, ev));
         }
     };
     for c in &diag {
@@ -1164,14 +1188,6 @@ fn polish_set(engine: &Engine, train: &[Recording], heldout: &[Recording], appli
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sim2real::recording::JointTrace;
-
-    fn rec(n: usize, dt: f64) -> Recording {
-        let t: Vec<f64> = (0..n).map(|i| i as f64 * dt).collect();
-        let mut j = JointTrace::new("a", t.iter().map(|x| x.sin()).collect());
-        j.q_cmd = Some(j.q.clone());
-        Recording { source: "r.csv".into(), meta: Default::default(), control_rate_hz: Some(100.0), control_t0_s: None, t, joints: vec![j], base: None }
-    }
 
     fn errs(w: &[f64]) -> Errors {
         let sse: f64 = w.iter().map(|v| v * v * 10.0).sum();
@@ -1224,26 +1240,5 @@ mod tests {
         assert_eq!(mirror("r_hip_pitch").as_deref(), Some("l_hip_pitch"));
         assert_eq!(mirror("hip_L").as_deref(), Some("hip_R"));
         assert_eq!(mirror("elbow_pitch"), None);
-    }
-
-    #[test]
-    fn windows_cover_the_recording_and_keep_the_tick_phase() {
-        let r = rec(1001, 0.005); // 5 s
-        let w = windows(&r, 1.0);
-        assert_eq!(w.len(), 5);
-        assert_eq!(w.iter().map(|x| x.t.len()).sum::<usize>(), 1001);
-        assert!(w.iter().all(|x| x.control_t0_s == Some(0.0)));
-        assert_eq!(w[2].joints[0].q[0], r.joints[0].q[w[0].t.len() + w[1].t.len()]);
-    }
-
-    #[test]
-    fn split_by_episode_and_by_time() {
-        let recs: Vec<Recording> = (0..8).map(|_| rec(100, 0.01)).collect();
-        let (tr, ho, by_time) = split(&recs, 4);
-        assert_eq!((tr.len(), ho.len(), by_time), (6, 2, false));
-        let (tr, ho, _) = split(&recs[..3], 4);
-        assert_eq!((tr.len(), ho.len()), (2, 1));
-        let (tr, ho, by_time) = split(&[rec(2001, 0.005)], 4);
-        assert!(by_time && !tr.is_empty() && !ho.is_empty(), "{} {}", tr.len(), ho.len());
     }
 }

@@ -184,6 +184,30 @@ pub fn aic(n: usize, rss: f64, k: usize) -> f64 {
 
 /// Bayesian information criterion for Gaussian residuals: `n ln(rss/n) + k ln n`.
 /// NaN when `n == 0` or `rss` is NaN/negative.
+/// The residual's white floor: per run of consecutive samples `runs`, the mean square `ms` of
+/// the residual and its white part `white = mean((r[i+1] − r[i])²) / 2`. Sensor noise and
+/// quantisation change from sample to sample; a missing effect leaves an error that changes
+/// smoothly over many samples. `ms / white` ≈ 1 means nothing is left to explain; a model error
+/// makes it grow with (error / noise)². Returns (ms, white).
+pub fn white_floor(runs: &[Vec<f64>]) -> (f64, f64) {
+    let (mut s2, mut n2, mut d2, mut nd) = (0.0, 0usize, 0.0, 0usize);
+    for r in runs {
+        for (i, &x) in r.iter().enumerate() {
+            s2 += x * x;
+            n2 += 1;
+            if i > 0 {
+                let d = x - r[i - 1];
+                d2 += d * d;
+                nd += 1;
+            }
+        }
+    }
+    if n2 == 0 || nd == 0 {
+        return (0.0, 0.0);
+    }
+    (s2 / n2 as f64, d2 / nd as f64 / 2.0)
+}
+
 pub fn bic(n: usize, rss: f64, k: usize) -> f64 {
     if n == 0 || rss.is_nan() || rss < 0.0 {
         return f64::NAN;
@@ -243,6 +267,34 @@ mod ar1_tests {
         assert_eq!(ar1_variance_inflation(&[0.0; 10]), 1.0);
         // Alternating residuals (ρ < 0) are not deflated.
         assert_eq!(ar1_variance_inflation(&[1.0, -1.0, 1.0, -1.0]), 1.0);
+    }
+}
+
+#[cfg(test)]
+mod white_tests {
+    use super::white_floor;
+
+    #[test]
+    fn white_noise_is_at_its_floor_and_a_smooth_error_is_not() {
+        // Deterministic pseudo-noise: uniform in [-1, 1) (variance 1/3).
+        let mut x = 12345u64;
+        let mut u = || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x >> 11) as f64 / (1u64 << 52) as f64 - 1.0
+        };
+        let noise: Vec<f64> = (0..20000).map(|_| u()).collect();
+        let (ms, w) = white_floor(&[noise.clone()]);
+        assert!((ms - 1.0 / 3.0).abs() < 0.01 && (ms / w - 1.0).abs() < 0.05, "{ms} {w}");
+        // A slow sine of the noise's amplitude on top: the white part stays, the mean square
+        // grows by A²/2.
+        let a = 1.0;
+        let r: Vec<f64> = noise.iter().enumerate().map(|(i, n)| n + a * (i as f64 * 0.01).sin()).collect();
+        let (ms, w) = white_floor(&[r]);
+        assert!((w - 1.0 / 3.0).abs() < 0.02, "{w}");
+        assert!((ms - (1.0 / 3.0 + 0.5)).abs() < 0.03, "{ms}");
+        assert_eq!(white_floor(&[]), (0.0, 0.0));
     }
 }
 

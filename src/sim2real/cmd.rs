@@ -15,9 +15,6 @@ pub const XL330_KT: f64 = 0.387;
 pub const XL330_R: f64 = 4.02;
 /// Dynamixel position-error gain: (4096 / 2π) / (256 · 885) duty per rad per firmware kp unit.
 pub const XL330_ERROR_GAIN: f64 = (4096.0 / (2.0 * std::f64::consts::PI)) / (256.0 * 885.0);
-/// Control rate given to imported BAM logs: the goal is applied from its own timestamp on,
-/// resolved at the 1 ms physics step (the servo takes each goal as it arrives).
-pub const BAM_CONTROL_HZ: f64 = 1000.0;
 
 /// Firmware P gain → N·m/rad: K = kp · error_gain · vin · kt / R.
 pub fn xl330_kp_si(kp_firmware: f64, vin: f64) -> f64 {
@@ -25,7 +22,8 @@ pub fn xl330_kp_si(kp_firmware: f64, vin: f64) -> f64 {
 }
 
 /// A BAM log as a replayable recording: a constant `servo.kp` column in N·m/rad (see
-/// [`xl330_kp_si`]), meta `kp_si`, and `control_rate_hz` = [`BAM_CONTROL_HZ`].
+/// [`xl330_kp_si`]) and meta `kp_si`. No control rate: the servo takes each goal as it arrives,
+/// so the replay holds each goal from its own timestamp on.
 pub fn bam_recording(log: BamLog) -> Recording {
     let mut rec = log.recording;
     let k = xl330_kp_si(log.kp, log.vin);
@@ -34,7 +32,7 @@ pub fn bam_recording(log: BamLog) -> Recording {
         j.kp = Some(vec![k; n]);
     }
     rec.meta.insert("kp_si".into(), format!("{k}"));
-    rec.control_rate_hz = Some(BAM_CONTROL_HZ);
+    rec.control_rate_hz = None;
     rec
 }
 
@@ -76,6 +74,7 @@ pub fn expand_inputs(inputs: &[PathBuf]) -> Result<Vec<PathBuf>, RecordingError>
 
 pub struct GapArgs {
     pub model: PathBuf,
+    pub command_timing: Option<crate::sim2real::commands::CommandTiming>,
     pub recordings: Vec<PathBuf>,
     pub spec: Option<PathBuf>,
     pub control_hz: Option<f64>,
@@ -119,7 +118,7 @@ pub fn run_gap(a: GapArgs) -> i32 {
         }
         recs.push(rec);
     }
-    let opts = ReplayOptions { control_hz: a.control_hz, base: a.base, ..Default::default() };
+    let opts = ReplayOptions { control_hz: a.control_hz, command_timing: a.command_timing, base: a.base, ..Default::default() };
     let replayer = Replayer::new(robot);
     let tty = std::io::stderr().is_terminal();
     let total = recs.len();

@@ -274,16 +274,16 @@ mod tests {
     fn rows_map_to_the_tick_they_fall_in_and_exact_stamps_to_their_own_tick() {
         // 100 Hz ticks; rows at 0.000 (exactly tick 0), 0.013 (tick 1), 0.030 (exactly tick 3,
         // printed value not exactly representable), 0.0299 (tick 2).
-        assert_eq!(tick_of(0.0, 0.0, 100.0, CommandTiming::InForce, true), 0);
-        assert_eq!(tick_of(0.013, 0.0, 100.0, CommandTiming::InForce, true), 1);
-        assert_eq!(tick_of(0.03, 0.0, 100.0, CommandTiming::InForce, true), 3);
-        assert_eq!(tick_of(0.07, 0.0, 100.0, CommandTiming::InForce, true), 7);
-        assert_eq!(tick_of(0.0299, 0.0, 100.0, CommandTiming::InForce, true), 2);
-        assert_eq!(tick_of(0.013, 0.0, 100.0, CommandTiming::SentAfter, true), 2);
-        assert_eq!(tick_of(0.03, 0.0, 100.0, CommandTiming::SentAfter, true), 3);
+        assert_eq!(tick_of(0.0, 0.0, 100.0, CommandTiming::InForce), 0);
+        assert_eq!(tick_of(0.013, 0.0, 100.0, CommandTiming::InForce), 1);
+        assert_eq!(tick_of(0.03, 0.0, 100.0, CommandTiming::InForce), 3);
+        assert_eq!(tick_of(0.07, 0.0, 100.0, CommandTiming::InForce), 7);
+        assert_eq!(tick_of(0.0299, 0.0, 100.0, CommandTiming::InForce), 2);
+        assert_eq!(tick_of(0.013, 0.0, 100.0, CommandTiming::SentAfter), 2);
+        assert_eq!(tick_of(0.03, 0.0, 100.0, CommandTiming::SentAfter), 3);
         // Phase: ticks at 0.004 + k/100.
-        assert_eq!(tick_of(0.013, 0.004, 100.0, CommandTiming::InForce, true), 0);
-        assert_eq!(tick_of(0.014, 0.004, 100.0, CommandTiming::InForce, true), 1);
+        assert_eq!(tick_of(0.013, 0.004, 100.0, CommandTiming::InForce), 0);
+        assert_eq!(tick_of(0.014, 0.004, 100.0, CommandTiming::InForce), 1);
     }
 
     #[test]

@@ -196,6 +196,7 @@ pub fn parse_csv_with(
     // Metadata and comments, then the header.
     let mut meta = BTreeMap::new();
     let mut control_rate_hz = None;
+    let mut rate_line = None;
     let mut control_t0_s = None;
     let mut idx = 0;
     while idx < lines.len() {
@@ -244,6 +245,7 @@ pub fn parse_csv_with(
                     ));
                 }
                 control_rate_hz = Some(x);
+                rate_line = Some(ln);
             } else {
                 control_t0_s = Some(x);
             }
@@ -482,6 +484,24 @@ pub fn parse_csv_with(
         base,
     };
     rec.check_inner(opts, Some(&row_lines))?;
+    if let (Some(rate), Some(ln)) = (rec.control_rate_hz, rate_line) {
+        let timing = rec.command_timing().unwrap_or_default();
+        let t0 = rec.control_t0_s.unwrap_or(rec.t[0]);
+        let tick = |x: f64| crate::sim2real::commands::tick_of(x, t0, rate, timing);
+        if tick(rec.t[0]) == tick(rec.t[rec.t.len() - 1]) {
+            return Err(err(
+                ln,
+                None,
+                format!(
+                    "control_rate_hz {rate} puts all {} rows ({} s … {} s) into one control tick: the rate is too low \
+                     for these timestamps (are the times in seconds?)",
+                    rec.t.len(),
+                    rec.t[0],
+                    rec.t[rec.t.len() - 1]
+                ),
+            ));
+        }
+    }
     Ok(rec)
 }
 
@@ -940,6 +960,23 @@ mod tests {
         assert!(e.message.contains("empty field"), "{e}");
         let e = parse_err("# control_rate_hz: fast\nt,a.q\n0,1\n1,1\n");
         assert_eq!(e.line, Some(1));
+    }
+
+    #[test]
+    fn split_timing_and_one_tick_errors_name_the_line() {
+        let e = parse_err("# robot: a\n# split: test\nt,a.q\n0,1\n1,1\n");
+        assert_eq!(e.line, Some(2));
+        assert!(e.message.contains("train") && e.message.contains("heldout"), "{}", e.message);
+        let e = parse_err("# command_timing: later\nt,a.q\n0,1\n1,1\n");
+        assert_eq!(e.line, Some(1));
+        let e = parse_err("# x: 1\n# control_rate_hz: 0.5\nt,a.q\n0,1\n0.5,1\n1.9,1\n");
+        assert_eq!(e.line, Some(2));
+        assert!(e.message.contains("one control tick"), "{}", e.message);
+        let e = parse_err("# control_rate_hz: -3\nt,a.q\n0,1\n1,1\n");
+        assert_eq!(e.line, Some(1));
+        let ok = parse_csv(p(), "# split: heldout\n# command_timing: sent_after\n# control_rate_hz: 1\nt,a.q\n0,1\n1,1\n").unwrap();
+        assert_eq!(ok.split(), Some(Split::Heldout));
+        assert_eq!(ok.command_timing(), Some(crate::sim2real::commands::CommandTiming::SentAfter));
     }
 
     #[test]

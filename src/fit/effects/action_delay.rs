@@ -31,6 +31,9 @@ impl Effect for ActionDelay {
             st.fifo.pop_front();
         }
     }
+    fn smooth(&self) -> bool {
+        true
+    }
     fn write_back(&self, p: &[f64]) -> WriteBack {
         WriteBack::Actuator(vec![("delay", p[0])])
     }

@@ -30,6 +30,9 @@ impl Effect for CoulombFriction {
         let r = mj::raw_mut(m);
         set(r.dof_frictionloss, r.nv as usize, t.dof, p[0].max(0.0));
     }
+    fn smooth(&self) -> bool {
+        true
+    }
     fn write_back(&self, p: &[f64]) -> WriteBack {
         WriteBack::Joint(vec![("frictionloss", p[0])])
     }

@@ -28,6 +28,9 @@ impl Effect for GainError {
             io.tau += (p[0] - 1.0) * io.kp * (io.ctrl - q) - (p[1] - 1.0) * io.kd * qd;
         }
     }
+    fn smooth(&self) -> bool {
+        true
+    }
     fn write_back(&self, p: &[f64]) -> WriteBack {
         WriteBack::Actuator(vec![("kp_scale", p[0]), ("kv_scale", p[1])])
     }

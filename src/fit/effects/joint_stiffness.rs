@@ -31,6 +31,9 @@ impl Effect for JointStiffness {
         set(r.jnt_stiffness, r.njnt as usize, t.jnt, p[0].max(0.0));
         set(r.qpos_spring, r.nq as usize, t.qposadr, t.key_q);
     }
+    fn smooth(&self) -> bool {
+        true
+    }
     fn write_back(&self, p: &[f64]) -> WriteBack {
         WriteBack::Joint(vec![("stiffness", p[0])])
     }

@@ -127,6 +127,13 @@ pub trait Effect: Sync {
     fn fitted(&self) -> usize {
         self.params().len()
     }
+    /// `true` when the simulated trajectory depends smoothly on the parameters, so that a
+    /// Levenberg–Marquardt step on a finite-difference rollout Jacobian converges in a few
+    /// iterations (how `mujoco.sysid` fits); `false` (the default) for kinks and dead zones
+    /// (backlash, saturation, Stribeck's curve), fitted by derivative-free search.
+    fn smooth(&self) -> bool {
+        false
+    }
 }
 
 /// Every effect, in the fit engine's preference order (simpler first).

@@ -23,6 +23,9 @@ impl Effect for PositionOffset {
     fn measurement_bias(&self, p: &[f64]) -> f64 {
         p[0]
     }
+    fn smooth(&self) -> bool {
+        true
+    }
     fn write_back(&self, _p: &[f64]) -> WriteBack {
         WriteBack::TomlOnly
     }

@@ -29,6 +29,9 @@ impl Effect for ViscousDamping {
         let r = mj::raw_mut(m);
         set(r.dof_damping, r.nv as usize, t.dof, p[0].max(0.0));
     }
+    fn smooth(&self) -> bool {
+        true
+    }
     fn write_back(&self, p: &[f64]) -> WriteBack {
         WriteBack::Joint(vec![("damping", p[0])])
     }
