@@ -119,8 +119,9 @@ pub enum ActuatorKind {
     /// force = kv·(ctrl − q̇)
     Velocity { kv: f64 },
     /// `<dcmotor>` (MuJoCo ≥ 3.17): force = K/R·(v − K·q̇) in its voltage mode; `resistance` R
-    /// (Ω) and motor constant K (geometric mean of Kt and Ke).
-    DcMotor { resistance: f64, k: f64 },
+    /// (Ω) and motor constant K (geometric mean of Kt and Ke). `voltage`: its only control is
+    /// the terminal voltage (ctrlrange in volts), not a position/velocity controller input.
+    DcMotor { resistance: f64, k: f64, voltage: bool },
     Other,
 }
 
@@ -530,6 +531,7 @@ fn extract(path: &Path, format: Format, tree: XNode, src: SourceIndex, mj: MjMod
     let cnum = mj::slice(r.actuator_ctrlnum, nu);
     let oadr = mj::slice(r.actuator_outadr, nu);
     let aarm = mj::slice(r.actuator_armature, nu);
+    let cspec = mj::slice(r.actuator_ctrlspec, nu);
     let adamp = mj::slice(r.actuator_damping, nu);
     let gt = mj::slice(r.actuator_gaintype, nu);
     let bt = mj::slice(r.actuator_biastype, nu);
@@ -549,7 +551,7 @@ fn extract(path: &Path, format: Format, tree: XNode, src: SourceIndex, mj: MjMod
             // gaintype 0 = fixed; biastype 0 = none, 1 = affine.
             // gaintype/biastype 3 = dcmotor: gainprm[0] = resistance, gainprm[1] = motor constant.
             let kind = if gt[i] == 3 && bt[i] == 3 {
-                ActuatorKind::DcMotor { resistance: g[0], k: g[1] }
+                ActuatorKind::DcMotor { resistance: g[0], k: g[1], voltage: cspec.get(i) == Some(&8) }
             } else if gt[i] == 0 && bt[i] == 0 && g[0] != 0.0 {
                 ActuatorKind::Motor
             } else if gt[i] == 0 && bt[i] == 1 && g[0] > 0.0 && (b[1] + g[0]).abs() <= 1e-9 * g[0].abs().max(1.0) && b[0] == 0.0 {
@@ -678,7 +680,7 @@ fn add_transmission_parts(m: &MjModel, joints: &mut [Joint], actuators: &[Actuat
         }
         let g2 = a.gear * a.gear;
         let emf = match a.kind {
-            ActuatorKind::DcMotor { resistance, k } if resistance > 0.0 => k * k / resistance,
+            ActuatorKind::DcMotor { resistance, k, .. } if resistance > 0.0 => k * k / resistance,
             _ => 0.0,
         };
         match a.trn {

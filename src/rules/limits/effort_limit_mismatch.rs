@@ -11,8 +11,9 @@ use crate::util::fmt_num;
 declare_rule! {
     /// ## What it does
     /// For every actuated hinge/slide joint, finds the largest torque the model lets the
-    /// actuators apply: the actuator's `forcerange` (× gear), the joint's `actuatorfrcrange`, or
-    /// for a `<motor>` its `ctrlrange` × gain × gear — the tightest that applies. Reports joints
+    /// actuators apply: the actuator's `forcerange` (× gear), the joint's `actuatorfrcrange`, for
+    /// a `<motor>` its `ctrlrange` × gain × gear, or for a voltage-driven `<dcmotor>` (MuJoCo
+    /// 3.17) its stall torque K/R × V_max × gear — the tightest that applies. Reports joints
     /// with no force limit at all (error), a `<motor>` whose torque `ctrlrange` (× gain × gear)
     /// contradicts the same joint's `actuatorfrcrange` by more than `tolerance` (no spec needed:
     /// e.g. ±139 N·m of command on a joint clamped at ±60), and limits that differ from the spec's motor
@@ -74,6 +75,12 @@ pub fn joint_torque_limit(robot: &Robot, j: usize) -> Option<(f64, LimitSource)>
         }
         if a.kind == ActuatorKind::Motor && a.ctrllimited {
             take(g * a.gainprm[0].abs() * a.ctrlrange[0].abs().max(a.ctrlrange[1].abs()), LimitSource::MotorCtrl(a.id));
+        }
+        // A voltage-driven `<dcmotor>` stalls at K/R × V_max (× gear).
+        if let ActuatorKind::DcMotor { resistance, k, voltage: true } = a.kind {
+            if a.ctrllimited && resistance > 0.0 {
+                take(g * (k / resistance).abs() * a.ctrlrange[0].abs().max(a.ctrlrange[1].abs()), LimitSource::MotorCtrl(a.id));
+            }
         }
     }
     best
