@@ -188,9 +188,15 @@ impl Rule for CollisionVisualMismatch {
                     )
                 };
                 let mut f = cx.at_attr(ElemKind::Geom, g.id, &g.name, "size", msg);
-                if worst.max(centre_out) < misplaced && cx.level == cx.meta.default_level {
+                let coarse = worst.max(centre_out) < misplaced;
+                if coarse && cx.level == cx.meta.default_level {
                     f.severity = Severity::Info;
                 }
+                let note = if coarse {
+                    format!("{note}; within {} mm of the part this is often a deliberate coarse approximation — check that it is intended (misplaced geometry on real models sticks out by {} mm or more)", fmt_num(misplaced * 1000.0, 3), fmt_num(misplaced * 1000.0, 3))
+                } else {
+                    note.to_string()
+                };
                 out.push(
                     f
                         .label(label)
