@@ -12,7 +12,8 @@ declare_rule! {
     /// motor family in the spec gives `kp`/`kd`), computes the closed-loop damping ratio
     /// ζ = kd / (2·√(kp·I)) and natural frequency ω_n = √(kp/I), where kd = actuator kv + the
     /// joint's effective damping (its own `damping`, plus actuator `damping`·gear² and tendon
-    /// damping, MuJoCo ≥ 3.17) and I is the joint's diagonal entry of the mass matrix at the
+    /// damping, MuJoCo ≥ 3.17; a voltage-driven `<dcmotor>`'s back-EMF adds K²/R × gear², as in
+    /// MuJoCo's DC motor model note) and I is the joint's diagonal entry of the mass matrix at the
     /// standing keyframe (MuJoCo includes every armature in it: joint, actuator·gear², tendon). Reports joints with ζ below `min_damping_ratio`. The
     /// armature-only bound kd / (2·√(kp·armature)) is reported alongside.
     ///

@@ -15,7 +15,9 @@ declare_rule! {
     /// ## Why is this bad?
     /// A geared motor's rotor spins gear-ratio times faster than the joint, so its inertia appears
     /// at the joint multiplied by gear²: the reflected inertia that MuJoCo's `armature` stands
-    /// for. The Asimov system identification (§2, "Armature as reflected rotor inertia") sets it
+    /// for (MuJoCo XML reference, `joint/armature`: inertia of the joint's motion not due to
+    /// body mass, e.g. a rotor; MuJoCo 3.17 adds `actuator/armature`, applied × gear²). The
+    /// Asimov system identification (§2, "Armature as reflected rotor inertia") sets it
     /// per actuator family from the motor datasheet and transmission and notes that it strongly
     /// affects closed-loop behaviour and stability. With none, a simulated joint under the same
     /// PD gains accelerates and overshoots more than the hardware, and light distal links become

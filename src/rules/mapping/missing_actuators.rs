@@ -11,7 +11,7 @@ declare_rule! {
     /// says every joint is passive (`robot.actuated = 0`).
     ///
     /// ## Why is this bad?
-    /// Without actuators MuJoCo has no controls (`nu = 0`): the policy's action vector maps onto
+    /// Without actuators MuJoCo has no controls (`nu = 0`; MuJoCo XML reference, `actuator`): the policy's action vector maps onto
     /// nothing, the robot collapses under gravity, and none of the actuator checks (gains, force
     /// limits, training ranges) can run — so a linter that stays silent here gives false
     /// comfort. Hardware mapping comes first (Asimov system identification §1): every motor of
