@@ -11,14 +11,14 @@ fn shared() -> Option<PathBuf> {
     p.is_dir().then_some(p)
 }
 
-fn check(model: &str, spec: &str, snap: &str) {
+fn check(model: &str, spec: Option<&str>, snap: &str) {
     let Some(_) = shared() else {
         eprintln!("skipping {model}: ../shared/data is absent");
         return;
     };
     let input = LintInput {
         model: PathBuf::from(model),
-        spec: Some(PathBuf::from(spec)),
+        spec: spec.map(PathBuf::from),
         config: None,
         select: vec![],
         ignore: vec![],
@@ -38,12 +38,23 @@ fn check(model: &str, spec: &str, snap: &str) {
 
 #[test]
 fn booster_t1_report() {
-    check("../shared/data/models/booster_t1/t1.xml", "fixtures/booster_t1.toml", "booster_t1.txt");
+    check("../shared/data/models/booster_t1/t1.xml", Some("fixtures/booster_t1.toml"), "booster_t1.txt");
 }
 
 #[test]
 fn unitree_h1_report() {
-    check("../shared/data/models/unitree_h1/h1.xml", "fixtures/unitree_h1.toml", "unitree_h1.txt");
+    check("../shared/data/models/unitree_h1/h1.xml", Some("fixtures/unitree_h1.toml"), "unitree_h1.txt");
+}
+
+/// What a new user sees: the model alone, no spec (issue 13: lint what the file itself shows).
+#[test]
+fn booster_t1_report_without_spec() {
+    check("../shared/data/models/booster_t1/t1.xml", None, "booster_t1_nospec.txt");
+}
+
+#[test]
+fn unitree_h1_report_without_spec() {
+    check("../shared/data/models/unitree_h1/h1.xml", None, "unitree_h1_nospec.txt");
 }
 
 #[test]

@@ -79,3 +79,85 @@ fn fixtures_produce_exactly_their_findings() {
     }
     assert!(failures.is_empty(), "{}", failures.join("\n\n"));
 }
+
+/// Severities without a spec are honest (default friction 1 and condim 6 are info), and stating
+/// the intended friction in modellint.toml makes the same deviation a warning again.
+#[test]
+fn stated_foot_friction_refines_severity() {
+    use modellint::finding::Severity;
+    let model = PathBuf::from("fixtures/rules/foot-collision-geometry/invalid_default_friction.xml");
+    let run = |config: Option<PathBuf>| {
+        let input = LintInput { model: model.clone(), spec: None, config, select: vec!["foot-collision-geometry".into()], ignore: vec![] };
+        let loaded = load(&input).unwrap();
+        run_rules(&loaded)
+    };
+    let friction = |fs: &[modellint::finding::Finding]| fs.iter().filter(|f| f.message.contains("sliding friction")).map(|f| f.severity).collect::<Vec<_>>();
+    let plain = run(None);
+    assert_eq!(friction(&plain), vec![Severity::Info, Severity::Info]);
+    assert!(plain.iter().all(|f| f.severity == Severity::Info), "no warning without a stated value");
+    let stated = run(Some(PathBuf::from("fixtures/config/foot_friction_stated.toml")));
+    assert_eq!(friction(&stated), vec![Severity::Warning, Severity::Warning]);
+}
+
+/// MuJoCo 3.17 actuator physics: the same reflected inertia written on the joint or on the
+/// actuator (armature × gear²) gives the same verdict, and the same ζ.
+#[test]
+fn armature_placement_does_not_change_the_verdict() {
+    let findings = |path: &str, id: &str| {
+        let p = Path::new(path);
+        let spec = p.with_extension("toml");
+        let input = LintInput { model: p.to_path_buf(), spec: spec.is_file().then_some(spec), config: None, select: vec![id.to_string()], ignore: vec![] };
+        let loaded = load(&input).unwrap();
+        run_rules(&loaded).into_iter().filter(|f| f.rule == id).map(|f| (f.measured.map(|q| (q.value * 1e6).round()), f.severity)).collect::<Vec<_>>()
+    };
+    let dir = "fixtures/rules/armature-mismatch";
+    let mut a = findings(&format!("{dir}/invalid.xml"), "armature-mismatch");
+    let mut b = findings(&format!("{dir}/invalid_actuator_placement.xml"), "armature-mismatch");
+    a.sort_by(|x, y| format!("{x:?}").cmp(&format!("{y:?}")));
+    b.sort_by(|x, y| format!("{x:?}").cmp(&format!("{y:?}")));
+    assert_eq!(a.len(), 3);
+    assert_eq!(a, b);
+    assert!(findings(&format!("{dir}/valid.xml"), "armature-mismatch").is_empty());
+    assert!(findings(&format!("{dir}/valid_actuator_placement.xml"), "armature-mismatch").is_empty());
+    // ζ = kd / (2√(kp·I)): kd = 1 + 0.1, kp = 100 either way (hand-computed: 25·2², 0.25·2² + 0.025·2²).
+    let z = |path: &str| {
+        let input = LintInput { model: path.into(), spec: None, config: None, select: vec!["underdamped-pd-gains".into()], ignore: vec![] };
+        let loaded = load(&input).unwrap();
+        let f = run_rules(&loaded).into_iter().find(|f| f.rule == "underdamped-pd-gains").unwrap();
+        (f.data["kd"], f.data["kp"], f.data["inertia"], f.data["zeta"])
+    };
+    let (kd1, kp1, i1, z1) = z("fixtures/rules/underdamped-pd-gains/invalid.xml");
+    let (kd2, kp2, i2, z2) = z("fixtures/rules/underdamped-pd-gains/invalid_actuator_placement.xml");
+    assert!((kd1 - 1.1).abs() < 1e-12 && (kd2 - 1.1).abs() < 1e-12, "{kd1} {kd2}");
+    assert!((kp1 - 100.0).abs() < 1e-9 && (kp2 - 100.0).abs() < 1e-9);
+    assert!((i1 - i2).abs() < 1e-12 && (z1 - z2).abs() < 1e-12);
+    // I = capsule about its end (hand-computed by MuJoCo's mass matrix) + armature 0.02.
+    assert!(i1 > 0.02);
+}
+
+/// Effective armature and damping as MuJoCo 3.17 applies them, against hand-computed values
+/// (see the comment in the fixture), and the mass matrix MuJoCo builds from them.
+#[test]
+fn effective_armature_and_damping_from_actuators_and_tendons() {
+    let input = LintInput { model: "fixtures/model/actuator_physics.xml".into(), spec: None, config: None, select: vec![], ignore: vec![] };
+    let l = load(&input).unwrap();
+    let r = &l.robot;
+    let j1 = r.joint("j1").unwrap();
+    let j2 = r.joint("j2").unwrap();
+    let close = |a: f64, b: f64| (a - b).abs() < 1e-12;
+    assert!(close(j1.armature, 0.217), "{}", j1.armature);
+    // j2 also has a passive dcmotor (no control input): back-EMF 0.05²/2 × 1² = 0.00125.
+    assert!(close(j1.damping, 4.025), "{}", j1.damping);
+    assert!(close(j2.armature, 0.007), "{}", j2.armature);
+    assert!(close(j2.damping, 0.4 + 0.00125), "{}", j2.damping);
+    assert!(close(j1.own_armature(), 0.01) && close(j2.own_armature(), 0.0));
+    // Box 0.2 m, 1 kg about a centroidal axis: (0.2² + 0.2²)/12; plus the effective armature.
+    let link = (0.04 + 0.04) / 12.0;
+    assert!((r.key.m_diag[j2.dofadr] - (link + 0.007)).abs() < 1e-9, "{}", r.key.m_diag[j2.dofadr]);
+    // Three actuators, two controls (the passive dcmotor has none): per-actuator data stays aligned.
+    assert_eq!(r.actuators.len(), 3);
+    assert_eq!(r.actuators[0].ctrlrange, [-24.0, 24.0]);
+    assert!(r.actuators[0].ctrllimited);
+    assert!((r.actuators[1].gear - 2.0).abs() < 1e-12);
+    assert!(matches!(r.actuators[2].kind, modellint::model::ActuatorKind::DcMotor { .. }));
+}

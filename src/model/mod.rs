@@ -39,15 +39,58 @@ pub struct Joint {
     pub dofadr: usize,
     pub limited: bool,
     pub range: [f64; 2],
+    /// Effective armature at the joint (kg·m², or kg for a slide): the joint's own `armature`
+    /// plus every actuator's `armature`·gear² and every fixed tendon's armature·coef² (MuJoCo
+    /// ≥ 3.17 adds those to the mass matrix but leaves `dof_armature` at the joint's own value).
     pub armature: f64,
+    /// Effective linear damping at the joint: own `damping` + actuator `damping`·gear² + tendon
+    /// damping·coef² + a `<dcmotor>`'s back-EMF damping K²/R·gear².
     pub damping: f64,
+    /// Where `armature` came from (the joint's own value first, when non-zero).
+    pub armature_parts: Vec<Part>,
+    /// Where `damping` came from.
+    pub damping_parts: Vec<Part>,
     pub stiffness: f64,
     pub frictionloss: f64,
     pub springref: f64,
     pub axis: [f64; 3],
 }
 
+/// Where one contribution to a joint's effective armature or damping is written.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PartSource {
+    /// The joint's own `armature` / `damping`.
+    Joint,
+    /// An actuator's `armature` / `damping` × gear² (actuator id, gear).
+    Actuator(usize, f64),
+    /// A fixed tendon's `armature` / `damping` × coef² (tendon id, coef).
+    Tendon(usize, f64),
+    /// An actuator on a fixed tendon: value × gear² × coef² (actuator id, tendon id, gear, coef).
+    TendonActuator(usize, usize, f64, f64),
+    /// A `<dcmotor>`'s back-EMF: K²/R × gear² (actuator id, gear).
+    BackEmf(usize, f64),
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Part {
+    pub source: PartSource,
+    /// Contribution at the joint.
+    pub value: f64,
+}
+
 impl Joint {
+    /// The joint's own `armature` attribute (compiled `dof_armature`).
+    pub fn own_armature(&self) -> f64 {
+        self.armature_parts.iter().filter(|p| p.source == PartSource::Joint).map(|p| p.value).sum()
+    }
+    /// The joint's own `damping` attribute (compiled `dof_damping`).
+    pub fn own_damping(&self) -> f64 {
+        self.damping_parts.iter().filter(|p| p.source == PartSource::Joint).map(|p| p.value).sum()
+    }
+    /// Whether any part of the effective armature comes from an actuator or tendon.
+    pub fn armature_elsewhere(&self) -> bool {
+        self.armature_parts.iter().any(|p| p.source != PartSource::Joint && p.value != 0.0)
+    }
     /// Hinge and slide joints: one scalar DoF a motor can drive.
     pub fn is_scalar(&self) -> bool {
         matches!(self.jtype, JointType::Hinge | JointType::Slide)
@@ -75,6 +118,10 @@ pub enum ActuatorKind {
     Motor,
     /// force = kv·(ctrl − q̇)
     Velocity { kv: f64 },
+    /// `<dcmotor>` (MuJoCo ≥ 3.17): force = K/R·(v − K·q̇) in its voltage mode; `resistance` R
+    /// (Ω) and motor constant K (geometric mean of Kt and Ke). `voltage`: its only control is
+    /// the terminal voltage (ctrlrange in volts), not a position/velocity controller input.
+    DcMotor { resistance: f64, k: f64, voltage: bool },
     Other,
 }
 
@@ -94,6 +141,10 @@ pub struct Actuator {
     pub forcelimited: bool,
     pub forcerange: [f64; 2],
     pub delay: f64,
+    /// The actuator's own `armature` (reflected to its transmission as armature·gear²).
+    pub armature: f64,
+    /// The actuator's own `damping` (applied at its transmission as damping·gear²).
+    pub damping: f64,
 }
 
 #[derive(Debug, Clone)]
@@ -427,7 +478,10 @@ fn choose_key(keys: &[String], want: Option<&str>) -> Option<usize> {
 
 fn extract(path: &Path, format: Format, tree: XNode, src: SourceIndex, mj: MjModel) -> Robot {
     let r = mj::raw(&mj);
-    let (njnt, nu, nbody, ngeom, nkey) = (r.njnt as usize, r.nu as usize, r.nbody as usize, r.ngeom as usize, r.nkey as usize);
+    // Per-actuator arrays have `nactuator` rows; controls (`nu`) and force outputs (`nout`) can
+    // differ from it in MuJoCo ≥ 3.17 (a `<dcmotor>` may take 0 or several controls).
+    let (njnt, nu, nbody, ngeom, nkey) = (r.njnt as usize, r.nactuator as usize, r.nbody as usize, r.ngeom as usize, r.nkey as usize);
+    let (nctrl, nout) = (r.nu as usize, r.nout as usize);
     let jt = mj::slice(r.jnt_type, njnt);
     let jb = mj::slice(r.jnt_bodyid, njnt);
     let jq = mj::slice(r.jnt_qposadr, njnt);
@@ -460,22 +514,31 @@ fn extract(path: &Path, format: Format, tree: XNode, src: SourceIndex, mj: MjMod
                 range: [jr[2 * i], jr[2 * i + 1]],
                 armature: darm.get(d).copied().unwrap_or(0.0),
                 damping: ddamp.get(d).copied().unwrap_or(0.0),
+                armature_parts: own_part(darm.get(d).copied().unwrap_or(0.0)),
+                damping_parts: own_part(ddamp.get(d).copied().unwrap_or(0.0)),
                 stiffness: js[i],
                 frictionloss: dfl.get(d).copied().unwrap_or(0.0),
                 springref: qspring.get(jq[i].max(0) as usize).copied().unwrap_or(0.0),
                 axis: [jax[3 * i], jax[3 * i + 1], jax[3 * i + 2]],
             }
         })
-        .collect();
+        .collect::<Vec<Joint>>();
+    let mut joints = joints;
     let trn = mj::slice(r.actuator_trntype, nu);
     let trnid = mj::slice(r.actuator_trnid, 2 * nu);
-    let gear = mj::slice(r.actuator_gear, 6 * nu);
+    let gear = mj::slice(r.actuator_gear, 6 * nout);
+    let cadr = mj::slice(r.actuator_ctrladr, nu);
+    let cnum = mj::slice(r.actuator_ctrlnum, nu);
+    let oadr = mj::slice(r.actuator_outadr, nu);
+    let aarm = mj::slice(r.actuator_armature, nu);
+    let cspec = mj::slice(r.actuator_ctrlspec, nu);
+    let adamp = mj::slice(r.actuator_damping, nu);
     let gt = mj::slice(r.actuator_gaintype, nu);
     let bt = mj::slice(r.actuator_biastype, nu);
     let gp = mj::slice(r.actuator_gainprm, 10 * nu);
     let bp = mj::slice(r.actuator_biasprm, 10 * nu);
-    let cl = mj::slice(r.actuator_ctrllimited, nu);
-    let cr = mj::slice(r.actuator_ctrlrange, 2 * nu);
+    let cl = mj::slice(r.actuator_ctrllimited, nctrl);
+    let cr = mj::slice(r.actuator_ctrlrange, 2 * nctrl);
     let fl = mj::slice(r.actuator_forcelimited, nu);
     let fr = mj::slice(r.actuator_forcerange, 2 * nu);
     let dl = mj::slice(r.actuator_delay, nu);
@@ -483,8 +546,13 @@ fn extract(path: &Path, format: Format, tree: XNode, src: SourceIndex, mj: MjMod
         .map(|i| {
             let g = [gp[10 * i], gp[10 * i + 1], gp[10 * i + 2]];
             let b = [bp[10 * i], bp[10 * i + 1], bp[10 * i + 2]];
+            // First control of the actuator (none for a passive `<dcmotor input="none">`).
+            let c = (cnum[i] > 0 && (cadr[i].max(0) as usize) < nctrl).then_some(cadr[i].max(0) as usize);
             // gaintype 0 = fixed; biastype 0 = none, 1 = affine.
-            let kind = if gt[i] == 0 && bt[i] == 0 && g[0] != 0.0 {
+            // gaintype/biastype 3 = dcmotor: gainprm[0] = resistance, gainprm[1] = motor constant.
+            let kind = if gt[i] == 3 && bt[i] == 3 {
+                ActuatorKind::DcMotor { resistance: g[0], k: g[1], voltage: cspec.get(i) == Some(&8) }
+            } else if gt[i] == 0 && bt[i] == 0 && g[0] != 0.0 {
                 ActuatorKind::Motor
             } else if gt[i] == 0 && bt[i] == 1 && g[0] > 0.0 && (b[1] + g[0]).abs() <= 1e-9 * g[0].abs().max(1.0) && b[0] == 0.0 {
                 ActuatorKind::Position { kp: g[0], kv: -b[2] }
@@ -505,18 +573,21 @@ fn extract(path: &Path, format: Format, tree: XNode, src: SourceIndex, mj: MjMod
                     _ => Transmission::Body,
                 },
                 target: trnid[2 * i],
-                gear: gear[6 * i],
+                gear: gear.get(6 * (oadr[i].max(0) as usize)).copied().unwrap_or(1.0),
                 kind,
                 gainprm: g,
                 biasprm: b,
-                ctrllimited: cl[i],
-                ctrlrange: [cr[2 * i], cr[2 * i + 1]],
+                ctrllimited: c.is_some_and(|c| cl[c]),
+                ctrlrange: c.map(|c| [cr[2 * c], cr[2 * c + 1]]).unwrap_or([0.0, 0.0]),
                 forcelimited: fl[i],
                 forcerange: [fr[2 * i], fr[2 * i + 1]],
                 delay: dl.get(i).copied().unwrap_or(0.0),
+                armature: aarm.get(i).copied().unwrap_or(0.0),
+                damping: adamp.get(i).copied().unwrap_or(0.0),
             }
         })
-        .collect();
+        .collect::<Vec<Actuator>>();
+    add_transmission_parts(&mj, &mut joints, &actuators);
     let bp_ = mj::slice(r.body_parentid, nbody);
     let bm = mj::slice(r.body_mass, nbody);
     let bodies = (0..nbody)
@@ -578,6 +649,107 @@ fn extract(path: &Path, format: Format, tree: XNode, src: SourceIndex, mj: MjMod
         tendons,
         equalities,
     }
+}
+
+fn own_part(v: f64) -> Vec<Part> {
+    if v != 0.0 { vec![Part { source: PartSource::Joint, value: v }] } else { Vec::new() }
+}
+
+/// Adds what actuators and fixed tendons contribute to each joint's armature and damping
+/// (MuJoCo ≥ 3.17): actuator armature/damping × gear², tendon armature/damping × coef² (with the
+/// tendon's actuators' values × gear² added to the tendon's), and a `<dcmotor>`'s back-EMF
+/// K²/R × gear² as damping.
+fn add_transmission_parts(m: &MjModel, joints: &mut [Joint], actuators: &[Actuator]) {
+    let r = mj::raw(m);
+    let (nt, nw) = (r.ntendon as usize, r.nwrap as usize);
+    let tadr = mj::slice(r.tendon_adr, nt);
+    let tnum = mj::slice(r.tendon_num, nt);
+    let tarm = mj::slice(r.tendon_armature, nt);
+    let tdamp = mj::slice(r.tendon_damping, nt);
+    let wt = mj::slice(r.wrap_type, nw);
+    let wo = mj::slice(r.wrap_objid, nw);
+    let wp = mj::slice(r.wrap_prm, nw);
+    let push = |parts: &mut Vec<Part>, source: PartSource, value: f64| {
+        if value != 0.0 && value.is_finite() {
+            parts.push(Part { source, value });
+        }
+    };
+    for a in actuators {
+        if a.target < 0 {
+            continue;
+        }
+        let g2 = a.gear * a.gear;
+        let emf = match a.kind {
+            ActuatorKind::DcMotor { resistance, k, .. } if resistance > 0.0 => k * k / resistance,
+            _ => 0.0,
+        };
+        match a.trn {
+            Transmission::Joint | Transmission::JointInParent => {
+                let Some(j) = joints.get_mut(a.target as usize) else { continue };
+                if !j.is_scalar() {
+                    continue;
+                }
+                push(&mut j.armature_parts, PartSource::Actuator(a.id, a.gear), a.armature * g2);
+                push(&mut j.damping_parts, PartSource::Actuator(a.id, a.gear), a.damping * g2);
+                push(&mut j.damping_parts, PartSource::BackEmf(a.id, a.gear), emf * g2);
+            }
+            Transmission::Tendon => {
+                let t = a.target as usize;
+                let (Some(&adr), Some(&num)) = (tadr.get(t), tnum.get(t)) else { continue };
+                for w in adr.max(0) as usize..(adr.max(0) + num.max(0)) as usize {
+                    if wt.get(w) != Some(&1) {
+                        continue;
+                    }
+                    let (Some(&jid), Some(&coef)) = (wo.get(w), wp.get(w)) else { continue };
+                    let Some(j) = joints.get_mut(jid.max(0) as usize) else { continue };
+                    let c2 = coef * coef;
+                    push(&mut j.armature_parts, PartSource::TendonActuator(a.id, t, a.gear, coef), a.armature * g2 * c2);
+                    push(&mut j.damping_parts, PartSource::TendonActuator(a.id, t, a.gear, coef), a.damping * g2 * c2);
+                    push(&mut j.damping_parts, PartSource::BackEmf(a.id, a.gear * coef), emf * g2 * c2);
+                }
+            }
+            _ => {}
+        }
+    }
+    for t in 0..nt {
+        if tarm[t] == 0.0 && tdamp[t] == 0.0 {
+            continue;
+        }
+        for w in tadr[t].max(0) as usize..(tadr[t].max(0) + tnum[t].max(0)) as usize {
+            if wt.get(w) != Some(&1) {
+                continue;
+            }
+            let (Some(&jid), Some(&coef)) = (wo.get(w), wp.get(w)) else { continue };
+            let Some(j) = joints.get_mut(jid.max(0) as usize) else { continue };
+            push(&mut j.armature_parts, PartSource::Tendon(t, coef), tarm[t] * coef * coef);
+            push(&mut j.damping_parts, PartSource::Tendon(t, coef), tdamp[t] * coef * coef);
+        }
+    }
+    for j in joints.iter_mut() {
+        j.armature = j.armature_parts.iter().map(|p| p.value).sum();
+        j.damping = j.damping_parts.iter().map(|p| p.value).sum();
+    }
+}
+
+/// "0.005 (joint) + 0.002 × 10² (actuator `ankle`)": where an effective value came from.
+pub fn describe_parts(robot: &Robot, parts: &[Part], what: &str) -> String {
+    if parts.is_empty() {
+        return format!("no {what} on the joint, its actuators or tendons");
+    }
+    let n = |x: f64| crate::util::fmt_num(x, 4);
+    let an = |id: usize| robot.actuators.get(id).map(|a| if a.name.is_empty() { format!("#{id}") } else { a.name.clone() }).unwrap_or_default();
+    let tn = |id: usize| robot.tendons.get(id).map(|t| if t.is_empty() { format!("#{id}") } else { t.clone() }).unwrap_or_default();
+    let v: Vec<String> = parts
+        .iter()
+        .map(|p| match p.source {
+            PartSource::Joint => format!("{} (joint `{what}`)", n(p.value)),
+            PartSource::Actuator(a, g) => format!("{} × {}² (actuator `{}`)", n(p.value / (g * g)), n(g.abs()), an(a)),
+            PartSource::Tendon(t, c) => format!("{} × {}² (tendon `{}`)", n(p.value / (c * c)), n(c.abs()), tn(t)),
+            PartSource::TendonActuator(a, t, g, c) => format!("{} × {}² × {}² (actuator `{}` on tendon `{}`)", n(p.value / (g * g * c * c)), n(g.abs()), n(c.abs()), an(a), tn(t)),
+            PartSource::BackEmf(a, g) => format!("{} × {}² (back-EMF K²/R of dcmotor `{}`)", n(p.value / (g * g)), n(g.abs()), an(a)),
+        })
+        .collect();
+    if v.len() == 1 && parts[0].source == PartSource::Joint { v[0].clone() } else { v.join(" + ") }
 }
 
 /// Runs mj_forward at the keyframe (or qpos0) and records what static rules need.

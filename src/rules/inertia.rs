@@ -1,3 +1,27 @@
 //! Rules of the `inertia` group.
 pub mod armature_mismatch;
 pub mod parallel_ankle_armature;
+pub mod zero_armature;
+
+use crate::finding::Finding;
+use crate::model::mjcf::ElemKind;
+use crate::model::{Joint, PartSource};
+use crate::rules::Context;
+
+/// A finding about a joint's armature, at the attribute that sets it: the joint's own
+/// `armature` when it has one, else the first actuator's `armature` (MuJoCo ≥ 3.17), else the
+/// joint element.
+pub fn at_armature(cx: &Context, j: &Joint, msg: impl Into<String>) -> Finding {
+    if j.own_armature() == 0.0 {
+        let act = j.armature_parts.iter().find_map(|p| match p.source {
+            PartSource::Actuator(a, _) | PartSource::TendonActuator(a, ..) => Some(a),
+            _ => None,
+        });
+        if let Some(a) = act {
+            let name = &cx.robot.actuators[a].name;
+            let jloc = cx.robot.elem_loc(ElemKind::Joint, j.id, &j.name);
+            return cx.at_attr(ElemKind::Actuator, a, name, "armature", msg).secondary(jloc, format!("joint `{}`", j.name));
+        }
+    }
+    cx.at_attr(ElemKind::Joint, j.id, &j.name, "armature", msg)
+}

@@ -142,8 +142,10 @@ pub const fn opt(name: &'static str, default: f64, unit: &'static str, help: &'s
 pub fn registry() -> Vec<&'static dyn Rule> {
     vec![
         &mapping::actuator_mapping::ActuatorMapping,
+        &mapping::missing_actuators::MissingActuators,
         &inertia::armature_mismatch::ArmatureMismatch,
         &inertia::parallel_ankle_armature::ParallelAnkleArmature,
+        &inertia::zero_armature::ZeroArmature,
         &contact::toe_tilt::ToeTilt,
         &contact::foot_collision_geometry::FootCollisionGeometry,
         &limits::soft_limits::SoftLimits,

@@ -34,14 +34,24 @@ pub fn markers(spec: Option<&Spec>) -> Vec<(String, String)> {
             v.push((l.clone(), r.clone()));
         }
     }
+    for (l, r) in LEG_PREFIXES {
+        v.push((l.to_string(), r.to_string()));
+    }
     for (l, r) in [("left_", "right_"), ("Left_", "Right_"), ("_left", "_right"), ("_Left", "_Right"), ("l_", "r_"), ("L_", "R_"), ("_l", "_r"), ("_L", "_R"), ("Left", "Right"), ("left", "right")] {
         v.push((l.to_string(), r.to_string()));
     }
     v
 }
 
+/// Quadruped leg prefixes: front/rear (or fore/hind) left ↔ right. Only ever a name's prefix.
+const LEG_PREFIXES: [(&str, &str); 8] =
+    [("FL_", "FR_"), ("RL_", "RR_"), ("fl_", "fr_"), ("rl_", "rr_"), ("LF_", "RF_"), ("LH_", "RH_"), ("lf_", "rf_"), ("lh_", "rh_")];
+
 /// Replace one marker occurrence: short markers (`l_`, `_l`) only as a prefix / suffix.
 fn swap(name: &str, from: &str, to: &str) -> Option<String> {
+    if LEG_PREFIXES.iter().any(|(l, r)| *l == from || *r == from) {
+        return name.starts_with(from).then(|| format!("{to}{}", &name[from.len()..]));
+    }
     let short = from.trim_matches('_').len() <= 1;
     if short {
         if from.ends_with('_') && name.starts_with(from) {
@@ -174,5 +184,9 @@ mod tests {
         assert_eq!(mirror("ankle_r", None), Some((Side::Right, "ankle_l".into())));
         assert_eq!(mirror("torso", None), None);
         assert_eq!(mirror("wheel_rl", None), None);
+        assert_eq!(mirror("FL_calf", None), Some((Side::Left, "FR_calf".into())));
+        assert_eq!(mirror("RR_hip", None), Some((Side::Right, "RL_hip".into())));
+        assert_eq!(mirror("LH_KFE", None), Some((Side::Left, "RH_KFE".into())));
+        assert_eq!(mirror("HALF_link", None), None);
     }
 }

@@ -11,11 +11,20 @@ declare_rule! {
     /// ## What it does
     /// Checks the collision geometry of each foot (its foot and toe bodies): contact must use
     /// primitives, not meshes — capsules or spheres, and boxes unless `allow_boxes = 0`; capsule,
-    /// sphere and cylinder radii within [`min_radius`, `max_radius`] (about 12 mm); `condim` 3;
-    /// sliding friction within `friction_tolerance` of `friction`; at least three non-collinear
+    /// sphere and cylinder radii within [`min_radius`, `max_radius`] (3–50 mm by default: a
+    /// sanity range, not one robot's design — the Asimov feet use about 12 mm, common reference
+    /// feet 5 mm corner spheres); `condim` 3; sliding friction within `friction_tolerance` of
+    /// `friction`; at least three non-collinear
     /// ground contact points whose support polygon reaches both the heel and the toe third of the
-    /// foot; and left and right feet with the same number and sizes of geoms. Problems are
-    /// reported once per foot, listing the geoms, at the first offending geom's attribute.
+    /// foot; and left and right feet with the same number and sizes of geoms (sizes within 2 % or
+    /// 0.5 mm, so mesh export noise does not count). Problems are reported once per foot, listing
+    /// the geoms, at the first offending geom's attribute.
+    ///
+    /// Friction and condim are matters of intent: MuJoCo's default friction 1 and condim 6
+    /// (rolling friction, common on quadruped feet) are deliberate choices in many public models.
+    /// Unless the intended values are stated — `friction` / `friction_tolerance` set under
+    /// `[rules.foot-collision-geometry]` in modellint.toml — they are reported as info, not as
+    /// warnings. condim 1 (frictionless feet) stays a warning.
     ///
     /// Foot bodies come from the spec's `robot.foot_bodies` globs; without them, from body names
     /// containing `foot`, `ankle_roll`, `toe` or `sole`; failing that, the leaf bodies whose
@@ -46,8 +55,8 @@ declare_rule! {
         probe: Some("stance-settle"),
         options: [
             opt("allow_boxes", 1.0, "bool", "1: box feet are acceptable primitives; 0: only capsules and spheres"),
-            opt("min_radius", 0.008, "m", "smallest capsule/sphere radius"),
-            opt("max_radius", 0.02, "m", "largest capsule/sphere radius"),
+            opt("min_radius", 0.003, "m", "smallest capsule/sphere radius"),
+            opt("max_radius", 0.05, "m", "largest capsule/sphere radius"),
             opt("friction", 0.6, "", "expected sliding friction of foot geoms"),
             opt("friction_tolerance", 0.2, "", "allowed deviation from `friction`"),
             opt("contact_window", 0.005, "m", "geom points within this of the foot's lowest point count as ground contacts"),
@@ -86,19 +95,10 @@ fn may_collide(robot: &Robot, a: usize, b: usize) -> bool {
     (x.contype & y.conaffinity) != 0 || (y.contype & x.conaffinity) != 0
 }
 
-/// A comparable signature of a foot's geoms: (type, size rounded to 0.1 mm), sorted.
-fn signature(robot: &Robot, f: &Foot) -> Vec<(u8, [i64; 3])> {
-    let mut v: Vec<(u8, [i64; 3])> = f
-        .geoms
-        .iter()
-        .map(|&g| {
-            let geom = &robot.geoms[g];
-            (geom.gtype as u8, geom.size.map(|s| (s * 1e4).round() as i64))
-        })
-        .collect();
-    v.sort();
-    v
-}
+/// Left/right feet match when every geom has a partner of the same type whose sizes agree within
+/// 2 % or 0.5 mm: mesh-derived sizes differ by export noise (0.1–0.2 mm), a real edit by more.
+const MIRROR_REL: f64 = 0.02;
+const MIRROR_ABS: f64 = 0.0005;
 
 impl Rule for FootCollisionGeometry {
     fn meta(&self) -> &'static RuleMeta {
@@ -110,6 +110,8 @@ impl Rule for FootCollisionGeometry {
         let (rmin, rmax) = (cx.opt("min_radius"), cx.opt("max_radius"));
         let (mu, mu_tol) = (cx.opt("friction"), cx.opt("friction_tolerance"));
         let window = cx.opt("contact_window");
+        // Intended friction/condim stated by the user (config), not just this rule's default.
+        let stated = cx.options.contains_key("friction") || cx.options.contains_key("friction_tolerance");
         let all_feet = feet(robot, cx.spec);
         for foot in &all_feet {
             let label = foot.label(robot);
@@ -174,8 +176,8 @@ impl Rule for FootCollisionGeometry {
                 out.push(
                     cx.at_attr(ElemKind::Geom, g0, &robot.geoms[g0].name, "size", format!("{label} has contact radius {} mm outside {}–{} mm: {}", fmt_num(r * 1000.0, 3), fmt_num(rmin * 1000.0, 3), fmt_num(rmax * 1000.0, 3), list(robot, &bad_r)))
                         .label(format!("radius {} mm", fmt_num(r * 1000.0, 3)))
-                        .note("the contact radius sets where the contact point sits and how the foot rolls over an edge; the identified foot model used capsules of about 12 mm")
-                        .help("set the capsule/sphere radius to about 12 mm")
+                        .note("the contact radius sets where the contact point sits and how the foot rolls over an edge; a radius this far outside the usual millimetre-to-centimetre range is usually a unit or scale error")
+                        .help("check the geom's size (MuJoCo sizes are in metres; a sphere's size is its radius)")
                         .subject(subj)
                         .measured(r, "m")
                         .expected(0.5 * (rmin + rmax), "m"),
@@ -190,8 +192,13 @@ impl Rule for FootCollisionGeometry {
                     4 | 6 => "condim 4/6 adds torsional/rolling friction that the identified contact model did not have",
                     _ => "only condim 3 (normal force plus 2-D sliding friction) matches the identified contact model",
                 };
+                let mut f =
+                    cx.at_attr(ElemKind::Geom, g0, &robot.geoms[g0].name, "condim", format!("{label} uses condim {c} (expected 3): {}", list(robot, &bad_c)));
+                if c != 1 && !stated && cx.level == cx.meta.default_level {
+                    f.severity = Severity::Info;
+                }
                 out.push(
-                    cx.at_attr(ElemKind::Geom, g0, &robot.geoms[g0].name, "condim", format!("{label} uses condim {c} (expected 3): {}", list(robot, &bad_c)))
+                    f
                         .label(format!("condim {c}"))
                         .note(format!("{why}; MuJoCo uses the larger condim of the two contacting geoms"))
                         .help("set condim=\"3\" on foot and toe geoms (and not higher on the floor)")
@@ -204,8 +211,18 @@ impl Rule for FootCollisionGeometry {
             let bad_f: Vec<usize> = foot.geoms.iter().copied().filter(|&g| (robot.geoms[g].friction[0] - mu).abs() > mu_tol).collect();
             if let Some(&g0) = bad_f.first() {
                 let v = robot.geoms[g0].friction[0];
+                let mut f = cx.at_attr(
+                    ElemKind::Geom,
+                    g0,
+                    &robot.geoms[g0].name,
+                    "friction",
+                    format!("{label} has sliding friction {} (expected {} ± {}{}): {}", fmt_num(v, 3), fmt_num(mu, 3), fmt_num(mu_tol, 3), if stated { "" } else { ", the Asimov identified value; no intended value stated" }, list(robot, &bad_f)),
+                );
+                if !stated && cx.level == cx.meta.default_level {
+                    f.severity = Severity::Info;
+                }
                 out.push(
-                    cx.at_attr(ElemKind::Geom, g0, &robot.geoms[g0].name, "friction", format!("{label} has sliding friction {} (expected {} ± {}): {}", fmt_num(v, 3), fmt_num(mu, 3), fmt_num(mu_tol, 3), list(robot, &bad_f)))
+                    f
                         .label(format!("friction {}", fmt_num(v, 3)))
                         .note("foot friction decides when the foot slips; a policy trained on grippier feet than the hardware's learns pushes that slip on the real floor")
                         .help(format!("set friction=\"{} …\" on the foot and toe geoms; MuJoCo combines friction by the maximum of the two geoms, so the floor's friction must not exceed it", fmt_num(mu, 3)))
@@ -253,8 +270,7 @@ impl Rule for FootCollisionGeometry {
         let left: Vec<&Foot> = all_feet.iter().filter(|f| f.side == Some(crate::rules::contact::feet::Side::Left)).collect();
         let right: Vec<&Foot> = all_feet.iter().filter(|f| f.side == Some(crate::rules::contact::feet::Side::Right)).collect();
         if let (Some(l), Some(r)) = (left.first(), right.first()) {
-            let (sl, sr) = (signature(robot, l), signature(robot, r));
-            if sl != sr {
+            if !crate::rules::geometry::mirror_asymmetry::same_geoms(robot, &l.geoms, &r.geoms, MIRROR_REL, MIRROR_ABS) {
                 let g0 = r.geoms[0];
                 let msg = if l.geoms.len() != r.geoms.len() {
                     format!("left and right feet differ: {} has {} collision geoms, {} has {}", robot.body_name(l.root), l.geoms.len(), robot.body_name(r.root), r.geoms.len())

@@ -14,7 +14,7 @@ declare_rule! {
     /// ## Why is this bad?
     /// The real firmware and bus delay every command by up to `max` control periods. A policy
     /// trained without that latency reacts to state it will not see in time on hardware and
-    /// oscillates or falls; the delay is part of the identified system (seed 001 §4–5). A delay
+    /// oscillates or falls; the delay is part of the identified system (Asimov system identification §4–5). A delay
     /// longer than the hardware's makes the policy needlessly sluggish.
     ///
     /// ## How it is confirmed
@@ -66,7 +66,7 @@ impl Rule for MissingActionDelay {
                 )
                 .label("delay = 0 on all actuators")
                 .secondary(spec_loc, spec_text)
-                .note("a policy trained without the real command latency reacts to state it will not see in time on hardware; the delay is part of the identified system (seed 001 §5)")
+                .note("a policy trained without the real command latency reacts to state it will not see in time on hardware; the delay is part of the identified system (Asimov system identification §5)")
                 .help(format!(
                     "add delay=\"{}\" (seconds, with nsample for the history buffer) to the actuators' default class, or randomise the delay in {}–{} ms in the training stack and suppress this finding with that reason",
                     fmt_num(hi_s, 3),

@@ -10,15 +10,17 @@ declare_rule! {
     /// ## What it does
     /// For every joint under PD control (a `<position>` actuator, or a `<motor>` actuator whose
     /// motor family in the spec gives `kp`/`kd`), computes the closed-loop damping ratio
-    /// ζ = kd / (2·√(kp·I)) and natural frequency ω_n = √(kp/I), where kd = actuator kv + joint
-    /// damping and I is the joint's diagonal entry of the mass matrix at the standing keyframe
-    /// (MuJoCo includes armature in it). Reports joints with ζ below `min_damping_ratio`. The
+    /// ζ = kd / (2·√(kp·I)) and natural frequency ω_n = √(kp/I), where kd = actuator kv + the
+    /// joint's effective damping (its own `damping`, plus actuator `damping`·gear² and tendon
+    /// damping, MuJoCo ≥ 3.17; a voltage-driven `<dcmotor>`'s back-EMF adds K²/R × gear², as in
+    /// MuJoCo's DC motor model note) and I is the joint's diagonal entry of the mass matrix at the
+    /// standing keyframe (MuJoCo includes every armature in it: joint, actuator·gear², tendon). Reports joints with ζ below `min_damping_ratio`. The
     /// armature-only bound kd / (2·√(kp·armature)) is reported alongside.
     ///
     /// ## Why is this bad?
     /// A policy trained on an underdamped simulated joint learns to behave like an underdamped
     /// controller: its corrections overshoot, and on hardware each overshoot triggers a larger
-    /// correction on the next cycle, exciting sustained oscillation (seed 001 §3). The real motor
+    /// correction on the next cycle, exciting sustained oscillation (Asimov system identification §3). The real motor
     /// controllers were fine; the simulated data domain was wrong.
     ///
     /// ## How it is confirmed
@@ -172,8 +174,19 @@ impl Rule for UnderdampedPdGains {
                 ),
                 None => " The joint has no armature, so nothing but the link inertia sets I.".into(),
             };
+            let parts_note = if j.armature_elsewhere() || j.damping_parts.iter().any(|p| p.source != crate::model::PartSource::Joint) {
+                format!(
+                    " Effective armature {} = {}; passive damping {} = {} (MuJoCo ≥ 3.17 applies actuator and tendon armature and damping at the joint).",
+                    fmt_num(j.armature, 4),
+                    crate::model::describe_parts(cx.robot, &j.armature_parts, "armature"),
+                    fmt_num(j.damping, 4),
+                    crate::model::describe_parts(cx.robot, &j.damping_parts, "damping")
+                )
+            } else {
+                String::new()
+            };
             f = f.note(format!(
-                "An underdamped simulated joint teaches the policy to behave like an underdamped controller; on hardware its corrections overshoot and it oscillates (seed 001 §3).{arm_note}"
+                "An underdamped simulated joint teaches the policy to behave like an underdamped controller; on hardware its corrections overshoot and it oscillates (Asimov system identification §3).{arm_note}{parts_note}"
             ));
             let help = match kd_max {
                 // The cap limits the controller's kd; joint damping adds to it.

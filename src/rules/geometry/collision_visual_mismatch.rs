@@ -18,6 +18,10 @@ declare_rule! {
     /// surface sticks out of the visual mesh's bounding box (in the mesh's own principal frame)
     /// by more than `tolerance` is reported; when its centre also lies outside the mesh's convex
     /// hull (parry3d) by more than `tolerance`, it is reported as misplaced rather than oversized.
+    /// Only geoms that stick out by `misplaced` (50 mm) or more are warnings: a primitive a
+    /// centimetre or two outside a curved link (a hip cylinder 12–16 mm out) is a deliberate
+    /// coarse approximation and is reported as info, while misplaced collision geometry on real
+    /// models sticks out by 50 mm or more.
     /// For foot bodies it also compares the support polygon of
     /// the collision geoms (the xy hull of their ground points) with the xy hull of the visual
     /// sole (visual vertices within 5 mm of its bottom); coverage below `min_sole_coverage` is
@@ -44,7 +48,8 @@ declare_rule! {
         level: Severity::Warning,
         probe: None,
         options: [
-            opt("tolerance", 0.01, "m", "how far a collision geom may extend outside the visual mesh's hull"),
+            opt("tolerance", 0.01, "m", "how far a collision geom may extend outside the visual mesh's hull before it is reported (as info)"),
+            opt("misplaced", 0.05, "m", "from this far outside the visual mesh a collision geom is a warning (misplaced or grossly oversized)"),
             opt("min_sole_coverage", 0.6, "ratio", "smallest fraction of the visual sole's area the foot's support polygon must cover"),
         ],
     }
@@ -134,6 +139,7 @@ impl Rule for CollisionVisualMismatch {
     fn check(&self, cx: &Context, out: &mut Vec<Finding>) {
         let robot = cx.robot;
         let tol = cx.opt("tolerance");
+        let misplaced = cx.opt("misplaced");
         let min_cov = cx.opt("min_sole_coverage");
         let dirs = directions();
         let foot_bodies: Vec<usize> = feet(robot, cx.spec).iter().map(|f| f.root).collect();
@@ -181,8 +187,18 @@ impl Rule for CollisionVisualMismatch {
                         "a collision geom larger than the part makes the simulated robot touch itself and the ground where the real one does not",
                     )
                 };
+                let mut f = cx.at_attr(ElemKind::Geom, g.id, &g.name, "size", msg);
+                let coarse = worst.max(centre_out) < misplaced;
+                if coarse && cx.level == cx.meta.default_level {
+                    f.severity = Severity::Info;
+                }
+                let note = if coarse {
+                    format!("{note}; within {} mm of the part this is often a deliberate coarse approximation — check that it is intended (misplaced geometry on real models sticks out by {} mm or more)", fmt_num(misplaced * 1000.0, 3), fmt_num(misplaced * 1000.0, 3))
+                } else {
+                    note.to_string()
+                };
                 out.push(
-                    cx.at_attr(ElemKind::Geom, g.id, &g.name, "size", msg)
+                    f
                         .label(label)
                         .note(note)
                         .help(format!("resize or move the geom to fit inside the visual mesh (tolerance {} mm)", fmt_num(tol * 1000.0, 3)))

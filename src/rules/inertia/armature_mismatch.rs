@@ -7,6 +7,8 @@ use crate::rules::inertia::parallel_ankle_armature::parallel_issue;
 use crate::rules::{Context, Rule, RuleMeta, opt};
 use crate::spec::v;
 use crate::util::fmt_num;
+use crate::model::describe_parts;
+use crate::rules::limits::effort_limit_mismatch::joint_torque_limit;
 
 declare_rule! {
     /// ## What it does
@@ -19,13 +21,14 @@ declare_rule! {
     /// motors (count > 1) are left to `parallel-ankle-armature`.
     ///
     /// ## Why is this bad?
-    /// Armature here is the reflected inertia of motor and gearbox seen at the joint (seed 001
+    /// Armature here is the reflected inertia of motor and gearbox seen at the joint (Asimov system identification
     /// §2). It often dominates the link inertia of distal joints and sets their closed-loop
     /// bandwidth and damping; a wrong value trains the policy on a joint that accelerates
     /// differently from the hardware.
     ///
     /// ## How it is confirmed
-    /// Static: compiled `dof_armature` against the spec's motor families.
+    /// Static: compiled `dof_armature` + `actuator_armature`·gear² + tendon armature against the
+    /// spec's motor families, or against the spread of the model's own force limits.
     ///
     /// ## How to fix
     /// Set each joint's armature to rotor_inertia × gear_ratio² × count of its motor, e.g. one
@@ -35,7 +38,10 @@ declare_rule! {
         group: "inertia",
         level: Severity::Warning,
         probe: None,
-        options: [opt("tolerance", 0.05, "fraction", "allowed relative difference from the expected reflected inertia")],
+        options: [
+            opt("tolerance", 0.05, "fraction", "allowed relative difference from the expected reflected inertia"),
+            opt("effort_spread", 5.0, "ratio", "without a spec: largest / smallest force limit above which one shared armature value is reported"),
+        ],
     }
 }
 
@@ -50,7 +56,10 @@ impl Rule for ArmatureMismatch {
         &Self::META
     }
     fn check(&self, cx: &Context, out: &mut Vec<Finding>) {
-        let Some(spec) = cx.spec else { return };
+        let Some(spec) = cx.spec else {
+            uniform_without_spec(cx, out);
+            return;
+        };
         let tol = cx.opt("tolerance");
         let robot = cx.robot;
         let mut actuated: Vec<(usize, f64, String)> = Vec::new();
@@ -103,10 +112,9 @@ impl Rule for ArmatureMismatch {
                     if a < e { "below" } else { "above" }
                 )
             };
-            let mut f = cx
-                .at_attr(ElemKind::Joint, first.id, &first.name, "armature", msg)
+            let mut f = crate::rules::inertia::at_armature(cx, first, msg)
                 .label(format!("armature {} kg·m²", fmt_num(a, 4)))
-                .note("armature stands for the motor and gearbox inertia reflected to the joint (seed 001 §2); it sets how fast the joint accelerates under the PD controller, so a wrong value trains the policy on a joint unlike the hardware")
+                .note("armature stands for the motor and gearbox inertia reflected to the joint (Asimov system identification §2); it sets how fast the joint accelerates under the PD controller, so a wrong value trains the policy on a joint unlike the hardware")
                 .help(format!("set armature=\"{}\" for the `{fam}` joints (rotor_inertia × gear_ratio² × count)", fmt_num(e, 6)))
                 .subject(Subject::Joint(first.id))
                 .measured(a, "kg·m²")
@@ -115,6 +123,9 @@ impl Rule for ArmatureMismatch {
                 .with("expected_armature", e);
             if zero && cx.level == cx.meta.default_level {
                 f.severity = Severity::Error;
+            }
+            if first.armature_elsewhere() {
+                f.note = Some(format!("{} — effective armature {} kg·m² = {}", f.note.unwrap_or_default(), fmt_num(a, 4), describe_parts(robot, &first.armature_parts, "armature")));
             }
             if let Some(l) = spec.joint(&first.name).and_then(|x| x.motor_loc) {
                 f = f.secondary(l, format!("spec motor family `{fam}`"));
@@ -157,5 +168,65 @@ impl Rule for ArmatureMismatch {
                 out.push(f);
             }
         }
+        if actuated.len() < 2 {
+            uniform_without_spec(cx, out);
+        }
     }
+}
+
+/// The copy-paste sign without a spec: one armature on every actuated joint while their force
+/// limits span `effort_spread` × or more.
+fn uniform_without_spec(cx: &Context, out: &mut Vec<Finding>) {
+    let robot = cx.robot;
+    let spread_min = cx.opt("effort_spread");
+    let joints: Vec<&crate::model::Joint> = robot
+        .joints
+        .iter()
+        .filter(|j| j.is_scalar() && !robot.actuators_on_joint(j.id).is_empty() && !cx.facts(&j.name).is_some_and(|f| f.passive))
+        .collect();
+    if joints.len() < 3 {
+        return;
+    }
+    let a0 = joints[0].armature;
+    if !(a0 > 0.0) || !joints.iter().all(|j| (j.armature - a0).abs() <= 1e-9 * a0) {
+        return;
+    }
+    let limits: Vec<(usize, f64)> = joints.iter().filter_map(|j| joint_torque_limit(robot, j.id).map(|(l, _)| (j.id, l))).filter(|(_, l)| *l > 0.0).collect();
+    if limits.len() < 2 {
+        return;
+    }
+    let (lo, hi) = limits.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), (_, l)| (lo.min(*l), hi.max(*l)));
+    let spread = hi / lo;
+    if !(spread >= spread_min) {
+        return;
+    }
+    let name = |l: f64| limits.iter().find(|(_, x)| *x == l).map(|(j, _)| robot.joints[*j].name.as_str()).unwrap_or("");
+    let j = joints[0];
+    let f = crate::rules::inertia::at_armature(
+            cx,
+            j,
+            format!(
+                "every one of the {} actuated joints has the same armature {} kg·m², while their force limits span {}–{} N·m ({}×, `{}` to `{}`)",
+                joints.len(),
+                fmt_num(a0, 4),
+                fmt_num(lo, 4),
+                fmt_num(hi, 4),
+                fmt_num(spread, 3),
+                name(lo),
+                name(hi)
+            ),
+        )
+        .label("one value for every motor")
+        .note(format!(
+            "reflected inertia is rotor_inertia × gear², peak torque ∝ gear: motors {}× apart in torque cannot share one reflected inertia, so one number everywhere is a copy-pasted placeholder (Asimov system identification §1–2: leg joints use actuator families with different reflected inertia){}",
+            fmt_num(spread, 3),
+            if j.armature_elsewhere() { format!("; effective armature = {}", describe_parts(robot, &j.armature_parts, "armature")) } else { String::new() }
+        ))
+        .help("give each motor family its own default class with armature = rotor_inertia × gear_ratio² × count; a spec with the families lets this rule check each value")
+        .subject(Subject::Model)
+        .measured(spread, "ratio")
+        .expected(spread_min, "ratio")
+        .with("armature", a0)
+        .with("effort_spread", spread);
+    out.push(f);
 }

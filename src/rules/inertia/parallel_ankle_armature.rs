@@ -15,8 +15,17 @@ declare_rule! {
     /// joints that carry a doubled value: twice their own family's, or the parallel family's
     /// N-motor value copied onto them.
     ///
+    /// Without a spec (for joints the spec gives no motor family) it detects reuse of the model's
+    /// own doubled values: a value that is exactly 2 × another value the model gives actuated
+    /// joints (within `exact_tolerance`) is a two-motor value. Reported on passive joints (no
+    /// actuator, or `passive = true` in the spec) that carry it — e.g. passive neck joints with
+    /// 0.0565056 = 2 × 0.0282528, the parallel ankle's value — and on single-motor joints that
+    /// carry it while the model shows elsewhere which joints really are two-motor ones (two
+    /// tendon actuators reach them). Armature is the effective value (joint + actuator·gear² +
+    /// tendon).
+    ///
     /// ## Why is this bad?
-    /// Armature strongly affects closed-loop behaviour (seed 001 §2). Halving a parallel ankle's
+    /// Armature strongly affects closed-loop behaviour (Asimov system identification §2). Halving a parallel ankle's
     /// reflected inertia makes it twice as lively in simulation as on hardware; copying the
     /// doubled ankle value onto a single-motor joint makes that joint artificially sluggish.
     ///
@@ -30,7 +39,10 @@ declare_rule! {
         group: "inertia",
         level: Severity::Error,
         probe: None,
-        options: [opt("tolerance", 0.05, "fraction", "relative tolerance when comparing armature values")],
+        options: [
+            opt("tolerance", 0.05, "fraction", "relative tolerance when comparing armature values"),
+            opt("exact_tolerance", 1e-4, "fraction", "without a spec: relative tolerance of an exact doubling (a copied value)"),
+        ],
     }
 }
 
@@ -104,6 +116,7 @@ impl Rule for ParallelAnkleArmature {
         &Self::META
     }
     fn check(&self, cx: &Context, out: &mut Vec<Finding>) {
+        doubled_without_spec(cx, out);
         let Some(spec) = cx.spec else { return };
         let tol = cx.opt("tolerance");
         for j in cx.robot.joints.iter().filter(|j| j.is_scalar()) {
@@ -123,7 +136,7 @@ impl Rule for ParallelAnkleArmature {
                         fmt_num(*expected, 4)
                     ),
                     *expected,
-                    "every motor of a parallel linkage reflects its rotor inertia onto the joint; with one motor's value the simulated joint is far livelier than the hardware (seed 001 §2: the ankle value is doubled for the two RSU motors)",
+                    "every motor of a parallel linkage reflects its rotor inertia onto the joint; with one motor's value the simulated joint is far livelier than the hardware (Asimov system identification §2: the ankle value is doubled for the two RSU motors)",
                 ),
                 Issue::DoubledOwn { single } => (
                     format!(
@@ -159,6 +172,98 @@ impl Rule for ParallelAnkleArmature {
                 .with("expected_armature", expected);
             if let Some(l) = facts.motor_loc {
                 f = f.secondary(l, format!("spec motor family `{fam}` (count = {})", facts.count));
+            }
+            out.push(f);
+        }
+    }
+}
+
+/// Reuse of the model's own doubled values, for joints the spec gives no motor family.
+fn doubled_without_spec(cx: &Context, out: &mut Vec<Finding>) {
+    let robot = cx.robot;
+    let etol = cx.opt("exact_tolerance");
+    let scalar: Vec<&Joint> = robot.joints.iter().filter(|j| j.is_scalar() && j.armature > 0.0).collect();
+    let passive = |j: &Joint| robot.actuators_on_joint(j.id).is_empty() || cx.facts(&j.name).is_some_and(|f| f.passive);
+    let has_family = |j: &Joint| cx.facts(&j.name).is_some_and(|f| f.motor.is_some() && !f.passive);
+    let same = |a: f64, b: f64| (a - b).abs() <= etol * a.abs().max(b.abs());
+    // Distinct values carried by actuated joints, each with its joints.
+    let mut bases: Vec<(f64, Vec<usize>)> = Vec::new();
+    for j in scalar.iter().filter(|j| !passive(j)) {
+        match bases.iter_mut().find(|(v, _)| same(*v, j.armature)) {
+            Some((_, js)) => js.push(j.id),
+            None => bases.push((j.armature, vec![j.id])),
+        }
+    }
+    // value → (passive joints, single-motor joints) carrying 2 × some base.
+    let mut hits: Vec<(f64, f64, Vec<usize>, Vec<usize>)> = Vec::new();
+    for j in &scalar {
+        if has_family(j) {
+            continue;
+        }
+        let Some((base, _)) = bases.iter().find(|(b, _)| same(j.armature, 2.0 * b)) else { continue };
+        let entry = match hits.iter_mut().position(|h| same(h.0, j.armature)) {
+            Some(i) => &mut hits[i],
+            None => {
+                hits.push((j.armature, *base, Vec::new(), Vec::new()));
+                hits.last_mut().unwrap()
+            }
+        };
+        if passive(j) {
+            entry.2.push(j.id);
+        } else {
+            entry.3.push(j.id);
+        }
+    }
+    let names = |ids: &[usize]| ids.iter().map(|&i| format!("`{}`", robot.joints[i].name)).collect::<Vec<_>>().join(", ");
+    for (value, base, passive_ids, single_ids) in hits {
+        let base_joints = &bases.iter().find(|(b, _)| same(*b, base)).map(|x| x.1.clone()).unwrap_or_default();
+        // Single-motor joints count only when the model shows which joints are two-motor ones.
+        let parallel: Vec<usize> = single_ids.iter().copied().filter(|&i| tendon_motor_count(robot, i) >= 2).collect();
+        let flagged_single: Vec<usize> = if parallel.is_empty() { Vec::new() } else { single_ids.iter().copied().filter(|i| !parallel.contains(i) && robot.actuators_on_joint(*i).len() == 1).collect() };
+        let legit: Vec<usize> = single_ids.iter().copied().filter(|i| !flagged_single.contains(i)).collect();
+        for (ids, what) in [(passive_ids, "passive"), (flagged_single, "single-motor")] {
+            if ids.is_empty() {
+                continue;
+            }
+            let j = &robot.joints[ids[0]];
+            let who = if ids.len() == 1 { format!("{what} joint `{}` carries", j.name) } else { format!("{} {what} joints ({}) carry", ids.len(), names(&ids)) };
+            let also = if legit.is_empty() { String::new() } else { format!(" (also on actuated {})", names(&legit)) };
+            let mut shown_base: Vec<usize> = base_joints.iter().copied().take(6).collect();
+            shown_base.retain(|i| !ids.contains(i));
+            let more = base_joints.len().saturating_sub(shown_base.len());
+            let msg = format!(
+                "{who} armature {} kg·m², exactly 2 × the {} kg·m² of {}{}{also}: a two-motor value on a joint {}",
+                fmt_num(value, 6),
+                fmt_num(base, 6),
+                names(&shown_base),
+                if more > 0 { format!(" and {more} more") } else { String::new() },
+                if what == "passive" { "that has no motor" } else { "driven by one motor" }
+            );
+            let mut f = crate::rules::inertia::at_armature(cx, j, msg)
+                .label(format!("armature {} = 2 × {}", fmt_num(value, 6), fmt_num(base, 6)))
+                .note(format!(
+                    "doubling belongs to joints driven by two motors through a parallel linkage (Asimov system identification §2: the ankle value is doubled for the two RSU motors); copied onto {} it makes the joint twice as sluggish as one motor would, or adds rotor inertia where there is no rotor{}",
+                    if what == "passive" { "a passive joint" } else { "a single-motor joint" },
+                    if j.armature_elsewhere() { format!("; effective armature = {}", crate::model::describe_parts(robot, &j.armature_parts, "armature")) } else { String::new() }
+                ))
+                .help(if what == "passive" {
+                    "give a passive joint only what it really has (a small armature for its own transmission, or none) plus its spring and damping; add a spec with `passive = true` to confirm".to_string()
+                } else {
+                    format!("set armature=\"{}\" (one motor's reflected inertia), or give the joint its own family's value", fmt_num(base, 6))
+                })
+                .subject(Subject::Joint(j.id))
+                .measured(value, "kg·m²")
+                .expected(base, "kg·m²")
+                .with("armature", value)
+                .with("base_armature", base);
+            // Inferred from the file alone: a warning, not the spec-backed error.
+            if cx.level == cx.meta.default_level {
+                f.severity = Severity::Warning;
+            }
+            if let Some(&b0) = base_joints.first() {
+                let bj = &robot.joints[b0];
+                let (loc, _) = robot.attr_loc(ElemKind::Joint, bj.id, &bj.name, "armature");
+                f = f.secondary(loc, format!("`{}` has {} kg·m²", bj.name, fmt_num(base, 6)));
             }
             out.push(f);
         }

@@ -11,15 +11,18 @@ use crate::util::fmt_num;
 declare_rule! {
     /// ## What it does
     /// For every actuated hinge/slide joint, finds the largest torque the model lets the
-    /// actuators apply: the actuator's `forcerange` (× gear), the joint's `actuatorfrcrange`, or
-    /// for a `<motor>` its `ctrlrange` × gain × gear — the tightest that applies. Reports joints
-    /// with no force limit at all (error), and limits that differ from the spec's motor
+    /// actuators apply: the actuator's `forcerange` (× gear), the joint's `actuatorfrcrange`, for
+    /// a `<motor>` its `ctrlrange` × gain × gear, or for a voltage-driven `<dcmotor>` (MuJoCo
+    /// 3.17) its stall torque K/R × V_max × gear — the tightest that applies. Reports joints
+    /// with no force limit at all (error), a `<motor>` whose torque `ctrlrange` (× gain × gear)
+    /// contradicts the same joint's `actuatorfrcrange` by more than `tolerance` (no spec needed:
+    /// e.g. ±139 N·m of command on a joint clamped at ±60), and limits that differ from the spec's motor
     /// `peak_torque` by more than `tolerance`. When the spec gives a motor family's
     /// `velocity_limit` or `saturation_torque`, reports once per family (info) that MuJoCo cannot
     /// express the speed–torque curve, so the training stack must apply it.
     ///
     /// ## Why is this bad?
-    /// Effort limits are part of the identified actuator model (seed 001 §4). A joint without a
+    /// Effort limits are part of the identified actuator model (Asimov system identification §4). A joint without a
     /// limit, or with a higher one than the motor's peak, lets the policy learn motions that need
     /// torque the hardware cannot produce; a lower one hides real capability.
     ///
@@ -73,6 +76,12 @@ pub fn joint_torque_limit(robot: &Robot, j: usize) -> Option<(f64, LimitSource)>
         if a.kind == ActuatorKind::Motor && a.ctrllimited {
             take(g * a.gainprm[0].abs() * a.ctrlrange[0].abs().max(a.ctrlrange[1].abs()), LimitSource::MotorCtrl(a.id));
         }
+        // A voltage-driven `<dcmotor>` stalls at K/R × V_max (× gear).
+        if let ActuatorKind::DcMotor { resistance, k, voltage: true } = a.kind {
+            if a.ctrllimited && resistance > 0.0 {
+                take(g * (k / resistance).abs() * a.ctrlrange[0].abs().max(a.ctrlrange[1].abs()), LimitSource::MotorCtrl(a.id));
+            }
+        }
     }
     best
 }
@@ -100,6 +109,9 @@ impl Rule for EffortLimitMismatch {
                 continue; // actuator-mapping reports the missing actuator
             }
             let unit = if j.jtype == crate::model::JointType::Slide { "N" } else { "N·m" };
+            if let Some(f) = ctrl_contradicts_joint_limit(cx, j, &acts, tol, unit) {
+                out.push(f);
+            }
             let Some((lim, src)) = joint_torque_limit(robot, j.id) else {
                 missing.push(j.id);
                 continue;
@@ -209,7 +221,7 @@ impl Rule for EffortLimitMismatch {
                     spec.loc(span),
                 )
                 .label("not representable in MJCF")
-                .note("a real motor's available torque falls with speed (seed 001 §4: speed–torque saturation); MuJoCo applies only a constant force range, so fast motions in simulation get more torque than the hardware")
+                .note("a real motor's available torque falls with speed (Asimov system identification §4: speed–torque saturation); MuJoCo applies only a constant force range, so fast motions in simulation get more torque than the hardware")
                 .help(match (st, vl, v(&m.peak_torque)) {
                     (Some(s), Some(w), _) => format!("in the actuator model clamp |τ| ≤ min(peak, {s}·(1 − |q̇|/{w})) N·m", s = fmt_num(s, 4), w = fmt_num(w, 4)),
                     (None, Some(w), Some(p)) => format!("in the actuator model clamp |τ| ≤ {p}·(1 − |q̇|/{w}) N·m, or at least limit joint speed to {w} rad/s", p = fmt_num(p, 4), w = fmt_num(w, 4)),
@@ -222,4 +234,53 @@ impl Rule for EffortLimitMismatch {
             out.push(f);
         }
     }
+}
+
+/// A `<motor>`'s torque command range that disagrees with the joint's `actuatorfrcrange`.
+fn ctrl_contradicts_joint_limit(cx: &Context, j: &crate::model::Joint, acts: &[&crate::model::Actuator], tol: f64, unit: &str) -> Option<Finding> {
+    let robot = cx.robot;
+    let r = mj::raw(&robot.mj);
+    let njnt = r.njnt as usize;
+    if !mj::slice(r.jnt_actfrclimited, njnt).get(j.id).copied().unwrap_or(false) || acts.len() != 1 {
+        return None;
+    }
+    let a = acts[0];
+    if a.kind != ActuatorKind::Motor || !a.ctrllimited || a.forcelimited {
+        return None;
+    }
+    let rng = mj::slice(r.jnt_actfrcrange, 2 * njnt);
+    let jl = rng[2 * j.id].abs().max(rng[2 * j.id + 1].abs());
+    let ml = (a.gear * a.gainprm[0]).abs() * a.ctrlrange[0].abs().max(a.ctrlrange[1].abs());
+    if !(jl > 0.0 && ml > 0.0) || (ml - jl).abs() <= tol * jl.max(ml) {
+        return None;
+    }
+    let above = ml > jl;
+    let msg = format!(
+        "motor `{}` commands up to ±{} {unit} (ctrlrange × gear), but joint `{}` clamps actuator force at ±{} {unit} (actuatorfrcrange)",
+        a.name,
+        fmt_num(ml, 4),
+        j.name,
+        fmt_num(jl, 4)
+    );
+    let (jloc, _) = robot.attr_loc(ElemKind::Joint, j.id, &j.name, "actuatorfrcrange");
+    Some(
+        cx.at_attr(ElemKind::Actuator, a.id, &a.name, "ctrlrange", msg)
+            .label(format!("±{} {unit}", fmt_num(ml, 4)))
+            .secondary(jloc, format!("actuatorfrcrange ±{} {unit}", fmt_num(jl, 4)))
+            .note(if above {
+                format!(
+                    "MuJoCo clamps the joint's actuator force at ±{} {unit}, so the top {}% of the policy's action range does nothing; one of the two numbers is not the motor's peak torque",
+                    fmt_num(jl, 4),
+                    fmt_num((1.0 - jl / ml) * 100.0, 3)
+                )
+            } else {
+                format!("the policy can never reach the joint's ±{} {unit} limit; one of the two numbers is not the motor's peak torque", fmt_num(jl, 4))
+            })
+            .help("make ctrlrange × gear and actuatorfrcrange the same motor peak torque (a spec with peak_torque says which one is right)")
+            .subject(Subject::Joint(j.id))
+            .measured(ml, unit)
+            .expected(jl, unit)
+            .with("ctrl_limit", ml)
+            .with("joint_limit", jl),
+    )
 }

@@ -17,7 +17,7 @@ declare_rule! {
     /// problem through one `<default class>` are reported once.
     ///
     /// ## Why is this bad?
-    /// Training is meant to use soft limits, typically 0.9 of the hardware range (seed 001 §8):
+    /// Training is meant to use soft limits, typically 0.9 of the hardware range (Asimov system identification §8):
     /// commanding the hard stops produces hard-stop impacts, exploitation of boundary states and
     /// shock loads near the limits on the real robot.
     ///
@@ -140,7 +140,7 @@ impl Rule for SoftLimits {
                 let soft = exp.unwrap_or([mid - 0.5 * fct * span, mid + 0.5 * fct * span]);
                 let mut f = cx
                     .at_attr(ElemKind::Actuator, a.id, &a.name, attr, msg)
-                    .note("training should use soft limits inside the hardware range (typically 0.9 of it, seed 001 §8); commanding the hard stops trains hard-stop impacts and boundary exploitation that shock-load the real joints")
+                    .note("training should use soft limits inside the hardware range (typically 0.9 of it, Asimov system identification §8); commanding the hard stops trains hard-stop impacts and boundary exploitation that shock-load the real joints")
                     .help(format!(
                         "set ctrlrange=\"{} {}\" ({} × range, centred), or inheritrange=\"{}\"",
                         fmt_num(soft[0] * g, 4),

@@ -17,7 +17,7 @@ declare_rule! {
     /// whole range is `soft-limits`' finding). Missing force limits are `effort-limit-mismatch`'s.
     ///
     /// ## Why is this bad?
-    /// Hardware mapping comes first (seed 001 §1): a joint driven in simulation but passive on
+    /// Hardware mapping comes first (Asimov system identification §1): a joint driven in simulation but passive on
     /// the robot, a missing or doubled actuator, or a flipped sign produce unstable or seemingly
     /// random policy behaviour that no reward tuning fixes.
     ///
@@ -138,6 +138,10 @@ impl Rule for ActuatorMapping {
                 continue;
             }
             let Some(fam) = facts.motor.clone() else { continue };
+            // A model with no actuator at all is one `missing-actuators` finding, not one per joint.
+            if acts.is_empty() && robot.actuators.is_empty() {
+                continue;
+            }
             if acts.is_empty() {
                 let f = cx
                     .at_elem(ElemKind::Joint, j.id, &j.name, format!("joint `{}` has a `{fam}` motor on the robot but no actuator in the model", j.name))

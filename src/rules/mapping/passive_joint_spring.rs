@@ -10,8 +10,13 @@ declare_rule! {
     /// gives it a spring (`stiffness` > 0), `damping` > 0, a `range`, and collision geometry on
     /// the body it moves.
     ///
+    /// Without a spec (and for joints the spec does not mention) it reports what the file alone
+    /// shows: an unactuated spring joint (`stiffness` > 0) with no damping of any kind (joint,
+    /// actuator or tendon damping, and no `frictionloss`) and no `range` — nothing dissipates its
+    /// energy and nothing stops it.
+    ///
     /// ## Why is this bad?
-    /// A passive toe still shapes whole-body stability through contact and push-off (seed 001
+    /// A passive toe still shapes whole-body stability through contact and push-off (Asimov system identification
     /// §6). Without stiffness it flops freely and gives no support, so the policy learns to
     /// ignore it; without damping it rings; without limits it folds past the real stops; without
     /// collision geometry it never touches the ground.
@@ -39,7 +44,23 @@ impl Rule for PassiveJointSpring {
     fn check(&self, cx: &Context, out: &mut Vec<Finding>) {
         let robot = cx.robot;
         for j in robot.joints.iter().filter(|j| j.is_scalar()) {
-            let Some(facts) = cx.facts(&j.name) else { continue };
+            let Some(facts) = cx.facts(&j.name) else {
+                if j.stiffness > 0.0 && !(j.damping > 0.0) && !(j.frictionloss > 0.0) && !j.limited && robot.actuators_on_joint(j.id).is_empty() {
+                    let mut f = cx
+                        .at_attr(ElemKind::Joint, j.id, &j.name, "stiffness", format!("spring joint `{}` (stiffness {} N·m/rad) has no damping and no range", j.name, fmt_num(j.stiffness, 4)))
+                        .label(format!("stiffness {}, damping 0, no range", fmt_num(j.stiffness, 4)))
+                        .note("an undamped spring with no stops oscillates for ever after every touchdown and can wind past any real stop; a passive spring joint on hardware has both damping and hard stops (Asimov system identification §1, §6: passive spring toes)")
+                        .help("set the joint's identified damping (N·m·s/rad) and its hardware range=\"lo hi\"; a spec with `passive = true` checks the rest")
+                        .subject(Subject::Joint(j.id))
+                        .measured(0.0, "N·m·s/rad")
+                        .with("stiffness", j.stiffness);
+                    if cx.level == cx.meta.default_level {
+                        f.severity = Severity::Warning;
+                    }
+                    out.push(f);
+                }
+                continue;
+            };
             if !facts.passive {
                 continue;
             }
@@ -57,7 +78,7 @@ impl Rule for PassiveJointSpring {
                 let f = cx
                     .at_attr(ElemKind::Joint, j.id, &j.name, "stiffness", format!("passive joint `{}` has no spring: stiffness = {}", j.name, fmt_num(j.stiffness, 4)))
                     .label("stiffness 0")
-                    .note("the real passive joint is spring-loaded; without stiffness it flops freely, gives no support in stance and the policy learns to ignore it (seed 001 §6)")
+                    .note("the real passive joint is spring-loaded; without stiffness it flops freely, gives no support in stance and the policy learns to ignore it (Asimov system identification §6)")
                     .help("set the identified stiffness (N·m/rad) on the joint, and springref to its rest angle");
                 out.push(spec_label(f).subject(Subject::Joint(j.id)).measured(j.stiffness, "N·m/rad").with("stiffness", j.stiffness));
             }
@@ -82,7 +103,7 @@ impl Rule for PassiveJointSpring {
                 let f = cx
                     .at_elem(ElemKind::Body, b.id, &b.name, format!("passive joint `{}` moves body `{}`, which has no collision geometry", j.name, b.name))
                     .label("no colliding geom")
-                    .note("a toe without collision geometry never touches the ground, so its spring never acts in stance or push-off (seed 001 §6–7)")
+                    .note("a toe without collision geometry never touches the ground, so its spring never acts in stance or push-off (Asimov system identification §6–7)")
                     .help("add simple collision capsules (e.g. radius ≈ 12 mm, condim 3) to the body");
                 out.push(warn(spec_label(f)).subject(Subject::Body(b.id)));
             }
