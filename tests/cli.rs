@@ -191,3 +191,30 @@ fn config_thresholds_and_errors() {
     assert_eq!(code, 2);
     assert!(err.contains("bad_rule.toml:2:") && err.contains("no-such-rule"), "{err}");
 }
+
+/// Recording metadata that cannot be right: exit 2 from `gap` and `fit` with file:line.
+#[test]
+fn bad_recording_timing_metadata_exits_2_with_file_and_line() {
+    let dir = std::env::temp_dir().join(format!("modellint_meta_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let model = concat!(env!("CARGO_MANIFEST_DIR"), "/fixtures/bam_xl330/rig.xml");
+    let cases = [
+        ("split.csv", "# robot: rig\n# split: validation\nt,servo.q\n0,0\n0.01,0\n", 2, "train"),
+        ("rate.csv", "# control_rate_hz: 0\nt,servo.q\n0,0\n0.01,0\n", 1, "positive"),
+        ("negrate.csv", "# control_rate_hz: -100\nt,servo.q\n0,0\n0.01,0\n", 1, "positive"),
+        ("onetick.csv", "# a: b\n# c: d\n# control_rate_hz: 2\nt,servo.q\n0,0\n0.1,0\n0.2,0\n0.49,0\n", 3, "one control tick"),
+        ("timing.csv", "# command_timing: before\nt,servo.q\n0,0\n0.01,0\n", 1, "sent_after"),
+    ];
+    for (name, text, line, what) in cases {
+        let f = dir.join(name);
+        std::fs::write(&f, text).unwrap();
+        for sub in ["gap", "fit"] {
+            let (code, _, err) = modellint(&[sub, model, f.to_str().unwrap()]);
+            assert_eq!(code, 2, "{sub} {name}: exit {code}\n{err}");
+            let loc = format!("{}:{line}:", f.display());
+            assert!(err.contains(&loc) && err.contains(what), "{sub} {name}: want `{loc}` and `{what}` in:\n{err}");
+            assert!(!err.contains("panicked"), "{err}");
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
