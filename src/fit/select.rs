@@ -685,6 +685,8 @@ fn greedy_round(engine: &Engine, train: &[Recording], heldout: &[Recording], all
     let k_before: usize = applied.iter().map(|a| a.effect.fitted()).sum();
     let bic_before = bic(tr_err.n, tr_err.sse, k_before);
     let mut accepted: Vec<(Selected, bool, Errors)> = Vec::new();
+    // Every single fit of the round, for the joint pairs when no single one passes.
+    let mut fitted: Vec<Applied> = Vec::new();
     // Screen for the extra (every-effect) multi-parameter candidates: a coarse fit (10
     // evaluations per parameter) must reach at least half of the best training improvement of
     // the fully fitted ones.
@@ -720,6 +722,7 @@ fn greedy_round(engine: &Engine, train: &[Recording], heldout: &[Recording], all
             continue;
         }
         best_train = best_train.min(train_rmse);
+        fitted.push(Applied { effect: e, joints: group.clone(), params: p.clone() });
         let mut trial = applied.clone();
         trial.push(Applied { effect: e, joints: group.clone(), params: p.clone() });
         let (Some(tr_a), Some(ho_a)) = (engine.errors(train, &trial), engine.errors(heldout, &trial)) else { continue };
@@ -765,7 +768,9 @@ fn greedy_round(engine: &Engine, train: &[Recording], heldout: &[Recording], all
     if accepted.iter().any(|(_, b, _)| !b) {
         accepted.retain(|(_, b, _)| !b);
     }
-    let Some(ib) = (0..accepted.len()).min_by(|&a, &b| accepted[a].0.heldout_rmse_after.total_cmp(&accepted[b].0.heldout_rmse_after)) else { return false };
+    let Some(ib) = (0..accepted.len()).min_by(|&a, &b| accepted[a].0.heldout_rmse_after.total_cmp(&accepted[b].0.heldout_rmse_after)) else {
+        return joint_pairs(engine, train, heldout, &applied, &fitted, (&tr_err, &ho_err), z, round, out);
+    };
     // Occam: the simplest candidate within 5 % of the best held-out RMSE that the best does not
     // beat beyond noise (paired test, z = 2) and whose training BIC is not higher (the training
     // set is larger than the held-out one: a better fit that pays for its parameters there is
@@ -926,6 +931,141 @@ fn pair_lookahead(
     out.applied[..n].clone_from_slice(&set[..n]);
     sync_selected(out);
     Some(res)
+}
+
+/// Pairs of effects that mimic each other alone but not together: a servo gain error and a
+/// delay both shift the phase; friction and inertia both slow the response; a dead band and an
+/// offset both bias it; damping and inertia both change the decay.
+const JOINT_PAIRS: [(&str, &str); 6] = [
+    ("gain_error", "action_delay"),
+    ("coulomb_friction", "armature"),
+    ("stribeck_friction", "armature"),
+    ("backlash", "position_offset"),
+    ("viscous_damping", "armature"),
+    ("gain_error", "coulomb_friction"),
+];
+
+/// When no single candidate passed the held-out gate: fit the [`JOINT_PAIRS`] whose members were
+/// both fitted on the same joint group this round, jointly from their single fits, and keep the
+/// best pair that passes the gate as a whole (beyond noise against the model without it, BIC
+/// down) with each member needed (removing either is worse beyond noise).
+#[allow(clippy::too_many_arguments)]
+fn joint_pairs(
+    engine: &Engine,
+    train: &[Recording],
+    heldout: &[Recording],
+    applied: &[Applied],
+    fitted: &[Applied],
+    (tr_err, ho_err): (&Errors, &Errors),
+    z: f64,
+    round: usize,
+    out: &mut FitOutcome,
+) -> bool {
+    let opts = engine.opts;
+    let n = applied.len();
+    let k_before: usize = applied.iter().map(|a| a.effect.fitted()).sum();
+    let bic_before = bic(tr_err.n, tr_err.sse, k_before);
+    let mut best: Option<(Vec<Applied>, Errors, Verdict, f64)> = None;
+    for (ea, eb) in JOINT_PAIRS {
+        for a in fitted.iter().filter(|x| x.effect.id() == ea) {
+            let Some(b) = fitted.iter().find(|x| x.effect.id() == eb && x.joints == a.joints) else { continue };
+            let mut set = applied.to_vec();
+            set.push(a.clone());
+            set.push(b.clone());
+            let set = fit_jointly(engine, train, set, n);
+            let (Some(h), Some(t)) = (engine.errors(heldout, &set), engine.errors(train, &set)) else { continue };
+            let k = a.effect.fitted() + b.effect.fitted();
+            let v = verdict(ho_err, &h, &a.joints, z, opts.decisive_improvement);
+            let bic_after = bic(t.n, t.sse, k_before + k);
+            let needed = (0..2).all(|m| {
+                let mut wo = set.clone();
+                wo.remove(n + m);
+                engine.errors(heldout, &wo).is_some_and(|hw| {
+                    let vw = verdict(&hw, &h, &a.joints, 2.0, opts.decisive_improvement);
+                    vw.significant && vw.rel >= opts.min_rel_improvement
+                })
+            });
+            let ok = v.significant && v.rel >= opts.min_rel_improvement && bic_after < bic_before && needed;
+            out.tried.push(Tried {
+                round,
+                phase: "joint_pair",
+                effect: format!("{ea}+{eb}"),
+                joints: a.joints.clone(),
+                params: set[n..].iter().flat_map(|x| x.params.iter().take(x.effect.fitted()).copied()).collect(),
+                train_rmse: t.rmse(),
+                heldout_improvement: v.rel,
+                significant: v.significant,
+                bic_decreased: bic_after < bic_before,
+                kept: false,
+            });
+            if ok && best.as_ref().is_none_or(|(_, hb, ..)| h.rmse() < hb.rmse()) {
+                best = Some((set, h, v, bic_after));
+            }
+        }
+    }
+    let Some((set, h, v, bic_after)) = best else { return false };
+    let label = format!("{}+{}", set[n].effect.id(), set[n + 1].effect.id());
+    if let Some(t) = out.tried.iter_mut().rev().find(|t| t.phase == "joint_pair" && t.effect == label && t.joints == set[n].joints) {
+        t.kept = true;
+    }
+    out.warnings.push(format!(
+        "no single effect passed; {} and {} on {} pass together: held-out RMSE {:.3e} → {:.3e} rad",
+        set[n].effect.id(),
+        set[n + 1].effect.id(),
+        set[n].joints.join(","),
+        ho_err.rmse(),
+        h.rmse()
+    ));
+    for m in 0..2 {
+        let a = set[n + m].clone();
+        let mut sel = Selected::new(&a, BTreeMap::new(), &v, ho_err.rmse(), h.rmse(), (bic_before, bic_after));
+        out.applied.push(a);
+        set_uncertainty(engine, train, &mut sel, &out.applied, &mut out.warnings);
+        out.selected.push(sel);
+    }
+    true
+}
+
+/// Fits the effects `set[first..]` jointly on `train` (the ones before stay fixed), starting from
+/// their current parameters: Levenberg–Marquardt when all are smooth, else Nelder–Mead. Returns
+/// the set unchanged when the joint fit does not lower the training error.
+fn fit_jointly(engine: &Engine, train: &[Recording], set: Vec<Applied>, first: usize) -> Vec<Applied> {
+    let mut slots = Vec::new(); // (applied index, parameter index, lo, hi)
+    for ai in first..set.len() {
+        let a = &set[ai];
+        let Some(t) = JointTarget::of(engine.robot, &a.joints[0]) else { return set };
+        let m0 = model_with(engine.robot, &set[..first]);
+        let (lo, hi) = a.effect.bounds(&m0, &t);
+        for k in 0..a.effect.fitted().min(a.params.len()) {
+            slots.push((ai, k, lo[k], hi[k]));
+        }
+    }
+    let make = |x: &[f64]| {
+        let mut a = set.clone();
+        for (&(ai, k, ..), v) in slots.iter().zip(x) {
+            a[ai].params[k] = *v;
+        }
+        a
+    };
+    let x0: Vec<f64> = slots.iter().map(|&(ai, k, lo, hi)| set[ai].params[k].clamp(lo, hi)).collect();
+    let b = Bounds { lo: slots.iter().map(|s| s.2).collect(), hi: slots.iter().map(|s| s.3).collect() };
+    let obj = |x: &[f64]| engine.errors(train, &make(x)).map_or(f64::INFINITY, |e| e.rmse());
+    let f0 = obj(&x0);
+    let (x, f) = if set[first..].iter().all(|a| a.effect.smooth()) {
+        let res = |x: &[f64]| engine.residuals(train, &make(x), &engine.joints, usize::MAX).unwrap_or_default();
+        let o = LmOpts { max_iters: 12, rel_step: 1e-3, tol: 1e-5 };
+        let r = levenberg_marquardt(&res, &x0, &b, &o);
+        let n = res_len(&r);
+        (r.x, if n > 0 { (2.0 * r.cost / n as f64).sqrt() } else { f64::INFINITY })
+    } else {
+        let o = NelderMeadOpts { max_evals: engine.opts.max_evals * 3, xtol: 1e-4, ftol: 1e-12, initial_step: 0.1 };
+        let r = nelder_mead(&obj, &x0, &b, &o);
+        (r.x, r.f)
+    };
+    if !(f < f0) {
+        return set;
+    }
+    make(&x)
 }
 
 /// Standard errors of `s`, the effect of `applied.last()`.

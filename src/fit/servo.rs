@@ -195,9 +195,10 @@ impl ActuatorHook for ServoHook {
 /// Copy of `robot.mj` with every DoF's armature set to `armature` (the rig has one DoF).
 pub fn model_with_armature(robot: &Robot, armature: f64) -> MjModel {
     let mut m = robot.mj.clone();
-    let r = mj::raw_mut(&mut m);
-    let nv = r.nv as usize;
-    mj::slice_mut(r.dof_armature, nv).fill(armature);
+    let nv = mj::raw(&m).nv as usize;
+    for d in 0..nv {
+        mj::set_armature(&mut m, d, armature);
+    }
     m
 }
 

@@ -48,6 +48,22 @@ pub fn raw_mut(m: &mut MjModel) -> &mut c::mjModel {
     unsafe { m.ffi_mut() }
 }
 
+/// Sets DoF `dof`'s armature to `value`, keeping `dof_M0` (the compiled diagonal inertia at
+/// qpos0, which MuJoCo uses directly for "simple" DoFs — a single body on a hinge) consistent:
+/// writing `dof_armature` alone changes nothing on such a DoF.
+pub fn set_armature(m: &mut MjModel, dof: usize, value: f64) {
+    let r = raw_mut(m);
+    let nv = r.nv as usize;
+    if dof >= nv {
+        return;
+    }
+    let arm = slice_mut(r.dof_armature, nv);
+    let delta = value - arm[dof];
+    arm[dof] = value;
+    let m0 = slice_mut(r.dof_M0, nv);
+    m0[dof] += delta;
+}
+
 pub fn data_raw<'a>(d: &'a MjData<&MjModel>) -> &'a c::mjData {
     d.ffi()
 }

@@ -28,7 +28,6 @@ pub struct Bench {
 impl Bench {
     pub fn new(robot: &Robot, s: Setup) -> Option<Bench> {
         let mut m = robot.mj.clone();
-        let nv = mj::raw(&m).nv as usize;
         let mut frozen_dofs: Vec<usize> = Vec::new();
         let mut frozen = Vec::new();
         for j in &robot.joints {
@@ -54,11 +53,10 @@ impl Bench {
             }
         }
         {
-            let r = mj::raw_mut(&mut m);
-            let arm = mj::slice_mut(r.dof_armature, nv);
             for &d in &frozen_dofs {
-                arm[d] = FROZEN_ARMATURE;
+                mj::set_armature(&mut m, d, FROZEN_ARMATURE);
             }
+            let r = mj::raw_mut(&mut m);
             if s.no_contact {
                 r.opt.disableflags |= 1 << 4;
             }

@@ -26,8 +26,7 @@ impl Effect for Armature {
         (vec![0.0], vec![P[0].hi.max(10.0 * self.initial(m, t)[0])])
     }
     fn apply_model(&self, m: &mut MjModel, t: &JointTarget, p: &[f64]) {
-        let r = mj::raw_mut(m);
-        set(r.dof_armature, r.nv as usize, t.dof, p[0].max(0.0));
+        mj::set_armature(m, t.dof, p[0].max(0.0));
     }
     fn smooth(&self) -> bool {
         true
