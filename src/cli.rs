@@ -91,6 +91,7 @@ pub enum Cmd {
     /// Recordings of a simulated "real robot" (the model plus hidden effects) through a
     /// simulated logging setup (100 Hz controller, asynchronous 88 Hz recorder, noise, 12-bit
     /// encoder, drops), with the answer key. `modellint synth --help` explains every knob.
+    #[command(long_about = crate::synth::cmd::LONG_ABOUT)]
     Synth(crate::synth::cmd::SynthCmd),
     /// Convert a BAM servo log (JSON) to the CSV recording format (adds the servo.kp column).
     Convert {

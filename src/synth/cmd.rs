@@ -7,7 +7,7 @@ use clap::Args;
 use super::Settings;
 use super::excitation::Excitation;
 
-const LONG_ABOUT: &str = "\
+pub const LONG_ABOUT: &str = "\
 Record a simulated \"real robot\" (the model plus hidden effects) through a simulated logging
 setup, and write the recordings with their answer key. The synth runs its own MuJoCo loop and
 shares no replay code with `gap`/`fit`, so it can check them.
@@ -37,7 +37,6 @@ OUT/truth_commands/ep_00.csv (every tick's exact command), OUT/truth.json (effec
 per-joint noise + quantisation floor, dropped rows). See docs/synth.md.";
 
 #[derive(Args, Debug)]
-#[command(long_about = LONG_ABOUT)]
 pub struct SynthCmd {
     /// Model (MJCF or URDF).
     pub model: PathBuf,
@@ -92,9 +91,9 @@ pub struct SynthCmd {
     /// Command amplitude about the keyframe pose [rad] (shrunk to fit joint ranges).
     #[arg(long, default_value_t = 0.35)]
     pub amplitude: f64,
-    /// The last N episodes are marked `split: heldout`.
-    #[arg(long, default_value_t = 1)]
-    pub heldout: usize,
+    /// The last N episodes are marked `split: heldout` (default 1; 0 with a single episode).
+    #[arg(long)]
+    pub heldout: Option<usize>,
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Floating-base robots: hold the base this many metres above its keyframe pose (a test
@@ -129,7 +128,7 @@ impl SynthCmd {
             drop: self.drop,
             excitation,
             amplitude: self.amplitude,
-            heldout: self.heldout,
+            heldout: self.heldout.unwrap_or(if self.episodes > 1 { 1 } else { 0 }),
             seed: self.seed,
             suspend_m: self.suspend,
         };

@@ -181,7 +181,14 @@ pub fn real_robot(robot: &Robot, joints: &[String], hidden: &[Hidden]) -> Result
             let p = &h.params;
             let need_servo = || if jp.servos.is_empty() { Err(format!("{} on {name}: the joint has no position actuator", h.effect)) } else { Ok(()) };
             match h.effect {
-                "armature" => *at(r.dof_armature, nv, j.dofadr).ok_or("dof")? = p[0],
+                "armature" => {
+                    // dof_M0 (the inertia MuJoCo uses directly for "simple" dofs, compiled with
+                    // the armature in it) moves with the armature.
+                    let a = at(r.dof_armature, nv, j.dofadr).ok_or("dof")?;
+                    let delta = p[0] - *a;
+                    *a = p[0];
+                    *at(r.dof_M0, nv, j.dofadr).ok_or("dof")? += delta;
+                }
                 "viscous_damping" => *at(r.dof_damping, nv, j.dofadr).ok_or("dof")? = p[0],
                 "coulomb_friction" => *at(r.dof_frictionloss, nv, j.dofadr).ok_or("dof")? = p[0],
                 "joint_stiffness" => {
