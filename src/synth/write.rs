@@ -20,6 +20,15 @@ pub fn stem(i: usize, n: usize) -> String {
     format!("ep_{i:0w$}")
 }
 
+/// `v` with `digits` decimals; a negative value that rounds to zero is written without sign.
+fn num(v: f64, digits: usize) -> String {
+    let s = format!("{v:.digits$}");
+    match s.strip_prefix('-') {
+        Some(rest) if rest.bytes().all(|b| b == b'0' || b == b'.') => rest.to_string(),
+        _ => s,
+    }
+}
+
 fn secs(us: i64) -> String {
     let sign = if us < 0 { "-" } else { "" };
     let a = us.unsigned_abs();
@@ -47,11 +56,11 @@ pub fn episode_csv(ds: &Dataset, ep: &Episode) -> String {
         o.push_str(",base.x,base.y,base.z,base.qw,base.qx,base.qy,base.qz");
     }
     o.push('\n');
-    let base: Option<String> = ds.base.map(|b| b.iter().map(|v| format!(",{v:.9}")).collect());
+    let base: Option<String> = ds.base.map(|b| b.iter().map(|v| format!(",{}", num(*v, 9))).collect());
     for (i, &t) in ep.t_us.iter().enumerate() {
         o.push_str(&secs(t));
         for j in 0..ds.joints.len() {
-            let _ = write!(o, ",{:.QD$},{:.6},{:.QD$}", ep.q[j][i], ep.qd[j][i], ep.q_cmd[j][i]);
+            let _ = write!(o, ",{},{},{}", num(ep.q[j][i], QD), num(ep.qd[j][i], 6), num(ep.q_cmd[j][i], QD));
         }
         if let Some(b) = &base {
             o.push_str(b);
@@ -74,7 +83,7 @@ pub fn commands_csv(ds: &Dataset, ep: &Episode) -> String {
         let k = c.first + i as i64;
         let _ = write!(o, "{k},{}", secs(c.clock.tick_us(k)));
         for v in row {
-            let _ = write!(o, ",{v:.QD$}");
+            let _ = write!(o, ",{}", num(*v, QD));
         }
         o.push('\n');
     }
@@ -205,6 +214,9 @@ mod tests {
         assert_eq!(super::secs(9_991_817), "9.991817");
         assert_eq!(super::secs(-6_000), "-0.006000");
         assert_eq!(super::stem(3, 4), "ep_03");
+        assert_eq!(super::num(-1e-13, 10), "0.0000000000");
+        assert_eq!(super::num(-0.0, 6), "0.000000");
+        assert_eq!(super::num(-0.25, 3), "-0.250");
         assert_eq!(super::stem(3, 1000), "ep_003");
     }
 }
