@@ -513,4 +513,12 @@ fn native_effects_equal_the_same_values_compiled_by_mujoco() {
         assert!(worst < 1e-9, "{spec}: differs from the compiled model by {worst} rad");
         assert!(moved > 1e-3, "{spec}: the effect changes nothing ({moved} rad)");
     }
+    // The per-step torque–speed clip (qfrc_applied) with a far velocity limit is MuJoCo's
+    // forcerange up to the line's slope (|q̇|/1000 of the effort).
+    let compiled = hinge_with("compiled", "", r#"kp="4" kv="0.06" forcerange="-0.3 0.3""#);
+    let want = run(&compiled, "none");
+    let got = run(&plain, "torque_limit=0.3,0.3,1000");
+    let worst = want.iter().zip(&got).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+    let moved = want.iter().zip(&base).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+    assert!(worst < 0.01 * moved, "per-step clip differs from forcerange by {worst} rad (effect size {moved})");
 }

@@ -101,8 +101,8 @@ impl Settings {
             return Err(format!("--episodes must be 1…10000, got {}", self.episodes));
         }
         pos("--duration", self.duration_s)?;
-        if self.duration_s > 3600.0 {
-            return Err(format!("--duration must be at most 3600 s, got {}", self.duration_s));
+        if !(0.01..=3600.0).contains(&self.duration_s) {
+            return Err(format!("--duration must be 0.01…3600 s, got {}", self.duration_s));
         }
         pos("--control-hz", self.control_hz)?;
         if self.control_hz > 100_000.0 {
