@@ -21,12 +21,12 @@ impl Rng {
     pub fn stream(seed: u64, purpose: u64, episode: u64) -> Rng {
         let mut r = Rng(seed ^ 0x6A09_E667_F3BC_C908);
         r.0 = r.0.wrapping_add(purpose.wrapping_mul(0xBB67_AE85_84CA_A73B));
-        r.next();
+        r.next_u64();
         r.0 = r.0.wrapping_add(episode.wrapping_mul(0x3C6E_F372_FE94_F82B));
-        r.next();
+        r.next_u64();
         r
     }
-    pub fn next(&mut self) -> u64 {
+    pub fn next_u64(&mut self) -> u64 {
         self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
         let mut z = self.0;
         z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
@@ -35,7 +35,7 @@ impl Rng {
     }
     /// Uniform in [0, 1).
     pub fn uniform(&mut self) -> f64 {
-        (self.next() >> 11) as f64 / (1u64 << 53) as f64
+        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
     }
     /// Uniform in [a, b).
     pub fn range(&mut self, a: f64, b: f64) -> f64 {
@@ -50,7 +50,7 @@ impl Rng {
     /// Fisher–Yates shuffle.
     pub fn shuffle<T>(&mut self, v: &mut [T]) {
         for i in (1..v.len()).rev() {
-            let j = (self.next() % (i as u64 + 1)) as usize;
+            let j = (self.next_u64() % (i as u64 + 1)) as usize;
             v.swap(i, j);
         }
     }
