@@ -1,12 +1,15 @@
 //! Concealed-effect benchmark core, shared by `examples/conceal_bench.rs` and `tests/conceal.rs`
 //! (included with `#[path]`).
 //!
-//! One case = hidden truth (effects with parameters on joints) → `synth::generate` recordings
-//! (commands, noise, quantisation, ~88 Hz jittered sampling, drops) → `select::fit` on the model
-//! that lacks the effects (the fit never sees the truth) → score against the truth:
+//! One case = hidden truth (effects with parameters on joints) → recordings made by the
+//! independent synth (`modellint::synth`: its own MuJoCo loop, 100 Hz controller, asynchronous
+//! 88 Hz recorder logging the command in force, settle, noise, optional 12-bit quantisation,
+//! drops), written to CSV and read back with the recording reader `fit` uses → `select::fit` on
+//! the model that lacks the effects (the fit never sees the truth) → score against the truth:
 //! precision/recall by (effect, joint), parameter error (relative; action_delay absolute in
 //! physics steps), and position MAE on FRESH held-out episodes (never given to the fit) before
-//! and after adding the fitted effects.
+//! and after adding the fitted effects. The floor is the synth's own noise-free true reading
+//! against the recording (noise + quantisation).
 #![allow(dead_code)]
 
 use std::path::{Path, PathBuf};
@@ -14,9 +17,10 @@ use std::time::Instant;
 
 use modellint::fit::effects::{self, Applied, simulate};
 use modellint::fit::select::{FitOptions, fit};
-use modellint::fit::synth::{SynthOptions, generate};
 use modellint::model::{Robot, source::SourceMap};
+use modellint::sim2real::recording::{Recording, read_csv};
 use modellint::sim2real::replay::ReplayOptions;
+use modellint::synth::{self, Settings, truth::Hidden};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Kind {
@@ -41,12 +45,13 @@ impl Kind {
     }
 }
 
-/// Sensor/sampling realism level.
+/// Sensor/sampling realism level (the encoder resolution is [`Case::quant_bits`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Noise {
-    /// As `modellint synth`: 88 Hz ±30 % jitter, σ 2e-4 rad, 12-bit encoder (2π/4096), 1 % drops.
+    /// The arm2 logging setup (`modellint synth` defaults): 88 Hz ±15 % recorder, σ 0.5 mrad,
+    /// 0.01 rad/s velocity noise, 0.5 % drops.
     Real,
-    /// σ 1e-3 rad, 12-bit encoder, 88 Hz ±30 % jitter, 3 % drops.
+    /// σ 1 mrad, 88 Hz ±30 %, 0.02 rad/s, 3 % drops.
     High,
 }
 
@@ -74,27 +79,54 @@ pub struct Case {
     pub duration_s: f64,
     pub amplitude: f64,
     pub seed: u64,
-    /// Floating base held this far above the keyframe pose [m] (`SynthOptions::suspend_m`).
+    /// Floating base held this far above the keyframe pose [m] (`Settings::suspend_m`).
     pub suspend_m: f64,
+    /// Encoder resolution (0: no quantisation).
+    pub quant_bits: u32,
 }
 
 impl Case {
-    pub fn synth(&self) -> SynthOptions {
-        let (noise, drop) = match self.noise {
-            Noise::Real => (2e-4, 0.01),
-            Noise::High => (1e-3, 0.03),
+    /// The synth settings of the fitted dataset (the held-out one uses another seed).
+    pub fn synth(&self) -> Settings {
+        let (noise, qd_noise, jitter, drop) = match self.noise {
+            Noise::Real => (5e-4, 0.01, 0.15, 0.005),
+            Noise::High => (1e-3, 0.02, 0.3, 0.03),
         };
-        SynthOptions {
+        Settings {
+            episodes: self.episodes,
             duration_s: self.duration_s,
-            sample_hz: 88.0,
-            jitter: 0.3,
-            control_hz: 100.0,
-            amplitude: self.amplitude,
             noise,
-            quantum: 2.0 * std::f64::consts::PI / 4096.0,
+            qd_noise,
+            jitter,
             drop,
+            quant_bits: self.quant_bits,
+            amplitude: self.amplitude,
+            seed: self.seed,
             suspend_m: self.suspend_m,
+            heldout: 1,
+            ..Settings::default()
         }
+    }
+    /// The same case without encoder quantisation.
+    pub fn unquantised(mut self) -> Case {
+        self.quant_bits = 0;
+        self
+    }
+    /// Noise label with the encoder: `real 12b`, `high none`.
+    pub fn noise_label(&self) -> String {
+        format!("{} {}", self.noise.label(), if self.quant_bits == 0 { "none".to_string() } else { format!("{}b", self.quant_bits) })
+    }
+    /// The hidden effects as the synth takes them (one per joint, full parameter vectors).
+    pub fn hidden(&self) -> Vec<Hidden> {
+        self.truth
+            .iter()
+            .flat_map(|(e, js, p)| {
+                let defs = effects::by_id(e).unwrap_or_else(|| panic!("effect {e}")).params();
+                let full: Vec<f64> = (0..defs.len()).map(|i| p.get(i).copied().unwrap_or(defs[i].default)).collect();
+                let id = effects::by_id(e).map(|x| x.id()).unwrap_or("");
+                js.iter().map(move |j| Hidden { effect: id, joint: j.clone(), params: full.clone() })
+            })
+            .collect()
     }
     pub fn truth_label(&self) -> String {
         if self.truth.is_empty() {
@@ -223,13 +255,9 @@ pub fn run(case: &Case, max_rounds: usize) -> Score {
     let t0 = Instant::now();
     let path = if case.model.is_absolute() { case.model.clone() } else { root().join(&case.model) };
     let robot = load(&path);
-    let truth: Vec<Applied> = case
-        .truth
-        .iter()
-        .map(|(e, j, p)| Applied { effect: effects::by_id(e).unwrap_or_else(|| panic!("effect {e}")), joints: j.clone(), params: p.clone() })
-        .collect();
+    let hidden = case.hidden();
     let o = case.synth();
-    let recs = generate(&robot, &case.joints, &truth, case.episodes, &o, case.seed).expect("generate");
+    let (recs, _) = recorded(&robot, case, &hidden, &o, "fit");
     // The fit sees only the recordings and the model without the effects.
     let opts = FitOptions { max_rounds, ..Default::default() };
     let out = fit(&robot, &recs, &opts);
@@ -273,12 +301,15 @@ pub fn run(case: &Case, max_rounds: usize) -> Score {
     let fneg = truth_pairs.len() - tp;
 
     // Fresh held-out episodes (other seed: other commands, timestamps, noise).
-    let ho = generate(&robot, &case.joints, &truth, 2, &o, case.seed.wrapping_add(7777)).expect("generate held-out");
+    let ho_o = Settings { episodes: 2, heldout: 1, seed: case.seed.wrapping_add(7777), ..o.clone() };
+    let (ho, ho_ds) = recorded(&robot, case, &hidden, &ho_o, "heldout");
     let ropts = ReplayOptions::default();
     let sims = |a: &[Applied]| -> Vec<Vec<Vec<f64>>> {
         simulate(&robot, &ho, a, &ropts).into_iter().map(|e| e.map(|e| e.q_sim).expect("held-out replay")).collect()
     };
-    let (s_before, s_after, s_truth) = (sims(&[]), sims(&out.applied), sims(&truth));
+    let (s_before, s_after) = (sims(&[]), sims(&out.applied));
+    // The truth: the synth's noise-free reading (true position + sensor offset) at every row.
+    let s_truth: Vec<Vec<Vec<f64>>> = ho_ds.episodes.iter().map(|e| e.q_true.clone()).collect();
     let mut focus: Vec<String> = truth_pairs.iter().map(|t| t.1.to_string()).chain(detected.iter().map(|d| d.1.clone())).collect();
     focus.sort();
     focus.dedup();
@@ -331,6 +362,19 @@ pub fn run(case: &Case, max_rounds: usize) -> Score {
     }
 }
 
+/// Generates `case`'s recordings with the independent synth, writes them as CSV and reads them
+/// back with the recording reader `fit` uses (the same path a user's files take).
+pub fn recorded(robot: &Robot, case: &Case, hidden: &[Hidden], o: &Settings, tag: &str) -> (Vec<Recording>, synth::Dataset) {
+    let ds = synth::generate(robot, &case.joints, hidden, o, &|_, _| {}).unwrap_or_else(|e| panic!("{}: synth: {e}", case.name));
+    let slug: String = format!("{} {} {tag}", case.name, case.noise_label()).chars().map(|c| if c.is_ascii_alphanumeric() { c } else { '_' }).collect();
+    let dir = std::env::temp_dir().join(format!("modellint_conceal_{}_{slug}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let files = synth::write::write(&ds, &dir).unwrap_or_else(|e| panic!("{}: {e}", case.name));
+    let recs = files.iter().map(|f| read_csv(f).unwrap_or_else(|e| panic!("{}: {e}", f.display()))).collect();
+    let _ = std::fs::remove_dir_all(&dir);
+    (recs, ds)
+}
+
 fn pct(x: Option<f64>) -> String {
     x.map_or("–".into(), |v| format!("{:.0} %", 100.0 * v))
 }
@@ -353,7 +397,7 @@ pub fn table_row(s: &Score) -> String {
         "| {} | {} | {} | {} | {} | {} | {} | {} | {:.2} → {:.2} ({:.2}) | {} | {} | {} | {:.0} | {} |\n",
         s.case.name,
         s.case.kind.label(),
-        s.case.noise.label(),
+        s.case.noise_label(),
         s.case.truth_label(),
         det,
         pct(s.precision()),
@@ -439,6 +483,8 @@ pub fn summary(scores: &[Score]) -> (String, bool) {
 pub const ARM3: &str = "fixtures/gap/arm3.xml";
 pub const RIG: &str = "fixtures/bam_xl330/rig.xml";
 pub const ASIMOV: &str = "models/asimov.xml";
+/// Lightly damped pendulum servo (ζ ≈ 0.15).
+pub const PENDULUM: &str = "fixtures/synth/pendulum_servo.xml";
 
 pub fn arm3_joints() -> Vec<String> {
     ["shoulder_pitch", "elbow_pitch", "wrist_pitch"].iter().map(|s| s.to_string()).collect()
@@ -478,6 +524,7 @@ pub fn arm3_case(name: &str, kind: Kind, truth: Vec<(&'static str, Vec<f64>)>, n
         amplitude: 0.5,
         seed,
         suspend_m: 0.0,
+        quant_bits: 12,
     }
 }
 
@@ -494,6 +541,7 @@ pub fn rig_case(name: &str, kind: Kind, truth: Vec<(&'static str, Vec<f64>)>, no
         amplitude: 0.8,
         seed,
         suspend_m: 0.0,
+        quant_bits: 12,
     }
 }
 
@@ -501,5 +549,67 @@ pub fn asimov_case(name: &str, kind: Kind, truth: Vec<(&'static str, Vec<String>
     // On a test stand: base 0.5 m above the standing keyframe, feet in the air (with the base
     // pinned at the standing pose the feet drag on the floor and the replay is chaotic; see
     // docs/conceal-benchmark.md).
-    Case { name: name.into(), kind, model: ASIMOV.into(), joints: asimov_legs(), truth, noise, episodes: 8, duration_s: 4.0, amplitude: 0.15, seed, suspend_m: 0.5 }
+    Case { name: name.into(), kind, model: ASIMOV.into(), joints: asimov_legs(), truth, noise, episodes: 8, duration_s: 4.0, amplitude: 0.15, seed, suspend_m: 0.5, quant_bits: 12 }
+}
+
+pub fn pendulum_case(name: &str, kind: Kind, truth: Vec<(&'static str, Vec<f64>)>, noise: Noise, seed: u64) -> Case {
+    Case {
+        name: name.into(),
+        kind,
+        model: PENDULUM.into(),
+        joints: vec!["servo".into()],
+        truth: truth.into_iter().map(|(e, p)| (e, vec!["servo".to_string()], p)).collect(),
+        noise,
+        episodes: 4,
+        duration_s: 10.0,
+        amplitude: 0.35,
+        seed,
+        suspend_m: 0.0,
+        quant_bits: 12,
+    }
+}
+
+/// The 11 single effects on the pendulum servo (I = 0.005 kg·m², kp 2 N·m/rad).
+pub fn pendulum_single_truths() -> Vec<(&'static str, Vec<f64>)> {
+    vec![
+        ("action_delay", vec![0.015]),
+        ("coulomb_friction", vec![0.03]),
+        ("viscous_damping", vec![0.03]),
+        ("armature", vec![0.003]),
+        ("position_offset", vec![0.05]),
+        ("gain_error", vec![0.7, 1.3]),
+        ("stribeck_friction", vec![0.06, 0.03, 0.2]),
+        ("torque_limit", vec![0.4, 1e4, 1e4]),
+        ("backlash", vec![0.03]),
+        ("joint_stiffness", vec![0.5]),
+        ("load_dependent_friction", vec![0.01, 0.1]),
+    ]
+}
+
+/// The 11 single effects for an asimov knee (kp 65, armature 0.034 kg·m²); first-guess sizes.
+pub fn asimov_single_truths() -> Vec<(&'static str, Vec<f64>)> {
+    vec![
+        ("action_delay", vec![0.015]),
+        ("coulomb_friction", vec![1.0]),
+        ("viscous_damping", vec![3.0]),
+        ("armature", vec![0.15]),
+        ("position_offset", vec![0.05]),
+        ("gain_error", vec![0.7, 1.3]),
+        ("stribeck_friction", vec![2.0, 1.0, 0.2]),
+        ("torque_limit", vec![10.0, 1e4, 1e4]),
+        ("backlash", vec![0.03]),
+        ("joint_stiffness", vec![20.0]),
+        ("load_dependent_friction", vec![0.5, 0.1]),
+    ]
+}
+
+/// Pairs every robot gets (the ones issue 12 names: they may only help together).
+pub fn pair_truths(singles: &[(&'static str, Vec<f64>)]) -> Vec<Vec<(&'static str, Vec<f64>)>> {
+    let p = |e: &str| singles.iter().find(|(x, _)| *x == e).map(|(x, v)| (*x, v.clone())).unwrap_or_else(|| panic!("{e}"));
+    vec![
+        vec![p("gain_error"), p("action_delay")],
+        vec![p("coulomb_friction"), p("armature")],
+        vec![p("backlash"), p("position_offset")],
+        vec![p("viscous_damping"), p("armature")],
+    ]
 }

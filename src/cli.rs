@@ -88,35 +88,11 @@ pub enum Cmd {
     /// position_offset, gain_error, stribeck_friction, torque_limit, backlash, joint_stiffness,
     /// load_dependent_friction).
     Fit(FitCmd),
-    /// Synthetic recordings from a hidden copy of the model with effects added (chirps, steps,
-    /// smooth random commands; noise, quantisation, ~88 Hz jittered sampling, dropped samples).
-    /// Effects: `effect[@joint_glob]=v1,v2;…`, e.g. `armature@*knee*=0.05;action_delay=0.02`.
-    Synth {
-        /// Model (MJCF or URDF).
-        model: PathBuf,
-        /// Effects to hide, with parameters.
-        #[arg(long)]
-        effects: String,
-        /// Output directory (episode_NNN.csv, truth.toml).
-        #[arg(long)]
-        out: PathBuf,
-        /// Drive only joints matching this glob.
-        #[arg(long)]
-        joints: Option<String>,
-        #[arg(long, default_value_t = 8)]
-        episodes: usize,
-        /// Episode length [s].
-        #[arg(long, default_value_t = 5.0)]
-        duration: f64,
-        #[arg(long, default_value_t = 1)]
-        seed: u64,
-        /// Floating-base robots: hold the base this many metres above its keyframe pose (a robot
-        /// on a test stand, feet in the air; written as base.* columns). Default 0: the keyframe
-        /// pose — a standing robot with its base pinned drags its feet on the floor, and that
-        /// replay is chaotic.
-        #[arg(long, default_value_t = 0.0)]
-        suspend: f64,
-    },
+    /// Recordings of a simulated "real robot" (the model plus hidden effects) through a
+    /// simulated logging setup (100 Hz controller, asynchronous 88 Hz recorder, noise, 12-bit
+    /// encoder, drops), with the answer key. `modellint synth --help` explains every knob.
+    #[command(long_about = crate::synth::cmd::LONG_ABOUT)]
+    Synth(crate::synth::cmd::SynthCmd),
     /// Convert a BAM servo log (JSON) to the CSV recording format (adds the servo.kp column).
     Convert {
         /// BAM JSON log.
@@ -298,9 +274,7 @@ pub fn run() -> i32 {
             write_actuators: f.write_actuators,
             report: f.report,
         }),
-        Some(Cmd::Synth { model, effects, out, joints, episodes, duration, seed, suspend }) => {
-            crate::fit::cmd::run_synth(crate::fit::cmd::SynthArgs { model, effects, out, joints, episodes, duration, seed, suspend })
-        }
+        Some(Cmd::Synth(s)) => crate::synth::cmd::run(s),
         Some(Cmd::Convert { input, output }) => crate::sim2real::cmd::run_convert(&input, &output),
         None => check(cli.check),
     }

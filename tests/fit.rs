@@ -242,10 +242,9 @@ fn synth_then_fit_end_to_end() {
         .output()
         .unwrap();
     assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
-    assert!(std::fs::read_to_string(dir.join("truth.toml")).unwrap().contains("offset_rad = 0.05"));
-    std::fs::rename(dir.join("truth.toml"), dir.join("truth.toml.hidden")).unwrap();
+    assert!(std::fs::read_to_string(dir.join("truth.json")).unwrap().contains("\"offset_rad\": 0.05"));
     let o = std::process::Command::new(bin)
-        .args(["fit", model.to_str().unwrap(), dir.to_str().unwrap(), "--format", "json", "--effects", "position_offset,armature,viscous_damping"])
+        .args(["fit", model.to_str().unwrap(), dir.join("episodes").to_str().unwrap(), "--format", "json", "--effects", "position_offset,armature,viscous_damping"])
         .output()
         .unwrap();
     assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
@@ -279,14 +278,14 @@ fn synth_suspend_holds_the_base_above_the_keyframe() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("--suspend"), "{}", String::from_utf8_lossy(&o.stderr));
     let o = run(&["--suspend", "0.5"]);
     assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
-    let csv = std::fs::read_dir(&dir).unwrap().filter_map(|e| e.ok()).map(|e| e.path()).find(|p| p.extension().is_some_and(|x| x == "csv")).unwrap();
+    let csv = std::fs::read_dir(dir.join("episodes")).unwrap().filter_map(|e| e.ok()).map(|e| e.path()).find(|p| p.extension().is_some_and(|x| x == "csv")).unwrap();
     let rec = modellint::sim2real::recording::read_csv(&csv).unwrap();
     let robot = load(&model);
     let free = robot.joints.iter().find(|j| j.jtype == modellint::model::JointType::Free).unwrap();
     let z_key = robot.key.qpos[free.qposadr + 2];
     let b = rec.base.as_ref().expect("base columns");
     assert!(b.pos.iter().all(|p| (p[2] - z_key - 0.5).abs() < 1e-9), "base z {} vs key {z_key}", b.pos[0][2]);
-    assert!(std::fs::read_to_string(dir.join("truth.toml")).unwrap().contains("suspend_m = 0.5"));
+    assert!(std::fs::read_to_string(dir.join("truth.json")).unwrap().contains("\"suspend_m\": 0.5"));
     let _ = std::fs::remove_dir_all(&dir);
 }
 
