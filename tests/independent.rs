@@ -128,8 +128,11 @@ fn gap_on_the_clean_control_is_at_the_noise_floor() {
         assert!(mae <= 1.3 * floor, "{}: MAE {mae} > 1.3 × floor {floor}", j["name"]);
     }
     // No lag is located on the clean control (the one-tick command lag would show as −11 ms).
-    let text = serde_json::to_string(&v["localisation"]).unwrap();
-    assert!(!text.contains("lag"), "{text}");
+    for c in v["localisation"]["causes"].as_array().unwrap() {
+        let lag = c["lag_s"].as_f64().unwrap();
+        assert!(lag.abs() < 2e-3, "{}: lag {lag} s", c["name"]);
+        assert!(!c["summary"].as_str().unwrap().contains("time lag"), "{c}");
+    }
 }
 
 /// Runs `fit` on one data set and checks it against truth.json: exactly the hidden effects,
