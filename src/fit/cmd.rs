@@ -8,7 +8,7 @@ use std::path::PathBuf;
 use serde_json::json;
 
 use crate::fit::effects::{self, simulate};
-use crate::fit::select::{FitOptions, fit};
+use crate::fit::select::{FitOptions, Progress, ProgressInfo, fit};
 use crate::sim2real::gap::{self, GapOptions, GapReport};
 use crate::sim2real::replay::{Episode, ReplayOptions};
 
@@ -28,6 +28,19 @@ pub struct FitArgs {
     pub write_model: Option<PathBuf>,
     pub write_actuators: Option<PathBuf>,
     pub report: Option<PathBuf>,
+}
+
+/// A spinner on stderr (hidden when stderr is not a terminal, or with `--quiet`).
+fn progress_bar(quiet: bool) -> Option<indicatif::ProgressBar> {
+    if quiet {
+        return None;
+    }
+    let b = indicatif::ProgressBar::with_draw_target(None, indicatif::ProgressDrawTarget::stderr());
+    if let Ok(style) = indicatif::ProgressStyle::with_template("{spinner} modellint fit: {wide_msg}") {
+        b.set_style(style);
+    }
+    b.enable_steady_tick(std::time::Duration::from_millis(200));
+    Some(b)
 }
 
 fn fail(msg: impl std::fmt::Display) -> i32 {
@@ -89,8 +102,22 @@ pub fn run_fit(a: FitArgs) -> i32 {
         Some(s) => names.iter().filter_map(|n| s.joint(n).and_then(|f| f.motor).map(|m| (n.clone(), m))).collect(),
         None => Default::default(),
     };
-    let opts = FitOptions { holdout: a.holdout, effects: a.effects.clone(), joints, replay: replay.clone(), shooting_s: a.window, families, ..Default::default() };
+    let bar = progress_bar(a.quiet);
+    let progress = bar.clone().map(|b| {
+        let start = std::time::Instant::now();
+        Progress(std::sync::Arc::new(move |p: &ProgressInfo| {
+            let what = match &p.candidate {
+                Some((i, n, c)) => format!("candidate {i}/{n}: {c}"),
+                None => p.phase.to_string(),
+            };
+            b.set_message(format!("round {}: {what} · {} simulations · {:.0} s", p.round + 1, p.simulations, start.elapsed().as_secs_f64()));
+        }))
+    });
+    let opts = FitOptions { holdout: a.holdout, effects: a.effects.clone(), joints, replay: replay.clone(), shooting_s: a.window, families, progress, ..Default::default() };
     let out = fit(robot, &recs, &opts);
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
     for w in &out.warnings {
         eprintln!("modellint: warning: {w}");
     }

@@ -69,6 +69,8 @@ pub struct FitOptions {
     /// The search stops when every fitted joint's training residual has a mean square within
     /// this factor of its white floor ([`white_floor`]): what is left is noise.
     pub white_ratio: f64,
+    /// Called at each step of the search (none: silent).
+    pub progress: Option<Progress>,
 }
 
 impl Default for FitOptions {
@@ -90,6 +92,7 @@ impl Default for FitOptions {
             simplify: true,
             gap_mask_s: 0.1,
             white_ratio: 1.5,
+            progress: None,
         }
     }
 }
@@ -169,12 +172,34 @@ impl Errors {
     }
 }
 
+/// Where the search is, for a progress display: the phase, the candidate being fitted (if any)
+/// with its index among the round's candidates, and the number of dataset simulations so far.
+#[derive(Debug, Clone)]
+pub struct ProgressInfo {
+    pub round: usize,
+    pub phase: &'static str,
+    pub candidate: Option<(usize, usize, String)>,
+    pub simulations: usize,
+}
+
+/// A progress callback (`modellint fit` draws it on stderr).
+#[derive(Clone)]
+pub struct Progress(pub std::sync::Arc<dyn Fn(&ProgressInfo) + Send + Sync>);
+
+impl std::fmt::Debug for Progress {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("Progress")
+    }
+}
+
 /// The fit engine's view of a robot and dataset.
 pub struct Engine<'a> {
     pub robot: &'a Robot,
     pub opts: &'a FitOptions,
     /// Joints scored by the objective.
     pub joints: Vec<String>,
+    /// Dataset simulations run so far (each replays every episode of a set once).
+    sims: std::sync::atomic::AtomicUsize,
 }
 
 impl<'a> Engine<'a> {
@@ -187,11 +212,19 @@ impl<'a> Engine<'a> {
                 }
             }
         }
-        Engine { robot, opts, joints }
+        Engine { robot, opts, joints, sims: std::sync::atomic::AtomicUsize::new(0) }
+    }
+
+    /// Reports progress through `opts.progress`, if any.
+    pub fn report(&self, round: usize, phase: &'static str, candidate: Option<(usize, usize, String)>) {
+        if let Some(p) = &self.opts.progress {
+            (p.0)(&ProgressInfo { round, phase, candidate, simulations: self.sims.load(std::sync::atomic::Ordering::Relaxed) });
+        }
     }
 
     /// Simulates `recs` with `applied`; `None` when an episode diverged or failed.
     pub fn errors(&self, recs: &[Recording], applied: &[Applied]) -> Option<Errors> {
+        self.sims.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         let m = model_with(self.robot, applied);
         let eps: Vec<Episode> = recs
             .par_iter()
@@ -545,6 +578,7 @@ pub fn fit(robot: &Robot, recs: &[Recording], opts: &FitOptions) -> FitOutcome {
     let mut round = 0;
     loop {
         while round < opts.max_rounds {
+            engine.report(round, "diagnose", None);
             let added = greedy_round(&engine, &train, &heldout, &allowed, round, &mut out);
             round += 1;
             if !added {
@@ -552,12 +586,14 @@ pub fn fit(robot: &Robot, recs: &[Recording], opts: &FitOptions) -> FitOutcome {
             }
         }
         if out.applied.len() >= 2 {
+            engine.report(round, "polish", None);
             polish(&engine, &train, &heldout, &mut out);
         }
         if !opts.simplify || out.applied.is_empty() {
             break;
         }
         // A change re-opens the greedy search (bounded by `max_rounds`).
+        engine.report(round, "simplify", None);
         if !simplify(&engine, &train, &heldout, &allowed, round, &mut out) || round >= opts.max_rounds {
             break;
         }
@@ -695,6 +731,7 @@ fn greedy_round(engine: &Engine, train: &[Recording], heldout: &[Recording], all
     let mut ci = 0;
     while ci < cands.len() {
         let (e, group, ev) = cands[ci].clone();
+        engine.report(round, "fit", Some((ci + 1, cands.len(), format!("{} on {}", e.id(), group.join(",")))));
         let extra = ci >= n_top;
         ci += 1;
         // (Only multi-parameter effects: a 1-D fit is a 9-point grid plus golden section anyway,
@@ -966,6 +1003,7 @@ fn joint_pairs(
     let k_before: usize = applied.iter().map(|a| a.effect.fitted()).sum();
     let bic_before = bic(tr_err.n, tr_err.sse, k_before);
     let mut best: Option<(Vec<Applied>, Errors, Verdict, f64)> = None;
+    engine.report(round, "joint pairs", None);
     for (ea, eb) in JOINT_PAIRS {
         for a in fitted.iter().filter(|x| x.effect.id() == ea) {
             let Some(b) = fitted.iter().find(|x| x.effect.id() == eb && x.joints == a.joints) else { continue };
