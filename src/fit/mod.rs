@@ -10,3 +10,4 @@ pub mod servo_report;
 pub mod stats;
 pub mod synth;
 pub mod writeback;
+pub mod writemodel;
