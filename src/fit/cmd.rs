@@ -108,15 +108,22 @@ pub fn run_fit(a: FitArgs) -> i32 {
     // Everything said on stderr after the fit also goes into the JSON `warnings`.
     let mut notes: Vec<String> = Vec::new();
     if let Some(dir) = &a.report {
-        for (sub, r, eps) in [("before", &before, &eps_b), ("after", &after, &eps_a)] {
-            match crate::sim2real::report::write(&dir.join(sub), r, &out.heldout, eps) {
-                Ok(p) => {
-                    let msg = format!("report written to {}", p.display());
-                    eprintln!("modellint: {msg}");
-                    notes.push(msg);
-                }
-                Err(e) => return fail(format!("cannot write report in {}: {e}", dir.display())),
+        let page = crate::fit::report::FitReport {
+            model: &a.model,
+            selected: &out.selected,
+            before: &before,
+            after: &after,
+            recs: &out.heldout,
+            eps_before: &eps_b,
+            eps_after: &eps_a,
+        };
+        match crate::fit::report::write(dir, &page) {
+            Ok(p) => {
+                let msg = format!("report written to {}", p.display());
+                eprintln!("modellint: {msg}");
+                notes.push(msg);
             }
+            Err(e) => return fail(format!("cannot write report in {}: {e}", dir.display())),
         }
     }
     if let Some(path) = &a.write_model {

@@ -3,6 +3,7 @@ pub mod cmd;
 pub mod diagnose;
 pub mod effects;
 pub mod optim;
+pub mod report;
 pub mod select;
 pub mod servo;
 pub mod servo_fit;

@@ -144,11 +144,14 @@ pub struct BarGroup {
     pub label: String,
     pub values: Vec<f64>,
     pub tip: String,
+    /// Colour per value; empty: the legend's colours in order.
+    pub colours: Vec<&'static str>,
 }
 
-/// Grouped vertical bars (one colour per member of `legend`), y axis from 0 with round ticks.
+/// Grouped vertical bars (value i in the colour of `legend[i]` unless the group sets colours),
+/// y axis from 0 with round ticks.
 pub fn bar_chart(title: &str, ylabel: &str, legend: &[(&str, &str)], groups: &[BarGroup]) -> String {
-    let k = legend.len().max(1) as f64;
+    let k = groups.iter().map(|g| g.values.len()).max().unwrap_or(1).max(1) as f64;
     let bw = if k > 1.0 { 11.0 } else { 16.0 };
     let gw = bw * k + 8.0;
     let label_h = groups.iter().map(|g| text_width(&g.label, 10.0)).fold(0.0, f64::max) * 0.87 + 12.0;
@@ -178,7 +181,7 @@ pub fn bar_chart(title: &str, ylabel: &str, legend: &[(&str, &str)], groups: &[B
     for (gi, g) in groups.iter().enumerate() {
         let x = ml + gw * gi as f64 + 4.0;
         for (i, v) in g.values.iter().enumerate() {
-            let c = legend.get(i).map_or("#7f7f7f", |l| l.1);
+            let c = g.colours.get(i).copied().or_else(|| legend.get(i).map(|l| l.1)).unwrap_or("#7f7f7f");
             let bh = if v.is_finite() { (v / top * ph).max(0.0) } else { 0.0 };
             let _ = write!(
                 o,
@@ -282,7 +285,7 @@ mod tests {
     #[test]
     fn titles_fit_in_the_svg() {
         let title = "Position MAE per joint, held-out episodes: before → after the fit [deg]";
-        let svg = bar_chart(title, "MAE [deg]", &[("before", "#999"), ("after", "#2ca02c")], &[BarGroup { label: "a".into(), values: vec![1.0, 0.5], tip: String::new() }]);
+        let svg = bar_chart(title, "MAE [deg]", &[("before", "#999"), ("after", "#2ca02c")], &[BarGroup { label: "a".into(), values: vec![1.0, 0.5], tip: String::new(), colours: vec![] }]);
         let w: f64 = svg.split("width=\"").nth(1).unwrap().split('"').next().unwrap().parse().unwrap();
         assert!(w >= text_width(title, 12.0), "svg width {w} for a title of {} px", text_width(title, 12.0));
     }
