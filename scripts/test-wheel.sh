@@ -150,7 +150,11 @@ else
   echo "test-wheel: skipping: pip install --user refused here ($(tail -n 1 "$work/user.log"))" >&2
 fi
 
-# 4. uv tool / pipx, when installed.
+# 4. uv tool / pipx: the ones on PATH, else installed from PyPI into a scratch venv.
+if ! command -v uv >/dev/null || ! command -v pipx >/dev/null; then
+  python3 -m venv "$work/tools" && "$work/tools/bin/python" -m pip install --quiet uv pipx >"$work/tools.log" 2>&1 \
+    && PATH="$PATH:$work/tools/bin"
+fi
 if command -v uv >/dev/null; then
   if UV_TOOL_DIR="$work/uv-tools" UV_TOOL_BIN_DIR="$work/uv-bin" uv tool install --quiet "$whl" >"$work/uv.log" 2>&1; then
     check_install "uv tool" "$work/uv-bin"
