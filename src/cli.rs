@@ -58,6 +58,10 @@ pub struct CheckArgs {
     /// Static pass only: skip the MuJoCo probe simulations (for pre-commit hooks).
     #[arg(long)]
     pub no_probe: bool,
+    /// URDF `package://NAME/...` meshes: the directory of package NAME (repeatable; before
+    /// ROS_PACKAGE_PATH). Every subcommand.
+    #[arg(long, global = true, value_name = "NAME=DIR", value_parser = crate::model::urdf_packages::parse_package_arg)]
+    pub package: Vec<(String, PathBuf)>,
     /// Colour in text output and messages: auto, always, never (every subcommand).
     #[arg(long, global = true, default_value = "auto", value_parser = ["auto", "always", "never"])]
     pub color: String,
@@ -211,6 +215,7 @@ pub fn run() -> i32 {
     crate::model::mj::silence_warnings();
     let cli = Cli::parse();
     crate::output::set_color_choice(&cli.check.color);
+    crate::model::urdf_packages::set_packages(cli.check.package.clone());
     match cli.cmd {
         Some(Cmd::Rules) => {
             let mut out = String::new();

@@ -35,8 +35,13 @@ fn pct(before: f64, after: f64) -> String {
     if before > 0.0 && before.is_finite() && after.is_finite() { format!("{:+.0} %", 100.0 * (after - before) / before) } else { "n/a".into() }
 }
 
-/// "1.23e-3" → "0.00123" when short; significant digits, not fixed decimals.
+/// Four significant digits ("0.001489", "2.000"), scientific outside 1e-4..1e5.
 fn sig(v: f64) -> String {
+    sig_n(v, 4)
+}
+
+/// `n` significant digits.
+fn sig_n(v: f64, n: i32) -> String {
     if !v.is_finite() {
         return "?".into();
     }
@@ -45,10 +50,11 @@ fn sig(v: f64) -> String {
     }
     let mag = v.abs().log10().floor() as i32;
     if (-4..5).contains(&mag) {
-        let dec = (3 - mag).max(0) as usize;
+        let dec = (n - 1 - mag).max(0) as usize;
         format!("{v:.dec$}")
     } else {
-        format!("{v:.3e}")
+        let d = (n - 1).max(0) as usize;
+        format!("{v:.d$e}")
     }
 }
 
@@ -70,7 +76,7 @@ fn missing_physics(sel: &[Selected]) -> String {
             .map(|(k, v)| {
                 let unit = e.and_then(|e| e.params().iter().find(|p| p.name == k)).map_or("", |p| p.unit);
                 let se = s.stderr.get(k).copied().unwrap_or(f64::INFINITY);
-                let se = if se.is_finite() { format!(" ± {}", sig(se)) } else { " ± ?".into() };
+                let se = if se.is_finite() { format!(" ± {}", sig_n(se, 2)) } else { " ± ?".into() };
                 (k.clone(), format!("{}{se} {unit}", sig(*v)))
             })
             .collect();
@@ -285,5 +291,6 @@ mod tests {
         assert_eq!(sig(1.999817), "2.000");
         assert_eq!(sig(123.4), "123.4");
         assert_eq!(sig(8.73e-6), "8.730e-6");
+        assert_eq!(sig_n(0.0004718, 2), "0.00047");
     }
 }
