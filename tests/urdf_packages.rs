@@ -22,8 +22,8 @@ const URDF: &str = r#"<?xml version="1.0"?>
 </robot>
 "#;
 
-fn setup(mesh: &str) -> (PathBuf, PathBuf) {
-    let d = std::env::temp_dir().join(format!("modellint_urdfpkg_{}_{mesh}", std::process::id()));
+fn setup(tag: &str, mesh: &str) -> (PathBuf, PathBuf) {
+    let d = std::env::temp_dir().join(format!("modellint_urdfpkg_{}_{tag}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(d.join("ws/mybot/meshes")).unwrap();
     std::fs::write(d.join("ws/mybot/meshes/tet.obj"), "v 0 0 0\nv 0.1 0 0\nv 0 0.1 0\nv 0 0 0.1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n").unwrap();
@@ -44,7 +44,7 @@ fn lint(urdf: &PathBuf, args: &[&str], rpp: Option<&str>) -> (Option<i32>, Strin
 
 #[test]
 fn package_paths_resolve_from_the_flag_or_ros_package_path() {
-    let (d, urdf) = setup("tet.obj");
+    let (d, urdf) = setup("resolve", "tet.obj");
     let pkg = format!("mybot={}", d.join("ws/mybot").display());
     let (c, out) = lint(&urdf, &["--package", &pkg], None);
     assert_eq!(c, Some(0), "{out}");
@@ -63,7 +63,7 @@ fn package_paths_resolve_from_the_flag_or_ros_package_path() {
 
 #[test]
 fn missing_package_mesh_is_an_error_at_its_line() {
-    let (d, urdf) = setup("gone.obj");
+    let (d, urdf) = setup("missing", "gone.obj");
     let pkg = format!("mybot={}", d.join("ws/mybot").display());
     let (c, out) = lint(&urdf, &["--package", &pkg], None);
     assert_eq!(c, Some(2), "{out}");
@@ -73,7 +73,7 @@ fn missing_package_mesh_is_an_error_at_its_line() {
 
 #[test]
 fn urdf_compile_errors_carry_file_and_line() {
-    let (d, urdf) = setup("tet.obj");
+    let (d, urdf) = setup("compile", "tet.obj");
     std::fs::write(&urdf, URDF.replace("MESH", "tet.obj").replace("<parent link=\"base\"/>", "<parent link=\"nolink\"/>")).unwrap();
     let pkg = format!("mybot={}", d.join("ws/mybot").display());
     let (c, out) = lint(&urdf, &["--package", &pkg], None);
