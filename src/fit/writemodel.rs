@@ -164,6 +164,9 @@ pub fn write_model(model: &Path, robot: &Robot, selected: &[Selected], out: &Pat
         return Err(format!("--write-model {}: {}", out.display(), hard.join("; ")));
     }
     notes.extend(soft);
+    if selected.is_empty() {
+        notes.push(format!("no missing physics was selected: {} is the input model, unchanged but for its paths", out.display()));
+    }
 
     let abs = |p: &Path| std::fs::canonicalize(p).unwrap_or_else(|_| p.to_path_buf());
     let model_dir = abs(model.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new(".")));
