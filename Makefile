@@ -3,7 +3,7 @@
 MUJOCO := .mujoco/lib/libmujoco.so
 CARGO ?= cargo
 
-.PHONY: run test build bench docs clean-mujoco
+.PHONY: run test build bench docs clean-mujoco test-install
 
 $(MUJOCO): scripts/setup-mujoco.sh
 	./scripts/setup-mujoco.sh
@@ -18,6 +18,11 @@ run: build
 test: $(MUJOCO)
 	@[ -d ../shared/data ] || echo "modellint: ../shared/data is absent: tests on the real Menagerie models and BAM logs print 'skipping' and pass without checking (run with -- --nocapture to see them)"
 	$(CARGO) test --release --locked
+
+# The Python package (wheel in a fresh venv) and the pre-commit hook, end to end (.ci/run runs them).
+test-install: build
+	./scripts/test-wheel.sh
+	./scripts/test-precommit.sh
 
 bench: build
 	./bench/run.sh

@@ -58,8 +58,12 @@ pub struct CheckArgs {
     /// Static pass only: skip the MuJoCo probe simulations (for pre-commit hooks).
     #[arg(long)]
     pub no_probe: bool,
-    /// Colour in text output: auto, always, never.
-    #[arg(long, default_value = "auto", value_parser = ["auto", "always", "never"])]
+    /// URDF `package://NAME/...` meshes: the directory of package NAME (repeatable; before
+    /// ROS_PACKAGE_PATH). Every subcommand.
+    #[arg(long, global = true, value_name = "NAME=DIR", value_parser = crate::model::urdf_packages::parse_package_arg)]
+    pub package: Vec<(String, PathBuf)>,
+    /// Colour in text output and messages: auto, always, never (every subcommand).
+    #[arg(long, global = true, default_value = "auto", value_parser = ["auto", "always", "never"])]
     pub color: String,
 }
 
@@ -192,7 +196,7 @@ pub struct FitCmd {
     /// Write all fitted effects (incl. hook-only ones) as TOML.
     #[arg(long)]
     pub write_actuators: Option<PathBuf>,
-    /// Write HTML gap reports (before/ and after/) into this directory.
+    /// Write one HTML report (DIR/index.html): held-out episodes before → after the fit.
     #[arg(long)]
     pub report: Option<PathBuf>,
 }
@@ -217,6 +221,8 @@ fn use_color(choice: &str) -> bool {
 pub fn run() -> i32 {
     crate::model::mj::silence_warnings();
     let cli = Cli::parse();
+    crate::output::set_color_choice(&cli.check.color);
+    crate::model::urdf_packages::set_packages(cli.check.package.clone());
     match cli.cmd {
         Some(Cmd::Rules) => {
             let mut out = String::new();
@@ -239,7 +245,12 @@ pub fn run() -> i32 {
             }
             None => {
                 let ids: Vec<String> = crate::rules::all_meta().iter().map(|m| m.id.to_string()).collect();
-                eprintln!("modellint: no rule `{id}`; near: {}", crate::util::near_matches(&id, &ids).join(", "));
+                let near = crate::util::near_matches(&id, &ids);
+                if near.is_empty() {
+                    eprintln!("modellint: no rule `{id}`, and no rule id is close to it; `modellint rules` lists them all");
+                } else {
+                    eprintln!("modellint: no rule `{id}`; did you mean: {}?", near.join(", "));
+                }
                 2
             }
         },

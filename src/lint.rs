@@ -147,8 +147,7 @@ pub fn exit_code(findings: &[Finding], fail_on: Severity) -> i32 {
 pub fn load_for_command(model: &Path, spec: Option<PathBuf>) -> Result<Loaded, i32> {
     let input = LintInput { model: model.to_path_buf(), spec, config: None, select: vec![], ignore: vec![] };
     load(&input).map_err(|e| {
-        use std::io::IsTerminal;
-        eprint!("{}", crate::output::text::render_error(&e, std::io::stderr().is_terminal()));
+        eprint!("{}", crate::output::text::render_error(&e, crate::output::color_on_stderr()));
         2
     })
 }

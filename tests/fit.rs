@@ -179,7 +179,8 @@ fn cli_json_write_model_and_actuators() {
     assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(text.starts_with("missing physics\n  armature") && text.contains("wrist_pitch") && text.contains("gap score"), "{text}");
-    assert!(rep.join("before").is_dir() && rep.join("after").is_dir());
+    let page = std::fs::read_to_string(rep.join("index.html")).unwrap();
+    assert!(page.contains("sim before") && page.contains("sim after") && page.contains("Missing physics"), "one fit page with before and after");
     let _ = std::fs::remove_dir_all(&dir);
 }
 

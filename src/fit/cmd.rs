@@ -135,35 +135,52 @@ pub fn run_fit(a: FitArgs) -> i32 {
         (Ok(b), Ok(a)) => (b, a),
         (Err(e), _) | (_, Err(e)) => return fail(e),
     };
+    // Everything said on stderr after the fit also goes into the JSON `warnings`.
+    let mut notes: Vec<String> = Vec::new();
     if let Some(dir) = &a.report {
-        for (sub, r, eps) in [("before", &before, &eps_b), ("after", &after, &eps_a)] {
-            match crate::sim2real::report::write(&dir.join(sub), r, &out.heldout, eps) {
-                Ok(p) => eprintln!("modellint: report written to {}", p.display()),
-                Err(e) => return fail(format!("cannot write report in {}: {e}", dir.display())),
+        let page = crate::fit::report::FitReport {
+            model: &a.model,
+            selected: &out.selected,
+            before: &before,
+            after: &after,
+            recs: &out.heldout,
+            eps_before: &eps_b,
+            eps_after: &eps_a,
+        };
+        match crate::fit::report::write(dir, &page) {
+            Ok(p) => {
+                let msg = format!("report written to {}", p.display());
+                eprintln!("modellint: {msg}");
+                notes.push(msg);
             }
+            Err(e) => return fail(format!("cannot write report in {}: {e}", dir.display())),
         }
     }
     if let Some(path) = &a.write_model {
-        let text = match std::fs::read_to_string(&a.model) {
-            Ok(t) => t,
-            Err(e) => return fail(format!("cannot read {}: {e}", a.model.display())),
-        };
-        match crate::fit::writeback::edit_mjcf(&text, robot, &out.selected) {
-            Ok((t, warns)) => {
-                for w in warns {
-                    eprintln!("modellint: note: {w}");
+        match crate::fit::writemodel::write_model(&a.model, robot, &out.selected, path) {
+            Ok(w) => {
+                for n in w.notes {
+                    eprintln!("modellint: note: {n}");
+                    notes.push(n);
                 }
-                if let Err(e) = std::fs::write(path, t) {
-                    return fail(format!("cannot write {}: {e}", path.display()));
-                }
+                let list: Vec<String> = w.files.iter().map(|p| p.display().to_string()).collect();
+                let msg = format!("fitted model written to {}", list.join(", "));
+                eprintln!("modellint: {msg}");
+                notes.push(msg);
             }
             Err(e) => return fail(e),
         }
     }
-    if let Some(path) = &a.write_actuators
-        && let Err(e) = std::fs::write(path, crate::fit::writeback::actuators_toml(&out.selected))
-    {
-        return fail(format!("cannot write {}: {e}", path.display()));
+    if let Some(path) = &a.write_actuators {
+        match crate::fit::writeback::write_actuators(path, robot, &out.selected) {
+            Ok(files) => {
+                let list: Vec<String> = files.iter().map(|p| p.display().to_string()).collect();
+                let msg = format!("actuator parameters written to {}", list.join(", "));
+                eprintln!("modellint: {msg}");
+                notes.push(msg);
+            }
+            Err(e) => return fail(e),
+        }
     }
     let text = if a.json {
         let mp: Vec<_> = out
@@ -187,7 +204,7 @@ pub fn run_fit(a: FitArgs) -> i32 {
             "split": {"train": out.train.len(), "heldout": out.heldout.len(), "by_time": out.split_by_time, "note": out.split_note},
             "floor": out.floors.iter().map(|(j, ms, w)| json!({"joint": j, "residual_rms": ms.sqrt(), "white_floor_rms": w.sqrt()})).collect::<Vec<_>>(),
             "stopped_at_floor": out.stopped_at_floor,
-            "warnings": out.warnings,
+            "warnings": out.warnings.iter().chain(&notes).collect::<Vec<_>>(),
         });
         serde_json::to_string_pretty(&v).unwrap_or_default() + "\n"
     } else {

@@ -2,7 +2,7 @@
 //! added to the element when absent; the rest of the file byte for byte) and a TOML file for
 //! the effects MuJoCo cannot express.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 
 use crate::fit::effects::{self, WriteBack};
 use crate::fit::select::Selected;
@@ -17,7 +17,40 @@ fn num(v: f64) -> String {
 /// Edits `xml` (the model's MJCF text) with the MuJoCo-expressible fitted values. Returns the new
 /// text and warnings (joints or actuators not found in this file, effects left to the TOML).
 pub fn edit_mjcf(xml: &str, robot: &Robot, selected: &[Selected]) -> Result<(String, Vec<String>), String> {
-    let doc = roxmltree::Document::parse(xml).map_err(|e| format!("cannot parse the MJCF: {e}"))?;
+    let mut found = BTreeSet::new();
+    let (out, mut warnings) = edit_file(xml, robot, selected, &mut found)?;
+    warnings.extend(unwritten(selected, &found, "in this file"));
+    Ok((out, warnings))
+}
+
+/// What `edit_file` could not place: (effect, joint) pairs whose element was found in none of the
+/// files searched, and the effects MJCF cannot express.
+pub fn unwritten(selected: &[Selected], found: &BTreeSet<(usize, String)>, where_: &str) -> Vec<String> {
+    let mut warnings = Vec::new();
+    for (i, s) in selected.iter().enumerate() {
+        let Some(e) = effects::by_id(&s.effect) else { continue };
+        match e.write_back(&s.values) {
+            WriteBack::Joint(_) => {
+                for j in s.joints.iter().filter(|j| !found.contains(&(i, (*j).clone()))) {
+                    warnings.push(format!("{}: <joint name=\"{j}\"> not found {where_}; not written", s.effect));
+                }
+            }
+            WriteBack::Actuator(_) => {
+                for j in s.joints.iter().filter(|j| !found.contains(&(i, (*j).clone()))) {
+                    warnings.push(format!("{}: no <actuator> element with joint=\"{j}\" {where_}; not written", s.effect));
+                }
+            }
+            WriteBack::TomlOnly => warnings.push(format!("{} on {}: not expressible in MJCF; see --write-actuators", s.effect, s.joints.join(","))),
+        }
+    }
+    warnings
+}
+
+/// Edits one MJCF file's text; records in `found` the (selected index, joint) pairs whose element
+/// is in this file. Warnings here are about elements found but not editable.
+pub fn edit_file(xml: &str, robot: &Robot, selected: &[Selected], found: &mut BTreeSet<(usize, String)>) -> Result<(String, Vec<String>), String> {
+    let opts = roxmltree::ParsingOptions { allow_dtd: true, ..Default::default() };
+    let doc = roxmltree::Document::parse_with_options(xml, opts).map_err(|e| format!("cannot parse the MJCF: {e}"))?;
     let mut warnings = Vec::new();
     // element start offset → (tag name end offset, attributes to set)
     let mut sets: BTreeMap<usize, (roxmltree::NodeId, Vec<(String, String)>)> = BTreeMap::new();
@@ -30,15 +63,15 @@ pub fn edit_mjcf(xml: &str, robot: &Robot, selected: &[Selected]) -> Result<(Str
         }
     };
     let in_actuator = |n: &roxmltree::Node| n.parent_element().is_some_and(|p| p.has_tag_name("actuator"));
-    for s in selected {
+    for (i, s) in selected.iter().enumerate() {
         let Some(e) = effects::by_id(&s.effect) else { continue };
         match e.write_back(&s.values) {
             WriteBack::Joint(attrs) => {
                 for j in &s.joints {
                     let Some(node) = doc.descendants().find(|n| n.has_tag_name("joint") && n.attribute("name") == Some(j.as_str()) && !in_actuator(n)) else {
-                        warnings.push(format!("{}: <joint name=\"{j}\"> not found in this file; not written", s.effect));
                         continue;
                     };
+                    found.insert((i, j.clone()));
                     for (a, v) in &attrs {
                         add(node, a, num(*v));
                     }
@@ -47,8 +80,8 @@ pub fn edit_mjcf(xml: &str, robot: &Robot, selected: &[Selected]) -> Result<(Str
             WriteBack::Actuator(attrs) => {
                 for j in &s.joints {
                     let acts: Vec<roxmltree::Node> = doc.descendants().filter(|n| in_actuator(n) && n.attribute("joint") == Some(j.as_str())).collect();
-                    if acts.is_empty() {
-                        warnings.push(format!("{}: no <actuator> element with joint=\"{j}\" in this file; not written", s.effect));
+                    if !acts.is_empty() {
+                        found.insert((i, j.clone()));
                     }
                     for node in acts {
                         let compiled = robot.actuators.iter().find(|a| Some(a.name.as_str()) == node.attribute("name")).or_else(|| {
@@ -86,7 +119,7 @@ pub fn edit_mjcf(xml: &str, robot: &Robot, selected: &[Selected]) -> Result<(Str
                     }
                 }
             }
-            WriteBack::TomlOnly => warnings.push(format!("{} on {}: not expressible in MJCF; see --write-actuators", s.effect, s.joints.join(","))),
+            WriteBack::TomlOnly => {}
         }
     }
     // Text edits (start, end, replacement), applied back to front.
@@ -135,27 +168,98 @@ pub fn actuators_toml(selected: &[Selected]) -> String {
         }
         s.push('\n');
     }
-    // Isaac Lab-style snippet.
-    let mut per_joint: BTreeMap<String, Vec<String>> = BTreeMap::new();
+    s.push_str("# Isaac Lab / mjlab actuator snippet: the Python file written beside this one.\n");
+    s
+}
+
+/// `--write-actuators PATH`: the TOML at PATH and the Isaac Lab / mjlab snippet beside it
+/// (`<stem>_isaaclab.py`). Returns the files written.
+pub fn write_actuators(path: &std::path::Path, robot: &Robot, selected: &[Selected]) -> Result<Vec<std::path::PathBuf>, String> {
+    std::fs::write(path, actuators_toml(selected)).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    let stem = path.file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or_else(|| "actuators".into());
+    let py = path.with_file_name(format!("{stem}_isaaclab.py"));
+    std::fs::write(&py, isaaclab_snippet(robot, selected)).map_err(|e| format!("cannot write {}: {e}", py.display()))?;
+    Ok(vec![path.to_path_buf(), py])
+}
+
+/// A Python string literal (double-quoted, escaped).
+fn py_str(s: &str) -> String {
+    let mut o = String::from("\"");
+    for c in s.chars() {
+        match c {
+            '\\' => o.push_str("\\\\"),
+            '"' => o.push_str("\\\""),
+            '\n' => o.push_str("\\n"),
+            c if (c as u32) < 0x20 => o.push_str(&format!("\\x{:02x}", c as u32)),
+            c => o.push(c),
+        }
+    }
+    o.push('"');
+    o
+}
+
+/// Valid Python: one `ImplicitActuatorCfg` per joint with the fitted values its fields can hold
+/// (armature, friction, effort_limit); the values they cannot hold (passive joint damping, action
+/// delay) as comments on lines of their own, in the units the simulators use.
+pub fn isaaclab_snippet(robot: &Robot, selected: &[Selected]) -> String {
+    let mut per_joint: BTreeMap<String, (Vec<String>, Vec<String>)> = BTreeMap::new();
     for x in selected {
         for j in &x.joints {
-            let e = per_joint.entry(j.clone()).or_default();
+            let (fields, comments) = per_joint.entry(j.clone()).or_default();
             let p = |k: &str| x.params.get(k).copied().unwrap_or(f64::NAN);
             match x.effect.as_str() {
-                "torque_limit" => e.push(format!("effort_limit={}", num(p("effort_limit")))),
-                "armature" => e.push(format!("armature={}", num(p("armature")))),
-                "coulomb_friction" => e.push(format!("friction={}", num(p("frictionloss")))),
-                "viscous_damping" => e.push(format!("# joint damping {}", num(p("damping")))),
-                "action_delay" => e.push(format!("# DelayedPDActuatorCfg: min_delay=max_delay={} physics steps", num(p("delay_s")))),
-                _ => {}
+                "torque_limit" => fields.push(format!("effort_limit={},  # N·m", num(p("effort_limit")))),
+                "armature" => fields.push(format!("armature={},  # kg·m² (reflected rotor inertia)", num(p("armature")))),
+                "coulomb_friction" => fields.push(format!("friction={},  # N·m (MuJoCo frictionloss; check your simulator's friction model)", num(p("frictionloss")))),
+                "viscous_damping" => comments.push(format!(
+                    "# passive joint damping {} N·m·s/rad: not an actuator field; add it to the joint's damping, or to the PD damping (kd)",
+                    num(p("damping"))
+                )),
+                "action_delay" => {
+                    let d = p("delay_s");
+                    let steps = (d / robot.opt.timestep).round();
+                    comments.push(format!(
+                        "# action delay {} s = {} physics steps of {} s: DelayedPDActuatorCfg(min_delay={}, max_delay={})",
+                        num(d),
+                        num(steps),
+                        num(robot.opt.timestep),
+                        num(steps),
+                        num(steps)
+                    ));
+                }
+                other => comments.push(format!("# {other}: {}", x.params.iter().map(|(k, v)| format!("{k} = {}", num(*v))).collect::<Vec<_>>().join(", "))),
             }
         }
     }
-    if !per_joint.is_empty() {
-        s.push_str("# Isaac Lab / mjlab actuator snippet (edit to taste):\n");
-        for (j, items) in per_joint {
-            s.push_str(&format!("#   \"{j}\": ImplicitActuatorCfg(joint_names_expr=[\"{j}\"], {})\n", items.join(", ")));
+    let mut s = String::from(
+        "# Written by `modellint fit`: fitted actuator parameters for Isaac Lab (mjlab has the same fields).\n\
+         # Values MuJoCo can hold are also in the model written by --write-model.\n\
+         from isaaclab.actuators import ImplicitActuatorCfg\n\n\
+         actuators = {\n",
+    );
+    for (j, (fields, comments)) in per_joint {
+        s.push_str(&format!("    {}: ImplicitActuatorCfg(\n", py_str(&j)));
+        s.push_str(&format!("        joint_names_expr=[{}],\n", py_str(&regex_escape(&j))));
+        for f in fields {
+            s.push_str(&format!("        {f}\n"));
         }
+        for c in comments {
+            s.push_str(&format!("        {c}\n"));
+        }
+        s.push_str("    ),\n");
     }
+    s.push_str("}\n");
     s
+}
+
+/// `joint_names_expr` entries are regular expressions: escape the metacharacters of a joint name.
+fn regex_escape(name: &str) -> String {
+    let mut o = String::new();
+    for c in name.chars() {
+        if "\\.+*?()|[]{}^$".contains(c) {
+            o.push('\\');
+        }
+        o.push(c);
+    }
+    o
 }

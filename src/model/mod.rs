@@ -4,6 +4,7 @@
 pub mod mj;
 pub mod mjcf;
 pub mod source;
+pub mod urdf_packages;
 
 use std::path::{Path, PathBuf};
 
@@ -435,9 +436,15 @@ pub fn load(map: &mut SourceMap, path: &Path, keyframe: Option<&str>) -> Result<
         Format::Mjcf => mjcf::index_mjcf(&tree),
         Format::Urdf => mjcf::index_urdf(&tree),
     };
-    let mj = MjModel::from_xml(path).map_err(|e| {
+    // URDF `package://` meshes: MuJoCo compiles a resolved copy (same line numbers).
+    let resolved = if format == Format::Urdf { urdf_packages::resolved_copy(map, first)? } else { None };
+    let mj = MjModel::from_xml(resolved.as_deref().unwrap_or(path));
+    if let Some(t) = &resolved {
+        let _ = std::fs::remove_file(t);
+    }
+    let mj = mj.map_err(|e| {
         let msg = format!("MuJoCo could not compile the model: {e}");
-        mujoco_error_location(map, first, &msg).unwrap_or_else(|| LoadError::plain(path, msg))
+        mujoco_error_location(map, first, &msg).or_else(|| missing_file_location(map, first, &msg)).unwrap_or_else(|| LoadError::plain(path, msg))
     })?;
     let mut robot = extract(path, format, tree, src, mj);
     let key = choose_key(&robot.keys, keyframe);
@@ -448,6 +455,28 @@ pub fn load(map: &mut SourceMap, path: &Path, keyframe: Option<&str>) -> Result<
     }
     robot.key = key_state(&robot.mj, key, &robot.keys);
     Ok(robot)
+}
+
+/// "Error opening file 'X'": the attribute that names X (by its file name), at its file:line.
+fn missing_file_location(map: &SourceMap, first_file: usize, msg: &str) -> Option<LoadError> {
+    let i = msg.find("Error opening file '")? + "Error opening file '".len();
+    let name = msg[i..].split('\'').next()?;
+    let base = name.rsplit(['/', '\\']).next().filter(|b| !b.is_empty())?;
+    for f in first_file..map.files.len() {
+        let text = &map.file(f).text;
+        for pat in ["filename=\"", "file=\""] {
+            let mut from = 0;
+            while let Some(k) = text[from..].find(pat) {
+                let vs = from + k + pat.len();
+                let ve = text[vs..].find('"').map_or(text.len(), |e| vs + e);
+                if text[vs..ve].ends_with(base) {
+                    return Some(LoadError::at(map, Loc { file: f, start: vs, end: ve }, format!("{msg} (file not found)")));
+                }
+                from = ve;
+            }
+        }
+    }
+    None
 }
 
 /// MuJoCo reports XML problems as "... line N, column M" or with a file name; map them back.

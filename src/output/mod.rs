@@ -20,6 +20,29 @@ pub enum Format {
     Github,
 }
 
+/// `--color` of the command line (any subcommand): 0 auto, 1 always, 2 never. Set once by the CLI.
+static COLOR_CHOICE: std::sync::atomic::AtomicU8 = std::sync::atomic::AtomicU8::new(0);
+
+pub fn set_color_choice(choice: &str) {
+    let v = match choice {
+        "always" => 1,
+        "never" => 2,
+        _ => 0,
+    };
+    COLOR_CHOICE.store(v, std::sync::atomic::Ordering::Relaxed);
+}
+
+/// Colour for messages on stderr: `--color always/never`, else when stderr is a terminal and
+/// NO_COLOR is unset.
+pub fn color_on_stderr() -> bool {
+    use std::io::IsTerminal;
+    match COLOR_CHOICE.load(std::sync::atomic::Ordering::Relaxed) {
+        1 => true,
+        2 => false,
+        _ => std::io::stderr().is_terminal() && std::env::var_os("NO_COLOR").is_none(),
+    }
+}
+
 /// File path, 1-based line/column of start, and of end.
 pub struct Position {
     pub file: String,

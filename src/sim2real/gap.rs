@@ -589,7 +589,7 @@ fn num(x: f64, p: usize) -> String {
 }
 
 impl GapReport {
-    /// Human summary (angles in degrees). `title` heads the block ("gap", "before", "after").
+    /// Human summary (angles in degrees, angular velocities in °/s; the JSON stays SI). `title` heads the block ("gap", "before", "after").
     pub fn to_text(&self, title: &str) -> String {
         let mut o = String::new();
         o.push_str(&format!(
@@ -597,12 +597,12 @@ impl GapReport {
             self.episodes, self.samples, self.duration_s, self.uniform_rate_hz
         ));
         o.push_str(&format!(
-            "  position  MAE {}  RMSE {}  max {}\n  velocity  MAE {} rad/s  RMSE {} rad/s\n  correlation mean {}   spectral KL {}\n",
+            "  position  MAE {}  RMSE {}  max {}\n  velocity  MAE {}°/s  RMSE {}°/s\n  correlation mean {}   spectral KL {}\n",
             deg(self.position_mae),
             deg(self.position_rmse),
             deg(self.position_max),
-            num(self.velocity_mae, 3),
-            num(self.velocity_rmse, 3),
+            num(self.velocity_mae.to_degrees(), 3),
+            num(self.velocity_rmse.to_degrees(), 3),
             num(self.correlation_mean, 3),
             num(self.spectral_kl, 3)
         ));
@@ -615,7 +615,7 @@ impl GapReport {
         ));
         o.push_str(&format!(
             "\n  {:<24} {:<6} {:>8} {:>8} {:>8} {:>6} {:>9} {:>7} {:>13}\n",
-            "joint", "region", "MAE", "RMSE", "max", "corr", "vel RMSE", "KL", "dom Hz r/s"
+            "joint", "region", "MAE", "RMSE", "max", "corr", "vel [°/s]", "KL", "dom Hz r/s"
         ));
         for s in &self.localisation.joints {
             let Some(j) = self.per_joint.iter().find(|j| j.name == s.name) else { continue };
@@ -627,7 +627,7 @@ impl GapReport {
                 deg(j.rmse),
                 deg(j.max),
                 j.corr.map_or("n/a".into(), |c| format!("{c:.2}")),
-                num(j.vel_rmse, 3),
+                num(j.vel_rmse.to_degrees(), 3),
                 num(j.spectral_kl, 3),
                 num(j.dominant_hz_real, 1),
                 num(j.dominant_hz_sim, 1)

@@ -7,6 +7,7 @@ pub mod locate;
 pub mod metrics;
 pub mod recording;
 pub mod spectral;
+pub mod svg;
 pub mod replay;
 pub mod gap;
 pub mod cmd;

@@ -1,21 +1,20 @@
-//! `--report DIR`: one self-contained `index.html` with inline SVG (no scripts, no network):
-//! real-vs-sim overlays of the worst 4 joints, per-joint MAE bars coloured by region, PSD
-//! comparison (log scale) of the worst joints and a correlation heat map (joints × episodes).
+//! `gap --report DIR`: one self-contained `index.html` with inline SVG (no scripts, no network;
+//! charts in `svg.rs`): real-vs-sim overlays of the worst 4 joints, per-joint MAE bars coloured by
+//! region (two joints or more), PSD comparison (log scale) of the worst joints, a correlation heat
+//! map (joints × episodes) with its colour scale, and the episodes by path relative to their
+//! common directory.
 //! When a headless chromium is installed, `index.png` is rendered from it as well (optional).
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use crate::sim2real::gap::GapReport;
+use crate::sim2real::svg::{self, Series, esc, line_plot};
 use crate::sim2real::recording::Recording;
 use crate::sim2real::replay::Episode;
 
 const REAL: &str = "#1f77b4";
 const SIM: &str = "#ff7f0e";
-
-fn esc(s: &str) -> String {
-    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
-}
 
 fn region_colour(r: &str) -> &'static str {
     match r {
@@ -27,141 +26,50 @@ fn region_colour(r: &str) -> &'static str {
     }
 }
 
-struct Series<'a> {
-    x: &'a [f64],
-    y: Vec<f64>,
-    colour: &'static str,
-    label: &'static str,
-}
-
-/// A line plot; `log_y` plots log10(y) (non-positive values dropped).
-fn line_plot(title: &str, xlabel: &str, ylabel: &str, series: &[Series], log_y: bool) -> String {
-    let (w, h, ml, mr, mt, mb) = (560.0, 260.0, 60.0, 10.0, 24.0, 36.0);
-    let tr = |v: f64| if log_y { if v > 0.0 { v.log10() } else { f64::NAN } } else { v };
-    let (mut x0, mut x1, mut y0, mut y1) = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
-    for s in series {
-        for (x, y) in s.x.iter().zip(&s.y) {
-            let y = tr(*y);
-            if x.is_finite() && y.is_finite() {
-                x0 = x0.min(*x);
-                x1 = x1.max(*x);
-                y0 = y0.min(y);
-                y1 = y1.max(y);
+/// Display names of the episodes: paths relative to their common directory (returned too).
+pub fn episode_names(sources: &[String]) -> (Vec<String>, Option<PathBuf>) {
+    let paths: Vec<&Path> = sources.iter().map(Path::new).collect();
+    let mut common: Option<PathBuf> = paths.first().and_then(|p| p.parent()).map(Path::to_path_buf);
+    for p in &paths {
+        while let Some(c) = &common {
+            if p.starts_with(c) {
+                break;
             }
+            common = c.parent().map(Path::to_path_buf);
         }
     }
-    let mut o = format!(r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" font-family="sans-serif" font-size="11">"#);
-    let _ = write!(o, r#"<text x="{}" y="15" text-anchor="middle" font-weight="bold">{}</text>"#, w / 2.0, esc(title));
-    if !(x0.is_finite() && y0.is_finite()) {
-        o.push_str("<text x=\"20\" y=\"60\">no data</text></svg>");
-        return o;
-    }
-    if x1 <= x0 {
-        x1 = x0 + 1.0;
-    }
-    if y1 <= y0 {
-        y1 = y0 + 1e-9;
-    }
-    let pw = w - ml - mr;
-    let ph = h - mt - mb;
-    let px = |x: f64| ml + (x - x0) / (x1 - x0) * pw;
-    let py = |y: f64| mt + ph - (y - y0) / (y1 - y0) * ph;
-    let _ = write!(o, r##"<rect x="{ml}" y="{mt}" width="{pw}" height="{ph}" fill="none" stroke="#999"/>"##);
-    for k in 0..=4 {
-        let yv = y0 + (y1 - y0) * k as f64 / 4.0;
-        let lab = if log_y { format!("1e{yv:.1}") } else { format!("{yv:.3}") };
-        let _ = write!(o, r#"<text x="{}" y="{}" text-anchor="end">{lab}</text>"#, ml - 4.0, py(yv) + 4.0);
-        let xv = x0 + (x1 - x0) * k as f64 / 4.0;
-        let _ = write!(o, r#"<text x="{}" y="{}" text-anchor="middle">{xv:.2}</text>"#, px(xv), h - mb + 14.0);
-    }
-    let _ = write!(o, r#"<text x="{}" y="{}" text-anchor="middle">{}</text>"#, ml + pw / 2.0, h - 4.0, esc(xlabel));
-    let _ = write!(o, r#"<text x="12" y="{}" transform="rotate(-90 12 {})" text-anchor="middle">{}</text>"#, mt + ph / 2.0, mt + ph / 2.0, esc(ylabel));
-    for (si, s) in series.iter().enumerate() {
-        let n = s.x.len().min(s.y.len());
-        let step = (n / 1500).max(1);
-        let mut d = String::new();
-        let mut pen = false;
-        for i in (0..n).step_by(step) {
-            let y = tr(s.y[i]);
-            if !(s.x[i].is_finite() && y.is_finite()) {
-                pen = false;
-                continue;
-            }
-            let _ = write!(d, "{}{:.1},{:.1} ", if pen { "L" } else { "M" }, px(s.x[i]), py(y));
-            pen = true;
-        }
-        let _ = write!(o, r#"<path d="{d}" fill="none" stroke="{}" stroke-width="1.2"/>"#, s.colour);
-        let _ = write!(o, r#"<text x="{}" y="{}" fill="{}">{}</text>"#, ml + 8.0 + 60.0 * si as f64, mt + 14.0, s.colour, s.label);
-    }
-    o.push_str("</svg>");
-    o
+    let common = common.filter(|c| !c.as_os_str().is_empty());
+    let names = paths
+        .iter()
+        .map(|p| common.as_ref().and_then(|c| p.strip_prefix(c).ok()).unwrap_or(p).to_string_lossy().into_owned())
+        .collect();
+    (names, common)
 }
 
+/// Per-joint MAE bars coloured by region (≥ 2 joints; one joint is a sentence, not a chart).
 fn bars(r: &GapReport) -> String {
-    let n = r.per_joint.len().max(1);
-    let (bw, ml, h, mt, mb) = (22.0, 50.0, 300.0, 24.0, 120.0);
-    let w = ml + bw * n as f64 + 20.0;
-    let vmax = r.per_joint.iter().map(|j| j.mae.to_degrees()).filter(|x| x.is_finite()).fold(0.0, f64::max).max(1e-9);
-    let ph = h - mt - mb;
-    let mut o = format!(r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" font-family="sans-serif" font-size="11">"#);
-    let _ = write!(o, r#"<text x="{ml}" y="15" font-weight="bold">Position MAE per joint [deg] (colour = region)</text>"#);
-    for (i, j) in r.per_joint.iter().enumerate() {
-        let v = j.mae.to_degrees();
-        let bh = if v.is_finite() { v / vmax * ph } else { 0.0 };
-        let x = ml + bw * i as f64;
-        let _ = write!(
-            o,
-            r#"<rect x="{x}" y="{}" width="{}" height="{bh}" fill="{}"><title>{} ({}): {v:.2}°</title></rect>"#,
-            mt + ph - bh,
-            bw - 4.0,
-            region_colour(&j.region),
-            esc(&j.name),
-            esc(&j.region)
-        );
-        let _ = write!(o, r#"<text x="{}" y="{}" font-size="9" text-anchor="middle">{v:.1}</text>"#, x + bw / 2.0 - 2.0, mt + ph - bh - 2.0);
-        let (tx, ty) = (x + bw / 2.0, mt + ph + 6.0);
-        let _ = write!(o, r#"<text x="{tx}" y="{ty}" transform="rotate(60 {tx} {ty})" font-size="10">{}</text>"#, esc(&j.name));
+    if r.per_joint.len() < 2 {
+        return r.per_joint.first().map_or(String::new(), |j| format!("<p>{}: position MAE {:.2}°</p>", esc(&j.name), j.mae.to_degrees()));
     }
-    let _ = write!(o, r##"<line x1="{ml}" y1="{}" x2="{}" y2="{}" stroke="#333"/>"##, mt + ph, w - 20.0, mt + ph);
-    let _ = write!(o, r#"<text x="{}" y="{}" text-anchor="end">{vmax:.1}</text>"#, ml - 4.0, mt + 4.0);
-    o.push_str("</svg>");
-    o
+    let mut regions: Vec<&str> = r.per_joint.iter().map(|j| j.region.as_str()).collect();
+    regions.sort_unstable();
+    regions.dedup();
+    let legend: Vec<(&str, &str)> = regions.iter().map(|g| (*g, region_colour(g))).collect();
+    let groups: Vec<svg::BarGroup> = r
+        .per_joint
+        .iter()
+        .map(|j| svg::BarGroup { label: j.name.clone(), values: vec![j.mae.to_degrees()], tip: format!("{} ({}): {:.2}°", j.name, j.region, j.mae.to_degrees()), colours: vec![region_colour(&j.region)] })
+        .collect();
+    svg::bar_chart("Position MAE per joint [deg] (colour = region)", "MAE [deg]", &legend, &groups)
 }
 
-fn heat_map(r: &GapReport) -> String {
-    let joints: Vec<&str> = r.per_joint.iter().map(|j| j.name.as_str()).collect();
-    let ne = r.per_episode.len().max(1);
-    let cell = (600.0 / ne as f64).clamp(3.0, 24.0);
-    let (ml, mt) = (170.0, 30.0);
-    let w = ml + cell * ne as f64 + 20.0;
-    let h = mt + 14.0 * joints.len() as f64 + 30.0;
-    let mut o = format!(r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" font-family="sans-serif" font-size="10">"#);
-    let _ = write!(o, r#"<text x="10" y="15" font-weight="bold">Correlation real vs sim (rows: joints, columns: episodes; green +1, white 0, red −1)</text>"#);
-    for (ji, jn) in joints.iter().enumerate() {
-        let y = mt + 14.0 * ji as f64;
-        let _ = write!(o, r#"<text x="{}" y="{}" text-anchor="end">{}</text>"#, ml - 4.0, y + 10.0, esc(jn));
-        for (ei, ep) in r.per_episode.iter().enumerate() {
-            let c = ep.per_joint.iter().find(|j| j.name == *jn).and_then(|j| j.corr);
-            let fill = match c {
-                None => "#cccccc".to_string(),
-                Some(c) => {
-                    let c = c.clamp(-1.0, 1.0);
-                    let k = (255.0 * (1.0 - c.abs())) as u8;
-                    if c >= 0.0 { format!("rgb({k},{},{k})", 160 + (95.0 * (1.0 - c)) as u8) } else { format!("rgb(255,{k},{k})") }
-                }
-            };
-            let tip = c.map_or("n/a".into(), |c| format!("{c:.3}"));
-            let _ = write!(
-                o,
-                r#"<rect x="{}" y="{y}" width="{cell}" height="13" fill="{fill}"><title>{} / {}: {tip}</title></rect>"#,
-                ml + cell * ei as f64,
-                esc(jn),
-                esc(&ep.source)
-            );
-        }
+fn heat_map(r: &GapReport, names: &[String]) -> String {
+    let joints: Vec<String> = r.per_joint.iter().map(|j| j.name.clone()).collect();
+    if joints.len() * r.per_episode.len() < 2 {
+        return String::new();
     }
-    o.push_str("</svg>");
-    o
+    let cell = |ji: usize, ei: usize| r.per_episode[ei].per_joint.iter().find(|j| j.name == joints[ji]).and_then(|j| j.corr);
+    format!("<h2>Correlation heat map</h2>{}", svg::heat_map("Correlation real vs sim (rows: joints, columns: episodes)", &joints, names, &cell))
 }
 
 /// Writes `dir/index.html` (and `dir/index.png` when chromium is available); returns the html path.
@@ -169,7 +77,7 @@ pub fn write(dir: &Path, r: &GapReport, recs: &[Recording], eps: &[Episode]) -> 
     std::fs::create_dir_all(dir)?;
     let mut html = String::from(
         "<!doctype html><html><head><meta charset=\"utf-8\"><title>modellint gap report</title>\
-         <style>body{font-family:sans-serif;margin:20px;max-width:1300px}table{border-collapse:collapse}\
+         <style>body{font-family:sans-serif;margin:20px;max-width:1360px}table{border-collapse:collapse}\
          td,th{border:1px solid #ccc;padding:2px 6px;text-align:right}th{background:#eee}\
          .grid{display:flex;flex-wrap:wrap;gap:8px}</style></head><body>",
     );
@@ -189,14 +97,14 @@ pub fn write(dir: &Path, r: &GapReport, recs: &[Recording], eps: &[Episode]) -> 
         let (rec, ep) = (&recs[ei], &eps[ei]);
         let (Some(jt), Some(k)) = (rec.joint(jn), ep.joints.iter().position(|x| x == jn)) else { continue };
         let t: Vec<f64> = rec.t.iter().map(|x| x - rec.t[0]).collect();
-        let title = format!("{jn} — {}", rec.source.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default());
+        let title = format!("{jn}: {}", rec.source.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default());
         html.push_str(&line_plot(
             &title,
             "time [s]",
             "position [deg]",
             &[
-                Series { x: &t, y: jt.q.iter().map(|v| v.to_degrees()).collect(), colour: REAL, label: "real" },
-                Series { x: &t, y: ep.q_sim[k].iter().map(|v| v.to_degrees()).collect(), colour: SIM, label: "sim" },
+                Series { x: &t, y: jt.q.iter().map(|v| v.to_degrees()).collect(), colour: REAL, label: "real".into(), dash: "" },
+                Series { x: &t, y: ep.q_sim[k].iter().map(|v| v.to_degrees()).collect(), colour: SIM, label: "sim".into(), dash: "" },
             ],
             false,
         ));
@@ -210,22 +118,28 @@ pub fn write(dir: &Path, r: &GapReport, recs: &[Recording], eps: &[Episode]) -> 
         html.push_str(&line_plot(
             &format!("{jn}: KL {:.3}", r.per_joint[i].spectral_kl),
             "frequency [Hz]",
-            "PSD [rad²/Hz] (log10)",
+            "PSD [rad²/Hz]",
             &[
-                Series { x: &p.freqs, y: p.real.clone(), colour: REAL, label: "real" },
-                Series { x: &p.freqs, y: p.sim.clone(), colour: SIM, label: "sim" },
+                Series { x: &p.freqs, y: p.real.clone(), colour: REAL, label: "real".into(), dash: "" },
+                Series { x: &p.freqs, y: p.sim.clone(), colour: SIM, label: "sim".into(), dash: "" },
             ],
             true,
         ));
     }
-    html.push_str("</div><h2>Correlation heat map</h2>");
-    html.push_str(&heat_map(r));
-    html.push_str("<h2>Per episode</h2><table><tr><th>episode</th><th>samples</th><th>MAE [deg]</th><th>RMSE [deg]</th><th>corr</th><th>G</th><th>status</th></tr>");
-    for e in &r.per_episode {
+    let sources: Vec<String> = r.per_episode.iter().map(|e| e.source.clone()).collect();
+    let (names, common) = episode_names(&sources);
+    html.push_str("</div>");
+    html.push_str(&heat_map(r, &names));
+    html.push_str("<h2>Per episode</h2>");
+    if let Some(c) = &common {
+        let _ = write!(html, "<p>Recordings in <code>{}</code></p>", esc(&c.display().to_string()));
+    }
+    html.push_str("<table><tr><th>episode</th><th>samples</th><th>MAE [deg]</th><th>RMSE [deg]</th><th>corr</th><th>G</th><th>status</th></tr>");
+    for (e, name) in r.per_episode.iter().zip(&names) {
         let _ = write!(
             html,
             "<tr><td style=\"text-align:left\">{}</td><td>{}</td><td>{:.2}</td><td>{:.2}</td><td>{}</td><td>{:.3}</td><td>{}</td></tr>",
-            esc(&e.source),
+            esc(name),
             e.samples,
             e.position_mae.to_degrees(),
             e.position_rmse.to_degrees(),
@@ -251,7 +165,7 @@ fn screenshot(html: &Path, png: &Path) {
         }
         let Ok(abs) = std::fs::canonicalize(html) else { return };
         let _ = std::process::Command::new(exe)
-            .args(["--headless", "--disable-gpu", "--no-sandbox", "--window-size=1300,2400"])
+            .args(["--headless", "--disable-gpu", "--no-sandbox", "--window-size=1400,2400"])
             .arg(format!("--screenshot={}", png.display()))
             .arg(format!("file://{}", abs.display()))
             .stdout(std::process::Stdio::null())

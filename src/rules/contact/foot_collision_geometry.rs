@@ -66,11 +66,12 @@ declare_rule! {
 
 fn gname(robot: &Robot, g: usize) -> String {
     let n = &robot.geoms[g].name;
-    if n.is_empty() { format!("#{g}") } else { n.clone() }
+    // Unnamed: MuJoCo's geom id and the body it belongs to (an id alone is hard to find).
+    if n.is_empty() { format!("geom #{g} of body `{}`", robot.body_name(robot.geoms[g].body)) } else { format!("`{n}`") }
 }
 
 fn list(robot: &Robot, gs: &[usize]) -> String {
-    let mut v: Vec<String> = gs.iter().take(6).map(|&g| format!("`{}`", gname(robot, g))).collect();
+    let mut v: Vec<String> = gs.iter().take(6).map(|&g| gname(robot, g)).collect();
     if gs.len() > 6 {
         v.push(format!("and {} more", gs.len() - 6));
     }

@@ -1,0 +1,199 @@
+//! `fit --write-model` writes the fitted values where the model really lives (a Menagerie-style
+//! scene that includes the robot file), and `--write-actuators` writes a Python snippet that
+//! parses. Expected values: the damping hidden by `synth` (chosen here), and the input model's own
+//! compiled values (which the written model must differ from).
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use modellint::model::{Robot, source::SourceMap};
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn load(path: &Path) -> Robot {
+    let mut map = SourceMap::default();
+    modellint::model::load(&mut map, path, None).unwrap_or_else(|e| panic!("{} does not load: {e}", path.display()))
+}
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_modellint"))
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("modellint_writeback_{name}_{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// `$MODELLINT_SHARED_DATA`, else the first `shared/data` beside the crate or an ancestor.
+fn shared_data() -> Option<PathBuf> {
+    if let Some(d) = std::env::var_os("MODELLINT_SHARED_DATA").map(PathBuf::from).filter(|d| d.is_dir()) {
+        return Some(d);
+    }
+    root().ancestors().skip(1).take(3).map(|a| a.join("shared/data")).find(|d| d.is_dir())
+}
+
+fn run(cmd: &mut Command) -> (Option<i32>, String, String) {
+    let o = cmd.output().unwrap();
+    (o.status.code(), String::from_utf8_lossy(&o.stdout).into_owned(), String::from_utf8_lossy(&o.stderr).into_owned())
+}
+
+/// synth (hidden viscous damping `truth` on joints matching `glob`) → fit → --write-model into
+/// `out_dir` (another directory than the model's). Returns the fitted model path and fit JSON.
+fn synth_fit_write(model: &Path, glob: &str, truth: f64, work: &Path, extra: &[&str]) -> (PathBuf, serde_json::Value, String) {
+    let recs = work.join("recordings");
+    let (c, _, e) = run(bin()
+        .arg("synth")
+        .arg(model)
+        .args(["--effects", &format!("viscous_damping@{glob}={truth}"), "--joints", glob, "--episodes", "4", "--duration", "2"])
+        .args(extra)
+        .arg("--out")
+        .arg(&recs));
+    assert_eq!(c, Some(0), "synth: {e}");
+    let out = work.join("out").join("fitted.xml");
+    let (c, stdout, stderr) = run(bin()
+        .arg("fit")
+        .arg(model)
+        .arg(&recs)
+        .args(["--effects", "viscous_damping", "--joints", glob, "--format", "json", "--write-model"])
+        .arg(&out)
+        .arg("--write-actuators")
+        .arg(work.join("out").join("act.toml")));
+    assert_eq!(c, Some(0), "fit: {stderr}");
+    let v: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    (out, v, stderr)
+}
+
+fn check_written(scene: &Path, robot_file: &Path, out: &Path, v: &serde_json::Value, stderr: &str, joints: &[&str], truth: f64) {
+    let dir = out.parent().unwrap();
+    let stem = robot_file.file_stem().unwrap().to_string_lossy();
+    let copy = dir.join(format!("fitted_{stem}.xml"));
+    assert!(copy.is_file(), "no copy of the robot file; stderr: {stderr}");
+    // The scene's include now points at the copy; the original files are untouched.
+    let scene_out = std::fs::read_to_string(out).unwrap();
+    assert!(scene_out.contains(&format!("file=\"fitted_{stem}.xml\"")), "{scene_out}");
+    // What stderr said is in the JSON warnings.
+    let warnings: Vec<String> = v["warnings"].as_array().unwrap().iter().map(|w| w.as_str().unwrap().to_string()).collect();
+    for line in stderr.lines().filter_map(|l| l.strip_prefix("modellint: ")) {
+        let line = line.strip_prefix("note: ").or_else(|| line.strip_prefix("warning: ")).unwrap_or(line);
+        assert!(warnings.iter().any(|w| w == line), "stderr line `{line}` not in JSON warnings {warnings:?}");
+    }
+    assert!(warnings.iter().any(|w| w.contains(&copy.display().to_string())), "{warnings:?}");
+    // MuJoCo loads the written model; the fitted joints' damping differs from the input's and is
+    // the hidden value.
+    let before = load(scene);
+    let after = load(out);
+    for j in joints {
+        let b = before.joint(j).unwrap().damping;
+        let a = after.joint(j).unwrap().damping;
+        assert!((a - b).abs() > 0.1 * truth, "{j}: damping {b} → {a} unchanged");
+        assert!((a - truth).abs() < 0.1 * truth, "{j}: written damping {a}, hidden {truth}");
+        let fitted = v["missing_physics"][0]["params"]["damping"].as_f64().unwrap();
+        assert!((a - fitted).abs() < 1e-5, "{j}: written {a}, fitted {fitted}");
+    }
+    // Every other joint is as it was.
+    for (jb, ja) in before.joints.iter().zip(&after.joints) {
+        if !joints.contains(&jb.name.as_str()) {
+            assert_eq!((jb.damping, jb.armature), (ja.damping, ja.armature), "{}", jb.name);
+        }
+    }
+}
+
+/// A scene that includes the robot file, meshes under `assets/` (meshdir), output elsewhere.
+#[test]
+fn write_model_edits_the_included_robot_file_and_rebases_assets() {
+    let work = tmp("include");
+    let m = work.join("model");
+    std::fs::create_dir_all(m.join("assets")).unwrap();
+    // A tetrahedron mesh: only loadable if meshdir is rebased correctly in the written copy.
+    std::fs::write(m.join("assets/tet.obj"), "v 0 0 0\nv 0.05 0 0\nv 0 0.05 0\nv 0 0 0.05\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n").unwrap();
+    let arm = std::fs::read_to_string(root().join("fixtures/gap/arm3.xml")).unwrap();
+    let robot = arm
+        .replace("<compiler angle=\"radian\" autolimits=\"true\"/>", "<compiler angle=\"radian\" autolimits=\"true\" meshdir=\"assets\"/>\n  <asset><mesh name=\"tet\" file=\"tet.obj\"/></asset>")
+        .replacen("<geom type=\"box\" size=\"0.05 0.05 0.05\" mass=\"1\"/>", "<geom type=\"mesh\" mesh=\"tet\" mass=\"1\"/>", 1);
+    assert_ne!(robot, arm, "fixture edit did not apply");
+    std::fs::write(m.join("arm.xml"), &robot).unwrap();
+    std::fs::write(m.join("scene.xml"), "<mujoco model=\"scene\">\n  <include file=\"arm.xml\"/>\n  <worldbody><light pos=\"0 0 2\"/></worldbody>\n</mujoco>\n").unwrap();
+    let (out, v, stderr) = synth_fit_write(&m.join("scene.xml"), "elbow_pitch", 0.6, &work, &[]);
+    check_written(&m.join("scene.xml"), &m.join("arm.xml"), &out, &v, &stderr, &["elbow_pitch"], 0.6);
+    assert_eq!(std::fs::read_to_string(m.join("arm.xml")).unwrap(), robot, "the original robot file was changed");
+    let copy = std::fs::read_to_string(out.parent().unwrap().join("fitted_arm.xml")).unwrap();
+    assert!(copy.contains("meshdir=\"../model/assets\""), "{copy}");
+    let _ = std::fs::remove_dir_all(&work);
+}
+
+/// The Booster T1 from MuJoCo Menagerie: scene.xml includes t1.xml; hidden knee damping.
+#[test]
+fn write_model_on_the_booster_t1_scene() {
+    let Some(data) = shared_data() else {
+        eprintln!("skipping: ../shared/data is absent (Booster T1 scene)");
+        return;
+    };
+    let scene = data.join("models/booster_t1/scene.xml");
+    if !scene.is_file() {
+        eprintln!("skipping: {} is absent", scene.display());
+        return;
+    }
+    let work = tmp("t1");
+    let (out, v, stderr) = synth_fit_write(&scene, "*Knee*", 2.0, &work, &["--suspend", "0.5"]);
+    check_written(&scene, &data.join("models/booster_t1/t1.xml"), &out, &v, &stderr, &["Left_Knee_Pitch", "Right_Knee_Pitch"], 2.0);
+    let _ = std::fs::remove_dir_all(&work);
+}
+
+#[test]
+fn write_model_refuses_urdf() {
+    let model = root().join("fixtures/rules/urdf-mjcf-drift/urdf/valid.urdf");
+    let robot = load(&model);
+    let work = tmp("urdf");
+    let e = modellint::fit::writemodel::write_model(&model, &robot, &[], &work.join("o.xml")).unwrap_err();
+    assert!(e.contains("is URDF"), "{e}");
+    assert!(!work.join("o.xml").exists());
+    let _ = std::fs::remove_dir_all(&work);
+}
+
+/// The Isaac Lab snippet of `--write-actuators` is valid Python for every effect it mentions.
+#[test]
+fn actuator_snippet_parses_as_python() {
+    use modellint::fit::select::Selected;
+    let robot = load(&root().join("fixtures/gap/arm3.xml"));
+    let sel = |effect: &str, joint: &str, params: &[(&str, f64)]| Selected {
+        effect: effect.into(),
+        joints: vec![joint.into()],
+        params: params.iter().map(|(k, v)| (k.to_string(), *v)).collect(),
+        stderr: Default::default(),
+        identifiable: true,
+        evidence: Default::default(),
+        heldout_improvement: 0.5,
+        heldout_rmse_before: 0.0,
+        heldout_rmse_after: 0.0,
+        window_improvement: 0.0,
+        window_improvement_se: 0.0,
+        bic_before: 0.0,
+        bic_after: 0.0,
+        values: params.iter().map(|p| p.1).collect(),
+    };
+    let selected = vec![
+        sel("armature", "elbow_pitch", &[("armature", 0.001489)]),
+        sel("viscous_damping", "elbow_pitch", &[("damping", 0.018939)]),
+        sel("coulomb_friction", "wrist_pitch", &[("frictionloss", 0.12)]),
+        sel("torque_limit", "wrist_pitch", &[("effort_limit", 3.5)]),
+        sel("action_delay", "shoulder_pitch", &[("delay_s", 0.02)]),
+        sel("backlash", "shoulder_pitch", &[("width", 0.01)]),
+    ];
+    let work = tmp("snippet");
+    let files = modellint::fit::writeback::write_actuators(&work.join("act.toml"), &robot, &selected).unwrap();
+    let py = files.iter().find(|p| p.extension().is_some_and(|x| x == "py")).expect("a .py file").clone();
+    let text = std::fs::read_to_string(&py).unwrap();
+    // arm3: timestep 0.001 s → a 0.02 s delay is 20 physics steps.
+    assert!(text.contains("min_delay=20, max_delay=20"), "{text}");
+    assert!(text.contains("armature=0.001489,"), "{text}");
+    assert!(toml::from_str::<toml::Value>(&std::fs::read_to_string(work.join("act.toml")).unwrap()).is_ok());
+    match Command::new("python3").arg("-c").arg("import ast, sys; ast.parse(open(sys.argv[1]).read())").arg(&py).output() {
+        Ok(o) => assert!(o.status.success(), "not valid Python:\n{text}\n{}", String::from_utf8_lossy(&o.stderr)),
+        Err(_) => eprintln!("skipping: python3 not found; the snippet was not parsed"),
+    }
+    let _ = std::fs::remove_dir_all(&work);
+}
