@@ -58,9 +58,41 @@ fn peek_keyframe(path: &Path) -> Option<String> {
     v.get("robot")?.get("keyframe")?.as_str().map(str::to_string)
 }
 
+crate::declare_rule! {
+    /// ## What it does
+    /// Reports content after the root element of a model file or an included file, such as a
+    /// second `</mujoco>` left by an editing mistake. MuJoCo stops reading at the end of the root
+    /// element and loads the model anyway; modellint does the same and points at the junk.
+    ///
+    /// ## Why is this bad?
+    /// Other XML tools (URDF converters, `xmllint`, editors, ROS tooling) reject the file, and
+    /// anything written after the root element (a forgotten `<actuator>` block pasted below it)
+    /// is silently ignored by MuJoCo.
+    ///
+    /// ## How it is confirmed
+    /// Static: the file parses as XML only up to the end of its root element.
+    ///
+    /// ## How to fix
+    /// Delete the content after the closing root tag, or move it inside the root element.
+    pub TrailingXmlContent { id: "trailing-xml-content", group: "engine", level: Severity::Warning, probe: None, options: [] }
+}
+
 /// Runs the static rules and applies inline suppressions.
 pub fn run_rules(l: &Loaded) -> Vec<Finding> {
     let mut findings = Vec::new();
+    let trailing = &TrailingXmlContent::META;
+    if l.config.enabled(trailing) {
+        for loc in &l.sources.trailing {
+            let junk: String = l.sources.file(loc.file).text[loc.start..loc.end].chars().take(40).collect();
+            let junk = junk.lines().next().unwrap_or("").to_string();
+            findings.push(
+                Finding::new(trailing.id, l.config.level(trailing), format!("content after the root element is ignored: `{junk}`"), *loc)
+                    .label("MuJoCo stops reading before this")
+                    .note("MuJoCo loads the file up to the end of its root element; other XML tools reject it, and anything written here is silently ignored")
+                    .help("delete the content after the closing root tag, or move it inside the root element"),
+            );
+        }
+    }
     for rule in registry() {
         let meta = rule.meta();
         if !l.config.enabled(meta) {

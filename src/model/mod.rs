@@ -227,7 +227,10 @@ impl Robot {
             .collect()
     }
 
-    /// Source element of a compiled object, matched by name, else by compiled order.
+    /// Source element of a compiled object, matched by name, else by compiled order: bodies by
+    /// their pre-order position, joints/geoms/sites by their rank inside their (matched) body.
+    /// Matching inside the body keeps an unnamed geom on its own line when a scene file adds
+    /// world geoms (a floor) that MuJoCo numbers before the robot's.
     pub fn elem(&self, kind: ElemKind, id: usize, name: &str) -> Option<&ElemSrc> {
         if !name.is_empty() {
             if let Some(e) = self.src.by_name(kind, name) {
@@ -235,17 +238,34 @@ impl Robot {
             }
         }
         let list = self.src.list(kind);
-        // Compiled order matches source order only when every element was indexed.
-        let expected = match kind {
-            ElemKind::Joint => self.joints.len(),
-            ElemKind::Geom => self.geoms.len(),
-            ElemKind::Body => self.bodies.len().saturating_sub(1),
-            ElemKind::Actuator => self.actuators.len(),
-            ElemKind::Key => self.keys.len(),
-            _ => usize::MAX,
+        let r = mj::raw(&self.mj);
+        let body_of: Vec<usize> = match kind {
+            ElemKind::Joint => self.joints.iter().map(|j| j.body).collect(),
+            ElemKind::Geom => self.geoms.iter().map(|g| g.body).collect(),
+            ElemKind::Site => mj::slice(r.site_bodyid, r.nsite as usize).iter().map(|&b| b.max(0) as usize).collect(),
+            _ => {
+                // Compiled order matches source order only when every element was indexed.
+                let expected = match kind {
+                    ElemKind::Body => self.bodies.len().saturating_sub(1),
+                    ElemKind::Actuator => self.actuators.len(),
+                    ElemKind::Key => self.keys.len(),
+                    _ => usize::MAX,
+                };
+                let idx = if kind == ElemKind::Body { id.checked_sub(1)? } else { id };
+                return if list.len() == expected { list.get(idx) } else { None };
+            }
         };
-        let idx = if kind == ElemKind::Body { id.checked_sub(1)? } else { id };
-        if list.len() == expected { list.get(idx) } else { None }
+        let b = *body_of.get(id)?;
+        let rank = body_of[..id].iter().filter(|&&x| x == b).count();
+        let count = body_of.iter().filter(|&&x| x == b).count();
+        let src_body = if b == 0 {
+            None
+        } else {
+            let e = self.elem(ElemKind::Body, b, self.body_name(b))?;
+            Some(self.src.list(ElemKind::Body).iter().position(|x| std::ptr::eq(x, e))?)
+        };
+        let in_body: Vec<&ElemSrc> = list.iter().filter(|e| e.body == src_body).collect();
+        if in_body.len() == count { in_body.get(rank).copied() } else { None }
     }
 
     /// Tightest location for attribute `attr` of an object (falls back to the element, then the

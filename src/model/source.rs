@@ -45,6 +45,8 @@ impl SourceFile {
 #[derive(Debug, Clone, Default)]
 pub struct SourceMap {
     pub files: Vec<SourceFile>,
+    /// Content after a file's root element (MuJoCo ignores it; modellint reports it).
+    pub trailing: Vec<Loc>,
 }
 
 impl SourceMap {
@@ -155,16 +157,68 @@ fn parse_file(
         return Err(LoadError::at(map, loc, format!("include cycle: {} includes itself (directly or indirectly)", path.display())));
     }
     let text = map.file(file_id).text.clone();
-    let opts = roxmltree::ParsingOptions { allow_dtd: true, ..Default::default() };
-    let doc = roxmltree::Document::parse_with_options(&text, opts).map_err(|e| {
-        let pos = e.pos();
-        LoadError::at_line(map, file_id, pos.row as usize, pos.col as usize, format!("malformed XML: {e}"))
-    })?;
+    let opts = || roxmltree::ParsingOptions { allow_dtd: true, ..Default::default() };
+    let doc = match roxmltree::Document::parse_with_options(&text, opts()) {
+        Ok(doc) => doc,
+        Err(e) => match root_end(&text) {
+            // MuJoCo (tinyxml2) stops reading after the root element: accept what precedes the
+            // junk, and remember where the junk is.
+            Some(end) => {
+                let junk_start = end + text[end..].len() - text[end..].trim_start().len();
+                map.trailing.push(Loc { file: file_id, start: junk_start, end: text.trim_end().len().max(junk_start) });
+                roxmltree::Document::parse_with_options(&text[..end], opts()).map_err(|e| {
+                    let pos = e.pos();
+                    LoadError::at_line(map, file_id, pos.row as usize, pos.col as usize, format!("malformed XML: {e}"))
+                })?
+            }
+            None => {
+                let pos = e.pos();
+                return Err(LoadError::at_line(map, file_id, pos.row as usize, pos.col as usize, format!("malformed XML: {e}")));
+            }
+        },
+    };
     let root = doc.root_element();
     let base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let node = convert(map, file_id, root, &base_dir, expand_includes, stack)?;
     stack.remove(&canon);
     Ok(node)
+}
+
+/// Byte offset just after the root element's closing tag, when the file is well-formed up to
+/// there and only trailing content (e.g. a second `</mujoco>`) makes it malformed.
+fn root_end(text: &str) -> Option<usize> {
+    let opts = || roxmltree::ParsingOptions { allow_dtd: true, ..Default::default() };
+    // Name of the root element: the first start tag that is not `<?`, `<!`.
+    let mut i = 0;
+    let name = loop {
+        let lt = i + text[i..].find('<')?;
+        let rest = &text[lt + 1..];
+        if rest.starts_with('?') || rest.starts_with('!') {
+            i = lt + 1;
+            continue;
+        }
+        let n: String = rest.chars().take_while(|c| !c.is_whitespace() && *c != '>' && *c != '/').collect();
+        break n;
+    };
+    if name.is_empty() {
+        return None;
+    }
+    let close = format!("</{name}");
+    let mut from = 0;
+    while let Some(p) = text[from..].find(&close) {
+        let after = from + p + close.len();
+        let gt = after + text[after..].find('>')?;
+        if !text[after..gt].trim().is_empty() {
+            from = after;
+            continue;
+        }
+        let end = gt + 1;
+        if roxmltree::Document::parse_with_options(&text[..end], opts()).is_ok() {
+            return (!text[end..].trim().is_empty()).then_some(end);
+        }
+        from = end;
+    }
+    None
 }
 
 fn convert(
