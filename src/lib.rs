@@ -12,4 +12,5 @@ pub mod probe;
 pub mod rules;
 pub mod sim2real;
 pub mod spec;
+pub mod spec_use;
 pub mod util;

@@ -9,6 +9,7 @@ use crate::model::Robot;
 use crate::model::source::SourceMap;
 use crate::rules::{Context, meta_rules, registry};
 use crate::spec::Spec;
+use crate::spec_use::SpecSearch;
 
 pub struct LintInput {
     pub model: PathBuf,
@@ -23,6 +24,8 @@ pub struct Loaded {
     pub robot: Robot,
     pub spec: Option<Spec>,
     pub config: Config,
+    /// Where the spec was looked for (empty `searched` when given with --spec).
+    pub spec_search: SpecSearch,
 }
 
 /// Loads everything a lint run needs; every failure is a located `LoadError` (exit 2).
@@ -35,12 +38,12 @@ pub fn load(input: &LintInput) -> Result<Loaded, LoadError> {
     };
     let mut config = config;
     config.add_cli(&input.select, &input.ignore).map_err(|m| LoadError::plain(Path::new("<command line>"), m))?;
-    let spec_path = input.spec.clone().or_else(|| crate::spec::beside(&input.model));
-    if let Some(p) = &input.spec {
-        if !p.is_file() {
-            return Err(LoadError::plain(p, "spec file not found".into()));
-        }
-    }
+    let spec_search = match &input.spec {
+        Some(p) if !p.is_file() => return Err(LoadError::plain(p, "spec file not found".into())),
+        Some(p) => SpecSearch { path: Some(p.clone()), searched: vec![] },
+        None => crate::spec_use::discover(&input.model),
+    };
+    let spec_path = spec_search.path.clone();
     // The spec may name the keyframe, so read its robot table before compiling the model.
     let keyframe = spec_path.as_ref().and_then(|p| peek_keyframe(p));
     let robot = crate::model::load(&mut sources, &input.model, keyframe.as_deref())?;
@@ -49,7 +52,7 @@ pub fn load(input: &LintInput) -> Result<Loaded, LoadError> {
         Some(p) => Some(crate::spec::load(&mut sources, &p, &names)?),
         None => None,
     };
-    Ok(Loaded { sources, robot, spec, config })
+    Ok(Loaded { sources, robot, spec, config, spec_search })
 }
 
 fn peek_keyframe(path: &Path) -> Option<String> {
@@ -160,6 +163,32 @@ fn apply_suppressions(l: &Loaded, findings: Vec<Finding>) -> Vec<Finding> {
     }
     sort_findings(&mut out);
     out
+}
+
+/// The findings of one model: static rules, then (unless `probe` is false) the probes.
+pub fn lint(l: &Loaded, probe: bool) -> Vec<Finding> {
+    let mut findings = run_rules(l);
+    if probe {
+        crate::probe::confirm_all(l, &mut findings);
+    }
+    findings
+}
+
+/// The note for a run without a spec (None when a spec is in use).
+pub fn missing_spec_note(l: &Loaded) -> Option<String> {
+    if l.spec.is_some() {
+        return None;
+    }
+    let enabled = |id: &str| crate::rules::find_meta(id).is_some_and(|m| l.config.enabled(m));
+    Some(crate::spec_use::missing_note(&l.robot.path, &l.spec_search, &enabled))
+}
+
+/// Why a path given among several is not linted: its root element is not `<mujoco>` or
+/// `<robot>` (ROS `package.xml`, launch files, …). `None`: lint it (unreadable files included,
+/// so that the loader reports them).
+pub fn not_a_model(path: &Path) -> Option<String> {
+    let tag = crate::model::source::root_tag(path)?;
+    (tag != "mujoco" && tag != "robot").then(|| format!("root element <{tag}> is not a robot model (MJCF <mujoco> or URDF <robot>)"))
 }
 
 /// Deterministic order: file, position, rule id, message.

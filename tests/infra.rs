@@ -117,3 +117,126 @@ fn trailing_content_after_the_root_is_a_finding_not_an_error() {
     let (code, _, err) = modellint(&["fixtures/broken/malformed.xml"]);
     assert_eq!(code, 2, "{err}");
 }
+
+/// A scene without its own spec finds the spec beside the robot file it includes; the spec is
+/// really used (its action delay makes `missing-action-delay` fire).
+#[test]
+fn spec_is_found_beside_the_included_robot_file() {
+    let v = json(&["fixtures/infra/spec_scene/scene.xml", "--format", "json", "--no-probe"]);
+    assert!(v["spec"]["path"].as_str().unwrap().ends_with("spec_scene/robot.toml"), "{}", v["spec"]);
+    assert_eq!(v["spec"]["skipped_rules"].as_array().unwrap().len(), 0);
+    assert!(v["findings"].as_array().unwrap().iter().any(|f| f["rule"] == "missing-action-delay"), "the spec's delay must be used");
+    let (_, _, err) = modellint(&["fixtures/infra/spec_scene/scene.xml", "--no-probe"]);
+    assert!(!err.contains("no hardware spec"), "{err}");
+}
+
+/// No spec anywhere: said once on stderr, naming every place looked at and the rules that are
+/// skipped or weakened; the same in JSON.
+#[test]
+fn missing_spec_is_reported_once_with_where_it_looked() {
+    let (_, _, err) = modellint(&["fixtures/include/scene.xml", "--no-probe"]);
+    assert_eq!(err.matches("no hardware spec found").count(), 1, "{err}");
+    assert!(err.contains("fixtures/include/scene.toml") && err.contains("fixtures/include/robot.toml"), "{err}");
+    assert!(err.contains("skipped without a spec: armature-mismatch"), "{err}");
+    assert!(err.contains("weakened without a spec:"), "{err}");
+    // Rules switched off are not listed.
+    let (_, _, err) = modellint(&["fixtures/include/scene.xml", "--no-probe", "--ignore", "armature-mismatch"]);
+    assert!(!err.contains("armature-mismatch"), "{err}");
+    let v = json(&["fixtures/include/scene.xml", "--format", "json", "--no-probe"]);
+    assert!(v["spec"]["path"].is_null(), "{}", v["spec"]);
+    let searched: Vec<String> = v["spec"]["searched"].as_array().unwrap().iter().map(|p| base(p)).collect();
+    assert_eq!(searched, ["scene.toml", "robot.toml"]);
+    assert!(v["spec"]["skipped_rules"].as_array().unwrap().iter().any(|r| r == "armature-mismatch"));
+    // A given spec is not searched for.
+    let (_, _, err) = modellint(&["models/asimov.xml", "--no-probe"]);
+    assert!(!err.contains("no hardware spec"), "models/asimov.toml is beside it: {err}");
+}
+
+fn package_xml() -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("modellint-infra-pkg-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = dir.join("package.xml");
+    std::fs::write(&p, "<?xml version=\"1.0\"?>\n<!-- ROS package manifest -->\n<package format=\"3\">\n  <name>robot_description</name>\n</package>\n").unwrap();
+    p
+}
+
+/// `modellint a.xml b.xml`: every model linted, exit code = the highest; a ROS package.xml
+/// among several paths is skipped with a note; alone it is an error (exit 2).
+#[test]
+fn several_models_per_call() {
+    let pkg = package_xml();
+    let pkg = pkg.to_str().unwrap();
+    // Clean model alone: exit 0. Model with an error finding alone: exit 1.
+    let (c_ok, _, _) = modellint(&["fixtures/infra/trailing_close.xml", "--no-probe"]);
+    assert_eq!(c_ok, 0);
+    let (c_bad, _, _) = modellint(&["models/asimov.xml", "--no-probe"]);
+    assert_eq!(c_bad, 1);
+    let (code, out, err) = modellint(&["fixtures/infra/trailing_close.xml", pkg, "models/asimov.xml", "--no-probe"]);
+    assert_eq!(code, 1, "max(0, 1): {err}");
+    assert!(err.contains("skipping") && err.contains("package.xml") && err.contains("<package>"), "{err}");
+    assert!(out.contains("trailing_close.xml: 0 error(s)") && out.contains("models/asimov.xml: 4 error(s)"), "{out}");
+    assert!(out.contains("2 model(s) linted, 1 skipped"), "{out}");
+    // A model that cannot be loaded makes the call exit 2, and the others are still linted.
+    let (code, out, err) = modellint(&["models/asimov.xml", "fixtures/broken/malformed.xml", "--no-probe"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("fixtures/broken/malformed.xml:4:"), "{err}");
+    assert!(out.contains("models/asimov.xml: 4 error(s)"), "{out}");
+    // Only non-models: nothing linted, exit 0 (a pre-commit run touching only package.xml).
+    let (code, _, err) = modellint(&[pkg, pkg, "--no-probe"]);
+    assert_eq!(code, 0, "{err}");
+    // A single non-model path is still an error.
+    let (code, _, err) = modellint(&[pkg, "--no-probe"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("neither MJCF"), "{err}");
+}
+
+#[test]
+fn several_models_in_every_format() {
+    let pkg = package_xml();
+    let pkg = pkg.to_str().unwrap();
+    let args = ["models/asimov.xml", "fixtures/include/scene.xml", pkg, "fixtures/broken/malformed.xml", "--no-probe"];
+    let with = |fmt: &str| {
+        let mut a = args.to_vec();
+        a.extend(["--format", fmt]);
+        let (code, out, err) = modellint(&a);
+        assert_eq!(code, 2, "{fmt}: {err}");
+        out
+    };
+    // JSON: a findings-set holding one complete single-model object per model.
+    let v: Value = serde_json::from_str(&with("json")).unwrap();
+    assert_eq!(v["schema"], "modellint/findings-set");
+    assert_eq!(v["version"], 1);
+    let models = v["models"].as_array().unwrap();
+    assert_eq!(models.len(), 2);
+    assert_eq!(models[0]["schema"], "modellint/findings");
+    assert_eq!(models[0]["model"], "models/asimov.xml");
+    assert_eq!(models[1]["model"], "fixtures/include/scene.xml");
+    let single = json(&["models/asimov.xml", "--format", "json", "--no-probe"]);
+    assert_eq!(models[0], single, "a model inside the set is exactly its single-model output");
+    assert_eq!(v["skipped"][0]["path"], pkg);
+    assert_eq!(v["errors"][0]["line"], 4);
+    assert_eq!(v["summary"]["models"], 2);
+    // SARIF: one run with the results of both models, the load failure as a notification.
+    let s: Value = serde_json::from_str(&with("sarif")).unwrap();
+    let uris: std::collections::BTreeSet<String> = s["runs"][0]["results"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["locations"][0]["physicalLocation"]["artifactLocation"]["uri"].as_str().unwrap().to_string())
+        .collect();
+    assert!(uris.contains("models/asimov.xml") && uris.contains("fixtures/include/robot.xml"), "{uris:?}");
+    assert_eq!(s["runs"][0]["invocations"][0]["executionSuccessful"], false);
+    let text = include_str!("data/sarif-schema-2.1.0.json").replace("^[a-zA-Z]{2}|^[a-zA-Z]{2}-[a-zA-Z]{2}]?$", "^[a-zA-Z]{2}(-[a-zA-Z]{2})?$");
+    let schema: Value = serde_json::from_str(&text).unwrap();
+    let validator = jsonschema::validator_for(&schema).unwrap();
+    let errors: Vec<String> = validator.iter_errors(&s).map(|e| format!("{e} at {}", e.instance_path())).collect();
+    assert!(errors.is_empty(), "{}", errors.join("\n"));
+    // GitHub: annotations of both models, and the load failure at its line.
+    let gh = with("github");
+    assert!(gh.contains("::error file=models/asimov.xml,line="), "{gh}");
+    assert!(gh.contains("file=fixtures/include/robot.xml,line=18,"), "{gh}");
+    assert!(gh.contains("::error file=fixtures/broken/malformed.xml,line=4,"), "{gh}");
+    // Text: both models' findings and summaries.
+    let t = with("text");
+    assert!(t.contains("models/asimov.xml: 4 error(s)") && t.contains("fixtures/include/scene.xml: "), "{t}");
+}

@@ -184,25 +184,38 @@ fn parse_file(
     Ok(node)
 }
 
-/// Byte offset just after the root element's closing tag, when the file is well-formed up to
-/// there and only trailing content (e.g. a second `</mujoco>`) makes it malformed.
-fn root_end(text: &str) -> Option<usize> {
-    let opts = || roxmltree::ParsingOptions { allow_dtd: true, ..Default::default() };
-    // Name of the root element: the first start tag that is not `<?`, `<!`.
+/// Name of a file's root element, read without a full parse (first start tag that is not a
+/// declaration, comment or processing instruction). `None` when the file cannot be read or has
+/// no element.
+pub fn root_tag(path: &Path) -> Option<String> {
+    let text = std::fs::read(path).ok()?;
+    let text = String::from_utf8_lossy(&text);
+    root_name(&text)
+}
+
+fn root_name(text: &str) -> Option<String> {
     let mut i = 0;
-    let name = loop {
+    loop {
         let lt = i + text[i..].find('<')?;
         let rest = &text[lt + 1..];
+        if rest.starts_with("!--") {
+            i = lt + 4 + rest[3..].find("-->")? + 3;
+            continue;
+        }
         if rest.starts_with('?') || rest.starts_with('!') {
             i = lt + 1;
             continue;
         }
         let n: String = rest.chars().take_while(|c| !c.is_whitespace() && *c != '>' && *c != '/').collect();
-        break n;
-    };
-    if name.is_empty() {
-        return None;
+        return (!n.is_empty()).then_some(n);
     }
+}
+
+/// Byte offset just after the root element's closing tag, when the file is well-formed up to
+/// there and only trailing content (e.g. a second `</mujoco>`) makes it malformed.
+fn root_end(text: &str) -> Option<usize> {
+    let opts = || roxmltree::ParsingOptions { allow_dtd: true, ..Default::default() };
+    let name = root_name(text)?;
     let close = format!("</{name}");
     let mut from = 0;
     while let Some(p) = text[from..].find(&close) {
@@ -291,6 +304,21 @@ mod tests {
         assert_eq!(f.line_col(3), (2, 1));
         assert_eq!(f.line_col(7), (2, 4));
         assert_eq!(f.line_col(8), (3, 1));
+    }
+
+    #[test]
+    fn root_name_skips_declarations_and_comments() {
+        assert_eq!(root_name("<?xml version=\"1.0\"?>\n<!-- a <b> -->\n<package format=\"3\">").as_deref(), Some("package"));
+        assert_eq!(root_name("<!DOCTYPE x>\n<mujoco/>").as_deref(), Some("mujoco"));
+        assert_eq!(root_name("no element"), None);
+    }
+
+    #[test]
+    fn root_end_finds_the_end_before_trailing_junk() {
+        let t = "<mujoco><worldbody/></mujoco>\n</mujoco>\n";
+        assert_eq!(root_end(t), Some(29));
+        assert_eq!(root_end("<mujoco><a></mujoco>"), None);
+        assert_eq!(root_end("<mujoco></mujoco>\n"), None);
     }
 
     #[test]
