@@ -240,3 +240,42 @@ fn several_models_in_every_format() {
     let t = with("text");
     assert!(t.contains("models/asimov.xml: 4 error(s)") && t.contains("fixtures/include/scene.xml: "), "{t}");
 }
+
+fn loaded(path: &str) -> modellint::lint::Loaded {
+    let input = modellint::lint::LintInput { model: path.into(), spec: None, config: None, select: vec![], ignore: vec![] };
+    modellint::lint::load(&input).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn geom(l: &modellint::lint::Loaded, name: &str) -> usize {
+    l.robot.geoms.iter().position(|g| g.name == name).unwrap()
+}
+
+/// The probe measures the pair with MuJoCo: hand-computed overlap 0.04 + 0.04 − 0.05 = 30 mm,
+/// a contact force, and the two hanging links swung apart (the contact acts 0.1 m below the
+/// hinges). On the valid fixture the thighs are 0.16 − 2·0.04 = 80 mm apart: no force.
+#[test]
+fn self_collision_probe_measures_contacts_at_the_keyframe() {
+    use modellint::probe::penetration;
+    let l = loaded("fixtures/probes/self_collide_jolt.xml");
+    let (a, b) = (geom(&l, "ball_l"), geom(&l, "ball_r"));
+    let p = penetration::run(&l.robot, a, b).unwrap();
+    assert!((p.depth0 + 0.03).abs() < 1e-6, "depth {}", p.depth0);
+    assert!(p.contact_force > 1.0, "force {}", p.contact_force);
+    assert!(p.separation_speed > penetration::JOLT_SPEED, "speed {}", p.separation_speed);
+    assert!(p.clear_time.is_some() && p.dist_end > 0.0, "{p:?}");
+    let l = loaded("fixtures/rules/self-collision-at-keyframe/valid.xml");
+    let (a, b) = (geom(&l, "left_thigh_capsule"), geom(&l, "right_thigh_capsule"));
+    let p = penetration::run(&l.robot, a, b).unwrap();
+    assert_eq!(p.contact_force, 0.0);
+    assert!((p.depth0 - 0.08).abs() < 1e-6, "distance {}", p.depth0);
+    // End to end: the finding carries the confirmed probe instead of "skipped".
+    let v = json(&["fixtures/probes/self_collide_jolt.xml", "--format", "json", "--select", "self-collision-at-keyframe"]);
+    let f = &v["findings"][0];
+    assert_eq!(f["probe"]["name"], "keyframe-penetration", "{f}");
+    assert_eq!(f["probe"]["status"], "confirmed", "{f}");
+    assert!(f["probe"]["measured"]["contact_force_n"].as_f64().unwrap() > 1.0);
+    let v = json(&["fixtures/rules/self-collision-at-keyframe/invalid.xml", "--format", "json", "--select", "self-collision-at-keyframe"]);
+    for f in v["findings"].as_array().unwrap() {
+        assert_ne!(f["probe"]["status"], "skipped", "{f}");
+    }
+}

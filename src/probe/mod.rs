@@ -7,6 +7,7 @@ pub mod bench;
 pub mod direction;
 pub mod impulse;
 pub mod limit;
+pub mod penetration;
 pub mod sanity;
 pub mod settle;
 
@@ -37,6 +38,7 @@ pub fn confirm_all(l: &Loaded, findings: &mut Vec<Finding>) {
             "actuator-direction" => direction_probe(l, f),
             "limit-approach" => limit_probe(l, f),
             "stance-settle" => settle_probe(l, f, &mut settle_cache),
+            "keyframe-penetration" => penetration_probe(l, f),
             _ => skipped(probe, "no probe of this name"),
         };
         if p.status == ProbeStatus::Refuted && f.severity > Severity::Info {
@@ -161,6 +163,47 @@ fn direction_probe(l: &Loaded, f: &Finding) -> ProbeOutcome {
     let names: Vec<String> = d.moved.iter().map(|(j, dq)| format!("{} {:+.4}", l.robot.joints[*j].name, dq)).collect();
     let st = if biggest != target { ProbeStatus::Confirmed } else { ProbeStatus::Inconclusive };
     outcome(NAME, st, m, d.steps, format!("a positive command moved: {}", names.join(", ")))
+}
+
+fn penetration_probe(l: &Loaded, f: &Finding) -> ProbeOutcome {
+    const NAME: &str = "keyframe-penetration";
+    let (Subject::Geom(a), Some(b)) = (f.subject, f.data.get("geom2")) else { return skipped(NAME, "finding does not name a geom pair") };
+    let Some(p) = penetration::run(&l.robot, a, *b as usize) else { return skipped(NAME, "could not set up the bench") };
+    let mut m = BTreeMap::new();
+    m.insert("depth_m".into(), -p.depth0);
+    m.insert("contact_force_n".into(), p.contact_force);
+    m.insert("separation_speed_m_s".into(), p.separation_speed);
+    m.insert("distance_after_m".into(), p.dist_end);
+    if let Some(t) = p.clear_time {
+        m.insert("clear_time_s".into(), t);
+    }
+    let clears = p.clear_time.map(|t| format!(", clear of each other after {} ms", fmt_num(t * 1000.0, 3))).unwrap_or_default();
+    if p.contact_force > 0.0 {
+        let motion = if p.separation_speed >= penetration::JOLT_SPEED {
+            format!("the pair jumps apart at up to {} m/s{clears}", fmt_num(p.separation_speed, 3))
+        } else {
+            format!(
+                "the joints cannot separate them (at most {} m/s over {} s): the force and its friction act on every motion of the two links",
+                fmt_num(p.separation_speed, 3),
+                fmt_num(penetration::DURATION, 3)
+            )
+        };
+        outcome(
+            NAME,
+            ProbeStatus::Confirmed,
+            m,
+            p.steps,
+            format!("at the keyframe (base on a stand, commands held) MuJoCo pushes the pair apart with {} N; {motion}", fmt_num(p.contact_force, 4)),
+        )
+    } else {
+        outcome(
+            NAME,
+            ProbeStatus::Refuted,
+            m,
+            p.steps,
+            "MuJoCo applies no force between the pair at the keyframe (the contact is inactive, e.g. its gap exceeds the overlap)".into(),
+        )
+    }
 }
 
 fn limit_probe(l: &Loaded, f: &Finding) -> ProbeOutcome {
