@@ -30,6 +30,11 @@ pub struct Loaded {
 
 /// Loads everything a lint run needs; every failure is a located `LoadError` (exit 2).
 pub fn load(input: &LintInput) -> Result<Loaded, LoadError> {
+    load_with_cache(input, None)
+}
+
+/// As `load`, with MuJoCo's compiled model cached in `cache_dir` (model/cache.rs).
+pub fn load_with_cache(input: &LintInput, cache_dir: Option<&Path>) -> Result<Loaded, LoadError> {
     crate::model::mj::silence_warnings();
     let mut sources = SourceMap::default();
     let config = match input.config.clone().or_else(|| crate::config::discover(&input.model)) {
@@ -46,7 +51,8 @@ pub fn load(input: &LintInput) -> Result<Loaded, LoadError> {
     let spec_path = spec_search.path.clone();
     // The spec may name the keyframe, so read its robot table before compiling the model.
     let keyframe = spec_path.as_ref().and_then(|p| peek_keyframe(p));
-    let robot = crate::model::load(&mut sources, &input.model, keyframe.as_deref())?;
+    let extra: Vec<PathBuf> = spec_path.iter().cloned().collect();
+    let robot = crate::model::load_cached(&mut sources, &input.model, keyframe.as_deref(), cache_dir, &extra)?;
     let names: Vec<String> = robot.joints.iter().map(|j| j.name.clone()).collect();
     let spec = match spec_path {
         Some(p) => Some(crate::spec::load(&mut sources, &p, &names)?),

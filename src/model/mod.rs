@@ -1,6 +1,7 @@
 //! Loading robot models: MuJoCo's compiled model is the semantic truth (defaults, includes,
 //! units are resolved by MuJoCo itself); the XML source index supplies spans for diagnostics.
 
+pub mod cache;
 pub mod mj;
 pub mod mjcf;
 pub mod source;
@@ -326,8 +327,13 @@ fn check_numbers(map: &SourceMap, n: &XNode) -> Result<(), LoadError> {
     Ok(())
 }
 
-/// Checks that every asset file the model names exists, pointing at the attribute when not.
-fn check_assets(map: &SourceMap, root: &XNode, model_dir: &Path) -> Result<(), LoadError> {
+/// Asset attributes that name files MuJoCo reads (cube and skybox textures use the six faces).
+const FILE_ATTRS: &[&str] = &["file", "fileright", "fileleft", "fileup", "filedown", "filefront", "fileback"];
+
+/// Checks that every asset file the model names exists, pointing at the attribute when not, and
+/// returns them (the inputs of the compile, for the cache key).
+fn check_assets(map: &SourceMap, root: &XNode, model_dir: &Path) -> Result<Vec<PathBuf>, LoadError> {
+    let mut files = Vec::new();
     let mut meshdir = None;
     let mut texturedir = None;
     for c in root.children_tagged("compiler") {
@@ -347,9 +353,9 @@ fn check_assets(map: &SourceMap, root: &XNode, model_dir: &Path) -> Result<(), L
             let dir = match a.tag.as_str() {
                 "mesh" | "hfield" | "skin" => &meshdir,
                 "texture" => &texturedir,
-                _ => continue,
+                _ => &None,
             };
-            if let Some(f) = a.attr("file") {
+            for f in FILE_ATTRS.iter().filter_map(|n| a.attr(n)) {
                 let p = Path::new(&f.value);
                 let full = if p.is_absolute() { p.to_path_buf() } else { model_dir.join(dir.as_deref().unwrap_or("")).join(p) };
                 if !full.is_file() {
@@ -359,10 +365,11 @@ fn check_assets(map: &SourceMap, root: &XNode, model_dir: &Path) -> Result<(), L
                         format!("<{}> file not found: {} (looked for {})", a.tag, f.value, full.display()),
                     ));
                 }
+                files.push(full);
             }
         }
     }
-    Ok(())
+    Ok(files)
 }
 
 fn geom_type(t: i32) -> GeomType {
@@ -382,6 +389,19 @@ fn geom_type(t: i32) -> GeomType {
 
 /// Loads an MJCF or URDF model. `keyframe` names the standing keyframe, when known.
 pub fn load(map: &mut SourceMap, path: &Path, keyframe: Option<&str>) -> Result<Robot, LoadError> {
+    load_cached(map, path, keyframe, None, &[])
+}
+
+/// As `load`, with the compiled model taken from (or written to) the cache in `cache_dir`.
+/// `extra_inputs` (the spec) join the cache key. URDF models are always compiled: MuJoCo
+/// resolves their mesh paths its own way, so their inputs are not known here.
+pub fn load_cached(
+    map: &mut SourceMap,
+    path: &Path,
+    keyframe: Option<&str>,
+    cache_dir: Option<&Path>,
+    extra_inputs: &[PathBuf],
+) -> Result<Robot, LoadError> {
     let first = map.files.len();
     let tree = source::parse_xml_tree(map, path, true)?;
     let format = match tree.tag.as_str() {
@@ -397,17 +417,36 @@ pub fn load(map: &mut SourceMap, path: &Path, keyframe: Option<&str>) -> Result<
     };
     check_numbers(map, &tree)?;
     let model_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    if format == Format::Mjcf {
-        check_assets(map, &tree, &model_dir)?;
-    }
+    let assets = if format == Format::Mjcf { Some(check_assets(map, &tree, &model_dir)?) } else { None };
     let src = match format {
         Format::Mjcf => mjcf::index_mjcf(&tree),
         Format::Urdf => mjcf::index_urdf(&tree),
     };
-    let mj = MjModel::from_xml(path).map_err(|e| {
-        let msg = format!("MuJoCo could not compile the model: {e}");
-        mujoco_error_location(map, first, &msg).unwrap_or_else(|| LoadError::plain(path, msg))
-    })?;
+    let key = match (cache_dir, &assets) {
+        (Some(_), Some(assets)) => {
+            let mut inputs: Vec<(PathBuf, Option<&str>)> = map.files[first..].iter().map(|f| (f.path.clone(), Some(f.text.as_str()))).collect();
+            inputs.extend(assets.iter().chain(extra_inputs).map(|p| (p.clone(), None)));
+            cache::key(&inputs)
+        }
+        _ => None,
+    };
+    let cached = match (cache_dir, &key) {
+        (Some(dir), Some(k)) => cache::load(dir, k),
+        _ => None,
+    };
+    let mj = match cached {
+        Some(m) => m,
+        None => {
+            let m = MjModel::from_xml(path).map_err(|e| {
+                let msg = format!("MuJoCo could not compile the model: {e}");
+                mujoco_error_location(map, first, &msg).unwrap_or_else(|| LoadError::plain(path, msg))
+            })?;
+            if let (Some(dir), Some(k), Some(bytes)) = (cache_dir, &key, cache_dir.and_then(|_| cache::serialize(&m))) {
+                cache::store(dir, k, &bytes);
+            }
+            m
+        }
+    };
     let mut robot = extract(path, format, tree, src, mj);
     let key = choose_key(&robot.keys, keyframe);
     if let Some(want) = keyframe {
