@@ -279,3 +279,70 @@ fn self_collision_probe_measures_contacts_at_the_keyframe() {
         assert_ne!(f["probe"]["status"], "skipped", "{f}");
     }
 }
+
+fn run_with_cache(args: &[&str], cache: &Path) -> (i32, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_modellint")).args(args).env_remove("GITHUB_ACTIONS").env("MODELLINT_CACHE_DIR", cache).output().unwrap();
+    (out.status.code().unwrap_or(-1), String::from_utf8_lossy(&out.stdout).into())
+}
+
+fn entries(dir: &Path) -> Vec<std::path::PathBuf> {
+    let mut v: Vec<_> = std::fs::read_dir(dir).map(|r| r.filter_map(|e| e.ok().map(|e| e.path())).filter(|p| p.extension().is_some_and(|e| e == "mjb")).collect()).unwrap_or_default();
+    v.sort();
+    v
+}
+
+/// The compiled-model cache: the same findings with and without it, a new entry whenever the
+/// model XML or a mesh it reads changes (never a stale model), and a corrupt entry is ignored.
+#[test]
+fn compiled_model_cache_gives_the_same_findings_and_follows_every_input() {
+    let root = std::env::temp_dir().join(format!("modellint-cache-test-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&root);
+    let cache = root.join("cache");
+    let model_dir = root.join("model");
+    std::fs::create_dir_all(&model_dir).unwrap();
+    // A pendulum with a mesh bob, so the cache key must cover a mesh file.
+    let obj = "v 0 0 0\nv 0.1 0 0\nv 0 0.1 0\nv 0 0 0.1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+    std::fs::write(model_dir.join("bob.obj"), obj).unwrap();
+    let xml = |kp: &str| {
+        format!(
+            "<mujoco model=\"cached\">\n  <asset><mesh name=\"bob\" file=\"bob.obj\"/></asset>\n  <worldbody>\n    <body name=\"arm\" pos=\"0 0 1\">\n      <joint name=\"hinge\" axis=\"0 1 0\" range=\"-1 1\" armature=\"0.01\"/>\n      <geom type=\"capsule\" size=\"0.02\" fromto=\"0 0 0 0 0 -0.3\" mass=\"1\"/>\n      <geom type=\"mesh\" mesh=\"bob\" pos=\"0 0 -0.3\" mass=\"0.2\"/>\n    </body>\n  </worldbody>\n  <actuator><position joint=\"hinge\" kp=\"{kp}\" kv=\"0.1\" ctrlrange=\"-1 1\"/></actuator>\n</mujoco>\n"
+        )
+    };
+    let model = model_dir.join("robot.xml");
+    std::fs::write(&model, xml("50")).unwrap();
+    let m = model.to_str().unwrap();
+    let args = [m, "--format", "json"];
+    let (c0, no_cache) = run_with_cache(&[m, "--format", "json", "--no-cache"], &cache);
+    assert!(entries(&cache).is_empty(), "--no-cache must not write");
+    let (c1, cold) = run_with_cache(&args, &cache);
+    assert_eq!(entries(&cache).len(), 1, "the cold run stores the compiled model");
+    let (c2, warm) = run_with_cache(&args, &cache);
+    assert_eq!(entries(&cache).len(), 1, "the warm run reuses it");
+    assert_eq!((c0, c1), (c1, c2));
+    assert_eq!(no_cache, cold);
+    assert_eq!(no_cache, warm, "same findings (incl. probes) from the cached model");
+    // --cache-dir overrides the environment.
+    let other = root.join("other");
+    let (_, via_flag) = run_with_cache(&[m, "--format", "json", "--cache-dir", other.to_str().unwrap()], &cache);
+    assert_eq!(via_flag, no_cache);
+    assert_eq!(entries(&other).len(), 1);
+    // A changed gain: a new entry, and the findings follow the file, not the cache.
+    std::fs::write(&model, xml("5000")).unwrap();
+    let (_, changed) = run_with_cache(&args, &cache);
+    let (_, changed_nc) = run_with_cache(&[m, "--format", "json", "--no-cache"], &cache);
+    assert_eq!(changed, changed_nc);
+    assert_ne!(changed, warm, "kp 50 → 5000 changes the findings");
+    assert_eq!(entries(&cache).len(), 2);
+    // A changed mesh (the XML untouched): a new entry.
+    std::fs::write(model_dir.join("bob.obj"), obj.replace("v 0 0 0.1", "v 0 0 0.2")).unwrap();
+    let (_, _) = run_with_cache(&args, &cache);
+    assert_eq!(entries(&cache).len(), 3, "the mesh is part of the key");
+    // A corrupt entry is ignored: the model is compiled again, same output.
+    for e in entries(&cache) {
+        std::fs::write(e, b"not a MuJoCo model").unwrap();
+    }
+    let (_, after_corrupt) = run_with_cache(&args, &cache);
+    let (_, nc) = run_with_cache(&[m, "--format", "json", "--no-cache"], &cache);
+    assert_eq!(after_corrupt, nc);
+    let _ = std::fs::remove_dir_all(&root);
+}

@@ -168,6 +168,8 @@ pub struct Options {
 
 /// A loaded robot model.
 pub struct Robot {
+    /// Unique per loaded model in this process (probe benches key their scratch copies on it).
+    pub uid: u64,
     pub path: PathBuf,
     pub format: Format,
     pub tree: XNode,
@@ -620,7 +622,9 @@ fn extract(path: &Path, format: Format, tree: XNode, src: SourceIndex, mj: MjMod
         .map(|i| Equality { id: i, name: mj::name_at(&mj, r.name_eqadr, neq, i), etype: et[i], obj1: e1[i], obj2: e2[i] })
         .collect();
     let opt = Options { timestep: r.opt.timestep, integrator: r.opt.integrator as i32, gravity: r.opt.gravity };
+    static NEXT_UID: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
     Robot {
+        uid: NEXT_UID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
         path: path.to_path_buf(),
         format,
         tree,
