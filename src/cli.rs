@@ -20,11 +20,13 @@ armature vs reflected rotor inertia, PD gains that make joints underdamped, tilt
 training ranges that use the hard stops, missing action delay, and more. Each finding can be\n\
 confirmed by a short MuJoCo probe simulation. `modellint gap` and `modellint fit` compare the model\n\
 with real recordings, name the physics it is missing and fit it.\n\n\
-Hardware facts come from a TOML spec beside the model (models/asimov.toml for models/asimov.xml)\n\
-or --spec; rule settings from modellint.toml beside the model or in the working directory.\n\n\
+Hardware facts come from a TOML spec beside the model (models/asimov.toml for models/asimov.xml),\n\
+else beside a file it includes (a scene's robot file), or --spec; without one modellint says which\n\
+rules were skipped or weakened; rule settings from modellint.toml beside the model or in the working directory.\n\n\
 Compiled-model cache: MuJoCo's binary model is cached (keyed by a hash of the model XML, its\n\
 includes, meshes, textures and the spec), so an unchanged re-lint of a mesh-heavy model with\n\
---no-probe takes well under 100 ms instead of a full MuJoCo compile (a pre-commit hook).\n\
+--no-probe takes under 100 ms (Booster T1 and Unitree H1 scenes: about 70 ms, bench/run.sh)\n\
+instead of a full MuJoCo compile, as a pre-commit hook re-runs it.\n\
 --no-cache disables it; --cache-dir or $MODELLINT_CACHE_DIR moves it.\n\n\
 Exit codes: 0 no finding at or above --fail-on; 1 findings; 2 modellint could not do its job.",
     after_help = "Examples:\n  modellint models/asimov.xml\n  modellint robot.xml --spec robot.toml --format sarif > modellint.sarif\n  modellint robot.xml --no-probe --fail-on warning     # pre-commit speed\n  modellint rules                                      # list rule ids\n  modellint rule underdamped-pd-gains                  # a rule's documentation",
@@ -374,7 +376,9 @@ fn check(a: CheckArgs) -> i32 {
         }
     };
     let mut stdout = std::io::stdout().lock();
-    if stdout.write_all(text.as_bytes()).is_err() {
+    let written = stdout.write_all(text.as_bytes()).is_ok();
+    crate::model::cache::finish();
+    if !written {
         return 2;
     }
     code

@@ -183,6 +183,25 @@ pub fn serialize(m: &MjModel) -> Option<Vec<u8>> {
     Some(buf)
 }
 
+static PENDING: std::sync::Mutex<Vec<std::thread::JoinHandle<()>>> = std::sync::Mutex::new(Vec::new());
+
+/// Writes an entry in the background (overlapping the lint); `finish` waits for the writes.
+pub fn store_in_background(dir: &Path, key: &str, bytes: Vec<u8>) {
+    let (dir, key) = (dir.to_path_buf(), key.to_string());
+    let handle = std::thread::spawn(move || store(&dir, &key, &bytes));
+    if let Ok(mut p) = PENDING.lock() {
+        p.push(handle);
+    }
+}
+
+/// Waits for the background cache writes of this process (the CLI calls it before exiting).
+pub fn finish() {
+    let handles: Vec<_> = PENDING.lock().map(|mut p| std::mem::take(&mut *p)).unwrap_or_default();
+    for h in handles {
+        let _ = h.join();
+    }
+}
+
 /// Writes an entry atomically (temporary file, then rename); failures are ignored.
 pub fn store(dir: &Path, key: &str, bytes: &[u8]) {
     if std::fs::create_dir_all(dir).is_err() {

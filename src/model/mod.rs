@@ -444,7 +444,7 @@ pub fn load_cached(
                 mujoco_error_location(map, first, &msg).unwrap_or_else(|| LoadError::plain(path, msg))
             })?;
             if let (Some(dir), Some(k), Some(bytes)) = (cache_dir, &key, cache_dir.and_then(|_| cache::serialize(&m))) {
-                cache::store(dir, k, &bytes);
+                cache::store_in_background(dir, k, bytes);
             }
             m
         }
