@@ -8,3 +8,4 @@ cargo build --release --examples
 ./target/release/examples/lint_bench
 ./target/release/examples/fit_bench
 ./target/release/examples/gap_bench "$@"
+./target/release/examples/cache_bench

@@ -9,6 +9,7 @@ use crate::model::Robot;
 use crate::model::source::SourceMap;
 use crate::rules::{Context, meta_rules, registry};
 use crate::spec::Spec;
+use crate::spec_use::SpecSearch;
 
 pub struct LintInput {
     pub model: PathBuf,
@@ -23,10 +24,17 @@ pub struct Loaded {
     pub robot: Robot,
     pub spec: Option<Spec>,
     pub config: Config,
+    /// Where the spec was looked for (empty `searched` when given with --spec).
+    pub spec_search: SpecSearch,
 }
 
 /// Loads everything a lint run needs; every failure is a located `LoadError` (exit 2).
 pub fn load(input: &LintInput) -> Result<Loaded, LoadError> {
+    load_with_cache(input, None)
+}
+
+/// As `load`, with MuJoCo's compiled model cached in `cache_dir` (model/cache.rs).
+pub fn load_with_cache(input: &LintInput, cache_dir: Option<&Path>) -> Result<Loaded, LoadError> {
     crate::model::mj::silence_warnings();
     let mut sources = SourceMap::default();
     let config = match input.config.clone().or_else(|| crate::config::discover(&input.model)) {
@@ -35,21 +43,22 @@ pub fn load(input: &LintInput) -> Result<Loaded, LoadError> {
     };
     let mut config = config;
     config.add_cli(&input.select, &input.ignore).map_err(|m| LoadError::plain(Path::new("<command line>"), m))?;
-    let spec_path = input.spec.clone().or_else(|| crate::spec::beside(&input.model));
-    if let Some(p) = &input.spec {
-        if !p.is_file() {
-            return Err(LoadError::plain(p, "spec file not found".into()));
-        }
-    }
+    let spec_search = match &input.spec {
+        Some(p) if !p.is_file() => return Err(LoadError::plain(p, "spec file not found".into())),
+        Some(p) => SpecSearch { path: Some(p.clone()), searched: vec![] },
+        None => crate::spec_use::discover(&input.model),
+    };
+    let spec_path = spec_search.path.clone();
     // The spec may name the keyframe, so read its robot table before compiling the model.
     let keyframe = spec_path.as_ref().and_then(|p| peek_keyframe(p));
-    let robot = crate::model::load(&mut sources, &input.model, keyframe.as_deref())?;
+    let extra: Vec<PathBuf> = spec_path.iter().cloned().collect();
+    let robot = crate::model::load_cached(&mut sources, &input.model, keyframe.as_deref(), cache_dir, &extra)?;
     let names: Vec<String> = robot.joints.iter().map(|j| j.name.clone()).collect();
     let spec = match spec_path {
         Some(p) => Some(crate::spec::load(&mut sources, &p, &names)?),
         None => None,
     };
-    Ok(Loaded { sources, robot, spec, config })
+    Ok(Loaded { sources, robot, spec, config, spec_search })
 }
 
 fn peek_keyframe(path: &Path) -> Option<String> {
@@ -58,9 +67,41 @@ fn peek_keyframe(path: &Path) -> Option<String> {
     v.get("robot")?.get("keyframe")?.as_str().map(str::to_string)
 }
 
+crate::declare_rule! {
+    /// ## What it does
+    /// Reports content after the root element of a model file or an included file, such as a
+    /// second `</mujoco>` left by an editing mistake. MuJoCo stops reading at the end of the root
+    /// element and loads the model anyway; modellint does the same and points at the junk.
+    ///
+    /// ## Why is this bad?
+    /// Other XML tools (URDF converters, `xmllint`, editors, ROS tooling) reject the file, and
+    /// anything written after the root element (a forgotten `<actuator>` block pasted below it)
+    /// is silently ignored by MuJoCo.
+    ///
+    /// ## How it is confirmed
+    /// Static: the file parses as XML only up to the end of its root element.
+    ///
+    /// ## How to fix
+    /// Delete the content after the closing root tag, or move it inside the root element.
+    pub TrailingXmlContent { id: "trailing-xml-content", group: "engine", level: Severity::Warning, probe: None, options: [] }
+}
+
 /// Runs the static rules and applies inline suppressions.
 pub fn run_rules(l: &Loaded) -> Vec<Finding> {
     let mut findings = Vec::new();
+    let trailing = &TrailingXmlContent::META;
+    if l.config.enabled(trailing) {
+        for loc in &l.sources.trailing {
+            let junk: String = l.sources.file(loc.file).text[loc.start..loc.end].chars().take(40).collect();
+            let junk = junk.lines().next().unwrap_or("").to_string();
+            findings.push(
+                Finding::new(trailing.id, l.config.level(trailing), format!("content after the root element is ignored: `{junk}`"), *loc)
+                    .label("MuJoCo stops reading before this")
+                    .note("MuJoCo loads the file up to the end of its root element; other XML tools reject it, and anything written here is silently ignored")
+                    .help("delete the content after the closing root tag, or move it inside the root element"),
+            );
+        }
+    }
     for rule in registry() {
         let meta = rule.meta();
         if !l.config.enabled(meta) {
@@ -128,6 +169,32 @@ fn apply_suppressions(l: &Loaded, findings: Vec<Finding>) -> Vec<Finding> {
     }
     sort_findings(&mut out);
     out
+}
+
+/// The findings of one model: static rules, then (unless `probe` is false) the probes.
+pub fn lint(l: &Loaded, probe: bool) -> Vec<Finding> {
+    let mut findings = run_rules(l);
+    if probe {
+        crate::probe::confirm_all(l, &mut findings);
+    }
+    findings
+}
+
+/// The note for a run without a spec (None when a spec is in use).
+pub fn missing_spec_note(l: &Loaded) -> Option<String> {
+    if l.spec.is_some() {
+        return None;
+    }
+    let enabled = |id: &str| crate::rules::find_meta(id).is_some_and(|m| l.config.enabled(m));
+    Some(crate::spec_use::missing_note(&l.robot.path, &l.spec_search, &enabled))
+}
+
+/// Why a path given among several is not linted: its root element is not `<mujoco>` or
+/// `<robot>` (ROS `package.xml`, launch files, …). `None`: lint it (unreadable files included,
+/// so that the loader reports them).
+pub fn not_a_model(path: &Path) -> Option<String> {
+    let tag = crate::model::source::root_tag(path)?;
+    (tag != "mujoco" && tag != "robot").then(|| format!("root element <{tag}> is not a robot model (MJCF <mujoco> or URDF <robot>)"))
 }
 
 /// Deterministic order: file, position, rule id, message.

@@ -95,3 +95,22 @@ pub fn silence_warnings() {
         c::mju_user_warning = Some(quiet_warning);
     }
 }
+
+/// Signed distance between two geoms at the data's current state (negative: penetration),
+/// capped at `distmax`.
+pub fn geom_distance(m: &MjModel, d: &mut MjData<&MjModel>, g1: usize, g2: usize, distmax: f64) -> f64 {
+    let mut fromto = [0.0f64; 6];
+    // SAFETY: valid model/data pair, geom ids checked by the caller against ngeom, fromto has 6.
+    unsafe { c::mj_geomDistance(raw(m), d.ffi_mut(), g1 as i32, g2 as i32, distmax, &mut fromto) }
+}
+
+/// Normal force of contact `i` of the data's current contact list (N, ≥ 0).
+pub fn contact_normal_force(m: &MjModel, d: &MjData<&MjModel>, i: usize) -> f64 {
+    let mut res = [0.0f64; 6];
+    if i >= d.ffi().ncon.max(0) as usize {
+        return 0.0;
+    }
+    // SAFETY: i < ncon; res has 6 entries as mj_contactForce requires.
+    unsafe { c::mj_contactForce(raw(m), d.ffi(), i as i32, &mut res) };
+    res[0]
+}

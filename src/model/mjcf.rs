@@ -40,6 +40,9 @@ pub struct ElemSrc {
     pub class: Option<String>,
     /// Indices into `SourceIndex::suppressions` that cover this element (its own and ancestors').
     pub suppressions: Vec<usize>,
+    /// For joints, geoms and sites: index of the enclosing body in the `Body` list (`None` for
+    /// the world body, whichever `<worldbody>` section or included file it came from).
+    pub body: Option<usize>,
 }
 
 /// An inline `<!-- modellint: ignore[rule] reason -->`.
@@ -136,6 +139,8 @@ fn parse_suppression(c: &super::source::XComment) -> Option<Result<Suppression, 
 struct Builder<'a> {
     defaults: Defaults<'a>,
     idx: SourceIndex,
+    /// Source body of the elements being pushed (None: world).
+    cur_body: Option<usize>,
 }
 
 impl<'a> Builder<'a> {
@@ -190,17 +195,28 @@ impl<'a> Builder<'a> {
             attrs,
             class: eff_class,
             suppressions: sup.clone(),
+            body: if kind == ElemKind::Body { None } else { self.cur_body },
         });
         sup
     }
 
     /// Bodies in MuJoCo's compiled order (pre-order), each body's joints/geoms/sites first.
-    fn body(&mut self, b: &XNode, class: Option<&str>, sup: &[usize], is_world: bool) {
+    fn body(&mut self, b: &XNode, class: Option<&str>, sup: &[usize]) {
+        let saved = self.cur_body;
         let class_here = b.get("childclass").or(class).map(str::to_string);
-        let sup = if is_world { sup.to_vec() } else { self.push(ElemKind::Body, b, class, sup, false) };
+        let sup = self.push(ElemKind::Body, b, class, sup, false);
+        self.cur_body = Some(self.idx.list(ElemKind::Body).len() - 1);
         let mut items = Vec::new();
         let mut bodies = Vec::new();
         flatten_frames(b, class_here.as_deref(), &mut items, &mut bodies, &sup, self);
+        self.items(items);
+        for (child, cls, s) in bodies {
+            self.body(child, cls.as_deref(), &s);
+        }
+        self.cur_body = saved;
+    }
+
+    fn items(&mut self, items: Vec<Item>) {
         for (n, cls, s) in items {
             match n.tag.as_str() {
                 "joint" | "freejoint" => {
@@ -214,9 +230,6 @@ impl<'a> Builder<'a> {
                 }
                 _ => {}
             }
-        }
-        for (child, cls, s) in bodies {
-            self.body(child, cls.as_deref(), &s, false);
         }
     }
 }
@@ -248,13 +261,22 @@ fn flatten_frames<'n>(
 
 /// Builds the source index of an MJCF tree (includes already expanded).
 pub fn index_mjcf(root: &XNode) -> SourceIndex {
-    let mut b = Builder { defaults: Defaults::collect(root), idx: SourceIndex { root: Some(root.loc), ..Default::default() } };
+    let mut b = Builder { defaults: Defaults::collect(root), idx: SourceIndex { root: Some(root.loc), ..Default::default() }, cur_body: None };
     let root_sup = b.suppressions_of(root);
+    // MuJoCo merges every <worldbody> section (e.g. the robot file's and the scene's, which
+    // adds a floor) into the world body: its own geoms/sites come first in the compiled lists,
+    // then the bodies of all sections in order.
+    let mut items = Vec::new();
+    let mut bodies = Vec::new();
     for wb in root.children_tagged("worldbody") {
-        let s = b.suppressions_of(wb);
         let mut all = root_sup.clone();
-        all.extend(s);
-        b.body(wb, None, &all, true);
+        all.extend(b.suppressions_of(wb));
+        flatten_frames(wb, None, &mut items, &mut bodies, &all, &mut b);
+    }
+    b.cur_body = None;
+    b.items(items);
+    for (child, cls, s) in bodies {
+        b.body(child, cls.as_deref(), &s);
     }
     for sec in root.children_tagged("actuator") {
         let s = b.suppressions_of(sec);
@@ -291,7 +313,7 @@ pub fn index_mjcf(root: &XNode) -> SourceIndex {
 
 /// Builds a (smaller) source index of a URDF tree: links as bodies, joints with their limits.
 pub fn index_urdf(root: &XNode) -> SourceIndex {
-    let mut b = Builder { defaults: Defaults { classes: BTreeMap::new() }, idx: SourceIndex { root: Some(root.loc), ..Default::default() } };
+    let mut b = Builder { defaults: Defaults { classes: BTreeMap::new() }, idx: SourceIndex { root: Some(root.loc), ..Default::default() }, cur_body: None };
     for l in root.children_tagged("link") {
         b.push(ElemKind::Body, l, None, &[], false);
     }

@@ -1,6 +1,7 @@
 //! Loading robot models: MuJoCo's compiled model is the semantic truth (defaults, includes,
 //! units are resolved by MuJoCo itself); the XML source index supplies spans for diagnostics.
 
+pub mod cache;
 pub mod mj;
 pub mod mjcf;
 pub mod source;
@@ -219,6 +220,8 @@ pub struct Options {
 
 /// A loaded robot model.
 pub struct Robot {
+    /// Unique per loaded model in this process (probe benches key their scratch copies on it).
+    pub uid: u64,
     pub path: PathBuf,
     pub format: Format,
     pub tree: XNode,
@@ -279,7 +282,10 @@ impl Robot {
             .collect()
     }
 
-    /// Source element of a compiled object, matched by name, else by compiled order.
+    /// Source element of a compiled object, matched by name, else by compiled order: bodies by
+    /// their pre-order position, joints/geoms/sites by their rank inside their (matched) body.
+    /// Matching inside the body keeps an unnamed geom on its own line when a scene file adds
+    /// world geoms (a floor) that MuJoCo numbers before the robot's.
     pub fn elem(&self, kind: ElemKind, id: usize, name: &str) -> Option<&ElemSrc> {
         if !name.is_empty() {
             if let Some(e) = self.src.by_name(kind, name) {
@@ -287,17 +293,34 @@ impl Robot {
             }
         }
         let list = self.src.list(kind);
-        // Compiled order matches source order only when every element was indexed.
-        let expected = match kind {
-            ElemKind::Joint => self.joints.len(),
-            ElemKind::Geom => self.geoms.len(),
-            ElemKind::Body => self.bodies.len().saturating_sub(1),
-            ElemKind::Actuator => self.actuators.len(),
-            ElemKind::Key => self.keys.len(),
-            _ => usize::MAX,
+        let r = mj::raw(&self.mj);
+        let body_of: Vec<usize> = match kind {
+            ElemKind::Joint => self.joints.iter().map(|j| j.body).collect(),
+            ElemKind::Geom => self.geoms.iter().map(|g| g.body).collect(),
+            ElemKind::Site => mj::slice(r.site_bodyid, r.nsite as usize).iter().map(|&b| b.max(0) as usize).collect(),
+            _ => {
+                // Compiled order matches source order only when every element was indexed.
+                let expected = match kind {
+                    ElemKind::Body => self.bodies.len().saturating_sub(1),
+                    ElemKind::Actuator => self.actuators.len(),
+                    ElemKind::Key => self.keys.len(),
+                    _ => usize::MAX,
+                };
+                let idx = if kind == ElemKind::Body { id.checked_sub(1)? } else { id };
+                return if list.len() == expected { list.get(idx) } else { None };
+            }
         };
-        let idx = if kind == ElemKind::Body { id.checked_sub(1)? } else { id };
-        if list.len() == expected { list.get(idx) } else { None }
+        let b = *body_of.get(id)?;
+        let rank = body_of[..id].iter().filter(|&&x| x == b).count();
+        let count = body_of.iter().filter(|&&x| x == b).count();
+        let src_body = if b == 0 {
+            None
+        } else {
+            let e = self.elem(ElemKind::Body, b, self.body_name(b))?;
+            Some(self.src.list(ElemKind::Body).iter().position(|x| std::ptr::eq(x, e))?)
+        };
+        let in_body: Vec<&ElemSrc> = list.iter().filter(|e| e.body == src_body).collect();
+        if in_body.len() == count { in_body.get(rank).copied() } else { None }
     }
 
     /// Tightest location for attribute `attr` of an object (falls back to the element, then the
@@ -358,8 +381,13 @@ fn check_numbers(map: &SourceMap, n: &XNode) -> Result<(), LoadError> {
     Ok(())
 }
 
-/// Checks that every asset file the model names exists, pointing at the attribute when not.
-fn check_assets(map: &SourceMap, root: &XNode, model_dir: &Path) -> Result<(), LoadError> {
+/// Asset attributes that name files MuJoCo reads (cube and skybox textures use the six faces).
+const FILE_ATTRS: &[&str] = &["file", "fileright", "fileleft", "fileup", "filedown", "filefront", "fileback"];
+
+/// Checks that every asset file the model names exists, pointing at the attribute when not, and
+/// returns them (the inputs of the compile, for the cache key).
+fn check_assets(map: &SourceMap, root: &XNode, model_dir: &Path) -> Result<Vec<PathBuf>, LoadError> {
+    let mut files = Vec::new();
     let mut meshdir = None;
     let mut texturedir = None;
     for c in root.children_tagged("compiler") {
@@ -379,9 +407,9 @@ fn check_assets(map: &SourceMap, root: &XNode, model_dir: &Path) -> Result<(), L
             let dir = match a.tag.as_str() {
                 "mesh" | "hfield" | "skin" => &meshdir,
                 "texture" => &texturedir,
-                _ => continue,
+                _ => &None,
             };
-            if let Some(f) = a.attr("file") {
+            for f in FILE_ATTRS.iter().filter_map(|n| a.attr(n)) {
                 let p = Path::new(&f.value);
                 let full = if p.is_absolute() { p.to_path_buf() } else { model_dir.join(dir.as_deref().unwrap_or("")).join(p) };
                 if !full.is_file() {
@@ -391,10 +419,11 @@ fn check_assets(map: &SourceMap, root: &XNode, model_dir: &Path) -> Result<(), L
                         format!("<{}> file not found: {} (looked for {})", a.tag, f.value, full.display()),
                     ));
                 }
+                files.push(full);
             }
         }
     }
-    Ok(())
+    Ok(files)
 }
 
 fn geom_type(t: i32) -> GeomType {
@@ -414,6 +443,19 @@ fn geom_type(t: i32) -> GeomType {
 
 /// Loads an MJCF or URDF model. `keyframe` names the standing keyframe, when known.
 pub fn load(map: &mut SourceMap, path: &Path, keyframe: Option<&str>) -> Result<Robot, LoadError> {
+    load_cached(map, path, keyframe, None, &[])
+}
+
+/// As `load`, with the compiled model taken from (or written to) the cache in `cache_dir`.
+/// `extra_inputs` (the spec) join the cache key. URDF models are always compiled: MuJoCo
+/// resolves their mesh paths its own way, so their inputs are not known here.
+pub fn load_cached(
+    map: &mut SourceMap,
+    path: &Path,
+    keyframe: Option<&str>,
+    cache_dir: Option<&Path>,
+    extra_inputs: &[PathBuf],
+) -> Result<Robot, LoadError> {
     let first = map.files.len();
     let tree = source::parse_xml_tree(map, path, true)?;
     let format = match tree.tag.as_str() {
@@ -429,23 +471,42 @@ pub fn load(map: &mut SourceMap, path: &Path, keyframe: Option<&str>) -> Result<
     };
     check_numbers(map, &tree)?;
     let model_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    if format == Format::Mjcf {
-        check_assets(map, &tree, &model_dir)?;
-    }
+    let assets = if format == Format::Mjcf { Some(check_assets(map, &tree, &model_dir)?) } else { None };
     let src = match format {
         Format::Mjcf => mjcf::index_mjcf(&tree),
         Format::Urdf => mjcf::index_urdf(&tree),
     };
-    // URDF `package://` meshes: MuJoCo compiles a resolved copy (same line numbers).
-    let resolved = if format == Format::Urdf { urdf_packages::resolved_copy(map, first)? } else { None };
-    let mj = MjModel::from_xml(resolved.as_deref().unwrap_or(path));
-    if let Some(t) = &resolved {
-        let _ = std::fs::remove_file(t);
-    }
-    let mj = mj.map_err(|e| {
-        let msg = format!("MuJoCo could not compile the model: {e}");
-        mujoco_error_location(map, first, &msg).or_else(|| missing_file_location(map, first, &msg)).unwrap_or_else(|| LoadError::plain(path, msg))
-    })?;
+    let key = match (cache_dir, &assets) {
+        (Some(_), Some(assets)) => {
+            let mut inputs: Vec<(PathBuf, Option<&str>)> = map.files[first..].iter().map(|f| (f.path.clone(), Some(f.text.as_str()))).collect();
+            inputs.extend(assets.iter().chain(extra_inputs).map(|p| (p.clone(), None)));
+            cache::key(&inputs)
+        }
+        _ => None,
+    };
+    let cached = match (cache_dir, &key) {
+        (Some(dir), Some(k)) => cache::load(dir, k),
+        _ => None,
+    };
+    let mj = match cached {
+        Some(m) => m,
+        None => {
+            // URDF `package://` meshes: MuJoCo compiles a resolved copy (same line numbers).
+            let resolved = if format == Format::Urdf { urdf_packages::resolved_copy(map, first)? } else { None };
+            let m = MjModel::from_xml(resolved.as_deref().unwrap_or(path));
+            if let Some(t) = &resolved {
+                let _ = std::fs::remove_file(t);
+            }
+            let m = m.map_err(|e| {
+                let msg = format!("MuJoCo could not compile the model: {e}");
+                mujoco_error_location(map, first, &msg).or_else(|| missing_file_location(map, first, &msg)).unwrap_or_else(|| LoadError::plain(path, msg))
+            })?;
+            if let (Some(dir), Some(k), Some(bytes)) = (cache_dir, &key, cache_dir.and_then(|_| cache::serialize(&m))) {
+                cache::store_in_background(dir, k, bytes);
+            }
+            m
+        }
+    };
     let mut robot = extract(path, format, tree, src, mj);
     let key = choose_key(&robot.keys, keyframe);
     if let Some(want) = keyframe {
@@ -661,7 +722,9 @@ fn extract(path: &Path, format: Format, tree: XNode, src: SourceIndex, mj: MjMod
         .map(|i| Equality { id: i, name: mj::name_at(&mj, r.name_eqadr, neq, i), etype: et[i], obj1: e1[i], obj2: e2[i] })
         .collect();
     let opt = Options { timestep: r.opt.timestep, integrator: r.opt.integrator as i32, gravity: r.opt.gravity };
+    static NEXT_UID: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
     Robot {
+        uid: NEXT_UID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
         path: path.to_path_buf(),
         format,
         tree,

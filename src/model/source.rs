@@ -45,6 +45,8 @@ impl SourceFile {
 #[derive(Debug, Clone, Default)]
 pub struct SourceMap {
     pub files: Vec<SourceFile>,
+    /// Content after a file's root element (MuJoCo ignores it; modellint reports it).
+    pub trailing: Vec<Loc>,
 }
 
 impl SourceMap {
@@ -155,16 +157,81 @@ fn parse_file(
         return Err(LoadError::at(map, loc, format!("include cycle: {} includes itself (directly or indirectly)", path.display())));
     }
     let text = map.file(file_id).text.clone();
-    let opts = roxmltree::ParsingOptions { allow_dtd: true, ..Default::default() };
-    let doc = roxmltree::Document::parse_with_options(&text, opts).map_err(|e| {
-        let pos = e.pos();
-        LoadError::at_line(map, file_id, pos.row as usize, pos.col as usize, format!("malformed XML: {e}"))
-    })?;
+    let opts = || roxmltree::ParsingOptions { allow_dtd: true, ..Default::default() };
+    let doc = match roxmltree::Document::parse_with_options(&text, opts()) {
+        Ok(doc) => doc,
+        Err(e) => match root_end(&text) {
+            // MuJoCo (tinyxml2) stops reading after the root element: accept what precedes the
+            // junk, and remember where the junk is.
+            Some(end) => {
+                let junk_start = end + text[end..].len() - text[end..].trim_start().len();
+                map.trailing.push(Loc { file: file_id, start: junk_start, end: text.trim_end().len().max(junk_start) });
+                roxmltree::Document::parse_with_options(&text[..end], opts()).map_err(|e| {
+                    let pos = e.pos();
+                    LoadError::at_line(map, file_id, pos.row as usize, pos.col as usize, format!("malformed XML: {e}"))
+                })?
+            }
+            None => {
+                let pos = e.pos();
+                return Err(LoadError::at_line(map, file_id, pos.row as usize, pos.col as usize, format!("malformed XML: {e}")));
+            }
+        },
+    };
     let root = doc.root_element();
     let base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let node = convert(map, file_id, root, &base_dir, expand_includes, stack)?;
     stack.remove(&canon);
     Ok(node)
+}
+
+/// Name of a file's root element, read without a full parse (first start tag that is not a
+/// declaration, comment or processing instruction). `None` when the file cannot be read or has
+/// no element.
+pub fn root_tag(path: &Path) -> Option<String> {
+    let text = std::fs::read(path).ok()?;
+    let text = String::from_utf8_lossy(&text);
+    root_name(&text)
+}
+
+fn root_name(text: &str) -> Option<String> {
+    let mut i = 0;
+    loop {
+        let lt = i + text[i..].find('<')?;
+        let rest = &text[lt + 1..];
+        if rest.starts_with("!--") {
+            i = lt + 4 + rest[3..].find("-->")? + 3;
+            continue;
+        }
+        if rest.starts_with('?') || rest.starts_with('!') {
+            i = lt + 1;
+            continue;
+        }
+        let n: String = rest.chars().take_while(|c| !c.is_whitespace() && *c != '>' && *c != '/').collect();
+        return (!n.is_empty()).then_some(n);
+    }
+}
+
+/// Byte offset just after the root element's closing tag, when the file is well-formed up to
+/// there and only trailing content (e.g. a second `</mujoco>`) makes it malformed.
+fn root_end(text: &str) -> Option<usize> {
+    let opts = || roxmltree::ParsingOptions { allow_dtd: true, ..Default::default() };
+    let name = root_name(text)?;
+    let close = format!("</{name}");
+    let mut from = 0;
+    while let Some(p) = text[from..].find(&close) {
+        let after = from + p + close.len();
+        let gt = after + text[after..].find('>')?;
+        if !text[after..gt].trim().is_empty() {
+            from = after;
+            continue;
+        }
+        let end = gt + 1;
+        if roxmltree::Document::parse_with_options(&text[..end], opts()).is_ok() {
+            return (!text[end..].trim().is_empty()).then_some(end);
+        }
+        from = end;
+    }
+    None
 }
 
 fn convert(
@@ -237,6 +304,21 @@ mod tests {
         assert_eq!(f.line_col(3), (2, 1));
         assert_eq!(f.line_col(7), (2, 4));
         assert_eq!(f.line_col(8), (3, 1));
+    }
+
+    #[test]
+    fn root_name_skips_declarations_and_comments() {
+        assert_eq!(root_name("<?xml version=\"1.0\"?>\n<!-- a <b> -->\n<package format=\"3\">").as_deref(), Some("package"));
+        assert_eq!(root_name("<!DOCTYPE x>\n<mujoco/>").as_deref(), Some("mujoco"));
+        assert_eq!(root_name("no element"), None);
+    }
+
+    #[test]
+    fn root_end_finds_the_end_before_trailing_junk() {
+        let t = "<mujoco><worldbody/></mujoco>\n</mujoco>\n";
+        assert_eq!(root_end(t), Some(29));
+        assert_eq!(root_end("<mujoco><a></mujoco>"), None);
+        assert_eq!(root_end("<mujoco></mujoco>\n"), None);
     }
 
     #[test]

@@ -39,3 +39,19 @@ pub fn render(map: &SourceMap, findings: &[Finding]) -> String {
     }
     out
 }
+
+/// Models that could not be loaded (exit 2), as error annotations at the problem's location.
+pub fn render_errors(errors: &[super::NotLinted]) -> String {
+    let mut out = String::new();
+    for e in errors {
+        out.push_str(&format!(
+            "::error file={},line={},col={},title={}::{}\n",
+            escape_prop(&e.file),
+            e.line.unwrap_or(1),
+            e.column.unwrap_or(1),
+            escape_prop("modellint could not load the model"),
+            escape_data(&e.message)
+        ));
+    }
+    out
+}

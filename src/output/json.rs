@@ -2,11 +2,12 @@
 
 use serde_json::{Value, json};
 
-use super::position;
+use super::{NotLinted, Report, SpecInfo, position};
 use crate::finding::{Finding, Severity};
 use crate::model::source::SourceMap;
 
 pub const SCHEMA_VERSION: u32 = 1;
+pub const SET_SCHEMA_VERSION: u32 = 1;
 
 pub fn finding_value(map: &SourceMap, f: &Finding) -> Value {
     let p = position(map, f.primary);
@@ -38,9 +39,14 @@ pub fn finding_value(map: &SourceMap, f: &Finding) -> Value {
     })
 }
 
-pub fn render(map: &SourceMap, model: &str, findings: &[Finding]) -> String {
+fn spec_value(s: &SpecInfo) -> Value {
+    json!({ "path": s.path, "searched": s.searched, "skipped_rules": s.skipped_rules, "weakened_rules": s.weakened_rules })
+}
+
+/// One model: schema `modellint/findings` version 1 (what a single path always produces).
+pub fn model_value(map: &SourceMap, model: &str, findings: &[Finding], spec: Option<&SpecInfo>) -> Value {
     let count = |s: Severity| findings.iter().filter(|f| f.severity == s).count();
-    let v = json!({
+    let mut v = json!({
         "schema": "modellint/findings",
         "version": SCHEMA_VERSION,
         "tool": { "name": "modellint", "version": env!("CARGO_PKG_VERSION") },
@@ -48,7 +54,40 @@ pub fn render(map: &SourceMap, model: &str, findings: &[Finding]) -> String {
         "summary": { "error": count(Severity::Error), "warning": count(Severity::Warning), "info": count(Severity::Info) },
         "findings": findings.iter().map(|f| finding_value(map, f)).collect::<Vec<_>>(),
     });
-    let mut s = serde_json::to_string_pretty(&v).unwrap_or_default();
+    if let Some(s) = spec {
+        v["spec"] = spec_value(s);
+    }
+    v
+}
+
+pub fn render(map: &SourceMap, model: &str, findings: &[Finding], spec: Option<&SpecInfo>) -> String {
+    pretty(&model_value(map, model, findings, spec))
+}
+
+fn pretty(v: &Value) -> String {
+    let mut s = serde_json::to_string_pretty(v).unwrap_or_default();
     s.push('\n');
     s
+}
+
+fn not_linted(n: &NotLinted) -> Value {
+    json!({ "path": n.path, "file": n.file, "line": n.line, "column": n.column, "message": n.message })
+}
+
+/// Several models: schema `modellint/findings-set` version 1, one `modellint/findings` object
+/// per linted model, plus the paths skipped (not a robot model) and those that failed to load.
+pub fn render_set(reports: &[Report], skipped: &[NotLinted], errors: &[NotLinted]) -> String {
+    let all: Vec<&Finding> = reports.iter().flat_map(|r| r.findings.iter()).collect();
+    let count = |s: Severity| all.iter().filter(|f| f.severity == s).count();
+    let v = json!({
+        "schema": "modellint/findings-set",
+        "version": SET_SCHEMA_VERSION,
+        "tool": { "name": "modellint", "version": env!("CARGO_PKG_VERSION") },
+        "summary": { "models": reports.len(), "skipped": skipped.len(), "not_loaded": errors.len(),
+                     "error": count(Severity::Error), "warning": count(Severity::Warning), "info": count(Severity::Info) },
+        "models": reports.iter().map(|r| model_value(r.sources, &r.model, r.findings, r.spec.as_ref())).collect::<Vec<_>>(),
+        "skipped": skipped.iter().map(not_linted).collect::<Vec<_>>(),
+        "errors": errors.iter().map(not_linted).collect::<Vec<_>>(),
+    });
+    pretty(&v)
 }

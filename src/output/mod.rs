@@ -65,8 +65,85 @@ pub fn position(map: &SourceMap, loc: Loc) -> Position {
 pub fn render(format: Format, map: &SourceMap, model: &str, findings: &[Finding], color: bool) -> String {
     match format {
         Format::Text => text::render(map, findings, color),
-        Format::Json => json::render(map, model, findings),
-        Format::Sarif => sarif::render(map, findings),
+        Format::Json => json::render(map, model, findings, None),
+        Format::Sarif => sarif::render(&[(map, findings)], &[]),
         Format::Github => github::render(map, findings),
+    }
+}
+
+/// Where the spec came from, for the JSON output.
+#[derive(Debug, Clone, Default)]
+pub struct SpecInfo {
+    pub path: Option<String>,
+    pub searched: Vec<String>,
+    /// Rules skipped / weakened because there is no spec (empty when a spec is in use).
+    pub skipped_rules: Vec<String>,
+    pub weakened_rules: Vec<String>,
+}
+
+/// One linted model.
+pub struct Report<'a> {
+    pub model: String,
+    pub sources: &'a SourceMap,
+    pub findings: &'a [Finding],
+    pub spec: Option<SpecInfo>,
+}
+
+/// A path that was not linted: skipped (not a robot model) or failed to load (exit 2).
+#[derive(Debug, Clone)]
+pub struct NotLinted {
+    pub path: String,
+    /// `file:line:col` of the problem, when known.
+    pub file: String,
+    pub line: Option<usize>,
+    pub column: Option<usize>,
+    pub message: String,
+}
+
+impl NotLinted {
+    pub fn from_error(path: &std::path::Path, e: &crate::error::LoadError) -> Self {
+        NotLinted { path: path.display().to_string(), file: e.file.display().to_string(), line: e.line, column: e.column, message: e.message.clone() }
+    }
+    pub fn skipped(path: &std::path::Path, why: String) -> Self {
+        NotLinted { path: path.display().to_string(), file: path.display().to_string(), line: None, column: None, message: why }
+    }
+}
+
+/// Several models in one call (`modellint a.xml b.xml`): every format carries all of them.
+/// Text and GitHub concatenate; JSON is a `modellint/findings-set` of per-model
+/// `modellint/findings` objects (docs/schemas/findings.md); SARIF is one run with every result.
+pub fn render_many(format: Format, reports: &[Report], skipped: &[NotLinted], errors: &[NotLinted], color: bool) -> String {
+    match format {
+        Format::Text => {
+            let mut out = String::new();
+            for r in reports {
+                out.push_str(&text::render_titled(r.sources, r.findings, color, Some(&r.model)));
+            }
+            let all: Vec<&Finding> = reports.iter().flat_map(|r| r.findings.iter()).collect();
+            let count = |s: crate::finding::Severity| all.iter().filter(|f| f.severity == s).count();
+            out.push_str(&format!(
+                "modellint: {} model(s) linted, {} skipped, {} could not be loaded: {} error(s), {} warning(s), {} info\n",
+                reports.len(),
+                skipped.len(),
+                errors.len(),
+                count(crate::finding::Severity::Error),
+                count(crate::finding::Severity::Warning),
+                count(crate::finding::Severity::Info)
+            ));
+            out
+        }
+        Format::Json => json::render_set(reports, skipped, errors),
+        Format::Sarif => {
+            let runs: Vec<(&SourceMap, &[Finding])> = reports.iter().map(|r| (r.sources, r.findings)).collect();
+            sarif::render(&runs, errors)
+        }
+        Format::Github => {
+            let mut out = String::new();
+            for r in reports {
+                out.push_str(&github::render(r.sources, r.findings));
+            }
+            out.push_str(&github::render_errors(errors));
+            out
+        }
     }
 }

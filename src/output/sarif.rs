@@ -24,7 +24,9 @@ fn first_paragraph(docs: &str) -> String {
         .join(" ")
 }
 
-pub fn render(map: &SourceMap, findings: &[Finding]) -> String {
+/// One SARIF run holding the results of every model; models that could not be loaded become
+/// tool execution notifications (and `executionSuccessful: false`).
+pub fn render(models: &[(&SourceMap, &[Finding])], errors: &[super::NotLinted]) -> String {
     let metas = all_meta();
     let rules: Vec<Value> = metas
         .iter()
@@ -40,9 +42,10 @@ pub fn render(map: &SourceMap, findings: &[Finding]) -> String {
             })
         })
         .collect();
-    let results: Vec<Value> = findings
+    let results: Vec<Value> = models
         .iter()
-        .map(|f| {
+        .flat_map(|(map, findings)| findings.iter().map(move |f| (*map, f)))
+        .map(|(map, f)| {
             let p = position(map, f.primary);
             let idx = metas.iter().position(|m| m.id == f.rule).unwrap_or(0);
             let mut text = f.message.clone();
@@ -88,6 +91,17 @@ pub fn render(map: &SourceMap, findings: &[Finding]) -> String {
                 "rules": rules,
             } },
             "results": results,
+            "invocations": [{
+                "executionSuccessful": errors.is_empty(),
+                "toolExecutionNotifications": errors.iter().map(|e| {
+                    let mut n = json!({ "level": "error", "message": { "text": format!("could not load {}: {}", e.path, e.message) } });
+                    if let Some(line) = e.line {
+                        n["locations"] = json!([{ "physicalLocation": { "artifactLocation": { "uri": uri(&e.file) },
+                            "region": { "startLine": line, "startColumn": e.column.unwrap_or(1) } } }]);
+                    }
+                    n
+                }).collect::<Vec<_>>(),
+            }],
         }],
     });
     let mut s = serde_json::to_string_pretty(&v).unwrap_or_default();

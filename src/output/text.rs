@@ -7,6 +7,11 @@ use crate::finding::{Finding, ProbeStatus, Severity};
 use crate::model::source::SourceMap;
 
 pub fn render(map: &SourceMap, findings: &[Finding], color: bool) -> String {
+    render_titled(map, findings, color, None)
+}
+
+/// As `render`; with `model`, the summary line names the model (several models per call).
+pub fn render_titled(map: &SourceMap, findings: &[Finding], color: bool, model: Option<&str>) -> String {
     let theme = if color { GraphicalTheme::unicode() } else { GraphicalTheme::unicode_nocolor() };
     let handler = GraphicalReportHandler::new_themed(theme).with_width(100);
     let mut out = String::new();
@@ -15,7 +20,8 @@ pub fn render(map: &SourceMap, findings: &[Finding], color: bool) -> String {
     }
     let count = |s: Severity| findings.iter().filter(|f| f.severity == s).count();
     out.push_str(&format!(
-        "modellint: {} error(s), {} warning(s), {} info\n",
+        "modellint: {}{} error(s), {} warning(s), {} info\n",
+        model.map(|m| format!("{m}: ")).unwrap_or_default(),
         count(Severity::Error),
         count(Severity::Warning),
         count(Severity::Info)

@@ -1,5 +1,15 @@
-//! The test bench every probe runs on: a private copy of the compiled model, put in a known
-//! state (keyframe, targets held), with optional isolation of one joint.
+//! The test bench every probe runs on: the compiled model put in a known state (keyframe,
+//! targets held), with optional isolation of one joint.
+//!
+//! A bench that changes nothing (no isolation, contacts and gravity on) simulates the robot's
+//! own model directly. One that changes armature (and with it `dof_M0`, see
+//! [`mj::set_armature`]) or option flags works on a scratch copy kept
+//! per thread and reset from the robot's model each time, instead of a fresh copy per probe: a
+//! mesh-heavy model is tens of megabytes (mostly mesh BVHs), and copying it for every probe cost
+//! more than the probes' own simulation steps.
+
+use std::cell::RefCell;
+use std::ops::Deref;
 
 use mujoco_rs::prelude::*;
 
@@ -19,15 +29,77 @@ pub struct Setup {
 
 pub const FROZEN_ARMATURE: f64 = 1e7;
 
-pub struct Bench {
-    pub m: MjModel,
+/// The model a bench simulates: the robot's own (read only) or this thread's scratch copy.
+pub enum BenchModel<'a> {
+    Shared(&'a MjModel),
+    Scratch(Option<MjModel>, u64),
+}
+
+impl Deref for BenchModel<'_> {
+    type Target = MjModel;
+    fn deref(&self) -> &MjModel {
+        match self {
+            BenchModel::Shared(m) => m,
+            BenchModel::Scratch(Some(m), _) => m,
+            BenchModel::Scratch(None, _) => unreachable!("scratch model is only taken in drop"),
+        }
+    }
+}
+
+impl Drop for BenchModel<'_> {
+    fn drop(&mut self) {
+        if let BenchModel::Scratch(m, source) = self {
+            if let Some(m) = m.take() {
+                SCRATCH.with(|s| *s.borrow_mut() = Some((*source, m)));
+            }
+        }
+    }
+}
+
+thread_local! {
+    /// (uid of the robot whose model it was copied from, copy). The robot's model is never
+    /// changed after loading, so resetting what a bench changes (armature, option flags) makes
+    /// the copy equal to it again.
+    static SCRATCH: RefCell<Option<(u64, MjModel)>> = const { RefCell::new(None) };
+}
+
+/// A copy of `robot.mj` with its armature and option flags as in the robot's model: this
+/// thread's scratch copy when it was made from the same model, else a fresh copy.
+fn scratch(robot: &Robot) -> (MjModel, u64) {
+    let source = robot.uid;
+    let reuse = SCRATCH.with(|s| match s.borrow_mut().take() {
+        Some((src, m)) if src == source => Some(m),
+        _ => None,
+    });
+    let mut m = match reuse {
+        Some(m) => m,
+        None => return (robot.mj.clone(), source),
+    };
+    let orig = mj::raw(&robot.mj);
+    let nv = orig.nv as usize;
+    let arm = mj::slice(orig.dof_armature, nv).to_vec();
+    let m0 = mj::slice(orig.dof_M0, nv).to_vec();
+    let flags = orig.opt.disableflags;
+    let r = mj::raw_mut(&mut m);
+    mj::slice_mut(r.dof_armature, nv).copy_from_slice(&arm);
+    mj::slice_mut(r.dof_M0, nv).copy_from_slice(&m0);
+    r.opt.disableflags = flags;
+    (m, source)
+}
+
+pub struct Bench<'a> {
+    pub m: BenchModel<'a>,
     frozen: Vec<(usize, f64)>, // (qpos index, value) to hold
     frozen_dofs: Vec<usize>,
 }
 
-impl Bench {
-    pub fn new(robot: &Robot, s: Setup) -> Option<Bench> {
-        let mut m = robot.mj.clone();
+impl<'a> Bench<'a> {
+    pub fn new(robot: &'a Robot, s: Setup) -> Option<Bench<'a>> {
+        let changes = s.isolate_dof.is_some() || s.pin_base || s.no_contact || s.no_gravity;
+        if !changes {
+            return Some(Bench { m: BenchModel::Shared(&robot.mj), frozen: Vec::new(), frozen_dofs: Vec::new() });
+        }
+        let (mut m, source) = scratch(robot);
         let mut frozen_dofs: Vec<usize> = Vec::new();
         let mut frozen = Vec::new();
         for j in &robot.joints {
@@ -52,10 +124,10 @@ impl Bench {
                 }
             }
         }
+        for &d in &frozen_dofs {
+            mj::set_armature(&mut m, d, FROZEN_ARMATURE);
+        }
         {
-            for &d in &frozen_dofs {
-                mj::set_armature(&mut m, d, FROZEN_ARMATURE);
-            }
             let r = mj::raw_mut(&mut m);
             if s.no_contact {
                 r.opt.disableflags |= 1 << 4;
@@ -64,12 +136,12 @@ impl Bench {
                 r.opt.disableflags |= 1 << 7;
             }
         }
-        Some(Bench { m, frozen, frozen_dofs })
+        Some(Bench { m: BenchModel::Scratch(Some(m), source), frozen, frozen_dofs })
     }
 
     /// Fresh data at the robot's standing keyframe (or qpos0), ctrl = keyframe ctrl.
     pub fn data(&self, robot: &Robot) -> MjData<&MjModel> {
-        let mut d = MjData::new(&self.m);
+        let mut d = MjData::new(&*self.m);
         if let Some(k) = robot.key.key {
             let _ = d.reset_keyframe(k);
         }

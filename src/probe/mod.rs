@@ -7,6 +7,7 @@ pub mod bench;
 pub mod direction;
 pub mod impulse;
 pub mod limit;
+pub mod penetration;
 pub mod sanity;
 pub mod settle;
 
@@ -24,19 +25,129 @@ fn skipped(name: &str, why: &str) -> ProbeOutcome {
     outcome(name, ProbeStatus::Skipped, BTreeMap::new(), 0, why.into())
 }
 
-/// Runs the probe of every finding whose rule declares one, then the whole-model sanity probe.
-pub fn confirm_all(l: &Loaded, findings: &mut Vec<Finding>) {
+/// Results of the simulations the findings ask for, computed once each and in parallel.
+#[derive(Default)]
+struct Results {
+    impulse: BTreeMap<usize, Option<impulse::StepResponse>>,
+    settle: Option<Option<settle::Settle>>,
+    sanity: Option<Finding>,
+    direction: BTreeMap<usize, Option<direction::Direction>>,
+    limit: BTreeMap<usize, Option<limit::LimitHit>>,
+    penetration: BTreeMap<(usize, usize), Option<penetration::Penetration>>,
+}
+
+/// One simulation to run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+enum Job {
+    Impulse(usize),
+    Settle,
+    Sanity,
+    Direction(usize),
+    Limit(usize),
+    Penetration(usize, usize),
+}
+
+enum Done {
+    Impulse(usize, Option<impulse::StepResponse>),
+    Settle(Option<settle::Settle>),
+    Sanity(Option<Finding>),
+    Direction(usize, Option<direction::Direction>),
+    Limit(usize, Option<limit::LimitHit>),
+    Penetration(usize, usize, Option<penetration::Penetration>),
+}
+
+/// The simulations the findings need (deduplicated: one step response per joint, one stance
+/// settle per model, ...).
+fn jobs(l: &Loaded, findings: &[Finding]) -> Vec<Job> {
+    let mut jobs = std::collections::BTreeSet::new();
+    for f in findings {
+        let Some(probe) = crate::rules::find_meta(f.rule).and_then(|m| m.probe) else { continue };
+        match (probe, f.subject) {
+            ("impulse-response", Subject::Joint(j)) => {
+                jobs.insert(Job::Impulse(j));
+            }
+            ("stance-settle", _) => {
+                jobs.insert(Job::Settle);
+            }
+            ("actuator-direction", Subject::Actuator(a)) => {
+                jobs.insert(Job::Direction(a));
+            }
+            ("limit-approach", Subject::Actuator(a)) => {
+                jobs.insert(Job::Limit(a));
+            }
+            ("limit-approach", Subject::Joint(j)) => {
+                if let Some(a) = l.robot.actuators_on_joint(j).first() {
+                    jobs.insert(Job::Limit(a.id));
+                }
+            }
+            ("keyframe-penetration", Subject::Geom(a)) => {
+                if let Some(b) = f.data.get("geom2") {
+                    jobs.insert(Job::Penetration(a, *b as usize));
+                }
+            }
+            _ => {}
+        }
+    }
+    if l.config.enabled(sanity::meta()) {
+        jobs.insert(Job::Sanity);
+    }
+    // Longest first (whole-model runs with contacts), so that two cores finish together.
+    let mut v: Vec<Job> = jobs.into_iter().collect();
+    v.sort_by_key(|j| match j {
+        Job::Sanity | Job::Settle => 0,
+        _ => 1,
+    });
+    v
+}
+
+fn run_job(l: &Loaded, job: Job) -> Done {
     let robot = &l.robot;
-    let mut steps_cache: BTreeMap<usize, Option<impulse::StepResponse>> = BTreeMap::new();
-    let mut settle_cache: Option<Option<settle::Settle>> = None;
+    match job {
+        Job::Impulse(j) => Done::Impulse(j, impulse::step_response(robot, j, spec_gains(l, j))),
+        Job::Settle => Done::Settle(settle::run(robot)),
+        Job::Sanity => Done::Sanity(sanity::run(robot, l.config.level(sanity::meta()))),
+        Job::Direction(a) => Done::Direction(a, direction::run(robot, a)),
+        Job::Limit(a) => Done::Limit(a, limit::run(robot, a)),
+        Job::Penetration(a, b) => Done::Penetration(a, b, penetration::run(robot, a, b)),
+    }
+}
+
+/// Runs the probe of every finding whose rule declares one, then the whole-model sanity probe.
+/// The simulations are independent (each on its own copy of the model) and run in parallel;
+/// results are gathered in a fixed order, so the output does not depend on scheduling.
+pub fn confirm_all(l: &Loaded, findings: &mut Vec<Finding>) {
+    use rayon::prelude::*;
+    let done: Vec<Done> = jobs(l, findings).into_par_iter().map(|j| run_job(l, j)).collect();
+    let mut res = Results::default();
+    for d in done {
+        match d {
+            Done::Impulse(j, r) => {
+                res.impulse.insert(j, r);
+            }
+            Done::Settle(s) => res.settle = Some(s),
+            Done::Sanity(f) => res.sanity = f,
+            Done::Direction(a, r) => {
+                res.direction.insert(a, r);
+            }
+            Done::Limit(a, r) => {
+                res.limit.insert(a, r);
+            }
+            Done::Penetration(a, b, r) => {
+                res.penetration.insert((a, b), r);
+            }
+        }
+    }
+    let mut steps_cache = std::mem::take(&mut res.impulse);
+    let mut settle_cache = res.settle.take();
     for f in findings.iter_mut() {
         let Some(meta) = crate::rules::find_meta(f.rule) else { continue };
         let Some(probe) = meta.probe else { continue };
         let p = match probe {
             "impulse-response" => impulse_probe(l, f, &mut steps_cache),
-            "actuator-direction" => direction_probe(l, f),
-            "limit-approach" => limit_probe(l, f),
+            "actuator-direction" => direction_probe(l, f, &mut res.direction),
+            "limit-approach" => limit_probe(l, f, &mut res.limit),
             "stance-settle" => settle_probe(l, f, &mut settle_cache),
+            "keyframe-penetration" => penetration_probe(l, f, &mut res.penetration),
             _ => skipped(probe, "no probe of this name"),
         };
         if p.status == ProbeStatus::Refuted && f.severity > Severity::Info {
@@ -45,11 +156,8 @@ pub fn confirm_all(l: &Loaded, findings: &mut Vec<Finding>) {
         }
         f.probe = Some(p);
     }
-    let meta = sanity::meta();
-    if l.config.enabled(meta) {
-        if let Some(f) = sanity::run(robot, l.config.level(meta)) {
-            findings.push(f);
-        }
+    if let Some(f) = res.sanity.take() {
+        findings.push(f);
     }
     crate::lint::sort_findings(findings);
 }
@@ -130,10 +238,10 @@ fn impulse_probe(l: &Loaded, f: &Finding, cache: &mut BTreeMap<usize, Option<imp
     }
 }
 
-fn direction_probe(l: &Loaded, f: &Finding) -> ProbeOutcome {
+fn direction_probe(l: &Loaded, f: &Finding, cache: &mut BTreeMap<usize, Option<direction::Direction>>) -> ProbeOutcome {
     const NAME: &str = "actuator-direction";
     let Subject::Actuator(a) = f.subject else { return skipped(NAME, "finding is not about one actuator") };
-    let Some(d) = direction::run(&l.robot, a) else { return skipped(NAME, "could not set up the bench") };
+    let Some(d) = cache.entry(a).or_insert_with(|| direction::run(&l.robot, a)).clone() else { return skipped(NAME, "could not set up the bench") };
     let act = &l.robot.actuators[a];
     let mut m = BTreeMap::new();
     for (j, dq) in &d.moved {
@@ -163,7 +271,49 @@ fn direction_probe(l: &Loaded, f: &Finding) -> ProbeOutcome {
     outcome(NAME, st, m, d.steps, format!("a positive command moved: {}", names.join(", ")))
 }
 
-fn limit_probe(l: &Loaded, f: &Finding) -> ProbeOutcome {
+fn penetration_probe(l: &Loaded, f: &Finding, cache: &mut BTreeMap<(usize, usize), Option<penetration::Penetration>>) -> ProbeOutcome {
+    const NAME: &str = "keyframe-penetration";
+    let (Subject::Geom(a), Some(b)) = (f.subject, f.data.get("geom2")) else { return skipped(NAME, "finding does not name a geom pair") };
+    let b = *b as usize;
+    let Some(p) = cache.entry((a, b)).or_insert_with(|| penetration::run(&l.robot, a, b)).clone() else { return skipped(NAME, "could not set up the bench") };
+    let mut m = BTreeMap::new();
+    m.insert("depth_m".into(), -p.depth0);
+    m.insert("contact_force_n".into(), p.contact_force);
+    m.insert("separation_speed_m_s".into(), p.separation_speed);
+    m.insert("distance_after_m".into(), p.dist_end);
+    if let Some(t) = p.clear_time {
+        m.insert("clear_time_s".into(), t);
+    }
+    let clears = p.clear_time.map(|t| format!(", clear of each other after {} ms", fmt_num(t * 1000.0, 3))).unwrap_or_default();
+    if p.contact_force > 0.0 {
+        let motion = if p.separation_speed >= penetration::JOLT_SPEED {
+            format!("the pair jumps apart at up to {} m/s{clears}", fmt_num(p.separation_speed, 3))
+        } else {
+            format!(
+                "the joints cannot separate them (at most {} m/s over {} s): the force and its friction act on every motion of the two links",
+                fmt_num(p.separation_speed, 3),
+                fmt_num(penetration::DURATION, 3)
+            )
+        };
+        outcome(
+            NAME,
+            ProbeStatus::Confirmed,
+            m,
+            p.steps,
+            format!("at the keyframe (base on a stand, commands held) MuJoCo pushes the pair apart with {} N; {motion}", fmt_num(p.contact_force, 4)),
+        )
+    } else {
+        outcome(
+            NAME,
+            ProbeStatus::Refuted,
+            m,
+            p.steps,
+            "MuJoCo applies no force between the pair at the keyframe (the contact is inactive, e.g. its gap exceeds the overlap)".into(),
+        )
+    }
+}
+
+fn limit_probe(l: &Loaded, f: &Finding, cache: &mut BTreeMap<usize, Option<limit::LimitHit>>) -> ProbeOutcome {
     const NAME: &str = "limit-approach";
     let a = match f.subject {
         Subject::Actuator(a) => a,
@@ -173,7 +323,7 @@ fn limit_probe(l: &Loaded, f: &Finding) -> ProbeOutcome {
         },
         _ => return skipped(NAME, "finding is not about one actuator"),
     };
-    let Some(h) = limit::run(&l.robot, a) else { return skipped(NAME, "actuator does not drive a hinge or slide joint") };
+    let Some(h) = cache.entry(a).or_insert_with(|| limit::run(&l.robot, a)).clone() else { return skipped(NAME, "actuator does not drive a hinge or slide joint") };
     let mut m = BTreeMap::new();
     m.insert("hit".into(), if h.hit { 1.0 } else { 0.0 });
     m.insert("impact_velocity".into(), h.impact_velocity);

@@ -198,7 +198,7 @@ pub mod meta_rules {
         pub InvalidSuppression { id: "invalid-suppression", group: "engine", level: Severity::Error, probe: None, options: [] }
     }
     pub fn all() -> Vec<&'static RuleMeta> {
-        vec![&UnusedSuppression::META, &InvalidSuppression::META, crate::probe::sanity::meta()]
+        vec![&UnusedSuppression::META, &InvalidSuppression::META, crate::probe::sanity::meta(), &crate::lint::TrailingXmlContent::META]
     }
 }
 

@@ -1,0 +1,243 @@
+//! Compiled-model cache: MuJoCo's binary model (the `.mjb` of `mj_saveModel`), keyed by a hash
+//! of every file the compile reads (the model XML and its includes, mesh/texture/height-field
+//! files, and the spec), the modellint version and the MuJoCo version. An unchanged re-lint
+//! (a pre-commit hook on the same meshes) loads the binary instead of compiling. The XML source
+//! map that locations come from is still parsed every time: it is cheap.
+//!
+//! Directory: `--cache-dir`, else `$MODELLINT_CACHE_DIR`, else `$XDG_CACHE_HOME/modellint`, else
+//! `~/.cache/modellint`. `--no-cache` disables it. A cache that cannot be read or written is
+//! ignored (the model is compiled as without a cache).
+
+use std::path::{Path, PathBuf};
+
+use mujoco_rs::prelude::*;
+
+/// The default cache directory (None when no home directory is known).
+pub fn default_dir() -> Option<PathBuf> {
+    let env = |k: &str| std::env::var_os(k).filter(|v| !v.is_empty()).map(PathBuf::from);
+    if let Some(d) = env("MODELLINT_CACHE_DIR") {
+        return Some(d);
+    }
+    if let Some(d) = env("XDG_CACHE_HOME") {
+        return Some(d.join("modellint"));
+    }
+    env("HOME").map(|h| h.join(".cache").join("modellint"))
+}
+
+/// A fast 4-lane streaming hash (the xxHash64 round structure: multiply, rotate, multiply) with a
+/// 128-bit output: hashing the inputs must cost far less than the compile it saves (tens of MB
+/// of meshes in a few milliseconds). Not cryptographic: a cache key, not a signature.
+struct Hash {
+    lanes: [u64; 4],
+    tail: Vec<u8>,
+    len: u64,
+}
+
+const P1: u64 = 0x9E37_79B1_85EB_CA87;
+const P2: u64 = 0xC2B2_AE3D_27D4_EB4F;
+const P3: u64 = 0x1656_67B1_9E37_79F9;
+
+fn round(acc: u64, v: u64) -> u64 {
+    acc.wrapping_add(v.wrapping_mul(P2)).rotate_left(31).wrapping_mul(P1)
+}
+
+fn avalanche(mut h: u64) -> u64 {
+    h ^= h >> 33;
+    h = h.wrapping_mul(P2);
+    h ^= h >> 29;
+    h = h.wrapping_mul(P3);
+    h ^ (h >> 32)
+}
+
+impl Hash {
+    fn new() -> Self {
+        Hash { lanes: [P1.wrapping_add(P2), P2, 0, 0u64.wrapping_sub(P1)], tail: Vec::new(), len: 0 }
+    }
+    fn stripes(&mut self, data: &[u8]) {
+        for chunk in data.chunks_exact(32) {
+            for (k, lane) in self.lanes.iter_mut().enumerate() {
+                let v = u64::from_le_bytes(chunk[8 * k..8 * k + 8].try_into().unwrap_or([0; 8]));
+                *lane = round(*lane, v);
+            }
+        }
+    }
+    fn write(&mut self, mut data: &[u8]) {
+        self.len += data.len() as u64;
+        if !self.tail.is_empty() {
+            let need = 32 - self.tail.len();
+            let take = need.min(data.len());
+            self.tail.extend_from_slice(&data[..take]);
+            data = &data[take..];
+            if self.tail.len() < 32 {
+                return;
+            }
+            let t = std::mem::take(&mut self.tail);
+            self.stripes(&t);
+        }
+        let whole = data.len() / 32 * 32;
+        self.stripes(&data[..whole]);
+        self.tail.extend_from_slice(&data[whole..]);
+    }
+    /// A length-prefixed field, so that ("ab", "c") and ("a", "bc") differ.
+    fn field(&mut self, data: &[u8]) {
+        self.write(&(data.len() as u64).to_le_bytes());
+        self.write(data);
+    }
+    fn finish(mut self) -> (u64, u64) {
+        let mut pad = std::mem::take(&mut self.tail);
+        pad.push(0x80);
+        pad.resize(32, 0);
+        self.stripes(&pad);
+        let [a, b, c, d] = self.lanes;
+        let h1 = avalanche(a.rotate_left(1) ^ b.rotate_left(7) ^ c.rotate_left(12) ^ d.rotate_left(18) ^ self.len);
+        let h2 = avalanche(a.wrapping_mul(P3) ^ b.rotate_left(23) ^ c.wrapping_mul(P1) ^ d.rotate_left(41) ^ self.len.wrapping_mul(P2));
+        (h1, h2)
+    }
+}
+
+/// Hash key of a compile: tool and MuJoCo versions, then each input's path and bytes, in order.
+/// `None` when a file cannot be read (then the model is compiled and not cached).
+pub fn key(inputs: &[(PathBuf, Option<&str>)]) -> Option<String> {
+    let mut h = Hash::new();
+    h.field(env!("CARGO_PKG_VERSION").as_bytes());
+    h.field(mujoco_rs::mujoco_c::mjVERSION_HEADER.to_string().as_bytes());
+    for (path, text) in inputs {
+        let abs = std::fs::canonicalize(path).unwrap_or_else(|_| path.clone());
+        h.field(abs.to_string_lossy().as_bytes());
+        match text {
+            Some(t) => h.field(t.as_bytes()),
+            None => h.field(&std::fs::read(path).ok()?),
+        }
+    }
+    let (a, b) = h.finish();
+    Some(format!("{a:016x}{b:016x}"))
+}
+
+fn entry(dir: &Path, key: &str) -> PathBuf {
+    dir.join(format!("{key}.mjb"))
+}
+
+/// The cached compiled model, when present and readable.
+pub fn load(dir: &Path, key: &str) -> Option<MjModel> {
+    let file = std::fs::File::open(entry(dir, key)).ok()?;
+    match Mapped::new(&file) {
+        // MuJoCo copies the buffer into its own model: map the file instead of reading it, which
+        // saves one copy of tens of megabytes (the mesh BVHs) on every warm run.
+        Some(map) => MjModel::from_buffer(map.bytes()).ok(),
+        None => MjModel::from_buffer(&std::fs::read(entry(dir, key)).ok()?).ok(),
+    }
+}
+
+/// A read-only memory map of a whole file (Unix), unmapped on drop.
+struct Mapped {
+    ptr: *mut std::ffi::c_void,
+    len: usize,
+}
+
+#[cfg(unix)]
+unsafe extern "C" {
+    fn mmap(addr: *mut std::ffi::c_void, len: usize, prot: i32, flags: i32, fd: i32, off: i64) -> *mut std::ffi::c_void;
+    fn munmap(addr: *mut std::ffi::c_void, len: usize) -> i32;
+}
+
+impl Mapped {
+    #[cfg(unix)]
+    fn new(file: &std::fs::File) -> Option<Mapped> {
+        use std::os::fd::AsRawFd;
+        const PROT_READ: i32 = 1;
+        const MAP_PRIVATE: i32 = 2;
+        let len = usize::try_from(file.metadata().ok()?.len()).ok()?;
+        if len == 0 {
+            return None;
+        }
+        // SAFETY: maps `len` bytes of an open, regular file read-only and private; the mapping is
+        // only read through `bytes()` while `self` lives and is unmapped once in `drop`. A cache
+        // entry is replaced by rename, never rewritten in place, so the mapped bytes do not change.
+        let ptr = unsafe { mmap(std::ptr::null_mut(), len, PROT_READ, MAP_PRIVATE, file.as_raw_fd(), 0) };
+        (ptr as isize != -1 && !ptr.is_null()).then_some(Mapped { ptr, len })
+    }
+    #[cfg(not(unix))]
+    fn new(_file: &std::fs::File) -> Option<Mapped> {
+        None
+    }
+    fn bytes(&self) -> &[u8] {
+        // SAFETY: `ptr` maps `len` readable bytes for the lifetime of `self` (see `new`).
+        unsafe { std::slice::from_raw_parts(self.ptr as *const u8, self.len) }
+    }
+}
+
+impl Drop for Mapped {
+    fn drop(&mut self) {
+        #[cfg(unix)]
+        // SAFETY: unmaps exactly the mapping created in `new`.
+        unsafe {
+            munmap(self.ptr, self.len);
+        }
+    }
+}
+
+/// The model as MuJoCo's binary format, ready to write.
+pub fn serialize(m: &MjModel) -> Option<Vec<u8>> {
+    let mut buf = vec![0u8; m.size()];
+    m.save_to_buffer(&mut buf).ok()?;
+    Some(buf)
+}
+
+static PENDING: std::sync::Mutex<Vec<std::thread::JoinHandle<()>>> = std::sync::Mutex::new(Vec::new());
+
+/// Writes an entry in the background (overlapping the lint); `finish` waits for the writes.
+pub fn store_in_background(dir: &Path, key: &str, bytes: Vec<u8>) {
+    let (dir, key) = (dir.to_path_buf(), key.to_string());
+    let handle = std::thread::spawn(move || store(&dir, &key, &bytes));
+    if let Ok(mut p) = PENDING.lock() {
+        p.push(handle);
+    }
+}
+
+/// Waits for the background cache writes of this process (the CLI calls it before exiting).
+pub fn finish() {
+    let handles: Vec<_> = PENDING.lock().map(|mut p| std::mem::take(&mut *p)).unwrap_or_default();
+    for h in handles {
+        let _ = h.join();
+    }
+}
+
+/// Writes an entry atomically (temporary file, then rename); failures are ignored.
+pub fn store(dir: &Path, key: &str, bytes: &[u8]) {
+    if std::fs::create_dir_all(dir).is_err() {
+        return;
+    }
+    let tmp = dir.join(format!(".{key}.{}.tmp", std::process::id()));
+    if std::fs::write(&tmp, bytes).is_ok() && std::fs::rename(&tmp, entry(dir, key)).is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn h(parts: &[&[u8]]) -> (u64, u64) {
+        let mut x = Hash::new();
+        for p in parts {
+            x.write(p);
+        }
+        x.finish()
+    }
+
+    #[test]
+    fn hash_is_streaming_and_sensitive() {
+        let data: Vec<u8> = (0..1000u32).map(|i| (i * 7 % 251) as u8).collect();
+        // Any split of the stream gives the same hash.
+        assert_eq!(h(&[&data]), h(&[&data[..1], &data[1..33], &data[33..500], &data[500..]]));
+        // One flipped bit anywhere changes both halves.
+        for i in [0, 31, 32, 999] {
+            let mut d = data.clone();
+            d[i] ^= 1;
+            let (a, b) = (h(&[&data]), h(&[&d]));
+            assert!(a.0 != b.0 && a.1 != b.1, "byte {i}");
+        }
+        // Trailing zero bytes are not ignored.
+        assert_ne!(h(&[&data]), h(&[&data, &[0u8]]));
+    }
+}

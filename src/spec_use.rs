@@ -1,0 +1,101 @@
+//! Spec discovery and what a missing spec costs. Without a hardware spec some rules have nothing
+//! to compare against and stay silent, others fall back to what the model file alone shows. The
+//! run says so once, naming where it looked (`modellint` on stderr, `spec` in JSON).
+
+use std::path::{Path, PathBuf};
+
+/// Rules that return without a spec (they compare the model with hardware facts only the spec
+/// states), with the fact each needs.
+pub const SKIPPED: &[(&str, &str)] = &[
+    ("armature-mismatch", "rotor inertia and gear ratio per motor family"),
+    ("parallel-ankle-armature", "which joints are driven by two motors"),
+    ("actuator-mapping", "the actuated/passive joint list"),
+    ("missing-action-delay", "control rate and measured action delay"),
+    ("urdf-mjcf-drift", "the companion URDF to compare with"),
+];
+
+/// Rules that run without a spec but check less, and what they fall back to.
+pub const WEAKENED: &[(&str, &str)] = &[
+    ("effort-limit-mismatch", "no motor peak torque: only the model's own limits are compared"),
+    ("soft-limits", "soft-limit factor assumed 1.0"),
+    ("underdamped-pd-gains", "only joints with position actuators (no spec kp/kd)"),
+    ("gains-unstable-for-timestep", "only joints with position actuators (no spec kp/kd)"),
+    ("toe-tilt", "feet found by body names, not the spec's foot_bodies"),
+    ("foot-collision-geometry", "feet found by body names; no intended friction/condim"),
+    ("collision-visual-mismatch", "feet found by body names, not the spec's foot_bodies"),
+    ("mirror-asymmetry", "left/right found by common name patterns, not the spec's left/right"),
+];
+
+/// Where the spec was looked for, and what was found.
+#[derive(Debug, Clone, Default)]
+pub struct SpecSearch {
+    /// The spec in use (given with --spec, or found).
+    pub path: Option<PathBuf>,
+    /// Every place looked at, in order (empty when --spec was given).
+    pub searched: Vec<PathBuf>,
+}
+
+/// `<model>.toml` beside the model; when the model includes other files (a scene including the
+/// robot file), `<included>.toml` beside each included file too, in include order.
+pub fn discover(model: &Path) -> SpecSearch {
+    let mut searched = vec![model.with_extension("toml")];
+    let mut seen = vec![model.to_path_buf()];
+    included_files(model, model.parent().unwrap_or(Path::new("")), &mut seen, 0);
+    for inc in seen.iter().skip(1) {
+        let p = inc.with_extension("toml");
+        if !searched.contains(&p) {
+            searched.push(p);
+        }
+    }
+    let path = searched.iter().find(|p| p.is_file()).cloned();
+    SpecSearch { path, searched }
+}
+
+/// Included files of an MJCF file (paths relative to the main model's directory, as MuJoCo
+/// resolves them), depth first. Unreadable or malformed files are skipped here: the loader
+/// reports them with their location.
+fn included_files(file: &Path, base: &Path, seen: &mut Vec<PathBuf>, depth: usize) {
+    if depth > 16 {
+        return;
+    }
+    let Ok(text) = std::fs::read_to_string(file) else { return };
+    let opts = roxmltree::ParsingOptions { allow_dtd: true, ..Default::default() };
+    let Ok(doc) = roxmltree::Document::parse_with_options(&text, opts) else { return };
+    for n in doc.descendants().filter(|n| n.has_tag_name("include")) {
+        let Some(f) = n.attribute("file") else { continue };
+        let p = base.join(f);
+        if seen.contains(&p) {
+            continue;
+        }
+        seen.push(p.clone());
+        included_files(&p, base, seen, depth + 1);
+    }
+}
+
+/// The one-paragraph note for a run without a spec.
+pub fn missing_note(model: &Path, s: &SpecSearch, enabled: &dyn Fn(&str) -> bool) -> String {
+    let looked: Vec<String> = s.searched.iter().map(|p| p.display().to_string()).collect();
+    let skipped: Vec<&str> = SKIPPED.iter().map(|r| r.0).filter(|id| enabled(id)).collect();
+    let weakened: Vec<&str> = WEAKENED.iter().map(|r| r.0).filter(|id| enabled(id)).collect();
+    let mut out = format!("modellint: {}: no hardware spec found (looked for {}; pass --spec FILE.toml, docs/spec.md)", model.display(), looked.join(", "));
+    if !skipped.is_empty() {
+        out.push_str(&format!("\n  skipped without a spec: {}", skipped.join(", ")));
+    }
+    if !weakened.is_empty() {
+        out.push_str(&format!("\n  weakened without a spec: {}", weakened.join(", ")));
+    }
+    out.push('\n');
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_listed_rule_exists() {
+        for (id, _) in SKIPPED.iter().chain(WEAKENED) {
+            assert!(crate::rules::find_meta(id).is_some(), "unknown rule `{id}` in spec_use");
+        }
+    }
+}
