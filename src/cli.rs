@@ -101,7 +101,7 @@ pub enum Cmd {
         #[arg(long)]
         check: bool,
     },
-    /// Replay real recordings in MuJoCo and measure the sim-to-real gap (seed study §4.4, §5).
+    /// Replay real recordings in MuJoCo and measure the sim-to-real gap (the Booster T1 sim-to-real study's replay and metrics).
     Gap(GapCmd),
     /// Name the physics the model is missing from real recordings, fit it, and show the held-out
     /// improvement (effects: action_delay, coulomb_friction, viscous_damping, armature,

@@ -208,9 +208,15 @@ pub fn run_fit(a: FitArgs) -> i32 {
         });
         serde_json::to_string_pretty(&v).unwrap_or_default() + "\n"
     } else {
+        // Human output: angles in degrees (as `gap`), SI in JSON; one before → after figure.
+        let deg = |rad: f64| rad.to_degrees();
         let mut s = String::from("missing physics\n");
         if out.selected.is_empty() {
-            s.push_str("  nothing: no candidate effect improved the held-out error beyond noise\n");
+            s.push_str(if out.stopped_at_floor {
+                "  nothing: the training residual is at its noise floor on every joint (nothing left to explain)\n"
+            } else {
+                "  nothing: no candidate effect improved the held-out error beyond noise\n"
+            });
         }
         for x in &out.selected {
             let e = effects::by_id(&x.effect);
@@ -220,7 +226,10 @@ pub fn run_fit(a: FitArgs) -> i32 {
                 .map(|(k, v)| {
                     let unit = e.and_then(|e| e.params().iter().find(|p| p.name == k)).map_or("", |p| p.unit);
                     let se = x.stderr.get(k).copied().unwrap_or(f64::INFINITY);
-                    format!("{k} = {v:.4}{}{}{unit}", if se.is_finite() { format!(" ± {se:.2e}") } else { " ± ?".into() }, if unit.is_empty() { "" } else { " " })
+                    let (v, se, unit) = if unit == "rad" { (deg(*v), deg(se), "°") } else { (*v, se, unit) };
+                    let se = if se.is_finite() { format!(" ± {se:.2e}") } else { " ± ?".into() };
+                    let sep = if unit.is_empty() || unit == "°" { "" } else { " " };
+                    format!("{k} = {v:.4}{se}{sep}{unit}")
                 })
                 .collect();
             s.push_str(&format!("  {:<24} {:<28} {}\n", x.effect, x.joints.join(","), ps.join(", ")));
@@ -229,28 +238,30 @@ pub fn run_fit(a: FitArgs) -> i32 {
                 .filter_map(|k| x.evidence.get(*k).map(|v| format!("{k} {v:.3}")))
                 .collect();
             s.push_str(&format!(
-                "      evidence: {}; held-out RMSE {:.4} → {:.4} rad ({:+.0} %){}\n",
-                ev.join(", "),
-                x.heldout_rmse_before,
-                x.heldout_rmse_after,
+                "      evidence: {}; when added, held-out error {:+.0} %{}\n",
+                if ev.is_empty() { "fitted jointly".to_string() } else { ev.join(", ") },
                 -100.0 * x.heldout_improvement,
                 if x.identifiable { "" } else { "  [not identifiable]" }
             ));
         }
         s.push_str(&format!(
-            "\nheld-out ({} episode{}{}): before → after\n  position MAE   {:.4} → {:.4} rad\n  position RMSE  {:.4} → {:.4} rad\n  correlation    {:.3} → {:.3}\n  gap score      {:.3} → {:.3}\n",
+            "\nheld-out ({} episode{}{}): before → after\n  position MAE   {:.3}° → {:.3}°\n  position RMSE  {:.3}° → {:.3}°\n  correlation    {:.3} → {:.3}\n  gap score      {:.3} → {:.3}\n",
             out.heldout.len(),
             if out.heldout.len() == 1 { "" } else { "s" },
             if out.split_by_time { ", time windows" } else { "" },
-            before.position_mae,
-            after.position_mae,
-            before.position_rmse,
-            after.position_rmse,
+            deg(before.position_mae),
+            deg(after.position_mae),
+            deg(before.position_rmse),
+            deg(after.position_rmse),
             before.correlation_mean,
             after.correlation_mean,
             before.gap_overall,
             after.gap_overall
         ));
+        if !out.floors.is_empty() {
+            let f: Vec<String> = out.floors.iter().map(|(j, _, w)| format!("{j} {:.3}°", deg(w.sqrt()))).collect();
+            s.push_str(&format!("  noise floor (white part of the training residual, RMS): {}\n", f.join(", ")));
+        }
         if !out.split_note.is_empty() {
             s.push_str(&format!("  ({})\n", out.split_note));
         }
