@@ -91,7 +91,7 @@ fn fit_and_gap_reports_render_whole_at_1400_px() {
     let bin = env!("CARGO_BIN_EXE_modellint");
     let (c, _, e) = run(Command::new(bin).arg("synth").arg(&model).args(["--effects", "viscous_damping@elbow_pitch=0.4", "--episodes", "5", "--duration", "2", "--out"]).arg(&recs));
     assert_eq!(c, Some(0), "{e}");
-    let (c, _, e) = run(Command::new(bin).arg("fit").arg(&model).arg(&recs).args(["--effects", "viscous_damping", "--holdout", "2", "--report"]).arg(work.join("fit")));
+    let (c, _, e) = run(Command::new(bin).arg("fit").arg(&model).arg(recs.join("episodes")).args(["--effects", "viscous_damping", "--holdout", "2", "--report"]).arg(work.join("fit")));
     assert_eq!(c, Some(0), "{e}");
     let fit = work.join("fit/index.html");
     let page = std::fs::read_to_string(&fit).unwrap();
@@ -100,12 +100,12 @@ fn fit_and_gap_reports_render_whole_at_1400_px() {
     }
     assert!(!work.join("fit/before").exists() && !work.join("fit/after").exists(), "one page, not two");
     check_rendered(&exe, &fit, "fit");
-    let (c, _, e) = run(Command::new(bin).arg("gap").arg(&model).arg(&recs).arg("--report").arg(work.join("gap")));
+    let (c, _, e) = run(Command::new(bin).arg("gap").arg(&model).arg(recs.join("episodes")).arg("--report").arg(work.join("gap")));
     assert!(c == Some(0) || c == Some(1), "{e}");
     let gap = work.join("gap/index.html");
     let page = std::fs::read_to_string(&gap).unwrap();
     assert!(!page.contains(&recs.display().to_string().replace('&', "&amp;")) || page.contains("Recordings in"), "absolute paths in the episode table");
-    assert!(page.contains("<td style=\"text-align:left\">episode_000.csv</td>"), "episode names relative to their directory");
+    assert!(page.contains("<td style=\"text-align:left\">ep_00.csv</td>"), "episode names relative to their directory");
     check_rendered(&exe, &gap, "gap");
     let _ = std::fs::remove_dir_all(&work);
 }

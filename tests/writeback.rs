@@ -57,7 +57,7 @@ fn synth_fit_write(model: &Path, glob: &str, truth: f64, work: &Path, extra: &[&
     let (c, stdout, stderr) = run(bin()
         .arg("fit")
         .arg(model)
-        .arg(&recs)
+        .arg(recs.join("episodes"))
         .args(["--effects", "viscous_damping", "--joints", glob, "--format", "json", "--write-model"])
         .arg(&out)
         .arg("--write-actuators")
