@@ -1064,27 +1064,39 @@ fn joint_pairs(
     true
 }
 
-/// Fits the effects `set[first..]` jointly on `train` (the ones before stay fixed), starting from
-/// their current parameters: Levenberg–Marquardt when all are smooth, else Nelder–Mead. Returns
-/// the set unchanged when the joint fit does not lower the training error.
-fn fit_jointly(engine: &Engine, train: &[Recording], set: Vec<Applied>, first: usize) -> Vec<Applied> {
-    let mut slots = Vec::new(); // (applied index, parameter index, lo, hi)
-    for ai in first..set.len() {
-        let a = &set[ai];
-        let Some(t) = JointTarget::of(engine.robot, &a.joints[0]) else { return set };
-        let m0 = model_with(engine.robot, &set[..first]);
+/// One fitted parameter of a set of applied effects: (effect index, parameter index, lo, hi).
+type Slot = (usize, usize, f64, f64);
+
+/// The fitted parameters of `set[first..]` with their bounds; effect `ai`'s bounds come from the
+/// model with `set[..base(ai)]` applied. `None` when an effect's joint is not in the model.
+fn param_slots(engine: &Engine, set: &[Applied], first: usize, base: impl Fn(usize) -> usize) -> Option<Vec<Slot>> {
+    let mut slots = Vec::new();
+    for (ai, a) in set.iter().enumerate().skip(first) {
+        let t = JointTarget::of(engine.robot, &a.joints[0])?;
+        let m0 = model_with(engine.robot, &set[..base(ai)]);
         let (lo, hi) = a.effect.bounds(&m0, &t);
         for k in 0..a.effect.fitted().min(a.params.len()) {
             slots.push((ai, k, lo[k], hi[k]));
         }
     }
-    let make = |x: &[f64]| {
-        let mut a = set.clone();
-        for (&(ai, k, ..), v) in slots.iter().zip(x) {
-            a[ai].params[k] = *v;
-        }
-        a
-    };
+    Some(slots)
+}
+
+/// `set` with the parameters of `slots` set to `x`.
+fn with_params(set: &[Applied], slots: &[Slot], x: &[f64]) -> Vec<Applied> {
+    let mut a = set.to_vec();
+    for (&(ai, k, ..), v) in slots.iter().zip(x) {
+        a[ai].params[k] = *v;
+    }
+    a
+}
+
+/// Fits the effects `set[first..]` jointly on `train` (the ones before stay fixed), starting from
+/// their current parameters: Levenberg–Marquardt when all are smooth, else Nelder–Mead. Returns
+/// the set unchanged when the joint fit does not lower the training error.
+fn fit_jointly(engine: &Engine, train: &[Recording], set: Vec<Applied>, first: usize) -> Vec<Applied> {
+    let Some(slots) = param_slots(engine, &set, first, |_| first) else { return set };
+    let make = |x: &[f64]| with_params(&set, &slots, x);
     let x0: Vec<f64> = slots.iter().map(|&(ai, k, lo, hi)| set[ai].params[k].clamp(lo, hi)).collect();
     let b = Bounds { lo: slots.iter().map(|s| s.2).collect(), hi: slots.iter().map(|s| s.3).collect() };
     let obj = |x: &[f64]| engine.errors(train, &make(x)).map_or(f64::INFINITY, |e| e.rmse());
@@ -1330,22 +1342,8 @@ fn polish(engine: &Engine, train: &[Recording], heldout: &[Recording], out: &mut
 }
 
 fn polish_set(engine: &Engine, train: &[Recording], heldout: &[Recording], applied: Vec<Applied>, step: f64) -> Vec<Applied> {
-    let mut slots = Vec::new(); // (applied index, parameter index, lo, hi)
-    for (ai, a) in applied.iter().enumerate() {
-        let Some(t) = JointTarget::of(engine.robot, &a.joints[0]) else { return applied };
-        let m0 = model_with(engine.robot, &applied[..ai]);
-        let (lo, hi) = a.effect.bounds(&m0, &t);
-        for k in 0..a.effect.fitted().min(a.params.len()) {
-            slots.push((ai, k, lo[k], hi[k]));
-        }
-    }
-    let make = |x: &[f64]| {
-        let mut a = applied.clone();
-        for (&(ai, k, ..), v) in slots.iter().zip(x) {
-            a[ai].params[k] = *v;
-        }
-        a
-    };
+    let Some(slots) = param_slots(engine, &applied, 0, |ai| ai) else { return applied };
+    let make = |x: &[f64]| with_params(&applied, &slots, x);
     let x0: Vec<f64> = slots.iter().map(|&(ai, k, ..)| applied[ai].params[k]).collect();
     let b = Bounds { lo: slots.iter().map(|s| s.2).collect(), hi: slots.iter().map(|s| s.3).collect() };
     let obj = |x: &[f64]| engine.errors(train, &make(x)).map_or(f64::INFINITY, |e| e.rmse());
