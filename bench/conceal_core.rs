@@ -114,7 +114,11 @@ impl Case {
     }
     /// Noise label with the encoder: `real 12b`, `high none`.
     pub fn noise_label(&self) -> String {
-        format!("{} {}", self.noise.label(), if self.quant_bits == 0 { "none".to_string() } else { format!("{}b", self.quant_bits) })
+        format!(
+            "{} {}",
+            self.noise.label(),
+            if self.quant_bits == 0 { "none".to_string() } else { format!("{}b", self.quant_bits) }
+        )
     }
     /// The hidden effects as the synth takes them (one per joint, full parameter vectors).
     pub fn hidden(&self) -> Vec<Hidden> {
@@ -122,9 +126,14 @@ impl Case {
             .iter()
             .flat_map(|(e, js, p)| {
                 let defs = effects::by_id(e).unwrap_or_else(|| panic!("effect {e}")).params();
-                let full: Vec<f64> = (0..defs.len()).map(|i| p.get(i).copied().unwrap_or(defs[i].default)).collect();
+                let full: Vec<f64> =
+                    (0..defs.len()).map(|i| p.get(i).copied().unwrap_or(defs[i].default)).collect();
                 let id = effects::by_id(e).map(|x| x.id()).unwrap_or("");
-                js.iter().map(move |j| Hidden { effect: id, joint: j.clone(), params: full.clone() })
+                js.iter().map(move |j| Hidden {
+                    effect: id,
+                    joint: j.clone(),
+                    params: full.clone(),
+                })
             })
             .collect()
     }
@@ -136,7 +145,11 @@ impl Case {
             .iter()
             .map(|(e, j, p)| {
                 let k = effects::by_id(e).map_or(p.len(), |x| x.fitted());
-                format!("{e}@{}={}", j.join("+"), p[..k].iter().map(|v| format!("{v}")).collect::<Vec<_>>().join(","))
+                format!(
+                    "{e}@{}={}",
+                    j.join("+"),
+                    p[..k].iter().map(|v| format!("{v}")).collect::<Vec<_>>().join(",")
+                )
             })
             .collect::<Vec<_>>()
             .join("; ")
@@ -216,7 +229,9 @@ impl Score {
         match self.case.kind {
             Kind::Control => self.fp == 0,
             Kind::Pair => self.fneg == 0 && self.fp == 0 && self.params_ok(),
-            Kind::Single | Kind::Group => self.fneg == 0 && self.fp == 0 && self.params_ok() && self.mae_ok(),
+            Kind::Single | Kind::Group => {
+                self.fneg == 0 && self.fp == 0 && self.params_ok() && self.mae_ok()
+            }
         }
     }
 }
@@ -227,12 +242,18 @@ pub fn root() -> PathBuf {
 
 pub fn load(path: &Path) -> Robot {
     let mut map = SourceMap::default();
-    modellint::model::load(&mut map, path, None).unwrap_or_else(|e| panic!("{}: {e:?}", path.display()))
+    modellint::model::load(&mut map, path, None)
+        .unwrap_or_else(|e| panic!("{}: {e:?}", path.display()))
 }
 
 /// Actuated scalar joints of a robot (what `modellint synth` records).
 pub fn actuated(robot: &Robot) -> Vec<String> {
-    robot.joints.iter().filter(|j| j.is_scalar() && !robot.actuators_on_joint(j.id).is_empty()).map(|j| j.name.clone()).collect()
+    robot
+        .joints
+        .iter()
+        .filter(|j| j.is_scalar() && !robot.actuators_on_joint(j.id).is_empty())
+        .map(|j| j.name.clone())
+        .collect()
 }
 
 fn mae(a: &[Vec<f64>], b: &[Vec<f64>], idx: &[usize]) -> (f64, usize) {
@@ -263,9 +284,16 @@ pub fn run(case: &Case, max_rounds: usize) -> Score {
     let out = fit(&robot, &recs, &opts);
 
     // Detection scoring by (effect, joint).
-    let detected: Vec<(String, String, Vec<f64>)> =
-        out.selected.iter().flat_map(|s| s.joints.iter().map(move |j| (s.effect.clone(), j.clone(), s.values.clone()))).collect();
-    let truth_pairs: Vec<(&str, &str, &Vec<f64>)> = case.truth.iter().flat_map(|(e, js, p)| js.iter().map(move |j| (*e, j.as_str(), p))).collect();
+    let detected: Vec<(String, String, Vec<f64>)> = out
+        .selected
+        .iter()
+        .flat_map(|s| s.joints.iter().map(move |j| (s.effect.clone(), j.clone(), s.values.clone())))
+        .collect();
+    let truth_pairs: Vec<(&str, &str, &Vec<f64>)> = case
+        .truth
+        .iter()
+        .flat_map(|(e, js, p)| js.iter().map(move |j| (*e, j.as_str(), p)))
+        .collect();
     let mut tp = 0;
     let mut param_rel: Option<f64> = None;
     let mut delay_steps: Option<f64> = None;
@@ -287,9 +315,14 @@ pub fn run(case: &Case, max_rounds: usize) -> Score {
     let mut z_err = Vec::new();
     for sel in &out.selected {
         let Some(e) = effects::by_id(&sel.effect) else { continue };
-        let Some((_, _, p)) = truth_pairs.iter().find(|t| t.0 == sel.effect && sel.joints.iter().any(|j| j == t.1)) else { continue };
+        let Some((_, _, p)) =
+            truth_pairs.iter().find(|t| t.0 == sel.effect && sel.joints.iter().any(|j| j == t.1))
+        else {
+            continue;
+        };
         for (i, d) in e.params().iter().take(e.fitted()).enumerate() {
-            if let (Some(v), Some(se), Some(tv)) = (sel.params.get(d.name), sel.stderr.get(d.name), p.get(i))
+            if let (Some(v), Some(se), Some(tv)) =
+                (sel.params.get(d.name), sel.stderr.get(d.name), p.get(i))
                 && se.is_finite()
                 && *se > 0.0
             {
@@ -297,26 +330,41 @@ pub fn run(case: &Case, max_rounds: usize) -> Score {
             }
         }
     }
-    let fp = detected.iter().filter(|d| !truth_pairs.iter().any(|t| t.0 == d.0 && t.1 == d.1)).count();
+    let fp =
+        detected.iter().filter(|d| !truth_pairs.iter().any(|t| t.0 == d.0 && t.1 == d.1)).count();
     let fneg = truth_pairs.len() - tp;
 
     // Fresh held-out episodes (other seed: other commands, timestamps, noise).
-    let ho_o = Settings { episodes: 2, heldout: 1, seed: case.seed.wrapping_add(7777), ..o.clone() };
+    let ho_o =
+        Settings { episodes: 2, heldout: 1, seed: case.seed.wrapping_add(7777), ..o.clone() };
     let (ho, ho_ds) = recorded(&robot, case, &hidden, &ho_o, "heldout");
     let ropts = ReplayOptions::default();
     let sims = |a: &[Applied]| -> Vec<Vec<Vec<f64>>> {
-        simulate(&robot, &ho, a, &ropts).into_iter().map(|e| e.map(|e| e.q_sim).expect("held-out replay")).collect()
+        simulate(&robot, &ho, a, &ropts)
+            .into_iter()
+            .map(|e| e.map(|e| e.q_sim).expect("held-out replay"))
+            .collect()
     };
     let (s_before, s_after) = (sims(&[]), sims(&out.applied));
     // The truth: the synth's noise-free reading (true position + sensor offset) at every row.
     let s_truth: Vec<Vec<Vec<f64>>> = ho_ds.episodes.iter().map(|e| e.q_true.clone()).collect();
-    let mut focus: Vec<String> = truth_pairs.iter().map(|t| t.1.to_string()).chain(detected.iter().map(|d| d.1.clone())).collect();
+    let mut focus: Vec<String> = truth_pairs
+        .iter()
+        .map(|t| t.1.to_string())
+        .chain(detected.iter().map(|d| d.1.clone()))
+        .collect();
     focus.sort();
     focus.dedup();
     let acc = |a: &[Vec<Vec<f64>>], b: Option<&[Vec<Vec<f64>>]>| {
         let (mut s, mut n) = (0.0, 0usize);
         for (r, rec) in ho.iter().enumerate() {
-            let idx: Vec<usize> = rec.joints.iter().enumerate().filter(|(_, j)| focus.is_empty() || focus.contains(&j.name)).map(|(k, _)| k).collect();
+            let idx: Vec<usize> = rec
+                .joints
+                .iter()
+                .enumerate()
+                .filter(|(_, j)| focus.is_empty() || focus.contains(&j.name))
+                .map(|(k, _)| k)
+                .collect();
             let recq: Vec<Vec<f64>> = rec.joints.iter().map(|j| j.q.clone()).collect();
             let (ds, dn) = mae(&a[r], b.map_or(&recq, |b| &b[r]), &idx);
             s += ds;
@@ -358,19 +406,37 @@ pub fn run(case: &Case, max_rounds: usize) -> Score {
                 )
             })
             .collect(),
-        diagnosis: out.diagnosis.iter().take(6).map(|c| format!("{}@{}: {:.2e}", c.effect, c.joint, c.explained_rms)).collect(),
+        diagnosis: out
+            .diagnosis
+            .iter()
+            .take(6)
+            .map(|c| format!("{}@{}: {:.2e}", c.effect, c.joint, c.explained_rms))
+            .collect(),
     }
 }
 
 /// Generates `case`'s recordings with the independent synth, writes them as CSV and reads them
 /// back with the recording reader `fit` uses (the same path a user's files take).
-pub fn recorded(robot: &Robot, case: &Case, hidden: &[Hidden], o: &Settings, tag: &str) -> (Vec<Recording>, synth::Dataset) {
-    let ds = synth::generate(robot, &case.joints, hidden, o, &|_, _| {}).unwrap_or_else(|e| panic!("{}: synth: {e}", case.name));
-    let slug: String = format!("{} {} {tag}", case.name, case.noise_label()).chars().map(|c| if c.is_ascii_alphanumeric() { c } else { '_' }).collect();
+pub fn recorded(
+    robot: &Robot,
+    case: &Case,
+    hidden: &[Hidden],
+    o: &Settings,
+    tag: &str,
+) -> (Vec<Recording>, synth::Dataset) {
+    let ds = synth::generate(robot, &case.joints, hidden, o, &|_, _| {})
+        .unwrap_or_else(|e| panic!("{}: synth: {e}", case.name));
+    let slug: String = format!("{} {} {tag}", case.name, case.noise_label())
+        .chars()
+        .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+        .collect();
     let dir = std::env::temp_dir().join(format!("modellint_conceal_{}_{slug}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     let files = synth::write::write(&ds, &dir).unwrap_or_else(|e| panic!("{}: {e}", case.name));
-    let recs = files.iter().map(|f| read_csv(f).unwrap_or_else(|e| panic!("{}: {e}", f.display()))).collect();
+    let recs = files
+        .iter()
+        .map(|f| read_csv(f).unwrap_or_else(|e| panic!("{}: {e}", f.display())))
+        .collect();
     let _ = std::fs::remove_dir_all(&dir);
     (recs, ds)
 }
@@ -387,11 +453,28 @@ pub fn table_row(s: &Score) -> String {
     let det = if s.detected.is_empty() {
         "(none)".to_string()
     } else {
-        s.detected.iter().map(|(e, j, v)| format!("{e}@{j}={}", v.iter().take(effects::by_id(e).map_or(v.len(), |x| x.fitted())).map(|x| format!("{x:.4}")).collect::<Vec<_>>().join(","))).collect::<Vec<_>>().join("; ")
+        s.detected
+            .iter()
+            .map(|(e, j, v)| {
+                format!(
+                    "{e}@{j}={}",
+                    v.iter()
+                        .take(effects::by_id(e).map_or(v.len(), |x| x.fitted()))
+                        .map(|x| format!("{x:.4}"))
+                        .collect::<Vec<_>>()
+                        .join(",")
+                )
+            })
+            .collect::<Vec<_>>()
+            .join("; ")
     };
     let perr = match (s.param_rel, s.delay_steps) {
         (None, None) => "–".to_string(),
-        (a, b) => [a.map(|v| format!("{:.1} %", 100.0 * v)), b.map(|v| format!("{v:.2} steps"))].into_iter().flatten().collect::<Vec<_>>().join(", "),
+        (a, b) => [a.map(|v| format!("{:.1} %", 100.0 * v)), b.map(|v| format!("{v:.2} steps"))]
+            .into_iter()
+            .flatten()
+            .collect::<Vec<_>>()
+            .join(", "),
     };
     format!(
         "| {} | {} | {} | {} | {} | {} | {} | {} | {:.2} → {:.2} ({:.2}) | {} | {} | {} | {:.0} | {} |\n",
@@ -418,7 +501,8 @@ pub fn table_row(s: &Score) -> String {
 pub fn summary(scores: &[Score]) -> (String, bool) {
     let mut lines = Vec::new();
     let mut all = true;
-    let singles: Vec<&Score> = scores.iter().filter(|s| matches!(s.case.kind, Kind::Single | Kind::Group)).collect();
+    let singles: Vec<&Score> =
+        scores.iter().filter(|s| matches!(s.case.kind, Kind::Single | Kind::Group)).collect();
     if !singles.is_empty() {
         let found = singles.iter().filter(|s| s.fneg == 0).count();
         let par = singles.iter().filter(|s| s.fneg == 0 && s.params_ok()).count();
@@ -437,9 +521,11 @@ pub fn summary(scores: &[Score]) -> (String, bool) {
     }
     let pairs: Vec<&Score> = scores.iter().filter(|s| s.case.kind == Kind::Pair).collect();
     if !pairs.is_empty() {
-        let (tp, tot): (usize, usize) = pairs.iter().fold((0, 0), |(a, b), s| (a + s.tp, b + s.tp + s.fneg));
+        let (tp, tot): (usize, usize) =
+            pairs.iter().fold((0, 0), |(a, b), s| (a + s.tp, b + s.tp + s.fneg));
         let rec = tp as f64 / tot.max(1) as f64;
-        let inv_clean = pairs.iter().filter(|s| s.case.noise == Noise::Real).map(|s| s.fp).sum::<usize>();
+        let inv_clean =
+            pairs.iter().filter(|s| s.case.noise == Noise::Real).map(|s| s.fp).sum::<usize>();
         let ok = rec >= 0.9 && inv_clean == 0;
         all &= ok;
         lines.push(format!(
@@ -452,7 +538,11 @@ pub fn summary(scores: &[Score]) -> (String, bool) {
     if !controls.is_empty() {
         let clean = controls.iter().filter(|s| s.fp == 0).count();
         all &= clean == controls.len();
-        lines.push(format!("controls: nothing selected in {clean}/{} [{}]", controls.len(), if clean == controls.len() { "MET" } else { "MISSED" }));
+        lines.push(format!(
+            "controls: nothing selected in {clean}/{} [{}]",
+            controls.len(),
+            if clean == controls.len() { "MET" } else { "MISSED" }
+        ));
     }
     // Reported uncertainty (information, no target): how far the fitted values are from the
     // truth in units of their standard errors.
@@ -474,7 +564,11 @@ pub fn summary(scores: &[Score]) -> (String, bool) {
     let passed = scores.iter().filter(|s| s.pass()).count();
     // Overall agrees with the per-case verdicts (a case with an invented effect fails).
     all &= passed == scores.len();
-    lines.push(format!("cases passed {passed}/{}; total {t:.0} s; overall: {}", scores.len(), if all { "ALL TARGETS MET" } else { "TARGETS MISSED (see above)" }));
+    lines.push(format!(
+        "cases passed {passed}/{}; total {t:.0} s; overall: {}",
+        scores.len(),
+        if all { "ALL TARGETS MET" } else { "TARGETS MISSED (see above)" }
+    ));
     (lines.join("\n"), all)
 }
 
@@ -491,7 +585,10 @@ pub fn arm3_joints() -> Vec<String> {
 }
 
 pub fn asimov_legs() -> Vec<String> {
-    ["hip_pitch", "hip_roll", "hip_yaw", "knee", "ankle_pitch", "ankle_roll"].iter().flat_map(|j| [format!("left_{j}"), format!("right_{j}")]).collect()
+    ["hip_pitch", "hip_roll", "hip_yaw", "knee", "ankle_pitch", "ankle_roll"]
+        .iter()
+        .flat_map(|j| [format!("left_{j}"), format!("right_{j}")])
+        .collect()
 }
 
 /// The 11 single effects on arm3's elbow with the parameters of tests/fit.rs.
@@ -511,7 +608,13 @@ pub fn arm3_single_truths() -> Vec<(&'static str, Vec<f64>)> {
     ]
 }
 
-pub fn arm3_case(name: &str, kind: Kind, truth: Vec<(&'static str, Vec<f64>)>, noise: Noise, seed: u64) -> Case {
+pub fn arm3_case(
+    name: &str,
+    kind: Kind,
+    truth: Vec<(&'static str, Vec<f64>)>,
+    noise: Noise,
+    seed: u64,
+) -> Case {
     Case {
         name: name.into(),
         kind,
@@ -528,7 +631,13 @@ pub fn arm3_case(name: &str, kind: Kind, truth: Vec<(&'static str, Vec<f64>)>, n
     }
 }
 
-pub fn rig_case(name: &str, kind: Kind, truth: Vec<(&'static str, Vec<f64>)>, noise: Noise, seed: u64) -> Case {
+pub fn rig_case(
+    name: &str,
+    kind: Kind,
+    truth: Vec<(&'static str, Vec<f64>)>,
+    noise: Noise,
+    seed: u64,
+) -> Case {
     Case {
         name: name.into(),
         kind,
@@ -545,14 +654,39 @@ pub fn rig_case(name: &str, kind: Kind, truth: Vec<(&'static str, Vec<f64>)>, no
     }
 }
 
-pub fn asimov_case(name: &str, kind: Kind, truth: Vec<(&'static str, Vec<String>, Vec<f64>)>, noise: Noise, seed: u64) -> Case {
+pub fn asimov_case(
+    name: &str,
+    kind: Kind,
+    truth: Vec<(&'static str, Vec<String>, Vec<f64>)>,
+    noise: Noise,
+    seed: u64,
+) -> Case {
     // On a test stand: base 0.5 m above the standing keyframe, feet in the air (with the base
     // pinned at the standing pose the feet drag on the floor and the replay is chaotic; see
     // docs/conceal-benchmark.md).
-    Case { name: name.into(), kind, model: ASIMOV.into(), joints: asimov_legs(), truth, noise, episodes: 8, duration_s: 4.0, amplitude: 0.15, seed, suspend_m: 0.5, quant_bits: 12 }
+    Case {
+        name: name.into(),
+        kind,
+        model: ASIMOV.into(),
+        joints: asimov_legs(),
+        truth,
+        noise,
+        episodes: 8,
+        duration_s: 4.0,
+        amplitude: 0.15,
+        seed,
+        suspend_m: 0.5,
+        quant_bits: 12,
+    }
 }
 
-pub fn pendulum_case(name: &str, kind: Kind, truth: Vec<(&'static str, Vec<f64>)>, noise: Noise, seed: u64) -> Case {
+pub fn pendulum_case(
+    name: &str,
+    kind: Kind,
+    truth: Vec<(&'static str, Vec<f64>)>,
+    noise: Noise,
+    seed: u64,
+) -> Case {
     Case {
         name: name.into(),
         kind,
@@ -605,7 +739,13 @@ pub fn asimov_single_truths() -> Vec<(&'static str, Vec<f64>)> {
 
 /// Pairs every robot gets (the ones issue 12 names: they may only help together).
 pub fn pair_truths(singles: &[(&'static str, Vec<f64>)]) -> Vec<Vec<(&'static str, Vec<f64>)>> {
-    let p = |e: &str| singles.iter().find(|(x, _)| *x == e).map(|(x, v)| (*x, v.clone())).unwrap_or_else(|| panic!("{e}"));
+    let p = |e: &str| {
+        singles
+            .iter()
+            .find(|(x, _)| *x == e)
+            .map(|(x, v)| (*x, v.clone()))
+            .unwrap_or_else(|| panic!("{e}"))
+    };
     vec![
         vec![p("gain_error"), p("action_delay")],
         vec![p("coulomb_friction"), p("armature")],

@@ -29,8 +29,15 @@ fn main() {
     let mut dir = dir.unwrap_or_else(|| PathBuf::from("../shared/data/recordings/bam_xl330"));
     if !dir.is_dir() && dir.is_relative() {
         // A worktree under wt/ has the data at ../../shared: look beside the crate's ancestors.
-        let rel: PathBuf = dir.components().skip_while(|c| matches!(c, std::path::Component::ParentDir)).collect();
-        if let Some(d) = PathBuf::from(env!("CARGO_MANIFEST_DIR")).ancestors().skip(1).take(3).map(|a| a.join(&rel)).find(|d| d.is_dir()) {
+        let rel: PathBuf =
+            dir.components().skip_while(|c| matches!(c, std::path::Component::ParentDir)).collect();
+        if let Some(d) = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .ancestors()
+            .skip(1)
+            .take(3)
+            .map(|a| a.join(&rel))
+            .find(|d| d.is_dir())
+        {
             dir = d;
         }
     }
@@ -41,10 +48,13 @@ fn main() {
         eprintln!("error: {e}");
         std::process::exit(2)
     });
-    let (report, folds) = modellint::fit::servo_report::run(&robot, &logs, &o, &|m| eprintln!("{m}")).unwrap_or_else(|e| {
-        eprintln!("error: {e}");
-        std::process::exit(2)
-    });
+    let (report, folds) =
+        modellint::fit::servo_report::run(&robot, &logs, &o, &|m| eprintln!("{m}")).unwrap_or_else(
+            |e| {
+                eprintln!("error: {e}");
+                std::process::exit(2)
+            },
+        );
     print!("{report}");
     eprintln!("total {:.0} s", t0.elapsed().as_secs_f64());
     if let Some(p) = json {

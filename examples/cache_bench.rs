@@ -39,9 +39,18 @@ fn children_cpu() -> f64 {
 fn run(bin: &str, args: &[&str], cache: &std::path::Path) -> (f64, f64) {
     let c0 = children_cpu();
     let t = Instant::now();
-    let out = Command::new(bin).args(args).env("MODELLINT_CACHE_DIR", cache).env_remove("GITHUB_ACTIONS").output().expect("modellint runs");
+    let out = Command::new(bin)
+        .args(args)
+        .env("MODELLINT_CACHE_DIR", cache)
+        .env_remove("GITHUB_ACTIONS")
+        .output()
+        .expect("modellint runs");
     let dt = t.elapsed().as_secs_f64();
-    assert!(out.status.code().is_some_and(|c| c < 2), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.code().is_some_and(|c| c < 2),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     (dt, children_cpu() - c0)
 }
 
@@ -81,24 +90,56 @@ fn bench(bin: &str, model: &str) {
     let again = median(compile);
     let (n, k, w, p) = (med2(&nocache), med2(&cold), med2(&warm), med2(&probes_warm));
     println!("{model}                                   wall ms   CPU ms");
-    println!("  MuJoCo compile alone, first in process{:8.1}  (again in the same process: {:.1} ms)", c * 1e3, again * 1e3);
-    println!("  modellint --no-probe, --no-cache      {:8.1} {:8.1}  ({:.2}× the compile, wall)", n.0 * 1e3, n.1 * 1e3, n.0 / c);
-    println!("  modellint --no-probe, cold cache      {:8.1} {:8.1}  ({:.2}× the compile, wall; writes the .mjb)", k.0 * 1e3, k.1 * 1e3, k.0 / c);
-    println!("  modellint --no-probe, warm cache      {:8.1} {:8.1}  (target < 100 ms)", w.0 * 1e3, w.1 * 1e3);
-    println!("  modellint with probes, warm cache     {:8.1} {:8.1}  (probes ≈ {:.1} ms wall, {:.1} ms CPU; target < 1000 ms)", p.0 * 1e3, p.1 * 1e3, (p.0 - w.0) * 1e3, (p.1 - w.1) * 1e3);
+    println!(
+        "  MuJoCo compile alone, first in process{:8.1}  (again in the same process: {:.1} ms)",
+        c * 1e3,
+        again * 1e3
+    );
+    println!(
+        "  modellint --no-probe, --no-cache      {:8.1} {:8.1}  ({:.2}× the compile, wall)",
+        n.0 * 1e3,
+        n.1 * 1e3,
+        n.0 / c
+    );
+    println!(
+        "  modellint --no-probe, cold cache      {:8.1} {:8.1}  ({:.2}× the compile, wall; writes the .mjb)",
+        k.0 * 1e3,
+        k.1 * 1e3,
+        k.0 / c
+    );
+    println!(
+        "  modellint --no-probe, warm cache      {:8.1} {:8.1}  (target < 100 ms)",
+        w.0 * 1e3,
+        w.1 * 1e3
+    );
+    println!(
+        "  modellint with probes, warm cache     {:8.1} {:8.1}  (probes ≈ {:.1} ms wall, {:.1} ms CPU; target < 1000 ms)",
+        p.0 * 1e3,
+        p.1 * 1e3,
+        (p.0 - w.0) * 1e3,
+        (p.1 - w.1) * 1e3
+    );
 }
 
 fn main() {
     modellint::model::mj::silence_warnings();
     // The modellint binary built beside this example (target/release/examples/../modellint).
     let exe = std::env::current_exe().expect("own path");
-    let bin_path = exe.parent().and_then(|p| p.parent()).map(|p| p.join("modellint")).expect("target dir");
-    assert!(bin_path.is_file(), "build the binary first: cargo build --release ({})", bin_path.display());
+    let bin_path =
+        exe.parent().and_then(|p| p.parent()).map(|p| p.join("modellint")).expect("target dir");
+    assert!(
+        bin_path.is_file(),
+        "build the binary first: cargo build --release ({})",
+        bin_path.display()
+    );
     let bin = bin_path.to_str().expect("utf-8 path");
     let args: Vec<String> = std::env::args().skip(1).collect();
     let models: Vec<String> = if args.is_empty() {
         let mut v = vec!["models/asimov.xml".to_string()];
-        for m in ["../shared/data/models/booster_t1/scene.xml", "../shared/data/models/unitree_h1/scene.xml"] {
+        for m in [
+            "../shared/data/models/booster_t1/scene.xml",
+            "../shared/data/models/unitree_h1/scene.xml",
+        ] {
             if std::path::Path::new(m).exists() {
                 v.push(m.to_string());
             } else {

@@ -8,19 +8,37 @@ use conceal_core::*;
 
 /// One robot's cases: every effect on one joint, every effect on all recorded joints (as one
 /// group; skipped for one-joint robots), the pairs, and a control.
-fn robot_cases(label: &str, mk: &dyn Fn(&str, Kind, Vec<(&'static str, Vec<String>, Vec<f64>)>) -> Case, one: &str, all: &[String], singles: &[(&'static str, Vec<f64>)]) -> Vec<Case> {
+fn robot_cases(
+    label: &str,
+    mk: &dyn Fn(&str, Kind, Vec<(&'static str, Vec<String>, Vec<f64>)>) -> Case,
+    one: &str,
+    all: &[String],
+    singles: &[(&'static str, Vec<f64>)],
+) -> Vec<Case> {
     let mut v = Vec::new();
     for (e, p) in singles {
-        v.push(mk(&format!("{label} {e}@{one}"), Kind::Single, vec![(*e, vec![one.to_string()], p.clone())]));
+        v.push(mk(
+            &format!("{label} {e}@{one}"),
+            Kind::Single,
+            vec![(*e, vec![one.to_string()], p.clone())],
+        ));
     }
     if all.len() > 1 {
         for (e, p) in singles {
-            v.push(mk(&format!("{label} {e}@all"), Kind::Group, vec![(*e, all.to_vec(), p.clone())]));
+            v.push(mk(
+                &format!("{label} {e}@all"),
+                Kind::Group,
+                vec![(*e, all.to_vec(), p.clone())],
+            ));
         }
     }
     for pair in pair_truths(singles) {
         let name = pair.iter().map(|(e, _)| *e).collect::<Vec<_>>().join("+");
-        v.push(mk(&format!("{label} {name}@{one}"), Kind::Pair, pair.into_iter().map(|(e, p)| (e, vec![one.to_string()], p)).collect()));
+        v.push(mk(
+            &format!("{label} {name}@{one}"),
+            Kind::Pair,
+            pair.into_iter().map(|(e, p)| (e, vec![one.to_string()], p)).collect(),
+        ));
     }
     v.push(mk(&format!("{label} control"), Kind::Control, vec![]));
     v
@@ -29,10 +47,25 @@ fn robot_cases(label: &str, mk: &dyn Fn(&str, Kind, Vec<(&'static str, Vec<Strin
 fn matrix(quick: bool) -> Vec<Case> {
     let mut v = Vec::new();
     if quick {
-        for (e, p) in arm3_single_truths().iter().filter(|(e, _)| ["action_delay", "armature", "position_offset"].contains(e)) {
-            v.push(arm3_case(&format!("arm3 {e}"), Kind::Single, vec![(*e, p.clone())], Noise::Real, 7));
+        for (e, p) in arm3_single_truths()
+            .iter()
+            .filter(|(e, _)| ["action_delay", "armature", "position_offset"].contains(e))
+        {
+            v.push(arm3_case(
+                &format!("arm3 {e}"),
+                Kind::Single,
+                vec![(*e, p.clone())],
+                Noise::Real,
+                7,
+            ));
         }
-        v.push(arm3_case("arm3 armature+viscous_damping", Kind::Pair, vec![("armature", vec![0.04]), ("viscous_damping", vec![0.4])], Noise::Real, 13));
+        v.push(arm3_case(
+            "arm3 armature+viscous_damping",
+            Kind::Pair,
+            vec![("armature", vec![0.04]), ("viscous_damping", vec![0.4])],
+            Noise::Real,
+            13,
+        ));
         v.push(arm3_case("arm3 control", Kind::Control, vec![], Noise::Real, 11));
         v.push(pendulum_case("pendulum control", Kind::Control, vec![], Noise::Real, 11));
         return v;
@@ -45,7 +78,13 @@ fn matrix(quick: bool) -> Vec<Case> {
             c.truth = t;
             c
         };
-        b.extend(robot_cases("pendulum", &pend, "servo", &["servo".to_string()], &pendulum_single_truths()));
+        b.extend(robot_cases(
+            "pendulum",
+            &pend,
+            "servo",
+            &["servo".to_string()],
+            &pendulum_single_truths(),
+        ));
         // Three-joint arm (arm3), effects on the elbow or on all three joints.
         let arm = |n: &str, k, t: Vec<(&'static str, Vec<String>, Vec<f64>)>| {
             let mut c = arm3_case(n, k, vec![], Noise::Real, 7);
@@ -57,7 +96,12 @@ fn matrix(quick: bool) -> Vec<Case> {
         let asi = |n: &str, k, t| asimov_case(n, k, t, Noise::Real, 7);
         b.extend(robot_cases("asimov", &asi, "left_knee", &asimov_legs(), &asimov_single_truths()));
         // The BAM XL330 rig (ζ ≈ 0.23): control and a few singles.
-        for (e, p) in [("action_delay", vec![0.02]), ("coulomb_friction", vec![0.03]), ("viscous_damping", vec![0.05]), ("armature", vec![0.005])] {
+        for (e, p) in [
+            ("action_delay", vec![0.02]),
+            ("coulomb_friction", vec![0.03]),
+            ("viscous_damping", vec![0.05]),
+            ("armature", vec![0.005]),
+        ] {
             b.push(rig_case(&format!("rig {e}"), Kind::Single, vec![(e, p)], Noise::Real, 5));
         }
         b.push(rig_case("rig control", Kind::Control, vec![], Noise::Real, 11));
@@ -76,10 +120,28 @@ fn matrix(quick: bool) -> Vec<Case> {
     if t1.exists() {
         let robot = load(&t1);
         let joints = actuated(&robot);
-        let knees: Vec<String> = joints.iter().filter(|j| j.to_lowercase().contains("knee")).cloned().collect();
+        let knees: Vec<String> =
+            joints.iter().filter(|j| j.to_lowercase().contains("knee")).cloned().collect();
         let group = if knees.is_empty() { vec![joints[0].clone()] } else { knees };
-        let mk = |name: &str, kind, truth| Case { name: name.into(), kind, model: t1.clone(), joints: joints.clone(), truth, noise: Noise::Real, episodes: 8, duration_s: 4.0, amplitude: 0.15, seed: 5, suspend_m: 0.0, quant_bits: 12 };
-        v.push(mk("t1 knees viscous_damping", Kind::Group, vec![("viscous_damping", group, vec![3.0])]));
+        let mk = |name: &str, kind, truth| Case {
+            name: name.into(),
+            kind,
+            model: t1.clone(),
+            joints: joints.clone(),
+            truth,
+            noise: Noise::Real,
+            episodes: 8,
+            duration_s: 4.0,
+            amplitude: 0.15,
+            seed: 5,
+            suspend_m: 0.0,
+            quant_bits: 12,
+        };
+        v.push(mk(
+            "t1 knees viscous_damping",
+            Kind::Group,
+            vec![("viscous_damping", group, vec![3.0])],
+        ));
         v.push(mk("t1 control", Kind::Control, vec![]));
     } else {
         println!("note: {} is absent: Booster T1 cases skipped\n", t1.display());
@@ -91,7 +153,14 @@ fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let quick = args.iter().any(|a| a == "--quick");
     let filter = args.iter().position(|a| a == "--filter").and_then(|i| args.get(i + 1)).cloned();
-    let cases: Vec<Case> = matrix(quick).into_iter().filter(|c| filter.as_ref().is_none_or(|f| format!("{} {}", c.name, c.noise_label()).contains(f.as_str()))).collect();
+    let cases: Vec<Case> = matrix(quick)
+        .into_iter()
+        .filter(|c| {
+            filter
+                .as_ref()
+                .is_none_or(|f| format!("{} {}", c.name, c.noise_label()).contains(f.as_str()))
+        })
+        .collect();
     eprintln!("conceal bench: {} cases{}", cases.len(), if quick { " (--quick)" } else { "" });
     let mut scores = Vec::new();
     for (i, c) in cases.iter().enumerate() {

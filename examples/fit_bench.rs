@@ -10,7 +10,15 @@ use modellint::fit::select::{FitOptions, fit};
 use modellint::fit::synth::{SynthOptions, generate};
 use modellint::model::source::SourceMap;
 
-fn bench(model: &str, joints: Vec<String>, effect: &str, on: Vec<String>, truth: Vec<f64>, episodes: usize, synth: SynthOptions) {
+fn bench(
+    model: &str,
+    joints: Vec<String>,
+    effect: &str,
+    on: Vec<String>,
+    truth: Vec<f64>,
+    episodes: usize,
+    synth: SynthOptions,
+) {
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
     let mut map = SourceMap::default();
     let robot = modellint::model::load(&mut map, &root.join(model), None).expect("model");
@@ -23,7 +31,8 @@ fn bench(model: &str, joints: Vec<String>, effect: &str, on: Vec<String>, truth:
     let t1 = Instant::now();
     let out = fit(&robot, &recs, &opts);
     let t_fit = t1.elapsed().as_secs_f64();
-    let got = out.selected.first().map(|s| (s.joints.clone(), s.values.clone(), s.heldout_improvement));
+    let got =
+        out.selected.first().map(|s| (s.joints.clone(), s.values.clone(), s.heldout_improvement));
     println!(
         "{model}: {} joints, {episodes} × {:.0} s episodes: generate {t_gen:.2} s, fit {effect} {t_fit:.2} s; truth {truth:?} on {on:?}; fitted {got:?}",
         joints.len(),
@@ -41,10 +50,11 @@ fn main() {
         8,
         SynthOptions { amplitude: 0.8, ..Default::default() },
     );
-    let legs: Vec<String> = ["hip_pitch", "hip_roll", "hip_yaw", "knee", "ankle_pitch", "ankle_roll"]
-        .iter()
-        .flat_map(|j| [format!("left_{j}"), format!("right_{j}")])
-        .collect();
+    let legs: Vec<String> =
+        ["hip_pitch", "hip_roll", "hip_yaw", "knee", "ankle_pitch", "ankle_roll"]
+            .iter()
+            .flat_map(|j| [format!("left_{j}"), format!("right_{j}")])
+            .collect();
     bench(
         "models/asimov.xml",
         legs,

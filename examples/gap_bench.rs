@@ -19,21 +19,33 @@ const TOTAL_S: f64 = 3687.0;
 const TOTAL_SAMPLES: usize = 284_794;
 
 fn main() {
-    let model = std::env::args().nth(1).map(PathBuf::from).unwrap_or_else(|| {
-        PathBuf::from("/work/shared/data/models/booster_t1/scene.xml")
-    });
-    let scale: f64 = std::env::var("GAP_BENCH_SCALE").ok().and_then(|s| s.parse().ok()).unwrap_or(1.0);
+    let model = std::env::args()
+        .nth(1)
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from("/work/shared/data/models/booster_t1/scene.xml"));
+    let scale: f64 =
+        std::env::var("GAP_BENCH_SCALE").ok().and_then(|s| s.parse().ok()).unwrap_or(1.0);
     let mut map = SourceMap::default();
     let robot = modellint::model::load(&mut map, &model, None).expect("model loads");
-    let joints: Vec<_> = robot.joints.iter().filter(|j| j.is_scalar() && !robot.actuators_on_joint(j.id).is_empty()).collect();
-    println!("model {} : {} actuated joints, timestep {} s", model.display(), joints.len(), robot.opt.timestep);
+    let joints: Vec<_> = robot
+        .joints
+        .iter()
+        .filter(|j| j.is_scalar() && !robot.actuators_on_joint(j.id).is_empty())
+        .collect();
+    println!(
+        "model {} : {} actuated joints, timestep {} s",
+        model.display(),
+        joints.len(),
+        robot.opt.timestep
+    );
 
     // Episode lengths ~30 s ± 16 s, scaled to the totals; samples proportional to duration.
     let n_ep = ((EPISODES as f64 * scale).round() as usize).max(1);
     let raw: Vec<f64> = (0..EPISODES).map(|k| 30.0 + 16.0 * ((k as f64) * 1.3).sin()).collect();
     let sum: f64 = raw.iter().sum();
     let durs: Vec<f64> = raw.iter().map(|d| d * TOTAL_S / sum).collect();
-    let mut counts: Vec<usize> = durs.iter().map(|d| (d / TOTAL_S * TOTAL_SAMPLES as f64).floor() as usize).collect();
+    let mut counts: Vec<usize> =
+        durs.iter().map(|d| (d / TOTAL_S * TOTAL_SAMPLES as f64).floor() as usize).collect();
     let short = TOTAL_SAMPLES - counts.iter().sum::<usize>();
     for c in counts.iter_mut().take(short) {
         *c += 1;
@@ -44,7 +56,10 @@ fn main() {
         let dt = dur / (n - 1) as f64;
         // Irregular: ±30 % jitter (deterministic), strictly increasing.
         let t: Vec<f64> = (0..n)
-            .map(|i| i as f64 * dt + if i == 0 || i == n - 1 { 0.0 } else { 0.3 * dt * ((i * 7 + k) as f64).sin() })
+            .map(|i| {
+                i as f64 * dt
+                    + if i == 0 || i == n - 1 { 0.0 } else { 0.3 * dt * ((i * 7 + k) as f64).sin() }
+            })
             .collect();
         let js = joints
             .iter()
@@ -58,7 +73,12 @@ fn main() {
                     lo = -10.0;
                     hi = 10.0;
                 }
-                let q: Vec<f64> = t.iter().map(|&x| (q0 + a * (2.0 * std::f64::consts::PI * f * x).sin().powi(2)).clamp(lo, hi)).collect();
+                let q: Vec<f64> = t
+                    .iter()
+                    .map(|&x| {
+                        (q0 + a * (2.0 * std::f64::consts::PI * f * x).sin().powi(2)).clamp(lo, hi)
+                    })
+                    .collect();
                 let mut jt = JointTrace::new(j.name.clone(), q.clone());
                 jt.q_cmd = Some(q);
                 jt
@@ -88,7 +108,10 @@ fn main() {
 
     let rp = Replayer::new(&robot);
     let t_start = Instant::now();
-    let eps: Vec<_> = replay::replay_all(&rp, &recs, &ReplayOptions::default(), None).into_iter().map(|e| e.expect("replay")).collect();
+    let eps: Vec<_> = replay::replay_all(&rp, &recs, &ReplayOptions::default(), None)
+        .into_iter()
+        .map(|e| e.expect("replay"))
+        .collect();
     let t_replay = t_start.elapsed().as_secs_f64();
     let diverged = eps.iter().filter(|e| e.diverged.is_some()).count();
     let t1 = Instant::now();
@@ -121,7 +144,19 @@ fn main() {
     let t_bare = t2.elapsed().as_secs_f64();
     println!("replay (all episodes, parallel): {t_replay:.2} s wall  ({diverged} diverged)");
     println!("gap metrics (spectra, decomposition, phases): {t_metrics:.2} s wall");
-    println!("bare MuJoCo loop, {steps} steps: {t_bare:.2} s wall  ({:.1} µs/step/thread)", t_bare * 1e6 * rayon::current_num_threads() as f64 / steps as f64);
-    println!("replay / bare = {:.3}   (replay + metrics) / bare = {:.3}", t_replay / t_bare, (t_replay + t_metrics) / t_bare);
-    println!("dataset gap: MAE {:.3}° RMSE {:.3}° G {:.3}", rep.position_mae.to_degrees(), rep.position_rmse.to_degrees(), rep.gap_overall);
+    println!(
+        "bare MuJoCo loop, {steps} steps: {t_bare:.2} s wall  ({:.1} µs/step/thread)",
+        t_bare * 1e6 * rayon::current_num_threads() as f64 / steps as f64
+    );
+    println!(
+        "replay / bare = {:.3}   (replay + metrics) / bare = {:.3}",
+        t_replay / t_bare,
+        (t_replay + t_metrics) / t_bare
+    );
+    println!(
+        "dataset gap: MAE {:.3}° RMSE {:.3}° G {:.3}",
+        rep.position_mae.to_degrees(),
+        rep.position_rmse.to_degrees(),
+        rep.gap_overall
+    );
 }

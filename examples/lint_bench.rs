@@ -14,7 +14,13 @@ fn median(mut v: Vec<f64>) -> f64 {
 }
 
 fn bench(model: &str, spec: Option<&str>) {
-    let input = LintInput { model: model.into(), spec: spec.map(Into::into), config: None, select: vec![], ignore: vec![] };
+    let input = LintInput {
+        model: model.into(),
+        spec: spec.map(Into::into),
+        config: None,
+        select: vec![],
+        ignore: vec![],
+    };
     let reps = 7;
     let mut compile = Vec::new();
     let mut lint = Vec::new();
@@ -51,7 +57,14 @@ fn bench(model: &str, spec: Option<&str>) {
     let mut per_rule = Vec::new();
     for rule in modellint::rules::registry() {
         let meta = rule.meta();
-        let cx = modellint::rules::Context { robot: &l.robot, spec: l.spec.as_ref(), sources: &l.sources, options: Default::default(), meta, level: meta.default_level };
+        let cx = modellint::rules::Context {
+            robot: &l.robot,
+            spec: l.spec.as_ref(),
+            sources: &l.sources,
+            options: Default::default(),
+            meta,
+            level: meta.default_level,
+        };
         let t = Instant::now();
         let mut out = Vec::new();
         for _ in 0..3 {
@@ -65,10 +78,19 @@ fn bench(model: &str, spec: Option<&str>) {
     println!("{model}");
     println!("  MuJoCo compile alone      {:8.1} ms", c * 1e3);
     println!("  static lint (load+rules)  {:8.1} ms  ({:.2}× the compile)", l * 1e3, l / c);
-    println!("  probes                    {:8.1} ms  ({probe_steps} steps, {:.0} steps/s)", p * 1e3, probe_steps as f64 / p.max(1e-9));
-    let top: Vec<String> = per_rule.iter().take(3).map(|(t, id)| format!("{id} {:.1} ms", t * 1e3)).collect();
+    println!(
+        "  probes                    {:8.1} ms  ({probe_steps} steps, {:.0} steps/s)",
+        p * 1e3,
+        probe_steps as f64 / p.max(1e-9)
+    );
+    let top: Vec<String> =
+        per_rule.iter().take(3).map(|(t, id)| format!("{id} {:.1} ms", t * 1e3)).collect();
     println!("  costliest rules           {}", top.join(", "));
-    println!("  bare mj_step loop         {:8.0} steps/s (probe throughput {:.2}× of it)", bare, probe_steps as f64 / p.max(1e-9) / bare);
+    println!(
+        "  bare mj_step loop         {:8.0} steps/s (probe throughput {:.2}× of it)",
+        bare,
+        probe_steps as f64 / p.max(1e-9) / bare
+    );
 }
 
 fn main() {

@@ -83,7 +83,11 @@ fn check_selector(s: &str) -> Result<(), String> {
     let near = crate::util::near_matches(s, &ids);
     Err(format!(
         "unknown rule or group `{s}`{}",
-        if near.is_empty() { String::new() } else { format!(" (did you mean {}?)", near.join(", ")) }
+        if near.is_empty() {
+            String::new()
+        } else {
+            format!(" (did you mean {}?)", near.join(", "))
+        }
     ))
 }
 
@@ -99,8 +103,9 @@ pub fn load(map: &mut SourceMap, path: &Path) -> Result<Config, LoadError> {
     let at = |map: &SourceMap, span: std::ops::Range<usize>, msg: String| {
         LoadError::at(map, Loc { file, start: span.start, end: span.end }, msg)
     };
-    let raw: RawConfig =
-        toml::from_str(&text).map_err(|e| at(map, e.span().unwrap_or(0..0), format!("invalid modellint.toml: {}", e.message())))?;
+    let raw: RawConfig = toml::from_str(&text).map_err(|e| {
+        at(map, e.span().unwrap_or(0..0), format!("invalid modellint.toml: {}", e.message()))
+    })?;
     let mut cfg = Config { path: Some(path.to_path_buf()), ..Default::default() };
     for (list, out) in [(&raw.select, &mut cfg.select), (&raw.ignore, &mut cfg.ignore)] {
         for s in list.iter().flatten() {
@@ -109,9 +114,13 @@ pub fn load(map: &mut SourceMap, path: &Path) -> Result<Config, LoadError> {
         }
     }
     if let Some(f) = &raw.fail_on {
-        cfg.fail_on = Some(
-            Severity::parse(f.get_ref()).ok_or_else(|| at(map, f.span(), format!("fail_on must be error, warning or info; got `{}`", f.get_ref())))?,
-        );
+        cfg.fail_on = Some(Severity::parse(f.get_ref()).ok_or_else(|| {
+            at(
+                map,
+                f.span(),
+                format!("fail_on must be error, warning or info; got `{}`", f.get_ref()),
+            )
+        })?);
     }
     let metas = all_meta();
     for (id, table) in &raw.rules {
@@ -121,7 +130,14 @@ pub fn load(map: &mut SourceMap, path: &Path) -> Result<Config, LoadError> {
             return Err(at(
                 map,
                 table.span(),
-                format!("[rules.{id}]: no rule has this id{}", if near.is_empty() { String::new() } else { format!(" (did you mean {}?)", near.join(", ")) }),
+                format!(
+                    "[rules.{id}]: no rule has this id{}",
+                    if near.is_empty() {
+                        String::new()
+                    } else {
+                        format!(" (did you mean {}?)", near.join(", "))
+                    }
+                ),
             ));
         };
         let mut rs = RuleSettings::default();
@@ -129,19 +145,41 @@ pub fn load(map: &mut SourceMap, path: &Path) -> Result<Config, LoadError> {
             let span = table.span();
             if key == "level" {
                 let s = val.as_str().unwrap_or("");
-                rs.level = Some(Severity::parse(s).ok_or_else(|| at(map, span.clone(), format!("[rules.{id}] level must be error, warning or info; got {val}")))?);
+                rs.level = Some(Severity::parse(s).ok_or_else(|| {
+                    at(
+                        map,
+                        span.clone(),
+                        format!("[rules.{id}] level must be error, warning or info; got {val}"),
+                    )
+                })?);
                 continue;
             }
             let Some(o) = meta.options.iter().find(|o| o.name == key) else {
                 let names: Vec<&str> = meta.options.iter().map(|o| o.name).collect();
-                return Err(at(map, span, format!("[rules.{id}] has no option `{key}` (options: level, {})", names.join(", "))));
+                return Err(at(
+                    map,
+                    span,
+                    format!(
+                        "[rules.{id}] has no option `{key}` (options: level, {})",
+                        names.join(", ")
+                    ),
+                ));
             };
             let x = val.as_float().or_else(|| val.as_integer().map(|i| i as f64));
             match x {
                 Some(x) if x.is_finite() => {
                     rs.options.insert(o.name.to_string(), x);
                 }
-                _ => return Err(at(map, span, format!("[rules.{id}] {key} must be a finite number ({}), got {val}", o.unit))),
+                _ => {
+                    return Err(at(
+                        map,
+                        span,
+                        format!(
+                            "[rules.{id}] {key} must be a finite number ({}), got {val}",
+                            o.unit
+                        ),
+                    ));
+                }
             }
         }
         cfg.rules.insert(id.clone(), rs);

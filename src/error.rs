@@ -41,7 +41,13 @@ impl LoadError {
     }
     pub fn at_line(map: &SourceMap, file: usize, line: usize, col: usize, message: String) -> Self {
         let f = map.file(file);
-        LoadError { file: f.path.clone(), line: Some(line), column: Some(col), message, snippet: None }
+        LoadError {
+            file: f.path.clone(),
+            line: Some(line),
+            column: Some(col),
+            message,
+            snippet: None,
+        }
     }
     /// `file:line:col` (as much of it as is known).
     pub fn location(&self) -> String {

@@ -42,7 +42,9 @@ pub fn load_with_cache(input: &LintInput, cache_dir: Option<&Path>) -> Result<Lo
         None => Config::default(),
     };
     let mut config = config;
-    config.add_cli(&input.select, &input.ignore).map_err(|m| LoadError::plain(Path::new("<command line>"), m))?;
+    config
+        .add_cli(&input.select, &input.ignore)
+        .map_err(|m| LoadError::plain(Path::new("<command line>"), m))?;
     let spec_search = match &input.spec {
         Some(p) if !p.is_file() => return Err(LoadError::plain(p, "spec file not found".into())),
         Some(p) => SpecSearch { path: Some(p.clone()), searched: vec![] },
@@ -52,7 +54,13 @@ pub fn load_with_cache(input: &LintInput, cache_dir: Option<&Path>) -> Result<Lo
     // The spec may name the keyframe, so read its robot table before compiling the model.
     let keyframe = spec_path.as_ref().and_then(|p| peek_keyframe(p));
     let extra: Vec<PathBuf> = spec_path.iter().cloned().collect();
-    let robot = crate::model::load_cached(&mut sources, &input.model, keyframe.as_deref(), cache_dir, &extra)?;
+    let robot = crate::model::load_cached(
+        &mut sources,
+        &input.model,
+        keyframe.as_deref(),
+        cache_dir,
+        &extra,
+    )?;
     let names: Vec<String> = robot.joints.iter().map(|j| j.name.clone()).collect();
     let spec = match spec_path {
         Some(p) => Some(crate::spec::load(&mut sources, &p, &names)?),
@@ -92,7 +100,8 @@ pub fn run_rules(l: &Loaded) -> Vec<Finding> {
     let trailing = &TrailingXmlContent::META;
     if l.config.enabled(trailing) {
         for loc in &l.sources.trailing {
-            let junk: String = l.sources.file(loc.file).text[loc.start..loc.end].chars().take(40).collect();
+            let junk: String =
+                l.sources.file(loc.file).text[loc.start..loc.end].chars().take(40).collect();
             let junk = junk.lines().next().unwrap_or("").to_string();
             findings.push(
                 Finding::new(trailing.id, l.config.level(trailing), format!("content after the root element is ignored: `{junk}`"), *loc)
@@ -128,7 +137,9 @@ fn apply_suppressions(l: &Loaded, findings: Vec<Finding>) -> Vec<Finding> {
     'f: for f in findings {
         for elems in idx.elems.values() {
             for e in elems {
-                let covers = |loc: crate::model::source::Loc| loc.file == e.full.file && loc.start >= e.full.start && loc.end <= e.full.end;
+                let covers = |loc: crate::model::source::Loc| {
+                    loc.file == e.full.file && loc.start >= e.full.start && loc.end <= e.full.end
+                };
                 if !(covers(f.primary) || f.element_loc.is_some_and(covers)) {
                     continue;
                 }
@@ -149,15 +160,28 @@ fn apply_suppressions(l: &Loaded, findings: Vec<Finding>) -> Vec<Finding> {
             if !known.contains(&r.as_str()) {
                 if l.config.enabled(invalid) {
                     out.push(
-                        Finding::new(invalid.id, l.config.level(invalid), format!("suppression names unknown rule `{r}`"), s.loc)
-                            .help("use an id from `modellint rules`"),
+                        Finding::new(
+                            invalid.id,
+                            l.config.level(invalid),
+                            format!("suppression names unknown rule `{r}`"),
+                            s.loc,
+                        )
+                        .help("use an id from `modellint rules`"),
                     );
                 }
-            } else if !used[i] && l.config.enabled(unused) && l.config.enabled(crate::rules::find_meta(r).unwrap_or(unused)) {
+            } else if !used[i]
+                && l.config.enabled(unused)
+                && l.config.enabled(crate::rules::find_meta(r).unwrap_or(unused))
+            {
                 out.push(
-                    Finding::new(unused.id, l.config.level(unused), format!("suppression of `{r}` matched no finding"), s.loc)
-                        .note(format!("reason given: {}", s.reason))
-                        .help("remove the comment if the problem was fixed"),
+                    Finding::new(
+                        unused.id,
+                        l.config.level(unused),
+                        format!("suppression of `{r}` matched no finding"),
+                        s.loc,
+                    )
+                    .note(format!("reason given: {}", s.reason))
+                    .help("remove the comment if the problem was fixed"),
                 );
             }
         }
@@ -194,13 +218,20 @@ pub fn missing_spec_note(l: &Loaded) -> Option<String> {
 /// so that the loader reports them).
 pub fn not_a_model(path: &Path) -> Option<String> {
     let tag = crate::model::source::root_tag(path)?;
-    (tag != "mujoco" && tag != "robot").then(|| format!("root element <{tag}> is not a robot model (MJCF <mujoco> or URDF <robot>)"))
+    (tag != "mujoco" && tag != "robot").then(|| {
+        format!("root element <{tag}> is not a robot model (MJCF <mujoco> or URDF <robot>)")
+    })
 }
 
 /// Deterministic order: file, position, rule id, message.
 pub fn sort_findings(v: &mut [Finding]) {
     v.sort_by(|a, b| {
-        (a.primary.file, a.primary.start, a.rule, &a.message).cmp(&(b.primary.file, b.primary.start, b.rule, &b.message))
+        (a.primary.file, a.primary.start, a.rule, &a.message).cmp(&(
+            b.primary.file,
+            b.primary.start,
+            b.rule,
+            &b.message,
+        ))
     });
 }
 
@@ -212,7 +243,13 @@ pub fn exit_code(findings: &[Finding], fail_on: Severity) -> i32 {
 /// For the subcommands (gap, fit, synth): load a model and its spec with no rule selection, or
 /// print the located error to stderr. `Err` carries the exit code (2).
 pub fn load_for_command(model: &Path, spec: Option<PathBuf>) -> Result<Loaded, i32> {
-    let input = LintInput { model: model.to_path_buf(), spec, config: None, select: vec![], ignore: vec![] };
+    let input = LintInput {
+        model: model.to_path_buf(),
+        spec,
+        config: None,
+        select: vec![],
+        ignore: vec![],
+    };
     load(&input).map_err(|e| {
         eprint!("{}", crate::output::text::render_error(&e, crate::output::color_on_stderr()));
         2

@@ -158,7 +158,12 @@ impl Spec {
         self.robot
             .foot_bodies
             .as_ref()
-            .map(|s| s.get_ref().iter().filter_map(|p| Glob::new(p).ok().map(|g| g.compile_matcher())).collect())
+            .map(|s| {
+                s.get_ref()
+                    .iter()
+                    .filter_map(|p| Glob::new(p).ok().map(|g| g.compile_matcher()))
+                    .collect()
+            })
             .unwrap_or_default()
     }
 }
@@ -191,10 +196,23 @@ pub fn load(map: &mut SourceMap, path: &Path, joint_names: &[String]) -> Result<
         ] {
             if let Some(s) = val {
                 let x = *s.get_ref();
-                let strict = matches!(key, "gear_ratio" | "peak_torque" | "velocity_limit" | "saturation_torque" | "kd_max");
+                let strict = matches!(
+                    key,
+                    "gear_ratio"
+                        | "peak_torque"
+                        | "velocity_limit"
+                        | "saturation_torque"
+                        | "kd_max"
+                );
                 let ok = x.is_finite() && if strict { x > 0.0 } else { x >= 0.0 };
                 if !ok {
-                    return Err(bad(s.span(), format!("motors.{name}.{key} must be a finite {} number, got {x}", if strict { "positive" } else { "non-negative" })));
+                    return Err(bad(
+                        s.span(),
+                        format!(
+                            "motors.{name}.{key} must be a finite {} number, got {x}",
+                            if strict { "positive" } else { "non-negative" }
+                        ),
+                    ));
                 }
             }
         }
@@ -203,20 +221,29 @@ pub fn load(map: &mut SourceMap, path: &Path, joint_names: &[String]) -> Result<
     if let Some(f) = &r.soft_limit_factor {
         let x = *f.get_ref();
         if !(x > 0.0 && x <= 1.0) {
-            return Err(bad(f.span(), format!("robot.soft_limit_factor must be in (0, 1], got {x}")));
+            return Err(bad(
+                f.span(),
+                format!("robot.soft_limit_factor must be in (0, 1], got {x}"),
+            ));
         }
     }
     if let Some(f) = &r.control_hz {
         let x = *f.get_ref();
         if !(x.is_finite() && x > 0.0) {
-            return Err(bad(f.span(), format!("robot.control_hz must be a positive number, got {x}")));
+            return Err(bad(
+                f.span(),
+                format!("robot.control_hz must be a positive number, got {x}"),
+            ));
         }
     }
     for (key, val) in [("action_delay_steps", &r.action_delay_steps), ("mass_kg", &r.mass_kg)] {
         if let Some(s) = val {
             let [a, b] = *s.get_ref();
             if !(a.is_finite() && b.is_finite() && a >= 0.0 && a <= b) {
-                return Err(bad(s.span(), format!("robot.{key} must be [min, max] with 0 ≤ min ≤ max, got [{a}, {b}]")));
+                return Err(bad(
+                    s.span(),
+                    format!("robot.{key} must be [min, max] with 0 ≤ min ≤ max, got [{a}, {b}]"),
+                ));
             }
         }
     }
@@ -227,7 +254,8 @@ pub fn load(map: &mut SourceMap, path: &Path, joint_names: &[String]) -> Result<
     for (pat, e) in entries {
         let span = e.span();
         let loc = Loc { file, start: span.start, end: span.end };
-        let glob = Glob::new(&pat).map_err(|er| bad(span.clone(), format!("joints.\"{pat}\": bad glob pattern: {er}")))?;
+        let glob = Glob::new(&pat)
+            .map_err(|er| bad(span.clone(), format!("joints.\"{pat}\": bad glob pattern: {er}")))?;
         let m = glob.compile_matcher();
         if !joint_names.iter().any(|n| m.is_match(n)) {
             let near = crate::util::near_matches(&pat, joint_names);
@@ -235,14 +263,21 @@ pub fn load(map: &mut SourceMap, path: &Path, joint_names: &[String]) -> Result<
                 span,
                 format!(
                     "joints.\"{pat}\" matches no joint of the model{}",
-                    if near.is_empty() { String::new() } else { format!(" (did you mean {}?)", near.join(", ")) }
+                    if near.is_empty() {
+                        String::new()
+                    } else {
+                        format!(" (did you mean {}?)", near.join(", "))
+                    }
                 ),
             ));
         }
         let je = e.into_inner();
         if let Some(mo) = &je.motor {
             if !raw.motors.contains_key(mo.get_ref()) {
-                return Err(bad(mo.span(), format!("motor family `{}` is not defined under [motors]", mo.get_ref())));
+                return Err(bad(
+                    mo.span(),
+                    format!("motor family `{}` is not defined under [motors]", mo.get_ref()),
+                ));
             }
         }
         if let Some(c) = &je.count {
@@ -252,12 +287,21 @@ pub fn load(map: &mut SourceMap, path: &Path, joint_names: &[String]) -> Result<
         }
         if let Some(d) = &je.direction {
             if d.get_ref().abs() != 1 {
-                return Err(bad(d.span(), format!("direction must be 1 or -1, got {}", d.get_ref())));
+                return Err(bad(
+                    d.span(),
+                    format!("direction must be 1 or -1, got {}", d.get_ref()),
+                ));
             }
         }
         if let Some(rg) = &je.region {
             if !["legs", "arms", "torso", "head"].contains(&rg.get_ref().as_str()) {
-                return Err(bad(rg.span(), format!("region must be one of legs, arms, torso, head; got `{}`", rg.get_ref())));
+                return Err(bad(
+                    rg.span(),
+                    format!(
+                        "region must be one of legs, arms, torso, head; got `{}`",
+                        rg.get_ref()
+                    ),
+                ));
             }
         }
         patterns.push((pat, m, je, loc));

@@ -77,7 +77,11 @@ pub fn missing_note(model: &Path, s: &SpecSearch, enabled: &dyn Fn(&str) -> bool
     let looked: Vec<String> = s.searched.iter().map(|p| p.display().to_string()).collect();
     let skipped: Vec<&str> = SKIPPED.iter().map(|r| r.0).filter(|id| enabled(id)).collect();
     let weakened: Vec<&str> = WEAKENED.iter().map(|r| r.0).filter(|id| enabled(id)).collect();
-    let mut out = format!("modellint: {}: no hardware spec found (looked for {}; pass --spec FILE.toml, docs/spec.md)", model.display(), looked.join(", "));
+    let mut out = format!(
+        "modellint: {}: no hardware spec found (looked for {}; pass --spec FILE.toml, docs/spec.md)",
+        model.display(),
+        looked.join(", ")
+    );
     if !skipped.is_empty() {
         out.push_str(&format!("\n  skipped without a spec: {}", skipped.join(", ")));
     }

@@ -49,7 +49,8 @@ mod tests {
     #[test]
     fn distance_and_near() {
         assert_eq!(edit_distance("knee", "knea"), 1);
-        let names = vec!["left_knee".to_string(), "right_knee".to_string(), "left_hip_pitch".to_string()];
+        let names =
+            vec!["left_knee".to_string(), "right_knee".to_string(), "left_hip_pitch".to_string()];
         assert_eq!(near_matches("left_kne", &names)[0], "left_knee");
         assert_eq!(fmt_num(0.0565056, 4), "0.05651");
         assert_eq!(fmt_num(65.0, 4), "65");

@@ -15,14 +15,20 @@ fn root() -> PathBuf {
 
 fn rig() -> Robot {
     let mut map = SourceMap::default();
-    modellint::model::load(&mut map, &root().join("fixtures/bam_xl330/rig.xml"), None).expect("rig loads")
+    modellint::model::load(&mut map, &root().join("fixtures/bam_xl330/rig.xml"), None)
+        .expect("rig loads")
 }
 
 /// `$MODELLINT_SHARED_DATA`, else the first `shared/data` beside the crate or an ancestor.
 fn shared_bam() -> Option<PathBuf> {
     let d = match std::env::var_os("MODELLINT_SHARED_DATA") {
         Some(d) => PathBuf::from(d),
-        None => root().ancestors().skip(1).take(3).map(|a| a.join("shared/data")).find(|d| d.is_dir())?,
+        None => root()
+            .ancestors()
+            .skip(1)
+            .take(3)
+            .map(|a| a.join("shared/data"))
+            .find(|d| d.is_dir())?,
     };
     let d = d.join("recordings/bam_xl330");
     d.is_dir().then_some(d)
@@ -30,9 +36,16 @@ fn shared_bam() -> Option<PathBuf> {
 
 /// A synthetic log: goal steps and sweeps, ~200 Hz irregular timestamps, with `q` simulated
 /// by the servo model `truth`.
-fn synthetic_log(robot: &Robot, kp: f64, truth_of: impl Fn(ServoParams) -> ServoParams, seed: f64) -> ServoLog {
+fn synthetic_log(
+    robot: &Robot,
+    kp: f64,
+    truth_of: impl Fn(ServoParams) -> ServoParams,
+    seed: f64,
+) -> ServoLog {
     let n = 1000;
-    let t: Vec<f64> = (0..n).map(|i| i as f64 * 0.005 + 0.001 * ((i as f64 * 1.3 + seed).sin()).powi(2)).collect();
+    let t: Vec<f64> = (0..n)
+        .map(|i| i as f64 * 0.005 + 0.001 * ((i as f64 * 1.3 + seed).sin()).powi(2))
+        .collect();
     let goal: Vec<f64> = t
         .iter()
         .map(|&x| {
@@ -48,7 +61,15 @@ fn synthetic_log(robot: &Robot, kp: f64, truth_of: impl Fn(ServoParams) -> Servo
         meta.insert(k.to_string(), v.to_string());
     }
     meta.insert("trajectory".into(), "synthetic".into());
-    let mut rec = Recording { source: "synthetic.json".into(), meta, control_rate_hz: Some(1000.0), control_t0_s: None, t, joints: vec![j], base: None };
+    let mut rec = Recording {
+        source: "synthetic.json".into(),
+        meta,
+        control_rate_hz: Some(1000.0),
+        control_t0_s: None,
+        t,
+        joints: vec![j],
+        base: None,
+    };
     let base = ServoParams::for_recording(&rec).unwrap();
     let ep = simulate(robot, &rec, &truth_of(base)).unwrap();
     assert!(ep.diverged.is_none());
@@ -66,13 +87,27 @@ fn synthetic_coulomb_and_armature_are_recovered() {
         p.armature = arm;
         p
     };
-    let logs: Vec<ServoLog> = [(200.0, 0.0), (800.0, 1.0)].iter().map(|&(kp, s)| synthetic_log(&robot, kp, truth, s)).collect();
+    let logs: Vec<ServoLog> = [(200.0, 0.0), (800.0, 1.0)]
+        .iter()
+        .map(|&(kp, s)| synthetic_log(&robot, kp, truth, s))
+        .collect();
     let set = EffectSet(vec![Effect::Armature, Effect::Coulomb]);
-    let o = FitOpts { optimiser: Optimiser::NelderMead, max_evals: 200, candidates: vec![], seed: 1, polish_evals: 0 };
+    let o = FitOpts {
+        optimiser: Optimiser::NelderMead,
+        max_evals: 200,
+        candidates: vec![],
+        seed: 1,
+        polish_evals: 0,
+    };
     let x0: Vec<f64> = set.specs().iter().map(|s| s.init).collect();
     let idx = [0usize, 1];
     let (x, f, evals) = servo_fit::fit_set(&robot, &logs, &idx, &set, &x0, &o);
-    eprintln!("recovered armature {:.5} (true {arm}), Fc {:.4} (true {fc}); MAE {:.4}°, {evals} evals", x[0], x[1], f.to_degrees());
+    eprintln!(
+        "recovered armature {:.5} (true {arm}), Fc {:.4} (true {fc}); MAE {:.4}°, {evals} evals",
+        x[0],
+        x[1],
+        f.to_degrees()
+    );
     assert!((x[0] - arm).abs() < 0.1 * arm, "armature {} vs {arm}", x[0]);
     assert!((x[1] - fc).abs() < 0.1 * fc, "Fc {} vs {fc}", x[1]);
 }
@@ -84,7 +119,9 @@ fn load(dir: &Path) -> Vec<ServoLog> {
 #[test]
 fn bam_held_out_fold_beats_nominal() {
     let Some(dir) = shared_bam() else {
-        eprintln!("SKIPPED bam_held_out_fold_beats_nominal: ../shared/data/recordings/bam_xl330 is absent");
+        eprintln!(
+            "SKIPPED bam_held_out_fold_beats_nominal: ../shared/data/recordings/bam_xl330 is absent"
+        );
         return;
     };
     let robot = rig();
@@ -101,7 +138,10 @@ fn bam_held_out_fold_beats_nominal() {
     };
     let f = servo_fit::forward_select(&robot, &logs, &train, &test, &o, &|s| eprintln!("{s}"));
     let (nom, fit) = (f.nominal.test_mae.to_degrees(), f.chosen.test_mae.to_degrees());
-    eprintln!("held-out kp 400: nominal {nom:.2}°, fitted {fit:.2}° with {:?} in {:.0} s", f.chosen.effects, f.seconds);
+    eprintln!(
+        "held-out kp 400: nominal {nom:.2}°, fitted {fit:.2}° with {:?} in {:.0} s",
+        f.chosen.effects, f.seconds
+    );
     assert!(fit < 0.8 * nom, "fitted {fit:.2}° vs nominal {nom:.2}°");
     assert!(f.chosen.effects.iter().any(|e| e.is_friction()), "{:?}", f.chosen.effects);
 }

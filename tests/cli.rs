@@ -3,8 +3,16 @@
 use std::process::Command;
 
 fn modellint(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_modellint")).args(args).env_remove("GITHUB_ACTIONS").output().unwrap();
-    (out.status.code().unwrap_or(-1), String::from_utf8_lossy(&out.stdout).into(), String::from_utf8_lossy(&out.stderr).into())
+    let out = Command::new(env!("CARGO_BIN_EXE_modellint"))
+        .args(args)
+        .env_remove("GITHUB_ACTIONS")
+        .output()
+        .unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into(),
+        String::from_utf8_lossy(&out.stderr).into(),
+    )
 }
 
 /// Every broken input: exit 2, `file:line:col` (where a line exists) and a precise message, no panic.
@@ -14,14 +22,42 @@ fn broken_inputs_exit_2_with_location() {
         (&["fixtures/broken/malformed.xml"], "fixtures/broken/malformed.xml:4:", "malformed XML"),
         (&["fixtures/broken/empty.xml"], "fixtures/broken/empty.xml", "empty"),
         (&["fixtures/broken/cycle_a.xml"], "cycle_", "include cycle"),
-        (&["fixtures/broken/nan_attr.xml"], "fixtures/broken/nan_attr.xml:4:", "not a finite number"),
-        (&["fixtures/broken/missing_mesh.xml"], "fixtures/broken/missing_mesh.xml:3:", "file not found"),
-        (&["fixtures/broken/not_a_model.xml"], "fixtures/broken/not_a_model.xml:1:", "neither MJCF"),
+        (
+            &["fixtures/broken/nan_attr.xml"],
+            "fixtures/broken/nan_attr.xml:4:",
+            "not a finite number",
+        ),
+        (
+            &["fixtures/broken/missing_mesh.xml"],
+            "fixtures/broken/missing_mesh.xml:3:",
+            "file not found",
+        ),
+        (
+            &["fixtures/broken/not_a_model.xml"],
+            "fixtures/broken/not_a_model.xml:1:",
+            "neither MJCF",
+        ),
         (&["fixtures/broken/does_not_exist.xml"], "does_not_exist.xml", "file not found"),
-        (&["fixtures/broken/mujoco_rejects.xml"], "fixtures/broken/mujoco_rejects.xml", "MuJoCo could not compile"),
-        (&["fixtures/broken/ok.xml", "--spec", "fixtures/broken/unknown_key.toml"], "unknown_key.toml:3:", "bogus_key"),
-        (&["fixtures/broken/ok.xml", "--spec", "fixtures/broken/unknown_joint.toml"], "unknown_joint.toml:1:", "matches no joint"),
-        (&["fixtures/broken/ok.xml", "--spec", "fixtures/broken/bad_value.toml"], "bad_value.toml:2:", "positive"),
+        (
+            &["fixtures/broken/mujoco_rejects.xml"],
+            "fixtures/broken/mujoco_rejects.xml",
+            "MuJoCo could not compile",
+        ),
+        (
+            &["fixtures/broken/ok.xml", "--spec", "fixtures/broken/unknown_key.toml"],
+            "unknown_key.toml:3:",
+            "bogus_key",
+        ),
+        (
+            &["fixtures/broken/ok.xml", "--spec", "fixtures/broken/unknown_joint.toml"],
+            "unknown_joint.toml:1:",
+            "matches no joint",
+        ),
+        (
+            &["fixtures/broken/ok.xml", "--spec", "fixtures/broken/bad_value.toml"],
+            "bad_value.toml:2:",
+            "positive",
+        ),
         (&["fixtures/broken/ok.xml", "--select", "no-such-rule"], "command line", "unknown rule"),
     ];
     for (args, loc, msg) in cases {
@@ -32,7 +68,8 @@ fn broken_inputs_exit_2_with_location() {
         assert!(!err.contains("panicked"), "{args:?} panicked:\n{err}");
     }
     // The hint names the near joint.
-    let (_, _, err) = modellint(&["fixtures/broken/ok.xml", "--spec", "fixtures/broken/unknown_joint.toml"]);
+    let (_, _, err) =
+        modellint(&["fixtures/broken/ok.xml", "--spec", "fixtures/broken/unknown_joint.toml"]);
     assert!(err.contains("hinge"), "{err}");
 }
 
@@ -45,7 +82,10 @@ fn json_output_is_versioned_and_complete() {
     assert_eq!(v["version"], 1);
     let f = v["findings"].as_array().unwrap();
     assert!(!f.is_empty(), "the shipped model has real findings (underdamped hips)");
-    for k in ["rule", "severity", "message", "file", "line", "column", "element", "help", "measured", "expected"] {
+    for k in [
+        "rule", "severity", "message", "file", "line", "column", "element", "help", "measured",
+        "expected",
+    ] {
         assert!(f[0].get(k).is_some(), "finding lacks `{k}`: {}", f[0]);
     }
     let under: Vec<_> = f.iter().filter(|x| x["rule"] == "underdamped-pd-gains").collect();
@@ -70,14 +110,18 @@ fn sarif_validates_against_the_2_1_0_schema() {
     // tests/data/sarif-schema-2.1.0.json is the OASIS SARIF 2.1.0 schema as shipped in the
     // serde-sarif 0.8.0 crate. Its `run.language` pattern has a stray `]` that a strict regex
     // engine rejects; repair it here (modellint never emits `language`).
-    let text = include_str!("data/sarif-schema-2.1.0.json").replace("^[a-zA-Z]{2}|^[a-zA-Z]{2}-[a-zA-Z]{2}]?$", "^[a-zA-Z]{2}(-[a-zA-Z]{2})?$");
+    let text = include_str!("data/sarif-schema-2.1.0.json")
+        .replace("^[a-zA-Z]{2}|^[a-zA-Z]{2}-[a-zA-Z]{2}]?$", "^[a-zA-Z]{2}(-[a-zA-Z]{2})?$");
     let schema: serde_json::Value = serde_json::from_str(&text).unwrap();
     let validator = jsonschema::validator_for(&schema).expect("schema compiles");
-    for model in ["models/asimov.xml", "fixtures/rules/toe-tilt/invalid.xml", "fixtures/broken/ok.xml"] {
+    for model in
+        ["models/asimov.xml", "fixtures/rules/toe-tilt/invalid.xml", "fixtures/broken/ok.xml"]
+    {
         let (code, out, err) = modellint(&[model, "--format", "sarif", "--no-probe"]);
         assert!(code == 0 || code == 1, "{err}");
         let v: serde_json::Value = serde_json::from_str(&out).unwrap();
-        let errors: Vec<String> = validator.iter_errors(&v).map(|e| format!("{e} at {}", e.instance_path())).collect();
+        let errors: Vec<String> =
+            validator.iter_errors(&v).map(|e| format!("{e} at {}", e.instance_path())).collect();
         assert!(errors.is_empty(), "{model}: SARIF invalid:\n{}", errors.join("\n"));
         assert_eq!(v["version"], "2.1.0");
     }
@@ -103,9 +147,17 @@ fn github_format_is_chosen_automatically_in_actions() {
 fn fail_on_and_select_control_the_exit_code() {
     let (code, _, _) = modellint(&["models/asimov.xml", "--no-probe", "--select", "toe-tilt"]);
     assert_eq!(code, 0, "the reference model's feet are flat");
-    let (code, _, _) = modellint(&["models/asimov.xml", "--no-probe", "--ignore", "underdamped-pd-gains"]);
+    let (code, _, _) =
+        modellint(&["models/asimov.xml", "--no-probe", "--ignore", "underdamped-pd-gains"]);
     assert_eq!(code, 0, "only info findings remain");
-    let (code, _, _) = modellint(&["models/asimov.xml", "--no-probe", "--ignore", "underdamped-pd-gains", "--fail-on", "info"]);
+    let (code, _, _) = modellint(&[
+        "models/asimov.xml",
+        "--no-probe",
+        "--ignore",
+        "underdamped-pd-gains",
+        "--fail-on",
+        "info",
+    ]);
     assert_eq!(code, 1);
 }
 
@@ -123,9 +175,21 @@ fn rule_docs_are_generated_and_current() {
     let (code, out, _) = modellint(&["rules"]);
     assert_eq!(code, 0);
     for id in [
-        "actuator-mapping", "armature-mismatch", "parallel-ankle-armature", "toe-tilt", "foot-collision-geometry", "soft-limits",
-        "underdamped-pd-gains", "effort-limit-mismatch", "passive-joint-spring", "gains-unstable-for-timestep", "mirror-asymmetry",
-        "missing-action-delay", "self-collision-at-keyframe", "collision-visual-mismatch", "urdf-mjcf-drift",
+        "actuator-mapping",
+        "armature-mismatch",
+        "parallel-ankle-armature",
+        "toe-tilt",
+        "foot-collision-geometry",
+        "soft-limits",
+        "underdamped-pd-gains",
+        "effort-limit-mismatch",
+        "passive-joint-spring",
+        "gains-unstable-for-timestep",
+        "mirror-asymmetry",
+        "missing-action-delay",
+        "self-collision-at-keyframe",
+        "collision-visual-mismatch",
+        "urdf-mjcf-drift",
     ] {
         assert!(out.contains(id), "`modellint rules` lacks {id}");
     }
@@ -134,7 +198,8 @@ fn rule_docs_are_generated_and_current() {
 #[test]
 fn fit_servo_mode_checks_its_input() {
     // A directory without BAM logs: a precise error, exit 2.
-    let (code, _, err) = modellint(&["fit", "fixtures/bam_xl330/rig.xml", "fixtures/broken", "--servo", "xl330"]);
+    let (code, _, err) =
+        modellint(&["fit", "fixtures/bam_xl330/rig.xml", "fixtures/broken", "--servo", "xl330"]);
     assert_eq!(code, 2, "{err}");
     let data = std::path::Path::new("../shared/data/recordings/bam_xl330");
     if !data.is_dir() {
@@ -142,7 +207,15 @@ fn fit_servo_mode_checks_its_input() {
         return;
     }
     // Nominal pass only (no fitting): loads all 16 logs of 4 gains and replays them.
-    let (code, _, err) = modellint(&["fit", "fixtures/bam_xl330/rig.xml", data.to_str().unwrap(), "--servo", "xl330", "--servo-evals", "0"]);
+    let (code, _, err) = modellint(&[
+        "fit",
+        "fixtures/bam_xl330/rig.xml",
+        data.to_str().unwrap(),
+        "--servo",
+        "xl330",
+        "--servo-evals",
+        "0",
+    ]);
     assert_eq!(code, 0, "{err}");
 }
 
@@ -161,15 +234,24 @@ fn urdf_models_load_with_spans() {
 
 #[test]
 fn inline_suppressions_need_a_reason_and_unused_ones_are_reported() {
-    let (_, out, _) = modellint(&["fixtures/suppress/suppressed.xml", "--no-probe", "--format", "json"]);
+    let (_, out, _) =
+        modellint(&["fixtures/suppress/suppressed.xml", "--no-probe", "--format", "json"]);
     let v: serde_json::Value = serde_json::from_str(&out).unwrap();
-    let rules: Vec<&str> = v["findings"].as_array().unwrap().iter().map(|f| f["rule"].as_str().unwrap()).collect();
+    let rules: Vec<&str> =
+        v["findings"].as_array().unwrap().iter().map(|f| f["rule"].as_str().unwrap()).collect();
     assert!(!rules.contains(&"underdamped-pd-gains"), "suppressed with a reason: {rules:?}");
-    assert!(rules.contains(&"unused-suppression"), "the toe-tilt suppression matched nothing: {rules:?}");
+    assert!(
+        rules.contains(&"unused-suppression"),
+        "the toe-tilt suppression matched nothing: {rules:?}"
+    );
     assert!(rules.contains(&"invalid-suppression"), "a suppression without a reason: {rules:?}");
     // Without the comment the finding is there: the suppression is what removed it.
     let text = std::fs::read_to_string("fixtures/suppress/suppressed.xml").unwrap();
-    let without: String = text.lines().filter(|l| !l.contains("ignore[underdamped-pd-gains]")).collect::<Vec<_>>().join("\n");
+    let without: String = text
+        .lines()
+        .filter(|l| !l.contains("ignore[underdamped-pd-gains]"))
+        .collect::<Vec<_>>()
+        .join("\n");
     let p = std::env::temp_dir().join(format!("modellint-unsup-{}.xml", std::process::id()));
     std::fs::write(&p, without).unwrap();
     let (_, out, _) = modellint(&[p.to_str().unwrap(), "--no-probe", "--format", "json"]);
@@ -179,13 +261,26 @@ fn inline_suppressions_need_a_reason_and_unused_ones_are_reported() {
 #[test]
 fn config_thresholds_and_errors() {
     let m = "fixtures/probes/servo_underdamped.xml";
-    let (_, out, _) = modellint(&[m, "--no-probe", "--format", "json", "--select", "underdamped-pd-gains"]);
+    let (_, out, _) =
+        modellint(&[m, "--no-probe", "--format", "json", "--select", "underdamped-pd-gains"]);
     assert!(out.contains("\"underdamped-pd-gains\""));
-    let (code, out, err) = modellint(&[m, "--no-probe", "--format", "json", "--select", "underdamped-pd-gains", "--config", "fixtures/config/loose.toml"]);
+    let (code, out, err) = modellint(&[
+        m,
+        "--no-probe",
+        "--format",
+        "json",
+        "--select",
+        "underdamped-pd-gains",
+        "--config",
+        "fixtures/config/loose.toml",
+    ]);
     assert_eq!(code, 0, "{err}");
     // (the rule id also appears in `spec.weakened_rules`: look at the findings only)
     let v: serde_json::Value = serde_json::from_str(&out).unwrap();
-    assert!(!v["findings"].as_array().unwrap().iter().any(|f| f["rule"] == "underdamped-pd-gains"), "threshold 0.2 < ζ 0.22");
+    assert!(
+        !v["findings"].as_array().unwrap().iter().any(|f| f["rule"] == "underdamped-pd-gains"),
+        "threshold 0.2 < ζ 0.22"
+    );
     let (code, _, err) = modellint(&[m, "--config", "fixtures/config/bad_option.toml"]);
     assert_eq!(code, 2);
     assert!(err.contains("bad_option.toml:1:") && err.contains("min_damping"), "{err}");
@@ -204,7 +299,12 @@ fn bad_recording_timing_metadata_exits_2_with_file_and_line() {
         ("split.csv", "# robot: rig\n# split: validation\nt,servo.q\n0,0\n0.01,0\n", 2, "train"),
         ("rate.csv", "# control_rate_hz: 0\nt,servo.q\n0,0\n0.01,0\n", 1, "positive"),
         ("negrate.csv", "# control_rate_hz: -100\nt,servo.q\n0,0\n0.01,0\n", 1, "positive"),
-        ("onetick.csv", "# a: b\n# c: d\n# control_rate_hz: 2\nt,servo.q\n0,0\n0.1,0\n0.2,0\n0.49,0\n", 3, "one control tick"),
+        (
+            "onetick.csv",
+            "# a: b\n# c: d\n# control_rate_hz: 2\nt,servo.q\n0,0\n0.1,0\n0.2,0\n0.49,0\n",
+            3,
+            "one control tick",
+        ),
         ("timing.csv", "# command_timing: before\nt,servo.q\n0,0\n0.01,0\n", 1, "sent_after"),
     ];
     for (name, text, line, what) in cases {
@@ -214,7 +314,10 @@ fn bad_recording_timing_metadata_exits_2_with_file_and_line() {
             let (code, _, err) = modellint(&[sub, model, f.to_str().unwrap()]);
             assert_eq!(code, 2, "{sub} {name}: exit {code}\n{err}");
             let loc = format!("{}:{line}:", f.display());
-            assert!(err.contains(&loc) && err.contains(what), "{sub} {name}: want `{loc}` and `{what}` in:\n{err}");
+            assert!(
+                err.contains(&loc) && err.contains(what),
+                "{sub} {name}: want `{loc}` and `{what}` in:\n{err}"
+            );
             assert!(!err.contains("panicked"), "{err}");
         }
     }

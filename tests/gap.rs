@@ -25,12 +25,17 @@ const JOINTS: [&str; 3] = ["shoulder_pitch", "elbow_pitch", "wrist_pitch"];
 /// Smooth commands starting at rest, on an irregular ~200 Hz time axis (8 s).
 fn command_recording() -> Recording {
     let n = 1600;
-    let t: Vec<f64> = (0..n).map(|i| i as f64 * 0.005 + 0.0012 * ((i as f64) * 1.7).sin().powi(2)).collect();
+    let t: Vec<f64> =
+        (0..n).map(|i| i as f64 * 0.005 + 0.0012 * ((i as f64) * 1.7).sin().powi(2)).collect();
     let s2 = |x: f64| x.sin().powi(2);
     let cmds: [Vec<f64>; 3] = [
         t.iter().map(|&x| 0.4 * s2(std::f64::consts::PI * 0.4 * x)).collect(),
         t.iter().map(|&x| 0.5 * s2(std::f64::consts::PI * 0.6 * x)).collect(),
-        t.iter().map(|&x| 0.4 * s2(std::f64::consts::PI * 0.5 * x) - 0.15 * s2(std::f64::consts::PI * 1.1 * x)).collect(),
+        t.iter()
+            .map(|&x| {
+                0.4 * s2(std::f64::consts::PI * 0.5 * x) - 0.15 * s2(std::f64::consts::PI * 1.1 * x)
+            })
+            .collect(),
     ];
     let joints = JOINTS
         .iter()
@@ -67,10 +72,20 @@ fn closed_form_metrics_and_localisation() {
         j.q = ep.q_sim[k].clone();
         j.qd = Some(ep.qd_sim[k].clone());
     }
-    let real = recording::parse_csv(Path::new("real.csv"), &recording::write_csv(&real)).expect("round trip");
+    let real = recording::parse_csv(Path::new("real.csv"), &recording::write_csv(&real))
+        .expect("round trip");
     let ep2 = replay::replay(&robot, &real, &opts, None).expect("replay real");
-    let r0 = gap::compute(std::slice::from_ref(&real), std::slice::from_ref(&ep2), &gap::region_from_name, &GapOptions::default());
-    assert!(r0.position_mae < 1e-9, "unperturbed replay must reproduce itself, MAE {}", r0.position_mae);
+    let r0 = gap::compute(
+        std::slice::from_ref(&real),
+        std::slice::from_ref(&ep2),
+        &gap::region_from_name,
+        &GapOptions::default(),
+    );
+    assert!(
+        r0.position_mae < 1e-9,
+        "unperturbed replay must reproduce itself, MAE {}",
+        r0.position_mae
+    );
     assert!(r0.velocity_mae < 1e-9, "velocity MAE {}", r0.velocity_mae);
 
     // Perturb: A offset 0.05 rad, B delayed 40 ms, C amplitude ×1.2 about its mean.
@@ -93,7 +108,12 @@ fn closed_form_metrics_and_localisation() {
         c.qd.as_mut().unwrap().iter_mut().for_each(|x| *x *= 1.2);
     }
     let ep3 = replay::replay(&robot, &pert, &opts, None).expect("replay perturbed");
-    let r = gap::compute(std::slice::from_ref(&pert), std::slice::from_ref(&ep3), &gap::region_from_name, &GapOptions::default());
+    let r = gap::compute(
+        std::slice::from_ref(&pert),
+        std::slice::from_ref(&ep3),
+        &gap::region_from_name,
+        &GapOptions::default(),
+    );
     eprintln!("{}", r.to_text("perturbed"));
     let j = |n: &str| r.per_joint.iter().find(|j| j.name == n).unwrap();
     let (a, b, c) = (j("shoulder_pitch"), j("elbow_pitch"), j("wrist_pitch"));
@@ -101,7 +121,11 @@ fn closed_form_metrics_and_localisation() {
     assert!((a.rmse - 0.05).abs() < 1e-3, "A RMSE {}", a.rmse);
     assert!(a.corr.unwrap() > 0.999, "offset keeps the shape: corr {:?}", a.corr);
     assert!(c.corr.unwrap() > 0.999, "amplitude keeps the shape: corr {:?}", c.corr);
-    assert!(b.corr.unwrap() > 0.9 && b.corr.unwrap() < 0.9999, "lag lowers corr a little: {:?}", b.corr);
+    assert!(
+        b.corr.unwrap() > 0.9 && b.corr.unwrap() < 0.9999,
+        "lag lowers corr a little: {:?}",
+        b.corr
+    );
     assert_eq!(a.decomposition.dominant, Explained::Offset);
     assert!((a.decomposition.bias - 0.05).abs() < 2e-3, "bias {}", a.decomposition.bias);
     assert_eq!(b.decomposition.dominant, Explained::Lag);
@@ -112,7 +136,15 @@ fn closed_form_metrics_and_localisation() {
     assert!(r.per_joint.iter().all(|j| j.region == "arms"));
     // JSON keys.
     let v = serde_json::to_value(&r).unwrap();
-    for k in ["position_mae", "gap_overall", "spectral_kl", "per_joint", "per_region", "per_episode", "localisation"] {
+    for k in [
+        "position_mae",
+        "gap_overall",
+        "spectral_kl",
+        "per_joint",
+        "per_region",
+        "per_episode",
+        "localisation",
+    ] {
         assert!(v.get(k).is_some(), "missing {k}");
     }
 }
@@ -126,7 +158,15 @@ fn hook_can_replace_the_actuator() {
         fn replaces_actuator(&self, _i: usize) -> bool {
             true
         }
-        fn before_step(&mut self, _t: f64, _i: usize, q: f64, qd: f64, target: f64, out: &mut replay::StepIo) {
+        fn before_step(
+            &mut self,
+            _t: f64,
+            _i: usize,
+            q: f64,
+            qd: f64,
+            target: f64,
+            out: &mut replay::StepIo,
+        ) {
             out.tau = out.kp * (target - q) - out.kd * qd;
         }
     }
@@ -160,17 +200,26 @@ fn shared_bam() -> Option<PathBuf> {
 #[test]
 fn bam_logs_replay_on_the_rig() {
     let Some(dir) = shared_bam() else {
-        eprintln!("SKIPPED bam_logs_replay_on_the_rig: ../shared/data/recordings/bam_xl330 is absent");
+        eprintln!(
+            "SKIPPED bam_logs_replay_on_the_rig: ../shared/data/recordings/bam_xl330 is absent"
+        );
         return;
     };
     let robot = load(&root().join("fixtures/bam_xl330/rig.xml"));
     let files = modellint::sim2real::cmd::expand_inputs(&[dir]).unwrap();
     assert_eq!(files.len(), 16);
-    let recs: Vec<Recording> = files.iter().map(|f| modellint::sim2real::cmd::read_recording(f).unwrap()).collect();
+    let recs: Vec<Recording> =
+        files.iter().map(|f| modellint::sim2real::cmd::read_recording(f).unwrap()).collect();
     let rp = replay::Replayer::new(&robot);
-    let eps: Vec<_> = replay::replay_all(&rp, &recs, &ReplayOptions::default(), None).into_iter().map(|e| e.unwrap()).collect();
+    let eps: Vec<_> = replay::replay_all(&rp, &recs, &ReplayOptions::default(), None)
+        .into_iter()
+        .map(|e| e.unwrap())
+        .collect();
     let r = gap::compute(&recs, &eps, &gap::region_from_name, &GapOptions::default());
-    eprintln!("{:<26} {:>5} {:<16} {:>8} {:>8} {:>6}", "log", "kp", "trajectory", "MAE°", "RMSE°", "corr");
+    eprintln!(
+        "{:<26} {:>5} {:<16} {:>8} {:>8} {:>6}",
+        "log", "kp", "trajectory", "MAE°", "RMSE°", "corr"
+    );
     let mut sum = 0.0;
     for (rec, e) in recs.iter().zip(&r.per_episode) {
         eprintln!(
@@ -183,11 +232,22 @@ fn bam_logs_replay_on_the_rig() {
             e.correlation_mean.unwrap_or(f64::NAN)
         );
         assert!(e.diverged.is_none());
-        assert!(e.position_mae.is_finite() && e.position_rmse.is_finite() && e.velocity_mae.is_finite());
-        assert!(e.position_mae.to_degrees() < 40.0, "{}: MAE {}°", e.source, e.position_mae.to_degrees());
+        assert!(
+            e.position_mae.is_finite() && e.position_rmse.is_finite() && e.velocity_mae.is_finite()
+        );
+        assert!(
+            e.position_mae.to_degrees() < 40.0,
+            "{}: MAE {}°",
+            e.source,
+            e.position_mae.to_degrees()
+        );
         sum += e.position_mae.to_degrees();
     }
-    eprintln!("mean of per-log MAE: {:.2}°   pooled MAE: {:.2}°", sum / 16.0, r.position_mae.to_degrees());
+    eprintln!(
+        "mean of per-log MAE: {:.2}°   pooled MAE: {:.2}°",
+        sum / 16.0,
+        r.position_mae.to_degrees()
+    );
     assert!(r.gap_overall.is_finite());
 }
 
@@ -211,7 +271,10 @@ fn arm() -> String {
 
 #[test]
 fn cli_truncated_csv_is_exit_2_with_line() {
-    let p = tmp("trunc.csv", "t,shoulder_pitch.q,shoulder_pitch.q_cmd\n0,0,0\n0.01,0.1,0.1\n0.02,0.2\n");
+    let p = tmp(
+        "trunc.csv",
+        "t,shoulder_pitch.q,shoulder_pitch.q_cmd\n0,0,0\n0.01,0.1,0.1\n0.02,0.2\n",
+    );
     let o = bin().args(["gap", &arm()]).arg(&p).output().unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "stderr: {err}");
@@ -221,7 +284,8 @@ fn cli_truncated_csv_is_exit_2_with_line() {
 
 #[test]
 fn cli_non_monotonic_time_is_exit_2_with_line() {
-    let p = tmp("nonmono.csv", "# control_rate_hz: 100\nt,shoulder_pitch.q\n0,0\n0.02,0.1\n0.01,0.2\n");
+    let p =
+        tmp("nonmono.csv", "# control_rate_hz: 100\nt,shoulder_pitch.q\n0,0\n0.02,0.1\n0.01,0.2\n");
     let o = bin().args(["gap", &arm()]).arg(&p).output().unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "stderr: {err}");
@@ -249,7 +313,13 @@ fn cli_json_has_the_keys() {
     let rec = command_recording();
     let p = tmp("ok.csv", &recording::write_csv(&rec));
     let report = std::env::temp_dir().join(format!("modellint-gap-report-{}", std::process::id()));
-    let o = bin().args(["gap", &arm()]).arg(&p).args(["--format", "json", "--report"]).arg(&report).output().unwrap();
+    let o = bin()
+        .args(["gap", &arm()])
+        .arg(&p)
+        .args(["--format", "json", "--report"])
+        .arg(&report)
+        .output()
+        .unwrap();
     assert_eq!(o.status.code(), Some(0), "stderr: {}", String::from_utf8_lossy(&o.stderr));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
     for k in [
@@ -272,7 +342,18 @@ fn cli_json_has_the_keys() {
         assert!(v.get(k).is_some(), "missing key {k}");
     }
     let j = &v["per_joint"][0];
-    for k in ["mae", "rmse", "max", "corr", "vel_mae", "vel_rmse", "spectral_kl", "dominant_hz_real", "dominant_hz_sim", "band_power"] {
+    for k in [
+        "mae",
+        "rmse",
+        "max",
+        "corr",
+        "vel_mae",
+        "vel_rmse",
+        "spectral_kl",
+        "dominant_hz_real",
+        "dominant_hz_sim",
+        "band_power",
+    ] {
         assert!(j.get(k).is_some(), "per_joint missing {k}");
     }
     let html = std::fs::read_to_string(report.join("index.html")).unwrap();

@@ -11,7 +11,8 @@ use modellint::sim2real::commands::{CommandTiming, Schedule, reconstruct};
 use modellint::sim2real::recording::read_csv;
 
 fn arm2() -> Option<PathBuf> {
-    let d = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data/recordings/independent_arm2");
+    let d = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../shared/data/recordings/independent_arm2");
     if d.join("arm2.xml").is_file() {
         Some(d)
     } else {
@@ -47,10 +48,15 @@ fn command_reconstruction_matches_the_exact_ticks() {
         for ep in 0..4 {
             let rec = read_csv(&d.join(format!("{ds}/episodes/ep_{ep:02}.csv"))).expect("csv");
             let truth = truth_ticks(&d.join(format!("{ds}/truth_commands/ep_{ep:02}.csv")));
-            let cmds: Vec<&[f64]> = rec.joints.iter().map(|j| j.q_cmd.as_deref().expect("q_cmd")).collect();
+            let cmds: Vec<&[f64]> =
+                rec.joints.iter().map(|j| j.q_cmd.as_deref().expect("q_cmd")).collect();
             let t0 = rec.control_t0_s.unwrap_or(0.0);
-            let s = reconstruct(&rec.t, &cmds, rec.control_rate_hz, t0, CommandTiming::InForce, true).expect("schedule");
-            let held = reconstruct(&rec.t, &cmds, rec.control_rate_hz, t0, CommandTiming::InForce, false).expect("schedule");
+            let s =
+                reconstruct(&rec.t, &cmds, rec.control_rate_hz, t0, CommandTiming::InForce, true)
+                    .expect("schedule");
+            let held =
+                reconstruct(&rec.t, &cmds, rec.control_rate_hz, t0, CommandTiming::InForce, false)
+                    .expect("schedule");
             let Schedule::Ticks { k0, cmd, stats, .. } = &s else { panic!("a rate is declared") };
             let Schedule::Ticks { cmd: cmd_held, .. } = &held else { panic!("a rate is declared") };
             let (mut exact, mut total, mut worst) = (0usize, 0usize, 0.0f64);
@@ -66,8 +72,10 @@ fn command_reconstruction_matches_the_exact_ticks() {
                 if err < 1e-9 {
                     exact += 1;
                 } else {
-                    filled_sq += (0..want.len()).map(|j| (cmd[j][i] - want[j]).powi(2)).sum::<f64>();
-                    held_sq += (0..want.len()).map(|j| (cmd_held[j][i] - want[j]).powi(2)).sum::<f64>();
+                    filled_sq +=
+                        (0..want.len()).map(|j| (cmd[j][i] - want[j]).powi(2)).sum::<f64>();
+                    held_sq +=
+                        (0..want.len()).map(|j| (cmd_held[j][i] - want[j]).powi(2)).sum::<f64>();
                 }
                 worst = worst.max(err);
             }
@@ -78,9 +86,16 @@ fn command_reconstruction_matches_the_exact_ticks() {
             // Every tick with a row is exact (the row carries the command in force); the empty
             // ticks (about 12 %) are filled, and interpolating ramps beats holding every one.
             assert!(total > 900, "{ds} ep {ep}: {total} ticks compared");
-            assert!(exact >= stats.occupied, "{ds} ep {ep}: {exact} exact of {total}, {} ticks had rows", stats.occupied);
+            assert!(
+                exact >= stats.occupied,
+                "{ds} ep {ep}: {exact} exact of {total}, {} ticks had rows",
+                stats.occupied
+            );
             assert!(exact + stats.empty >= total, "{ds} ep {ep}: a tick with a row is wrong");
-            assert!(filled_sq <= 0.5 * held_sq, "{ds} ep {ep}: filled {filled_sq} vs held {held_sq}");
+            assert!(
+                filled_sq <= 0.5 * held_sq,
+                "{ds} ep {ep}: filled {filled_sq} vs held {held_sq}"
+            );
             assert_eq!(stats.conflicting, 0, "{ds} ep {ep}");
             assert!(worst < 0.5, "{ds} ep {ep}: worst tick error {worst}");
         }
@@ -112,7 +127,8 @@ fn gap_on_the_clean_control_is_at_the_noise_floor() {
     let Some(d) = arm2() else { return };
     let truth = json(&d.join("arm2.none/truth.json"));
     let rec = &truth["recording"];
-    let floor = noise_floor_mae(rec["q_noise"].as_f64().unwrap(), rec["q_quantum"].as_f64().unwrap());
+    let floor =
+        noise_floor_mae(rec["q_noise"].as_f64().unwrap(), rec["q_quantum"].as_f64().unwrap());
     assert!((floor - 0.54e-3).abs() < 0.03e-3, "floor {floor}");
     let out = Command::new(bin())
         .args(["gap", "--format", "json"])
@@ -124,7 +140,13 @@ fn gap_on_the_clean_control_is_at_the_noise_floor() {
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("json");
     for j in v["per_joint"].as_array().unwrap() {
         let mae = j["mae"].as_f64().unwrap();
-        eprintln!("{}: MAE {:.3} mrad, floor {:.3} mrad ({:.2}×)", j["name"], 1e3 * mae, 1e3 * floor, mae / floor);
+        eprintln!(
+            "{}: MAE {:.3} mrad, floor {:.3} mrad ({:.2}×)",
+            j["name"],
+            1e3 * mae,
+            1e3 * floor,
+            mae / floor
+        );
         assert!(mae <= 1.3 * floor, "{}: MAE {mae} > 1.3 × floor {floor}", j["name"]);
     }
     // No lag is located on the clean control (the one-tick command lag would show as −11 ms).
@@ -149,17 +171,33 @@ fn fit_matches_truth(ds: &str) {
     assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("json");
     let found = v["missing_physics"].as_array().unwrap();
-    let mut want: Vec<String> =
-        truth["effects"].as_array().unwrap().iter().map(|e| e.as_str().unwrap().to_string()).filter(|e| e != "none").collect();
+    let mut want: Vec<String> = truth["effects"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|e| e.as_str().unwrap().to_string())
+        .filter(|e| e != "none")
+        .collect();
     want.sort();
-    let mut got: Vec<String> = found.iter().map(|m| m["effect"].as_str().unwrap().to_string()).collect();
+    let mut got: Vec<String> =
+        found.iter().map(|m| m["effect"].as_str().unwrap().to_string()).collect();
     got.sort();
     eprintln!("{ds}: found {found:?}");
     assert_eq!(got, want, "{ds}: effects");
-    let joints: Vec<String> = truth["joints"].as_array().unwrap().iter().map(|j| j.as_str().unwrap().to_string()).collect();
+    let joints: Vec<String> = truth["joints"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|j| j.as_str().unwrap().to_string())
+        .collect();
     for m in found {
         let id = m["effect"].as_str().unwrap();
-        let mut mj: Vec<String> = m["joints"].as_array().unwrap().iter().map(|j| j.as_str().unwrap().to_string()).collect();
+        let mut mj: Vec<String> = m["joints"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|j| j.as_str().unwrap().to_string())
+            .collect();
         mj.sort();
         let mut tj = joints.clone();
         tj.sort();
@@ -177,14 +215,18 @@ fn fit_matches_truth(ds: &str) {
                 assert!((got - p).abs() <= 1.5e-3, "{ds}: delay {got} vs {p}");
             } else if id == "armature" {
                 // truth: armature × 2 on the shoulder (0.02 → 0.04).
-                let want = truth["resolved"]["joints"]["shoulder"]["joint.armature"][1].as_f64().unwrap();
+                let want =
+                    truth["resolved"]["joints"]["shoulder"]["joint.armature"][1].as_f64().unwrap();
                 assert!((got - want).abs() <= 0.1 * want, "{ds}: armature {got} vs {want}");
             } else {
                 assert!((got - p).abs() <= 0.1 * p.abs(), "{ds}: {id}.{k} {got} vs {p}");
             }
         }
     }
-    let (b, a) = (v["before"]["position_mae"].as_f64().unwrap(), v["after"]["position_mae"].as_f64().unwrap());
+    let (b, a) = (
+        v["before"]["position_mae"].as_f64().unwrap(),
+        v["after"]["position_mae"].as_f64().unwrap(),
+    );
     assert!(a <= b + 1e-12, "{ds}: held-out MAE {b} → {a}");
 }
 

@@ -15,7 +15,11 @@ fn modellint(args: &[&str]) -> (i32, String, String) {
         .env("MODELLINT_CACHE_DIR", cache_dir())
         .output()
         .unwrap();
-    (out.status.code().unwrap_or(-1), String::from_utf8_lossy(&out.stdout).into(), String::from_utf8_lossy(&out.stderr).into())
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into(),
+        String::from_utf8_lossy(&out.stderr).into(),
+    )
 }
 
 fn cache_dir() -> std::path::PathBuf {
@@ -32,7 +36,10 @@ fn json(args: &[&str]) -> Value {
 type Where = (String, String, u64, u64, u64, Vec<(String, u64, u64)>);
 
 fn base(p: &Value) -> String {
-    Path::new(p.as_str().unwrap_or("")).file_name().map(|f| f.to_string_lossy().to_string()).unwrap_or_default()
+    Path::new(p.as_str().unwrap_or(""))
+        .file_name()
+        .map(|f| f.to_string_lossy().to_string())
+        .unwrap_or_default()
 }
 
 fn locations(v: &Value) -> Vec<Where> {
@@ -41,7 +48,14 @@ fn locations(v: &Value) -> Vec<Where> {
         .unwrap()
         .iter()
         .map(|f| {
-            let labels = f["labels"].as_array().unwrap().iter().map(|l| (base(&l["file"]), l["line"].as_u64().unwrap(), l["column"].as_u64().unwrap())).collect();
+            let labels = f["labels"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|l| {
+                    (base(&l["file"]), l["line"].as_u64().unwrap(), l["column"].as_u64().unwrap())
+                })
+                .collect();
             (
                 f["rule"].as_str().unwrap().to_string(),
                 base(&f["file"]),
@@ -64,23 +78,52 @@ fn include_keeps_every_location_on_its_own_element() {
     let robot = json(&["fixtures/include/robot.xml", "--format", "json", "--no-probe"]);
     let scene = json(&["fixtures/include/scene.xml", "--format", "json", "--no-probe"]);
     for v in [&robot, &scene] {
-        let hits: Vec<&Value> = v["findings"].as_array().unwrap().iter().filter(|f| f["rule"] == "self-collision-at-keyframe").collect();
+        let hits: Vec<&Value> = v["findings"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|f| f["rule"] == "self-collision-at-keyframe")
+            .collect();
         assert_eq!(hits.len(), 1, "{v}");
         let f = hits[0];
-        assert_eq!((base(&f["file"]).as_str(), f["line"].as_u64(), f["column"].as_u64()), ("robot.xml", Some(18), Some(12)), "{f}");
+        assert_eq!(
+            (base(&f["file"]).as_str(), f["line"].as_u64(), f["column"].as_u64()),
+            ("robot.xml", Some(18), Some(12)),
+            "{f}"
+        );
         let l = &f["labels"][0];
         assert_eq!((base(&l["file"]).as_str(), l["line"].as_u64()), ("robot.xml", Some(24)), "{f}");
     }
     let (r, s) = (locations(&robot), locations(&scene));
     assert_eq!(r, s, "robot vs scene locations differ");
-    assert!(s.iter().all(|w| w.1 == "robot.xml"), "no finding may land on the scene's floor: {s:?}");
+    assert!(
+        s.iter().all(|w| w.1 == "robot.xml"),
+        "no finding may land on the scene's floor: {s:?}"
+    );
     // SARIF and GitHub annotations carry the same lines.
-    let (_, sarif, _) = modellint(&["fixtures/include/scene.xml", "--format", "sarif", "--no-probe", "--select", "self-collision-at-keyframe"]);
+    let (_, sarif, _) = modellint(&[
+        "fixtures/include/scene.xml",
+        "--format",
+        "sarif",
+        "--no-probe",
+        "--select",
+        "self-collision-at-keyframe",
+    ]);
     let v: Value = serde_json::from_str(&sarif).unwrap();
     let loc = &v["runs"][0]["results"][0]["locations"][0]["physicalLocation"];
-    assert!(loc["artifactLocation"]["uri"].as_str().unwrap().ends_with("fixtures/include/robot.xml"), "{loc}");
+    assert!(
+        loc["artifactLocation"]["uri"].as_str().unwrap().ends_with("fixtures/include/robot.xml"),
+        "{loc}"
+    );
     assert_eq!(loc["region"]["startLine"], 18);
-    let (_, gh, _) = modellint(&["fixtures/include/scene.xml", "--format", "github", "--no-probe", "--select", "self-collision-at-keyframe"]);
+    let (_, gh, _) = modellint(&[
+        "fixtures/include/scene.xml",
+        "--format",
+        "github",
+        "--no-probe",
+        "--select",
+        "self-collision-at-keyframe",
+    ]);
     assert!(gh.contains("robot.xml,line=18,col=12,"), "{gh}");
 }
 
@@ -98,7 +141,10 @@ fn shared_scenes_and_robot_files_give_identical_locations() {
         let s = json(&[s.to_str().unwrap(), "--format", "json", "--no-probe"]);
         let (lr, ls) = (locations(&r), locations(&s));
         assert!(!lr.is_empty(), "{dir}: expected findings");
-        assert!(lr.iter().any(|w| w.0 == "collision-visual-mismatch"), "{dir}: geom findings expected");
+        assert!(
+            lr.iter().any(|w| w.0 == "collision-visual-mismatch"),
+            "{dir}: geom findings expected"
+        );
         assert_eq!(lr, ls, "{dir}: {robot} vs scene.xml locations differ");
     }
 }
@@ -107,10 +153,16 @@ fn shared_scenes_and_robot_files_give_identical_locations() {
 /// modellint lints it and reports the junk at its line.
 #[test]
 fn trailing_content_after_the_root_is_a_finding_not_an_error() {
-    let (code, out, err) = modellint(&["fixtures/infra/trailing_close.xml", "--format", "json", "--no-probe"]);
+    let (code, out, err) =
+        modellint(&["fixtures/infra/trailing_close.xml", "--format", "json", "--no-probe"]);
     assert!(code == 0 || code == 1, "exit {code}: {err}");
     let v: Value = serde_json::from_str(&out).unwrap();
-    let t: Vec<&Value> = v["findings"].as_array().unwrap().iter().filter(|f| f["rule"] == "trailing-xml-content").collect();
+    let t: Vec<&Value> = v["findings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|f| f["rule"] == "trailing-xml-content")
+        .collect();
     assert_eq!(t.len(), 1, "{out}");
     assert_eq!((t[0]["line"].as_u64(), t[0]["column"].as_u64()), (Some(13), Some(1)), "{}", t[0]);
     // Real malformed XML (not just trailing content) stays exit 2.
@@ -123,9 +175,16 @@ fn trailing_content_after_the_root_is_a_finding_not_an_error() {
 #[test]
 fn spec_is_found_beside_the_included_robot_file() {
     let v = json(&["fixtures/infra/spec_scene/scene.xml", "--format", "json", "--no-probe"]);
-    assert!(v["spec"]["path"].as_str().unwrap().ends_with("spec_scene/robot.toml"), "{}", v["spec"]);
+    assert!(
+        v["spec"]["path"].as_str().unwrap().ends_with("spec_scene/robot.toml"),
+        "{}",
+        v["spec"]
+    );
     assert_eq!(v["spec"]["skipped_rules"].as_array().unwrap().len(), 0);
-    assert!(v["findings"].as_array().unwrap().iter().any(|f| f["rule"] == "missing-action-delay"), "the spec's delay must be used");
+    assert!(
+        v["findings"].as_array().unwrap().iter().any(|f| f["rule"] == "missing-action-delay"),
+        "the spec's delay must be used"
+    );
     let (_, _, err) = modellint(&["fixtures/infra/spec_scene/scene.xml", "--no-probe"]);
     assert!(!err.contains("no hardware spec"), "{err}");
 }
@@ -136,17 +195,24 @@ fn spec_is_found_beside_the_included_robot_file() {
 fn missing_spec_is_reported_once_with_where_it_looked() {
     let (_, _, err) = modellint(&["fixtures/include/scene.xml", "--no-probe"]);
     assert_eq!(err.matches("no hardware spec found").count(), 1, "{err}");
-    assert!(err.contains("fixtures/include/scene.toml") && err.contains("fixtures/include/robot.toml"), "{err}");
+    assert!(
+        err.contains("fixtures/include/scene.toml") && err.contains("fixtures/include/robot.toml"),
+        "{err}"
+    );
     assert!(err.contains("skipped without a spec: armature-mismatch"), "{err}");
     assert!(err.contains("weakened without a spec:"), "{err}");
     // Rules switched off are not listed.
-    let (_, _, err) = modellint(&["fixtures/include/scene.xml", "--no-probe", "--ignore", "armature-mismatch"]);
+    let (_, _, err) =
+        modellint(&["fixtures/include/scene.xml", "--no-probe", "--ignore", "armature-mismatch"]);
     assert!(!err.contains("armature-mismatch"), "{err}");
     let v = json(&["fixtures/include/scene.xml", "--format", "json", "--no-probe"]);
     assert!(v["spec"]["path"].is_null(), "{}", v["spec"]);
-    let searched: Vec<String> = v["spec"]["searched"].as_array().unwrap().iter().map(|p| base(p)).collect();
+    let searched: Vec<String> =
+        v["spec"]["searched"].as_array().unwrap().iter().map(|p| base(p)).collect();
     assert_eq!(searched, ["scene.toml", "robot.toml"]);
-    assert!(v["spec"]["skipped_rules"].as_array().unwrap().iter().any(|r| r == "armature-mismatch"));
+    assert!(
+        v["spec"]["skipped_rules"].as_array().unwrap().iter().any(|r| r == "armature-mismatch")
+    );
     // A given spec is not searched for.
     let (_, _, err) = modellint(&["models/asimov.xml", "--no-probe"]);
     assert!(!err.contains("no hardware spec"), "models/asimov.toml is beside it: {err}");
@@ -171,13 +237,22 @@ fn several_models_per_call() {
     assert_eq!(c_ok, 0);
     let (c_bad, _, _) = modellint(&["models/asimov.xml", "--no-probe"]);
     assert_eq!(c_bad, 1);
-    let (code, out, err) = modellint(&["fixtures/infra/trailing_close.xml", pkg, "models/asimov.xml", "--no-probe"]);
+    let (code, out, err) =
+        modellint(&["fixtures/infra/trailing_close.xml", pkg, "models/asimov.xml", "--no-probe"]);
     assert_eq!(code, 1, "max(0, 1): {err}");
-    assert!(err.contains("skipping") && err.contains("package.xml") && err.contains("<package>"), "{err}");
-    assert!(out.contains("trailing_close.xml: 0 error(s)") && out.contains("models/asimov.xml: 4 error(s)"), "{out}");
+    assert!(
+        err.contains("skipping") && err.contains("package.xml") && err.contains("<package>"),
+        "{err}"
+    );
+    assert!(
+        out.contains("trailing_close.xml: 0 error(s)")
+            && out.contains("models/asimov.xml: 4 error(s)"),
+        "{out}"
+    );
     assert!(out.contains("2 model(s) linted, 1 skipped"), "{out}");
     // A model that cannot be loaded makes the call exit 2, and the others are still linted.
-    let (code, out, err) = modellint(&["models/asimov.xml", "fixtures/broken/malformed.xml", "--no-probe"]);
+    let (code, out, err) =
+        modellint(&["models/asimov.xml", "fixtures/broken/malformed.xml", "--no-probe"]);
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("fixtures/broken/malformed.xml:4:"), "{err}");
     assert!(out.contains("models/asimov.xml: 4 error(s)"), "{out}");
@@ -194,7 +269,13 @@ fn several_models_per_call() {
 fn several_models_in_every_format() {
     let pkg = package_xml();
     let pkg = pkg.to_str().unwrap();
-    let args = ["models/asimov.xml", "fixtures/include/scene.xml", pkg, "fixtures/broken/malformed.xml", "--no-probe"];
+    let args = [
+        "models/asimov.xml",
+        "fixtures/include/scene.xml",
+        pkg,
+        "fixtures/broken/malformed.xml",
+        "--no-probe",
+    ];
     let with = |fmt: &str| {
         let mut a = args.to_vec();
         a.extend(["--format", fmt]);
@@ -222,14 +303,24 @@ fn several_models_in_every_format() {
         .as_array()
         .unwrap()
         .iter()
-        .map(|r| r["locations"][0]["physicalLocation"]["artifactLocation"]["uri"].as_str().unwrap().to_string())
+        .map(|r| {
+            r["locations"][0]["physicalLocation"]["artifactLocation"]["uri"]
+                .as_str()
+                .unwrap()
+                .to_string()
+        })
         .collect();
-    assert!(uris.contains("models/asimov.xml") && uris.contains("fixtures/include/robot.xml"), "{uris:?}");
+    assert!(
+        uris.contains("models/asimov.xml") && uris.contains("fixtures/include/robot.xml"),
+        "{uris:?}"
+    );
     assert_eq!(s["runs"][0]["invocations"][0]["executionSuccessful"], false);
-    let text = include_str!("data/sarif-schema-2.1.0.json").replace("^[a-zA-Z]{2}|^[a-zA-Z]{2}-[a-zA-Z]{2}]?$", "^[a-zA-Z]{2}(-[a-zA-Z]{2})?$");
+    let text = include_str!("data/sarif-schema-2.1.0.json")
+        .replace("^[a-zA-Z]{2}|^[a-zA-Z]{2}-[a-zA-Z]{2}]?$", "^[a-zA-Z]{2}(-[a-zA-Z]{2})?$");
     let schema: Value = serde_json::from_str(&text).unwrap();
     let validator = jsonschema::validator_for(&schema).unwrap();
-    let errors: Vec<String> = validator.iter_errors(&s).map(|e| format!("{e} at {}", e.instance_path())).collect();
+    let errors: Vec<String> =
+        validator.iter_errors(&s).map(|e| format!("{e} at {}", e.instance_path())).collect();
     assert!(errors.is_empty(), "{}", errors.join("\n"));
     // GitHub: annotations of both models, and the load failure at its line.
     let gh = with("github");
@@ -238,11 +329,20 @@ fn several_models_in_every_format() {
     assert!(gh.contains("::error file=fixtures/broken/malformed.xml,line=4,"), "{gh}");
     // Text: both models' findings and summaries.
     let t = with("text");
-    assert!(t.contains("models/asimov.xml: 4 error(s)") && t.contains("fixtures/include/scene.xml: "), "{t}");
+    assert!(
+        t.contains("models/asimov.xml: 4 error(s)") && t.contains("fixtures/include/scene.xml: "),
+        "{t}"
+    );
 }
 
 fn loaded(path: &str) -> modellint::lint::Loaded {
-    let input = modellint::lint::LintInput { model: path.into(), spec: None, config: None, select: vec![], ignore: vec![] };
+    let input = modellint::lint::LintInput {
+        model: path.into(),
+        spec: None,
+        config: None,
+        select: vec![],
+        ignore: vec![],
+    };
     modellint::lint::load(&input).unwrap_or_else(|e| panic!("{e}"))
 }
 
@@ -269,24 +369,47 @@ fn self_collision_probe_measures_contacts_at_the_keyframe() {
     assert_eq!(p.contact_force, 0.0);
     assert!((p.depth0 - 0.08).abs() < 1e-6, "distance {}", p.depth0);
     // End to end: the finding carries the confirmed probe instead of "skipped".
-    let v = json(&["fixtures/probes/self_collide_jolt.xml", "--format", "json", "--select", "self-collision-at-keyframe"]);
+    let v = json(&[
+        "fixtures/probes/self_collide_jolt.xml",
+        "--format",
+        "json",
+        "--select",
+        "self-collision-at-keyframe",
+    ]);
     let f = &v["findings"][0];
     assert_eq!(f["probe"]["name"], "keyframe-penetration", "{f}");
     assert_eq!(f["probe"]["status"], "confirmed", "{f}");
     assert!(f["probe"]["measured"]["contact_force_n"].as_f64().unwrap() > 1.0);
-    let v = json(&["fixtures/rules/self-collision-at-keyframe/invalid.xml", "--format", "json", "--select", "self-collision-at-keyframe"]);
+    let v = json(&[
+        "fixtures/rules/self-collision-at-keyframe/invalid.xml",
+        "--format",
+        "json",
+        "--select",
+        "self-collision-at-keyframe",
+    ]);
     for f in v["findings"].as_array().unwrap() {
         assert_ne!(f["probe"]["status"], "skipped", "{f}");
     }
 }
 
 fn run_with_cache(args: &[&str], cache: &Path) -> (i32, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_modellint")).args(args).env_remove("GITHUB_ACTIONS").env("MODELLINT_CACHE_DIR", cache).output().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_modellint"))
+        .args(args)
+        .env_remove("GITHUB_ACTIONS")
+        .env("MODELLINT_CACHE_DIR", cache)
+        .output()
+        .unwrap();
     (out.status.code().unwrap_or(-1), String::from_utf8_lossy(&out.stdout).into())
 }
 
 fn entries(dir: &Path) -> Vec<std::path::PathBuf> {
-    let mut v: Vec<_> = std::fs::read_dir(dir).map(|r| r.filter_map(|e| e.ok().map(|e| e.path())).filter(|p| p.extension().is_some_and(|e| e == "mjb")).collect()).unwrap_or_default();
+    let mut v: Vec<_> = std::fs::read_dir(dir)
+        .map(|r| {
+            r.filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|p| p.extension().is_some_and(|e| e == "mjb"))
+                .collect()
+        })
+        .unwrap_or_default();
     v.sort();
     v
 }
@@ -323,7 +446,8 @@ fn compiled_model_cache_gives_the_same_findings_and_follows_every_input() {
     assert_eq!(no_cache, warm, "same findings (incl. probes) from the cached model");
     // --cache-dir overrides the environment.
     let other = root.join("other");
-    let (_, via_flag) = run_with_cache(&[m, "--format", "json", "--cache-dir", other.to_str().unwrap()], &cache);
+    let (_, via_flag) =
+        run_with_cache(&[m, "--format", "json", "--cache-dir", other.to_str().unwrap()], &cache);
     assert_eq!(via_flag, no_cache);
     assert_eq!(entries(&other).len(), 1);
     // A changed gain: a new entry, and the findings follow the file, not the cache.

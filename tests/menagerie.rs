@@ -33,17 +33,29 @@ fn check(model: &str, spec: Option<&str>, snap: &str) {
         return;
     }
     let want = std::fs::read_to_string(&path).unwrap_or_default();
-    assert!(want == text, "{} changed; review and run with UPDATE_SNAPSHOTS=1\n--- got\n{text}", path.display());
+    assert!(
+        want == text,
+        "{} changed; review and run with UPDATE_SNAPSHOTS=1\n--- got\n{text}",
+        path.display()
+    );
 }
 
 #[test]
 fn booster_t1_report() {
-    check("../shared/data/models/booster_t1/t1.xml", Some("fixtures/booster_t1.toml"), "booster_t1.txt");
+    check(
+        "../shared/data/models/booster_t1/t1.xml",
+        Some("fixtures/booster_t1.toml"),
+        "booster_t1.txt",
+    );
 }
 
 #[test]
 fn unitree_h1_report() {
-    check("../shared/data/models/unitree_h1/h1.xml", Some("fixtures/unitree_h1.toml"), "unitree_h1.txt");
+    check(
+        "../shared/data/models/unitree_h1/h1.xml",
+        Some("fixtures/unitree_h1.toml"),
+        "unitree_h1.txt",
+    );
 }
 
 /// What a new user sees: the model alone, no spec (issue 13: lint what the file itself shows).
@@ -63,8 +75,11 @@ fn both_scenes_load() {
         eprintln!("skipping: ../shared/data is absent");
         return;
     }
-    for m in ["../shared/data/models/booster_t1/scene.xml", "../shared/data/models/unitree_h1/scene.xml"] {
-        let input = LintInput { model: m.into(), spec: None, config: None, select: vec![], ignore: vec![] };
+    for m in
+        ["../shared/data/models/booster_t1/scene.xml", "../shared/data/models/unitree_h1/scene.xml"]
+    {
+        let input =
+            LintInput { model: m.into(), spec: None, config: None, select: vec![], ignore: vec![] };
         let l = load(&input).unwrap_or_else(|e| panic!("{m}: {e}"));
         assert!(l.robot.joints.len() > 19, "{m}");
         assert!(l.robot.key.key.is_some(), "{m} has a keyframe");

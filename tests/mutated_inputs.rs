@@ -54,7 +54,10 @@ fn mutated_specs_and_recordings_never_panic() {
     let dir = std::env::temp_dir().join(format!("modellint-mut-spec-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let spec = std::fs::read_to_string("models/asimov.toml").unwrap();
-    let joints: Vec<String> = ["left_hip_pitch", "left_knee", "left_toe", "right_knee"].iter().map(|s| s.to_string()).collect();
+    let joints: Vec<String> = ["left_hip_pitch", "left_knee", "left_toe", "right_knee"]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
     for (i, v) in variants(&spec, 30).into_iter().enumerate() {
         let p = dir.join(format!("s{i}.toml"));
         std::fs::write(&p, &v).unwrap();

@@ -7,7 +7,13 @@ use modellint::lint::{LintInput, Loaded, load, run_rules};
 use modellint::probe::{direction, impulse, settle};
 
 fn loaded(path: &str) -> Loaded {
-    let input = LintInput { model: Path::new(path).to_path_buf(), spec: None, config: None, select: vec![], ignore: vec![] };
+    let input = LintInput {
+        model: Path::new(path).to_path_buf(),
+        spec: None,
+        config: None,
+        select: vec![],
+        ignore: vec![],
+    };
     load(&input).unwrap_or_else(|e| panic!("{e}"))
 }
 

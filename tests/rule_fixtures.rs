@@ -12,15 +12,26 @@ use modellint::rules::all_meta;
 fn fixtures(id: &str) -> Vec<PathBuf> {
     let dir = Path::new("fixtures/rules").join(id);
     let mut v: Vec<PathBuf> = std::fs::read_dir(&dir)
-        .map(|rd| rd.filter_map(|e| e.ok().map(|e| e.path())).filter(|p| p.extension().is_some_and(|e| e == "xml" || e == "urdf")).collect())
+        .map(|rd| {
+            rd.filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|p| p.extension().is_some_and(|e| e == "xml" || e == "urdf"))
+                .collect()
+        })
         .unwrap_or_default();
     v.sort();
     v
 }
 
 fn lint_one(path: &Path, id: &str) -> (Vec<modellint::finding::Finding>, String) {
-    let input = LintInput { model: path.to_path_buf(), spec: None, config: None, select: vec![id.to_string()], ignore: vec![] };
-    let loaded = load(&input).unwrap_or_else(|e| panic!("fixture {} failed to load: {e}", path.display()));
+    let input = LintInput {
+        model: path.to_path_buf(),
+        spec: None,
+        config: None,
+        select: vec![id.to_string()],
+        ignore: vec![],
+    };
+    let loaded =
+        load(&input).unwrap_or_else(|e| panic!("fixture {} failed to load: {e}", path.display()));
     let mut findings = run_rules(&loaded);
     if id == "unstable-simulation" {
         // This rule exists only as a probe: run the simulations.
@@ -36,13 +47,23 @@ fn every_rule_has_docs_and_fixtures() {
         if m.group == "engine" {
             continue;
         }
-        for h in ["## What it does", "## Why is this bad?", "## How it is confirmed", "## How to fix"] {
+        for h in
+            ["## What it does", "## Why is this bad?", "## How it is confirmed", "## How to fix"]
+        {
             assert!(m.docs.contains(h), "rule {} docs lack `{h}`", m.id);
         }
         let fx = fixtures(m.id);
         let name = |p: &PathBuf| p.file_name().unwrap().to_string_lossy().to_string();
-        assert!(fx.iter().any(|p| name(p).starts_with("invalid")), "rule {} has no invalid fixture", m.id);
-        assert!(fx.iter().any(|p| name(p).starts_with("valid")), "rule {} has no valid fixture", m.id);
+        assert!(
+            fx.iter().any(|p| name(p).starts_with("invalid")),
+            "rule {} has no invalid fixture",
+            m.id
+        );
+        assert!(
+            fx.iter().any(|p| name(p).starts_with("valid")),
+            "rule {} has no valid fixture",
+            m.id
+        );
     }
 }
 
@@ -57,12 +78,20 @@ fn fixtures_produce_exactly_their_findings() {
             let mine = findings.iter().filter(|f| f.rule == m.id).count();
             if stem.starts_with("valid") {
                 if mine != 0 {
-                    failures.push(format!("{}: expected no `{}` finding, got:\n{rendered}", path.display(), m.id));
+                    failures.push(format!(
+                        "{}: expected no `{}` finding, got:\n{rendered}",
+                        path.display(),
+                        m.id
+                    ));
                 }
                 continue;
             }
             if mine == 0 {
-                failures.push(format!("{}: expected a `{}` finding, got none", path.display(), m.id));
+                failures.push(format!(
+                    "{}: expected a `{}` finding, got none",
+                    path.display(),
+                    m.id
+                ));
                 continue;
             }
             let snap = path.with_extension("snap");
@@ -71,8 +100,14 @@ fn fixtures_produce_exactly_their_findings() {
             } else {
                 match std::fs::read_to_string(&snap) {
                     Ok(s) if s == rendered => {}
-                    Ok(s) => failures.push(format!("{}: snapshot differs\n--- expected\n{s}\n--- got\n{rendered}", snap.display())),
-                    Err(_) => failures.push(format!("{}: missing snapshot (run with UPDATE_SNAPSHOTS=1)", snap.display())),
+                    Ok(s) => failures.push(format!(
+                        "{}: snapshot differs\n--- expected\n{s}\n--- got\n{rendered}",
+                        snap.display()
+                    )),
+                    Err(_) => failures.push(format!(
+                        "{}: missing snapshot (run with UPDATE_SNAPSHOTS=1)",
+                        snap.display()
+                    )),
                 }
             }
         }
@@ -85,16 +120,31 @@ fn fixtures_produce_exactly_their_findings() {
 #[test]
 fn stated_foot_friction_refines_severity() {
     use modellint::finding::Severity;
-    let model = PathBuf::from("fixtures/rules/foot-collision-geometry/invalid_default_friction.xml");
+    let model =
+        PathBuf::from("fixtures/rules/foot-collision-geometry/invalid_default_friction.xml");
     let run = |config: Option<PathBuf>| {
-        let input = LintInput { model: model.clone(), spec: None, config, select: vec!["foot-collision-geometry".into()], ignore: vec![] };
+        let input = LintInput {
+            model: model.clone(),
+            spec: None,
+            config,
+            select: vec!["foot-collision-geometry".into()],
+            ignore: vec![],
+        };
         let loaded = load(&input).unwrap();
         run_rules(&loaded)
     };
-    let friction = |fs: &[modellint::finding::Finding]| fs.iter().filter(|f| f.message.contains("sliding friction")).map(|f| f.severity).collect::<Vec<_>>();
+    let friction = |fs: &[modellint::finding::Finding]| {
+        fs.iter()
+            .filter(|f| f.message.contains("sliding friction"))
+            .map(|f| f.severity)
+            .collect::<Vec<_>>()
+    };
     let plain = run(None);
     assert_eq!(friction(&plain), vec![Severity::Info, Severity::Info]);
-    assert!(plain.iter().all(|f| f.severity == Severity::Info), "no warning without a stated value");
+    assert!(
+        plain.iter().all(|f| f.severity == Severity::Info),
+        "no warning without a stated value"
+    );
     let stated = run(Some(PathBuf::from("fixtures/config/foot_friction_stated.toml")));
     assert_eq!(friction(&stated), vec![Severity::Warning, Severity::Warning]);
 }
@@ -106,9 +156,19 @@ fn armature_placement_does_not_change_the_verdict() {
     let findings = |path: &str, id: &str| {
         let p = Path::new(path);
         let spec = p.with_extension("toml");
-        let input = LintInput { model: p.to_path_buf(), spec: spec.is_file().then_some(spec), config: None, select: vec![id.to_string()], ignore: vec![] };
+        let input = LintInput {
+            model: p.to_path_buf(),
+            spec: spec.is_file().then_some(spec),
+            config: None,
+            select: vec![id.to_string()],
+            ignore: vec![],
+        };
         let loaded = load(&input).unwrap();
-        run_rules(&loaded).into_iter().filter(|f| f.rule == id).map(|f| (f.measured.map(|q| (q.value * 1e6).round()), f.severity)).collect::<Vec<_>>()
+        run_rules(&loaded)
+            .into_iter()
+            .filter(|f| f.rule == id)
+            .map(|f| (f.measured.map(|q| (q.value * 1e6).round()), f.severity))
+            .collect::<Vec<_>>()
     };
     let dir = "fixtures/rules/armature-mismatch";
     let mut a = findings(&format!("{dir}/invalid.xml"), "armature-mismatch");
@@ -118,16 +178,25 @@ fn armature_placement_does_not_change_the_verdict() {
     assert_eq!(a.len(), 3);
     assert_eq!(a, b);
     assert!(findings(&format!("{dir}/valid.xml"), "armature-mismatch").is_empty());
-    assert!(findings(&format!("{dir}/valid_actuator_placement.xml"), "armature-mismatch").is_empty());
+    assert!(
+        findings(&format!("{dir}/valid_actuator_placement.xml"), "armature-mismatch").is_empty()
+    );
     // ζ = kd / (2√(kp·I)): kd = 1 + 0.1, kp = 100 either way (hand-computed: 25·2², 0.25·2² + 0.025·2²).
     let z = |path: &str| {
-        let input = LintInput { model: path.into(), spec: None, config: None, select: vec!["underdamped-pd-gains".into()], ignore: vec![] };
+        let input = LintInput {
+            model: path.into(),
+            spec: None,
+            config: None,
+            select: vec!["underdamped-pd-gains".into()],
+            ignore: vec![],
+        };
         let loaded = load(&input).unwrap();
         let f = run_rules(&loaded).into_iter().find(|f| f.rule == "underdamped-pd-gains").unwrap();
         (f.data["kd"], f.data["kp"], f.data["inertia"], f.data["zeta"])
     };
     let (kd1, kp1, i1, z1) = z("fixtures/rules/underdamped-pd-gains/invalid.xml");
-    let (kd2, kp2, i2, z2) = z("fixtures/rules/underdamped-pd-gains/invalid_actuator_placement.xml");
+    let (kd2, kp2, i2, z2) =
+        z("fixtures/rules/underdamped-pd-gains/invalid_actuator_placement.xml");
     assert!((kd1 - 1.1).abs() < 1e-12 && (kd2 - 1.1).abs() < 1e-12, "{kd1} {kd2}");
     assert!((kp1 - 100.0).abs() < 1e-9 && (kp2 - 100.0).abs() < 1e-9);
     assert!((i1 - i2).abs() < 1e-12 && (z1 - z2).abs() < 1e-12);
@@ -139,7 +208,13 @@ fn armature_placement_does_not_change_the_verdict() {
 /// (see the comment in the fixture), and the mass matrix MuJoCo builds from them.
 #[test]
 fn effective_armature_and_damping_from_actuators_and_tendons() {
-    let input = LintInput { model: "fixtures/model/actuator_physics.xml".into(), spec: None, config: None, select: vec![], ignore: vec![] };
+    let input = LintInput {
+        model: "fixtures/model/actuator_physics.xml".into(),
+        spec: None,
+        config: None,
+        select: vec![],
+        ignore: vec![],
+    };
     let l = load(&input).unwrap();
     let r = &l.robot;
     let j1 = r.joint("j1").unwrap();

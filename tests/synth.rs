@@ -16,13 +16,22 @@ fn root() -> PathBuf {
 }
 
 fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("modellint_synth_test_{}_{name}", std::process::id()));
+    let d =
+        std::env::temp_dir().join(format!("modellint_synth_test_{}_{name}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     d
 }
 
 fn synth(model: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_modellint")).arg("synth").arg(model).arg("--out").arg(out).arg("--quiet").args(extra).output().unwrap()
+    Command::new(env!("CARGO_BIN_EXE_modellint"))
+        .arg("synth")
+        .arg(model)
+        .arg("--out")
+        .arg(out)
+        .arg("--quiet")
+        .args(extra)
+        .output()
+        .unwrap()
 }
 
 /// A CSV read by hand: `# key: value` metadata, header, rows as strings.
@@ -55,7 +64,10 @@ impl Csv {
         self.meta.iter().find(|(a, _)| a == k).map(|(_, v)| v.as_str())
     }
     fn col(&self, name: &str) -> usize {
-        self.header.iter().position(|h| h == name).unwrap_or_else(|| panic!("no column {name} in {:?}", self.header))
+        self.header
+            .iter()
+            .position(|h| h == name)
+            .unwrap_or_else(|| panic!("no column {name} in {:?}", self.header))
     }
     fn f(&self, i: usize, c: usize) -> f64 {
         self.rows[i][c].parse().unwrap()
@@ -84,7 +96,11 @@ fn check_commands(out: &Path, ep: &str) -> (usize, f64, f64) {
         let crow = &cmd.rows[(k - first) as usize];
         assert_eq!(crow[0].parse::<i64>().unwrap(), k);
         for j in ARM3_JOINTS {
-            assert_eq!(row[rec.col(&format!("{j}.q_cmd"))], crow[cmd.col(&format!("{j}.q_cmd"))], "{ep} row {i} t {t}: tick {k}");
+            assert_eq!(
+                row[rec.col(&format!("{j}.q_cmd"))],
+                crow[cmd.col(&format!("{j}.q_cmd"))],
+                "{ep} row {i} t {t}: tick {k}"
+            );
         }
         checked += 1;
     }
@@ -94,7 +110,11 @@ fn check_commands(out: &Path, ep: &str) -> (usize, f64, f64) {
 #[test]
 fn every_row_logs_the_command_in_force() {
     let out = tmp("cmd");
-    let o = synth(&root().join(ARM3), &out, &["--episodes", "2", "--duration", "3", "--control-phase", "0.0043"]);
+    let o = synth(
+        &root().join(ARM3),
+        &out,
+        &["--episodes", "2", "--duration", "3", "--control-phase", "0.0043"],
+    );
     assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
     let (n, rate, t0) = check_commands(&out, "ep_00.csv");
     assert!(n > 250, "{n} rows");
@@ -113,14 +133,32 @@ fn every_row_logs_the_command_in_force() {
 #[test]
 fn log_at_ticks_rows_carry_their_tick() {
     let out = tmp("ticks");
-    let o = synth(&root().join(ARM3), &out, &["--episodes", "2", "--duration", "2", "--log-at-ticks", "--control-hz", "50", "--drop", "0"]);
+    let o = synth(
+        &root().join(ARM3),
+        &out,
+        &[
+            "--episodes",
+            "2",
+            "--duration",
+            "2",
+            "--log-at-ticks",
+            "--control-hz",
+            "50",
+            "--drop",
+            "0",
+        ],
+    );
     assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
     let rec = Csv::read(&out.join("episodes/ep_00.csv"));
     let cmd = Csv::read(&out.join("truth_commands/ep_00.csv"));
     assert_eq!(rec.rows.len(), 100);
     for (k, row) in rec.rows.iter().enumerate() {
         assert_eq!(row[0], format!("{:.6}", k as f64 * 0.02));
-        assert_eq!(row[rec.col("elbow_pitch.q_cmd")], cmd.rows[k][cmd.col("elbow_pitch.q_cmd")], "row {k}");
+        assert_eq!(
+            row[rec.col("elbow_pitch.q_cmd")],
+            cmd.rows[k][cmd.col("elbow_pitch.q_cmd")],
+            "row {k}"
+        );
     }
     let _ = std::fs::remove_dir_all(&out);
 }
@@ -128,9 +166,29 @@ fn log_at_ticks_rows_carry_their_tick() {
 #[test]
 fn sampling_quantisation_and_drops_follow_the_settings() {
     let out = tmp("stats");
-    let o = synth(&root().join(ARM3), &out, &["--episodes", "3", "--duration", "20", "--sample-hz", "200", "--jitter", "0.3", "--drop", "0.1", "--quant-bits", "10", "--heldout", "2"]);
+    let o = synth(
+        &root().join(ARM3),
+        &out,
+        &[
+            "--episodes",
+            "3",
+            "--duration",
+            "20",
+            "--sample-hz",
+            "200",
+            "--jitter",
+            "0.3",
+            "--drop",
+            "0.1",
+            "--quant-bits",
+            "10",
+            "--heldout",
+            "2",
+        ],
+    );
     assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
-    let truth: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("truth.json")).unwrap()).unwrap();
+    let truth: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("truth.json")).unwrap()).unwrap();
     let quantum = std::f64::consts::TAU / 1024.0;
     let (mut rows, mut samples, mut dropped) = (0usize, 0usize, 0usize);
     let mut gaps = 0usize;
@@ -166,7 +224,10 @@ fn sampling_quantisation_and_drops_follow_the_settings() {
     assert!((samples as f64 / 12000.0 - 1.0).abs() < 0.01, "{samples} samples");
     // Drops ~ Binomial(n, 0.1): within 4σ.
     let (n, p) = (samples as f64, 0.1);
-    assert!((dropped as f64 - n * p).abs() < 4.0 * (n * p * (1.0 - p)).sqrt(), "{dropped} of {samples} dropped");
+    assert!(
+        (dropped as f64 - n * p).abs() < 4.0 * (n * p * (1.0 - p)).sqrt(),
+        "{dropped} of {samples} dropped"
+    );
     assert!(gaps > dropped / 2, "{gaps} gaps for {dropped} drops");
     // Floor of a 10-bit encoder with 0.5 mrad noise: RMSE² ≈ σ² + Δ²/12 (exact for positions
     // spread evenly over the grid; holds and steps make it a few % lower).
@@ -181,7 +242,20 @@ fn sampling_quantisation_and_drops_follow_the_settings() {
 #[test]
 fn settle_starts_the_recording_at_rest_and_output_is_deterministic() {
     let out = tmp("settle");
-    let args = ["--episodes", "1", "--duration", "1", "--noise", "0", "--qd-noise", "0", "--quant-bits", "0", "--drop", "0"];
+    let args = [
+        "--episodes",
+        "1",
+        "--duration",
+        "1",
+        "--noise",
+        "0",
+        "--qd-noise",
+        "0",
+        "--quant-bits",
+        "0",
+        "--drop",
+        "0",
+    ];
     let o = synth(&root().join(ARM3), &out, &args);
     assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
     let rec = Csv::read(&out.join("episodes/ep_00.csv"));
@@ -199,7 +273,11 @@ fn settle_starts_the_recording_at_rest_and_output_is_deterministic() {
     let out2 = tmp("settle2");
     assert_eq!(synth(&root().join(ARM3), &out2, &args).status.code(), Some(0));
     assert_eq!(a, std::fs::read(out2.join("episodes/ep_00.csv")).unwrap());
-    assert_eq!(String::from_utf8_lossy(&b).replace(out.to_str().unwrap(), ""), String::from_utf8_lossy(&std::fs::read(out2.join("truth.json")).unwrap()).replace(out2.to_str().unwrap(), ""));
+    assert_eq!(
+        String::from_utf8_lossy(&b).replace(out.to_str().unwrap(), ""),
+        String::from_utf8_lossy(&std::fs::read(out2.join("truth.json")).unwrap())
+            .replace(out2.to_str().unwrap(), "")
+    );
     for d in [out, out2] {
         let _ = std::fs::remove_dir_all(d);
     }
@@ -232,7 +310,8 @@ fn bad_values_exit_2_naming_the_flag() {
         assert!(err.contains(flag), "{args:?}: {err}");
     }
     assert!(!out.exists(), "nothing written on bad input");
-    let h = Command::new(env!("CARGO_BIN_EXE_modellint")).args(["synth", "--help"]).output().unwrap();
+    let h =
+        Command::new(env!("CARGO_BIN_EXE_modellint")).args(["synth", "--help"]).output().unwrap();
     let h = String::from_utf8_lossy(&h.stdout);
     for k in ["--log-at-ticks", "--quant-bits", "command in", "truth.json", "effect[@joint_glob]"] {
         assert!(h.contains(k), "--help lacks {k}");
@@ -288,7 +367,10 @@ fn analytic(t: f64, a: f64, kp: f64, kv: f64, inertia: f64) -> f64 {
 
 /// Times where x − a crosses zero upwards (linear interpolation).
 fn up_crossings(t: &[f64], x: &[f64], a: f64) -> Vec<f64> {
-    (1..t.len()).filter(|&i| x[i - 1] < a && x[i] >= a).map(|i| t[i - 1] + (a - x[i - 1]) / (x[i] - x[i - 1]) * (t[i] - t[i - 1])).collect()
+    (1..t.len())
+        .filter(|&i| x[i - 1] < a && x[i] >= a)
+        .map(|i| t[i - 1] + (a - x[i - 1]) / (x[i] - x[i - 1]) * (t[i] - t[i - 1]))
+        .collect()
 }
 
 #[test]
@@ -351,7 +433,10 @@ fn viscous_damping_gives_the_damping_ratio() {
     let (kp, i) = (4.0, 0.01);
     let r = hinge("damp", kp, 0.0, i);
     let (t, q) = step_response(&r, "viscous_damping=0.04", 0.1);
-    let peaks: Vec<f64> = (1..q.len() - 1).filter(|&k| q[k] > q[k - 1] && q[k] >= q[k + 1] && t[k] > 0.01).map(|k| q[k] - 0.1).collect();
+    let peaks: Vec<f64> = (1..q.len() - 1)
+        .filter(|&k| q[k] > q[k - 1] && q[k] >= q[k + 1] && t[k] > 0.01)
+        .map(|k| q[k] - 0.1)
+        .collect();
     let delta = (peaks[0] / peaks[1]).ln();
     let z = 0.1f64;
     let expect = std::f64::consts::TAU * z / (1.0 - z * z).sqrt();
@@ -362,16 +447,40 @@ fn viscous_damping_gives_the_damping_ratio() {
 fn position_offset_is_a_sensor_bias() {
     // Noise-free, unquantised: every recorded q is the true q + offset; the truth file says so.
     let out = tmp("offset");
-    let args = ["--episodes", "1", "--duration", "1", "--noise", "0", "--qd-noise", "0", "--quant-bits", "0", "--drop", "0"];
+    let args = [
+        "--episodes",
+        "1",
+        "--duration",
+        "1",
+        "--noise",
+        "0",
+        "--qd-noise",
+        "0",
+        "--quant-bits",
+        "0",
+        "--drop",
+        "0",
+    ];
     assert_eq!(synth(&root().join(ARM3), &out, &args).status.code(), Some(0));
     let out2 = tmp("offset2");
-    assert_eq!(synth(&root().join(ARM3), &out2, &[&args[..], &["--effects", "position_offset@elbow*=0.05"]].concat()).status.code(), Some(0));
-    let (a, b) = (Csv::read(&out.join("episodes/ep_00.csv")), Csv::read(&out2.join("episodes/ep_00.csv")));
+    assert_eq!(
+        synth(
+            &root().join(ARM3),
+            &out2,
+            &[&args[..], &["--effects", "position_offset@elbow*=0.05"]].concat()
+        )
+        .status
+        .code(),
+        Some(0)
+    );
+    let (a, b) =
+        (Csv::read(&out.join("episodes/ep_00.csv")), Csv::read(&out2.join("episodes/ep_00.csv")));
     for (x, y) in a.column("elbow_pitch.q").iter().zip(b.column("elbow_pitch.q")) {
         assert!((y - x - 0.05).abs() < 1e-9);
     }
     assert_eq!(a.column("shoulder_pitch.q"), b.column("shoulder_pitch.q"));
-    let truth: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out2.join("truth.json")).unwrap()).unwrap();
+    let truth: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out2.join("truth.json")).unwrap()).unwrap();
     assert_eq!(truth["effects"][0]["effect"], "position_offset");
     assert_eq!(truth["effects"][0]["joint"], "elbow_pitch");
     assert_eq!(truth["effects"][0]["params"]["offset_rad"], 0.05);
@@ -414,21 +523,33 @@ fn arm2_settings_reproduce_the_independent_logging_statistics() {
     };
     let (n_ref, med_ref, min_ref, first_ref) = stats(&a.join("arm2.none"));
     let (n, med, min, first) = stats(&out);
-    eprintln!("arm2.none: {n_ref} rows, median interval {med_ref:.6} s, min {min_ref:.6}; synth: {n} rows, median {med:.6}, min {min:.6}");
+    eprintln!(
+        "arm2.none: {n_ref} rows, median interval {med_ref:.6} s, min {min_ref:.6}; synth: {n} rows, median {med:.6}, min {min:.6}"
+    );
     assert!((n as f64 / n_ref as f64 - 1.0).abs() < 0.02, "rows {n} vs {n_ref}");
     assert!((med / med_ref - 1.0).abs() < 0.02, "median interval {med} vs {med_ref}");
     assert!((min / min_ref - 1.0).abs() < 0.02, "min interval {min} vs {min_ref}");
     // Both settle 2 s at the first command: the first recorded position (quantised) is the same
     // equilibrium under gravity, within one quantum + noise.
     for ((s, e), (sr, er)) in first.iter().zip(&first_ref) {
-        assert!((s - sr).abs() < 0.0035 && (e - er).abs() < 0.0035, "first row {s},{e} vs {sr},{er}");
+        assert!(
+            (s - sr).abs() < 0.0035 && (e - er).abs() < 0.0035,
+            "first row {s},{e} vs {sr},{er}"
+        );
     }
     // Floor: 0.5 mrad noise + 12-bit quantisation ≈ 0.55 mrad MAE, 0.67 mrad RMSE (README).
-    let truth: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("truth.json")).unwrap()).unwrap();
+    let truth: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("truth.json")).unwrap()).unwrap();
     for j in ["shoulder", "elbow"] {
-        let (mae, rmse) = (truth["floor"][j]["mae_rad"].as_f64().unwrap(), truth["floor"][j]["rmse_rad"].as_f64().unwrap());
+        let (mae, rmse) = (
+            truth["floor"][j]["mae_rad"].as_f64().unwrap(),
+            truth["floor"][j]["rmse_rad"].as_f64().unwrap(),
+        );
         eprintln!("synth arm2 floor {j}: MAE {:.3} mrad, RMSE {:.3} mrad", 1e3 * mae, 1e3 * rmse);
-        assert!((mae / 0.00055 - 1.0).abs() < 0.06 && (rmse / 0.000669 - 1.0).abs() < 0.05, "{j}: {mae} / {rmse}");
+        assert!(
+            (mae / 0.00055 - 1.0).abs() < 0.06 && (rmse / 0.000669 - 1.0).abs() < 0.05,
+            "{j}: {mae} / {rmse}"
+        );
     }
     let _ = std::fs::remove_dir_all(&out);
 }
@@ -450,14 +571,22 @@ fn arm2_commands_replayed_in_the_synth_loop_match_the_independent_recording() {
         let cmds = Commands {
             clock: ControlClock { rate_hz: 100.0, t0_us: 0 },
             first: cmd.rows[0][0].parse().unwrap(),
-            cmd: (0..cmd.rows.len()).map(|i| vec![cmd.f(i, cmd.col("shoulder.q_cmd")), cmd.f(i, cmd.col("elbow.q_cmd"))]).collect(),
+            cmd: (0..cmd.rows.len())
+                .map(|i| {
+                    vec![cmd.f(i, cmd.col("shoulder.q_cmd")), cmd.f(i, cmd.col("elbow.q_cmd"))]
+                })
+                .collect(),
         };
         let t: Vec<i64> = rec.column("t").iter().map(|x| (x * 1e6).round() as i64).collect();
         let tr = sim::run(&robot, &real, &cmds, &t, 2.0, None).unwrap();
         for (k, j) in joints.iter().enumerate() {
             let q = rec.column(&format!("{j}.q"));
-            let mae = q.iter().zip(&tr.q[k]).map(|(a, b)| (a - b).abs()).sum::<f64>() / q.len() as f64;
-            eprintln!("arm2.none {ep} {j}: synth loop vs independent recording MAE {:.3} mrad", 1e3 * mae);
+            let mae =
+                q.iter().zip(&tr.q[k]).map(|(a, b)| (a - b).abs()).sum::<f64>() / q.len() as f64;
+            eprintln!(
+                "arm2.none {ep} {j}: synth loop vs independent recording MAE {:.3} mrad",
+                1e3 * mae
+            );
             assert!(mae < 0.00065, "{ep} {j}: MAE {mae}");
         }
     }
@@ -489,12 +618,22 @@ fn native_effects_equal_the_same_values_compiled_by_mujoco() {
     // Each MuJoCo-native hidden effect on the plain hinge must give the same trajectory as the
     // value written in the MJCF and compiled by MuJoCo (the independent reference), including
     // armature on a "simple" dof, where MuJoCo reads the compiled dof_M0.
-    let s = modellint::synth::Settings { episodes: 1, duration_s: 3.0, noise: 0.0, qd_noise: 0.0, quant_bits: 0, drop: 0.0, heldout: 0, ..Default::default() };
+    let s = modellint::synth::Settings {
+        episodes: 1,
+        duration_s: 3.0,
+        noise: 0.0,
+        qd_noise: 0.0,
+        quant_bits: 0,
+        drop: 0.0,
+        heldout: 0,
+        ..Default::default()
+    };
     let joints = vec!["j".to_string()];
     let plain = hinge_with("plain", "", r#"kp="4" kv="0.06""#);
     let run = |r: &Robot, spec: &str| {
         let h = truth::parse(spec, &joints).unwrap();
-        modellint::synth::generate(r, &joints, &h, &s, &|_, _| {}).unwrap().episodes[0].q_true[0].clone()
+        modellint::synth::generate(r, &joints, &h, &s, &|_, _| {}).unwrap().episodes[0].q_true[0]
+            .clone()
     };
     let base = run(&plain, "none");
     for (spec, jattr, aattr) in [
@@ -520,5 +659,8 @@ fn native_effects_equal_the_same_values_compiled_by_mujoco() {
     let got = run(&plain, "torque_limit=0.3,0.3,1000");
     let worst = want.iter().zip(&got).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
     let moved = want.iter().zip(&base).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
-    assert!(worst < 0.01 * moved, "per-step clip differs from forcerange by {worst} rad (effect size {moved})");
+    assert!(
+        worst < 0.01 * moved,
+        "per-step clip differs from forcerange by {worst} rad (effect size {moved})"
+    );
 }

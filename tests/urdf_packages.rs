@@ -26,7 +26,11 @@ fn setup(tag: &str, mesh: &str) -> (PathBuf, PathBuf) {
     let d = std::env::temp_dir().join(format!("modellint_urdfpkg_{}_{tag}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(d.join("ws/mybot/meshes")).unwrap();
-    std::fs::write(d.join("ws/mybot/meshes/tet.obj"), "v 0 0 0\nv 0.1 0 0\nv 0 0.1 0\nv 0 0 0.1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n").unwrap();
+    std::fs::write(
+        d.join("ws/mybot/meshes/tet.obj"),
+        "v 0 0 0\nv 0.1 0 0\nv 0 0.1 0\nv 0 0 0.1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n",
+    )
+    .unwrap();
     let urdf = d.join("bot.urdf");
     std::fs::write(&urdf, URDF.replace("MESH", mesh)).unwrap();
     (d, urdf)
@@ -39,7 +43,10 @@ fn lint(urdf: &PathBuf, args: &[&str], rpp: Option<&str>) -> (Option<i32>, Strin
         c.env("ROS_PACKAGE_PATH", p);
     }
     let o = c.output().unwrap();
-    (o.status.code(), String::from_utf8_lossy(&o.stdout).into_owned() + &String::from_utf8_lossy(&o.stderr))
+    (
+        o.status.code(),
+        String::from_utf8_lossy(&o.stdout).into_owned() + &String::from_utf8_lossy(&o.stderr),
+    )
 }
 
 #[test]
@@ -54,7 +61,12 @@ fn package_paths_resolve_from_the_flag_or_ros_package_path() {
     // Without either: exit 2 at the first filename attribute (line 8, column 39).
     let (c, out) = lint(&urdf, &[], None);
     assert_eq!(c, Some(2), "{out}");
-    assert!(out.contains("bot.urdf:8:39") && out.contains("package `mybot` not found") && out.contains("--package mybot=DIR"), "{out}");
+    assert!(
+        out.contains("bot.urdf:8:39")
+            && out.contains("package `mybot` not found")
+            && out.contains("--package mybot=DIR"),
+        "{out}"
+    );
     let (c, out) = lint(&urdf, &["--package", "broken"], None);
     assert_eq!(c, Some(2), "{out}");
     assert!(out.contains("NAME=DIR"), "{out}");
@@ -67,14 +79,24 @@ fn missing_package_mesh_is_an_error_at_its_line() {
     let pkg = format!("mybot={}", d.join("ws/mybot").display());
     let (c, out) = lint(&urdf, &["--package", &pkg], None);
     assert_eq!(c, Some(2), "{out}");
-    assert!(out.contains("bot.urdf:9:42") && out.contains("mesh file not found") && out.contains("gone.obj"), "{out}");
+    assert!(
+        out.contains("bot.urdf:9:42")
+            && out.contains("mesh file not found")
+            && out.contains("gone.obj"),
+        "{out}"
+    );
     let _ = std::fs::remove_dir_all(&d);
 }
 
 #[test]
 fn urdf_compile_errors_carry_file_and_line() {
     let (d, urdf) = setup("compile", "tet.obj");
-    std::fs::write(&urdf, URDF.replace("MESH", "tet.obj").replace("<parent link=\"base\"/>", "<parent link=\"nolink\"/>")).unwrap();
+    std::fs::write(
+        &urdf,
+        URDF.replace("MESH", "tet.obj")
+            .replace("<parent link=\"base\"/>", "<parent link=\"nolink\"/>"),
+    )
+    .unwrap();
     let pkg = format!("mybot={}", d.join("ws/mybot").display());
     let (c, out) = lint(&urdf, &["--package", &pkg], None);
     assert_eq!(c, Some(2), "{out}");

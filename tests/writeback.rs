@@ -14,7 +14,8 @@ fn root() -> PathBuf {
 
 fn load(path: &Path) -> Robot {
     let mut map = SourceMap::default();
-    modellint::model::load(&mut map, path, None).unwrap_or_else(|e| panic!("{} does not load: {e}", path.display()))
+    modellint::model::load(&mut map, path, None)
+        .unwrap_or_else(|e| panic!("{} does not load: {e}", path.display()))
 }
 
 fn bin() -> Command {
@@ -30,7 +31,9 @@ fn tmp(name: &str) -> PathBuf {
 
 /// `$MODELLINT_SHARED_DATA`, else the first `shared/data` beside the crate or an ancestor.
 fn shared_data() -> Option<PathBuf> {
-    if let Some(d) = std::env::var_os("MODELLINT_SHARED_DATA").map(PathBuf::from).filter(|d| d.is_dir()) {
+    if let Some(d) =
+        std::env::var_os("MODELLINT_SHARED_DATA").map(PathBuf::from).filter(|d| d.is_dir())
+    {
         return Some(d);
     }
     root().ancestors().skip(1).take(3).map(|a| a.join("shared/data")).find(|d| d.is_dir())
@@ -38,17 +41,36 @@ fn shared_data() -> Option<PathBuf> {
 
 fn run(cmd: &mut Command) -> (Option<i32>, String, String) {
     let o = cmd.output().unwrap();
-    (o.status.code(), String::from_utf8_lossy(&o.stdout).into_owned(), String::from_utf8_lossy(&o.stderr).into_owned())
+    (
+        o.status.code(),
+        String::from_utf8_lossy(&o.stdout).into_owned(),
+        String::from_utf8_lossy(&o.stderr).into_owned(),
+    )
 }
 
 /// synth (hidden viscous damping `truth` on joints matching `glob`) → fit → --write-model into
 /// `out_dir` (another directory than the model's). Returns the fitted model path and fit JSON.
-fn synth_fit_write(model: &Path, glob: &str, truth: f64, work: &Path, extra: &[&str]) -> (PathBuf, serde_json::Value, String) {
+fn synth_fit_write(
+    model: &Path,
+    glob: &str,
+    truth: f64,
+    work: &Path,
+    extra: &[&str],
+) -> (PathBuf, serde_json::Value, String) {
     let recs = work.join("recordings");
     let (c, _, e) = run(bin()
         .arg("synth")
         .arg(model)
-        .args(["--effects", &format!("viscous_damping@{glob}={truth}"), "--joints", glob, "--episodes", "4", "--duration", "2"])
+        .args([
+            "--effects",
+            &format!("viscous_damping@{glob}={truth}"),
+            "--joints",
+            glob,
+            "--episodes",
+            "4",
+            "--duration",
+            "2",
+        ])
         .args(extra)
         .arg("--out")
         .arg(&recs));
@@ -58,7 +80,15 @@ fn synth_fit_write(model: &Path, glob: &str, truth: f64, work: &Path, extra: &[&
         .arg("fit")
         .arg(model)
         .arg(recs.join("episodes"))
-        .args(["--effects", "viscous_damping", "--joints", glob, "--format", "json", "--write-model"])
+        .args([
+            "--effects",
+            "viscous_damping",
+            "--joints",
+            glob,
+            "--format",
+            "json",
+            "--write-model",
+        ])
         .arg(&out)
         .arg("--write-actuators")
         .arg(work.join("out").join("act.toml")));
@@ -67,7 +97,15 @@ fn synth_fit_write(model: &Path, glob: &str, truth: f64, work: &Path, extra: &[&
     (out, v, stderr)
 }
 
-fn check_written(scene: &Path, robot_file: &Path, out: &Path, v: &serde_json::Value, stderr: &str, joints: &[&str], truth: f64) {
+fn check_written(
+    scene: &Path,
+    robot_file: &Path,
+    out: &Path,
+    v: &serde_json::Value,
+    stderr: &str,
+    joints: &[&str],
+    truth: f64,
+) {
     let dir = out.parent().unwrap();
     let stem = robot_file.file_stem().unwrap().to_string_lossy();
     let copy = dir.join(format!("fitted_{stem}.xml"));
@@ -76,10 +114,15 @@ fn check_written(scene: &Path, robot_file: &Path, out: &Path, v: &serde_json::Va
     let scene_out = std::fs::read_to_string(out).unwrap();
     assert!(scene_out.contains(&format!("file=\"fitted_{stem}.xml\"")), "{scene_out}");
     // What stderr said is in the JSON warnings.
-    let warnings: Vec<String> = v["warnings"].as_array().unwrap().iter().map(|w| w.as_str().unwrap().to_string()).collect();
+    let warnings: Vec<String> =
+        v["warnings"].as_array().unwrap().iter().map(|w| w.as_str().unwrap().to_string()).collect();
     for line in stderr.lines().filter_map(|l| l.strip_prefix("modellint: ")) {
-        let line = line.strip_prefix("note: ").or_else(|| line.strip_prefix("warning: ")).unwrap_or(line);
-        assert!(warnings.iter().any(|w| w == line), "stderr line `{line}` not in JSON warnings {warnings:?}");
+        let line =
+            line.strip_prefix("note: ").or_else(|| line.strip_prefix("warning: ")).unwrap_or(line);
+        assert!(
+            warnings.iter().any(|w| w == line),
+            "stderr line `{line}` not in JSON warnings {warnings:?}"
+        );
     }
     assert!(warnings.iter().any(|w| w.contains(&copy.display().to_string())), "{warnings:?}");
     // MuJoCo loads the written model; the fitted joints' damping differs from the input's and is
@@ -109,7 +152,11 @@ fn write_model_edits_the_included_robot_file_and_rebases_assets() {
     let m = work.join("model");
     std::fs::create_dir_all(m.join("assets")).unwrap();
     // A tetrahedron mesh: only loadable if meshdir is rebased correctly in the written copy.
-    std::fs::write(m.join("assets/tet.obj"), "v 0 0 0\nv 0.05 0 0\nv 0 0.05 0\nv 0 0 0.05\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n").unwrap();
+    std::fs::write(
+        m.join("assets/tet.obj"),
+        "v 0 0 0\nv 0.05 0 0\nv 0 0.05 0\nv 0 0 0.05\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n",
+    )
+    .unwrap();
     let arm = std::fs::read_to_string(root().join("fixtures/gap/arm3.xml")).unwrap();
     let robot = arm
         .replace("<compiler angle=\"radian\" autolimits=\"true\"/>", "<compiler angle=\"radian\" autolimits=\"true\" meshdir=\"assets\"/>\n  <asset><mesh name=\"tet\" file=\"tet.obj\"/></asset>")
@@ -118,8 +165,20 @@ fn write_model_edits_the_included_robot_file_and_rebases_assets() {
     std::fs::write(m.join("arm.xml"), &robot).unwrap();
     std::fs::write(m.join("scene.xml"), "<mujoco model=\"scene\">\n  <include file=\"arm.xml\"/>\n  <worldbody><light pos=\"0 0 2\"/></worldbody>\n</mujoco>\n").unwrap();
     let (out, v, stderr) = synth_fit_write(&m.join("scene.xml"), "elbow_pitch", 0.6, &work, &[]);
-    check_written(&m.join("scene.xml"), &m.join("arm.xml"), &out, &v, &stderr, &["elbow_pitch"], 0.6);
-    assert_eq!(std::fs::read_to_string(m.join("arm.xml")).unwrap(), robot, "the original robot file was changed");
+    check_written(
+        &m.join("scene.xml"),
+        &m.join("arm.xml"),
+        &out,
+        &v,
+        &stderr,
+        &["elbow_pitch"],
+        0.6,
+    );
+    assert_eq!(
+        std::fs::read_to_string(m.join("arm.xml")).unwrap(),
+        robot,
+        "the original robot file was changed"
+    );
     let copy = std::fs::read_to_string(out.parent().unwrap().join("fitted_arm.xml")).unwrap();
     assert!(copy.contains("meshdir=\"../model/assets\""), "{copy}");
     let _ = std::fs::remove_dir_all(&work);
@@ -139,7 +198,15 @@ fn write_model_on_the_booster_t1_scene() {
     }
     let work = tmp("t1");
     let (out, v, stderr) = synth_fit_write(&scene, "*Knee*", 2.0, &work, &["--suspend", "0.5"]);
-    check_written(&scene, &data.join("models/booster_t1/t1.xml"), &out, &v, &stderr, &["Left_Knee_Pitch", "Right_Knee_Pitch"], 2.0);
+    check_written(
+        &scene,
+        &data.join("models/booster_t1/t1.xml"),
+        &out,
+        &v,
+        &stderr,
+        &["Left_Knee_Pitch", "Right_Knee_Pitch"],
+        2.0,
+    );
     let _ = std::fs::remove_dir_all(&work);
 }
 
@@ -148,7 +215,8 @@ fn write_model_refuses_urdf() {
     let model = root().join("fixtures/rules/urdf-mjcf-drift/urdf/valid.urdf");
     let robot = load(&model);
     let work = tmp("urdf");
-    let e = modellint::fit::writemodel::write_model(&model, &robot, &[], &work.join("o.xml")).unwrap_err();
+    let e = modellint::fit::writemodel::write_model(&model, &robot, &[], &work.join("o.xml"))
+        .unwrap_err();
     assert!(e.contains("is URDF"), "{e}");
     assert!(!work.join("o.xml").exists());
     let _ = std::fs::remove_dir_all(&work);
@@ -184,15 +252,33 @@ fn actuator_snippet_parses_as_python() {
         sel("backlash", "shoulder_pitch", &[("width", 0.01)]),
     ];
     let work = tmp("snippet");
-    let files = modellint::fit::writeback::write_actuators(&work.join("act.toml"), &robot, &selected).unwrap();
-    let py = files.iter().find(|p| p.extension().is_some_and(|x| x == "py")).expect("a .py file").clone();
+    let files =
+        modellint::fit::writeback::write_actuators(&work.join("act.toml"), &robot, &selected)
+            .unwrap();
+    let py = files
+        .iter()
+        .find(|p| p.extension().is_some_and(|x| x == "py"))
+        .expect("a .py file")
+        .clone();
     let text = std::fs::read_to_string(&py).unwrap();
     // arm3: timestep 0.001 s → a 0.02 s delay is 20 physics steps.
     assert!(text.contains("min_delay=20, max_delay=20"), "{text}");
     assert!(text.contains("armature=0.001489,"), "{text}");
-    assert!(toml::from_str::<toml::Value>(&std::fs::read_to_string(work.join("act.toml")).unwrap()).is_ok());
-    match Command::new("python3").arg("-c").arg("import ast, sys; ast.parse(open(sys.argv[1]).read())").arg(&py).output() {
-        Ok(o) => assert!(o.status.success(), "not valid Python:\n{text}\n{}", String::from_utf8_lossy(&o.stderr)),
+    assert!(
+        toml::from_str::<toml::Value>(&std::fs::read_to_string(work.join("act.toml")).unwrap())
+            .is_ok()
+    );
+    match Command::new("python3")
+        .arg("-c")
+        .arg("import ast, sys; ast.parse(open(sys.argv[1]).read())")
+        .arg(&py)
+        .output()
+    {
+        Ok(o) => assert!(
+            o.status.success(),
+            "not valid Python:\n{text}\n{}",
+            String::from_utf8_lossy(&o.stderr)
+        ),
         Err(_) => eprintln!("skipping: python3 not found; the snippet was not parsed"),
     }
     let _ = std::fs::remove_dir_all(&work);

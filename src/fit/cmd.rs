@@ -36,7 +36,9 @@ fn progress_bar(quiet: bool) -> Option<indicatif::ProgressBar> {
         return None;
     }
     let b = indicatif::ProgressBar::with_draw_target(None, indicatif::ProgressDrawTarget::stderr());
-    if let Ok(style) = indicatif::ProgressStyle::with_template("{spinner} modellint fit: {wide_msg}") {
+    if let Ok(style) =
+        indicatif::ProgressStyle::with_template("{spinner} modellint fit: {wide_msg}")
+    {
         b.set_style(style);
     }
     b.enable_steady_tick(std::time::Duration::from_millis(200));
@@ -97,9 +99,17 @@ pub fn run_fit(a: FitArgs) -> i32 {
             return fail(format!("--joints {g} matches no recorded joint"));
         }
     }
-    let replay = ReplayOptions { control_hz: a.control_hz, command_timing: a.command_timing, base: a.base, ..Default::default() };
+    let replay = ReplayOptions {
+        control_hz: a.control_hz,
+        command_timing: a.command_timing,
+        base: a.base,
+        ..Default::default()
+    };
     let families = match loaded.spec.as_ref() {
-        Some(s) => names.iter().filter_map(|n| s.joint(n).and_then(|f| f.motor).map(|m| (n.clone(), m))).collect(),
+        Some(s) => names
+            .iter()
+            .filter_map(|n| s.joint(n).and_then(|f| f.motor).map(|m| (n.clone(), m)))
+            .collect(),
         None => Default::default(),
     };
     let bar = progress_bar(a.quiet);
@@ -110,10 +120,24 @@ pub fn run_fit(a: FitArgs) -> i32 {
                 Some((i, n, c)) => format!("candidate {i}/{n}: {c}"),
                 None => p.phase.to_string(),
             };
-            b.set_message(format!("round {}: {what} · {} simulations · {:.0} s", p.round + 1, p.simulations, start.elapsed().as_secs_f64()));
+            b.set_message(format!(
+                "round {}: {what} · {} simulations · {:.0} s",
+                p.round + 1,
+                p.simulations,
+                start.elapsed().as_secs_f64()
+            ));
         }))
     });
-    let opts = FitOptions { holdout: a.holdout, effects: a.effects.clone(), joints, replay: replay.clone(), shooting_s: a.window, families, progress, ..Default::default() };
+    let opts = FitOptions {
+        holdout: a.holdout,
+        effects: a.effects.clone(),
+        joints,
+        replay: replay.clone(),
+        shooting_s: a.window,
+        families,
+        progress,
+        ..Default::default()
+    };
     let out = fit(robot, &recs, &opts);
     if let Some(b) = bar {
         b.finish_and_clear();
@@ -125,9 +149,14 @@ pub fn run_fit(a: FitArgs) -> i32 {
         return 2;
     }
     let spec = loaded.spec.as_ref();
-    let region = |name: &str| spec.and_then(|s| s.joint(name)).and_then(|f| f.region).unwrap_or_else(|| gap::region_from_name(name));
+    let region = |name: &str| {
+        spec.and_then(|s| s.joint(name))
+            .and_then(|f| f.region)
+            .unwrap_or_else(|| gap::region_from_name(name))
+    };
     let run = |applied| -> Result<(GapReport, Vec<Episode>), String> {
-        let eps: Result<Vec<Episode>, _> = simulate(robot, &out.heldout, applied, &replay).into_iter().collect();
+        let eps: Result<Vec<Episode>, _> =
+            simulate(robot, &out.heldout, applied, &replay).into_iter().collect();
         let eps = eps.map_err(|e| e.to_string())?;
         Ok((gap::compute(&out.heldout, &eps, &region, &GapOptions::default()), eps))
     };
@@ -224,19 +253,35 @@ pub fn run_fit(a: FitArgs) -> i32 {
                 .params
                 .iter()
                 .map(|(k, v)| {
-                    let unit = e.and_then(|e| e.params().iter().find(|p| p.name == k)).map_or("", |p| p.unit);
+                    let unit = e
+                        .and_then(|e| e.params().iter().find(|p| p.name == k))
+                        .map_or("", |p| p.unit);
                     let se = x.stderr.get(k).copied().unwrap_or(f64::INFINITY);
-                    let (v, se, unit) = if unit == "rad" { (deg(*v), deg(se), "°") } else { (*v, se, unit) };
+                    let (v, se, unit) =
+                        if unit == "rad" { (deg(*v), deg(se), "°") } else { (*v, se, unit) };
                     let se = if se.is_finite() { format!(" ± {se:.2e}") } else { " ± ?".into() };
                     let sep = if unit.is_empty() || unit == "°" { "" } else { " " };
                     format!("{k} = {v:.4}{se}{sep}{unit}")
                 })
                 .collect();
-            s.push_str(&format!("  {:<24} {:<28} {}\n", x.effect, x.joints.join(","), ps.join(", ")));
-            let ev: Vec<String> = ["corr", "explained_share", "lag_s", "implied_frictionloss", "implied_damping", "implied_armature", "bias_rad"]
-                .iter()
-                .filter_map(|k| x.evidence.get(*k).map(|v| format!("{k} {v:.3}")))
-                .collect();
+            s.push_str(&format!(
+                "  {:<24} {:<28} {}\n",
+                x.effect,
+                x.joints.join(","),
+                ps.join(", ")
+            ));
+            let ev: Vec<String> = [
+                "corr",
+                "explained_share",
+                "lag_s",
+                "implied_frictionloss",
+                "implied_damping",
+                "implied_armature",
+                "bias_rad",
+            ]
+            .iter()
+            .filter_map(|k| x.evidence.get(*k).map(|v| format!("{k} {v:.3}")))
+            .collect();
             s.push_str(&format!(
                 "      evidence: {}; when added, held-out error {:+.0} %{}\n",
                 if ev.is_empty() { "fitted jointly".to_string() } else { ev.join(", ") },
@@ -259,8 +304,12 @@ pub fn run_fit(a: FitArgs) -> i32 {
             after.gap_overall
         ));
         if !out.floors.is_empty() {
-            let f: Vec<String> = out.floors.iter().map(|(j, _, w)| format!("{j} {:.3}°", deg(w.sqrt()))).collect();
-            s.push_str(&format!("  noise floor (white part of the training residual, RMS): {}\n", f.join(", ")));
+            let f: Vec<String> =
+                out.floors.iter().map(|(j, _, w)| format!("{j} {:.3}°", deg(w.sqrt()))).collect();
+            s.push_str(&format!(
+                "  noise floor (white part of the training residual, RMS): {}\n",
+                f.join(", ")
+            ));
         }
         if !out.split_note.is_empty() {
             s.push_str(&format!("  ({})\n", out.split_note));
@@ -299,12 +348,19 @@ pub fn run_servo(model: &std::path::Path, recordings: &[std::path::PathBuf], eva
         }
     };
     if crate::fit::servo_fit::gains(&logs).len() < 2 {
-        eprintln!("modellint: {}: --servo needs logs of at least two firmware gains to hold one out", dir.display());
+        eprintln!(
+            "modellint: {}: --servo needs logs of at least two firmware gains to hold one out",
+            dir.display()
+        );
         return 2;
     }
     let o = crate::fit::servo_fit::FitOpts { max_evals: evals, ..Default::default() };
     let quiet = !std::io::IsTerminal::is_terminal(&std::io::stderr());
-    match crate::fit::servo_report::run(&robot, &logs, &o, &|m| if !quiet { eprintln!("{m}") }) {
+    match crate::fit::servo_report::run(&robot, &logs, &o, &|m| {
+        if !quiet {
+            eprintln!("{m}")
+        }
+    }) {
         Ok((report, _)) => {
             print!("{report}");
             0

@@ -97,7 +97,14 @@ fn percentile(x: &[f64], p: f64) -> f64 {
 /// Ranked candidates for every (effect, joint) over the given episodes. `joints`: the joints to
 /// diagnose (all recorded joints when empty). `allowed`: effect ids to consider (all when empty).
 /// Samples up to `gap_mask_s` after a gap in a recording are left out ([`gap_mask`]).
-pub fn diagnose(robot: &Robot, recs: &[Recording], eps: &[Episode], joints: &[String], allowed: &[String], gap_mask_s: f64) -> Vec<Candidate> {
+pub fn diagnose(
+    robot: &Robot,
+    recs: &[Recording],
+    eps: &[Episode],
+    joints: &[String],
+    allowed: &[String],
+    gap_mask_s: f64,
+) -> Vec<Candidate> {
     let mut names: Vec<String> = Vec::new();
     for r in recs {
         for j in &r.joints {
@@ -119,7 +126,15 @@ pub fn diagnose(robot: &Robot, recs: &[Recording], eps: &[Episode], joints: &[St
                 _ => None,
             })
             .unwrap_or((0.0, 0.0));
-        let mut s = Samples { r: vec![], qd: vec![], qdd: vec![], u: vec![], tau: vec![], qrel: vec![], at: vec![] };
+        let mut s = Samples {
+            r: vec![],
+            qd: vec![],
+            qdd: vec![],
+            u: vec![],
+            tau: vec![],
+            qrel: vec![],
+            at: vec![],
+        };
         for (e, (rec, ep)) in recs.iter().zip(eps).enumerate() {
             let Some(k) = rec.joints.iter().position(|j| j.name == *name) else { continue };
             let jt = &rec.joints[k];
@@ -150,7 +165,11 @@ pub fn diagnose(robot: &Robot, recs: &[Recording], eps: &[Episode], joints: &[St
         let qd_rms = rms(&s.qd).max(1e-6);
         let u_rms = rms(&s.u).max(1e-9);
         let p80 = percentile(&s.tau.iter().map(|x| x.abs()).collect::<Vec<_>>(), 0.8);
-        let mut push = |effect: &'static str, f: &[f64], raw: bool, extra: Vec<(&str, f64)>, implied: Option<(&str, f64)>| {
+        let mut push = |effect: &'static str,
+                        f: &[f64],
+                        raw: bool,
+                        extra: Vec<(&str, f64)>,
+                        implied: Option<(&str, f64)>| {
             if !ok(effect) {
                 return;
             }
@@ -158,7 +177,10 @@ pub fn diagnose(robot: &Robot, recs: &[Recording], eps: &[Episode], joints: &[St
             let mut ev = BTreeMap::new();
             ev.insert("coef".to_string(), c);
             ev.insert("corr".to_string(), corr);
-            ev.insert("explained_share".to_string(), if res_rms > 0.0 { ems / (res_rms * res_rms) } else { 0.0 });
+            ev.insert(
+                "explained_share".to_string(),
+                if res_rms > 0.0 { ems / (res_rms * res_rms) } else { 0.0 },
+            );
             for (k, v) in extra {
                 ev.insert(k.to_string(), v);
             }
@@ -167,22 +189,27 @@ pub fn diagnose(robot: &Robot, recs: &[Recording], eps: &[Episode], joints: &[St
             {
                 ev.insert(k.to_string(), scale * c * kp);
             }
-            out.push(Candidate { effect, joint: name.clone(), explained_rms: ems.sqrt(), residual_rms: res_rms, evidence: ev });
+            out.push(Candidate {
+                effect,
+                joint: name.clone(),
+                explained_rms: ems.sqrt(),
+                residual_rms: res_rms,
+                evidence: ev,
+            });
         };
         // Delay: lag L ∈ [0, 100 ms] maximising the fit of r by q_sim(t − L) − q_sim(t).
         if ok("action_delay") {
             let mut best = (0.0, f64::INFINITY, Vec::new());
             for l in 0..=100 {
                 let lag = l as f64 * 1e-3;
-                let f: Vec<f64> = s
-                    .at
-                    .iter()
-                    .map(|&(e, i)| {
-                        let k = recs[e].joints.iter().position(|j| j.name == *name).unwrap();
-                        let ep = &eps[e];
-                        interp_at(&ep.t, &ep.q_sim[k], ep.t[i] - lag) - ep.q_sim[k][i]
-                    })
-                    .collect();
+                let f: Vec<f64> =
+                    s.at.iter()
+                        .map(|&(e, i)| {
+                            let k = recs[e].joints.iter().position(|j| j.name == *name).unwrap();
+                            let ep = &eps[e];
+                            interp_at(&ep.t, &ep.q_sim[k], ep.t[i] - lag) - ep.q_sim[k][i]
+                        })
+                        .collect();
                 let sse: f64 = s.r.iter().zip(&f).map(|(r, f)| (r - f).powi(2)).sum();
                 if sse < best.1 {
                     best = (lag, sse, f);
@@ -200,7 +227,8 @@ pub fn diagnose(robot: &Robot, recs: &[Recording], eps: &[Episode], joints: &[St
         let vs = 0.2 * qd_rms;
         let st: Vec<f64> = s.qd.iter().map(|v| v.signum() * (-(v / vs).powi(2)).exp()).collect();
         push("stribeck_friction", &st, false, vec![], None);
-        let ld: Vec<f64> = s.qd.iter().zip(&s.tau).map(|(v, t)| (v / (0.02 * qd_rms)).tanh() * t.abs()).collect();
+        let ld: Vec<f64> =
+            s.qd.iter().zip(&s.tau).map(|(v, t)| (v / (0.02 * qd_rms)).tanh() * t.abs()).collect();
         push("load_dependent_friction", &ld, false, vec![], None);
         let sat: Vec<f64> = s.tau.iter().map(|t| t.signum() * (t.abs() - p80).max(0.0)).collect();
         push("torque_limit", &sat, false, vec![("tau_p80", p80)], None);

@@ -187,7 +187,12 @@ impl Default for NelderMeadOpts {
 /// search is restarted around the best point (a collapsed simplex on a bound
 /// face can otherwise stall); it is declared converged when a restart no
 /// longer improves the best value by more than `ftol`.
-pub fn nelder_mead(f: &dyn Fn(&[f64]) -> f64, x0: &[f64], b: &Bounds, o: &NelderMeadOpts) -> OptResult {
+pub fn nelder_mead(
+    f: &dyn Fn(&[f64]) -> f64,
+    x0: &[f64],
+    b: &Bounds,
+    o: &NelderMeadOpts,
+) -> OptResult {
     let Some(sp) = Space::new(b, x0.len()) else {
         return invalid_result(x0);
     };
@@ -211,7 +216,11 @@ pub fn nelder_mead(f: &dyn Fn(&[f64]) -> f64, x0: &[f64], b: &Bounds, o: &Nelder
     } else {
         (1.0, 2.0, 0.5, 0.5)
     };
-    let step0 = if o.initial_step.is_finite() && o.initial_step > 0.0 { o.initial_step.min(0.5) } else { 0.15 };
+    let step0 = if o.initial_step.is_finite() && o.initial_step > 0.0 {
+        o.initial_step.min(0.5)
+    } else {
+        0.15
+    };
     let xtol = if o.xtol.is_finite() { o.xtol.max(0.0) } else { 1e-6 };
     let ftol = if o.ftol.is_finite() { o.ftol.max(0.0) } else { 1e-10 };
 
@@ -223,7 +232,11 @@ pub fn nelder_mead(f: &dyn Fn(&[f64]) -> f64, x0: &[f64], b: &Bounds, o: &Nelder
 
     'restarts: for restart in 0..=MAX_RESTARTS {
         // Build simplex around the best point, stepping inward at the bounds.
-        let step = if restart == 0 { step0 } else { (step0 * 0.5f64.powi(restart as i32)).max(10.0 * xtol).min(step0) };
+        let step = if restart == 0 {
+            step0
+        } else {
+            (step0 * 0.5f64.powi(restart as i32)).max(10.0 * xtol).min(step0)
+        };
         let mut pts: Vec<Vec<f64>> = vec![best_u.clone()];
         let mut fs: Vec<f64> = vec![best_f];
         for i in 0..n {
@@ -272,7 +285,9 @@ pub fn nelder_mead(f: &dyn Fn(&[f64]) -> f64, x0: &[f64], b: &Bounds, o: &Nelder
                 }
             }
             let worst = pts[n].clone();
-            let along = |t: f64| -> Vec<f64> { c.iter().zip(&worst).map(|(ci, wi)| clamp01(ci + t * (ci - wi))).collect() };
+            let along = |t: f64| -> Vec<f64> {
+                c.iter().zip(&worst).map(|(ci, wi)| clamp01(ci + t * (ci - wi))).collect()
+            };
 
             let xr = along(alpha);
             let fr = feval(&xr, &mut evals);
@@ -314,7 +329,11 @@ pub fn nelder_mead(f: &dyn Fn(&[f64]) -> f64, x0: &[f64], b: &Bounds, o: &Nelder
                 if evals >= o.max_evals {
                     break;
                 }
-                let p: Vec<f64> = pts[i].iter().zip(&pts[0]).map(|(pi, bi)| clamp01(bi + delta * (pi - bi))).collect();
+                let p: Vec<f64> = pts[i]
+                    .iter()
+                    .zip(&pts[0])
+                    .map(|(pi, bi)| clamp01(bi + delta * (pi - bi)))
+                    .collect();
                 fs[i] = feval(&p, &mut evals);
                 pts[i] = p;
             }
@@ -377,7 +396,12 @@ struct CmaRun {
 /// sequentially from the seeded RNG and fitnesses collected in sample order, so
 /// the result is independent of the thread count. `converged` reports whether
 /// the run that produced the best point stopped on a tolerance criterion.
-pub fn cmaes(f: &(dyn Fn(&[f64]) -> f64 + Sync), x0: &[f64], b: &Bounds, o: &CmaesOpts) -> OptResult {
+pub fn cmaes(
+    f: &(dyn Fn(&[f64]) -> f64 + Sync),
+    x0: &[f64],
+    b: &Bounds,
+    o: &CmaesOpts,
+) -> OptResult {
     let Some(sp) = Space::new(b, x0.len()) else {
         return invalid_result(x0);
     };
@@ -405,7 +429,8 @@ pub fn cmaes(f: &(dyn Fn(&[f64]) -> f64 + Sync), x0: &[f64], b: &Bounds, o: &Cma
         if evals + lambda > o.max_evals {
             break;
         }
-        let start: Vec<f64> = if restart == 0 { u0.clone() } else { (0..n).map(|_| rng.uniform()).collect() };
+        let start: Vec<f64> =
+            if restart == 0 { u0.clone() } else { (0..n).map(|_| rng.uniform()).collect() };
         let run = cma_run(f, &sp, &start, sigma0, lambda, ftol, o.max_evals, &mut evals, &mut rng);
         if run.best_f < best_f {
             best_f = run.best_f;
@@ -434,7 +459,8 @@ fn cma_run(
     let n = start.len();
     let nf = n as f64;
     let mu = (lambda / 2).max(1);
-    let raw_w: Vec<f64> = (0..mu).map(|i| ((mu as f64) + 0.5).ln() - ((i + 1) as f64).ln()).collect();
+    let raw_w: Vec<f64> =
+        (0..mu).map(|i| ((mu as f64) + 0.5).ln() - ((i + 1) as f64).ln()).collect();
     let wsum: f64 = raw_w.iter().sum();
     let w: Vec<f64> = raw_w.iter().map(|v| v / wsum).collect();
     let mueff = 1.0 / w.iter().map(|v| v * v).sum::<f64>();
@@ -442,7 +468,8 @@ fn cma_run(
     let ds = 1.0 + 2.0 * (((mueff - 1.0) / (nf + 1.0)).sqrt() - 1.0).max(0.0) + cs;
     let cc = (4.0 + mueff / nf) / (nf + 4.0 + 2.0 * mueff / nf);
     let c1 = 2.0 / ((nf + 1.3).powi(2) + mueff);
-    let cmu = (1.0 - c1).min(2.0 * (mueff - 2.0 + 1.0 / mueff) / ((nf + 2.0).powi(2) + mueff)).max(0.0);
+    let cmu =
+        (1.0 - c1).min(2.0 * (mueff - 2.0 + 1.0 / mueff) / ((nf + 2.0).powi(2) + mueff)).max(0.0);
     let chin = nf.sqrt() * (1.0 - 1.0 / (4.0 * nf) + 1.0 / (21.0 * nf * nf));
     let hist_len = 10 + (30.0 * nf / lambda as f64).ceil() as usize;
     let max_gens = 100 + (150.0 * (nf + 3.0).powi(2) / (lambda as f64).sqrt()) as usize;
@@ -552,7 +579,8 @@ fn cma_run(
             hist.pop_front();
         }
         if hist.len() == hist_len {
-            let pop_hi = fs.iter().cloned().filter(|v| v.is_finite()).fold(f64::NEG_INFINITY, f64::max);
+            let pop_hi =
+                fs.iter().cloned().filter(|v| v.is_finite()).fold(f64::NEG_INFINITY, f64::max);
             let hi = hist.iter().cloned().fold(pop_hi, f64::max);
             let lo = hist.iter().cloned().fold(f64::INFINITY, f64::min);
             if hi - lo <= ftol && fs[idx[0]].is_finite() {
@@ -583,9 +611,21 @@ fn cma_run(
 /// until it is narrower than `tol` or `max_evals` evaluations have been spent.
 /// The best point ever evaluated is returned. `lo > hi` is swapped;
 /// non-finite bounds or `max_evals == 0` return `f = +∞` without evaluating.
-pub fn golden_section(f: &dyn Fn(f64) -> f64, lo: f64, hi: f64, tol: f64, max_evals: usize) -> (f64, f64) {
+pub fn golden_section(
+    f: &dyn Fn(f64) -> f64,
+    lo: f64,
+    hi: f64,
+    tol: f64,
+    max_evals: usize,
+) -> (f64, f64) {
     if !lo.is_finite() || !hi.is_finite() || max_evals == 0 {
-        let x = if lo.is_finite() { lo } else if hi.is_finite() { hi } else { 0.0 };
+        let x = if lo.is_finite() {
+            lo
+        } else if hi.is_finite() {
+            hi
+        } else {
+            0.0
+        };
         return (x, f64::INFINITY);
     }
     let (lo, hi) = if lo <= hi { (lo, hi) } else { (hi, lo) };
@@ -610,7 +650,8 @@ pub fn golden_section(f: &dyn Fn(f64) -> f64, lo: f64, hi: f64, tol: f64, max_ev
         let v = ev(x, &mut evals, &mut best);
         return (x, v);
     }
-    let grid: Vec<f64> = (0..n_grid).map(|i| lo + (hi - lo) * i as f64 / (n_grid - 1) as f64).collect();
+    let grid: Vec<f64> =
+        (0..n_grid).map(|i| lo + (hi - lo) * i as f64 / (n_grid - 1) as f64).collect();
     let gf: Vec<f64> = grid.iter().map(|&x| ev(x, &mut evals, &mut best)).collect();
     // First index of the minimum (deterministic on ties).
     let ib = (0..n_grid).fold(0, |b, i| if gf[i] < gf[b] { i } else { b });
@@ -687,15 +728,28 @@ pub struct LmResult {
 /// differs from the one at `x0`, count as failures: such trial steps are
 /// rejected (damping increased), such Jacobian columns fall back to the
 /// opposite-side difference or zero.
-pub fn levenberg_marquardt(r: &(dyn Fn(&[f64]) -> Vec<f64> + Sync), x0: &[f64], b: &Bounds, o: &LmOpts) -> LmResult {
-    let fail = |x: Vec<f64>| LmResult { x, cost: f64::INFINITY, jacobian: vec![], iters: 0, converged: false };
+pub fn levenberg_marquardt(
+    r: &(dyn Fn(&[f64]) -> Vec<f64> + Sync),
+    x0: &[f64],
+    b: &Bounds,
+    o: &LmOpts,
+) -> LmResult {
+    let fail = |x: Vec<f64>| LmResult {
+        x,
+        cost: f64::INFINITY,
+        jacobian: vec![],
+        iters: 0,
+        converged: false,
+    };
     let Some(sp) = Space::new(b, x0.len()) else {
         return fail(x0.to_vec());
     };
     let np = x0.len();
     let n = sp.dim();
     let mut u = sp.to_unit(x0);
-    let Some(mut res) = Some(r(&sp.params_of(&u))).filter(|v| !v.is_empty() && v.iter().all(|x| x.is_finite())) else {
+    let Some(mut res) =
+        Some(r(&sp.params_of(&u))).filter(|v| !v.is_empty() && v.iter().all(|x| x.is_finite()))
+    else {
         return fail(sp.params_of(&u));
     };
     let m = res.len();
@@ -746,7 +800,8 @@ pub fn levenberg_marquardt(r: &(dyn Fn(&[f64]) -> Vec<f64> + Sync), x0: &[f64], 
         jac = Some(j);
 
         // Projected gradient: components pushing out of the box don't count.
-        let active: Vec<bool> = (0..n).map(|k| (u[k] <= 0.0 && g[k] > 0.0) || (u[k] >= 1.0 && g[k] < 0.0)).collect();
+        let active: Vec<bool> =
+            (0..n).map(|k| (u[k] <= 0.0 && g[k] > 0.0) || (u[k] >= 1.0 && g[k] < 0.0)).collect();
         let pg = (0..n).map(|k| if active[k] { 0.0 } else { g[k].abs() }).fold(0.0, f64::max);
         if pg <= tol * 1e-4 * cost.max(f64::MIN_POSITIVE) {
             converged = true;
@@ -866,7 +921,8 @@ mod tests {
         assert!(r.converged);
         // Corner optimum, 3-D, with a fixed parameter (lo == hi) that must stay put.
         let b = Bounds { lo: vec![0.0, 0.0, 0.7, 0.0], hi: vec![1.0, 1.0, 0.7, 1.0] };
-        let f = |x: &[f64]| (x[0] - 3.0).powi(2) + (x[1] + 2.0).powi(2) + (x[3] - 0.25).powi(2) + x[2];
+        let f =
+            |x: &[f64]| (x[0] - 3.0).powi(2) + (x[1] + 2.0).powi(2) + (x[3] - 0.25).powi(2) + x[2];
         let r = nelder_mead(&f, &[0.5, 0.5, 123.0, 0.5], &b, &NelderMeadOpts::default());
         assert_eq!(r.x[0], 1.0);
         assert_eq!(r.x[1], 0.0);
@@ -893,7 +949,10 @@ mod tests {
         // Same seed in a single-threaded pool: bit-identical.
         let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
         let r2 = pool.install(|| cmaes(&rastrigin, &[1.0, 2.0, 3.0], &b, &o));
-        assert_eq!(r1.x.iter().map(|v| v.to_bits()).collect::<Vec<_>>(), r2.x.iter().map(|v| v.to_bits()).collect::<Vec<_>>());
+        assert_eq!(
+            r1.x.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+            r2.x.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+        );
         assert_eq!(r1.f.to_bits(), r2.f.to_bits());
         assert_eq!(r1.evals, r2.evals);
         // A different seed explores differently.
@@ -924,7 +983,8 @@ mod tests {
     #[test]
     fn golden_multimodal_picks_global() {
         // Broad local minimum at -1 (depth 1), narrow global at 2.1 (depth 2).
-        let f = |x: f64| -2.0 * (-((x - 2.1) / 0.3).powi(2)).exp() - (-((x + 1.0) / 1.0).powi(2)).exp();
+        let f =
+            |x: f64| -2.0 * (-((x - 2.1) / 0.3).powi(2)).exp() - (-((x + 1.0) / 1.0).powi(2)).exp();
         let count = AtomicUsize::new(0);
         let fc = |x: f64| {
             count.fetch_add(1, Ordering::Relaxed);
@@ -971,7 +1031,9 @@ mod tests {
         let mut within2 = 0;
         for seed in 0..n_seeds {
             let (t, y) = exp_data(seed, &truth, sigma);
-            let r = |p: &[f64]| t.iter().zip(&y).map(|(&ti, &yi)| exp_model(p, ti) - yi).collect::<Vec<f64>>();
+            let r = |p: &[f64]| {
+                t.iter().zip(&y).map(|(&ti, &yi)| exp_model(p, ti) - yi).collect::<Vec<f64>>()
+            };
             let fit = levenberg_marquardt(&r, &[1.0, 0.5, 0.0], &b, &o);
             assert!(fit.converged, "seed {seed}: {fit:?}");
             let resid = r(&fit.x);
@@ -993,7 +1055,12 @@ mod tests {
             }
             if seed == 0 {
                 for k in 0..3 {
-                    assert!((fit.x[k] - truth[k]).abs() < 2.0 * u.stderr[k], "param {k}: {:?} {:?}", fit.x, u.stderr);
+                    assert!(
+                        (fit.x[k] - truth[k]).abs() < 2.0 * u.stderr[k],
+                        "param {k}: {:?} {:?}",
+                        fit.x,
+                        u.stderr
+                    );
                 }
             }
             est.push(fit.x.clone());
@@ -1003,12 +1070,17 @@ mod tests {
         assert!(within2 >= 40, "only {within2}/50 within 2 stderr");
         for k in 0..3 {
             let mean = est.iter().map(|e| e[k]).sum::<f64>() / n_seeds as f64;
-            let emp = (est.iter().map(|e| (e[k] - mean).powi(2)).sum::<f64>() / (n_seeds - 1) as f64).sqrt();
+            let emp = (est.iter().map(|e| (e[k] - mean).powi(2)).sum::<f64>()
+                / (n_seeds - 1) as f64)
+                .sqrt();
             let p = pred.iter().map(|s| s[k]).sum::<f64>() / n_seeds as f64;
             let ratio = p / emp;
             assert!((1.0 / 1.5..=1.5).contains(&ratio), "param {k}: predicted {p} empirical {emp}");
             // Estimator is unbiased to well within its spread.
-            assert!((mean - truth[k]).abs() < 3.0 * emp / (n_seeds as f64).sqrt() + 1e-3, "param {k} mean {mean}");
+            assert!(
+                (mean - truth[k]).abs() < 3.0 * emp / (n_seeds as f64).sqrt() + 1e-3,
+                "param {k} mean {mean}"
+            );
         }
     }
 
@@ -1018,7 +1090,9 @@ mod tests {
         let truth = [2.0, 1.3, 0.5];
         let (t, y) = exp_data(1, &truth, 0.0);
         let b = Bounds { lo: vec![0.0, 0.01, -2.0], hi: vec![5.0, 5.0, 2.0] };
-        let r = |p: &[f64]| t.iter().zip(&y).map(|(&ti, &yi)| exp_model(p, ti) - yi).collect::<Vec<f64>>();
+        let r = |p: &[f64]| {
+            t.iter().zip(&y).map(|(&ti, &yi)| exp_model(p, ti) - yi).collect::<Vec<f64>>()
+        };
         let fit = levenberg_marquardt(&r, &[1.0, 0.5, 0.0], &b, &LmOpts::default());
         for k in 0..3 {
             assert!((fit.x[k] - truth[k]).abs() < 1e-6, "{fit:?}");
@@ -1032,14 +1106,24 @@ mod tests {
         // Reference: Nelder–Mead on the same problem with c fixed at the bound.
         let b3 = Bounds { lo: vec![0.0, 0.01, 0.8], hi: vec![5.0, 5.0, 0.8] };
         let sse = |p: &[f64]| 0.5 * r(p).iter().map(|v| v * v).sum::<f64>();
-        let nm = nelder_mead(&sse, &[1.0, 0.5, 0.8], &b3, &NelderMeadOpts { xtol: 1e-10, ftol: 1e-15, ..Default::default() });
+        let nm = nelder_mead(
+            &sse,
+            &[1.0, 0.5, 0.8],
+            &b3,
+            &NelderMeadOpts { xtol: 1e-10, ftol: 1e-15, ..Default::default() },
+        );
         assert!((fit2.cost - nm.f).abs() < 1e-9 * (1.0 + nm.f), "{fit2:?} {nm:?}");
-        assert!((fit2.x[0] - nm.x[0]).abs() < 1e-4 && (fit2.x[1] - nm.x[1]).abs() < 1e-4, "{fit2:?} {nm:?}");
+        assert!(
+            (fit2.x[0] - nm.x[0]).abs() < 1e-4 && (fit2.x[1] - nm.x[1]).abs() < 1e-4,
+            "{fit2:?} {nm:?}"
+        );
         // Linear case y = 3 + 2 t: stderr equals the OLS closed form.
         let ts: Vec<f64> = (0..20).map(|i| i as f64).collect();
         let mut rng = Rng::new(11);
         let ys: Vec<f64> = ts.iter().map(|&x| 3.0 + 2.0 * x + 0.3 * rng.normal()).collect();
-        let rl = |p: &[f64]| ts.iter().zip(&ys).map(|(&x, &y)| p[0] + p[1] * x - y).collect::<Vec<f64>>();
+        let rl = |p: &[f64]| {
+            ts.iter().zip(&ys).map(|(&x, &y)| p[0] + p[1] * x - y).collect::<Vec<f64>>()
+        };
         let bl = Bounds { lo: vec![-10.0, -10.0], hi: vec![10.0, 10.0] };
         let fl = levenberg_marquardt(&rl, &[0.0, 0.0], &bl, &LmOpts::default());
         let n = 20.0;
@@ -1048,8 +1132,16 @@ mod tests {
         let sxy: f64 = ts.iter().zip(&ys).map(|(x, y)| x * y).sum();
         let slope = (n * sxy - sx * sy) / (n * sxx - sx * sx);
         let icpt = (sy - slope * sx) / n;
-        assert!((fl.x[1] - slope).abs() < 1e-7 && (fl.x[0] - icpt).abs() < 1e-6, "{fl:?} {icpt} {slope}");
-        let u = super::super::stats::uncertainty_from_jacobian(&fl.jacobian, &rl(&fl.x), 2, &[20.0, 20.0]);
+        assert!(
+            (fl.x[1] - slope).abs() < 1e-7 && (fl.x[0] - icpt).abs() < 1e-6,
+            "{fl:?} {icpt} {slope}"
+        );
+        let u = super::super::stats::uncertainty_from_jacobian(
+            &fl.jacobian,
+            &rl(&fl.x),
+            2,
+            &[20.0, 20.0],
+        );
         let s2 = 2.0 * fl.cost / (n - 2.0);
         let se_slope = (s2 * n / (n * sxx - sx * sx)).sqrt();
         assert!((u.stderr[1] / se_slope - 1.0).abs() < 1e-6);
@@ -1058,7 +1150,9 @@ mod tests {
     #[test]
     fn nan_regions_avoided() {
         // Unconstrained optimum (1,1) sits in a region where the "simulation" fails.
-        let f = |x: &[f64]| if x[0] + x[1] > 1.5 { f64::NAN } else { (x[0] - 1.0).powi(2) + (x[1] - 1.0).powi(2) };
+        let f = |x: &[f64]| {
+            if x[0] + x[1] > 1.5 { f64::NAN } else { (x[0] - 1.0).powi(2) + (x[1] - 1.0).powi(2) }
+        };
         let b = Bounds { lo: vec![-2.0, -2.0], hi: vec![2.0, 2.0] };
         let nm = nelder_mead(&f, &[-1.0, 0.0], &b, &NelderMeadOpts::default());
         assert!(nm.f.is_finite() && nm.x[0] + nm.x[1] <= 1.5, "{nm:?}");
@@ -1071,9 +1165,15 @@ mod tests {
         assert!(gf.is_finite() && (gx - 0.75).abs() < 1e-6, "{gx} {gf}");
         // Objective that is NaN everywhere: no panic, infinite f, not converged.
         let all_nan = |_: &[f64]| f64::NAN;
-        let r = nelder_mead(&all_nan, &[0.0, 0.0], &b, &NelderMeadOpts { max_evals: 100, ..Default::default() });
+        let r = nelder_mead(
+            &all_nan,
+            &[0.0, 0.0],
+            &b,
+            &NelderMeadOpts { max_evals: 100, ..Default::default() },
+        );
         assert!(r.f.is_infinite() && !r.converged && r.evals <= 100);
-        let r = cmaes(&all_nan, &[0.0, 0.0], &b, &CmaesOpts { max_evals: 200, ..Default::default() });
+        let r =
+            cmaes(&all_nan, &[0.0, 0.0], &b, &CmaesOpts { max_evals: 200, ..Default::default() });
         assert!(r.f.is_infinite() && !r.converged && r.evals <= 200);
         // LM: residuals NaN for b > 1.6; start at b = 1.5 so naive steps overshoot into it.
         let truth = [2.0, 1.3, 0.5];
@@ -1107,12 +1207,33 @@ mod tests {
             assert!(!r.converged && r.iters == 0);
         }
         // Zero budgets.
-        assert!(!nelder_mead(&f, &[0.5, 0.5], &b2, &NelderMeadOpts { max_evals: 0, ..Default::default() }).converged);
-        assert!(!cmaes(&f, &[0.5, 0.5], &b2, &CmaesOpts { max_evals: 0, ..Default::default() }).converged);
-        let r = cmaes(&f, &[0.5, 0.5], &b2, &CmaesOpts { max_evals: 3, popsize: Some(1), ..Default::default() });
+        assert!(
+            !nelder_mead(
+                &f,
+                &[0.5, 0.5],
+                &b2,
+                &NelderMeadOpts { max_evals: 0, ..Default::default() }
+            )
+            .converged
+        );
+        assert!(
+            !cmaes(&f, &[0.5, 0.5], &b2, &CmaesOpts { max_evals: 0, ..Default::default() })
+                .converged
+        );
+        let r = cmaes(
+            &f,
+            &[0.5, 0.5],
+            &b2,
+            &CmaesOpts { max_evals: 3, popsize: Some(1), ..Default::default() },
+        );
         assert!(r.evals <= 3 && r.f.is_finite());
         // Empty residual vector.
-        let r = levenberg_marquardt(&|_: &[f64]| vec![], &[0.5], &Bounds { lo: vec![0.0], hi: vec![1.0] }, &LmOpts::default());
+        let r = levenberg_marquardt(
+            &|_: &[f64]| vec![],
+            &[0.5],
+            &Bounds { lo: vec![0.0], hi: vec![1.0] },
+            &LmOpts::default(),
+        );
         assert!(!r.converged);
         // x0 outside the box and all-fixed parameters.
         let fixed = Bounds { lo: vec![0.3, 0.4], hi: vec![0.3, 0.4] };

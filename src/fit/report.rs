@@ -32,7 +32,11 @@ pub struct FitReport<'a> {
 }
 
 fn pct(before: f64, after: f64) -> String {
-    if before > 0.0 && before.is_finite() && after.is_finite() { format!("{:+.0} %", 100.0 * (after - before) / before) } else { "n/a".into() }
+    if before > 0.0 && before.is_finite() && after.is_finite() {
+        format!("{:+.0} %", 100.0 * (after - before) / before)
+    } else {
+        "n/a".into()
+    }
 }
 
 /// Four significant digits ("0.001489", "2.000"), scientific outside 1e-4..1e5.
@@ -74,9 +78,11 @@ fn missing_physics(sel: &[Selected]) -> String {
             .params
             .iter()
             .map(|(k, v)| {
-                let unit = e.and_then(|e| e.params().iter().find(|p| p.name == k)).map_or("", |p| p.unit);
+                let unit =
+                    e.and_then(|e| e.params().iter().find(|p| p.name == k)).map_or("", |p| p.unit);
                 let se = s.stderr.get(k).copied().unwrap_or(f64::INFINITY);
-                let se = if se.is_finite() { format!(" ± {}", sig_n(se, 2)) } else { " ± ?".into() };
+                let se =
+                    if se.is_finite() { format!(" ± {}", sig_n(se, 2)) } else { " ± ?".into() };
                 (k.clone(), format!("{}{se} {unit}", sig(*v)))
             })
             .collect();
@@ -84,7 +90,12 @@ fn missing_physics(sel: &[Selected]) -> String {
         for (i, (k, v)) in rows.iter().enumerate() {
             h.push_str("<tr>");
             if i == 0 {
-                let _ = write!(h, "<td rowspan=\"{n}\" class=\"l\">{}</td><td rowspan=\"{n}\" class=\"l\">{}</td>", esc(&s.effect), esc(&s.joints.join(", ")));
+                let _ = write!(
+                    h,
+                    "<td rowspan=\"{n}\" class=\"l\">{}</td><td rowspan=\"{n}\" class=\"l\">{}</td>",
+                    esc(&s.effect),
+                    esc(&s.joints.join(", "))
+                );
             }
             let _ = write!(h, "<td class=\"l\">{}</td><td>{}</td>", esc(k), esc(v));
             if i == 0 {
@@ -105,7 +116,9 @@ fn missing_physics(sel: &[Selected]) -> String {
 }
 
 fn summary(b: &GapReport, a: &GapReport) -> String {
-    let mut h = String::from("<h2>Held-out episodes: before → after</h2><table><tr><th>metric</th><th>before</th><th>after</th><th>change</th></tr>");
+    let mut h = String::from(
+        "<h2>Held-out episodes: before → after</h2><table><tr><th>metric</th><th>before</th><th>after</th><th>change</th></tr>",
+    );
     let rows: [(&str, f64, f64, usize); 5] = [
         ("position MAE [deg]", b.position_mae.to_degrees(), a.position_mae.to_degrees(), 3),
         ("position RMSE [deg]", b.position_rmse.to_degrees(), a.position_rmse.to_degrees(), 3),
@@ -114,8 +127,12 @@ fn summary(b: &GapReport, a: &GapReport) -> String {
         ("gap score (0 = no gap)", b.gap_overall, a.gap_overall, 3),
     ];
     for (name, x, y, d) in rows {
-        let change = if name.starts_with("correlation") { format!("{:+.3}", y - x) } else { pct(x, y) };
-        let _ = write!(h, "<tr><td class=\"l\">{name}</td><td>{x:.d$}</td><td>{y:.d$}</td><td>{change}</td></tr>");
+        let change =
+            if name.starts_with("correlation") { format!("{:+.3}", y - x) } else { pct(x, y) };
+        let _ = write!(
+            h,
+            "<tr><td class=\"l\">{name}</td><td>{x:.d$}</td><td>{y:.d$}</td><td>{change}</td></tr>"
+        );
     }
     h.push_str("</table>");
     h
@@ -123,18 +140,41 @@ fn summary(b: &GapReport, a: &GapReport) -> String {
 
 fn per_joint(b: &GapReport, a: &GapReport) -> String {
     let mut h = String::from("<h2>Error per joint: before → after</h2>");
-    let pairs: Vec<(&str, f64, f64)> =
-        b.per_joint.iter().filter_map(|jb| a.per_joint.iter().find(|ja| ja.name == jb.name).map(|ja| (jb.name.as_str(), jb.mae.to_degrees(), ja.mae.to_degrees()))).collect();
+    let pairs: Vec<(&str, f64, f64)> = b
+        .per_joint
+        .iter()
+        .filter_map(|jb| {
+            a.per_joint
+                .iter()
+                .find(|ja| ja.name == jb.name)
+                .map(|ja| (jb.name.as_str(), jb.mae.to_degrees(), ja.mae.to_degrees()))
+        })
+        .collect();
     if pairs.len() >= 2 {
         let groups: Vec<BarGroup> = pairs
             .iter()
-            .map(|(n, x, y)| BarGroup { label: n.to_string(), values: vec![*x, *y], tip: format!("{n}: {x:.3}° → {y:.3}°"), colours: vec![] })
+            .map(|(n, x, y)| BarGroup {
+                label: n.to_string(),
+                values: vec![*x, *y],
+                tip: format!("{n}: {x:.3}° → {y:.3}°"),
+                colours: vec![],
+            })
             .collect();
-        h.push_str(&svg::bar_chart("Position MAE per joint, held-out episodes [deg]", "MAE [deg]", &[("before the fit", GREY), ("after the fit", AFTER)], &groups));
+        h.push_str(&svg::bar_chart(
+            "Position MAE per joint, held-out episodes [deg]",
+            "MAE [deg]",
+            &[("before the fit", GREY), ("after the fit", AFTER)],
+            &groups,
+        ));
     }
     h.push_str("<table><tr><th>joint</th><th>MAE before [deg]</th><th>MAE after [deg]</th><th>change</th></tr>");
     for (n, x, y) in &pairs {
-        let _ = write!(h, "<tr><td class=\"l\">{}</td><td>{x:.3}</td><td>{y:.3}</td><td>{}</td></tr>", esc(n), pct(*x, *y));
+        let _ = write!(
+            h,
+            "<tr><td class=\"l\">{}</td><td>{x:.3}</td><td>{y:.3}</td><td>{}</td></tr>",
+            esc(n),
+            pct(*x, *y)
+        );
     }
     h.push_str("</table>");
     h
@@ -158,7 +198,9 @@ fn joints_to_plot(r: &FitReport) -> Vec<String> {
 }
 
 fn overlays(r: &FitReport, joints: &[String]) -> String {
-    let mut h = String::from("<h2>Real vs simulated, before and after the fit (held-out episode with the largest error before)</h2><div class=\"grid\">");
+    let mut h = String::from(
+        "<h2>Real vs simulated, before and after the fit (held-out episode with the largest error before)</h2><div class=\"grid\">",
+    );
     for jn in joints {
         let worst = r
             .before
@@ -170,18 +212,47 @@ fn overlays(r: &FitReport, joints: &[String]) -> String {
             .filter(|(_, x)| x.is_finite())
             .max_by(|a, b| a.1.total_cmp(&b.1));
         let Some((ei, _)) = worst else { continue };
-        let (Some(rec), Some(eb), Some(ea)) = (r.recs.get(ei), r.eps_before.get(ei), r.eps_after.get(ei)) else { continue };
-        let (Some(jt), Some(kb), Some(ka)) = (rec.joint(jn), eb.joints.iter().position(|x| x == jn), ea.joints.iter().position(|x| x == jn)) else { continue };
+        let (Some(rec), Some(eb), Some(ea)) =
+            (r.recs.get(ei), r.eps_before.get(ei), r.eps_after.get(ei))
+        else {
+            continue;
+        };
+        let (Some(jt), Some(kb), Some(ka)) = (
+            rec.joint(jn),
+            eb.joints.iter().position(|x| x == jn),
+            ea.joints.iter().position(|x| x == jn),
+        ) else {
+            continue;
+        };
         let t: Vec<f64> = rec.t.iter().map(|x| x - rec.t[0]).collect();
-        let file = rec.source.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default();
+        let file =
+            rec.source.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default();
         h.push_str(&line_plot(
             &format!("{jn}: {file}"),
             "time [s]",
             "position [deg]",
             &[
-                Series { x: &t, y: jt.q.iter().map(|v| v.to_degrees()).collect(), colour: REAL, label: "real".into(), dash: "" },
-                Series { x: &t, y: eb.q_sim[kb].iter().map(|v| v.to_degrees()).collect(), colour: BEFORE, label: "sim before".into(), dash: "5 3" },
-                Series { x: &t, y: ea.q_sim[ka].iter().map(|v| v.to_degrees()).collect(), colour: AFTER, label: "sim after".into(), dash: "" },
+                Series {
+                    x: &t,
+                    y: jt.q.iter().map(|v| v.to_degrees()).collect(),
+                    colour: REAL,
+                    label: "real".into(),
+                    dash: "",
+                },
+                Series {
+                    x: &t,
+                    y: eb.q_sim[kb].iter().map(|v| v.to_degrees()).collect(),
+                    colour: BEFORE,
+                    label: "sim before".into(),
+                    dash: "5 3",
+                },
+                Series {
+                    x: &t,
+                    y: ea.q_sim[ka].iter().map(|v| v.to_degrees()).collect(),
+                    colour: AFTER,
+                    label: "sim after".into(),
+                    dash: "",
+                },
             ],
             false,
         ));
@@ -191,18 +262,46 @@ fn overlays(r: &FitReport, joints: &[String]) -> String {
 }
 
 fn spectra(r: &FitReport, joints: &[String]) -> String {
-    let mut h = String::from("<h2>Power spectral density before → after (Welch, 256-sample Hann, 50 % overlap)</h2><div class=\"grid\">");
+    let mut h = String::from(
+        "<h2>Power spectral density before → after (Welch, 256-sample Hann, 50 % overlap)</h2><div class=\"grid\">",
+    );
     for jn in joints {
-        let (Some(ib), Some(ia)) = (r.before.per_joint.iter().position(|j| &j.name == jn), r.after.per_joint.iter().position(|j| &j.name == jn)) else { continue };
+        let (Some(ib), Some(ia)) = (
+            r.before.per_joint.iter().position(|j| &j.name == jn),
+            r.after.per_joint.iter().position(|j| &j.name == jn),
+        ) else {
+            continue;
+        };
         let (Some(pb), Some(pa)) = (r.before.psd.get(ib), r.after.psd.get(ia)) else { continue };
         h.push_str(&line_plot(
-            &format!("{jn}: spectral KL {:.3} → {:.3}", r.before.per_joint[ib].spectral_kl, r.after.per_joint[ia].spectral_kl),
+            &format!(
+                "{jn}: spectral KL {:.3} → {:.3}",
+                r.before.per_joint[ib].spectral_kl, r.after.per_joint[ia].spectral_kl
+            ),
             "frequency [Hz]",
             "PSD [rad²/Hz]",
             &[
-                Series { x: &pb.freqs, y: pb.real.clone(), colour: REAL, label: "real".into(), dash: "" },
-                Series { x: &pb.freqs, y: pb.sim.clone(), colour: BEFORE, label: "sim before".into(), dash: "5 3" },
-                Series { x: &pa.freqs, y: pa.sim.clone(), colour: AFTER, label: "sim after".into(), dash: "" },
+                Series {
+                    x: &pb.freqs,
+                    y: pb.real.clone(),
+                    colour: REAL,
+                    label: "real".into(),
+                    dash: "",
+                },
+                Series {
+                    x: &pb.freqs,
+                    y: pb.sim.clone(),
+                    colour: BEFORE,
+                    label: "sim before".into(),
+                    dash: "5 3",
+                },
+                Series {
+                    x: &pa.freqs,
+                    y: pa.sim.clone(),
+                    colour: AFTER,
+                    label: "sim after".into(),
+                    dash: "",
+                },
             ],
             true,
         ));
@@ -244,9 +343,7 @@ fn episodes(b: &GapReport, a: &GapReport) -> String {
 /// The page as a string (deterministic: same input, same bytes).
 pub fn html(r: &FitReport) -> String {
     let model = r.model.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default();
-    let mut h = String::from(
-        "<!doctype html><html><head><meta charset=\"utf-8\">",
-    );
+    let mut h = String::from("<!doctype html><html><head><meta charset=\"utf-8\">");
     let _ = write!(h, "<title>modellint fit: {}</title>", esc(&model));
     h.push_str(
         "<style>body{font-family:sans-serif;margin:20px;max-width:1360px}table{border-collapse:collapse;margin:6px 0}\

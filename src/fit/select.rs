@@ -22,11 +22,16 @@ use serde::Serialize;
 
 use crate::fit::diagnose::{Candidate, diagnose};
 use crate::fit::effects::{self, Applied, Effect, JointTarget, model_with, replay_with};
-use crate::fit::optim::{Bounds, CmaesOpts, LmOpts, LmResult, NelderMeadOpts, cmaes, golden_section, levenberg_marquardt, nelder_mead};
-use crate::fit::stats::{ar1_variance_inflation, bic, improvement_beyond_noise, uncertainty_from_jacobian, white_floor};
+use crate::fit::optim::{
+    Bounds, CmaesOpts, LmOpts, LmResult, NelderMeadOpts, cmaes, golden_section,
+    levenberg_marquardt, nelder_mead,
+};
+use crate::fit::split::{Split, split, windows};
+use crate::fit::stats::{
+    ar1_variance_inflation, bic, improvement_beyond_noise, uncertainty_from_jacobian, white_floor,
+};
 use crate::model::Robot;
 use crate::sim2real::metrics::gap_mask;
-use crate::fit::split::{Split, split, windows};
 use crate::sim2real::recording::Recording;
 use crate::sim2real::replay::{Episode, ReplayOptions};
 
@@ -207,7 +212,9 @@ impl<'a> Engine<'a> {
         let mut joints = Vec::new();
         for r in recs {
             for j in &r.joints {
-                if (opts.joints.is_empty() || opts.joints.contains(&j.name)) && !joints.contains(&j.name) {
+                if (opts.joints.is_empty() || opts.joints.contains(&j.name))
+                    && !joints.contains(&j.name)
+                {
                     joints.push(j.name.clone());
                 }
             }
@@ -216,9 +223,19 @@ impl<'a> Engine<'a> {
     }
 
     /// Reports progress through `opts.progress`, if any.
-    pub fn report(&self, round: usize, phase: &'static str, candidate: Option<(usize, usize, String)>) {
+    pub fn report(
+        &self,
+        round: usize,
+        phase: &'static str,
+        candidate: Option<(usize, usize, String)>,
+    ) {
         if let Some(p) = &self.opts.progress {
-            (p.0)(&ProgressInfo { round, phase, candidate, simulations: self.sims.load(std::sync::atomic::Ordering::Relaxed) });
+            (p.0)(&ProgressInfo {
+                round,
+                phase,
+                candidate,
+                simulations: self.sims.load(std::sync::atomic::Ordering::Relaxed),
+            });
         }
     }
 
@@ -228,7 +245,11 @@ impl<'a> Engine<'a> {
         let m = model_with(self.robot, applied);
         let eps: Vec<Episode> = recs
             .par_iter()
-            .map(|r| replay_with(self.robot, &m, r, applied, &self.opts.replay).ok().filter(|e| e.diverged.is_none()))
+            .map(|r| {
+                replay_with(self.robot, &m, r, applied, &self.opts.replay)
+                    .ok()
+                    .filter(|e| e.diverged.is_none())
+            })
             .collect::<Option<Vec<_>>>()?;
         let mut sse = 0.0;
         let mut n = 0usize;
@@ -299,14 +320,27 @@ impl<'a> Engine<'a> {
     }
 
     /// Residual vector (real − sim) on `joints`, subsampled to at most `max_len` entries.
-    fn residuals(&self, recs: &[Recording], applied: &[Applied], joints: &[String], max_len: usize) -> Option<Vec<f64>> {
+    fn residuals(
+        &self,
+        recs: &[Recording],
+        applied: &[Applied],
+        joints: &[String],
+        max_len: usize,
+    ) -> Option<Vec<f64>> {
         let e = self.errors(recs, applied)?;
         let mut out = Vec::new();
         for (rec, ep) in recs.iter().zip(&e.eps) {
             let scored = gap_mask(&rec.t, self.opts.gap_mask_s);
             for (k, jt) in rec.joints.iter().enumerate() {
                 if joints.contains(&jt.name) {
-                    out.extend(jt.q.iter().zip(&ep.q_sim[k]).zip(&scored).filter(|(_, s)| **s).map(|((a, b), _)| a - b).filter(|x| x.is_finite()));
+                    out.extend(
+                        jt.q.iter()
+                            .zip(&ep.q_sim[k])
+                            .zip(&scored)
+                            .filter(|(_, s)| **s)
+                            .map(|((a, b), _)| a - b)
+                            .filter(|x| x.is_finite()),
+                    );
                 }
             }
         }
@@ -316,14 +350,29 @@ impl<'a> Engine<'a> {
 
     /// Fits `effect` on `group` on top of `base`: returns the full parameter vector and the
     /// training RMSE.
-    pub fn fit_one(&self, train: &[Recording], base: &[Applied], effect: &'static dyn Effect, group: &[String]) -> (Vec<f64>, f64) {
+    pub fn fit_one(
+        &self,
+        train: &[Recording],
+        base: &[Applied],
+        effect: &'static dyn Effect,
+        group: &[String],
+    ) -> (Vec<f64>, f64) {
         self.fit_budget(train, base, effect, group, self.opts.max_evals)
     }
 
     /// [`Engine::fit_one`] with a budget of `max_evals` objective evaluations (twice that above
     /// one parameter; golden section stops earlier at its tolerance).
-    pub fn fit_budget(&self, train: &[Recording], base: &[Applied], effect: &'static dyn Effect, group: &[String], max_evals: usize) -> (Vec<f64>, f64) {
-        let Some(t) = JointTarget::of(self.robot, &group[0]) else { return (vec![], f64::INFINITY) };
+    pub fn fit_budget(
+        &self,
+        train: &[Recording],
+        base: &[Applied],
+        effect: &'static dyn Effect,
+        group: &[String],
+        max_evals: usize,
+    ) -> (Vec<f64>, f64) {
+        let Some(t) = JointTarget::of(self.robot, &group[0]) else {
+            return (vec![], f64::INFINITY);
+        };
         let m0 = model_with(self.robot, base);
         let full0 = effect.initial(&m0, &t);
         let (lo, hi) = effect.bounds(&m0, &t);
@@ -343,8 +392,14 @@ impl<'a> Engine<'a> {
             _ if effect.smooth() => {
                 // Gauss–Newton / Levenberg–Marquardt on the rollout residuals: k + 1 replays per
                 // iteration, converged in a handful (a derivative-free search needs ~40).
-                let res = |x: &[f64]| self.residuals(train, &make(x), &self.joints, usize::MAX).unwrap_or_default();
-                let o = LmOpts { max_iters: (max_evals / (k + 2)).clamp(2, 12), rel_step: 1e-3, tol: 1e-5 };
+                let res = |x: &[f64]| {
+                    self.residuals(train, &make(x), &self.joints, usize::MAX).unwrap_or_default()
+                };
+                let o = LmOpts {
+                    max_iters: (max_evals / (k + 2)).clamp(2, 12),
+                    rel_step: 1e-3,
+                    tol: 1e-5,
+                };
                 let r = levenberg_marquardt(&res, &x0, &b, &o);
                 let n = res_len(&r);
                 (r.x, if n > 0 { (2.0 * r.cost / n as f64).sqrt() } else { f64::INFINITY })
@@ -355,7 +410,12 @@ impl<'a> Engine<'a> {
                 (vec![x], f)
             }
             2 | 3 => {
-                let o = NelderMeadOpts { max_evals: max_evals * 2, xtol: 1e-3, ftol: 1e-12, initial_step: 0.1 };
+                let o = NelderMeadOpts {
+                    max_evals: max_evals * 2,
+                    xtol: 1e-3,
+                    ftol: 1e-12,
+                    initial_step: 0.1,
+                };
                 let r = nelder_mead(&obj, &x0, &b, &o);
                 (r.x, r.f)
             }
@@ -372,16 +432,37 @@ impl<'a> Engine<'a> {
 
     /// `true` when `effect` starts from the same parameter values on every joint of `group`
     /// (within 1e-9, relative), so that the group can share one parameter vector.
-    pub fn shared_start(&self, effect: &'static dyn Effect, base: &[Applied], group: &[String]) -> bool {
+    pub fn shared_start(
+        &self,
+        effect: &'static dyn Effect,
+        base: &[Applied],
+        group: &[String],
+    ) -> bool {
         let m0 = model_with(self.robot, base);
-        let starts: Vec<Vec<f64>> = group.iter().filter_map(|j| JointTarget::of(self.robot, j)).map(|t| effect.initial(&m0, &t)).collect();
+        let starts: Vec<Vec<f64>> = group
+            .iter()
+            .filter_map(|j| JointTarget::of(self.robot, j))
+            .map(|t| effect.initial(&m0, &t))
+            .collect();
         starts.len() == group.len()
-            && starts.windows(2).all(|w| w[0].len() == w[1].len() && w[0].iter().zip(&w[1]).all(|(a, b)| (a - b).abs() <= 1e-9 * a.abs().max(b.abs()).max(1.0)))
+            && starts.windows(2).all(|w| {
+                w[0].len() == w[1].len()
+                    && w[0]
+                        .iter()
+                        .zip(&w[1])
+                        .all(|(a, b)| (a - b).abs() <= 1e-9 * a.abs().max(b.abs()).max(1.0))
+            })
     }
 
     /// Linearised explained mean square of the residual by a probe step of candidate `c`
     /// (`None` when the probe changes nothing or diverges): returns (explained MS, coefficient).
-    fn sensitivity(&self, train: &[Recording], base: &[Applied], base_err: &Errors, c: &Candidate) -> Option<(f64, f64)> {
+    fn sensitivity(
+        &self,
+        train: &[Recording],
+        base: &[Applied],
+        base_err: &Errors,
+        c: &Candidate,
+    ) -> Option<(f64, f64)> {
         let effect = effects::by_id(c.effect)?;
         let t = JointTarget::of(self.robot, &c.joint)?;
         let m0 = model_with(self.robot, base);
@@ -429,7 +510,9 @@ impl<'a> Engine<'a> {
         let m0 = model_with(self.robot, &applied[..applied.len() - 1]);
         let (lo, hi) = effect.bounds(&m0, &t);
         let k = effect.fitted().min(last.params.len());
-        let Some(r0) = self.residuals(train, applied, &last.joints, 20_000) else { return (vec![f64::INFINITY; k], false) };
+        let Some(r0) = self.residuals(train, applied, &last.joints, 20_000) else {
+            return (vec![f64::INFINITY; k], false);
+        };
         let mut cols = Vec::with_capacity(k);
         for i in 0..k {
             let range = hi[i] - lo[i];
@@ -441,11 +524,14 @@ impl<'a> Engine<'a> {
             a.last_mut().unwrap().params[i] += h;
             match self.residuals(train, &a, &last.joints, 20_000) {
                 // Residuals are real − sim, so ∂r/∂p = −∂sim/∂p; the sign does not matter for J^T J.
-                Some(r1) if r1.len() == r0.len() => cols.push(r1.iter().zip(&r0).map(|(a, b)| (a - b) / h).collect::<Vec<f64>>()),
+                Some(r1) if r1.len() == r0.len() => {
+                    cols.push(r1.iter().zip(&r0).map(|(a, b)| (a - b) / h).collect::<Vec<f64>>())
+                }
                 _ => return (vec![f64::INFINITY; k], false),
             }
         }
-        let jac: Vec<Vec<f64>> = (0..r0.len()).map(|row| cols.iter().map(|c| c[row]).collect()).collect();
+        let jac: Vec<Vec<f64>> =
+            (0..r0.len()).map(|row| cols.iter().map(|c| c[row]).collect()).collect();
         let ranges: Vec<f64> = (0..k).map(|i| hi[i] - lo[i]).collect();
         // Serially correlated residuals: scaling them by √inflation scales s² (and so the
         // covariance s²(JᵀJ)⁺ and the identifiability check) by the AR(1) inflation.
@@ -517,7 +603,9 @@ struct Verdict {
 /// standard errors, or the improvement is decisive (relative ≥ `decisive`, with more than twice
 /// as many windows improved as worsened).
 fn verdict(before: &Errors, after: &Errors, group: &[String], z: f64, decisive: f64) -> Verdict {
-    let on = |w: &[(String, f64)]| w.iter().filter(|(j, _)| group.contains(j)).map(|(_, v)| *v).collect::<Vec<f64>>();
+    let on = |w: &[(String, f64)]| {
+        w.iter().filter(|(j, _)| group.contains(j)).map(|(_, v)| *v).collect::<Vec<f64>>()
+    };
     let (wb, wa) = (on(&before.windows), on(&after.windows));
     let (mean, se, _) = improvement_beyond_noise(&wb, &wa);
     let ln = |w: &[f64]| w.iter().map(|v| v.max(1e-12).ln()).collect::<Vec<f64>>();
@@ -574,7 +662,11 @@ pub fn fit(robot: &Robot, recs: &[Recording], opts: &FitOptions) -> FitOutcome {
         out.warnings.push("not enough data for a train/held-out split (need 2 episodes, or one of several seconds)".into());
         return out;
     }
-    let allowed: Vec<String> = if opts.effects.is_empty() { effects::all().iter().map(|e| e.id().to_string()).collect() } else { opts.effects.clone() };
+    let allowed: Vec<String> = if opts.effects.is_empty() {
+        effects::all().iter().map(|e| e.id().to_string()).collect()
+    } else {
+        opts.effects.clone()
+    };
     let mut round = 0;
     loop {
         while round < opts.max_rounds {
@@ -594,7 +686,9 @@ pub fn fit(robot: &Robot, recs: &[Recording], opts: &FitOptions) -> FitOutcome {
         }
         // A change re-opens the greedy search (bounded by `max_rounds`).
         engine.report(round, "simplify", None);
-        if !simplify(&engine, &train, &heldout, &allowed, round, &mut out) || round >= opts.max_rounds {
+        if !simplify(&engine, &train, &heldout, &allowed, round, &mut out)
+            || round >= opts.max_rounds
+        {
             break;
         }
     }
@@ -603,7 +697,14 @@ pub fn fit(robot: &Robot, recs: &[Recording], opts: &FitOptions) -> FitOutcome {
 
 /// One greedy round: diagnose, fit the candidates, keep the best that passes the held-out gate.
 /// Returns `true` when an effect was added.
-fn greedy_round(engine: &Engine, train: &[Recording], heldout: &[Recording], allowed: &[String], round: usize, out: &mut FitOutcome) -> bool {
+fn greedy_round(
+    engine: &Engine,
+    train: &[Recording],
+    heldout: &[Recording],
+    allowed: &[String],
+    round: usize,
+    out: &mut FitOutcome,
+) -> bool {
     let opts = engine.opts;
     let robot = engine.robot;
     let applied = out.applied.clone();
@@ -626,7 +727,9 @@ fn greedy_round(engine: &Engine, train: &[Recording], heldout: &[Recording], all
         return false;
     }
     let diag = diagnose(robot, train, &tr_err.eps, &engine.joints, allowed, opts.gap_mask_s);
-    let covered = |id: &str, j: &str| applied.iter().any(|a| a.effect.id() == id && a.joints.iter().any(|x| x == j));
+    let covered = |id: &str, j: &str| {
+        applied.iter().any(|a| a.effect.id() == id && a.joints.iter().any(|x| x == j))
+    };
     // Re-rank the diagnosis by the linearised (Gauss–Newton) explained residual: the
     // residual projected on the simulated sensitivity to a probe step of the effect.
     let mut diag = diag;
@@ -657,7 +760,10 @@ fn greedy_round(engine: &Engine, train: &[Recording], heldout: &[Recording], all
         if let Some(p) = mirror(&c.joint)
             && engine.joints.contains(&p)
             && !covered(c.effect, &p)
-            && diag.iter().take(opts.candidates_per_round * 4).any(|d| d.effect == c.effect && d.joint == p)
+            && diag
+                .iter()
+                .take(opts.candidates_per_round * 4)
+                .any(|d| d.effect == c.effect && d.joint == p)
         {
             group.push(p);
             group.sort();
@@ -670,14 +776,21 @@ fn greedy_round(engine: &Engine, train: &[Recording], heldout: &[Recording], all
         ev.insert("residual_rms".into(), c.residual_rms);
         // The joint's motor family as one more group (shared parameters).
         let fam: Vec<String> = match opts.families.get(&c.joint) {
-            Some(f) => engine.joints.iter().filter(|j| opts.families.get(*j) == Some(f) && !covered(c.effect, j)).cloned().collect(),
+            Some(f) => engine
+                .joints
+                .iter()
+                .filter(|j| opts.families.get(*j) == Some(f) && !covered(c.effect, j))
+                .cloned()
+                .collect(),
             None => vec![],
         };
-        let fam_new = fam.len() >= 3 && !cands.iter().any(|(e2, g, _)| e2.id() == e.id() && *g == fam);
+        let fam_new =
+            fam.len() >= 3 && !cands.iter().any(|(e2, g, _)| e2.id() == e.id() && *g == fam);
         // Every recorded joint as one group sharing the parameters (an effect the whole robot
         // has, such as a missing damping or friction, a delay or a servo gain error) — when the
         // model gives those joints the same starting value, so that one knob is meaningful.
-        let all: Vec<String> = engine.joints.iter().filter(|j| !covered(c.effect, j)).cloned().collect();
+        let all: Vec<String> =
+            engine.joints.iter().filter(|j| !covered(c.effect, j)).cloned().collect();
         let all_new = all.len() >= 2
             && all.len() > group.len()
             && all != fam
@@ -704,12 +817,21 @@ fn greedy_round(engine: &Engine, train: &[Recording], heldout: &[Recording], all
         // The best-ranked joint of every other effect: the linearised ranking is only a guide
         // (a doubled inertia or a saturation is far from linear).
         // Effects whose best joint explains less than a tenth of the top candidate are left out.
-        let top = diag.iter().filter(|c| !covered(c.effect, &c.joint)).map(|c| c.explained_rms).fold(0.0, f64::max);
+        let top = diag
+            .iter()
+            .filter(|c| !covered(c.effect, &c.joint))
+            .map(|c| c.explained_rms)
+            .fold(0.0, f64::max);
         for id in allowed {
             if cands.iter().any(|(e, ..)| e.id() == id) {
                 continue;
             }
-            if let Some(c) = diag.iter().find(|c| c.effect == id && !covered(c.effect, &c.joint) && c.explained_rms > 1e-9 && c.explained_rms >= 0.1 * top) {
+            if let Some(c) = diag.iter().find(|c| {
+                c.effect == id
+                    && !covered(c.effect, &c.joint)
+                    && c.explained_rms > 1e-9
+                    && c.explained_rms >= 0.1 * top
+            }) {
                 push(c, &mut cands);
             }
         }
@@ -731,7 +853,11 @@ fn greedy_round(engine: &Engine, train: &[Recording], heldout: &[Recording], all
     let mut ci = 0;
     while ci < cands.len() {
         let (e, group, ev) = cands[ci].clone();
-        engine.report(round, "fit", Some((ci + 1, cands.len(), format!("{} on {}", e.id(), group.join(",")))));
+        engine.report(
+            round,
+            "fit",
+            Some((ci + 1, cands.len(), format!("{} on {}", e.id(), group.join(",")))),
+        );
         let extra = ci >= n_top;
         ci += 1;
         // (Only multi-parameter effects: a 1-D fit is a 9-point grid plus golden section anyway,
@@ -762,7 +888,11 @@ fn greedy_round(engine: &Engine, train: &[Recording], heldout: &[Recording], all
         fitted.push(Applied { effect: e, joints: group.clone(), params: p.clone() });
         let mut trial = applied.clone();
         trial.push(Applied { effect: e, joints: group.clone(), params: p.clone() });
-        let (Some(tr_a), Some(ho_a)) = (engine.errors(train, &trial), engine.errors(heldout, &trial)) else { continue };
+        let (Some(tr_a), Some(ho_a)) =
+            (engine.errors(train, &trial), engine.errors(heldout, &trial))
+        else {
+            continue;
+        };
         let bic_after = bic(tr_a.n, tr_a.sse, k_before + e.fitted());
         // Paired test on the windows of the candidate's joints (others barely move).
         let v = verdict(&ho_err, &ho_a, &group, z, opts.decisive_improvement);
@@ -797,7 +927,11 @@ fn greedy_round(engine: &Engine, train: &[Recording], heldout: &[Recording], all
             }
             let a = trial.last().expect("pushed");
             let bound = at_bound(engine, &applied, a);
-            accepted.push((Selected::new(a, ev, &v, ho_err.rmse(), ho_a.rmse(), (bic_before, bic_after)), bound, ho_a));
+            accepted.push((
+                Selected::new(a, ev, &v, ho_err.rmse(), ho_a.rmse(), (bic_before, bic_after)),
+                bound,
+                ho_a,
+            ));
         }
     }
     let kept_all: Vec<Selected> = accepted.iter().map(|(s, ..)| s.clone()).collect();
@@ -805,8 +939,20 @@ fn greedy_round(engine: &Engine, train: &[Recording], heldout: &[Recording], all
     if accepted.iter().any(|(_, b, _)| !b) {
         accepted.retain(|(_, b, _)| !b);
     }
-    let Some(ib) = (0..accepted.len()).min_by(|&a, &b| accepted[a].0.heldout_rmse_after.total_cmp(&accepted[b].0.heldout_rmse_after)) else {
-        return joint_pairs(engine, train, heldout, &applied, &fitted, (&tr_err, &ho_err), z, round, out);
+    let Some(ib) = (0..accepted.len()).min_by(|&a, &b| {
+        accepted[a].0.heldout_rmse_after.total_cmp(&accepted[b].0.heldout_rmse_after)
+    }) else {
+        return joint_pairs(
+            engine,
+            train,
+            heldout,
+            &applied,
+            &fitted,
+            (&tr_err, &ho_err),
+            z,
+            round,
+            out,
+        );
     };
     // Occam: the simplest candidate within 5 % of the best held-out RMSE that the best does not
     // beat beyond noise (paired test, z = 2) and whose training BIC is not higher (the training
@@ -828,12 +974,15 @@ fn greedy_round(engine: &Engine, train: &[Recording], heldout: &[Recording], all
         .min_by(|&a, &b| {
             let ka = effects::by_id(&accepted[a].0.effect).map_or(9, |e| e.fitted());
             let kb = effects::by_id(&accepted[b].0.effect).map_or(9, |e| e.fitted());
-            ka.cmp(&kb).then(accepted[a].0.heldout_rmse_after.total_cmp(&accepted[b].0.heldout_rmse_after))
+            ka.cmp(&kb)
+                .then(accepted[a].0.heldout_rmse_after.total_cmp(&accepted[b].0.heldout_rmse_after))
         })
         .expect("the best is equivalent to itself");
     let mut accepted: Vec<Selected> = accepted.into_iter().map(|(s, ..)| s).collect();
     let mut s = accepted.swap_remove(win);
-    if let Some(pair) = pair_lookahead(engine, train, heldout, &applied, &kept_all, &s, z, round, out) {
+    if let Some(pair) =
+        pair_lookahead(engine, train, heldout, &applied, &kept_all, &s, z, round, out)
+    {
         for (mut p, a) in pair {
             out.applied.push(a);
             set_uncertainty(engine, train, &mut p, &out.applied, &mut out.warnings);
@@ -841,7 +990,9 @@ fn greedy_round(engine: &Engine, train: &[Recording], heldout: &[Recording], all
         }
         return true;
     }
-    if let Some(t) = out.tried.iter_mut().rev().find(|t| t.round == round && t.phase == "add" && t.effect == s.effect && t.joints == s.joints) {
+    if let Some(t) = out.tried.iter_mut().rev().find(|t| {
+        t.round == round && t.phase == "add" && t.effect == s.effect && t.joints == s.joints
+    }) {
         t.kept = true;
     }
     let e = effects::by_id(&s.effect).expect("known");
@@ -877,7 +1028,11 @@ fn pair_lookahead(
     if single.heldout_improvement >= 0.95 {
         return None;
     }
-    let as_applied = |s: &Selected| Applied { effect: effects::by_id(&s.effect).expect("known"), joints: s.joints.clone(), params: s.values.clone() };
+    let as_applied = |s: &Selected| Applied {
+        effect: effects::by_id(&s.effect).expect("known"),
+        joints: s.joints.clone(),
+        params: s.values.clone(),
+    };
     let mut with_single = applied.to_vec();
     with_single.push(as_applied(single));
     let h_single = engine.errors(heldout, &with_single)?;
@@ -895,8 +1050,12 @@ fn pair_lookahead(
             set.push(as_applied(a));
             set.push(as_applied(b));
             let set = polish_set(engine, train, heldout, set, 0.05);
-            let (Some(h), Some(t)) = (engine.errors(heldout, &set), engine.errors(train, &set)) else { continue };
-            let k = effects::by_id(&a.effect).map_or(9, |e| e.fitted()) + effects::by_id(&b.effect).map_or(9, |e| e.fitted());
+            let (Some(h), Some(t)) = (engine.errors(heldout, &set), engine.errors(train, &set))
+            else {
+                continue;
+            };
+            let k = effects::by_id(&a.effect).map_or(9, |e| e.fitted())
+                + effects::by_id(&b.effect).map_or(9, |e| e.fitted());
             let group: Vec<String> = a.joints.iter().chain(&b.joints).cloned().collect();
             let v = verdict(&h_single, &h, &group, z, opts.decisive_improvement);
             let bic_ok = bic(t.n, t.sse, k_before + k) < bic(t_base.n, t_base.sse, k_before);
@@ -905,7 +1064,13 @@ fn pair_lookahead(
                 let mut wo = set.clone();
                 wo.remove(applied.len() + m);
                 engine.errors(heldout, &wo).is_some_and(|hw| {
-                    let vw = verdict(&hw, &h, &set[applied.len() + m].joints, 2.0, opts.decisive_improvement);
+                    let vw = verdict(
+                        &hw,
+                        &h,
+                        &set[applied.len() + m].joints,
+                        2.0,
+                        opts.decisive_improvement,
+                    );
                     vw.significant && vw.rel >= opts.min_rel_improvement
                 })
             });
@@ -915,7 +1080,10 @@ fn pair_lookahead(
                 phase: "pair",
                 effect: format!("{}+{}", a.effect, b.effect),
                 joints: group.clone(),
-                params: set[applied.len()..].iter().flat_map(|x| x.params.iter().take(x.effect.fitted()).copied()).collect(),
+                params: set[applied.len()..]
+                    .iter()
+                    .flat_map(|x| x.params.iter().take(x.effect.fitted()).copied())
+                    .collect(),
                 train_rmse: t.rmse(),
                 heldout_improvement: (h_base.rmse() - h.rmse()) / h_base.rmse().max(1e-300),
                 significant: v.significant,
@@ -927,7 +1095,10 @@ fn pair_lookahead(
             }
             let better = match &best {
                 None => true,
-                Some((_, r, kb)) => (k < *kb && h.rmse() <= r * 1.01) || (h.rmse() < *r && !(k > *kb && h.rmse() > r / 1.01)),
+                Some((_, r, kb)) => {
+                    (k < *kb && h.rmse() <= r * 1.01)
+                        || (h.rmse() < *r && !(k > *kb && h.rmse() > r / 1.01))
+                }
             };
             if better {
                 best = Some((set, h.rmse(), k));
@@ -959,8 +1130,13 @@ fn pair_lookahead(
         wo.remove(n + m);
         let (hw, tw) = (engine.errors(heldout, &wo)?, engine.errors(train, &wo)?);
         let v = verdict(&hw, &h_pair, &a.joints, 2.0, opts.decisive_improvement);
-        let evidence = kept.iter().find(|s| s.effect == a.effect.id() && s.joints == a.joints).map(|s| s.evidence.clone()).unwrap_or_default();
-        let bics = (bic(tw.n, tw.sse, k_pair - a.effect.fitted()), bic(t_pair.n, t_pair.sse, k_pair));
+        let evidence = kept
+            .iter()
+            .find(|s| s.effect == a.effect.id() && s.joints == a.joints)
+            .map(|s| s.evidence.clone())
+            .unwrap_or_default();
+        let bics =
+            (bic(tw.n, tw.sse, k_pair - a.effect.fitted()), bic(t_pair.n, t_pair.sse, k_pair));
         let s = Selected::new(&a, evidence, &v, hw.rmse(), rmse, bics);
         res.push((s, a));
     }
@@ -1006,12 +1182,18 @@ fn joint_pairs(
     engine.report(round, "joint pairs", None);
     for (ea, eb) in JOINT_PAIRS {
         for a in fitted.iter().filter(|x| x.effect.id() == ea) {
-            let Some(b) = fitted.iter().find(|x| x.effect.id() == eb && x.joints == a.joints) else { continue };
+            let Some(b) = fitted.iter().find(|x| x.effect.id() == eb && x.joints == a.joints)
+            else {
+                continue;
+            };
             let mut set = applied.to_vec();
             set.push(a.clone());
             set.push(b.clone());
             let set = fit_jointly(engine, train, set, n);
-            let (Some(h), Some(t)) = (engine.errors(heldout, &set), engine.errors(train, &set)) else { continue };
+            let (Some(h), Some(t)) = (engine.errors(heldout, &set), engine.errors(train, &set))
+            else {
+                continue;
+            };
             let k = a.effect.fitted() + b.effect.fitted();
             let v = verdict(ho_err, &h, &a.joints, z, opts.decisive_improvement);
             let bic_after = bic(t.n, t.sse, k_before + k);
@@ -1023,13 +1205,19 @@ fn joint_pairs(
                     vw.significant && vw.rel >= opts.min_rel_improvement
                 })
             });
-            let ok = v.significant && v.rel >= opts.min_rel_improvement && bic_after < bic_before && needed;
+            let ok = v.significant
+                && v.rel >= opts.min_rel_improvement
+                && bic_after < bic_before
+                && needed;
             out.tried.push(Tried {
                 round,
                 phase: "joint_pair",
                 effect: format!("{ea}+{eb}"),
                 joints: a.joints.clone(),
-                params: set[n..].iter().flat_map(|x| x.params.iter().take(x.effect.fitted()).copied()).collect(),
+                params: set[n..]
+                    .iter()
+                    .flat_map(|x| x.params.iter().take(x.effect.fitted()).copied())
+                    .collect(),
                 train_rmse: t.rmse(),
                 heldout_improvement: v.rel,
                 significant: v.significant,
@@ -1043,7 +1231,12 @@ fn joint_pairs(
     }
     let Some((set, h, v, bic_after)) = best else { return false };
     let label = format!("{}+{}", set[n].effect.id(), set[n + 1].effect.id());
-    if let Some(t) = out.tried.iter_mut().rev().find(|t| t.phase == "joint_pair" && t.effect == label && t.joints == set[n].joints) {
+    if let Some(t) = out
+        .tried
+        .iter_mut()
+        .rev()
+        .find(|t| t.phase == "joint_pair" && t.effect == label && t.joints == set[n].joints)
+    {
         t.kept = true;
     }
     out.warnings.push(format!(
@@ -1056,7 +1249,14 @@ fn joint_pairs(
     ));
     for m in 0..2 {
         let a = set[n + m].clone();
-        let mut sel = Selected::new(&a, BTreeMap::new(), &v, ho_err.rmse(), h.rmse(), (bic_before, bic_after));
+        let mut sel = Selected::new(
+            &a,
+            BTreeMap::new(),
+            &v,
+            ho_err.rmse(),
+            h.rmse(),
+            (bic_before, bic_after),
+        );
         out.applied.push(a);
         set_uncertainty(engine, train, &mut sel, &out.applied, &mut out.warnings);
         out.selected.push(sel);
@@ -1069,7 +1269,12 @@ type Slot = (usize, usize, f64, f64);
 
 /// The fitted parameters of `set[first..]` with their bounds; effect `ai`'s bounds come from the
 /// model with `set[..base(ai)]` applied. `None` when an effect's joint is not in the model.
-fn param_slots(engine: &Engine, set: &[Applied], first: usize, base: impl Fn(usize) -> usize) -> Option<Vec<Slot>> {
+fn param_slots(
+    engine: &Engine,
+    set: &[Applied],
+    first: usize,
+    base: impl Fn(usize) -> usize,
+) -> Option<Vec<Slot>> {
     let mut slots = Vec::new();
     for (ai, a) in set.iter().enumerate().skip(first) {
         let t = JointTarget::of(engine.robot, &a.joints[0])?;
@@ -1094,21 +1299,35 @@ fn with_params(set: &[Applied], slots: &[Slot], x: &[f64]) -> Vec<Applied> {
 /// Fits the effects `set[first..]` jointly on `train` (the ones before stay fixed), starting from
 /// their current parameters: Levenberg–Marquardt when all are smooth, else Nelder–Mead. Returns
 /// the set unchanged when the joint fit does not lower the training error.
-fn fit_jointly(engine: &Engine, train: &[Recording], set: Vec<Applied>, first: usize) -> Vec<Applied> {
+fn fit_jointly(
+    engine: &Engine,
+    train: &[Recording],
+    set: Vec<Applied>,
+    first: usize,
+) -> Vec<Applied> {
     let Some(slots) = param_slots(engine, &set, first, |_| first) else { return set };
     let make = |x: &[f64]| with_params(&set, &slots, x);
-    let x0: Vec<f64> = slots.iter().map(|&(ai, k, lo, hi)| set[ai].params[k].clamp(lo, hi)).collect();
-    let b = Bounds { lo: slots.iter().map(|s| s.2).collect(), hi: slots.iter().map(|s| s.3).collect() };
+    let x0: Vec<f64> =
+        slots.iter().map(|&(ai, k, lo, hi)| set[ai].params[k].clamp(lo, hi)).collect();
+    let b =
+        Bounds { lo: slots.iter().map(|s| s.2).collect(), hi: slots.iter().map(|s| s.3).collect() };
     let obj = |x: &[f64]| engine.errors(train, &make(x)).map_or(f64::INFINITY, |e| e.rmse());
     let f0 = obj(&x0);
     let (x, f) = if set[first..].iter().all(|a| a.effect.smooth()) {
-        let res = |x: &[f64]| engine.residuals(train, &make(x), &engine.joints, usize::MAX).unwrap_or_default();
+        let res = |x: &[f64]| {
+            engine.residuals(train, &make(x), &engine.joints, usize::MAX).unwrap_or_default()
+        };
         let o = LmOpts { max_iters: 12, rel_step: 1e-3, tol: 1e-5 };
         let r = levenberg_marquardt(&res, &x0, &b, &o);
         let n = res_len(&r);
         (r.x, if n > 0 { (2.0 * r.cost / n as f64).sqrt() } else { f64::INFINITY })
     } else {
-        let o = NelderMeadOpts { max_evals: engine.opts.max_evals * 3, xtol: 1e-4, ftol: 1e-12, initial_step: 0.1 };
+        let o = NelderMeadOpts {
+            max_evals: engine.opts.max_evals * 3,
+            xtol: 1e-4,
+            ftol: 1e-12,
+            initial_step: 0.1,
+        };
         let r = nelder_mead(&obj, &x0, &b, &o);
         (r.x, r.f)
     };
@@ -1119,26 +1338,49 @@ fn fit_jointly(engine: &Engine, train: &[Recording], set: Vec<Applied>, first: u
 }
 
 /// Standard errors of `s`, the effect of `applied.last()`.
-fn set_uncertainty(engine: &Engine, train: &[Recording], s: &mut Selected, applied: &[Applied], warnings: &mut Vec<String>) {
+fn set_uncertainty(
+    engine: &Engine,
+    train: &[Recording],
+    s: &mut Selected,
+    applied: &[Applied],
+    warnings: &mut Vec<String>,
+) {
     let e = applied.last().expect("non-empty").effect;
     let (se, ident) = engine.uncertainty(train, applied);
     s.stderr = e.params().iter().zip(&se).map(|(d, v)| (d.name.to_string(), *v)).collect();
     s.identifiable = ident;
     if !ident {
-        warnings.push(format!("{} on {}: parameters not identifiable from this data (excite the joint more)", s.effect, s.joints.join(",")));
+        warnings.push(format!(
+            "{} on {}: parameters not identifiable from this data (excite the joint more)",
+            s.effect,
+            s.joints.join(",")
+        ));
     }
 }
 
 /// Fitted parameters of `a` by name.
 fn named_params(a: &Applied) -> BTreeMap<String, f64> {
-    a.effect.params().iter().zip(&a.params).take(a.effect.fitted()).map(|(d, v)| (d.name.to_string(), *v)).collect()
+    a.effect
+        .params()
+        .iter()
+        .zip(&a.params)
+        .take(a.effect.fitted())
+        .map(|(d, v)| (d.name.to_string(), *v))
+        .collect()
 }
 
 impl Selected {
     /// Record of the kept effect `a`: `v` compares the held-out set without it (RMSE `before`)
     /// and with it (`after`); `bics` = training BIC (without, with). Standard errors come later
     /// ([`set_uncertainty`]).
-    fn new(a: &Applied, evidence: BTreeMap<String, f64>, v: &Verdict, before: f64, after: f64, bics: (f64, f64)) -> Self {
+    fn new(
+        a: &Applied,
+        evidence: BTreeMap<String, f64>,
+        v: &Verdict,
+        before: f64,
+        after: f64,
+        bics: (f64, f64),
+    ) -> Self {
         Selected {
             effect: a.effect.id().into(),
             joints: a.joints.clone(),
@@ -1176,7 +1418,14 @@ fn sync_selected(out: &mut FitOutcome) {
 ///   friction; a servo gain error whose only change is kd is joint damping.
 ///
 /// Returns `true` when the set changed.
-fn simplify(engine: &Engine, train: &[Recording], heldout: &[Recording], allowed: &[String], round: usize, out: &mut FitOutcome) -> bool {
+fn simplify(
+    engine: &Engine,
+    train: &[Recording],
+    heldout: &[Recording],
+    allowed: &[String],
+    round: usize,
+    out: &mut FitOutcome,
+) -> bool {
     let mut changed = false;
     // Each swap removes at least one parameter, so this ends.
     loop {
@@ -1189,7 +1438,13 @@ fn simplify(engine: &Engine, train: &[Recording], heldout: &[Recording], allowed
 }
 
 /// Drops, last kept first. Returns `true` when an effect was dropped.
-fn drop_pass(engine: &Engine, train: &[Recording], heldout: &[Recording], round: usize, out: &mut FitOutcome) -> bool {
+fn drop_pass(
+    engine: &Engine,
+    train: &[Recording],
+    heldout: &[Recording],
+    round: usize,
+    out: &mut FitOutcome,
+) -> bool {
     let opts = engine.opts;
     let mut changed = false;
     let mut i = out.applied.len();
@@ -1197,15 +1452,19 @@ fn drop_pass(engine: &Engine, train: &[Recording], heldout: &[Recording], round:
         i -= 1;
         let mut without = out.applied.clone();
         without.remove(i);
-        let (Some(h_full), Some(h_wo), Some(t_full), Some(t_wo)) =
-            (engine.errors(heldout, &out.applied), engine.errors(heldout, &without), engine.errors(train, &out.applied), engine.errors(train, &without))
-        else {
+        let (Some(h_full), Some(h_wo), Some(t_full), Some(t_wo)) = (
+            engine.errors(heldout, &out.applied),
+            engine.errors(heldout, &without),
+            engine.errors(train, &out.applied),
+            engine.errors(train, &without),
+        ) else {
             continue;
         };
         let a = &out.applied[i];
         let v = verdict(&h_wo, &h_full, &a.joints, 2.0, opts.decisive_improvement);
         let k_full: usize = out.applied.iter().map(|a| a.effect.fitted()).sum();
-        let bic_dec = bic(t_full.n, t_full.sse, k_full) < bic(t_wo.n, t_wo.sse, k_full - a.effect.fitted());
+        let bic_dec =
+            bic(t_full.n, t_full.sse, k_full) < bic(t_wo.n, t_wo.sse, k_full - a.effect.fitted());
         let keep = v.significant && v.rel >= opts.min_rel_improvement;
         out.tried.push(Tried {
             round,
@@ -1235,7 +1494,14 @@ fn drop_pass(engine: &Engine, train: &[Recording], heldout: &[Recording], round:
 }
 
 /// Swaps for simpler effects. Returns `true` when a swap was made.
-fn swap_pass(engine: &Engine, train: &[Recording], heldout: &[Recording], allowed: &[String], round: usize, out: &mut FitOutcome) -> bool {
+fn swap_pass(
+    engine: &Engine,
+    train: &[Recording],
+    heldout: &[Recording],
+    allowed: &[String],
+    round: usize,
+    out: &mut FitOutcome,
+) -> bool {
     let opts = engine.opts;
     let mut changed = false;
     let mut i = 0;
@@ -1244,7 +1510,9 @@ fn swap_pass(engine: &Engine, train: &[Recording], heldout: &[Recording], allowe
         let k_cur = cur.effect.fitted();
         let mut others = out.applied.clone();
         others.remove(i);
-        let (Some(h_cur), Some(h_wo)) = (engine.errors(heldout, &out.applied), engine.errors(heldout, &others)) else {
+        let (Some(h_cur), Some(h_wo)) =
+            (engine.errors(heldout, &out.applied), engine.errors(heldout, &others))
+        else {
             i += 1;
             continue;
         };
@@ -1252,13 +1520,21 @@ fn swap_pass(engine: &Engine, train: &[Recording], heldout: &[Recording], allowe
         // that is not higher (as in the greedy winner's choice).
         let tol = 0.05 * h_cur.rmse();
         let k_all: usize = out.applied.iter().map(|a| a.effect.fitted()).sum();
-        let bic_cur = engine.errors(train, &out.applied).map_or(f64::NEG_INFINITY, |e| bic(e.n, e.sse, k_all));
+        let bic_cur = engine
+            .errors(train, &out.applied)
+            .map_or(f64::NEG_INFINITY, |e| bic(e.n, e.sse, k_all));
         let mut best: Option<(Vec<Applied>, f64, usize)> = None;
         for e in effects::all() {
-            if !allowed.iter().any(|a| a == e.id()) || e.id() == cur.effect.id() || e.fitted() >= k_cur {
+            if !allowed.iter().any(|a| a == e.id())
+                || e.id() == cur.effect.id()
+                || e.fitted() >= k_cur
+            {
                 continue;
             }
-            if others.iter().any(|a| a.effect.id() == e.id() && a.joints.iter().any(|j| cur.joints.contains(j))) {
+            if others
+                .iter()
+                .any(|a| a.effect.id() == e.id() && a.joints.iter().any(|j| cur.joints.contains(j)))
+            {
                 continue;
             }
             let (p, tr) = engine.fit_one(train, &others, e, &cur.joints);
@@ -1269,12 +1545,17 @@ fn swap_pass(engine: &Engine, train: &[Recording], heldout: &[Recording], allowe
             set.push(Applied { effect: e, joints: cur.joints.clone(), params: p });
             let Some(h0) = engine.errors(heldout, &set) else { continue };
             // Hopeless before polishing: skip the joint re-fit.
-            let set = if h0.rmse() <= h_cur.rmse() * 1.10 && set.len() >= 2 { polish_set(engine, train, heldout, set, 0.02) } else { set };
+            let set = if h0.rmse() <= h_cur.rmse() * 1.10 && set.len() >= 2 {
+                polish_set(engine, train, heldout, set, 0.02)
+            } else {
+                set
+            };
             let Some(h1) = engine.errors(heldout, &set) else { continue };
             // Is the current set better than the swap beyond noise?
             let worse = verdict(&h1, &h_cur, &cur.joints, 2.0, f64::INFINITY);
             let k_set = k_all - k_cur + e.fitted();
-            let bic_ok = engine.errors(train, &set).is_some_and(|t| bic(t.n, t.sse, k_set) <= bic_cur);
+            let bic_ok =
+                engine.errors(train, &set).is_some_and(|t| bic(t.n, t.sse, k_set) <= bic_cur);
             let ok = h1.rmse() <= h_cur.rmse() + tol && !worse.significant && bic_ok;
             out.tried.push(Tried {
                 round,
@@ -1301,7 +1582,11 @@ fn swap_pass(engine: &Engine, train: &[Recording], heldout: &[Recording], allowe
             continue;
         };
         let new = set.last().expect("non-empty").clone();
-        if let Some(t) = out.tried.iter_mut().rev().find(|t| t.phase == "swap" && t.effect == new.effect.id() && t.joints == new.joints) {
+        if let Some(t) =
+            out.tried.iter_mut().rev().find(|t| {
+                t.phase == "swap" && t.effect == new.effect.id() && t.joints == new.joints
+            })
+        {
             t.kept = true;
         }
         out.warnings.push(format!(
@@ -1315,7 +1600,11 @@ fn swap_pass(engine: &Engine, train: &[Recording], heldout: &[Recording], allowe
         let old = out.selected.remove(i);
         out.applied = set;
         sync_selected(out);
-        let (Some(t_wo), Some(t_new), Some(h_new)) = (engine.errors(train, &others), engine.errors(train, &out.applied), engine.errors(heldout, &out.applied)) else {
+        let (Some(t_wo), Some(t_new), Some(h_new)) = (
+            engine.errors(train, &others),
+            engine.errors(train, &out.applied),
+            engine.errors(heldout, &out.applied),
+        ) else {
             // Cannot happen (both were just simulated); keep the old effect's record shape.
             out.selected.push(old);
             changed = true;
@@ -1324,7 +1613,8 @@ fn swap_pass(engine: &Engine, train: &[Recording], heldout: &[Recording], allowe
         let k_new: usize = out.applied.iter().map(|a| a.effect.fitted()).sum();
         let v = verdict(&h_wo, &h_new, &new.joints, 2.0, opts.decisive_improvement);
         let evidence = BTreeMap::from([(format!("replaces_{}", cur.effect.id()), 1.0)]);
-        let bics = (bic(t_wo.n, t_wo.sse, k_new - new.effect.fitted()), bic(t_new.n, t_new.sse, k_new));
+        let bics =
+            (bic(t_wo.n, t_wo.sse, k_new - new.effect.fitted()), bic(t_new.n, t_new.sse, k_new));
         let mut s = Selected::new(&new, evidence, &v, h_wo.rmse(), h_new.rmse(), bics);
         set_uncertainty(engine, train, &mut s, &out.applied, &mut out.warnings);
         out.selected.push(s);
@@ -1341,20 +1631,35 @@ fn polish(engine: &Engine, train: &[Recording], heldout: &[Recording], out: &mut
     sync_selected(out);
 }
 
-fn polish_set(engine: &Engine, train: &[Recording], heldout: &[Recording], applied: Vec<Applied>, step: f64) -> Vec<Applied> {
+fn polish_set(
+    engine: &Engine,
+    train: &[Recording],
+    heldout: &[Recording],
+    applied: Vec<Applied>,
+    step: f64,
+) -> Vec<Applied> {
     let Some(slots) = param_slots(engine, &applied, 0, |ai| ai) else { return applied };
     let make = |x: &[f64]| with_params(&applied, &slots, x);
     let x0: Vec<f64> = slots.iter().map(|&(ai, k, ..)| applied[ai].params[k]).collect();
-    let b = Bounds { lo: slots.iter().map(|s| s.2).collect(), hi: slots.iter().map(|s| s.3).collect() };
+    let b =
+        Bounds { lo: slots.iter().map(|s| s.2).collect(), hi: slots.iter().map(|s| s.3).collect() };
     let obj = |x: &[f64]| engine.errors(train, &make(x)).map_or(f64::INFINITY, |e| e.rmse());
     let f0 = obj(&x0);
-    let o = NelderMeadOpts { max_evals: engine.opts.max_evals * 2, xtol: 1e-4, ftol: 1e-12, initial_step: step };
+    let o = NelderMeadOpts {
+        max_evals: engine.opts.max_evals * 2,
+        xtol: 1e-4,
+        ftol: 1e-12,
+        initial_step: step,
+    };
     let r = nelder_mead(&obj, &x0, &b, &o);
     if r.f.is_nan() || r.f >= f0 {
         return applied;
     }
     let new = make(&r.x);
-    let (Some(h0), Some(h1)) = (engine.errors(heldout, &applied), engine.errors(heldout, &new)) else { return applied };
+    let (Some(h0), Some(h1)) = (engine.errors(heldout, &applied), engine.errors(heldout, &new))
+    else {
+        return applied;
+    };
     if h1.rmse() > h0.rmse() {
         return applied;
     }
@@ -1367,7 +1672,12 @@ mod tests {
 
     fn errs(w: &[f64]) -> Errors {
         let sse: f64 = w.iter().map(|v| v * v * 10.0).sum();
-        Errors { sse, n: 10 * w.len(), windows: w.iter().map(|v| ("a".to_string(), *v)).collect(), eps: vec![] }
+        Errors {
+            sse,
+            n: 10 * w.len(),
+            windows: w.iter().map(|v| ("a".to_string(), *v)).collect(),
+            eps: vec![],
+        }
     }
 
     #[test]
@@ -1397,7 +1707,11 @@ mod tests {
         assert!(verdict(&errs(&before), &errs(&after), &g, 2.0, 0.5).significant);
         // Noise: as many windows worse as better, tiny mean change: not significant.
         let before: Vec<f64> = (0..16).map(|i| 1.0 + 0.01 * ((i * 7) % 5) as f64).collect();
-        let after: Vec<f64> = before.iter().enumerate().map(|(i, v)| v + if i % 2 == 0 { 0.01 } else { -0.011 }).collect();
+        let after: Vec<f64> = before
+            .iter()
+            .enumerate()
+            .map(|(i, v)| v + if i % 2 == 0 { 0.01 } else { -0.011 })
+            .collect();
         assert!(!verdict(&errs(&before), &errs(&after), &g, 2.0, 0.5).significant);
         // A big improvement on one window and worse on most others is not decisive.
         let mut after = before.clone();

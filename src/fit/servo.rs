@@ -33,7 +33,9 @@ use mujoco_rs::prelude::*;
 use crate::model::{Robot, mj};
 use crate::sim2real::cmd::{XL330_ERROR_GAIN, XL330_KT, XL330_R};
 use crate::sim2real::recording::Recording;
-use crate::sim2real::replay::{ActuatorHook, Episode, ReplayError, ReplayOptions, Replayer, StepIo};
+use crate::sim2real::replay::{
+    ActuatorHook, Episode, ReplayError, ReplayOptions, Replayer, StepIo,
+};
 
 /// Standard gravity used for the external (gravity) torque of the pendulum rig.
 pub const G: f64 = 9.81;
@@ -114,7 +116,8 @@ impl ServoParams {
 
     /// Friction budget F ≥ 0 (Coulomb + Stribeck + load-dependent terms).
     pub fn friction_budget(&self, qd: f64, tau_motor: f64, tau_ext: f64) -> f64 {
-        let mut f = self.coulomb + self.load_motor * tau_motor.abs() + self.load_ext * tau_ext.abs();
+        let mut f =
+            self.coulomb + self.load_motor * tau_motor.abs() + self.load_ext * tau_ext.abs();
         if self.stribeck_extra > 0.0 && self.stribeck_vs > 0.0 {
             let x = qd / self.stribeck_vs;
             f += self.stribeck_extra * (-x * x).exp();
@@ -187,7 +190,15 @@ impl ActuatorHook for ServoHook {
     fn replaces_actuator(&self, _joint_idx: usize) -> bool {
         true
     }
-    fn before_step(&mut self, t: f64, _joint_idx: usize, q: f64, qd: f64, q_target: f64, out: &mut StepIo) {
+    fn before_step(
+        &mut self,
+        t: f64,
+        _joint_idx: usize,
+        q: f64,
+        qd: f64,
+        q_target: f64,
+        out: &mut StepIo,
+    ) {
         out.tau = self.torque(t, q, qd, q_target, out.enabled);
     }
 }
@@ -252,7 +263,14 @@ const fn ps(name: &'static str, unit: &'static str, lo: f64, hi: f64, init: f64)
     ParamSpec { name, unit, lo, hi, init, neutral: lo }
 }
 
-const fn psn(name: &'static str, unit: &'static str, lo: f64, hi: f64, init: f64, neutral: f64) -> ParamSpec {
+const fn psn(
+    name: &'static str,
+    unit: &'static str,
+    lo: f64,
+    hi: f64,
+    init: f64,
+    neutral: f64,
+) -> ParamSpec {
     ParamSpec { name, unit, lo, hi, init, neutral }
 }
 
@@ -284,7 +302,14 @@ impl Effect {
     }
 
     pub fn is_friction(self) -> bool {
-        matches!(self, Effect::Coulomb | Effect::Viscous | Effect::Stribeck | Effect::LoadMotor | Effect::LoadExternal)
+        matches!(
+            self,
+            Effect::Coulomb
+                | Effect::Viscous
+                | Effect::Stribeck
+                | Effect::LoadMotor
+                | Effect::LoadExternal
+        )
     }
 
     pub fn params(self) -> &'static [ParamSpec] {
@@ -302,7 +327,10 @@ impl Effect {
                 P
             }
             Effect::Stribeck => {
-                const P: &[ParamSpec] = &[ps("Fs-Fc", "N·m", 0.0, 0.3, 0.03), psn("v_s", "rad/s", 0.005, 1.0, 0.1, 0.1)];
+                const P: &[ParamSpec] = &[
+                    ps("Fs-Fc", "N·m", 0.0, 0.3, 0.03),
+                    psn("v_s", "rad/s", 0.005, 1.0, 0.1, 0.1),
+                ];
                 P
             }
             Effect::LoadMotor => {
@@ -322,7 +350,10 @@ impl Effect {
                 P
             }
             Effect::Motor => {
-                const P: &[ParamSpec] = &[psn("kt", "N·m/A", 0.2, 0.8, XL330_KT, XL330_KT), psn("R", "Ω", 2.0, 10.0, XL330_R, XL330_R)];
+                const P: &[ParamSpec] = &[
+                    psn("kt", "N·m/A", 0.2, 0.8, XL330_KT, XL330_KT),
+                    psn("R", "Ω", 2.0, 10.0, XL330_R, XL330_R),
+                ];
                 P
             }
         }

@@ -35,7 +35,8 @@ pub fn load_logs(dir: &Path) -> Result<Vec<ServoLog>, String> {
     let mut out = Vec::new();
     for f in files {
         let rec = read_recording(&f).map_err(|e| e.to_string())?;
-        let base = ServoParams::for_recording(&rec).ok_or_else(|| format!("{}: not a BAM log (meta kp/vin/mass/length)", f.display()))?;
+        let base = ServoParams::for_recording(&rec)
+            .ok_or_else(|| format!("{}: not a BAM log (meta kp/vin/mass/length)", f.display()))?;
         out.push(ServoLog {
             name: f.file_name().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default(),
             kp: base.kp_firmware,
@@ -52,7 +53,11 @@ pub fn load_logs(dir: &Path) -> Result<Vec<ServoLog>, String> {
 pub fn log_residuals(robot: &Robot, log: &ServoLog, p: &ServoParams) -> Vec<f64> {
     let real = &log.rec.joints[0].q;
     match simulate(robot, &log.rec, p) {
-        Ok(ep) => ep.q_sim[0].iter().zip(real).map(|(s, r)| if s.is_finite() { s - r } else { DIVERGED_ERROR }).collect(),
+        Ok(ep) => ep.q_sim[0]
+            .iter()
+            .zip(real)
+            .map(|(s, r)| if s.is_finite() { s - r } else { DIVERGED_ERROR })
+            .collect(),
         Err(_) => vec![DIVERGED_ERROR; real.len()],
     }
 }
@@ -62,12 +67,24 @@ pub fn mae(r: &[f64]) -> f64 {
 }
 
 /// Per-log residuals of the model `set`/`x` on the logs `idx` (parallel over logs).
-pub fn residuals(robot: &Robot, logs: &[ServoLog], idx: &[usize], set: &EffectSet, x: &[f64]) -> Vec<Vec<f64>> {
+pub fn residuals(
+    robot: &Robot,
+    logs: &[ServoLog],
+    idx: &[usize],
+    set: &EffectSet,
+    x: &[f64],
+) -> Vec<Vec<f64>> {
     idx.par_iter().map(|&i| log_residuals(robot, &logs[i], &set.apply(&logs[i].base, x))).collect()
 }
 
 /// Objective: mean over the logs `idx` of the whole-log position MAE [rad].
-pub fn objective(robot: &Robot, logs: &[ServoLog], idx: &[usize], set: &EffectSet, x: &[f64]) -> f64 {
+pub fn objective(
+    robot: &Robot,
+    logs: &[ServoLog],
+    idx: &[usize],
+    set: &EffectSet,
+    x: &[f64],
+) -> f64 {
     let r = residuals(robot, logs, idx, set, x);
     r.iter().map(|v| mae(v)).sum::<f64>() / r.len().max(1) as f64
 }
@@ -92,7 +109,13 @@ pub struct FitOpts {
 
 impl Default for FitOpts {
     fn default() -> Self {
-        FitOpts { optimiser: Optimiser::NelderMead, max_evals: 80, candidates: Effect::ALL.to_vec(), seed: 7, polish_evals: 200 }
+        FitOpts {
+            optimiser: Optimiser::NelderMead,
+            max_evals: 80,
+            candidates: Effect::ALL.to_vec(),
+            seed: 7,
+            polish_evals: 200,
+        }
     }
 }
 
@@ -116,23 +139,56 @@ pub struct FitResult {
 }
 
 /// Minimises the training objective of `set` from `x0`.
-pub fn fit_set(robot: &Robot, logs: &[ServoLog], train: &[usize], set: &EffectSet, x0: &[f64], o: &FitOpts) -> (Vec<f64>, f64, usize) {
+pub fn fit_set(
+    robot: &Robot,
+    logs: &[ServoLog],
+    train: &[usize],
+    set: &EffectSet,
+    x0: &[f64],
+    o: &FitOpts,
+) -> (Vec<f64>, f64, usize) {
     if set.n_params() == 0 {
         return (vec![], objective(robot, logs, train, set, &[]), 1);
     }
     let specs = set.specs();
-    let b = Bounds { lo: specs.iter().map(|s| s.lo).collect(), hi: specs.iter().map(|s| s.hi).collect() };
+    let b = Bounds {
+        lo: specs.iter().map(|s| s.lo).collect(),
+        hi: specs.iter().map(|s| s.hi).collect(),
+    };
     let f = |x: &[f64]| objective(robot, logs, train, set, x);
     let r = match o.optimiser {
-        Optimiser::Cmaes => cmaes(&f, x0, &b, &CmaesOpts { max_evals: o.max_evals, sigma0: 0.2, popsize: None, seed: o.seed, ftol: 1e-7 }),
-        Optimiser::NelderMead => nelder_mead(&f, x0, &b, &NelderMeadOpts { max_evals: o.max_evals, xtol: 1e-4, ftol: 1e-7, initial_step: 0.15 }),
+        Optimiser::Cmaes => cmaes(
+            &f,
+            x0,
+            &b,
+            &CmaesOpts {
+                max_evals: o.max_evals,
+                sigma0: 0.2,
+                popsize: None,
+                seed: o.seed,
+                ftol: 1e-7,
+            },
+        ),
+        Optimiser::NelderMead => nelder_mead(
+            &f,
+            x0,
+            &b,
+            &NelderMeadOpts { max_evals: o.max_evals, xtol: 1e-4, ftol: 1e-7, initial_step: 0.15 },
+        ),
     };
     (r.x, r.f, r.evals)
 }
 
 /// Training BIC, standard errors (finite-difference Jacobian of the training residual vector)
 /// and held-out MAE of `set` at `x`.
-pub fn assess(robot: &Robot, logs: &[ServoLog], train: &[usize], test: &[usize], set: &EffectSet, x: &[f64]) -> FitResult {
+pub fn assess(
+    robot: &Robot,
+    logs: &[ServoLog],
+    train: &[usize],
+    test: &[usize],
+    set: &EffectSet,
+    x: &[f64],
+) -> FitResult {
     let specs = set.specs();
     let flat = |r: Vec<Vec<f64>>| r.into_iter().flatten().collect::<Vec<f64>>();
     let r_train = residuals(robot, logs, train, set, x);
@@ -158,7 +214,8 @@ pub fn assess(robot: &Robot, logs: &[ServoLog], train: &[usize], test: &[usize],
                 rp.iter().zip(&rm).map(|(a, b)| (a - b) / d).collect()
             })
             .collect();
-        let jac: Vec<Vec<f64>> = (0..r0.len()).map(|i| cols.iter().map(|c| c[i]).collect()).collect();
+        let jac: Vec<Vec<f64>> =
+            (0..r0.len()).map(|i| cols.iter().map(|c| c[i]).collect()).collect();
         let ranges: Vec<f64> = specs.iter().map(|s| s.hi - s.lo).collect();
         uncertainty_from_jacobian(&jac, &r0, k, &ranges).stderr
     };
@@ -224,7 +281,12 @@ pub fn forward_select(
     let mut set = EffectSet(vec![]);
     let mut x: Vec<f64> = vec![];
     let nominal = assess(robot, logs, train, test, &set, &x);
-    progress(&format!("  nominal: train {:.2}°  held-out {:.2}°  BIC {:.0}", nominal.train_mae.to_degrees(), nominal.test_mae.to_degrees(), nominal.bic));
+    progress(&format!(
+        "  nominal: train {:.2}°  held-out {:.2}°  BIC {:.0}",
+        nominal.train_mae.to_degrees(),
+        nominal.test_mae.to_degrees(),
+        nominal.bic
+    ));
     let mut cur = nominal.clone();
     let mut trials = Vec::new();
     let mut remaining = o.candidates.clone();
@@ -262,10 +324,19 @@ pub fn forward_select(
         cands.sort_by(|a, b| a.1.bic.total_cmp(&b.1.bic));
         let pick = cands.iter().position(|(_, r)| r.bic < cur.bic && r.test_mae < cur.test_mae);
         for (k, (e, r)) in cands.iter().enumerate() {
-            trials.push(Trial { round, effect: *e, train_mae: r.train_mae, bic: r.bic, test_mae: r.test_mae, accepted: Some(k) == pick, x: r.x.clone() });
+            trials.push(Trial {
+                round,
+                effect: *e,
+                train_mae: r.train_mae,
+                bic: r.bic,
+                test_mae: r.test_mae,
+                accepted: Some(k) == pick,
+                x: r.x.clone(),
+            });
         }
         let cur_bic = cur.bic;
-        let keep: Vec<Effect> = cands.iter().filter(|(_, r)| r.bic < cur_bic).map(|(e, _)| *e).collect();
+        let keep: Vec<Effect> =
+            cands.iter().filter(|(_, r)| r.bic < cur_bic).map(|(e, _)| *e).collect();
         let Some(k) = pick else { break };
         let (e, r) = cands.swap_remove(k);
         progress(&format!("  → keep {} (held-out {:.2}°)", e.name(), r.test_mae.to_degrees()));

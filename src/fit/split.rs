@@ -63,12 +63,18 @@ pub fn windows(rec: &Recording, len_s: f64) -> Vec<Recording> {
 }
 
 fn name(r: &Recording) -> String {
-    r.source.file_name().map_or_else(|| r.source.display().to_string(), |f| f.to_string_lossy().into_owned())
+    r.source
+        .file_name()
+        .map_or_else(|| r.source.display().to_string(), |f| f.to_string_lossy().into_owned())
 }
 
 fn names(rs: &[&Recording]) -> String {
     let v: Vec<String> = rs.iter().map(|r| name(r)).collect();
-    if v.len() <= 6 { v.join(", ") } else { format!("{}, … ({} episodes)", v[..5].join(", "), v.len()) }
+    if v.len() <= 6 {
+        v.join(", ")
+    } else {
+        format!("{}, … ({} episodes)", v[..5].join(", "), v.len())
+    }
 }
 
 /// Splits `recs` (see the module docs); `holdout` ≥ 2 is the "one in N" ratio.
@@ -81,8 +87,17 @@ pub fn split(recs: &[Recording], holdout: usize) -> Split {
             if *d == Some(Declared::Heldout) { ho.push(r) } else { tr.push(r) }
         }
         if !tr.is_empty() {
-            let note = format!("held out {} (declared `split: heldout`); trained on {}", names(&ho), names(&tr));
-            return Split { train: tr.into_iter().cloned().collect(), heldout: ho.into_iter().cloned().collect(), by_time: false, note };
+            let note = format!(
+                "held out {} (declared `split: heldout`); trained on {}",
+                names(&ho),
+                names(&tr)
+            );
+            return Split {
+                train: tr.into_iter().cloned().collect(),
+                heldout: ho.into_iter().cloned().collect(),
+                by_time: false,
+                note,
+            };
         }
     }
     if recs.len() == 1 {
@@ -113,13 +128,26 @@ pub fn split(recs: &[Recording], holdout: usize) -> Split {
     for (i, r) in recs.iter().enumerate() {
         if picked.contains(&i) { ho.push(r) } else { tr.push(r) }
     }
-    let why = if declared.iter().any(Option::is_some) { " (no episode declares `split: heldout`)" } else { "" };
+    let why = if declared.iter().any(Option::is_some) {
+        " (no episode declares `split: heldout`)"
+    } else {
+        ""
+    };
     let note = if ho.is_empty() {
         String::new()
     } else {
-        format!("held out {} of {n} episodes, spread evenly over the sorted list{why}: {}", ho.len(), names(&ho))
+        format!(
+            "held out {} of {n} episodes, spread evenly over the sorted list{why}: {}",
+            ho.len(),
+            names(&ho)
+        )
     };
-    Split { train: tr.into_iter().cloned().collect(), heldout: ho.into_iter().cloned().collect(), by_time: false, note }
+    Split {
+        train: tr.into_iter().cloned().collect(),
+        heldout: ho.into_iter().cloned().collect(),
+        by_time: false,
+        note,
+    }
 }
 
 #[cfg(test)]
@@ -131,7 +159,15 @@ mod tests {
         let t: Vec<f64> = (0..n).map(|i| i as f64 * dt).collect();
         let mut j = JointTrace::new("a", t.iter().map(|x| x.sin()).collect());
         j.q_cmd = Some(j.q.clone());
-        Recording { source: "r.csv".into(), meta: Default::default(), control_rate_hz: Some(100.0), control_t0_s: None, t, joints: vec![j], base: None }
+        Recording {
+            source: "r.csv".into(),
+            meta: Default::default(),
+            control_rate_hz: Some(100.0),
+            control_t0_s: None,
+            t,
+            joints: vec![j],
+            base: None,
+        }
     }
 
     fn named(i: usize, split: Option<&str>) -> Recording {
@@ -155,7 +191,12 @@ mod tests {
 
     #[test]
     fn declared_split_is_honoured() {
-        let recs = vec![named(0, Some("train")), named(1, Some("heldout")), named(2, Some("train")), named(3, Some("train"))];
+        let recs = vec![
+            named(0, Some("train")),
+            named(1, Some("heldout")),
+            named(2, Some("train")),
+            named(3, Some("train")),
+        ];
         let s = split(&recs, 4);
         let ho: Vec<String> = s.heldout.iter().map(name).collect();
         assert_eq!(ho, ["ep_01.csv"]);
@@ -185,7 +226,12 @@ mod tests {
     #[test]
     fn single_episode_is_split_by_time() {
         let s = split(&[rec(2001, 0.005)], 4);
-        assert!(s.by_time && !s.train.is_empty() && !s.heldout.is_empty(), "{} {}", s.train.len(), s.heldout.len());
+        assert!(
+            s.by_time && !s.train.is_empty() && !s.heldout.is_empty(),
+            "{} {}",
+            s.train.len(),
+            s.heldout.len()
+        );
         assert!(s.note.contains("windows"));
     }
 }

@@ -60,7 +60,11 @@ pub fn uncertainty_from_jacobian(
     let m = jac.len();
     let p = n_params;
     if p == 0 {
-        return ParamUncertainty { stderr: vec![], identifiable: vec![], condition_number: f64::INFINITY };
+        return ParamUncertainty {
+            stderr: vec![],
+            identifiable: vec![],
+            condition_number: f64::INFINITY,
+        };
     }
     if m <= p
         || residuals.len() != m
@@ -290,7 +294,8 @@ mod white_tests {
         // A slow sine of the noise's amplitude on top: the white part stays, the mean square
         // grows by A²/2.
         let a = 1.0;
-        let r: Vec<f64> = noise.iter().enumerate().map(|(i, n)| n + a * (i as f64 * 0.01).sin()).collect();
+        let r: Vec<f64> =
+            noise.iter().enumerate().map(|(i, n)| n + a * (i as f64 * 0.01).sin()).collect();
         let (ms, w) = white_floor(&[r]);
         assert!((w - 1.0 / 3.0).abs() < 0.02, "{w}");
         assert!((ms - (1.0 / 3.0 + 0.5)).abs() < 0.03, "{ms}");
@@ -334,10 +339,12 @@ mod tests {
     #[test]
     fn collinear_parameters_are_unidentifiable() {
         // Columns 0 and 1 identical: only their sum is determined; column 2 is fine.
-        let jac: Vec<Vec<f64>> = (0..20).map(|i| {
-            let t = i as f64 * 0.1;
-            vec![t.sin(), t.sin(), 1.0]
-        }).collect();
+        let jac: Vec<Vec<f64>> = (0..20)
+            .map(|i| {
+                let t = i as f64 * 0.1;
+                vec![t.sin(), t.sin(), 1.0]
+            })
+            .collect();
         let res: Vec<f64> = (0..20).map(|i| if i % 2 == 0 { 0.01 } else { -0.01 }).collect();
         let u = uncertainty_from_jacobian(&jac, &res, 3, &[1.0, 1.0, 1.0]);
         assert_eq!(u.identifiable, vec![false, false, true]);
@@ -349,7 +356,8 @@ mod tests {
     #[test]
     fn weak_parameter_flagged_by_range() {
         // Column 1 is tiny -> large stderr relative to its range of 1.0.
-        let jac: Vec<Vec<f64>> = (0..30).map(|i| vec![1.0, 1e-4 * ((i as f64) * 0.7).cos()]).collect();
+        let jac: Vec<Vec<f64>> =
+            (0..30).map(|i| vec![1.0, 1e-4 * ((i as f64) * 0.7).cos()]).collect();
         let res: Vec<f64> = (0..30).map(|i| 0.05 * ((i as f64) * 1.3).sin()).collect();
         let u = uncertainty_from_jacobian(&jac, &res, 2, &[1.0, 1.0]);
         assert!(u.identifiable[0]);
@@ -370,9 +378,19 @@ mod tests {
         let u = uncertainty_from_jacobian(&[vec![1.0, 2.0]], &[0.1], 2, &[1.0, 1.0]);
         assert_eq!(u.identifiable, vec![false; 2]);
         // Ragged / NaN.
-        let u = uncertainty_from_jacobian(&[vec![1.0], vec![1.0, 2.0], vec![0.0, 1.0]], &[0.1, 0.2, 0.3], 2, &[]);
+        let u = uncertainty_from_jacobian(
+            &[vec![1.0], vec![1.0, 2.0], vec![0.0, 1.0]],
+            &[0.1, 0.2, 0.3],
+            2,
+            &[],
+        );
         assert_eq!(u.identifiable, vec![false; 2]);
-        let u = uncertainty_from_jacobian(&[vec![f64::NAN, 1.0], vec![1.0, 2.0], vec![0.0, 1.0]], &[0.1, 0.2, 0.3], 2, &[]);
+        let u = uncertainty_from_jacobian(
+            &[vec![f64::NAN, 1.0], vec![1.0, 2.0], vec![0.0, 1.0]],
+            &[0.1, 0.2, 0.3],
+            2,
+            &[],
+        );
         assert_eq!(u.identifiable, vec![false; 2]);
         // All-zero Jacobian.
         let u = uncertainty_from_jacobian(&[vec![0.0], vec![0.0]], &[0.1, 0.2], 1, &[]);
@@ -391,7 +409,14 @@ mod tests {
 
     #[test]
     fn bootstrap_std_dev() {
-        let s = vec![vec![1.0, 10.0], vec![2.0, 10.0], vec![3.0, 10.0], vec![4.0, 10.0], vec![f64::NAN, 10.0], vec![9.0]];
+        let s = vec![
+            vec![1.0, 10.0],
+            vec![2.0, 10.0],
+            vec![3.0, 10.0],
+            vec![4.0, 10.0],
+            vec![f64::NAN, 10.0],
+            vec![9.0],
+        ];
         let sd = bootstrap_stderr(&s);
         // Sample std of 1,2,3,4 = sqrt(5/3).
         assert!(close(sd[0], (5.0f64 / 3.0).sqrt(), 1e-12));

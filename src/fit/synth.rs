@@ -59,12 +59,30 @@ pub struct SynthOptions {
 
 impl Default for SynthOptions {
     fn default() -> Self {
-        SynthOptions { duration_s: 5.0, sample_hz: 200.0, jitter: 0.2, control_hz: 100.0, amplitude: 0.5, noise: 1e-4, quantum: 0.0, drop: 0.0, suspend_m: 0.0 }
+        SynthOptions {
+            duration_s: 5.0,
+            sample_hz: 200.0,
+            jitter: 0.2,
+            control_hz: 100.0,
+            amplitude: 0.5,
+            noise: 1e-4,
+            quantum: 0.0,
+            drop: 0.0,
+            suspend_m: 0.0,
+        }
     }
 }
 
 /// Command of kind `kind % 3` (chirp, steps, smooth random) at time `t`.
-fn command(kind: usize, t: f64, dur: f64, amp: f64, phase: f64, steps: &[f64], knots: &[f64]) -> f64 {
+fn command(
+    kind: usize,
+    t: f64,
+    dur: f64,
+    amp: f64,
+    phase: f64,
+    steps: &[f64],
+    knots: &[f64],
+) -> f64 {
     let ramp = (t / 0.3).min(1.0);
     match kind % 3 {
         0 => {
@@ -105,9 +123,14 @@ pub fn excitation(joints: &[(String, f64)], o: &SynthOptions, seed: u64) -> Reco
         .map(|(k, (name, q0))| {
             let kind = (seed as usize + k) % 3;
             let steps: Vec<f64> = (0..8).map(|_| 2.0 * rng.uniform() - 1.0).collect();
-            let knots: Vec<f64> = (0..((o.duration_s / 0.4) as usize + 3)).map(|_| 2.0 * rng.uniform() - 1.0).collect();
+            let knots: Vec<f64> = (0..((o.duration_s / 0.4) as usize + 3))
+                .map(|_| 2.0 * rng.uniform() - 1.0)
+                .collect();
             let phase = rng.uniform() * std::f64::consts::TAU;
-            let c: Vec<f64> = t.iter().map(|&ti| q0 + command(kind, ti, o.duration_s, o.amplitude, phase, &steps, &knots)).collect();
+            let c: Vec<f64> = t
+                .iter()
+                .map(|&ti| q0 + command(kind, ti, o.duration_s, o.amplitude, phase, &steps, &knots))
+                .collect();
             let mut j = JointTrace::new(name.clone(), c.clone());
             j.q_cmd = Some(c);
             j.qd = Some(vec![0.0; n]);
@@ -127,16 +150,33 @@ pub fn excitation(joints: &[(String, f64)], o: &SynthOptions, seed: u64) -> Reco
 
 /// "Real" recordings: `n` excitations of `joints` replayed on `robot` with the hidden `truth`
 /// effects, then noise, quantisation and dropped samples applied to the positions.
-pub fn generate(robot: &Robot, joints: &[String], truth: &[Applied], n: usize, o: &SynthOptions, seed: u64) -> Result<Vec<Recording>, ReplayError> {
+pub fn generate(
+    robot: &Robot,
+    joints: &[String],
+    truth: &[Applied],
+    n: usize,
+    o: &SynthOptions,
+    seed: u64,
+) -> Result<Vec<Recording>, ReplayError> {
     let jq: Vec<(String, f64)> = joints
         .iter()
-        .map(|j| (j.clone(), robot.joint(j).map_or(0.0, |jj| robot.key.qpos.get(jj.qposadr).copied().unwrap_or(0.0))))
+        .map(|j| {
+            (
+                j.clone(),
+                robot
+                    .joint(j)
+                    .map_or(0.0, |jj| robot.key.qpos.get(jj.qposadr).copied().unwrap_or(0.0)),
+            )
+        })
         .collect();
     let free = robot.joints.iter().find(|j| j.jtype == JointType::Free).map(|j| j.qposadr);
     let base = |len: usize| -> Option<BaseTrace> {
         let qa = free.filter(|_| o.suspend_m > 0.0)?;
         let k = robot.key.qpos.get(qa..qa + 7)?;
-        Some(BaseTrace { pos: vec![[k[0], k[1], k[2] + o.suspend_m]; len], quat: vec![[k[3], k[4], k[5], k[6]]; len] })
+        Some(BaseTrace {
+            pos: vec![[k[0], k[1], k[2] + o.suspend_m]; len],
+            quat: vec![[k[3], k[4], k[5], k[6]]; len],
+        })
     };
     let cmds: Vec<Recording> = (0..n)
         .map(|i| {
@@ -161,7 +201,8 @@ pub fn generate(robot: &Robot, joints: &[String], truth: &[Applied], n: usize, o
             j.qd = Some(ep.qd_sim[k].iter().map(|&v| v + 10.0 * o.noise * rng.normal()).collect());
         }
         if o.drop > 0.0 {
-            let keep: Vec<bool> = (0..rec.t.len()).map(|i| i < 2 || rng.uniform() >= o.drop).collect();
+            let keep: Vec<bool> =
+                (0..rec.t.len()).map(|i| i < 2 || rng.uniform() >= o.drop).collect();
             let f = |v: &Vec<f64>| kept_rows(v, &keep);
             rec.t = f(&rec.t);
             if let Some(b) = rec.base.as_mut() {
@@ -189,7 +230,9 @@ fn kept_rows<T: Copy>(v: &[T], keep: &[bool]) -> Vec<T> {
 pub fn parse_spec(spec: &str, joints: &[String]) -> Result<Vec<Applied>, String> {
     let mut out = Vec::new();
     for item in spec.split(';').map(str::trim).filter(|s| !s.is_empty()) {
-        let (lhs, rhs) = item.split_once('=').ok_or_else(|| format!("`{item}`: expected effect[@joints]=values"))?;
+        let (lhs, rhs) = item
+            .split_once('=')
+            .ok_or_else(|| format!("`{item}`: expected effect[@joints]=values"))?;
         let (id, glob) = match lhs.split_once('@') {
             Some((a, b)) => (a.trim(), Some(b.trim())),
             None => (lhs.trim(), None),
@@ -227,7 +270,11 @@ pub fn truth_toml(truth: &[Applied], o: &SynthOptions, seed: u64) -> String {
         o.noise, o.quantum, o.sample_hz, o.jitter, o.drop, o.suspend_m
     );
     for a in truth {
-        s.push_str(&format!("[[effect]]\nid = \"{}\"\njoints = [{}]\n[effect.params]\n", a.effect.id(), a.joints.iter().map(|j| format!("\"{j}\"")).collect::<Vec<_>>().join(", ")));
+        s.push_str(&format!(
+            "[[effect]]\nid = \"{}\"\njoints = [{}]\n[effect.params]\n",
+            a.effect.id(),
+            a.joints.iter().map(|j| format!("\"{j}\"")).collect::<Vec<_>>().join(", ")
+        ));
         for (d, v) in a.effect.params().iter().zip(&a.params) {
             s.push_str(&format!("{} = {v}\n", d.name));
         }

@@ -16,7 +16,11 @@ fn num(v: f64) -> String {
 
 /// Edits `xml` (the model's MJCF text) with the MuJoCo-expressible fitted values. Returns the new
 /// text and warnings (joints or actuators not found in this file, effects left to the TOML).
-pub fn edit_mjcf(xml: &str, robot: &Robot, selected: &[Selected]) -> Result<(String, Vec<String>), String> {
+pub fn edit_mjcf(
+    xml: &str,
+    robot: &Robot,
+    selected: &[Selected],
+) -> Result<(String, Vec<String>), String> {
     let mut found = BTreeSet::new();
     let (out, mut warnings) = edit_file(xml, robot, selected, &mut found)?;
     warnings.extend(unwritten(selected, &found, "in this file"));
@@ -25,22 +29,36 @@ pub fn edit_mjcf(xml: &str, robot: &Robot, selected: &[Selected]) -> Result<(Str
 
 /// What `edit_file` could not place: (effect, joint) pairs whose element was found in none of the
 /// files searched, and the effects MJCF cannot express.
-pub fn unwritten(selected: &[Selected], found: &BTreeSet<(usize, String)>, where_: &str) -> Vec<String> {
+pub fn unwritten(
+    selected: &[Selected],
+    found: &BTreeSet<(usize, String)>,
+    where_: &str,
+) -> Vec<String> {
     let mut warnings = Vec::new();
     for (i, s) in selected.iter().enumerate() {
         let Some(e) = effects::by_id(&s.effect) else { continue };
         match e.write_back(&s.values) {
             WriteBack::Joint(_) => {
                 for j in s.joints.iter().filter(|j| !found.contains(&(i, (*j).clone()))) {
-                    warnings.push(format!("{}: <joint name=\"{j}\"> not found {where_}; not written", s.effect));
+                    warnings.push(format!(
+                        "{}: <joint name=\"{j}\"> not found {where_}; not written",
+                        s.effect
+                    ));
                 }
             }
             WriteBack::Actuator(_) => {
                 for j in s.joints.iter().filter(|j| !found.contains(&(i, (*j).clone()))) {
-                    warnings.push(format!("{}: no <actuator> element with joint=\"{j}\" {where_}; not written", s.effect));
+                    warnings.push(format!(
+                        "{}: no <actuator> element with joint=\"{j}\" {where_}; not written",
+                        s.effect
+                    ));
                 }
             }
-            WriteBack::TomlOnly => warnings.push(format!("{} on {}: not expressible in MJCF; see --write-actuators", s.effect, s.joints.join(","))),
+            WriteBack::TomlOnly => warnings.push(format!(
+                "{} on {}: not expressible in MJCF; see --write-actuators",
+                s.effect,
+                s.joints.join(",")
+            )),
         }
     }
     warnings
@@ -48,9 +66,15 @@ pub fn unwritten(selected: &[Selected], found: &BTreeSet<(usize, String)>, where
 
 /// Edits one MJCF file's text; records in `found` the (selected index, joint) pairs whose element
 /// is in this file. Warnings here are about elements found but not editable.
-pub fn edit_file(xml: &str, robot: &Robot, selected: &[Selected], found: &mut BTreeSet<(usize, String)>) -> Result<(String, Vec<String>), String> {
+pub fn edit_file(
+    xml: &str,
+    robot: &Robot,
+    selected: &[Selected],
+    found: &mut BTreeSet<(usize, String)>,
+) -> Result<(String, Vec<String>), String> {
     let opts = roxmltree::ParsingOptions { allow_dtd: true, ..Default::default() };
-    let doc = roxmltree::Document::parse_with_options(xml, opts).map_err(|e| format!("cannot parse the MJCF: {e}"))?;
+    let doc = roxmltree::Document::parse_with_options(xml, opts)
+        .map_err(|e| format!("cannot parse the MJCF: {e}"))?;
     let mut warnings = Vec::new();
     // element start offset → (tag name end offset, attributes to set)
     let mut sets: BTreeMap<usize, (roxmltree::NodeId, Vec<(String, String)>)> = BTreeMap::new();
@@ -62,13 +86,18 @@ pub fn edit_file(xml: &str, robot: &Robot, selected: &[Selected], found: &mut BT
             e.1.push((attr.to_string(), val));
         }
     };
-    let in_actuator = |n: &roxmltree::Node| n.parent_element().is_some_and(|p| p.has_tag_name("actuator"));
+    let in_actuator =
+        |n: &roxmltree::Node| n.parent_element().is_some_and(|p| p.has_tag_name("actuator"));
     for (i, s) in selected.iter().enumerate() {
         let Some(e) = effects::by_id(&s.effect) else { continue };
         match e.write_back(&s.values) {
             WriteBack::Joint(attrs) => {
                 for j in &s.joints {
-                    let Some(node) = doc.descendants().find(|n| n.has_tag_name("joint") && n.attribute("name") == Some(j.as_str()) && !in_actuator(n)) else {
+                    let Some(node) = doc.descendants().find(|n| {
+                        n.has_tag_name("joint")
+                            && n.attribute("name") == Some(j.as_str())
+                            && !in_actuator(n)
+                    }) else {
                         continue;
                     };
                     found.insert((i, j.clone()));
@@ -79,14 +108,23 @@ pub fn edit_file(xml: &str, robot: &Robot, selected: &[Selected], found: &mut BT
             }
             WriteBack::Actuator(attrs) => {
                 for j in &s.joints {
-                    let acts: Vec<roxmltree::Node> = doc.descendants().filter(|n| in_actuator(n) && n.attribute("joint") == Some(j.as_str())).collect();
+                    let acts: Vec<roxmltree::Node> = doc
+                        .descendants()
+                        .filter(|n| in_actuator(n) && n.attribute("joint") == Some(j.as_str()))
+                        .collect();
                     if !acts.is_empty() {
                         found.insert((i, j.clone()));
                     }
                     for node in acts {
-                        let compiled = robot.actuators.iter().find(|a| Some(a.name.as_str()) == node.attribute("name")).or_else(|| {
-                            robot.joint(j).and_then(|jj| robot.actuators_on_joint(jj.id).first().copied())
-                        });
+                        let compiled = robot
+                            .actuators
+                            .iter()
+                            .find(|a| Some(a.name.as_str()) == node.attribute("name"))
+                            .or_else(|| {
+                                robot
+                                    .joint(j)
+                                    .and_then(|jj| robot.actuators_on_joint(jj.id).first().copied())
+                            });
                         for (a, v) in &attrs {
                             match *a {
                                 "delay" => {
@@ -99,7 +137,9 @@ pub fn edit_file(xml: &str, robot: &Robot, selected: &[Selected], found: &mut BT
                                     add(node, "forcerange", format!("{} {}", num(-v), num(*v)));
                                 }
                                 "kp_scale" | "kv_scale" => {
-                                    let Some(ActuatorKind::Position { kp, kv }) = compiled.map(|c| c.kind) else {
+                                    let Some(ActuatorKind::Position { kp, kv }) =
+                                        compiled.map(|c| c.kind)
+                                    else {
                                         warnings.push(format!("gain_error on {j}: actuator is not a position servo; not written"));
                                         continue;
                                     };
@@ -138,7 +178,10 @@ pub fn edit_file(xml: &str, robot: &Robot, selected: &[Selected], found: &mut BT
         }
         if !insert.is_empty() {
             // After the last attribute (or the tag name): new attributes are appended.
-            let at = node.attributes().next_back().map_or(start + 1 + node.tag_name().name().len(), |x| x.range().end);
+            let at = node
+                .attributes()
+                .next_back()
+                .map_or(start + 1 + node.tag_name().name().len(), |x| x.range().end);
             edits.push((at, at, insert));
         }
     }
@@ -153,11 +196,20 @@ pub fn edit_file(xml: &str, robot: &Robot, selected: &[Selected], found: &mut BT
 /// TOML with every selected effect (parameters, standard errors), and an Isaac Lab / mjlab
 /// actuator snippet as comments.
 pub fn actuators_toml(selected: &[Selected]) -> String {
-    let mut s = String::from("# Written by `modellint fit`: effects found missing in the model, with fitted parameters.\n# Effects MuJoCo cannot express (hook-only) are applied by a per-step torque/command hook.\n\n");
+    let mut s = String::from(
+        "# Written by `modellint fit`: effects found missing in the model, with fitted parameters.\n# Effects MuJoCo cannot express (hook-only) are applied by a per-step torque/command hook.\n\n",
+    );
     for x in selected {
-        let hook = effects::by_id(&x.effect).map(|e| matches!(e.write_back(&x.values), WriteBack::TomlOnly)).unwrap_or(true);
+        let hook = effects::by_id(&x.effect)
+            .map(|e| matches!(e.write_back(&x.values), WriteBack::TomlOnly))
+            .unwrap_or(true);
         s.push_str("[[effect]]\n");
-        s.push_str(&format!("id = \"{}\"\njoints = [{}]\nhook_only = {hook}\nheldout_improvement = {}\n", x.effect, x.joints.iter().map(|j| format!("\"{j}\"")).collect::<Vec<_>>().join(", "), num(x.heldout_improvement)));
+        s.push_str(&format!(
+            "id = \"{}\"\njoints = [{}]\nhook_only = {hook}\nheldout_improvement = {}\n",
+            x.effect,
+            x.joints.iter().map(|j| format!("\"{j}\"")).collect::<Vec<_>>().join(", "),
+            num(x.heldout_improvement)
+        ));
         s.push_str("[effect.params]\n");
         for (k, v) in &x.params {
             s.push_str(&format!("{k} = {}\n", num(*v)));
@@ -174,11 +226,20 @@ pub fn actuators_toml(selected: &[Selected]) -> String {
 
 /// `--write-actuators PATH`: the TOML at PATH and the Isaac Lab / mjlab snippet beside it
 /// (`<stem>_isaaclab.py`). Returns the files written.
-pub fn write_actuators(path: &std::path::Path, robot: &Robot, selected: &[Selected]) -> Result<Vec<std::path::PathBuf>, String> {
-    std::fs::write(path, actuators_toml(selected)).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
-    let stem = path.file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or_else(|| "actuators".into());
+pub fn write_actuators(
+    path: &std::path::Path,
+    robot: &Robot,
+    selected: &[Selected],
+) -> Result<Vec<std::path::PathBuf>, String> {
+    std::fs::write(path, actuators_toml(selected))
+        .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    let stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().to_string())
+        .unwrap_or_else(|| "actuators".into());
     let py = path.with_file_name(format!("{stem}_isaaclab.py"));
-    std::fs::write(&py, isaaclab_snippet(robot, selected)).map_err(|e| format!("cannot write {}: {e}", py.display()))?;
+    std::fs::write(&py, isaaclab_snippet(robot, selected))
+        .map_err(|e| format!("cannot write {}: {e}", py.display()))?;
     Ok(vec![path.to_path_buf(), py])
 }
 

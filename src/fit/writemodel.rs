@@ -49,7 +49,8 @@ fn closure(model: &Path) -> Result<Vec<Src>, String> {
     let canon = |p: &Path| std::fs::canonicalize(p).unwrap_or_else(|_| p.to_path_buf());
     index.insert(canon(model), 0);
     while let Some(p) = todo.pop() {
-        let text = std::fs::read_to_string(&p).map_err(|e| format!("cannot read {}: {e}", p.display()))?;
+        let text =
+            std::fs::read_to_string(&p).map_err(|e| format!("cannot read {}: {e}", p.display()))?;
         files.push(Src { path: p.clone(), text, includes: vec![] });
         let me = files.len() - 1;
         let base = p.parent().map(Path::to_path_buf).unwrap_or_default();
@@ -57,7 +58,11 @@ fn closure(model: &Path) -> Result<Vec<Src>, String> {
             let doc = parse(&files[me].text).map_err(|e| format!("{}: {e}", p.display()))?;
             doc.descendants()
                 .filter(|n| n.has_tag_name("include"))
-                .filter_map(|n| n.attributes().find(|a| a.name() == "file").map(|a| (a.range_value(), base.join(a.value()))))
+                .filter_map(|n| {
+                    n.attributes()
+                        .find(|a| a.name() == "file")
+                        .map(|a| (a.range_value(), base.join(a.value())))
+                })
                 .collect()
         };
         for (range, inc) in found {
@@ -102,7 +107,11 @@ fn slash(p: &Path) -> String {
 }
 
 /// Text edits (range, replacement) that rebase relative asset paths by `rel`.
-fn rebase_edits(text: &str, rel: &Path, dirs_set: &BTreeSet<&'static str>) -> Result<Vec<(std::ops::Range<usize>, String)>, String> {
+fn rebase_edits(
+    text: &str,
+    rel: &Path,
+    dirs_set: &BTreeSet<&'static str>,
+) -> Result<Vec<(std::ops::Range<usize>, String)>, String> {
     let doc = parse(text)?;
     let mut edits = Vec::new();
     let rebase = |v: &str| -> Option<String> {
@@ -115,7 +124,11 @@ fn rebase_edits(text: &str, rel: &Path, dirs_set: &BTreeSet<&'static str>) -> Re
             let dir_kind = match (tag, a.name()) {
                 ("compiler", "meshdir" | "texturedir" | "assetdir") => None,
                 ("mesh" | "skin" | "hfield", "file") => Some("meshdir"),
-                ("texture", "file" | "fileright" | "fileleft" | "fileup" | "filedown" | "filefront" | "fileback") => Some("texturedir"),
+                (
+                    "texture",
+                    "file" | "fileright" | "fileleft" | "fileup" | "filedown" | "filefront"
+                    | "fileback",
+                ) => Some("texturedir"),
                 _ => continue,
             };
             if dir_kind.is_some_and(|k| dirs_set.contains(k) || dirs_set.contains("assetdir")) {
@@ -140,7 +153,12 @@ fn apply(text: &str, mut edits: Vec<(std::ops::Range<usize>, String)>) -> String
 
 /// Writes the fitted model to `out` (and edited copies of included files beside it). `Err` when
 /// an MJCF-expressible value found no element in any file, or the written model does not load.
-pub fn write_model(model: &Path, robot: &Robot, selected: &[Selected], out: &Path) -> Result<Written, String> {
+pub fn write_model(
+    model: &Path,
+    robot: &Robot,
+    selected: &[Selected],
+    out: &Path,
+) -> Result<Written, String> {
     let files = closure(model)?;
     if parse(&files[0].text).is_ok_and(|d| d.root_element().has_tag_name("robot")) {
         return Err(format!(
@@ -154,24 +172,32 @@ pub fn write_model(model: &Path, robot: &Robot, selected: &[Selected], out: &Pat
     let mut notes = Vec::new();
     for f in &files {
         let before = found.len();
-        let (text, w) = edit_file(&f.text, robot, selected, &mut found).map_err(|e| format!("{}: {e}", f.path.display()))?;
+        let (text, w) = edit_file(&f.text, robot, selected, &mut found)
+            .map_err(|e| format!("{}: {e}", f.path.display()))?;
         notes.extend(w);
         edited.push((found.len() > before && text != f.text).then_some(text));
     }
     let missing = unwritten(selected, &found, "in the model or the files it includes");
-    let (hard, soft): (Vec<String>, Vec<String>) = missing.into_iter().partition(|w| w.ends_with("not written") && !w.contains("see --write-actuators"));
+    let (hard, soft): (Vec<String>, Vec<String>) = missing
+        .into_iter()
+        .partition(|w| w.ends_with("not written") && !w.contains("see --write-actuators"));
     if !hard.is_empty() {
         return Err(format!("--write-model {}: {}", out.display(), hard.join("; ")));
     }
     notes.extend(soft);
     if selected.is_empty() {
-        notes.push(format!("no missing physics was selected: {} is the input model, unchanged but for its paths", out.display()));
+        notes.push(format!(
+            "no missing physics was selected: {} is the input model, unchanged but for its paths",
+            out.display()
+        ));
     }
 
     let abs = |p: &Path| std::fs::canonicalize(p).unwrap_or_else(|_| p.to_path_buf());
-    let model_dir = abs(model.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new(".")));
+    let model_dir =
+        abs(model.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new(".")));
     let out_dir_raw = out.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    std::fs::create_dir_all(out_dir_raw).map_err(|e| format!("cannot create {}: {e}", out_dir_raw.display()))?;
+    std::fs::create_dir_all(out_dir_raw)
+        .map_err(|e| format!("cannot create {}: {e}", out_dir_raw.display()))?;
     let out_dir = abs(out_dir_raw);
     let moved = model_dir != out_dir;
 
@@ -196,9 +222,13 @@ pub fn write_model(model: &Path, robot: &Robot, selected: &[Selected], out: &Pat
         }
     }
     if abs(out) == abs(model) || (1..n).any(|i| abs(&files[i].path) == abs(out)) {
-        return Err(format!("--write-model {}: would overwrite the input model; choose another file name", out.display()));
+        return Err(format!(
+            "--write-model {}: would overwrite the input model; choose another file name",
+            out.display()
+        ));
     }
-    let stem = out.file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or_else(|| "fitted".into());
+    let stem =
+        out.file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or_else(|| "fitted".into());
     let mut names: Vec<PathBuf> = Vec::with_capacity(n);
     let mut taken: BTreeSet<String> = BTreeSet::new();
     taken.insert(out.file_name().map(|s| s.to_string_lossy().to_string()).unwrap_or_default());
@@ -207,7 +237,11 @@ pub fn write_model(model: &Path, robot: &Robot, selected: &[Selected], out: &Pat
             names.push(out.to_path_buf());
             continue;
         }
-        let fstem = f.path.file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or_else(|| "include".into());
+        let fstem = f
+            .path
+            .file_stem()
+            .map(|s| s.to_string_lossy().to_string())
+            .unwrap_or_else(|| "include".into());
         let mut name = format!("{stem}_{fstem}.xml");
         let mut k = 2;
         while !taken.insert(name.clone()) {
@@ -240,8 +274,11 @@ pub fn write_model(model: &Path, robot: &Robot, selected: &[Selected], out: &Pat
         // Includes: the attribute ranges refer to the original text; joint/actuator edits may have
         // shifted them, so locate includes in `base` again by document order.
         let doc = parse(&base).map_err(|e| format!("{}: {e}", f.path.display()))?;
-        let inc_ranges: Vec<std::ops::Range<usize>> =
-            doc.descendants().filter(|n| n.has_tag_name("include")).filter_map(|n| n.attributes().find(|a| a.name() == "file").map(|a| a.range_value())).collect();
+        let inc_ranges: Vec<std::ops::Range<usize>> = doc
+            .descendants()
+            .filter(|n| n.has_tag_name("include"))
+            .filter_map(|n| n.attributes().find(|a| a.name() == "file").map(|a| a.range_value()))
+            .collect();
         for (r, (_, child)) in inc_ranges.into_iter().zip(&f.includes) {
             let target = if write[*child] {
                 names[*child].file_name().map(PathBuf::from).unwrap_or_default()
@@ -254,19 +291,29 @@ pub fn write_model(model: &Path, robot: &Robot, selected: &[Selected], out: &Pat
             edits.push((r, slash(&target)));
         }
         if moved {
-            edits.extend(rebase_edits(&base, &rel, &dirs_set).map_err(|e| format!("{}: {e}", f.path.display()))?);
+            edits.extend(
+                rebase_edits(&base, &rel, &dirs_set)
+                    .map_err(|e| format!("{}: {e}", f.path.display()))?,
+            );
         }
         let text = apply(&base, edits);
-        std::fs::write(&names[i], &text).map_err(|e| format!("cannot write {}: {e}", names[i].display()))?;
+        std::fs::write(&names[i], &text)
+            .map_err(|e| format!("cannot write {}: {e}", names[i].display()))?;
         written.push(names[i].clone());
     }
     for i in (1..n).filter(|&i| edited[i].is_some()) {
-        notes.push(format!("fitted values for {} written to {} (a copy; the included file is unchanged)", files[i].path.display(), names[i].display()));
+        notes.push(format!(
+            "fitted values for {} written to {} (a copy; the included file is unchanged)",
+            files[i].path.display(),
+            names[i].display()
+        ));
     }
 
     // The written model must load, and must be the one the fit was made for.
     let mut map = crate::model::source::SourceMap::default();
-    crate::model::load(&mut map, out, None).map_err(|e| format!("--write-model {}: the written model does not load: {e}", out.display()))?;
+    crate::model::load(&mut map, out, None).map_err(|e| {
+        format!("--write-model {}: the written model does not load: {e}", out.display())
+    })?;
     Ok(Written { files: written, notes })
 }
 
@@ -276,7 +323,10 @@ mod tests {
 
     #[test]
     fn relative_paths_between_directories() {
-        assert_eq!(relative(Path::new("/a/b/out"), Path::new("/a/models/t1")), PathBuf::from("../../models/t1"));
+        assert_eq!(
+            relative(Path::new("/a/b/out"), Path::new("/a/models/t1")),
+            PathBuf::from("../../models/t1")
+        );
         assert_eq!(relative(Path::new("/a/b"), Path::new("/a/b")), PathBuf::from("."));
         assert_eq!(relative(Path::new("/a/b"), Path::new("/a/b/c")), PathBuf::from("c"));
         assert_eq!(relative(Path::new("/tmp/out"), Path::new("/work/m")), PathBuf::from("/work/m"));

@@ -51,7 +51,11 @@ fn avalanche(mut h: u64) -> u64 {
 
 impl Hash {
     fn new() -> Self {
-        Hash { lanes: [P1.wrapping_add(P2), P2, 0, 0u64.wrapping_sub(P1)], tail: Vec::new(), len: 0 }
+        Hash {
+            lanes: [P1.wrapping_add(P2), P2, 0, 0u64.wrapping_sub(P1)],
+            tail: Vec::new(),
+            len: 0,
+        }
     }
     fn stripes(&mut self, data: &[u8]) {
         for chunk in data.chunks_exact(32) {
@@ -89,8 +93,16 @@ impl Hash {
         pad.resize(32, 0);
         self.stripes(&pad);
         let [a, b, c, d] = self.lanes;
-        let h1 = avalanche(a.rotate_left(1) ^ b.rotate_left(7) ^ c.rotate_left(12) ^ d.rotate_left(18) ^ self.len);
-        let h2 = avalanche(a.wrapping_mul(P3) ^ b.rotate_left(23) ^ c.wrapping_mul(P1) ^ d.rotate_left(41) ^ self.len.wrapping_mul(P2));
+        let h1 = avalanche(
+            a.rotate_left(1) ^ b.rotate_left(7) ^ c.rotate_left(12) ^ d.rotate_left(18) ^ self.len,
+        );
+        let h2 = avalanche(
+            a.wrapping_mul(P3)
+                ^ b.rotate_left(23)
+                ^ c.wrapping_mul(P1)
+                ^ d.rotate_left(41)
+                ^ self.len.wrapping_mul(P2),
+        );
         (h1, h2)
     }
 }
@@ -136,7 +148,14 @@ struct Mapped {
 
 #[cfg(unix)]
 unsafe extern "C" {
-    fn mmap(addr: *mut std::ffi::c_void, len: usize, prot: i32, flags: i32, fd: i32, off: i64) -> *mut std::ffi::c_void;
+    fn mmap(
+        addr: *mut std::ffi::c_void,
+        len: usize,
+        prot: i32,
+        flags: i32,
+        fd: i32,
+        off: i64,
+    ) -> *mut std::ffi::c_void;
     fn munmap(addr: *mut std::ffi::c_void, len: usize) -> i32;
 }
 
@@ -153,7 +172,8 @@ impl Mapped {
         // SAFETY: maps `len` bytes of an open, regular file read-only and private; the mapping is
         // only read through `bytes()` while `self` lives and is unmapped once in `drop`. A cache
         // entry is replaced by rename, never rewritten in place, so the mapped bytes do not change.
-        let ptr = unsafe { mmap(std::ptr::null_mut(), len, PROT_READ, MAP_PRIVATE, file.as_raw_fd(), 0) };
+        let ptr =
+            unsafe { mmap(std::ptr::null_mut(), len, PROT_READ, MAP_PRIVATE, file.as_raw_fd(), 0) };
         (ptr as isize != -1 && !ptr.is_null()).then_some(Mapped { ptr, len })
     }
     #[cfg(not(unix))]
@@ -183,7 +203,8 @@ pub fn serialize(m: &MjModel) -> Option<Vec<u8>> {
     Some(buf)
 }
 
-static PENDING: std::sync::Mutex<Vec<std::thread::JoinHandle<()>>> = std::sync::Mutex::new(Vec::new());
+static PENDING: std::sync::Mutex<Vec<std::thread::JoinHandle<()>>> =
+    std::sync::Mutex::new(Vec::new());
 
 /// Writes an entry in the background (overlapping the lint); `finish` waits for the writes.
 pub fn store_in_background(dir: &Path, key: &str, bytes: Vec<u8>) {

@@ -98,7 +98,13 @@ pub fn silence_warnings() {
 
 /// Signed distance between two geoms at the data's current state (negative: penetration),
 /// capped at `distmax`.
-pub fn geom_distance(m: &MjModel, d: &mut MjData<&MjModel>, g1: usize, g2: usize, distmax: f64) -> f64 {
+pub fn geom_distance(
+    m: &MjModel,
+    d: &mut MjData<&MjModel>,
+    g1: usize,
+    g2: usize,
+    distmax: f64,
+) -> f64 {
     let mut fromto = [0.0f64; 6];
     // SAFETY: valid model/data pair, geom ids checked by the caller against ngeom, fromto has 6.
     unsafe { c::mj_geomDistance(raw(m), d.ffi_mut(), g1 as i32, g2 as i32, distmax, &mut fromto) }

@@ -71,8 +71,19 @@ impl SourceIndex {
     }
 }
 
-const ACTUATOR_TAGS: &[&str] =
-    &["general", "motor", "position", "velocity", "intvelocity", "damper", "cylinder", "muscle", "adhesion", "plugin", "dcmotor"];
+const ACTUATOR_TAGS: &[&str] = &[
+    "general",
+    "motor",
+    "position",
+    "velocity",
+    "intvelocity",
+    "damper",
+    "cylinder",
+    "muscle",
+    "adhesion",
+    "plugin",
+    "dcmotor",
+];
 
 struct Defaults<'a> {
     /// class -> (parent class, default node)
@@ -88,7 +99,10 @@ impl<'a> Defaults<'a> {
         d
     }
     fn add(&mut self, node: &'a XNode, parent: Option<String>) {
-        let name = node.get("class").map(str::to_string).unwrap_or_else(|| if parent.is_none() { "main".into() } else { "main".into() });
+        let name = node
+            .get("class")
+            .map(str::to_string)
+            .unwrap_or_else(|| if parent.is_none() { "main".into() } else { "main".into() });
         self.classes.insert(name.clone(), (parent, node));
         for c in node.children_tagged("default") {
             self.add(c, Some(name.clone()));
@@ -120,18 +134,24 @@ fn parse_suppression(c: &super::source::XComment) -> Option<Result<Suppression, 
     let text = c.text.trim();
     let rest = text.strip_prefix("modellint:")?.trim();
     let Some(rest) = rest.strip_prefix("ignore[") else {
-        return Some(Err("unknown modellint directive; expected `modellint: ignore[<rule-id>] <reason>`".into()));
+        return Some(Err(
+            "unknown modellint directive; expected `modellint: ignore[<rule-id>] <reason>`".into(),
+        ));
     };
     let Some(end) = rest.find(']') else {
         return Some(Err("unclosed `ignore[`".into()));
     };
-    let rules: Vec<String> = rest[..end].split(',').map(|s| s.trim().to_string()).filter(|s| !s.is_empty()).collect();
+    let rules: Vec<String> =
+        rest[..end].split(',').map(|s| s.trim().to_string()).filter(|s| !s.is_empty()).collect();
     let reason = rest[end + 1..].trim().to_string();
     if rules.is_empty() {
         return Some(Err("`ignore[]` names no rule".into()));
     }
     if reason.is_empty() {
-        return Some(Err("a suppression must give a reason: `modellint: ignore[<rule-id>] <why this is fine>`".into()));
+        return Some(Err(
+            "a suppression must give a reason: `modellint: ignore[<rule-id>] <why this is fine>`"
+                .into(),
+        ));
     }
     Some(Ok(Suppression { rules, reason, loc: c.loc }))
 }
@@ -159,7 +179,12 @@ impl<'a> Builder<'a> {
         out
     }
 
-    fn resolve(&self, n: &XNode, class: Option<&str>, actuator: bool) -> BTreeMap<String, AttrOrigin> {
+    fn resolve(
+        &self,
+        n: &XNode,
+        class: Option<&str>,
+        actuator: bool,
+    ) -> BTreeMap<String, AttrOrigin> {
         let mut attrs = BTreeMap::new();
         let class_name = n.get("class").or(class).unwrap_or("main");
         // Walk from the most general (main) to the most specific so later inserts win.
@@ -167,22 +192,44 @@ impl<'a> Builder<'a> {
         for (cname, dnode) in chain.iter().rev() {
             let mut setters: Vec<&XNode> = Vec::new();
             if actuator {
-                setters.extend(dnode.children.iter().filter(|c| ACTUATOR_TAGS.contains(&c.tag.as_str()) && c.tag != n.tag));
+                setters.extend(
+                    dnode
+                        .children
+                        .iter()
+                        .filter(|c| ACTUATOR_TAGS.contains(&c.tag.as_str()) && c.tag != n.tag),
+                );
             }
             setters.extend(dnode.children.iter().filter(|c| c.tag == n.tag));
             for s in setters {
                 for a in &s.attrs {
-                    attrs.insert(a.name.clone(), AttrOrigin { value: a.value.clone(), loc: a.loc, class: Some(cname.to_string()) });
+                    attrs.insert(
+                        a.name.clone(),
+                        AttrOrigin {
+                            value: a.value.clone(),
+                            loc: a.loc,
+                            class: Some(cname.to_string()),
+                        },
+                    );
                 }
             }
         }
         for a in &n.attrs {
-            attrs.insert(a.name.clone(), AttrOrigin { value: a.value.clone(), loc: a.loc, class: None });
+            attrs.insert(
+                a.name.clone(),
+                AttrOrigin { value: a.value.clone(), loc: a.loc, class: None },
+            );
         }
         attrs
     }
 
-    fn push(&mut self, kind: ElemKind, n: &XNode, class: Option<&str>, inherited: &[usize], actuator: bool) -> Vec<usize> {
+    fn push(
+        &mut self,
+        kind: ElemKind,
+        n: &XNode,
+        class: Option<&str>,
+        inherited: &[usize],
+        actuator: bool,
+    ) -> Vec<usize> {
         let mut sup = inherited.to_vec();
         sup.extend(self.suppressions_of(n));
         let attrs = self.resolve(n, class, actuator);
@@ -246,7 +293,9 @@ fn flatten_frames<'n>(
 ) {
     for c in &parent.children {
         match c.tag.as_str() {
-            "joint" | "freejoint" | "geom" | "site" => items.push((c, class.map(str::to_string), sup.to_vec())),
+            "joint" | "freejoint" | "geom" | "site" => {
+                items.push((c, class.map(str::to_string), sup.to_vec()))
+            }
             "body" => bodies.push((c, class.map(str::to_string), sup.to_vec())),
             "frame" => {
                 let mut s = sup.to_vec();
@@ -261,7 +310,11 @@ fn flatten_frames<'n>(
 
 /// Builds the source index of an MJCF tree (includes already expanded).
 pub fn index_mjcf(root: &XNode) -> SourceIndex {
-    let mut b = Builder { defaults: Defaults::collect(root), idx: SourceIndex { root: Some(root.loc), ..Default::default() }, cur_body: None };
+    let mut b = Builder {
+        defaults: Defaults::collect(root),
+        idx: SourceIndex { root: Some(root.loc), ..Default::default() },
+        cur_body: None,
+    };
     let root_sup = b.suppressions_of(root);
     // MuJoCo merges every <worldbody> section (e.g. the robot file's and the scene's, which
     // adds a floor) into the world body: its own geoms/sites come first in the compiled lists,
@@ -313,7 +366,11 @@ pub fn index_mjcf(root: &XNode) -> SourceIndex {
 
 /// Builds a (smaller) source index of a URDF tree: links as bodies, joints with their limits.
 pub fn index_urdf(root: &XNode) -> SourceIndex {
-    let mut b = Builder { defaults: Defaults { classes: BTreeMap::new() }, idx: SourceIndex { root: Some(root.loc), ..Default::default() }, cur_body: None };
+    let mut b = Builder {
+        defaults: Defaults { classes: BTreeMap::new() },
+        idx: SourceIndex { root: Some(root.loc), ..Default::default() },
+        cur_body: None,
+    };
     for l in root.children_tagged("link") {
         b.push(ElemKind::Body, l, None, &[], false);
     }
@@ -325,7 +382,10 @@ pub fn index_urdf(root: &XNode) -> SourceIndex {
             for c in &j.children {
                 if c.tag == "limit" || c.tag == "dynamics" || c.tag == "axis" {
                     for a in &c.attrs {
-                        e.attrs.insert(format!("{}.{}", c.tag, a.name), AttrOrigin { value: a.value.clone(), loc: a.loc, class: None });
+                        e.attrs.insert(
+                            format!("{}.{}", c.tag, a.name),
+                            AttrOrigin { value: a.value.clone(), loc: a.loc, class: None },
+                        );
                     }
                 }
             }

@@ -115,15 +115,24 @@ pub enum Transmission {
 #[serde(rename_all = "snake_case", tag = "kind")]
 pub enum ActuatorKind {
     /// force = kp·(ctrl − q) − kv·q̇
-    Position { kp: f64, kv: f64 },
+    Position {
+        kp: f64,
+        kv: f64,
+    },
     /// force = gear·ctrl
     Motor,
     /// force = kv·(ctrl − q̇)
-    Velocity { kv: f64 },
+    Velocity {
+        kv: f64,
+    },
     /// `<dcmotor>` (MuJoCo ≥ 3.17): force = K/R·(v − K·q̇) in its voltage mode; `resistance` R
     /// (Ω) and motor constant K (geometric mean of Kt and Ke). `voltage`: its only control is
     /// the terminal voltage (ctrlrange in volts), not a position/velocity controller input.
-    DcMotor { resistance: f64, k: f64, voltage: bool },
+    DcMotor {
+        resistance: f64,
+        k: f64,
+        voltage: bool,
+    },
     Other,
 }
 
@@ -251,7 +260,10 @@ pub struct Equality {
 
 impl std::fmt::Debug for Robot {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Robot").field("path", &self.path).field("joints", &self.joints.len()).finish()
+        f.debug_struct("Robot")
+            .field("path", &self.path)
+            .field("joints", &self.joints.len())
+            .finish()
     }
 }
 
@@ -275,7 +287,8 @@ impl Robot {
                     let num = mj::slice(r.tendon_num, r.ntendon as usize)[t] as usize;
                     let wt = mj::slice(r.wrap_type, r.nwrap as usize);
                     let wo = mj::slice(r.wrap_objid, r.nwrap as usize);
-                    (adr..adr + num).any(|w| wt.get(w) == Some(&1) && wo.get(w) == Some(&(j as i32)))
+                    (adr..adr + num)
+                        .any(|w| wt.get(w) == Some(&1) && wo.get(w) == Some(&(j as i32)))
                 }
                 _ => false,
             })
@@ -297,7 +310,10 @@ impl Robot {
         let body_of: Vec<usize> = match kind {
             ElemKind::Joint => self.joints.iter().map(|j| j.body).collect(),
             ElemKind::Geom => self.geoms.iter().map(|g| g.body).collect(),
-            ElemKind::Site => mj::slice(r.site_bodyid, r.nsite as usize).iter().map(|&b| b.max(0) as usize).collect(),
+            ElemKind::Site => mj::slice(r.site_bodyid, r.nsite as usize)
+                .iter()
+                .map(|&b| b.max(0) as usize)
+                .collect(),
             _ => {
                 // Compiled order matches source order only when every element was indexed.
                 let expected = match kind {
@@ -325,7 +341,13 @@ impl Robot {
 
     /// Tightest location for attribute `attr` of an object (falls back to the element, then the
     /// model root), and the default class it was inherited from, if any.
-    pub fn attr_loc(&self, kind: ElemKind, id: usize, name: &str, attr: &str) -> (Loc, Option<String>) {
+    pub fn attr_loc(
+        &self,
+        kind: ElemKind,
+        id: usize,
+        name: &str,
+        attr: &str,
+    ) -> (Loc, Option<String>) {
         match self.elem(kind, id, name) {
             Some(e) => match e.attrs.get(attr) {
                 Some(o) => (o.loc, o.class.clone()),
@@ -350,11 +372,52 @@ impl Robot {
 
 /// Attributes that hold names or paths, never numbers (skipped by the NaN/inf check).
 const STRING_ATTRS: &[&str] = &[
-    "name", "class", "childclass", "file", "joint", "joint1", "joint2", "body", "body1", "body2", "geom", "geom1",
-    "geom2", "site", "site1", "site2", "tendon", "tendon1", "tendon2", "mesh", "material", "texture", "hfield",
-    "target", "objname", "objtype", "type", "meshdir", "texturedir", "assetdir", "model", "prefix", "content_type",
-    "refsite", "cranksite", "slidersite", "actuator", "plugin", "instance", "key", "mode", "link", "parent", "child",
-    "filename", "version",
+    "name",
+    "class",
+    "childclass",
+    "file",
+    "joint",
+    "joint1",
+    "joint2",
+    "body",
+    "body1",
+    "body2",
+    "geom",
+    "geom1",
+    "geom2",
+    "site",
+    "site1",
+    "site2",
+    "tendon",
+    "tendon1",
+    "tendon2",
+    "mesh",
+    "material",
+    "texture",
+    "hfield",
+    "target",
+    "objname",
+    "objtype",
+    "type",
+    "meshdir",
+    "texturedir",
+    "assetdir",
+    "model",
+    "prefix",
+    "content_type",
+    "refsite",
+    "cranksite",
+    "slidersite",
+    "actuator",
+    "plugin",
+    "instance",
+    "key",
+    "mode",
+    "link",
+    "parent",
+    "child",
+    "filename",
+    "version",
 ];
 
 fn check_numbers(map: &SourceMap, n: &XNode) -> Result<(), LoadError> {
@@ -367,11 +430,16 @@ fn check_numbers(map: &SourceMap, n: &XNode) -> Result<(), LoadError> {
             continue;
         }
         let parsed: Vec<Option<f64>> = toks.iter().map(|t| t.parse::<f64>().ok()).collect();
-        if parsed.iter().all(Option::is_some) && parsed.iter().any(|v| !v.unwrap_or(0.0).is_finite()) {
+        if parsed.iter().all(Option::is_some)
+            && parsed.iter().any(|v| !v.unwrap_or(0.0).is_finite())
+        {
             return Err(LoadError::at(
                 map,
                 a.loc,
-                format!("<{}> attribute `{}` is not a finite number: \"{}\"", n.tag, a.name, a.value),
+                format!(
+                    "<{}> attribute `{}` is not a finite number: \"{}\"",
+                    n.tag, a.name, a.value
+                ),
             ));
         }
     }
@@ -382,11 +450,16 @@ fn check_numbers(map: &SourceMap, n: &XNode) -> Result<(), LoadError> {
 }
 
 /// Asset attributes that name files MuJoCo reads (cube and skybox textures use the six faces).
-const FILE_ATTRS: &[&str] = &["file", "fileright", "fileleft", "fileup", "filedown", "filefront", "fileback"];
+const FILE_ATTRS: &[&str] =
+    &["file", "fileright", "fileleft", "fileup", "filedown", "filefront", "fileback"];
 
 /// Checks that every asset file the model names exists, pointing at the attribute when not, and
 /// returns them (the inputs of the compile, for the cache key).
-fn check_assets(map: &SourceMap, root: &XNode, model_dir: &Path) -> Result<Vec<PathBuf>, LoadError> {
+fn check_assets(
+    map: &SourceMap,
+    root: &XNode,
+    model_dir: &Path,
+) -> Result<Vec<PathBuf>, LoadError> {
     let mut files = Vec::new();
     let mut meshdir = None;
     let mut texturedir = None;
@@ -411,12 +484,21 @@ fn check_assets(map: &SourceMap, root: &XNode, model_dir: &Path) -> Result<Vec<P
             };
             for f in FILE_ATTRS.iter().filter_map(|n| a.attr(n)) {
                 let p = Path::new(&f.value);
-                let full = if p.is_absolute() { p.to_path_buf() } else { model_dir.join(dir.as_deref().unwrap_or("")).join(p) };
+                let full = if p.is_absolute() {
+                    p.to_path_buf()
+                } else {
+                    model_dir.join(dir.as_deref().unwrap_or("")).join(p)
+                };
                 if !full.is_file() {
                     return Err(LoadError::at(
                         map,
                         f.loc,
-                        format!("<{}> file not found: {} (looked for {})", a.tag, f.value, full.display()),
+                        format!(
+                            "<{}> file not found: {} (looked for {})",
+                            a.tag,
+                            f.value,
+                            full.display()
+                        ),
                     ));
                 }
                 files.push(full);
@@ -471,14 +553,18 @@ pub fn load_cached(
     };
     check_numbers(map, &tree)?;
     let model_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    let assets = if format == Format::Mjcf { Some(check_assets(map, &tree, &model_dir)?) } else { None };
+    let assets =
+        if format == Format::Mjcf { Some(check_assets(map, &tree, &model_dir)?) } else { None };
     let src = match format {
         Format::Mjcf => mjcf::index_mjcf(&tree),
         Format::Urdf => mjcf::index_urdf(&tree),
     };
     let key = match (cache_dir, &assets) {
         (Some(_), Some(assets)) => {
-            let mut inputs: Vec<(PathBuf, Option<&str>)> = map.files[first..].iter().map(|f| (f.path.clone(), Some(f.text.as_str()))).collect();
+            let mut inputs: Vec<(PathBuf, Option<&str>)> = map.files[first..]
+                .iter()
+                .map(|f| (f.path.clone(), Some(f.text.as_str())))
+                .collect();
             inputs.extend(assets.iter().chain(extra_inputs).map(|p| (p.clone(), None)));
             cache::key(&inputs)
         }
@@ -492,16 +578,24 @@ pub fn load_cached(
         Some(m) => m,
         None => {
             // URDF `package://` meshes: MuJoCo compiles a resolved copy (same line numbers).
-            let resolved = if format == Format::Urdf { urdf_packages::resolved_copy(map, first)? } else { None };
+            let resolved = if format == Format::Urdf {
+                urdf_packages::resolved_copy(map, first)?
+            } else {
+                None
+            };
             let m = MjModel::from_xml(resolved.as_deref().unwrap_or(path));
             if let Some(t) = &resolved {
                 let _ = std::fs::remove_file(t);
             }
             let m = m.map_err(|e| {
                 let msg = format!("MuJoCo could not compile the model: {e}");
-                mujoco_error_location(map, first, &msg).or_else(|| missing_file_location(map, first, &msg)).unwrap_or_else(|| LoadError::plain(path, msg))
+                mujoco_error_location(map, first, &msg)
+                    .or_else(|| missing_file_location(map, first, &msg))
+                    .unwrap_or_else(|| LoadError::plain(path, msg))
             })?;
-            if let (Some(dir), Some(k), Some(bytes)) = (cache_dir, &key, cache_dir.and_then(|_| cache::serialize(&m))) {
+            if let (Some(dir), Some(k), Some(bytes)) =
+                (cache_dir, &key, cache_dir.and_then(|_| cache::serialize(&m)))
+            {
                 cache::store_in_background(dir, k, bytes);
             }
             m
@@ -511,7 +605,13 @@ pub fn load_cached(
     let key = choose_key(&robot.keys, keyframe);
     if let Some(want) = keyframe {
         if key.is_none() {
-            return Err(LoadError::plain(path, format!("keyframe `{want}` named by the spec is not in the model (keyframes: {:?})", robot.keys)));
+            return Err(LoadError::plain(
+                path,
+                format!(
+                    "keyframe `{want}` named by the spec is not in the model (keyframes: {:?})",
+                    robot.keys
+                ),
+            ));
         }
     }
     robot.key = key_state(&robot.mj, key, &robot.keys);
@@ -531,7 +631,11 @@ fn missing_file_location(map: &SourceMap, first_file: usize, msg: &str) -> Optio
                 let vs = from + k + pat.len();
                 let ve = text[vs..].find('"').map_or(text.len(), |e| vs + e);
                 if text[vs..ve].ends_with(base) {
-                    return Some(LoadError::at(map, Loc { file: f, start: vs, end: ve }, format!("{msg} (file not found)")));
+                    return Some(LoadError::at(
+                        map,
+                        Loc { file: f, start: vs, end: ve },
+                        format!("{msg} (file not found)"),
+                    ));
                 }
                 from = ve;
             }
@@ -546,10 +650,14 @@ fn mujoco_error_location(map: &SourceMap, first_file: usize, msg: &str) -> Optio
     let li = lower.find("line ")?;
     let rest = &msg[li + 5..];
     let line: usize = rest.split(|c: char| !c.is_ascii_digit()).next()?.parse().ok()?;
-    let col = lower.find("column ").and_then(|ci| msg[ci + 7..].split(|c: char| !c.is_ascii_digit()).next()?.parse().ok());
+    let col = lower
+        .find("column ")
+        .and_then(|ci| msg[ci + 7..].split(|c: char| !c.is_ascii_digit()).next()?.parse().ok());
     // Prefer the file MuJoCo names, else the top-level model.
     let file = (first_file..map.files.len())
-        .find(|&i| map.file(i).path.file_name().and_then(|f| f.to_str()).is_some_and(|f| msg.contains(f)))
+        .find(|&i| {
+            map.file(i).path.file_name().and_then(|f| f.to_str()).is_some_and(|f| msg.contains(f))
+        })
         .unwrap_or(first_file);
     Some(LoadError::at_line(map, file, line, col.unwrap_or(1), msg.to_string()))
 }
@@ -570,7 +678,13 @@ fn extract(path: &Path, format: Format, tree: XNode, src: SourceIndex, mj: MjMod
     let r = mj::raw(&mj);
     // Per-actuator arrays have `nactuator` rows; controls (`nu`) and force outputs (`nout`) can
     // differ from it in MuJoCo ≥ 3.17 (a `<dcmotor>` may take 0 or several controls).
-    let (njnt, nu, nbody, ngeom, nkey) = (r.njnt as usize, r.nactuator as usize, r.nbody as usize, r.ngeom as usize, r.nkey as usize);
+    let (njnt, nu, nbody, ngeom, nkey) = (
+        r.njnt as usize,
+        r.nactuator as usize,
+        r.nbody as usize,
+        r.ngeom as usize,
+        r.nkey as usize,
+    );
     let (nctrl, nout) = (r.nu as usize, r.nout as usize);
     let jt = mj::slice(r.jnt_type, njnt);
     let jb = mj::slice(r.jnt_bodyid, njnt);
@@ -637,16 +751,30 @@ fn extract(path: &Path, format: Format, tree: XNode, src: SourceIndex, mj: MjMod
             let g = [gp[10 * i], gp[10 * i + 1], gp[10 * i + 2]];
             let b = [bp[10 * i], bp[10 * i + 1], bp[10 * i + 2]];
             // First control of the actuator (none for a passive `<dcmotor input="none">`).
-            let c = (cnum[i] > 0 && (cadr[i].max(0) as usize) < nctrl).then_some(cadr[i].max(0) as usize);
+            let c = (cnum[i] > 0 && (cadr[i].max(0) as usize) < nctrl)
+                .then_some(cadr[i].max(0) as usize);
             // gaintype 0 = fixed; biastype 0 = none, 1 = affine.
             // gaintype/biastype 3 = dcmotor: gainprm[0] = resistance, gainprm[1] = motor constant.
             let kind = if gt[i] == 3 && bt[i] == 3 {
-                ActuatorKind::DcMotor { resistance: g[0], k: g[1], voltage: cspec.get(i) == Some(&8) }
+                ActuatorKind::DcMotor {
+                    resistance: g[0],
+                    k: g[1],
+                    voltage: cspec.get(i) == Some(&8),
+                }
             } else if gt[i] == 0 && bt[i] == 0 && g[0] != 0.0 {
                 ActuatorKind::Motor
-            } else if gt[i] == 0 && bt[i] == 1 && g[0] > 0.0 && (b[1] + g[0]).abs() <= 1e-9 * g[0].abs().max(1.0) && b[0] == 0.0 {
+            } else if gt[i] == 0
+                && bt[i] == 1
+                && g[0] > 0.0
+                && (b[1] + g[0]).abs() <= 1e-9 * g[0].abs().max(1.0)
+                && b[0] == 0.0
+            {
                 ActuatorKind::Position { kp: g[0], kv: -b[2] }
-            } else if gt[i] == 0 && bt[i] == 1 && b[1] == 0.0 && (b[2] + g[0]).abs() <= 1e-9 * g[0].abs().max(1.0) {
+            } else if gt[i] == 0
+                && bt[i] == 1
+                && b[1] == 0.0
+                && (b[2] + g[0]).abs() <= 1e-9 * g[0].abs().max(1.0)
+            {
                 ActuatorKind::Velocity { kv: g[0] }
             } else {
                 ActuatorKind::Other
@@ -681,7 +809,12 @@ fn extract(path: &Path, format: Format, tree: XNode, src: SourceIndex, mj: MjMod
     let bp_ = mj::slice(r.body_parentid, nbody);
     let bm = mj::slice(r.body_mass, nbody);
     let bodies = (0..nbody)
-        .map(|i| Body { id: i, name: mj::name_at(&mj, r.name_bodyadr, nbody, i), parent: bp_[i].max(0) as usize, mass: bm[i] })
+        .map(|i| Body {
+            id: i,
+            name: mj::name_at(&mj, r.name_bodyadr, nbody, i),
+            parent: bp_[i].max(0) as usize,
+            mass: bm[i],
+        })
         .collect();
     let gtp = mj::slice(r.geom_type, ngeom);
     let gb = mj::slice(r.geom_bodyid, ngeom);
@@ -719,9 +852,19 @@ fn extract(path: &Path, format: Format, tree: XNode, src: SourceIndex, mj: MjMod
     let e1 = mj::slice(r.eq_obj1id, neq);
     let e2 = mj::slice(r.eq_obj2id, neq);
     let equalities = (0..neq)
-        .map(|i| Equality { id: i, name: mj::name_at(&mj, r.name_eqadr, neq, i), etype: et[i], obj1: e1[i], obj2: e2[i] })
+        .map(|i| Equality {
+            id: i,
+            name: mj::name_at(&mj, r.name_eqadr, neq, i),
+            etype: et[i],
+            obj1: e1[i],
+            obj2: e2[i],
+        })
         .collect();
-    let opt = Options { timestep: r.opt.timestep, integrator: r.opt.integrator as i32, gravity: r.opt.gravity };
+    let opt = Options {
+        timestep: r.opt.timestep,
+        integrator: r.opt.integrator as i32,
+        gravity: r.opt.gravity,
+    };
     static NEXT_UID: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
     Robot {
         uid: NEXT_UID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
@@ -795,9 +938,21 @@ fn add_transmission_parts(m: &MjModel, joints: &mut [Joint], actuators: &[Actuat
                     let (Some(&jid), Some(&coef)) = (wo.get(w), wp.get(w)) else { continue };
                     let Some(j) = joints.get_mut(jid.max(0) as usize) else { continue };
                     let c2 = coef * coef;
-                    push(&mut j.armature_parts, PartSource::TendonActuator(a.id, t, a.gear, coef), a.armature * g2 * c2);
-                    push(&mut j.damping_parts, PartSource::TendonActuator(a.id, t, a.gear, coef), a.damping * g2 * c2);
-                    push(&mut j.damping_parts, PartSource::BackEmf(a.id, a.gear * coef), emf * g2 * c2);
+                    push(
+                        &mut j.armature_parts,
+                        PartSource::TendonActuator(a.id, t, a.gear, coef),
+                        a.armature * g2 * c2,
+                    );
+                    push(
+                        &mut j.damping_parts,
+                        PartSource::TendonActuator(a.id, t, a.gear, coef),
+                        a.damping * g2 * c2,
+                    );
+                    push(
+                        &mut j.damping_parts,
+                        PartSource::BackEmf(a.id, a.gear * coef),
+                        emf * g2 * c2,
+                    );
                 }
             }
             _ => {}
@@ -829,16 +984,44 @@ pub fn describe_parts(robot: &Robot, parts: &[Part], what: &str) -> String {
         return format!("no {what} on the joint, its actuators or tendons");
     }
     let n = |x: f64| crate::util::fmt_num(x, 4);
-    let an = |id: usize| robot.actuators.get(id).map(|a| if a.name.is_empty() { format!("#{id}") } else { a.name.clone() }).unwrap_or_default();
-    let tn = |id: usize| robot.tendons.get(id).map(|t| if t.is_empty() { format!("#{id}") } else { t.clone() }).unwrap_or_default();
+    let an = |id: usize| {
+        robot
+            .actuators
+            .get(id)
+            .map(|a| if a.name.is_empty() { format!("#{id}") } else { a.name.clone() })
+            .unwrap_or_default()
+    };
+    let tn = |id: usize| {
+        robot
+            .tendons
+            .get(id)
+            .map(|t| if t.is_empty() { format!("#{id}") } else { t.clone() })
+            .unwrap_or_default()
+    };
     let v: Vec<String> = parts
         .iter()
         .map(|p| match p.source {
             PartSource::Joint => format!("{} (joint `{what}`)", n(p.value)),
-            PartSource::Actuator(a, g) => format!("{} × {}² (actuator `{}`)", n(p.value / (g * g)), n(g.abs()), an(a)),
-            PartSource::Tendon(t, c) => format!("{} × {}² (tendon `{}`)", n(p.value / (c * c)), n(c.abs()), tn(t)),
-            PartSource::TendonActuator(a, t, g, c) => format!("{} × {}² × {}² (actuator `{}` on tendon `{}`)", n(p.value / (g * g * c * c)), n(g.abs()), n(c.abs()), an(a), tn(t)),
-            PartSource::BackEmf(a, g) => format!("{} × {}² (back-EMF K²/R of dcmotor `{}`)", n(p.value / (g * g)), n(g.abs()), an(a)),
+            PartSource::Actuator(a, g) => {
+                format!("{} × {}² (actuator `{}`)", n(p.value / (g * g)), n(g.abs()), an(a))
+            }
+            PartSource::Tendon(t, c) => {
+                format!("{} × {}² (tendon `{}`)", n(p.value / (c * c)), n(c.abs()), tn(t))
+            }
+            PartSource::TendonActuator(a, t, g, c) => format!(
+                "{} × {}² × {}² (actuator `{}` on tendon `{}`)",
+                n(p.value / (g * g * c * c)),
+                n(g.abs()),
+                n(c.abs()),
+                an(a),
+                tn(t)
+            ),
+            PartSource::BackEmf(a, g) => format!(
+                "{} × {}² (back-EMF K²/R of dcmotor `{}`)",
+                n(p.value / (g * g)),
+                n(g.abs()),
+                an(a)
+            ),
         })
         .collect();
     if v.len() == 1 && parts[0].source == PartSource::Joint { v[0].clone() } else { v.join(" + ") }
@@ -853,7 +1036,8 @@ pub fn key_state(m: &MjModel, key: Option<usize>, keys: &[String]) -> KeyState {
     d.forward();
     let r = mj::raw(m);
     let dr = d.ffi();
-    let (nq, nv, nu, ngeom, nbody) = (r.nq as usize, r.nv as usize, r.nu as usize, r.ngeom as usize, r.nbody as usize);
+    let (nq, nv, nu, ngeom, nbody) =
+        (r.nq as usize, r.nv as usize, r.nu as usize, r.ngeom as usize, r.nbody as usize);
     let full = mj::full_mass_matrix(m, &d);
     let m_diag = (0..nv).map(|i| full[i * nv + i]).collect();
     let gx = mj::slice(dr.geom_xpos, 3 * ngeom);

@@ -121,8 +121,9 @@ impl XNode {
 /// Reads a file into the source map, with a clear error on failure.
 pub fn read_source(map: &mut SourceMap, path: &Path) -> Result<usize, LoadError> {
     let bytes = std::fs::read(path).map_err(|e| LoadError::io(path, &e))?;
-    let text = String::from_utf8(bytes)
-        .map_err(|e| LoadError::plain(path, format!("not valid UTF-8 (byte {})", e.utf8_error().valid_up_to())))?;
+    let text = String::from_utf8(bytes).map_err(|e| {
+        LoadError::plain(path, format!("not valid UTF-8 (byte {})", e.utf8_error().valid_up_to()))
+    })?;
     if text.trim().is_empty() {
         return Err(LoadError::plain(path, "file is empty".to_string()));
     }
@@ -130,7 +131,11 @@ pub fn read_source(map: &mut SourceMap, path: &Path) -> Result<usize, LoadError>
 }
 
 /// Parses an XML file (and, for MJCF, the files it includes) into an owned tree.
-pub fn parse_xml_tree(map: &mut SourceMap, path: &Path, expand_includes: bool) -> Result<XNode, LoadError> {
+pub fn parse_xml_tree(
+    map: &mut SourceMap,
+    path: &Path,
+    expand_includes: bool,
+) -> Result<XNode, LoadError> {
     let mut stack = BTreeSet::new();
     parse_file(map, path, expand_includes, &mut stack, None)
 }
@@ -147,14 +152,22 @@ fn parse_file(
         Ok(id) => id,
         Err(e) => {
             return Err(match included_from {
-                Some(loc) => LoadError::at(map, loc, format!("included file {}: {}", path.display(), e.message)),
+                Some(loc) => LoadError::at(
+                    map,
+                    loc,
+                    format!("included file {}: {}", path.display(), e.message),
+                ),
                 None => e,
             });
         }
     };
     if !stack.insert(canon.clone()) {
         let loc = included_from.unwrap_or(Loc { file: file_id, start: 0, end: 0 });
-        return Err(LoadError::at(map, loc, format!("include cycle: {} includes itself (directly or indirectly)", path.display())));
+        return Err(LoadError::at(
+            map,
+            loc,
+            format!("include cycle: {} includes itself (directly or indirectly)", path.display()),
+        ));
     }
     let text = map.file(file_id).text.clone();
     let opts = || roxmltree::ParsingOptions { allow_dtd: true, ..Default::default() };
@@ -165,15 +178,31 @@ fn parse_file(
             // junk, and remember where the junk is.
             Some(end) => {
                 let junk_start = end + text[end..].len() - text[end..].trim_start().len();
-                map.trailing.push(Loc { file: file_id, start: junk_start, end: text.trim_end().len().max(junk_start) });
+                map.trailing.push(Loc {
+                    file: file_id,
+                    start: junk_start,
+                    end: text.trim_end().len().max(junk_start),
+                });
                 roxmltree::Document::parse_with_options(&text[..end], opts()).map_err(|e| {
                     let pos = e.pos();
-                    LoadError::at_line(map, file_id, pos.row as usize, pos.col as usize, format!("malformed XML: {e}"))
+                    LoadError::at_line(
+                        map,
+                        file_id,
+                        pos.row as usize,
+                        pos.col as usize,
+                        format!("malformed XML: {e}"),
+                    )
                 })?
             }
             None => {
                 let pos = e.pos();
-                return Err(LoadError::at_line(map, file_id, pos.row as usize, pos.col as usize, format!("malformed XML: {e}")));
+                return Err(LoadError::at_line(
+                    map,
+                    file_id,
+                    pos.row as usize,
+                    pos.col as usize,
+                    format!("malformed XML: {e}"),
+                ));
             }
         },
     };
@@ -206,7 +235,8 @@ fn root_name(text: &str) -> Option<String> {
             i = lt + 1;
             continue;
         }
-        let n: String = rest.chars().take_while(|c| !c.is_whitespace() && *c != '>' && *c != '/').collect();
+        let n: String =
+            rest.chars().take_while(|c| !c.is_whitespace() && *c != '>' && *c != '/').collect();
         return (!n.is_empty()).then_some(n);
     }
 }
@@ -245,12 +275,17 @@ fn convert(
     let range = n.range();
     let tag = n.tag_name().name().to_string();
     // The tag name sits right after '<'.
-    let loc = Loc { file, start: range.start + 1, end: (range.start + 1 + tag.len()).min(range.end) };
+    let loc =
+        Loc { file, start: range.start + 1, end: (range.start + 1 + tag.len()).min(range.end) };
     let attrs = n
         .attributes()
         .map(|a| {
             let r = a.range_value();
-            XAttr { name: a.name().to_string(), value: a.value().to_string(), loc: Loc { file, start: r.start, end: r.end } }
+            XAttr {
+                name: a.name().to_string(),
+                value: a.value().to_string(),
+                loc: Loc { file, start: r.start, end: r.end },
+            }
         })
         .collect();
     let mut children = Vec::new();
@@ -258,7 +293,10 @@ fn convert(
     for c in n.children() {
         if c.is_comment() {
             let r = c.range();
-            pending_comments.push(XComment { text: c.text().unwrap_or("").to_string(), loc: Loc { file, start: r.start, end: r.end } });
+            pending_comments.push(XComment {
+                text: c.text().unwrap_or("").to_string(),
+                loc: Loc { file, start: r.start, end: r.end },
+            });
             continue;
         }
         if !c.is_element() {
@@ -267,7 +305,11 @@ fn convert(
         if expand_includes && c.tag_name().name() == "include" {
             let Some(attr) = c.attributes().find(|a| a.name() == "file") else {
                 let r = c.range();
-                return Err(LoadError::at(map, Loc { file, start: r.start, end: r.end }, "<include> without a file attribute".into()));
+                return Err(LoadError::at(
+                    map,
+                    Loc { file, start: r.start, end: r.end },
+                    "<include> without a file attribute".into(),
+                ));
             };
             let r = attr.range_value();
             let inc_loc = Loc { file, start: r.start, end: r.end };
@@ -290,7 +332,14 @@ fn convert(
         child.comments = std::mem::take(&mut pending_comments);
         children.push(child);
     }
-    Ok(XNode { tag, attrs, children, loc, full: Loc { file, start: range.start, end: range.end }, comments: Vec::new() })
+    Ok(XNode {
+        tag,
+        attrs,
+        children,
+        loc,
+        full: Loc { file, start: range.start, end: range.end },
+        comments: Vec::new(),
+    })
 }
 
 #[cfg(test)]
@@ -308,7 +357,10 @@ mod tests {
 
     #[test]
     fn root_name_skips_declarations_and_comments() {
-        assert_eq!(root_name("<?xml version=\"1.0\"?>\n<!-- a <b> -->\n<package format=\"3\">").as_deref(), Some("package"));
+        assert_eq!(
+            root_name("<?xml version=\"1.0\"?>\n<!-- a <b> -->\n<package format=\"3\">").as_deref(),
+            Some("package")
+        );
         assert_eq!(root_name("<!DOCTYPE x>\n<mujoco/>").as_deref(), Some("mujoco"));
         assert_eq!(root_name("no element"), None);
     }

@@ -74,9 +74,20 @@ pub fn resolved_copy(map: &SourceMap, file: usize) -> Result<Option<PathBuf>, Lo
                 let where_ = if searched.is_empty() {
                     "ROS_PACKAGE_PATH is not set".to_string()
                 } else {
-                    format!("not in ROS_PACKAGE_PATH ({})", searched.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(":"))
+                    format!(
+                        "not in ROS_PACKAGE_PATH ({})",
+                        searched
+                            .iter()
+                            .map(|p| p.display().to_string())
+                            .collect::<Vec<_>>()
+                            .join(":")
+                    )
                 };
-                return Err(LoadError::at(map, loc, format!("package `{name}` not found: {where_}; pass --package {name}=DIR")));
+                return Err(LoadError::at(
+                    map,
+                    loc,
+                    format!("package `{name}` not found: {where_}; pass --package {name}=DIR"),
+                ));
             };
             dir.join(sub)
         } else if let Some(p) = v.strip_prefix("file://") {
@@ -87,7 +98,11 @@ pub fn resolved_copy(map: &SourceMap, file: usize) -> Result<Option<PathBuf>, Lo
             model_dir.join(v)
         };
         if !full.is_file() {
-            return Err(LoadError::at(map, loc, format!("mesh file not found: {v} (looked for {})", full.display())));
+            return Err(LoadError::at(
+                map,
+                loc,
+                format!("mesh file not found: {v} (looked for {})", full.display()),
+            ));
         }
         let abs = std::fs::canonicalize(&full).unwrap_or(full);
         let s = abs.to_string_lossy().replace('&', "&amp;").replace('"', "&quot;");
@@ -95,7 +110,10 @@ pub fn resolved_copy(map: &SourceMap, file: usize) -> Result<Option<PathBuf>, Lo
     }
     // MuJoCo keeps the directories of mesh paths only with strippath="false".
     let root = doc.root_element();
-    let compiler = root.children().find(|c| c.has_tag_name("mujoco")).and_then(|m| m.children().find(|c| c.has_tag_name("compiler")));
+    let compiler = root
+        .children()
+        .find(|c| c.has_tag_name("mujoco"))
+        .and_then(|m| m.children().find(|c| c.has_tag_name("compiler")));
     match compiler {
         Some(c) => match c.attributes().find(|a| a.name() == "strippath") {
             Some(a) => edits.push((a.range_value(), "false".into())),
@@ -124,8 +142,14 @@ pub fn resolved_copy(map: &SourceMap, file: usize) -> Result<Option<PathBuf>, Lo
     }
     static N: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
     let n = N.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-    let stem = src.path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "model".into());
-    let tmp = std::env::temp_dir().join(format!("modellint-{}-{n}-{stem}.urdf", std::process::id()));
-    std::fs::write(&tmp, out).map_err(|e| LoadError::plain(&tmp, format!("cannot write the resolved URDF: {e}")))?;
+    let stem = src
+        .path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "model".into());
+    let tmp =
+        std::env::temp_dir().join(format!("modellint-{}-{n}-{stem}.urdf", std::process::id()));
+    std::fs::write(&tmp, out)
+        .map_err(|e| LoadError::plain(&tmp, format!("cannot write the resolved URDF: {e}")))?;
     Ok(Some(tmp))
 }

@@ -44,7 +44,12 @@ fn spec_value(s: &SpecInfo) -> Value {
 }
 
 /// One model: schema `modellint/findings` version 1 (what a single path always produces).
-pub fn model_value(map: &SourceMap, model: &str, findings: &[Finding], spec: Option<&SpecInfo>) -> Value {
+pub fn model_value(
+    map: &SourceMap,
+    model: &str,
+    findings: &[Finding],
+    spec: Option<&SpecInfo>,
+) -> Value {
     let count = |s: Severity| findings.iter().filter(|f| f.severity == s).count();
     let mut v = json!({
         "schema": "modellint/findings",
@@ -60,7 +65,12 @@ pub fn model_value(map: &SourceMap, model: &str, findings: &[Finding], spec: Opt
     v
 }
 
-pub fn render(map: &SourceMap, model: &str, findings: &[Finding], spec: Option<&SpecInfo>) -> String {
+pub fn render(
+    map: &SourceMap,
+    model: &str,
+    findings: &[Finding],
+    spec: Option<&SpecInfo>,
+) -> String {
     pretty(&model_value(map, model, findings, spec))
 }
 

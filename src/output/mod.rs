@@ -62,7 +62,13 @@ pub fn position(map: &SourceMap, loc: Loc) -> Position {
     Position { file: f.path.display().to_string(), line, column, end_line, end_column }
 }
 
-pub fn render(format: Format, map: &SourceMap, model: &str, findings: &[Finding], color: bool) -> String {
+pub fn render(
+    format: Format,
+    map: &SourceMap,
+    model: &str,
+    findings: &[Finding],
+    color: bool,
+) -> String {
     match format {
         Format::Text => text::render(map, findings, color),
         Format::Json => json::render(map, model, findings, None),
@@ -102,17 +108,35 @@ pub struct NotLinted {
 
 impl NotLinted {
     pub fn from_error(path: &std::path::Path, e: &crate::error::LoadError) -> Self {
-        NotLinted { path: path.display().to_string(), file: e.file.display().to_string(), line: e.line, column: e.column, message: e.message.clone() }
+        NotLinted {
+            path: path.display().to_string(),
+            file: e.file.display().to_string(),
+            line: e.line,
+            column: e.column,
+            message: e.message.clone(),
+        }
     }
     pub fn skipped(path: &std::path::Path, why: String) -> Self {
-        NotLinted { path: path.display().to_string(), file: path.display().to_string(), line: None, column: None, message: why }
+        NotLinted {
+            path: path.display().to_string(),
+            file: path.display().to_string(),
+            line: None,
+            column: None,
+            message: why,
+        }
     }
 }
 
 /// Several models in one call (`modellint a.xml b.xml`): every format carries all of them.
 /// Text and GitHub concatenate; JSON is a `modellint/findings-set` of per-model
 /// `modellint/findings` objects (docs/schemas/findings.md); SARIF is one run with every result.
-pub fn render_many(format: Format, reports: &[Report], skipped: &[NotLinted], errors: &[NotLinted], color: bool) -> String {
+pub fn render_many(
+    format: Format,
+    reports: &[Report],
+    skipped: &[NotLinted],
+    errors: &[NotLinted],
+    color: bool,
+) -> String {
     match format {
         Format::Text => {
             let mut out = String::new();
@@ -120,7 +144,8 @@ pub fn render_many(format: Format, reports: &[Report], skipped: &[NotLinted], er
                 out.push_str(&text::render_titled(r.sources, r.findings, color, Some(&r.model)));
             }
             let all: Vec<&Finding> = reports.iter().flat_map(|r| r.findings.iter()).collect();
-            let count = |s: crate::finding::Severity| all.iter().filter(|f| f.severity == s).count();
+            let count =
+                |s: crate::finding::Severity| all.iter().filter(|f| f.severity == s).count();
             out.push_str(&format!(
                 "modellint: {} model(s) linted, {} skipped, {} could not be loaded: {} error(s), {} warning(s), {} info\n",
                 reports.len(),
@@ -134,7 +159,8 @@ pub fn render_many(format: Format, reports: &[Report], skipped: &[NotLinted], er
         }
         Format::Json => json::render_set(reports, skipped, errors),
         Format::Sarif => {
-            let runs: Vec<(&SourceMap, &[Finding])> = reports.iter().map(|r| (r.sources, r.findings)).collect();
+            let runs: Vec<(&SourceMap, &[Finding])> =
+                reports.iter().map(|r| (r.sources, r.findings)).collect();
             sarif::render(&runs, errors)
         }
         Format::Github => {

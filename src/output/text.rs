@@ -11,7 +11,12 @@ pub fn render(map: &SourceMap, findings: &[Finding], color: bool) -> String {
 }
 
 /// As `render`; with `model`, the summary line names the model (several models per call).
-pub fn render_titled(map: &SourceMap, findings: &[Finding], color: bool, model: Option<&str>) -> String {
+pub fn render_titled(
+    map: &SourceMap,
+    findings: &[Finding],
+    color: bool,
+    model: Option<&str>,
+) -> String {
     let theme = if color { GraphicalTheme::unicode() } else { GraphicalTheme::unicode_nocolor() };
     let handler = GraphicalReportHandler::new_themed(theme).with_width(100);
     let mut out = String::new();
@@ -73,11 +78,15 @@ fn render_one(map: &SourceMap, handler: &GraphicalReportHandler, f: &Finding) ->
         )];
         for l in &f.labels {
             if l.loc.file == f.primary.file && l.loc != f.primary {
-                labels.push(LabeledSpan::new_with_span(Some(l.text.clone()), (l.loc.start, l.loc.end.saturating_sub(l.loc.start))));
+                labels.push(LabeledSpan::new_with_span(
+                    Some(l.text.clone()),
+                    (l.loc.start, l.loc.end.saturating_sub(l.loc.start)),
+                ));
             }
         }
         d = d.with_labels(labels);
-        let report = miette::Report::new(d).with_source_code(NamedSource::new(file.path.display().to_string(), file.text.clone()));
+        let report = miette::Report::new(d)
+            .with_source_code(NamedSource::new(file.path.display().to_string(), file.text.clone()));
         let _ = handler.render_report(&mut s, report.as_ref());
     } else {
         let report = miette::Report::new(d);
@@ -91,12 +100,17 @@ fn render_one(map: &SourceMap, handler: &GraphicalReportHandler, f: &Finding) ->
 pub fn render_error(e: &crate::error::LoadError, color: bool) -> String {
     let theme = if color { GraphicalTheme::unicode() } else { GraphicalTheme::unicode_nocolor() };
     let handler = GraphicalReportHandler::new_themed(theme).with_width(100);
-    let mut d = MietteDiagnostic::new(format!("{}: {}", e.location(), e.message)).with_code("modellint::input");
+    let mut d = MietteDiagnostic::new(format!("{}: {}", e.location(), e.message))
+        .with_code("modellint::input");
     let mut s = String::new();
     match &e.snippet {
         Some((text, range)) => {
-            d = d.with_label(LabeledSpan::new_primary_with_span(Some("here".into()), (range.start, range.end - range.start)));
-            let report = miette::Report::new(d).with_source_code(NamedSource::new(e.file.display().to_string(), text.clone()));
+            d = d.with_label(LabeledSpan::new_primary_with_span(
+                Some("here".into()),
+                (range.start, range.end - range.start),
+            ));
+            let report = miette::Report::new(d)
+                .with_source_code(NamedSource::new(e.file.display().to_string(), text.clone()));
             let _ = handler.render_report(&mut s, report.as_ref());
         }
         None => {

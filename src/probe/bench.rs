@@ -97,7 +97,11 @@ impl<'a> Bench<'a> {
     pub fn new(robot: &'a Robot, s: Setup) -> Option<Bench<'a>> {
         let changes = s.isolate_dof.is_some() || s.pin_base || s.no_contact || s.no_gravity;
         if !changes {
-            return Some(Bench { m: BenchModel::Shared(&robot.mj), frozen: Vec::new(), frozen_dofs: Vec::new() });
+            return Some(Bench {
+                m: BenchModel::Shared(&robot.mj),
+                frozen: Vec::new(),
+                frozen_dofs: Vec::new(),
+            });
         }
         let (mut m, source) = scratch(robot);
         let mut frozen_dofs: Vec<usize> = Vec::new();
@@ -120,7 +124,10 @@ impl<'a> Bench<'a> {
             if freeze {
                 frozen_dofs.extend(j.dofadr..j.dofadr + ndof);
                 for k in 0..nq {
-                    frozen.push((j.qposadr + k, robot.key.qpos.get(j.qposadr + k).copied().unwrap_or(0.0)));
+                    frozen.push((
+                        j.qposadr + k,
+                        robot.key.qpos.get(j.qposadr + k).copied().unwrap_or(0.0),
+                    ));
                 }
             }
         }

@@ -20,7 +20,10 @@ pub struct Direction {
 
 pub fn run(robot: &Robot, act: usize) -> Option<Direction> {
     let a = robot.actuators.get(act)?;
-    let b = Bench::new(robot, Setup { pin_base: true, no_contact: true, no_gravity: true, ..Default::default() })?;
+    let b = Bench::new(
+        robot,
+        Setup { pin_base: true, no_contact: true, no_gravity: true, ..Default::default() },
+    )?;
     let mut d = b.data(robot);
     let c0 = bench::ctrl(&d, act);
     let cmd = match a.kind {

@@ -30,7 +30,11 @@ pub struct StepResponse {
 }
 
 /// PD gains acting on a joint: from its position actuator, else from the spec (through a motor).
-pub fn gains(robot: &Robot, joint: usize, spec_kp_kd: Option<(f64, f64)>) -> Option<(usize, f64, f64, bool)> {
+pub fn gains(
+    robot: &Robot,
+    joint: usize,
+    spec_kp_kd: Option<(f64, f64)>,
+) -> Option<(usize, f64, f64, bool)> {
     let j = &robot.joints[joint];
     for a in robot.actuators_on_joint(joint) {
         if let ActuatorKind::Position { kp, kv } = a.kind {
@@ -39,18 +43,28 @@ pub fn gains(robot: &Robot, joint: usize, spec_kp_kd: Option<(f64, f64)>) -> Opt
         }
     }
     let (kp, kd) = spec_kp_kd?;
-    let a = robot.actuators_on_joint(joint).into_iter().find(|a| matches!(a.kind, ActuatorKind::Motor))?;
+    let a = robot
+        .actuators_on_joint(joint)
+        .into_iter()
+        .find(|a| matches!(a.kind, ActuatorKind::Motor))?;
     Some((a.id, kp, kd + j.damping, false))
 }
 
-pub fn step_response(robot: &Robot, joint: usize, spec_kp_kd: Option<(f64, f64)>) -> Option<StepResponse> {
+pub fn step_response(
+    robot: &Robot,
+    joint: usize,
+    spec_kp_kd: Option<(f64, f64)>,
+) -> Option<StepResponse> {
     let j = robot.joints.get(joint)?;
     if !j.is_scalar() {
         return None;
     }
     let (act, kp, kd, is_position) = gains(robot, joint, spec_kp_kd)?;
     let gear = robot.actuators[act].gear;
-    let b = Bench::new(robot, Setup { isolate_dof: Some(j.dofadr), no_contact: true, ..Default::default() })?;
+    let b = Bench::new(
+        robot,
+        Setup { isolate_dof: Some(j.dofadr), no_contact: true, ..Default::default() },
+    )?;
     let mut d = b.data(robot);
     let dt = b.dt();
     let q0 = bench::qpos(&d, j.qposadr);
@@ -93,14 +107,26 @@ pub fn step_response(robot: &Robot, joint: usize, spec_kp_kd: Option<(f64, f64)>
         b.step(&mut d);
         steps += 1;
         let q = bench::qpos(&d, j.qposadr);
-        if !q.is_finite() || bench::warnings(&d) > warn0 || (q - q_eq).abs() > 100.0 * delta.abs() + 10.0 {
+        if !q.is_finite()
+            || bench::warnings(&d) > warn0
+            || (q - q_eq).abs() > 100.0 * delta.abs() + 10.0
+        {
             diverged = true;
             break;
         }
         y.push((q - q_eq) / delta);
     }
     if diverged {
-        return Some(StepResponse { steps, diverged, overshoot: f64::NAN, zeta: None, omega_n: None, inertia: None, kp, kd });
+        return Some(StepResponse {
+            steps,
+            diverged,
+            overshoot: f64::NAN,
+            zeta: None,
+            omega_n: None,
+            inertia: None,
+            kp,
+            kd,
+        });
     }
     Some(analyse(&y, dt, kp, kd, steps))
 }
@@ -173,7 +199,8 @@ mod tests {
         (1..=n)
             .map(|k| {
                 let t = k as f64 * dt;
-                1.0 - (-zeta * wn * t).exp() * ((wd * t).cos() + zeta / (1.0 - zeta * zeta).sqrt() * (wd * t).sin())
+                1.0 - (-zeta * wn * t).exp()
+                    * ((wd * t).cos() + zeta / (1.0 - zeta * zeta).sqrt() * (wd * t).sin())
             })
             .collect()
     }

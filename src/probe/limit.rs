@@ -28,8 +28,15 @@ pub fn run(robot: &Robot, act: usize) -> Option<LimitHit> {
     if !j.is_scalar() {
         return None;
     }
-    let b = Bench::new(robot, Setup { isolate_dof: Some(j.dofadr), no_contact: true, ..Default::default() })?;
-    let (lo, hi) = if a.ctrllimited { (a.ctrlrange[0], a.ctrlrange[1]) } else { (j.range[0] * a.gear, j.range[1] * a.gear) };
+    let b = Bench::new(
+        robot,
+        Setup { isolate_dof: Some(j.dofadr), no_contact: true, ..Default::default() },
+    )?;
+    let (lo, hi) = if a.ctrllimited {
+        (a.ctrlrange[0], a.ctrlrange[1])
+    } else {
+        (j.range[0] * a.gear, j.range[1] * a.gear)
+    };
     let mut out = LimitHit { steps: 0, hit: false, impact_velocity: 0.0, max_limit_force: 0.0 };
     for target in [lo, hi] {
         let mut d = b.data(robot);
@@ -46,7 +53,8 @@ pub fn run(robot: &Robot, act: usize) -> Option<LimitHit> {
             for k in 0..nefc {
                 if ty[k] == 3 && id[k] == j.id as i32 && f[k].abs() > 1e-9 {
                     if first {
-                        out.impact_velocity = out.impact_velocity.max(bench::qvel(&d, j.dofadr).abs());
+                        out.impact_velocity =
+                            out.impact_velocity.max(bench::qvel(&d, j.dofadr).abs());
                         first = false;
                     }
                     out.hit = true;

@@ -17,7 +17,13 @@ use crate::finding::{Finding, ProbeOutcome, ProbeStatus, Severity, Subject};
 use crate::lint::Loaded;
 use crate::util::fmt_num;
 
-fn outcome(name: &str, status: ProbeStatus, measured: BTreeMap<String, f64>, steps: usize, note: String) -> ProbeOutcome {
+fn outcome(
+    name: &str,
+    status: ProbeStatus,
+    measured: BTreeMap<String, f64>,
+    steps: usize,
+    note: String,
+) -> ProbeOutcome {
     ProbeOutcome { name: name.into(), status, measured, steps, note }
 }
 
@@ -169,16 +175,40 @@ fn spec_gains(l: &Loaded, joint: usize) -> Option<(f64, f64)> {
     Some((crate::spec::v(&m.kp)?, crate::spec::v(&m.kd)?))
 }
 
-fn impulse_probe(l: &Loaded, f: &Finding, cache: &mut BTreeMap<usize, Option<impulse::StepResponse>>) -> ProbeOutcome {
+fn impulse_probe(
+    l: &Loaded,
+    f: &Finding,
+    cache: &mut BTreeMap<usize, Option<impulse::StepResponse>>,
+) -> ProbeOutcome {
     const NAME: &str = "impulse-response";
-    let Subject::Joint(j) = f.subject else { return skipped(NAME, "finding is not about one joint") };
-    let r = cache.entry(j).or_insert_with(|| impulse::step_response(&l.robot, j, spec_gains(l, j))).clone();
-    let Some(r) = r else { return skipped(NAME, "joint has no PD servo to step (no position actuator, no spec kp/kd)") };
+    let Subject::Joint(j) = f.subject else {
+        return skipped(NAME, "finding is not about one joint");
+    };
+    let r = cache
+        .entry(j)
+        .or_insert_with(|| impulse::step_response(&l.robot, j, spec_gains(l, j)))
+        .clone();
+    let Some(r) = r else {
+        return skipped(
+            NAME,
+            "joint has no PD servo to step (no position actuator, no spec kp/kd)",
+        );
+    };
     let mut m = impulse::measured_map(&r);
     if r.diverged {
         m.insert("diverged".into(), 1.0);
-        let st = if f.rule == "gains-unstable-for-timestep" || f.rule == "underdamped-pd-gains" { ProbeStatus::Confirmed } else { ProbeStatus::Inconclusive };
-        return outcome(NAME, st, m, r.steps, "the step response diverged (NaN, MuJoCo warning or unbounded growth)".into());
+        let st = if f.rule == "gains-unstable-for-timestep" || f.rule == "underdamped-pd-gains" {
+            ProbeStatus::Confirmed
+        } else {
+            ProbeStatus::Inconclusive
+        };
+        return outcome(
+            NAME,
+            st,
+            m,
+            r.steps,
+            "the step response diverged (NaN, MuJoCo warning or unbounded growth)".into(),
+        );
     }
     let z = r.zeta;
     let zs = z.map(|z| fmt_num(z, 3)).unwrap_or_else(|| "≥ 1 (no overshoot)".into());
@@ -186,21 +216,38 @@ fn impulse_probe(l: &Loaded, f: &Finding, cache: &mut BTreeMap<usize, Option<imp
         "underdamped-pd-gains" => {
             let threshold = f.data.get("threshold").copied().unwrap_or(0.7);
             let predicted = f.data.get("zeta").copied();
-            let pred = predicted.map(|p| format!(" (predicted {})", fmt_num(p, 3))).unwrap_or_default();
+            let pred =
+                predicted.map(|p| format!(" (predicted {})", fmt_num(p, 3))).unwrap_or_default();
             match z {
                 Some(z) if z < threshold => outcome(
                     NAME,
                     ProbeStatus::Confirmed,
                     m,
                     r.steps,
-                    format!("measured ζ = {zs}{pred}, overshoot {:.1} % on a 0.05 rad step", 100.0 * r.overshoot),
+                    format!(
+                        "measured ζ = {zs}{pred}, overshoot {:.1} % on a 0.05 rad step",
+                        100.0 * r.overshoot
+                    ),
                 ),
-                _ => outcome(NAME, ProbeStatus::Refuted, m, r.steps, format!("measured ζ = {zs}{pred} is not below {threshold}")),
+                _ => outcome(
+                    NAME,
+                    ProbeStatus::Refuted,
+                    m,
+                    r.steps,
+                    format!("measured ζ = {zs}{pred} is not below {threshold}"),
+                ),
             }
         }
         "armature-mismatch" | "parallel-ankle-armature" => {
-            let (Some(arm), Some(exp)) = (f.data.get("armature"), f.data.get("expected_armature")) else {
-                return outcome(NAME, ProbeStatus::Inconclusive, m, r.steps, format!("measured ζ = {zs}; finding carries no armature figures"));
+            let (Some(arm), Some(exp)) = (f.data.get("armature"), f.data.get("expected_armature"))
+            else {
+                return outcome(
+                    NAME,
+                    ProbeStatus::Inconclusive,
+                    m,
+                    r.steps,
+                    format!("measured ζ = {zs}; finding carries no armature figures"),
+                );
             };
             let dof = l.robot.joints[j].dofadr;
             let m_model = l.robot.key.m_diag.get(dof).copied().unwrap_or(f64::NAN);
@@ -215,10 +262,20 @@ fn impulse_probe(l: &Loaded, f: &Finding, cache: &mut BTreeMap<usize, Option<imp
                         fmt_num(hw, 3),
                         100.0 * rel
                     );
-                    let st = if rel.abs() > 0.05 { ProbeStatus::Confirmed } else { ProbeStatus::Refuted };
+                    let st = if rel.abs() > 0.05 {
+                        ProbeStatus::Confirmed
+                    } else {
+                        ProbeStatus::Refuted
+                    };
                     outcome(NAME, st, m, r.steps, note)
                 }
-                None => outcome(NAME, ProbeStatus::Inconclusive, m, r.steps, format!("response does not ring (ζ {zs}); inertia not identifiable from it")),
+                None => outcome(
+                    NAME,
+                    ProbeStatus::Inconclusive,
+                    m,
+                    r.steps,
+                    format!("response does not ring (ζ {zs}); inertia not identifiable from it"),
+                ),
             }
         }
         "gains-unstable-for-timestep" => {
@@ -229,26 +286,50 @@ fn impulse_probe(l: &Loaded, f: &Finding, cache: &mut BTreeMap<usize, Option<imp
                     ProbeStatus::Confirmed,
                     m,
                     r.steps,
-                    format!("integration distorts the response: measured ω_n = {} rad/s vs {} rad/s analytic", fmt_num(w, 3), fmt_num(p, 3)),
+                    format!(
+                        "integration distorts the response: measured ω_n = {} rad/s vs {} rad/s analytic",
+                        fmt_num(w, 3),
+                        fmt_num(p, 3)
+                    ),
                 ),
-                _ => outcome(NAME, ProbeStatus::Refuted, m, r.steps, format!("stable and accurate step response (ζ = {zs})")),
+                _ => outcome(
+                    NAME,
+                    ProbeStatus::Refuted,
+                    m,
+                    r.steps,
+                    format!("stable and accurate step response (ζ = {zs})"),
+                ),
             }
         }
         _ => outcome(NAME, ProbeStatus::Inconclusive, m, r.steps, format!("measured ζ = {zs}")),
     }
 }
 
-fn direction_probe(l: &Loaded, f: &Finding, cache: &mut BTreeMap<usize, Option<direction::Direction>>) -> ProbeOutcome {
+fn direction_probe(
+    l: &Loaded,
+    f: &Finding,
+    cache: &mut BTreeMap<usize, Option<direction::Direction>>,
+) -> ProbeOutcome {
     const NAME: &str = "actuator-direction";
-    let Subject::Actuator(a) = f.subject else { return skipped(NAME, "finding is not about one actuator") };
-    let Some(d) = cache.entry(a).or_insert_with(|| direction::run(&l.robot, a)).clone() else { return skipped(NAME, "could not set up the bench") };
+    let Subject::Actuator(a) = f.subject else {
+        return skipped(NAME, "finding is not about one actuator");
+    };
+    let Some(d) = cache.entry(a).or_insert_with(|| direction::run(&l.robot, a)).clone() else {
+        return skipped(NAME, "could not set up the bench");
+    };
     let act = &l.robot.actuators[a];
     let mut m = BTreeMap::new();
     for (j, dq) in &d.moved {
         m.insert(format!("dq.{}", l.robot.joints[*j].name), *dq);
     }
     if d.moved.is_empty() {
-        return outcome(NAME, ProbeStatus::Confirmed, m, d.steps, "a positive command moved no joint".into());
+        return outcome(
+            NAME,
+            ProbeStatus::Confirmed,
+            m,
+            d.steps,
+            "a positive command moved no joint".into(),
+        );
     }
     let target = (act.target >= 0).then_some(act.target as usize);
     let on_target = target.and_then(|t| d.moved.iter().find(|(j, _)| *j == t)).map(|(_, dq)| *dq);
@@ -260,22 +341,50 @@ fn direction_probe(l: &Loaded, f: &Finding, cache: &mut BTreeMap<usize, Option<d
                 ProbeStatus::Confirmed,
                 m,
                 d.steps,
-                format!("a positive command moved the joint by {} rad: opposite to the spec's direction {expected:+}", fmt_num(dq, 3)),
+                format!(
+                    "a positive command moved the joint by {} rad: opposite to the spec's direction {expected:+}",
+                    fmt_num(dq, 3)
+                ),
             ),
-            Some(dq) => outcome(NAME, ProbeStatus::Refuted, m, d.steps, format!("a positive command moved the joint by {} rad, as the spec says", fmt_num(dq, 3))),
-            None => outcome(NAME, ProbeStatus::Inconclusive, m, d.steps, "the targeted joint did not move".into()),
+            Some(dq) => outcome(
+                NAME,
+                ProbeStatus::Refuted,
+                m,
+                d.steps,
+                format!(
+                    "a positive command moved the joint by {} rad, as the spec says",
+                    fmt_num(dq, 3)
+                ),
+            ),
+            None => outcome(
+                NAME,
+                ProbeStatus::Inconclusive,
+                m,
+                d.steps,
+                "the targeted joint did not move".into(),
+            ),
         };
     }
-    let names: Vec<String> = d.moved.iter().map(|(j, dq)| format!("{} {:+.4}", l.robot.joints[*j].name, dq)).collect();
+    let names: Vec<String> =
+        d.moved.iter().map(|(j, dq)| format!("{} {:+.4}", l.robot.joints[*j].name, dq)).collect();
     let st = if biggest != target { ProbeStatus::Confirmed } else { ProbeStatus::Inconclusive };
     outcome(NAME, st, m, d.steps, format!("a positive command moved: {}", names.join(", ")))
 }
 
-fn penetration_probe(l: &Loaded, f: &Finding, cache: &mut BTreeMap<(usize, usize), Option<penetration::Penetration>>) -> ProbeOutcome {
+fn penetration_probe(
+    l: &Loaded,
+    f: &Finding,
+    cache: &mut BTreeMap<(usize, usize), Option<penetration::Penetration>>,
+) -> ProbeOutcome {
     const NAME: &str = "keyframe-penetration";
-    let (Subject::Geom(a), Some(b)) = (f.subject, f.data.get("geom2")) else { return skipped(NAME, "finding does not name a geom pair") };
+    let (Subject::Geom(a), Some(b)) = (f.subject, f.data.get("geom2")) else {
+        return skipped(NAME, "finding does not name a geom pair");
+    };
     let b = *b as usize;
-    let Some(p) = cache.entry((a, b)).or_insert_with(|| penetration::run(&l.robot, a, b)).clone() else { return skipped(NAME, "could not set up the bench") };
+    let Some(p) = cache.entry((a, b)).or_insert_with(|| penetration::run(&l.robot, a, b)).clone()
+    else {
+        return skipped(NAME, "could not set up the bench");
+    };
     let mut m = BTreeMap::new();
     m.insert("depth_m".into(), -p.depth0);
     m.insert("contact_force_n".into(), p.contact_force);
@@ -284,7 +393,10 @@ fn penetration_probe(l: &Loaded, f: &Finding, cache: &mut BTreeMap<(usize, usize
     if let Some(t) = p.clear_time {
         m.insert("clear_time_s".into(), t);
     }
-    let clears = p.clear_time.map(|t| format!(", clear of each other after {} ms", fmt_num(t * 1000.0, 3))).unwrap_or_default();
+    let clears = p
+        .clear_time
+        .map(|t| format!(", clear of each other after {} ms", fmt_num(t * 1000.0, 3)))
+        .unwrap_or_default();
     if p.contact_force > 0.0 {
         let motion = if p.separation_speed >= penetration::JOLT_SPEED {
             format!("the pair jumps apart at up to {} m/s{clears}", fmt_num(p.separation_speed, 3))
@@ -300,7 +412,10 @@ fn penetration_probe(l: &Loaded, f: &Finding, cache: &mut BTreeMap<(usize, usize
             ProbeStatus::Confirmed,
             m,
             p.steps,
-            format!("at the keyframe (base on a stand, commands held) MuJoCo pushes the pair apart with {} N; {motion}", fmt_num(p.contact_force, 4)),
+            format!(
+                "at the keyframe (base on a stand, commands held) MuJoCo pushes the pair apart with {} N; {motion}",
+                fmt_num(p.contact_force, 4)
+            ),
         )
     } else {
         outcome(
@@ -313,7 +428,11 @@ fn penetration_probe(l: &Loaded, f: &Finding, cache: &mut BTreeMap<(usize, usize
     }
 }
 
-fn limit_probe(l: &Loaded, f: &Finding, cache: &mut BTreeMap<usize, Option<limit::LimitHit>>) -> ProbeOutcome {
+fn limit_probe(
+    l: &Loaded,
+    f: &Finding,
+    cache: &mut BTreeMap<usize, Option<limit::LimitHit>>,
+) -> ProbeOutcome {
     const NAME: &str = "limit-approach";
     let a = match f.subject {
         Subject::Actuator(a) => a,
@@ -323,7 +442,9 @@ fn limit_probe(l: &Loaded, f: &Finding, cache: &mut BTreeMap<usize, Option<limit
         },
         _ => return skipped(NAME, "finding is not about one actuator"),
     };
-    let Some(h) = cache.entry(a).or_insert_with(|| limit::run(&l.robot, a)).clone() else { return skipped(NAME, "actuator does not drive a hinge or slide joint") };
+    let Some(h) = cache.entry(a).or_insert_with(|| limit::run(&l.robot, a)).clone() else {
+        return skipped(NAME, "actuator does not drive a hinge or slide joint");
+    };
     let mut m = BTreeMap::new();
     m.insert("hit".into(), if h.hit { 1.0 } else { 0.0 });
     m.insert("impact_velocity".into(), h.impact_velocity);
@@ -341,17 +462,33 @@ fn limit_probe(l: &Loaded, f: &Finding, cache: &mut BTreeMap<usize, Option<limit
             ),
         )
     } else {
-        outcome(NAME, ProbeStatus::Refuted, m, h.steps, "the commanded extremes never reached the hard stop".into())
+        outcome(
+            NAME,
+            ProbeStatus::Refuted,
+            m,
+            h.steps,
+            "the commanded extremes never reached the hard stop".into(),
+        )
     }
 }
 
-fn settle_probe(l: &Loaded, f: &Finding, cache: &mut Option<Option<settle::Settle>>) -> ProbeOutcome {
+fn settle_probe(
+    l: &Loaded,
+    f: &Finding,
+    cache: &mut Option<Option<settle::Settle>>,
+) -> ProbeOutcome {
     const NAME: &str = "stance-settle";
     let robot = &l.robot;
     let s = cache.get_or_insert_with(|| settle::run(robot)).clone();
     let Some(s) = s else { return skipped(NAME, "could not set up the bench") };
     if s.diverged {
-        return outcome(NAME, ProbeStatus::Confirmed, BTreeMap::new(), s.steps, "the standing simulation diverged".into());
+        return outcome(
+            NAME,
+            ProbeStatus::Confirmed,
+            BTreeMap::new(),
+            s.steps,
+            "the standing simulation diverged".into(),
+        );
     }
     // The foot: the body of the subject geom / the subject body, plus its parent and children.
     let body = match f.subject {
@@ -360,22 +497,35 @@ fn settle_probe(l: &Loaded, f: &Finding, cache: &mut Option<Option<settle::Settl
         Subject::Joint(j) => robot.joints.get(j).map(|j| j.body),
         _ => None,
     };
-    let Some(body) = body else { return skipped(NAME, "finding is not about a foot, geom or joint") };
+    let Some(body) = body else {
+        return skipped(NAME, "finding is not about a foot, geom or joint");
+    };
     let foot: Vec<usize> = robot
         .bodies
         .iter()
-        .filter(|b| b.id == body || b.parent == body || (robot.bodies[body].parent == b.id && b.id != 0))
+        .filter(|b| {
+            b.id == body || b.parent == body || (robot.bodies[body].parent == b.id && b.id != 0)
+        })
         .map(|b| b.id)
         .collect();
-    let geoms: Vec<usize> = robot.geoms.iter().filter(|g| g.collides() && foot.contains(&g.body)).map(|g| g.id).collect();
+    let geoms: Vec<usize> = robot
+        .geoms
+        .iter()
+        .filter(|g| g.collides() && foot.contains(&g.body))
+        .map(|g| g.id)
+        .collect();
     let total: f64 = geoms.iter().map(|g| s.geom_load.get(g).copied().unwrap_or(0.0)).sum();
     let mut m = BTreeMap::new();
     m.insert("foot_load_n".into(), total);
     for g in &geoms {
         let gname = &robot.geoms[*g].name;
-        m.insert(format!("load.{}", if gname.is_empty() { format!("geom{g}") } else { gname.clone() }), s.geom_load.get(g).copied().unwrap_or(0.0));
+        m.insert(
+            format!("load.{}", if gname.is_empty() { format!("geom{g}") } else { gname.clone() }),
+            s.geom_load.get(g).copied().unwrap_or(0.0),
+        );
     }
-    let chatter = foot.iter().map(|b| s.chatter_per_s.get(b).copied().unwrap_or(0.0)).fold(0.0, f64::max);
+    let chatter =
+        foot.iter().map(|b| s.chatter_per_s.get(b).copied().unwrap_or(0.0)).fold(0.0, f64::max);
     let pen = foot.iter().map(|b| s.penetration.get(b).copied().unwrap_or(0.0)).fold(0.0, f64::max);
     let tilt = s.body_tilt_deg.get(&body).copied().unwrap_or(0.0);
     m.insert("chatter_per_s".into(), chatter);
@@ -390,30 +540,84 @@ fn settle_probe(l: &Loaded, f: &Finding, cache: &mut Option<Option<settle::Settl
                 .map(|g| crate::rules::display_name(&robot.geoms[*g].name, *g))
                 .collect();
             if total <= 1e-6 {
-                outcome(NAME, ProbeStatus::Inconclusive, m, s.steps, "the foot carries no load at all after settling".into())
+                outcome(
+                    NAME,
+                    ProbeStatus::Inconclusive,
+                    m,
+                    s.steps,
+                    "the foot carries no load at all after settling".into(),
+                )
             } else if !unloaded.is_empty() {
-                outcome(NAME, ProbeStatus::Confirmed, m, s.steps, format!("after 1 s standing, {} carr{} < 2 % of the foot's {} N", unloaded.join(", "), if unloaded.len() == 1 { "ies" } else { "y" }, fmt_num(total, 3)))
+                outcome(
+                    NAME,
+                    ProbeStatus::Confirmed,
+                    m,
+                    s.steps,
+                    format!(
+                        "after 1 s standing, {} carr{} < 2 % of the foot's {} N",
+                        unloaded.join(", "),
+                        if unloaded.len() == 1 { "ies" } else { "y" },
+                        fmt_num(total, 3)
+                    ),
+                )
             } else {
-                outcome(NAME, ProbeStatus::Refuted, m, s.steps, format!("every contact geom of the foot carries load ({} N in all)", fmt_num(total, 3)))
+                outcome(
+                    NAME,
+                    ProbeStatus::Refuted,
+                    m,
+                    s.steps,
+                    format!(
+                        "every contact geom of the foot carries load ({} N in all)",
+                        fmt_num(total, 3)
+                    ),
+                )
             }
         }
         "foot-collision-geometry" => {
-            let touching = geoms.iter().filter(|g| s.geom_load.get(g).copied().unwrap_or(0.0) > 0.02 * total.max(1e-9)).count();
-            let note = format!("{} contact changes/s, {} mm deepest penetration, {} loaded contact geom(s)", fmt_num(chatter, 3), fmt_num(pen * 1000.0, 3), touching);
-            let st = if chatter > 5.0 || pen > 0.005 { ProbeStatus::Confirmed } else { ProbeStatus::Inconclusive };
+            let touching = geoms
+                .iter()
+                .filter(|g| s.geom_load.get(g).copied().unwrap_or(0.0) > 0.02 * total.max(1e-9))
+                .count();
+            let note = format!(
+                "{} contact changes/s, {} mm deepest penetration, {} loaded contact geom(s)",
+                fmt_num(chatter, 3),
+                fmt_num(pen * 1000.0, 3),
+                touching
+            );
+            let st = if chatter > 5.0 || pen > 0.005 {
+                ProbeStatus::Confirmed
+            } else {
+                ProbeStatus::Inconclusive
+            };
             outcome(NAME, st, m, s.steps, note)
         }
         "passive-joint-spring" => {
-            let Subject::Joint(j) = f.subject else { return outcome(NAME, ProbeStatus::Inconclusive, m, s.steps, "no joint".into()) };
+            let Subject::Joint(j) = f.subject else {
+                return outcome(NAME, ProbeStatus::Inconclusive, m, s.steps, "no joint".into());
+            };
             let defl = s.joint_deflection.get(&j).copied().unwrap_or(0.0);
             m.insert("deflection_rad".into(), defl);
             let jt = &robot.joints[j];
             let q = robot.key.qpos.get(jt.qposadr).copied().unwrap_or(0.0) + defl;
             let at_limit = jt.limited && (q <= jt.range[0] + 1e-3 || q >= jt.range[1] - 1e-3);
-            let note = format!("passive joint deflected {} rad under the standing load{}", fmt_num(defl, 3), if at_limit { ", onto its limit" } else { "" });
-            let st = if defl.abs() > 0.2 || at_limit { ProbeStatus::Confirmed } else { ProbeStatus::Refuted };
+            let note = format!(
+                "passive joint deflected {} rad under the standing load{}",
+                fmt_num(defl, 3),
+                if at_limit { ", onto its limit" } else { "" }
+            );
+            let st = if defl.abs() > 0.2 || at_limit {
+                ProbeStatus::Confirmed
+            } else {
+                ProbeStatus::Refuted
+            };
             outcome(NAME, st, m, s.steps, note)
         }
-        _ => outcome(NAME, ProbeStatus::Inconclusive, m, s.steps, format!("foot tilt {tilt:.2}°, chatter {chatter:.1}/s")),
+        _ => outcome(
+            NAME,
+            ProbeStatus::Inconclusive,
+            m,
+            s.steps,
+            format!("foot tilt {tilt:.2}°, chatter {chatter:.1}/s"),
+        ),
     }
 }

@@ -40,11 +40,18 @@ pub fn run(robot: &Robot, a: usize, b: usize) -> Option<Penetration> {
     let m = &bench.m;
     let ncon = d.ffi().ncon.max(0) as usize;
     // Active contacts only (efc_address ≥ 0): those the constraint solver applies force through.
-    let cons: Vec<(i32, i32, bool)> = mj::slice(d.ffi().contact, ncon).iter().map(|c| (c.geom1, c.geom2, c.efc_address >= 0)).collect();
+    let cons: Vec<(i32, i32, bool)> = mj::slice(d.ffi().contact, ncon)
+        .iter()
+        .map(|c| (c.geom1, c.geom2, c.efc_address >= 0))
+        .collect();
     let contact_force: f64 = cons
         .iter()
         .enumerate()
-        .filter(|(_, (g1, g2, active))| *active && ((*g1 as usize, *g2 as usize) == (a, b) || (*g1 as usize, *g2 as usize) == (b, a)))
+        .filter(|(_, (g1, g2, active))| {
+            *active
+                && ((*g1 as usize, *g2 as usize) == (a, b)
+                    || (*g1 as usize, *g2 as usize) == (b, a))
+        })
         .map(|(i, _)| mj::contact_normal_force(m, &d, i))
         .sum();
     let distmax = 1.0;

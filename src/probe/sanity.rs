@@ -33,7 +33,15 @@ pub fn meta() -> &'static RuleMeta {
     &UnstableSimulation::META
 }
 
-const WARNING_NAMES: [&str; 7] = ["near-singular inertia", "contact buffer full", "constraint buffer full", "bad qpos", "bad qvel", "bad qacc", "bad ctrl"];
+const WARNING_NAMES: [&str; 7] = [
+    "near-singular inertia",
+    "contact buffer full",
+    "constraint buffer full",
+    "bad qpos",
+    "bad qvel",
+    "bad qacc",
+    "bad ctrl",
+];
 
 /// splitmix64, for a deterministic command sequence.
 fn next(state: &mut u64) -> f64 {
@@ -63,7 +71,8 @@ pub fn run(robot: &Robot, level: Severity) -> Option<Finding> {
             for (a, act) in robot.actuators.iter().enumerate() {
                 let width = if act.ctrllimited { act.ctrlrange[1] - act.ctrlrange[0] } else { 0.2 };
                 let v = base[a] + 0.05 * width * next(&mut seed);
-                let v = if act.ctrllimited { v.clamp(act.ctrlrange[0], act.ctrlrange[1]) } else { v };
+                let v =
+                    if act.ctrllimited { v.clamp(act.ctrlrange[0], act.ctrlrange[1]) } else { v };
                 bench::set_ctrl(&mut d, a, v);
             }
         }
@@ -71,7 +80,11 @@ pub fn run(robot: &Robot, level: Severity) -> Option<Finding> {
         steps += 1;
         let w = &d.ffi().warning;
         if let Some(i) = w.iter().position(|w| w.number > 0) {
-            problem = Some(format!("MuJoCo warning `{}` at t = {:.3} s", WARNING_NAMES.get(i).unwrap_or(&"unknown"), k as f64 * dt));
+            problem = Some(format!(
+                "MuJoCo warning `{}` at t = {:.3} s",
+                WARNING_NAMES.get(i).unwrap_or(&"unknown"),
+                k as f64 * dt
+            ));
             break;
         }
         let qv = mj::slice(d.ffi().qvel, nv);
@@ -93,6 +106,12 @@ pub fn run(robot: &Robot, level: Severity) -> Option<Finding> {
     f.element = format!("model {}", robot.path.display());
     let mut measured = std::collections::BTreeMap::new();
     measured.insert("max_speed".into(), max_speed);
-    f.probe = Some(ProbeOutcome { name: "whole-model-sanity".into(), status: ProbeStatus::Confirmed, measured, steps, note: msg });
+    f.probe = Some(ProbeOutcome {
+        name: "whole-model-sanity".into(),
+        status: ProbeStatus::Confirmed,
+        measured,
+        steps,
+        note: msg,
+    });
     Some(f)
 }

@@ -44,7 +44,11 @@ pub fn run(robot: &Robot) -> Option<Settle> {
     let (nbody, ngeom) = (r.nbody as usize, r.ngeom as usize);
     let gbody = mj::slice(r.geom_bodyid, ngeom).to_vec();
     let x0: Vec<f64> = mj::slice(d.ffi().xmat, 9 * nbody).to_vec();
-    let base_z0 = robot.joints.iter().find(|j| j.jtype == crate::model::JointType::Free).map(|j| robot.key.qpos[j.qposadr + 2]);
+    let base_z0 = robot
+        .joints
+        .iter()
+        .find(|j| j.jtype == crate::model::JointType::Free)
+        .map(|j| robot.key.qpos[j.qposadr + 2]);
     let mut out = Settle::default();
     let mut load_sum: BTreeMap<usize, f64> = BTreeMap::new();
     let mut prev: BTreeSet<(usize, usize)> = BTreeSet::new();
@@ -109,10 +113,13 @@ pub fn run(robot: &Robot) -> Option<Settle> {
     let q = mj::slice(d.ffi().qpos, nq);
     for j in &robot.joints {
         if j.is_scalar() {
-            out.joint_deflection.insert(j.id, q[j.qposadr] - robot.key.qpos.get(j.qposadr).copied().unwrap_or(0.0));
+            out.joint_deflection
+                .insert(j.id, q[j.qposadr] - robot.key.qpos.get(j.qposadr).copied().unwrap_or(0.0));
         }
     }
-    if let (Some(z0), Some(fj)) = (base_z0, robot.joints.iter().find(|j| j.jtype == crate::model::JointType::Free)) {
+    if let (Some(z0), Some(fj)) =
+        (base_z0, robot.joints.iter().find(|j| j.jtype == crate::model::JointType::Free))
+    {
         out.base_drop = z0 - q[fj.qposadr + 2];
     }
     Some(out)

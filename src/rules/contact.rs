@@ -1,4 +1,4 @@
 //! Rules of the `contact` group.
-pub mod toe_tilt;
-pub mod foot_collision_geometry;
 pub mod feet;
+pub mod foot_collision_geometry;
+pub mod toe_tilt;

@@ -1,5 +1,5 @@
 //! Rules of the `geometry` group.
+pub mod collision_visual_mismatch;
 pub mod mirror_asymmetry;
 pub mod self_collision_at_keyframe;
-pub mod collision_visual_mismatch;
 pub mod shapes;

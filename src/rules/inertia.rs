@@ -20,7 +20,9 @@ pub fn at_armature(cx: &Context, j: &Joint, msg: impl Into<String>) -> Finding {
         if let Some(a) = act {
             let name = &cx.robot.actuators[a].name;
             let jloc = cx.robot.elem_loc(ElemKind::Joint, j.id, &j.name);
-            return cx.at_attr(ElemKind::Actuator, a, name, "armature", msg).secondary(jloc, format!("joint `{}`", j.name));
+            return cx
+                .at_attr(ElemKind::Actuator, a, name, "armature", msg)
+                .secondary(jloc, format!("joint `{}`", j.name));
         }
     }
     cx.at_attr(ElemKind::Joint, j.id, &j.name, "armature", msg)

@@ -1,4 +1,4 @@
 //! Rules of the `limits` group.
-pub mod soft_limits;
 pub mod ctrlrange_in_degrees;
 pub mod effort_limit_mismatch;
+pub mod soft_limits;

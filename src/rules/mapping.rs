@@ -1,5 +1,5 @@
 //! Rules of the `mapping` group.
 pub mod actuator_mapping;
+pub mod missing_actuators;
 pub mod passive_joint_spring;
 pub mod urdf_mjcf_drift;
-pub mod missing_actuators;

@@ -63,18 +63,37 @@ impl Context<'_> {
     }
     /// Finding on an attribute of a compiled object, pointing at the value that set it and, when
     /// inherited, labelling the `<default class>` it came from.
-    pub fn at_attr(&self, kind: ElemKind, id: usize, name: &str, attr: &str, message: impl Into<String>) -> Finding {
+    pub fn at_attr(
+        &self,
+        kind: ElemKind,
+        id: usize,
+        name: &str,
+        attr: &str,
+        message: impl Into<String>,
+    ) -> Finding {
         let (loc, class) = self.robot.attr_loc(kind, id, name, attr);
         let eloc = self.robot.elem_loc(kind, id, name);
-        let mut f = self.finding(message, loc).element(format!("{} {}", kind_word(kind), display_name(name, id)), eloc);
+        let mut f = self
+            .finding(message, loc)
+            .element(format!("{} {}", kind_word(kind), display_name(name, id)), eloc);
         if let Some(c) = class {
-            f = f.secondary(eloc, format!("{} inherits `{attr}` from <default class=\"{c}\">", kind_word(kind)));
+            f = f.secondary(
+                eloc,
+                format!("{} inherits `{attr}` from <default class=\"{c}\">", kind_word(kind)),
+            );
         }
         f
     }
-    pub fn at_elem(&self, kind: ElemKind, id: usize, name: &str, message: impl Into<String>) -> Finding {
+    pub fn at_elem(
+        &self,
+        kind: ElemKind,
+        id: usize,
+        name: &str,
+        message: impl Into<String>,
+    ) -> Finding {
         let eloc = self.robot.elem_loc(kind, id, name);
-        self.finding(message, eloc).element(format!("{} {}", kind_word(kind), display_name(name, id)), eloc)
+        self.finding(message, eloc)
+            .element(format!("{} {}", kind_word(kind), display_name(name, id)), eloc)
     }
     /// Spec facts for a joint, if a spec is present and mentions it.
     pub fn facts(&self, joint: &str) -> Option<crate::spec::JointFacts> {
@@ -134,7 +153,12 @@ macro_rules! declare_rule {
 }
 
 /// Shorthand for a rule option.
-pub const fn opt(name: &'static str, default: f64, unit: &'static str, help: &'static str) -> RuleOption {
+pub const fn opt(
+    name: &'static str,
+    default: f64,
+    unit: &'static str,
+    help: &'static str,
+) -> RuleOption {
     RuleOption { name, default, unit, help }
 }
 
@@ -198,7 +222,12 @@ pub mod meta_rules {
         pub InvalidSuppression { id: "invalid-suppression", group: "engine", level: Severity::Error, probe: None, options: [] }
     }
     pub fn all() -> Vec<&'static RuleMeta> {
-        vec![&UnusedSuppression::META, &InvalidSuppression::META, crate::probe::sanity::meta(), &crate::lint::TrailingXmlContent::META]
+        vec![
+            &UnusedSuppression::META,
+            &InvalidSuppression::META,
+            crate::probe::sanity::meta(),
+            &crate::lint::TrailingXmlContent::META,
+        ]
     }
 }
 

@@ -96,12 +96,7 @@ pub fn parse_bam(path: &Path, text: &str) -> Result<BamLog, RecordingError> {
         return Err(RecordingError::new(path, Some(1), None, "empty file"));
     }
     let raw: RawLog = serde_json::from_str(text).map_err(|e| {
-        RecordingError::new(
-            path,
-            Some(e.line().max(1)),
-            None,
-            format!("not a BAM log: {e}"),
-        )
+        RecordingError::new(path, Some(e.line().max(1)), None, format!("not a BAM log: {e}"))
     })?;
     let mut t = Vec::with_capacity(raw.entries.len());
     let mut q = Vec::with_capacity(raw.entries.len());
@@ -202,18 +197,11 @@ mod tests {
 
     #[test]
     fn parses_synthetic_log() {
-        let text = log(&[
-            entry(0.0035, -0.003),
-            entry(0.0087, -0.0015),
-            entry(0.0139, 0.0),
-        ]);
+        let text = log(&[entry(0.0035, -0.003), entry(0.0087, -0.0015), entry(0.0139, 0.0)]);
         assert!(is_bam_json(&text));
         let b = parse_bam(Path::new("x.json"), &text).expect("parses");
         assert_eq!((b.mass, b.length, b.kp, b.vin), (0.49, 0.1, 400.0, 7.4));
-        assert_eq!(
-            (b.motor.as_str(), b.trajectory.as_str()),
-            ("xl330", "sin_sin")
-        );
+        assert_eq!((b.motor.as_str(), b.trajectory.as_str()), ("xl330", "sin_sin"));
         let r = &b.recording;
         assert_eq!(r.t, vec![0.0035, 0.0087, 0.0139]);
         let j = r.joint(BAM_JOINT).expect("servo joint");
@@ -223,37 +211,20 @@ mod tests {
         assert_eq!(j.enabled, Some(vec![true; 3]));
         assert!(j.tau.is_none());
         assert_eq!(r.meta.get("kp").map(String::as_str), Some("400"));
-        assert_eq!(
-            r.meta.get("trajectory").map(String::as_str),
-            Some("sin_sin")
-        );
+        assert_eq!(r.meta.get("trajectory").map(String::as_str), Some("sin_sin"));
         assert!(!r.meta.contains_key("dropped_duplicates"));
     }
 
     #[test]
     fn duplicates_dropped_conflicts_and_disorder_rejected() {
         let p = Path::new("x.json");
-        let text = log(&[
-            entry(0.0, 0.0),
-            entry(0.005, 0.1),
-            entry(0.005, 0.1),
-            entry(0.01, 0.2),
-        ]);
+        let text = log(&[entry(0.0, 0.0), entry(0.005, 0.1), entry(0.005, 0.1), entry(0.01, 0.2)]);
         let b = parse_bam(p, &text).expect("parses");
         assert_eq!(b.recording.t.len(), 3);
-        assert_eq!(
-            b.recording
-                .meta
-                .get("dropped_duplicates")
-                .map(String::as_str),
-            Some("1")
-        );
+        assert_eq!(b.recording.meta.get("dropped_duplicates").map(String::as_str), Some("1"));
         let text = log(&[entry(0.0, 0.0), entry(0.005, 0.1), entry(0.005, 0.2)]);
         let e = parse_bam(p, &text).expect_err("conflict");
-        assert!(
-            e.message.contains("entries 1 and 2 share timestamp 0.005"),
-            "{e}"
-        );
+        assert!(e.message.contains("entries 1 and 2 share timestamp 0.005"), "{e}");
         let text = log(&[entry(0.0, 0.0), entry(0.005, 0.1), entry(0.004, 0.2)]);
         let e = parse_bam(p, &text).expect_err("disorder");
         assert!(e.message.contains("entry 2"), "{e}");
@@ -288,16 +259,8 @@ mod tests {
             let b = read_bam(f).unwrap_or_else(|e| panic!("{e}"));
             let r = &b.recording;
             assert!(r.t.len() > 1000, "{}: {} samples", f.display(), r.t.len());
-            assert!(
-                (r.duration() - 6.0).abs() < 0.1,
-                "{}: duration {}",
-                f.display(),
-                r.duration()
-            );
-            assert_eq!(
-                (b.mass, b.length, b.vin, b.motor.as_str()),
-                (0.49, 0.1, 7.4, "xl330")
-            );
+            assert!((r.duration() - 6.0).abs() < 0.1, "{}: duration {}", f.display(), r.duration());
+            assert_eq!((b.mass, b.length, b.vin, b.motor.as_str()), (0.49, 0.1, 7.4, "xl330"));
             kps.insert(b.kp as i64);
             let j = r.joint(BAM_JOINT).expect("servo");
             assert!(j.q.iter().all(|x| x.abs() < 4.0));
@@ -308,9 +271,6 @@ mod tests {
                 );
             }
         }
-        assert_eq!(
-            kps.into_iter().collect::<Vec<_>>(),
-            vec![100, 200, 400, 800]
-        );
+        assert_eq!(kps.into_iter().collect::<Vec<_>>(), vec![100, 200, 400, 800]);
     }
 }

@@ -53,14 +53,26 @@ pub fn expand_inputs(inputs: &[PathBuf]) -> Result<Vec<PathBuf>, RecordingError>
     let mut out = Vec::new();
     for p in inputs {
         if p.is_dir() {
-            let rd = std::fs::read_dir(p).map_err(|e| RecordingError::new(p, None, None, format!("cannot read directory: {e}")))?;
+            let rd = std::fs::read_dir(p).map_err(|e| {
+                RecordingError::new(p, None, None, format!("cannot read directory: {e}"))
+            })?;
             let mut files: Vec<PathBuf> = rd
                 .filter_map(|e| e.ok().map(|e| e.path()))
-                .filter(|f| f.is_file() && f.extension().is_some_and(|x| x.eq_ignore_ascii_case("csv") || x.eq_ignore_ascii_case("json")))
+                .filter(|f| {
+                    f.is_file()
+                        && f.extension().is_some_and(|x| {
+                            x.eq_ignore_ascii_case("csv") || x.eq_ignore_ascii_case("json")
+                        })
+                })
                 .collect();
             files.sort();
             if files.is_empty() {
-                return Err(RecordingError::new(p, None, None, "directory holds no *.csv or *.json recordings"));
+                return Err(RecordingError::new(
+                    p,
+                    None,
+                    None,
+                    "directory holds no *.csv or *.json recordings",
+                ));
             }
             out.extend(files);
         } else if p.is_file() {
@@ -118,7 +130,12 @@ pub fn run_gap(a: GapArgs) -> i32 {
         }
         recs.push(rec);
     }
-    let opts = ReplayOptions { control_hz: a.control_hz, command_timing: a.command_timing, base: a.base, ..Default::default() };
+    let opts = ReplayOptions {
+        control_hz: a.control_hz,
+        command_timing: a.command_timing,
+        base: a.base,
+        ..Default::default()
+    };
     let replayer = Replayer::new(robot);
     let tty = std::io::stderr().is_terminal();
     let total = recs.len();
@@ -142,7 +159,11 @@ pub fn run_gap(a: GapArgs) -> i32 {
         }
     }
     let spec = loaded.spec.as_ref();
-    let region = |name: &str| spec.and_then(|s| s.joint(name)).and_then(|f| f.region).unwrap_or_else(|| gap::region_from_name(name));
+    let region = |name: &str| {
+        spec.and_then(|s| s.joint(name))
+            .and_then(|f| f.region)
+            .unwrap_or_else(|| gap::region_from_name(name))
+    };
     let report = gap::compute(&recs, &eps, &region, &GapOptions::default());
     if let Some(dir) = &a.report {
         match crate::sim2real::report::write(dir, &report, &recs, &eps) {

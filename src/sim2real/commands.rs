@@ -131,7 +131,9 @@ pub enum ScheduleError {
 impl std::fmt::Display for ScheduleError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            ScheduleError::BadRate(r) => write!(f, "control rate must be a positive number of Hz, got {r}"),
+            ScheduleError::BadRate(r) => {
+                write!(f, "control rate must be a positive number of Hz, got {r}")
+            }
             ScheduleError::OneTick { tick, rows } => write!(
                 f,
                 "all {rows} rows fall into control tick {tick}: control_rate_hz is too low for these timestamps \
@@ -166,14 +168,23 @@ pub fn reconstruct(
             }
             return Ok(Schedule::Events { t: tt, cmd: cc });
         }
-        return Ok(Schedule::Events { t: t.to_vec(), cmd: cmds.iter().map(|c| c.to_vec()).collect() });
+        return Ok(Schedule::Events {
+            t: t.to_vec(),
+            cmd: cmds.iter().map(|c| c.to_vec()).collect(),
+        });
     };
     if !(rate.is_finite() && rate > 0.0) {
         return Err(ScheduleError::BadRate(rate));
     }
     let n = t.len();
     if n == 0 {
-        return Ok(Schedule::Ticks { t0, rate, k0: 0, cmd: vec![Vec::new(); cmds.len()], stats: TickStats::default() });
+        return Ok(Schedule::Ticks {
+            t0,
+            rate,
+            k0: 0,
+            cmd: vec![Vec::new(); cmds.len()],
+            stats: TickStats::default(),
+        });
     }
     let ticks: Vec<i64> = t.iter().map(|&x| tick_of(x, t0, rate, timing)).collect();
     let (k0, k1) = (ticks[0], ticks[n - 1]);
@@ -191,7 +202,8 @@ pub fn reconstruct(
         match rep[k] {
             None => rep[k] = Some(i),
             Some(r) => {
-                if cmds.iter().any(|c| (c[i] - c[r]).abs() > 1e-9) && last_conflict_tick != Some(k) {
+                if cmds.iter().any(|c| (c[i] - c[r]).abs() > 1e-9) && last_conflict_tick != Some(k)
+                {
                     conflicting += 1;
                     last_conflict_tick = Some(k);
                 }
@@ -202,7 +214,8 @@ pub fn reconstruct(
         }
     }
     let known: Vec<usize> = (0..len).filter(|&k| rep[k].is_some()).collect();
-    let mut stats = TickStats { ticks: len, occupied: known.len(), conflicting, ..Default::default() };
+    let mut stats =
+        TickStats { ticks: len, occupied: known.len(), conflicting, ..Default::default() };
     let mut out = Vec::with_capacity(cmds.len());
     for c in cmds {
         let mut v = vec![f64::NAN; len];
@@ -363,8 +376,14 @@ mod tests {
             reconstruct(&t, &[&c], Some(1.0), 0.0, CommandTiming::InForce, true),
             Err(ScheduleError::OneTick { tick: 0, rows: 3 })
         );
-        assert!(matches!(reconstruct(&t, &[&c], Some(0.0), 0.0, CommandTiming::InForce, true), Err(ScheduleError::BadRate(_))));
-        assert!(matches!(reconstruct(&t, &[&c], Some(f64::NAN), 0.0, CommandTiming::InForce, true), Err(ScheduleError::BadRate(_))));
+        assert!(matches!(
+            reconstruct(&t, &[&c], Some(0.0), 0.0, CommandTiming::InForce, true),
+            Err(ScheduleError::BadRate(_))
+        ));
+        assert!(matches!(
+            reconstruct(&t, &[&c], Some(f64::NAN), 0.0, CommandTiming::InForce, true),
+            Err(ScheduleError::BadRate(_))
+        ));
     }
 
     #[test]
@@ -372,7 +391,8 @@ mod tests {
         let t = [0.001, 0.011, 0.031, 0.041];
         let step = [0.0, 0.0, 1.0, 1.0];
         let ramp = [0.0, 0.1, 0.3, 0.4];
-        let s = reconstruct(&t, &[&step, &ramp], Some(100.0), 0.0, CommandTiming::InForce, true).unwrap();
+        let s = reconstruct(&t, &[&step, &ramp], Some(100.0), 0.0, CommandTiming::InForce, true)
+            .unwrap();
         assert_eq!(s.at(0, 0.025), 0.0);
         assert!((s.at(1, 0.025) - 0.2).abs() < 1e-12);
     }

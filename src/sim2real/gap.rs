@@ -41,7 +41,13 @@ pub struct GapOptions {
 
 impl Default for GapOptions {
     fn default() -> Self {
-        GapOptions { constants: GapConstants::default(), nperseg: 256, overlap: 0.5, uniform_rate_hz: None, max_lag_s: 0.25 }
+        GapOptions {
+            constants: GapConstants::default(),
+            nperseg: 256,
+            overlap: 0.5,
+            uniform_rate_hz: None,
+            max_lag_s: 0.25,
+        }
     }
 }
 
@@ -265,16 +271,24 @@ fn mean(v: &[f64]) -> Option<f64> {
 
 /// Computes the report for episodes replayed from `recs` (paired by index). `region` maps a
 /// joint name to its region (spec, else [`region_from_name`]).
-pub fn compute(recs: &[Recording], eps: &[Episode], region: &dyn Fn(&str) -> String, opts: &GapOptions) -> GapReport {
+pub fn compute(
+    recs: &[Recording],
+    eps: &[Episode],
+    region: &dyn Fn(&str) -> String,
+    opts: &GapOptions,
+) -> GapReport {
     let c = &opts.constants;
     // Uniform rate: mean sample rate over the non-diverged dataset.
-    let ok: Vec<usize> = (0..recs.len().min(eps.len())).filter(|&i| eps[i].diverged.is_none()).collect();
+    let ok: Vec<usize> =
+        (0..recs.len().min(eps.len())).filter(|&i| eps[i].diverged.is_none()).collect();
     let (mut tot_int, mut tot_dur) = (0usize, 0.0);
     for &i in &ok {
         tot_int += recs[i].t.len().saturating_sub(1);
         tot_dur += recs[i].duration();
     }
-    let fs = opts.uniform_rate_hz.unwrap_or_else(|| if tot_dur > 0.0 { (tot_int as f64 / tot_dur).round().max(1.0) } else { 100.0 });
+    let fs = opts.uniform_rate_hz.unwrap_or_else(|| {
+        if tot_dur > 0.0 { (tot_int as f64 / tot_dur).round().max(1.0) } else { 100.0 }
+    });
 
     let mut joints: Vec<JointAcc> = Vec::new();
     let mut per_episode = Vec::new();
@@ -341,8 +355,15 @@ pub fn compute(recs: &[Recording], eps: &[Episode], region: &dyn Fn(&str) -> Str
                 // full-length episode exists (the longest short one wins).
                 let full = ru.len() >= opts.nperseg;
                 let cur_full = ja.psd.freqs.len() == opts.nperseg / 2 + 1;
-                if ja.psd.freqs.is_empty() || (full && !cur_full) || (!full && !cur_full && f.len() > ja.psd.freqs.len()) {
-                    ja.psd = JointPsd { freqs: f, real: pr.iter().map(|x| x * w).collect(), sim: ps.iter().map(|x| x * w).collect() };
+                if ja.psd.freqs.is_empty()
+                    || (full && !cur_full)
+                    || (!full && !cur_full && f.len() > ja.psd.freqs.len())
+                {
+                    ja.psd = JointPsd {
+                        freqs: f,
+                        real: pr.iter().map(|x| x * w).collect(),
+                        sim: ps.iter().map(|x| x * w).collect(),
+                    };
                     ja.psd_w = w;
                 } else if f.len() == ja.psd.freqs.len() && full {
                     for (a, b) in ja.psd.real.iter_mut().zip(&pr) {
@@ -361,14 +382,22 @@ pub fn compute(recs: &[Recording], eps: &[Episode], region: &dyn Fn(&str) -> Str
                 ja.bias += d.bias * w;
                 ja.lag += d.lag_s * w;
                 ja.gain += d.gain * w;
-                ja.res_sq += if d.residual_rms.is_finite() { d.residual_rms.powi(2) * w } else { 0.0 };
+                ja.res_sq +=
+                    if d.residual_rms.is_finite() { d.residual_rms.powi(2) * w } else { 0.0 };
                 ja.tot_sq += d.total_rms.powi(2) * w;
                 match ja.votes.iter_mut().find(|v| v.0 == d.explained) {
                     Some(v) => v.1 += d.total_rms.powi(2) * w,
                     None => ja.votes.push((d.explained, d.total_rms.powi(2) * w)),
                 }
             }
-            let ph = locate::phase_errors(&rec.t, &jt.q, qd_real, jt.q_cmd.as_deref(), jt.tau.as_deref(), qs);
+            let ph = locate::phase_errors(
+                &rec.t,
+                &jt.q,
+                qd_real,
+                jt.q_cmd.as_deref(),
+                jt.tau.as_deref(),
+                qs,
+            );
             ja.ph[0].merge(&stats_to_accum(&ph.reversal));
             ja.ph[1].merge(&stats_to_accum(&ph.high_accel));
             if let Some(h) = &ph.high_load {
@@ -428,7 +457,10 @@ pub fn compute(recs: &[Recording], eps: &[Episode], region: &dyn Fn(&str) -> Str
             spectral_kl: spectral::symmetric_kl(&pr, &pss),
             dominant_hz_real: spectral::dominant_frequency(f, &pr),
             dominant_hz_sim: spectral::dominant_frequency(f, &pss),
-            band_power: BandPowers { real: spectral::band_power(f, &pr), sim: spectral::band_power(f, &pss) },
+            band_power: BandPowers {
+                real: spectral::band_power(f, &pr),
+                sim: spectral::band_power(f, &pss),
+            },
             decomposition: Decomposition {
                 bias: ja.bias / dw,
                 lag_s: ja.lag / dw,
@@ -457,7 +489,8 @@ pub fn compute(recs: &[Recording], eps: &[Episode], region: &dyn Fn(&str) -> Str
         }
     }
     for r in &names {
-        let members: Vec<usize> = (0..per_joint.len()).filter(|&i| per_joint[i].region == *r).collect();
+        let members: Vec<usize> =
+            (0..per_joint.len()).filter(|&i| per_joint[i].region == *r).collect();
         let (mut pa, mut va) = (Accum::new(), Accum::new());
         for &i in &members {
             pa.merge(&joints[i].pos);
@@ -465,7 +498,8 @@ pub fn compute(recs: &[Recording], eps: &[Episode], region: &dyn Fn(&str) -> Str
         }
         let (p, v) = (pa.finish(), va.finish());
         let corrs: Vec<f64> = members.iter().filter_map(|&i| per_joint[i].corr).collect();
-        let kls: Vec<f64> = members.iter().map(|&i| per_joint[i].spectral_kl).filter(|x| x.is_finite()).collect();
+        let kls: Vec<f64> =
+            members.iter().map(|&i| per_joint[i].spectral_kl).filter(|x| x.is_finite()).collect();
         region_sq.push((r.clone(), pa.sum_sq, pa.n));
         per_region.push(RegionGap {
             region: r.clone(),
@@ -497,13 +531,19 @@ pub fn compute(recs: &[Recording], eps: &[Episode], region: &dyn Fn(&str) -> Str
     jshare.sort_by(|a, b| b.share.total_cmp(&a.share));
     let mut rshare: Vec<Share> = region_sq
         .iter()
-        .map(|(r, sq, n)| Share { name: r.clone(), rmse: (sq / (*n).max(1) as f64).sqrt(), share: sq / total_sq })
+        .map(|(r, sq, n)| Share {
+            name: r.clone(),
+            rmse: (sq / (*n).max(1) as f64).sqrt(),
+            share: sq / total_sq,
+        })
         .collect();
     rshare.sort_by(|a, b| b.share.total_cmp(&a.share));
     let (mut br, mut bs) = ([0.0; 3], [0.0; 3]);
     for j in &per_joint {
         let (r, s) = (&j.band_power.real, &j.band_power.sim);
-        for (k, (x, y)) in [(r.low, s.low), (r.mid, s.mid), (r.high, s.high)].into_iter().enumerate() {
+        for (k, (x, y)) in
+            [(r.low, s.low), (r.mid, s.mid), (r.high, s.high)].into_iter().enumerate()
+        {
             if x.is_finite() && y.is_finite() {
                 br[k] += x;
                 bs[k] += y;
@@ -514,7 +554,12 @@ pub fn compute(recs: &[Recording], eps: &[Episode], region: &dyn Fn(&str) -> Str
     let mut bands: Vec<BandMismatch> = ["0-2 Hz", "2-10 Hz", ">10 Hz"]
         .iter()
         .enumerate()
-        .map(|(k, b)| BandMismatch { band: b.to_string(), real: br[k], sim: bs[k], mismatch: (bs[k] - br[k]).abs() / real_total })
+        .map(|(k, b)| BandMismatch {
+            band: b.to_string(),
+            real: br[k],
+            sim: bs[k],
+            mismatch: (bs[k] - br[k]).abs() / real_total,
+        })
         .collect();
     bands.sort_by(|a, b| b.mismatch.total_cmp(&a.mismatch));
     let worst_band = bands.first().filter(|b| b.mismatch > 0.0).map(|b| b.band.clone());
@@ -525,15 +570,22 @@ pub fn compute(recs: &[Recording], eps: &[Episode], region: &dyn Fn(&str) -> Str
         }
     }
     let other_rmse = ph_all[3].finish().rmse;
-    let mut phases: Vec<PhaseShare> = ["velocity reversal", "high commanded acceleration", "high load"]
-        .iter()
-        .enumerate()
-        .filter(|(k, _)| ph_all[*k].n > 0)
-        .map(|(k, name)| {
-            let s = ph_all[k].finish();
-            PhaseShare { phase: name.to_string(), rmse: s.rmse, mae: s.mae, samples: s.n, ratio_to_other: s.rmse / other_rmse }
-        })
-        .collect();
+    let mut phases: Vec<PhaseShare> =
+        ["velocity reversal", "high commanded acceleration", "high load"]
+            .iter()
+            .enumerate()
+            .filter(|(k, _)| ph_all[*k].n > 0)
+            .map(|(k, name)| {
+                let s = ph_all[k].finish();
+                PhaseShare {
+                    phase: name.to_string(),
+                    rmse: s.rmse,
+                    mae: s.mae,
+                    samples: s.n,
+                    ratio_to_other: s.rmse / other_rmse,
+                }
+            })
+            .collect();
     phases.sort_by(|a, b| b.ratio_to_other.total_cmp(&a.ratio_to_other));
     let causes = jshare
         .iter()
@@ -541,7 +593,9 @@ pub fn compute(recs: &[Recording], eps: &[Episode], region: &dyn Fn(&str) -> Str
         .map(|j| {
             let d = &j.decomposition;
             let summary = match d.dominant {
-                Explained::Offset => format!("constant offset: real − sim = {:+.2}°", d.bias.to_degrees()),
+                Explained::Offset => {
+                    format!("constant offset: real − sim = {:+.2}°", d.bias.to_degrees())
+                }
                 Explained::Lag => format!("time lag: real lags sim by {:.1} ms", d.lag_s * 1e3),
                 Explained::Amplitude => format!("amplitude: real/sim = {:.3}", d.gain),
                 Explained::Residual => format!(
@@ -551,7 +605,14 @@ pub fn compute(recs: &[Recording], eps: &[Episode], region: &dyn Fn(&str) -> Str
                 ),
                 Explained::None => "no significant error".to_string(),
             };
-            JointCause { name: j.name.clone(), dominant: d.dominant, bias: d.bias, lag_s: d.lag_s, gain: d.gain, summary }
+            JointCause {
+                name: j.name.clone(),
+                dominant: d.dominant,
+                bias: d.bias,
+                lag_s: d.lag_s,
+                gain: d.gain,
+                summary,
+            }
         })
         .collect();
 
@@ -575,7 +636,14 @@ pub fn compute(recs: &[Recording], eps: &[Episode], region: &dyn Fn(&str) -> Str
         per_joint,
         per_region,
         per_episode,
-        localisation: Localisation { joints: jshare, regions: rshare, worst_band, bands, phases, causes },
+        localisation: Localisation {
+            joints: jshare,
+            regions: rshare,
+            worst_band,
+            bands,
+            phases,
+            causes,
+        },
         diverged,
         psd,
     }
@@ -658,13 +726,21 @@ impl GapReport {
             o.push_str(&format!("    largest PSD mismatch in band {b}\n"));
         }
         for p in l.phases.iter().take(3) {
-            o.push_str(&format!("    {}: RMSE {} ({:.2}× outside phases)\n", p.phase, deg(p.rmse), p.ratio_to_other));
+            o.push_str(&format!(
+                "    {}: RMSE {} ({:.2}× outside phases)\n",
+                p.phase,
+                deg(p.rmse),
+                p.ratio_to_other
+            ));
         }
         for c in l.causes.iter().take(8) {
             o.push_str(&format!("    {:<24} {}\n", c.name, c.summary));
         }
         if !self.diverged.is_empty() {
-            o.push_str(&format!("\n  {} episode(s) DIVERGED and are excluded:\n", self.diverged.len()));
+            o.push_str(&format!(
+                "\n  {} episode(s) DIVERGED and are excluded:\n",
+                self.diverged.len()
+            ));
             for d in &self.diverged {
                 o.push_str(&format!("    {d}\n"));
             }

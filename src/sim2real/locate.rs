@@ -42,11 +42,7 @@ fn rms_of(it: impl Iterator<Item = f64>) -> f64 {
         s += e * e;
         n += 1;
     }
-    if n == 0 {
-        f64::NAN
-    } else {
-        (s / n as f64).sqrt()
-    }
+    if n == 0 { f64::NAN } else { (s / n as f64).sqrt() }
 }
 
 /// Value of `x` at fractional index `p` (linear interpolation), `None` outside `[0, len−1]`.
@@ -56,11 +52,7 @@ fn at_frac(x: &[f64], p: f64) -> Option<f64> {
     }
     let j = p.floor() as usize;
     let a = p - j as f64;
-    if j + 1 >= x.len() || a == 0.0 {
-        Some(x[j])
-    } else {
-        Some(x[j] * (1.0 - a) + x[j + 1] * a)
-    }
+    if j + 1 >= x.len() || a == 0.0 { Some(x[j]) } else { Some(x[j] * (1.0 - a) + x[j + 1] * a) }
 }
 
 /// Decomposes the error between `sim` and `real`, both sampled uniformly every `t_uniform_dt`
@@ -119,11 +111,7 @@ pub fn decompose(
             saa += a * a;
             sbb += b * b;
         }
-        if saa > 0.0 && sbb > 0.0 {
-            sab / (saa * sbb).sqrt()
-        } else {
-            f64::NEG_INFINITY
-        }
+        if saa > 0.0 && sbb > 0.0 { sab / (saa * sbb).sqrt() } else { f64::NEG_INFINITY }
     };
     let km = kmax as isize;
     let cs: Vec<f64> = (-km..=km).map(corr).collect();
@@ -147,9 +135,8 @@ pub fn decompose(
     let lag_s = lag_samples * t_uniform_dt;
 
     // Shifted simulation (mean removed) where defined.
-    let shifted: Vec<(usize, f64)> = (0..n)
-        .filter_map(|i| at_frac(&s0, i as f64 - lag_samples).map(|v| (i, v)))
-        .collect();
+    let shifted: Vec<(usize, f64)> =
+        (0..n).filter_map(|i| at_frac(&s0, i as f64 - lag_samples).map(|v| (i, v))).collect();
     let (mut sxy, mut sxx) = (0.0, 0.0);
     for &(i, v) in &shifted {
         sxy += r0[i] * v;
@@ -178,14 +165,7 @@ pub fn decompose(
         }
         pick.0
     };
-    ErrorDecomposition {
-        bias,
-        lag_s,
-        gain,
-        residual_rms,
-        total_rms,
-        explained,
-    }
+    ErrorDecomposition { bias, lag_s, gain, residual_rms, total_rms, explained }
 }
 
 /// Position error (sim − real) per motion phase. The first three sets may overlap; `other` is
@@ -312,9 +292,7 @@ fn second_derivative(t: &[f64], x: &[f64]) -> Vec<f64> {
 
 /// Mask of the ceil(10 %) samples with the largest |x| (ties by index), zeros and NaN excluded.
 fn top_fraction(x: &[f64]) -> Vec<bool> {
-    let mut idx: Vec<usize> = (0..x.len())
-        .filter(|&i| x[i].is_finite() && x[i] != 0.0)
-        .collect();
+    let mut idx: Vec<usize> = (0..x.len()).filter(|&i| x[i].is_finite() && x[i] != 0.0).collect();
     idx.sort_by(|&a, &b| x[b].abs().total_cmp(&x[a].abs()).then(a.cmp(&b)));
     let k = (x.len() as f64 * TOP_FRACTION).ceil() as usize;
     let mut mask = vec![false; x.len()];
@@ -355,9 +333,7 @@ mod tests {
     fn pure_lag_sub_sample() {
         let s = sim();
         // 30 ms = 7.5 samples at 4 ms: real is delayed
-        let r: Vec<f64> = (0..s.len())
-            .map(|i| signal(i as f64 * DT - 0.030))
-            .collect();
+        let r: Vec<f64> = (0..s.len()).map(|i| signal(i as f64 * DT - 0.030)).collect();
         let d = decompose(DT, &s, &r, 0.2);
         assert!((d.lag_s - 0.030).abs() < 0.002, "{d:?}");
         assert!((d.gain - 1.0).abs() < 0.01, "{d:?}");
@@ -365,9 +341,7 @@ mod tests {
         assert!(d.residual_rms < 0.1 * d.total_rms, "{d:?}");
         // real leading gives a negative lag; integer shift at 5 ms sampling
         let s5: Vec<f64> = (0..2000).map(|i| signal(i as f64 * 0.005)).collect();
-        let r5: Vec<f64> = (0..2000)
-            .map(|i| signal(i as f64 * 0.005 + 0.030))
-            .collect();
+        let r5: Vec<f64> = (0..2000).map(|i| signal(i as f64 * 0.005 + 0.030)).collect();
         let d = decompose(0.005, &s5, &r5, 0.2);
         assert!((d.lag_s + 0.030).abs() < 0.002, "{d:?}");
         assert_eq!(d.explained, Explained::Lag);
@@ -393,9 +367,7 @@ mod tests {
         let r: Vec<f64> = s
             .iter()
             .map(|v| {
-                seed = seed
-                    .wrapping_mul(6364136223846793005)
-                    .wrapping_add(1442695040888963407);
+                seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
                 v + 0.5 * ((seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5)
             })
             .collect();
@@ -403,10 +375,7 @@ mod tests {
         let d = decompose(DT, &s, &s, 0.2);
         assert_eq!(d.explained, Explained::None);
         assert_eq!(d.total_rms, 0.0);
-        assert_eq!(
-            decompose(DT, &s[..2], &s[..2], 0.2).explained,
-            Explained::None
-        );
+        assert_eq!(decompose(DT, &s[..2], &s[..2], 0.2).explained, Explained::None);
         assert_eq!(decompose(0.0, &s, &r, 0.2).explained, Explained::None);
     }
 
@@ -424,11 +393,8 @@ mod tests {
         let qd: Vec<f64> = t.iter().map(|&s| w * (w * s).cos()).collect();
         // velocity reversals at t = 0.25 + 0.5 k
         let near_rev = |s: f64| ((s - 0.25) / 0.5 - ((s - 0.25) / 0.5).round()).abs() * 0.5 <= 0.03;
-        let sim: Vec<f64> = t
-            .iter()
-            .zip(&q)
-            .map(|(&s, &v)| if near_rev(s) { v + 0.1 } else { v })
-            .collect();
+        let sim: Vec<f64> =
+            t.iter().zip(&q).map(|(&s, &v)| if near_rev(s) { v + 0.1 } else { v }).collect();
         let tau: Vec<f64> = t.to_vec();
         let p = phase_errors(&t, &q, &qd, None, Some(&tau), &sim);
         assert!(p.reversal.n > 0);

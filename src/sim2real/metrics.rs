@@ -27,13 +27,7 @@ pub struct GapConstants {
 
 impl Default for GapConstants {
     fn default() -> Self {
-        GapConstants {
-            eps_pos: 0.5,
-            eps_vel: 2.0,
-            w_kin: 0.4,
-            w_dyn: 0.3,
-            w_ctrl: 0.3,
-        }
+        GapConstants { eps_pos: 0.5, eps_vel: 2.0, w_kin: 0.4, w_dyn: 0.3, w_ctrl: 0.3 }
     }
 }
 
@@ -102,12 +96,7 @@ impl Accum {
 
     pub fn finish(&self) -> ErrorStats {
         if self.n == 0 {
-            return ErrorStats {
-                mae: f64::NAN,
-                rmse: f64::NAN,
-                max: f64::NAN,
-                n: 0,
-            };
+            return ErrorStats { mae: f64::NAN, rmse: f64::NAN, max: f64::NAN, n: 0 };
         }
         let n = self.n as f64;
         ErrorStats {
@@ -166,12 +155,7 @@ pub fn gap_scores(pos_rmse: f64, vel_rmse: f64, mean_corr: f64, c: &GapConstants
     let dynamic = (vel_rmse / c.eps_vel).min(1.0);
     let control = 1.0 - mean_corr;
     let overall = c.w_kin * kinematic + c.w_dyn * dynamic + c.w_ctrl * control;
-    GapScores {
-        kinematic,
-        dynamic,
-        control,
-        overall,
-    }
+    GapScores { kinematic, dynamic, control, overall }
 }
 
 /// Linear interpolation of `x(t)` onto the grid `t[0] + k/rate_hz`, k = 0, 1, … while the grid
@@ -243,7 +227,8 @@ pub fn interp_at(t: &[f64], x: &[f64], tq: f64) -> f64 {
 
 /// Median of the positive finite sample intervals (`None` when there is none).
 pub fn median_interval(t: &[f64]) -> Option<f64> {
-    let mut dts: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).filter(|d| d.is_finite() && *d > 0.0).collect();
+    let mut dts: Vec<f64> =
+        t.windows(2).map(|w| w[1] - w[0]).filter(|d| d.is_finite() && *d > 0.0).collect();
     if dts.is_empty() {
         return None;
     }
@@ -303,7 +288,12 @@ pub fn fill_dropped_rows(t: &[f64], x: &[f64]) -> (Vec<f64>, Vec<f64>) {
         }
         let gap = t[i + 1] - t[i];
         let rows = (gap / h).round() as usize;
-        if !(gap > GAP_FACTOR * h) || rows < 2 || rows > MAX_FILLED_ROWS + 1 || !x[i].is_finite() || !x[i + 1].is_finite() {
+        if !(gap > GAP_FACTOR * h)
+            || rows < 2
+            || rows > MAX_FILLED_ROWS + 1
+            || !x[i].is_finite()
+            || !x[i + 1].is_finite()
+        {
             continue;
         }
         for r in 1..rows {
@@ -392,22 +382,10 @@ mod tests {
     #[test]
     fn pearson_cases() {
         let a = [1.0, 2.0, 3.0, 4.0];
-        assert!(close(
-            pearson(&a, &[2.0, 4.0, 6.0, 8.0]).unwrap_or(0.0),
-            1.0,
-            1e-12
-        ));
-        assert!(close(
-            pearson(&a, &[8.0, 6.0, 4.0, 2.0]).unwrap_or(0.0),
-            -1.0,
-            1e-12
-        ));
+        assert!(close(pearson(&a, &[2.0, 4.0, 6.0, 8.0]).unwrap_or(0.0), 1.0, 1e-12));
+        assert!(close(pearson(&a, &[8.0, 6.0, 4.0, 2.0]).unwrap_or(0.0), -1.0, 1e-12));
         // offset does not change correlation (Proposition 1)
-        assert!(close(
-            pearson(&a, &[11.0, 12.0, 13.0, 14.0]).unwrap_or(0.0),
-            1.0,
-            1e-12
-        ));
+        assert!(close(pearson(&a, &[11.0, 12.0, 13.0, 14.0]).unwrap_or(0.0), 1.0, 1e-12));
         let r = pearson(&[1.0, 2.0, 3.0], &[1.0, 3.0, 2.0]).unwrap_or(f64::NAN);
         assert!(close(r, 0.5, 1e-12));
         assert_eq!(pearson(&a, &[0.1; 4]), None);
@@ -423,11 +401,7 @@ mod tests {
         assert!(close(g.kinematic, 0.300, 1e-12));
         assert!(close(g.control, 0.743, 1e-12));
         assert!(close(g.dynamic, 0.3245, 1e-12)); // eq 7; the paper's table says 0.065
-        assert!(close(
-            g.overall,
-            0.4 * 0.3 + 0.3 * 0.3245 + 0.3 * 0.743,
-            1e-12
-        ));
+        assert!(close(g.overall, 0.4 * 0.3 + 0.3 * 0.3245 + 0.3 * 0.743, 1e-12));
         // The table's G_dyn = 0.065 (vel RMSE 0.13) reproduces its overall 0.362.
         let g = gap_scores(0.150, 0.13, 0.257, &c);
         assert!(close(g.dynamic, 0.065, 1e-12));

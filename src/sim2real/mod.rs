@@ -2,13 +2,13 @@
 //! error localisation.
 
 pub mod bam;
+pub mod cmd;
 pub mod commands;
+pub mod gap;
 pub mod locate;
 pub mod metrics;
 pub mod recording;
+pub mod replay;
+pub mod report;
 pub mod spectral;
 pub mod svg;
-pub mod replay;
-pub mod gap;
-pub mod cmd;
-pub mod report;

@@ -225,17 +225,9 @@ pub fn parse_csv_with(
             return Err(err(ln, None, format!("duplicate metadata key '{k}'")));
         }
         if known {
-            let x: f64 = v
-                .parse()
-                .ok()
-                .filter(|x: &f64| x.is_finite())
-                .ok_or_else(|| {
-                    err(
-                        ln,
-                        None,
-                        format!("metadata '{k}': expected a finite number, found '{v}'"),
-                    )
-                })?;
+            let x: f64 = v.parse().ok().filter(|x: &f64| x.is_finite()).ok_or_else(|| {
+                err(ln, None, format!("metadata '{k}': expected a finite number, found '{v}'"))
+            })?;
             if k == KEY_CONTROL_RATE {
                 if x <= 0.0 {
                     return Err(err(
@@ -251,25 +243,27 @@ pub fn parse_csv_with(
             }
         } else {
             if k == KEY_SPLIT && Split::parse(v).is_none() {
-                return Err(err(ln, None, format!("metadata '{k}' must be `train` or `heldout`, found '{v}'")));
+                return Err(err(
+                    ln,
+                    None,
+                    format!("metadata '{k}' must be `train` or `heldout`, found '{v}'"),
+                ));
             }
-            if k == crate::sim2real::commands::KEY_COMMAND_TIMING && crate::sim2real::commands::CommandTiming::parse(v).is_none() {
-                return Err(err(ln, None, format!("metadata '{k}' must be `in_force` or `sent_after`, found '{v}'")));
+            if k == crate::sim2real::commands::KEY_COMMAND_TIMING
+                && crate::sim2real::commands::CommandTiming::parse(v).is_none()
+            {
+                return Err(err(
+                    ln,
+                    None,
+                    format!("metadata '{k}' must be `in_force` or `sent_after`, found '{v}'"),
+                ));
             }
             meta.insert(k.to_string(), v.to_string());
         }
     }
     let Some(&(header_ln, header)) = lines.get(idx) else {
-        let last = lines
-            .iter()
-            .rev()
-            .find(|(_, l)| !l.trim().is_empty())
-            .map_or(1, |(n, _)| *n);
-        return Err(err(
-            last,
-            None,
-            "no header row (only metadata/comment lines)".into(),
-        ));
+        let last = lines.iter().rev().find(|(_, l)| !l.trim().is_empty()).map_or(1, |(n, _)| *n);
+        return Err(err(last, None, "no header row (only metadata/comment lines)".into()));
     };
     idx += 1;
 
@@ -289,11 +283,7 @@ pub fn parse_csv_with(
             ));
         }
         if names[..ci].contains(&name) {
-            return Err(err(
-                header_ln,
-                Some(name),
-                format!("header: duplicate column '{name}'"),
-            ));
+            return Err(err(header_ln, Some(name), format!("header: duplicate column '{name}'")));
         }
         let field = if name == "t" {
             t_col = Some(ci);
@@ -407,11 +397,7 @@ pub fn parse_csv_with(
                     "expected {} fields, found {}{}",
                     names.len(),
                     parts.len(),
-                    if parts.len() < names.len() {
-                        " (truncated line?)"
-                    } else {
-                        ""
-                    }
+                    if parts.len() < names.len() { " (truncated line?)" } else { "" }
                 ),
             ));
         }
@@ -438,11 +424,7 @@ pub fn parse_csv_with(
     }
     if row_lines.len() < 2 {
         let ln = row_lines.last().copied().unwrap_or(header_ln);
-        return Err(err(
-            ln,
-            None,
-            format!("need at least 2 data rows, found {}", row_lines.len()),
-        ));
+        return Err(err(ln, None, format!("need at least 2 data rows, found {}", row_lines.len())));
     }
 
     let take = |c: Option<usize>, cols: &mut Vec<Vec<f64>>| c.map(|c| std::mem::take(&mut cols[c]));
@@ -461,15 +443,11 @@ pub fn parse_csv_with(
         });
     }
     let base = if n_base == 7 {
-        let b: Vec<Vec<f64>> = base_cols
-            .iter()
-            .map(|c| take(*c, &mut cols).unwrap_or_default())
-            .collect();
+        let b: Vec<Vec<f64>> =
+            base_cols.iter().map(|c| take(*c, &mut cols).unwrap_or_default()).collect();
         Some(BaseTrace {
             pos: (0..t.len()).map(|i| [b[0][i], b[1][i], b[2][i]]).collect(),
-            quat: (0..t.len())
-                .map(|i| [b[3][i], b[4][i], b[5][i], b[6][i]])
-                .collect(),
+            quat: (0..t.len()).map(|i| [b[3][i], b[4][i], b[5][i], b[6][i]]).collect(),
         })
     } else {
         None
@@ -563,18 +541,11 @@ pub fn write_csv(rec: &Recording) -> String {
         let _ = write!(out, "{}", rec.t[i]);
         for j in &rec.joints {
             let _ = write!(out, ",{}", num(Some(&j.q), i));
-            for v in [&j.qd, &j.q_cmd, &j.tau, &j.kp, &j.kd]
-                .into_iter()
-                .flatten()
-            {
+            for v in [&j.qd, &j.q_cmd, &j.tau, &j.kp, &j.kd].into_iter().flatten() {
                 let _ = write!(out, ",{}", num(Some(v), i));
             }
             if let Some(e) = &j.enabled {
-                out.push_str(if e.get(i).copied().unwrap_or(false) {
-                    ",1"
-                } else {
-                    ",0"
-                });
+                out.push_str(if e.get(i).copied().unwrap_or(false) { ",1" } else { ",0" });
             }
         }
         if let Some(b) = &rec.base {
@@ -693,11 +664,7 @@ impl Recording {
                 return Err(err(
                     0,
                     Some("base.x"),
-                    format!(
-                        "base pose has {}/{} samples, time has {n}",
-                        b.pos.len(),
-                        b.quat.len()
-                    ),
+                    format!("base pose has {}/{} samples, time has {n}", b.pos.len(), b.quat.len()),
                 ));
             }
             let bad = b
@@ -729,10 +696,7 @@ impl Recording {
                 problems.push(format!(
                     "unknown joint '{}' (did you mean {}?)",
                     j.name,
-                    near.iter()
-                        .map(|s| format!("'{s}'"))
-                        .collect::<Vec<_>>()
-                        .join(", ")
+                    near.iter().map(|s| format!("'{s}'")).collect::<Vec<_>>().join(", ")
                 ));
             }
         }
@@ -743,11 +707,7 @@ impl Recording {
             &self.source,
             None,
             first_col.as_deref(),
-            format!(
-                "{} not in the model: {}",
-                problems.len(),
-                problems.join("; ")
-            ),
+            format!("{} not in the model: {}", problems.len(), problems.join("; ")),
         ))
     }
 
@@ -770,7 +730,9 @@ impl Recording {
 
     /// The declared `command_timing` (metadata), if any.
     pub fn command_timing(&self) -> Option<crate::sim2real::commands::CommandTiming> {
-        self.meta.get(crate::sim2real::commands::KEY_COMMAND_TIMING).and_then(|v| crate::sim2real::commands::CommandTiming::parse(v))
+        self.meta
+            .get(crate::sim2real::commands::KEY_COMMAND_TIMING)
+            .and_then(|v| crate::sim2real::commands::CommandTiming::parse(v))
     }
 
     pub fn duration(&self) -> f64 {
@@ -828,11 +790,7 @@ fn near_matches(name: &str, candidates: &[String], max: usize) -> Vec<String> {
         .filter(|(d, _)| *d <= limit)
         .collect();
     scored.sort();
-    scored
-        .into_iter()
-        .take(max)
-        .map(|(_, c)| c.clone())
-        .collect()
+    scored.into_iter().take(max).map(|(_, c)| c.clone()).collect()
 }
 
 #[cfg(test)]
@@ -869,10 +827,7 @@ mod tests {
         assert_eq!(knee.q_cmd.as_deref(), Some(&[0.2, 0.21, 0.22][..]));
         assert_eq!(knee.enabled.as_deref(), Some(&[true, false, true][..]));
         assert!(knee.qd.is_none());
-        assert_eq!(
-            r.joint("hip").and_then(|h| h.qd.clone()),
-            Some(vec![0.25, 1e-3, 0.0])
-        );
+        assert_eq!(r.joint("hip").and_then(|h| h.qd.clone()), Some(vec![0.25, 1e-3, 0.0]));
         assert!((r.duration() - 0.02).abs() < 1e-15);
         assert!(r.base.is_none());
     }
@@ -905,10 +860,7 @@ mod tests {
         assert!(e.message.contains("no header"), "{e}");
         assert!(parse_err("x.q\n1\n2\n").message.contains("no 't' column"));
         let e = parse_err("t,a.q,a.q\n0,1,1\n1,1,1\n");
-        assert!(
-            e.message.contains("duplicate column 'a.q'") && e.line == Some(1),
-            "{e}"
-        );
+        assert!(e.message.contains("duplicate column 'a.q'") && e.line == Some(1), "{e}");
         let e = parse_err("t,a.q,a.vel\n0,1,1\n1,1,1\n");
         assert!(
             e.message.contains("unknown suffix '.vel'") && e.column.as_deref() == Some("a.vel"),
@@ -930,10 +882,7 @@ mod tests {
         let e = parse_err("# k: v\nt,a.q,a.q_cmd\n0,1,1\n0.1,1\n");
         assert_eq!(e.line, Some(4));
         assert!(e.message.contains("truncated"), "{e}");
-        assert_eq!(
-            e.to_string(),
-            "rec.csv:4: expected 3 fields, found 2 (truncated line?)"
-        );
+        assert_eq!(e.to_string(), "rec.csv:4: expected 3 fields, found 2 (truncated line?)");
         let e = parse_err("t,a.q\n0,1\n0.1,1.o\n");
         assert!(
             e.line == Some(3) && e.column.as_deref() == Some("a.q") && e.message.contains("'1.o'"),
@@ -945,11 +894,7 @@ mod tests {
         }
         let e = parse_err("t,a.q\n0,1\n0.2,1\n0.1,1\n");
         assert_eq!(e.line, Some(4));
-        assert!(
-            e.message
-                .contains("t = 0.1 at line 4 is not after t = 0.2 at line 3"),
-            "{e}"
-        );
+        assert!(e.message.contains("t = 0.1 at line 4 is not after t = 0.2 at line 3"), "{e}");
         let e = parse_err("t,a.q\n0,1\n0,1\n");
         assert!(e.message.contains("not strictly increasing"), "{e}");
         let e = parse_err("t,a.q,a.enabled\n0,1,1\n0.1,1,2\n");
@@ -985,13 +930,7 @@ mod tests {
         let e = parse_err(text);
         assert_eq!(e.line, Some(3));
         assert!(e.message.contains("looks like degrees"), "{e}");
-        let ok = parse_csv_with(
-            p(),
-            text,
-            &ParseOptions {
-                max_abs_rad: f64::INFINITY,
-            },
-        );
+        let ok = parse_csv_with(p(), text, &ParseOptions { max_abs_rad: f64::INFINITY });
         assert!(ok.is_ok());
         let e = parse_err("t,knee.q,knee.q_cmd\n0,0,0\n0.01,0,-30\n");
         assert_eq!(e.column.as_deref(), Some("knee.q_cmd"));
@@ -1006,8 +945,7 @@ mod tests {
             .collect();
         let e = r.validate_joint_names(&model).expect_err("unknown joint");
         assert!(
-            e.message
-                .contains("unknown joint 'Left_Knee_Pitc' (did you mean 'Left_Knee_Pitch'"),
+            e.message.contains("unknown joint 'Left_Knee_Pitc' (did you mean 'Left_Knee_Pitch'"),
             "{e}"
         );
         assert!(!e.message.contains("Waist"), "{e}");

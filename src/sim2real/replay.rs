@@ -62,7 +62,13 @@ pub struct ReplayOptions {
 
 impl Default for ReplayOptions {
     fn default() -> Self {
-        ReplayOptions { control_hz: None, command_timing: None, base: BaseMode::Fixed, hold_unlisted_at_key: true, fill_dropped_commands: true }
+        ReplayOptions {
+            control_hz: None,
+            command_timing: None,
+            base: BaseMode::Fixed,
+            hold_unlisted_at_key: true,
+            fill_dropped_commands: true,
+        }
     }
 }
 
@@ -114,7 +120,15 @@ pub trait ActuatorHook {
     }
     /// Called every physics step before `mj_step` for every recorded joint. `t` is the
     /// simulation time (recording clock), `q_target` the held command.
-    fn before_step(&mut self, t: f64, joint_idx: usize, q: f64, qd: f64, q_target: f64, out: &mut StepIo);
+    fn before_step(
+        &mut self,
+        t: f64,
+        joint_idx: usize,
+        q: f64,
+        qd: f64,
+        q_target: f64,
+        out: &mut StepIo,
+    );
 }
 
 #[derive(Debug, Clone)]
@@ -162,7 +176,8 @@ impl<'m> Replayer<'m> {
                 acts: robot.actuators_on_joint(j.id).iter().map(|a| (a.id, a.kind)).collect(),
             })
             .collect();
-        let free = robot.joints.iter().find(|j| j.jtype == JointType::Free).map(|j| (j.qposadr, j.dofadr));
+        let free =
+            robot.joints.iter().find(|j| j.jtype == JointType::Free).map(|j| (j.qposadr, j.dofadr));
         Replayer {
             model,
             joints,
@@ -193,7 +208,9 @@ impl<'m> Replayer<'m> {
         let rate = opts.control_hz.or(rec.control_rate_hz);
         let timing = opts.command_timing.or_else(|| rec.command_timing()).unwrap_or_default();
         if opts.base == BaseMode::Recorded && rec.base.is_none() && self.free.is_some() {
-            return Err(setup("--base recorded needs base.x … base.qz columns; the recording has none".into()));
+            return Err(setup(
+                "--base recorded needs base.x … base.qz columns; the recording has none".into(),
+            ));
         }
 
         // Recorded joint → model joint, command and velocity traces.
@@ -204,7 +221,10 @@ impl<'m> Replayer<'m> {
             let ji = self.names.iter().position(|s| *s == jt.name).expect("validated");
             let info = &self.joints[ji];
             if !info.scalar {
-                return Err(setup(format!("joint '{}' is not a hinge or slide joint; only scalar joints can be replayed", jt.name)));
+                return Err(setup(format!(
+                    "joint '{}' is not a hinge or slide joint; only scalar joints can be replayed",
+                    jt.name
+                )));
             }
             jm.push(ji);
             qd0.push(match &jt.qd {
@@ -213,17 +233,25 @@ impl<'m> Replayer<'m> {
             });
         }
 
-        let cmds: Vec<&[f64]> = rec.joints.iter().map(|jt| jt.q_cmd.as_deref().unwrap_or(&jt.q)).collect();
+        let cmds: Vec<&[f64]> =
+            rec.joints.iter().map(|jt| jt.q_cmd.as_deref().unwrap_or(&jt.q)).collect();
         let tick0 = rec.control_t0_s.unwrap_or(rec.t[0]);
-        let schedule = reconstruct(&rec.t, &cmds, rate, tick0, timing, opts.fill_dropped_commands).map_err(|e| setup(e.to_string()))?;
+        let schedule = reconstruct(&rec.t, &cmds, rate, tick0, timing, opts.fill_dropped_commands)
+            .map_err(|e| setup(e.to_string()))?;
         if let Some(h) = hook.as_deref_mut() {
             let names: Vec<String> = rec.joints.iter().map(|j| j.name.clone()).collect();
             h.reset(&names, mj::raw(self.model).opt.timestep);
         }
-        let replaced: Vec<bool> = (0..nj).map(|i| hook.as_deref().is_some_and(|h| h.replaces_actuator(i))).collect();
+        let replaced: Vec<bool> =
+            (0..nj).map(|i| hook.as_deref().is_some_and(|h| h.replaces_actuator(i))).collect();
         for (i, &ji) in jm.iter().enumerate() {
             for &(aid, kind) in &self.joints[ji].acts {
-                if !replaced[i] && !matches!(kind, ActuatorKind::Position { .. } | ActuatorKind::Velocity { .. }) {
+                if !replaced[i]
+                    && !matches!(
+                        kind,
+                        ActuatorKind::Position { .. } | ActuatorKind::Velocity { .. }
+                    )
+                {
                     return Err(setup(format!(
                         "actuator {aid} on joint '{}' is not a position (or velocity) actuator; replaying torque \
                          actuators needs an ActuatorHook that replaces it with a servo law",
@@ -232,8 +260,10 @@ impl<'m> Replayer<'m> {
                 }
             }
         }
-        let gain_cols = rec.joints.iter().any(|j| j.kp.is_some() || j.kd.is_some() || j.enabled.is_some());
-        let owned: Option<MjModel> = (gain_cols || replaced.iter().any(|&r| r)).then(|| self.model.clone());
+        let gain_cols =
+            rec.joints.iter().any(|j| j.kp.is_some() || j.kd.is_some() || j.enabled.is_some());
+        let owned: Option<MjModel> =
+            (gain_cols || replaced.iter().any(|&r| r)).then(|| self.model.clone());
         let m: &MjModel = owned.as_ref().unwrap_or(self.model);
         let r = mj::raw(m);
         let (nq, nv, nu) = (r.nq as usize, r.nv as usize, r.nu as usize);
@@ -300,13 +330,25 @@ impl<'m> Replayer<'m> {
         }
         // Base pose to pin (Fixed/Free start).
         let base_pin: Option<[f64; 7]> = self.free.map(|(qa, _)| match &rec.base {
-            Some(b) => [b.pos[0][0], b.pos[0][1], b.pos[0][2], b.quat[0][0], b.quat[0][1], b.quat[0][2], b.quat[0][3]],
+            Some(b) => [
+                b.pos[0][0],
+                b.pos[0][1],
+                b.pos[0][2],
+                b.quat[0][0],
+                b.quat[0][1],
+                b.quat[0][2],
+                b.quat[0][3],
+            ],
             None => {
                 let q = mj::slice(mj::data_raw(&d).qpos, nq);
                 std::array::from_fn(|k| q[qa + k])
             }
         });
-        let base_mode = if rec.base.is_none() && opts.base == BaseMode::Recorded { BaseMode::Fixed } else { opts.base };
+        let base_mode = if rec.base.is_none() && opts.base == BaseMode::Recorded {
+            BaseMode::Fixed
+        } else {
+            opts.base
+        };
         let set_base = |d: &mut MjData<&MjModel>, t: f64| {
             let (Some((qa, va)), Some(pin)) = (self.free, base_pin) else { return };
             let dr = mj::data_raw_mut(d);
@@ -392,8 +434,10 @@ impl<'m> Replayer<'m> {
                 tick = Some(ti);
                 for (i, jt) in rec.joints.iter().enumerate() {
                     let nom = nominal[i].first().map(|&(_, g, b1, b2)| (g, -b1, -b2));
-                    kp[i] = jt.kp.as_ref().map_or(nom.map_or(0.0, |x| x.0), |v| zoh_at(&rec.t, v, tt));
-                    kd[i] = jt.kd.as_ref().map_or(nom.map_or(0.0, |x| x.2), |v| zoh_at(&rec.t, v, tt));
+                    kp[i] =
+                        jt.kp.as_ref().map_or(nom.map_or(0.0, |x| x.0), |v| zoh_at(&rec.t, v, tt));
+                    kd[i] =
+                        jt.kd.as_ref().map_or(nom.map_or(0.0, |x| x.2), |v| zoh_at(&rec.t, v, tt));
                     enabled[i] = jt.enabled.as_ref().is_none_or(|v| {
                         let j = rec.t.partition_point(|&x| x <= tt);
                         v[j.saturating_sub(1)]
@@ -404,7 +448,9 @@ impl<'m> Replayer<'m> {
                     let want_gain = (jt.kp.is_some() || jt.kd.is_some()).then_some((kp[i], kd[i]));
                     if enabled[i] != applied_enabled[i] || want_gain != applied_gain[i] {
                         for &(a, g, b1, b2) in &nominal[i] {
-                            let is_pos = self.joints[jm[i]].acts.iter().any(|&(x, kd)| x == a && matches!(kd, ActuatorKind::Position { .. }));
+                            let is_pos = self.joints[jm[i]].acts.iter().any(|&(x, kd)| {
+                                x == a && matches!(kd, ActuatorKind::Position { .. })
+                            });
                             if !enabled[i] {
                                 set_gains(a, 0.0, 0.0, 0.0);
                             } else if let (Some((p, v)), true) = (want_gain, is_pos) {
@@ -419,7 +465,8 @@ impl<'m> Replayer<'m> {
                 }
             }
             for i in 0..nj {
-                io[i] = StepIo { ctrl: target[i], tau: 0.0, kp: kp[i], kd: kd[i], enabled: enabled[i] };
+                io[i] =
+                    StepIo { ctrl: target[i], tau: 0.0, kp: kp[i], kd: kd[i], enabled: enabled[i] };
                 if let Some(h) = hook.as_deref_mut() {
                     h.before_step(tk, i, cur_q[i], cur_qd[i], target[i], &mut io[i]);
                 }
@@ -465,20 +512,32 @@ impl<'m> Replayer<'m> {
                 next_sample += 1;
             }
         }
-        Ok(Episode { t: rec.t.clone(), joints: rec.joints.iter().map(|j| j.name.clone()).collect(), q_sim, qd_sim, diverged })
+        Ok(Episode {
+            t: rec.t.clone(),
+            joints: rec.joints.iter().map(|j| j.name.clone()).collect(),
+            q_sim,
+            qd_sim,
+            diverged,
+        })
     }
 }
 
 fn divergence(d: &MjData<&MjModel>, q: &[f64], qd: &[f64], t: f64) -> Option<String> {
     let dr = mj::data_raw(d);
-    let names = ["", "", "", "bad qpos", "bad qvel", "bad qacc (NaN/Inf/huge acceleration)", "bad ctrl"];
+    let names =
+        ["", "", "", "bad qpos", "bad qvel", "bad qacc (NaN/Inf/huge acceleration)", "bad ctrl"];
     for w in 3..=6 {
         if dr.warning[w].number > 0 {
-            return Some(format!("MuJoCo warning at t = {t:.4} s: {} (index {})", names[w], dr.warning[w].lastinfo));
+            return Some(format!(
+                "MuJoCo warning at t = {t:.4} s: {} (index {})",
+                names[w], dr.warning[w].lastinfo
+            ));
         }
     }
     if q.iter().chain(qd.iter()).any(|x| !x.is_finite() || x.abs() > BLOWUP) {
-        return Some(format!("simulation blew up at t = {t:.4} s (|q| or |q\u{307}| > {BLOWUP} or not finite)"));
+        return Some(format!(
+            "simulation blew up at t = {t:.4} s (|q| or |q\u{307}| > {BLOWUP} or not finite)"
+        ));
     }
     None
 }
@@ -494,7 +553,15 @@ fn base_pose(t: &[f64], b: &crate::sim2real::recording::BaseTrace, tq: f64) -> [
     let mut q: [f64; 4] = std::array::from_fn(|k| q0[k] + a * (q1[k] - q0[k]));
     let nrm = q.iter().map(|x| x * x).sum::<f64>().sqrt().max(1e-12);
     q.iter_mut().for_each(|x| *x /= nrm);
-    [p0[0] + a * (p1[0] - p0[0]), p0[1] + a * (p1[1] - p0[1]), p0[2] + a * (p1[2] - p0[2]), q[0], q[1], q[2], q[3]]
+    [
+        p0[0] + a * (p1[0] - p0[0]),
+        p0[1] + a * (p1[1] - p0[1]),
+        p0[2] + a * (p1[2] - p0[2]),
+        q[0],
+        q[1],
+        q[2],
+        q[3],
+    ]
 }
 
 /// Body-frame angular velocity taking unit quaternion `q0` to `q1` in `dt` (w-x-y-z).
@@ -579,14 +646,23 @@ mod tests {
     #[test]
     fn replay_samples_first_state_exactly_and_holds_commands() {
         let mut map = crate::model::source::SourceMap::default();
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/bam_xl330/rig.xml");
+        let path =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/bam_xl330/rig.xml");
         let robot = crate::model::load(&mut map, &path, None).unwrap();
         let n = 200;
         let t: Vec<f64> = (0..n).map(|i| i as f64 * 0.005).collect();
         let mut j = crate::sim2real::recording::JointTrace::new("servo", vec![0.3; n]);
         j.q_cmd = Some(vec![0.3; n]);
         j.qd = Some(vec![0.0; n]);
-        let rec = Recording { source: "r.csv".into(), meta: Default::default(), control_rate_hz: None, control_t0_s: None, t, joints: vec![j], base: None };
+        let rec = Recording {
+            source: "r.csv".into(),
+            meta: Default::default(),
+            control_rate_hz: None,
+            control_t0_s: None,
+            t,
+            joints: vec![j],
+            base: None,
+        };
         let ep = replay(&robot, &rec, &ReplayOptions::default(), None).unwrap();
         assert_eq!(ep.q_sim[0][0], 0.3);
         assert!(ep.diverged.is_none());
@@ -599,7 +675,8 @@ mod tests {
     #[test]
     fn dropped_command_rows_are_filled_before_the_hold() {
         let mut map = crate::model::source::SourceMap::default();
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/bam_xl330/rig.xml");
+        let path =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/bam_xl330/rig.xml");
         let robot = crate::model::load(&mut map, &path, None).unwrap();
         // A 2 rad/s ramp logged at the 100 Hz control rate; then the same log with rows 50–52 lost.
         let n = 120;
@@ -607,10 +684,21 @@ mod tests {
         let c: Vec<f64> = t.iter().map(|&x| 2.0 * x).collect();
         let rec_of = |keep: &dyn Fn(usize) -> bool| {
             let idx: Vec<usize> = (0..n).filter(|&i| keep(i)).collect();
-            let mut j = crate::sim2real::recording::JointTrace::new("servo", idx.iter().map(|&i| c[i]).collect());
+            let mut j = crate::sim2real::recording::JointTrace::new(
+                "servo",
+                idx.iter().map(|&i| c[i]).collect(),
+            );
             j.q_cmd = Some(idx.iter().map(|&i| c[i]).collect());
             let t = idx.iter().map(|&i| t[i]).collect();
-            Recording { source: "r.csv".into(), meta: Default::default(), control_rate_hz: Some(100.0), control_t0_s: None, t, joints: vec![j], base: None }
+            Recording {
+                source: "r.csv".into(),
+                meta: Default::default(),
+                control_rate_hz: Some(100.0),
+                control_t0_s: None,
+                t,
+                joints: vec![j],
+                base: None,
+            }
         };
         let full = replay(&robot, &rec_of(&|_| true), &ReplayOptions::default(), None).unwrap();
         let lossy = rec_of(&|i| !(50..53).contains(&i));
@@ -618,7 +706,10 @@ mod tests {
             let o = ReplayOptions { fill_dropped_commands: fill, ..Default::default() };
             let ep = replay(&robot, &lossy, &o, None).unwrap();
             // Same timestamps after the gap: compare there.
-            (0..lossy.t.len()).filter(|&k| lossy.t[k] > 0.5).map(|k| (ep.q_sim[0][k] - full.q_sim[0][k + 3]).abs()).fold(0.0, f64::max)
+            (0..lossy.t.len())
+                .filter(|&k| lossy.t[k] > 0.5)
+                .map(|k| (ep.q_sim[0][k] - full.q_sim[0][k + 3]).abs())
+                .fold(0.0, f64::max)
         };
         let (held, filled) = (err(false), err(true));
         assert!(held > 1e-3, "holding the row before the gap should lag the ramp: {held}");
@@ -628,7 +719,8 @@ mod tests {
     #[test]
     fn blow_up_is_reported_not_panicked() {
         let mut map = crate::model::source::SourceMap::default();
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/bam_xl330/rig.xml");
+        let path =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/bam_xl330/rig.xml");
         let robot = crate::model::load(&mut map, &path, None).unwrap();
         let n = 100;
         let t: Vec<f64> = (0..n).map(|i| i as f64 * 0.01).collect();
@@ -636,7 +728,15 @@ mod tests {
         // An absurd gain makes explicit Euler unstable.
         j.kp = Some(vec![1e9; n]);
         j.q_cmd = Some(vec![1.0; n]);
-        let rec = Recording { source: "r.csv".into(), meta: Default::default(), control_rate_hz: None, control_t0_s: None, t, joints: vec![j], base: None };
+        let rec = Recording {
+            source: "r.csv".into(),
+            meta: Default::default(),
+            control_rate_hz: None,
+            control_t0_s: None,
+            t,
+            joints: vec![j],
+            base: None,
+        };
         let ep = replay(&robot, &rec, &ReplayOptions::default(), None).unwrap();
         assert!(ep.diverged.is_some());
         assert!(ep.q_sim[0].last().unwrap().is_nan());

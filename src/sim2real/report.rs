@@ -9,9 +9,9 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use crate::sim2real::gap::GapReport;
-use crate::sim2real::svg::{self, Series, esc, line_plot};
 use crate::sim2real::recording::Recording;
 use crate::sim2real::replay::Episode;
+use crate::sim2real::svg::{self, Series, esc, line_plot};
 
 const REAL: &str = "#1f77b4";
 const SIM: &str = "#ff7f0e";
@@ -41,7 +41,14 @@ pub fn episode_names(sources: &[String]) -> (Vec<String>, Option<PathBuf>) {
     let common = common.filter(|c| !c.as_os_str().is_empty());
     let names = paths
         .iter()
-        .map(|p| common.as_ref().and_then(|c| p.strip_prefix(c).ok()).unwrap_or(p).to_string_lossy().into_owned())
+        .map(|p| {
+            common
+                .as_ref()
+                .and_then(|c| p.strip_prefix(c).ok())
+                .unwrap_or(p)
+                .to_string_lossy()
+                .into_owned()
+        })
         .collect();
     (names, common)
 }
@@ -49,7 +56,9 @@ pub fn episode_names(sources: &[String]) -> (Vec<String>, Option<PathBuf>) {
 /// Per-joint MAE bars coloured by region (≥ 2 joints; one joint is a sentence, not a chart).
 fn bars(r: &GapReport) -> String {
     if r.per_joint.len() < 2 {
-        return r.per_joint.first().map_or(String::new(), |j| format!("<p>{}: position MAE {:.2}°</p>", esc(&j.name), j.mae.to_degrees()));
+        return r.per_joint.first().map_or(String::new(), |j| {
+            format!("<p>{}: position MAE {:.2}°</p>", esc(&j.name), j.mae.to_degrees())
+        });
     }
     let mut regions: Vec<&str> = r.per_joint.iter().map(|j| j.region.as_str()).collect();
     regions.sort_unstable();
@@ -58,7 +67,12 @@ fn bars(r: &GapReport) -> String {
     let groups: Vec<svg::BarGroup> = r
         .per_joint
         .iter()
-        .map(|j| svg::BarGroup { label: j.name.clone(), values: vec![j.mae.to_degrees()], tip: format!("{} ({}): {:.2}°", j.name, j.region, j.mae.to_degrees()), colours: vec![region_colour(&j.region)] })
+        .map(|j| svg::BarGroup {
+            label: j.name.clone(),
+            values: vec![j.mae.to_degrees()],
+            tip: format!("{} ({}): {:.2}°", j.name, j.region, j.mae.to_degrees()),
+            colours: vec![region_colour(&j.region)],
+        })
         .collect();
     svg::bar_chart("Position MAE per joint [deg] (colour = region)", "MAE [deg]", &legend, &groups)
 }
@@ -68,12 +82,27 @@ fn heat_map(r: &GapReport, names: &[String]) -> String {
     if joints.len() * r.per_episode.len() < 2 {
         return String::new();
     }
-    let cell = |ji: usize, ei: usize| r.per_episode[ei].per_joint.iter().find(|j| j.name == joints[ji]).and_then(|j| j.corr);
-    format!("<h2>Correlation heat map</h2>{}", svg::heat_map("Correlation real vs sim (rows: joints, columns: episodes)", &joints, names, &cell))
+    let cell = |ji: usize, ei: usize| {
+        r.per_episode[ei].per_joint.iter().find(|j| j.name == joints[ji]).and_then(|j| j.corr)
+    };
+    format!(
+        "<h2>Correlation heat map</h2>{}",
+        svg::heat_map(
+            "Correlation real vs sim (rows: joints, columns: episodes)",
+            &joints,
+            names,
+            &cell
+        )
+    )
 }
 
 /// Writes `dir/index.html` (and `dir/index.png` when chromium is available); returns the html path.
-pub fn write(dir: &Path, r: &GapReport, recs: &[Recording], eps: &[Episode]) -> std::io::Result<PathBuf> {
+pub fn write(
+    dir: &Path,
+    r: &GapReport,
+    recs: &[Recording],
+    eps: &[Episode],
+) -> std::io::Result<PathBuf> {
     std::fs::create_dir_all(dir)?;
     let mut html = String::from(
         "<!doctype html><html><head><meta charset=\"utf-8\"><title>modellint gap report</title>\
@@ -95,23 +124,42 @@ pub fn write(dir: &Path, r: &GapReport, recs: &[Recording], eps: &[Episode]) -> 
             .max_by(|a, b| a.1.total_cmp(&b.1));
         let Some((ei, _)) = best else { continue };
         let (rec, ep) = (&recs[ei], &eps[ei]);
-        let (Some(jt), Some(k)) = (rec.joint(jn), ep.joints.iter().position(|x| x == jn)) else { continue };
+        let (Some(jt), Some(k)) = (rec.joint(jn), ep.joints.iter().position(|x| x == jn)) else {
+            continue;
+        };
         let t: Vec<f64> = rec.t.iter().map(|x| x - rec.t[0]).collect();
-        let title = format!("{jn}: {}", rec.source.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default());
+        let title = format!(
+            "{jn}: {}",
+            rec.source.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default()
+        );
         html.push_str(&line_plot(
             &title,
             "time [s]",
             "position [deg]",
             &[
-                Series { x: &t, y: jt.q.iter().map(|v| v.to_degrees()).collect(), colour: REAL, label: "real".into(), dash: "" },
-                Series { x: &t, y: ep.q_sim[k].iter().map(|v| v.to_degrees()).collect(), colour: SIM, label: "sim".into(), dash: "" },
+                Series {
+                    x: &t,
+                    y: jt.q.iter().map(|v| v.to_degrees()).collect(),
+                    colour: REAL,
+                    label: "real".into(),
+                    dash: "",
+                },
+                Series {
+                    x: &t,
+                    y: ep.q_sim[k].iter().map(|v| v.to_degrees()).collect(),
+                    colour: SIM,
+                    label: "sim".into(),
+                    dash: "",
+                },
             ],
             false,
         ));
     }
     html.push_str("</div><h2>Per-joint error</h2>");
     html.push_str(&bars(r));
-    html.push_str("<h2>Power spectral density, worst joints (Welch, 256 Hann, 50 %)</h2><div class=\"grid\">");
+    html.push_str(
+        "<h2>Power spectral density, worst joints (Welch, 256 Hann, 50 %)</h2><div class=\"grid\">",
+    );
     for jn in &worst {
         let Some(i) = r.per_joint.iter().position(|j| j.name == *jn) else { continue };
         let p = &r.psd[i];
@@ -120,8 +168,20 @@ pub fn write(dir: &Path, r: &GapReport, recs: &[Recording], eps: &[Episode]) -> 
             "frequency [Hz]",
             "PSD [rad²/Hz]",
             &[
-                Series { x: &p.freqs, y: p.real.clone(), colour: REAL, label: "real".into(), dash: "" },
-                Series { x: &p.freqs, y: p.sim.clone(), colour: SIM, label: "sim".into(), dash: "" },
+                Series {
+                    x: &p.freqs,
+                    y: p.real.clone(),
+                    colour: REAL,
+                    label: "real".into(),
+                    dash: "",
+                },
+                Series {
+                    x: &p.freqs,
+                    y: p.sim.clone(),
+                    colour: SIM,
+                    label: "sim".into(),
+                    dash: "",
+                },
             ],
             true,
         ));

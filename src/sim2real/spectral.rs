@@ -14,21 +14,12 @@ pub fn welch_psd(x: &[f64], fs: f64, nperseg: usize, overlap: f64) -> (Vec<f64>,
     if x.len() < 2 || !fs.is_finite() || fs <= 0.0 {
         return (Vec::new(), Vec::new());
     }
-    let nseg = if nperseg == 0 || nperseg > x.len() {
-        x.len()
-    } else {
-        nperseg.max(2)
-    };
-    let ov = if overlap.is_finite() {
-        overlap.clamp(0.0, 1.0)
-    } else {
-        0.5
-    };
+    let nseg = if nperseg == 0 || nperseg > x.len() { x.len() } else { nperseg.max(2) };
+    let ov = if overlap.is_finite() { overlap.clamp(0.0, 1.0) } else { 0.5 };
     let noverlap = ((nseg as f64 * ov).floor() as usize).min(nseg - 1);
     let step = nseg - noverlap;
-    let window: Vec<f64> = (0..nseg)
-        .map(|i| 0.5 - 0.5 * (2.0 * PI * i as f64 / nseg as f64).cos())
-        .collect();
+    let window: Vec<f64> =
+        (0..nseg).map(|i| 0.5 - 0.5 * (2.0 * PI * i as f64 / nseg as f64).cos()).collect();
     let wss: f64 = window.iter().map(|w| w * w).sum();
     let nbins = nseg / 2 + 1;
     let mut psd = vec![0.0; nbins];
@@ -71,10 +62,8 @@ fn power_spectrum(x: &[f64]) -> Vec<f64> {
         fft_in_place(&mut re, &mut im);
         return (0..nbins).map(|k| re[k] * re[k] + im[k] * im[k]).collect();
     }
-    let (cos, sin): (Vec<f64>, Vec<f64>) = (0..n)
-        .map(|m| (2.0 * PI * m as f64 / n as f64).sin_cos())
-        .map(|(s, c)| (c, s))
-        .unzip();
+    let (cos, sin): (Vec<f64>, Vec<f64>) =
+        (0..n).map(|m| (2.0 * PI * m as f64 / n as f64).sin_cos()).map(|(s, c)| (c, s)).unzip();
     (0..nbins)
         .map(|k| {
             let (mut re, mut im) = (0.0, 0.0);
@@ -157,11 +146,7 @@ pub struct BandPower {
 
 /// Integrates `psd` (rectangle rule, df = freqs[1] − freqs[0]) into [`BandPower`].
 pub fn band_power(freqs: &[f64], psd: &[f64]) -> BandPower {
-    let mut b = BandPower {
-        low: 0.0,
-        mid: 0.0,
-        high: 0.0,
-    };
+    let mut b = BandPower { low: 0.0, mid: 0.0, high: 0.0 };
     if freqs.len() < 2 {
         return b;
     }
@@ -196,18 +181,14 @@ mod tests {
     use super::*;
 
     fn sine(f: f64, fs: f64, n: usize, amp: f64) -> Vec<f64> {
-        (0..n)
-            .map(|i| amp * (2.0 * PI * f * i as f64 / fs).sin())
-            .collect()
+        (0..n).map(|i| amp * (2.0 * PI * f * i as f64 / fs).sin()).collect()
     }
 
     /// Deterministic pseudo-random numbers in [-0.5, 0.5).
     fn noise(n: usize, mut s: u64) -> Vec<f64> {
         (0..n)
             .map(|_| {
-                s = s
-                    .wrapping_mul(6364136223846793005)
-                    .wrapping_add(1442695040888963407);
+                s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
                 (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
             })
             .collect()
@@ -252,10 +233,7 @@ mod tests {
         assert!((dominant_frequency(&f, &p) - 5.0).abs() <= df);
         let total: f64 = p.iter().sum::<f64>() * df;
         let var = variance(&x);
-        assert!(
-            (total / var - 1.0).abs() < 0.05,
-            "integrated {total} vs variance {var}"
-        );
+        assert!((total / var - 1.0).abs() < 0.05, "integrated {total} vs variance {var}");
         let b = band_power(&f, &p);
         assert!((b.low + b.mid + b.high - total).abs() < 1e-12);
         assert!(b.mid > 0.95 * total, "{b:?}");
@@ -288,9 +266,8 @@ mod tests {
         // Reference values from scipy.signal.welch(x, fs=100, nperseg=N) (scipy 1.17) for
         // x[i] = sin(0.3 i) + 0.001 i², i < 40: N = 16 (FFT path, 4 segments) and N = 12
         // (direct-DFT path, 5 segments, trailing partial segment dropped).
-        let x: Vec<f64> = (0..40)
-            .map(|i| (0.3 * i as f64).sin() + 0.001 * (i * i) as f64)
-            .collect();
+        let x: Vec<f64> =
+            (0..40).map(|i| (0.3 * i as f64).sin() + 0.001 * (i * i) as f64).collect();
         let cases: [(usize, f64, &[f64]); 2] = [
             (
                 16,
@@ -326,10 +303,7 @@ mod tests {
             assert_eq!(p.len(), reference.len());
             assert!((f[1] - df).abs() < 1e-12);
             for (a, b) in p.iter().zip(reference) {
-                assert!(
-                    (a - b).abs() <= 1e-9 * b.abs(),
-                    "nperseg {nperseg}: {a} vs {b}"
-                );
+                assert!((a - b).abs() <= 1e-9 * b.abs(), "nperseg {nperseg}: {a} vs {b}");
             }
         }
     }

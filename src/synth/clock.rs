@@ -100,7 +100,13 @@ impl ControlClock {
 
 /// Recorder sample times [µs] in [0, duration): every (1/rate)(1 + U(−jitter, jitter)) from 0,
 /// or the control ticks when `at_ticks`.
-pub fn sample_times(duration_us: i64, rate_hz: f64, jitter: f64, at_ticks: Option<&ControlClock>, rng: &mut Rng) -> Vec<i64> {
+pub fn sample_times(
+    duration_us: i64,
+    rate_hz: f64,
+    jitter: f64,
+    at_ticks: Option<&ControlClock>,
+    rng: &mut Rng,
+) -> Vec<i64> {
     let mut out = Vec::new();
     if let Some(c) = at_ticks {
         let mut k = 0;

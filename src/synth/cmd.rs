@@ -112,7 +112,9 @@ fn fail(msg: impl std::fmt::Display) -> i32 {
 
 impl SynthCmd {
     pub fn settings(&self) -> Result<Settings, String> {
-        let excitation = Excitation::parse(&self.excitation).ok_or_else(|| format!("--excitation must be mix, chirp, steps or random, got `{}`", self.excitation))?;
+        let excitation = Excitation::parse(&self.excitation).ok_or_else(|| {
+            format!("--excitation must be mix, chirp, steps or random, got `{}`", self.excitation)
+        })?;
         let s = Settings {
             episodes: self.episodes,
             duration_s: self.duration,
@@ -176,8 +178,17 @@ pub fn run(a: SynthCmd) -> i32 {
         return fail(e);
     }
     if !quiet {
-        let fl: Vec<String> = ds.joints.iter().zip(&ds.floor).map(|(j, f)| format!("{j} {:.3}/{:.3}", 1e3 * f.mae, 1e3 * f.rmse)).collect();
-        eprintln!("synth: {} episodes written to {} (answers in truth.json)", ds.episodes.len(), a.out.display());
+        let fl: Vec<String> = ds
+            .joints
+            .iter()
+            .zip(&ds.floor)
+            .map(|(j, f)| format!("{j} {:.3}/{:.3}", 1e3 * f.mae, 1e3 * f.rmse))
+            .collect();
+        eprintln!(
+            "synth: {} episodes written to {} (answers in truth.json)",
+            ds.episodes.len(),
+            a.out.display()
+        );
         eprintln!("synth: noise + quantisation floor MAE/RMSE [mrad]: {}", fl.join(", "));
     }
     0

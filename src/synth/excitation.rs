@@ -97,7 +97,9 @@ impl Band {
 /// Per-joint random content of one segment (normalised to [−1, 1]).
 #[derive(Debug, Clone)]
 enum Content {
-    Chirp { sign: f64 },
+    Chirp {
+        sign: f64,
+    },
     /// (start time, level) of each step.
     Steps(Vec<(f64, f64)>),
     /// Knot values every WALK_KNOT_S from the segment start.
@@ -140,7 +142,9 @@ impl Plan {
                 segments
                     .iter()
                     .map(|s| match s.kind {
-                        Kind::Chirp => Content::Chirp { sign: if rng.uniform() < 0.5 { -1.0 } else { 1.0 } },
+                        Kind::Chirp => {
+                            Content::Chirp { sign: if rng.uniform() < 0.5 { -1.0 } else { 1.0 } }
+                        }
                         Kind::Steps => {
                             let mut v = Vec::new();
                             let mut x = s.t0;
@@ -246,7 +250,9 @@ mod tests {
         let mut rng = Rng::stream(5, 1, 0);
         let p = Plan::new(Excitation::Mix, 10.0, &bands, &mut rng);
         assert_eq!(p.segments.len(), 3);
-        assert!((p.segments[0].t0 - HOLD_S).abs() < 1e-12 && (p.segments[2].t1 - 10.0).abs() < 1e-12);
+        assert!(
+            (p.segments[0].t0 - HOLD_S).abs() < 1e-12 && (p.segments[2].t1 - 10.0).abs() < 1e-12
+        );
         let mut kinds: Vec<&str> = p.segments.iter().map(|s| s.kind.label()).collect();
         kinds.sort();
         assert_eq!(kinds, ["chirp", "steps", "walk"]);
@@ -259,7 +265,10 @@ mod tests {
                 let c = p.command(j, k as f64 * 1e-3);
                 assert!((c - b.centre).abs() <= b.amp + 1e-12);
                 // Slope bound: a step rises 2·amp in RISE_S at most; chirp/walk are slower.
-                assert!((c - last).abs() <= 2.0 * b.amp / RISE_S * 1e-3 + 1e-9, "jump at {k} ms: {last} → {c}");
+                assert!(
+                    (c - last).abs() <= 2.0 * b.amp / RISE_S * 1e-3 + 1e-9,
+                    "jump at {k} ms: {last} → {c}"
+                );
                 last = c;
                 k += 1;
             }

@@ -90,13 +90,29 @@ impl Default for Settings {
 impl Settings {
     /// Encoder quantum [rad] (0: none).
     pub fn quantum(&self) -> f64 {
-        if self.quant_bits == 0 { 0.0 } else { std::f64::consts::TAU / 2f64.powi(self.quant_bits as i32) }
+        if self.quant_bits == 0 {
+            0.0
+        } else {
+            std::f64::consts::TAU / 2f64.powi(self.quant_bits as i32)
+        }
     }
 
     /// Checks every knob; the message names the flag.
     pub fn validate(&self) -> Result<(), String> {
-        let pos = |flag: &str, v: f64| if v.is_finite() && v > 0.0 { Ok(()) } else { Err(format!("{flag} must be a positive number, got {v}")) };
-        let nonneg = |flag: &str, v: f64| if v.is_finite() && v >= 0.0 { Ok(()) } else { Err(format!("{flag} must be a finite number ≥ 0, got {v}")) };
+        let pos = |flag: &str, v: f64| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(format!("{flag} must be a positive number, got {v}"))
+            }
+        };
+        let nonneg = |flag: &str, v: f64| {
+            if v.is_finite() && v >= 0.0 {
+                Ok(())
+            } else {
+                Err(format!("{flag} must be a finite number ≥ 0, got {v}"))
+            }
+        };
         if self.episodes == 0 || self.episodes > 10_000 {
             return Err(format!("--episodes must be 1…10000, got {}", self.episodes));
         }
@@ -110,7 +126,11 @@ impl Settings {
         }
         nonneg("--control-phase", self.control_phase_s)?;
         if to_us(self.control_phase_s) as f64 >= 1e6 / self.control_hz {
-            return Err(format!("--control-phase must be less than one control period ({} s), got {}", 1.0 / self.control_hz, self.control_phase_s));
+            return Err(format!(
+                "--control-phase must be less than one control period ({} s), got {}",
+                1.0 / self.control_hz,
+                self.control_phase_s
+            ));
         }
         pos("--sample-hz", self.sample_hz)?;
         if self.sample_hz > 100_000.0 {
@@ -118,7 +138,10 @@ impl Settings {
         }
         nonneg("--jitter", self.jitter)?;
         if self.jitter >= 1.0 {
-            return Err(format!("--jitter is a fraction of the period and must be < 1, got {}", self.jitter));
+            return Err(format!(
+                "--jitter is a fraction of the period and must be < 1, got {}",
+                self.jitter
+            ));
         }
         nonneg("--settle", self.settle_s)?;
         if self.settle_s > 600.0 {
@@ -135,7 +158,10 @@ impl Settings {
         }
         pos("--amplitude", self.amplitude)?;
         if self.heldout >= self.episodes {
-            return Err(format!("--heldout must be less than --episodes ({}), got {}", self.episodes, self.heldout));
+            return Err(format!(
+                "--heldout must be less than --episodes ({}), got {}",
+                self.episodes, self.heldout
+            ));
         }
         nonneg("--suspend", self.suspend_m)?;
         Ok(())
@@ -166,7 +192,11 @@ impl Floor {
             s2 += e * e;
             n += 1;
         }
-        if n == 0 { Floor::default() } else { Floor { mae: sa / n as f64, rmse: (s2 / n as f64).sqrt(), n } }
+        if n == 0 {
+            Floor::default()
+        } else {
+            Floor { mae: sa / n as f64, rmse: (s2 / n as f64).sqrt(), n }
+        }
     }
 }
 
@@ -212,19 +242,29 @@ pub struct Dataset {
 /// filtered by an optional glob.
 pub fn driven_joints(robot: &Robot, glob: Option<&str>) -> Result<Vec<String>, String> {
     let m = match glob {
-        Some(g) => Some(globset::Glob::new(g).map_err(|e| format!("--joints: {e}"))?.compile_matcher()),
+        Some(g) => {
+            Some(globset::Glob::new(g).map_err(|e| format!("--joints: {e}"))?.compile_matcher())
+        }
         None => None,
     };
     let v: Vec<String> = robot
         .joints
         .iter()
-        .filter(|j| j.is_scalar() && robot.actuators_on_joint(j.id).iter().any(|a| matches!(a.kind, crate::model::ActuatorKind::Position { .. })))
+        .filter(|j| {
+            j.is_scalar()
+                && robot
+                    .actuators_on_joint(j.id)
+                    .iter()
+                    .any(|a| matches!(a.kind, crate::model::ActuatorKind::Position { .. }))
+        })
         .filter(|j| m.as_ref().is_none_or(|m| m.is_match(&j.name)))
         .map(|j| j.name.clone())
         .collect();
     if v.is_empty() {
         return Err(match glob {
-            Some(g) => format!("--joints `{g}`: no hinge/slide joint with a position actuator matches"),
+            Some(g) => {
+                format!("--joints `{g}`: no hinge/slide joint with a position actuator matches")
+            }
             None => "the model has no hinge/slide joint with a position actuator to drive".into(),
         });
     }
@@ -232,7 +272,13 @@ pub fn driven_joints(robot: &Robot, glob: Option<&str>) -> Result<Vec<String>, S
 }
 
 /// Generates the dataset. `progress(done, total)` is called after each episode.
-pub fn generate(robot: &Robot, joints: &[String], hidden: &[Hidden], s: &Settings, progress: &(dyn Fn(usize, usize) + Sync)) -> Result<Dataset, String> {
+pub fn generate(
+    robot: &Robot,
+    joints: &[String],
+    hidden: &[Hidden],
+    s: &Settings,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<Dataset, String> {
     s.validate()?;
     crate::model::mj::silence_warnings();
     let real = truth::real_robot(robot, joints, hidden)?;
@@ -245,9 +291,17 @@ pub fn generate(robot: &Robot, joints: &[String], hidden: &[Hidden], s: &Setting
         })
         .collect::<Result<_, String>>()?;
     let stand = if s.suspend_m > 0.0 {
-        let f = robot.joints.iter().find(|j| j.jtype == JointType::Free).ok_or("--suspend needs a floating-base model (a free joint)")?;
+        let f = robot
+            .joints
+            .iter()
+            .find(|j| j.jtype == JointType::Free)
+            .ok_or("--suspend needs a floating-base model (a free joint)")?;
         let k = robot.key.qpos.get(f.qposadr..f.qposadr + 7).ok_or("free joint outside qpos")?;
-        Some(sim::Stand { qposadr: f.qposadr, dofadr: f.dofadr, pose: [k[0], k[1], k[2] + s.suspend_m, k[3], k[4], k[5], k[6]] })
+        Some(sim::Stand {
+            qposadr: f.qposadr,
+            dofadr: f.dofadr,
+            pose: [k[0], k[1], k[2] + s.suspend_m, k[3], k[4], k[5], k[6]],
+        })
     } else {
         None
     };
@@ -262,11 +316,24 @@ pub fn generate(robot: &Robot, joints: &[String], hidden: &[Hidden], s: &Setting
             let plan = Plan::new(s.excitation, s.duration_s, &bands, &mut rng);
             let ticks = clock.ticks(dur_us);
             let first = *ticks.start();
-            let cmd: Vec<Vec<f64>> = ticks.map(|k| (0..joints.len()).map(|j| plan.command(j, clock.tick_us(k) as f64 / clock::US)).collect()).collect();
+            let cmd: Vec<Vec<f64>> = ticks
+                .map(|k| {
+                    (0..joints.len())
+                        .map(|j| plan.command(j, clock.tick_us(k) as f64 / clock::US))
+                        .collect()
+                })
+                .collect();
             let commands = Commands { clock, first, cmd };
             let mut rr = Rng::stream(s.seed, RNG_RECORDER, e as u64);
-            let t_all = sample_times(dur_us, s.sample_hz, s.jitter, s.log_at_ticks.then_some(&clock), &mut rr);
-            let tr = sim::run(robot, &real, &commands, &t_all, s.settle_s, stand).map_err(|m| format!("episode {e}: {m}"))?;
+            let t_all = sample_times(
+                dur_us,
+                s.sample_hz,
+                s.jitter,
+                s.log_at_ticks.then_some(&clock),
+                &mut rr,
+            );
+            let tr = sim::run(robot, &real, &commands, &t_all, s.settle_s, stand)
+                .map_err(|m| format!("episode {e}: {m}"))?;
             let ep = measure(e, s, &commands, &t_all, tr, &offsets, plan.segments.clone());
             let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
             progress(n, s.episodes);
@@ -290,14 +357,24 @@ pub fn generate(robot: &Robot, joints: &[String], hidden: &[Hidden], s: &Setting
 }
 
 /// Measurement: noise, quantisation, velocity noise, the logged command, dropped rows.
-fn measure(e: usize, s: &Settings, cmds: &Commands, t_all: &[i64], tr: sim::Trace, offsets: &[f64], segments: Vec<Segment>) -> Episode {
+fn measure(
+    e: usize,
+    s: &Settings,
+    cmds: &Commands,
+    t_all: &[i64],
+    tr: sim::Trace,
+    offsets: &[f64],
+    segments: Vec<Segment>,
+) -> Episode {
     let mut noise = Rng::stream(s.seed, RNG_NOISE, e as u64);
     let mut drops = Rng::stream(s.seed, RNG_DROP, e as u64);
     let n = t_all.len();
-    let keep: Vec<bool> = (0..n).map(|i| i == 0 || i + 1 == n || drops.uniform() >= s.drop).collect();
+    let keep: Vec<bool> =
+        (0..n).map(|i| i == 0 || i + 1 == n || drops.uniform() >= s.drop).collect();
     let quantum = s.quantum();
     let nj = offsets.len();
-    let (mut q, mut qd, mut q_cmd, mut q_true, mut qd_true) = (vec![vec![]; nj], vec![vec![]; nj], vec![vec![]; nj], vec![vec![]; nj], vec![vec![]; nj]);
+    let (mut q, mut qd, mut q_cmd, mut q_true, mut qd_true) =
+        (vec![vec![]; nj], vec![vec![]; nj], vec![vec![]; nj], vec![vec![]; nj], vec![vec![]; nj]);
     let mut t_us = Vec::new();
     for i in 0..n {
         // Noise is drawn for every row (kept or not), so a different drop rate leaves the

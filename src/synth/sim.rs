@@ -32,7 +32,14 @@ pub struct Trace {
 }
 
 /// Simulates one episode. `samples_us` must be sorted and ≥ 0.
-pub fn run(robot: &Robot, real: &RealRobot, cmds: &Commands, samples_us: &[i64], settle_s: f64, stand: Option<Stand>) -> Result<Trace, String> {
+pub fn run(
+    robot: &Robot,
+    real: &RealRobot,
+    cmds: &Commands,
+    samples_us: &[i64],
+    settle_s: f64,
+    stand: Option<Stand>,
+) -> Result<Trace, String> {
     let m = &real.model;
     let r = mj::raw(m);
     let (nq, nv, nu) = (r.nq as usize, r.nv as usize, r.nu as usize);
@@ -76,7 +83,10 @@ pub fn run(robot: &Robot, real: &RealRobot, cmds: &Commands, samples_us: &[i64],
             qd.push(qvel[jp.dof]);
         }
     };
-    let mut out = Trace { q: vec![Vec::with_capacity(samples_us.len()); nj], qd: vec![Vec::with_capacity(samples_us.len()); nj] };
+    let mut out = Trace {
+        q: vec![Vec::with_capacity(samples_us.len()); nj],
+        qd: vec![Vec::with_capacity(samples_us.len()); nj],
+    };
     let n_settle = (settle_s / dt).round() as i64;
     let (mut q0, mut qd0, mut q1, mut qd1) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     read(&d, &mut q0, &mut qd0);

@@ -35,7 +35,9 @@ pub struct Hidden {
 
 /// Parameter names of an effect (from the fit's effect table).
 pub fn param_names(effect: &str) -> Vec<&'static str> {
-    crate::fit::effects::by_id(effect).map(|e| e.params().iter().map(|p| p.name).collect()).unwrap_or_default()
+    crate::fit::effects::by_id(effect)
+        .map(|e| e.params().iter().map(|p| p.name).collect())
+        .unwrap_or_default()
 }
 
 /// Parses `effect[@joint_glob]=v1,v2;…` (no glob: every joint in `joints`). One [`Hidden`] per
@@ -46,7 +48,9 @@ pub fn parse(spec: &str, joints: &[String]) -> Result<Vec<Hidden>, String> {
         return Ok(out);
     }
     for item in spec.split(';').map(str::trim).filter(|s| !s.is_empty()) {
-        let (lhs, rhs) = item.split_once('=').ok_or_else(|| format!("`{item}`: expected effect[@joint_glob]=v1,v2,…"))?;
+        let (lhs, rhs) = item
+            .split_once('=')
+            .ok_or_else(|| format!("`{item}`: expected effect[@joint_glob]=v1,v2,…"))?;
         let (id, glob) = match lhs.split_once('@') {
             Some((a, b)) => (a.trim(), Some(b.trim())),
             None => (lhs.trim(), None),
@@ -60,9 +64,16 @@ pub fn parse(spec: &str, joints: &[String]) -> Result<Vec<Hidden>, String> {
         for (k, v) in rhs.split(',').enumerate() {
             if k >= params.len() {
                 let names: Vec<&str> = defs.iter().map(|d| d.name).collect();
-                return Err(format!("`{item}`: {id} has {} parameter(s): {}", params.len(), names.join(", ")));
+                return Err(format!(
+                    "`{item}`: {id} has {} parameter(s): {}",
+                    params.len(),
+                    names.join(", ")
+                ));
             }
-            let x: f64 = v.trim().parse().map_err(|_| format!("`{item}`: `{}` is not a number", v.trim()))?;
+            let x: f64 = v
+                .trim()
+                .parse()
+                .map_err(|_| format!("`{item}`: `{}` is not a number", v.trim()))?;
             if !x.is_finite() {
                 return Err(format!("`{item}`: `{}` is not finite", v.trim()));
             }
@@ -71,13 +82,17 @@ pub fn parse(spec: &str, joints: &[String]) -> Result<Vec<Hidden>, String> {
         check_values(id, &params).map_err(|m| format!("`{item}`: {m}"))?;
         let sel: Vec<&String> = match glob {
             Some(g) => {
-                let m = globset::Glob::new(g).map_err(|x| format!("`{item}`: {x}"))?.compile_matcher();
+                let m =
+                    globset::Glob::new(g).map_err(|x| format!("`{item}`: {x}"))?.compile_matcher();
                 joints.iter().filter(|j| m.is_match(j.as_str())).collect()
             }
             None => joints.iter().collect(),
         };
         if sel.is_empty() {
-            return Err(format!("`{item}`: no recorded joint matches (recorded: {})", joints.join(", ")));
+            return Err(format!(
+                "`{item}`: no recorded joint matches (recorded: {})",
+                joints.join(", ")
+            ));
         }
         for j in sel {
             if out.iter().any(|h| h.effect == id && &h.joint == j) {
@@ -92,9 +107,13 @@ pub fn parse(spec: &str, joints: &[String]) -> Result<Vec<Hidden>, String> {
 /// Physically meaningless values are refused (negative inertia, friction, delay…).
 fn check_values(id: &str, p: &[f64]) -> Result<(), String> {
     let names = param_names(id);
-    let nonneg = |i: usize| if p[i] < 0.0 { Err(format!("{} must be ≥ 0, got {}", names[i], p[i])) } else { Ok(()) };
+    let nonneg = |i: usize| {
+        if p[i] < 0.0 { Err(format!("{} must be ≥ 0, got {}", names[i], p[i])) } else { Ok(()) }
+    };
     match id {
-        "armature" | "viscous_damping" | "coulomb_friction" | "joint_stiffness" | "backlash" => nonneg(0),
+        "armature" | "viscous_damping" | "coulomb_friction" | "joint_stiffness" | "backlash" => {
+            nonneg(0)
+        }
         "action_delay" => {
             nonneg(0)?;
             if p[0] > 1.0 { Err(format!("delay_s {} s is longer than 1 s", p[0])) } else { Ok(()) }
@@ -162,7 +181,11 @@ fn at(ptr: *mut f64, n: usize, i: usize) -> Option<&'static mut f64> {
 }
 
 /// Builds the real robot for the recorded `joints` (names) with `hidden` effects.
-pub fn real_robot(robot: &Robot, joints: &[String], hidden: &[Hidden]) -> Result<RealRobot, String> {
+pub fn real_robot(
+    robot: &Robot,
+    joints: &[String],
+    hidden: &[Hidden],
+) -> Result<RealRobot, String> {
     let mut model = robot.mj.clone();
     let mut out = Vec::new();
     for name in joints {
@@ -174,12 +197,19 @@ pub fn real_robot(robot: &Robot, joints: &[String], hidden: &[Hidden]) -> Result
             .map(|a| Servo { id: a.id, gear: if a.gear != 0.0 { a.gear } else { 1.0 } })
             .collect();
         let key_q = robot.key.qpos.get(j.qposadr).copied().unwrap_or(0.0);
-        let mut jp = JointPhysics { dof: j.dofadr, qposadr: j.qposadr, servos, ..Default::default() };
+        let mut jp =
+            JointPhysics { dof: j.dofadr, qposadr: j.qposadr, servos, ..Default::default() };
         let r = mj::raw_mut(&mut model);
         let (nv, njnt, nq, nu) = (r.nv as usize, r.njnt as usize, r.nq as usize, r.nu as usize);
         for h in hidden.iter().filter(|h| &h.joint == name) {
             let p = &h.params;
-            let need_servo = || if jp.servos.is_empty() { Err(format!("{} on {name}: the joint has no position actuator", h.effect)) } else { Ok(()) };
+            let need_servo = || {
+                if jp.servos.is_empty() {
+                    Err(format!("{} on {name}: the joint has no position actuator", h.effect))
+                } else {
+                    Ok(())
+                }
+            };
             match h.effect {
                 "armature" => {
                     // dof_M0 (the inertia MuJoCo uses directly for "simple" dofs, compiled with
@@ -258,7 +288,8 @@ pub fn servo_torque(m: &MjModel, jp: &JointPhysics, u: f64, q: f64, qd: f64) -> 
     for s in &jp.servos {
         let i = s.id;
         let ctrl = if cl[i] { u.clamp(cr[2 * i], cr[2 * i + 1]) } else { u };
-        let mut f = g[10 * i] * ctrl + b[10 * i] + b[10 * i + 1] * s.gear * q + b[10 * i + 2] * s.gear * qd;
+        let mut f =
+            g[10 * i] * ctrl + b[10 * i] + b[10 * i + 1] * s.gear * q + b[10 * i + 2] * s.gear * qd;
         if fl[i] {
             f = f.clamp(fr[2 * i], fr[2 * i + 1]);
         }
@@ -308,14 +339,27 @@ mod tests {
     fn spec_parsing() {
         let h = parse("armature@*knee=0.05;action_delay=0.012", &joints()).unwrap();
         assert_eq!(h.len(), 5);
-        assert_eq!(h[0], Hidden { effect: "armature", joint: "left_knee".into(), params: vec![0.05] });
+        assert_eq!(
+            h[0],
+            Hidden { effect: "armature", joint: "left_knee".into(), params: vec![0.05] }
+        );
         assert_eq!(h[4].joint, "hip");
         // Missing parameters take the effect's defaults (stribeck: v_stribeck 0.1).
         let s = parse("stribeck_friction@hip=0.3,0.1", &joints()).unwrap();
         assert_eq!(s[0].params, vec![0.3, 0.1, 0.1]);
         assert!(parse("none", &joints()).unwrap().is_empty());
         assert!(parse("", &joints()).unwrap().is_empty());
-        for bad in ["armature@nothing=1", "bogus=1", "armature=1,2", "armature=x", "armature=-1", "gain_error=0,1", "armature", "action_delay=2", "armature=1;armature@hip=2"] {
+        for bad in [
+            "armature@nothing=1",
+            "bogus=1",
+            "armature=1,2",
+            "armature=x",
+            "armature=-1",
+            "gain_error=0,1",
+            "armature",
+            "action_delay=2",
+            "armature=1;armature@hip=2",
+        ] {
             assert!(parse(bad, &joints()).is_err(), "{bad}");
         }
     }

@@ -45,9 +45,15 @@ pub fn episode_csv(ds: &Dataset, ep: &Episode) -> String {
     let _ = writeln!(o, "# split: {}", if ep.heldout { "heldout" } else { "train" });
     let _ = writeln!(o, "# control_rate_hz: {}", s.control_hz);
     let _ = writeln!(o, "# control_t0_s: {}", ds.control_t0_s);
-    let _ = writeln!(o, "# base: {}", if ds.base.is_some() { "recorded (test stand)" } else { "fixed" });
+    let _ = writeln!(
+        o,
+        "# base: {}",
+        if ds.base.is_some() { "recorded (test stand)" } else { "fixed" }
+    );
     o.push_str("# units: rad, rad/s\n");
-    o.push_str("# generator: modellint synth (simulated logging setup; answers in ../truth.json)\n");
+    o.push_str(
+        "# generator: modellint synth (simulated logging setup; answers in ../truth.json)\n",
+    );
     o.push('t');
     for j in &ds.joints {
         let _ = write!(o, ",{j}.q,{j}.qd,{j}.q_cmd");
@@ -56,11 +62,18 @@ pub fn episode_csv(ds: &Dataset, ep: &Episode) -> String {
         o.push_str(",base.x,base.y,base.z,base.qw,base.qx,base.qy,base.qz");
     }
     o.push('\n');
-    let base: Option<String> = ds.base.map(|b| b.iter().map(|v| format!(",{}", num(*v, 9))).collect());
+    let base: Option<String> =
+        ds.base.map(|b| b.iter().map(|v| format!(",{}", num(*v, 9))).collect());
     for (i, &t) in ep.t_us.iter().enumerate() {
         o.push_str(&secs(t));
         for j in 0..ds.joints.len() {
-            let _ = write!(o, ",{},{},{}", num(ep.q[j][i], QD), num(ep.qd[j][i], 6), num(ep.q_cmd[j][i], QD));
+            let _ = write!(
+                o,
+                ",{},{},{}",
+                num(ep.q[j][i], QD),
+                num(ep.qd[j][i], 6),
+                num(ep.q_cmd[j][i], QD)
+            );
         }
         if let Some(b) = &base {
             o.push_str(b);
@@ -73,7 +86,9 @@ pub fn episode_csv(ds: &Dataset, ep: &Episode) -> String {
 /// The exact command of every control tick of one episode.
 pub fn commands_csv(ds: &Dataset, ep: &Episode) -> String {
     let c = &ep.commands;
-    let mut o = String::from("# the exact command of each control tick k, in force over [t_k, t_k+1) (t_k = control_t0_s + k / control_rate_hz, rounded to 1 µs)\n");
+    let mut o = String::from(
+        "# the exact command of each control tick k, in force over [t_k, t_k+1) (t_k = control_t0_s + k / control_rate_hz, rounded to 1 µs)\n",
+    );
     o.push_str("tick,t");
     for j in &ds.joints {
         let _ = write!(o, ",{j}.q_cmd");
@@ -188,8 +203,12 @@ pub fn truth_json(ds: &Dataset) -> String {
 /// Writes the dataset under `out`; returns the episode files.
 pub fn write(ds: &Dataset, out: &Path) -> Result<Vec<PathBuf>, String> {
     let n = ds.episodes.len();
-    let mk = |p: &Path| std::fs::create_dir_all(p).map_err(|e| format!("cannot create {}: {e}", p.display()));
-    let put = |p: &Path, text: &str| std::fs::write(p, text).map_err(|e| format!("cannot write {}: {e}", p.display()));
+    let mk = |p: &Path| {
+        std::fs::create_dir_all(p).map_err(|e| format!("cannot create {}: {e}", p.display()))
+    };
+    let put = |p: &Path, text: &str| {
+        std::fs::write(p, text).map_err(|e| format!("cannot write {}: {e}", p.display()))
+    };
     let (eps, cmds) = (out.join("episodes"), out.join("truth_commands"));
     mk(&eps)?;
     mk(&cmds)?;

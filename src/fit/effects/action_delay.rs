@@ -19,7 +19,16 @@ impl Effect for ActionDelay {
     fn describe(&self) -> &'static str {
         "transport delay between the policy's command and the servo (bus, firmware, filtering)"
     }
-    fn torque(&self, st: &mut EffectState, _q: f64, _qd: f64, _q_target: f64, io: &mut StepIo, dt: f64, p: &[f64]) {
+    fn torque(
+        &self,
+        st: &mut EffectState,
+        _q: f64,
+        _qd: f64,
+        _q_target: f64,
+        io: &mut StepIo,
+        dt: f64,
+        p: &[f64],
+    ) {
         let d = (p[0].max(0.0) / dt).min(1e5);
         st.fifo.push_back(io.ctrl);
         let k = d.floor() as usize;

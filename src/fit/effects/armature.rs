@@ -3,7 +3,8 @@ use super::*;
 
 pub struct Armature;
 
-const P: &[ParamDef] = &[ParamDef { name: "armature", unit: "kg·m²", lo: 0.0, hi: 0.5, default: 0.0 }];
+const P: &[ParamDef] =
+    &[ParamDef { name: "armature", unit: "kg·m²", lo: 0.0, hi: 0.5, default: 0.0 }];
 
 impl Effect for Armature {
     fn id(&self) -> &'static str {

@@ -4,7 +4,8 @@ use super::*;
 
 pub struct Backlash;
 
-const P: &[ParamDef] = &[ParamDef { name: "backlash_rad", unit: "rad", lo: 0.0, hi: 0.2, default: 0.0 }];
+const P: &[ParamDef] =
+    &[ParamDef { name: "backlash_rad", unit: "rad", lo: 0.0, hi: 0.2, default: 0.0 }];
 
 impl Effect for Backlash {
     fn id(&self) -> &'static str {
@@ -19,7 +20,16 @@ impl Effect for Backlash {
     fn describe(&self) -> &'static str {
         "gear play: dead band on the position error the servo sees"
     }
-    fn torque(&self, _st: &mut EffectState, q: f64, _qd: f64, _q_target: f64, io: &mut StepIo, _dt: f64, p: &[f64]) {
+    fn torque(
+        &self,
+        _st: &mut EffectState,
+        q: f64,
+        _qd: f64,
+        _q_target: f64,
+        io: &mut StepIo,
+        _dt: f64,
+        p: &[f64],
+    ) {
         let h = 0.5 * p[0].max(0.0);
         let e = io.ctrl - q;
         let e2 = if e.abs() <= h { 0.0 } else { e - h * e.signum() };

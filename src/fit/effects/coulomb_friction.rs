@@ -4,7 +4,8 @@ use super::*;
 
 pub struct CoulombFriction;
 
-const P: &[ParamDef] = &[ParamDef { name: "frictionloss", unit: "N·m", lo: 0.0, hi: 5.0, default: 0.0 }];
+const P: &[ParamDef] =
+    &[ParamDef { name: "frictionloss", unit: "N·m", lo: 0.0, hi: 5.0, default: 0.0 }];
 
 impl Effect for CoulombFriction {
     fn id(&self) -> &'static str {

@@ -23,7 +23,16 @@ impl Effect for GainError {
     fn describe(&self) -> &'static str {
         "real PD gains = model gains × (kp_scale, kd_scale)"
     }
-    fn torque(&self, _st: &mut EffectState, q: f64, qd: f64, _q_target: f64, io: &mut StepIo, _dt: f64, p: &[f64]) {
+    fn torque(
+        &self,
+        _st: &mut EffectState,
+        q: f64,
+        qd: f64,
+        _q_target: f64,
+        io: &mut StepIo,
+        _dt: f64,
+        p: &[f64],
+    ) {
         if io.enabled {
             io.tau += (p[0] - 1.0) * io.kp * (io.ctrl - q) - (p[1] - 1.0) * io.kd * qd;
         }

@@ -4,7 +4,8 @@ use super::*;
 
 pub struct JointStiffness;
 
-const P: &[ParamDef] = &[ParamDef { name: "stiffness", unit: "N·m/rad", lo: 0.0, hi: 20.0, default: 0.0 }];
+const P: &[ParamDef] =
+    &[ParamDef { name: "stiffness", unit: "N·m/rad", lo: 0.0, hi: 20.0, default: 0.0 }];
 
 impl Effect for JointStiffness {
     fn id(&self) -> &'static str {

@@ -12,7 +12,9 @@ use rayon::prelude::*;
 
 use crate::model::{Robot, mj};
 use crate::sim2real::recording::Recording;
-use crate::sim2real::replay::{ActuatorHook, Episode, ReplayError, ReplayOptions, Replayer, StepIo};
+use crate::sim2real::replay::{
+    ActuatorHook, Episode, ReplayError, ReplayOptions, Replayer, StepIo,
+};
 
 mod action_delay;
 mod armature;
@@ -117,7 +119,17 @@ pub trait Effect: Sync {
     /// Hook effects: called every physics step before `mj_step`; may change `io.ctrl` (command
     /// effects) or add to `io.tau` (torque effects).
     #[allow(clippy::too_many_arguments)]
-    fn torque(&self, _st: &mut EffectState, _q: f64, _qd: f64, _q_target: f64, _io: &mut StepIo, _dt: f64, _p: &[f64]) {}
+    fn torque(
+        &self,
+        _st: &mut EffectState,
+        _q: f64,
+        _qd: f64,
+        _q_target: f64,
+        _io: &mut StepIo,
+        _dt: f64,
+        _p: &[f64],
+    ) {
+    }
     /// Measurement effects: sensor reading minus true position.
     fn measurement_bias(&self, _p: &[f64]) -> f64 {
         0.0
@@ -226,7 +238,10 @@ impl ActuatorHook for Hook<'_> {
                     .applied
                     .iter()
                     .enumerate()
-                    .filter(|(_, a)| matches!(a.effect.entry(), Entry::Command | Entry::Torque) && a.joints.iter().any(|j| j == n))
+                    .filter(|(_, a)| {
+                        matches!(a.effect.entry(), Entry::Command | Entry::Torque)
+                            && a.joints.iter().any(|j| j == n)
+                    })
                     .map(|(i, _)| (i, EffectState::default()))
                     .collect();
                 v.sort_by_key(|(i, _)| (self.applied[*i].effect.entry() != Entry::Command) as u8);
@@ -234,7 +249,15 @@ impl ActuatorHook for Hook<'_> {
             })
             .collect();
     }
-    fn before_step(&mut self, _t: f64, joint_idx: usize, q: f64, qd: f64, q_target: f64, out: &mut StepIo) {
+    fn before_step(
+        &mut self,
+        _t: f64,
+        joint_idx: usize,
+        q: f64,
+        qd: f64,
+        q_target: f64,
+        out: &mut StepIo,
+    ) {
         let Some(list) = self.lists.get_mut(joint_idx) else { return };
         for (i, st) in list.iter_mut() {
             let a = &self.applied[*i];
@@ -245,7 +268,13 @@ impl ActuatorHook for Hook<'_> {
 
 /// Replays `rec` on `model` (a copy made by [`model_with`]) with the hook and measurement effects
 /// of `applied`.
-pub fn replay_with(robot: &Robot, model: &MjModel, rec: &Recording, applied: &[Applied], opts: &ReplayOptions) -> Result<Episode, ReplayError> {
+pub fn replay_with(
+    robot: &Robot,
+    model: &MjModel,
+    rec: &Recording,
+    applied: &[Applied],
+    opts: &ReplayOptions,
+) -> Result<Episode, ReplayError> {
     let replayer = Replayer::with_model(robot, model);
     let bias: Vec<f64> = rec
         .joints
@@ -289,7 +318,12 @@ pub fn replay_with(robot: &Robot, model: &MjModel, rec: &Recording, applied: &[A
 }
 
 /// Replays every recording (in parallel) with `applied` effects.
-pub fn simulate(robot: &Robot, recs: &[Recording], applied: &[Applied], opts: &ReplayOptions) -> Vec<Result<Episode, ReplayError>> {
+pub fn simulate(
+    robot: &Robot,
+    recs: &[Recording],
+    applied: &[Applied],
+    opts: &ReplayOptions,
+) -> Vec<Result<Episode, ReplayError>> {
     let m = model_with(robot, applied);
     recs.par_iter().map(|r| replay_with(robot, &m, r, applied, opts)).collect()
 }

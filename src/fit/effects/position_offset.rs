@@ -5,7 +5,8 @@ use super::*;
 
 pub struct PositionOffset;
 
-const P: &[ParamDef] = &[ParamDef { name: "offset_rad", unit: "rad", lo: -0.3, hi: 0.3, default: 0.0 }];
+const P: &[ParamDef] =
+    &[ParamDef { name: "offset_rad", unit: "rad", lo: -0.3, hi: 0.3, default: 0.0 }];
 
 impl Effect for PositionOffset {
     fn id(&self) -> &'static str {

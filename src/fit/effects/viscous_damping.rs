@@ -3,7 +3,8 @@ use super::*;
 
 pub struct ViscousDamping;
 
-const P: &[ParamDef] = &[ParamDef { name: "damping", unit: "N·m·s/rad", lo: 0.0, hi: 5.0, default: 0.0 }];
+const P: &[ParamDef] =
+    &[ParamDef { name: "damping", unit: "N·m·s/rad", lo: 0.0, hi: 5.0, default: 0.0 }];
 
 impl Effect for ViscousDamping {
     fn id(&self) -> &'static str {

@@ -37,15 +37,34 @@ pub fn markers(spec: Option<&Spec>) -> Vec<(String, String)> {
     for (l, r) in LEG_PREFIXES {
         v.push((l.to_string(), r.to_string()));
     }
-    for (l, r) in [("left_", "right_"), ("Left_", "Right_"), ("_left", "_right"), ("_Left", "_Right"), ("l_", "r_"), ("L_", "R_"), ("_l", "_r"), ("_L", "_R"), ("Left", "Right"), ("left", "right")] {
+    for (l, r) in [
+        ("left_", "right_"),
+        ("Left_", "Right_"),
+        ("_left", "_right"),
+        ("_Left", "_Right"),
+        ("l_", "r_"),
+        ("L_", "R_"),
+        ("_l", "_r"),
+        ("_L", "_R"),
+        ("Left", "Right"),
+        ("left", "right"),
+    ] {
         v.push((l.to_string(), r.to_string()));
     }
     v
 }
 
 /// Quadruped leg prefixes: front/rear (or fore/hind) left ↔ right. Only ever a name's prefix.
-const LEG_PREFIXES: [(&str, &str); 8] =
-    [("FL_", "FR_"), ("RL_", "RR_"), ("fl_", "fr_"), ("rl_", "rr_"), ("LF_", "RF_"), ("LH_", "RH_"), ("lf_", "rf_"), ("lh_", "rh_")];
+const LEG_PREFIXES: [(&str, &str); 8] = [
+    ("FL_", "FR_"),
+    ("RL_", "RR_"),
+    ("fl_", "fr_"),
+    ("rl_", "rr_"),
+    ("LF_", "RF_"),
+    ("LH_", "RH_"),
+    ("lf_", "rf_"),
+    ("lh_", "rh_"),
+];
 
 /// Replace one marker occurrence: short markers (`l_`, `_l`) only as a prefix / suffix.
 fn swap(name: &str, from: &str, to: &str) -> Option<String> {
@@ -116,7 +135,13 @@ fn is_ancestor(robot: &Robot, anc: usize, mut b: usize) -> bool {
 }
 
 fn contact_geoms(robot: &Robot, body: usize) -> impl Iterator<Item = usize> + '_ {
-    robot.geoms.iter().filter(move |g| g.body == body && g.collides() && !matches!(g.gtype, GeomType::Plane | GeomType::Hfield)).map(|g| g.id)
+    robot
+        .geoms
+        .iter()
+        .filter(move |g| {
+            g.body == body && g.collides() && !matches!(g.gtype, GeomType::Plane | GeomType::Hfield)
+        })
+        .map(|g| g.id)
 }
 
 /// The feet of the model, left before right.
@@ -140,13 +165,23 @@ pub fn feet(robot: &Robot, spec: Option<&Spec>) -> Vec<Foot> {
     let floating = robot.joints.iter().any(|j| j.jtype == crate::model::JointType::Free);
     if matched.is_empty() && !from_spec && floating {
         // Leaf bodies whose collision geoms touch down.
-        let lowest = |b: usize| contact_geoms(robot, b).map(|g| Placed::of(robot, g).lowest()[2]).fold(f64::INFINITY, f64::min);
+        let lowest = |b: usize| {
+            contact_geoms(robot, b)
+                .map(|g| Placed::of(robot, g).lowest()[2])
+                .fold(f64::INFINITY, f64::min)
+        };
         let zmin = (1..n).map(lowest).fold(f64::INFINITY, f64::min);
         matched = (1..n)
-            .filter(|&b| !robot.bodies.iter().any(|c| c.id != 0 && c.parent == b) && lowest(b) <= zmin + 0.03)
+            .filter(|&b| {
+                !robot.bodies.iter().any(|c| c.id != 0 && c.parent == b) && lowest(b) <= zmin + 0.03
+            })
             .collect();
     }
-    let roots: Vec<usize> = matched.iter().copied().filter(|&b| !matched.iter().any(|&a| a != b && is_ancestor(robot, a, b))).collect();
+    let roots: Vec<usize> = matched
+        .iter()
+        .copied()
+        .filter(|&b| !matched.iter().any(|&a| a != b && is_ancestor(robot, a, b)))
+        .collect();
     let mut out: Vec<Foot> = Vec::new();
     for &root in &roots {
         let side = side_of(robot.body_name(root), spec);

@@ -67,7 +67,11 @@ declare_rule! {
 fn gname(robot: &Robot, g: usize) -> String {
     let n = &robot.geoms[g].name;
     // Unnamed: MuJoCo's geom id and the body it belongs to (an id alone is hard to find).
-    if n.is_empty() { format!("geom #{g} of body `{}`", robot.body_name(robot.geoms[g].body)) } else { format!("`{n}`") }
+    if n.is_empty() {
+        format!("geom #{g} of body `{}`", robot.body_name(robot.geoms[g].body))
+    } else {
+        format!("`{n}`")
+    }
 }
 
 fn list(robot: &Robot, gs: &[usize]) -> String {
@@ -112,18 +116,29 @@ impl Rule for FootCollisionGeometry {
         let (mu, mu_tol) = (cx.opt("friction"), cx.opt("friction_tolerance"));
         let window = cx.opt("contact_window");
         // Intended friction/condim stated by the user (config), not just this rule's default.
-        let stated = cx.options.contains_key("friction") || cx.options.contains_key("friction_tolerance");
+        let stated =
+            cx.options.contains_key("friction") || cx.options.contains_key("friction_tolerance");
         let all_feet = feet(robot, cx.spec);
         for foot in &all_feet {
             let label = foot.label(robot);
             let subj = Subject::Foot(foot.root);
             // Meshes.
-            let meshes: Vec<usize> = foot.geoms.iter().copied().filter(|&g| robot.geoms[g].gtype == GeomType::Mesh).collect();
+            let meshes: Vec<usize> = foot
+                .geoms
+                .iter()
+                .copied()
+                .filter(|&g| robot.geoms[g].gtype == GeomType::Mesh)
+                .collect();
             if let Some(&g0) = meshes.first() {
                 let partners: Vec<usize> = robot
                     .geoms
                     .iter()
-                    .filter(|o| o.gtype == GeomType::Mesh && o.collides() && !foot.geoms.contains(&o.id) && meshes.iter().any(|&m| may_collide(robot, m, o.id)))
+                    .filter(|o| {
+                        o.gtype == GeomType::Mesh
+                            && o.collides()
+                            && !foot.geoms.contains(&o.id)
+                            && meshes.iter().any(|&m| may_collide(robot, m, o.id))
+                    })
                     .map(|o| o.id)
                     .collect();
                 let mut f = cx
@@ -137,7 +152,10 @@ impl Rule for FootCollisionGeometry {
                     f.severity = Severity::Error;
                 }
                 if !partners.is_empty() {
-                    f.message.push_str(&format!("; it can also touch other meshes mesh-to-mesh ({})", list(robot, &partners)));
+                    f.message.push_str(&format!(
+                        "; it can also touch other meshes mesh-to-mesh ({})",
+                        list(robot, &partners)
+                    ));
                 }
                 out.push(f);
             }
@@ -166,7 +184,12 @@ impl Rule for FootCollisionGeometry {
                 .geoms
                 .iter()
                 .copied()
-                .filter(|&g| matches!(robot.geoms[g].gtype, GeomType::Capsule | GeomType::Sphere | GeomType::Cylinder))
+                .filter(|&g| {
+                    matches!(
+                        robot.geoms[g].gtype,
+                        GeomType::Capsule | GeomType::Sphere | GeomType::Cylinder
+                    )
+                })
                 .filter(|&g| {
                     let r = robot.geoms[g].size[0];
                     r < rmin || r > rmax
@@ -185,31 +208,49 @@ impl Rule for FootCollisionGeometry {
                 );
             }
             // condim.
-            let bad_c: Vec<usize> = foot.geoms.iter().copied().filter(|&g| robot.geoms[g].condim != 3).collect();
+            let bad_c: Vec<usize> =
+                foot.geoms.iter().copied().filter(|&g| robot.geoms[g].condim != 3).collect();
             if let Some(&g0) = bad_c.first() {
                 let c = robot.geoms[g0].condim;
                 let why = match c {
                     1 => "condim 1 is frictionless contact: the foot slides freely",
-                    4 | 6 => "condim 4/6 adds torsional/rolling friction that the identified contact model did not have",
-                    _ => "only condim 3 (normal force plus 2-D sliding friction) matches the identified contact model",
+                    4 | 6 => {
+                        "condim 4/6 adds torsional/rolling friction that the identified contact model did not have"
+                    }
+                    _ => {
+                        "only condim 3 (normal force plus 2-D sliding friction) matches the identified contact model"
+                    }
                 };
-                let mut f =
-                    cx.at_attr(ElemKind::Geom, g0, &robot.geoms[g0].name, "condim", format!("{label} uses condim {c} (expected 3): {}", list(robot, &bad_c)));
+                let mut f = cx.at_attr(
+                    ElemKind::Geom,
+                    g0,
+                    &robot.geoms[g0].name,
+                    "condim",
+                    format!("{label} uses condim {c} (expected 3): {}", list(robot, &bad_c)),
+                );
                 if c != 1 && !stated && cx.level == cx.meta.default_level {
                     f.severity = Severity::Info;
                 }
                 out.push(
-                    f
-                        .label(format!("condim {c}"))
-                        .note(format!("{why}; MuJoCo uses the larger condim of the two contacting geoms"))
-                        .help("set condim=\"3\" on foot and toe geoms (and not higher on the floor)")
+                    f.label(format!("condim {c}"))
+                        .note(format!(
+                            "{why}; MuJoCo uses the larger condim of the two contacting geoms"
+                        ))
+                        .help(
+                            "set condim=\"3\" on foot and toe geoms (and not higher on the floor)",
+                        )
                         .subject(subj)
                         .measured(c as f64, "")
                         .expected(3.0, ""),
                 );
             }
             // Friction.
-            let bad_f: Vec<usize> = foot.geoms.iter().copied().filter(|&g| (robot.geoms[g].friction[0] - mu).abs() > mu_tol).collect();
+            let bad_f: Vec<usize> = foot
+                .geoms
+                .iter()
+                .copied()
+                .filter(|&g| (robot.geoms[g].friction[0] - mu).abs() > mu_tol)
+                .collect();
             if let Some(&g0) = bad_f.first() {
                 let v = robot.geoms[g0].friction[0];
                 let mut f = cx.at_attr(
@@ -217,7 +258,18 @@ impl Rule for FootCollisionGeometry {
                     g0,
                     &robot.geoms[g0].name,
                     "friction",
-                    format!("{label} has sliding friction {} (expected {} ± {}{}): {}", fmt_num(v, 3), fmt_num(mu, 3), fmt_num(mu_tol, 3), if stated { "" } else { ", the Asimov identified value; no intended value stated" }, list(robot, &bad_f)),
+                    format!(
+                        "{label} has sliding friction {} (expected {} ± {}{}): {}",
+                        fmt_num(v, 3),
+                        fmt_num(mu, 3),
+                        fmt_num(mu_tol, 3),
+                        if stated {
+                            ""
+                        } else {
+                            ", the Asimov identified value; no intended value stated"
+                        },
+                        list(robot, &bad_f)
+                    ),
                 );
                 if !stated && cx.level == cx.meta.default_level {
                     f.severity = Severity::Info;
@@ -233,7 +285,8 @@ impl Rule for FootCollisionGeometry {
                 );
             }
             // Support polygon.
-            let placed: Vec<(usize, Placed)> = foot.geoms.iter().map(|&g| (g, Placed::of(robot, g))).collect();
+            let placed: Vec<(usize, Placed)> =
+                foot.geoms.iter().map(|&g| (g, Placed::of(robot, g))).collect();
             let zmin = placed.iter().map(|(_, p)| p.lowest()[2]).fold(f64::INFINITY, f64::min);
             let mut pts: Vec<[f64; 3]> = Vec::new();
             for (_, p) in &placed {
@@ -242,19 +295,35 @@ impl Rule for FootCollisionGeometry {
                     pts.push(p.lowest());
                 }
             }
-            let xs: Vec<f64> = placed.iter().flat_map(|(_, p)| [p.support([1.0, 0.0, 0.0])[0], p.support([-1.0, 0.0, 0.0])[0]]).collect();
-            let (x0, x1) = (xs.iter().copied().fold(f64::INFINITY, f64::min), xs.iter().copied().fold(f64::NEG_INFINITY, f64::max));
+            let xs: Vec<f64> = placed
+                .iter()
+                .flat_map(|(_, p)| [p.support([1.0, 0.0, 0.0])[0], p.support([-1.0, 0.0, 0.0])[0]])
+                .collect();
+            let (x0, x1) = (
+                xs.iter().copied().fold(f64::INFINITY, f64::min),
+                xs.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+            );
             let third = (x1 - x0) / 3.0;
             let heel = pts.iter().any(|p| p[0] <= x0 + third);
             let toe = pts.iter().any(|p| p[0] >= x1 - third);
             let area = hull_area(&pts.iter().map(|p| [p[0], p[1]]).collect::<Vec<_>>());
             let degenerate = area < 1e-6;
             if degenerate || !heel || !toe {
-                let g0 = placed.iter().find(|(_, p)| p.lowest()[2] <= zmin + window).map(|x| x.0).unwrap_or(foot.geoms[0]);
+                let g0 = placed
+                    .iter()
+                    .find(|(_, p)| p.lowest()[2] <= zmin + window)
+                    .map(|x| x.0)
+                    .unwrap_or(foot.geoms[0]);
                 let what = if degenerate {
-                    format!("{label} touches the ground along a line or at a point (support polygon {} cm²)", fmt_num(area * 1e4, 3))
+                    format!(
+                        "{label} touches the ground along a line or at a point (support polygon {} cm²)",
+                        fmt_num(area * 1e4, 3)
+                    )
                 } else {
-                    format!("{label} has no ground contact at the {}", if !heel { "heel" } else { "toe" })
+                    format!(
+                        "{label} has no ground contact at the {}",
+                        if !heel { "heel" } else { "toe" }
+                    )
                 };
                 out.push(
                     cx.at_elem(ElemKind::Geom, g0, &robot.geoms[g0].name, what)
@@ -268,15 +337,33 @@ impl Rule for FootCollisionGeometry {
             }
         }
         // Left/right match.
-        let left: Vec<&Foot> = all_feet.iter().filter(|f| f.side == Some(crate::rules::contact::feet::Side::Left)).collect();
-        let right: Vec<&Foot> = all_feet.iter().filter(|f| f.side == Some(crate::rules::contact::feet::Side::Right)).collect();
+        let left: Vec<&Foot> = all_feet
+            .iter()
+            .filter(|f| f.side == Some(crate::rules::contact::feet::Side::Left))
+            .collect();
+        let right: Vec<&Foot> = all_feet
+            .iter()
+            .filter(|f| f.side == Some(crate::rules::contact::feet::Side::Right))
+            .collect();
         if let (Some(l), Some(r)) = (left.first(), right.first()) {
-            if !crate::rules::geometry::mirror_asymmetry::same_geoms(robot, &l.geoms, &r.geoms, MIRROR_REL, MIRROR_ABS) {
+            if !crate::rules::geometry::mirror_asymmetry::same_geoms(
+                robot, &l.geoms, &r.geoms, MIRROR_REL, MIRROR_ABS,
+            ) {
                 let g0 = r.geoms[0];
                 let msg = if l.geoms.len() != r.geoms.len() {
-                    format!("left and right feet differ: {} has {} collision geoms, {} has {}", robot.body_name(l.root), l.geoms.len(), robot.body_name(r.root), r.geoms.len())
+                    format!(
+                        "left and right feet differ: {} has {} collision geoms, {} has {}",
+                        robot.body_name(l.root),
+                        l.geoms.len(),
+                        robot.body_name(r.root),
+                        r.geoms.len()
+                    )
                 } else {
-                    format!("left and right feet differ in collision geom types or sizes ({} vs {})", robot.body_name(l.root), robot.body_name(r.root))
+                    format!(
+                        "left and right feet differ in collision geom types or sizes ({} vs {})",
+                        robot.body_name(l.root),
+                        robot.body_name(r.root)
+                    )
                 };
                 let lloc = robot.elem_loc(ElemKind::Body, l.root, robot.body_name(l.root));
                 out.push(

@@ -66,7 +66,11 @@ fn kind_name(robot: &Robot, foot: &Foot, g: usize) -> String {
         _ => "geom",
     };
     let name = &robot.geoms[g].name;
-    if name.is_empty() { format!("{part} {shape} #{g}") } else { format!("{part} {shape} `{name}`") }
+    if name.is_empty() {
+        format!("{part} {shape} #{g}")
+    } else {
+        format!("{part} {shape} `{name}`")
+    }
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -100,11 +104,18 @@ impl Rule for ToeTilt {
         let window = cx.opt("contact_window");
         let pose = pose_word(robot);
         for foot in feet(robot, cx.spec) {
-            let low: Vec<(usize, f64)> = foot.geoms.iter().map(|&g| (g, Placed::of(robot, g).lowest()[2])).collect();
+            let low: Vec<(usize, f64)> =
+                foot.geoms.iter().map(|&g| (g, Placed::of(robot, g).lowest()[2])).collect();
             let zmin = low.iter().map(|x| x.1).fold(f64::INFINITY, f64::min);
-            let sole: Vec<(usize, f64)> = low.iter().copied().filter(|x| x.1 <= zmin + window).collect();
-            let own: Vec<f64> = sole.iter().filter(|x| !foot.is_toe_geom(robot, x.0)).map(|x| x.1).collect();
-            let zref = if own.is_empty() { median(sole.iter().map(|x| x.1).collect()) } else { median(own) };
+            let sole: Vec<(usize, f64)> =
+                low.iter().copied().filter(|x| x.1 <= zmin + window).collect();
+            let own: Vec<f64> =
+                sole.iter().filter(|x| !foot.is_toe_geom(robot, x.0)).map(|x| x.1).collect();
+            let zref = if own.is_empty() {
+                median(sole.iter().map(|x| x.1).collect())
+            } else {
+                median(own)
+            };
             let others = |g: usize| sole.iter().filter(|x| x.0 != g).count();
             for &(g, z) in &sole {
                 let geom = &robot.geoms[g];
@@ -112,9 +123,15 @@ impl Rule for ToeTilt {
                 let what = kind_name(robot, &foot, g);
                 if dz.abs() > spread && others(g) > 0 {
                     let (dir, effect) = if dz < 0.0 {
-                        ("below", "makes a flat foot rock on it: the foot stands on this geom and pivots instead of resting on the whole sole")
+                        (
+                            "below",
+                            "makes a flat foot rock on it: the foot stands on this geom and pivots instead of resting on the whole sole",
+                        )
                     } else {
-                        ("above", "leaves it off the ground in stance: the foot rests on the other geoms and this one only touches once the foot rolls")
+                        (
+                            "above",
+                            "leaves it off the ground in stance: the foot rests on the other geoms and this one only touches once the foot rolls",
+                        )
                     };
                     let msg = format!(
                         "{what} sits {} mm {dir} the sole of the {} at {pose}",
@@ -143,7 +160,8 @@ impl Rule for ToeTilt {
                 let mat = &robot.key.geom_xmat[g];
                 let Some(t) = tilt(geom.gtype, mat) else { continue };
                 let axis = [mat[2], mat[5], mat[8]];
-                let lying = matches!(geom.gtype, GeomType::Capsule | GeomType::Cylinder) && axis[2].abs() < std::f64::consts::FRAC_1_SQRT_2;
+                let lying = matches!(geom.gtype, GeomType::Capsule | GeomType::Cylinder)
+                    && axis[2].abs() < std::f64::consts::FRAC_1_SQRT_2;
                 let longitudinal = lying && axis[0].abs() > axis[1].abs();
                 if longitudinal && !foot.is_toe_geom(robot, g) {
                     continue;
@@ -155,7 +173,10 @@ impl Rule for ToeTilt {
                         _ if lying => "axis",
                         _ => "cap face",
                     };
-                    let msg = format!("{what} {feature} is tilted {}° from the ground at {pose}", fmt_num(deg, 3));
+                    let msg = format!(
+                        "{what} {feature} is tilted {}° from the ground at {pose}",
+                        fmt_num(deg, 3)
+                    );
                     out.push(
                         cx.at_elem(ElemKind::Geom, g, &geom.name, msg)
                             .label(format!("{feature} tilted {}°", fmt_num(deg, 3)))

@@ -73,7 +73,8 @@ impl Rule for GainsUnstableForTimestep {
             let w = p.omega_n();
             let wdt = w * dt;
             // Euler integrates joint damping implicitly but actuator kv explicitly.
-            let zeta_explicit = if integ == 0 { p.kd_ctrl / (2.0 * (p.kp * p.inertia).sqrt()) } else { 0.0 };
+            let zeta_explicit =
+                if integ == 0 { p.kd_ctrl / (2.0 * (p.kp * p.inertia).sqrt()) } else { 0.0 };
             let bound = omega_dt_bound(integ, base, zeta_explicit);
             let unstable = wdt >= bound;
             if !(unstable || wdt > frac * bound) {

@@ -33,7 +33,10 @@ impl Rule for MissingActionDelay {
     }
     fn check(&self, cx: &Context, out: &mut Vec<Finding>) {
         let Some(spec) = cx.spec else { return };
-        let (Some(steps), Some(hz)) = (&spec.robot.action_delay_steps, &spec.robot.control_hz) else { return };
+        let (Some(steps), Some(hz)) = (&spec.robot.action_delay_steps, &spec.robot.control_hz)
+        else {
+            return;
+        };
         let [lo, hi] = *steps.get_ref();
         let hz = *hz.get_ref();
         if !(hi > 0.0) || cx.robot.actuators.is_empty() {

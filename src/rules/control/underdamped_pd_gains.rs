@@ -143,8 +143,10 @@ impl Rule for UnderdampedPdGains {
             }
             let j = &cx.robot.joints[p.joint];
             let w = p.omega_n();
-            let z_arm = if p.armature > 0.0 { Some(damping_ratio(p.kp, p.kd, p.armature)) } else { None };
-            let kd_max = p.family.as_deref().and_then(|f| cx.spec?.motor(f)).and_then(|m| v(&m.kd_max));
+            let z_arm =
+                if p.armature > 0.0 { Some(damping_ratio(p.kp, p.kd, p.armature)) } else { None };
+            let kd_max =
+                p.family.as_deref().and_then(|f| cx.spec?.motor(f)).and_then(|m| v(&m.kd_max));
             let kd_need = 2.0 * zmin * (p.kp * p.inertia).sqrt();
             let msg = format!(
                 "joint `{}` is underdamped under PD control: ζ = {} (kp {} N·m/rad, kd {} N·m·s/rad, I {} kg·m², ω_n {} rad/s), below {}",
@@ -159,11 +161,19 @@ impl Rule for UnderdampedPdGains {
             let mut f = match p.source {
                 GainSource::Actuator(aid) => {
                     let a = &cx.robot.actuators[aid];
-                    cx.at_attr(ElemKind::Actuator, aid, &a.name, if a.biasprm[2] != 0.0 { "kv" } else { "kp" }, msg)
+                    cx.at_attr(
+                        ElemKind::Actuator,
+                        aid,
+                        &a.name,
+                        if a.biasprm[2] != 0.0 { "kv" } else { "kp" },
+                        msg,
+                    )
                 }
                 GainSource::SpecMotor(_) => cx.at_elem(ElemKind::Joint, j.id, &j.name, msg),
             };
-            if let (GainSource::SpecMotor(_), Some(loc)) = (p.source, cx.facts(&j.name).and_then(|x| x.motor_loc)) {
+            if let (GainSource::SpecMotor(_), Some(loc)) =
+                (p.source, cx.facts(&j.name).and_then(|x| x.motor_loc))
+            {
                 f = f.secondary(loc, "kp/kd come from this motor family in the spec");
             }
             let arm_note = match z_arm {
@@ -172,9 +182,13 @@ impl Rule for UnderdampedPdGains {
                     fmt_num(p.armature, 4),
                     fmt_num(za, 3)
                 ),
-                None => " The joint has no armature, so nothing but the link inertia sets I.".into(),
+                None => {
+                    " The joint has no armature, so nothing but the link inertia sets I.".into()
+                }
             };
-            let parts_note = if j.armature_elsewhere() || j.damping_parts.iter().any(|p| p.source != crate::model::PartSource::Joint) {
+            let parts_note = if j.armature_elsewhere()
+                || j.damping_parts.iter().any(|p| p.source != crate::model::PartSource::Joint)
+            {
                 format!(
                     " Effective armature {} = {}; passive damping {} = {} (MuJoCo ≥ 3.17 applies actuator and tendon armature and damping at the joint).",
                     fmt_num(j.armature, 4),

@@ -105,8 +105,18 @@ impl Bounds {
                 hi[k] = hi[k].max(v[k]);
             }
         }
-        let centre = scale(verts.iter().fold([0.0; 3], |a, v| add(a, *v)), 1.0 / verts.len() as f64);
-        let pts: Vec<Vector> = verts.iter().map(|v| Vector::new((v[0] - centre[0]) as f32, (v[1] - centre[1]) as f32, (v[2] - centre[2]) as f32)).collect();
+        let centre =
+            scale(verts.iter().fold([0.0; 3], |a, v| add(a, *v)), 1.0 / verts.len() as f64);
+        let pts: Vec<Vector> = verts
+            .iter()
+            .map(|v| {
+                Vector::new(
+                    (v[0] - centre[0]) as f32,
+                    (v[1] - centre[1]) as f32,
+                    (v[2] - centre[2]) as f32,
+                )
+            })
+            .collect();
         Some(Bounds { pos, mat, lo, hi, centre, pts, poly: std::cell::OnceCell::new() })
     }
     /// Distance of a world point outside the bounding box (0 inside).
@@ -120,7 +130,11 @@ impl Bounds {
         match self.poly.get_or_init(|| ConvexPolyhedron::from_convex_hull(&self.pts)) {
             Some(poly) => {
                 let q = sub(p, self.centre);
-                poly.distance_to_point(&Pose::IDENTITY, Vector::new(q[0] as f32, q[1] as f32, q[2] as f32), true) as f64
+                poly.distance_to_point(
+                    &Pose::IDENTITY,
+                    Vector::new(q[0] as f32, q[1] as f32, q[2] as f32),
+                    true,
+                ) as f64
             }
             None => self.outside_box(p),
         }
@@ -144,22 +158,37 @@ impl Rule for CollisionVisualMismatch {
         let dirs = directions();
         let foot_bodies: Vec<usize> = feet(robot, cx.spec).iter().map(|f| f.root).collect();
         for body in 1..robot.bodies.len() {
-            let visuals: Vec<&Geom> = robot.geoms.iter().filter(|g| g.body == body && is_visual_mesh(g)).collect();
+            let visuals: Vec<&Geom> =
+                robot.geoms.iter().filter(|g| g.body == body && is_visual_mesh(g)).collect();
             if visuals.is_empty() {
                 continue;
             }
-            let verts: Vec<V3> = visuals.iter().flat_map(|g| Placed::of(robot, g.id).verts).collect();
+            let verts: Vec<V3> =
+                visuals.iter().flat_map(|g| Placed::of(robot, g.id).verts).collect();
             let v0 = visuals[0].id;
-            let Some(hull) = Bounds::new(robot.key.geom_xpos[v0], robot.key.geom_xmat[v0], &verts) else { continue };
+            let Some(hull) = Bounds::new(robot.key.geom_xpos[v0], robot.key.geom_xmat[v0], &verts)
+            else {
+                continue;
+            };
             let bname = robot.body_name(body);
-            let colliders: Vec<&Geom> =
-                robot.geoms.iter().filter(|g| g.body == body && g.collides() && !matches!(g.gtype, GeomType::Plane | GeomType::Hfield)).collect();
+            let colliders: Vec<&Geom> = robot
+                .geoms
+                .iter()
+                .filter(|g| {
+                    g.body == body
+                        && g.collides()
+                        && !matches!(g.gtype, GeomType::Plane | GeomType::Hfield)
+                })
+                .collect();
             for g in &colliders {
                 if g.gtype == GeomType::Mesh && visuals.iter().any(|v| v.mesh == g.mesh) {
                     continue;
                 }
                 let p = Placed::of(robot, g.id);
-                let (worst, wdir) = dirs.iter().map(|d| (hull.outside_box(p.support(*d)), *d)).fold((0.0, [0.0; 3]), |a, b| if b.0 > a.0 { b } else { a });
+                let (worst, wdir) = dirs
+                    .iter()
+                    .map(|d| (hull.outside_box(p.support(*d)), *d))
+                    .fold((0.0, [0.0; 3]), |a, b| if b.0 > a.0 { b } else { a });
                 if worst <= tol {
                     continue;
                 }
@@ -169,20 +198,35 @@ impl Rule for CollisionVisualMismatch {
                     let mut parts = Vec::new();
                     for k in 0..3 {
                         if wdir[k].abs() > 0.1 {
-                            parts.push(format!("{}{}", if wdir[k] > 0.0 { "+" } else { "−" }, axis[k]));
+                            parts.push(format!(
+                                "{}{}",
+                                if wdir[k] > 0.0 { "+" } else { "−" },
+                                axis[k]
+                            ));
                         }
                     }
                     parts.join("")
                 };
                 let (msg, label, note) = if centre_out > tol {
                     (
-                        format!("collision geom {} of body `{bname}` is centred {} mm outside the body's visual mesh", gname(robot, g.id), fmt_num(centre_out * 1000.0, 3)),
-                        format!("centre {} mm outside the visual mesh", fmt_num(centre_out * 1000.0, 3)),
+                        format!(
+                            "collision geom {} of body `{bname}` is centred {} mm outside the body's visual mesh",
+                            gname(robot, g.id),
+                            fmt_num(centre_out * 1000.0, 3)
+                        ),
+                        format!(
+                            "centre {} mm outside the visual mesh",
+                            fmt_num(centre_out * 1000.0, 3)
+                        ),
                         "a collision geom whose centre lies outside the part it stands for is misplaced (a wrong `pos`, or a geom left on the wrong body): the simulated robot collides where the real one has no material",
                     )
                 } else {
                     (
-                        format!("collision geom {} of body `{bname}` sticks out of the body's visual mesh by {} mm (towards world {dir_word})", gname(robot, g.id), fmt_num(worst * 1000.0, 3)),
+                        format!(
+                            "collision geom {} of body `{bname}` sticks out of the body's visual mesh by {} mm (towards world {dir_word})",
+                            gname(robot, g.id),
+                            fmt_num(worst * 1000.0, 3)
+                        ),
                         format!("{} mm outside the visual mesh", fmt_num(worst * 1000.0, 3)),
                         "a collision geom larger than the part makes the simulated robot touch itself and the ground where the real one does not",
                     )
@@ -193,7 +237,11 @@ impl Rule for CollisionVisualMismatch {
                     f.severity = Severity::Info;
                 }
                 let note = if coarse {
-                    format!("{note}; within {} mm of the part this is often a deliberate coarse approximation — check that it is intended (misplaced geometry on real models sticks out by {} mm or more)", fmt_num(misplaced * 1000.0, 3), fmt_num(misplaced * 1000.0, 3))
+                    format!(
+                        "{note}; within {} mm of the part this is often a deliberate coarse approximation — check that it is intended (misplaced geometry on real models sticks out by {} mm or more)",
+                        fmt_num(misplaced * 1000.0, 3),
+                        fmt_num(misplaced * 1000.0, 3)
+                    )
                 } else {
                     note.to_string()
                 };
@@ -212,9 +260,11 @@ impl Rule for CollisionVisualMismatch {
             // Sole coverage of feet.
             if foot_bodies.contains(&body) && !colliders.is_empty() {
                 let zmin = verts.iter().map(|v| v[2]).fold(f64::INFINITY, f64::min);
-                let sole: Vec<[f64; 2]> = verts.iter().filter(|v| v[2] <= zmin + 0.005).map(|v| [v[0], v[1]]).collect();
+                let sole: Vec<[f64; 2]> =
+                    verts.iter().filter(|v| v[2] <= zmin + 0.005).map(|v| [v[0], v[1]]).collect();
                 let sole_area = hull_area(&sole);
-                let placed: Vec<Placed> = colliders.iter().map(|g| Placed::of(robot, g.id)).collect();
+                let placed: Vec<Placed> =
+                    colliders.iter().map(|g| Placed::of(robot, g.id)).collect();
                 let cmin = placed.iter().map(|p| p.lowest()[2]).fold(f64::INFINITY, f64::min);
                 let pts: Vec<[f64; 2]> = placed
                     .iter()

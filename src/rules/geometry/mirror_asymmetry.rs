@@ -68,9 +68,20 @@ struct Pair<'a> {
 }
 
 impl Pair<'_> {
-    fn finding(&self, cx: &Context, attr: &str, what: &str, lv: String, rv: String, unit: &str) -> Finding {
+    fn finding(
+        &self,
+        cx: &Context,
+        attr: &str,
+        what: &str,
+        lv: String,
+        rv: String,
+        unit: &str,
+    ) -> Finding {
         let kw = crate::rules::kind_word(self.kind);
-        let msg = format!("{kw} `{}` {what} {rv}{unit} differs from its mirror `{}` ({lv}{unit})", self.right.1, self.left.1);
+        let msg = format!(
+            "{kw} `{}` {what} {rv}{unit} differs from its mirror `{}` ({lv}{unit})",
+            self.right.1, self.left.1
+        );
         let lloc = cx.robot.elem_loc(self.kind, self.left.0, self.left.1);
         let (lattr, _) = cx.robot.attr_loc(self.kind, self.left.0, self.left.1, attr);
         let subject = match self.kind {
@@ -107,8 +118,12 @@ fn pairs<'a>(names: &'a [String], cx: &Context) -> Vec<(usize, usize)> {
 }
 
 fn geom_signature(robot: &Robot, body: usize) -> Vec<(u8, [i64; 3])> {
-    let mut v: Vec<(u8, [i64; 3])> =
-        robot.geoms.iter().filter(|g| g.body == body && g.collides()).map(|g| (g.gtype as u8, g.size.map(|s| (s * 1e4).round() as i64))).collect();
+    let mut v: Vec<(u8, [i64; 3])> = robot
+        .geoms
+        .iter()
+        .filter(|g| g.body == body && g.collides())
+        .map(|g| (g.gtype as u8, g.size.map(|s| (s * 1e4).round() as i64)))
+        .collect();
     v.sort();
     v
 }
@@ -135,7 +150,9 @@ pub fn same_geoms(robot: &Robot, a: &[usize], b: &[usize], rel: f64, abs: f64) -
                 h.gtype == g.gtype && (0..3).all(|k| close(g.size[k], h.size[k]))
             })
             .min_by(|(_, x), (_, y)| {
-                let d = |o: usize| (0..3).map(|k| (robot.geoms[o].size[k] - g.size[k]).abs()).sum::<f64>();
+                let d = |o: usize| {
+                    (0..3).map(|k| (robot.geoms[o].size[k] - g.size[k]).abs()).sum::<f64>()
+                };
                 d(**x).total_cmp(&d(**y))
             });
         match best {
@@ -152,10 +169,12 @@ fn colliders(robot: &Robot, body: usize) -> Vec<usize> {
 
 /// "2 × capsule 12/30 mm, box 100/50/15 mm".
 fn sig_str(sig: &[(u8, [i64; 3])]) -> String {
-    const NAMES: [&str; 9] = ["plane", "hfield", "sphere", "capsule", "ellipsoid", "cylinder", "box", "mesh", "sdf"];
+    const NAMES: [&str; 9] =
+        ["plane", "hfield", "sphere", "capsule", "ellipsoid", "cylinder", "box", "mesh", "sdf"];
     let mut parts: Vec<(usize, String)> = Vec::new();
     for (t, s) in sig {
-        let sizes: Vec<String> = s.iter().filter(|&&x| x != 0).map(|&x| fmt_num(x as f64 / 10.0, 4)).collect();
+        let sizes: Vec<String> =
+            s.iter().filter(|&&x| x != 0).map(|&x| fmt_num(x as f64 / 10.0, 4)).collect();
         let d = format!("{} {} mm", NAMES.get(*t as usize).unwrap_or(&"geom"), sizes.join("/"));
         match parts.last_mut() {
             Some((n, last)) if *last == d => *n += 1,
@@ -165,7 +184,8 @@ fn sig_str(sig: &[(u8, [i64; 3])]) -> String {
     if parts.is_empty() {
         return "none".into();
     }
-    let v: Vec<String> = parts.into_iter().map(|(n, d)| if n > 1 { format!("{n} × {d}") } else { d }).collect();
+    let v: Vec<String> =
+        parts.into_iter().map(|(n, d)| if n > 1 { format!("{n} × {d}") } else { d }).collect();
     format!("[{}]", v.join(", "))
 }
 
@@ -191,7 +211,11 @@ impl Rule for MirrorAsymmetry {
                 ("frictionloss", "frictionloss", a.frictionloss, b.frictionloss, " N·m"),
             ] {
                 if differs(x, y, tol) {
-                    out.push(p.finding(cx, attr, what, n4(x), n4(y), unit).measured(y, unit.trim()).expected(x, unit.trim()));
+                    out.push(
+                        p.finding(cx, attr, what, n4(x), n4(y), unit)
+                            .measured(y, unit.trim())
+                            .expected(x, unit.trim()),
+                    );
                 }
             }
             if (a.limited || b.limited) && !range_matches(a.range, b.range, rtol) {
@@ -206,12 +230,24 @@ impl Rule for MirrorAsymmetry {
         for (l, rr) in pairs(&an, cx) {
             let (a, b) = (&robot.actuators[l], &robot.actuators[rr]);
             let p = Pair { kind: ElemKind::Actuator, left: (l, &a.name), right: (rr, &b.name) };
-            if let (ActuatorKind::Position { kp: kpa, kv: kva }, ActuatorKind::Position { kp: kpb, kv: kvb }) = (a.kind, b.kind) {
+            if let (
+                ActuatorKind::Position { kp: kpa, kv: kva },
+                ActuatorKind::Position { kp: kpb, kv: kvb },
+            ) = (a.kind, b.kind)
+            {
                 if differs(kpa, kpb, tol) {
-                    out.push(p.finding(cx, "kp", "kp", n4(kpa), n4(kpb), " N·m/rad").measured(kpb, "N·m/rad").expected(kpa, "N·m/rad"));
+                    out.push(
+                        p.finding(cx, "kp", "kp", n4(kpa), n4(kpb), " N·m/rad")
+                            .measured(kpb, "N·m/rad")
+                            .expected(kpa, "N·m/rad"),
+                    );
                 }
                 if differs(kva, kvb, tol) {
-                    out.push(p.finding(cx, "kv", "kv", n4(kva), n4(kvb), " N·m·s/rad").measured(kvb, "N·m·s/rad").expected(kva, "N·m·s/rad"));
+                    out.push(
+                        p.finding(cx, "kv", "kv", n4(kva), n4(kvb), " N·m·s/rad")
+                            .measured(kvb, "N·m·s/rad")
+                            .expected(kva, "N·m·s/rad"),
+                    );
                 }
             } else if a.gainprm[0] != 0.0 && differs(a.gainprm[0], b.gainprm[0], tol) {
                 out.push(p.finding(cx, "gainprm", "gain", n4(a.gainprm[0]), n4(b.gainprm[0]), ""));
@@ -219,11 +255,37 @@ impl Rule for MirrorAsymmetry {
             if differs(a.gear.abs(), b.gear.abs(), tol) {
                 out.push(p.finding(cx, "gear", "gear", n4(a.gear), n4(b.gear), ""));
             }
-            if (a.forcelimited || b.forcelimited) && !range_matches(a.forcerange, b.forcerange, tol * a.forcerange[1].abs().max(a.forcerange[0].abs()).max(1e-9)) {
-                out.push(p.finding(cx, "forcerange", "forcerange", r(a.forcerange), r(b.forcerange), " N·m"));
+            if (a.forcelimited || b.forcelimited)
+                && !range_matches(
+                    a.forcerange,
+                    b.forcerange,
+                    tol * a.forcerange[1].abs().max(a.forcerange[0].abs()).max(1e-9),
+                )
+            {
+                out.push(p.finding(
+                    cx,
+                    "forcerange",
+                    "forcerange",
+                    r(a.forcerange),
+                    r(b.forcerange),
+                    " N·m",
+                ));
             }
-            if (a.ctrllimited || b.ctrllimited) && !range_matches(a.ctrlrange, b.ctrlrange, rtol.max(tol * a.ctrlrange[1].abs().max(a.ctrlrange[0].abs()))) {
-                out.push(p.finding(cx, "ctrlrange", "ctrlrange", r(a.ctrlrange), r(b.ctrlrange), ""));
+            if (a.ctrllimited || b.ctrllimited)
+                && !range_matches(
+                    a.ctrlrange,
+                    b.ctrlrange,
+                    rtol.max(tol * a.ctrlrange[1].abs().max(a.ctrlrange[0].abs())),
+                )
+            {
+                out.push(p.finding(
+                    cx,
+                    "ctrlrange",
+                    "ctrlrange",
+                    r(a.ctrlrange),
+                    r(b.ctrlrange),
+                    "",
+                ));
             }
         }
         // Bodies: mass and collision geometry.

@@ -62,7 +62,9 @@ pub fn keyframe_penetrations(robot: &Robot) -> BTreeMap<(usize, usize), f64> {
         }
         let (a, b) = (a.min(b) as usize, a.max(b) as usize);
         let (ga, gb) = (&robot.geoms[a], &robot.geoms[b]);
-        let ground = |g: &crate::model::Geom| g.body == 0 || matches!(g.gtype, GeomType::Plane | GeomType::Hfield);
+        let ground = |g: &crate::model::Geom| {
+            g.body == 0 || matches!(g.gtype, GeomType::Plane | GeomType::Hfield)
+        };
         if ground(ga) || ground(gb) {
             continue;
         }
@@ -96,7 +98,12 @@ impl Rule for SelfCollisionAtKeyframe {
                 continue;
             }
             let gb = &robot.geoms[b];
-            let msg = format!("collision geoms {} and {} penetrate by {} mm at {pose}", gdesc(robot, a), gdesc(robot, b), fmt_num(depth * 1000.0, 3));
+            let msg = format!(
+                "collision geoms {} and {} penetrate by {} mm at {pose}",
+                gdesc(robot, a),
+                gdesc(robot, b),
+                fmt_num(depth * 1000.0, 3)
+            );
             out.push(
                 cx.at_elem(ElemKind::Geom, a, &robot.geoms[a].name, msg)
                     .label(format!("penetrates {} by {} mm", gdesc(robot, b), fmt_num(depth * 1000.0, 3)))

@@ -63,7 +63,11 @@ impl Placed {
         let geom = &robot.geoms[g];
         let pos = robot.key.geom_xpos[g];
         let mat = robot.key.geom_xmat[g];
-        let verts = if geom.gtype == GeomType::Mesh { mesh_world_vertices(robot, geom.mesh, pos, &mat) } else { Vec::new() };
+        let verts = if geom.gtype == GeomType::Mesh {
+            mesh_world_vertices(robot, geom.mesh, pos, &mat)
+        } else {
+            Vec::new()
+        };
         Placed { gtype: geom.gtype, size: geom.size, pos, mat, verts }
     }
 
@@ -101,7 +105,8 @@ impl Placed {
             GeomType::Mesh => {
                 let best = self.verts.iter().map(|v| dot(*v, d)).fold(f64::NEG_INFINITY, f64::max);
                 // Centroid of the vertices within 0.1 mm of the extreme, so flat faces resolve to their middle.
-                let near: Vec<&V3> = self.verts.iter().filter(|v| dot(**v, d) >= best - 1e-4).collect();
+                let near: Vec<&V3> =
+                    self.verts.iter().filter(|v| dot(**v, d) >= best - 1e-4).collect();
                 if near.is_empty() {
                     return c;
                 }
@@ -126,7 +131,10 @@ impl Placed {
             GeomType::Sphere | GeomType::Ellipsoid => vec![self.lowest()],
             GeomType::Capsule => {
                 let a = col(m, 2);
-                [-1.0, 1.0].iter().map(|k| add(add(c, scale(a, k * s[1])), scale(down, s[0]))).collect()
+                [-1.0, 1.0]
+                    .iter()
+                    .map(|k| add(add(c, scale(a, k * s[1])), scale(down, s[0])))
+                    .collect()
             }
             GeomType::Cylinder => {
                 let a = col(m, 2);
@@ -205,11 +213,14 @@ pub fn hull_area(pts: &[[f64; 2]]) -> f64 {
     if p.len() < 3 {
         return 0.0;
     }
-    let cross = |o: [f64; 2], a: [f64; 2], b: [f64; 2]| (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]);
+    let cross = |o: [f64; 2], a: [f64; 2], b: [f64; 2]| {
+        (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+    };
     let mut h: Vec<[f64; 2]> = Vec::new();
     for pass in 0..2 {
         let start = h.len();
-        let it: Box<dyn Iterator<Item = &[f64; 2]>> = if pass == 0 { Box::new(p.iter()) } else { Box::new(p.iter().rev()) };
+        let it: Box<dyn Iterator<Item = &[f64; 2]>> =
+            if pass == 0 { Box::new(p.iter()) } else { Box::new(p.iter().rev()) };
         for &q in it {
             while h.len() >= start + 2 && cross(h[h.len() - 2], h[h.len() - 1], q) <= 0.0 {
                 h.pop();
@@ -219,7 +230,8 @@ pub fn hull_area(pts: &[[f64; 2]]) -> f64 {
         h.pop();
     }
     let n = h.len();
-    (0..n).map(|i| h[i][0] * h[(i + 1) % n][1] - h[(i + 1) % n][0] * h[i][1]).sum::<f64>().abs() / 2.0
+    (0..n).map(|i| h[i][0] * h[(i + 1) % n][1] - h[(i + 1) % n][0] * h[i][1]).sum::<f64>().abs()
+        / 2.0
 }
 
 #[cfg(test)]
@@ -238,7 +250,12 @@ mod tests {
     #[test]
     fn lowest_point_of_rotated_capsule() {
         // Capsule along local z, rotated 90° about y: lies along world x, flat.
-        let c = placed(GeomType::Capsule, [0.012, 0.05, 0.0], [0.0, 0.0, 0.1], rot_y(std::f64::consts::FRAC_PI_2));
+        let c = placed(
+            GeomType::Capsule,
+            [0.012, 0.05, 0.0],
+            [0.0, 0.0, 0.1],
+            rot_y(std::f64::consts::FRAC_PI_2),
+        );
         let p = c.lowest();
         assert!((p[2] - 0.088).abs() < 1e-12 && p[0].abs() < 1e-12);
         // Tilted 3° from horizontal: one end dips by h·sin(3°).
@@ -251,7 +268,12 @@ mod tests {
 
     #[test]
     fn lowest_point_of_rotated_box() {
-        let b = placed(GeomType::Box, [0.1, 0.05, 0.015], [0.0, 0.0, 0.05], [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]);
+        let b = placed(
+            GeomType::Box,
+            [0.1, 0.05, 0.015],
+            [0.0, 0.0, 0.05],
+            [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0],
+        );
         assert!((b.lowest()[2] - 0.035).abs() < 1e-12);
         assert_eq!(tilt(GeomType::Box, &b.mat), Some(0.0));
         let a = 2f64.to_radians();
@@ -264,9 +286,19 @@ mod tests {
 
     #[test]
     fn cylinder_and_ellipsoid_support() {
-        let cy = placed(GeomType::Cylinder, [0.03, 0.05, 0.0], [0.0, 0.0, 0.1], rot_y(std::f64::consts::FRAC_PI_2));
+        let cy = placed(
+            GeomType::Cylinder,
+            [0.03, 0.05, 0.0],
+            [0.0, 0.0, 0.1],
+            rot_y(std::f64::consts::FRAC_PI_2),
+        );
         assert!((cy.lowest()[2] - 0.07).abs() < 1e-12);
-        let e = placed(GeomType::Ellipsoid, [0.1, 0.05, 0.02], [0.0, 0.0, 0.1], rot_y(std::f64::consts::FRAC_PI_2));
+        let e = placed(
+            GeomType::Ellipsoid,
+            [0.1, 0.05, 0.02],
+            [0.0, 0.0, 0.1],
+            rot_y(std::f64::consts::FRAC_PI_2),
+        );
         // Local x (0.1) now points down.
         assert!((e.lowest()[2] - 0.0).abs() < 1e-12);
     }

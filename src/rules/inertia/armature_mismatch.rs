@@ -2,13 +2,13 @@ use std::collections::BTreeMap;
 
 use crate::declare_rule;
 use crate::finding::{Finding, Severity, Subject};
+use crate::model::describe_parts;
 use crate::model::mjcf::ElemKind;
 use crate::rules::inertia::parallel_ankle_armature::parallel_issue;
+use crate::rules::limits::effort_limit_mismatch::joint_torque_limit;
 use crate::rules::{Context, Rule, RuleMeta, opt};
 use crate::spec::v;
 use crate::util::fmt_num;
-use crate::model::describe_parts;
-use crate::rules::limits::effort_limit_mismatch::joint_torque_limit;
 
 declare_rule! {
     /// ## What it does
@@ -86,24 +86,35 @@ impl Rule for ArmatureMismatch {
                 continue;
             }
             let (loc, class) = robot.attr_loc(ElemKind::Joint, j.id, &j.name, "armature");
-            let key = if class.is_some() { (loc.file, loc.start, loc.end, fam.clone(), zero) } else { (usize::MAX, j.id, 0, fam.clone(), zero) };
+            let key = if class.is_some() {
+                (loc.file, loc.start, loc.end, fam.clone(), zero)
+            } else {
+                (usize::MAX, j.id, 0, fam.clone(), zero)
+            };
             groups.entry(key).or_default().push(Entry { joint: j.id, expected, family: fam });
         }
         for ((.., zero), es) in groups {
             let first = &robot.joints[es[0].joint];
             let (a, e, fam) = (first.armature, es[0].expected, es[0].family.as_str());
             let m = spec.motor(fam);
-            let (ri, g) = (m.and_then(|m| v(&m.rotor_inertia)).unwrap_or(f64::NAN), m.and_then(|m| v(&m.gear_ratio)).unwrap_or(f64::NAN));
+            let (ri, g) = (
+                m.and_then(|m| v(&m.rotor_inertia)).unwrap_or(f64::NAN),
+                m.and_then(|m| v(&m.gear_ratio)).unwrap_or(f64::NAN),
+            );
             let ri_s = if ri.abs() < 1e-3 { format!("{ri:e}") } else { fmt_num(ri, 4) };
             let formula = format!("{ri_s} × {}² = {} kg·m²", fmt_num(g, 4), fmt_num(e, 4));
             let who = if es.len() == 1 {
                 format!("joint `{}`", first.name)
             } else {
-                let names: Vec<&str> = es.iter().map(|x| robot.joints[x.joint].name.as_str()).collect();
+                let names: Vec<&str> =
+                    es.iter().map(|x| robot.joints[x.joint].name.as_str()).collect();
                 format!("{} `{fam}` joints ({})", es.len(), names.join(", "))
             };
             let msg = if zero {
-                format!("{who} {} no armature, but the `{fam}` motor reflects rotor_inertia × gear² = {formula}", if es.len() == 1 { "has" } else { "have" })
+                format!(
+                    "{who} {} no armature, but the `{fam}` motor reflects rotor_inertia × gear² = {formula}",
+                    if es.len() == 1 { "has" } else { "have" }
+                )
             } else {
                 format!(
                     "armature {} kg·m² on {who} is {}% {} the `{fam}` motor's reflected inertia {formula}",
@@ -125,7 +136,12 @@ impl Rule for ArmatureMismatch {
                 f.severity = Severity::Error;
             }
             if first.armature_elsewhere() {
-                f.note = Some(format!("{} — effective armature {} kg·m² = {}", f.note.unwrap_or_default(), fmt_num(a, 4), describe_parts(robot, &first.armature_parts, "armature")));
+                f.note = Some(format!(
+                    "{} — effective armature {} kg·m² = {}",
+                    f.note.unwrap_or_default(),
+                    fmt_num(a, 4),
+                    describe_parts(robot, &first.armature_parts, "armature")
+                ));
             }
             if let Some(l) = spec.joint(&first.name).and_then(|x| x.motor_loc) {
                 f = f.secondary(l, format!("spec motor family `{fam}`"));
@@ -135,7 +151,9 @@ impl Rule for ArmatureMismatch {
         // Copy-paste sign: one value everywhere while the families differ.
         if actuated.len() >= 2 {
             let a0 = robot.joints[actuated[0].0].armature;
-            let same = actuated.iter().all(|(j, ..)| (robot.joints[*j].armature - a0).abs() <= 1e-9 * a0.abs().max(1e-12));
+            let same = actuated.iter().all(|(j, ..)| {
+                (robot.joints[*j].armature - a0).abs() <= 1e-9 * a0.abs().max(1e-12)
+            });
             let mut fams: BTreeMap<&str, f64> = BTreeMap::new();
             for (_, e, fam) in &actuated {
                 fams.entry(fam.as_str()).or_insert(*e);
@@ -145,7 +163,8 @@ impl Rule for ArmatureMismatch {
             let distinct = vals.windows(2).any(|w| (w[1] - w[0]).abs() > tol * w[1]);
             if same && fams.len() >= 2 && distinct {
                 let j = &robot.joints[actuated[0].0];
-                let list: Vec<String> = fams.iter().map(|(k, e)| format!("{k} {}", fmt_num(*e, 4))).collect();
+                let list: Vec<String> =
+                    fams.iter().map(|(k, e)| format!("{k} {}", fmt_num(*e, 4))).collect();
                 let f = cx
                     .at_attr(
                         ElemKind::Joint,
@@ -182,7 +201,11 @@ fn uniform_without_spec(cx: &Context, out: &mut Vec<Finding>) {
     let joints: Vec<&crate::model::Joint> = robot
         .joints
         .iter()
-        .filter(|j| j.is_scalar() && !robot.actuators_on_joint(j.id).is_empty() && !cx.facts(&j.name).is_some_and(|f| f.passive))
+        .filter(|j| {
+            j.is_scalar()
+                && !robot.actuators_on_joint(j.id).is_empty()
+                && !cx.facts(&j.name).is_some_and(|f| f.passive)
+        })
         .collect();
     if joints.len() < 3 {
         return;
@@ -191,16 +214,27 @@ fn uniform_without_spec(cx: &Context, out: &mut Vec<Finding>) {
     if !(a0 > 0.0) || !joints.iter().all(|j| (j.armature - a0).abs() <= 1e-9 * a0) {
         return;
     }
-    let limits: Vec<(usize, f64)> = joints.iter().filter_map(|j| joint_torque_limit(robot, j.id).map(|(l, _)| (j.id, l))).filter(|(_, l)| *l > 0.0).collect();
+    let limits: Vec<(usize, f64)> = joints
+        .iter()
+        .filter_map(|j| joint_torque_limit(robot, j.id).map(|(l, _)| (j.id, l)))
+        .filter(|(_, l)| *l > 0.0)
+        .collect();
     if limits.len() < 2 {
         return;
     }
-    let (lo, hi) = limits.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), (_, l)| (lo.min(*l), hi.max(*l)));
+    let (lo, hi) =
+        limits.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), (_, l)| (lo.min(*l), hi.max(*l)));
     let spread = hi / lo;
     if !(spread >= spread_min) {
         return;
     }
-    let name = |l: f64| limits.iter().find(|(_, x)| *x == l).map(|(j, _)| robot.joints[*j].name.as_str()).unwrap_or("");
+    let name = |l: f64| {
+        limits
+            .iter()
+            .find(|(_, x)| *x == l)
+            .map(|(j, _)| robot.joints[*j].name.as_str())
+            .unwrap_or("")
+    };
     let j = joints[0];
     let f = crate::rules::inertia::at_armature(
             cx,

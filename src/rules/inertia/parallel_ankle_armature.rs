@@ -74,7 +74,13 @@ pub fn tendon_motor_count(robot: &Robot, j: usize) -> u32 {
 
 /// The parallel-drive armature problem of a joint, if any (shared with `armature-mismatch`,
 /// which leaves these joints to this rule).
-pub fn parallel_issue(cx: &Context, spec: &Spec, j: &Joint, facts: &JointFacts, tol: f64) -> Option<Issue> {
+pub fn parallel_issue(
+    cx: &Context,
+    spec: &Spec,
+    j: &Joint,
+    facts: &JointFacts,
+    tol: f64,
+) -> Option<Issue> {
     let fam = facts.motor.as_deref()?;
     if facts.passive {
         return None;
@@ -88,14 +94,27 @@ pub fn parallel_issue(cx: &Context, spec: &Spec, j: &Joint, facts: &JointFacts, 
         if close(a, expected, tol) {
             return None;
         }
-        return Some(Issue::Parallel { n, detected: facts.count == 1, single, expected, carries_single: close(a, single, tol) });
+        return Some(Issue::Parallel {
+            n,
+            detected: facts.count == 1,
+            single,
+            expected,
+            carries_single: close(a, single, tol),
+        });
     }
     if !(a > 0.0) || close(a, single, tol) {
         return None;
     }
     // One value copy-pasted onto every actuated joint is `armature-mismatch`'s uniform finding,
     // not a doubling, even when it happens to be twice some family's value.
-    let uniform = cx.robot.joints.iter().filter(|o| o.is_scalar() && spec.joint(&o.name).is_some_and(|f| f.motor.is_some() && !f.passive)).all(|o| o.armature == a);
+    let uniform = cx
+        .robot
+        .joints
+        .iter()
+        .filter(|o| {
+            o.is_scalar() && spec.joint(&o.name).is_some_and(|f| f.motor.is_some() && !f.passive)
+        })
+        .all(|o| o.armature == a);
     if !uniform && close(a, 2.0 * single, tol) {
         return Some(Issue::DoubledOwn { single });
     }
@@ -129,9 +148,19 @@ impl Rule for ParallelAnkleArmature {
                     format!(
                         "joint `{}` is driven by {n} `{fam}` motors{} but its armature {} kg·m² {}; expected {n} × {} = {} kg·m²",
                         j.name,
-                        if *detected { format!(" (the model reaches it through {n} tendon actuators; the spec says count = 1)") } else { String::new() },
+                        if *detected {
+                            format!(
+                                " (the model reaches it through {n} tendon actuators; the spec says count = 1)"
+                            )
+                        } else {
+                            String::new()
+                        },
                         fmt_num(a, 4),
-                        if *carries_single { "is one motor's reflected inertia" } else { "is not their combined reflected inertia" },
+                        if *carries_single {
+                            "is one motor's reflected inertia"
+                        } else {
+                            "is not their combined reflected inertia"
+                        },
                         fmt_num(*single, 4),
                         fmt_num(*expected, 4)
                     ),
@@ -164,7 +193,10 @@ impl Rule for ParallelAnkleArmature {
                 .at_attr(ElemKind::Joint, j.id, &j.name, "armature", msg)
                 .label(format!("armature {} kg·m²", fmt_num(a, 4)))
                 .note(note)
-                .help(format!("set armature=\"{}\" (count × rotor_inertia × gear_ratio²)", fmt_num(expected, 6)))
+                .help(format!(
+                    "set armature=\"{}\" (count × rotor_inertia × gear_ratio²)",
+                    fmt_num(expected, 6)
+                ))
                 .subject(Subject::Joint(j.id))
                 .measured(a, "kg·m²")
                 .expected(expected, "kg·m²")
@@ -182,8 +214,11 @@ impl Rule for ParallelAnkleArmature {
 fn doubled_without_spec(cx: &Context, out: &mut Vec<Finding>) {
     let robot = cx.robot;
     let etol = cx.opt("exact_tolerance");
-    let scalar: Vec<&Joint> = robot.joints.iter().filter(|j| j.is_scalar() && j.armature > 0.0).collect();
-    let passive = |j: &Joint| robot.actuators_on_joint(j.id).is_empty() || cx.facts(&j.name).is_some_and(|f| f.passive);
+    let scalar: Vec<&Joint> =
+        robot.joints.iter().filter(|j| j.is_scalar() && j.armature > 0.0).collect();
+    let passive = |j: &Joint| {
+        robot.actuators_on_joint(j.id).is_empty() || cx.facts(&j.name).is_some_and(|f| f.passive)
+    };
     let has_family = |j: &Joint| cx.facts(&j.name).is_some_and(|f| f.motor.is_some() && !f.passive);
     let same = |a: f64, b: f64| (a - b).abs() <= etol * a.abs().max(b.abs());
     // Distinct values carried by actuated joints, each with its joints.
@@ -200,7 +235,9 @@ fn doubled_without_spec(cx: &Context, out: &mut Vec<Finding>) {
         if has_family(j) {
             continue;
         }
-        let Some((base, _)) = bases.iter().find(|(b, _)| same(j.armature, 2.0 * b)) else { continue };
+        let Some((base, _)) = bases.iter().find(|(b, _)| same(j.armature, 2.0 * b)) else {
+            continue;
+        };
         let entry = match hits.iter_mut().position(|h| same(h.0, j.armature)) {
             Some(i) => &mut hits[i],
             None => {
@@ -214,20 +251,41 @@ fn doubled_without_spec(cx: &Context, out: &mut Vec<Finding>) {
             entry.3.push(j.id);
         }
     }
-    let names = |ids: &[usize]| ids.iter().map(|&i| format!("`{}`", robot.joints[i].name)).collect::<Vec<_>>().join(", ");
+    let names = |ids: &[usize]| {
+        ids.iter().map(|&i| format!("`{}`", robot.joints[i].name)).collect::<Vec<_>>().join(", ")
+    };
     for (value, base, passive_ids, single_ids) in hits {
-        let base_joints = &bases.iter().find(|(b, _)| same(*b, base)).map(|x| x.1.clone()).unwrap_or_default();
+        let base_joints =
+            &bases.iter().find(|(b, _)| same(*b, base)).map(|x| x.1.clone()).unwrap_or_default();
         // Single-motor joints count only when the model shows which joints are two-motor ones.
-        let parallel: Vec<usize> = single_ids.iter().copied().filter(|&i| tendon_motor_count(robot, i) >= 2).collect();
-        let flagged_single: Vec<usize> = if parallel.is_empty() { Vec::new() } else { single_ids.iter().copied().filter(|i| !parallel.contains(i) && robot.actuators_on_joint(*i).len() == 1).collect() };
-        let legit: Vec<usize> = single_ids.iter().copied().filter(|i| !flagged_single.contains(i)).collect();
+        let parallel: Vec<usize> =
+            single_ids.iter().copied().filter(|&i| tendon_motor_count(robot, i) >= 2).collect();
+        let flagged_single: Vec<usize> = if parallel.is_empty() {
+            Vec::new()
+        } else {
+            single_ids
+                .iter()
+                .copied()
+                .filter(|i| !parallel.contains(i) && robot.actuators_on_joint(*i).len() == 1)
+                .collect()
+        };
+        let legit: Vec<usize> =
+            single_ids.iter().copied().filter(|i| !flagged_single.contains(i)).collect();
         for (ids, what) in [(passive_ids, "passive"), (flagged_single, "single-motor")] {
             if ids.is_empty() {
                 continue;
             }
             let j = &robot.joints[ids[0]];
-            let who = if ids.len() == 1 { format!("{what} joint `{}` carries", j.name) } else { format!("{} {what} joints ({}) carry", ids.len(), names(&ids)) };
-            let also = if legit.is_empty() { String::new() } else { format!(" (also on actuated {})", names(&legit)) };
+            let who = if ids.len() == 1 {
+                format!("{what} joint `{}` carries", j.name)
+            } else {
+                format!("{} {what} joints ({}) carry", ids.len(), names(&ids))
+            };
+            let also = if legit.is_empty() {
+                String::new()
+            } else {
+                format!(" (also on actuated {})", names(&legit))
+            };
             let mut shown_base: Vec<usize> = base_joints.iter().copied().take(6).collect();
             shown_base.retain(|i| !ids.contains(i));
             let more = base_joints.len().saturating_sub(shown_base.len());

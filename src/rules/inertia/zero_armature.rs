@@ -63,7 +63,8 @@ impl Rule for ZeroArmature {
             }
             // A spec family with a known reflected inertia: armature-mismatch reports it with
             // the expected value.
-            let expected = facts.as_ref().and_then(|f| cx.spec?.expected_armature(f)).filter(|e| *e > 0.0);
+            let expected =
+                facts.as_ref().and_then(|f| cx.spec?.expected_armature(f)).filter(|e| *e > 0.0);
             if expected.is_some() {
                 continue;
             }
@@ -75,11 +76,22 @@ impl Rule for ZeroArmature {
         let first = &robot.joints[zero[0]];
         let names: Vec<&str> = zero.iter().map(|&i| robot.joints[i].name.as_str()).collect();
         let msg = if zero.len() == 1 {
-            format!("actuated joint `{}` has no armature: none on the joint, its actuator or a tendon", first.name)
+            format!(
+                "actuated joint `{}` has no armature: none on the joint, its actuator or a tendon",
+                first.name
+            )
         } else if zero.len() == n_act {
-            format!("none of the {} actuated joints has any armature (joint, actuator or tendon): {}", zero.len(), names.join(", "))
+            format!(
+                "none of the {} actuated joints has any armature (joint, actuator or tendon): {}",
+                zero.len(),
+                names.join(", ")
+            )
         } else {
-            format!("{} of the {n_act} actuated joints have no armature (joint, actuator or tendon): {}", zero.len(), names.join(", "))
+            format!(
+                "{} of the {n_act} actuated joints have no armature (joint, actuator or tendon): {}",
+                zero.len(),
+                names.join(", ")
+            )
         };
         let f = cx
             .at_attr(ElemKind::Joint, first.id, &first.name, "armature", msg)

@@ -56,10 +56,15 @@ pub fn degree_mode(robot: &Robot) -> bool {
 
 /// The ctrlrange (in joint units) of a position actuator on a limited hinge looks like degrees.
 pub fn looks_like_degrees(robot: &Robot, a: &Actuator, ratio_tol: f64) -> bool {
-    if !matches!(a.kind, ActuatorKind::Position { .. }) || !matches!(a.trn, Transmission::Joint | Transmission::JointInParent) || !a.ctrllimited {
+    if !matches!(a.kind, ActuatorKind::Position { .. })
+        || !matches!(a.trn, Transmission::Joint | Transmission::JointInParent)
+        || !a.ctrllimited
+    {
         return false;
     }
-    let Some(j) = usize::try_from(a.target).ok().and_then(|t| robot.joints.get(t)) else { return false };
+    let Some(j) = usize::try_from(a.target).ok().and_then(|t| robot.joints.get(t)) else {
+        return false;
+    };
     if j.jtype != JointType::Hinge || !j.limited || !degree_mode(robot) {
         return false;
     }
@@ -67,7 +72,8 @@ pub fn looks_like_degrees(robot: &Robot, a: &Actuator, ratio_tol: f64) -> bool {
     let (c0, c1) = (a.ctrlrange[0] / g, a.ctrlrange[1] / g);
     let k = 180.0 / std::f64::consts::PI;
     let span_ratio = (c1 - c0) / (j.range[1] - j.range[0]).max(1e-12);
-    let beyond = c0.abs().max(c1.abs()) > 2.0 * std::f64::consts::PI && j.range[0].abs().max(j.range[1].abs()) <= 2.0 * std::f64::consts::PI;
+    let beyond = c0.abs().max(c1.abs()) > 2.0 * std::f64::consts::PI
+        && j.range[0].abs().max(j.range[1].abs()) <= 2.0 * std::f64::consts::PI;
     ((span_ratio / k) - 1.0).abs() <= ratio_tol || (beyond && span_ratio > 10.0)
 }
 

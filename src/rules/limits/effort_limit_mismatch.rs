@@ -71,15 +71,24 @@ pub fn joint_torque_limit(robot: &Robot, j: usize) -> Option<(f64, LimitSource)>
         let a = acts[0];
         let g = a.gear.abs();
         if a.forcelimited {
-            take(g * a.forcerange[0].abs().max(a.forcerange[1].abs()), LimitSource::ActuatorForce(a.id));
+            take(
+                g * a.forcerange[0].abs().max(a.forcerange[1].abs()),
+                LimitSource::ActuatorForce(a.id),
+            );
         }
         if a.kind == ActuatorKind::Motor && a.ctrllimited {
-            take(g * a.gainprm[0].abs() * a.ctrlrange[0].abs().max(a.ctrlrange[1].abs()), LimitSource::MotorCtrl(a.id));
+            take(
+                g * a.gainprm[0].abs() * a.ctrlrange[0].abs().max(a.ctrlrange[1].abs()),
+                LimitSource::MotorCtrl(a.id),
+            );
         }
         // A voltage-driven `<dcmotor>` stalls at K/R × V_max (× gear).
         if let ActuatorKind::DcMotor { resistance, k, voltage: true } = a.kind {
             if a.ctrllimited && resistance > 0.0 {
-                take(g * (k / resistance).abs() * a.ctrlrange[0].abs().max(a.ctrlrange[1].abs()), LimitSource::MotorCtrl(a.id));
+                take(
+                    g * (k / resistance).abs() * a.ctrlrange[0].abs().max(a.ctrlrange[1].abs()),
+                    LimitSource::MotorCtrl(a.id),
+                );
             }
         }
     }
@@ -132,9 +141,15 @@ impl Rule for EffortLimitMismatch {
                 fmt_num(rel.abs() * 100.0, 3)
             );
             let mut f = match src {
-                LimitSource::Joint => cx.at_attr(ElemKind::Joint, j.id, &j.name, "actuatorfrcrange", msg),
-                LimitSource::ActuatorForce(a) => cx.at_attr(ElemKind::Actuator, a, &robot.actuators[a].name, "forcerange", msg),
-                LimitSource::MotorCtrl(a) => cx.at_attr(ElemKind::Actuator, a, &robot.actuators[a].name, "ctrlrange", msg),
+                LimitSource::Joint => {
+                    cx.at_attr(ElemKind::Joint, j.id, &j.name, "actuatorfrcrange", msg)
+                }
+                LimitSource::ActuatorForce(a) => {
+                    cx.at_attr(ElemKind::Actuator, a, &robot.actuators[a].name, "forcerange", msg)
+                }
+                LimitSource::MotorCtrl(a) => {
+                    cx.at_attr(ElemKind::Actuator, a, &robot.actuators[a].name, "ctrlrange", msg)
+                }
             };
             if let Some(s) = cx.spec {
                 if let Some(p) = &m.peak_torque {
@@ -157,7 +172,11 @@ impl Rule for EffortLimitMismatch {
             out.push(f);
         }
         // Missing limits: one finding when no actuated joint has one, else one per joint.
-        let n_act = robot.joints.iter().filter(|j| j.is_scalar() && !robot.actuators_on_joint(j.id).is_empty()).count();
+        let n_act = robot
+            .joints
+            .iter()
+            .filter(|j| j.is_scalar() && !robot.actuators_on_joint(j.id).is_empty())
+            .count();
         let err = |mut f: Finding| {
             if cx.level == cx.meta.default_level {
                 f.severity = Severity::Error;
@@ -178,14 +197,27 @@ impl Rule for EffortLimitMismatch {
         } else {
             for &ji in &missing {
                 let j = &robot.joints[ji];
-                let peak = cx.facts(&j.name).and_then(|f| f.motor).and_then(|fam| cx.spec?.motor(&fam)).and_then(|m| v(&m.peak_torque));
+                let peak = cx
+                    .facts(&j.name)
+                    .and_then(|f| f.motor)
+                    .and_then(|fam| cx.spec?.motor(&fam))
+                    .and_then(|m| v(&m.peak_torque));
                 let f = cx
-                    .at_elem(ElemKind::Joint, j.id, &j.name, format!("actuated joint `{}` has no force limit", j.name))
+                    .at_elem(
+                        ElemKind::Joint,
+                        j.id,
+                        &j.name,
+                        format!("actuated joint `{}` has no force limit", j.name),
+                    )
                     .label("no actuatorfrcrange / forcerange")
                     .note(note)
                     .help(match peak {
-                        Some(p) => format!("set actuatorfrcrange=\"-{p} {p}\" (spec peak torque)", p = fmt_num(p, 4)),
-                        None => "set actuatorfrcrange=\"-peak peak\" with the motor's peak torque".into(),
+                        Some(p) => format!(
+                            "set actuatorfrcrange=\"-{p} {p}\" (spec peak torque)",
+                            p = fmt_num(p, 4)
+                        ),
+                        None => "set actuatorfrcrange=\"-peak peak\" with the motor's peak torque"
+                            .into(),
                     })
                     .subject(Subject::Joint(j.id));
                 out.push(err(f));
@@ -196,7 +228,14 @@ impl Rule for EffortLimitMismatch {
         for (fam, &jid) in &used_families {
             let Some(m) = spec.motor(fam) else { continue };
             let (vl, st) = (v(&m.velocity_limit), v(&m.saturation_torque));
-            let Some(span) = m.velocity_limit.as_ref().map(|s| s.span()).or(m.saturation_torque.as_ref().map(|s| s.span())) else { continue };
+            let Some(span) = m
+                .velocity_limit
+                .as_ref()
+                .map(|s| s.span())
+                .or(m.saturation_torque.as_ref().map(|s| s.span()))
+            else {
+                continue;
+            };
             let mut parts = Vec::new();
             if let Some(x) = vl {
                 parts.push(format!("velocity limit {} rad/s", fmt_num(x, 4)));
@@ -207,7 +246,9 @@ impl Rule for EffortLimitMismatch {
             let joints: Vec<&str> = robot
                 .joints
                 .iter()
-                .filter(|j| cx.facts(&j.name).and_then(|f| f.motor).as_deref() == Some(fam.as_str()))
+                .filter(|j| {
+                    cx.facts(&j.name).and_then(|f| f.motor).as_deref() == Some(fam.as_str())
+                })
                 .map(|j| j.name.as_str())
                 .collect();
             let mut f = cx
@@ -237,11 +278,18 @@ impl Rule for EffortLimitMismatch {
 }
 
 /// A `<motor>`'s torque command range that disagrees with the joint's `actuatorfrcrange`.
-fn ctrl_contradicts_joint_limit(cx: &Context, j: &crate::model::Joint, acts: &[&crate::model::Actuator], tol: f64, unit: &str) -> Option<Finding> {
+fn ctrl_contradicts_joint_limit(
+    cx: &Context,
+    j: &crate::model::Joint,
+    acts: &[&crate::model::Actuator],
+    tol: f64,
+    unit: &str,
+) -> Option<Finding> {
     let robot = cx.robot;
     let r = mj::raw(&robot.mj);
     let njnt = r.njnt as usize;
-    if !mj::slice(r.jnt_actfrclimited, njnt).get(j.id).copied().unwrap_or(false) || acts.len() != 1 {
+    if !mj::slice(r.jnt_actfrclimited, njnt).get(j.id).copied().unwrap_or(false) || acts.len() != 1
+    {
         return None;
     }
     let a = acts[0];

@@ -53,7 +53,8 @@ impl Rule for SoftLimits {
     fn check(&self, cx: &Context, out: &mut Vec<Finding>) {
         let tol = cx.opt("tolerance");
         let factor = cx.spec.map(|s| s.soft_limit_factor());
-        let factor_loc = cx.spec.and_then(|s| s.robot.soft_limit_factor.as_ref().map(|f| s.loc(f.span())));
+        let factor_loc =
+            cx.spec.and_then(|s| s.robot.soft_limit_factor.as_ref().map(|f| s.loc(f.span())));
         // Findings that come from one default-class attribute are merged: key = span of the value.
         let mut groups: BTreeMap<(usize, usize, usize, u8), Vec<Finding>> = BTreeMap::new();
         for j in cx.robot.joints.iter().filter(|j| j.is_scalar()) {
@@ -74,7 +75,9 @@ impl Rule for SoftLimits {
                 continue;
             }
             for a in acts {
-                if !matches!(a.kind, ActuatorKind::Position { .. }) || !matches!(a.trn, Transmission::Joint | Transmission::JointInParent) {
+                if !matches!(a.kind, ActuatorKind::Position { .. })
+                    || !matches!(a.trn, Transmission::Joint | Transmission::JointInParent)
+                {
                     continue;
                 }
                 // A ctrlrange written in degrees is its own finding (ctrlrange-in-degrees).
@@ -98,7 +101,15 @@ impl Rule for SoftLimits {
                 let dev = exp.map(|e| ((c[0] - e[0]).abs()).max((c[1] - e[1]).abs()) / span);
                 let within_spec = dev.is_some_and(|d| d <= tol);
                 let (kind, msg) = if !a.ctrllimited {
-                    (0u8, format!("position actuator `{}` has no ctrlrange: the policy can command any target on joint `{}` (range {})", a.name, j.name, rng(r, u)))
+                    (
+                        0u8,
+                        format!(
+                            "position actuator `{}` has no ctrlrange: the policy can command any target on joint `{}` (range {})",
+                            a.name,
+                            j.name,
+                            rng(r, u)
+                        ),
+                    )
                 } else if covers && !within_spec {
                     let wider = c[0] < r[0] - eps || c[1] > r[1] + eps;
                     (
@@ -131,7 +142,9 @@ impl Rule for SoftLimits {
                 } else {
                     continue;
                 };
-                let attr = if cx.robot.elem(ElemKind::Actuator, a.id, &a.name).is_some_and(|e| !e.attrs.contains_key("ctrlrange") && e.attrs.contains_key("inheritrange")) {
+                let attr = if cx.robot.elem(ElemKind::Actuator, a.id, &a.name).is_some_and(|e| {
+                    !e.attrs.contains_key("ctrlrange") && e.attrs.contains_key("inheritrange")
+                }) {
                     "inheritrange"
                 } else {
                     "ctrlrange"
@@ -160,7 +173,11 @@ impl Rule for SoftLimits {
                     f = f.secondary(loc, format!("spec soft_limit_factor = {}", fmt_num(fct, 3)));
                 }
                 let (loc, class) = cx.robot.attr_loc(ElemKind::Actuator, a.id, &a.name, attr);
-                let key = if class.is_some() { (loc.file, loc.start, loc.end, kind) } else { (usize::MAX, a.id, 0, kind) };
+                let key = if class.is_some() {
+                    (loc.file, loc.start, loc.end, kind)
+                } else {
+                    (usize::MAX, a.id, 0, kind)
+                };
                 groups.entry(key).or_default().push(f);
             }
         }
@@ -170,15 +187,25 @@ impl Rule for SoftLimits {
                 continue;
             }
             let n = fs.len();
-            let names: Vec<String> = fs.iter().map(|f| f.element.trim_start_matches("actuator ").to_string()).collect();
+            let names: Vec<String> =
+                fs.iter().map(|f| f.element.trim_start_matches("actuator ").to_string()).collect();
             let mut f = fs.remove(0);
             let what = match f.message.contains("no ctrlrange") {
                 true => "have no ctrlrange".to_string(),
-                false if f.message.contains("is not the soft range") => "are not at the spec's soft range".to_string(),
+                false if f.message.contains("is not the soft range") => {
+                    "are not at the spec's soft range".to_string()
+                }
                 false => "cover their joints' whole hardware range".to_string(),
             };
-            f.help = Some(format!("set each actuator's ctrlrange to the centred soft range, e.g. inheritrange=\"{}\" in the default class", fmt_num(factor.unwrap_or(0.9), 3)));
-            f.message = format!("{n} position actuators {what} through one default class: {} (first: {})", names.join(", "), f.message);
+            f.help = Some(format!(
+                "set each actuator's ctrlrange to the centred soft range, e.g. inheritrange=\"{}\" in the default class",
+                fmt_num(factor.unwrap_or(0.9), 3)
+            ));
+            f.message = format!(
+                "{n} position actuators {what} through one default class: {} (first: {})",
+                names.join(", "),
+                f.message
+            );
             out.push(f);
         }
     }

@@ -64,14 +64,21 @@ impl Rule for ActuatorMapping {
         // Actuators whose gear sign contradicts the spec: their shifted ctrlrange is a consequence.
         let flipped = |a: &crate::model::Actuator| {
             a.target >= 0
-                && cx.facts(&robot.joints[a.target as usize].name).and_then(|f| f.direction).is_some_and(|d| a.gear * f64::from(d) < 0.0)
+                && cx
+                    .facts(&robot.joints[a.target as usize].name)
+                    .and_then(|f| f.direction)
+                    .is_some_and(|d| a.gear * f64::from(d) < 0.0)
         };
         // Position targets outside the joint range (partial overlap; full coverage is soft-limits').
         for a in &robot.actuators {
             if flipped(a) {
                 continue;
             }
-            if !matches!(a.kind, ActuatorKind::Position { .. }) || !matches!(a.trn, Transmission::Joint | Transmission::JointInParent) || !a.ctrllimited || a.target < 0 {
+            if !matches!(a.kind, ActuatorKind::Position { .. })
+                || !matches!(a.trn, Transmission::Joint | Transmission::JointInParent)
+                || !a.ctrllimited
+                || a.target < 0
+            {
                 continue;
             }
             let j = &robot.joints[a.target as usize];
@@ -153,7 +160,9 @@ impl Rule for ActuatorMapping {
                 continue;
             }
             // A force-unlimited extra actuator on a joint that already has a limited one.
-            let limited = |a: &&crate::model::Actuator| a.forcelimited || (a.kind == ActuatorKind::Motor && a.ctrllimited);
+            let limited = |a: &&crate::model::Actuator| {
+                a.forcelimited || (a.kind == ActuatorKind::Motor && a.ctrllimited)
+            };
             if acts.len() > 1 && acts.iter().any(limited) {
                 if let Some(a) = acts.iter().find(|a| !limited(a)) {
                     let f = cx
@@ -178,7 +187,10 @@ impl Rule for ActuatorMapping {
                 out.push(warn(spec_label(f)));
             }
             if let Some(d) = facts.direction {
-                for a in acts.iter().filter(|a| matches!(a.trn, Transmission::Joint | Transmission::JointInParent)) {
+                for a in acts
+                    .iter()
+                    .filter(|a| matches!(a.trn, Transmission::Joint | Transmission::JointInParent))
+                {
                     if a.gear * d as f64 >= 0.0 {
                         continue;
                     }
@@ -194,7 +206,9 @@ impl Rule for ActuatorMapping {
                 }
             }
         }
-        for (what, count, want) in [("actuated", n_act, &spec.robot.actuated), ("passive", n_passive, &spec.robot.passive)] {
+        for (what, count, want) in
+            [("actuated", n_act, &spec.robot.actuated), ("passive", n_passive, &spec.robot.passive)]
+        {
             let Some(w) = want else { continue };
             if count == *w.get_ref() {
                 continue;

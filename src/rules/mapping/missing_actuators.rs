@@ -41,7 +41,8 @@ impl Rule for MissingActuators {
         if !robot.actuators.is_empty() {
             return;
         }
-        let joints: Vec<&str> = robot.joints.iter().filter(|j| j.is_scalar()).map(|j| j.name.as_str()).collect();
+        let joints: Vec<&str> =
+            robot.joints.iter().filter(|j| j.is_scalar()).map(|j| j.name.as_str()).collect();
         if joints.is_empty() {
             return;
         }
@@ -49,7 +50,11 @@ impl Rule for MissingActuators {
         if spec_actuated == Some(0) {
             return;
         }
-        let spec_driven = robot.joints.iter().filter(|j| cx.facts(&j.name).is_some_and(|f| f.motor.is_some() && !f.passive)).count();
+        let spec_driven = robot
+            .joints
+            .iter()
+            .filter(|j| cx.facts(&j.name).is_some_and(|f| f.motor.is_some() && !f.passive))
+            .count();
         let mut shown: Vec<String> = joints.iter().take(8).map(|n| format!("`{n}`")).collect();
         if joints.len() > 8 {
             shown.push(format!("and {} more", joints.len() - 8));
@@ -67,9 +72,14 @@ impl Rule for MissingActuators {
             .with("joints", joints.len() as f64);
         if let Some(s) = cx.spec {
             if let Some(a) = &s.robot.actuated {
-                f = f.secondary(s.loc(a.span()), format!("the spec says {} joints are actuated", a.get_ref()));
+                f = f.secondary(
+                    s.loc(a.span()),
+                    format!("the spec says {} joints are actuated", a.get_ref()),
+                );
             }
-            if (spec_actuated.unwrap_or(0) > 0 || spec_driven > 0) && cx.level == cx.meta.default_level {
+            if (spec_actuated.unwrap_or(0) > 0 || spec_driven > 0)
+                && cx.level == cx.meta.default_level
+            {
                 f.severity = Severity::Error;
             }
         }

@@ -45,7 +45,12 @@ impl Rule for PassiveJointSpring {
         let robot = cx.robot;
         for j in robot.joints.iter().filter(|j| j.is_scalar()) {
             let Some(facts) = cx.facts(&j.name) else {
-                if j.stiffness > 0.0 && !(j.damping > 0.0) && !(j.frictionloss > 0.0) && !j.limited && robot.actuators_on_joint(j.id).is_empty() {
+                if j.stiffness > 0.0
+                    && !(j.damping > 0.0)
+                    && !(j.frictionloss > 0.0)
+                    && !j.limited
+                    && robot.actuators_on_joint(j.id).is_empty()
+                {
                     let mut f = cx
                         .at_attr(ElemKind::Joint, j.id, &j.name, "stiffness", format!("spring joint `{}` (stiffness {} N·m/rad) has no damping and no range", j.name, fmt_num(j.stiffness, 4)))
                         .label(format!("stiffness {}, damping 0, no range", fmt_num(j.stiffness, 4)))
@@ -80,7 +85,12 @@ impl Rule for PassiveJointSpring {
                     .label("stiffness 0")
                     .note("the real passive joint is spring-loaded; without stiffness it flops freely, gives no support in stance and the policy learns to ignore it (Asimov system identification §6)")
                     .help("set the identified stiffness (N·m/rad) on the joint, and springref to its rest angle");
-                out.push(spec_label(f).subject(Subject::Joint(j.id)).measured(j.stiffness, "N·m/rad").with("stiffness", j.stiffness));
+                out.push(
+                    spec_label(f)
+                        .subject(Subject::Joint(j.id))
+                        .measured(j.stiffness, "N·m/rad")
+                        .with("stiffness", j.stiffness),
+                );
             }
             if !(j.damping > 0.0) {
                 let f = cx
@@ -88,7 +98,9 @@ impl Rule for PassiveJointSpring {
                     .label("damping 0")
                     .note("an undamped spring joint rings after every touchdown, feeding oscillation into the contact the policy learns from")
                     .help("set the identified damping (N·m·s/rad) on the joint");
-                out.push(warn(spec_label(f)).subject(Subject::Joint(j.id)).with("damping", j.damping));
+                out.push(
+                    warn(spec_label(f)).subject(Subject::Joint(j.id)).with("damping", j.damping),
+                );
             }
             if !j.limited {
                 let f = cx

@@ -47,14 +47,19 @@ declare_rule! {
 
 fn companion(spec: &Spec, cx: &Context) -> Option<(PathBuf, crate::model::source::Loc)> {
     let c = spec.robot.companion_urdf.as_ref()?;
-    let base = cx.sources.file(spec.file).path.parent().map(|p| p.to_path_buf()).unwrap_or_default();
+    let base =
+        cx.sources.file(spec.file).path.parent().map(|p| p.to_path_buf()).unwrap_or_default();
     Some((base.join(c.get_ref()), spec.loc(c.span())))
 }
 
 /// Largest torque the model lets the joint's actuators apply, if bounded.
 fn model_effort(robot: &Robot, j: usize) -> Option<f64> {
     let acts = robot.actuators_on_joint(j);
-    let lim: Vec<f64> = acts.iter().filter(|a| a.forcelimited).map(|a| a.forcerange[0].abs().max(a.forcerange[1].abs())).collect();
+    let lim: Vec<f64> = acts
+        .iter()
+        .filter(|a| a.forcelimited)
+        .map(|a| a.forcerange[0].abs().max(a.forcerange[1].abs()))
+        .collect();
     if !lim.is_empty() {
         return lim.into_iter().reduce(f64::max);
     }
@@ -92,7 +97,11 @@ impl Rule for UrdfMjcfDrift {
         let urdf = match urdf_rs::read_file(&path) {
             Ok(u) => u,
             Err(e) => {
-                let why = if path.is_file() { format!("cannot be parsed: {e}") } else { "does not exist".to_string() };
+                let why = if path.is_file() {
+                    format!("cannot be parsed: {e}")
+                } else {
+                    "does not exist".to_string()
+                };
                 out.push(
                     cx.finding(format!("companion URDF {} {why}", path.display()), spec_loc)
                         .label("companion_urdf")
@@ -113,18 +122,33 @@ impl Rule for UrdfMjcfDrift {
             }
             let Some(j) = robot.joint(&uj.name) else { continue };
             let unit_r = if uj.joint_type == T::Prismatic { "m" } else { "rad" };
-            let tag = |f: Finding| f.secondary(spec_loc, format!("compared with {fname}")).subject(Subject::Joint(j.id));
+            let tag = |f: Finding| {
+                f.secondary(spec_loc, format!("compared with {fname}"))
+                    .subject(Subject::Joint(j.id))
+            };
             // Axis.
             let (ua, ma) = (unit(uj.axis.xyz.0), unit(j.axis));
             let d_same = (0..3).map(|k| (ua[k] - ma[k]).abs()).fold(0.0, f64::max);
             let d_flip = (0..3).map(|k| (ua[k] + ma[k]).abs()).fold(0.0, f64::max);
             let flipped = d_flip <= atol && d_same > atol;
-            let axis_s = |a: [f64; 3]| format!("({}, {}, {})", fmt_num(a[0], 3), fmt_num(a[1], 3), fmt_num(a[2], 3));
+            let axis_s = |a: [f64; 3]| {
+                format!("({}, {}, {})", fmt_num(a[0], 3), fmt_num(a[1], 3), fmt_num(a[2], 3))
+            };
             if d_same > atol {
                 let msg = if flipped {
-                    format!("joint `{}` axis {} is the URDF's axis {} reversed", j.name, axis_s(ma), axis_s(ua))
+                    format!(
+                        "joint `{}` axis {} is the URDF's axis {} reversed",
+                        j.name,
+                        axis_s(ma),
+                        axis_s(ua)
+                    )
                 } else {
-                    format!("joint `{}` axis {} differs from the URDF's {}", j.name, axis_s(ma), axis_s(ua))
+                    format!(
+                        "joint `{}` axis {} differs from the URDF's {}",
+                        j.name,
+                        axis_s(ma),
+                        axis_s(ua)
+                    )
                 };
                 out.push(tag(cx
                     .at_attr(ElemKind::Joint, j.id, &j.name, "axis", msg)
@@ -137,9 +161,15 @@ impl Rule for UrdfMjcfDrift {
                     .help("use the same axis in both files, or record the sign flip in the joint mapping")));
             }
             // Range.
-            let limited = uj.joint_type != T::Continuous && uj.limit.lower.is_finite() && uj.limit.upper.is_finite();
+            let limited = uj.joint_type != T::Continuous
+                && uj.limit.lower.is_finite()
+                && uj.limit.upper.is_finite();
             if limited && j.limited {
-                let ur = if flipped { [-uj.limit.upper, -uj.limit.lower] } else { [uj.limit.lower, uj.limit.upper] };
+                let ur = if flipped {
+                    [-uj.limit.upper, -uj.limit.lower]
+                } else {
+                    [uj.limit.lower, uj.limit.upper]
+                };
                 let dr = (j.range[0] - ur[0]).abs().max((j.range[1] - ur[1]).abs());
                 if dr > rtol {
                     out.push(tag(cx
@@ -154,9 +184,18 @@ impl Rule for UrdfMjcfDrift {
                         .expected(0.0, unit_r)));
                 }
             } else if limited != j.limited && uj.joint_type != T::Continuous {
-                out.push(tag(cx.at_elem(ElemKind::Joint, j.id, &j.name, format!(
-                    "joint `{}` is {} in the MJCF but {} in the URDF", j.name,
-                    if j.limited { "limited" } else { "unlimited" }, if limited { "limited" } else { "unlimited" }))
+                out.push(tag(cx
+                    .at_elem(
+                        ElemKind::Joint,
+                        j.id,
+                        &j.name,
+                        format!(
+                            "joint `{}` is {} in the MJCF but {} in the URDF",
+                            j.name,
+                            if j.limited { "limited" } else { "unlimited" },
+                            if limited { "limited" } else { "unlimited" }
+                        ),
+                    )
                     .note("one file lets the joint turn freely where the other stops it")
                     .help("limit the joint in both files")));
             }
@@ -166,8 +205,12 @@ impl Rule for UrdfMjcfDrift {
                     if rel_differs(me, uj.limit.effort, tol) {
                         let acts = robot.actuators_on_joint(j.id);
                         let f = match acts.first() {
-                            Some(a) if a.forcelimited => cx.at_attr(ElemKind::Actuator, a.id, &a.name, "forcerange", ""),
-                            Some(a) if a.kind == ActuatorKind::Motor && a.ctrllimited => cx.at_attr(ElemKind::Actuator, a.id, &a.name, "ctrlrange", ""),
+                            Some(a) if a.forcelimited => {
+                                cx.at_attr(ElemKind::Actuator, a.id, &a.name, "forcerange", "")
+                            }
+                            Some(a) if a.kind == ActuatorKind::Motor && a.ctrllimited => {
+                                cx.at_attr(ElemKind::Actuator, a.id, &a.name, "ctrlrange", "")
+                            }
                             _ => cx.at_attr(ElemKind::Joint, j.id, &j.name, "actuatorfrcrange", ""),
                         };
                         let mut f = tag(f
@@ -176,7 +219,12 @@ impl Rule for UrdfMjcfDrift {
                             .help("use the hardware torque limit in both files")
                             .measured(me, "N·m")
                             .expected(uj.limit.effort, "N·m"));
-                        f.message = format!("joint `{}` effort limit {} N·m in the MJCF differs from the URDF's {} N·m", j.name, fmt_num(me, 4), fmt_num(uj.limit.effort, 4));
+                        f.message = format!(
+                            "joint `{}` effort limit {} N·m in the MJCF differs from the URDF's {} N·m",
+                            j.name,
+                            fmt_num(me, 4),
+                            fmt_num(uj.limit.effort, 4)
+                        );
                         out.push(f);
                     }
                 }
@@ -205,7 +253,9 @@ impl Rule for UrdfMjcfDrift {
         }
         // Link masses.
         for link in &urdf.links {
-            let Some(b) = robot.bodies.iter().find(|b| b.name == link.name && b.id != 0) else { continue };
+            let Some(b) = robot.bodies.iter().find(|b| b.name == link.name && b.id != 0) else {
+                continue;
+            };
             let um = link.inertial.mass.value;
             if um > 0.0 && rel_differs(b.mass, um, tol) {
                 out.push(
