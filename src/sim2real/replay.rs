@@ -489,6 +489,9 @@ impl<'m> Replayer<'m> {
                     qfrc[info.dofadr] = io[i].tau;
                 }
             }
+            if k == 0 {
+                hold_delay_history(&mut d, t0, dt);
+            }
             set_base(&mut d, tk);
             d.step();
             if base_mode == BaseMode::Fixed {
@@ -616,6 +619,34 @@ pub fn replay_all(
             e
         })
         .collect()
+}
+
+/// Fills the control history of every actuator with a `delay` (MuJoCo's `nsample` buffer) with
+/// its first command, as if that command had been in force before the replay starts. A fresh
+/// `MjData` holds zeros there: a recording that starts mid-motion would otherwise drive the
+/// delayed actuators towards 0 for the first `delay` seconds (on the Asimov legs, 20 ms of
+/// target 0 kicked the bent knee, hip and ankle pitch joints into a 4–6 mrad transient against a
+/// 1 mrad noise floor on a clean recording). Must run after the first commands are written to
+/// `ctrl` and before the first step.
+fn hold_delay_history(d: &mut MjData<&MjModel>, t0: f64, dt: f64) {
+    let m = d.model();
+    let hist: Vec<[i32; 2]> = m.actuator_history().to_vec();
+    let ctrlnum: Vec<i32> = m.actuator_ctrlnum().to_vec();
+    let adr: Vec<i32> = m.actuator_ctrladr().to_vec();
+    for (a, h) in hist.iter().enumerate() {
+        let ns = h[0];
+        if ns <= 0 {
+            continue;
+        }
+        let (ns, nc) = (ns as usize, ctrlnum[a].max(0) as usize);
+        let c0 = adr[a].max(0) as usize;
+        let now: Vec<f64> = d.ctrl()[c0..c0 + nc].to_vec();
+        // Strictly increasing times ending one step before t0 (the first step appends t0).
+        let times: Vec<f64> = (0..ns).map(|i| t0 - (ns - i) as f64 * dt).collect();
+        let values: Vec<f64> = (0..ns).flat_map(|_| now.iter().copied()).collect();
+        // Errors only for a missing buffer or wrong lengths, both excluded above.
+        let _ = d.init_ctrl_history(a, Some(&times), &values);
+    }
 }
 
 #[cfg(test)]
