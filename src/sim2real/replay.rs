@@ -704,6 +704,43 @@ mod tests {
     }
 
     #[test]
+    fn delayed_actuator_starts_from_the_first_command_not_zero() {
+        // No gravity, no friction: a joint held at its command is at equilibrium, so the
+        // replay of a recording that holds q = q_cmd = 0.5 must stay at 0.5 exactly. A delay
+        // history left at zero would drive the servo towards 0 for the first 20 ms
+        // (kp 50 × 0.5 rad = 25 N·m on 0.01 kg·m²).
+        let xml = r#"<mujoco><option gravity="0 0 0" timestep="0.002"/>
+  <worldbody><body><joint name="j" type="hinge" axis="0 1 0"/>
+    <geom type="capsule" fromto="0 0 0 0.2 0 0" size="0.02" mass="0.5"/></body></worldbody>
+  <actuator><position joint="j" kp="50" kv="2" delay="0.02" nsample="10"/></actuator>
+</mujoco>"#;
+        let dir = std::env::temp_dir().join(format!("modellint-delay-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("delayed.xml");
+        std::fs::write(&path, xml).unwrap();
+        let mut map = crate::model::source::SourceMap::default();
+        let robot = crate::model::load(&mut map, &path, None).unwrap();
+        let n = 100;
+        let t: Vec<f64> = (0..n).map(|i| i as f64 * 0.005).collect();
+        let mut j = crate::sim2real::recording::JointTrace::new("j", vec![0.5; n]);
+        j.q_cmd = Some(vec![0.5; n]);
+        j.qd = Some(vec![0.0; n]);
+        let rec = Recording {
+            source: "r.csv".into(),
+            meta: Default::default(),
+            control_rate_hz: Some(100.0),
+            control_t0_s: None,
+            t,
+            joints: vec![j],
+            base: None,
+        };
+        let ep = replay(&robot, &rec, &ReplayOptions::default(), None).unwrap();
+        let worst = ep.q_sim[0].iter().map(|q| (q - 0.5).abs()).fold(0.0, f64::max);
+        assert!(worst < 1e-9, "the held joint moved by {worst} rad");
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
     fn dropped_command_rows_are_filled_before_the_hold() {
         let mut map = crate::model::source::SourceMap::default();
         let path =
