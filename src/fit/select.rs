@@ -745,13 +745,24 @@ fn greedy_round(
     };
     // Re-rank the diagnosis by the linearised (Gauss–Newton) explained residual: the
     // residual projected on the simulated sensitivity to a probe step of the effect.
+    // One probe simulation per (effect, joint), independent of each other: run them in
+    // parallel (each replay is itself parallel over episodes; results in a fixed order).
     let mut diag = diag;
-    for c in diag.iter_mut() {
+    let probes: Vec<Option<(f64, f64)>> = diag
+        .par_iter()
+        .map(|c| {
+            if covered(c.effect, &c.joint) {
+                None
+            } else {
+                engine.sensitivity(train, &applied, &tr_err, c)
+            }
+        })
+        .collect();
+    for (c, sens) in diag.iter_mut().zip(probes) {
         if covered(c.effect, &c.joint) {
             c.explained_rms = 0.0;
             continue;
         }
-        let sens = engine.sensitivity(train, &applied, &tr_err, c);
         if let Some((ems, coef)) = sens {
             c.evidence.insert("feature_explained_rms".into(), c.explained_rms);
             c.evidence.insert("sensitivity_coef".into(), coef);
@@ -863,6 +874,8 @@ fn greedy_round(
     // the fully fitted ones.
     let base_train = tr_err.rmse();
     let mut best_train = base_train;
+    // Fewest parameters of a kept candidate whose training residual is white on every joint.
+    let mut floor_k: Option<usize> = None;
     let mut ci = 0;
     while ci < cands.len() {
         let (e, group, ev) = cands[ci].clone();
@@ -873,6 +886,23 @@ fn greedy_round(
         );
         let extra = ci >= n_top;
         ci += 1;
+        // A kept candidate already left a white training residual: one with more parameters
+        // cannot explain more, and Occam's choice would not take it (`tried`: phase "floor").
+        if floor_k.is_some_and(|k| e.fitted() > k) {
+            out.tried.push(Tried {
+                round,
+                phase: "floor",
+                effect: e.id().into(),
+                joints: group.clone(),
+                params: vec![],
+                train_rmse: f64::NAN,
+                heldout_improvement: f64::NAN,
+                significant: false,
+                bic_decreased: false,
+                kept: false,
+            });
+            continue;
+        }
         // (Only multi-parameter effects: a 1-D fit is a 9-point grid plus golden section anyway,
         // and a coarse one misses scale parameters near zero, such as a small armature.)
         if extra && e.fitted() >= 2 {
@@ -922,6 +952,11 @@ fn greedy_round(
             bic_decreased: bic_after < bic_before,
             kept: false,
         });
+        if keep
+            && engine.floors(train, &tr_a).iter().all(|(_, ms, w)| *ms <= opts.white_ratio * w)
+        {
+            floor_k = Some(floor_k.map_or(e.fitted(), |k| k.min(e.fitted())));
+        }
         if keep {
             // Mirror completion: a kept one-joint candidate is also fitted on its left/right
             // pair, which then competes with it on held-out (the diagnosis ranks the two sides
