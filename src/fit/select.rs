@@ -229,18 +229,6 @@ impl<'a> Engine<'a> {
         phase: &'static str,
         candidate: Option<(usize, usize, String)>,
     ) {
-        if std::env::var_os("MODELLINT_TRACE").is_some() {
-            eprintln!(
-                "TRACE {:?} round {round} {phase} {:?} sims {}",
-                std::time::SystemTime::now()
-                    .duration_since(std::time::UNIX_EPOCH)
-                    .unwrap()
-                    .as_millis()
-                    % 1000000,
-                candidate,
-                self.sims.load(std::sync::atomic::Ordering::Relaxed)
-            );
-        }
         if let Some(p) = &self.opts.progress {
             (p.0)(&ProgressInfo {
                 round,
