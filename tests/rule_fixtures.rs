@@ -115,6 +115,71 @@ fn fixtures_produce_exactly_their_findings() {
     assert!(failures.is_empty(), "{}", failures.join("\n\n"));
 }
 
+/// Text output shows the relevant lines, not a long span whole: in every snippet box, each
+/// source line shown is within 2 lines of a labelled line or of the box's header line (the
+/// finding's location); the lines between distant labels are one `⋮` row.
+#[test]
+fn snippets_show_only_lines_near_their_labels() {
+    let mut elided = 0;
+    let mut boxes = 0;
+    for m in all_meta() {
+        for path in fixtures(m.id) {
+            if !path.file_name().unwrap().to_string_lossy().starts_with("invalid") {
+                continue;
+            }
+            let (_, rendered) = lint_one(&path, m.id);
+            elided += rendered.matches('⋮').count();
+            boxes += check_near_labels(&path, &rendered);
+        }
+    }
+    // The mirror-asymmetry and armature fixtures label lines far apart in one file.
+    assert!(elided >= 5, "expected elided runs in the fixtures, got {elided}");
+    assert!(boxes >= 20, "only {boxes} snippet boxes checked");
+}
+
+/// Checks one rendered report; returns the number of snippet boxes it holds.
+fn check_near_labels(path: &Path, rendered: &str) -> usize {
+    let lines: Vec<&str> = rendered.lines().collect();
+    let source_line = |l: &str| -> Option<usize> {
+        let t = l.trim_start();
+        let digits = t.chars().take_while(|c| c.is_ascii_digit()).count();
+        (digits > 0 && t[digits..].starts_with(" │")).then(|| t[..digits].parse().ok())?
+    };
+    let is_label = |l: &str| l.trim_start().starts_with('·');
+    let mut boxes = 0;
+    let mut i = 0;
+    while i < lines.len() {
+        let Some(head) = lines[i].trim_start().strip_prefix("╭─[") else {
+            i += 1;
+            continue;
+        };
+        boxes += 1;
+        let head_line: usize =
+            head.trim_end_matches(']').rsplit(':').nth(1).unwrap().parse().unwrap();
+        let end = (i..lines.len()).find(|&k| lines[k].trim_start().starts_with('╰')).unwrap();
+        let mut anchors = vec![head_line];
+        for k in i + 1..end {
+            if let Some(n) = source_line(lines[k])
+                && is_label(lines[k + 1])
+            {
+                anchors.push(n);
+            }
+        }
+        for k in i + 1..end {
+            if let Some(n) = source_line(lines[k]) {
+                let d = anchors.iter().map(|a| a.abs_diff(n)).min().unwrap();
+                assert!(
+                    d <= 2,
+                    "{}: line {n} is shown {d} lines away from any label:\n{rendered}",
+                    path.display()
+                );
+            }
+        }
+        i = end + 1;
+    }
+    boxes
+}
+
 /// Severities without a spec are honest (default friction 1 and condim 6 are info), and stating
 /// the intended friction in modellint.toml makes the same deviation a warning again.
 #[test]
