@@ -219,3 +219,85 @@ pub fn confirm(findings: &mut [Finding], mut plan: Plan<'_>) -> Runs {
     }
     runs
 }
+
+#[cfg(test)]
+mod tests {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+
+    use super::*;
+    use crate::lint::{LintInput, load};
+    use crate::model::source::Loc;
+
+    static RUNS: AtomicUsize = AtomicUsize::new(0);
+
+    /// A probe that counts its runs and echoes its key (no run for key 0).
+    struct Echo;
+    impl Probe for Echo {
+        const NAME: &'static str = "echo";
+        const UNAVAILABLE: &'static str = "nothing to echo";
+        type Key = usize;
+        type Output = usize;
+        fn run(_: &Loaded, key: usize) -> Option<usize> {
+            RUNS.fetch_add(1, Ordering::SeqCst);
+            (key != 0).then_some(key)
+        }
+        fn steps(out: &usize) -> usize {
+            *out * 10
+        }
+    }
+
+    /// Claims the echo is above a bound; `key: None` cannot be probed.
+    #[derive(Debug)]
+    struct Above {
+        key: Option<usize>,
+        bound: usize,
+    }
+    impl Claim for Above {
+        type Probe = Echo;
+        fn key(&self, _: &Loaded) -> Result<usize, &'static str> {
+            self.key.ok_or("no key")
+        }
+        fn judge(&self, _: &Loaded, out: &usize) -> Verdict {
+            let st = if *out > self.bound { ProbeStatus::Confirmed } else { ProbeStatus::Refuted };
+            Verdict::new(st, BTreeMap::from([("echo".to_string(), *out as f64)]), format!("{out}"))
+        }
+    }
+
+    #[test]
+    fn each_run_once_and_each_claim_judged() {
+        let input = LintInput {
+            model: "fixtures/rules/underdamped-pd-gains/invalid.xml".into(),
+            spec: None,
+            config: None,
+            select: vec![],
+            ignore: vec![],
+        };
+        let l = load(&input).unwrap();
+        let at = Loc { file: 0, start: 0, end: 1 };
+        let finding =
+            |key, bound| Finding::new("x", Severity::Error, "m", at).claim(Above { key, bound });
+        let mut fs = vec![
+            finding(Some(3), 1),
+            finding(Some(3), 5),
+            finding(Some(7), 1),
+            finding(Some(0), 1),
+            finding(None, 1),
+            Finding::new("x", Severity::Warning, "no claim", at),
+        ];
+        RUNS.store(0, Ordering::SeqCst);
+        confirm(&mut fs, Plan::new(&l));
+        // Keys 3, 7 and 0 once each; the claim without a key plans nothing.
+        assert_eq!(RUNS.load(Ordering::SeqCst), 3);
+        let status = |i: usize| fs[i].probe.as_ref().map(|p| (p.status, p.steps, p.note.clone()));
+        assert_eq!(status(0), Some((ProbeStatus::Confirmed, 30, "3".into())));
+        // Refuted: downgraded to info, and says so.
+        assert_eq!(status(1), Some((ProbeStatus::Refuted, 30, "3".into())));
+        assert_eq!(fs[1].severity, Severity::Info);
+        assert!(fs[1].message.ends_with("(refuted by simulation)"));
+        assert_eq!(status(2), Some((ProbeStatus::Confirmed, 70, "7".into())));
+        assert_eq!(status(3), Some((ProbeStatus::Skipped, 0, "nothing to echo".into())));
+        assert_eq!(status(4), Some((ProbeStatus::Skipped, 0, "no key".into())));
+        assert!(fs[5].probe.is_none());
+        assert!(fs.iter().take(5).all(|f| f.probe.as_ref().is_some_and(|p| p.name == "echo")));
+    }
+}
