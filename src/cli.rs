@@ -146,11 +146,21 @@ pub struct GapCmd {
     #[arg(long, default_value = "fixed", value_parser = ["fixed", "recorded", "free"])]
     pub base: String,
     /// Output format.
-    #[arg(long, default_value = "text", value_parser = ["text", "json"])]
-    pub format: String,
+    #[arg(long, value_enum, default_value_t = ResultFormat::Text)]
+    pub format: ResultFormat,
     /// Write an HTML report (inline SVG) into this directory.
     #[arg(long)]
     pub report: Option<PathBuf>,
+}
+
+/// `--format` of `gap` and `fit` (the lint's `--format` is [`crate::output::Format`], which
+/// adds SARIF and GitHub annotations for findings).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum ResultFormat {
+    /// Human-readable tables.
+    Text,
+    /// JSON on stdout.
+    Json,
 }
 
 #[derive(Args, Debug)]
@@ -204,8 +214,8 @@ pub struct FitCmd {
     #[arg(long, short)]
     pub quiet: bool,
     /// Output format.
-    #[arg(long, default_value = "text", value_parser = ["text", "json"])]
-    pub format: String,
+    #[arg(long, value_enum, default_value_t = ResultFormat::Text)]
+    pub format: ResultFormat,
     /// Write the model with the MuJoCo-expressible fitted values (MJCF text edited in place).
     #[arg(long)]
     pub write_model: Option<PathBuf>,
@@ -284,7 +294,7 @@ pub fn run() -> i32 {
                 .as_deref()
                 .and_then(crate::sim2real::commands::CommandTiming::parse),
             base: base_mode(&g.base),
-            json: g.format == "json",
+            json: g.format == ResultFormat::Json,
             report: g.report,
         }),
         Some(Cmd::Fit(f)) if f.servo.is_some() => {
@@ -305,7 +315,7 @@ pub fn run() -> i32 {
                 .and_then(crate::sim2real::commands::CommandTiming::parse),
             base: base_mode(&f.base),
             quiet: f.quiet,
-            json: f.format == "json",
+            json: f.format == ResultFormat::Json,
             write_model: f.write_model,
             write_actuators: f.write_actuators,
             report: f.report,
@@ -370,12 +380,10 @@ fn check(a: CheckArgs) -> i32 {
     let mut errors = Vec::new();
     let mut code = 0;
     for model in &a.models {
-        if multi {
-            if let Some(why) = crate::lint::not_a_model(model) {
-                eprintln!("modellint: skipping {}: {why}", model.display());
-                skipped.push(output::NotLinted::skipped(model, why));
-                continue;
-            }
+        if multi && let Some(why) = crate::lint::not_a_model(model) {
+            eprintln!("modellint: skipping {}: {why}", model.display());
+            skipped.push(output::NotLinted::skipped(model, why));
+            continue;
         }
         let input = LintInput {
             model: model.clone(),

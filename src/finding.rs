@@ -108,6 +108,8 @@ pub struct Finding {
     pub expected: Option<Quantity>,
     /// Extra numbers a probe can compare against (e.g. predicted damping ratio).
     pub data: BTreeMap<String, f64>,
+    /// What the rule's probe can check about this finding (the rule's typed claim).
+    pub claim: Option<std::sync::Arc<dyn crate::probe::ProbeCheck>>,
     pub probe: Option<ProbeOutcome>,
 }
 
@@ -133,6 +135,7 @@ impl Finding {
             measured: None,
             expected: None,
             data: BTreeMap::new(),
+            claim: None,
             probe: None,
         }
     }
@@ -167,6 +170,11 @@ impl Finding {
     }
     pub fn with(mut self, key: &str, v: f64) -> Self {
         self.data.insert(key.to_string(), v);
+        self
+    }
+    /// The claim the rule's probe checks (`--no-probe` leaves it unchecked).
+    pub fn claim(mut self, c: impl crate::probe::Claim) -> Self {
+        self.claim = Some(std::sync::Arc::new(c));
         self
     }
     pub fn secondary(mut self, loc: Loc, text: impl Into<String>) -> Self {

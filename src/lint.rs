@@ -199,9 +199,29 @@ fn apply_suppressions(l: &Loaded, findings: Vec<Finding>) -> Vec<Finding> {
 pub fn lint(l: &Loaded, probe: bool) -> Vec<Finding> {
     let mut findings = run_rules(l);
     if probe {
-        crate::probe::confirm_all(l, &mut findings);
+        confirm(l, &mut findings);
     }
     findings
+}
+
+/// Runs the probes: the claim of every finding that carries one, and the whole-model sanity run
+/// (whose misbehaviour is the finding `unstable-simulation`), all in parallel.
+pub fn confirm(l: &Loaded, findings: &mut Vec<Finding>) {
+    use crate::probe::{Plan, WholeModelSanity};
+    use crate::rules::control::unstable_simulation::{UnstableSimulation, finding};
+    let sanity = l.config.enabled(&UnstableSimulation::META);
+    let mut plan = Plan::new(l);
+    if sanity {
+        plan.add::<WholeModelSanity>(());
+    }
+    let runs = crate::probe::confirm(findings, plan);
+    if sanity
+        && let Some(run) = runs.get::<WholeModelSanity>(())
+        && let Some(f) = finding(l, l.config.level(&UnstableSimulation::META), run)
+    {
+        findings.push(f);
+    }
+    sort_findings(findings);
 }
 
 /// The note for a run without a spec (None when a spec is in use).

@@ -25,7 +25,7 @@ fn check(model: &str, spec: Option<&str>, snap: &str) {
     };
     let l = load(&input).unwrap_or_else(|e| panic!("{e}"));
     let mut f = run_rules(&l);
-    modellint::probe::confirm_all(&l, &mut f);
+    modellint::lint::confirm(&l, &mut f);
     let text = modellint::output::text::render(&l.sources, &f, false);
     let path = Path::new("tests/snapshots").join(snap);
     if std::env::var_os("UPDATE_SNAPSHOTS").is_some() {

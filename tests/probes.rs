@@ -62,7 +62,7 @@ fn settle_probe_confirms_the_low_toe() {
     let mut findings = run_rules(&l);
     findings.retain(|f| f.rule == "toe-tilt");
     assert!(!findings.is_empty());
-    modellint::probe::confirm_all(&l, &mut findings);
+    modellint::lint::confirm(&l, &mut findings);
     let p = findings.iter().find(|f| f.rule == "toe-tilt").and_then(|f| f.probe.clone()).unwrap();
     assert_eq!(p.status, ProbeStatus::Confirmed, "{}", p.note);
     // The raw measurement: some foot geom carries almost nothing after settling.

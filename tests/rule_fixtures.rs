@@ -1,6 +1,7 @@
 //! Fixtures are tests: every rule has `fixtures/rules/<id>/invalid*.xml` (must produce that
 //! rule's finding; rendered output is a reviewed snapshot `*.snap`) and `valid*.xml` (must
-//! produce none of it). A spec `<stem>.toml` beside a fixture is used for it.
+//! produce none of it). A spec `<stem>.toml` beside a fixture is used for it. For a rule with a
+//! probe, `<stem>.probed.snap` is the output with the probe simulations run.
 //! Set UPDATE_SNAPSHOTS=1 to rewrite snapshots, then review the diff.
 
 use std::path::{Path, PathBuf};
@@ -23,6 +24,12 @@ fn fixtures(id: &str) -> Vec<PathBuf> {
 }
 
 fn lint_one(path: &Path, id: &str) -> (Vec<modellint::finding::Finding>, String) {
+    lint_probed(path, id, id == "unstable-simulation")
+}
+
+/// As `lint_one`; with `probe`, the probe simulations run (the rule `unstable-simulation`
+/// exists only as a probe, so its plain snapshot is probed too).
+fn lint_probed(path: &Path, id: &str, probe: bool) -> (Vec<modellint::finding::Finding>, String) {
     let input = LintInput {
         model: path.to_path_buf(),
         spec: None,
@@ -33,9 +40,8 @@ fn lint_one(path: &Path, id: &str) -> (Vec<modellint::finding::Finding>, String)
     let loaded =
         load(&input).unwrap_or_else(|e| panic!("fixture {} failed to load: {e}", path.display()));
     let mut findings = run_rules(&loaded);
-    if id == "unstable-simulation" {
-        // This rule exists only as a probe: run the simulations.
-        modellint::probe::confirm_all(&loaded, &mut findings);
+    if probe {
+        modellint::lint::confirm(&loaded, &mut findings);
     }
     let rendered = text::render(&loaded.sources, &findings, false);
     (findings, rendered)
@@ -113,6 +119,129 @@ fn fixtures_produce_exactly_their_findings() {
         }
     }
     assert!(failures.is_empty(), "{}", failures.join("\n\n"));
+}
+
+/// Snapshots with the probes run, for every invalid fixture of a rule with a probe: what each
+/// probe concluded about each finding is reviewed like the rest of the output. Every such rule
+/// has at least one fixture whose findings the probe really checked (confirmed or refuted), and a
+/// finding's claim is for the probe its rule names.
+#[test]
+fn probed_fixtures_match_their_snapshots() {
+    use modellint::finding::ProbeStatus;
+    let update = std::env::var_os("UPDATE_SNAPSHOTS").is_some();
+    let mut failures = Vec::new();
+    for m in all_meta() {
+        let Some(probe) = m.probe else { continue };
+        if m.id == "unstable-simulation" {
+            continue; // its plain snapshot is the probed one
+        }
+        let mut decided = 0;
+        for path in fixtures(m.id) {
+            if !path.file_name().unwrap().to_string_lossy().starts_with("invalid") {
+                continue;
+            }
+            let (findings, rendered) = lint_probed(&path, m.id, true);
+            for f in findings.iter().filter(|f| f.rule == m.id) {
+                if let Some(c) = &f.claim {
+                    assert_eq!(c.probe_name(), probe, "{}: claim of {}", path.display(), m.id);
+                }
+                if let Some(p) = &f.probe {
+                    assert_eq!(p.name, probe, "{}", path.display());
+                    if matches!(p.status, ProbeStatus::Confirmed | ProbeStatus::Refuted) {
+                        decided += 1;
+                    }
+                }
+            }
+            let snap = path.with_extension("probed.snap");
+            if update {
+                std::fs::write(&snap, &rendered).unwrap();
+                continue;
+            }
+            match std::fs::read_to_string(&snap) {
+                Ok(s) if s == rendered => {}
+                Ok(s) => failures.push(format!(
+                    "{}: snapshot differs\n--- expected\n{s}\n--- got\n{rendered}",
+                    snap.display()
+                )),
+                Err(_) => failures.push(format!(
+                    "{}: missing snapshot (run with UPDATE_SNAPSHOTS=1)",
+                    snap.display()
+                )),
+            }
+        }
+        if decided == 0 {
+            failures.push(format!(
+                "rule {}: no fixture finding was confirmed or refuted by `{probe}`",
+                m.id
+            ));
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n\n"));
+}
+
+/// Text output shows the relevant lines, not a long span whole: in every snippet box, each
+/// source line shown is within 2 lines of a labelled line or of the box's header line (the
+/// finding's location); the lines between distant labels are one `⋮` row.
+#[test]
+fn snippets_show_only_lines_near_their_labels() {
+    let mut elided = 0;
+    let mut boxes = 0;
+    for m in all_meta() {
+        for path in fixtures(m.id) {
+            if !path.file_name().unwrap().to_string_lossy().starts_with("invalid") {
+                continue;
+            }
+            let (_, rendered) = lint_one(&path, m.id);
+            elided += rendered.matches('⋮').count();
+            boxes += check_near_labels(&path, &rendered);
+        }
+    }
+    // The mirror-asymmetry and armature fixtures label lines far apart in one file.
+    assert!(elided >= 5, "expected elided runs in the fixtures, got {elided}");
+    assert!(boxes >= 20, "only {boxes} snippet boxes checked");
+}
+
+/// Checks one rendered report; returns the number of snippet boxes it holds.
+fn check_near_labels(path: &Path, rendered: &str) -> usize {
+    let lines: Vec<&str> = rendered.lines().collect();
+    let source_line = |l: &str| -> Option<usize> {
+        let t = l.trim_start();
+        let digits = t.chars().take_while(|c| c.is_ascii_digit()).count();
+        (digits > 0 && t[digits..].starts_with(" │")).then(|| t[..digits].parse().ok())?
+    };
+    let is_label = |l: &str| l.trim_start().starts_with('·');
+    let mut boxes = 0;
+    let mut i = 0;
+    while i < lines.len() {
+        let Some(head) = lines[i].trim_start().strip_prefix("╭─[") else {
+            i += 1;
+            continue;
+        };
+        boxes += 1;
+        let head_line: usize =
+            head.trim_end_matches(']').rsplit(':').nth(1).unwrap().parse().unwrap();
+        let end = (i..lines.len()).find(|&k| lines[k].trim_start().starts_with('╰')).unwrap();
+        let mut anchors = vec![head_line];
+        for k in i + 1..end {
+            if let Some(n) = source_line(lines[k])
+                && is_label(lines[k + 1])
+            {
+                anchors.push(n);
+            }
+        }
+        for k in i + 1..end {
+            if let Some(n) = source_line(lines[k]) {
+                let d = anchors.iter().map(|a| a.abs_diff(n)).min().unwrap();
+                assert!(
+                    d <= 2,
+                    "{}: line {n} is shown {d} lines away from any label:\n{rendered}",
+                    path.display()
+                );
+            }
+        }
+        i = end + 1;
+    }
+    boxes
 }
 
 /// Severities without a spec are honest (default friction 1 and condim 6 are info), and stating

@@ -2,6 +2,7 @@
 //! units are resolved by MuJoCo itself); the XML source index supplies spans for diagnostics.
 
 pub mod cache;
+pub mod mirror;
 pub mod mj;
 pub mod mjcf;
 pub mod source;

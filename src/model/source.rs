@@ -121,11 +121,21 @@ impl XNode {
 /// Reads a file into the source map, with a clear error on failure.
 pub fn read_source(map: &mut SourceMap, path: &Path) -> Result<usize, LoadError> {
     let bytes = std::fs::read(path).map_err(|e| LoadError::io(path, &e))?;
+    let located = |line: usize, column: usize, message: String| LoadError {
+        line: Some(line),
+        column: Some(column),
+        ..LoadError::plain(path, message)
+    };
     let text = String::from_utf8(bytes).map_err(|e| {
-        LoadError::plain(path, format!("not valid UTF-8 (byte {})", e.utf8_error().valid_up_to()))
+        let at = e.utf8_error().valid_up_to();
+        // Line and column (in characters) of the first invalid byte.
+        let valid = String::from_utf8_lossy(&e.as_bytes()[..at]).into_owned();
+        let line = valid.matches('\n').count() + 1;
+        let column = valid.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+        located(line, column, format!("not valid UTF-8 (byte {at})"))
     })?;
     if text.trim().is_empty() {
-        return Err(LoadError::plain(path, "file is empty".to_string()));
+        return Err(located(1, 1, "file is empty".to_string()));
     }
     Ok(map.add(path.to_path_buf(), text))
 }

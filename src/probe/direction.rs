@@ -9,7 +9,24 @@
 //! * Budget: 0.3 s at the model's timestep.
 
 use super::bench::{self, Bench, Setup};
+use crate::lint::Loaded;
 use crate::model::{ActuatorKind, Robot};
+
+/// The probe: one actuator driven alone (key: the actuator's id).
+pub struct ActuatorDirection;
+
+impl super::Probe for ActuatorDirection {
+    const NAME: &'static str = "actuator-direction";
+    const UNAVAILABLE: &'static str = "could not set up the bench";
+    type Key = usize;
+    fn steps(out: &Direction) -> usize {
+        out.steps
+    }
+    type Output = Direction;
+    fn run(l: &Loaded, actuator: usize) -> Option<Direction> {
+        run(&l.robot, actuator)
+    }
+}
 
 #[derive(Debug, Clone)]
 pub struct Direction {

@@ -13,7 +13,33 @@
 use std::collections::BTreeMap;
 
 use super::bench::{self, Bench, Setup};
+use crate::lint::Loaded;
 use crate::model::{ActuatorKind, Robot};
+
+/// The probe: a step response of one joint (key: the joint's id).
+pub struct ImpulseResponse;
+
+impl super::Probe for ImpulseResponse {
+    const NAME: &'static str = "impulse-response";
+    const UNAVAILABLE: &'static str =
+        "joint has no PD servo to step (no position actuator, no spec kp/kd)";
+    type Key = usize;
+    fn steps(out: &StepResponse) -> usize {
+        out.steps
+    }
+    type Output = StepResponse;
+    fn run(l: &Loaded, joint: usize) -> Option<StepResponse> {
+        step_response(&l.robot, joint, spec_gains(l, joint))
+    }
+}
+
+/// The spec's kp/kd of the joint's motor family, for a joint driven by a torque motor.
+pub fn spec_gains(l: &Loaded, joint: usize) -> Option<(f64, f64)> {
+    let spec = l.spec.as_ref()?;
+    let facts = spec.joint(&l.robot.joints.get(joint)?.name)?;
+    let m = spec.motor(facts.motor.as_deref()?)?;
+    Some((crate::spec::v(&m.kp)?, crate::spec::v(&m.kd)?))
+}
 
 #[derive(Debug, Clone)]
 pub struct StepResponse {
@@ -172,8 +198,22 @@ pub fn analyse(y: &[f64], dt: f64, kp: f64, kd: f64, steps: usize) -> StepRespon
     StepResponse { steps, diverged: false, overshoot, zeta, omega_n, inertia, kp, kd }
 }
 
+/// What a diverged step response says.
+pub const DIVERGED: &str = "the step response diverged (NaN, MuJoCo warning or unbounded growth)";
+
+impl StepResponse {
+    /// ζ as shown: the number, or "≥ 1 (no overshoot)".
+    pub fn zeta_text(&self) -> String {
+        self.zeta.map(|z| crate::util::fmt_num(z, 3)).unwrap_or_else(|| "≥ 1 (no overshoot)".into())
+    }
+}
+
+/// The measured values by name, for the JSON output.
 pub fn measured_map(r: &StepResponse) -> BTreeMap<String, f64> {
     let mut m = BTreeMap::new();
+    if r.diverged {
+        m.insert("diverged".into(), 1.0);
+    }
     m.insert("overshoot".into(), r.overshoot);
     if let Some(z) = r.zeta {
         m.insert("zeta".into(), z);

@@ -9,7 +9,24 @@
 //! * Budget: 2 × 1 s at the model's timestep.
 
 use super::bench::{self, Bench, Setup};
+use crate::lint::Loaded;
 use crate::model::{Robot, mj};
+
+/// The probe: one actuator commanded to its ctrlrange extremes (key: the actuator's id).
+pub struct LimitApproach;
+
+impl super::Probe for LimitApproach {
+    const NAME: &'static str = "limit-approach";
+    const UNAVAILABLE: &'static str = "actuator does not drive a hinge or slide joint";
+    type Key = usize;
+    fn steps(out: &LimitHit) -> usize {
+        out.steps
+    }
+    type Output = LimitHit;
+    fn run(l: &Loaded, actuator: usize) -> Option<LimitHit> {
+        run(&l.robot, actuator)
+    }
+}
 
 #[derive(Debug, Clone)]
 pub struct LimitHit {

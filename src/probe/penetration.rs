@@ -8,7 +8,24 @@
 //! the contact is inactive (e.g. a `gap` larger than the overlap) and no force acts.
 
 use super::bench::{Bench, Setup};
+use crate::lint::Loaded;
 use crate::model::{Robot, mj};
+
+/// The probe: one pair of the robot's geoms at the keyframe (key: the two geom ids).
+pub struct KeyframePenetration;
+
+impl super::Probe for KeyframePenetration {
+    const NAME: &'static str = "keyframe-penetration";
+    const UNAVAILABLE: &'static str = "could not set up the bench";
+    type Key = (usize, usize);
+    fn steps(out: &Penetration) -> usize {
+        out.steps
+    }
+    type Output = Penetration;
+    fn run(l: &Loaded, (a, b): (usize, usize)) -> Option<Penetration> {
+        run(&l.robot, a, b)
+    }
+}
 
 /// Probe duration [s].
 pub const DURATION: f64 = 0.1;

@@ -3,34 +3,34 @@
 //! of the rule `unstable-simulation`.
 
 use super::bench::{self, Bench, Setup};
-use crate::declare_rule;
-use crate::finding::{Finding, ProbeOutcome, ProbeStatus, Severity};
+use crate::lint::Loaded;
 use crate::model::{Robot, mj};
-use crate::rules::RuleMeta;
 
-declare_rule! {
-    /// ## What it does
-    /// Runs the model for 1 s from its standing keyframe with small random position/torque
-    /// commands and reports MuJoCo warnings (bad qacc/qvel/qpos, full contact or constraint
-    /// buffers), NaN states, or a velocity blow-up.
-    ///
-    /// ## Why is this bad?
-    /// A model that blows up under small commands will blow up under a policy's exploration: the
-    /// training run resets constantly, and the policy learns from corrupted transitions.
-    ///
-    /// ## How it is confirmed
-    /// This finding *is* the probe `whole-model-sanity`: it exists only when the simulation
-    /// misbehaved. It is skipped with `--no-probe`.
-    ///
-    /// ## How to fix
-    /// Look at the first warning MuJoCo names: bad qacc usually means a near-singular inertia
-    /// (tiny masses with large armature ratios), gains too stiff for the timestep, or
-    /// interpenetrating geoms at the keyframe. Reduce the timestep or fix the offending element.
-    pub UnstableSimulation { id: "unstable-simulation", group: "control", level: Severity::Error, probe: Some("whole-model-sanity"), options: [] }
+/// The probe: the whole model under small random commands (one run per model).
+pub struct WholeModelSanity;
+
+impl super::Probe for WholeModelSanity {
+    const NAME: &'static str = "whole-model-sanity";
+    const WHOLE_MODEL: bool = true;
+    const UNAVAILABLE: &'static str = "could not set up the bench";
+    type Key = ();
+    fn steps(out: &Sanity) -> usize {
+        out.steps
+    }
+    type Output = Sanity;
+    fn run(l: &Loaded, (): ()) -> Option<Sanity> {
+        run(&l.robot)
+    }
 }
 
-pub fn meta() -> &'static RuleMeta {
-    &UnstableSimulation::META
+/// What the run saw.
+#[derive(Debug, Clone)]
+pub struct Sanity {
+    pub steps: usize,
+    /// Largest |q̇| before the run stopped.
+    pub max_speed: f64,
+    /// The first problem (a MuJoCo warning, NaN, a blow-up), if any.
+    pub problem: Option<String>,
 }
 
 const WARNING_NAMES: [&str; 7] = [
@@ -53,7 +53,7 @@ fn next(state: &mut u64) -> f64 {
     (z >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
 }
 
-pub fn run(robot: &Robot, level: Severity) -> Option<Finding> {
+pub fn run(robot: &Robot) -> Option<Sanity> {
     let b = Bench::new(robot, Setup::default())?;
     let mut d = b.data(robot);
     let dt = b.dt();
@@ -99,19 +99,5 @@ pub fn run(robot: &Robot, level: Severity) -> Option<Finding> {
             break;
         }
     }
-    let msg = problem?;
-    let mut f = Finding::new(meta().id, level, format!("simulation is unstable under small commands: {msg}"), robot.root_loc())
-        .note("a policy explores far more aggressively than ±5 % commands; training would reset or learn from corrupted states")
-        .help("reduce the timestep, check tiny masses / huge armature ratios, and interpenetrating geoms at the keyframe");
-    f.element = format!("model {}", robot.path.display());
-    let mut measured = std::collections::BTreeMap::new();
-    measured.insert("max_speed".into(), max_speed);
-    f.probe = Some(ProbeOutcome {
-        name: "whole-model-sanity".into(),
-        status: ProbeStatus::Confirmed,
-        measured,
-        steps,
-        note: msg,
-    });
-    Some(f)
+    Some(Sanity { steps, max_speed, problem })
 }

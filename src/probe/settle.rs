@@ -13,7 +13,93 @@
 use std::collections::{BTreeMap, BTreeSet};
 
 use super::bench::{Bench, Setup};
+use crate::lint::Loaded;
 use crate::model::{Robot, mj};
+
+/// The probe: the whole robot standing for 1 s (one run per model).
+pub struct StanceSettle;
+
+impl super::Probe for StanceSettle {
+    const NAME: &'static str = "stance-settle";
+    const WHOLE_MODEL: bool = true;
+    const UNAVAILABLE: &'static str = "could not set up the bench";
+    type Key = ();
+    fn steps(out: &Settle) -> usize {
+        out.steps
+    }
+    type Output = Settle;
+    fn run(l: &Loaded, (): ()) -> Option<Settle> {
+        run(&l.robot)
+    }
+}
+
+/// What a diverged settle says.
+pub const DIVERGED: &str = "the standing simulation diverged";
+
+/// What the settle measured around one foot: the body, its parent and its children.
+#[derive(Debug, Clone)]
+pub struct FootView {
+    /// The colliding geoms of those bodies.
+    pub geoms: Vec<usize>,
+    /// Their total mean normal load, N.
+    pub load: f64,
+    /// Most contact changes per second of any of the bodies.
+    pub chatter_per_s: f64,
+    /// Deepest penetration of any of the bodies, m.
+    pub penetration: f64,
+    /// Tilt of the body itself, degrees.
+    pub tilt_deg: f64,
+    /// The figures above (and each geom's load) by name, for the JSON output.
+    pub measured: BTreeMap<String, f64>,
+}
+
+impl Settle {
+    /// The mean load of one geom, N (0 when it never touched anything).
+    pub fn load(&self, geom: usize) -> f64 {
+        self.geom_load.get(&geom).copied().unwrap_or(0.0)
+    }
+
+    /// The measurements around the foot whose body is `body`.
+    pub fn foot(&self, robot: &Robot, body: usize) -> FootView {
+        let parent = robot.bodies.get(body).map(|b| b.parent);
+        let foot: Vec<usize> = robot
+            .bodies
+            .iter()
+            .filter(|b| b.id == body || b.parent == body || (parent == Some(b.id) && b.id != 0))
+            .map(|b| b.id)
+            .collect();
+        let geoms: Vec<usize> = robot
+            .geoms
+            .iter()
+            .filter(|g| g.collides() && foot.contains(&g.body))
+            .map(|g| g.id)
+            .collect();
+        let load: f64 = geoms.iter().map(|g| self.load(*g)).sum();
+        let mut m = BTreeMap::new();
+        m.insert("foot_load_n".into(), load);
+        for g in &geoms {
+            let gname = &robot.geoms[*g].name;
+            m.insert(
+                format!(
+                    "load.{}",
+                    if gname.is_empty() { format!("geom{g}") } else { gname.clone() }
+                ),
+                self.load(*g),
+            );
+        }
+        let worst = |per: &BTreeMap<usize, f64>| {
+            foot.iter().map(|b| per.get(b).copied().unwrap_or(0.0)).fold(0.0, f64::max)
+        };
+        let chatter_per_s = worst(&self.chatter_per_s);
+        let penetration = worst(&self.penetration);
+        let tilt_deg = self.body_tilt_deg.get(&body).copied().unwrap_or(0.0);
+        m.insert("chatter_per_s".into(), chatter_per_s);
+        m.insert("penetration_m".into(), penetration);
+        m.insert("tilt_deg".into(), tilt_deg);
+        m.insert("base_drop_m".into(), self.base_drop);
+        FootView { geoms, load, chatter_per_s, penetration, tilt_deg, measured: m }
+    }
+}
 
 #[derive(Debug, Clone, Default)]
 pub struct Settle {

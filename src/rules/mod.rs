@@ -32,7 +32,9 @@ pub struct RuleMeta {
     pub id: &'static str,
     pub group: &'static str,
     pub default_level: Severity,
-    /// Name of the probe simulation that can confirm the rule's findings, if any.
+    /// Name of the probe simulation that can confirm the rule's findings, if any: the
+    /// [`crate::probe::Probe::NAME`] of the type named in `declare_rule!`, whose claims the
+    /// rule's findings carry.
     pub probe: Option<&'static str>,
     pub options: &'static [RuleOption],
     /// Markdown from the rule's doc comment.
@@ -124,16 +126,19 @@ pub trait Rule: Sync {
     fn check(&self, cx: &Context, out: &mut Vec<Finding>);
 }
 
-/// Declares a rule type whose doc comment is its documentation.
+/// Declares a rule type whose doc comment is its documentation. `probe:` is `None` or the type
+/// of the probe (a [`crate::probe::Probe`]) whose claims the rule's findings carry.
 #[macro_export]
 macro_rules! declare_rule {
+    (@probe None) => { None };
+    (@probe $probe:ident) => { Some(<$probe as $crate::probe::Probe>::NAME) };
     (
         $(#[doc = $doc:expr])*
         pub $name:ident {
             id: $id:expr,
             group: $group:expr,
             level: $lvl:expr,
-            probe: $probe:expr,
+            probe: $probe:ident,
             options: [$($opt:expr),* $(,)?] $(,)?
         }
     ) => {
@@ -144,7 +149,7 @@ macro_rules! declare_rule {
                 id: $id,
                 group: $group,
                 default_level: $lvl,
-                probe: $probe,
+                probe: $crate::declare_rule!(@probe $probe),
                 options: &[$($opt),*],
                 docs: concat!($($doc, "\n"),*),
             };
@@ -225,7 +230,7 @@ pub mod meta_rules {
         vec![
             &UnusedSuppression::META,
             &InvalidSuppression::META,
-            crate::probe::sanity::meta(),
+            &control::unstable_simulation::UnstableSimulation::META,
             &crate::lint::TrailingXmlContent::META,
         ]
     }

@@ -1,5 +1,5 @@
-//! Which bodies are feet, which side they are on, and how left/right names mirror. Shared by
-//! the contact rules and `mirror-asymmetry`.
+//! Which bodies are feet and which side they are on. Shared by the contact rules and
+//! `collision-visual-mismatch`; left/right names mirror by [`crate::model::mirror`].
 //!
 //! Foot bodies come from the spec's `robot.foot_bodies` globs; without them, from body names
 //! containing `foot`, `ankle_roll`, `toe` or `sole`; failing that, the leaf bodies whose
@@ -7,99 +7,10 @@
 //! Each matched body that has no matched ancestor is a foot root; its descendants (and any
 //! other matched body on the same side, e.g. a separately matched toe) are its toe bodies.
 
+pub use crate::model::mirror::{Side, side_of};
 use crate::model::{GeomType, Robot};
 use crate::rules::geometry::shapes::Placed;
 use crate::spec::Spec;
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
-pub enum Side {
-    Left,
-    Right,
-}
-
-impl Side {
-    pub fn word(self) -> &'static str {
-        match self {
-            Side::Left => "left",
-            Side::Right => "right",
-        }
-    }
-}
-
-/// Left/right marker pairs to try, the spec's first.
-pub fn markers(spec: Option<&Spec>) -> Vec<(String, String)> {
-    let mut v = Vec::new();
-    if let Some(s) = spec {
-        if let (Some(l), Some(r)) = (&s.robot.left, &s.robot.right) {
-            v.push((l.clone(), r.clone()));
-        }
-    }
-    for (l, r) in LEG_PREFIXES {
-        v.push((l.to_string(), r.to_string()));
-    }
-    for (l, r) in [
-        ("left_", "right_"),
-        ("Left_", "Right_"),
-        ("_left", "_right"),
-        ("_Left", "_Right"),
-        ("l_", "r_"),
-        ("L_", "R_"),
-        ("_l", "_r"),
-        ("_L", "_R"),
-        ("Left", "Right"),
-        ("left", "right"),
-    ] {
-        v.push((l.to_string(), r.to_string()));
-    }
-    v
-}
-
-/// Quadruped leg prefixes: front/rear (or fore/hind) left ↔ right. Only ever a name's prefix.
-const LEG_PREFIXES: [(&str, &str); 8] = [
-    ("FL_", "FR_"),
-    ("RL_", "RR_"),
-    ("fl_", "fr_"),
-    ("rl_", "rr_"),
-    ("LF_", "RF_"),
-    ("LH_", "RH_"),
-    ("lf_", "rf_"),
-    ("lh_", "rh_"),
-];
-
-/// Replace one marker occurrence: short markers (`l_`, `_l`) only as a prefix / suffix.
-fn swap(name: &str, from: &str, to: &str) -> Option<String> {
-    if LEG_PREFIXES.iter().any(|(l, r)| *l == from || *r == from) {
-        return name.starts_with(from).then(|| format!("{to}{}", &name[from.len()..]));
-    }
-    let short = from.trim_matches('_').len() <= 1;
-    if short {
-        if from.ends_with('_') && name.starts_with(from) {
-            return Some(format!("{to}{}", &name[from.len()..]));
-        }
-        if from.starts_with('_') && name.ends_with(from) {
-            return Some(format!("{}{to}", &name[..name.len() - from.len()]));
-        }
-        return None;
-    }
-    name.contains(from).then(|| name.replacen(from, to, 1))
-}
-
-/// Side of a name and its mirrored counterpart, by the first marker pair that applies.
-pub fn mirror(name: &str, spec: Option<&Spec>) -> Option<(Side, String)> {
-    for (l, r) in markers(spec) {
-        if let Some(m) = swap(name, &l, &r) {
-            return Some((Side::Left, m));
-        }
-        if let Some(m) = swap(name, &r, &l) {
-            return Some((Side::Right, m));
-        }
-    }
-    None
-}
-
-pub fn side_of(name: &str, spec: Option<&Spec>) -> Option<Side> {
-    mirror(name, spec).map(|(s, _)| s)
-}
 
 #[derive(Debug, Clone)]
 pub struct Foot {
@@ -206,22 +117,4 @@ pub fn feet(robot: &Robot, spec: Option<&Spec>) -> Vec<Foot> {
     out.retain(|f| !f.geoms.is_empty());
     out.sort_by_key(|f| (f.side.map(|s| s as u8).unwrap_or(2), f.root));
     out
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    #[test]
-    fn mirror_names() {
-        assert_eq!(mirror("left_knee", None), Some((Side::Left, "right_knee".into())));
-        assert_eq!(mirror("Hip_Pitch_Right", None), Some((Side::Right, "Hip_Pitch_Left".into())));
-        assert_eq!(mirror("l_ankle", None), Some((Side::Left, "r_ankle".into())));
-        assert_eq!(mirror("ankle_r", None), Some((Side::Right, "ankle_l".into())));
-        assert_eq!(mirror("torso", None), None);
-        assert_eq!(mirror("wheel_rl", None), None);
-        assert_eq!(mirror("FL_calf", None), Some((Side::Left, "FR_calf".into())));
-        assert_eq!(mirror("RR_hip", None), Some((Side::Right, "RL_hip".into())));
-        assert_eq!(mirror("LH_KFE", None), Some((Side::Left, "RH_KFE".into())));
-        assert_eq!(mirror("HALF_link", None), None);
-    }
 }

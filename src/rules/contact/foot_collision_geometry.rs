@@ -1,7 +1,10 @@
 use crate::declare_rule;
-use crate::finding::{Finding, Severity, Subject};
+use crate::finding::{Finding, ProbeStatus, Severity, Subject};
+use crate::lint::Loaded;
 use crate::model::mjcf::ElemKind;
 use crate::model::{GeomType, Robot};
+use crate::probe::settle::{DIVERGED, Settle};
+use crate::probe::{Claim, StanceSettle, Verdict};
 use crate::rules::contact::feet::{Foot, feet};
 use crate::rules::geometry::shapes::{Placed, hull_area};
 use crate::rules::{Context, Rule, RuleMeta, opt};
@@ -52,7 +55,7 @@ declare_rule! {
         id: "foot-collision-geometry",
         group: "contact",
         level: Severity::Warning,
-        probe: Some("stance-settle"),
+        probe: StanceSettle,
         options: [
             opt("allow_boxes", 1.0, "bool", "1: box feet are acceptable primitives; 0: only capsules and spheres"),
             opt("min_radius", 0.003, "m", "smallest capsule/sphere radius"),
@@ -105,11 +108,58 @@ fn may_collide(robot: &Robot, a: usize, b: usize) -> bool {
 const MIRROR_REL: f64 = 0.02;
 const MIRROR_ABS: f64 = 0.0005;
 
+/// What the `stance-settle` probe checks: the foot's contacts chatter (more than 5 changes/s) or
+/// penetrate the floor by more than 5 mm while standing.
+#[derive(Debug)]
+pub struct FootContactUnsteady {
+    /// The foot's body.
+    pub body: usize,
+}
+
+impl Claim for FootContactUnsteady {
+    type Probe = StanceSettle;
+    fn key(&self, _: &Loaded) -> Result<(), &'static str> {
+        Ok(())
+    }
+    fn judge(&self, l: &Loaded, s: &Settle) -> Verdict {
+        if s.diverged {
+            return Verdict::new(ProbeStatus::Confirmed, Default::default(), DIVERGED);
+        }
+        let foot = s.foot(&l.robot, self.body);
+        let touching =
+            foot.geoms.iter().filter(|g| s.load(**g) > 0.02 * foot.load.max(1e-9)).count();
+        let note = format!(
+            "{} contact changes/s, {} mm deepest penetration, {} loaded contact geom(s)",
+            fmt_num(foot.chatter_per_s, 3),
+            fmt_num(foot.penetration * 1000.0, 3),
+            touching
+        );
+        let st = if foot.chatter_per_s > 5.0 || foot.penetration > 0.005 {
+            ProbeStatus::Confirmed
+        } else {
+            ProbeStatus::Inconclusive
+        };
+        Verdict::new(st, foot.measured, note)
+    }
+}
+
 impl Rule for FootCollisionGeometry {
     fn meta(&self) -> &'static RuleMeta {
         &Self::META
     }
     fn check(&self, cx: &Context, out: &mut Vec<Finding>) {
+        let first = out.len();
+        self.check_feet(cx, out);
+        for f in &mut out[first..] {
+            if let Subject::Foot(b) = f.subject {
+                f.claim = Some(std::sync::Arc::new(FootContactUnsteady { body: b }));
+            }
+        }
+    }
+}
+
+impl FootCollisionGeometry {
+    fn check_feet(&self, cx: &Context, out: &mut Vec<Finding>) {
         let robot = cx.robot;
         let allow_boxes = cx.opt("allow_boxes") != 0.0;
         let (rmin, rmax) = (cx.opt("min_radius"), cx.opt("max_radius"));

@@ -1,7 +1,10 @@
 use crate::declare_rule;
-use crate::finding::{Finding, Severity, Subject};
+use crate::finding::{Finding, ProbeStatus, Severity, Subject};
+use crate::lint::Loaded;
 use crate::model::mjcf::ElemKind;
 use crate::model::{GeomType, Robot};
+use crate::probe::settle::{DIVERGED, Settle};
+use crate::probe::{Claim, StanceSettle, Verdict};
 use crate::rules::contact::feet::{Foot, feet};
 use crate::rules::geometry::shapes::{Placed, tilt};
 use crate::rules::{Context, Rule, RuleMeta, opt};
@@ -45,7 +48,7 @@ declare_rule! {
         id: "toe-tilt",
         group: "contact",
         level: Severity::Warning,
-        probe: Some("stance-settle"),
+        probe: StanceSettle,
         options: [
             opt("max_height_spread", 0.001, "m", "largest height difference of a sole geom's lowest point from the sole height"),
             opt("max_tilt", 0.5, "deg", "largest angle between a flat contact feature and the ground"),
@@ -93,11 +96,81 @@ fn pose_word(robot: &Robot) -> String {
     }
 }
 
+/// What the `stance-settle` probe checks: after standing, a contact geom of the foot (the body,
+/// its parent and children) carries (almost) no load.
+#[derive(Debug)]
+pub struct ContactGeomUnloaded {
+    /// The body of the tilted geom.
+    pub body: usize,
+}
+
+impl Claim for ContactGeomUnloaded {
+    type Probe = StanceSettle;
+    fn key(&self, _: &Loaded) -> Result<(), &'static str> {
+        Ok(())
+    }
+    fn judge(&self, l: &Loaded, s: &Settle) -> Verdict {
+        if s.diverged {
+            return Verdict::new(ProbeStatus::Confirmed, Default::default(), DIVERGED);
+        }
+        let foot = s.foot(&l.robot, self.body);
+        let total = foot.load;
+        let unloaded: Vec<String> = foot
+            .geoms
+            .iter()
+            .filter(|g| s.load(**g) < 0.02 * total)
+            .map(|g| crate::rules::display_name(&l.robot.geoms[*g].name, *g))
+            .collect();
+        let m = foot.measured;
+        if total <= 1e-6 {
+            Verdict::new(
+                ProbeStatus::Inconclusive,
+                m,
+                "the foot carries no load at all after settling",
+            )
+        } else if !unloaded.is_empty() {
+            Verdict::new(
+                ProbeStatus::Confirmed,
+                m,
+                format!(
+                    "after 1 s standing, {} carr{} < 2 % of the foot's {} N",
+                    unloaded.join(", "),
+                    if unloaded.len() == 1 { "ies" } else { "y" },
+                    fmt_num(total, 3)
+                ),
+            )
+        } else {
+            Verdict::new(
+                ProbeStatus::Refuted,
+                m,
+                format!(
+                    "every contact geom of the foot carries load ({} N in all)",
+                    fmt_num(total, 3)
+                ),
+            )
+        }
+    }
+}
+
 impl Rule for ToeTilt {
     fn meta(&self) -> &'static RuleMeta {
         &Self::META
     }
     fn check(&self, cx: &Context, out: &mut Vec<Finding>) {
+        let first = out.len();
+        self.check_feet(cx, out);
+        for f in &mut out[first..] {
+            if let Subject::Geom(g) = f.subject
+                && let Some(geom) = cx.robot.geoms.get(g)
+            {
+                f.claim = Some(std::sync::Arc::new(ContactGeomUnloaded { body: geom.body }));
+            }
+        }
+    }
+}
+
+impl ToeTilt {
+    fn check_feet(&self, cx: &Context, out: &mut Vec<Finding>) {
         let robot = cx.robot;
         let spread = cx.opt("max_height_spread");
         let max_tilt = cx.opt("max_tilt");

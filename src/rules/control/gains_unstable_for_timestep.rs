@@ -1,6 +1,9 @@
 use crate::declare_rule;
-use crate::finding::{Finding, Severity, Subject};
+use crate::finding::{Finding, ProbeStatus, Severity, Subject};
+use crate::lint::Loaded;
 use crate::model::mjcf::ElemKind;
+use crate::probe::impulse::{DIVERGED, StepResponse, measured_map};
+use crate::probe::{Claim, ImpulseResponse, Verdict};
 use crate::rules::control::underdamped_pd_gains::{GainSource, pd_joints};
 use crate::rules::{Context, Rule, RuleMeta, opt};
 use crate::util::fmt_num;
@@ -31,11 +34,50 @@ declare_rule! {
         id: "gains-unstable-for-timestep",
         group: "control",
         level: Severity::Error,
-        probe: Some("impulse-response"),
+        probe: ImpulseResponse,
         options: [
             opt("max_omega_dt", 2.0, "", "stability bound on ω_n·dt for explicit stiffness (undamped)"),
             opt("accuracy_fraction", 0.5, "", "warn above this fraction of the bound (loss of accuracy)"),
         ],
+    }
+}
+
+/// What the `impulse-response` probe checks: the integrated step response diverges, or its
+/// natural frequency is more than 10 % off the analytic one.
+#[derive(Debug)]
+pub struct DistortedByTimestep {
+    pub joint: usize,
+    /// The analytic ω_n of the finding, rad/s.
+    pub omega_n: f64,
+}
+
+impl Claim for DistortedByTimestep {
+    type Probe = ImpulseResponse;
+    fn key(&self, _: &Loaded) -> Result<usize, &'static str> {
+        Ok(self.joint)
+    }
+    fn judge(&self, _: &Loaded, r: &StepResponse) -> Verdict {
+        let m = measured_map(r);
+        if r.diverged {
+            return Verdict::new(ProbeStatus::Confirmed, m, DIVERGED);
+        }
+        let p = self.omega_n;
+        match r.omega_n {
+            Some(w) if ((w - p) / p).abs() > 0.1 => Verdict::new(
+                ProbeStatus::Confirmed,
+                m,
+                format!(
+                    "integration distorts the response: measured ω_n = {} rad/s vs {} rad/s analytic",
+                    fmt_num(w, 3),
+                    fmt_num(p, 3)
+                ),
+            ),
+            _ => Verdict::new(
+                ProbeStatus::Refuted,
+                m,
+                format!("stable and accurate step response (ζ = {})", r.zeta_text()),
+            ),
+        }
     }
 }
 
@@ -139,6 +181,7 @@ impl Rule for GainsUnstableForTimestep {
                 })
                 .label(format!("ω_n·dt = {}", fmt_num(wdt, 3)))
                 .subject(Subject::Joint(j.id))
+                .claim(DistortedByTimestep { joint: j.id, omega_n: w })
                 .measured(wdt, "")
                 .expected(bound, "")
                 .with("omega_n", w)

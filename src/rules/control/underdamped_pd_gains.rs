@@ -1,7 +1,10 @@
 use crate::declare_rule;
-use crate::finding::{Finding, Severity, Subject};
+use crate::finding::{Finding, ProbeStatus, Severity, Subject};
+use crate::lint::Loaded;
 use crate::model::mjcf::ElemKind;
 use crate::model::{ActuatorKind, Robot, Transmission};
+use crate::probe::impulse::{DIVERGED, StepResponse, measured_map};
+use crate::probe::{Claim, ImpulseResponse, Verdict};
 use crate::rules::{Context, Rule, RuleMeta, opt};
 use crate::spec::v;
 use crate::util::fmt_num;
@@ -35,8 +38,48 @@ declare_rule! {
         id: "underdamped-pd-gains",
         group: "control",
         level: Severity::Error,
-        probe: Some("impulse-response"),
+        probe: ImpulseResponse,
         options: [opt("min_damping_ratio", 0.7, "", "smallest acceptable closed-loop damping ratio ζ")],
+    }
+}
+
+/// What the `impulse-response` probe checks: a step of the joint's target rings with a measured
+/// ζ below the threshold (or diverges).
+#[derive(Debug)]
+pub struct Underdamped {
+    pub joint: usize,
+    /// The analytic ζ of the finding.
+    pub predicted: f64,
+    pub threshold: f64,
+}
+
+impl Claim for Underdamped {
+    type Probe = ImpulseResponse;
+    fn key(&self, _: &Loaded) -> Result<usize, &'static str> {
+        Ok(self.joint)
+    }
+    fn judge(&self, _: &Loaded, r: &StepResponse) -> Verdict {
+        let m = measured_map(r);
+        if r.diverged {
+            return Verdict::new(ProbeStatus::Confirmed, m, DIVERGED);
+        }
+        let zs = r.zeta_text();
+        let pred = format!(" (predicted {})", fmt_num(self.predicted, 3));
+        match r.zeta {
+            Some(z) if z < self.threshold => Verdict::new(
+                ProbeStatus::Confirmed,
+                m,
+                format!(
+                    "measured ζ = {zs}{pred}, overshoot {:.1} % on a 0.05 rad step",
+                    100.0 * r.overshoot
+                ),
+            ),
+            _ => Verdict::new(
+                ProbeStatus::Refuted,
+                m,
+                format!("measured ζ = {zs}{pred} is not below {}", self.threshold),
+            ),
+        }
     }
 }
 
@@ -221,6 +264,7 @@ impl Rule for UnderdampedPdGains {
                 .help(help)
                 .label(format!("ζ = {}", fmt_num(z, 3)))
                 .subject(Subject::Joint(j.id))
+                .claim(Underdamped { joint: j.id, predicted: z, threshold: zmin })
                 .measured(z, "")
                 .expected(zmin, "")
                 .with("zeta", z)

@@ -1,8 +1,8 @@
 use crate::declare_rule;
 use crate::finding::{Finding, Severity, Subject};
+use crate::model::mirror::{Side, mirror};
 use crate::model::mjcf::ElemKind;
 use crate::model::{ActuatorKind, Robot};
-use crate::rules::contact::feet::{Side, mirror};
 use crate::rules::{Context, Rule, RuleMeta, opt};
 use crate::util::fmt_num;
 

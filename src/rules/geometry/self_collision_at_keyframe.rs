@@ -3,9 +3,12 @@ use std::collections::BTreeMap;
 use mujoco_rs::prelude::*;
 
 use crate::declare_rule;
-use crate::finding::{Finding, Severity, Subject};
+use crate::finding::{Finding, ProbeStatus, Severity, Subject};
+use crate::lint::Loaded;
 use crate::model::mjcf::ElemKind;
 use crate::model::{GeomType, Robot, mj};
+use crate::probe::penetration::{self, Penetration};
+use crate::probe::{Claim, KeyframePenetration, Verdict};
 use crate::rules::{Context, Rule, RuleMeta, opt};
 use crate::util::fmt_num;
 
@@ -39,7 +42,7 @@ declare_rule! {
         id: "self-collision-at-keyframe",
         group: "geometry",
         level: Severity::Warning,
-        probe: Some("keyframe-penetration"),
+        probe: KeyframePenetration,
         options: [opt("min_depth", 0.001, "m", "smallest penetration depth reported")],
     }
 }
@@ -81,6 +84,59 @@ fn gdesc(robot: &Robot, g: usize) -> String {
     format!("{name} (body {})", robot.body_name(geom.body))
 }
 
+/// What the `keyframe-penetration` probe checks: MuJoCo pushes the overlapping pair apart at the
+/// keyframe.
+#[derive(Debug)]
+pub struct PushedApart {
+    pub geoms: (usize, usize),
+}
+
+impl Claim for PushedApart {
+    type Probe = KeyframePenetration;
+    fn key(&self, _: &Loaded) -> Result<(usize, usize), &'static str> {
+        Ok(self.geoms)
+    }
+    fn judge(&self, _: &Loaded, p: &Penetration) -> Verdict {
+        let mut m = BTreeMap::new();
+        m.insert("depth_m".into(), -p.depth0);
+        m.insert("contact_force_n".into(), p.contact_force);
+        m.insert("separation_speed_m_s".into(), p.separation_speed);
+        m.insert("distance_after_m".into(), p.dist_end);
+        if let Some(t) = p.clear_time {
+            m.insert("clear_time_s".into(), t);
+        }
+        let pushes = p.contact_force > 0.0; // NaN: no force
+        if !pushes {
+            return Verdict::new(
+                ProbeStatus::Refuted,
+                m,
+                "MuJoCo applies no force between the pair at the keyframe (the contact is inactive, e.g. its gap exceeds the overlap)",
+            );
+        }
+        let clears = p
+            .clear_time
+            .map(|t| format!(", clear of each other after {} ms", fmt_num(t * 1000.0, 3)))
+            .unwrap_or_default();
+        let motion = if p.separation_speed >= penetration::JOLT_SPEED {
+            format!("the pair jumps apart at up to {} m/s{clears}", fmt_num(p.separation_speed, 3))
+        } else {
+            format!(
+                "the joints cannot separate them (at most {} m/s over {} s): the force and its friction act on every motion of the two links",
+                fmt_num(p.separation_speed, 3),
+                fmt_num(penetration::DURATION, 3)
+            )
+        };
+        Verdict::new(
+            ProbeStatus::Confirmed,
+            m,
+            format!(
+                "at the keyframe (base on a stand, commands held) MuJoCo pushes the pair apart with {} N; {motion}",
+                fmt_num(p.contact_force, 4)
+            ),
+        )
+    }
+}
+
 impl Rule for SelfCollisionAtKeyframe {
     fn meta(&self) -> &'static RuleMeta {
         &Self::META
@@ -111,6 +167,7 @@ impl Rule for SelfCollisionAtKeyframe {
                     .note("overlapping geoms in the initial pose push apart with large contact forces on the first step, so every episode starts with a jolt the hardware never experiences")
                     .help("shrink or move the geoms so they clear each other in this pose, or filter the pair with <contact><exclude body1=.. body2=../></contact> or contype/conaffinity if the links cannot touch on the hardware")
                     .subject(Subject::Geom(a))
+                    .claim(PushedApart { geoms: (a, b) })
                     .measured(depth, "m")
                     .expected(0.0, "m")
                     .with("depth_m", depth)

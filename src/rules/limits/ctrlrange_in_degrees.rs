@@ -3,6 +3,8 @@ use crate::finding::{Finding, Severity, Subject};
 use crate::model::mjcf::ElemKind;
 use crate::model::source::XNode;
 use crate::model::{Actuator, ActuatorKind, JointType, Robot, Transmission};
+use crate::probe::LimitApproach;
+use crate::rules::limits::soft_limits::ReachesHardStop;
 use crate::rules::{Context, Rule, RuleMeta, opt};
 use crate::util::fmt_num;
 
@@ -30,7 +32,7 @@ declare_rule! {
         id: "ctrlrange-in-degrees",
         group: "limits",
         level: Severity::Error,
-        probe: Some("limit-approach"),
+        probe: LimitApproach,
         options: [opt("ratio_tolerance", 0.05, "fraction", "how close ctrlrange/range must be to 180/π to count as degrees")],
     }
 }
@@ -109,6 +111,7 @@ impl Rule for CtrlrangeInDegrees {
                 .note("`<compiler angle=\"degree\">` converts joint ranges but never ctrlrange: the servo target range is 57.3× too wide and the policy's action scaling is wrong")
                 .help(format!("ctrlrange=\"{} {}\" (radians), or inheritrange=\"0.9\"", fmt_num(rad[0], 4), fmt_num(rad[1], 4)))
                 .subject(Subject::Actuator(a.id))
+                .claim(ReachesHardStop { actuator: a.id })
                 .measured(a.ctrlrange[1] - a.ctrlrange[0], "rad")
                 .expected(j.range[1] - j.range[0], "rad");
             out.push(f);

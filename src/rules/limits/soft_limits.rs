@@ -1,9 +1,12 @@
 use std::collections::BTreeMap;
 
 use crate::declare_rule;
-use crate::finding::{Finding, Severity, Subject};
+use crate::finding::{Finding, ProbeStatus, Severity, Subject};
+use crate::lint::Loaded;
 use crate::model::mjcf::ElemKind;
 use crate::model::{ActuatorKind, JointType, Transmission};
+use crate::probe::limit::LimitHit;
+use crate::probe::{Claim, LimitApproach, Verdict};
 use crate::rules::{Context, Rule, RuleMeta, opt};
 use crate::util::fmt_num;
 
@@ -33,7 +36,7 @@ declare_rule! {
         id: "soft-limits",
         group: "limits",
         level: Severity::Warning,
-        probe: Some("limit-approach"),
+        probe: LimitApproach,
         options: [opt("tolerance", 0.02, "fraction of joint range", "allowed deviation of each ctrlrange end from the soft range")],
     }
 }
@@ -46,11 +49,66 @@ fn rng(r: [f64; 2], u: &str) -> String {
     format!("[{}, {}] {u}", fmt_num(r[0], 4), fmt_num(r[1], 4))
 }
 
+/// What the `limit-approach` probe checks: commanding the actuator's ctrlrange extremes drives
+/// its joint into the hard stop.
+#[derive(Debug)]
+pub struct ReachesHardStop {
+    pub actuator: usize,
+}
+
+impl Claim for ReachesHardStop {
+    type Probe = LimitApproach;
+    fn key(&self, _: &Loaded) -> Result<usize, &'static str> {
+        Ok(self.actuator)
+    }
+    fn judge(&self, _: &Loaded, h: &LimitHit) -> Verdict {
+        let m = BTreeMap::from([
+            ("hit".to_string(), if h.hit { 1.0 } else { 0.0 }),
+            ("impact_velocity".to_string(), h.impact_velocity),
+            ("max_limit_force".to_string(), h.max_limit_force),
+        ]);
+        if h.hit {
+            Verdict::new(
+                ProbeStatus::Confirmed,
+                m,
+                format!(
+                    "commanding the ctrlrange extreme drove the joint into its hard stop at {} rad/s (limit force up to {} N·m)",
+                    fmt_num(h.impact_velocity, 3),
+                    fmt_num(h.max_limit_force, 3)
+                ),
+            )
+        } else {
+            Verdict::new(
+                ProbeStatus::Refuted,
+                m,
+                "the commanded extremes never reached the hard stop",
+            )
+        }
+    }
+}
+
+/// Attaches [`ReachesHardStop`] to the findings about one actuator.
+pub fn claim_hard_stops(findings: &mut [Finding]) {
+    for f in findings {
+        if let Subject::Actuator(a) = f.subject {
+            f.claim = Some(std::sync::Arc::new(ReachesHardStop { actuator: a }));
+        }
+    }
+}
+
 impl Rule for SoftLimits {
     fn meta(&self) -> &'static RuleMeta {
         &Self::META
     }
     fn check(&self, cx: &Context, out: &mut Vec<Finding>) {
+        let first = out.len();
+        self.check_ranges(cx, out);
+        claim_hard_stops(&mut out[first..]);
+    }
+}
+
+impl SoftLimits {
+    fn check_ranges(&self, cx: &Context, out: &mut Vec<Finding>) {
         let tol = cx.opt("tolerance");
         let factor = cx.spec.map(|s| s.soft_limit_factor());
         let factor_loc =

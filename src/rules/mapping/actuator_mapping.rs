@@ -1,7 +1,12 @@
+use std::collections::BTreeMap;
+
 use crate::declare_rule;
-use crate::finding::{Finding, Severity, Subject};
+use crate::finding::{Finding, ProbeStatus, Severity, Subject};
+use crate::lint::Loaded;
 use crate::model::mjcf::ElemKind;
 use crate::model::{ActuatorKind, Transmission};
+use crate::probe::direction::Direction;
+use crate::probe::{ActuatorDirection, Claim, Verdict};
 use crate::rules::{Context, Rule, RuleMeta};
 use crate::util::fmt_num;
 
@@ -32,8 +37,67 @@ declare_rule! {
         id: "actuator-mapping",
         group: "mapping",
         level: Severity::Error,
-        probe: Some("actuator-direction"),
+        probe: ActuatorDirection,
         options: [],
+    }
+}
+
+/// What the `actuator-direction` probe checks about an actuator: with a spec direction, that a
+/// positive command moves its joint against it; without, that it moves nothing, or moves another
+/// joint more than its own target.
+#[derive(Debug)]
+pub struct MisdirectedActuator {
+    pub actuator: usize,
+    /// The spec's `direction` of the target joint (+1 / -1), when the finding is about it.
+    pub expected: Option<i32>,
+}
+
+impl Claim for MisdirectedActuator {
+    type Probe = ActuatorDirection;
+    fn key(&self, _: &Loaded) -> Result<usize, &'static str> {
+        Ok(self.actuator)
+    }
+    fn judge(&self, l: &Loaded, d: &Direction) -> Verdict {
+        let robot = &l.robot;
+        let mut m = BTreeMap::new();
+        for (j, dq) in &d.moved {
+            m.insert(format!("dq.{}", robot.joints[*j].name), *dq);
+        }
+        if d.moved.is_empty() {
+            return Verdict::new(ProbeStatus::Confirmed, m, "a positive command moved no joint");
+        }
+        let act = &robot.actuators[self.actuator];
+        let target = (act.target >= 0).then_some(act.target as usize);
+        let on_target =
+            target.and_then(|t| d.moved.iter().find(|(j, _)| *j == t)).map(|(_, dq)| *dq);
+        if let Some(expected) = self.expected {
+            return match on_target {
+                Some(dq) if dq.signum() != f64::from(expected).signum() => Verdict::new(
+                    ProbeStatus::Confirmed,
+                    m,
+                    format!(
+                        "a positive command moved the joint by {} rad: opposite to the spec's direction {expected:+}",
+                        fmt_num(dq, 3)
+                    ),
+                ),
+                Some(dq) => Verdict::new(
+                    ProbeStatus::Refuted,
+                    m,
+                    format!(
+                        "a positive command moved the joint by {} rad, as the spec says",
+                        fmt_num(dq, 3)
+                    ),
+                ),
+                None => {
+                    Verdict::new(ProbeStatus::Inconclusive, m, "the targeted joint did not move")
+                }
+            };
+        }
+        let biggest = d.moved.iter().max_by(|a, b| a.1.abs().total_cmp(&b.1.abs())).map(|x| x.0);
+        let names: Vec<String> =
+            d.moved.iter().map(|(j, dq)| format!("{} {:+.4}", robot.joints[*j].name, dq)).collect();
+        let st = if biggest != target { ProbeStatus::Confirmed } else { ProbeStatus::Inconclusive };
+        Verdict::new(st, m, format!("a positive command moved: {}", names.join(", ")))
     }
 }
 
@@ -42,6 +106,20 @@ impl Rule for ActuatorMapping {
         &Self::META
     }
     fn check(&self, cx: &Context, out: &mut Vec<Finding>) {
+        let first = out.len();
+        self.check_mapping(cx, out);
+        // Every finding about one actuator can be driven on the bench.
+        for f in &mut out[first..] {
+            if let (Subject::Actuator(a), None) = (f.subject, &f.claim) {
+                f.claim =
+                    Some(std::sync::Arc::new(MisdirectedActuator { actuator: a, expected: None }));
+            }
+        }
+    }
+}
+
+impl ActuatorMapping {
+    fn check_mapping(&self, cx: &Context, out: &mut Vec<Finding>) {
         let robot = cx.robot;
         let warn = |mut f: Finding| {
             if cx.level == cx.meta.default_level {
@@ -200,6 +278,7 @@ impl Rule for ActuatorMapping {
                         .note("a flipped actuator sign makes every command move the joint the wrong way relative to the hardware's convention; the deployed policy drives the real joint backwards")
                         .help(format!("set gear=\"{}\" (or fix the spec's direction)", fmt_num(-a.gear, 4)))
                         .subject(Subject::Actuator(a.id))
+                        .claim(MisdirectedActuator { actuator: a.id, expected: Some(d) })
                         .with("gear", a.gear)
                         .with("direction", d as f64);
                     out.push(spec_label(f));

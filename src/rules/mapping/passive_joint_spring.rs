@@ -1,6 +1,9 @@
 use crate::declare_rule;
-use crate::finding::{Finding, Severity, Subject};
+use crate::finding::{Finding, ProbeStatus, Severity, Subject};
+use crate::lint::Loaded;
 use crate::model::mjcf::ElemKind;
+use crate::probe::settle::{DIVERGED, Settle};
+use crate::probe::{Claim, StanceSettle, Verdict};
 use crate::rules::{Context, Rule, RuleMeta};
 use crate::util::fmt_num;
 
@@ -32,8 +35,45 @@ declare_rule! {
         id: "passive-joint-spring",
         group: "mapping",
         level: Severity::Error,
-        probe: Some("stance-settle"),
+        probe: StanceSettle,
         options: [],
+    }
+}
+
+/// What the `stance-settle` probe checks: under the standing load the passive joint deflects
+/// more than 0.2 rad or onto its limit.
+#[derive(Debug)]
+pub struct PassiveJointCollapses {
+    pub joint: usize,
+}
+
+impl Claim for PassiveJointCollapses {
+    type Probe = StanceSettle;
+    fn key(&self, _: &Loaded) -> Result<(), &'static str> {
+        Ok(())
+    }
+    fn judge(&self, l: &Loaded, s: &Settle) -> Verdict {
+        if s.diverged {
+            return Verdict::new(ProbeStatus::Confirmed, Default::default(), DIVERGED);
+        }
+        let robot = &l.robot;
+        let jt = &robot.joints[self.joint];
+        let mut m = s.foot(robot, jt.body).measured;
+        let defl = s.joint_deflection.get(&self.joint).copied().unwrap_or(0.0);
+        m.insert("deflection_rad".into(), defl);
+        let q = robot.key.qpos.get(jt.qposadr).copied().unwrap_or(0.0) + defl;
+        let at_limit = jt.limited && (q <= jt.range[0] + 1e-3 || q >= jt.range[1] - 1e-3);
+        let note = format!(
+            "passive joint deflected {} rad under the standing load{}",
+            fmt_num(defl, 3),
+            if at_limit { ", onto its limit" } else { "" }
+        );
+        let st = if defl.abs() > 0.2 || at_limit {
+            ProbeStatus::Confirmed
+        } else {
+            ProbeStatus::Refuted
+        };
+        Verdict::new(st, m, note)
     }
 }
 
@@ -42,6 +82,18 @@ impl Rule for PassiveJointSpring {
         &Self::META
     }
     fn check(&self, cx: &Context, out: &mut Vec<Finding>) {
+        let first = out.len();
+        self.check_joints(cx, out);
+        for f in &mut out[first..] {
+            if let Subject::Joint(j) = f.subject {
+                f.claim = Some(std::sync::Arc::new(PassiveJointCollapses { joint: j }));
+            }
+        }
+    }
+}
+
+impl PassiveJointSpring {
+    fn check_joints(&self, cx: &Context, out: &mut Vec<Finding>) {
         let robot = cx.robot;
         for j in robot.joints.iter().filter(|j| j.is_scalar()) {
             let Some(facts) = cx.facts(&j.name) else {

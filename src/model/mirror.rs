@@ -1,0 +1,133 @@
+//! Left/right names: which side a joint, body or actuator name is on and the name of its mirror
+//! (`left_knee` ↔ `right_knee`, `Hip_Pitch_Right` ↔ `Hip_Pitch_Left`, `l_hip` ↔ `r_hip`,
+//! `hip_L` ↔ `hip_R`, quadruped `FL_calf` ↔ `FR_calf`), with the spec's own markers first. One
+//! implementation for the lint rules and the fit engine's joint pairing.
+
+use crate::spec::Spec;
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Side {
+    Left,
+    Right,
+}
+
+impl Side {
+    pub fn word(self) -> &'static str {
+        match self {
+            Side::Left => "left",
+            Side::Right => "right",
+        }
+    }
+}
+
+/// Left/right marker pairs to try, the spec's first.
+pub fn markers(spec: Option<&Spec>) -> Vec<(String, String)> {
+    let mut v = Vec::new();
+    if let Some(s) = spec
+        && let (Some(l), Some(r)) = (&s.robot.left, &s.robot.right)
+    {
+        v.push((l.clone(), r.clone()));
+    }
+    for (l, r) in LEG_PREFIXES {
+        v.push((l.to_string(), r.to_string()));
+    }
+    for (l, r) in [
+        ("left_", "right_"),
+        ("Left_", "Right_"),
+        ("_left", "_right"),
+        ("_Left", "_Right"),
+        ("l_", "r_"),
+        ("L_", "R_"),
+        ("_l", "_r"),
+        ("_L", "_R"),
+        ("Left", "Right"),
+        ("left", "right"),
+        ("LEFT", "RIGHT"),
+    ] {
+        v.push((l.to_string(), r.to_string()));
+    }
+    v
+}
+
+/// Quadruped leg prefixes: front/rear (or fore/hind) left ↔ right. Only ever a name's prefix.
+const LEG_PREFIXES: [(&str, &str); 8] = [
+    ("FL_", "FR_"),
+    ("RL_", "RR_"),
+    ("fl_", "fr_"),
+    ("rl_", "rr_"),
+    ("LF_", "RF_"),
+    ("LH_", "RH_"),
+    ("lf_", "rf_"),
+    ("lh_", "rh_"),
+];
+
+/// Replace one marker occurrence: short markers (`l_`, `_l`) only as a prefix / suffix.
+fn swap(name: &str, from: &str, to: &str) -> Option<String> {
+    if LEG_PREFIXES.iter().any(|(l, r)| *l == from || *r == from) {
+        return name.starts_with(from).then(|| format!("{to}{}", &name[from.len()..]));
+    }
+    let short = from.trim_matches('_').len() <= 1;
+    if short {
+        if from.ends_with('_') && name.starts_with(from) {
+            return Some(format!("{to}{}", &name[from.len()..]));
+        }
+        if from.starts_with('_') && name.ends_with(from) {
+            return Some(format!("{}{to}", &name[..name.len() - from.len()]));
+        }
+        return None;
+    }
+    name.contains(from).then(|| name.replacen(from, to, 1))
+}
+
+/// Side of a name and its mirrored counterpart, by the first marker pair that applies.
+pub fn mirror(name: &str, spec: Option<&Spec>) -> Option<(Side, String)> {
+    for (l, r) in markers(spec) {
+        if let Some(m) = swap(name, &l, &r) {
+            return Some((Side::Left, m));
+        }
+        if let Some(m) = swap(name, &r, &l) {
+            return Some((Side::Right, m));
+        }
+    }
+    None
+}
+
+pub fn side_of(name: &str, spec: Option<&Spec>) -> Option<Side> {
+    mirror(name, spec).map(|(s, _)| s)
+}
+
+/// The mirror of a name by the built-in markers alone (no spec): `None` when the name carries no
+/// side marker.
+pub fn mirror_name(name: &str) -> Option<String> {
+    mirror(name, None).map(|(_, m)| m)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    #[test]
+    fn mirror_names() {
+        assert_eq!(mirror("left_knee", None), Some((Side::Left, "right_knee".into())));
+        assert_eq!(mirror("Hip_Pitch_Right", None), Some((Side::Right, "Hip_Pitch_Left".into())));
+        assert_eq!(mirror("l_ankle", None), Some((Side::Left, "r_ankle".into())));
+        assert_eq!(mirror("ankle_r", None), Some((Side::Right, "ankle_l".into())));
+        assert_eq!(mirror("torso", None), None);
+        assert_eq!(mirror("wheel_rl", None), None);
+        assert_eq!(mirror("FL_calf", None), Some((Side::Left, "FR_calf".into())));
+        assert_eq!(mirror("RR_hip", None), Some((Side::Right, "RL_hip".into())));
+        assert_eq!(mirror("LH_KFE", None), Some((Side::Left, "RH_KFE".into())));
+        assert_eq!(mirror("HALF_link", None), None);
+    }
+
+    #[test]
+    fn mirror_name_pairs_both_ways() {
+        assert_eq!(mirror_name("left_knee").as_deref(), Some("right_knee"));
+        assert_eq!(mirror_name("r_hip_pitch").as_deref(), Some("l_hip_pitch"));
+        assert_eq!(mirror_name("hip_L").as_deref(), Some("hip_R"));
+        assert_eq!(mirror_name("LEFT_ANKLE").as_deref(), Some("RIGHT_ANKLE"));
+        assert_eq!(mirror_name("elbow_pitch"), None);
+        for n in ["left_knee", "Hip_Pitch_Right", "l_ankle", "ankle_r", "FL_calf", "LEFT_ANKLE"] {
+            assert_eq!(mirror_name(&mirror_name(n).unwrap()).as_deref(), Some(n));
+        }
+    }
+}
