@@ -18,6 +18,8 @@
 use std::collections::BTreeMap;
 
 use rayon::prelude::*;
+
+use crate::model::mirror::mirror_name;
 use serde::Serialize;
 
 use crate::fit::diagnose::{Candidate, diagnose};
@@ -548,37 +550,6 @@ fn res_len(r: &LmResult) -> usize {
     r.jacobian.len()
 }
 
-/// Partner of a left/right joint name (`left_knee` ↔ `right_knee`, `l_hip` ↔ `r_hip`, `hip_l` ↔
-/// `hip_r`, `L_` ↔ `R_`).
-pub fn mirror(name: &str) -> Option<String> {
-    let pairs = [("left", "right"), ("Left", "Right"), ("LEFT", "RIGHT")];
-    for (a, b) in pairs {
-        if name.contains(a) {
-            return Some(name.replacen(a, b, 1));
-        }
-        if name.contains(b) {
-            return Some(name.replacen(b, a, 1));
-        }
-    }
-    for (a, b) in [("l_", "r_"), ("L_", "R_")] {
-        if let Some(rest) = name.strip_prefix(a) {
-            return Some(format!("{b}{rest}"));
-        }
-        if let Some(rest) = name.strip_prefix(b) {
-            return Some(format!("{a}{rest}"));
-        }
-    }
-    for (a, b) in [("_l", "_r"), ("_L", "_R")] {
-        if let Some(rest) = name.strip_suffix(a) {
-            return Some(format!("{rest}{b}"));
-        }
-        if let Some(rest) = name.strip_suffix(b) {
-            return Some(format!("{rest}{a}"));
-        }
-    }
-    None
-}
-
 /// A candidate: effect, joint group, evidence.
 type Cand = (&'static dyn Effect, Vec<String>, BTreeMap<String, f64>);
 
@@ -769,7 +740,7 @@ fn greedy_round(
         }
         let Some(e) = effects::by_id(c.effect) else { return };
         let mut group = vec![c.joint.clone()];
-        if let Some(p) = mirror(&c.joint)
+        if let Some(p) = mirror_name(&c.joint)
             && engine.joints.contains(&p)
             && !covered(c.effect, &p)
             && diag
@@ -940,8 +911,7 @@ fn greedy_round(
             bic_decreased: bic_after < bic_before,
             kept: false,
         });
-        if keep
-            && engine.floors(train, &tr_a).iter().all(|(_, ms, w)| *ms <= opts.white_ratio * w)
+        if keep && engine.floors(train, &tr_a).iter().all(|(_, ms, w)| *ms <= opts.white_ratio * w)
         {
             floor_k = Some(floor_k.map_or(e.fitted(), |k| k.min(e.fitted())));
         }
@@ -950,7 +920,7 @@ fn greedy_round(
             // pair, which then competes with it on held-out (the diagnosis ranks the two sides
             // separately and can miss the partner of an effect both sides have).
             if let [j] = group.as_slice()
-                && let Some(p) = mirror(j)
+                && let Some(p) = mirror_name(j)
                 && engine.joints.contains(&p)
                 && !covered(e.id(), &p)
                 && !cands.iter().any(|(e2, g, _)| e2.id() == e.id() && g.contains(&p))
@@ -1771,9 +1741,12 @@ mod tests {
 
     #[test]
     fn mirror_names() {
-        assert_eq!(mirror("left_knee").as_deref(), Some("right_knee"));
-        assert_eq!(mirror("r_hip_pitch").as_deref(), Some("l_hip_pitch"));
-        assert_eq!(mirror("hip_L").as_deref(), Some("hip_R"));
-        assert_eq!(mirror("elbow_pitch"), None);
+        assert_eq!(mirror_name("left_knee").as_deref(), Some("right_knee"));
+        assert_eq!(mirror_name("r_hip_pitch").as_deref(), Some("l_hip_pitch"));
+        assert_eq!(mirror_name("hip_L").as_deref(), Some("hip_R"));
+        assert_eq!(mirror_name("elbow_pitch"), None);
+        // Booster T1 and Unitree H1 spellings (the fit pairs their legs).
+        assert_eq!(mirror_name("Left_Knee_Pitch").as_deref(), Some("Right_Knee_Pitch"));
+        assert_eq!(mirror_name("right_knee_joint").as_deref(), Some("left_knee_joint"));
     }
 }
