@@ -16,7 +16,7 @@
 
 //!
 //! This module owns the shared types ([`Bounds`], [`OptResult`]), the RNG and the normalised
-//! search space; each method has its own file: [`nelder_mead`], [`cmaes`], [`golden_section`]
+//! search space; each method has its own file: [`nelder_mead()`], [`cmaes()`], [`golden_section`]
 //! (in `golden`) and [`levenberg_marquardt`] (in `lm`).
 
 mod cmaes;
