@@ -1,0 +1,332 @@
+//! Bounded Levenberg–Marquardt least squares with a finite-difference Jacobian.
+
+use nalgebra::{DMatrix, DVector};
+use rayon::prelude::*;
+use serde::Serialize;
+
+use super::{Bounds, Space, clamp01};
+
+/// Options for [`levenberg_marquardt`].
+#[derive(Debug, Clone, Serialize)]
+pub struct LmOpts {
+    /// Maximum number of Jacobian evaluations (outer iterations).
+    pub max_iters: usize,
+    /// Forward finite-difference step in normalised units.
+    pub rel_step: f64,
+    /// Convergence tolerance: relative cost decrease, normalised step size
+    /// and projected-gradient size (relative to the cost).
+    pub tol: f64,
+}
+
+impl Default for LmOpts {
+    fn default() -> Self {
+        LmOpts { max_iters: 100, rel_step: 1e-3, tol: 1e-8 }
+    }
+}
+
+/// Result of [`levenberg_marquardt`].
+#[derive(Debug, Clone, Serialize)]
+pub struct LmResult {
+    pub x: Vec<f64>,
+    /// `0.5 * Σ r²` at `x` (`+∞` if the residuals could never be evaluated).
+    pub cost: f64,
+    /// Finite-difference Jacobian at `x`, `n_resid x n_param`, in the user's
+    /// parameter units (columns of fixed parameters are zero).
+    pub jacobian: Vec<Vec<f64>>,
+    pub iters: usize,
+    pub converged: bool,
+}
+
+/// Bounded Levenberg–Marquardt least squares (`min 0.5 Σ r(x)²`).
+///
+/// Works in the normalised box; steps are projected onto it. Damping is
+/// Marquardt's diagonal scaling. The Jacobian is computed by forward
+/// differences (stepping inward at an upper bound), its columns evaluated in
+/// parallel. Residual vectors containing non-finite values, or whose length
+/// differs from the one at `x0`, count as failures: such trial steps are
+/// rejected (damping increased), such Jacobian columns fall back to the
+/// opposite-side difference or zero.
+pub fn levenberg_marquardt(
+    r: &(dyn Fn(&[f64]) -> Vec<f64> + Sync),
+    x0: &[f64],
+    b: &Bounds,
+    o: &LmOpts,
+) -> LmResult {
+    let fail = |x: Vec<f64>| LmResult {
+        x,
+        cost: f64::INFINITY,
+        jacobian: vec![],
+        iters: 0,
+        converged: false,
+    };
+    let Some(sp) = Space::new(b, x0.len()) else {
+        return fail(x0.to_vec());
+    };
+    let np = x0.len();
+    let n = sp.dim();
+    let mut u = sp.to_unit(x0);
+    let Some(mut res) =
+        Some(r(&sp.params_of(&u))).filter(|v| !v.is_empty() && v.iter().all(|x| x.is_finite()))
+    else {
+        return fail(sp.params_of(&u));
+    };
+    let m = res.len();
+    let eval = |u: &[f64]| -> Option<Vec<f64>> {
+        let v = r(&sp.params_of(u));
+        if v.len() == m && v.iter().all(|x| x.is_finite()) { Some(v) } else { None }
+    };
+    let cost_of = |v: &[f64]| 0.5 * v.iter().map(|x| x * x).sum::<f64>();
+    let h = if o.rel_step.is_finite() && o.rel_step > 0.0 { o.rel_step.min(0.25) } else { 1e-3 };
+    let tol = if o.tol.is_finite() && o.tol >= 0.0 { o.tol } else { 1e-8 };
+
+    // Jacobian in unit space, m x n, columns in parallel (fixed order).
+    let jac_unit = |u: &[f64], res: &[f64]| -> DMatrix<f64> {
+        let cols: Vec<Vec<f64>> = (0..n)
+            .into_par_iter()
+            .map(|j| {
+                let try_step = |s: f64| -> Option<Vec<f64>> {
+                    let mut up = u.to_vec();
+                    up[j] = clamp01(u[j] + s);
+                    let ds = up[j] - u[j];
+                    if ds == 0.0 {
+                        return None;
+                    }
+                    eval(&up).map(|rp| rp.iter().zip(res).map(|(a, b)| (a - b) / ds).collect())
+                };
+                let first = if u[j] + h <= 1.0 { h } else { -h };
+                try_step(first).or_else(|| try_step(-first)).unwrap_or_else(|| vec![0.0; m])
+            })
+            .collect();
+        DMatrix::from_fn(m, n, |i, j| cols[j][i])
+    };
+
+    let mut cost = cost_of(&res);
+    let mut lambda = 1e-3;
+    let mut iters = 0usize;
+    let mut converged = false;
+    let mut jac: Option<DMatrix<f64>> = None;
+
+    if n == 0 || cost == 0.0 {
+        converged = true;
+    }
+    'outer: while !converged && iters < o.max_iters {
+        let j = jac_unit(&u, &res);
+        iters += 1;
+        let jt = j.transpose();
+        let a = &jt * &j;
+        let g = &jt * DVector::from_column_slice(&res);
+        jac = Some(j);
+
+        // Projected gradient: components pushing out of the box don't count.
+        let active: Vec<bool> =
+            (0..n).map(|k| (u[k] <= 0.0 && g[k] > 0.0) || (u[k] >= 1.0 && g[k] < 0.0)).collect();
+        let pg = (0..n).map(|k| if active[k] { 0.0 } else { g[k].abs() }).fold(0.0, f64::max);
+        if pg <= tol * 1e-4 * cost.max(f64::MIN_POSITIVE) {
+            converged = true;
+            break;
+        }
+        let maxdiag = (0..n).map(|k| a[(k, k)]).fold(0.0, f64::max);
+        let dfloor = (maxdiag * 1e-9).max(1e-300);
+        loop {
+            // Active-set reduction: variables held at a bound they are pushed
+            // against are frozen (identity row/column, zero right-hand side).
+            let mut damped = a.clone();
+            let mut rhs = -&g;
+            for k in 0..n {
+                if active[k] {
+                    damped.row_mut(k).fill(0.0);
+                    damped.column_mut(k).fill(0.0);
+                    damped[(k, k)] = 1.0;
+                    rhs[k] = 0.0;
+                } else {
+                    damped[(k, k)] += lambda * a[(k, k)].max(dfloor);
+                }
+            }
+            let step = damped.cholesky().map(|ch| ch.solve(&rhs));
+            let Some(step) = step.filter(|s| s.iter().all(|v| v.is_finite())) else {
+                lambda *= 10.0;
+                if lambda > 1e16 {
+                    break 'outer;
+                }
+                continue;
+            };
+            let un: Vec<f64> = (0..n).map(|k| clamp01(u[k] + step[k])).collect();
+            let du = (0..n).map(|k| (un[k] - u[k]).abs()).fold(0.0, f64::max);
+            if du == 0.0 {
+                // Projected step vanished: stationary w.r.t. the active bounds.
+                converged = true;
+                break 'outer;
+            }
+            let trial = eval(&un);
+            let cn = trial.as_deref().map(cost_of).unwrap_or(f64::INFINITY);
+            if cn < cost {
+                let rel_drop = (cost - cn) / cost;
+                u = un;
+                res = trial.unwrap();
+                cost = cn;
+                jac = None;
+                lambda = (lambda / 3.0).max(1e-12);
+                if rel_drop <= tol || du <= tol || cost == 0.0 {
+                    converged = true;
+                }
+                break;
+            }
+            lambda *= 10.0;
+            if lambda > 1e16 {
+                // No descent even for tiny steps: local minimum up to FD accuracy.
+                converged = du <= (tol * 1e3).max(1e-6);
+                break 'outer;
+            }
+        }
+    }
+
+    let j = match jac {
+        Some(j) => j,
+        None => jac_unit(&u, &res),
+    };
+    let mut jacobian = vec![vec![0.0; np]; m];
+    for (k, &i) in sp.free.iter().enumerate() {
+        for row in 0..m {
+            jacobian[row][i] = j[(row, k)] / sp.span[i];
+        }
+    }
+    LmResult { x: sp.params_of(&u), cost, jacobian, iters, converged }
+}
+
+#[cfg(test)]
+#[allow(clippy::needless_range_loop)]
+mod tests {
+    use super::super::tests::{exp_data, exp_model};
+    use super::super::{NelderMeadOpts, Rng, nelder_mead};
+    use super::*;
+
+    #[test]
+    fn lm_exp_fit_and_uncertainty_calibration() {
+        use crate::fit::stats::uncertainty_from_jacobian;
+        let truth = [2.0, 1.3, 0.5];
+        let sigma = 0.05;
+        let b = Bounds { lo: vec![0.0, 0.01, -2.0], hi: vec![5.0, 5.0, 2.0] };
+        let ranges: Vec<f64> = b.lo.iter().zip(&b.hi).map(|(l, h)| h - l).collect();
+        let o = LmOpts::default();
+        let n_seeds = 50;
+        let mut est: Vec<Vec<f64>> = vec![];
+        let mut pred: Vec<Vec<f64>> = vec![];
+        let mut within2 = 0;
+        for seed in 0..n_seeds {
+            let (t, y) = exp_data(seed, &truth, sigma);
+            let r = |p: &[f64]| {
+                t.iter().zip(&y).map(|(&ti, &yi)| exp_model(p, ti) - yi).collect::<Vec<f64>>()
+            };
+            let fit = levenberg_marquardt(&r, &[1.0, 0.5, 0.0], &b, &o);
+            assert!(fit.converged, "seed {seed}: {fit:?}");
+            let resid = r(&fit.x);
+            assert!((fit.cost - 0.5 * resid.iter().map(|v| v * v).sum::<f64>()).abs() < 1e-15);
+            assert_eq!(fit.jacobian.len(), 60);
+            // Jacobian (user units) vs analytic at the solution.
+            let (a_, b_) = (fit.x[0], fit.x[1]);
+            for (i, &ti) in t.iter().enumerate() {
+                let e = (-b_ * ti).exp();
+                let an = [e, -a_ * ti * e, 1.0];
+                for k in 0..3 {
+                    assert!((fit.jacobian[i][k] - an[k]).abs() < 0.02, "J[{i}][{k}]");
+                }
+            }
+            let u = uncertainty_from_jacobian(&fit.jacobian, &resid, 3, &ranges);
+            assert!(u.identifiable.iter().all(|&v| v));
+            if (0..3).all(|k| (fit.x[k] - truth[k]).abs() < 2.0 * u.stderr[k]) {
+                within2 += 1;
+            }
+            if seed == 0 {
+                for k in 0..3 {
+                    assert!(
+                        (fit.x[k] - truth[k]).abs() < 2.0 * u.stderr[k],
+                        "param {k}: {:?} {:?}",
+                        fit.x,
+                        u.stderr
+                    );
+                }
+            }
+            est.push(fit.x.clone());
+            pred.push(u.stderr.clone());
+        }
+        // Nominal joint coverage of three ±2σ intervals is ≳ 0.86.
+        assert!(within2 >= 40, "only {within2}/50 within 2 stderr");
+        for k in 0..3 {
+            let mean = est.iter().map(|e| e[k]).sum::<f64>() / n_seeds as f64;
+            let emp = (est.iter().map(|e| (e[k] - mean).powi(2)).sum::<f64>()
+                / (n_seeds - 1) as f64)
+                .sqrt();
+            let p = pred.iter().map(|s| s[k]).sum::<f64>() / n_seeds as f64;
+            let ratio = p / emp;
+            assert!((1.0 / 1.5..=1.5).contains(&ratio), "param {k}: predicted {p} empirical {emp}");
+            // Estimator is unbiased to well within its spread.
+            assert!(
+                (mean - truth[k]).abs() < 3.0 * emp / (n_seeds as f64).sqrt() + 1e-3,
+                "param {k} mean {mean}"
+            );
+        }
+    }
+
+    #[test]
+    fn lm_bound_active_and_exact() {
+        // Noise-free: exact recovery.
+        let truth = [2.0, 1.3, 0.5];
+        let (t, y) = exp_data(1, &truth, 0.0);
+        let b = Bounds { lo: vec![0.0, 0.01, -2.0], hi: vec![5.0, 5.0, 2.0] };
+        let r = |p: &[f64]| {
+            t.iter().zip(&y).map(|(&ti, &yi)| exp_model(p, ti) - yi).collect::<Vec<f64>>()
+        };
+        let fit = levenberg_marquardt(&r, &[1.0, 0.5, 0.0], &b, &LmOpts::default());
+        for k in 0..3 {
+            assert!((fit.x[k] - truth[k]).abs() < 1e-6, "{fit:?}");
+        }
+        assert!(fit.cost < 1e-12);
+        // Offset c forced to be >= 0.8 while data has c = 0.5: c ends at the bound.
+        let b2 = Bounds { lo: vec![0.0, 0.01, 0.8], hi: vec![5.0, 5.0, 2.0] };
+        let fit2 = levenberg_marquardt(&r, &[1.0, 0.5, 1.5], &b2, &LmOpts::default());
+        assert_eq!(fit2.x[2], 0.8, "{fit2:?}");
+        assert!(fit2.converged);
+        // Reference: Nelder–Mead on the same problem with c fixed at the bound.
+        let b3 = Bounds { lo: vec![0.0, 0.01, 0.8], hi: vec![5.0, 5.0, 0.8] };
+        let sse = |p: &[f64]| 0.5 * r(p).iter().map(|v| v * v).sum::<f64>();
+        let nm = nelder_mead(
+            &sse,
+            &[1.0, 0.5, 0.8],
+            &b3,
+            &NelderMeadOpts { xtol: 1e-10, ftol: 1e-15, ..Default::default() },
+        );
+        assert!((fit2.cost - nm.f).abs() < 1e-9 * (1.0 + nm.f), "{fit2:?} {nm:?}");
+        assert!(
+            (fit2.x[0] - nm.x[0]).abs() < 1e-4 && (fit2.x[1] - nm.x[1]).abs() < 1e-4,
+            "{fit2:?} {nm:?}"
+        );
+        // Linear case y = 3 + 2 t: stderr equals the OLS closed form.
+        let ts: Vec<f64> = (0..20).map(|i| i as f64).collect();
+        let mut rng = Rng::new(11);
+        let ys: Vec<f64> = ts.iter().map(|&x| 3.0 + 2.0 * x + 0.3 * rng.normal()).collect();
+        let rl = |p: &[f64]| {
+            ts.iter().zip(&ys).map(|(&x, &y)| p[0] + p[1] * x - y).collect::<Vec<f64>>()
+        };
+        let bl = Bounds { lo: vec![-10.0, -10.0], hi: vec![10.0, 10.0] };
+        let fl = levenberg_marquardt(&rl, &[0.0, 0.0], &bl, &LmOpts::default());
+        let n = 20.0;
+        let (sx, sy): (f64, f64) = (ts.iter().sum(), ys.iter().sum());
+        let sxx: f64 = ts.iter().map(|x| x * x).sum();
+        let sxy: f64 = ts.iter().zip(&ys).map(|(x, y)| x * y).sum();
+        let slope = (n * sxy - sx * sy) / (n * sxx - sx * sx);
+        let icpt = (sy - slope * sx) / n;
+        assert!(
+            (fl.x[1] - slope).abs() < 1e-7 && (fl.x[0] - icpt).abs() < 1e-6,
+            "{fl:?} {icpt} {slope}"
+        );
+        let u = crate::fit::stats::uncertainty_from_jacobian(
+            &fl.jacobian,
+            &rl(&fl.x),
+            2,
+            &[20.0, 20.0],
+        );
+        let s2 = 2.0 * fl.cost / (n - 2.0);
+        let se_slope = (s2 * n / (n * sxx - sx * sx)).sqrt();
+        assert!((u.stderr[1] / se_slope - 1.0).abs() < 1e-6);
+    }
+}

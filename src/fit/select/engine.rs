@@ -1,0 +1,369 @@
+//! The fit engine: simulates a dataset with a set of effects and scores it, fits one candidate's
+//! parameters, and gives the linearised standard errors of a fit.
+
+use rayon::prelude::*;
+
+use crate::fit::diagnose::Candidate;
+use crate::fit::effects::{self, Applied, Effect, JointTarget, model_with, replay_with};
+use crate::fit::optim::{
+    Bounds, CmaesOpts, LmOpts, LmResult, NelderMeadOpts, cmaes, golden_section,
+    levenberg_marquardt, nelder_mead,
+};
+use crate::fit::stats::{ar1_variance_inflation, uncertainty_from_jacobian, white_floor};
+use crate::model::Robot;
+use crate::sim2real::metrics::gap_mask;
+use crate::sim2real::recording::Recording;
+use crate::sim2real::replay::Episode;
+
+use super::{Errors, FitOptions, ProgressInfo};
+
+/// The fit engine's view of a robot and dataset.
+pub struct Engine<'a> {
+    pub robot: &'a Robot,
+    pub opts: &'a FitOptions,
+    /// Joints scored by the objective.
+    pub joints: Vec<String>,
+    /// Dataset simulations run so far (each replays every episode of a set once).
+    sims: std::sync::atomic::AtomicUsize,
+}
+
+impl<'a> Engine<'a> {
+    pub fn new(robot: &'a Robot, recs: &[Recording], opts: &'a FitOptions) -> Self {
+        let mut joints = Vec::new();
+        for r in recs {
+            for j in &r.joints {
+                if (opts.joints.is_empty() || opts.joints.contains(&j.name))
+                    && !joints.contains(&j.name)
+                {
+                    joints.push(j.name.clone());
+                }
+            }
+        }
+        Engine { robot, opts, joints, sims: std::sync::atomic::AtomicUsize::new(0) }
+    }
+
+    /// Reports progress through `opts.progress`, if any.
+    pub fn report(
+        &self,
+        round: usize,
+        phase: &'static str,
+        candidate: Option<(usize, usize, String)>,
+    ) {
+        if let Some(p) = &self.opts.progress {
+            (p.0)(&ProgressInfo {
+                round,
+                phase,
+                candidate,
+                simulations: self.sims.load(std::sync::atomic::Ordering::Relaxed),
+            });
+        }
+    }
+
+    /// Simulates `recs` with `applied`; `None` when an episode diverged or failed.
+    pub fn errors(&self, recs: &[Recording], applied: &[Applied]) -> Option<Errors> {
+        self.sims.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let m = model_with(self.robot, applied);
+        let eps: Vec<Episode> = recs
+            .par_iter()
+            .map(|r| {
+                replay_with(self.robot, &m, r, applied, &self.opts.replay)
+                    .ok()
+                    .filter(|e| e.diverged.is_none())
+            })
+            .collect::<Option<Vec<_>>>()?;
+        let mut sse = 0.0;
+        let mut n = 0usize;
+        let mut win = Vec::new();
+        for (rec, ep) in recs.iter().zip(&eps) {
+            let scored = gap_mask(&rec.t, self.opts.gap_mask_s);
+            for (k, jt) in rec.joints.iter().enumerate() {
+                if !self.joints.contains(&jt.name) {
+                    continue;
+                }
+                let t0 = rec.t[0];
+                let mut w = (0usize, 0.0, 0usize);
+                for i in 0..rec.t.len() {
+                    if !scored[i] {
+                        continue;
+                    }
+                    let e = jt.q[i] - ep.q_sim[k][i];
+                    if !e.is_finite() {
+                        if jt.q[i].is_finite() {
+                            return None;
+                        }
+                        continue;
+                    }
+                    let wi = ((rec.t[i] - t0) / self.opts.window_s) as usize;
+                    if wi != w.0 && w.2 > 0 {
+                        win.push((jt.name.clone(), (w.1 / w.2 as f64).sqrt()));
+                        w = (wi, 0.0, 0);
+                    }
+                    w.0 = wi;
+                    w.1 += e * e;
+                    w.2 += 1;
+                    sse += e * e;
+                    n += 1;
+                }
+                if w.2 > 0 {
+                    win.push((jt.name.clone(), (w.1 / w.2 as f64).sqrt()));
+                }
+            }
+        }
+        Some(Errors { sse, n, windows: win, eps })
+    }
+
+    /// Per fitted joint: (name, mean square, white floor) of the residual of `recs` simulated
+    /// as `errs` ([`white_floor`], over the runs of samples between gaps).
+    pub fn floors(&self, recs: &[Recording], errs: &Errors) -> Vec<(String, f64, f64)> {
+        self.joints
+            .iter()
+            .map(|name| {
+                let mut runs = Vec::new();
+                for (rec, ep) in recs.iter().zip(&errs.eps) {
+                    let Some(k) = rec.joints.iter().position(|j| &j.name == name) else { continue };
+                    let scored = gap_mask(&rec.t, self.opts.gap_mask_s);
+                    let mut run = Vec::new();
+                    for i in 0..rec.t.len() {
+                        let e = rec.joints[k].q[i] - ep.q_sim[k][i];
+                        if scored[i] && e.is_finite() {
+                            run.push(e);
+                        } else if !run.is_empty() {
+                            runs.push(std::mem::take(&mut run));
+                        }
+                    }
+                    runs.push(run);
+                }
+                let (ms, w) = white_floor(&runs);
+                (name.clone(), ms, w)
+            })
+            .collect()
+    }
+
+    /// Residual vector (real − sim) on `joints`, subsampled to at most `max_len` entries.
+    pub(super) fn residuals(
+        &self,
+        recs: &[Recording],
+        applied: &[Applied],
+        joints: &[String],
+        max_len: usize,
+    ) -> Option<Vec<f64>> {
+        let e = self.errors(recs, applied)?;
+        let mut out = Vec::new();
+        for (rec, ep) in recs.iter().zip(&e.eps) {
+            let scored = gap_mask(&rec.t, self.opts.gap_mask_s);
+            for (k, jt) in rec.joints.iter().enumerate() {
+                if joints.contains(&jt.name) {
+                    out.extend(
+                        jt.q.iter()
+                            .zip(&ep.q_sim[k])
+                            .zip(&scored)
+                            .filter(|(_, s)| **s)
+                            .map(|((a, b), _)| a - b)
+                            .filter(|x| x.is_finite()),
+                    );
+                }
+            }
+        }
+        let stride = out.len().div_ceil(max_len.max(1)).max(1);
+        Some(out.into_iter().step_by(stride).collect())
+    }
+
+    /// Fits `effect` on `group` on top of `base`: returns the full parameter vector and the
+    /// training RMSE.
+    pub fn fit_one(
+        &self,
+        train: &[Recording],
+        base: &[Applied],
+        effect: &'static dyn Effect,
+        group: &[String],
+    ) -> (Vec<f64>, f64) {
+        self.fit_budget(train, base, effect, group, self.opts.max_evals)
+    }
+
+    /// [`Engine::fit_one`] with a budget of `max_evals` objective evaluations (twice that above
+    /// one parameter; golden section stops earlier at its tolerance).
+    pub fn fit_budget(
+        &self,
+        train: &[Recording],
+        base: &[Applied],
+        effect: &'static dyn Effect,
+        group: &[String],
+        max_evals: usize,
+    ) -> (Vec<f64>, f64) {
+        let Some(t) = JointTarget::of(self.robot, &group[0]) else {
+            return (vec![], f64::INFINITY);
+        };
+        let m0 = model_with(self.robot, base);
+        let full0 = effect.initial(&m0, &t);
+        let (lo, hi) = effect.bounds(&m0, &t);
+        let k = effect.fitted().min(full0.len());
+        let make = |x: &[f64]| {
+            let mut p = full0.clone();
+            p[..k].copy_from_slice(&x[..k]);
+            let mut a = base.to_vec();
+            a.push(Applied { effect, joints: group.to_vec(), params: p });
+            a
+        };
+        let obj = |x: &[f64]| self.errors(train, &make(x)).map_or(f64::INFINITY, |e| e.rmse());
+        let x0: Vec<f64> = (0..k).map(|i| full0[i].clamp(lo[i], hi[i])).collect();
+        let b = Bounds { lo: lo[..k].to_vec(), hi: hi[..k].to_vec() };
+        let (x, f) = match k {
+            0 => (vec![], obj(&[])),
+            _ if effect.smooth() => {
+                // Gauss–Newton / Levenberg–Marquardt on the rollout residuals: k + 1 replays per
+                // iteration, converged in a handful (a derivative-free search needs ~40).
+                let res = |x: &[f64]| {
+                    self.residuals(train, &make(x), &self.joints, usize::MAX).unwrap_or_default()
+                };
+                let o = LmOpts {
+                    max_iters: (max_evals / (k + 2)).clamp(2, 12),
+                    rel_step: 1e-3,
+                    tol: 1e-5,
+                };
+                let r = levenberg_marquardt(&res, &x0, &b, &o);
+                let n = res_len(&r);
+                (r.x, if n > 0 { (2.0 * r.cost / n as f64).sqrt() } else { f64::INFINITY })
+            }
+            1 => {
+                let tol = 2e-4 * (hi[0] - lo[0]);
+                let (x, f) = golden_section(&|v| obj(&[v]), lo[0], hi[0], tol, max_evals.min(40));
+                (vec![x], f)
+            }
+            2 | 3 => {
+                let o = NelderMeadOpts {
+                    max_evals: max_evals * 2,
+                    xtol: 1e-3,
+                    ftol: 1e-12,
+                    initial_step: 0.1,
+                };
+                let r = nelder_mead(&obj, &x0, &b, &o);
+                (r.x, r.f)
+            }
+            _ => {
+                let o = CmaesOpts { max_evals: max_evals * 2, ..Default::default() };
+                let r = cmaes(&obj, &x0, &b, &o);
+                (r.x, r.f)
+            }
+        };
+        let mut p = full0.clone();
+        p[..k].copy_from_slice(&x[..k]);
+        (p, f)
+    }
+
+    /// `true` when `effect` starts from the same parameter values on every joint of `group`
+    /// (within 1e-9, relative), so that the group can share one parameter vector.
+    pub fn shared_start(
+        &self,
+        effect: &'static dyn Effect,
+        base: &[Applied],
+        group: &[String],
+    ) -> bool {
+        let m0 = model_with(self.robot, base);
+        let starts: Vec<Vec<f64>> = group
+            .iter()
+            .filter_map(|j| JointTarget::of(self.robot, j))
+            .map(|t| effect.initial(&m0, &t))
+            .collect();
+        starts.len() == group.len()
+            && starts.windows(2).all(|w| {
+                w[0].len() == w[1].len()
+                    && w[0]
+                        .iter()
+                        .zip(&w[1])
+                        .all(|(a, b)| (a - b).abs() <= 1e-9 * a.abs().max(b.abs()).max(1.0))
+            })
+    }
+
+    /// Linearised explained mean square of the residual by a probe step of candidate `c`
+    /// (`None` when the probe changes nothing or diverges): returns (explained MS, coefficient).
+    pub(super) fn sensitivity(
+        &self,
+        train: &[Recording],
+        base: &[Applied],
+        base_err: &Errors,
+        c: &Candidate,
+    ) -> Option<(f64, f64)> {
+        let effect = effects::by_id(c.effect)?;
+        let t = JointTarget::of(self.robot, &c.joint)?;
+        let m0 = model_with(self.robot, base);
+        let mut p = effect.initial(&m0, &t);
+        let (lo, hi) = effect.bounds(&m0, &t);
+        if effect.id() == "torque_limit" {
+            p[0] = c.evidence.get("tau_p80").copied().filter(|v| *v > lo[0])?;
+        } else {
+            let step = 0.05 * (hi[0] - lo[0]);
+            p[0] = if p[0] + step <= hi[0] { p[0] + step } else { p[0] - step };
+        }
+        let mut a = base.to_vec();
+        a.push(Applied { effect, joints: vec![c.joint.clone()], params: p });
+        let e = self.errors(train, &a)?;
+        let (mut rs, mut ss) = (0.0, 0.0);
+        let mut n = 0usize;
+        for ((rec, e0), e1) in train.iter().zip(&base_err.eps).zip(&e.eps) {
+            let scored = gap_mask(&rec.t, self.opts.gap_mask_s);
+            for (k, jt) in rec.joints.iter().enumerate() {
+                if !self.joints.contains(&jt.name) {
+                    continue;
+                }
+                for i in (0..rec.t.len()).filter(|&i| scored[i]) {
+                    let r = jt.q[i] - e0.q_sim[k][i];
+                    let s = e1.q_sim[k][i] - e0.q_sim[k][i];
+                    if r.is_finite() && s.is_finite() {
+                        rs += r * s;
+                        ss += s * s;
+                        n += 1;
+                    }
+                }
+            }
+        }
+        if ss <= 1e-300 || n == 0 {
+            return None;
+        }
+        Some((rs * rs / ss / n as f64, rs / ss))
+    }
+
+    /// Linearised standard errors of the fitted parameters of `applied.last()`.
+    pub(super) fn uncertainty(&self, train: &[Recording], applied: &[Applied]) -> (Vec<f64>, bool) {
+        let last = applied.last().expect("non-empty");
+        let effect = last.effect;
+        let t = JointTarget::of(self.robot, &last.joints[0]).expect("joint");
+        let m0 = model_with(self.robot, &applied[..applied.len() - 1]);
+        let (lo, hi) = effect.bounds(&m0, &t);
+        let k = effect.fitted().min(last.params.len());
+        let Some(r0) = self.residuals(train, applied, &last.joints, 20_000) else {
+            return (vec![f64::INFINITY; k], false);
+        };
+        let mut cols = Vec::with_capacity(k);
+        for i in 0..k {
+            let range = hi[i] - lo[i];
+            let mut h = 1e-3 * range.max(1e-9);
+            if last.params[i] + h > hi[i] {
+                h = -h;
+            }
+            let mut a = applied.to_vec();
+            a.last_mut().unwrap().params[i] += h;
+            match self.residuals(train, &a, &last.joints, 20_000) {
+                // Residuals are real − sim, so ∂r/∂p = −∂sim/∂p; the sign does not matter for J^T J.
+                Some(r1) if r1.len() == r0.len() => {
+                    cols.push(r1.iter().zip(&r0).map(|(a, b)| (a - b) / h).collect::<Vec<f64>>())
+                }
+                _ => return (vec![f64::INFINITY; k], false),
+            }
+        }
+        let jac: Vec<Vec<f64>> =
+            (0..r0.len()).map(|row| cols.iter().map(|c| c[row]).collect()).collect();
+        let ranges: Vec<f64> = (0..k).map(|i| hi[i] - lo[i]).collect();
+        // Serially correlated residuals: scaling them by √inflation scales s² (and so the
+        // covariance s²(JᵀJ)⁺ and the identifiability check) by the AR(1) inflation.
+        let c = ar1_variance_inflation(&r0).sqrt();
+        let r0: Vec<f64> = r0.iter().map(|x| x * c).collect();
+        let u = uncertainty_from_jacobian(&jac, &r0, k, &ranges);
+        let ident = u.identifiable.iter().all(|&x| x);
+        (u.stderr, ident)
+    }
+}
+
+/// Number of residuals behind an [`LmResult`] (the rows of its Jacobian).
+pub(super) fn res_len(r: &LmResult) -> usize {
+    r.jacobian.len()
+}

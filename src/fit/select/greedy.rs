@@ -1,0 +1,377 @@
+//! One greedy round of the selection: diagnose the residual, build the candidate (effect, joint
+//! group) list, fit and gate each candidate, and keep the winner.
+
+use std::collections::BTreeMap;
+
+use rayon::prelude::*;
+
+use crate::fit::diagnose::{Candidate, diagnose};
+use crate::fit::effects::{self, Applied, Effect};
+use crate::fit::stats::bic;
+use crate::model::mirror::mirror_name;
+use crate::sim2real::recording::Recording;
+
+use super::engine::Engine;
+use super::pairs::{joint_pairs, pair_lookahead};
+use super::verdict::{at_bound, verdict, z_needed};
+use super::{Errors, FitOutcome, Selected, Tried, set_uncertainty};
+
+/// A candidate: effect, joint group, evidence.
+type Cand = (&'static dyn Effect, Vec<String>, BTreeMap<String, f64>);
+
+/// One greedy round: diagnose, fit the candidates, keep the best that passes the held-out gate.
+/// Returns `true` when an effect was added.
+pub(super) fn greedy_round(
+    engine: &Engine,
+    train: &[Recording],
+    heldout: &[Recording],
+    allowed: &[String],
+    round: usize,
+    out: &mut FitOutcome,
+) -> bool {
+    let opts = engine.opts;
+    let robot = engine.robot;
+    let applied = out.applied.clone();
+    let Some(tr_err) = engine.errors(train, &applied) else {
+        out.warnings.push("the training replay diverged with the current model; stopping".into());
+        return false;
+    };
+    let Some(ho_err) = engine.errors(heldout, &applied) else {
+        out.warnings.push("the held-out replay diverged with the current model; stopping".into());
+        return false;
+    };
+    // Nothing left to explain: on every fitted joint the training residual is (nearly) white,
+    // at the floor that noise, quantisation and command reconstruction impose on this dataset.
+    let floors = engine.floors(train, &tr_err);
+    if round == 0 {
+        out.floors = floors.clone();
+    }
+    if floors.iter().all(|(_, ms, w)| *ms <= opts.white_ratio * w) {
+        out.stopped_at_floor = true;
+        return false;
+    }
+    let diag = diagnose(robot, train, &tr_err.eps, &engine.joints, allowed, opts.gap_mask_s);
+    let covered = |id: &str, j: &str| {
+        applied.iter().any(|a| a.effect.id() == id && a.joints.iter().any(|x| x == j))
+    };
+    // Re-rank the diagnosis by the linearised (Gauss–Newton) explained residual: the
+    // residual projected on the simulated sensitivity to a probe step of the effect.
+    // One probe simulation per (effect, joint), independent of each other: run them in
+    // parallel (each replay is itself parallel over episodes; results in a fixed order).
+    let mut diag = diag;
+    let probes: Vec<Option<(f64, f64)>> = diag
+        .par_iter()
+        .map(|c| {
+            if covered(c.effect, &c.joint) {
+                None
+            } else {
+                engine.sensitivity(train, &applied, &tr_err, c)
+            }
+        })
+        .collect();
+    for (c, sens) in diag.iter_mut().zip(probes) {
+        if covered(c.effect, &c.joint) {
+            c.explained_rms = 0.0;
+            continue;
+        }
+        if let Some((ems, coef)) = sens {
+            c.evidence.insert("feature_explained_rms".into(), c.explained_rms);
+            c.evidence.insert("sensitivity_coef".into(), coef);
+            c.explained_rms = ems.sqrt();
+        }
+    }
+    diag.sort_by(|a, b| b.explained_rms.total_cmp(&a.explained_rms));
+    if round == 0 {
+        out.diagnosis = diag.clone();
+    }
+    // Candidate (effect, group) list, best first.
+    let mut cands: Vec<Cand> = Vec::new();
+    let push = |c: &Candidate, cands: &mut Vec<Cand>| {
+        if covered(c.effect, &c.joint) || c.explained_rms <= 1e-9 {
+            return;
+        }
+        let Some(e) = effects::by_id(c.effect) else { return };
+        let mut group = vec![c.joint.clone()];
+        if let Some(p) = mirror_name(&c.joint)
+            && engine.joints.contains(&p)
+            && !covered(c.effect, &p)
+            && diag
+                .iter()
+                .take(opts.candidates_per_round * 4)
+                .any(|d| d.effect == c.effect && d.joint == p)
+        {
+            group.push(p);
+            group.sort();
+        }
+        if cands.iter().any(|(e2, g, _)| e2.id() == e.id() && g.iter().any(|x| group.contains(x))) {
+            return;
+        }
+        let mut ev = c.evidence.clone();
+        ev.insert("explained_rms".into(), c.explained_rms);
+        ev.insert("residual_rms".into(), c.residual_rms);
+        // The joint's motor family as one more group (shared parameters).
+        let fam: Vec<String> = match opts.families.get(&c.joint) {
+            Some(f) => engine
+                .joints
+                .iter()
+                .filter(|j| opts.families.get(*j) == Some(f) && !covered(c.effect, j))
+                .cloned()
+                .collect(),
+            None => vec![],
+        };
+        let fam_new =
+            fam.len() >= 3 && !cands.iter().any(|(e2, g, _)| e2.id() == e.id() && *g == fam);
+        // Every recorded joint as one group sharing the parameters (an effect the whole robot
+        // has, such as a missing damping or friction, a delay or a servo gain error) — when the
+        // model gives those joints the same starting value, so that one knob is meaningful.
+        let all: Vec<String> =
+            engine.joints.iter().filter(|j| !covered(c.effect, j)).cloned().collect();
+        let all_new = all.len() >= 2
+            && all.len() > group.len()
+            && all != fam
+            && !cands.iter().any(|(e2, g, _)| e2.id() == e.id() && *g == all)
+            && engine.shared_start(e, &applied, &all);
+        cands.push((e, group, ev.clone()));
+        if fam_new {
+            cands.push((e, fam, ev.clone()));
+        }
+        if all_new {
+            let mut ev = ev;
+            ev.insert("all_joints_group".into(), 1.0);
+            cands.push((e, all, ev));
+        }
+    };
+    for c in &diag {
+        if cands.len() >= opts.candidates_per_round {
+            break;
+        }
+        push(c, &mut cands);
+    }
+    let n_top = cands.len();
+    if opts.every_effect {
+        // The best-ranked joint of every other effect: the linearised ranking is only a guide
+        // (a doubled inertia or a saturation is far from linear).
+        // Effects whose best joint explains less than a tenth of the top candidate are left out.
+        let top = diag
+            .iter()
+            .filter(|c| !covered(c.effect, &c.joint))
+            .map(|c| c.explained_rms)
+            .fold(0.0, f64::max);
+        for id in allowed {
+            if cands.iter().any(|(e, ..)| e.id() == id) {
+                continue;
+            }
+            if let Some(c) = diag.iter().find(|c| {
+                c.effect == id
+                    && !covered(c.effect, &c.joint)
+                    && c.explained_rms > 1e-9
+                    && c.explained_rms >= 0.1 * top
+            }) {
+                push(c, &mut cands);
+            }
+        }
+    }
+    if cands.is_empty() {
+        return false;
+    }
+    let z = z_needed(cands.len());
+    let k_before: usize = applied.iter().map(|a| a.effect.fitted()).sum();
+    let bic_before = bic(tr_err.n, tr_err.sse, k_before);
+    let mut accepted: Vec<(Selected, bool, Errors)> = Vec::new();
+    // Every single fit of the round, for the joint pairs when no single one passes.
+    let mut fitted: Vec<Applied> = Vec::new();
+    // Screen for the extra (every-effect) multi-parameter candidates: a coarse fit (10
+    // evaluations per parameter) must reach at least half of the best training improvement of
+    // the fully fitted ones.
+    let base_train = tr_err.rmse();
+    let mut best_train = base_train;
+    // Fewest parameters of a kept candidate whose training residual is white on every joint.
+    let mut floor_k: Option<usize> = None;
+    let mut ci = 0;
+    while ci < cands.len() {
+        let (e, group, ev) = cands[ci].clone();
+        engine.report(
+            round,
+            "fit",
+            Some((ci + 1, cands.len(), format!("{} on {}", e.id(), group.join(",")))),
+        );
+        let extra = ci >= n_top;
+        ci += 1;
+        // A kept candidate already left a white training residual: one with more parameters
+        // cannot explain more, and Occam's choice would not take it (`tried`: phase "floor").
+        if floor_k.is_some_and(|k| e.fitted() > k) {
+            out.tried.push(Tried {
+                round,
+                phase: "floor",
+                effect: e.id().into(),
+                joints: group.clone(),
+                params: vec![],
+                train_rmse: f64::NAN,
+                heldout_improvement: f64::NAN,
+                significant: false,
+                bic_decreased: false,
+                kept: false,
+            });
+            continue;
+        }
+        // (Only multi-parameter effects: a 1-D fit is a 9-point grid plus golden section anyway,
+        // and a coarse one misses scale parameters near zero, such as a small armature.)
+        if extra && e.fitted() >= 2 {
+            let (p, f) = engine.fit_budget(train, &applied, e, &group, 10);
+            if p.is_empty() || !f.is_finite() || base_train - f < 0.5 * (base_train - best_train) {
+                out.tried.push(Tried {
+                    round,
+                    phase: "screen",
+                    effect: e.id().into(),
+                    joints: group.clone(),
+                    params: p,
+                    train_rmse: f,
+                    heldout_improvement: f64::NAN,
+                    significant: false,
+                    bic_decreased: false,
+                    kept: false,
+                });
+                continue;
+            }
+        }
+        let (p, train_rmse) = engine.fit_one(train, &applied, e, &group);
+        if p.is_empty() || !train_rmse.is_finite() {
+            continue;
+        }
+        best_train = best_train.min(train_rmse);
+        fitted.push(Applied { effect: e, joints: group.clone(), params: p.clone() });
+        let mut trial = applied.clone();
+        trial.push(Applied { effect: e, joints: group.clone(), params: p.clone() });
+        let (Some(tr_a), Some(ho_a)) =
+            (engine.errors(train, &trial), engine.errors(heldout, &trial))
+        else {
+            continue;
+        };
+        let bic_after = bic(tr_a.n, tr_a.sse, k_before + e.fitted());
+        // Paired test on the windows of the candidate's joints (others barely move).
+        let v = verdict(&ho_err, &ho_a, &group, z, opts.decisive_improvement);
+        let keep = v.significant && v.rel >= opts.min_rel_improvement && bic_after < bic_before;
+        out.tried.push(Tried {
+            round,
+            phase: "add",
+            effect: e.id().into(),
+            joints: group.clone(),
+            params: p.clone(),
+            train_rmse,
+            heldout_improvement: v.rel,
+            significant: v.significant,
+            bic_decreased: bic_after < bic_before,
+            kept: false,
+        });
+        if keep && engine.floors(train, &tr_a).iter().all(|(_, ms, w)| *ms <= opts.white_ratio * w)
+        {
+            floor_k = Some(floor_k.map_or(e.fitted(), |k| k.min(e.fitted())));
+        }
+        if keep {
+            // Mirror completion: a kept one-joint candidate is also fitted on its left/right
+            // pair, which then competes with it on held-out (the diagnosis ranks the two sides
+            // separately and can miss the partner of an effect both sides have).
+            if let [j] = group.as_slice()
+                && let Some(p) = mirror_name(j)
+                && engine.joints.contains(&p)
+                && !covered(e.id(), &p)
+                && !cands.iter().any(|(e2, g, _)| e2.id() == e.id() && g.contains(&p))
+            {
+                let mut g = vec![j.clone(), p];
+                g.sort();
+                let mut ev2 = ev.clone();
+                ev2.insert("mirror_completion".into(), 1.0);
+                cands.push((e, g, ev2));
+            }
+            let a = trial.last().expect("pushed");
+            let bound = at_bound(engine, &applied, a);
+            accepted.push((
+                Selected::new(a, ev, &v, ho_err.rmse(), ho_a.rmse(), (bic_before, bic_after)),
+                bound,
+                ho_a,
+            ));
+        }
+    }
+    let kept_all: Vec<Selected> = accepted.iter().map(|(s, ..)| s.clone()).collect();
+    // A candidate with a parameter on its bound only wins when no interior one is kept.
+    if accepted.iter().any(|(_, b, _)| !b) {
+        accepted.retain(|(_, b, _)| !b);
+    }
+    let Some(ib) = (0..accepted.len()).min_by(|&a, &b| {
+        accepted[a].0.heldout_rmse_after.total_cmp(&accepted[b].0.heldout_rmse_after)
+    }) else {
+        return joint_pairs(
+            engine,
+            train,
+            heldout,
+            &applied,
+            &fitted,
+            (&tr_err, &ho_err),
+            z,
+            round,
+            out,
+        );
+    };
+    // Occam: the simplest candidate within 5 % of the best held-out RMSE that the best does not
+    // beat beyond noise (paired test, z = 2) and whose training BIC is not higher (the training
+    // set is larger than the held-out one: a better fit that pays for its parameters there is
+    // not noise).
+    let (best_s, _, best_e) = &accepted[ib];
+    let equivalent = |i: usize| {
+        let (s, _, e) = &accepted[i];
+        if i == ib {
+            return true;
+        }
+        let group: Vec<String> = s.joints.iter().chain(&best_s.joints).cloned().collect();
+        s.heldout_rmse_after <= best_s.heldout_rmse_after * 1.05
+            && s.bic_after <= best_s.bic_after
+            && !verdict(e, best_e, &group, 2.0, f64::INFINITY).significant
+    };
+    let win = (0..accepted.len())
+        .filter(|&i| equivalent(i))
+        .min_by(|&a, &b| {
+            let ka = effects::by_id(&accepted[a].0.effect).map_or(9, |e| e.fitted());
+            let kb = effects::by_id(&accepted[b].0.effect).map_or(9, |e| e.fitted());
+            ka.cmp(&kb)
+                .then(accepted[a].0.heldout_rmse_after.total_cmp(&accepted[b].0.heldout_rmse_after))
+        })
+        .expect("the best is equivalent to itself");
+    let mut accepted: Vec<Selected> = accepted.into_iter().map(|(s, ..)| s).collect();
+    let mut s = accepted.swap_remove(win);
+    if let Some(pair) =
+        pair_lookahead(engine, train, heldout, &applied, &kept_all, &s, z, round, out)
+    {
+        for (mut p, a) in pair {
+            out.applied.push(a);
+            set_uncertainty(engine, train, &mut p, &out.applied, &mut out.warnings);
+            out.selected.push(p);
+        }
+        return true;
+    }
+    if let Some(t) = out.tried.iter_mut().rev().find(|t| {
+        t.round == round && t.phase == "add" && t.effect == s.effect && t.joints == s.joints
+    }) {
+        t.kept = true;
+    }
+    let e = effects::by_id(&s.effect).expect("known");
+    out.applied.push(Applied { effect: e, joints: s.joints.clone(), params: s.values.clone() });
+    set_uncertainty(engine, train, &mut s, &out.applied, &mut out.warnings);
+    out.selected.push(s);
+    true
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn mirror_names() {
+        assert_eq!(mirror_name("left_knee").as_deref(), Some("right_knee"));
+        assert_eq!(mirror_name("r_hip_pitch").as_deref(), Some("l_hip_pitch"));
+        assert_eq!(mirror_name("hip_L").as_deref(), Some("hip_R"));
+        assert_eq!(mirror_name("elbow_pitch"), None);
+        // Booster T1 and Unitree H1 spellings (the fit pairs their legs).
+        assert_eq!(mirror_name("Left_Knee_Pitch").as_deref(), Some("Right_Knee_Pitch"));
+        assert_eq!(mirror_name("right_knee_joint").as_deref(), Some("left_knee_joint"));
+    }
+}

@@ -1,0 +1,345 @@
+//! Greedy forward selection of missing physics.
+//!
+//! 1. Split the dataset: every `holdout`-th episode is held out (at least one when there are two
+//!    or more); a single episode is cut into time windows instead, every `holdout`-th window
+//!    held out. Optionally, training episodes are cut into multiple-shooting windows (each
+//!    replay starts from the recorded state).
+//! 2. Each round: replay the training set with the effects kept so far, [`diagnose`] the
+//!    residuals, take the top-ranked (effect, joint group) candidates, and fit each one's
+//!    parameters (golden section for one parameter, Nelder–Mead for two or three, CMA-ES above)
+//!    to minimise the position RMSE over the training episodes.
+//! 3. A candidate is kept only when, on the held-out episodes, the paired per-window RMSE
+//!    improvement is beyond noise ([`improvement_beyond_noise`]), the relative RMSE improvement
+//!    is at least `min_rel_improvement`, and the training BIC decreases. Of the kept candidates the
+//!    one with the lowest held-out RMSE wins (a simpler one within 1 % of it is preferred).
+//! 4. Repeat until nothing helps. Uncertainty: finite-difference Jacobian of the residual vector
+//!    at the optimum → [`uncertainty_from_jacobian`].
+//!
+//! This module owns the options, the outcome types and the [`fit`] entry point; the search itself
+//! is split by seam: `engine` (simulating a dataset, fitting one candidate, standard errors),
+//! `verdict` (the held-out gate), `greedy` (one round), `pairs` (effects fitted together) and
+//! `simplify` (drop, swap, polish).
+//!
+//! [`diagnose`]: crate::fit::diagnose::diagnose
+//! [`improvement_beyond_noise`]: crate::fit::stats::improvement_beyond_noise
+//! [`uncertainty_from_jacobian`]: crate::fit::stats::uncertainty_from_jacobian
+
+mod engine;
+mod greedy;
+mod pairs;
+mod simplify;
+mod verdict;
+
+use std::collections::BTreeMap;
+
+use serde::Serialize;
+
+use crate::fit::diagnose::Candidate;
+use crate::fit::effects::{self, Applied};
+use crate::fit::split::{Split, split, windows};
+use crate::model::Robot;
+use crate::sim2real::recording::Recording;
+use crate::sim2real::replay::{Episode, ReplayOptions};
+
+pub use engine::Engine;
+pub use verdict::z_needed;
+
+use greedy::greedy_round;
+use simplify::{polish, simplify};
+use verdict::Verdict;
+
+#[derive(Debug, Clone)]
+pub struct FitOptions {
+    /// Every N-th episode is held out (N ≥ 2).
+    pub holdout: usize,
+    /// Effect ids to consider (all when empty).
+    pub effects: Vec<String>,
+    /// Joints to fit (all recorded joints when empty).
+    pub joints: Vec<String>,
+    pub replay: ReplayOptions,
+    /// Length of the windows of the held-out paired test [s].
+    pub window_s: f64,
+    /// Multiple shooting: cut training episodes into windows of this length [s].
+    pub shooting_s: Option<f64>,
+    pub max_rounds: usize,
+    pub candidates_per_round: usize,
+    /// Minimum relative held-out RMSE improvement for an effect to be kept.
+    pub min_rel_improvement: f64,
+    /// Objective evaluations per candidate fit.
+    pub max_evals: usize,
+    /// Joint → motor family (from the spec): a family of three or more fitted joints is also
+    /// tried as one group sharing the parameters.
+    pub families: BTreeMap<String, String>,
+    /// Besides the top `candidates_per_round`, also fit the best-ranked joint group of every
+    /// other allowed effect (the linearised ranking misses strongly nonlinear effects).
+    pub every_effect: bool,
+    /// A candidate that cuts the held-out RMSE by at least this fraction, with more than twice
+    /// as many held-out windows improved as worsened, is kept without the paired z test (an
+    /// effect confined to a few windows, e.g. saturation, cannot pass it; noise cannot halve the
+    /// error on unseen episodes).
+    pub decisive_improvement: f64,
+    /// After the greedy rounds: drop kept effects whose removal does not hurt held-out beyond
+    /// noise, and swap each for a simpler effect that explains the data as well.
+    pub simplify: bool,
+    /// Samples up to this long after a gap in a recording (dropped rows) are left out of every
+    /// error sum ([`gap_mask`]): the command during the gap is unknown [s].
+    ///
+    /// [`gap_mask`]: crate::sim2real::metrics::gap_mask
+    pub gap_mask_s: f64,
+    /// The search stops when every fitted joint's training residual has a mean square within
+    /// this factor of its white floor ([`white_floor`]): what is left is noise.
+    ///
+    /// [`white_floor`]: crate::fit::stats::white_floor
+    pub white_ratio: f64,
+    /// Called at each step of the search (none: silent).
+    pub progress: Option<Progress>,
+}
+
+impl Default for FitOptions {
+    fn default() -> Self {
+        FitOptions {
+            holdout: 4,
+            effects: vec![],
+            joints: vec![],
+            replay: ReplayOptions::default(),
+            window_s: 0.5,
+            shooting_s: None,
+            max_rounds: 4,
+            candidates_per_round: 4,
+            min_rel_improvement: 0.02,
+            max_evals: 60,
+            families: BTreeMap::new(),
+            every_effect: true,
+            decisive_improvement: 0.5,
+            simplify: true,
+            gap_mask_s: 0.1,
+            white_ratio: 1.5,
+            progress: None,
+        }
+    }
+}
+
+/// One kept effect.
+#[derive(Debug, Clone, Serialize)]
+pub struct Selected {
+    pub effect: String,
+    pub joints: Vec<String>,
+    pub params: BTreeMap<String, f64>,
+    pub stderr: BTreeMap<String, f64>,
+    /// `false` when some fitted parameter is not determined by the data.
+    pub identifiable: bool,
+    pub evidence: BTreeMap<String, f64>,
+    /// Relative held-out position-RMSE reduction (0.3 = 30 % lower).
+    pub heldout_improvement: f64,
+    pub heldout_rmse_before: f64,
+    pub heldout_rmse_after: f64,
+    /// Mean ± stderr of the paired per-window improvement [rad].
+    pub window_improvement: f64,
+    pub window_improvement_se: f64,
+    pub bic_before: f64,
+    pub bic_after: f64,
+    #[serde(skip)]
+    pub values: Vec<f64>,
+}
+
+/// A candidate that was fitted (kept or not), for the log.
+#[derive(Debug, Clone, Serialize)]
+pub struct Tried {
+    pub round: usize,
+    /// `add` (greedy round), `drop` (removal test: `kept` = the effect stays) or `swap`
+    /// (replacement by a simpler effect: `kept` = the swap was made).
+    pub phase: &'static str,
+    pub effect: String,
+    pub joints: Vec<String>,
+    pub params: Vec<f64>,
+    pub train_rmse: f64,
+    pub heldout_improvement: f64,
+    pub significant: bool,
+    pub bic_decreased: bool,
+    pub kept: bool,
+}
+
+pub struct FitOutcome {
+    pub train: Vec<Recording>,
+    pub heldout: Vec<Recording>,
+    /// The held-out set is made of time windows of a single episode.
+    pub split_by_time: bool,
+    /// Which episodes were held out and why.
+    pub split_note: String,
+    /// Per fitted joint, of the model as given on the training set: (name, residual mean
+    /// square, white floor) [rad²].
+    pub floors: Vec<(String, f64, f64)>,
+    /// The search ended because the residual reached the white floor on every joint.
+    pub stopped_at_floor: bool,
+    /// Diagnosis of the first round (the model as given).
+    pub diagnosis: Vec<Candidate>,
+    pub selected: Vec<Selected>,
+    pub applied: Vec<Applied>,
+    pub tried: Vec<Tried>,
+    pub warnings: Vec<String>,
+}
+
+/// Position errors of one simulation of a dataset.
+pub struct Errors {
+    pub sse: f64,
+    pub n: usize,
+    /// Per (episode, window, joint) RMSE, with the joint's name.
+    pub windows: Vec<(String, f64)>,
+    pub eps: Vec<Episode>,
+}
+
+impl Errors {
+    pub fn rmse(&self) -> f64 {
+        if self.n == 0 { f64::INFINITY } else { (self.sse / self.n as f64).sqrt() }
+    }
+}
+
+/// Where the search is, for a progress display: the phase, the candidate being fitted (if any)
+/// with its index among the round's candidates, and the number of dataset simulations so far.
+#[derive(Debug, Clone)]
+pub struct ProgressInfo {
+    pub round: usize,
+    pub phase: &'static str,
+    pub candidate: Option<(usize, usize, String)>,
+    pub simulations: usize,
+}
+
+/// A progress callback (`modellint fit` draws it on stderr).
+#[derive(Clone)]
+pub struct Progress(pub std::sync::Arc<dyn Fn(&ProgressInfo) + Send + Sync>);
+
+impl std::fmt::Debug for Progress {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("Progress")
+    }
+}
+
+/// Runs the whole selection on `recs`.
+pub fn fit(robot: &Robot, recs: &[Recording], opts: &FitOptions) -> FitOutcome {
+    let engine = Engine::new(robot, recs, opts);
+    let Split { train: train0, heldout, by_time, note } = split(recs, opts.holdout);
+    let train: Vec<Recording> = match opts.shooting_s {
+        Some(w) if w > 0.0 => train0.iter().flat_map(|r| windows(r, w)).collect(),
+        _ => train0,
+    };
+    let mut out = FitOutcome {
+        train: train.clone(),
+        heldout: heldout.clone(),
+        split_by_time: by_time,
+        split_note: note,
+        floors: vec![],
+        stopped_at_floor: false,
+        diagnosis: vec![],
+        selected: vec![],
+        applied: vec![],
+        tried: vec![],
+        warnings: vec![],
+    };
+    if train.is_empty() || heldout.is_empty() {
+        out.warnings.push("not enough data for a train/held-out split (need 2 episodes, or one of several seconds)".into());
+        return out;
+    }
+    let allowed: Vec<String> = if opts.effects.is_empty() {
+        effects::all().iter().map(|e| e.id().to_string()).collect()
+    } else {
+        opts.effects.clone()
+    };
+    let mut round = 0;
+    loop {
+        while round < opts.max_rounds {
+            engine.report(round, "diagnose", None);
+            let added = greedy_round(&engine, &train, &heldout, &allowed, round, &mut out);
+            round += 1;
+            if !added {
+                break;
+            }
+        }
+        if out.applied.len() >= 2 {
+            engine.report(round, "polish", None);
+            polish(&engine, &train, &heldout, &mut out);
+        }
+        if !opts.simplify || out.applied.is_empty() {
+            break;
+        }
+        // A change re-opens the greedy search (bounded by `max_rounds`).
+        engine.report(round, "simplify", None);
+        if !simplify(&engine, &train, &heldout, &allowed, round, &mut out)
+            || round >= opts.max_rounds
+        {
+            break;
+        }
+    }
+    engine.report(round, "done", None);
+    out
+}
+
+/// Standard errors of `s`, the effect of `applied.last()`.
+fn set_uncertainty(
+    engine: &Engine,
+    train: &[Recording],
+    s: &mut Selected,
+    applied: &[Applied],
+    warnings: &mut Vec<String>,
+) {
+    let e = applied.last().expect("non-empty").effect;
+    let (se, ident) = engine.uncertainty(train, applied);
+    s.stderr = e.params().iter().zip(&se).map(|(d, v)| (d.name.to_string(), *v)).collect();
+    s.identifiable = ident;
+    if !ident {
+        warnings.push(format!(
+            "{} on {}: parameters not identifiable from this data (excite the joint more)",
+            s.effect,
+            s.joints.join(",")
+        ));
+    }
+}
+
+/// Fitted parameters of `a` by name.
+fn named_params(a: &Applied) -> BTreeMap<String, f64> {
+    a.effect
+        .params()
+        .iter()
+        .zip(&a.params)
+        .take(a.effect.fitted())
+        .map(|(d, v)| (d.name.to_string(), *v))
+        .collect()
+}
+
+impl Selected {
+    /// Record of the kept effect `a`: `v` compares the held-out set without it (RMSE `before`)
+    /// and with it (`after`); `bics` = training BIC (without, with). Standard errors come later
+    /// ([`set_uncertainty`]).
+    fn new(
+        a: &Applied,
+        evidence: BTreeMap<String, f64>,
+        v: &Verdict,
+        before: f64,
+        after: f64,
+        bics: (f64, f64),
+    ) -> Self {
+        Selected {
+            effect: a.effect.id().into(),
+            joints: a.joints.clone(),
+            params: named_params(a),
+            stderr: BTreeMap::new(),
+            identifiable: true,
+            evidence,
+            heldout_improvement: v.rel,
+            heldout_rmse_before: before,
+            heldout_rmse_after: after,
+            window_improvement: v.mean,
+            window_improvement_se: v.se,
+            bic_before: bics.0,
+            bic_after: bics.1,
+            values: a.params.clone(),
+        }
+    }
+}
+
+/// Copies the parameters of `out.applied` into `out.selected` (same order).
+fn sync_selected(out: &mut FitOutcome) {
+    for (s, a) in out.selected.iter_mut().zip(&out.applied) {
+        s.values = a.params.clone();
+        s.params.extend(named_params(a));
+    }
+}

@@ -1,0 +1,358 @@
+//! Effects fitted together: the pair look-ahead after a round's winner, the known [`JOINT_PAIRS`]
+//! when no single effect passes, and the joint re-fit of several effects' parameters.
+
+use std::collections::BTreeMap;
+
+use crate::fit::effects::{self, Applied, JointTarget, model_with};
+use crate::fit::optim::{Bounds, LmOpts, NelderMeadOpts, levenberg_marquardt, nelder_mead};
+use crate::fit::stats::bic;
+use crate::sim2real::recording::Recording;
+
+use super::engine::{Engine, res_len};
+use super::simplify::polish_set;
+use super::verdict::{Verdict, verdict};
+use super::{Errors, FitOutcome, Selected, Tried, set_uncertainty, sync_selected};
+
+/// Look-ahead for two effects that only make sense together (extra inertia *and* damping: each
+/// alone is mimicked by a delay or a gain error). The top four kept candidates of the round are
+/// paired when they act on the same joints, each pair is fitted jointly from the two single
+/// fits, and the best pair replaces the single winner when it is ≥ 10 % better on held-out
+/// (and beyond noise), and each member is needed in it (removing either is worse beyond
+/// noise). The pair with fewer parameters wins within 1 %.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn pair_lookahead(
+    engine: &Engine,
+    train: &[Recording],
+    heldout: &[Recording],
+    applied: &[Applied],
+    kept: &[Selected],
+    single: &Selected,
+    z: f64,
+    round: usize,
+    out: &mut FitOutcome,
+) -> Option<Vec<(Selected, Applied)>> {
+    let opts = engine.opts;
+    let mut top: Vec<&Selected> = kept.iter().collect();
+    top.sort_by(|a, b| a.heldout_rmse_after.total_cmp(&b.heldout_rmse_after));
+    top.truncate(4);
+    // A single effect that leaves under 5 % of the error needs no partner.
+    if single.heldout_improvement >= 0.95 {
+        return None;
+    }
+    let as_applied = |s: &Selected| Applied {
+        effect: effects::by_id(&s.effect).expect("known"),
+        joints: s.joints.clone(),
+        params: s.values.clone(),
+    };
+    let mut with_single = applied.to_vec();
+    with_single.push(as_applied(single));
+    // Nor does one that leaves a white training residual on every fitted joint: what is left
+    // is noise, quantisation and command reconstruction (the floor that stops the rounds), and a
+    // partner has nothing to explain. (The held-out test cannot show this: its improvement is
+    // bounded by the same floor, e.g. 94 % on arm2's elbow damping.)
+    let t_single = engine.errors(train, &with_single)?;
+    if engine.floors(train, &t_single).iter().all(|(_, ms, w)| *ms <= opts.white_ratio * w) {
+        return None;
+    }
+    let h_single = engine.errors(heldout, &with_single)?;
+    let h_base = engine.errors(heldout, applied)?;
+    let t_base = engine.errors(train, applied)?;
+    let k_before: usize = applied.iter().map(|a| a.effect.fitted()).sum();
+    let mut best: Option<(Vec<Applied>, f64, usize)> = None;
+    engine.report(round, "pair look-ahead", None);
+    for i in 0..top.len() {
+        for j in i + 1..top.len() {
+            let (a, b) = (top[i], top[j]);
+            if a.effect == b.effect || !a.joints.iter().any(|x| b.joints.contains(x)) {
+                continue;
+            }
+            let mut set = applied.to_vec();
+            set.push(as_applied(a));
+            set.push(as_applied(b));
+            let set = polish_set(engine, train, heldout, set, 0.05);
+            let (Some(h), Some(t)) = (engine.errors(heldout, &set), engine.errors(train, &set))
+            else {
+                continue;
+            };
+            let k = effects::by_id(&a.effect).map_or(9, |e| e.fitted())
+                + effects::by_id(&b.effect).map_or(9, |e| e.fitted());
+            let group: Vec<String> = a.joints.iter().chain(&b.joints).cloned().collect();
+            let v = verdict(&h_single, &h, &group, z, opts.decisive_improvement);
+            let bic_ok = bic(t.n, t.sse, k_before + k) < bic(t_base.n, t_base.sse, k_before);
+            // Each member needed: the pair beats the set without it beyond noise.
+            let needed = (0..2).all(|m| {
+                let mut wo = set.clone();
+                wo.remove(applied.len() + m);
+                engine.errors(heldout, &wo).is_some_and(|hw| {
+                    let vw = verdict(
+                        &hw,
+                        &h,
+                        &set[applied.len() + m].joints,
+                        2.0,
+                        opts.decisive_improvement,
+                    );
+                    vw.significant && vw.rel >= opts.min_rel_improvement
+                })
+            });
+            let ok = h.rmse() < 0.9 * h_single.rmse() && v.significant && bic_ok && needed;
+            out.tried.push(Tried {
+                round,
+                phase: "pair",
+                effect: format!("{}+{}", a.effect, b.effect),
+                joints: group.clone(),
+                params: set[applied.len()..]
+                    .iter()
+                    .flat_map(|x| x.params.iter().take(x.effect.fitted()).copied())
+                    .collect(),
+                train_rmse: t.rmse(),
+                heldout_improvement: (h_base.rmse() - h.rmse()) / h_base.rmse().max(1e-300),
+                significant: v.significant,
+                bic_decreased: bic_ok,
+                kept: false,
+            });
+            if !ok {
+                continue;
+            }
+            let better = match &best {
+                None => true,
+                Some((_, r, kb)) => {
+                    (k < *kb && h.rmse() <= r * 1.01)
+                        || (h.rmse() < *r && !(k > *kb && h.rmse() > r / 1.01))
+                }
+            };
+            if better {
+                best = Some((set, h.rmse(), k));
+            }
+        }
+    }
+    let (set, rmse, _) = best?;
+    let n = applied.len();
+    let label = format!("{}+{}", set[n].effect.id(), set[n + 1].effect.id());
+    if let Some(t) = out.tried.iter_mut().rev().find(|t| t.phase == "pair" && t.effect == label) {
+        t.kept = true;
+    }
+    out.warnings.push(format!(
+        "{} and {} on {} fitted together: held-out RMSE {:.3e} rad, vs {:.3e} with {} alone",
+        set[n].effect.id(),
+        set[n + 1].effect.id(),
+        set[n].joints.join(","),
+        rmse,
+        h_single.rmse(),
+        single.effect
+    ));
+    let t_pair = engine.errors(train, &set)?;
+    let h_pair = engine.errors(heldout, &set)?;
+    let k_pair: usize = set.iter().map(|a| a.effect.fitted()).sum();
+    let mut res = Vec::new();
+    for m in 0..2 {
+        let a = set[n + m].clone();
+        let mut wo = set.clone();
+        wo.remove(n + m);
+        let (hw, tw) = (engine.errors(heldout, &wo)?, engine.errors(train, &wo)?);
+        let v = verdict(&hw, &h_pair, &a.joints, 2.0, opts.decisive_improvement);
+        let evidence = kept
+            .iter()
+            .find(|s| s.effect == a.effect.id() && s.joints == a.joints)
+            .map(|s| s.evidence.clone())
+            .unwrap_or_default();
+        let bics =
+            (bic(tw.n, tw.sse, k_pair - a.effect.fitted()), bic(t_pair.n, t_pair.sse, k_pair));
+        let s = Selected::new(&a, evidence, &v, hw.rmse(), rmse, bics);
+        res.push((s, a));
+    }
+    // The polish may have moved the effects kept earlier: carry them over.
+    out.applied[..n].clone_from_slice(&set[..n]);
+    sync_selected(out);
+    Some(res)
+}
+
+/// Pairs of effects that mimic each other alone but not together: a servo gain error and a
+/// delay both shift the phase; friction and inertia both slow the response; a dead band and an
+/// offset both bias it; damping and inertia both change the decay.
+const JOINT_PAIRS: [(&str, &str); 6] = [
+    ("gain_error", "action_delay"),
+    ("coulomb_friction", "armature"),
+    ("stribeck_friction", "armature"),
+    ("backlash", "position_offset"),
+    ("viscous_damping", "armature"),
+    ("gain_error", "coulomb_friction"),
+];
+
+/// When no single candidate passed the held-out gate: fit the [`JOINT_PAIRS`] whose members were
+/// both fitted on the same joint group this round, jointly from their single fits, and keep the
+/// best pair that passes the gate as a whole (beyond noise against the model without it, BIC
+/// down) with each member needed (removing either is worse beyond noise).
+#[allow(clippy::too_many_arguments)]
+pub(super) fn joint_pairs(
+    engine: &Engine,
+    train: &[Recording],
+    heldout: &[Recording],
+    applied: &[Applied],
+    fitted: &[Applied],
+    (tr_err, ho_err): (&Errors, &Errors),
+    z: f64,
+    round: usize,
+    out: &mut FitOutcome,
+) -> bool {
+    let opts = engine.opts;
+    let n = applied.len();
+    let k_before: usize = applied.iter().map(|a| a.effect.fitted()).sum();
+    let bic_before = bic(tr_err.n, tr_err.sse, k_before);
+    let mut best: Option<(Vec<Applied>, Errors, Verdict, f64)> = None;
+    engine.report(round, "joint pairs", None);
+    for (ea, eb) in JOINT_PAIRS {
+        for a in fitted.iter().filter(|x| x.effect.id() == ea) {
+            let Some(b) = fitted.iter().find(|x| x.effect.id() == eb && x.joints == a.joints)
+            else {
+                continue;
+            };
+            let mut set = applied.to_vec();
+            set.push(a.clone());
+            set.push(b.clone());
+            let set = fit_jointly(engine, train, set, n);
+            let (Some(h), Some(t)) = (engine.errors(heldout, &set), engine.errors(train, &set))
+            else {
+                continue;
+            };
+            let k = a.effect.fitted() + b.effect.fitted();
+            let v = verdict(ho_err, &h, &a.joints, z, opts.decisive_improvement);
+            let bic_after = bic(t.n, t.sse, k_before + k);
+            let needed = (0..2).all(|m| {
+                let mut wo = set.clone();
+                wo.remove(n + m);
+                engine.errors(heldout, &wo).is_some_and(|hw| {
+                    let vw = verdict(&hw, &h, &a.joints, 2.0, opts.decisive_improvement);
+                    vw.significant && vw.rel >= opts.min_rel_improvement
+                })
+            });
+            let ok = v.significant
+                && v.rel >= opts.min_rel_improvement
+                && bic_after < bic_before
+                && needed;
+            out.tried.push(Tried {
+                round,
+                phase: "joint_pair",
+                effect: format!("{ea}+{eb}"),
+                joints: a.joints.clone(),
+                params: set[n..]
+                    .iter()
+                    .flat_map(|x| x.params.iter().take(x.effect.fitted()).copied())
+                    .collect(),
+                train_rmse: t.rmse(),
+                heldout_improvement: v.rel,
+                significant: v.significant,
+                bic_decreased: bic_after < bic_before,
+                kept: false,
+            });
+            if ok && best.as_ref().is_none_or(|(_, hb, ..)| h.rmse() < hb.rmse()) {
+                best = Some((set, h, v, bic_after));
+            }
+        }
+    }
+    let Some((set, h, v, bic_after)) = best else { return false };
+    let label = format!("{}+{}", set[n].effect.id(), set[n + 1].effect.id());
+    if let Some(t) = out
+        .tried
+        .iter_mut()
+        .rev()
+        .find(|t| t.phase == "joint_pair" && t.effect == label && t.joints == set[n].joints)
+    {
+        t.kept = true;
+    }
+    out.warnings.push(format!(
+        "no single effect passed; {} and {} on {} pass together: held-out RMSE {:.3e} → {:.3e} rad",
+        set[n].effect.id(),
+        set[n + 1].effect.id(),
+        set[n].joints.join(","),
+        ho_err.rmse(),
+        h.rmse()
+    ));
+    for m in 0..2 {
+        let a = set[n + m].clone();
+        let mut sel = Selected::new(
+            &a,
+            BTreeMap::new(),
+            &v,
+            ho_err.rmse(),
+            h.rmse(),
+            (bic_before, bic_after),
+        );
+        out.applied.push(a);
+        set_uncertainty(engine, train, &mut sel, &out.applied, &mut out.warnings);
+        out.selected.push(sel);
+    }
+    true
+}
+
+/// One fitted parameter of a set of applied effects: (effect index, parameter index, lo, hi).
+type Slot = (usize, usize, f64, f64);
+
+/// The fitted parameters of `set[first..]` with their bounds; effect `ai`'s bounds come from the
+/// model with `set[..base(ai)]` applied. `None` when an effect's joint is not in the model.
+pub(super) fn param_slots(
+    engine: &Engine,
+    set: &[Applied],
+    first: usize,
+    base: impl Fn(usize) -> usize,
+) -> Option<Vec<Slot>> {
+    let mut slots = Vec::new();
+    for (ai, a) in set.iter().enumerate().skip(first) {
+        let t = JointTarget::of(engine.robot, &a.joints[0])?;
+        let m0 = model_with(engine.robot, &set[..base(ai)]);
+        let (lo, hi) = a.effect.bounds(&m0, &t);
+        for k in 0..a.effect.fitted().min(a.params.len()) {
+            slots.push((ai, k, lo[k], hi[k]));
+        }
+    }
+    Some(slots)
+}
+
+/// `set` with the parameters of `slots` set to `x`.
+pub(super) fn with_params(set: &[Applied], slots: &[Slot], x: &[f64]) -> Vec<Applied> {
+    let mut a = set.to_vec();
+    for (&(ai, k, ..), v) in slots.iter().zip(x) {
+        a[ai].params[k] = *v;
+    }
+    a
+}
+
+/// Fits the effects `set[first..]` jointly on `train` (the ones before stay fixed), starting from
+/// their current parameters: Levenberg–Marquardt when all are smooth, else Nelder–Mead. Returns
+/// the set unchanged when the joint fit does not lower the training error.
+fn fit_jointly(
+    engine: &Engine,
+    train: &[Recording],
+    set: Vec<Applied>,
+    first: usize,
+) -> Vec<Applied> {
+    let Some(slots) = param_slots(engine, &set, first, |_| first) else { return set };
+    let make = |x: &[f64]| with_params(&set, &slots, x);
+    let x0: Vec<f64> =
+        slots.iter().map(|&(ai, k, lo, hi)| set[ai].params[k].clamp(lo, hi)).collect();
+    let b =
+        Bounds { lo: slots.iter().map(|s| s.2).collect(), hi: slots.iter().map(|s| s.3).collect() };
+    let obj = |x: &[f64]| engine.errors(train, &make(x)).map_or(f64::INFINITY, |e| e.rmse());
+    let f0 = obj(&x0);
+    let (x, f) = if set[first..].iter().all(|a| a.effect.smooth()) {
+        let res = |x: &[f64]| {
+            engine.residuals(train, &make(x), &engine.joints, usize::MAX).unwrap_or_default()
+        };
+        let o = LmOpts { max_iters: 12, rel_step: 1e-3, tol: 1e-5 };
+        let r = levenberg_marquardt(&res, &x0, &b, &o);
+        let n = res_len(&r);
+        (r.x, if n > 0 { (2.0 * r.cost / n as f64).sqrt() } else { f64::INFINITY })
+    } else {
+        let o = NelderMeadOpts {
+            max_evals: engine.opts.max_evals * 3,
+            xtol: 1e-4,
+            ftol: 1e-12,
+            initial_step: 0.1,
+        };
+        let r = nelder_mead(&obj, &x0, &b, &o);
+        (r.x, r.f)
+    };
+    if !(f < f0) {
+        return set;
+    }
+    make(&x)
+}

@@ -1,0 +1,277 @@
+//! Occam's pass after the greedy rounds (drop effects no longer needed, swap one for a simpler
+//! effect) and the joint polish of every kept effect's parameters.
+
+use std::collections::BTreeMap;
+
+use crate::fit::effects::{self, Applied};
+use crate::fit::optim::{Bounds, NelderMeadOpts, nelder_mead};
+use crate::fit::stats::bic;
+use crate::sim2real::recording::Recording;
+
+use super::engine::Engine;
+use super::pairs::{param_slots, with_params};
+use super::verdict::verdict;
+use super::{FitOutcome, Selected, Tried, set_uncertainty, sync_selected};
+
+/// Occam's pass over the kept effects, judged on the held-out set:
+/// * **drop** an effect whose removal does not make the held-out error worse beyond noise (it
+///   was needed only before a later effect explained the same thing);
+/// * **swap** an effect for one with fewer parameters on the same joints (re-fitted, then all
+///   parameters polished together) when the simpler set is not worse beyond noise: held-out
+///   RMSE within min(1 % of it, 5 % of what the effect explains) and no significant paired
+///   difference. Example: Stribeck friction with its velocity scale at the bound is Coulomb
+///   friction; a servo gain error whose only change is kd is joint damping.
+///
+/// Returns `true` when the set changed.
+pub(super) fn simplify(
+    engine: &Engine,
+    train: &[Recording],
+    heldout: &[Recording],
+    allowed: &[String],
+    round: usize,
+    out: &mut FitOutcome,
+) -> bool {
+    let mut changed = false;
+    // Each swap removes at least one parameter, so this ends.
+    loop {
+        changed |= drop_pass(engine, train, heldout, round, out);
+        if !swap_pass(engine, train, heldout, allowed, round, out) {
+            return changed;
+        }
+        changed = true;
+    }
+}
+
+/// Drops, last kept first. Returns `true` when an effect was dropped.
+fn drop_pass(
+    engine: &Engine,
+    train: &[Recording],
+    heldout: &[Recording],
+    round: usize,
+    out: &mut FitOutcome,
+) -> bool {
+    let opts = engine.opts;
+    let mut changed = false;
+    let mut i = out.applied.len();
+    while i > 0 {
+        i -= 1;
+        let mut without = out.applied.clone();
+        without.remove(i);
+        let (Some(h_full), Some(h_wo), Some(t_full), Some(t_wo)) = (
+            engine.errors(heldout, &out.applied),
+            engine.errors(heldout, &without),
+            engine.errors(train, &out.applied),
+            engine.errors(train, &without),
+        ) else {
+            continue;
+        };
+        let a = &out.applied[i];
+        let v = verdict(&h_wo, &h_full, &a.joints, 2.0, opts.decisive_improvement);
+        let k_full: usize = out.applied.iter().map(|a| a.effect.fitted()).sum();
+        let bic_dec =
+            bic(t_full.n, t_full.sse, k_full) < bic(t_wo.n, t_wo.sse, k_full - a.effect.fitted());
+        let keep = v.significant && v.rel >= opts.min_rel_improvement;
+        out.tried.push(Tried {
+            round,
+            phase: "drop",
+            effect: a.effect.id().into(),
+            joints: a.joints.clone(),
+            params: a.params.clone(),
+            train_rmse: t_full.rmse(),
+            heldout_improvement: v.rel,
+            significant: v.significant,
+            bic_decreased: bic_dec,
+            kept: keep,
+        });
+        if !keep {
+            out.warnings.push(format!(
+                "{} on {} dropped: with the other effects, removing it changes the held-out RMSE by {:+.1} % (not beyond noise)",
+                a.effect.id(),
+                a.joints.join(","),
+                -100.0 * v.rel
+            ));
+            out.applied.remove(i);
+            out.selected.remove(i);
+            changed = true;
+        }
+    }
+    changed
+}
+
+/// Swaps for simpler effects. Returns `true` when a swap was made.
+fn swap_pass(
+    engine: &Engine,
+    train: &[Recording],
+    heldout: &[Recording],
+    allowed: &[String],
+    round: usize,
+    out: &mut FitOutcome,
+) -> bool {
+    let opts = engine.opts;
+    let mut changed = false;
+    let mut i = 0;
+    while i < out.applied.len() {
+        let cur = out.applied[i].clone();
+        let k_cur = cur.effect.fitted();
+        let mut others = out.applied.clone();
+        others.remove(i);
+        let (Some(h_cur), Some(h_wo)) =
+            (engine.errors(heldout, &out.applied), engine.errors(heldout, &others))
+        else {
+            i += 1;
+            continue;
+        };
+        // Within 5 % of the current held-out RMSE, not worse beyond noise, and a training BIC
+        // that is not higher (as in the greedy winner's choice).
+        let tol = 0.05 * h_cur.rmse();
+        let k_all: usize = out.applied.iter().map(|a| a.effect.fitted()).sum();
+        let bic_cur = engine
+            .errors(train, &out.applied)
+            .map_or(f64::NEG_INFINITY, |e| bic(e.n, e.sse, k_all));
+        let mut best: Option<(Vec<Applied>, f64, usize)> = None;
+        for e in effects::all() {
+            if !allowed.iter().any(|a| a == e.id())
+                || e.id() == cur.effect.id()
+                || e.fitted() >= k_cur
+            {
+                continue;
+            }
+            if others
+                .iter()
+                .any(|a| a.effect.id() == e.id() && a.joints.iter().any(|j| cur.joints.contains(j)))
+            {
+                continue;
+            }
+            let (p, tr) = engine.fit_one(train, &others, e, &cur.joints);
+            if p.is_empty() || !tr.is_finite() {
+                continue;
+            }
+            let mut set = others.clone();
+            set.push(Applied { effect: e, joints: cur.joints.clone(), params: p });
+            let Some(h0) = engine.errors(heldout, &set) else { continue };
+            // Hopeless before polishing: skip the joint re-fit.
+            let set = if h0.rmse() <= h_cur.rmse() * 1.10 && set.len() >= 2 {
+                polish_set(engine, train, heldout, set, 0.02)
+            } else {
+                set
+            };
+            let Some(h1) = engine.errors(heldout, &set) else { continue };
+            // Is the current set better than the swap beyond noise?
+            let worse = verdict(&h1, &h_cur, &cur.joints, 2.0, f64::INFINITY);
+            let k_set = k_all - k_cur + e.fitted();
+            let bic_ok =
+                engine.errors(train, &set).is_some_and(|t| bic(t.n, t.sse, k_set) <= bic_cur);
+            let ok = h1.rmse() <= h_cur.rmse() + tol && !worse.significant && bic_ok;
+            out.tried.push(Tried {
+                round,
+                phase: "swap",
+                effect: e.id().into(),
+                joints: cur.joints.clone(),
+                params: set.last().expect("pushed").params.clone(),
+                train_rmse: tr,
+                heldout_improvement: (h_cur.rmse() - h1.rmse()) / h_cur.rmse().max(1e-300),
+                significant: worse.significant,
+                bic_decreased: bic_ok,
+                kept: false,
+            });
+            let better = match &best {
+                None => true,
+                Some((_, r, k)) => e.fitted() < *k || (e.fitted() == *k && h1.rmse() < *r),
+            };
+            if ok && better {
+                best = Some((set, h1.rmse(), e.fitted()));
+            }
+        }
+        let Some((set, rmse_new, _)) = best else {
+            i += 1;
+            continue;
+        };
+        let new = set.last().expect("non-empty").clone();
+        if let Some(t) =
+            out.tried.iter_mut().rev().find(|t| {
+                t.phase == "swap" && t.effect == new.effect.id() && t.joints == new.joints
+            })
+        {
+            t.kept = true;
+        }
+        out.warnings.push(format!(
+            "{} on {} replaced by the simpler {} (held-out RMSE {:.3e} → {:.3e} rad)",
+            cur.effect.id(),
+            cur.joints.join(","),
+            new.effect.id(),
+            h_cur.rmse(),
+            rmse_new
+        ));
+        let old = out.selected.remove(i);
+        out.applied = set;
+        sync_selected(out);
+        let (Some(t_wo), Some(t_new), Some(h_new)) = (
+            engine.errors(train, &others),
+            engine.errors(train, &out.applied),
+            engine.errors(heldout, &out.applied),
+        ) else {
+            // Cannot happen (both were just simulated); keep the old effect's record shape.
+            out.selected.push(old);
+            changed = true;
+            continue;
+        };
+        let k_new: usize = out.applied.iter().map(|a| a.effect.fitted()).sum();
+        let v = verdict(&h_wo, &h_new, &new.joints, 2.0, opts.decisive_improvement);
+        let evidence = BTreeMap::from([(format!("replaces_{}", cur.effect.id()), 1.0)]);
+        let bics =
+            (bic(t_wo.n, t_wo.sse, k_new - new.effect.fitted()), bic(t_new.n, t_new.sse, k_new));
+        let mut s = Selected::new(&new, evidence, &v, h_wo.rmse(), h_new.rmse(), bics);
+        set_uncertainty(engine, train, &mut s, &out.applied, &mut out.warnings);
+        out.selected.push(s);
+        changed = true;
+        // `i` now holds the next effect; the new one (last) is revisited at the end.
+    }
+    changed
+}
+
+/// Joint re-fit of every kept effect's fitted parameters (Nelder–Mead from the greedy values);
+/// kept only when both the training and the held-out RMSE do not get worse.
+pub(super) fn polish(
+    engine: &Engine,
+    train: &[Recording],
+    heldout: &[Recording],
+    out: &mut FitOutcome,
+) {
+    out.applied = polish_set(engine, train, heldout, std::mem::take(&mut out.applied), 0.02);
+    sync_selected(out);
+}
+
+pub(super) fn polish_set(
+    engine: &Engine,
+    train: &[Recording],
+    heldout: &[Recording],
+    applied: Vec<Applied>,
+    step: f64,
+) -> Vec<Applied> {
+    let Some(slots) = param_slots(engine, &applied, 0, |ai| ai) else { return applied };
+    let make = |x: &[f64]| with_params(&applied, &slots, x);
+    let x0: Vec<f64> = slots.iter().map(|&(ai, k, ..)| applied[ai].params[k]).collect();
+    let b =
+        Bounds { lo: slots.iter().map(|s| s.2).collect(), hi: slots.iter().map(|s| s.3).collect() };
+    let obj = |x: &[f64]| engine.errors(train, &make(x)).map_or(f64::INFINITY, |e| e.rmse());
+    let f0 = obj(&x0);
+    let o = NelderMeadOpts {
+        max_evals: engine.opts.max_evals * 2,
+        xtol: 1e-4,
+        ftol: 1e-12,
+        initial_step: step,
+    };
+    let r = nelder_mead(&obj, &x0, &b, &o);
+    if r.f.is_nan() || r.f >= f0 {
+        return applied;
+    }
+    let new = make(&r.x);
+    let (Some(h0), Some(h1)) = (engine.errors(heldout, &applied), engine.errors(heldout, &new))
+    else {
+        return applied;
+    };
+    if h1.rmse() > h0.rmse() {
+        return applied;
+    }
+    new
+}

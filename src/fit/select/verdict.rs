@@ -1,0 +1,128 @@
+//! The held-out gate: how strong the paired test must be ([`z_needed`]), whether a change is
+//! beyond noise ([`verdict`]), and whether a fit sits on a parameter bound ([`at_bound`]).
+
+use crate::fit::effects::{Applied, JointTarget, model_with};
+use crate::fit::stats::improvement_beyond_noise;
+
+use super::Errors;
+use super::engine::Engine;
+
+/// z the paired held-out test needs when `m` candidates compete in one round: 2 for up to four,
+/// then growing like a Bonferroni correction (2.35 for 8, 2.69 for 16) so that fitting more
+/// candidates does not buy more false discoveries.
+pub fn z_needed(m: usize) -> f64 {
+    2.0 + 0.5 * (m.max(4) as f64 / 4.0).ln()
+}
+
+/// Held-out comparison of `after` against `before` on the windows of `group`.
+pub(super) struct Verdict {
+    /// Mean ± s.e. of the paired per-window RMSE improvement [rad].
+    pub(super) mean: f64,
+    pub(super) se: f64,
+    /// Relative held-out RMSE improvement over all fitted joints.
+    pub(super) rel: f64,
+    pub(super) significant: bool,
+}
+
+/// `significant`: the paired per-window improvement (absolute, or of the log error) exceeds `z`
+/// standard errors, or the improvement is decisive (relative ≥ `decisive`, with more than twice
+/// as many windows improved as worsened).
+pub(super) fn verdict(
+    before: &Errors,
+    after: &Errors,
+    group: &[String],
+    z: f64,
+    decisive: f64,
+) -> Verdict {
+    let on = |w: &[(String, f64)]| {
+        w.iter().filter(|(j, _)| group.contains(j)).map(|(_, v)| *v).collect::<Vec<f64>>()
+    };
+    let (wb, wa) = (on(&before.windows), on(&after.windows));
+    let (mean, se, _) = improvement_beyond_noise(&wb, &wa);
+    let ln = |w: &[f64]| w.iter().map(|v| v.max(1e-12).ln()).collect::<Vec<f64>>();
+    let (lmean, lse, _) = improvement_beyond_noise(&ln(&wb), &ln(&wa));
+    let beyond = |m: f64, s: f64| m > 0.0 && m > z * s;
+    let rel = (before.rmse() - after.rmse()) / before.rmse().max(1e-300);
+    let (mut up, mut down) = (0usize, 0usize);
+    for (b, a) in wb.iter().zip(&wa) {
+        let tol = 1e-3 * b.abs();
+        if b - a > tol {
+            up += 1;
+        } else if a - b > tol {
+            down += 1;
+        }
+    }
+    let decisive_ok = rel >= decisive && up > 2 * down;
+    Verdict { mean, se, rel, significant: beyond(mean, se) || beyond(lmean, lse) || decisive_ok }
+}
+
+/// `true` when a fitted parameter of `a` sits on its bound (within 0.5 % of the range): the
+/// effect was stretched to explain something else.
+pub(super) fn at_bound(engine: &Engine, base: &[Applied], a: &Applied) -> bool {
+    let Some(t) = JointTarget::of(engine.robot, &a.joints[0]) else { return false };
+    let m0 = model_with(engine.robot, base);
+    let (lo, hi) = a.effect.bounds(&m0, &t);
+    (0..a.effect.fitted().min(a.params.len())).any(|k| {
+        let tol = 5e-3 * (hi[k] - lo[k]);
+        a.params[k] <= lo[k] + tol || a.params[k] >= hi[k] - tol
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn errs(w: &[f64]) -> Errors {
+        let sse: f64 = w.iter().map(|v| v * v * 10.0).sum();
+        Errors {
+            sse,
+            n: 10 * w.len(),
+            windows: w.iter().map(|v| ("a".to_string(), *v)).collect(),
+            eps: vec![],
+        }
+    }
+
+    #[test]
+    fn z_grows_with_the_number_of_candidates() {
+        assert_eq!(z_needed(1), 2.0);
+        assert_eq!(z_needed(4), 2.0);
+        assert!((z_needed(8) - 2.3466).abs() < 1e-3);
+        assert!(z_needed(16) > z_needed(8));
+    }
+
+    #[test]
+    fn verdict_paired_decisive_and_noise() {
+        let g = vec!["a".to_string()];
+        // Consistent 10 % improvement in every window: significant by the paired test.
+        let before: Vec<f64> = (0..16).map(|i| 1.0 + 0.05 * (i % 3) as f64).collect();
+        let after: Vec<f64> = before.iter().map(|v| 0.9 * v).collect();
+        assert!(verdict(&errs(&before), &errs(&after), &g, 2.0, 0.5).significant);
+        // A saturation event: 3 of 16 windows improve 20-fold, the rest are unchanged. The
+        // paired tests fail (too few informative windows), the decisive path accepts.
+        let mut before = vec![1.0; 16];
+        let mut after = vec![1.0; 16];
+        for (i, big) in [(2, 40.0), (7, 25.0), (11, 60.0)] {
+            before[i] = big;
+            after[i] = 1.0;
+        }
+        assert!(!verdict(&errs(&before), &errs(&after), &g, 2.0, f64::INFINITY).significant);
+        assert!(verdict(&errs(&before), &errs(&after), &g, 2.0, 0.5).significant);
+        // Noise: as many windows worse as better, tiny mean change: not significant.
+        let before: Vec<f64> = (0..16).map(|i| 1.0 + 0.01 * ((i * 7) % 5) as f64).collect();
+        let after: Vec<f64> = before
+            .iter()
+            .enumerate()
+            .map(|(i, v)| v + if i % 2 == 0 { 0.01 } else { -0.011 })
+            .collect();
+        assert!(!verdict(&errs(&before), &errs(&after), &g, 2.0, 0.5).significant);
+        // A big improvement on one window and worse on most others is not decisive.
+        let mut after = before.clone();
+        after[0] = 0.0;
+        for v in after.iter_mut().skip(1).take(8) {
+            *v *= 1.05;
+        }
+        let mut b2 = before.clone();
+        b2[0] = 10.0;
+        assert!(!verdict(&errs(&b2), &errs(&after), &g, 2.0, 0.5).significant);
+    }
+}
