@@ -36,7 +36,7 @@ fn bench(model: &str, spec: Option<&str>) {
         let mut f = run_rules(&l);
         lint.push(t.elapsed().as_secs_f64());
         let t = Instant::now();
-        modellint::probe::confirm_all(&l, &mut f);
+        modellint::lint::confirm(&l, &mut f);
         probes.push(t.elapsed().as_secs_f64());
         probe_steps = f.iter().filter_map(|x| x.probe.as_ref()).map(|p| p.steps).sum();
     }
