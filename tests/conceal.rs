@@ -159,8 +159,10 @@ fn conceal_asimov_one_knee_is_not_smeared_over_both() {
     // Leg joints on a test stand; damping on the left knee only. The mirror completion tries
     // both knees as a group; held-out must keep the one-joint fit: nothing on the right knee.
     // KNOWN MISS on the independent synth (issue notes): the left knee's damping 3.0 comes out
-    // as a servo gain error (kp × 0.92, kd × 1.43) that leaves 2.3 mrad against a 0.56 mrad
-    // floor; asserted here: not smeared, nothing invented elsewhere, the error at least halved.
+    // as a servo gain error (kp × 0.95, kd × 1.49: the extra kd is the damping) that leaves
+    // 0.68 mrad held-out MAE against a 0.56 mrad floor (2.3 mrad before the replay filled
+    // MuJoCo's actuator delay history); asserted here: not smeared, nothing invented
+    // elsewhere, the error within 1.5× the floor.
     let c = asimov_case(
         "asimov left knee viscous_damping",
         Kind::Single,
@@ -178,11 +180,12 @@ fn conceal_asimov_one_knee_is_not_smeared_over_both() {
     );
     assert!(!s.detected.is_empty(), "{}: nothing found", c.name);
     assert!(
-        s.mae_after <= 0.5 * s.mae_before,
-        "{}: held-out MAE {} → {}",
+        s.mae_after <= 1.5 * s.mae_floor,
+        "{}: held-out MAE {} → {} (floor {})",
         c.name,
         s.mae_before,
-        s.mae_after
+        s.mae_after,
+        s.mae_floor
     );
 }
 
