@@ -276,19 +276,22 @@ impl Robot {
     }
     /// Actuators whose transmission reaches joint `j` (directly, or through a fixed tendon).
     pub fn actuators_on_joint(&self, j: usize) -> Vec<&Actuator> {
-        let r = mj::raw(&self.mj);
+        let m = &self.mj;
         self.actuators
             .iter()
             .filter(|a| match a.trn {
                 Transmission::Joint | Transmission::JointInParent => a.target == j as i32,
                 Transmission::Tendon if a.target >= 0 => {
                     let t = a.target as usize;
-                    let adr = mj::slice(r.tendon_adr, r.ntendon as usize)[t] as usize;
-                    let num = mj::slice(r.tendon_num, r.ntendon as usize)[t] as usize;
-                    let wt = mj::slice(r.wrap_type, r.nwrap as usize);
-                    let wo = mj::slice(r.wrap_objid, r.nwrap as usize);
-                    (adr..adr + num)
-                        .any(|w| wt.get(w) == Some(&1) && wo.get(w) == Some(&(j as i32)))
+                    let (Some(&adr), Some(&num)) = (m.tendon_adr().get(t), m.tendon_num().get(t))
+                    else {
+                        return false;
+                    };
+                    let (adr, num) = (adr.max(0) as usize, num.max(0) as usize);
+                    let (wt, wo) = (m.wrap_type(), m.wrap_objid());
+                    (adr..adr + num).any(|w| {
+                        wt.get(w).map(|&t| t as i32) == Some(1) && wo.get(w) == Some(&(j as i32))
+                    })
                 }
                 _ => false,
             })
@@ -306,14 +309,10 @@ impl Robot {
             }
         }
         let list = self.src.list(kind);
-        let r = mj::raw(&self.mj);
         let body_of: Vec<usize> = match kind {
             ElemKind::Joint => self.joints.iter().map(|j| j.body).collect(),
             ElemKind::Geom => self.geoms.iter().map(|g| g.body).collect(),
-            ElemKind::Site => mj::slice(r.site_bodyid, r.nsite as usize)
-                .iter()
-                .map(|&b| b.max(0) as usize)
-                .collect(),
+            ElemKind::Site => self.mj.site_bodyid().iter().map(|&b| b.max(0) as usize).collect(),
             _ => {
                 // Compiled order matches source order only when every element was indexed.
                 let expected = match kind {
@@ -685,26 +684,25 @@ fn extract(path: &Path, format: Format, tree: XNode, src: SourceIndex, mj: MjMod
         r.ngeom as usize,
         r.nkey as usize,
     );
-    let (nctrl, nout) = (r.nu as usize, r.nout as usize);
-    let jt = mj::slice(r.jnt_type, njnt);
-    let jb = mj::slice(r.jnt_bodyid, njnt);
-    let jq = mj::slice(r.jnt_qposadr, njnt);
-    let jd = mj::slice(r.jnt_dofadr, njnt);
-    let jl = mj::slice(r.jnt_limited, njnt);
-    let jr = mj::slice(r.jnt_range, 2 * njnt);
-    let js = mj::slice(r.jnt_stiffness, njnt);
-    let jax = mj::slice(r.jnt_axis, 3 * njnt);
-    let nv = r.nv as usize;
-    let darm = mj::slice(r.dof_armature, nv);
-    let ddamp = mj::slice(r.dof_damping, nv);
-    let dfl = mj::slice(r.dof_frictionloss, nv);
-    let qspring = mj::slice(r.qpos_spring, r.nq as usize);
+    let nctrl = r.nu as usize;
+    let jt: Vec<i32> = mj.jnt_type().iter().map(|&t| t as i32).collect();
+    let jb = mj.jnt_bodyid();
+    let jq = mj.jnt_qposadr();
+    let jd = mj.jnt_dofadr();
+    let jl = mj.jnt_limited();
+    let jr = mj.jnt_range().as_flattened();
+    let js = mj.jnt_stiffness();
+    let jax = mj.jnt_axis().as_flattened();
+    let darm = mj.dof_armature();
+    let ddamp = mj.dof_damping();
+    let dfl = mj.dof_frictionloss();
+    let qspring = mj.qpos_spring();
     let joints = (0..njnt)
         .map(|i| {
             let d = jd[i].max(0) as usize;
             Joint {
                 id: i,
-                name: mj::name_at(&mj, r.name_jntadr, njnt, i),
+                name: mj::name_at(&mj, mj.name_jntadr(), i),
                 jtype: match jt[i] {
                     0 => JointType::Free,
                     1 => JointType::Ball,
@@ -728,24 +726,24 @@ fn extract(path: &Path, format: Format, tree: XNode, src: SourceIndex, mj: MjMod
         })
         .collect::<Vec<Joint>>();
     let mut joints = joints;
-    let trn = mj::slice(r.actuator_trntype, nu);
-    let trnid = mj::slice(r.actuator_trnid, 2 * nu);
-    let gear = mj::slice(r.actuator_gear, 6 * nout);
-    let cadr = mj::slice(r.actuator_ctrladr, nu);
-    let cnum = mj::slice(r.actuator_ctrlnum, nu);
-    let oadr = mj::slice(r.actuator_outadr, nu);
-    let aarm = mj::slice(r.actuator_armature, nu);
-    let cspec = mj::slice(r.actuator_ctrlspec, nu);
-    let adamp = mj::slice(r.actuator_damping, nu);
-    let gt = mj::slice(r.actuator_gaintype, nu);
-    let bt = mj::slice(r.actuator_biastype, nu);
-    let gp = mj::slice(r.actuator_gainprm, 10 * nu);
-    let bp = mj::slice(r.actuator_biasprm, 10 * nu);
-    let cl = mj::slice(r.actuator_ctrllimited, nctrl);
-    let cr = mj::slice(r.actuator_ctrlrange, 2 * nctrl);
-    let fl = mj::slice(r.actuator_forcelimited, nu);
-    let fr = mj::slice(r.actuator_forcerange, 2 * nu);
-    let dl = mj::slice(r.actuator_delay, nu);
+    let trn: Vec<i32> = mj.actuator_trntype().iter().map(|&t| t as i32).collect();
+    let trnid = mj.actuator_trnid().as_flattened();
+    let gear = mj.actuator_gear().as_flattened();
+    let cadr = mj.actuator_ctrladr();
+    let cnum = mj.actuator_ctrlnum();
+    let oadr = mj.actuator_outadr();
+    let aarm = mj.actuator_armature();
+    let cspec = mj.actuator_ctrlspec();
+    let adamp = mj.actuator_damping();
+    let gt: Vec<i32> = mj.actuator_gaintype().iter().map(|&t| t as i32).collect();
+    let bt: Vec<i32> = mj.actuator_biastype().iter().map(|&t| t as i32).collect();
+    let gp = mj.actuator_gainprm().as_flattened();
+    let bp = mj.actuator_biasprm().as_flattened();
+    let cl = mj.actuator_ctrllimited();
+    let cr = mj.actuator_ctrlrange().as_flattened();
+    let fl = mj.actuator_forcelimited();
+    let fr = mj.actuator_forcerange().as_flattened();
+    let dl = mj.actuator_delay();
     let actuators = (0..nu)
         .map(|i| {
             let g = [gp[10 * i], gp[10 * i + 1], gp[10 * i + 2]];
@@ -781,7 +779,7 @@ fn extract(path: &Path, format: Format, tree: XNode, src: SourceIndex, mj: MjMod
             };
             Actuator {
                 id: i,
-                name: mj::name_at(&mj, r.name_actuatoradr, nu, i),
+                name: mj::name_at(&mj, mj.name_actuatoradr(), i),
                 trn: match trn[i] {
                     0 => Transmission::Joint,
                     1 => Transmission::JointInParent,
@@ -806,30 +804,30 @@ fn extract(path: &Path, format: Format, tree: XNode, src: SourceIndex, mj: MjMod
         })
         .collect::<Vec<Actuator>>();
     add_transmission_parts(&mj, &mut joints, &actuators);
-    let bp_ = mj::slice(r.body_parentid, nbody);
-    let bm = mj::slice(r.body_mass, nbody);
+    let bp_ = mj.body_parentid();
+    let bm = mj.body_mass();
     let bodies = (0..nbody)
         .map(|i| Body {
             id: i,
-            name: mj::name_at(&mj, r.name_bodyadr, nbody, i),
+            name: mj::name_at(&mj, mj.name_bodyadr(), i),
             parent: bp_[i].max(0) as usize,
             mass: bm[i],
         })
         .collect();
-    let gtp = mj::slice(r.geom_type, ngeom);
-    let gb = mj::slice(r.geom_bodyid, ngeom);
-    let gs = mj::slice(r.geom_size, 3 * ngeom);
-    let gct = mj::slice(r.geom_contype, ngeom);
-    let gca = mj::slice(r.geom_conaffinity, ngeom);
-    let gcd = mj::slice(r.geom_condim, ngeom);
-    let gf = mj::slice(r.geom_friction, 3 * ngeom);
-    let gg = mj::slice(r.geom_group, ngeom);
-    let gd = mj::slice(r.geom_dataid, ngeom);
-    let grb = mj::slice(r.geom_rbound, ngeom);
+    let gtp: Vec<i32> = mj.geom_type().iter().map(|&t| t as i32).collect();
+    let gb = mj.geom_bodyid();
+    let gs = mj.geom_size().as_flattened();
+    let gct = mj.geom_contype();
+    let gca = mj.geom_conaffinity();
+    let gcd = mj.geom_condim();
+    let gf = mj.geom_friction().as_flattened();
+    let gg = mj.geom_group();
+    let gd = mj.geom_dataid();
+    let grb = mj.geom_rbound();
     let geoms = (0..ngeom)
         .map(|i| Geom {
             id: i,
-            name: mj::name_at(&mj, r.name_geomadr, ngeom, i),
+            name: mj::name_at(&mj, mj.name_geomadr(), i),
             body: gb[i].max(0) as usize,
             gtype: geom_type(gtp[i]),
             size: [gs[3 * i], gs[3 * i + 1], gs[3 * i + 2]],
@@ -842,19 +840,19 @@ fn extract(path: &Path, format: Format, tree: XNode, src: SourceIndex, mj: MjMod
             rbound: grb[i],
         })
         .collect();
-    let keys = (0..nkey).map(|i| mj::name_at(&mj, r.name_keyadr, nkey, i)).collect();
+    let keys = (0..nkey).map(|i| mj::name_at(&mj, mj.name_keyadr(), i)).collect();
     let nmesh = r.nmesh as usize;
-    let meshes = (0..nmesh).map(|i| mj::name_at(&mj, r.name_meshadr, nmesh, i)).collect();
+    let meshes = (0..nmesh).map(|i| mj::name_at(&mj, mj.name_meshadr(), i)).collect();
     let ntendon = r.ntendon as usize;
-    let tendons = (0..ntendon).map(|i| mj::name_at(&mj, r.name_tendonadr, ntendon, i)).collect();
+    let tendons = (0..ntendon).map(|i| mj::name_at(&mj, mj.name_tendonadr(), i)).collect();
     let neq = r.neq as usize;
-    let et = mj::slice(r.eq_type, neq);
-    let e1 = mj::slice(r.eq_obj1id, neq);
-    let e2 = mj::slice(r.eq_obj2id, neq);
+    let et: Vec<i32> = mj.eq_type().iter().map(|&t| t as i32).collect();
+    let e1 = mj.eq_obj1id();
+    let e2 = mj.eq_obj2id();
     let equalities = (0..neq)
         .map(|i| Equality {
             id: i,
-            name: mj::name_at(&mj, r.name_eqadr, neq, i),
+            name: mj::name_at(&mj, mj.name_eqadr(), i),
             etype: et[i],
             obj1: e1[i],
             obj2: e2[i],
@@ -895,15 +893,10 @@ fn own_part(v: f64) -> Vec<Part> {
 /// tendon's actuators' values × gear² added to the tendon's), and a `<dcmotor>`'s back-EMF
 /// K²/R × gear² as damping.
 fn add_transmission_parts(m: &MjModel, joints: &mut [Joint], actuators: &[Actuator]) {
-    let r = mj::raw(m);
-    let (nt, nw) = (r.ntendon as usize, r.nwrap as usize);
-    let tadr = mj::slice(r.tendon_adr, nt);
-    let tnum = mj::slice(r.tendon_num, nt);
-    let tarm = mj::slice(r.tendon_armature, nt);
-    let tdamp = mj::slice(r.tendon_damping, nt);
-    let wt = mj::slice(r.wrap_type, nw);
-    let wo = mj::slice(r.wrap_objid, nw);
-    let wp = mj::slice(r.wrap_prm, nw);
+    let (tadr, tnum) = (m.tendon_adr(), m.tendon_num());
+    let (tarm, tdamp) = (m.tendon_armature(), m.tendon_damping());
+    let wt: Vec<i32> = m.wrap_type().iter().map(|&t| t as i32).collect();
+    let (wo, wp) = (m.wrap_objid(), m.wrap_prm());
     let push = |parts: &mut Vec<Part>, source: PartSource, value: f64| {
         if value != 0.0 && value.is_finite() {
             parts.push(Part { source, value });
@@ -958,7 +951,7 @@ fn add_transmission_parts(m: &MjModel, joints: &mut [Joint], actuators: &[Actuat
             _ => {}
         }
     }
-    for t in 0..nt {
+    for t in 0..tadr.len().min(tnum.len()).min(tarm.len()).min(tdamp.len()) {
         if tarm[t] == 0.0 && tdamp[t] == 0.0 {
             continue;
         }
@@ -1034,23 +1027,17 @@ pub fn key_state(m: &MjModel, key: Option<usize>, keys: &[String]) -> KeyState {
         let _ = d.reset_keyframe(k);
     }
     d.forward();
-    let r = mj::raw(m);
-    let dr = d.ffi();
-    let (nq, nv, nu, ngeom, nbody) =
-        (r.nq as usize, r.nv as usize, r.nu as usize, r.ngeom as usize, r.nbody as usize);
-    let full = mj::full_mass_matrix(m, &d);
+    let nv = mj::raw(m).nv.max(0) as usize;
+    let full = mj::full_mass_matrix(&d);
     let m_diag = (0..nv).map(|i| full[i * nv + i]).collect();
-    let gx = mj::slice(dr.geom_xpos, 3 * ngeom);
-    let gm = mj::slice(dr.geom_xmat, 9 * ngeom);
-    let bx = mj::slice(dr.xpos, 3 * nbody);
     KeyState {
         key,
         key_name: key.and_then(|k| keys.get(k).cloned()),
-        qpos: mj::slice(dr.qpos, nq).to_vec(),
-        ctrl: mj::slice(dr.ctrl, nu).to_vec(),
+        qpos: d.qpos().to_vec(),
+        ctrl: d.ctrl().to_vec(),
         m_diag,
-        geom_xpos: (0..ngeom).map(|i| [gx[3 * i], gx[3 * i + 1], gx[3 * i + 2]]).collect(),
-        geom_xmat: (0..ngeom).map(|i| std::array::from_fn(|k| gm[9 * i + k])).collect(),
-        body_xpos: (0..nbody).map(|i| [bx[3 * i], bx[3 * i + 1], bx[3 * i + 2]]).collect(),
+        geom_xpos: d.geom_xpos().to_vec(),
+        geom_xmat: d.geom_xmat().to_vec(),
+        body_xpos: d.xpos().to_vec(),
     }
 }
