@@ -303,10 +303,10 @@ impl Robot {
     /// Matching inside the body keeps an unnamed geom on its own line when a scene file adds
     /// world geoms (a floor) that MuJoCo numbers before the robot's.
     pub fn elem(&self, kind: ElemKind, id: usize, name: &str) -> Option<&ElemSrc> {
-        if !name.is_empty() {
-            if let Some(e) = self.src.by_name(kind, name) {
-                return Some(e);
-            }
+        if !name.is_empty()
+            && let Some(e) = self.src.by_name(kind, name)
+        {
+            return Some(e);
         }
         let list = self.src.list(kind);
         let body_of: Vec<usize> = match kind {
@@ -602,16 +602,16 @@ pub fn load_cached(
     };
     let mut robot = extract(path, format, tree, src, mj);
     let key = choose_key(&robot.keys, keyframe);
-    if let Some(want) = keyframe {
-        if key.is_none() {
-            return Err(LoadError::plain(
-                path,
-                format!(
-                    "keyframe `{want}` named by the spec is not in the model (keyframes: {:?})",
-                    robot.keys
-                ),
-            ));
-        }
+    if let Some(want) = keyframe
+        && key.is_none()
+    {
+        return Err(LoadError::plain(
+            path,
+            format!(
+                "keyframe `{want}` named by the spec is not in the model (keyframes: {:?})",
+                robot.keys
+            ),
+        ));
     }
     robot.key = key_state(&robot.mj, key, &robot.keys);
     Ok(robot)
@@ -858,11 +858,8 @@ fn extract(path: &Path, format: Format, tree: XNode, src: SourceIndex, mj: MjMod
             obj2: e2[i],
         })
         .collect();
-    let opt = Options {
-        timestep: r.opt.timestep,
-        integrator: r.opt.integrator as i32,
-        gravity: r.opt.gravity,
-    };
+    let opt =
+        Options { timestep: r.opt.timestep, integrator: r.opt.integrator, gravity: r.opt.gravity };
     static NEXT_UID: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
     Robot {
         uid: NEXT_UID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),

@@ -100,11 +100,11 @@ pub fn run_gap(a: GapArgs) -> i32 {
         Ok(l) => l,
         Err(code) => return code,
     };
-    if let Some(hz) = a.control_hz {
-        if !(hz.is_finite() && hz > 0.0) {
-            eprintln!("modellint: --control-hz must be positive, got {hz}");
-            return 2;
-        }
+    if let Some(hz) = a.control_hz
+        && !(hz.is_finite() && hz > 0.0)
+    {
+        eprintln!("modellint: --control-hz must be positive, got {hz}");
+        return 2;
     }
     let files = match expand_inputs(&a.recordings) {
         Ok(f) => f,

@@ -355,9 +355,7 @@ pub fn compute(
                 // full-length episode exists (the longest short one wins).
                 let full = ru.len() >= opts.nperseg;
                 let cur_full = ja.psd.freqs.len() == opts.nperseg / 2 + 1;
-                if ja.psd.freqs.is_empty()
-                    || (full && !cur_full)
-                    || (!full && !cur_full && f.len() > ja.psd.freqs.len())
+                if ja.psd.freqs.is_empty() || (!cur_full && (full || f.len() > ja.psd.freqs.len()))
                 {
                     ja.psd = JointPsd {
                         freqs: f,
@@ -565,8 +563,8 @@ pub fn compute(
     let worst_band = bands.first().filter(|b| b.mismatch > 0.0).map(|b| b.band.clone());
     let mut ph_all = [Accum::new(), Accum::new(), Accum::new(), Accum::new()];
     for ja in &joints {
-        for k in 0..4 {
-            ph_all[k].merge(&ja.ph[k]);
+        for (acc, ph) in ph_all.iter_mut().zip(&ja.ph) {
+            acc.merge(ph);
         }
     }
     let other_rmse = ph_all[3].finish().rmse;

@@ -263,7 +263,7 @@ impl<'m> Replayer<'m> {
             (gain_cols || replaced.iter().any(|&r| r)).then(|| self.model.clone());
         let m: &MjModel = owned.as_ref().unwrap_or(self.model);
         let dt = mj::raw(m).opt.timestep;
-        if !(dt > 0.0) {
+        if dt.is_nan() || dt <= 0.0 {
             return Err(setup(format!("model timestep {dt} is not positive")));
         }
         // Nominal gains of every position actuator of the recorded joints.

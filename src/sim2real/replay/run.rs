@@ -108,10 +108,10 @@ impl Replayer<'_> {
                 BaseMode::Free => {}
             }
         };
-        if base_mode == BaseMode::Free {
-            if let (Some((qa, _)), Some(pin)) = (self.free, base_pin) {
-                d.qpos_mut()[qa..qa + 7].copy_from_slice(&pin);
-            }
+        if base_mode == BaseMode::Free
+            && let (Some((qa, _)), Some(pin)) = (self.free, base_pin)
+        {
+            d.qpos_mut()[qa..qa + 7].copy_from_slice(&pin);
         }
         set_base(&mut d, t0);
         d.forward();
@@ -254,11 +254,11 @@ fn divergence<M: ModelType>(d: &MjData<M>, q: &[f64], qd: &[f64], t: f64) -> Opt
     let dr = d.ffi();
     let names =
         ["", "", "", "bad qpos", "bad qvel", "bad qacc (NaN/Inf/huge acceleration)", "bad ctrl"];
-    for w in 3..=6 {
+    for (w, name) in names.iter().enumerate().skip(3) {
         if dr.warning[w].number > 0 {
             return Some(format!(
-                "MuJoCo warning at t = {t:.4} s: {} (index {})",
-                names[w], dr.warning[w].lastinfo
+                "MuJoCo warning at t = {t:.4} s: {name} (index {})",
+                dr.warning[w].lastinfo
             ));
         }
     }
