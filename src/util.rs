@@ -36,7 +36,7 @@ pub fn fmt_num(x: f64, sig: usize) -> String {
     }
     let mag = x.abs().log10().floor() as i32;
     let decimals = (sig as i32 - 1 - mag).max(0) as usize;
-    if mag < -4 || mag >= 9 {
+    if !(-4..9).contains(&mag) {
         return format!("{:.*e}", sig.saturating_sub(1), x);
     }
     let s = format!("{:.*}", decimals, x);
