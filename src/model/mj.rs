@@ -124,3 +124,80 @@ pub fn geom_distance<M: ModelType>(d: &mut MjData<M>, g1: usize, g2: usize, dist
 pub fn contact_normal_force<M: ModelType>(d: &MjData<M>, i: usize) -> f64 {
     d.try_contact_force(i).map(|f| f[0]).unwrap_or(0.0)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A hinge with armature and a range, a position servo on it.
+    const XML: &str = r#"<mujoco><option gravity="0 0 0"/><worldbody><body name="b">
+        <joint name="j" type="hinge" axis="0 1 0" armature="0.1" limited="true" range="-0.1 0.1"/>
+        <geom type="sphere" size="0.1" pos="0.3 0 0" mass="1"/></body></worldbody>
+        <actuator><position name="a" joint="j" kp="10" kv="1"/></actuator></mujoco>"#;
+
+    fn model() -> MjModel {
+        MjModel::from_xml_string(XML).expect("compiles")
+    }
+
+    #[test]
+    fn names_by_id_and_out_of_range() {
+        let m = model();
+        assert_eq!(name_at(&m, m.name_jntadr(), 0), "j");
+        assert_eq!(name_at(&m, m.name_actuatoradr(), 0), "a");
+        assert_eq!(name_at(&m, m.name_bodyadr(), 1), "b");
+        assert_eq!(name_at(&m, m.name_jntadr(), 1), "");
+        assert_eq!(name_at(&m, &[i32::MAX], 0), "");
+    }
+
+    #[test]
+    fn armature_moves_dof_m0_with_it() {
+        let mut m = model();
+        let (a0, m00) = (m.dof_armature()[0], m.dof_m0()[0]);
+        set_armature(&mut m, 0, 0.5);
+        assert_eq!(m.dof_armature()[0], 0.5);
+        assert!((m.dof_m0()[0] - (m00 + 0.5 - a0)).abs() < 1e-12);
+        set_armature(&mut m, 9, 1.0); // out of range: nothing
+        assert_eq!(m.dof_armature(), &[0.5]);
+    }
+
+    #[test]
+    fn gains_written_through_the_data_drive_the_next_step() {
+        let mut m = model();
+        let mut d = MjData::new(&mut m);
+        d.ctrl_mut()[0] = 0.05;
+        d.forward();
+        assert!((d.actuator_force()[0] - 10.0 * 0.05).abs() < 1e-9);
+        set_actuator_gains(&mut d, 0, 40.0, -40.0, -2.0);
+        set_actuator_gains(&mut d, 3, 1.0, 1.0, 1.0); // no such actuator: nothing
+        assert_eq!(d.model().actuator_gainprm()[0][0], 40.0);
+        assert_eq!(&d.model().actuator_biasprm()[0][..3], &[0.0, -40.0, -2.0]);
+        d.forward();
+        assert!((d.actuator_force()[0] - 40.0 * 0.05).abs() < 1e-9);
+    }
+
+    #[test]
+    fn constraint_forces_show_the_joint_limit_row() {
+        let m = model();
+        let mut d = MjData::new(&m);
+        assert!(constraint_forces(&d).is_empty());
+        d.ctrl_mut()[0] = 1.0; // far beyond the 0.1 rad stop
+        let mut hit = false;
+        for _ in 0..500 {
+            d.step();
+            hit |= constraint_forces(&d).iter().any(|&(ty, id, f)| {
+                ty == c::mjtConstraint::mjCNSTR_LIMIT_JOINT as i32 && id == 0 && f.abs() > 1e-9
+            });
+        }
+        assert!(hit, "the servo never pressed the joint into its stop");
+    }
+
+    #[test]
+    fn distance_and_contact_queries_reject_bad_ids() {
+        let m = model();
+        let mut d = MjData::new(&m);
+        d.forward();
+        assert!(geom_distance(&mut d, 0, 5, 1.0).is_nan());
+        assert_eq!(contact_normal_force(&d, 0), 0.0);
+        assert_eq!(full_mass_matrix(&d).len(), 1);
+    }
+}
