@@ -3,7 +3,7 @@
 MUJOCO := .mujoco/lib/libmujoco.so
 CARGO ?= cargo
 
-.PHONY: run test build bench docs clean-mujoco test-install
+.PHONY: run test build lint bench docs clean-mujoco test-install
 
 $(MUJOCO): scripts/setup-mujoco.sh
 	./scripts/setup-mujoco.sh
@@ -14,6 +14,12 @@ build: $(MUJOCO)
 # Exit code 1 only means "findings were reported"; make fails only on exit 2 (modellint could not run).
 run: build
 	@./target/release/modellint models/asimov.xml; s=$$?; [ $$s -le 1 ]
+
+# Formatting and clippy, warnings as errors (.ci/run runs this before `make test`). Clippy needs
+# .mujoco/ too: mujoco-rs links libmujoco at build time.
+lint: $(MUJOCO)
+	$(CARGO) fmt --all --check
+	$(CARGO) clippy --all-targets --locked -- -D warnings
 
 test: $(MUJOCO)
 	@[ -d ../shared/data ] || echo "modellint: ../shared/data is absent: tests on the real Menagerie models and BAM logs print 'skipping' and pass without checking (run with -- --nocapture to see them)"

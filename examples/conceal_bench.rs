@@ -6,11 +6,14 @@ mod conceal_core;
 
 use conceal_core::*;
 
+/// Hidden effects of a case: (effect, joints, parameters).
+type Effects = Vec<(&'static str, Vec<String>, Vec<f64>)>;
+
 /// One robot's cases: every effect on one joint, every effect on all recorded joints (as one
 /// group; skipped for one-joint robots), the pairs, and a control.
 fn robot_cases(
     label: &str,
-    mk: &dyn Fn(&str, Kind, Vec<(&'static str, Vec<String>, Vec<f64>)>) -> Case,
+    mk: &dyn Fn(&str, Kind, Effects) -> Case,
     one: &str,
     all: &[String],
     singles: &[(&'static str, Vec<f64>)],

@@ -127,11 +127,9 @@ fn main() {
         .map(|r| {
             let mut d = MjData::new(m);
             let nsteps = (r.duration() / dt).ceil() as usize;
-            let nu = mj::raw(m).nu as usize;
             for s in 0..nsteps {
                 if s % 10 == 0 {
-                    let dr = mj::data_raw_mut(&mut d);
-                    let ctrl = mj::slice_mut(dr.ctrl, nu);
+                    let ctrl = d.ctrl_mut();
                     for (i, c) in ctrl.iter_mut().enumerate() {
                         *c = 0.1 * ((s as f64 * dt + i as f64) * 2.0).sin();
                     }

@@ -272,37 +272,31 @@ pub fn load(map: &mut SourceMap, path: &Path, joint_names: &[String]) -> Result<
             ));
         }
         let je = e.into_inner();
-        if let Some(mo) = &je.motor {
-            if !raw.motors.contains_key(mo.get_ref()) {
-                return Err(bad(
-                    mo.span(),
-                    format!("motor family `{}` is not defined under [motors]", mo.get_ref()),
-                ));
-            }
+        if let Some(mo) = &je.motor
+            && !raw.motors.contains_key(mo.get_ref())
+        {
+            return Err(bad(
+                mo.span(),
+                format!("motor family `{}` is not defined under [motors]", mo.get_ref()),
+            ));
         }
-        if let Some(c) = &je.count {
-            if *c.get_ref() == 0 {
-                return Err(bad(c.span(), "count must be at least 1".into()));
-            }
+        if let Some(c) = &je.count
+            && *c.get_ref() == 0
+        {
+            return Err(bad(c.span(), "count must be at least 1".into()));
         }
-        if let Some(d) = &je.direction {
-            if d.get_ref().abs() != 1 {
-                return Err(bad(
-                    d.span(),
-                    format!("direction must be 1 or -1, got {}", d.get_ref()),
-                ));
-            }
+        if let Some(d) = &je.direction
+            && d.get_ref().abs() != 1
+        {
+            return Err(bad(d.span(), format!("direction must be 1 or -1, got {}", d.get_ref())));
         }
-        if let Some(rg) = &je.region {
-            if !["legs", "arms", "torso", "head"].contains(&rg.get_ref().as_str()) {
-                return Err(bad(
-                    rg.span(),
-                    format!(
-                        "region must be one of legs, arms, torso, head; got `{}`",
-                        rg.get_ref()
-                    ),
-                ));
-            }
+        if let Some(rg) = &je.region
+            && !["legs", "arms", "torso", "head"].contains(&rg.get_ref().as_str())
+        {
+            return Err(bad(
+                rg.span(),
+                format!("region must be one of legs, arms, torso, head; got `{}`", rg.get_ref()),
+            ));
         }
         patterns.push((pat, m, je, loc));
     }

@@ -208,7 +208,7 @@ fn missing_spec_is_reported_once_with_where_it_looked() {
     let v = json(&["fixtures/include/scene.xml", "--format", "json", "--no-probe"]);
     assert!(v["spec"]["path"].is_null(), "{}", v["spec"]);
     let searched: Vec<String> =
-        v["spec"]["searched"].as_array().unwrap().iter().map(|p| base(p)).collect();
+        v["spec"]["searched"].as_array().unwrap().iter().map(base).collect();
     assert_eq!(searched, ["scene.toml", "robot.toml"]);
     assert!(
         v["spec"]["skipped_rules"].as_array().unwrap().iter().any(|r| r == "armature-mismatch")

@@ -65,14 +65,14 @@ pub fn run_fit(a: FitArgs) -> i32 {
     if a.holdout < 2 {
         return fail("--holdout must be at least 2");
     }
-    let files = match crate::sim2real::cmd::expand_inputs(&a.recordings) {
+    let files = match crate::sim2real::input::expand_inputs(&a.recordings) {
         Ok(f) => f,
         Err(e) => return fail(e),
     };
     let names: Vec<String> = robot.joints.iter().map(|j| j.name.clone()).collect();
     let mut recs = Vec::new();
     for f in &files {
-        match crate::sim2real::cmd::read_recording(f) {
+        match crate::sim2real::input::read_recording(f) {
             Ok(r) => {
                 if let Err(e) = r.validate_joint_names(&names) {
                     return fail(e);

@@ -31,7 +31,7 @@ use std::collections::VecDeque;
 use mujoco_rs::prelude::*;
 
 use crate::model::{Robot, mj};
-use crate::sim2real::cmd::{XL330_ERROR_GAIN, XL330_KT, XL330_R};
+use crate::sim2real::bam::{XL330_ERROR_GAIN, XL330_KT, XL330_R};
 use crate::sim2real::recording::Recording;
 use crate::sim2real::replay::{
     ActuatorHook, Episode, ReplayError, ReplayOptions, Replayer, StepIo,
@@ -425,7 +425,7 @@ mod tests {
         let big = p.motor_torque(3.0, 0.0, true);
         assert!((big - 7.4 * XL330_KT / XL330_R).abs() < 1e-12);
         let small = p.motor_torque(0.01, 0.0, true);
-        assert!((small - crate::sim2real::cmd::xl330_kp_si(400.0, 7.4) * 0.01).abs() < 1e-12);
+        assert!((small - crate::sim2real::bam::xl330_kp_si(400.0, 7.4) * 0.01).abs() < 1e-12);
         assert_eq!(p.motor_torque(1.0, 0.0, false), 0.0);
     }
 

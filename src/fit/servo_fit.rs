@@ -13,7 +13,7 @@ use super::optim::{Bounds, CmaesOpts, NelderMeadOpts, cmaes, nelder_mead};
 use super::servo::{Effect, EffectSet, ServoParams, simulate};
 use super::stats::{bic, uncertainty_from_jacobian};
 use crate::model::Robot;
-use crate::sim2real::cmd::{expand_inputs, read_recording};
+use crate::sim2real::input::{expand_inputs, read_recording};
 use crate::sim2real::recording::Recording;
 
 /// Error [rad] charged to a sample the simulation did not reach (diverged episode).

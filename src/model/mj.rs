@@ -1,85 +1,100 @@
-//! Thin, safe accessors over MuJoCo's compiled model and data arrays (mujoco-rs FFI structs).
-//! All unsafe pointer reads of mjModel/mjData live here.
+//! The MuJoCo boundary: what modellint needs from mjModel/mjData beyond mujoco-rs's own
+//! length-checked accessors (`m.dof_armature()`, `d.qpos_mut()`, …, used directly everywhere
+//! else). Every `unsafe` block of the crate that touches MuJoCo lives here, each with its
+//! `// SAFETY:` argument; the functions below are safe to call with any arguments.
 
 use mujoco_rs::mujoco_c as c;
 use mujoco_rs::prelude::*;
+use mujoco_rs::wrappers::mj_model::traits::ModelType;
 
-/// A view of `n` elements starting at `ptr` (empty when the pointer is null or n == 0).
-pub fn slice<'a, T>(ptr: *const T, n: usize) -> &'a [T] {
-    if ptr.is_null() || n == 0 {
-        &[]
-    } else {
-        // SAFETY: MuJoCo allocates every model/data array with the documented length and keeps it
-        // alive as long as the model/data; callers pass those lengths.
-        unsafe { std::slice::from_raw_parts(ptr, n) }
-    }
+/// The compiled model's C struct, read-only: sizes (`nv`, `nu`, …) and options (`opt`). Its
+/// array fields are raw pointers; read arrays through mujoco-rs's accessors instead.
+pub fn raw(m: &MjModel) -> &c::mjModel {
+    m.ffi()
 }
 
-pub fn slice_mut<'a, T>(ptr: *mut T, n: usize) -> &'a mut [T] {
-    if ptr.is_null() || n == 0 {
-        &mut []
-    } else {
-        // SAFETY: as above; the caller holds the only mutable handle to the model/data.
-        unsafe { std::slice::from_raw_parts_mut(ptr, n) }
-    }
-}
-
-/// Name of object `id` given the model's `name_*adr` array for its kind ("" when unnamed).
-pub fn name_at(m: &MjModel, adr: *const i32, n: usize, id: usize) -> String {
-    let r = raw(m);
-    let adrs = slice(adr, n);
-    let names = slice(r.names as *const u8, r.nnames as usize);
-    let Some(&start) = adrs.get(id) else { return String::new() };
+/// Name of object `id` given the model's name-address array for its kind (e.g.
+/// `m.name_jntadr()`); "" when unnamed or out of range.
+pub fn name_at(m: &MjModel, adr: &[i32], id: usize) -> String {
+    let names = m.names();
+    let Some(&start) = adr.get(id) else { return String::new() };
     let start = start.max(0) as usize;
     if start >= names.len() {
         return String::new();
     }
     let end = names[start..].iter().position(|&b| b == 0).map(|p| start + p).unwrap_or(names.len());
-    String::from_utf8_lossy(&names[start..end]).into_owned()
-}
-
-pub fn raw(m: &MjModel) -> &c::mjModel {
-    m.ffi()
-}
-
-/// Mutable raw model for fitting (parameters written in place between simulations).
-pub fn raw_mut(m: &mut MjModel) -> &mut c::mjModel {
-    // SAFETY: exclusive borrow of the model; only numeric parameter arrays are written.
-    unsafe { m.ffi_mut() }
+    let bytes: Vec<u8> = names[start..end].iter().map(|&b| b as u8).collect();
+    String::from_utf8_lossy(&bytes).into_owned()
 }
 
 /// Sets DoF `dof`'s armature to `value`, keeping `dof_M0` (the compiled diagonal inertia at
 /// qpos0, which MuJoCo uses directly for "simple" DoFs — a single body on a hinge) consistent:
 /// writing `dof_armature` alone changes nothing on such a DoF.
 pub fn set_armature(m: &mut MjModel, dof: usize, value: f64) {
-    let r = raw_mut(m);
-    let nv = r.nv as usize;
-    if dof >= nv {
-        return;
+    let Some(arm) = m.dof_armature_mut().get_mut(dof) else { return };
+    let delta = value - *arm;
+    *arm = value;
+    if let Some(m0) = m.dof_m0_mut().get_mut(dof) {
+        *m0 += delta;
     }
-    let arm = slice_mut(r.dof_armature, nv);
-    let delta = value - arm[dof];
-    arm[dof] = value;
-    let m0 = slice_mut(r.dof_M0, nv);
-    m0[dof] += delta;
 }
 
-pub fn data_raw<'a>(d: &'a MjData<&MjModel>) -> &'a c::mjData {
-    d.ffi()
+/// `actuator_gainprm` (nactuator × 10, row-major), writable.
+pub fn actuator_gainprm_mut(m: &mut MjModel) -> &mut [f64] {
+    // SAFETY: mujoco-rs marks this accessor unsafe because some model arrays hold ids and
+    // addresses MuJoCo indexes with. gainprm holds only floating-point coefficients that MuJoCo
+    // multiplies with (for every gain type, including dcmotor's resistance and motor constant),
+    // never uses as an index or size, so any value written keeps every access in bounds. The
+    // slice borrows `m` exclusively and has the length mujoco-rs computes from `nactuator`.
+    unsafe { m.actuator_gainprm_mut() }.as_flattened_mut()
 }
 
-pub fn data_raw_mut<'a>(d: &'a mut MjData<&MjModel>) -> &'a mut c::mjData {
-    // SAFETY: exclusive borrow of the data.
-    unsafe { d.ffi_mut() }
+/// Writes actuator `a`'s `gainprm[0]`, `biasprm[1]` and `biasprm[2]` (a position servo's kp,
+/// −kp, −kd). Nothing when `a` is out of range.
+pub fn set_model_gains(m: &mut MjModel, a: usize, g0: f64, b1: f64, b2: f64) {
+    if let Some(g) = actuator_gainprm_mut(m).get_mut(10 * a) {
+        *g = g0;
+    }
+    if let Some(row) = m.actuator_biasprm_mut().get_mut(a) {
+        row[1] = b1;
+        row[2] = b2;
+    }
+}
+
+/// [`set_model_gains`] on the model `d` simulates, between steps.
+pub fn set_actuator_gains(d: &mut MjData<&mut MjModel>, a: usize, g0: f64, b1: f64, b2: f64) {
+    // SAFETY: `model_mut` is unsafe because a changed model could stop matching the data's
+    // buffers. Only gainprm/biasprm values change here (see `actuator_gainprm_mut`): no size,
+    // count, address or id, so the data's buffers stay valid for the model. The data holds the
+    // only (mutable) borrow of the model, so nothing else observes the write.
+    set_model_gains(unsafe { d.model_mut() }, a, g0, b1, b2);
+}
+
+/// Solved force of every scalar constraint row of the data's last `mj_step` / `mj_forward`, with
+/// its type and object id (`efc_force`, `efc_type`, `efc_id`; `nefc` rows).
+///
+/// Crate-private on purpose: `efc_force` is written by the constraint solver only, so reading it
+/// is defined only when the last pipeline call on `d` ran the solver. Every `MjData` modellint
+/// creates is advanced by `MjData::step`/`forward` (full pipeline) or reset (`nefc` = 0), and no
+/// public function of the crate hands out a data that ran a partial stage.
+pub(crate) fn constraint_forces<M: ModelType>(d: &MjData<M>) -> Vec<(i32, i32, f64)> {
+    // SAFETY: see above: the last pipeline call ran the solver, which writes `efc_force` for all
+    // `nefc` rows; mujoco-rs bounds the slice by `nefc`.
+    let force = unsafe { d.efc_force() };
+    d.efc_type()
+        .iter()
+        .zip(d.efc_id())
+        .zip(force)
+        .map(|((&t, &id), &f)| (t as i32, id, f))
+        .collect()
 }
 
 /// Dense joint-space inertia matrix (nv × nv, row-major) at the data's current state.
-pub fn full_mass_matrix(m: &MjModel, d: &MjData<&MjModel>) -> Vec<f64> {
-    let nv = raw(m).nv as usize;
+pub fn full_mass_matrix<M: ModelType>(d: &MjData<M>) -> Vec<f64> {
+    let nv = raw(d.model()).nv.max(0) as usize;
     let mut out = vec![0.0; nv * nv];
-    if nv > 0 {
-        // SAFETY: dst has nv*nv entries as mj_fullM requires; qM is current after mj_forward.
-        unsafe { c::mj_fullM(raw(m), d.ffi(), out.as_mut_ptr()) };
+    if nv > 0 && d.full_m(&mut out).is_err() {
+        out.fill(f64::NAN);
     }
     out
 }
@@ -90,33 +105,99 @@ unsafe extern "C" fn quiet_warning(_msg: *const std::os::raw::c_char) {}
 /// `mjData.warning` instead and reports them as findings, so silence the printing.
 pub fn silence_warnings() {
     // SAFETY: a plain function-pointer store into MuJoCo's global hook, done before any
-    // simulation starts (called from the CLI entry point and probe/replay setup).
+    // simulation starts (called from the CLI entry point and probe/replay setup); the hook
+    // ignores its argument.
     unsafe {
         c::mju_user_warning = Some(quiet_warning);
     }
 }
 
 /// Signed distance between two geoms at the data's current state (negative: penetration),
-/// capped at `distmax`.
-pub fn geom_distance(
-    m: &MjModel,
-    d: &mut MjData<&MjModel>,
-    g1: usize,
-    g2: usize,
-    distmax: f64,
-) -> f64 {
+/// capped at `distmax`; NaN for a geom id out of range.
+pub fn geom_distance<M: ModelType>(d: &mut MjData<M>, g1: usize, g2: usize, distmax: f64) -> f64 {
     let mut fromto = [0.0f64; 6];
-    // SAFETY: valid model/data pair, geom ids checked by the caller against ngeom, fromto has 6.
-    unsafe { c::mj_geomDistance(raw(m), d.ffi_mut(), g1 as i32, g2 as i32, distmax, &mut fromto) }
+    d.try_geom_distance(g1, g2, distmax, Some(&mut fromto)).unwrap_or(f64::NAN)
 }
 
-/// Normal force of contact `i` of the data's current contact list (N, ≥ 0).
-pub fn contact_normal_force(m: &MjModel, d: &MjData<&MjModel>, i: usize) -> f64 {
-    let mut res = [0.0f64; 6];
-    if i >= d.ffi().ncon.max(0) as usize {
-        return 0.0;
+/// Normal force of contact `i` of the data's current contact list (N, ≥ 0); 0 when there is no
+/// such contact.
+pub fn contact_normal_force<M: ModelType>(d: &MjData<M>, i: usize) -> f64 {
+    d.try_contact_force(i).map(|f| f[0]).unwrap_or(0.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A hinge with armature and a range, a position servo on it.
+    const XML: &str = r#"<mujoco><option gravity="0 0 0"/><worldbody><body name="b">
+        <joint name="j" type="hinge" axis="0 1 0" armature="0.1" limited="true" range="-0.1 0.1"/>
+        <geom type="sphere" size="0.1" pos="0.3 0 0" mass="1"/></body></worldbody>
+        <actuator><position name="a" joint="j" kp="10" kv="1"/></actuator></mujoco>"#;
+
+    fn model() -> MjModel {
+        MjModel::from_xml_string(XML).expect("compiles")
     }
-    // SAFETY: i < ncon; res has 6 entries as mj_contactForce requires.
-    unsafe { c::mj_contactForce(raw(m), d.ffi(), i as i32, &mut res) };
-    res[0]
+
+    #[test]
+    fn names_by_id_and_out_of_range() {
+        let m = model();
+        assert_eq!(name_at(&m, m.name_jntadr(), 0), "j");
+        assert_eq!(name_at(&m, m.name_actuatoradr(), 0), "a");
+        assert_eq!(name_at(&m, m.name_bodyadr(), 1), "b");
+        assert_eq!(name_at(&m, m.name_jntadr(), 1), "");
+        assert_eq!(name_at(&m, &[i32::MAX], 0), "");
+    }
+
+    #[test]
+    fn armature_moves_dof_m0_with_it() {
+        let mut m = model();
+        let (a0, m00) = (m.dof_armature()[0], m.dof_m0()[0]);
+        set_armature(&mut m, 0, 0.5);
+        assert_eq!(m.dof_armature()[0], 0.5);
+        assert!((m.dof_m0()[0] - (m00 + 0.5 - a0)).abs() < 1e-12);
+        set_armature(&mut m, 9, 1.0); // out of range: nothing
+        assert_eq!(m.dof_armature(), &[0.5]);
+    }
+
+    #[test]
+    fn gains_written_through_the_data_drive_the_next_step() {
+        let mut m = model();
+        let mut d = MjData::new(&mut m);
+        d.ctrl_mut()[0] = 0.05;
+        d.forward();
+        assert!((d.actuator_force()[0] - 10.0 * 0.05).abs() < 1e-9);
+        set_actuator_gains(&mut d, 0, 40.0, -40.0, -2.0);
+        set_actuator_gains(&mut d, 3, 1.0, 1.0, 1.0); // no such actuator: nothing
+        assert_eq!(d.model().actuator_gainprm()[0][0], 40.0);
+        assert_eq!(&d.model().actuator_biasprm()[0][..3], &[0.0, -40.0, -2.0]);
+        d.forward();
+        assert!((d.actuator_force()[0] - 40.0 * 0.05).abs() < 1e-9);
+    }
+
+    #[test]
+    fn constraint_forces_show_the_joint_limit_row() {
+        let m = model();
+        let mut d = MjData::new(&m);
+        assert!(constraint_forces(&d).is_empty());
+        d.ctrl_mut()[0] = 1.0; // far beyond the 0.1 rad stop
+        let mut hit = false;
+        for _ in 0..500 {
+            d.step();
+            hit |= constraint_forces(&d).iter().any(|&(ty, id, f)| {
+                ty == c::mjtConstraint::mjCNSTR_LIMIT_JOINT as i32 && id == 0 && f.abs() > 1e-9
+            });
+        }
+        assert!(hit, "the servo never pressed the joint into its stop");
+    }
+
+    #[test]
+    fn distance_and_contact_queries_reject_bad_ids() {
+        let m = model();
+        let mut d = MjData::new(&m);
+        d.forward();
+        assert!(geom_distance(&mut d, 0, 5, 1.0).is_nan());
+        assert_eq!(contact_normal_force(&d, 0), 0.0);
+        assert_eq!(full_mass_matrix(&d).len(), 1);
+    }
 }

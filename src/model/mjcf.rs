@@ -99,10 +99,7 @@ impl<'a> Defaults<'a> {
         d
     }
     fn add(&mut self, node: &'a XNode, parent: Option<String>) {
-        let name = node
-            .get("class")
-            .map(str::to_string)
-            .unwrap_or_else(|| if parent.is_none() { "main".into() } else { "main".into() });
+        let name = node.get("class").map(str::to_string).unwrap_or_else(|| "main".into());
         self.classes.insert(name.clone(), (parent, node));
         for c in node.children_tagged("default") {
             self.add(c, Some(name.clone()));

@@ -2,6 +2,8 @@
 //! units are resolved by MuJoCo itself); the XML source index supplies spans for diagnostics.
 
 pub mod cache;
+mod checks;
+mod extract;
 pub mod mirror;
 pub mod mj;
 pub mod mjcf;
@@ -13,6 +15,9 @@ use std::path::{Path, PathBuf};
 use mujoco_rs::prelude::*;
 
 use crate::error::LoadError;
+use checks::{check_assets, check_numbers};
+use extract::extract;
+pub use extract::key_state;
 use mjcf::{ElemKind, ElemSrc, SourceIndex};
 use source::{Loc, SourceMap, XNode};
 
@@ -277,19 +282,22 @@ impl Robot {
     }
     /// Actuators whose transmission reaches joint `j` (directly, or through a fixed tendon).
     pub fn actuators_on_joint(&self, j: usize) -> Vec<&Actuator> {
-        let r = mj::raw(&self.mj);
+        let m = &self.mj;
         self.actuators
             .iter()
             .filter(|a| match a.trn {
                 Transmission::Joint | Transmission::JointInParent => a.target == j as i32,
                 Transmission::Tendon if a.target >= 0 => {
                     let t = a.target as usize;
-                    let adr = mj::slice(r.tendon_adr, r.ntendon as usize)[t] as usize;
-                    let num = mj::slice(r.tendon_num, r.ntendon as usize)[t] as usize;
-                    let wt = mj::slice(r.wrap_type, r.nwrap as usize);
-                    let wo = mj::slice(r.wrap_objid, r.nwrap as usize);
-                    (adr..adr + num)
-                        .any(|w| wt.get(w) == Some(&1) && wo.get(w) == Some(&(j as i32)))
+                    let (Some(&adr), Some(&num)) = (m.tendon_adr().get(t), m.tendon_num().get(t))
+                    else {
+                        return false;
+                    };
+                    let (adr, num) = (adr.max(0) as usize, num.max(0) as usize);
+                    let (wt, wo) = (m.wrap_type(), m.wrap_objid());
+                    (adr..adr + num).any(|w| {
+                        wt.get(w).map(|&t| t as i32) == Some(1) && wo.get(w) == Some(&(j as i32))
+                    })
                 }
                 _ => false,
             })
@@ -301,20 +309,16 @@ impl Robot {
     /// Matching inside the body keeps an unnamed geom on its own line when a scene file adds
     /// world geoms (a floor) that MuJoCo numbers before the robot's.
     pub fn elem(&self, kind: ElemKind, id: usize, name: &str) -> Option<&ElemSrc> {
-        if !name.is_empty() {
-            if let Some(e) = self.src.by_name(kind, name) {
-                return Some(e);
-            }
+        if !name.is_empty()
+            && let Some(e) = self.src.by_name(kind, name)
+        {
+            return Some(e);
         }
         let list = self.src.list(kind);
-        let r = mj::raw(&self.mj);
         let body_of: Vec<usize> = match kind {
             ElemKind::Joint => self.joints.iter().map(|j| j.body).collect(),
             ElemKind::Geom => self.geoms.iter().map(|g| g.body).collect(),
-            ElemKind::Site => mj::slice(r.site_bodyid, r.nsite as usize)
-                .iter()
-                .map(|&b| b.max(0) as usize)
-                .collect(),
+            ElemKind::Site => self.mj.site_bodyid().iter().map(|&b| b.max(0) as usize).collect(),
             _ => {
                 // Compiled order matches source order only when every element was indexed.
                 let expected = match kind {
@@ -368,159 +372,6 @@ impl Robot {
 
     pub fn total_mass(&self) -> f64 {
         self.bodies.iter().map(|b| b.mass).sum()
-    }
-}
-
-/// Attributes that hold names or paths, never numbers (skipped by the NaN/inf check).
-const STRING_ATTRS: &[&str] = &[
-    "name",
-    "class",
-    "childclass",
-    "file",
-    "joint",
-    "joint1",
-    "joint2",
-    "body",
-    "body1",
-    "body2",
-    "geom",
-    "geom1",
-    "geom2",
-    "site",
-    "site1",
-    "site2",
-    "tendon",
-    "tendon1",
-    "tendon2",
-    "mesh",
-    "material",
-    "texture",
-    "hfield",
-    "target",
-    "objname",
-    "objtype",
-    "type",
-    "meshdir",
-    "texturedir",
-    "assetdir",
-    "model",
-    "prefix",
-    "content_type",
-    "refsite",
-    "cranksite",
-    "slidersite",
-    "actuator",
-    "plugin",
-    "instance",
-    "key",
-    "mode",
-    "link",
-    "parent",
-    "child",
-    "filename",
-    "version",
-];
-
-fn check_numbers(map: &SourceMap, n: &XNode) -> Result<(), LoadError> {
-    for a in &n.attrs {
-        if STRING_ATTRS.contains(&a.name.as_str()) {
-            continue;
-        }
-        let toks: Vec<&str> = a.value.split_whitespace().collect();
-        if toks.is_empty() {
-            continue;
-        }
-        let parsed: Vec<Option<f64>> = toks.iter().map(|t| t.parse::<f64>().ok()).collect();
-        if parsed.iter().all(Option::is_some)
-            && parsed.iter().any(|v| !v.unwrap_or(0.0).is_finite())
-        {
-            return Err(LoadError::at(
-                map,
-                a.loc,
-                format!(
-                    "<{}> attribute `{}` is not a finite number: \"{}\"",
-                    n.tag, a.name, a.value
-                ),
-            ));
-        }
-    }
-    for c in &n.children {
-        check_numbers(map, c)?;
-    }
-    Ok(())
-}
-
-/// Asset attributes that name files MuJoCo reads (cube and skybox textures use the six faces).
-const FILE_ATTRS: &[&str] =
-    &["file", "fileright", "fileleft", "fileup", "filedown", "filefront", "fileback"];
-
-/// Checks that every asset file the model names exists, pointing at the attribute when not, and
-/// returns them (the inputs of the compile, for the cache key).
-fn check_assets(
-    map: &SourceMap,
-    root: &XNode,
-    model_dir: &Path,
-) -> Result<Vec<PathBuf>, LoadError> {
-    let mut files = Vec::new();
-    let mut meshdir = None;
-    let mut texturedir = None;
-    for c in root.children_tagged("compiler") {
-        if let Some(d) = c.get("assetdir") {
-            meshdir.get_or_insert(d.to_string());
-            texturedir.get_or_insert(d.to_string());
-        }
-        if let Some(d) = c.get("meshdir") {
-            meshdir = Some(d.to_string());
-        }
-        if let Some(d) = c.get("texturedir") {
-            texturedir = Some(d.to_string());
-        }
-    }
-    for asset in root.children_tagged("asset") {
-        for a in &asset.children {
-            let dir = match a.tag.as_str() {
-                "mesh" | "hfield" | "skin" => &meshdir,
-                "texture" => &texturedir,
-                _ => &None,
-            };
-            for f in FILE_ATTRS.iter().filter_map(|n| a.attr(n)) {
-                let p = Path::new(&f.value);
-                let full = if p.is_absolute() {
-                    p.to_path_buf()
-                } else {
-                    model_dir.join(dir.as_deref().unwrap_or("")).join(p)
-                };
-                if !full.is_file() {
-                    return Err(LoadError::at(
-                        map,
-                        f.loc,
-                        format!(
-                            "<{}> file not found: {} (looked for {})",
-                            a.tag,
-                            f.value,
-                            full.display()
-                        ),
-                    ));
-                }
-                files.push(full);
-            }
-        }
-    }
-    Ok(files)
-}
-
-fn geom_type(t: i32) -> GeomType {
-    match t {
-        0 => GeomType::Plane,
-        1 => GeomType::Hfield,
-        2 => GeomType::Sphere,
-        3 => GeomType::Capsule,
-        4 => GeomType::Ellipsoid,
-        5 => GeomType::Cylinder,
-        6 => GeomType::Box,
-        7 => GeomType::Mesh,
-        8 => GeomType::Sdf,
-        _ => GeomType::Other,
     }
 }
 
@@ -604,16 +455,16 @@ pub fn load_cached(
     };
     let mut robot = extract(path, format, tree, src, mj);
     let key = choose_key(&robot.keys, keyframe);
-    if let Some(want) = keyframe {
-        if key.is_none() {
-            return Err(LoadError::plain(
-                path,
-                format!(
-                    "keyframe `{want}` named by the spec is not in the model (keyframes: {:?})",
-                    robot.keys
-                ),
-            ));
-        }
+    if let Some(want) = keyframe
+        && key.is_none()
+    {
+        return Err(LoadError::plain(
+            path,
+            format!(
+                "keyframe `{want}` named by the spec is not in the model (keyframes: {:?})",
+                robot.keys
+            ),
+        ));
     }
     robot.key = key_state(&robot.mj, key, &robot.keys);
     Ok(robot)
@@ -675,310 +526,6 @@ fn choose_key(keys: &[String], want: Option<&str>) -> Option<usize> {
     if keys.is_empty() { None } else { Some(0) }
 }
 
-fn extract(path: &Path, format: Format, tree: XNode, src: SourceIndex, mj: MjModel) -> Robot {
-    let r = mj::raw(&mj);
-    // Per-actuator arrays have `nactuator` rows; controls (`nu`) and force outputs (`nout`) can
-    // differ from it in MuJoCo ≥ 3.17 (a `<dcmotor>` may take 0 or several controls).
-    let (njnt, nu, nbody, ngeom, nkey) = (
-        r.njnt as usize,
-        r.nactuator as usize,
-        r.nbody as usize,
-        r.ngeom as usize,
-        r.nkey as usize,
-    );
-    let (nctrl, nout) = (r.nu as usize, r.nout as usize);
-    let jt = mj::slice(r.jnt_type, njnt);
-    let jb = mj::slice(r.jnt_bodyid, njnt);
-    let jq = mj::slice(r.jnt_qposadr, njnt);
-    let jd = mj::slice(r.jnt_dofadr, njnt);
-    let jl = mj::slice(r.jnt_limited, njnt);
-    let jr = mj::slice(r.jnt_range, 2 * njnt);
-    let js = mj::slice(r.jnt_stiffness, njnt);
-    let jax = mj::slice(r.jnt_axis, 3 * njnt);
-    let nv = r.nv as usize;
-    let darm = mj::slice(r.dof_armature, nv);
-    let ddamp = mj::slice(r.dof_damping, nv);
-    let dfl = mj::slice(r.dof_frictionloss, nv);
-    let qspring = mj::slice(r.qpos_spring, r.nq as usize);
-    let joints = (0..njnt)
-        .map(|i| {
-            let d = jd[i].max(0) as usize;
-            Joint {
-                id: i,
-                name: mj::name_at(&mj, r.name_jntadr, njnt, i),
-                jtype: match jt[i] {
-                    0 => JointType::Free,
-                    1 => JointType::Ball,
-                    2 => JointType::Slide,
-                    _ => JointType::Hinge,
-                },
-                body: jb[i].max(0) as usize,
-                qposadr: jq[i].max(0) as usize,
-                dofadr: d,
-                limited: jl[i],
-                range: [jr[2 * i], jr[2 * i + 1]],
-                armature: darm.get(d).copied().unwrap_or(0.0),
-                damping: ddamp.get(d).copied().unwrap_or(0.0),
-                armature_parts: own_part(darm.get(d).copied().unwrap_or(0.0)),
-                damping_parts: own_part(ddamp.get(d).copied().unwrap_or(0.0)),
-                stiffness: js[i],
-                frictionloss: dfl.get(d).copied().unwrap_or(0.0),
-                springref: qspring.get(jq[i].max(0) as usize).copied().unwrap_or(0.0),
-                axis: [jax[3 * i], jax[3 * i + 1], jax[3 * i + 2]],
-            }
-        })
-        .collect::<Vec<Joint>>();
-    let mut joints = joints;
-    let trn = mj::slice(r.actuator_trntype, nu);
-    let trnid = mj::slice(r.actuator_trnid, 2 * nu);
-    let gear = mj::slice(r.actuator_gear, 6 * nout);
-    let cadr = mj::slice(r.actuator_ctrladr, nu);
-    let cnum = mj::slice(r.actuator_ctrlnum, nu);
-    let oadr = mj::slice(r.actuator_outadr, nu);
-    let aarm = mj::slice(r.actuator_armature, nu);
-    let cspec = mj::slice(r.actuator_ctrlspec, nu);
-    let adamp = mj::slice(r.actuator_damping, nu);
-    let gt = mj::slice(r.actuator_gaintype, nu);
-    let bt = mj::slice(r.actuator_biastype, nu);
-    let gp = mj::slice(r.actuator_gainprm, 10 * nu);
-    let bp = mj::slice(r.actuator_biasprm, 10 * nu);
-    let cl = mj::slice(r.actuator_ctrllimited, nctrl);
-    let cr = mj::slice(r.actuator_ctrlrange, 2 * nctrl);
-    let fl = mj::slice(r.actuator_forcelimited, nu);
-    let fr = mj::slice(r.actuator_forcerange, 2 * nu);
-    let dl = mj::slice(r.actuator_delay, nu);
-    let actuators = (0..nu)
-        .map(|i| {
-            let g = [gp[10 * i], gp[10 * i + 1], gp[10 * i + 2]];
-            let b = [bp[10 * i], bp[10 * i + 1], bp[10 * i + 2]];
-            // First control of the actuator (none for a passive `<dcmotor input="none">`).
-            let c = (cnum[i] > 0 && (cadr[i].max(0) as usize) < nctrl)
-                .then_some(cadr[i].max(0) as usize);
-            // gaintype 0 = fixed; biastype 0 = none, 1 = affine.
-            // gaintype/biastype 3 = dcmotor: gainprm[0] = resistance, gainprm[1] = motor constant.
-            let kind = if gt[i] == 3 && bt[i] == 3 {
-                ActuatorKind::DcMotor {
-                    resistance: g[0],
-                    k: g[1],
-                    voltage: cspec.get(i) == Some(&8),
-                }
-            } else if gt[i] == 0 && bt[i] == 0 && g[0] != 0.0 {
-                ActuatorKind::Motor
-            } else if gt[i] == 0
-                && bt[i] == 1
-                && g[0] > 0.0
-                && (b[1] + g[0]).abs() <= 1e-9 * g[0].abs().max(1.0)
-                && b[0] == 0.0
-            {
-                ActuatorKind::Position { kp: g[0], kv: -b[2] }
-            } else if gt[i] == 0
-                && bt[i] == 1
-                && b[1] == 0.0
-                && (b[2] + g[0]).abs() <= 1e-9 * g[0].abs().max(1.0)
-            {
-                ActuatorKind::Velocity { kv: g[0] }
-            } else {
-                ActuatorKind::Other
-            };
-            Actuator {
-                id: i,
-                name: mj::name_at(&mj, r.name_actuatoradr, nu, i),
-                trn: match trn[i] {
-                    0 => Transmission::Joint,
-                    1 => Transmission::JointInParent,
-                    2 => Transmission::SliderCrank,
-                    3 => Transmission::Tendon,
-                    4 => Transmission::Site,
-                    _ => Transmission::Body,
-                },
-                target: trnid[2 * i],
-                gear: gear.get(6 * (oadr[i].max(0) as usize)).copied().unwrap_or(1.0),
-                kind,
-                gainprm: g,
-                biasprm: b,
-                ctrllimited: c.is_some_and(|c| cl[c]),
-                ctrlrange: c.map(|c| [cr[2 * c], cr[2 * c + 1]]).unwrap_or([0.0, 0.0]),
-                forcelimited: fl[i],
-                forcerange: [fr[2 * i], fr[2 * i + 1]],
-                delay: dl.get(i).copied().unwrap_or(0.0),
-                armature: aarm.get(i).copied().unwrap_or(0.0),
-                damping: adamp.get(i).copied().unwrap_or(0.0),
-            }
-        })
-        .collect::<Vec<Actuator>>();
-    add_transmission_parts(&mj, &mut joints, &actuators);
-    let bp_ = mj::slice(r.body_parentid, nbody);
-    let bm = mj::slice(r.body_mass, nbody);
-    let bodies = (0..nbody)
-        .map(|i| Body {
-            id: i,
-            name: mj::name_at(&mj, r.name_bodyadr, nbody, i),
-            parent: bp_[i].max(0) as usize,
-            mass: bm[i],
-        })
-        .collect();
-    let gtp = mj::slice(r.geom_type, ngeom);
-    let gb = mj::slice(r.geom_bodyid, ngeom);
-    let gs = mj::slice(r.geom_size, 3 * ngeom);
-    let gct = mj::slice(r.geom_contype, ngeom);
-    let gca = mj::slice(r.geom_conaffinity, ngeom);
-    let gcd = mj::slice(r.geom_condim, ngeom);
-    let gf = mj::slice(r.geom_friction, 3 * ngeom);
-    let gg = mj::slice(r.geom_group, ngeom);
-    let gd = mj::slice(r.geom_dataid, ngeom);
-    let grb = mj::slice(r.geom_rbound, ngeom);
-    let geoms = (0..ngeom)
-        .map(|i| Geom {
-            id: i,
-            name: mj::name_at(&mj, r.name_geomadr, ngeom, i),
-            body: gb[i].max(0) as usize,
-            gtype: geom_type(gtp[i]),
-            size: [gs[3 * i], gs[3 * i + 1], gs[3 * i + 2]],
-            contype: gct[i],
-            conaffinity: gca[i],
-            condim: gcd[i],
-            friction: [gf[3 * i], gf[3 * i + 1], gf[3 * i + 2]],
-            group: gg[i],
-            mesh: if gtp[i] == 7 { gd[i] } else { -1 },
-            rbound: grb[i],
-        })
-        .collect();
-    let keys = (0..nkey).map(|i| mj::name_at(&mj, r.name_keyadr, nkey, i)).collect();
-    let nmesh = r.nmesh as usize;
-    let meshes = (0..nmesh).map(|i| mj::name_at(&mj, r.name_meshadr, nmesh, i)).collect();
-    let ntendon = r.ntendon as usize;
-    let tendons = (0..ntendon).map(|i| mj::name_at(&mj, r.name_tendonadr, ntendon, i)).collect();
-    let neq = r.neq as usize;
-    let et = mj::slice(r.eq_type, neq);
-    let e1 = mj::slice(r.eq_obj1id, neq);
-    let e2 = mj::slice(r.eq_obj2id, neq);
-    let equalities = (0..neq)
-        .map(|i| Equality {
-            id: i,
-            name: mj::name_at(&mj, r.name_eqadr, neq, i),
-            etype: et[i],
-            obj1: e1[i],
-            obj2: e2[i],
-        })
-        .collect();
-    let opt = Options {
-        timestep: r.opt.timestep,
-        integrator: r.opt.integrator as i32,
-        gravity: r.opt.gravity,
-    };
-    static NEXT_UID: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
-    Robot {
-        uid: NEXT_UID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
-        path: path.to_path_buf(),
-        format,
-        tree,
-        src,
-        mj,
-        joints,
-        actuators,
-        bodies,
-        geoms,
-        keys,
-        opt,
-        key: KeyState::default(),
-        meshes,
-        tendons,
-        equalities,
-    }
-}
-
-fn own_part(v: f64) -> Vec<Part> {
-    if v != 0.0 { vec![Part { source: PartSource::Joint, value: v }] } else { Vec::new() }
-}
-
-/// Adds what actuators and fixed tendons contribute to each joint's armature and damping
-/// (MuJoCo ≥ 3.17): actuator armature/damping × gear², tendon armature/damping × coef² (with the
-/// tendon's actuators' values × gear² added to the tendon's), and a `<dcmotor>`'s back-EMF
-/// K²/R × gear² as damping.
-fn add_transmission_parts(m: &MjModel, joints: &mut [Joint], actuators: &[Actuator]) {
-    let r = mj::raw(m);
-    let (nt, nw) = (r.ntendon as usize, r.nwrap as usize);
-    let tadr = mj::slice(r.tendon_adr, nt);
-    let tnum = mj::slice(r.tendon_num, nt);
-    let tarm = mj::slice(r.tendon_armature, nt);
-    let tdamp = mj::slice(r.tendon_damping, nt);
-    let wt = mj::slice(r.wrap_type, nw);
-    let wo = mj::slice(r.wrap_objid, nw);
-    let wp = mj::slice(r.wrap_prm, nw);
-    let push = |parts: &mut Vec<Part>, source: PartSource, value: f64| {
-        if value != 0.0 && value.is_finite() {
-            parts.push(Part { source, value });
-        }
-    };
-    for a in actuators {
-        if a.target < 0 {
-            continue;
-        }
-        let g2 = a.gear * a.gear;
-        let emf = match a.kind {
-            ActuatorKind::DcMotor { resistance, k, .. } if resistance > 0.0 => k * k / resistance,
-            _ => 0.0,
-        };
-        match a.trn {
-            Transmission::Joint | Transmission::JointInParent => {
-                let Some(j) = joints.get_mut(a.target as usize) else { continue };
-                if !j.is_scalar() {
-                    continue;
-                }
-                push(&mut j.armature_parts, PartSource::Actuator(a.id, a.gear), a.armature * g2);
-                push(&mut j.damping_parts, PartSource::Actuator(a.id, a.gear), a.damping * g2);
-                push(&mut j.damping_parts, PartSource::BackEmf(a.id, a.gear), emf * g2);
-            }
-            Transmission::Tendon => {
-                let t = a.target as usize;
-                let (Some(&adr), Some(&num)) = (tadr.get(t), tnum.get(t)) else { continue };
-                for w in adr.max(0) as usize..(adr.max(0) + num.max(0)) as usize {
-                    if wt.get(w) != Some(&1) {
-                        continue;
-                    }
-                    let (Some(&jid), Some(&coef)) = (wo.get(w), wp.get(w)) else { continue };
-                    let Some(j) = joints.get_mut(jid.max(0) as usize) else { continue };
-                    let c2 = coef * coef;
-                    push(
-                        &mut j.armature_parts,
-                        PartSource::TendonActuator(a.id, t, a.gear, coef),
-                        a.armature * g2 * c2,
-                    );
-                    push(
-                        &mut j.damping_parts,
-                        PartSource::TendonActuator(a.id, t, a.gear, coef),
-                        a.damping * g2 * c2,
-                    );
-                    push(
-                        &mut j.damping_parts,
-                        PartSource::BackEmf(a.id, a.gear * coef),
-                        emf * g2 * c2,
-                    );
-                }
-            }
-            _ => {}
-        }
-    }
-    for t in 0..nt {
-        if tarm[t] == 0.0 && tdamp[t] == 0.0 {
-            continue;
-        }
-        for w in tadr[t].max(0) as usize..(tadr[t].max(0) + tnum[t].max(0)) as usize {
-            if wt.get(w) != Some(&1) {
-                continue;
-            }
-            let (Some(&jid), Some(&coef)) = (wo.get(w), wp.get(w)) else { continue };
-            let Some(j) = joints.get_mut(jid.max(0) as usize) else { continue };
-            push(&mut j.armature_parts, PartSource::Tendon(t, coef), tarm[t] * coef * coef);
-            push(&mut j.damping_parts, PartSource::Tendon(t, coef), tdamp[t] * coef * coef);
-        }
-    }
-    for j in joints.iter_mut() {
-        j.armature = j.armature_parts.iter().map(|p| p.value).sum();
-        j.damping = j.damping_parts.iter().map(|p| p.value).sum();
-    }
-}
-
 /// "0.005 (joint) + 0.002 × 10² (actuator `ankle`)": where an effective value came from.
 pub fn describe_parts(robot: &Robot, parts: &[Part], what: &str) -> String {
     if parts.is_empty() {
@@ -1026,32 +573,4 @@ pub fn describe_parts(robot: &Robot, parts: &[Part], what: &str) -> String {
         })
         .collect();
     if v.len() == 1 && parts[0].source == PartSource::Joint { v[0].clone() } else { v.join(" + ") }
-}
-
-/// Runs mj_forward at the keyframe (or qpos0) and records what static rules need.
-pub fn key_state(m: &MjModel, key: Option<usize>, keys: &[String]) -> KeyState {
-    let mut d = MjData::new(m);
-    if let Some(k) = key {
-        let _ = d.reset_keyframe(k);
-    }
-    d.forward();
-    let r = mj::raw(m);
-    let dr = d.ffi();
-    let (nq, nv, nu, ngeom, nbody) =
-        (r.nq as usize, r.nv as usize, r.nu as usize, r.ngeom as usize, r.nbody as usize);
-    let full = mj::full_mass_matrix(m, &d);
-    let m_diag = (0..nv).map(|i| full[i * nv + i]).collect();
-    let gx = mj::slice(dr.geom_xpos, 3 * ngeom);
-    let gm = mj::slice(dr.geom_xmat, 9 * ngeom);
-    let bx = mj::slice(dr.xpos, 3 * nbody);
-    KeyState {
-        key,
-        key_name: key.and_then(|k| keys.get(k).cloned()),
-        qpos: mj::slice(dr.qpos, nq).to_vec(),
-        ctrl: mj::slice(dr.ctrl, nu).to_vec(),
-        m_diag,
-        geom_xpos: (0..ngeom).map(|i| [gx[3 * i], gx[3 * i + 1], gx[3 * i + 2]]).collect(),
-        geom_xmat: (0..ngeom).map(|i| std::array::from_fn(|k| gm[9 * i + k])).collect(),
-        body_xpos: (0..nbody).map(|i| [bx[3 * i], bx[3 * i + 1], bx[3 * i + 2]]).collect(),
-    }
 }

@@ -237,8 +237,8 @@ fn root_name(text: &str) -> Option<String> {
     loop {
         let lt = i + text[i..].find('<')?;
         let rest = &text[lt + 1..];
-        if rest.starts_with("!--") {
-            i = lt + 4 + rest[3..].find("-->")? + 3;
+        if let Some(comment) = rest.strip_prefix("!--") {
+            i = lt + 4 + comment.find("-->")? + 3;
             continue;
         }
         if rest.starts_with('?') || rest.starts_with('!') {

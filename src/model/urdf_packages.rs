@@ -30,10 +30,10 @@ pub fn parse_package_arg(s: &str) -> Result<(String, PathBuf), String> {
 
 fn find_package(name: &str) -> (Option<PathBuf>, Vec<PathBuf>) {
     let mut searched = Vec::new();
-    if let Ok(g) = PACKAGES.lock() {
-        if let Some((_, d)) = g.iter().find(|(n, _)| n == name) {
-            return (Some(d.clone()), searched);
-        }
+    if let Ok(g) = PACKAGES.lock()
+        && let Some((_, d)) = g.iter().find(|(n, _)| n == name)
+    {
+        return (Some(d.clone()), searched);
     }
     if let Some(rpp) = std::env::var_os("ROS_PACKAGE_PATH") {
         for entry in std::env::split_paths(&rpp).filter(|e| !e.as_os_str().is_empty()) {

@@ -75,15 +75,10 @@ fn scratch(robot: &Robot) -> (MjModel, u64) {
         Some(m) => m,
         None => return (robot.mj.clone(), source),
     };
-    let orig = mj::raw(&robot.mj);
-    let nv = orig.nv as usize;
-    let arm = mj::slice(orig.dof_armature, nv).to_vec();
-    let m0 = mj::slice(orig.dof_M0, nv).to_vec();
-    let flags = orig.opt.disableflags;
-    let r = mj::raw_mut(&mut m);
-    mj::slice_mut(r.dof_armature, nv).copy_from_slice(&arm);
-    mj::slice_mut(r.dof_M0, nv).copy_from_slice(&m0);
-    r.opt.disableflags = flags;
+    let orig = &robot.mj;
+    m.dof_armature_mut().copy_from_slice(orig.dof_armature());
+    m.dof_m0_mut().copy_from_slice(orig.dof_m0());
+    m.opt_mut().disableflags = orig.opt().disableflags;
     (m, source)
 }
 
@@ -134,14 +129,11 @@ impl<'a> Bench<'a> {
         for &d in &frozen_dofs {
             mj::set_armature(&mut m, d, FROZEN_ARMATURE);
         }
-        {
-            let r = mj::raw_mut(&mut m);
-            if s.no_contact {
-                r.opt.disableflags |= 1 << 4;
-            }
-            if s.no_gravity {
-                r.opt.disableflags |= 1 << 7;
-            }
+        if s.no_contact {
+            m.opt_mut().disableflags |= 1 << 4;
+        }
+        if s.no_gravity {
+            m.opt_mut().disableflags |= 1 << 7;
         }
         Some(Bench { m: BenchModel::Scratch(Some(m), source), frozen, frozen_dofs })
     }
@@ -154,9 +146,8 @@ impl<'a> Bench<'a> {
         }
         // Pre-fill actuator delay buffers with the held command so a delayed actuator does not
         // see a zero target for its first `delay` seconds.
-        let nu = mj::raw(&self.m).nu as usize;
-        let ctrl = mj::slice(d.ffi().ctrl, nu).to_vec();
-        let hadr = mj::slice(mj::raw(&self.m).actuator_historyadr, nu).to_vec();
+        let ctrl = d.ctrl().to_vec();
+        let hadr = self.m.actuator_historyadr().to_vec();
         for (i, &c) in ctrl.iter().enumerate() {
             if hadr.get(i).copied().unwrap_or(-1) >= 0 {
                 let _ = d.init_ctrl_history(i, None, &[c]);
@@ -169,14 +160,11 @@ impl<'a> Bench<'a> {
     /// One physics step, then re-impose the frozen coordinates.
     pub fn step(&self, d: &mut MjData<&MjModel>) {
         d.step();
-        let r = mj::raw(&self.m);
-        let (nq, nv) = (r.nq as usize, r.nv as usize);
-        let dr = mj::data_raw_mut(d);
-        let qpos = mj::slice_mut(dr.qpos, nq);
+        let qpos = d.qpos_mut();
         for &(i, v) in &self.frozen {
             qpos[i] = v;
         }
-        let qvel = mj::slice_mut(dr.qvel, nv);
+        let qvel = d.qvel_mut();
         for &k in &self.frozen_dofs {
             qvel[k] = 0.0;
         }
@@ -193,23 +181,19 @@ pub fn warnings(d: &MjData<&MjModel>) -> i32 {
 }
 
 pub fn qpos(d: &MjData<&MjModel>, i: usize) -> f64 {
-    let n = mj::raw(d.model()).nq as usize;
-    mj::slice(d.ffi().qpos, n).get(i).copied().unwrap_or(f64::NAN)
+    d.qpos().get(i).copied().unwrap_or(f64::NAN)
 }
 
 pub fn qvel(d: &MjData<&MjModel>, i: usize) -> f64 {
-    let n = mj::raw(d.model()).nv as usize;
-    mj::slice(d.ffi().qvel, n).get(i).copied().unwrap_or(f64::NAN)
+    d.qvel().get(i).copied().unwrap_or(f64::NAN)
 }
 
 pub fn set_ctrl(d: &mut MjData<&MjModel>, a: usize, v: f64) {
-    let n = mj::raw(d.model()).nu as usize;
-    if let Some(c) = mj::slice_mut(mj::data_raw_mut(d).ctrl, n).get_mut(a) {
+    if let Some(c) = d.ctrl_mut().get_mut(a) {
         *c = v;
     }
 }
 
 pub fn ctrl(d: &MjData<&MjModel>, a: usize) -> f64 {
-    let n = mj::raw(d.model()).nu as usize;
-    mj::slice(d.ffi().ctrl, n).get(a).copied().unwrap_or(f64::NAN)
+    d.ctrl().get(a).copied().unwrap_or(f64::NAN)
 }

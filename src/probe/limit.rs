@@ -63,19 +63,15 @@ pub fn run(robot: &Robot, act: usize) -> Option<LimitHit> {
             bench::set_ctrl(&mut d, act, target);
             b.step(&mut d);
             out.steps += 1;
-            let nefc = d.ffi().nefc.max(0) as usize;
-            let ty = mj::slice(d.ffi().efc_type, nefc);
-            let id = mj::slice(d.ffi().efc_id, nefc);
-            let f = mj::slice(d.ffi().efc_force, nefc);
-            for k in 0..nefc {
-                if ty[k] == 3 && id[k] == j.id as i32 && f[k].abs() > 1e-9 {
+            for (ty, id, f) in mj::constraint_forces(&d) {
+                if ty == 3 && id == j.id as i32 && f.abs() > 1e-9 {
                     if first {
                         out.impact_velocity =
                             out.impact_velocity.max(bench::qvel(&d, j.dofadr).abs());
                         first = false;
                     }
                     out.hit = true;
-                    out.max_limit_force = out.max_limit_force.max(f[k].abs());
+                    out.max_limit_force = out.max_limit_force.max(f.abs());
                 }
             }
         }

@@ -54,13 +54,9 @@ pub fn run(robot: &Robot, a: usize, b: usize) -> Option<Penetration> {
     }
     let bench = Bench::new(robot, Setup { pin_base: true, ..Default::default() })?;
     let mut d = bench.data(robot);
-    let m = &bench.m;
-    let ncon = d.ffi().ncon.max(0) as usize;
     // Active contacts only (efc_address ≥ 0): those the constraint solver applies force through.
-    let cons: Vec<(i32, i32, bool)> = mj::slice(d.ffi().contact, ncon)
-        .iter()
-        .map(|c| (c.geom1, c.geom2, c.efc_address >= 0))
-        .collect();
+    let cons: Vec<(i32, i32, bool)> =
+        d.contact().iter().map(|c| (c.geom1, c.geom2, c.efc_address >= 0)).collect();
     let contact_force: f64 = cons
         .iter()
         .enumerate()
@@ -69,10 +65,10 @@ pub fn run(robot: &Robot, a: usize, b: usize) -> Option<Penetration> {
                 && ((*g1 as usize, *g2 as usize) == (a, b)
                     || (*g1 as usize, *g2 as usize) == (b, a))
         })
-        .map(|(i, _)| mj::contact_normal_force(m, &d, i))
+        .map(|(i, _)| mj::contact_normal_force(&d, i))
         .sum();
     let distmax = 1.0;
-    let depth0 = mj::geom_distance(m, &mut d, a, b, distmax);
+    let depth0 = mj::geom_distance(&mut d, a, b, distmax);
     let dt = bench.dt();
     let n = (DURATION / dt).ceil() as usize;
     let mut prev = depth0;
@@ -82,7 +78,7 @@ pub fn run(robot: &Robot, a: usize, b: usize) -> Option<Penetration> {
     for k in 0..n {
         bench.step(&mut d);
         steps += 1;
-        let dist = mj::geom_distance(m, &mut d, a, b, distmax);
+        let dist = mj::geom_distance(&mut d, a, b, distmax);
         if !dist.is_finite() {
             break;
         }

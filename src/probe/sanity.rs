@@ -4,7 +4,7 @@
 
 use super::bench::{self, Bench, Setup};
 use crate::lint::Loaded;
-use crate::model::{Robot, mj};
+use crate::model::Robot;
 
 /// The probe: the whole model under small random commands (one run per model).
 pub struct WholeModelSanity;
@@ -62,7 +62,6 @@ pub fn run(robot: &Robot) -> Option<Sanity> {
     let nu = robot.actuators.len();
     let base: Vec<f64> = (0..nu).map(|a| bench::ctrl(&d, a)).collect();
     let mut seed = 0x5EED_u64;
-    let nv = mj::raw(&b.m).nv as usize;
     let mut problem = None;
     let mut max_speed: f64 = 0.0;
     let mut steps = 0;
@@ -87,7 +86,7 @@ pub fn run(robot: &Robot) -> Option<Sanity> {
             ));
             break;
         }
-        let qv = mj::slice(d.ffi().qvel, nv);
+        let qv = d.qvel();
         let s = qv.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         if !s.is_finite() {
             problem = Some(format!("NaN velocity at t = {:.3} s", k as f64 * dt));

@@ -126,10 +126,9 @@ pub fn run(robot: &Robot) -> Option<Settle> {
     let n = (1.0 / dt).ceil() as usize;
     let load_from = n - (0.3 / dt).ceil() as usize;
     let chatter_from = n - (0.5 / dt).ceil() as usize;
-    let r = mj::raw(&b.m);
-    let (nbody, ngeom) = (r.nbody as usize, r.ngeom as usize);
-    let gbody = mj::slice(r.geom_bodyid, ngeom).to_vec();
-    let x0: Vec<f64> = mj::slice(d.ffi().xmat, 9 * nbody).to_vec();
+    let nbody = mj::raw(&b.m).nbody as usize;
+    let gbody = b.m.geom_bodyid().to_vec();
+    let x0: Vec<f64> = d.xmat().as_flattened().to_vec();
     let base_z0 = robot
         .joints
         .iter()
@@ -147,8 +146,7 @@ pub fn run(robot: &Robot) -> Option<Settle> {
             out.diverged = true;
             return Some(out);
         }
-        let ncon = d.ffi().ncon.max(0) as usize;
-        let cons = mj::slice(d.ffi().contact, ncon);
+        let cons = d.contact();
         let mut now = BTreeSet::new();
         for (ci, c) in cons.iter().enumerate() {
             let (g1, g2) = (c.geom[0], c.geom[1]);
@@ -187,7 +185,7 @@ pub fn run(robot: &Robot) -> Option<Settle> {
     out.geom_load = load_sum.into_iter().map(|(g, s)| (g, s / nload)).collect();
     let window = (n - chatter_from) as f64 * dt;
     out.chatter_per_s = changes.into_iter().map(|(b, c)| (b, c as f64 / window)).collect();
-    let x1 = mj::slice(d.ffi().xmat, 9 * nbody);
+    let x1 = d.xmat().as_flattened();
     for bi in 1..nbody {
         // Angle between the body's z axis now and at the keyframe.
         let z0 = [x0[9 * bi + 2], x0[9 * bi + 5], x0[9 * bi + 8]];
@@ -195,8 +193,7 @@ pub fn run(robot: &Robot) -> Option<Settle> {
         let dot = (z0[0] * z1[0] + z0[1] * z1[1] + z0[2] * z1[2]).clamp(-1.0, 1.0);
         out.body_tilt_deg.insert(bi, dot.acos().to_degrees());
     }
-    let nq = r.nq as usize;
-    let q = mj::slice(d.ffi().qpos, nq);
+    let q = d.qpos();
     for j in &robot.joints {
         if j.is_scalar() {
             out.joint_deflection

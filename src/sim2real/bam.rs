@@ -9,6 +9,9 @@
 //! strictly increasing; an entry that exactly repeats the previous one (every field equal) is
 //! dropped and counted in meta `dropped_duplicates`; two entries with the same timestamp but
 //! different data are an error naming the entry index.
+//!
+//! [`bam_recording`] makes a log replayable: the firmware P gain converted to N·m/rad with the
+//! XL330 constants ([`xl330_kp_si`]) as a `servo.kp` column.
 
 use super::recording::{JointTrace, ParseOptions, Recording, RecordingError};
 use serde::{Deserialize, Serialize};
@@ -169,6 +172,32 @@ pub fn parse_bam(path: &Path, text: &str) -> Result<BamLog, RecordingError> {
     })
 }
 
+/// XL330 constants (BAM project's first-order fit) for the firmware P-gain conversion.
+pub const XL330_KT: f64 = 0.387;
+pub const XL330_R: f64 = 4.02;
+/// Dynamixel position-error gain: (4096 / 2π) / (256 · 885) duty per rad per firmware kp unit.
+pub const XL330_ERROR_GAIN: f64 = (4096.0 / (2.0 * std::f64::consts::PI)) / (256.0 * 885.0);
+
+/// Firmware P gain → N·m/rad: K = kp · error_gain · vin · kt / R.
+pub fn xl330_kp_si(kp_firmware: f64, vin: f64) -> f64 {
+    kp_firmware * XL330_ERROR_GAIN * vin * XL330_KT / XL330_R
+}
+
+/// A BAM log as a replayable recording: a constant `servo.kp` column in N·m/rad (see
+/// [`xl330_kp_si`]) and meta `kp_si`. No control rate: the servo takes each goal as it arrives,
+/// so the replay holds each goal from its own timestamp on.
+pub fn bam_recording(log: BamLog) -> Recording {
+    let mut rec = log.recording;
+    let k = xl330_kp_si(log.kp, log.vin);
+    let n = rec.t.len();
+    if let Some(j) = rec.joints.iter_mut().find(|j| j.name == BAM_JOINT) {
+        j.kp = Some(vec![k; n]);
+    }
+    rec.meta.insert("kp_si".into(), format!("{k}"));
+    rec.control_rate_hz = None;
+    rec
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -272,5 +301,12 @@ mod tests {
             }
         }
         assert_eq!(kps.into_iter().collect::<Vec<_>>(), vec![100, 200, 400, 800]);
+    }
+
+    #[test]
+    fn firmware_gain_matches_the_rig_actuator() {
+        // fixtures/bam_xl330/rig.xml: gainprm = 0.8199237503 for kp 400, vin 7.4.
+        assert!((xl330_kp_si(400.0, 7.4) - 0.8199237503).abs() < 1e-9);
+        assert!((xl330_kp_si(800.0, 7.4) - 2.0 * 0.8199237503).abs() < 1e-9);
     }
 }

@@ -1,88 +1,14 @@
-//! `modellint gap` and `modellint convert`: input discovery, BAM import with the firmware-gain
-//! conversion, replay of the dataset, output. Exit codes: 0 done, 1 done but some episode
+//! `modellint gap` and `modellint convert`: reading the inputs ([`crate::sim2real::input`]),
+//! replay of the dataset, output. Exit codes: 0 done, 1 done but some episode
 //! diverged (excluded and listed), 2 could not do the job (nothing is printed as a result).
 
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 
-use crate::sim2real::bam::{self, BAM_JOINT, BamLog};
 use crate::sim2real::gap::{self, GapOptions, GapReport};
-use crate::sim2real::recording::{self, Recording, RecordingError};
+use crate::sim2real::input::{expand_inputs, read_recording};
+use crate::sim2real::recording;
 use crate::sim2real::replay::{self, BaseMode, ReplayOptions, Replayer};
-
-/// XL330 constants (BAM project's first-order fit) for the firmware P-gain conversion.
-pub const XL330_KT: f64 = 0.387;
-pub const XL330_R: f64 = 4.02;
-/// Dynamixel position-error gain: (4096 / 2π) / (256 · 885) duty per rad per firmware kp unit.
-pub const XL330_ERROR_GAIN: f64 = (4096.0 / (2.0 * std::f64::consts::PI)) / (256.0 * 885.0);
-
-/// Firmware P gain → N·m/rad: K = kp · error_gain · vin · kt / R.
-pub fn xl330_kp_si(kp_firmware: f64, vin: f64) -> f64 {
-    kp_firmware * XL330_ERROR_GAIN * vin * XL330_KT / XL330_R
-}
-
-/// A BAM log as a replayable recording: a constant `servo.kp` column in N·m/rad (see
-/// [`xl330_kp_si`]) and meta `kp_si`. No control rate: the servo takes each goal as it arrives,
-/// so the replay holds each goal from its own timestamp on.
-pub fn bam_recording(log: BamLog) -> Recording {
-    let mut rec = log.recording;
-    let k = xl330_kp_si(log.kp, log.vin);
-    let n = rec.t.len();
-    if let Some(j) = rec.joints.iter_mut().find(|j| j.name == BAM_JOINT) {
-        j.kp = Some(vec![k; n]);
-    }
-    rec.meta.insert("kp_si".into(), format!("{k}"));
-    rec.control_rate_hz = None;
-    rec
-}
-
-/// Reads one recording file: BAM JSON (sniffed) or CSV.
-pub fn read_recording(path: &Path) -> Result<Recording, RecordingError> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| RecordingError::new(path, None, None, format!("cannot read file: {e}")))?;
-    if bam::is_bam_json(&text) {
-        Ok(bam_recording(bam::parse_bam(path, &text)?))
-    } else {
-        recording::parse_csv(path, &text)
-    }
-}
-
-/// Expands the command-line inputs: files as given, directories to their `*.csv` (and BAM
-/// `*.json`) files in sorted order.
-pub fn expand_inputs(inputs: &[PathBuf]) -> Result<Vec<PathBuf>, RecordingError> {
-    let mut out = Vec::new();
-    for p in inputs {
-        if p.is_dir() {
-            let rd = std::fs::read_dir(p).map_err(|e| {
-                RecordingError::new(p, None, None, format!("cannot read directory: {e}"))
-            })?;
-            let mut files: Vec<PathBuf> = rd
-                .filter_map(|e| e.ok().map(|e| e.path()))
-                .filter(|f| {
-                    f.is_file()
-                        && f.extension().is_some_and(|x| {
-                            x.eq_ignore_ascii_case("csv") || x.eq_ignore_ascii_case("json")
-                        })
-                })
-                .collect();
-            files.sort();
-            if files.is_empty() {
-                return Err(RecordingError::new(
-                    p,
-                    None,
-                    None,
-                    "directory holds no *.csv or *.json recordings",
-                ));
-            }
-            out.extend(files);
-        } else if p.is_file() {
-            out.push(p.clone());
-        } else {
-            return Err(RecordingError::new(p, None, None, "no such file or directory"));
-        }
-    }
-    Ok(out)
-}
 
 pub struct GapArgs {
     pub model: PathBuf,
@@ -100,11 +26,11 @@ pub fn run_gap(a: GapArgs) -> i32 {
         Ok(l) => l,
         Err(code) => return code,
     };
-    if let Some(hz) = a.control_hz {
-        if !(hz.is_finite() && hz > 0.0) {
-            eprintln!("modellint: --control-hz must be positive, got {hz}");
-            return 2;
-        }
+    if let Some(hz) = a.control_hz
+        && !(hz.is_finite() && hz > 0.0)
+    {
+        eprintln!("modellint: --control-hz must be positive, got {hz}");
+        return 2;
     }
     let files = match expand_inputs(&a.recordings) {
         Ok(f) => f,
@@ -209,16 +135,4 @@ pub fn run_convert(input: &Path, output: &Path) -> i32 {
         return 2;
     }
     0
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn firmware_gain_matches_the_rig_actuator() {
-        // fixtures/bam_xl330/rig.xml: gainprm = 0.8199237503 for kp 400, vin 7.4.
-        assert!((xl330_kp_si(400.0, 7.4) - 0.8199237503).abs() < 1e-9);
-        assert!((xl330_kp_si(800.0, 7.4) - 2.0 * 0.8199237503).abs() < 1e-9);
-    }
 }

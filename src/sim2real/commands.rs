@@ -243,8 +243,8 @@ pub fn reconstruct(
             let after = known.get(w + 2).map(|&q| (v[q] - b) / (q - j) as f64);
             if fill && is_ramp(gap_slope, before, after) {
                 any_ramp = true;
-                for k in i + 1..j {
-                    v[k] = a + gap_slope * (k - i) as f64;
+                for (k, x) in v.iter_mut().enumerate().take(j).skip(i + 1) {
+                    *x = a + gap_slope * (k - i) as f64;
                 }
             } else {
                 for x in v.iter_mut().take(j).skip(i + 1) {
@@ -330,9 +330,9 @@ mod tests {
         let t: Vec<f64> = (0..6).map(|k| k as f64 * 0.01).collect();
         let c = [1.0, 2.0, 3.0, 4.0, 5.0, 6.0];
         let s = reconstruct(&t, &[&c], Some(100.0), 0.0, CommandTiming::InForce, true).unwrap();
-        for k in 0..6 {
-            assert_eq!(s.at(0, k as f64 * 0.01 + 0.005), c[k]);
-            assert_eq!(s.at(0, k as f64 * 0.01), c[k]);
+        for (k, &ck) in c.iter().enumerate() {
+            assert_eq!(s.at(0, k as f64 * 0.01 + 0.005), ck);
+            assert_eq!(s.at(0, k as f64 * 0.01), ck);
         }
     }
 

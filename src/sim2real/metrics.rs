@@ -288,9 +288,9 @@ pub fn fill_dropped_rows(t: &[f64], x: &[f64]) -> (Vec<f64>, Vec<f64>) {
         }
         let gap = t[i + 1] - t[i];
         let rows = (gap / h).round() as usize;
-        if !(gap > GAP_FACTOR * h)
-            || rows < 2
-            || rows > MAX_FILLED_ROWS + 1
+        if gap.is_nan()
+            || gap <= GAP_FACTOR * h
+            || !(2..=MAX_FILLED_ROWS + 1).contains(&rows)
             || !x[i].is_finite()
             || !x[i + 1].is_finite()
         {

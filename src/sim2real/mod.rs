@@ -5,6 +5,7 @@ pub mod bam;
 pub mod cmd;
 pub mod commands;
 pub mod gap;
+pub mod input;
 pub mod locate;
 pub mod metrics;
 pub mod recording;

@@ -42,7 +42,7 @@ pub fn run(
 ) -> Result<Trace, String> {
     let m = &real.model;
     let r = mj::raw(m);
-    let (nq, nv, nu) = (r.nq as usize, r.nv as usize, r.nu as usize);
+    let nu = r.nu as usize;
     let dt = r.opt.timestep;
     if !(dt > 0.0 && dt.is_finite()) {
         return Err(format!("model timestep {dt} is not a positive number"));
@@ -53,29 +53,25 @@ pub fn run(
         d.reset_keyframe(k).map_err(|e| format!("keyframe {k}: {e:?}"))?;
     }
     {
-        let dr = mj::data_raw_mut(&mut d);
-        let qpos = mj::slice_mut(dr.qpos, nq);
+        let qpos = d.qpos_mut();
         for (j, jp) in real.joints.iter().enumerate() {
             qpos[jp.qposadr] = cmds.of_tick(cmds.first, j);
         }
-        mj::slice_mut(dr.qvel, nv).iter_mut().for_each(|v| *v = 0.0);
+        d.qvel_mut().iter_mut().for_each(|v| *v = 0.0);
         if robot.key.key.is_none() && robot.key.ctrl.len() == nu {
-            mj::slice_mut(dr.ctrl, nu).copy_from_slice(&robot.key.ctrl);
+            d.ctrl_mut().copy_from_slice(&robot.key.ctrl);
         }
     }
     let pin = |d: &mut MjData<&MjModel>| {
         if let Some(s) = stand {
-            let dr = mj::data_raw_mut(d);
-            mj::slice_mut(dr.qpos, nq)[s.qposadr..s.qposadr + 7].copy_from_slice(&s.pose);
-            mj::slice_mut(dr.qvel, nv)[s.dofadr..s.dofadr + 6].iter_mut().for_each(|v| *v = 0.0);
+            d.qpos_mut()[s.qposadr..s.qposadr + 7].copy_from_slice(&s.pose);
+            d.qvel_mut()[s.dofadr..s.dofadr + 6].iter_mut().for_each(|v| *v = 0.0);
         }
     };
     pin(&mut d);
     d.forward();
     let read = |d: &MjData<&MjModel>, q: &mut Vec<f64>, qd: &mut Vec<f64>| {
-        let dr = mj::data_raw(d);
-        let qpos = mj::slice(dr.qpos, nq);
-        let qvel = mj::slice(dr.qvel, nv);
+        let (qpos, qvel) = (d.qpos(), d.qvel());
         q.clear();
         qd.clear();
         for jp in &real.joints {
@@ -103,12 +99,11 @@ pub fn run(
         emit(&mut out, (&q0, &qd0), (&q0, &qd0), 0.0);
         next += 1;
     }
+    let mut tau = vec![0.0; nj];
     while next < samples_us.len() {
         let t = n as f64 * dt;
         {
-            let dr = mj::data_raw_mut(&mut d);
-            let ctrl = mj::slice_mut(dr.ctrl, nu);
-            let qfrc = mj::slice_mut(dr.qfrc_applied, nv);
+            let ctrl = d.ctrl_mut();
             for (j, jp) in real.joints.iter().enumerate() {
                 let mut u = cmds.mean(t - jp.delay_s, t + dt - jp.delay_s, j);
                 if jp.half_play > 0.0 {
@@ -117,7 +112,11 @@ pub fn run(
                 for s in &jp.servos {
                     ctrl[s.id] = u;
                 }
-                qfrc[jp.dof] = step_torque(m, jp, u, q0[j], qd0[j]);
+                tau[j] = step_torque(m, jp, u, q0[j], qd0[j]);
+            }
+            let qfrc = d.qfrc_applied_mut();
+            for (jp, &t) in real.joints.iter().zip(&tau) {
+                qfrc[jp.dof] = t;
             }
         }
         pin(&mut d);

@@ -176,10 +176,6 @@ pub struct RealRobot {
     pub joints: Vec<JointPhysics>,
 }
 
-fn at(ptr: *mut f64, n: usize, i: usize) -> Option<&'static mut f64> {
-    mj::slice_mut(ptr, n).get_mut(i)
-}
-
 /// Builds the real robot for the recorded `joints` (names) with `hidden` effects.
 pub fn real_robot(
     robot: &Robot,
@@ -199,8 +195,6 @@ pub fn real_robot(
         let key_q = robot.key.qpos.get(j.qposadr).copied().unwrap_or(0.0);
         let mut jp =
             JointPhysics { dof: j.dofadr, qposadr: j.qposadr, servos, ..Default::default() };
-        let r = mj::raw_mut(&mut model);
-        let (nv, njnt, nq, nu) = (r.nv as usize, r.njnt as usize, r.nq as usize, r.nu as usize);
         for h in hidden.iter().filter(|h| &h.joint == name) {
             let p = &h.params;
             let need_servo = || {
@@ -214,25 +208,29 @@ pub fn real_robot(
                 "armature" => {
                     // dof_M0 (the inertia MuJoCo uses directly for "simple" dofs, compiled with
                     // the armature in it) moves with the armature.
-                    let a = at(r.dof_armature, nv, j.dofadr).ok_or("dof")?;
+                    let a = model.dof_armature_mut().get_mut(j.dofadr).ok_or("dof")?;
                     let delta = p[0] - *a;
                     *a = p[0];
-                    *at(r.dof_M0, nv, j.dofadr).ok_or("dof")? += delta;
+                    *model.dof_m0_mut().get_mut(j.dofadr).ok_or("dof")? += delta;
                 }
-                "viscous_damping" => *at(r.dof_damping, nv, j.dofadr).ok_or("dof")? = p[0],
-                "coulomb_friction" => *at(r.dof_frictionloss, nv, j.dofadr).ok_or("dof")? = p[0],
+                "viscous_damping" => {
+                    *model.dof_damping_mut().get_mut(j.dofadr).ok_or("dof")? = p[0]
+                }
+                "coulomb_friction" => {
+                    *model.dof_frictionloss_mut().get_mut(j.dofadr).ok_or("dof")? = p[0]
+                }
                 "joint_stiffness" => {
-                    *at(r.jnt_stiffness, njnt, j.id).ok_or("jnt")? = p[0];
-                    *at(r.qpos_spring, nq, j.qposadr).ok_or("qpos")? = key_q;
+                    *model.jnt_stiffness_mut().get_mut(j.id).ok_or("jnt")? = p[0];
+                    *model.qpos_spring_mut().get_mut(j.qposadr).ok_or("qpos")? = key_q;
                 }
                 "gain_error" => {
                     need_servo()?;
                     for s in &jp.servos {
-                        let g = mj::slice_mut(r.actuator_gainprm, 10 * nu);
-                        g[10 * s.id] *= p[0];
-                        let b = mj::slice_mut(r.actuator_biasprm, 10 * nu);
-                        b[10 * s.id + 1] *= p[0];
-                        b[10 * s.id + 2] *= p[1];
+                        *mj::actuator_gainprm_mut(&mut model).get_mut(10 * s.id).ok_or("act")? *=
+                            p[0];
+                        let b = model.actuator_biasprm_mut().get_mut(s.id).ok_or("act")?;
+                        b[1] *= p[0];
+                        b[2] *= p[1];
                     }
                 }
                 "torque_limit" => {
@@ -241,10 +239,8 @@ pub fn real_robot(
                         // Effort only: MuJoCo's own actuator force clamp (force = torque / gear).
                         for s in &jp.servos {
                             let e = p[0] / s.gear.abs();
-                            mj::slice_mut(r.actuator_forcelimited, nu)[s.id] = true;
-                            let fr = mj::slice_mut(r.actuator_forcerange, 2 * nu);
-                            fr[2 * s.id] = -e;
-                            fr[2 * s.id + 1] = e;
+                            *model.actuator_forcelimited_mut().get_mut(s.id).ok_or("act")? = true;
+                            *model.actuator_forcerange_mut().get_mut(s.id).ok_or("act")? = [-e, e];
                         }
                     } else {
                         jp.torque_line = Some([p[0], p[1], p[2]]);
@@ -276,14 +272,9 @@ pub fn real_robot(
 /// actuator parameters (force = gain·u + b0 + b1·gear·q + b2·gear·qd, clamped to forcerange;
 /// joint torque = gear · force).
 pub fn servo_torque(m: &MjModel, jp: &JointPhysics, u: f64, q: f64, qd: f64) -> f64 {
-    let r = mj::raw(m);
-    let nu = r.nu as usize;
-    let g = mj::slice(r.actuator_gainprm, 10 * nu);
-    let b = mj::slice(r.actuator_biasprm, 10 * nu);
-    let fl = mj::slice(r.actuator_forcelimited, nu);
-    let fr = mj::slice(r.actuator_forcerange, 2 * nu);
-    let cl = mj::slice(r.actuator_ctrllimited, nu);
-    let cr = mj::slice(r.actuator_ctrlrange, 2 * nu);
+    let (g, b) = (m.actuator_gainprm().as_flattened(), m.actuator_biasprm().as_flattened());
+    let (fl, fr) = (m.actuator_forcelimited(), m.actuator_forcerange().as_flattened());
+    let (cl, cr) = (m.actuator_ctrllimited(), m.actuator_ctrlrange().as_flattened());
     let mut tau = 0.0;
     for s in &jp.servos {
         let i = s.id;

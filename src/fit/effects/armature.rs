@@ -20,8 +20,7 @@ impl Effect for Armature {
         "reflected rotor inertia (gear ratio² × rotor inertia): dof_armature"
     }
     fn initial(&self, m: &MjModel, t: &JointTarget) -> Vec<f64> {
-        let r = mj::raw(m);
-        vec![get(r.dof_armature, r.nv as usize, t.dof)]
+        vec![get(m.dof_armature(), t.dof)]
     }
     fn bounds(&self, m: &MjModel, t: &JointTarget) -> (Vec<f64>, Vec<f64>) {
         (vec![0.0], vec![P[0].hi.max(10.0 * self.initial(m, t)[0])])

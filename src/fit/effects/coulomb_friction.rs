@@ -21,15 +21,13 @@ impl Effect for CoulombFriction {
         "velocity-independent dry friction (gearbox, seals): dof_frictionloss"
     }
     fn initial(&self, m: &MjModel, t: &JointTarget) -> Vec<f64> {
-        let r = mj::raw(m);
-        vec![get(r.dof_frictionloss, r.nv as usize, t.dof)]
+        vec![get(m.dof_frictionloss(), t.dof)]
     }
     fn bounds(&self, m: &MjModel, t: &JointTarget) -> (Vec<f64>, Vec<f64>) {
         (vec![0.0], vec![P[0].hi.max(10.0 * self.initial(m, t)[0])])
     }
     fn apply_model(&self, m: &mut MjModel, t: &JointTarget, p: &[f64]) {
-        let r = mj::raw_mut(m);
-        set(r.dof_frictionloss, r.nv as usize, t.dof, p[0].max(0.0));
+        set(m.dof_frictionloss_mut(), t.dof, p[0].max(0.0));
     }
     fn smooth(&self) -> bool {
         true

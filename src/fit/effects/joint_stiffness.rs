@@ -21,16 +21,14 @@ impl Effect for JointStiffness {
         "spring torque towards the keyframe pose: jnt_stiffness with springref at the keyframe"
     }
     fn initial(&self, m: &MjModel, t: &JointTarget) -> Vec<f64> {
-        let r = mj::raw(m);
-        vec![get(r.jnt_stiffness, r.njnt as usize, t.jnt)]
+        vec![get(m.jnt_stiffness(), t.jnt)]
     }
     fn bounds(&self, m: &MjModel, t: &JointTarget) -> (Vec<f64>, Vec<f64>) {
         (vec![0.0], vec![P[0].hi.max(10.0 * self.initial(m, t)[0])])
     }
     fn apply_model(&self, m: &mut MjModel, t: &JointTarget, p: &[f64]) {
-        let r = mj::raw_mut(m);
-        set(r.jnt_stiffness, r.njnt as usize, t.jnt, p[0].max(0.0));
-        set(r.qpos_spring, r.nq as usize, t.qposadr, t.key_q);
+        set(m.jnt_stiffness_mut(), t.jnt, p[0].max(0.0));
+        set(m.qpos_spring_mut(), t.qposadr, t.key_q);
     }
     fn smooth(&self) -> bool {
         true

@@ -328,15 +328,16 @@ pub fn simulate(
     recs.par_iter().map(|r| replay_with(robot, &m, r, applied, opts)).collect()
 }
 
-/// Writes `v` into entry `i` of a model array of length `n`.
-pub(crate) fn set(ptr: *mut f64, n: usize, i: usize, v: f64) {
-    if let Some(x) = mj::slice_mut(ptr, n).get_mut(i) {
+/// Writes `v` into entry `i` of a model array (nothing when out of range).
+pub(crate) fn set(a: &mut [f64], i: usize, v: f64) {
+    if let Some(x) = a.get_mut(i) {
         *x = v;
     }
 }
 
-pub(crate) fn get(ptr: *const f64, n: usize, i: usize) -> f64 {
-    mj::slice(ptr, n).get(i).copied().unwrap_or(0.0)
+/// Entry `i` of a model array (0 when out of range).
+pub(crate) fn get(a: &[f64], i: usize) -> f64 {
+    a.get(i).copied().unwrap_or(0.0)
 }
 
 #[cfg(test)]

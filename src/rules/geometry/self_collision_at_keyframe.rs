@@ -6,7 +6,7 @@ use crate::declare_rule;
 use crate::finding::{Finding, ProbeStatus, Severity, Subject};
 use crate::lint::Loaded;
 use crate::model::mjcf::ElemKind;
-use crate::model::{GeomType, Robot, mj};
+use crate::model::{GeomType, Robot};
 use crate::probe::penetration::{self, Penetration};
 use crate::probe::{Claim, KeyframePenetration, Verdict};
 use crate::rules::{Context, Rule, RuleMeta, opt};
@@ -55,8 +55,7 @@ pub fn keyframe_penetrations(robot: &Robot) -> BTreeMap<(usize, usize), f64> {
         let _ = d.reset_keyframe(k);
     }
     d.forward();
-    let dr = mj::data_raw(&d);
-    let cons = mj::slice(dr.contact, dr.ncon.max(0) as usize);
+    let cons = d.contact();
     let mut out: BTreeMap<(usize, usize), f64> = BTreeMap::new();
     for c in cons {
         let (a, b) = (c.geom1, c.geom2);

@@ -2,7 +2,7 @@
 //! extreme points in any direction), axis tilt, mesh vertices in world coordinates. Pure math on
 //! `KeyState` (positions and row-major rotations) and compiled sizes, shared by several rules.
 
-use crate::model::{GeomType, Robot, mj};
+use crate::model::{GeomType, Robot};
 
 pub type V3 = [f64; 3];
 
@@ -168,11 +168,8 @@ pub fn mesh_world_vertices(robot: &Robot, mesh: i32, pos: V3, mat: &[f64; 9]) ->
     if mesh < 0 {
         return Vec::new();
     }
-    let r = mj::raw(&robot.mj);
-    let nmesh = r.nmesh as usize;
-    let adr = mj::slice(r.mesh_vertadr, nmesh);
-    let num = mj::slice(r.mesh_vertnum, nmesh);
-    let vert = mj::slice(r.mesh_vert, 3 * r.nmeshvert as usize);
+    let (adr, num) = (robot.mj.mesh_vertadr(), robot.mj.mesh_vertnum());
+    let vert = robot.mj.mesh_vert().as_flattened();
     let m = mesh as usize;
     let (a, n) = (adr[m].max(0) as usize, num[m].max(0) as usize);
     (a..a + n)

@@ -3,7 +3,7 @@ use std::collections::BTreeMap;
 use crate::declare_rule;
 use crate::finding::{Finding, Severity, Subject};
 use crate::model::mjcf::ElemKind;
-use crate::model::{ActuatorKind, Robot, mj};
+use crate::model::{ActuatorKind, Robot};
 use crate::rules::{Context, Rule, RuleMeta, opt};
 use crate::spec::v;
 use crate::util::fmt_num;
@@ -52,10 +52,8 @@ pub enum LimitSource {
 
 /// The tightest symmetric torque limit (max |bound|) the model applies to joint `j`.
 pub fn joint_torque_limit(robot: &Robot, j: usize) -> Option<(f64, LimitSource)> {
-    let r = mj::raw(&robot.mj);
-    let njnt = r.njnt as usize;
-    let lim = mj::slice(r.jnt_actfrclimited, njnt);
-    let rng = mj::slice(r.jnt_actfrcrange, 2 * njnt);
+    let lim = robot.mj.jnt_actfrclimited();
+    let rng = robot.mj.jnt_actfrcrange().as_flattened();
     let mut best: Option<(f64, LimitSource)> = None;
     let mut take = |x: f64, s: LimitSource| {
         if x.is_finite() && best.is_none_or(|(b, _)| x < b) {
@@ -286,17 +284,14 @@ fn ctrl_contradicts_joint_limit(
     unit: &str,
 ) -> Option<Finding> {
     let robot = cx.robot;
-    let r = mj::raw(&robot.mj);
-    let njnt = r.njnt as usize;
-    if !mj::slice(r.jnt_actfrclimited, njnt).get(j.id).copied().unwrap_or(false) || acts.len() != 1
-    {
+    if !robot.mj.jnt_actfrclimited().get(j.id).copied().unwrap_or(false) || acts.len() != 1 {
         return None;
     }
     let a = acts[0];
     if a.kind != ActuatorKind::Motor || !a.ctrllimited || a.forcelimited {
         return None;
     }
-    let rng = mj::slice(r.jnt_actfrcrange, 2 * njnt);
+    let rng = robot.mj.jnt_actfrcrange().as_flattened();
     let jl = rng[2 * j.id].abs().max(rng[2 * j.id + 1].abs());
     let ml = (a.gear * a.gainprm[0]).abs() * a.ctrlrange[0].abs().max(a.ctrlrange[1].abs());
     if !(jl > 0.0 && ml > 0.0) || (ml - jl).abs() <= tol * jl.max(ml) {

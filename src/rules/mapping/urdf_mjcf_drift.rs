@@ -3,7 +3,7 @@ use std::path::PathBuf;
 use crate::declare_rule;
 use crate::finding::{Finding, Severity, Subject};
 use crate::model::mjcf::ElemKind;
-use crate::model::{ActuatorKind, Robot, mj};
+use crate::model::{ActuatorKind, Robot};
 use crate::rules::{Context, Rule, RuleMeta, opt};
 use crate::spec::Spec;
 use crate::util::fmt_num;
@@ -63,10 +63,8 @@ fn model_effort(robot: &Robot, j: usize) -> Option<f64> {
     if !lim.is_empty() {
         return lim.into_iter().reduce(f64::max);
     }
-    let r = mj::raw(&robot.mj);
-    let n = r.njnt as usize;
-    if mj::slice(r.jnt_actfrclimited, n).get(j).copied().unwrap_or(false) {
-        let fr = mj::slice(r.jnt_actfrcrange, 2 * n);
+    if robot.mj.jnt_actfrclimited().get(j).copied().unwrap_or(false) {
+        let fr = robot.mj.jnt_actfrcrange().as_flattened();
         return Some(fr[2 * j].abs().max(fr[2 * j + 1].abs()));
     }
     let m: Vec<f64> = acts

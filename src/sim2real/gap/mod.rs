@@ -19,6 +19,8 @@
 //!
 //! Diverged episodes are excluded from every pooled number and listed in `diverged`.
 
+mod text;
+
 use serde::Serialize;
 
 use crate::sim2real::locate::{self, Explained};
@@ -355,9 +357,7 @@ pub fn compute(
                 // full-length episode exists (the longest short one wins).
                 let full = ru.len() >= opts.nperseg;
                 let cur_full = ja.psd.freqs.len() == opts.nperseg / 2 + 1;
-                if ja.psd.freqs.is_empty()
-                    || (full && !cur_full)
-                    || (!full && !cur_full && f.len() > ja.psd.freqs.len())
+                if ja.psd.freqs.is_empty() || (!cur_full && (full || f.len() > ja.psd.freqs.len()))
                 {
                     ja.psd = JointPsd {
                         freqs: f,
@@ -565,8 +565,8 @@ pub fn compute(
     let worst_band = bands.first().filter(|b| b.mismatch > 0.0).map(|b| b.band.clone());
     let mut ph_all = [Accum::new(), Accum::new(), Accum::new(), Accum::new()];
     for ja in &joints {
-        for k in 0..4 {
-            ph_all[k].merge(&ja.ph[k]);
+        for (acc, ph) in ph_all.iter_mut().zip(&ja.ph) {
+            acc.merge(ph);
         }
     }
     let other_rmse = ph_all[3].finish().rmse;
@@ -646,106 +646,6 @@ pub fn compute(
         },
         diverged,
         psd,
-    }
-}
-
-fn deg(x: f64) -> String {
-    if x.is_finite() { format!("{:.2}°", x.to_degrees()) } else { "n/a".into() }
-}
-fn num(x: f64, p: usize) -> String {
-    if x.is_finite() { format!("{x:.p$}") } else { "n/a".into() }
-}
-
-impl GapReport {
-    /// Human summary (angles in degrees, angular velocities in °/s; the JSON stays SI). `title` heads the block ("gap", "before", "after").
-    pub fn to_text(&self, title: &str) -> String {
-        let mut o = String::new();
-        o.push_str(&format!(
-            "{title}: {} episode(s), {} samples, {:.1} s (spectra at {} Hz)\n",
-            self.episodes, self.samples, self.duration_s, self.uniform_rate_hz
-        ));
-        o.push_str(&format!(
-            "  position  MAE {}  RMSE {}  max {}\n  velocity  MAE {}°/s  RMSE {}°/s\n  correlation mean {}   spectral KL {}\n",
-            deg(self.position_mae),
-            deg(self.position_rmse),
-            deg(self.position_max),
-            num(self.velocity_mae.to_degrees(), 3),
-            num(self.velocity_rmse.to_degrees(), 3),
-            num(self.correlation_mean, 3),
-            num(self.spectral_kl, 3)
-        ));
-        o.push_str(&format!(
-            "  gap  kinematic {}  dynamic {}  control {}  overall {}\n",
-            num(self.gap_kinematic, 3),
-            num(self.gap_dynamic, 3),
-            num(self.gap_control, 3),
-            num(self.gap_overall, 3)
-        ));
-        o.push_str(&format!(
-            "\n  {:<24} {:<6} {:>8} {:>8} {:>8} {:>6} {:>9} {:>7} {:>13}\n",
-            "joint", "region", "MAE", "RMSE", "max", "corr", "vel [°/s]", "KL", "dom Hz r/s"
-        ));
-        for s in &self.localisation.joints {
-            let Some(j) = self.per_joint.iter().find(|j| j.name == s.name) else { continue };
-            o.push_str(&format!(
-                "  {:<24} {:<6} {:>8} {:>8} {:>8} {:>6} {:>9} {:>7} {:>6}/{:<6}\n",
-                j.name,
-                j.region,
-                deg(j.mae),
-                deg(j.rmse),
-                deg(j.max),
-                j.corr.map_or("n/a".into(), |c| format!("{c:.2}")),
-                num(j.vel_rmse.to_degrees(), 3),
-                num(j.spectral_kl, 3),
-                num(j.dominant_hz_real, 1),
-                num(j.dominant_hz_sim, 1)
-            ));
-        }
-        if self.per_region.len() > 1 {
-            o.push_str("\n  region   joints      MAE     RMSE   corr\n");
-            for r in &self.per_region {
-                o.push_str(&format!(
-                    "  {:<8} {:>6} {:>8} {:>8} {:>6}\n",
-                    r.region,
-                    r.joints,
-                    deg(r.mae),
-                    deg(r.rmse),
-                    r.corr.map_or("n/a".into(), |c| format!("{c:.2}"))
-                ));
-            }
-        }
-        let l = &self.localisation;
-        o.push_str("\n  where the gap is:\n");
-        for s in l.joints.iter().take(5) {
-            o.push_str(&format!("    {:>5.1} % of squared error  {}\n", 100.0 * s.share, s.name));
-        }
-        for s in l.regions.iter().take(4) {
-            o.push_str(&format!("    {:>5.1} % region {}\n", 100.0 * s.share, s.name));
-        }
-        if let Some(b) = &l.worst_band {
-            o.push_str(&format!("    largest PSD mismatch in band {b}\n"));
-        }
-        for p in l.phases.iter().take(3) {
-            o.push_str(&format!(
-                "    {}: RMSE {} ({:.2}× outside phases)\n",
-                p.phase,
-                deg(p.rmse),
-                p.ratio_to_other
-            ));
-        }
-        for c in l.causes.iter().take(8) {
-            o.push_str(&format!("    {:<24} {}\n", c.name, c.summary));
-        }
-        if !self.diverged.is_empty() {
-            o.push_str(&format!(
-                "\n  {} episode(s) DIVERGED and are excluded:\n",
-                self.diverged.len()
-            ));
-            for d in &self.diverged {
-                o.push_str(&format!("    {d}\n"));
-            }
-        }
-        o
     }
 }
 

@@ -1,0 +1,123 @@
+//! Consistency checks of a parsed (or constructed) recording.
+
+use super::{ParseOptions, Recording, RecordingError};
+
+impl Recording {
+    /// Checks consistency (lengths, finiteness, strictly increasing time, at least two samples,
+    /// positions not in degrees). Errors name the sample index (no line numbers).
+    pub fn check(&self, opts: &ParseOptions) -> Result<(), RecordingError> {
+        self.check_inner(opts, None)
+    }
+
+    /// `row_lines[i]` is the 1-based source line of sample `i`, when known.
+    pub(super) fn check_inner(
+        &self,
+        opts: &ParseOptions,
+        row_lines: Option<&[usize]>,
+    ) -> Result<(), RecordingError> {
+        let line = |i: usize| row_lines.and_then(|r| r.get(i).copied());
+        let at = |i: usize| match line(i) {
+            Some(l) => format!("line {l}"),
+            None => format!("sample {i}"),
+        };
+        let err = |i: usize, col: Option<&str>, msg: String| {
+            RecordingError::new(&self.source, line(i), col, msg)
+        };
+        let n = self.t.len();
+        if n < 2 {
+            return Err(err(0, None, format!("need at least 2 samples, found {n}")));
+        }
+        for (i, &x) in self.t.iter().enumerate() {
+            if !x.is_finite() {
+                return Err(err(i, Some("t"), format!("non-finite time {x}")));
+            }
+            if i > 0 && x <= self.t[i - 1] {
+                return Err(err(
+                    i,
+                    Some("t"),
+                    format!(
+                        "time not strictly increasing: t = {x} at {} is not after t = {} at {}",
+                        at(i),
+                        self.t[i - 1],
+                        at(i - 1)
+                    ),
+                ));
+            }
+        }
+        let check_vec = |col: &str, v: &[f64]| -> Result<(), RecordingError> {
+            if v.len() != n {
+                return Err(err(
+                    0,
+                    Some(col),
+                    format!("column '{col}' has {} samples, time has {n}", v.len()),
+                ));
+            }
+            if let Some(i) = v.iter().position(|x| !x.is_finite()) {
+                return Err(err(
+                    i,
+                    Some(col),
+                    format!("column '{col}': non-finite value {}", v[i]),
+                ));
+            }
+            Ok(())
+        };
+        for j in &self.joints {
+            let named = [
+                ("q", Some(&j.q)),
+                ("qd", j.qd.as_ref()),
+                ("q_cmd", j.q_cmd.as_ref()),
+                ("tau", j.tau.as_ref()),
+                ("kp", j.kp.as_ref()),
+                ("kd", j.kd.as_ref()),
+            ];
+            for (suffix, v) in named {
+                if let Some(v) = v {
+                    check_vec(&format!("{}.{suffix}", j.name), v)?;
+                }
+            }
+            if let Some(e) = &j.enabled
+                && e.len() != n
+            {
+                let col = format!("{}.enabled", j.name);
+                return Err(err(
+                    0,
+                    Some(&col),
+                    format!("column '{col}' has {} samples, time has {n}", e.len()),
+                ));
+            }
+            for (suffix, v) in [("q", Some(&j.q)), ("q_cmd", j.q_cmd.as_ref())] {
+                let Some(v) = v else { continue };
+                if let Some(i) = v.iter().position(|x| x.abs() > opts.max_abs_rad) {
+                    let col = format!("{}.{suffix}", j.name);
+                    return Err(err(
+                        i,
+                        Some(&col),
+                        format!(
+                            "column '{col}': |{}| > {} rad at t = {}: looks like degrees (positions must be in radians; \
+                         for continuous joints raise max_abs_rad)",
+                            v[i], opts.max_abs_rad, self.t[i]
+                        ),
+                    ));
+                }
+            }
+        }
+        if let Some(b) = &self.base {
+            if b.pos.len() != n || b.quat.len() != n {
+                return Err(err(
+                    0,
+                    Some("base.x"),
+                    format!("base pose has {}/{} samples, time has {n}", b.pos.len(), b.quat.len()),
+                ));
+            }
+            let bad = b
+                .pos
+                .iter()
+                .zip(b.quat.iter())
+                .position(|(p, q)| p.iter().chain(q.iter()).any(|x| !x.is_finite()));
+            if let Some(i) = bad {
+                return Err(err(i, Some("base.x"), "base pose: non-finite value".into()));
+            }
+        }
+        Ok(())
+    }
+}

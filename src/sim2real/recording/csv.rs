@@ -1,0 +1,403 @@
+//! Reading the CSV format (see the parent module's docs): metadata lines, the header row, the
+//! data rows, then the recording-wide checks. Every error names the file and the 1-based line.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use super::{
+    BASE_SUFFIXES, BaseTrace, JOINT_SUFFIXES, JointTrace, KEY_CONTROL_RATE, KEY_CONTROL_T0,
+    KEY_SPLIT, ParseOptions, Recording, RecordingError, Split,
+};
+use crate::sim2real::commands::{self, CommandTiming, KEY_COMMAND_TIMING};
+
+/// Reads and parses a CSV recording with default [`ParseOptions`].
+pub fn read_csv(path: &Path) -> Result<Recording, RecordingError> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| RecordingError::new(path, None, None, format!("cannot read file: {e}")))?;
+    parse_csv(path, &text)
+}
+
+/// Parses CSV text with default [`ParseOptions`]; `path` is only used for `source` and errors.
+pub fn parse_csv(path: &Path, text: &str) -> Result<Recording, RecordingError> {
+    parse_csv_with(path, text, &ParseOptions::default())
+}
+
+/// Parses CSV text; see the module docs for the format.
+pub fn parse_csv_with(
+    path: &Path,
+    text: &str,
+    opts: &ParseOptions,
+) -> Result<Recording, RecordingError> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    if text.trim().is_empty() {
+        return Err(err(path, 1, None, "empty file".into()));
+    }
+    let lines: Vec<(usize, &str)> = text
+        .split('\n')
+        .enumerate()
+        .map(|(i, l)| (i + 1, l.strip_suffix('\r').unwrap_or(l)))
+        .collect();
+    let (meta, idx) = parse_metadata(path, &lines)?;
+    let Some(&(header_ln, header)) = lines.get(idx) else {
+        let last = lines.iter().rev().find(|(_, l)| !l.trim().is_empty()).map_or(1, |(n, _)| *n);
+        return Err(err(path, last, None, "no header row (only metadata/comment lines)".into()));
+    };
+    let header = parse_header(path, header_ln, header)?;
+    let (cols, row_lines) = parse_rows(path, &header, &lines[idx + 1..])?;
+    let rate_line = meta.rate_line;
+    let rec = assemble(path, meta, header, cols);
+    rec.check_inner(opts, Some(&row_lines))?;
+    check_rate(path, &rec, rate_line)?;
+    Ok(rec)
+}
+
+fn err(path: &Path, line: usize, col: Option<&str>, msg: String) -> RecordingError {
+    RecordingError::new(path, Some(line), col, msg)
+}
+
+/// The leading `# key: value` lines.
+struct Metadata {
+    meta: BTreeMap<String, String>,
+    control_rate_hz: Option<f64>,
+    /// Line of the `control_rate_hz` key.
+    rate_line: Option<usize>,
+    control_t0_s: Option<f64>,
+}
+
+/// Metadata and comments up to the header; returns them and the index of the header line.
+fn parse_metadata(
+    path: &Path,
+    lines: &[(usize, &str)],
+) -> Result<(Metadata, usize), RecordingError> {
+    let mut m = Metadata {
+        meta: BTreeMap::new(),
+        control_rate_hz: None,
+        rate_line: None,
+        control_t0_s: None,
+    };
+    let mut idx = 0;
+    while idx < lines.len() {
+        let (ln, raw) = lines[idx];
+        let line = raw.trim();
+        if line.is_empty() {
+            idx += 1;
+            continue;
+        }
+        let Some(comment) = line.strip_prefix('#') else {
+            break;
+        };
+        idx += 1;
+        let Some((k, v)) = comment.split_once(':') else {
+            continue;
+        };
+        let (k, v) = (k.trim(), v.trim());
+        if k.is_empty() {
+            continue;
+        }
+        let err = |msg: String| err(path, ln, None, msg);
+        if m.meta.contains_key(k)
+            || (k == KEY_CONTROL_RATE && m.control_rate_hz.is_some())
+            || (k == KEY_CONTROL_T0 && m.control_t0_s.is_some())
+        {
+            return Err(err(format!("duplicate metadata key '{k}'")));
+        }
+        if k == KEY_CONTROL_RATE || k == KEY_CONTROL_T0 {
+            let x: f64 = v.parse().ok().filter(|x: &f64| x.is_finite()).ok_or_else(|| {
+                err(format!("metadata '{k}': expected a finite number, found '{v}'"))
+            })?;
+            if k == KEY_CONTROL_RATE {
+                if x <= 0.0 {
+                    return Err(err(format!("metadata '{k}' must be positive, found {x}")));
+                }
+                m.control_rate_hz = Some(x);
+                m.rate_line = Some(ln);
+            } else {
+                m.control_t0_s = Some(x);
+            }
+            continue;
+        }
+        if k == KEY_SPLIT && Split::parse(v).is_none() {
+            return Err(err(format!("metadata '{k}' must be `train` or `heldout`, found '{v}'")));
+        }
+        if k == KEY_COMMAND_TIMING && CommandTiming::parse(v).is_none() {
+            return Err(err(format!(
+                "metadata '{k}' must be `in_force` or `sent_after`, found '{v}'"
+            )));
+        }
+        m.meta.insert(k.to_string(), v.to_string());
+    }
+    Ok((m, idx))
+}
+
+#[derive(Clone, Copy, PartialEq)]
+enum Field {
+    Time,
+    Joint(usize, usize), // joint index, suffix index in JOINT_SUFFIXES
+    Base(usize),         // index in BASE_SUFFIXES
+}
+
+/// The header row: what each column holds.
+struct Header<'a> {
+    line: usize,
+    names: Vec<&'a str>,
+    fields: Vec<Field>,
+    joint_names: Vec<String>,
+    /// Column of each joint's suffixes (JOINT_SUFFIXES order).
+    joint_cols: Vec<[Option<usize>; 7]>,
+    /// Column of each base coordinate (BASE_SUFFIXES order).
+    base_cols: [Option<usize>; 7],
+    t_col: usize,
+}
+
+fn parse_header<'a>(path: &Path, ln: usize, header: &'a str) -> Result<Header<'a>, RecordingError> {
+    let err = |col: Option<&str>, msg: String| err(path, ln, col, msg);
+    let names: Vec<&str> = header.split(',').map(str::trim).collect();
+    let mut h = Header {
+        line: ln,
+        fields: Vec::with_capacity(names.len()),
+        joint_names: Vec::new(),
+        joint_cols: Vec::new(),
+        base_cols: [None; 7],
+        t_col: 0,
+        names: Vec::new(),
+    };
+    let mut t_col = None;
+    for (ci, &name) in names.iter().enumerate() {
+        if name.is_empty() {
+            return Err(err(None, format!("header: column {} has an empty name", ci + 1)));
+        }
+        if names[..ci].contains(&name) {
+            return Err(err(Some(name), format!("header: duplicate column '{name}'")));
+        }
+        let field = if name == "t" {
+            t_col = Some(ci);
+            Field::Time
+        } else {
+            let Some((joint, suffix)) = name.rsplit_once('.') else {
+                return Err(err(
+                    Some(name),
+                    format!(
+                        "header: column '{name}' is neither 't', 'base.<x|y|z|qw|qx|qy|qz>' nor '<joint>.<suffix>'"
+                    ),
+                ));
+            };
+            if joint == "base"
+                && let Some(b) = BASE_SUFFIXES.iter().position(|s| *s == suffix)
+            {
+                h.base_cols[b] = Some(ci);
+                Field::Base(b)
+            } else {
+                let Some(si) = JOINT_SUFFIXES.iter().position(|s| *s == suffix) else {
+                    return Err(err(
+                        Some(name),
+                        format!(
+                            "header: column '{name}' has unknown suffix '.{suffix}' (expected one of .{})",
+                            JOINT_SUFFIXES.join(", .")
+                        ),
+                    ));
+                };
+                if joint.is_empty() {
+                    return Err(err(
+                        Some(name),
+                        format!("header: column '{name}' has an empty joint name"),
+                    ));
+                }
+                let ji = match h.joint_names.iter().position(|j| j == joint) {
+                    Some(ji) => ji,
+                    None => {
+                        h.joint_names.push(joint.to_string());
+                        h.joint_cols.push([None; 7]);
+                        h.joint_names.len() - 1
+                    }
+                };
+                h.joint_cols[ji][si] = Some(ci);
+                Field::Joint(ji, si)
+            }
+        };
+        h.fields.push(field);
+    }
+    let Some(t_col) = t_col else {
+        return Err(err(None, "header: no 't' column".into()));
+    };
+    h.t_col = t_col;
+    h.names = names;
+    check_header(path, &h)?;
+    Ok(h)
+}
+
+/// Every joint has its `.q`; the base has all seven columns or none.
+fn check_header(path: &Path, h: &Header) -> Result<(), RecordingError> {
+    for (ji, cols) in h.joint_cols.iter().enumerate() {
+        if cols[0].is_none() {
+            let present: Vec<String> = cols
+                .iter()
+                .enumerate()
+                .filter(|(_, c)| c.is_some())
+                .map(|(si, _)| format!("{}.{}", h.joint_names[ji], JOINT_SUFFIXES[si]))
+                .collect();
+            let col = format!("{}.q", h.joint_names[ji]);
+            return Err(err(
+                path,
+                h.line,
+                Some(&col),
+                format!(
+                    "header: joint '{}' has {} but no '{}' column",
+                    h.joint_names[ji],
+                    present.join(", "),
+                    col
+                ),
+            ));
+        }
+    }
+    let n_base = h.base_cols.iter().filter(|c| c.is_some()).count();
+    if n_base != 0 && n_base != 7 {
+        let missing: Vec<String> = BASE_SUFFIXES
+            .iter()
+            .zip(h.base_cols.iter())
+            .filter(|(_, c)| c.is_none())
+            .map(|(s, _)| format!("base.{s}"))
+            .collect();
+        return Err(err(
+            path,
+            h.line,
+            None,
+            format!(
+                "header: base pose needs all seven columns (base.x base.y base.z base.qw base.qx base.qy base.qz); missing {}",
+                missing.join(", ")
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// The data rows after the header, column-major, with the source line of each row.
+fn parse_rows(
+    path: &Path,
+    h: &Header,
+    lines: &[(usize, &str)],
+) -> Result<(Vec<Vec<f64>>, Vec<usize>), RecordingError> {
+    let names = &h.names;
+    let mut cols: Vec<Vec<f64>> = vec![Vec::new(); names.len()];
+    let mut row_lines: Vec<usize> = Vec::new();
+    let mut blank_at: Option<usize> = None;
+    for &(ln, raw) in lines {
+        if raw.trim().is_empty() {
+            blank_at.get_or_insert(ln);
+            continue;
+        }
+        if let Some(b) = blank_at {
+            return Err(err(path, b, None, "empty line inside the data rows".into()));
+        }
+        let parts: Vec<&str> = raw.split(',').map(str::trim).collect();
+        if parts.len() != names.len() {
+            return Err(err(
+                path,
+                ln,
+                None,
+                format!(
+                    "expected {} fields, found {}{}",
+                    names.len(),
+                    parts.len(),
+                    if parts.len() < names.len() { " (truncated line?)" } else { "" }
+                ),
+            ));
+        }
+        for (ci, s) in parts.iter().enumerate() {
+            let v = parse_field(h.fields[ci], s).map_err(|m| {
+                err(path, ln, Some(names[ci]), format!("column '{}': {m}", names[ci]))
+            })?;
+            cols[ci].push(v);
+        }
+        row_lines.push(ln);
+    }
+    if row_lines.len() < 2 {
+        let ln = row_lines.last().copied().unwrap_or(h.line);
+        return Err(err(
+            path,
+            ln,
+            None,
+            format!("need at least 2 data rows, found {}", row_lines.len()),
+        ));
+    }
+    Ok((cols, row_lines))
+}
+
+/// One field: `.enabled` takes 0/1/false/true, every other column a finite number.
+fn parse_field(field: Field, s: &str) -> Result<f64, String> {
+    if let Field::Joint(_, 6) = field {
+        return match s {
+            "0" | "false" => Ok(0.0),
+            "1" | "true" => Ok(1.0),
+            _ => Err(format!("expected 0 or 1, found '{s}'")),
+        };
+    }
+    if s.is_empty() {
+        return Err("empty field".into());
+    }
+    match s.parse::<f64>() {
+        Ok(x) if x.is_finite() => Ok(x),
+        Ok(x) => Err(format!("non-finite value '{s}' ({x})")),
+        Err(_) => Err(format!("cannot parse '{s}' as a number")),
+    }
+}
+
+/// The recording from the parsed parts (columns moved, not copied).
+fn assemble(path: &Path, m: Metadata, h: Header, mut cols: Vec<Vec<f64>>) -> Recording {
+    let mut take = |c: Option<usize>| c.map(|c| std::mem::take(&mut cols[c]));
+    let t = take(Some(h.t_col)).unwrap_or_default();
+    let mut joints = Vec::with_capacity(h.joint_names.len());
+    for (name, jc) in h.joint_names.into_iter().zip(h.joint_cols.iter()) {
+        joints.push(JointTrace {
+            name,
+            q: take(jc[0]).unwrap_or_default(),
+            qd: take(jc[1]),
+            q_cmd: take(jc[2]),
+            tau: take(jc[3]),
+            kp: take(jc[4]),
+            kd: take(jc[5]),
+            enabled: take(jc[6]).map(|v| v.into_iter().map(|x| x != 0.0).collect()),
+        });
+    }
+    let base = h.base_cols.iter().all(|c| c.is_some()).then(|| {
+        let b: Vec<Vec<f64>> = h.base_cols.iter().map(|c| take(*c).unwrap_or_default()).collect();
+        BaseTrace {
+            pos: (0..t.len()).map(|i| [b[0][i], b[1][i], b[2][i]]).collect(),
+            quat: (0..t.len()).map(|i| [b[3][i], b[4][i], b[5][i], b[6][i]]).collect(),
+        }
+    });
+    Recording {
+        source: path.to_path_buf(),
+        meta: m.meta,
+        control_rate_hz: m.control_rate_hz,
+        control_t0_s: m.control_t0_s,
+        t,
+        joints,
+        base,
+    }
+}
+
+/// A declared control rate must not put the whole recording into one control tick.
+fn check_rate(
+    path: &Path,
+    rec: &Recording,
+    rate_line: Option<usize>,
+) -> Result<(), RecordingError> {
+    let (Some(rate), Some(ln)) = (rec.control_rate_hz, rate_line) else { return Ok(()) };
+    let (Some(&first), Some(&last)) = (rec.t.first(), rec.t.last()) else { return Ok(()) };
+    let timing = rec.command_timing().unwrap_or_default();
+    let t0 = rec.control_t0_s.unwrap_or(first);
+    let tick = |x: f64| commands::tick_of(x, t0, rate, timing);
+    if tick(first) == tick(last) {
+        return Err(err(
+            path,
+            ln,
+            None,
+            format!(
+                "control_rate_hz {rate} puts all {} rows ({first} s … {last} s) into one control tick: the rate is too low \
+                 for these timestamps (are the times in seconds?)",
+                rec.t.len(),
+            ),
+        ));
+    }
+    Ok(())
+}

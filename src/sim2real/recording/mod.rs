@@ -1,0 +1,264 @@
+//! The CSV recording format for real (or simulated) joint trajectories.
+//!
+//! ```text
+//! # control_rate_hz: 100
+//! # robot: booster_t1
+//! t,knee.q,knee.qd,knee.q_cmd,base.x,base.y,base.z,base.qw,base.qx,base.qy,base.qz
+//! 0.000,0.10,0.0,0.11,0,0,0.7,1,0,0,0
+//! 0.011,0.11,0.9,0.12,0,0,0.7,1,0,0,0
+//! ```
+//!
+//! * Leading `# key: value` lines are metadata. `control_rate_hz` and `control_t0_s` are parsed
+//!   into their own fields; every other key is kept verbatim in [`Recording::meta`]. A `#` line
+//!   without a colon is a plain comment and is ignored. Blank lines may appear among them.
+//! * The header row names the columns: `t` (seconds, strictly increasing, irregular spacing
+//!   allowed), per joint `<joint>.q` (required), `<joint>.qd`, `<joint>.q_cmd`, `<joint>.tau`,
+//!   `<joint>.kp`, `<joint>.kd`, `<joint>.enabled` (0/1) — all optional — and optionally the
+//!   floating base `base.x base.y base.z base.qw base.qx base.qy base.qz` (all seven or none,
+//!   quaternion in w-x-y-z order). Columns may come in any order; joints keep the order of their
+//!   first column.
+//! * Fields are comma separated; spaces around fields, CRLF line ends and trailing empty lines
+//!   are accepted. Every error carries the file and the 1-based line number; parsing never
+//!   panics.
+
+mod check;
+mod csv;
+#[cfg(test)]
+mod tests;
+mod write;
+
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+pub use csv::{parse_csv, parse_csv_with, read_csv};
+pub use write::write_csv;
+
+/// Metadata key parsed into [`Recording::control_rate_hz`].
+pub const KEY_CONTROL_RATE: &str = "control_rate_hz";
+/// Metadata key parsed into [`Recording::control_t0_s`].
+pub const KEY_CONTROL_T0: &str = "control_t0_s";
+
+/// Metadata key naming the episode's role in a fit: `train` or `heldout`.
+pub const KEY_SPLIT: &str = "split";
+
+/// A recording's declared role (metadata `split`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Split {
+    Train,
+    Heldout,
+}
+
+impl Split {
+    pub fn parse(s: &str) -> Option<Split> {
+        match s.trim() {
+            "train" => Some(Split::Train),
+            "heldout" => Some(Split::Heldout),
+            _ => None,
+        }
+    }
+}
+
+const JOINT_SUFFIXES: [&str; 7] = ["q", "qd", "q_cmd", "tau", "kp", "kd", "enabled"];
+const BASE_SUFFIXES: [&str; 7] = ["x", "y", "z", "qw", "qx", "qy", "qz"];
+
+/// One recorded episode: a shared time axis plus per-joint and optional base traces.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Recording {
+    pub source: PathBuf,
+    pub meta: BTreeMap<String, String>,
+    pub control_rate_hz: Option<f64>,
+    pub control_t0_s: Option<f64>,
+    pub t: Vec<f64>,
+    pub joints: Vec<JointTrace>,
+    pub base: Option<BaseTrace>,
+}
+
+/// All traces of one joint; every present vector has the length of [`Recording::t`].
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct JointTrace {
+    pub name: String,
+    pub q: Vec<f64>,
+    pub qd: Option<Vec<f64>>,
+    pub q_cmd: Option<Vec<f64>>,
+    pub tau: Option<Vec<f64>>,
+    pub kp: Option<Vec<f64>>,
+    pub kd: Option<Vec<f64>>,
+    pub enabled: Option<Vec<bool>>,
+}
+
+impl JointTrace {
+    /// A joint with positions only.
+    pub fn new(name: impl Into<String>, q: Vec<f64>) -> Self {
+        JointTrace {
+            name: name.into(),
+            q,
+            qd: None,
+            q_cmd: None,
+            tau: None,
+            kp: None,
+            kd: None,
+            enabled: None,
+        }
+    }
+}
+
+/// Floating-base pose; quaternions are w, x, y, z.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct BaseTrace {
+    pub pos: Vec<[f64; 3]>,
+    pub quat: Vec<[f64; 4]>,
+}
+
+/// An error reading a recording: where (file, 1-based line, column) and what.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RecordingError {
+    pub file: PathBuf,
+    pub line: Option<usize>,
+    pub column: Option<String>,
+    pub message: String,
+}
+
+impl RecordingError {
+    pub fn new(
+        file: &Path,
+        line: Option<usize>,
+        column: Option<&str>,
+        message: impl Into<String>,
+    ) -> Self {
+        RecordingError {
+            file: file.to_path_buf(),
+            line,
+            column: column.map(str::to_string),
+            message: message.into(),
+        }
+    }
+}
+
+impl fmt::Display for RecordingError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.line {
+            Some(l) => write!(f, "{}:{}: {}", self.file.display(), l, self.message),
+            None => write!(f, "{}: {}", self.file.display(), self.message),
+        }
+    }
+}
+
+impl std::error::Error for RecordingError {}
+
+/// Options for [`parse_csv_with`].
+#[derive(Debug, Clone, Serialize)]
+pub struct ParseOptions {
+    /// Any joint position (`.q` or `.q_cmd`) with |value| above this is rejected as "looks like
+    /// degrees". Default 10.0 rad: above 1.5 turns (3π ≈ 9.42), which no revolute joint of a
+    /// legged robot reaches, while 10° already exceeds it. The CSV format does not say which
+    /// joints are continuous (wheels, turntables accumulate angle): for such recordings raise
+    /// this, e.g. to `f64::INFINITY`.
+    pub max_abs_rad: f64,
+}
+
+impl Default for ParseOptions {
+    fn default() -> Self {
+        ParseOptions { max_abs_rad: 10.0 }
+    }
+}
+
+impl Recording {
+    /// Errors unless every recorded joint is one of `model_joints`; the message lists, for each
+    /// unknown joint, the closest model joint names (case-insensitive edit distance).
+    pub fn validate_joint_names(&self, model_joints: &[String]) -> Result<(), RecordingError> {
+        let mut problems = Vec::new();
+        let mut first_col = None;
+        for j in &self.joints {
+            if model_joints.contains(&j.name) {
+                continue;
+            }
+            first_col.get_or_insert_with(|| format!("{}.q", j.name));
+            let near = near_matches(&j.name, model_joints, 3);
+            if near.is_empty() {
+                problems.push(format!("unknown joint '{}'", j.name));
+            } else {
+                problems.push(format!(
+                    "unknown joint '{}' (did you mean {}?)",
+                    j.name,
+                    near.iter().map(|s| format!("'{s}'")).collect::<Vec<_>>().join(", ")
+                ));
+            }
+        }
+        if problems.is_empty() {
+            return Ok(());
+        }
+        Err(RecordingError::new(
+            &self.source,
+            None,
+            first_col.as_deref(),
+            format!("{} not in the model: {}", problems.len(), problems.join("; ")),
+        ))
+    }
+
+    /// Fills `qd` where absent with the derivative of `q`: the three-point central difference
+    /// for irregular spacing (exact for quadratics) inside, one-sided differences at both ends.
+    pub fn derive_velocities(&mut self) {
+        let t = &self.t;
+        for j in &mut self.joints {
+            if j.qd.is_none() && j.q.len() == t.len() {
+                j.qd = Some(derivative(t, &j.q));
+            }
+        }
+    }
+
+    /// The declared `split` (metadata), if any.
+    pub fn split(&self) -> Option<Split> {
+        self.meta.get(KEY_SPLIT).and_then(|v| Split::parse(v))
+    }
+
+    /// The declared `command_timing` (metadata), if any.
+    pub fn command_timing(&self) -> Option<crate::sim2real::commands::CommandTiming> {
+        self.meta
+            .get(crate::sim2real::commands::KEY_COMMAND_TIMING)
+            .and_then(|v| crate::sim2real::commands::CommandTiming::parse(v))
+    }
+
+    /// Last time minus first time, 0 when there are fewer than two samples.
+    pub fn duration(&self) -> f64 {
+        match (self.t.first(), self.t.last()) {
+            (Some(a), Some(b)) => b - a,
+            _ => 0.0,
+        }
+    }
+
+    pub fn joint(&self, name: &str) -> Option<&JointTrace> {
+        self.joints.iter().find(|j| j.name == name)
+    }
+}
+
+/// First derivative of `x(t)` on an irregular grid (see [`Recording::derive_velocities`]).
+pub fn derivative(t: &[f64], x: &[f64]) -> Vec<f64> {
+    let n = t.len().min(x.len());
+    if n < 2 {
+        return vec![0.0; n];
+    }
+    let mut d = vec![0.0; n];
+    d[0] = (x[1] - x[0]) / (t[1] - t[0]);
+    d[n - 1] = (x[n - 1] - x[n - 2]) / (t[n - 1] - t[n - 2]);
+    for i in 1..n - 1 {
+        let h0 = t[i] - t[i - 1];
+        let h1 = t[i + 1] - t[i];
+        d[i] = (h0 * h0 * x[i + 1] - h1 * h1 * x[i - 1] + (h1 * h1 - h0 * h0) * x[i])
+            / (h0 * h1 * (h0 + h1));
+    }
+    d
+}
+
+/// Up to `max` candidates within edit distance max(2, len/3) of `name`, closest first.
+fn near_matches(name: &str, candidates: &[String], max: usize) -> Vec<String> {
+    let limit = (name.chars().count() / 3).max(2);
+    let mut scored: Vec<(usize, &String)> = candidates
+        .iter()
+        .map(|c| (strsim::levenshtein(&name.to_lowercase(), &c.to_lowercase()), c))
+        .filter(|(d, _)| *d <= limit)
+        .collect();
+    scored.sort();
+    scored.into_iter().take(max).map(|(_, c)| c.clone()).collect()
+}

@@ -1,0 +1,195 @@
+use super::*;
+
+fn p() -> &'static Path {
+    Path::new("rec.csv")
+}
+
+const GOOD: &str = "# control_rate_hz: 100\r\n# robot: t1\r\n# plain comment\r\n\
+    t, knee.q ,knee.q_cmd,knee.enabled,hip.q,hip.qd\r\n\
+    0.0, 0.1, 0.2, 1, -0.5, 0.25\r\n\
+    0.013,0.11,0.21,0,-0.4,1e-3\r\n\
+    0.02,0.12,0.22,1,-0.3,0\r\n\r\n";
+
+fn parse_err(text: &str) -> RecordingError {
+    match parse_csv(p(), text) {
+        Ok(r) => panic!("expected an error, parsed {r:?}"),
+        Err(e) => e,
+    }
+}
+
+#[test]
+fn parses_crlf_metadata_spaces_and_trailing_blank() {
+    let r = parse_csv(p(), GOOD).expect("parses");
+    assert_eq!(r.control_rate_hz, Some(100.0));
+    assert_eq!(r.meta.get("robot").map(String::as_str), Some("t1"));
+    assert_eq!(r.meta.len(), 1);
+    assert_eq!(r.t, vec![0.0, 0.013, 0.02]);
+    assert_eq!(r.joints.len(), 2);
+    let knee = r.joint("knee").expect("knee");
+    assert_eq!(knee.q, vec![0.1, 0.11, 0.12]);
+    assert_eq!(knee.q_cmd.as_deref(), Some(&[0.2, 0.21, 0.22][..]));
+    assert_eq!(knee.enabled.as_deref(), Some(&[true, false, true][..]));
+    assert!(knee.qd.is_none());
+    assert_eq!(r.joint("hip").and_then(|h| h.qd.clone()), Some(vec![0.25, 1e-3, 0.0]));
+    assert!((r.duration() - 0.02).abs() < 1e-15);
+    assert!(r.base.is_none());
+}
+
+#[test]
+fn round_trips_exactly() {
+    let mut r = parse_csv(p(), GOOD).expect("parses");
+    r.control_t0_s = Some(-0.0025);
+    r.meta.insert("note".into(), "a: b, c".into());
+    r.t = vec![0.0, 0.1 + 0.2, 1.0 / 3.0];
+    r.joints[0].tau = Some(vec![1e-300, -2.5e-8, 123456.789]);
+    r.joints[0].kp = Some(vec![75.0; 3]);
+    r.joints[0].kd = Some(vec![5.0; 3]);
+    r.base = Some(BaseTrace {
+        pos: vec![[0.1, -0.2, 0.7]; 3],
+        quat: vec![[1.0, 0.0, -0.0, std::f64::consts::FRAC_1_SQRT_2]; 3],
+    });
+    let text = write_csv(&r);
+    let back = parse_csv(p(), &text).expect("re-parses");
+    assert_eq!(back, r);
+    assert_eq!(write_csv(&back), text);
+}
+
+#[test]
+fn structural_errors() {
+    let e = parse_err("");
+    assert_eq!((e.line, e.message.as_str()), (Some(1), "empty file"));
+    let e = parse_err("# a: b\n# c: d\n");
+    assert_eq!(e.line, Some(2));
+    assert!(e.message.contains("no header"), "{e}");
+    assert!(parse_err("x.q\n1\n2\n").message.contains("no 't' column"));
+    let e = parse_err("t,a.q,a.q\n0,1,1\n1,1,1\n");
+    assert!(e.message.contains("duplicate column 'a.q'") && e.line == Some(1), "{e}");
+    let e = parse_err("t,a.q,a.vel\n0,1,1\n1,1,1\n");
+    assert!(
+        e.message.contains("unknown suffix '.vel'") && e.column.as_deref() == Some("a.vel"),
+        "{e}"
+    );
+    let e = parse_err("t,a.qd\n0,1\n1,1\n");
+    assert!(e.message.contains("no 'a.q' column"), "{e}");
+    let e = parse_err("t,a.q,base.x,base.y,base.z\n0,0,0,0,0\n1,0,0,0,0\n");
+    assert!(e.message.contains("missing base.qw"), "{e}");
+    let e = parse_err("t,a.q\n0,1\n");
+    assert!(e.message.contains("at least 2") && e.line == Some(2), "{e}");
+    assert!(parse_err("t,a.q\n").message.contains("found 0"));
+    let e = parse_err("t,a.q\n0,1\n\n1,2\n");
+    assert_eq!(e.line, Some(3));
+}
+
+#[test]
+fn row_errors_name_the_line() {
+    let e = parse_err("# k: v\nt,a.q,a.q_cmd\n0,1,1\n0.1,1\n");
+    assert_eq!(e.line, Some(4));
+    assert!(e.message.contains("truncated"), "{e}");
+    assert_eq!(e.to_string(), "rec.csv:4: expected 3 fields, found 2 (truncated line?)");
+    let e = parse_err("t,a.q\n0,1\n0.1,1.o\n");
+    assert!(
+        e.line == Some(3) && e.column.as_deref() == Some("a.q") && e.message.contains("'1.o'"),
+        "{e}"
+    );
+    for bad in ["NaN", "inf", "-infinity"] {
+        let e = parse_err(&format!("t,a.q\n0,1\n0.1,{bad}\n"));
+        assert!(e.line == Some(3) && e.message.contains("non-finite"), "{e}");
+    }
+    let e = parse_err("t,a.q\n0,1\n0.2,1\n0.1,1\n");
+    assert_eq!(e.line, Some(4));
+    assert!(e.message.contains("t = 0.1 at line 4 is not after t = 0.2 at line 3"), "{e}");
+    let e = parse_err("t,a.q\n0,1\n0,1\n");
+    assert!(e.message.contains("not strictly increasing"), "{e}");
+    let e = parse_err("t,a.q,a.enabled\n0,1,1\n0.1,1,2\n");
+    assert!(e.message.contains("expected 0 or 1"), "{e}");
+    let e = parse_err("t,a.q\n0,,\n");
+    assert!(e.message.contains("expected 2 fields, found 3"), "{e}");
+    let e = parse_err("t,a.q\n0,\n1,1\n");
+    assert!(e.message.contains("empty field"), "{e}");
+    let e = parse_err("# control_rate_hz: fast\nt,a.q\n0,1\n1,1\n");
+    assert_eq!(e.line, Some(1));
+}
+
+#[test]
+fn split_timing_and_one_tick_errors_name_the_line() {
+    let e = parse_err("# robot: a\n# split: test\nt,a.q\n0,1\n1,1\n");
+    assert_eq!(e.line, Some(2));
+    assert!(e.message.contains("train") && e.message.contains("heldout"), "{}", e.message);
+    let e = parse_err("# command_timing: later\nt,a.q\n0,1\n1,1\n");
+    assert_eq!(e.line, Some(1));
+    let e = parse_err("# x: 1\n# control_rate_hz: 0.5\nt,a.q\n0,1\n0.5,1\n1.9,1\n");
+    assert_eq!(e.line, Some(2));
+    assert!(e.message.contains("one control tick"), "{}", e.message);
+    let e = parse_err("# control_rate_hz: -3\nt,a.q\n0,1\n1,1\n");
+    assert_eq!(e.line, Some(1));
+    let ok = parse_csv(
+        p(),
+        "# split: heldout\n# command_timing: sent_after\n# control_rate_hz: 1\nt,a.q\n0,1\n1,1\n",
+    )
+    .unwrap();
+    assert_eq!(ok.split(), Some(Split::Heldout));
+    assert_eq!(ok.command_timing(), Some(crate::sim2real::commands::CommandTiming::SentAfter));
+}
+
+#[test]
+fn degrees_are_rejected_with_adjustable_threshold() {
+    let text = "t,knee.q\n0,10\n0.01,45\n0.02,90\n";
+    let e = parse_err(text);
+    assert_eq!(e.line, Some(3));
+    assert!(e.message.contains("looks like degrees"), "{e}");
+    let ok = parse_csv_with(p(), text, &ParseOptions { max_abs_rad: f64::INFINITY });
+    assert!(ok.is_ok());
+    let e = parse_err("t,knee.q,knee.q_cmd\n0,0,0\n0.01,0,-30\n");
+    assert_eq!(e.column.as_deref(), Some("knee.q_cmd"));
+}
+
+#[test]
+fn joint_name_validation_suggests_near_matches() {
+    let r = parse_csv(p(), "t,Left_Knee_Pitc.q,Waist.q\n0,0,0\n1,0,0\n").expect("parses");
+    let model: Vec<String> = ["Left_Knee_Pitch", "Right_Knee_Pitch", "Waist", "AAHead_yaw"]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    let e = r.validate_joint_names(&model).expect_err("unknown joint");
+    assert!(
+        e.message.contains("unknown joint 'Left_Knee_Pitc' (did you mean 'Left_Knee_Pitch'"),
+        "{e}"
+    );
+    assert!(!e.message.contains("Waist"), "{e}");
+    let r2 = parse_csv(p(), "t,waist.q,Zzz.q\n0,0,0\n1,0,0\n").expect("parses");
+    let e = r2.validate_joint_names(&model).expect_err("unknown");
+    assert!(e.message.contains("'waist' (did you mean 'Waist'?)"), "{e}");
+    assert!(e.message.ends_with("unknown joint 'Zzz'"), "{e}");
+    let r3 = parse_csv(p(), "t,Waist.q\n0,0\n1,0\n").expect("parses");
+    assert!(r3.validate_joint_names(&model).is_ok());
+}
+
+#[test]
+fn derived_velocities_exact_for_quadratic_on_irregular_grid() {
+    let t = vec![0.0, 0.004, 0.011, 0.015, 0.022, 0.03];
+    let q: Vec<f64> = t.iter().map(|&x| 1.0 + 2.0 * x - 3.0 * x * x).collect();
+    let mut r = Recording {
+        source: p().into(),
+        meta: BTreeMap::new(),
+        control_rate_hz: None,
+        control_t0_s: None,
+        t: t.clone(),
+        joints: vec![JointTrace::new("a", q)],
+        base: None,
+    };
+    let mut keep = JointTrace::new("b", vec![0.0; 6]);
+    keep.qd = Some(vec![7.0; 6]);
+    r.joints.push(keep);
+    r.derive_velocities();
+    let qd = r.joints[0].qd.as_ref().expect("derived");
+    for i in 1..t.len() - 1 {
+        assert!(
+            (qd[i] - (2.0 - 6.0 * t[i])).abs() < 1e-9,
+            "i={i} {} vs {}",
+            qd[i],
+            2.0 - 6.0 * t[i]
+        );
+    }
+    assert!((qd[0] - (2.0 - 3.0 * 0.004)).abs() < 1e-9);
+    assert_eq!(r.joints[1].qd, Some(vec![7.0; 6]));
+}

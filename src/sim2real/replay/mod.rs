@@ -1,0 +1,351 @@
+//! Position-controlled trajectory replay (seed study §4.4): drive a MuJoCo model with a
+//! recording's commands and sample the simulated joints at the recording's own timestamps.
+//!
+//! Protocol, per episode:
+//! 1. Initialise: model joints take the keyframe `qpos` (or `qpos0`), recorded joints the first
+//!    recorded `q`, their velocity the first recorded `qd` (or the derivative of `q`).
+//! 2. Commands: [`crate::sim2real::commands`] reconstructs the command in force at every moment
+//!    from `q_cmd` (or `q` when the recording has no command): with a control rate (`control_hz`
+//!    option, else the recording's `control_rate_hz`) one command per control tick at
+//!    `control_t0_s + k/rate` (`t[0]` when absent), held over the tick; without one, each goal
+//!    held from its own timestamp. Every physics step applies the command in force at the step's
+//!    start to every recorded joint's position actuators. The recorded `kp`/`kd`
+//!    columns (N·m/rad, N·m·s/rad) set the actuator's `gainprm[0] = kp`, `biasprm[1] = −kp`,
+//!    `biasprm[2] = −kd` at the same ticks; `enabled = false` zeroes the actuator's gain and bias
+//!    (torque off, e.g. free fall). Model joints without recording hold their keyframe `ctrl`.
+//! 3. Physics steps at the model's timestep; an [`ActuatorHook`] may rewrite each recorded
+//!    joint's `ctrl` and add a joint torque (`qfrc_applied`) before every step.
+//! 4. Samples: the simulated `q`, `q̇` at each recording timestamp are linearly interpolated
+//!    between the two physics states around it (exact at `t[0]`).
+//!
+//! The model is never mutated: an episode that changes gains (kp/kd/enabled columns, or a hook
+//! that replaces actuators) runs on its own copy of the model.
+
+use std::path::PathBuf;
+
+use mujoco_rs::prelude::*;
+use rayon::prelude::*;
+
+use crate::model::{ActuatorKind, JointType, Robot, mj};
+use crate::sim2real::commands::{CommandTiming, reconstruct};
+use crate::sim2real::recording::{Recording, RecordingError, derivative};
+
+/// What the floating base does during replay.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum BaseMode {
+    /// Pinned at the first recorded base pose (else the keyframe pose) every physics step.
+    #[default]
+    Fixed,
+    /// Driven kinematically from the recording's `base.*` columns (error when absent).
+    Recorded,
+    /// Free: initialised like `Fixed`, then left to the physics.
+    Free,
+}
+
+#[derive(Debug, Clone)]
+pub struct ReplayOptions {
+    /// Control rate override [Hz]; else the recording's `control_rate_hz`; else none (each goal
+    /// held from its own timestamp).
+    pub control_hz: Option<f64>,
+    /// What a row's `q_cmd` means; else the recording's `command_timing` key; else in force.
+    pub command_timing: Option<CommandTiming>,
+    pub base: BaseMode,
+    /// Model joints absent from the recording: `true` → their actuators get the keyframe ctrl
+    /// (hold the key pose); `false` → ctrl 0.
+    pub hold_unlisted_at_key: bool,
+    /// Control ticks without a row are interpolated across ramps (and, without a control rate,
+    /// dropped rows' commands are interpolated, [`crate::sim2real::metrics::fill_dropped_rows`]);
+    /// `false` holds the command before the gap.
+    pub fill_dropped_commands: bool,
+}
+
+impl Default for ReplayOptions {
+    fn default() -> Self {
+        ReplayOptions {
+            control_hz: None,
+            command_timing: None,
+            base: BaseMode::Fixed,
+            hold_unlisted_at_key: true,
+            fill_dropped_commands: true,
+        }
+    }
+}
+
+/// One replayed episode, sampled at the recording's timestamps.
+#[derive(Debug, Clone)]
+pub struct Episode {
+    pub t: Vec<f64>,
+    /// Recorded joints, in the recording's order.
+    pub joints: Vec<String>,
+    pub q_sim: Vec<Vec<f64>>,
+    pub qd_sim: Vec<Vec<f64>>,
+    /// Why the simulation stopped early (samples after it are NaN); `None` when it completed.
+    pub diverged: Option<String>,
+}
+
+#[derive(Debug, Clone, thiserror::Error)]
+pub enum ReplayError {
+    #[error("{0}")]
+    Recording(#[from] RecordingError),
+    #[error("{file}: {message}")]
+    Setup { file: PathBuf, message: String },
+}
+
+/// Per-step input/output of an [`ActuatorHook`] for one recorded joint. On entry the fields hold
+/// what the plain replay would do; the hook may change `ctrl` and `tau`.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct StepIo {
+    /// Value written to the ctrl of every position actuator of the joint (rad).
+    pub ctrl: f64,
+    /// Generalised force added on the joint's DoF (written to `qfrc_applied`) [N·m or N].
+    pub tau: f64,
+    /// Recorded (or model) gains in force at this step.
+    pub kp: f64,
+    pub kd: f64,
+    /// Recorded torque-enable state in force at this step.
+    pub enabled: bool,
+}
+
+/// Per-physics-step actuator override, for effects MuJoCo cannot express (Stribeck friction,
+/// backlash, speed–torque saturation, fractional delays, custom servo laws).
+pub trait ActuatorHook {
+    /// Called once per episode before the first step: the recorded joints (indices used by
+    /// `before_step`) and the physics timestep.
+    fn reset(&mut self, joints: &[String], dt: f64);
+    /// `true` when the hook computes the whole joint torque itself: the joint's MuJoCo
+    /// actuators are then switched off (gain and bias 0) for the episode and only `tau` acts.
+    fn replaces_actuator(&self, _joint_idx: usize) -> bool {
+        false
+    }
+    /// Called every physics step before `mj_step` for every recorded joint. `t` is the
+    /// simulation time (recording clock), `q_target` the held command.
+    fn before_step(
+        &mut self,
+        t: f64,
+        joint_idx: usize,
+        q: f64,
+        qd: f64,
+        q_target: f64,
+        out: &mut StepIo,
+    );
+}
+
+#[derive(Debug, Clone)]
+struct JointInfo {
+    scalar: bool,
+    qposadr: usize,
+    dofadr: usize,
+    /// (actuator id, kind) of the actuators that reach this joint.
+    acts: Vec<(usize, ActuatorKind)>,
+}
+
+/// Joint/actuator mapping of a model, built once and reused for any number of replays.
+#[derive(Clone)]
+pub struct Replayer<'m> {
+    model: &'m MjModel,
+    joints: Vec<JointInfo>,
+    names: Vec<String>,
+    key_qpos: Vec<f64>,
+    key_ctrl: Vec<f64>,
+    /// (qposadr, dofadr) of the first free joint.
+    free: Option<(usize, usize)>,
+}
+
+/// |q| beyond this [rad or m] counts as a blow-up.
+const BLOWUP: f64 = 1e3;
+
+impl<'m> Replayer<'m> {
+    /// Mapping for `robot.mj`.
+    pub fn new(robot: &'m Robot) -> Self {
+        Self::with_model(robot, &robot.mj)
+    }
+
+    /// Mapping from `robot`, simulating `model` instead: a copy of `robot.mj` with changed
+    /// numeric parameters (what a fit engine varies). Its sizes must equal `robot.mj`'s.
+    pub fn with_model(robot: &Robot, model: &'m MjModel) -> Self {
+        let joints = robot
+            .joints
+            .iter()
+            .map(|j| JointInfo {
+                scalar: j.is_scalar(),
+                qposadr: j.qposadr,
+                dofadr: j.dofadr,
+                acts: robot.actuators_on_joint(j.id).iter().map(|a| (a.id, a.kind)).collect(),
+            })
+            .collect();
+        let free =
+            robot.joints.iter().find(|j| j.jtype == JointType::Free).map(|j| (j.qposadr, j.dofadr));
+        Replayer {
+            model,
+            joints,
+            names: robot.joints.iter().map(|j| j.name.clone()).collect(),
+            key_qpos: robot.key.qpos.clone(),
+            key_ctrl: robot.key.ctrl.clone(),
+            free,
+        }
+    }
+
+    pub fn joint_names(&self) -> &[String] {
+        &self.names
+    }
+
+    /// Replays one recording; see the module docs.
+    pub fn replay(
+        &self,
+        rec: &Recording,
+        opts: &ReplayOptions,
+        mut hook: Option<&mut dyn ActuatorHook>,
+    ) -> Result<Episode, ReplayError> {
+        let setup = |message: String| ReplayError::Setup { file: rec.source.clone(), message };
+        let n = rec.t.len();
+        if n < 2 {
+            return Err(setup(format!("need at least 2 samples, found {n}")));
+        }
+        rec.validate_joint_names(&self.names)?;
+        let rate = opts.control_hz.or(rec.control_rate_hz);
+        let timing = opts.command_timing.or_else(|| rec.command_timing()).unwrap_or_default();
+        if opts.base == BaseMode::Recorded && rec.base.is_none() && self.free.is_some() {
+            return Err(setup(
+                "--base recorded needs base.x … base.qz columns; the recording has none".into(),
+            ));
+        }
+
+        // Recorded joint → model joint, command and velocity traces.
+        let nj = rec.joints.len();
+        let mut jm = Vec::with_capacity(nj);
+        let mut qd0 = Vec::with_capacity(nj);
+        for jt in &rec.joints {
+            let ji = self.names.iter().position(|s| *s == jt.name).expect("validated");
+            let info = &self.joints[ji];
+            if !info.scalar {
+                return Err(setup(format!(
+                    "joint '{}' is not a hinge or slide joint; only scalar joints can be replayed",
+                    jt.name
+                )));
+            }
+            jm.push(ji);
+            qd0.push(match &jt.qd {
+                Some(v) => v[0],
+                None => derivative(&rec.t[..n.min(3)], &jt.q[..n.min(3)])[0],
+            });
+        }
+
+        let cmds: Vec<&[f64]> =
+            rec.joints.iter().map(|jt| jt.q_cmd.as_deref().unwrap_or(&jt.q)).collect();
+        let tick0 = rec.control_t0_s.unwrap_or(rec.t[0]);
+        let schedule = reconstruct(&rec.t, &cmds, rate, tick0, timing, opts.fill_dropped_commands)
+            .map_err(|e| setup(e.to_string()))?;
+        if let Some(h) = hook.as_deref_mut() {
+            let names: Vec<String> = rec.joints.iter().map(|j| j.name.clone()).collect();
+            h.reset(&names, mj::raw(self.model).opt.timestep);
+        }
+        let replaced: Vec<bool> =
+            (0..nj).map(|i| hook.as_deref().is_some_and(|h| h.replaces_actuator(i))).collect();
+        for (i, &ji) in jm.iter().enumerate() {
+            for &(aid, kind) in &self.joints[ji].acts {
+                if !replaced[i]
+                    && !matches!(
+                        kind,
+                        ActuatorKind::Position { .. } | ActuatorKind::Velocity { .. }
+                    )
+                {
+                    return Err(setup(format!(
+                        "actuator {aid} on joint '{}' is not a position (or velocity) actuator; replaying torque \
+                         actuators needs an ActuatorHook that replaces it with a servo law",
+                        rec.joints[i].name
+                    )));
+                }
+            }
+        }
+        let gain_cols =
+            rec.joints.iter().any(|j| j.kp.is_some() || j.kd.is_some() || j.enabled.is_some());
+        let mut owned: Option<MjModel> =
+            (gain_cols || replaced.iter().any(|&r| r)).then(|| self.model.clone());
+        let m: &MjModel = owned.as_ref().unwrap_or(self.model);
+        let dt = mj::raw(m).opt.timestep;
+        if dt.is_nan() || dt <= 0.0 {
+            return Err(setup(format!("model timestep {dt} is not positive")));
+        }
+        // Nominal gains of every position actuator of the recorded joints.
+        let (gp, bp) = (m.actuator_gainprm(), m.actuator_biasprm());
+        let nominal: Vec<Vec<(usize, f64, f64, f64)>> = jm
+            .iter()
+            .map(|&ji| {
+                self.joints[ji]
+                    .acts
+                    .iter()
+                    .map(|&(a, _)| {
+                        let (g, b) = (gp.get(a), bp.get(a));
+                        (
+                            a,
+                            g.map_or(0.0, |g| g[0]),
+                            b.map_or(0.0, |b| b[1]),
+                            b.map_or(0.0, |b| b[2]),
+                        )
+                    })
+                    .collect()
+            })
+            .collect();
+        let c = run::Run {
+            rec,
+            opts,
+            jm: &jm,
+            qd0: &qd0,
+            nominal: &nominal,
+            replaced: &replaced,
+            rate,
+            tick0,
+            schedule: &schedule,
+            dt,
+        };
+        // Gains are written on the episode's own copy only, never on the shared model.
+        match owned.as_mut() {
+            Some(copy) => {
+                for (i, acts) in nominal.iter().enumerate() {
+                    if replaced[i] {
+                        for &(a, ..) in acts {
+                            mj::set_model_gains(copy, a, 0.0, 0.0, 0.0);
+                        }
+                    }
+                }
+                self.run(MjData::new(copy), &c, hook, Some(mj::set_actuator_gains))
+            }
+            None => self.run(MjData::new(self.model), &c, hook, None),
+        }
+    }
+}
+
+/// [`Replayer::replay`] on `robot.mj`.
+pub fn replay(
+    robot: &Robot,
+    rec: &Recording,
+    opts: &ReplayOptions,
+    hook: Option<&mut dyn ActuatorHook>,
+) -> Result<Episode, ReplayError> {
+    Replayer::new(robot).replay(rec, opts, hook)
+}
+
+/// Replays many recordings in parallel (rayon); results in input order, each deterministic.
+/// `progress` is called with the number of finished episodes.
+pub fn replay_all(
+    replayer: &Replayer<'_>,
+    recs: &[Recording],
+    opts: &ReplayOptions,
+    progress: Option<&(dyn Fn(usize) + Sync)>,
+) -> Vec<Result<Episode, ReplayError>> {
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    recs.par_iter()
+        .map(|r| {
+            let e = replayer.replay(r, opts, None);
+            let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+            if let Some(p) = progress {
+                p(k);
+            }
+            e
+        })
+        .collect()
+}
+
+mod run;
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,156 @@
+use super::run::{base_pose, quat_ang_vel};
+use super::*;
+
+#[test]
+fn angular_velocity_of_a_yaw_rotation() {
+    let a: f64 = 0.01; // rad turned about z in dt
+    let q0 = [1.0, 0.0, 0.0, 0.0];
+    let q1 = [(a / 2.0).cos(), 0.0, 0.0, (a / 2.0).sin()];
+    let w = quat_ang_vel(&q0, &q1, 0.002);
+    assert!((w[2] - 5.0).abs() < 1e-9 && w[0].abs() < 1e-12 && w[1].abs() < 1e-12, "{w:?}");
+}
+
+#[test]
+fn base_pose_interpolates_and_normalises() {
+    let b = crate::sim2real::recording::BaseTrace {
+        pos: vec![[0.0, 0.0, 1.0], [1.0, 0.0, 1.0]],
+        quat: vec![[1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]],
+    };
+    let p = base_pose(&[0.0, 1.0], &b, 0.5);
+    assert!((p[0] - 0.5).abs() < 1e-12);
+    let n: f64 = p[3..].iter().map(|x| x * x).sum();
+    assert!((n - 1.0).abs() < 1e-12);
+}
+
+#[test]
+fn replay_samples_first_state_exactly_and_holds_commands() {
+    let mut map = crate::model::source::SourceMap::default();
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/bam_xl330/rig.xml");
+    let robot = crate::model::load(&mut map, &path, None).unwrap();
+    let n = 200;
+    let t: Vec<f64> = (0..n).map(|i| i as f64 * 0.005).collect();
+    let mut j = crate::sim2real::recording::JointTrace::new("servo", vec![0.3; n]);
+    j.q_cmd = Some(vec![0.3; n]);
+    j.qd = Some(vec![0.0; n]);
+    let rec = Recording {
+        source: "r.csv".into(),
+        meta: Default::default(),
+        control_rate_hz: None,
+        control_t0_s: None,
+        t,
+        joints: vec![j],
+        base: None,
+    };
+    let ep = replay(&robot, &rec, &ReplayOptions::default(), None).unwrap();
+    assert_eq!(ep.q_sim[0][0], 0.3);
+    assert!(ep.diverged.is_none());
+    // Gravity pulls the arm below the held target: K (0.3 − q) = m g l sin q.
+    let q = *ep.q_sim[0].last().unwrap();
+    assert!(q < 0.3 && q > -0.5, "{q}");
+    assert!(ep.q_sim[0].iter().all(|x| x.is_finite()));
+}
+
+#[test]
+fn dropped_command_rows_are_filled_before_the_hold() {
+    let mut map = crate::model::source::SourceMap::default();
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/bam_xl330/rig.xml");
+    let robot = crate::model::load(&mut map, &path, None).unwrap();
+    // A 2 rad/s ramp logged at the 100 Hz control rate; then the same log with rows 50–52 lost.
+    let n = 120;
+    let t: Vec<f64> = (0..n).map(|i| i as f64 * 0.01).collect();
+    let c: Vec<f64> = t.iter().map(|&x| 2.0 * x).collect();
+    let rec_of = |keep: &dyn Fn(usize) -> bool| {
+        let idx: Vec<usize> = (0..n).filter(|&i| keep(i)).collect();
+        let mut j = crate::sim2real::recording::JointTrace::new(
+            "servo",
+            idx.iter().map(|&i| c[i]).collect(),
+        );
+        j.q_cmd = Some(idx.iter().map(|&i| c[i]).collect());
+        let t = idx.iter().map(|&i| t[i]).collect();
+        Recording {
+            source: "r.csv".into(),
+            meta: Default::default(),
+            control_rate_hz: Some(100.0),
+            control_t0_s: None,
+            t,
+            joints: vec![j],
+            base: None,
+        }
+    };
+    let full = replay(&robot, &rec_of(&|_| true), &ReplayOptions::default(), None).unwrap();
+    let lossy = rec_of(&|i| !(50..53).contains(&i));
+    let err = |fill: bool| {
+        let o = ReplayOptions { fill_dropped_commands: fill, ..Default::default() };
+        let ep = replay(&robot, &lossy, &o, None).unwrap();
+        // Same timestamps after the gap: compare there.
+        (0..lossy.t.len())
+            .filter(|&k| lossy.t[k] > 0.5)
+            .map(|k| (ep.q_sim[0][k] - full.q_sim[0][k + 3]).abs())
+            .fold(0.0, f64::max)
+    };
+    let (held, filled) = (err(false), err(true));
+    assert!(held > 1e-3, "holding the row before the gap should lag the ramp: {held}");
+    assert!(filled < 0.2 * held, "filled {filled} vs held {held}");
+}
+
+#[test]
+fn blow_up_is_reported_not_panicked() {
+    let mut map = crate::model::source::SourceMap::default();
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/bam_xl330/rig.xml");
+    let robot = crate::model::load(&mut map, &path, None).unwrap();
+    let n = 100;
+    let t: Vec<f64> = (0..n).map(|i| i as f64 * 0.01).collect();
+    let mut j = crate::sim2real::recording::JointTrace::new("servo", vec![0.0; n]);
+    // An absurd gain makes explicit Euler unstable.
+    j.kp = Some(vec![1e9; n]);
+    j.q_cmd = Some(vec![1.0; n]);
+    let rec = Recording {
+        source: "r.csv".into(),
+        meta: Default::default(),
+        control_rate_hz: None,
+        control_t0_s: None,
+        t,
+        joints: vec![j],
+        base: None,
+    };
+    let ep = replay(&robot, &rec, &ReplayOptions::default(), None).unwrap();
+    assert!(ep.diverged.is_some());
+    assert!(ep.q_sim[0].last().unwrap().is_nan());
+}
+
+#[test]
+fn delayed_actuator_starts_from_the_first_command_not_zero() {
+    // No gravity, no friction: a joint held at its command is at equilibrium, so the
+    // replay of a recording that holds q = q_cmd = 0.5 must stay at 0.5 exactly. A delay
+    // history left at zero would drive the servo towards 0 for the first 20 ms
+    // (kp 50 × 0.5 rad = 25 N·m on 0.01 kg·m²).
+    let xml = r#"<mujoco><option gravity="0 0 0" timestep="0.002"/>
+  <worldbody><body><joint name="j" type="hinge" axis="0 1 0"/>
+<geom type="capsule" fromto="0 0 0 0.2 0 0" size="0.02" mass="0.5"/></body></worldbody>
+  <actuator><position joint="j" kp="50" kv="2" delay="0.02" nsample="10"/></actuator>
+</mujoco>"#;
+    let dir = std::env::temp_dir().join(format!("modellint-delay-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("delayed.xml");
+    std::fs::write(&path, xml).unwrap();
+    let mut map = crate::model::source::SourceMap::default();
+    let robot = crate::model::load(&mut map, &path, None).unwrap();
+    let n = 100;
+    let t: Vec<f64> = (0..n).map(|i| i as f64 * 0.005).collect();
+    let mut j = crate::sim2real::recording::JointTrace::new("j", vec![0.5; n]);
+    j.q_cmd = Some(vec![0.5; n]);
+    j.qd = Some(vec![0.0; n]);
+    let rec = Recording {
+        source: "r.csv".into(),
+        meta: Default::default(),
+        control_rate_hz: Some(100.0),
+        control_t0_s: None,
+        t,
+        joints: vec![j],
+        base: None,
+    };
+    let ep = replay(&robot, &rec, &ReplayOptions::default(), None).unwrap();
+    let worst = ep.q_sim[0].iter().map(|q| (q - 0.5).abs()).fold(0.0, f64::max);
+    assert!(worst < 1e-9, "the held joint moved by {worst} rad");
+    std::fs::remove_dir_all(&dir).ok();
+}
