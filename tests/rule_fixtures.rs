@@ -229,8 +229,8 @@ fn check_near_labels(path: &Path, rendered: &str) -> usize {
                 anchors.push(n);
             }
         }
-        for k in i + 1..end {
-            if let Some(n) = source_line(lines[k]) {
+        for line in &lines[i + 1..end] {
+            if let Some(n) = source_line(line) {
                 let d = anchors.iter().map(|a| a.abs_diff(n)).min().unwrap();
                 assert!(
                     d <= 2,

@@ -29,7 +29,7 @@ pub fn run(
     // Nominal figures on all logs: the rig's linear MuJoCo actuator (no duty clip) and the
     // firmware law with its clip (ServoHook, no friction).
     let recs: Vec<_> = logs.iter().map(|l| l.rec.clone()).collect();
-    let rp = replay::Replayer::new(&robot);
+    let rp = replay::Replayer::new(robot);
     let lin: Vec<f64> = replay::replay_all(&rp, &recs, &ReplayOptions::default(), None)
         .into_iter()
         .zip(logs)
@@ -41,7 +41,7 @@ pub fn run(
         })
         .collect();
     let nominal = EffectSet(vec![]);
-    let nom: Vec<f64> = servo_fit::residuals(&robot, logs, &all, &nominal, &[])
+    let nom: Vec<f64> = servo_fit::residuals(robot, logs, &all, &nominal, &[])
         .iter()
         .map(|r| servo_fit::mae(r))
         .collect();
@@ -79,13 +79,11 @@ pub fn run(
         folds.push(f);
     }
 
-    out.push_str(&format!(
-        "\n## BAM XL330: forward selection, fit on 3 gains, held-out MAE on the 4th\n"
-    ));
+    out.push_str("\n## BAM XL330: forward selection, fit on 3 gains, held-out MAE on the 4th\n");
     out.push('\n');
-    out.push_str(&format!("| held-out kp | effects chosen | parameters (± stderr) | nominal held-out MAE | fitted held-out MAE | fold time |"));
+    out.push_str("| held-out kp | effects chosen | parameters (± stderr) | nominal held-out MAE | fitted held-out MAE | fold time |");
     out.push('\n');
-    out.push_str(&format!("|---|---|---|---|---|---|"));
+    out.push_str("|---|---|---|---|---|---|");
     out.push('\n');
     let mut per_log = vec![f64::NAN; logs.len()];
     for f in &folds {
@@ -114,9 +112,7 @@ pub fn run(
             per_log[i] = c.test_mae_per_log[k];
         }
     }
-    out.push_str(&format!(
-        "\n### Every candidate fitted alone on the nominal model (round 1): what each effect buys\n"
-    ));
+    out.push_str("\n### Every candidate fitted alone on the nominal model (round 1): what each effect buys\n");
     out.push('\n');
     out.push_str(&format!(
         "| effect | {} |",
@@ -150,11 +146,11 @@ pub fn run(
         out.push_str(&format!("| {} | {} |", e.name(), cells.join(" | ")));
         out.push('\n');
     }
-    out.push_str(&format!("\n### Held-out MAE per log\n"));
+    out.push_str("\n### Held-out MAE per log\n");
     out.push('\n');
-    out.push_str(&format!("| log | kp | trajectory | linear rig (no clip) | nominal firmware law | fitted (held out) |"));
+    out.push_str("| log | kp | trajectory | linear rig (no clip) | nominal firmware law | fitted (held out) |");
     out.push('\n');
-    out.push_str(&format!("|---|---|---|---|---|---|"));
+    out.push_str("|---|---|---|---|---|---|");
     out.push('\n');
     for (i, l) in logs.iter().enumerate() {
         out.push_str(&format!(
@@ -168,17 +164,17 @@ pub fn run(
         ));
         out.push('\n');
     }
-    out.push_str(&format!("\n### Average over the 16 logs (whole-log position MAE)\n"));
+    out.push_str("\n### Average over the 16 logs (whole-log position MAE)\n");
     out.push('\n');
-    out.push_str(&format!("| model | average MAE |"));
+    out.push_str("| model | average MAE |");
     out.push('\n');
-    out.push_str(&format!("|---|---|"));
+    out.push_str("|---|---|");
     out.push('\n');
-    out.push_str(&format!("| BAM no friction (BAM's 5 ms resampling) | 8.05° |"));
+    out.push_str("| BAM no friction (BAM's 5 ms resampling) | 8.05° |");
     out.push('\n');
-    out.push_str(&format!("| BAM M1, Coulomb + viscous (BAM's 5 ms resampling) | 4.69° |"));
+    out.push_str("| BAM M1, Coulomb + viscous (BAM's 5 ms resampling) | 4.69° |");
     out.push('\n');
-    out.push_str(&format!("| BAM M3, load-dependent (BAM's 5 ms resampling) | 3.96° |"));
+    out.push_str("| BAM M3, load-dependent (BAM's 5 ms resampling) | 3.96° |");
     out.push('\n');
     out.push_str(&format!(
         "| modellint rig, linear actuator, no clip (log timestamps) | {:.2}° |",
@@ -195,7 +191,7 @@ pub fn run(
         avg(&per_log).to_degrees()
     ));
     out.push('\n');
-    out.push_str(&format!("\nBAM's figures are fitted on all logs and evaluated on their 5 ms resampling; ours are held-out and at the logs' own timestamps."));
+    out.push_str("\nBAM's figures are fitted on all logs and evaluated on their 5 ms resampling; ours are held-out and at the logs' own timestamps.");
     out.push('\n');
     out.push_str(&format!("total time {:.0} s\n", t0.elapsed().as_secs_f64()));
     Ok((out, folds))

@@ -81,7 +81,7 @@ fn names(rs: &[&Recording]) -> String {
 pub fn split(recs: &[Recording], holdout: usize) -> Split {
     let h = holdout.max(2);
     let declared: Vec<Option<Declared>> = recs.iter().map(Recording::split).collect();
-    if declared.iter().any(|d| *d == Some(Declared::Heldout)) {
+    if declared.contains(&Some(Declared::Heldout)) {
         let (mut tr, mut ho) = (vec![], vec![]);
         for (r, d) in recs.iter().zip(&declared) {
             if *d == Some(Declared::Heldout) { ho.push(r) } else { tr.push(r) }

@@ -289,7 +289,7 @@ mod white_tests {
             (x >> 11) as f64 / (1u64 << 52) as f64 - 1.0
         };
         let noise: Vec<f64> = (0..20000).map(|_| u()).collect();
-        let (ms, w) = white_floor(&[noise.clone()]);
+        let (ms, w) = white_floor(std::slice::from_ref(&noise));
         assert!((ms - 1.0 / 3.0).abs() < 0.01 && (ms / w - 1.0).abs() < 0.05, "{ms} {w}");
         // A slow sine of the noise's amplitude on top: the white part stays, the mean square
         // grows by A²/2.

@@ -48,10 +48,10 @@ impl Deref for BenchModel<'_> {
 
 impl Drop for BenchModel<'_> {
     fn drop(&mut self) {
-        if let BenchModel::Scratch(m, source) = self {
-            if let Some(m) = m.take() {
-                SCRATCH.with(|s| *s.borrow_mut() = Some((*source, m)));
-            }
+        if let BenchModel::Scratch(m, source) = self
+            && let Some(m) = m.take()
+        {
+            SCRATCH.with(|s| *s.borrow_mut() = Some((*source, m)));
         }
     }
 }

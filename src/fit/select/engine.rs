@@ -82,6 +82,8 @@ impl<'a> Engine<'a> {
                 }
                 let t0 = rec.t[0];
                 let mut w = (0usize, 0.0, 0usize);
+                // One sample index into four parallel arrays (t, mask, real, sim).
+                #[allow(clippy::needless_range_loop)]
                 for i in 0..rec.t.len() {
                     if !scored[i] {
                         continue;
@@ -123,6 +125,8 @@ impl<'a> Engine<'a> {
                     let Some(k) = rec.joints.iter().position(|j| &j.name == name) else { continue };
                     let scored = gap_mask(&rec.t, self.opts.gap_mask_s);
                     let mut run = Vec::new();
+                    // One sample index into three parallel arrays (mask, real, sim).
+                    #[allow(clippy::needless_range_loop)]
                     for i in 0..rec.t.len() {
                         let e = rec.joints[k].q[i] - ep.q_sim[k][i];
                         if scored[i] && e.is_finite() {

@@ -395,28 +395,29 @@ impl FootCollisionGeometry {
             .iter()
             .filter(|f| f.side == Some(crate::rules::contact::feet::Side::Right))
             .collect();
-        if let (Some(l), Some(r)) = (left.first(), right.first()) {
-            if !crate::rules::geometry::mirror_asymmetry::same_geoms(
+        if let (Some(l), Some(r)) = (left.first(), right.first())
+            && !crate::rules::geometry::mirror_asymmetry::same_geoms(
                 robot, &l.geoms, &r.geoms, MIRROR_REL, MIRROR_ABS,
-            ) {
-                let g0 = r.geoms[0];
-                let msg = if l.geoms.len() != r.geoms.len() {
-                    format!(
-                        "left and right feet differ: {} has {} collision geoms, {} has {}",
-                        robot.body_name(l.root),
-                        l.geoms.len(),
-                        robot.body_name(r.root),
-                        r.geoms.len()
-                    )
-                } else {
-                    format!(
-                        "left and right feet differ in collision geom types or sizes ({} vs {})",
-                        robot.body_name(l.root),
-                        robot.body_name(r.root)
-                    )
-                };
-                let lloc = robot.elem_loc(ElemKind::Body, l.root, robot.body_name(l.root));
-                out.push(
+            )
+        {
+            let g0 = r.geoms[0];
+            let msg = if l.geoms.len() != r.geoms.len() {
+                format!(
+                    "left and right feet differ: {} has {} collision geoms, {} has {}",
+                    robot.body_name(l.root),
+                    l.geoms.len(),
+                    robot.body_name(r.root),
+                    r.geoms.len()
+                )
+            } else {
+                format!(
+                    "left and right feet differ in collision geom types or sizes ({} vs {})",
+                    robot.body_name(l.root),
+                    robot.body_name(r.root)
+                )
+            };
+            let lloc = robot.elem_loc(ElemKind::Body, l.root, robot.body_name(l.root));
+            out.push(
                     cx.at_elem(ElemKind::Geom, g0, &robot.geoms[g0].name, msg)
                         .label("right foot geometry")
                         .secondary(lloc, "left foot")
@@ -424,7 +425,6 @@ impl FootCollisionGeometry {
                         .help("make the right foot's collision geoms the mirror image of the left's")
                         .subject(Subject::Foot(r.root)),
                 );
-            }
         }
     }
 }

@@ -100,18 +100,17 @@ impl Pair<'_> {
 }
 
 /// (left id, right id) pairs among `names`.
-fn pairs<'a>(names: &'a [String], cx: &Context) -> Vec<(usize, usize)> {
+fn pairs(names: &[String], cx: &Context) -> Vec<(usize, usize)> {
     let mut v = Vec::new();
     for (i, n) in names.iter().enumerate() {
         if n.is_empty() {
             continue;
         }
-        if let Some((Side::Left, m)) = mirror(n, cx.spec) {
-            if let Some(j) = names.iter().position(|x| *x == m) {
-                if j != i {
-                    v.push((i, j));
-                }
-            }
+        if let Some((Side::Left, m)) = mirror(n, cx.spec)
+            && let Some(j) = names.iter().position(|x| *x == m)
+            && j != i
+        {
+            v.push((i, j));
         }
     }
     v

@@ -90,6 +90,8 @@ impl Placed {
             }
             GeomType::Box => {
                 let mut p = c;
+                // Axis k of the rotation with half-size k.
+                #[allow(clippy::needless_range_loop)]
                 for k in 0..3 {
                     let ax = col(m, k);
                     p = add(p, scale(ax, sgn(dot(ax, d)) * s[k]));

@@ -44,10 +44,10 @@ pub fn degree_mode(robot: &Robot) -> bool {
     }
     let mut deg = true;
     let mut visit = |n: &XNode| {
-        if n.tag == "compiler" {
-            if let Some(a) = n.get("angle") {
-                deg = a != "radian";
-            }
+        if n.tag == "compiler"
+            && let Some(a) = n.get("angle")
+        {
+            deg = a != "radian";
         }
     };
     for c in &robot.tree.children {

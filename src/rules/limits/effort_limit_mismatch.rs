@@ -81,13 +81,14 @@ pub fn joint_torque_limit(robot: &Robot, j: usize) -> Option<(f64, LimitSource)>
             );
         }
         // A voltage-driven `<dcmotor>` stalls at K/R × V_max (× gear).
-        if let ActuatorKind::DcMotor { resistance, k, voltage: true } = a.kind {
-            if a.ctrllimited && resistance > 0.0 {
-                take(
-                    g * (k / resistance).abs() * a.ctrlrange[0].abs().max(a.ctrlrange[1].abs()),
-                    LimitSource::MotorCtrl(a.id),
-                );
-            }
+        if let ActuatorKind::DcMotor { resistance, k, voltage: true } = a.kind
+            && a.ctrllimited
+            && resistance > 0.0
+        {
+            take(
+                g * (k / resistance).abs() * a.ctrlrange[0].abs().max(a.ctrlrange[1].abs()),
+                LimitSource::MotorCtrl(a.id),
+            );
         }
     }
     best
@@ -149,10 +150,10 @@ impl Rule for EffortLimitMismatch {
                     cx.at_attr(ElemKind::Actuator, a, &robot.actuators[a].name, "ctrlrange", msg)
                 }
             };
-            if let Some(s) = cx.spec {
-                if let Some(p) = &m.peak_torque {
-                    f = f.secondary(s.loc(p.span()), format!("spec peak_torque of `{fam}`"));
-                }
+            if let Some(s) = cx.spec
+                && let Some(p) = &m.peak_torque
+            {
+                f = f.secondary(s.loc(p.span()), format!("spec peak_torque of `{fam}`"));
             }
             f = f
                 .label(format!("±{} {unit}", fmt_num(lim, 4)))

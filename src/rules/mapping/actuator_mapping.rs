@@ -241,17 +241,18 @@ impl ActuatorMapping {
             let limited = |a: &&crate::model::Actuator| {
                 a.forcelimited || (a.kind == ActuatorKind::Motor && a.ctrllimited)
             };
-            if acts.len() > 1 && acts.iter().any(limited) {
-                if let Some(a) = acts.iter().find(|a| !limited(a)) {
-                    let f = cx
+            if acts.len() > 1
+                && acts.iter().any(limited)
+                && let Some(a) = acts.iter().find(|a| !limited(a))
+            {
+                let f = cx
                         .at_elem(ElemKind::Actuator, a.id, &a.name, format!("actuator `{}` reaches joint `{}` without a force limit, beside a limited actuator", a.name, j.name))
                         .label("unlimited second actuator")
                         .note("the extra actuator adds torque past the motor's limit, so the joint's effort limit is no longer enforced")
                         .help("remove the extra actuator or give it a forcerange")
                         .subject(Subject::Actuator(a.id));
-                    out.push(spec_label(f));
-                    continue;
-                }
+                out.push(spec_label(f));
+                continue;
             }
             if acts.len() > facts.count as usize {
                 let names: Vec<&str> = acts.iter().map(|a| a.name.as_str()).collect();

@@ -198,34 +198,34 @@ impl Rule for UrdfMjcfDrift {
                     .help("limit the joint in both files")));
             }
             // Effort.
-            if uj.limit.effort > 0.0 && uj.limit.effort.is_finite() {
-                if let Some(me) = model_effort(robot, j.id) {
-                    if rel_differs(me, uj.limit.effort, tol) {
-                        let acts = robot.actuators_on_joint(j.id);
-                        let f = match acts.first() {
-                            Some(a) if a.forcelimited => {
-                                cx.at_attr(ElemKind::Actuator, a.id, &a.name, "forcerange", "")
-                            }
-                            Some(a) if a.kind == ActuatorKind::Motor && a.ctrllimited => {
-                                cx.at_attr(ElemKind::Actuator, a.id, &a.name, "ctrlrange", "")
-                            }
-                            _ => cx.at_attr(ElemKind::Joint, j.id, &j.name, "actuatorfrcrange", ""),
-                        };
-                        let mut f = tag(f
+            if uj.limit.effort > 0.0
+                && uj.limit.effort.is_finite()
+                && let Some(me) = model_effort(robot, j.id)
+                && rel_differs(me, uj.limit.effort, tol)
+            {
+                let acts = robot.actuators_on_joint(j.id);
+                let f = match acts.first() {
+                    Some(a) if a.forcelimited => {
+                        cx.at_attr(ElemKind::Actuator, a.id, &a.name, "forcerange", "")
+                    }
+                    Some(a) if a.kind == ActuatorKind::Motor && a.ctrllimited => {
+                        cx.at_attr(ElemKind::Actuator, a.id, &a.name, "ctrlrange", "")
+                    }
+                    _ => cx.at_attr(ElemKind::Joint, j.id, &j.name, "actuatorfrcrange", ""),
+                };
+                let mut f = tag(f
                             .label(format!("effort {}", fmt_num(me, 4)))
                             .note("the simulated actuator can push harder (or weaker) than the URDF's effort limit, which the motor driver enforces on hardware")
                             .help("use the hardware torque limit in both files")
                             .measured(me, "N·m")
                             .expected(uj.limit.effort, "N·m"));
-                        f.message = format!(
-                            "joint `{}` effort limit {} N·m in the MJCF differs from the URDF's {} N·m",
-                            j.name,
-                            fmt_num(me, 4),
-                            fmt_num(uj.limit.effort, 4)
-                        );
-                        out.push(f);
-                    }
-                }
+                f.message = format!(
+                    "joint `{}` effort limit {} N·m in the MJCF differs from the URDF's {} N·m",
+                    j.name,
+                    fmt_num(me, 4),
+                    fmt_num(uj.limit.effort, 4)
+                );
+                out.push(f);
             }
             // Velocity vs spec.
             if uj.limit.velocity > 0.0 && uj.limit.velocity.is_finite() {
@@ -234,9 +234,10 @@ impl Rule for UrdfMjcfDrift {
                     let m = spec.motor(&fam)?;
                     m.velocity_limit.as_ref().map(|v| (*v.get_ref(), spec.loc(v.span())))
                 });
-                if let Some((sv, sloc)) = sv {
-                    if rel_differs(sv, uj.limit.velocity, tol) {
-                        out.push(tag(cx
+                if let Some((sv, sloc)) = sv
+                    && rel_differs(sv, uj.limit.velocity, tol)
+                {
+                    out.push(tag(cx
                             .at_elem(ElemKind::Joint, j.id, &j.name, format!(
                                 "joint `{}` velocity limit {} rad/s in the URDF differs from the spec's motor velocity_limit {} rad/s",
                                 j.name, fmt_num(uj.limit.velocity, 4), fmt_num(sv, 4)))
@@ -245,7 +246,6 @@ impl Rule for UrdfMjcfDrift {
                             .help("make the URDF and the spec agree on the motor's velocity limit")
                             .measured(uj.limit.velocity, "rad/s")
                             .expected(sv, "rad/s")));
-                    }
                 }
             }
         }
