@@ -200,18 +200,7 @@ pub(super) fn greedy_round(
         // A kept candidate already left a white training residual: one with more parameters
         // cannot explain more, and Occam's choice would not take it (`tried`: phase "floor").
         if floor_k.is_some_and(|k| e.fitted() > k) {
-            out.tried.push(Tried {
-                round,
-                phase: "floor",
-                effect: e.id().into(),
-                joints: group.clone(),
-                params: vec![],
-                train_rmse: f64::NAN,
-                heldout_improvement: f64::NAN,
-                significant: false,
-                bic_decreased: false,
-                kept: false,
-            });
+            out.tried.push(Tried::not_tested(round, "floor", e.id(), &group, vec![], f64::NAN));
             continue;
         }
         // (Only multi-parameter effects: a 1-D fit is a 9-point grid plus golden section anyway,
@@ -219,18 +208,7 @@ pub(super) fn greedy_round(
         if extra && e.fitted() >= 2 {
             let (p, f) = engine.fit_budget(train, &applied, e, &group, 10);
             if p.is_empty() || !f.is_finite() || base_train - f < 0.5 * (base_train - best_train) {
-                out.tried.push(Tried {
-                    round,
-                    phase: "screen",
-                    effect: e.id().into(),
-                    joints: group.clone(),
-                    params: p,
-                    train_rmse: f,
-                    heldout_improvement: f64::NAN,
-                    significant: false,
-                    bic_decreased: false,
-                    kept: false,
-                });
+                out.tried.push(Tried::not_tested(round, "screen", e.id(), &group, p, f));
                 continue;
             }
         }

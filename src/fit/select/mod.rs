@@ -146,7 +146,8 @@ pub struct Selected {
 #[derive(Debug, Clone, Serialize)]
 pub struct Tried {
     pub round: usize,
-    /// `add` (greedy round), `drop` (removal test: `kept` = the effect stays) or `swap`
+    /// `add` (greedy round), `screen` / `floor` (not fitted fully / not fitted: see
+    /// docs/fitting.md), `pair`, `drop` (removal test: `kept` = the effect stays) or `swap`
     /// (replacement by a simpler effect: `kept` = the swap was made).
     pub phase: &'static str,
     pub effect: String,
@@ -157,6 +158,32 @@ pub struct Tried {
     pub significant: bool,
     pub bic_decreased: bool,
     pub kept: bool,
+}
+
+impl Tried {
+    /// A candidate left out before the held-out test (`screen`: a coarse fit did not reach half
+    /// the best training improvement; `floor`: a kept candidate already left a white residual).
+    fn not_tested(
+        round: usize,
+        phase: &'static str,
+        effect: &str,
+        joints: &[String],
+        params: Vec<f64>,
+        train_rmse: f64,
+    ) -> Tried {
+        Tried {
+            round,
+            phase,
+            effect: effect.into(),
+            joints: joints.to_vec(),
+            params,
+            train_rmse,
+            heldout_improvement: f64::NAN,
+            significant: false,
+            bic_decreased: false,
+            kept: false,
+        }
+    }
 }
 
 pub struct FitOutcome {

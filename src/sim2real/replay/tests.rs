@@ -27,20 +27,7 @@ fn replay_samples_first_state_exactly_and_holds_commands() {
     let mut map = crate::model::source::SourceMap::default();
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/bam_xl330/rig.xml");
     let robot = crate::model::load(&mut map, &path, None).unwrap();
-    let n = 200;
-    let t: Vec<f64> = (0..n).map(|i| i as f64 * 0.005).collect();
-    let mut j = crate::sim2real::recording::JointTrace::new("servo", vec![0.3; n]);
-    j.q_cmd = Some(vec![0.3; n]);
-    j.qd = Some(vec![0.0; n]);
-    let rec = Recording {
-        source: "r.csv".into(),
-        meta: Default::default(),
-        control_rate_hz: None,
-        control_t0_s: None,
-        t,
-        joints: vec![j],
-        base: None,
-    };
+    let rec = held_recording("servo", 200, 0.005, 0.3, None);
     let ep = replay(&robot, &rec, &ReplayOptions::default(), None).unwrap();
     assert_eq!(ep.q_sim[0][0], 0.3);
     assert!(ep.diverged.is_none());
@@ -135,22 +122,25 @@ fn delayed_actuator_starts_from_the_first_command_not_zero() {
     std::fs::write(&path, xml).unwrap();
     let mut map = crate::model::source::SourceMap::default();
     let robot = crate::model::load(&mut map, &path, None).unwrap();
-    let n = 100;
-    let t: Vec<f64> = (0..n).map(|i| i as f64 * 0.005).collect();
-    let mut j = crate::sim2real::recording::JointTrace::new("j", vec![0.5; n]);
-    j.q_cmd = Some(vec![0.5; n]);
-    j.qd = Some(vec![0.0; n]);
-    let rec = Recording {
-        source: "r.csv".into(),
-        meta: Default::default(),
-        control_rate_hz: Some(100.0),
-        control_t0_s: None,
-        t,
-        joints: vec![j],
-        base: None,
-    };
+    let rec = held_recording("j", 100, 0.005, 0.5, Some(100.0));
     let ep = replay(&robot, &rec, &ReplayOptions::default(), None).unwrap();
     let worst = ep.q_sim[0].iter().map(|q| (q - 0.5).abs()).fold(0.0, f64::max);
     assert!(worst < 1e-9, "the held joint moved by {worst} rad");
     std::fs::remove_dir_all(&dir).ok();
+}
+
+/// One joint at rest at `q`, commanded to `q`: `n` rows every `dt` seconds.
+fn held_recording(joint: &str, n: usize, dt: f64, q: f64, rate: Option<f64>) -> Recording {
+    let mut j = crate::sim2real::recording::JointTrace::new(joint, vec![q; n]);
+    j.q_cmd = Some(vec![q; n]);
+    j.qd = Some(vec![0.0; n]);
+    Recording {
+        source: "r.csv".into(),
+        meta: Default::default(),
+        control_rate_hz: rate,
+        control_t0_s: None,
+        t: (0..n).map(|i| i as f64 * dt).collect(),
+        joints: vec![j],
+        base: None,
+    }
 }
