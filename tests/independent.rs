@@ -7,7 +7,7 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use modellint::sim2real::commands::{CommandTiming, Schedule, reconstruct};
+use modellint::sim2real::commands::{CommandTiming, Fill, Schedule, reconstruct};
 use modellint::sim2real::recording::read_csv;
 
 fn arm2() -> Option<PathBuf> {
@@ -51,12 +51,24 @@ fn command_reconstruction_matches_the_exact_ticks() {
             let cmds: Vec<&[f64]> =
                 rec.joints.iter().map(|j| j.q_cmd.as_deref().expect("q_cmd")).collect();
             let t0 = rec.control_t0_s.unwrap_or(0.0);
-            let s =
-                reconstruct(&rec.t, &cmds, rec.control_rate_hz, t0, CommandTiming::InForce, true)
-                    .expect("schedule");
-            let held =
-                reconstruct(&rec.t, &cmds, rec.control_rate_hz, t0, CommandTiming::InForce, false)
-                    .expect("schedule");
+            let s = reconstruct(
+                &rec.t,
+                &cmds,
+                rec.control_rate_hz,
+                t0,
+                CommandTiming::InForce,
+                Fill::Ramps,
+            )
+            .expect("schedule");
+            let held = reconstruct(
+                &rec.t,
+                &cmds,
+                rec.control_rate_hz,
+                t0,
+                CommandTiming::InForce,
+                Fill::Hold,
+            )
+            .expect("schedule");
             let Schedule::Ticks { k0, cmd, stats, .. } = &s else { panic!("a rate is declared") };
             let Schedule::Ticks { cmd: cmd_held, .. } = &held else { panic!("a rate is declared") };
             let (mut exact, mut total, mut worst) = (0usize, 0usize, 0.0f64);

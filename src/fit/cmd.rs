@@ -231,7 +231,7 @@ pub fn run_fit(a: FitArgs) -> i32 {
             "diagnosis": out.diagnosis.iter().take(20).collect::<Vec<_>>(),
             "tried": out.tried,
             "split": {"train": out.train.len(), "heldout": out.heldout.len(), "by_time": out.split_by_time, "note": out.split_note},
-            "floor": out.floors.iter().map(|(j, ms, w)| json!({"joint": j, "residual_rms": ms.sqrt(), "white_floor_rms": w.sqrt()})).collect::<Vec<_>>(),
+            "floor": out.floors.iter().map(|f| json!({"joint": f.joint, "residual_rms": f.ms.sqrt(), "white_floor_rms": f.white.sqrt(), "reconstruction_floor_rms": f.reconstruction.sqrt()})).collect::<Vec<_>>(),
             "stopped_at_floor": out.stopped_at_floor,
             "warnings": out.warnings.iter().chain(&notes).collect::<Vec<_>>(),
         });
@@ -304,10 +304,20 @@ pub fn run_fit(a: FitArgs) -> i32 {
             after.gap_overall
         ));
         if !out.floors.is_empty() {
-            let f: Vec<String> =
-                out.floors.iter().map(|(j, _, w)| format!("{j} {:.3}°", deg(w.sqrt()))).collect();
+            let f: Vec<String> = out
+                .floors
+                .iter()
+                .map(|f| {
+                    format!(
+                        "{} {:.3}° + {:.3}°",
+                        f.joint,
+                        deg(f.white.sqrt()),
+                        deg(f.reconstruction.sqrt())
+                    )
+                })
+                .collect();
             s.push_str(&format!(
-                "  noise floor (white part of the training residual, RMS): {}\n",
+                "  floor (RMS: white part of the training residual + command reconstruction): {}\n",
                 f.join(", ")
             ));
         }

@@ -143,19 +143,35 @@ impl std::fmt::Display for ScheduleError {
     }
 }
 
+/// How a tick without a row (or a dropped row) is filled.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Fill {
+    /// Interpolated across a ramp, the command before the gap held across a step (the best
+    /// guess; without a control rate, dropped rows' commands are interpolated).
+    #[default]
+    Ramps,
+    /// The command before the gap held (the command changed at the first row after it).
+    Hold,
+    /// As [`Fill::Ramps`], but a step takes the command after the gap (it changed right after
+    /// the last row before it): the other end of what the rows allow. The fit replays this
+    /// alternative to measure the error command reconstruction alone leaves (its floor).
+    /// Without a control rate: as [`Fill::Hold`].
+    Next,
+}
+
 /// Reconstructs the command schedule of the joints `cmds` (one trace per joint, sampled at `t`,
-/// increasing). `rate = None`: [`Schedule::Events`]. `fill = false` holds the command before
-/// every empty tick (or dropped row) instead of interpolating ramps.
+/// increasing). `rate = None`: [`Schedule::Events`]. `fill` says what an empty tick (or dropped
+/// row) gets.
 pub fn reconstruct(
     t: &[f64],
     cmds: &[&[f64]],
     rate: Option<f64>,
     t0: f64,
     timing: CommandTiming,
-    fill: bool,
+    fill: Fill,
 ) -> Result<Schedule, ScheduleError> {
     let Some(rate) = rate else {
-        if fill && has_gap(t) {
+        if fill == Fill::Ramps && has_gap(t) {
             let mut tt = Vec::new();
             let mut cc = Vec::with_capacity(cmds.len());
             for c in cmds {
@@ -241,10 +257,14 @@ pub fn reconstruct(
                 (a - v[p]) / (i - p) as f64
             });
             let after = known.get(w + 2).map(|&q| (v[q] - b) / (q - j) as f64);
-            if fill && is_ramp(gap_slope, before, after) {
+            if fill != Fill::Hold && is_ramp(gap_slope, before, after) {
                 any_ramp = true;
                 for (k, x) in v.iter_mut().enumerate().take(j).skip(i + 1) {
                     *x = a + gap_slope * (k - i) as f64;
+                }
+            } else if fill == Fill::Next {
+                for x in v.iter_mut().take(j).skip(i + 1) {
+                    *x = b;
                 }
             } else {
                 for x in v.iter_mut().take(j).skip(i + 1) {
@@ -306,7 +326,8 @@ mod tests {
         // Recorder rows (in force): no row in ticks 2 (ramp) and 5 (step).
         let t = [0.001, 0.0125, 0.031, 0.045, 0.067, 0.078, 0.081, 0.095];
         let c: Vec<f64> = t.iter().map(|&x: &f64| truth[(x * 100.0).floor() as usize]).collect();
-        let s = reconstruct(&t, &[&c], Some(100.0), 0.0, CommandTiming::InForce, true).unwrap();
+        let s =
+            reconstruct(&t, &[&c], Some(100.0), 0.0, CommandTiming::InForce, Fill::Ramps).unwrap();
         let (k0, cmd) = ticks(&s);
         assert_eq!(k0, 0);
         // Tick 2 interpolated on the ramp (0.2); tick 5 held from tick 4 across the step (0.4).
@@ -329,7 +350,8 @@ mod tests {
         // A logger that reads state then sends: rows exactly at t_k carry c_k.
         let t: Vec<f64> = (0..6).map(|k| k as f64 * 0.01).collect();
         let c = [1.0, 2.0, 3.0, 4.0, 5.0, 6.0];
-        let s = reconstruct(&t, &[&c], Some(100.0), 0.0, CommandTiming::InForce, true).unwrap();
+        let s =
+            reconstruct(&t, &[&c], Some(100.0), 0.0, CommandTiming::InForce, Fill::Ramps).unwrap();
         for (k, &ck) in c.iter().enumerate() {
             assert_eq!(s.at(0, k as f64 * 0.01 + 0.005), ck);
             assert_eq!(s.at(0, k as f64 * 0.01), ck);
@@ -341,11 +363,13 @@ mod tests {
         // Rows sampled mid-tick log the command sent at the next tick.
         let t = [0.005, 0.015, 0.025];
         let c = [1.0, 2.0, 3.0];
-        let s = reconstruct(&t, &[&c], Some(100.0), 0.0, CommandTiming::SentAfter, true).unwrap();
+        let s = reconstruct(&t, &[&c], Some(100.0), 0.0, CommandTiming::SentAfter, Fill::Ramps)
+            .unwrap();
         assert_eq!(s.at(0, 0.012), 1.0);
         assert_eq!(s.at(0, 0.022), 2.0);
         assert_eq!(s.at(0, 0.031), 3.0);
-        let f = reconstruct(&t, &[&c], Some(100.0), 0.0, CommandTiming::InForce, true).unwrap();
+        let f =
+            reconstruct(&t, &[&c], Some(100.0), 0.0, CommandTiming::InForce, Fill::Ramps).unwrap();
         assert_eq!(f.at(0, 0.012), 2.0);
     }
 
@@ -353,7 +377,8 @@ mod tests {
     fn conflicting_rows_in_one_tick_are_counted() {
         let t = [0.001, 0.004, 0.011, 0.015];
         let c = [1.0, 1.5, 2.0, 2.0];
-        let s = reconstruct(&t, &[&c], Some(100.0), 0.0, CommandTiming::InForce, true).unwrap();
+        let s =
+            reconstruct(&t, &[&c], Some(100.0), 0.0, CommandTiming::InForce, Fill::Ramps).unwrap();
         assert_eq!(s.stats().unwrap().conflicting, 1);
         assert_eq!(s.at(0, 0.005), 1.0);
     }
@@ -362,7 +387,7 @@ mod tests {
     fn without_a_rate_each_goal_holds_from_its_timestamp() {
         let t = [0.0, 0.0037, 0.0091];
         let c = [1.0, 2.0, 3.0];
-        let s = reconstruct(&t, &[&c], None, 0.0, CommandTiming::InForce, true).unwrap();
+        let s = reconstruct(&t, &[&c], None, 0.0, CommandTiming::InForce, Fill::Ramps).unwrap();
         assert_eq!(s.at(0, 0.0036), 1.0);
         assert_eq!(s.at(0, 0.0037), 2.0);
         assert_eq!(s.at(0, 0.05), 3.0);
@@ -373,15 +398,15 @@ mod tests {
         let t = [0.0, 0.1, 0.2];
         let c = [0.0; 3];
         assert_eq!(
-            reconstruct(&t, &[&c], Some(1.0), 0.0, CommandTiming::InForce, true),
+            reconstruct(&t, &[&c], Some(1.0), 0.0, CommandTiming::InForce, Fill::Ramps),
             Err(ScheduleError::OneTick { tick: 0, rows: 3 })
         );
         assert!(matches!(
-            reconstruct(&t, &[&c], Some(0.0), 0.0, CommandTiming::InForce, true),
+            reconstruct(&t, &[&c], Some(0.0), 0.0, CommandTiming::InForce, Fill::Ramps),
             Err(ScheduleError::BadRate(_))
         ));
         assert!(matches!(
-            reconstruct(&t, &[&c], Some(f64::NAN), 0.0, CommandTiming::InForce, true),
+            reconstruct(&t, &[&c], Some(f64::NAN), 0.0, CommandTiming::InForce, Fill::Ramps),
             Err(ScheduleError::BadRate(_))
         ));
     }
@@ -391,9 +416,29 @@ mod tests {
         let t = [0.001, 0.011, 0.031, 0.041];
         let step = [0.0, 0.0, 1.0, 1.0];
         let ramp = [0.0, 0.1, 0.3, 0.4];
-        let s = reconstruct(&t, &[&step, &ramp], Some(100.0), 0.0, CommandTiming::InForce, true)
-            .unwrap();
+        let s =
+            reconstruct(&t, &[&step, &ramp], Some(100.0), 0.0, CommandTiming::InForce, Fill::Ramps)
+                .unwrap();
         assert_eq!(s.at(0, 0.025), 0.0);
         assert!((s.at(1, 0.025) - 0.2).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_alternative_fills_take_each_end_of_the_gap() {
+        // Tick 2 has no row; the step from 0 to 1 happened at tick 2 or tick 3.
+        let t = [0.001, 0.011, 0.031, 0.041];
+        let step = [0.0, 0.0, 1.0, 1.0];
+        let at = |fill| {
+            reconstruct(&t, &[&step], Some(100.0), 0.0, CommandTiming::InForce, fill)
+                .unwrap()
+                .at(0, 0.025)
+        };
+        assert_eq!(at(Fill::Ramps), 0.0);
+        assert_eq!(at(Fill::Hold), 0.0);
+        assert_eq!(at(Fill::Next), 1.0);
+        // Known ticks are the same whatever the fill.
+        let s = reconstruct(&t, &[&step], Some(100.0), 0.0, CommandTiming::InForce, Fill::Next)
+            .unwrap();
+        assert_eq!((s.at(0, 0.015), s.at(0, 0.035)), (0.0, 1.0));
     }
 }

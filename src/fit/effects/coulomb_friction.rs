@@ -8,6 +8,9 @@ const P: &[ParamDef] =
     &[ParamDef { name: "frictionloss", unit: "N·m", lo: 0.0, hi: 5.0, default: 0.0 }];
 
 impl Effect for CoulombFriction {
+    fn friction(&self) -> bool {
+        true
+    }
     fn id(&self) -> &'static str {
         "coulomb_friction"
     }

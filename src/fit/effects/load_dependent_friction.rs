@@ -10,6 +10,9 @@ const P: &[ParamDef] = &[
 ];
 
 impl Effect for LoadDependentFriction {
+    fn friction(&self) -> bool {
+        true
+    }
     fn id(&self) -> &'static str {
         "load_dependent_friction"
     }

@@ -146,6 +146,11 @@ pub trait Effect: Sync {
     fn smooth(&self) -> bool {
         false
     }
+    /// `true` for the friction models (Coulomb, Stribeck, load-dependent): alternative
+    /// descriptions of one loss, never a pair that only makes sense together.
+    fn friction(&self) -> bool {
+        false
+    }
 }
 
 /// Every effect, in the fit engine's preference order (simpler first).

@@ -14,6 +14,9 @@ const P: &[ParamDef] = &[
 ];
 
 impl Effect for StribeckFriction {
+    fn friction(&self) -> bool {
+        true
+    }
     fn id(&self) -> &'static str {
         "stribeck_friction"
     }

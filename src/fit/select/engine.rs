@@ -11,11 +11,12 @@ use crate::fit::optim::{
 };
 use crate::fit::stats::{ar1_variance_inflation, uncertainty_from_jacobian, white_floor};
 use crate::model::Robot;
+use crate::sim2real::commands::Fill;
 use crate::sim2real::metrics::gap_mask;
 use crate::sim2real::recording::Recording;
-use crate::sim2real::replay::Episode;
+use crate::sim2real::replay::{Episode, ReplayOptions};
 
-use super::{Errors, FitOptions, ProgressInfo};
+use super::{Errors, FitOptions, Floor, ProgressInfo};
 
 /// The fit engine's view of a robot and dataset.
 pub struct Engine<'a> {
@@ -25,6 +26,9 @@ pub struct Engine<'a> {
     pub joints: Vec<String>,
     /// Dataset simulations run so far (each replays every episode of a set once).
     sims: std::sync::atomic::AtomicUsize,
+    /// Per scored joint (order of `joints`): the mean square that command reconstruction alone
+    /// leaves, measured on the first set [`Engine::floors`] sees ([`Engine::reconstruction_floor`]).
+    recon: std::sync::OnceLock<Vec<f64>>,
 }
 
 impl<'a> Engine<'a> {
@@ -39,7 +43,13 @@ impl<'a> Engine<'a> {
                 }
             }
         }
-        Engine { robot, opts, joints, sims: std::sync::atomic::AtomicUsize::new(0) }
+        Engine {
+            robot,
+            opts,
+            joints,
+            sims: std::sync::atomic::AtomicUsize::new(0),
+            recon: std::sync::OnceLock::new(),
+        }
     }
 
     /// Reports progress through `opts.progress`, if any.
@@ -114,12 +124,56 @@ impl<'a> Engine<'a> {
         Some(Errors { sse, n, windows: win, eps })
     }
 
-    /// Per fitted joint: (name, mean square, white floor) of the residual of `recs` simulated
-    /// as `errs` ([`white_floor`], over the runs of samples between gaps).
-    pub fn floors(&self, recs: &[Recording], errs: &Errors) -> Vec<(String, f64, f64)> {
+    /// Per scored joint: the mean square of the error that command reconstruction alone leaves
+    /// on `recs`. A control tick without a row has a command somewhere between the commands of
+    /// the known ticks around it; the replay takes one guess ([`Fill::Ramps`]). The model as
+    /// given is replayed once more with every such tick filled from the *other* end of its gap
+    /// ([`Fill::Next`]), and half the mean square of the difference between the two simulations
+    /// is the floor: the truth lies between the two ends, and a lightly damped servo rings at
+    /// every step whose tick is unknown. Zero when the recording has no empty ticks.
+    ///
+    /// [`Fill::Ramps`]: crate::sim2real::commands::Fill::Ramps
+    /// [`Fill::Next`]: crate::sim2real::commands::Fill::Next
+    pub fn reconstruction_floor(&self, recs: &[Recording]) -> Vec<f64> {
+        let alt = FitOptions {
+            replay: ReplayOptions { command_fill: Fill::Next, ..self.opts.replay.clone() },
+            progress: None,
+            ..self.opts.clone()
+        };
+        let alt = Engine::new(self.robot, recs, &alt);
+        let (Some(a), Some(b)) = (self.errors(recs, &[]), alt.errors(recs, &[])) else {
+            return vec![0.0; self.joints.len()];
+        };
         self.joints
             .iter()
             .map(|name| {
+                let (mut ss, mut n) = (0.0, 0usize);
+                for ((rec, ea), eb) in recs.iter().zip(&a.eps).zip(&b.eps) {
+                    let Some(k) = rec.joints.iter().position(|j| &j.name == name) else { continue };
+                    let scored = gap_mask(&rec.t, self.opts.gap_mask_s);
+                    for (i, s) in scored.iter().enumerate() {
+                        let d = ea.q_sim[k][i] - eb.q_sim[k][i];
+                        if *s && d.is_finite() {
+                            ss += d * d;
+                            n += 1;
+                        }
+                    }
+                }
+                if n == 0 { 0.0 } else { 0.5 * ss / n as f64 }
+            })
+            .collect()
+    }
+
+    /// Per fitted joint: (name, mean square, floor) of the residual of `recs` simulated as
+    /// `errs`. The floor is the white floor ([`white_floor`], over the runs of samples between
+    /// gaps) plus the command-reconstruction floor ([`Engine::reconstruction_floor`], measured
+    /// once, on the first set this sees: the training set).
+    pub fn floors(&self, recs: &[Recording], errs: &Errors) -> Vec<Floor> {
+        let recon = self.recon.get_or_init(|| self.reconstruction_floor(recs));
+        self.joints
+            .iter()
+            .zip(recon)
+            .map(|(name, rc)| {
                 let mut runs = Vec::new();
                 for (rec, ep) in recs.iter().zip(&errs.eps) {
                     let Some(k) = rec.joints.iter().position(|j| &j.name == name) else { continue };
@@ -137,10 +191,16 @@ impl<'a> Engine<'a> {
                     }
                     runs.push(run);
                 }
-                let (ms, w) = white_floor(&runs);
-                (name.clone(), ms, w)
+                let (ms, white) = white_floor(&runs);
+                Floor { joint: name.clone(), ms, white, reconstruction: *rc }
             })
             .collect()
+    }
+
+    /// `true` when every fitted joint's residual of `recs` simulated as `errs` is within
+    /// `white_ratio` of its floor ([`Engine::floors`]): what is left is noise and timing.
+    pub fn at_floor(&self, recs: &[Recording], errs: &Errors) -> bool {
+        self.floors(recs, errs).iter().all(|f| f.reached(self.opts.white_ratio))
     }
 
     /// Residual vector (real − sim) on `joints`, subsampled to at most `max_len` entries.

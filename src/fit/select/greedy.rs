@@ -46,7 +46,7 @@ pub(super) fn greedy_round(
     if round == 0 {
         out.floors = floors.clone();
     }
-    if floors.iter().all(|(_, ms, w)| *ms <= opts.white_ratio * w) {
+    if floors.iter().all(|f| f.reached(opts.white_ratio)) {
         out.stopped_at_floor = true;
         return false;
     }
@@ -147,7 +147,6 @@ pub(super) fn greedy_round(
         }
         push(c, &mut cands);
     }
-    let n_top = cands.len();
     if opts.every_effect {
         // The best-ranked joint of every other effect: the linearised ranking is only a guide
         // (a doubled inertia or a saturation is far from linear).
@@ -174,13 +173,16 @@ pub(super) fn greedy_round(
     if cands.is_empty() {
         return false;
     }
+    // One-parameter candidates first (a 1-D fit is cheap), in rank order; then the
+    // multi-parameter ones, each screened against the best of those (below).
+    cands.sort_by_key(|(e, ..)| e.fitted() >= 2);
     let z = z_needed(cands.len());
     let k_before: usize = applied.iter().map(|a| a.effect.fitted()).sum();
     let bic_before = bic(tr_err.n, tr_err.sse, k_before);
     let mut accepted: Vec<(Selected, bool, Errors)> = Vec::new();
     // Every single fit of the round, for the joint pairs when no single one passes.
     let mut fitted: Vec<Applied> = Vec::new();
-    // Screen for the extra (every-effect) multi-parameter candidates: a coarse fit (10
+    // Screen for the multi-parameter candidates: a coarse fit (10
     // evaluations per parameter) must reach at least half of the best training improvement of
     // the fully fitted ones.
     let base_train = tr_err.rmse();
@@ -195,7 +197,6 @@ pub(super) fn greedy_round(
             "fit",
             Some((ci + 1, cands.len(), format!("{} on {}", e.id(), group.join(",")))),
         );
-        let extra = ci >= n_top;
         ci += 1;
         // A kept candidate already left a white training residual: one with more parameters
         // cannot explain more, and Occam's choice would not take it (`tried`: phase "floor").
@@ -205,10 +206,15 @@ pub(super) fn greedy_round(
         }
         // (Only multi-parameter effects: a 1-D fit is a 9-point grid plus golden section anyway,
         // and a coarse one misses scale parameters near zero, such as a small armature.)
-        if extra && e.fitted() >= 2 {
+        if e.fitted() >= 2 {
             let (p, f) = engine.fit_budget(train, &applied, e, &group, 10);
             if p.is_empty() || !f.is_finite() || base_train - f < 0.5 * (base_train - best_train) {
-                out.tried.push(Tried::not_tested(round, "screen", e.id(), &group, p, f));
+                out.tried.push(Tried::not_tested(round, "screen", e.id(), &group, p.clone(), f));
+                // Its coarse fit still starts a joint pair fit (gain error + delay: neither
+                // alone explains much).
+                if !p.is_empty() && f.is_finite() {
+                    fitted.push(Applied { effect: e, joints: group.clone(), params: p });
+                }
                 continue;
             }
         }
@@ -241,8 +247,7 @@ pub(super) fn greedy_round(
             bic_decreased: bic_after < bic_before,
             kept: false,
         });
-        if keep && engine.floors(train, &tr_a).iter().all(|(_, ms, w)| *ms <= opts.white_ratio * w)
-        {
+        if keep && engine.at_floor(train, &tr_a) {
             floor_k = Some(floor_k.map_or(e.fitted(), |k| k.min(e.fitted())));
         }
         if keep {

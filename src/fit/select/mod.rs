@@ -163,7 +163,7 @@ pub struct Tried {
 impl Tried {
     /// A candidate left out before the held-out test (`screen`: a coarse fit did not reach half
     /// the best training improvement; `floor`: a kept candidate already left a white residual).
-    fn not_tested(
+    pub(super) fn not_tested(
         round: usize,
         phase: &'static str,
         effect: &str,
@@ -186,6 +186,26 @@ impl Tried {
     }
 }
 
+/// What is left to explain on one fitted joint: its residual and the floors under it, as mean
+/// squares [rad²].
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Floor {
+    pub joint: String,
+    /// Residual mean square of the model as simulated.
+    pub ms: f64,
+    /// White floor ([`crate::fit::stats::white_floor`]): noise and quantisation.
+    pub white: f64,
+    /// Command-reconstruction floor ([`Engine::reconstruction_floor`]).
+    pub reconstruction: f64,
+}
+
+impl Floor {
+    /// The residual is within `ratio` of the floor (white + reconstruction).
+    pub fn reached(&self, ratio: f64) -> bool {
+        self.ms <= ratio * (self.white + self.reconstruction)
+    }
+}
+
 pub struct FitOutcome {
     pub train: Vec<Recording>,
     pub heldout: Vec<Recording>,
@@ -193,9 +213,8 @@ pub struct FitOutcome {
     pub split_by_time: bool,
     /// Which episodes were held out and why.
     pub split_note: String,
-    /// Per fitted joint, of the model as given on the training set: (name, residual mean
-    /// square, white floor) [rad²].
-    pub floors: Vec<(String, f64, f64)>,
+    /// Per fitted joint, of the model as given on the training set.
+    pub floors: Vec<Floor>,
     /// The search ended because the residual reached the white floor on every joint.
     pub stopped_at_floor: bool,
     /// Diagnosis of the first round (the model as given).

@@ -15,10 +15,10 @@ use super::{Errors, FitOutcome, Selected, Tried, set_uncertainty, sync_selected}
 
 /// Look-ahead for two effects that only make sense together (extra inertia *and* damping: each
 /// alone is mimicked by a delay or a gain error). The top four kept candidates of the round are
-/// paired when they act on the same joints, each pair is fitted jointly from the two single
-/// fits, and the best pair replaces the single winner when it is ≥ 10 % better on held-out
-/// (and beyond noise), and each member is needed in it (removing either is worse beyond
-/// noise). The pair with fewer parameters wins within 1 %.
+/// paired when they act on the same joints (not two friction models), each pair is fitted
+/// jointly from the two single fits, and the best pair replaces the single winner when it is
+/// ≥ 10 % better on held-out (and beyond noise), and each member is needed in it (removing
+/// either is worse beyond noise). The pair with fewer parameters wins within 1 %.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn pair_lookahead(
     engine: &Engine,
@@ -51,7 +51,7 @@ pub(super) fn pair_lookahead(
     // partner has nothing to explain. (The held-out test cannot show this: its improvement is
     // bounded by the same floor, e.g. 94 % on arm2's elbow damping.)
     let t_single = engine.errors(train, &with_single)?;
-    if engine.floors(train, &t_single).iter().all(|(_, ms, w)| *ms <= opts.white_ratio * w) {
+    if engine.at_floor(train, &t_single) {
         return None;
     }
     let h_single = engine.errors(heldout, &with_single)?;
@@ -64,6 +64,13 @@ pub(super) fn pair_lookahead(
         for j in i + 1..top.len() {
             let (a, b) = (top[i], top[j]);
             if a.effect == b.effect || !a.joints.iter().any(|x| b.joints.contains(x)) {
+                continue;
+            }
+            // Two friction models are two descriptions of one loss, not a pair.
+            if [&a.effect, &b.effect]
+                .iter()
+                .all(|id| effects::by_id(id).is_some_and(|e| e.friction()))
+            {
                 continue;
             }
             let mut set = applied.to_vec();

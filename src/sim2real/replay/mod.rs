@@ -27,7 +27,7 @@ use mujoco_rs::prelude::*;
 use rayon::prelude::*;
 
 use crate::model::{ActuatorKind, JointType, Robot, mj};
-use crate::sim2real::commands::{CommandTiming, reconstruct};
+use crate::sim2real::commands::{CommandTiming, Fill, reconstruct};
 use crate::sim2real::recording::{Recording, RecordingError, derivative};
 
 /// What the floating base does during replay.
@@ -53,10 +53,10 @@ pub struct ReplayOptions {
     /// Model joints absent from the recording: `true` → their actuators get the keyframe ctrl
     /// (hold the key pose); `false` → ctrl 0.
     pub hold_unlisted_at_key: bool,
-    /// Control ticks without a row are interpolated across ramps (and, without a control rate,
-    /// dropped rows' commands are interpolated, [`crate::sim2real::metrics::fill_dropped_rows`]);
-    /// `false` holds the command before the gap.
-    pub fill_dropped_commands: bool,
+    /// What control ticks without a row get ([`Fill`]; default: interpolated across ramps,
+    /// held across steps; without a control rate, dropped rows' commands are interpolated,
+    /// [`crate::sim2real::metrics::fill_dropped_rows`]).
+    pub command_fill: Fill,
 }
 
 impl Default for ReplayOptions {
@@ -66,7 +66,7 @@ impl Default for ReplayOptions {
             command_timing: None,
             base: BaseMode::Fixed,
             hold_unlisted_at_key: true,
-            fill_dropped_commands: true,
+            command_fill: Fill::Ramps,
         }
     }
 }
@@ -233,7 +233,7 @@ impl<'m> Replayer<'m> {
         let cmds: Vec<&[f64]> =
             rec.joints.iter().map(|jt| jt.q_cmd.as_deref().unwrap_or(&jt.q)).collect();
         let tick0 = rec.control_t0_s.unwrap_or(rec.t[0]);
-        let schedule = reconstruct(&rec.t, &cmds, rate, tick0, timing, opts.fill_dropped_commands)
+        let schedule = reconstruct(&rec.t, &cmds, rate, tick0, timing, opts.command_fill)
             .map_err(|e| setup(e.to_string()))?;
         if let Some(h) = hook.as_deref_mut() {
             let names: Vec<String> = rec.joints.iter().map(|j| j.name.clone()).collect();

@@ -67,7 +67,10 @@ fn dropped_command_rows_are_filled_before_the_hold() {
     let full = replay(&robot, &rec_of(&|_| true), &ReplayOptions::default(), None).unwrap();
     let lossy = rec_of(&|i| !(50..53).contains(&i));
     let err = |fill: bool| {
-        let o = ReplayOptions { fill_dropped_commands: fill, ..Default::default() };
+        let o = ReplayOptions {
+            command_fill: if fill { Fill::Ramps } else { Fill::Hold },
+            ..Default::default()
+        };
         let ep = replay(&robot, &lossy, &o, None).unwrap();
         // Same timestamps after the gap: compare there.
         (0..lossy.t.len())
