@@ -1,5 +1,6 @@
-//! Effects fitted together: the pair look-ahead after a round's winner, the known [`JOINT_PAIRS`]
-//! when no single effect passes, and the joint re-fit of several effects' parameters.
+//! Effects fitted together: the pair look-ahead after a round's winner, the known mimicking
+//! pairs ([`effects::mimicking_pairs`]) when no single effect passes, and the joint re-fit of
+//! several effects' parameters.
 
 use std::collections::BTreeMap;
 
