@@ -7,7 +7,7 @@
 //! of docs/fitting.md and `modellint fit --help` are generated from it, see [`docs`]) and the
 //! parameters are its table — and implements [`Effect`]: how it enters the simulation, its
 //! residual signature for the diagnosis, its write-back and its Isaac Lab / mjlab snippet.
-//! Adding an effect is that file, one line in [`all`] and its tests.
+//! Adding an effect is that file, one line in the `registry!` below and its tests.
 //!
 //! [`simulate`] replays recordings with any set of [`Applied`] effects; the fit engine
 //! ([`crate::fit::select`]) and `modellint synth`-style data generation use the same machinery.
@@ -26,17 +26,33 @@ use crate::sim2real::replay::{
 
 pub mod docs;
 
-mod action_delay;
-mod armature;
-mod backlash;
-mod coulomb_friction;
-mod gain_error;
-mod joint_stiffness;
-mod load_dependent_friction;
-mod position_offset;
-mod stribeck_friction;
-mod torque_limit;
-mod viscous_damping;
+/// The effect registry: one `module::Type` per effect, in the fit engine's preference order
+/// (simpler first). Declares each module and [`all`].
+macro_rules! registry {
+    ($($module:ident::$effect:ident),* $(,)?) => {
+        $(mod $module;)*
+
+        /// Every effect, in the fit engine's preference order (simpler first).
+        pub fn all() -> Vec<&'static dyn Effect> {
+            vec![$(&$module::$effect),*]
+        }
+    };
+}
+
+// Registering an effect is one line here.
+registry![
+    action_delay::ActionDelay,
+    coulomb_friction::CoulombFriction,
+    viscous_damping::ViscousDamping,
+    armature::Armature,
+    position_offset::PositionOffset,
+    gain_error::GainError,
+    stribeck_friction::StribeckFriction,
+    torque_limit::TorqueLimit,
+    backlash::Backlash,
+    joint_stiffness::JointStiffness,
+    load_dependent_friction::LoadDependentFriction,
+];
 
 /// One fitted parameter: name, unit, bounds and default (the value meaning "effect absent"
 /// where there is one).
@@ -277,23 +293,6 @@ pub fn num(v: f64) -> String {
 /// A fitted parameter by name (`NaN` when absent), for [`Effect::isaaclab`].
 pub fn named(params: &BTreeMap<String, f64>, name: &str) -> f64 {
     params.get(name).copied().unwrap_or(f64::NAN)
-}
-
-/// Every effect, in the fit engine's preference order (simpler first).
-pub fn all() -> Vec<&'static dyn Effect> {
-    vec![
-        &action_delay::ActionDelay,
-        &coulomb_friction::CoulombFriction,
-        &viscous_damping::ViscousDamping,
-        &armature::Armature,
-        &position_offset::PositionOffset,
-        &gain_error::GainError,
-        &stribeck_friction::StribeckFriction,
-        &torque_limit::TorqueLimit,
-        &backlash::Backlash,
-        &joint_stiffness::JointStiffness,
-        &load_dependent_friction::LoadDependentFriction,
-    ]
 }
 
 pub fn by_id(id: &str) -> Option<&'static dyn Effect> {
