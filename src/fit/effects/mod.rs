@@ -514,6 +514,26 @@ mod tests {
         assert!(super::by_id("no_such_effect").is_none());
     }
 
+    /// The diagnosis's probe without evidence: the default 5 % step (down from the upper
+    /// bound), or no probe for an effect that needs its evidence (torque_limit) — never a value
+    /// outside the bounds.
+    #[test]
+    fn probe_steps_stay_within_bounds() {
+        let none = std::collections::BTreeMap::new();
+        let mut stepped = 0;
+        for e in super::all() {
+            let d = e.params()[0];
+            let step = 0.05 * (d.hi - d.lo);
+            for (start, want) in [(d.lo, d.lo + step), (d.hi, d.hi - step)] {
+                if let Some(v) = e.probe(start, d.lo, d.hi, &none) {
+                    assert_eq!(v, want, "{}: from {start}", e.id());
+                    stepped += 1;
+                }
+            }
+        }
+        assert_eq!(stepped, 2 * (super::all().len() - 1));
+    }
+
     #[test]
     fn num_trims_zeros_and_negative_zero() {
         assert_eq!(super::num(0.1), "0.1");

@@ -92,3 +92,18 @@ impl Effect for TorqueLimit {
         ))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The probe starts at P80 |τ| when that is above the lower bound, else not at all.
+    #[test]
+    fn probe_starts_at_the_torque_percentile() {
+        let (lo, hi) = (TorqueLimit::META.params[0].lo, TorqueLimit::META.params[0].hi);
+        let ev = |v: f64| BTreeMap::from([(TAU_P80.to_string(), v)]);
+        assert_eq!(TorqueLimit.probe(hi, lo, hi, &ev(2.5)), Some(2.5));
+        assert_eq!(TorqueLimit.probe(hi, lo, hi, &ev(lo)), None);
+        assert_eq!(TorqueLimit.probe(hi, lo, hi, &BTreeMap::new()), None);
+    }
+}
