@@ -104,9 +104,8 @@ pub enum Cmd {
     /// Replay real recordings in MuJoCo and measure the sim-to-real gap (the Booster T1 sim-to-real study's replay and metrics).
     Gap(GapCmd),
     /// Name the physics the model is missing from real recordings, fit it, and show the held-out
-    /// improvement (effects: action_delay, coulomb_friction, viscous_damping, armature,
-    /// position_offset, gain_error, stribeck_friction, torque_limit, backlash, joint_stiffness,
-    /// load_dependent_friction).
+    /// improvement (`modellint fit --help` lists the effects).
+    #[command(after_help = crate::fit::effects::docs::help())]
     Fit(FitCmd),
     /// Recordings of a simulated "real robot" (the model plus hidden effects) through a
     /// simulated logging setup (100 Hz controller, asynchronous 88 Hz recorder, noise, 12-bit

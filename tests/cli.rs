@@ -195,6 +195,28 @@ fn rule_docs_are_generated_and_current() {
     }
 }
 
+/// `fit --help` lists every effect (from the registry) with its summary; `--effects` refuses an
+/// unknown id and names the known ones.
+#[test]
+fn fit_help_lists_the_effects() {
+    let (code, out, err) = modellint(&["fit", "--help"]);
+    assert_eq!(code, 0, "{err}");
+    let effects = modellint::fit::effects::all();
+    assert_eq!(effects.len(), 11);
+    for e in &effects {
+        let summary = modellint::fit::effects::docs::summary(e.meta());
+        assert!(out.contains(&format!("  {:<24} {summary}", e.id())), "{} missing:\n{out}", e.id());
+    }
+    assert!(out.contains("  viscous_damping "), "{out}");
+    let (code, _, err) =
+        modellint(&["fit", "fixtures/gap/arm3.xml", "fixtures/gap", "--effects", "viscous_dmping"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("unknown effect `viscous_dmping`") && err.contains("viscous_damping"),
+        "{err}"
+    );
+}
+
 #[test]
 fn fit_servo_mode_checks_its_input() {
     // A directory without BAM logs: a precise error, exit 2.

@@ -283,3 +283,91 @@ fn actuator_snippet_parses_as_python() {
     }
     let _ = std::fs::remove_dir_all(&work);
 }
+
+/// A kept effect as `fit` reports it (only the fields write-back reads matter).
+fn kept(effect: &str, joint: &str, params: &[(&str, f64)]) -> modellint::fit::select::Selected {
+    modellint::fit::select::Selected {
+        effect: effect.into(),
+        joints: vec![joint.into()],
+        params: params.iter().map(|(k, v)| (k.to_string(), *v)).collect(),
+        stderr: Default::default(),
+        identifiable: true,
+        evidence: Default::default(),
+        heldout_improvement: 0.5,
+        heldout_rmse_before: 0.0,
+        heldout_rmse_after: 0.0,
+        window_improvement: 0.0,
+        window_improvement_se: 0.0,
+        bic_before: 0.0,
+        bic_after: 0.0,
+        values: params.iter().map(|p| p.1).collect(),
+    }
+}
+
+/// Each effect's MJCF write-back on arm3 (timestep 1 ms; `<position>` servos with kp 50, kv 1.5
+/// from the default class): the attributes it sets, and the notes for what MJCF cannot hold.
+#[test]
+fn mjcf_write_back_of_each_expressible_effect() {
+    let path = root().join("fixtures/gap/arm3.xml");
+    let robot = load(&path);
+    let xml = std::fs::read_to_string(&path).unwrap();
+    let selected = vec![
+        kept("action_delay", "shoulder_pitch", &[("delay_s", 0.0204)]),
+        kept("torque_limit", "wrist_pitch", &[("effort_limit", 3.5)]),
+        kept("gain_error", "elbow_pitch", &[("kp_scale", 0.8), ("kd_scale", 1.2)]),
+        kept("viscous_damping", "elbow_pitch", &[("damping", 0.25)]),
+        kept("backlash", "shoulder_pitch", &[("backlash_rad", 0.01)]),
+    ];
+    let (out, warnings) = modellint::fit::writeback::edit_mjcf(&xml, &robot, &selected).unwrap();
+    let line = |name: &str, tag: &str| {
+        out.lines()
+            .find(|l| l.contains(&format!("<{tag} ")) && l.contains(&format!("name=\"{name}\"")))
+            .unwrap_or_else(|| panic!("no <{tag} name=\"{name}\"> in\n{out}"))
+            .to_string()
+    };
+    // 0.0204 s at 1 ms steps: 20 samples of MuJoCo's actuator delay buffer.
+    let shoulder = line("shoulder_pitch", "position");
+    assert!(
+        shoulder.contains("delay=\"0.0204\"") && shoulder.contains("nsample=\"20\""),
+        "{shoulder}"
+    );
+    let wrist = line("wrist_pitch", "position");
+    assert!(
+        wrist.contains("forcelimited=\"true\"") && wrist.contains("forcerange=\"-3.5 3.5\""),
+        "{wrist}"
+    );
+    // Gains from the compiled servo: 50 × 0.8 and 1.5 × 1.2.
+    let elbow = line("elbow_pitch", "position");
+    assert!(elbow.contains("kp=\"40\"") && elbow.contains("kv=\"1.8\""), "{elbow}");
+    assert!(line("elbow_pitch", "joint").contains("damping=\"0.25\""), "{out}");
+    assert_eq!(
+        warnings,
+        vec!["backlash on shoulder_pitch: not expressible in MJCF; see --write-actuators"]
+    );
+}
+
+/// A gain error cannot be written on a servo that is not a `<position>` one: one note per gain.
+#[test]
+fn gain_error_on_a_torque_motor_is_not_written() {
+    let work = tmp("motor");
+    let path = work.join("motor.xml");
+    let xml = r#"<mujoco>
+  <worldbody>
+    <body name="link">
+      <joint name="j" type="hinge" axis="0 1 0"/>
+      <geom type="capsule" size="0.02" fromto="0 0 0 0.2 0 0" mass="0.5"/>
+    </body>
+  </worldbody>
+  <actuator>
+    <motor name="m" joint="j"/>
+  </actuator>
+</mujoco>
+"#;
+    std::fs::write(&path, xml).unwrap();
+    let robot = load(&path);
+    let sel = vec![kept("gain_error", "j", &[("kp_scale", 0.8), ("kd_scale", 1.2)])];
+    let (out, warnings) = modellint::fit::writeback::edit_mjcf(xml, &robot, &sel).unwrap();
+    assert_eq!(out, xml);
+    assert_eq!(warnings, vec!["gain_error on j: actuator is not a position servo; not written"; 2]);
+    let _ = std::fs::remove_dir_all(&work);
+}

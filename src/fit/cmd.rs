@@ -270,18 +270,12 @@ pub fn run_fit(a: FitArgs) -> i32 {
                 x.joints.join(","),
                 ps.join(", ")
             ));
-            let ev: Vec<String> = [
-                "corr",
-                "explained_share",
-                "lag_s",
-                "implied_frictionloss",
-                "implied_damping",
-                "implied_armature",
-                "bias_rad",
-            ]
-            .iter()
-            .filter_map(|k| x.evidence.get(*k).map(|v| format!("{k} {v:.3}")))
-            .collect();
+            let shown = e.map_or(&[][..], |e| e.shown_evidence());
+            let ev: Vec<String> = ["corr", "explained_share"]
+                .iter()
+                .chain(shown)
+                .filter_map(|k| x.evidence.get(*k).map(|v| format!("{k} {v:.3}")))
+                .collect();
             s.push_str(&format!(
                 "      evidence: {}; when added, held-out error {:+.0} %{}\n",
                 if ev.is_empty() { "fitted jointly".to_string() } else { ev.join(", ") },

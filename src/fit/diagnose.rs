@@ -1,23 +1,11 @@
 //! Diagnosis: which missing physics do the replay residuals (real − sim) look like?
 //!
 //! Per joint, the residual `r = q_real − q_sim` is compared with one signature feature per
-//! effect, computed from the *simulated* trajectory (clean) and the command:
+//! effect ([`crate::fit::effects::Effect::signature`], in each effect's file; the table is in
+//! docs/fitting.md, generated from the effects' doc comments), computed from the *simulated*
+//! trajectory (clean) and the command ([`Samples`]). For a stiff servo, r ≈ −Δτ / kp.
 //!
-//! | effect | feature f | physical reading (stiff servo: r ≈ −Δτ / kp) |
-//! |---|---|---|
-//! | action_delay | q_sim(t − L) − q_sim(t), L = lag of the cross-correlation peak | lag L |
-//! | coulomb_friction | tanh(q̇/ε) | F ≈ −c·kp |
-//! | stribeck_friction | sign(q̇)·exp(−(q̇/v_s)²) (sticking at reversals) | |
-//! | load_dependent_friction | sign(q̇)·|τ| | |
-//! | viscous_damping | q̇ | b ≈ −c·kp |
-//! | armature | q̈ | ΔI ≈ −c·kp |
-//! | position_offset | 1 (constant bias) | offset ≈ c |
-//! | gain_error | servo error ctrl − q (and the amplitude ratio) | |
-//! | torque_limit | sign(τ)·max(|τ| − P80|τ|, 0) (error growing beyond a torque level) | |
-//! | backlash | sign of the servo error | |
-//! | joint_stiffness | q − q_key (error ∝ deflection/load) | k ≈ −c·kp |
-//!
-//! `c` is the least-squares coefficient of r on f (both centred, except the constant). The
+//! `c` is the least-squares coefficient of r on f (both centred, except for raw features). The
 //! score is the residual mean square that feature explains (`c²·Σf²/n`), reported as an RMS in
 //! radians; candidates are ranked by it.
 
@@ -25,8 +13,9 @@ use std::collections::BTreeMap;
 
 use serde::Serialize;
 
+use crate::fit::effects;
 use crate::model::{ActuatorKind, Robot};
-use crate::sim2real::metrics::{gap_mask, interp_at, pearson, zoh_at};
+use crate::sim2real::metrics::{gap_mask, pearson, zoh_at};
 use crate::sim2real::recording::{Recording, derivative};
 use crate::sim2real::replay::Episode;
 
@@ -41,18 +30,52 @@ pub struct Candidate {
     pub evidence: BTreeMap<String, f64>,
 }
 
-struct Samples {
-    r: Vec<f64>,
-    qd: Vec<f64>,
-    qdd: Vec<f64>,
-    u: Vec<f64>,
-    tau: Vec<f64>,
-    qrel: Vec<f64>,
+/// One joint's scored samples over the episodes (non-finite and post-gap samples left out), from
+/// which every effect computes its signature feature.
+pub struct Samples<'a> {
+    /// The recordings and their replays with the current model.
+    pub recs: &'a [Recording],
+    pub eps: &'a [Episode],
+    /// The joint's name.
+    pub joint: &'a str,
+    /// Residual q_real − q_sim [rad].
+    pub r: Vec<f64>,
+    /// Simulated velocity [rad/s] and acceleration [rad/s²].
+    pub qd: Vec<f64>,
+    pub qdd: Vec<f64>,
+    /// Servo error: command in force − q_sim [rad].
+    pub u: Vec<f64>,
+    /// Servo torque kp·u − kd·q̇ (the recording's kp/kd columns when present) [N·m].
+    pub tau: Vec<f64>,
+    /// q_sim − keyframe position [rad].
+    pub qrel: Vec<f64>,
     /// (episode index, sample index) of each kept sample.
-    at: Vec<(usize, usize)>,
+    pub at: Vec<(usize, usize)>,
+    /// RMS of `qd` (at least 1e-6) and of `u` (at least 1e-9).
+    pub qd_rms: f64,
+    pub u_rms: f64,
 }
 
-fn mean(x: &[f64]) -> f64 {
+/// An effect's signature on one joint: the feature the residual is regressed on.
+pub struct Signature {
+    /// One value per sample of [`Samples`].
+    pub feature: Vec<f64>,
+    /// Regress without centring (the feature's mean carries the signal: a bias, a lag).
+    pub raw: bool,
+    /// Evidence of its own: (key, value).
+    pub evidence: Vec<(&'static str, f64)>,
+    /// Evidence key for the physical value a stiff servo implies, −c·kp (only with a kp).
+    pub implied: Option<&'static str>,
+}
+
+impl Signature {
+    /// A centred feature with no evidence of its own.
+    pub fn centred(feature: Vec<f64>) -> Signature {
+        Signature { feature, raw: false, evidence: vec![], implied: None }
+    }
+}
+
+pub(crate) fn mean(x: &[f64]) -> f64 {
     if x.is_empty() { 0.0 } else { x.iter().sum::<f64>() / x.len() as f64 }
 }
 
@@ -85,7 +108,7 @@ fn explain(r: &[f64], f: &[f64], raw: bool) -> (f64, f64, f64) {
     (c, c * c * sff / n as f64, corr)
 }
 
-fn percentile(x: &[f64], p: f64) -> f64 {
+pub(crate) fn percentile(x: &[f64], p: f64) -> f64 {
     let mut v: Vec<f64> = x.iter().copied().filter(|v| v.is_finite()).collect();
     if v.is_empty() {
         return 0.0;
@@ -96,6 +119,7 @@ fn percentile(x: &[f64], p: f64) -> f64 {
 
 /// Ranked candidates for every (effect, joint) over the given episodes. `joints`: the joints to
 /// diagnose (all recorded joints when empty). `allowed`: effect ids to consider (all when empty).
+/// Within a joint, candidates come in registry order ([`effects::all`]) before the (stable) sort.
 /// Samples up to `gap_mask_s` after a gap in a recording are left out ([`gap_mask`]).
 pub fn diagnose(
     robot: &Robot,
@@ -127,6 +151,9 @@ pub fn diagnose(
             })
             .unwrap_or((0.0, 0.0));
         let mut s = Samples {
+            recs,
+            eps,
+            joint: name,
             r: vec![],
             qd: vec![],
             qdd: vec![],
@@ -134,6 +161,8 @@ pub fn diagnose(
             tau: vec![],
             qrel: vec![],
             at: vec![],
+            qd_rms: 0.0,
+            u_rms: 0.0,
         };
         for (e, (rec, ep)) in recs.iter().zip(eps).enumerate() {
             let Some(k) = rec.joints.iter().position(|j| j.name == *name) else { continue };
@@ -162,18 +191,14 @@ pub fn diagnose(
             continue;
         }
         let res_rms = rms(&s.r);
-        let qd_rms = rms(&s.qd).max(1e-6);
-        let u_rms = rms(&s.u).max(1e-9);
-        let p80 = percentile(&s.tau.iter().map(|x| x.abs()).collect::<Vec<_>>(), 0.8);
-        let mut push = |effect: &'static str,
-                        f: &[f64],
-                        raw: bool,
-                        extra: Vec<(&str, f64)>,
-                        implied: Option<(&str, f64)>| {
-            if !ok(effect) {
-                return;
+        s.qd_rms = rms(&s.qd).max(1e-6);
+        s.u_rms = rms(&s.u).max(1e-9);
+        for effect in effects::all() {
+            if !ok(effect.id()) {
+                continue;
             }
-            let (c, ems, corr) = explain(&s.r, f, raw);
+            let sig = effect.signature(&s);
+            let (c, ems, corr) = explain(&s.r, &sig.feature, sig.raw);
             let mut ev = BTreeMap::new();
             ev.insert("coef".to_string(), c);
             ev.insert("corr".to_string(), corr);
@@ -181,60 +206,23 @@ pub fn diagnose(
                 "explained_share".to_string(),
                 if res_rms > 0.0 { ems / (res_rms * res_rms) } else { 0.0 },
             );
-            for (k, v) in extra {
+            for (k, v) in sig.evidence {
                 ev.insert(k.to_string(), v);
             }
-            if let Some((k, scale)) = implied
+            if let Some(k) = sig.implied
                 && kp > 0.0
             {
-                ev.insert(k.to_string(), scale * c * kp);
+                // r ≈ −Δτ/kp for a stiff servo: the implied value is −c·kp.
+                ev.insert(k.to_string(), -c * kp);
             }
             out.push(Candidate {
-                effect,
+                effect: effect.id(),
                 joint: name.clone(),
                 explained_rms: ems.sqrt(),
                 residual_rms: res_rms,
                 evidence: ev,
             });
-        };
-        // Delay: lag L ∈ [0, 100 ms] maximising the fit of r by q_sim(t − L) − q_sim(t).
-        if ok("action_delay") {
-            let mut best = (0.0, f64::INFINITY, Vec::new());
-            for l in 0..=100 {
-                let lag = l as f64 * 1e-3;
-                let f: Vec<f64> =
-                    s.at.iter()
-                        .map(|&(e, i)| {
-                            let k = recs[e].joints.iter().position(|j| j.name == *name).unwrap();
-                            let ep = &eps[e];
-                            interp_at(&ep.t, &ep.q_sim[k], ep.t[i] - lag) - ep.q_sim[k][i]
-                        })
-                        .collect();
-                let sse: f64 = s.r.iter().zip(&f).map(|(r, f)| (r - f).powi(2)).sum();
-                if sse < best.1 {
-                    best = (lag, sse, f);
-                }
-            }
-            let (lag, _, f) = best;
-            push("action_delay", &f, true, vec![("lag_s", lag)], None);
         }
-        let sg: Vec<f64> = s.qd.iter().map(|v| (v / (0.02 * qd_rms)).tanh()).collect();
-        push("coulomb_friction", &sg, false, vec![], Some(("implied_frictionloss", -1.0)));
-        push("viscous_damping", &s.qd, false, vec![], Some(("implied_damping", -1.0)));
-        push("armature", &s.qdd, false, vec![], Some(("implied_armature", -1.0)));
-        push("position_offset", &vec![1.0; s.r.len()], true, vec![("bias_rad", mean(&s.r))], None);
-        push("gain_error", &s.u, false, vec![], None);
-        let vs = 0.2 * qd_rms;
-        let st: Vec<f64> = s.qd.iter().map(|v| v.signum() * (-(v / vs).powi(2)).exp()).collect();
-        push("stribeck_friction", &st, false, vec![], None);
-        let ld: Vec<f64> =
-            s.qd.iter().zip(&s.tau).map(|(v, t)| (v / (0.02 * qd_rms)).tanh() * t.abs()).collect();
-        push("load_dependent_friction", &ld, false, vec![], None);
-        let sat: Vec<f64> = s.tau.iter().map(|t| t.signum() * (t.abs() - p80).max(0.0)).collect();
-        push("torque_limit", &sat, false, vec![("tau_p80", p80)], None);
-        let bl: Vec<f64> = s.u.iter().map(|u| (u / (0.1 * u_rms)).tanh()).collect();
-        push("backlash", &bl, false, vec![], None);
-        push("joint_stiffness", &s.qrel, false, vec![], Some(("implied_stiffness", -1.0)));
     }
     out.sort_by(|a, b| b.explained_rms.total_cmp(&a.explained_rms));
     out

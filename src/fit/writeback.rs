@@ -4,15 +4,9 @@
 
 use std::collections::{BTreeMap, BTreeSet};
 
-use crate::fit::effects::{self, WriteBack};
+use crate::fit::effects::{self, ActuatorSite, IsaacLab, WriteBack, num};
 use crate::fit::select::Selected;
-use crate::model::{ActuatorKind, Robot};
-
-fn num(v: f64) -> String {
-    let s = format!("{v:.6}");
-    let s = s.trim_end_matches('0').trim_end_matches('.').to_string();
-    if s.is_empty() || s == "-0" { "0".into() } else { s }
-}
+use crate::model::Robot;
 
 /// Edits `xml` (the model's MJCF text) with the MuJoCo-expressible fitted values. Returns the new
 /// text and warnings (joints or actuators not found in this file, effects left to the TOML).
@@ -125,35 +119,20 @@ pub fn edit_file(
                                     .joint(j)
                                     .and_then(|jj| robot.actuators_on_joint(jj.id).first().copied())
                             });
+                        let site = ActuatorSite {
+                            tag: node.tag_name().name(),
+                            kind: compiled.map(|c| c.kind),
+                            timestep: robot.opt.timestep,
+                        };
                         for (a, v) in &attrs {
-                            match *a {
-                                "delay" => {
-                                    let n = (v / robot.opt.timestep).round().max(1.0) as i64;
-                                    add(node, "delay", num(*v));
-                                    add(node, "nsample", n.to_string());
-                                }
-                                "forcerange" => {
-                                    add(node, "forcelimited", "true".into());
-                                    add(node, "forcerange", format!("{} {}", num(-v), num(*v)));
-                                }
-                                "kp_scale" | "kv_scale" => {
-                                    let Some(ActuatorKind::Position { kp, kv }) =
-                                        compiled.map(|c| c.kind)
-                                    else {
-                                        warnings.push(format!("gain_error on {j}: actuator is not a position servo; not written"));
-                                        continue;
-                                    };
-                                    if node.has_tag_name("position") {
-                                        if *a == "kp_scale" {
-                                            add(node, "kp", num(kp * v));
-                                        } else {
-                                            add(node, "kv", num(kv * v));
-                                        }
-                                    } else {
-                                        warnings.push(format!("gain_error on {j}: <{}> is not <position>; not written", node.tag_name().name()));
+                            match e.actuator_attr(a, *v, &site) {
+                                Ok(set) => {
+                                    for (name, text) in set {
+                                        add(node, name, text);
                                     }
                                 }
-                                _ => add(node, a, num(*v)),
+                                Err(why) => warnings
+                                    .push(format!("{} on {j}: {why}; not written", s.effect)),
                             }
                         }
                     }
@@ -261,34 +240,18 @@ fn py_str(s: &str) -> String {
 
 /// Valid Python: one `ImplicitActuatorCfg` per joint with the fitted values its fields can hold
 /// (armature, friction, effort_limit); the values they cannot hold (passive joint damping, action
-/// delay) as comments on lines of their own, in the units the simulators use.
+/// delay) as comments on lines of their own, in the units the simulators use. Each effect says
+/// which ([`effects::Effect::isaaclab`]).
 pub fn isaaclab_snippet(robot: &Robot, selected: &[Selected]) -> String {
     let mut per_joint: BTreeMap<String, (Vec<String>, Vec<String>)> = BTreeMap::new();
     for x in selected {
+        let Some(e) = effects::by_id(&x.effect) else { continue };
+        let line = e.isaaclab(&x.params, robot.opt.timestep);
         for j in &x.joints {
             let (fields, comments) = per_joint.entry(j.clone()).or_default();
-            let p = |k: &str| x.params.get(k).copied().unwrap_or(f64::NAN);
-            match x.effect.as_str() {
-                "torque_limit" => fields.push(format!("effort_limit={},  # N·m", num(p("effort_limit")))),
-                "armature" => fields.push(format!("armature={},  # kg·m² (reflected rotor inertia)", num(p("armature")))),
-                "coulomb_friction" => fields.push(format!("friction={},  # N·m (MuJoCo frictionloss; check your simulator's friction model)", num(p("frictionloss")))),
-                "viscous_damping" => comments.push(format!(
-                    "# passive joint damping {} N·m·s/rad: not an actuator field; add it to the joint's damping, or to the PD damping (kd)",
-                    num(p("damping"))
-                )),
-                "action_delay" => {
-                    let d = p("delay_s");
-                    let steps = (d / robot.opt.timestep).round();
-                    comments.push(format!(
-                        "# action delay {} s = {} physics steps of {} s: DelayedPDActuatorCfg(min_delay={}, max_delay={})",
-                        num(d),
-                        num(steps),
-                        num(robot.opt.timestep),
-                        num(steps),
-                        num(steps)
-                    ));
-                }
-                other => comments.push(format!("# {other}: {}", x.params.iter().map(|(k, v)| format!("{k} = {}", num(*v))).collect::<Vec<_>>().join(", "))),
+            match &line {
+                IsaacLab::Field(f) => fields.push(f.clone()),
+                IsaacLab::Comment(c) => comments.push(c.clone()),
             }
         }
     }

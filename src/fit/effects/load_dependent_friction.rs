@@ -1,29 +1,36 @@
-//! Load-dependent friction: a dry-friction budget that grows with the transmitted torque
-//! (gear-mesh normal force), base + k·|τ_motor|, applied as −tanh(q̇/ε)·budget.
 use super::*;
+use crate::declare_effect;
 
-pub struct LoadDependentFriction;
-
-const P: &[ParamDef] = &[
-    ParamDef { name: "frictionloss", unit: "N·m", lo: 0.0, hi: 2.0, default: 0.0 },
-    ParamDef { name: "load_coeff", unit: "", lo: 0.0, hi: 0.5, default: 0.0 },
-];
+declare_effect! {
+    /// Dry friction growing with the motor torque: base + load_coeff·|τ_motor|.
+    ///
+    /// A dry-friction budget that grows with the transmitted torque (gear-mesh normal force),
+    /// applied as −tanh(q̇/ε)·budget with ε = 0.02 rad/s.
+    ///
+    /// ## Simulation
+    /// hook: `−tanh(q̇/0.02)·(F0 + k·|τ_motor|)`
+    ///
+    /// ## Signature
+    /// `tanh(q̇/ε)·|τ|`, ε = 0.02·rms q̇
+    ///
+    /// ## Write-back
+    /// TOML
+    ///
+    /// ## Isaac Lab / mjlab
+    /// comment with the parameters
+    pub LoadDependentFriction {
+        id: "load_dependent_friction",
+        entry: Torque,
+        params: [
+            ParamDef { name: "frictionloss", unit: "N·m", lo: 0.0, hi: 2.0, default: 0.0 },
+            ParamDef { name: "load_coeff", unit: "", lo: 0.0, hi: 0.5, default: 0.0 },
+        ],
+    }
+}
 
 impl Effect for LoadDependentFriction {
     fn friction(&self) -> bool {
         true
-    }
-    fn id(&self) -> &'static str {
-        "load_dependent_friction"
-    }
-    fn params(&self) -> &'static [ParamDef] {
-        P
-    }
-    fn entry(&self) -> Entry {
-        Entry::Torque
-    }
-    fn describe(&self) -> &'static str {
-        "dry friction growing with the motor torque: base + load_coeff·|τ_motor|"
     }
     fn initial(&self, _m: &MjModel, _t: &JointTarget) -> Vec<f64> {
         vec![0.02, 0.02]
@@ -40,6 +47,14 @@ impl Effect for LoadDependentFriction {
     ) {
         let budget = p[0].max(0.0) + p[1].max(0.0) * servo_torque(q, qd, io).abs();
         io.tau -= smooth_sign(qd, super::stribeck_friction::EPS) * budget;
+    }
+    fn signature(&self, s: &Samples) -> Signature {
+        Signature::centred(
+            s.qd.iter()
+                .zip(&s.tau)
+                .map(|(v, t)| (v / (0.02 * s.qd_rms)).tanh() * t.abs())
+                .collect(),
+        )
     }
     fn write_back(&self, _p: &[f64]) -> WriteBack {
         WriteBack::TomlOnly

@@ -2,31 +2,57 @@
 //! way into the simulation — an edit of the compiled model copy (MuJoCo-native), a per-physics-
 //! step torque/command hook ([`ActuatorHook`]), or a measurement transform (sensor bias).
 //!
+//! One effect, one file: each `src/fit/effects/<id>.rs` declares its effect with
+//! [`declare_effect!`](crate::declare_effect) — the doc comment is its documentation (the tables
+//! of docs/fitting.md and `modellint fit --help` are generated from it, see [`docs`]) and the
+//! parameters are its table — and implements [`Effect`]: how it enters the simulation, its
+//! residual signature for the diagnosis, its write-back and its Isaac Lab / mjlab snippet.
+//! Adding an effect is that file, one line in the `registry!` below and its tests.
+//!
 //! [`simulate`] replays recordings with any set of [`Applied`] effects; the fit engine
 //! ([`crate::fit::select`]) and `modellint synth`-style data generation use the same machinery.
 
-use std::collections::VecDeque;
+use std::collections::{BTreeMap, VecDeque};
 
 use mujoco_rs::prelude::*;
 use rayon::prelude::*;
 
-use crate::model::{Robot, mj};
+use crate::fit::diagnose::{Samples, Signature};
+use crate::model::{ActuatorKind, Robot, mj};
 use crate::sim2real::recording::Recording;
 use crate::sim2real::replay::{
     ActuatorHook, Episode, ReplayError, ReplayOptions, Replayer, StepIo,
 };
 
-mod action_delay;
-mod armature;
-mod backlash;
-mod coulomb_friction;
-mod gain_error;
-mod joint_stiffness;
-mod load_dependent_friction;
-mod position_offset;
-mod stribeck_friction;
-mod torque_limit;
-mod viscous_damping;
+pub mod docs;
+
+/// The effect registry: one `module::Type` per effect, in the fit engine's preference order
+/// (simpler first). Declares each module and [`all`].
+macro_rules! registry {
+    ($($module:ident::$effect:ident),* $(,)?) => {
+        $(mod $module;)*
+
+        /// Every effect, in the fit engine's preference order (simpler first).
+        pub fn all() -> Vec<&'static dyn Effect> {
+            vec![$(&$module::$effect),*]
+        }
+    };
+}
+
+// Registering an effect is one line here.
+registry![
+    action_delay::ActionDelay,
+    coulomb_friction::CoulombFriction,
+    viscous_damping::ViscousDamping,
+    armature::Armature,
+    position_offset::PositionOffset,
+    gain_error::GainError,
+    stribeck_friction::StribeckFriction,
+    torque_limit::TorqueLimit,
+    backlash::Backlash,
+    joint_stiffness::JointStiffness,
+    load_dependent_friction::LoadDependentFriction,
+];
 
 /// One fitted parameter: name, unit, bounds and default (the value meaning "effect absent"
 /// where there is one).
@@ -97,12 +123,84 @@ pub enum Entry {
     Measurement,
 }
 
-pub trait Effect: Sync {
-    fn id(&self) -> &'static str;
-    fn params(&self) -> &'static [ParamDef];
-    fn entry(&self) -> Entry;
-    /// One-line physical description (docs, `--help`).
-    fn describe(&self) -> &'static str;
+/// What [`declare_effect!`](crate::declare_effect) declares: the effect's id, how it enters the
+/// simulation, its parameters and its documentation.
+#[derive(Debug, Clone, Copy)]
+pub struct EffectMeta {
+    /// Stable snake_case id (`--effects`, JSON, TOML).
+    pub id: &'static str,
+    pub entry: Entry,
+    pub params: &'static [ParamDef],
+    /// Markdown from the effect's doc comment: a one-paragraph summary, a description, and the
+    /// sections [`docs::SECTIONS`] names.
+    pub docs: &'static str,
+}
+
+/// Implemented by [`declare_effect!`](crate::declare_effect): the declared metadata.
+pub trait Declared {
+    fn meta(&self) -> &'static EffectMeta;
+}
+
+/// Declares an effect type whose doc comment is its documentation (see [`docs::SECTIONS`]) and
+/// whose parameters are listed here; the file then implements [`Effect`] for it.
+#[macro_export]
+macro_rules! declare_effect {
+    (
+        $(#[doc = $doc:expr])*
+        pub $name:ident {
+            id: $id:expr,
+            entry: $entry:ident,
+            params: [$($param:expr),* $(,)?] $(,)?
+        }
+    ) => {
+        $(#[doc = $doc])*
+        pub struct $name;
+        impl $name {
+            pub const META: $crate::fit::effects::EffectMeta = $crate::fit::effects::EffectMeta {
+                id: $id,
+                entry: $crate::fit::effects::Entry::$entry,
+                params: &[$($param),*],
+                docs: concat!($($doc, "\n"),*),
+            };
+        }
+        impl $crate::fit::effects::Declared for $name {
+            fn meta(&self) -> &'static $crate::fit::effects::EffectMeta {
+                &Self::META
+            }
+        }
+    };
+}
+
+/// Where a joint's actuator element is, for [`Effect::actuator_attr`].
+#[derive(Debug, Clone, Copy)]
+pub struct ActuatorSite<'a> {
+    /// Tag of the MJCF element (`position`, `motor`, `general`, …).
+    pub tag: &'a str,
+    /// The compiled actuator (`None` when it is not in the model).
+    pub kind: Option<ActuatorKind>,
+    /// The model's physics time step [s].
+    pub timestep: f64,
+}
+
+/// What an effect contributes to a joint's Isaac Lab / mjlab `ImplicitActuatorCfg`.
+#[derive(Debug, Clone, PartialEq)]
+pub enum IsaacLab {
+    /// A field line (`armature=0.1,  # kg·m²`).
+    Field(String),
+    /// A comment line (`# …`): a value the configuration has no field for.
+    Comment(String),
+}
+
+pub trait Effect: Declared + Sync {
+    fn id(&self) -> &'static str {
+        self.meta().id
+    }
+    fn params(&self) -> &'static [ParamDef] {
+        self.meta().params
+    }
+    fn entry(&self) -> Entry {
+        self.meta().entry
+    }
     /// Start point of a fit: the model's current value for MuJoCo-native parameters, else the
     /// defaults.
     fn initial(&self, _m: &MjModel, _t: &JointTarget) -> Vec<f64> {
@@ -134,7 +232,6 @@ pub trait Effect: Sync {
     fn measurement_bias(&self, _p: &[f64]) -> f64 {
         0.0
     }
-    fn write_back(&self, p: &[f64]) -> WriteBack;
     /// Number of parameters that are actually fitted (the first `n`); the rest stay at default.
     fn fitted(&self) -> usize {
         self.params().len()
@@ -151,27 +248,76 @@ pub trait Effect: Sync {
     fn friction(&self) -> bool {
         false
     }
+    /// The diagnosis: this effect's signature feature, computed from one joint's samples (the
+    /// residual is least-squares fitted on it, see [`crate::fit::diagnose`]).
+    fn signature(&self, s: &Samples) -> Signature;
+    /// Keys of the diagnosis evidence the text output of `modellint fit` shows for this effect
+    /// (after `corr` and `explained_share`).
+    fn shown_evidence(&self) -> &'static [&'static str] {
+        &[]
+    }
+    /// The first parameter's value for the diagnosis's linearised re-ranking: one probe
+    /// simulation at this value, from `start` within `[lo, hi]`. `None`: no probe. Default: a
+    /// step of 5 % of the range (down when up would leave the bounds).
+    fn probe(&self, start: f64, lo: f64, hi: f64, evidence: &BTreeMap<String, f64>) -> Option<f64> {
+        let _ = evidence;
+        let step = 0.05 * (hi - lo);
+        Some(if start + step <= hi { start + step } else { start - step })
+    }
+    fn write_back(&self, p: &[f64]) -> WriteBack;
+    /// One `(attribute, value)` of [`WriteBack::Actuator`] as MJCF attributes (name, text) on the
+    /// actuator element `act`, or why it cannot be written there. Default: the attribute as is.
+    fn actuator_attr(
+        &self,
+        attr: &'static str,
+        v: f64,
+        act: &ActuatorSite,
+    ) -> Result<Vec<(&'static str, String)>, String> {
+        let _ = act;
+        Ok(vec![(attr, num(v))])
+    }
+    /// The line this effect adds to a joint's Isaac Lab / mjlab actuator configuration, from the
+    /// fitted parameters by name. Default: a comment with the parameters.
+    fn isaaclab(&self, params: &BTreeMap<String, f64>, timestep: f64) -> IsaacLab {
+        let _ = timestep;
+        IsaacLab::Comment(format!(
+            "# {}: {}",
+            self.id(),
+            params.iter().map(|(k, v)| format!("{k} = {}", num(*v))).collect::<Vec<_>>().join(", ")
+        ))
+    }
 }
 
-/// Every effect, in the fit engine's preference order (simpler first).
-pub fn all() -> Vec<&'static dyn Effect> {
-    vec![
-        &action_delay::ActionDelay,
-        &coulomb_friction::CoulombFriction,
-        &viscous_damping::ViscousDamping,
-        &armature::Armature,
-        &position_offset::PositionOffset,
-        &gain_error::GainError,
-        &stribeck_friction::StribeckFriction,
-        &torque_limit::TorqueLimit,
-        &backlash::Backlash,
-        &joint_stiffness::JointStiffness,
-        &load_dependent_friction::LoadDependentFriction,
-    ]
+/// A value as MJCF / TOML / Python text: 6 decimals, trailing zeros trimmed, no `-0`.
+pub fn num(v: f64) -> String {
+    let s = format!("{v:.6}");
+    let s = s.trim_end_matches('0').trim_end_matches('.').to_string();
+    if s.is_empty() || s == "-0" { "0".into() } else { s }
+}
+
+/// A fitted parameter by name (`NaN` when absent), for [`Effect::isaaclab`].
+pub fn named(params: &BTreeMap<String, f64>, name: &str) -> f64 {
+    params.get(name).copied().unwrap_or(f64::NAN)
 }
 
 pub fn by_id(id: &str) -> Option<&'static dyn Effect> {
     all().into_iter().find(|e| e.id() == id)
+}
+
+/// Pairs of effects that mimic each other alone but not together: a servo gain error and a
+/// delay both shift the phase; friction and inertia both slow the response; a dead band and an
+/// offset both bias it; damping and inertia both change the decay. The fit tries them jointly
+/// when no single effect passes ([`crate::fit::select`]), in this order (which decides ties and
+/// the order of the `tried` log).
+pub fn mimicking_pairs() -> Vec<(&'static dyn Effect, &'static dyn Effect)> {
+    vec![
+        (&gain_error::GainError, &action_delay::ActionDelay),
+        (&coulomb_friction::CoulombFriction, &armature::Armature),
+        (&stribeck_friction::StribeckFriction, &armature::Armature),
+        (&backlash::Backlash, &position_offset::PositionOffset),
+        (&viscous_damping::ViscousDamping, &armature::Armature),
+        (&gain_error::GainError, &coulomb_friction::CoulombFriction),
+    ]
 }
 
 /// An effect with parameters on a set of joints (a joint group shares one parameter vector).
@@ -349,13 +495,55 @@ pub(crate) fn get(a: &[f64], i: usize) -> f64 {
 mod tests {
     #[test]
     fn short_parameter_vectors_are_padded_with_defaults() {
-        let e = super::by_id("torque_limit").expect("known");
-        let a = super::Applied { effect: e, joints: vec!["j".into()], params: vec![1.0] };
-        let p = a.full_params();
-        assert_eq!(p.len(), e.params().len());
-        assert_eq!(p[0], 1.0);
-        assert_eq!(p[1], e.params()[1].default);
-        let full = super::Applied { params: p.to_vec(), ..a.clone() };
-        assert!(matches!(full.full_params(), std::borrow::Cow::Borrowed(_)));
+        let multi: Vec<_> = super::all().into_iter().filter(|e| e.params().len() >= 2).collect();
+        assert!(!multi.is_empty());
+        for e in multi {
+            let a = super::Applied { effect: e, joints: vec!["j".into()], params: vec![1.0] };
+            let p = a.full_params();
+            assert_eq!(p.len(), e.params().len());
+            assert_eq!(p[0], 1.0);
+            assert_eq!(p[1], e.params()[1].default);
+            let full = super::Applied { params: p.to_vec(), ..a.clone() };
+            assert!(matches!(full.full_params(), std::borrow::Cow::Borrowed(_)));
+        }
+    }
+
+    #[test]
+    fn ids_are_unique_and_found() {
+        let all = super::all();
+        for (i, e) in all.iter().enumerate() {
+            assert!(all[..i].iter().all(|x| x.id() != e.id()), "{} twice", e.id());
+            assert_eq!(super::by_id(e.id()).map(|x| x.id()), Some(e.id()));
+            assert!(e.fitted() >= 1 && e.fitted() <= e.params().len(), "{}", e.id());
+        }
+        assert!(super::by_id("no_such_effect").is_none());
+    }
+
+    /// The diagnosis's probe without evidence: the default 5 % step (down from the upper
+    /// bound), or no probe for an effect that needs its evidence (torque_limit) — never a value
+    /// outside the bounds.
+    #[test]
+    fn probe_steps_stay_within_bounds() {
+        let none = std::collections::BTreeMap::new();
+        let mut stepped = 0;
+        for e in super::all() {
+            let d = e.params()[0];
+            let step = 0.05 * (d.hi - d.lo);
+            for (start, want) in [(d.lo, d.lo + step), (d.hi, d.hi - step)] {
+                if let Some(v) = e.probe(start, d.lo, d.hi, &none) {
+                    assert_eq!(v, want, "{}: from {start}", e.id());
+                    stepped += 1;
+                }
+            }
+        }
+        assert_eq!(stepped, 2 * (super::all().len() - 1));
+    }
+
+    #[test]
+    fn num_trims_zeros_and_negative_zero() {
+        assert_eq!(super::num(0.1), "0.1");
+        assert_eq!(super::num(50.0), "50");
+        assert_eq!(super::num(-1e-9), "0");
+        assert_eq!(super::num(1.23456789), "1.234568");
     }
 }

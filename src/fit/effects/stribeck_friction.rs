@@ -1,33 +1,41 @@
-//! Stribeck friction: static friction above the sliding (Coulomb) level at low speed,
-//! −sign(q̇)·(Fd + (Fs − Fd)·exp(−(q̇/vs)²)), with tanh(q̇/ε) for the sign near zero.
 use super::*;
+use crate::declare_effect;
 
-pub struct StribeckFriction;
+declare_effect! {
+    /// Breakaway (static) friction above the sliding level at low speed.
+    ///
+    /// Static friction above the sliding (Coulomb) level at low speed,
+    /// −sign(q̇)·(Fd + (Fs − Fd)·exp(−(q̇/vs)²)), with tanh(q̇/ε) for the sign near zero
+    /// (ε = 0.02 rad/s).
+    ///
+    /// ## Simulation
+    /// hook: `−tanh(q̇/0.02)·(Fd + (Fs−Fd)·exp(−(q̇/vs)²))`
+    ///
+    /// ## Signature
+    /// `sign(q̇)·exp(−(q̇/v_s)²)`, v_s = 0.2·rms q̇ (sticking at reversals)
+    ///
+    /// ## Write-back
+    /// TOML
+    ///
+    /// ## Isaac Lab / mjlab
+    /// comment with the parameters
+    pub StribeckFriction {
+        id: "stribeck_friction",
+        entry: Torque,
+        params: [
+            ParamDef { name: "static", unit: "N·m", lo: 0.0, hi: 5.0, default: 0.0 },
+            ParamDef { name: "dynamic", unit: "N·m", lo: 0.0, hi: 5.0, default: 0.0 },
+            ParamDef { name: "v_stribeck", unit: "rad/s", lo: 0.01, hi: 2.0, default: 0.1 },
+        ],
+    }
+}
 
 /// Smoothing velocity of the sign [rad/s].
 pub const EPS: f64 = 0.02;
 
-const P: &[ParamDef] = &[
-    ParamDef { name: "static", unit: "N·m", lo: 0.0, hi: 5.0, default: 0.0 },
-    ParamDef { name: "dynamic", unit: "N·m", lo: 0.0, hi: 5.0, default: 0.0 },
-    ParamDef { name: "v_stribeck", unit: "rad/s", lo: 0.01, hi: 2.0, default: 0.1 },
-];
-
 impl Effect for StribeckFriction {
     fn friction(&self) -> bool {
         true
-    }
-    fn id(&self) -> &'static str {
-        "stribeck_friction"
-    }
-    fn params(&self) -> &'static [ParamDef] {
-        P
-    }
-    fn entry(&self) -> Entry {
-        Entry::Torque
-    }
-    fn describe(&self) -> &'static str {
-        "breakaway (static) friction above the sliding level at low speed"
     }
     fn initial(&self, _m: &MjModel, _t: &JointTarget) -> Vec<f64> {
         vec![0.1, 0.05, 0.1]
@@ -44,6 +52,10 @@ impl Effect for StribeckFriction {
     ) {
         let (fs, fd, vs) = (p[0].max(0.0), p[1].max(0.0), p[2].max(1e-4));
         io.tau -= smooth_sign(qd, EPS) * (fd + (fs - fd) * (-(qd / vs).powi(2)).exp());
+    }
+    fn signature(&self, s: &Samples) -> Signature {
+        let vs = 0.2 * s.qd_rms;
+        Signature::centred(s.qd.iter().map(|v| v.signum() * (-(v / vs).powi(2)).exp()).collect())
     }
     fn write_back(&self, _p: &[f64]) -> WriteBack {
         WriteBack::TomlOnly

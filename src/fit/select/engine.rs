@@ -352,12 +352,7 @@ impl<'a> Engine<'a> {
         let m0 = model_with(self.robot, base);
         let mut p = effect.initial(&m0, &t);
         let (lo, hi) = effect.bounds(&m0, &t);
-        if effect.id() == "torque_limit" {
-            p[0] = c.evidence.get("tau_p80").copied().filter(|v| *v > lo[0])?;
-        } else {
-            let step = 0.05 * (hi[0] - lo[0]);
-            p[0] = if p[0] + step <= hi[0] { p[0] + step } else { p[0] - step };
-        }
+        p[0] = effect.probe(p[0], lo[0], hi[0], &c.evidence)?;
         let mut a = base.to_vec();
         a.push(Applied { effect, joints: vec![c.joint.clone()], params: p });
         let e = self.errors(train, &a)?;

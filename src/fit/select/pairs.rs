@@ -1,5 +1,6 @@
-//! Effects fitted together: the pair look-ahead after a round's winner, the known [`JOINT_PAIRS`]
-//! when no single effect passes, and the joint re-fit of several effects' parameters.
+//! Effects fitted together: the pair look-ahead after a round's winner, the known mimicking
+//! pairs ([`effects::mimicking_pairs`]) when no single effect passes, and the joint re-fit of
+//! several effects' parameters.
 
 use std::collections::BTreeMap;
 
@@ -173,19 +174,8 @@ pub(super) fn pair_lookahead(
     Some(res)
 }
 
-/// Pairs of effects that mimic each other alone but not together: a servo gain error and a
-/// delay both shift the phase; friction and inertia both slow the response; a dead band and an
-/// offset both bias it; damping and inertia both change the decay.
-const JOINT_PAIRS: [(&str, &str); 6] = [
-    ("gain_error", "action_delay"),
-    ("coulomb_friction", "armature"),
-    ("stribeck_friction", "armature"),
-    ("backlash", "position_offset"),
-    ("viscous_damping", "armature"),
-    ("gain_error", "coulomb_friction"),
-];
-
-/// When no single candidate passed the held-out gate: fit the [`JOINT_PAIRS`] whose members were
+/// When no single candidate passed the held-out gate: fit the pairs of effects that mimic each
+/// other alone but not together ([`effects::mimicking_pairs`]) whose members were
 /// both fitted on the same joint group this round, jointly from their single fits, and keep the
 /// best pair that passes the gate as a whole (beyond noise against the model without it, BIC
 /// down) with each member needed (removing either is worse beyond noise).
@@ -207,7 +197,7 @@ pub(super) fn joint_pairs(
     let bic_before = bic(tr_err.n, tr_err.sse, k_before);
     let mut best: Option<(Vec<Applied>, Errors, Verdict, f64)> = None;
     engine.report(round, "joint pairs", None);
-    for (ea, eb) in JOINT_PAIRS {
+    for (ea, eb) in effects::mimicking_pairs().into_iter().map(|(a, b)| (a.id(), b.id())) {
         for a in fitted.iter().filter(|x| x.effect.id() == ea) {
             let Some(b) = fitted.iter().find(|x| x.effect.id() == eb && x.joints == a.joints)
             else {
