@@ -26,9 +26,6 @@ pub struct Engine<'a> {
     pub joints: Vec<String>,
     /// Dataset simulations run so far (each replays every episode of a set once).
     sims: std::sync::atomic::AtomicUsize,
-    /// Per scored joint (order of `joints`): the mean square that command reconstruction alone
-    /// leaves, measured on the first set [`Engine::floors`] sees ([`Engine::reconstruction_floor`]).
-    recon: std::sync::OnceLock<Vec<f64>>,
 }
 
 impl<'a> Engine<'a> {
@@ -43,13 +40,7 @@ impl<'a> Engine<'a> {
                 }
             }
         }
-        Engine {
-            robot,
-            opts,
-            joints,
-            sims: std::sync::atomic::AtomicUsize::new(0),
-            recon: std::sync::OnceLock::new(),
-        }
+        Engine { robot, opts, joints, sims: std::sync::atomic::AtomicUsize::new(0) }
     }
 
     /// Reports progress through `opts.progress`, if any.
@@ -125,30 +116,36 @@ impl<'a> Engine<'a> {
     }
 
     /// Per scored joint: the mean square of the error that command reconstruction alone leaves
-    /// on `recs`. A control tick without a row has a command somewhere between the commands of
-    /// the known ticks around it; the replay takes one guess ([`Fill::Ramps`]). The model as
-    /// given is replayed once more with every such tick filled from the *other* end of its gap
-    /// ([`Fill::Next`]), and half the mean square of the difference between the two simulations
-    /// is the floor: the truth lies between the two ends, and a lightly damped servo rings at
-    /// every step whose tick is unknown. Zero when the recording has no empty ticks.
+    /// on `recs` simulated with `applied` (`errs`). A control tick without a row has a command
+    /// somewhere between the commands of the known ticks around it; the replay takes one guess
+    /// ([`Fill::Ramps`]). The same model is replayed once more with every held (step) gap filled
+    /// from its *other* end ([`Fill::Next`]), and half the mean square of the difference between
+    /// the two simulations is the floor: the truth lies between the two ends, and a lightly
+    /// damped servo rings after every step whose tick is unknown. Zero when no gap is held.
     ///
     /// [`Fill::Ramps`]: crate::sim2real::commands::Fill::Ramps
     /// [`Fill::Next`]: crate::sim2real::commands::Fill::Next
-    pub fn reconstruction_floor(&self, recs: &[Recording]) -> Vec<f64> {
+    pub fn reconstruction_floor(
+        &self,
+        recs: &[Recording],
+        applied: &[Applied],
+        errs: &Errors,
+    ) -> Vec<f64> {
         let alt = FitOptions {
             replay: ReplayOptions { command_fill: Fill::Next, ..self.opts.replay.clone() },
             progress: None,
             ..self.opts.clone()
         };
         let alt = Engine::new(self.robot, recs, &alt);
-        let (Some(a), Some(b)) = (self.errors(recs, &[]), alt.errors(recs, &[])) else {
+        let Some(b) = alt.errors(recs, applied) else {
             return vec![0.0; self.joints.len()];
         };
+        self.sims.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         self.joints
             .iter()
             .map(|name| {
                 let (mut ss, mut n) = (0.0, 0usize);
-                for ((rec, ea), eb) in recs.iter().zip(&a.eps).zip(&b.eps) {
+                for ((rec, ea), eb) in recs.iter().zip(&errs.eps).zip(&b.eps) {
                     let Some(k) = rec.joints.iter().position(|j| &j.name == name) else { continue };
                     let scored = gap_mask(&rec.t, self.opts.gap_mask_s);
                     for (i, s) in scored.iter().enumerate() {
@@ -164,15 +161,15 @@ impl<'a> Engine<'a> {
             .collect()
     }
 
-    /// Per fitted joint: (name, mean square, floor) of the residual of `recs` simulated as
-    /// `errs`. The floor is the white floor ([`white_floor`], over the runs of samples between
-    /// gaps) plus the command-reconstruction floor ([`Engine::reconstruction_floor`], measured
-    /// once, on the first set this sees: the training set).
-    pub fn floors(&self, recs: &[Recording], errs: &Errors) -> Vec<Floor> {
-        let recon = self.recon.get_or_init(|| self.reconstruction_floor(recs));
+    /// Per fitted joint: (name, mean square, floors) of the residual of `recs` simulated with
+    /// `applied` as `errs`. The floor is the white floor ([`white_floor`], over the runs of
+    /// samples between gaps) plus the command-reconstruction floor
+    /// ([`Engine::reconstruction_floor`], of this model: one more simulation).
+    pub fn floors(&self, recs: &[Recording], applied: &[Applied], errs: &Errors) -> Vec<Floor> {
+        let recon = self.reconstruction_floor(recs, applied, errs);
         self.joints
             .iter()
-            .zip(recon)
+            .zip(&recon)
             .map(|(name, rc)| {
                 let mut runs = Vec::new();
                 for (rec, ep) in recs.iter().zip(&errs.eps) {
@@ -197,10 +194,10 @@ impl<'a> Engine<'a> {
             .collect()
     }
 
-    /// `true` when every fitted joint's residual of `recs` simulated as `errs` is within
+    /// `true` when every fitted joint's residual of `recs` simulated with `applied` as `errs` is within
     /// `white_ratio` of its floor ([`Engine::floors`]): what is left is noise and timing.
-    pub fn at_floor(&self, recs: &[Recording], errs: &Errors) -> bool {
-        self.floors(recs, errs).iter().all(|f| f.reached(self.opts.white_ratio))
+    pub fn at_floor(&self, recs: &[Recording], applied: &[Applied], errs: &Errors) -> bool {
+        self.floors(recs, applied, errs).iter().all(|f| f.reached(self.opts.white_ratio))
     }
 
     /// Residual vector (real − sim) on `joints`, subsampled to at most `max_len` entries.

@@ -42,7 +42,7 @@ pub(super) fn greedy_round(
     };
     // Nothing left to explain: on every fitted joint the training residual is (nearly) white,
     // at the floor that noise, quantisation and command reconstruction impose on this dataset.
-    let floors = engine.floors(train, &tr_err);
+    let floors = engine.floors(train, &applied, &tr_err);
     if round == 0 {
         out.floors = floors.clone();
     }
@@ -247,7 +247,7 @@ pub(super) fn greedy_round(
             bic_decreased: bic_after < bic_before,
             kept: false,
         });
-        if keep && engine.at_floor(train, &tr_a) {
+        if keep && engine.at_floor(train, &trial, &tr_a) {
             floor_k = Some(floor_k.map_or(e.fitted(), |k| k.min(e.fitted())));
         }
         if keep {

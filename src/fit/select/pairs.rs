@@ -52,7 +52,7 @@ pub(super) fn pair_lookahead(
     // partner has nothing to explain. (The held-out test cannot show this: its improvement is
     // bounded by the same floor, e.g. 94 % on arm2's elbow damping.)
     let t_single = engine.errors(train, &with_single)?;
-    if engine.at_floor(train, &t_single) {
+    if engine.at_floor(train, &with_single, &t_single) {
         return None;
     }
     let h_single = engine.errors(heldout, &with_single)?;
