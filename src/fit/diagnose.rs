@@ -94,6 +94,21 @@ fn percentile(x: &[f64], p: f64) -> f64 {
     v[((v.len() - 1) as f64 * p).round() as usize]
 }
 
+/// Effects with a signature feature of their own in [`diagnose`].
+const SIGNED: [&str; 11] = [
+    "action_delay",
+    "coulomb_friction",
+    "viscous_damping",
+    "armature",
+    "position_offset",
+    "gain_error",
+    "stribeck_friction",
+    "load_dependent_friction",
+    "torque_limit",
+    "backlash",
+    "joint_stiffness",
+];
+
 /// Ranked candidates for every (effect, joint) over the given episodes. `joints`: the joints to
 /// diagnose (all recorded joints when empty). `allowed`: effect ids to consider (all when empty).
 /// Samples up to `gap_mask_s` after a gap in a recording are left out ([`gap_mask`]).
@@ -235,6 +250,14 @@ pub fn diagnose(
         let bl: Vec<f64> = s.u.iter().map(|u| (u / (0.1 * u_rms)).tanh()).collect();
         push("backlash", &bl, false, vec![], None);
         push("joint_stiffness", &s.qrel, false, vec![], Some(("implied_stiffness", -1.0)));
+        // Effects without a signature above (external-load friction, torque-off braking, motor
+        // constants): the friction-like feature as a placeholder, so that they are candidates;
+        // the greedy round ranks every candidate by its simulated sensitivity anyway.
+        for e in crate::fit::effects::all() {
+            if !SIGNED.contains(&e.id()) {
+                push(e.id(), &sg, false, vec![], None);
+            }
+        }
     }
     out.sort_by(|a, b| b.explained_rms.total_cmp(&a.explained_rms));
     out

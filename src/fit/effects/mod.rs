@@ -5,7 +5,7 @@
 //! [`simulate`] replays recordings with any set of [`Applied`] effects; the fit engine
 //! ([`crate::fit::select`]) and `modellint synth`-style data generation use the same machinery.
 
-use std::collections::VecDeque;
+use std::collections::{BTreeMap, VecDeque};
 
 use mujoco_rs::prelude::*;
 use rayon::prelude::*;
@@ -20,12 +20,15 @@ mod action_delay;
 mod armature;
 mod backlash;
 mod coulomb_friction;
+mod external_load_friction;
 mod gain_error;
 mod joint_stiffness;
 mod load_dependent_friction;
+mod motor_constants;
 mod position_offset;
 mod stribeck_friction;
 mod torque_limit;
+mod torque_off_braking;
 mod viscous_damping;
 
 /// One fitted parameter: name, unit, bounds and default (the value meaning "effect absent"
@@ -146,6 +149,15 @@ pub trait Effect: Sync {
     fn smooth(&self) -> bool {
         false
     }
+    /// Hook effects: called once per episode and joint before the first step with the
+    /// recording's metadata (e.g. a supply voltage the effect needs), to fill `st`.
+    fn start(&self, _st: &mut EffectState, _meta: &BTreeMap<String, String>, _p: &[f64]) {}
+    /// Order of the hook effects within a step: command effects (0) run first, then torque
+    /// effects (1); an effect that needs every other torque of the step (implicit friction,
+    /// stage 2) runs last.
+    fn stage(&self) -> u8 {
+        if self.entry() == Entry::Command { 0 } else { 1 }
+    }
 }
 
 /// Every effect, in the fit engine's preference order (simpler first).
@@ -162,6 +174,9 @@ pub fn all() -> Vec<&'static dyn Effect> {
         &backlash::Backlash,
         &joint_stiffness::JointStiffness,
         &load_dependent_friction::LoadDependentFriction,
+        &external_load_friction::ExternalLoadFriction,
+        &torque_off_braking::TorqueOffBraking,
+        &motor_constants::MotorConstants,
     ]
 }
 
@@ -223,6 +238,8 @@ pub fn model_with(robot: &Robot, applied: &[Applied]) -> MjModel {
 
 struct Hook<'a> {
     applied: &'a [Applied],
+    /// The episode's recording metadata (for [`Effect::start`]).
+    meta: &'a BTreeMap<String, String>,
     /// Per recorded joint: (index into `applied`, state), command effects first.
     lists: Vec<Vec<(usize, EffectState)>>,
     dt: f64,
@@ -242,9 +259,13 @@ impl ActuatorHook for Hook<'_> {
                         matches!(a.effect.entry(), Entry::Command | Entry::Torque)
                             && a.joints.iter().any(|j| j == n)
                     })
-                    .map(|(i, _)| (i, EffectState::default()))
+                    .map(|(i, a)| {
+                        let mut st = EffectState::default();
+                        a.effect.start(&mut st, self.meta, &a.full_params());
+                        (i, st)
+                    })
                     .collect();
-                v.sort_by_key(|(i, _)| (self.applied[*i].effect.entry() != Entry::Command) as u8);
+                v.sort_by_key(|(i, _)| self.applied[*i].effect.stage());
                 v
             })
             .collect();
@@ -304,7 +325,7 @@ pub fn replay_with(
     };
     let hooked = applied.iter().any(|a| matches!(a.effect.entry(), Entry::Command | Entry::Torque));
     let mut ep = if hooked {
-        let mut h = Hook { applied, lists: vec![], dt: 0.0 };
+        let mut h = Hook { applied, meta: &rec.meta, lists: vec![], dt: 0.0 };
         replayer.replay(rec_in, opts, Some(&mut h))?
     } else {
         replayer.replay(rec_in, opts, None)?

@@ -1,0 +1,45 @@
+//! Torque-off braking: with torque disabled (recorded `enabled` false) the model's actuator is
+//! off and the joint coasts; a real servo's H-bridge may instead short the motor, whose back-EMF
+//! then brakes the joint. Adds `−beta·kd·q̇` while disabled, `kd` the actuator's velocity gain
+//! (for a DC-motor servo the back-EMF damping kt²/R): beta 0 = open bridge (coasting), 1 =
+//! shorted bridge (full back-EMF braking).
+use super::*;
+
+pub struct TorqueOffBraking;
+
+const P: &[ParamDef] = &[ParamDef { name: "beta_off", unit: "", lo: 0.0, hi: 1.0, default: 0.0 }];
+
+impl Effect for TorqueOffBraking {
+    fn id(&self) -> &'static str {
+        "torque_off_braking"
+    }
+    fn params(&self) -> &'static [ParamDef] {
+        P
+    }
+    fn entry(&self) -> Entry {
+        Entry::Torque
+    }
+    fn describe(&self) -> &'static str {
+        "back-EMF braking while torque is off: −beta_off·kd·q̇ (0 coasting … 1 shorted bridge)"
+    }
+    fn torque(
+        &self,
+        _st: &mut EffectState,
+        _q: f64,
+        qd: f64,
+        _q_target: f64,
+        io: &mut StepIo,
+        _dt: f64,
+        p: &[f64],
+    ) {
+        if !io.enabled {
+            io.tau -= p[0].max(0.0) * io.kd * qd;
+        }
+    }
+    fn smooth(&self) -> bool {
+        true
+    }
+    fn write_back(&self, _p: &[f64]) -> WriteBack {
+        WriteBack::TomlOnly
+    }
+}
