@@ -1,7 +1,8 @@
 //! Servo identification with the general fit engine (no servo-specific mode): a synthetic
 //! recovery of external-load friction held out by a metadata key (no data needed), and the
 //! leave-one-gain-out experiment on the 16 real BAM XL330 logs from the CLI (skipped with a
-//! visible message when ../shared/data is absent; ~25 min on 2 busy cores).
+//! visible message when ../shared/data is absent; ~37 min wall on 2 cores shared with other
+//! builds, 21 min CPU).
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -107,10 +108,10 @@ fn synthetic_external_load_friction_is_recovered_on_a_held_out_gain() {
     assert!((v - mu).abs() < 0.05 * mu, "mu_ext {v} vs {mu}");
 }
 
-/// Held-out position MAE of the leave-one-gain-out run, averaged over the 16 logs: README and
-/// docs/examples/bam-xl330.md report the measured figure; the old servo-specific mode gave
-/// 3.09°, BAM's own M3 model 3.96° (fitted on all logs, not held out).
-const HELD_OUT_DEG: f64 = 3.09;
+/// Held-out position MAE of the leave-one-gain-out run, averaged over the 16 logs, as measured
+/// and reported in README and docs/examples/bam-xl330.md (the old servo-specific mode gave
+/// 3.09°; BAM's own M3 model 3.96°, fitted on all logs, not held out).
+const HELD_OUT_DEG: f64 = 2.94;
 
 #[test]
 fn bam_logs_leave_one_gain_out_from_the_cli() {
@@ -146,7 +147,8 @@ fn bam_logs_leave_one_gain_out_from_the_cli() {
         );
     }
     eprintln!("held-out MAE {before:.2}° → {after:.2}° in {:.0} s", t0.elapsed().as_secs_f64());
-    // The nominal rig, and the fit within 10 % of the figure the docs report.
+    // The nominal rig, and the fit within 5 % of the figure the docs report (which keeps it at
+    // or below the old servo mode's 3.09°).
     assert!((before - 10.36).abs() < 0.2, "nominal {before:.2}°");
-    assert!(after <= HELD_OUT_DEG * 1.1, "held-out {after:.2}° vs {HELD_OUT_DEG}°");
+    assert!(after <= HELD_OUT_DEG * 1.05, "held-out {after:.2}° vs {HELD_OUT_DEG}°");
 }

@@ -442,6 +442,7 @@ fn rotate(
                     "position_mae_before": fold_avg(eps, |e| e.1),
                     "position_mae_after": fold_avg(eps, |e| e.2),
                     "seconds": secs,
+                    "tried": out.tried,
                     "warnings": out.warnings,
                 })
             })
