@@ -149,6 +149,12 @@ pub trait Effect: Sync {
     fn smooth(&self) -> bool {
         false
     }
+    /// Whether the effect can act on these recordings at all (e.g. torque-off braking needs a
+    /// torque-off interval, a supply clip needs the supply voltage); the fit leaves it out of
+    /// the candidates otherwise.
+    fn applies(&self, _recs: &[Recording]) -> bool {
+        true
+    }
     /// Hook effects: called once per episode and joint before the first step with the
     /// recording's metadata (e.g. a supply voltage the effect needs), to fill `st`.
     fn start(&self, _st: &mut EffectState, _meta: &BTreeMap<String, String>, _p: &[f64]) {}

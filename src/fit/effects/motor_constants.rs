@@ -9,9 +9,9 @@
 //! ```
 //! i.e. `(kt_scale/r_scale)·clip(kp·(ctrl − q), ±τ_stall) − (kt_scale²/r_scale)·kd·q̇` with the
 //! stall torque `τ_stall = vin·kt₀/R₀`. The supply clip needs the recording's metadata `vin`
-//! [V], `motor_kt` [N·m/A] and `motor_r` [Ω] (the BAM importer writes them); without them there
-//! is no clip and only the gains are rescaled. At scales 1 the effect is the model's actuator
-//! plus the supply clip.
+//! [V], `motor_kt` [N·m/A] and `motor_r` [Ω] (the BAM importer writes them); without them the
+//! effect is not a candidate (its scales would only be a `gain_error` in disguise). At scales 1
+//! the effect is the model's actuator plus the supply clip.
 use super::*;
 
 pub struct MotorConstants;
@@ -42,6 +42,10 @@ impl Effect for MotorConstants {
     }
     fn describe(&self) -> &'static str {
         "DC-motor servo law with supply clip (vin from the recording), kt and R refitted"
+    }
+    /// Only with the motor declared (else kt/R scales are a gain error in disguise).
+    fn applies(&self, recs: &[Recording]) -> bool {
+        !recs.is_empty() && recs.iter().all(|r| stall_torque(&r.meta).is_finite())
     }
     fn start(&self, st: &mut EffectState, meta: &BTreeMap<String, String>, _p: &[f64]) {
         st.s[0] = stall_torque(meta);

@@ -22,6 +22,11 @@ impl Effect for TorqueOffBraking {
     fn describe(&self) -> &'static str {
         "back-EMF braking while torque is off: −beta_off·kd·q̇ (0 coasting … 1 shorted bridge)"
     }
+    fn applies(&self, recs: &[Recording]) -> bool {
+        recs.iter().any(|r| {
+            r.joints.iter().any(|j| j.enabled.as_ref().is_some_and(|e| e.iter().any(|x| !x)))
+        })
+    }
     fn torque(
         &self,
         _st: &mut EffectState,

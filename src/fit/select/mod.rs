@@ -295,6 +295,15 @@ pub fn fit(robot: &Robot, recs: &[Recording], opts: &FitOptions) -> FitOutcome {
     } else {
         opts.effects.clone()
     };
+    // Effects that cannot act on this data (no torque-off interval, no declared motor).
+    let (allowed, inapplicable): (Vec<String>, Vec<String>) =
+        allowed.into_iter().partition(|id| effects::by_id(id).is_none_or(|e| e.applies(recs)));
+    if !opts.effects.is_empty() && !inapplicable.is_empty() {
+        out.warnings.push(format!(
+            "not tried, cannot act on these recordings: {}",
+            inapplicable.join(", ")
+        ));
+    }
     let mut round = 0;
     loop {
         while round < opts.max_rounds {
