@@ -166,15 +166,10 @@ pub enum ResultFormat {
 pub struct FitCmd {
     /// Model (MJCF or URDF).
     pub model: PathBuf,
-    /// Servo identification mode for BAM servo logs (a directory of them): fit the servo's
-    /// firmware law + friction/inertia/delay effects on the logs of all firmware gains but one,
-    /// evaluate on the held-out gain, rotate every gain; prints the comparison with BAM's
-    /// published anchors. The model is the pendulum rig (fixtures/bam_xl330/rig.xml).
-    #[arg(long, value_parser = ["xl330"])]
+    /// Deprecated: `--servo xl330` is `--holdout-by kp` (the servo's firmware law, friction
+    /// and torque-off braking are ordinary effects now).
+    #[arg(long, value_parser = ["xl330"], hide = true)]
     pub servo: Option<String>,
-    /// Objective evaluations per candidate fit in --servo mode.
-    #[arg(long, default_value_t = 80)]
-    pub servo_evals: usize,
     /// Recordings: CSV files, BAM JSON logs, or directories.
     #[arg(required = true)]
     pub recordings: Vec<PathBuf>,
@@ -192,6 +187,12 @@ pub struct FitCmd {
     /// time windows).
     #[arg(long, default_value_t = 4)]
     pub holdout: usize,
+    /// Hold out by a metadata key instead: `KEY=VALUE` holds out the episodes whose metadata
+    /// KEY equals VALUE (e.g. `kp=800`, the firmware gain of BAM servo logs); `KEY` alone holds
+    /// out every value in turn (one fit per value) and reports each fold and the held-out
+    /// error averaged over all episodes.
+    #[arg(long, value_name = "KEY[=VALUE]")]
+    pub holdout_by: Option<String>,
     /// Multiple shooting: fit on training windows of this length [s], each started from the
     /// recorded state.
     #[arg(long)]
@@ -296,10 +297,17 @@ pub fn run() -> i32 {
             json: g.format == ResultFormat::Json,
             report: g.report,
         }),
-        Some(Cmd::Fit(f)) if f.servo.is_some() => {
-            crate::fit::cmd::run_servo(&f.model, &f.recordings, f.servo_evals)
-        }
         Some(Cmd::Fit(f)) => crate::fit::cmd::run_fit(crate::fit::cmd::FitArgs {
+            holdout_by: match (&f.servo, &f.holdout_by) {
+                (Some(_), None) => {
+                    eprintln!(
+                        "modellint: note: --servo is deprecated; it means --holdout-by kp (every \
+                         firmware gain held out in turn)"
+                    );
+                    Some("kp".to_string())
+                }
+                _ => f.holdout_by,
+            },
             model: f.model,
             recordings: f.recordings,
             spec: f.spec,

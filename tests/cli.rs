@@ -218,8 +218,9 @@ fn fit_help_lists_the_effects() {
 }
 
 #[test]
-fn fit_servo_mode_checks_its_input() {
-    // A directory without BAM logs: a precise error, exit 2.
+fn fit_holdout_by_checks_its_input() {
+    // A directory without recordings: a precise error, exit 2 (also through the deprecated
+    // --servo alias).
     let (code, _, err) =
         modellint(&["fit", "fixtures/bam_xl330/rig.xml", "fixtures/broken", "--servo", "xl330"]);
     assert_eq!(code, 2, "{err}");
@@ -228,17 +229,19 @@ fn fit_servo_mode_checks_its_input() {
         eprintln!("skipping the BAM part: ../shared/data is absent");
         return;
     }
-    // Nominal pass only (no fitting): loads all 16 logs of 4 gains and replays them.
-    let (code, _, err) = modellint(&[
-        "fit",
-        "fixtures/bam_xl330/rig.xml",
-        data.to_str().unwrap(),
-        "--servo",
-        "xl330",
-        "--servo-evals",
-        "0",
-    ]);
-    assert_eq!(code, 0, "{err}");
+    let d = data.to_str().unwrap();
+    let rig = "fixtures/bam_xl330/rig.xml";
+    // A key no log has, a value no log has: exit 2 before any fitting, naming the values.
+    let (code, _, err) = modellint(&["fit", rig, d, "--holdout-by", "nokey"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("at least two values"), "{err}");
+    let (code, _, err) = modellint(&["fit", rig, d, "--holdout-by", "kp=300"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("100, 200, 400, 800"), "{err}");
+    // Rotation writes no model; --servo is the deprecated spelling of --holdout-by kp.
+    let (code, _, err) = modellint(&["fit", rig, d, "--servo", "xl330", "--report", "/tmp/x"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("deprecated") && err.contains("--holdout-by kp=VALUE"), "{err}");
 }
 
 #[test]

@@ -19,6 +19,8 @@ pub struct FitArgs {
     pub effects: Vec<String>,
     pub joints: Option<String>,
     pub holdout: usize,
+    /// `KEY=VALUE`: hold out the episodes with that metadata value; `KEY`: every value in turn.
+    pub holdout_by: Option<String>,
     pub window: Option<f64>,
     pub control_hz: Option<f64>,
     pub command_timing: Option<crate::sim2real::commands::CommandTiming>,
@@ -128,7 +130,7 @@ pub fn run_fit(a: FitArgs) -> i32 {
             ));
         }))
     });
-    let opts = FitOptions {
+    let mut opts = FitOptions {
         holdout: a.holdout,
         effects: a.effects.clone(),
         joints,
@@ -138,6 +140,20 @@ pub fn run_fit(a: FitArgs) -> i32 {
         progress,
         ..Default::default()
     };
+    if let Some(by) = &a.holdout_by {
+        match by.split_once('=') {
+            Some((k, v)) if !k.is_empty() && !v.is_empty() => {
+                opts.holdout_by = Some((k.to_string(), v.to_string()))
+            }
+            Some(_) => return fail(format!("--holdout-by {by}: expected KEY or KEY=VALUE")),
+            None => {
+                if let Some(b) = bar {
+                    b.finish_and_clear();
+                }
+                return rotate(robot, &recs, &opts, by, &a);
+            }
+        }
+    }
     let out = fit(robot, &recs, &opts);
     if let Some(b) = bar {
         b.finish_and_clear();
@@ -326,52 +342,189 @@ pub fn run_fit(a: FitArgs) -> i32 {
     0
 }
 
-/// `modellint fit RIG.xml LOGDIR --servo xl330`: held-out-by-gain servo identification.
-pub fn run_servo(model: &std::path::Path, recordings: &[std::path::PathBuf], evals: usize) -> i32 {
-    let mut map = crate::model::source::SourceMap::default();
-    let robot = match crate::model::load(&mut map, model, None) {
-        Ok(r) => r,
-        Err(e) => {
-            eprintln!("modellint: {e}");
+/// Per held-out episode: (source file name, position MAE before, after) [rad].
+type EpisodeMae = (String, f64, f64);
+
+/// `--holdout-by KEY`: leave-one-group-out over the values of metadata `KEY`. Each value is held
+/// out in turn and the whole selection runs on the other episodes; prints every fold's effects
+/// and held-out MAE before → after per episode, and the average over all episodes (each held
+/// out exactly once).
+fn rotate(
+    robot: &crate::model::Robot,
+    recs: &[crate::sim2real::recording::Recording],
+    opts: &FitOptions,
+    key: &str,
+    a: &FitArgs,
+) -> i32 {
+    if a.write_model.is_some() || a.write_actuators.is_some() || a.report.is_some() {
+        return fail(format!(
+            "--holdout-by {key} rotates over every value of `{key}` (one fit per value); give \
+             --holdout-by {key}=VALUE to write a model, actuator TOML or report"
+        ));
+    }
+    let values = crate::fit::split::key_values(recs, key);
+    if values.len() < 2 {
+        return fail(format!(
+            "--holdout-by {key}: need at least two values of `{key}` to hold one out (found {})",
+            values.len()
+        ));
+    }
+    let t0 = std::time::Instant::now();
+    let mut folds = Vec::new();
+    for v in &values {
+        let bar = progress_bar(a.quiet);
+        let progress = bar.clone().map(|b| {
+            let start = std::time::Instant::now();
+            let v = v.clone();
+            let key = key.to_string();
+            Progress(std::sync::Arc::new(move |p: &ProgressInfo| {
+                let what = match &p.candidate {
+                    Some((i, n, c)) => format!("candidate {i}/{n}: {c}"),
+                    None => p.phase.to_string(),
+                };
+                b.set_message(format!(
+                    "hold out {key} = {v} · round {}: {what} · {} simulations · {:.0} s",
+                    p.round + 1,
+                    p.simulations,
+                    start.elapsed().as_secs_f64()
+                ));
+            }))
+        });
+        let o =
+            FitOptions { holdout_by: Some((key.to_string(), v.clone())), progress, ..opts.clone() };
+        let ts = std::time::Instant::now();
+        let out = fit(robot, recs, &o);
+        if let Some(b) = bar {
+            b.finish_and_clear();
+        }
+        for w in &out.warnings {
+            eprintln!("modellint: warning: {key} = {v}: {w}");
+        }
+        if out.heldout.is_empty() {
             return 2;
         }
+        let mae = |applied: &[effects::Applied]| -> Result<Vec<f64>, String> {
+            simulate(robot, &out.heldout, applied, &o.replay)
+                .into_iter()
+                .zip(&out.heldout)
+                .map(|(e, r)| e.map(|e| episode_mae(r, &e)).map_err(|e| e.to_string()))
+                .collect()
+        };
+        let (before, after) = match (mae(&[]), mae(&out.applied)) {
+            (Ok(b), Ok(a)) => (b, a),
+            (Err(e), _) | (_, Err(e)) => return fail(e),
+        };
+        let eps: Vec<EpisodeMae> = out
+            .heldout
+            .iter()
+            .zip(before.iter().zip(&after))
+            .map(|(r, (b, a))| {
+                let name = r.source.file_name().map_or_else(
+                    || r.source.display().to_string(),
+                    |f| f.to_string_lossy().into_owned(),
+                );
+                (name, *b, *a)
+            })
+            .collect();
+        folds.push((v.clone(), out, eps, ts.elapsed().as_secs_f64()));
+    }
+    let all: Vec<&EpisodeMae> = folds.iter().flat_map(|f| &f.2).collect();
+    let avg = |f: fn(&EpisodeMae) -> f64| all.iter().map(|e| f(e)).sum::<f64>() / all.len() as f64;
+    let (avg_b, avg_a) = (avg(|e| e.1), avg(|e| e.2));
+    let fold_avg = |eps: &[EpisodeMae], f: fn(&EpisodeMae) -> f64| {
+        eps.iter().map(f).sum::<f64>() / eps.len().max(1) as f64
     };
-    let [dir] = recordings else {
-        eprintln!("modellint: --servo takes one directory of BAM logs");
-        return 2;
-    };
-    let logs = match crate::fit::servo_fit::load_logs(dir) {
-        Ok(l) if !l.is_empty() => l,
-        Ok(_) => {
-            eprintln!("modellint: {}: no BAM logs found", dir.display());
-            return 2;
-        }
-        Err(e) => {
-            eprintln!("modellint: {e}");
-            return 2;
-        }
-    };
-    if crate::fit::servo_fit::gains(&logs).len() < 2 {
-        eprintln!(
-            "modellint: {}: --servo needs logs of at least two firmware gains to hold one out",
-            dir.display()
+    let text = if a.json {
+        let fs: Vec<_> = folds
+            .iter()
+            .map(|(v, out, eps, secs)| {
+                json!({
+                    "value": v,
+                    "train": out.train.len(),
+                    "selected": out.selected.iter().map(|s| json!({"effect": s.effect, "joints": s.joints, "params": s.params})).collect::<Vec<_>>(),
+                    "heldout": eps.iter().map(|(n, b, a)| json!({"source": n, "position_mae_before": b, "position_mae_after": a})).collect::<Vec<_>>(),
+                    "position_mae_before": fold_avg(eps, |e| e.1),
+                    "position_mae_after": fold_avg(eps, |e| e.2),
+                    "seconds": secs,
+                    "tried": out.tried,
+                    "warnings": out.warnings,
+                })
+            })
+            .collect();
+        let v = json!({
+            "holdout_by": key,
+            "folds": fs,
+            "position_mae_before": avg_b,
+            "position_mae_after": avg_a,
+            "episodes": all.len(),
+            "seconds": t0.elapsed().as_secs_f64(),
+        });
+        serde_json::to_string_pretty(&v).unwrap_or_default() + "\n"
+    } else {
+        let deg = |x: f64| x.to_degrees();
+        let mut s = format!(
+            "cross-validation by `{key}`: each of {} values held out in turn, the selection run on the others\n",
+            values.len()
         );
+        for (v, out, eps, secs) in &folds {
+            s.push_str(&format!(
+                "\n{key} = {v} held out ({} episodes; trained on {}; {secs:.0} s)\n",
+                eps.len(),
+                out.train.len()
+            ));
+            if out.selected.is_empty() {
+                s.push_str("  missing physics: nothing kept\n");
+            }
+            for x in &out.selected {
+                let ps: Vec<String> =
+                    x.params.iter().map(|(k, v)| format!("{k} = {v:.4}")).collect();
+                s.push_str(&format!(
+                    "  {:<24} {:<12} {}\n",
+                    x.effect,
+                    x.joints.join(","),
+                    ps.join(", ")
+                ));
+            }
+            for (n, b, a) in eps {
+                s.push_str(&format!(
+                    "    {n:<32} position MAE {:.2}° → {:.2}°\n",
+                    deg(*b),
+                    deg(*a)
+                ));
+            }
+            s.push_str(&format!(
+                "  held-out position MAE (mean over its episodes) {:.2}° → {:.2}°\n",
+                deg(fold_avg(eps, |e| e.1)),
+                deg(fold_avg(eps, |e| e.2))
+            ));
+        }
+        s.push_str(&format!(
+            "\nheld-out position MAE, mean over the {} episodes (each held out once): {:.2}° → {:.2}°  ({:.0} s)\n",
+            all.len(),
+            deg(avg_b),
+            deg(avg_a),
+            t0.elapsed().as_secs_f64()
+        ));
+        s
+    };
+    if std::io::stdout().lock().write_all(text.as_bytes()).is_err() {
         return 2;
     }
-    let o = crate::fit::servo_fit::FitOpts { max_evals: evals, ..Default::default() };
-    let quiet = !std::io::IsTerminal::is_terminal(&std::io::stderr());
-    match crate::fit::servo_report::run(&robot, &logs, &o, &|m| {
-        if !quiet {
-            eprintln!("{m}")
-        }
-    }) {
-        Ok((report, _)) => {
-            print!("{report}");
-            0
-        }
-        Err(e) => {
-            eprintln!("modellint: {e}");
-            2
+    0
+}
+
+/// Whole-episode position MAE over every recorded joint and sample [rad] (a sample the
+/// simulation did not reach counts as 1 rad).
+fn episode_mae(rec: &crate::sim2real::recording::Recording, ep: &Episode) -> f64 {
+    let mut sum = 0.0;
+    let mut n = 0usize;
+    for (k, j) in rec.joints.iter().enumerate() {
+        for (r, s) in j.q.iter().zip(&ep.q_sim[k]) {
+            if r.is_finite() {
+                sum += if s.is_finite() { (r - s).abs() } else { 1.0 };
+                n += 1;
+            }
         }
     }
+    if n == 0 { f64::NAN } else { sum / n as f64 }
 }

@@ -8,6 +8,11 @@
 //!    (a dataset sorted by time, gain or amplitude is not judged on its end alone).
 //! 3. A single episode is cut into time windows, every `holdout`-th window held out.
 //!
+//! 4. By a metadata key (`--holdout-by KEY=VALUE`, [`split_by_key`]): the episodes whose
+//!    metadata `KEY` equals `VALUE` are held out, every other one trains — e.g. the firmware gain
+//!    `kp` of servo logs, so that the fit is judged on a gain it never saw. `--holdout-by KEY`
+//!    rotates over every value of the key ([`key_values`]; leave-one-group-out).
+//!
 //! [`Split::note`] says which were held out and why; `modellint fit` prints it.
 
 use crate::sim2real::recording::{Recording, Split as Declared};
@@ -75,6 +80,58 @@ fn names(rs: &[&Recording]) -> String {
     } else {
         format!("{}, … ({} episodes)", v[..5].join(", "), v.len())
     }
+}
+
+/// Distinct values of metadata `key` over `recs`, sorted (numerically when every value is a
+/// number); episodes without the key are not counted.
+pub fn key_values(recs: &[Recording], key: &str) -> Vec<String> {
+    let mut v: Vec<String> = recs.iter().filter_map(|r| r.meta.get(key).cloned()).collect();
+    v.sort();
+    v.dedup();
+    let nums: Option<Vec<f64>> = v.iter().map(|x| x.trim().parse::<f64>().ok()).collect();
+    if let Some(n) = nums {
+        let mut idx: Vec<usize> = (0..v.len()).collect();
+        idx.sort_by(|&a, &b| n[a].total_cmp(&n[b]));
+        v = idx.into_iter().map(|i| v[i].clone()).collect();
+    }
+    v
+}
+
+/// Holds out the episodes whose metadata `key` equals `value` (numerically equal when both are
+/// numbers); every other episode, including those without the key, trains. An error when
+/// nothing or everything would be held out.
+pub fn split_by_key(recs: &[Recording], key: &str, value: &str) -> Result<Split, String> {
+    let same = |v: &str| match (v.trim().parse::<f64>(), value.trim().parse::<f64>()) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => v == value,
+    };
+    let (ho, tr): (Vec<&Recording>, Vec<&Recording>) =
+        recs.iter().partition(|r| r.meta.get(key).is_some_and(|v| same(v)));
+    if ho.is_empty() {
+        let vals = key_values(recs, key);
+        return Err(if vals.is_empty() {
+            format!("--holdout-by: no recording has the metadata key `{key}`")
+        } else {
+            format!("--holdout-by: no recording has {key} = {value}; values: {}", vals.join(", "))
+        });
+    }
+    if tr.is_empty() {
+        return Err(format!(
+            "--holdout-by: every recording has {key} = {value}; nothing to train on"
+        ));
+    }
+    let note = format!(
+        "held out the {} episodes with {key} = {value} ({}); trained on the other {}",
+        ho.len(),
+        names(&ho),
+        tr.len()
+    );
+    Ok(Split {
+        train: tr.into_iter().cloned().collect(),
+        heldout: ho.into_iter().cloned().collect(),
+        by_time: false,
+        note,
+    })
 }
 
 /// Splits `recs` (see the module docs); `holdout` ≥ 2 is the "one in N" ratio.
@@ -221,6 +278,32 @@ mod tests {
         let s = split(&recs, 4);
         assert_eq!(s.heldout.len(), 1);
         assert!(s.note.contains("no episode declares"), "{}", s.note);
+    }
+
+    #[test]
+    fn split_by_metadata_key() {
+        let recs: Vec<Recording> = (0..6)
+            .map(|i| {
+                let mut r = named(i, None);
+                r.meta.insert("kp".into(), ["100", "200", "800"][i % 3].into());
+                r
+            })
+            .collect();
+        assert_eq!(key_values(&recs, "kp"), ["100", "200", "800"]);
+        let s = split_by_key(&recs, "kp", "200.0").expect("numeric match");
+        let ho: Vec<String> = s.heldout.iter().map(name).collect();
+        assert_eq!(ho, ["ep_01.csv", "ep_04.csv"]);
+        assert_eq!(s.train.len(), 4);
+        assert!(s.note.contains("kp = 200.0"), "{}", s.note);
+        let e = split_by_key(&recs, "kp", "300").err().expect("no such value");
+        assert!(e.contains("100, 200, 800"), "{e}");
+        assert!(split_by_key(&recs, "vin", "7").is_err());
+        // Numeric order, not lexical.
+        let mut r = named(9, None);
+        r.meta.insert("kp".into(), "50".into());
+        let mut more = recs.clone();
+        more.push(r);
+        assert_eq!(key_values(&more, "kp"), ["50", "100", "200", "800"]);
     }
 
     #[test]

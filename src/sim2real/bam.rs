@@ -184,7 +184,8 @@ pub fn xl330_kp_si(kp_firmware: f64, vin: f64) -> f64 {
 }
 
 /// A BAM log as a replayable recording: a constant `servo.kp` column in N·m/rad (see
-/// [`xl330_kp_si`]) and meta `kp_si`. No control rate: the servo takes each goal as it arrives,
+/// [`xl330_kp_si`]), meta `kp_si` and the motor constants behind it (`motor_kt`, `motor_r`).
+/// No control rate: the servo takes each goal as it arrives,
 /// so the replay holds each goal from its own timestamp on.
 pub fn bam_recording(log: BamLog) -> Recording {
     let mut rec = log.recording;
@@ -194,6 +195,9 @@ pub fn bam_recording(log: BamLog) -> Recording {
         j.kp = Some(vec![k; n]);
     }
     rec.meta.insert("kp_si".into(), format!("{k}"));
+    // The motor behind the linear law (the `motor_constants` effect's supply clip and refit).
+    rec.meta.insert("motor_kt".into(), format!("{XL330_KT}"));
+    rec.meta.insert("motor_r".into(), format!("{XL330_R}"));
     rec.control_rate_hz = None;
     rec
 }

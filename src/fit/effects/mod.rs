@@ -52,6 +52,9 @@ registry![
     backlash::Backlash,
     joint_stiffness::JointStiffness,
     load_dependent_friction::LoadDependentFriction,
+    external_load_friction::ExternalLoadFriction,
+    torque_off_braking::TorqueOffBraking,
+    motor_constants::MotorConstants,
 ];
 
 /// One fitted parameter: name, unit, bounds and default (the value meaning "effect absent"
@@ -286,6 +289,21 @@ pub trait Effect: Declared + Sync {
             params.iter().map(|(k, v)| format!("{k} = {}", num(*v))).collect::<Vec<_>>().join(", ")
         ))
     }
+    /// Whether the effect can act on these recordings at all (e.g. torque-off braking needs a
+    /// torque-off interval, a supply clip needs the supply voltage); the fit leaves it out of
+    /// the candidates otherwise.
+    fn applies(&self, _recs: &[Recording]) -> bool {
+        true
+    }
+    /// Hook effects: called once per episode and joint before the first step with the
+    /// recording's metadata (e.g. a supply voltage the effect needs), to fill `st`.
+    fn start(&self, _st: &mut EffectState, _meta: &BTreeMap<String, String>, _p: &[f64]) {}
+    /// Order of the hook effects within a step: command effects (0) run first, then torque
+    /// effects (1); an effect that needs every other torque of the step (implicit friction,
+    /// stage 2) runs last.
+    fn stage(&self) -> u8 {
+        if self.entry() == Entry::Command { 0 } else { 1 }
+    }
 }
 
 /// A value as MJCF / TOML / Python text: 6 decimals, trailing zeros trimmed, no `-0`.
@@ -374,6 +392,8 @@ pub fn model_with(robot: &Robot, applied: &[Applied]) -> MjModel {
 
 struct Hook<'a> {
     applied: &'a [Applied],
+    /// The episode's recording metadata (for [`Effect::start`]).
+    meta: &'a BTreeMap<String, String>,
     /// Per recorded joint: (index into `applied`, state), command effects first.
     lists: Vec<Vec<(usize, EffectState)>>,
     dt: f64,
@@ -393,9 +413,13 @@ impl ActuatorHook for Hook<'_> {
                         matches!(a.effect.entry(), Entry::Command | Entry::Torque)
                             && a.joints.iter().any(|j| j == n)
                     })
-                    .map(|(i, _)| (i, EffectState::default()))
+                    .map(|(i, a)| {
+                        let mut st = EffectState::default();
+                        a.effect.start(&mut st, self.meta, &a.full_params());
+                        (i, st)
+                    })
                     .collect();
-                v.sort_by_key(|(i, _)| (self.applied[*i].effect.entry() != Entry::Command) as u8);
+                v.sort_by_key(|(i, _)| self.applied[*i].effect.stage());
                 v
             })
             .collect();
@@ -455,7 +479,7 @@ pub fn replay_with(
     };
     let hooked = applied.iter().any(|a| matches!(a.effect.entry(), Entry::Command | Entry::Torque));
     let mut ep = if hooked {
-        let mut h = Hook { applied, lists: vec![], dt: 0.0 };
+        let mut h = Hook { applied, meta: &rec.meta, lists: vec![], dt: 0.0 };
         replayer.replay(rec_in, opts, Some(&mut h))?
     } else {
         replayer.replay(rec_in, opts, None)?

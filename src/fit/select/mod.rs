@@ -36,7 +36,7 @@ use serde::Serialize;
 
 use crate::fit::diagnose::Candidate;
 use crate::fit::effects::{self, Applied};
-use crate::fit::split::{Split, split, windows};
+use crate::fit::split::{Split, split, split_by_key, windows};
 use crate::model::Robot;
 use crate::sim2real::recording::Recording;
 use crate::sim2real::replay::{Episode, ReplayOptions};
@@ -52,6 +52,9 @@ use verdict::Verdict;
 pub struct FitOptions {
     /// Every N-th episode is held out (N ≥ 2).
     pub holdout: usize,
+    /// Hold out the episodes whose metadata key (`.0`) has the value `.1` instead
+    /// ([`crate::fit::split::split_by_key`]).
+    pub holdout_by: Option<(String, String)>,
     /// Effect ids to consider (all when empty).
     pub effects: Vec<String>,
     /// Joints to fit (all recorded joints when empty).
@@ -99,6 +102,7 @@ impl Default for FitOptions {
     fn default() -> Self {
         FitOptions {
             holdout: 4,
+            holdout_by: None,
             effects: vec![],
             joints: vec![],
             replay: ReplayOptions::default(),
@@ -225,6 +229,24 @@ pub struct FitOutcome {
     pub warnings: Vec<String>,
 }
 
+impl FitOutcome {
+    fn empty(split_note: String) -> Self {
+        FitOutcome {
+            train: vec![],
+            heldout: vec![],
+            split_by_time: false,
+            split_note,
+            floors: vec![],
+            stopped_at_floor: false,
+            diagnosis: vec![],
+            selected: vec![],
+            applied: vec![],
+            tried: vec![],
+            warnings: vec![],
+        }
+    }
+}
+
 /// Position errors of one simulation of a dataset.
 pub struct Errors {
     pub sse: f64,
@@ -263,7 +285,16 @@ impl std::fmt::Debug for Progress {
 /// Runs the whole selection on `recs`.
 pub fn fit(robot: &Robot, recs: &[Recording], opts: &FitOptions) -> FitOutcome {
     let engine = Engine::new(robot, recs, opts);
-    let Split { train: train0, heldout, by_time, note } = split(recs, opts.holdout);
+    let by_key = opts.holdout_by.as_ref().map(|(k, v)| split_by_key(recs, k, v));
+    let Split { train: train0, heldout, by_time, note } = match by_key {
+        Some(Ok(s)) => s,
+        Some(Err(e)) => {
+            let mut out = FitOutcome::empty(String::new());
+            out.warnings.push(e);
+            return out;
+        }
+        None => split(recs, opts.holdout),
+    };
     let train: Vec<Recording> = match opts.shooting_s {
         Some(w) if w > 0.0 => train0.iter().flat_map(|r| windows(r, w)).collect(),
         _ => train0,
@@ -272,14 +303,7 @@ pub fn fit(robot: &Robot, recs: &[Recording], opts: &FitOptions) -> FitOutcome {
         train: train.clone(),
         heldout: heldout.clone(),
         split_by_time: by_time,
-        split_note: note,
-        floors: vec![],
-        stopped_at_floor: false,
-        diagnosis: vec![],
-        selected: vec![],
-        applied: vec![],
-        tried: vec![],
-        warnings: vec![],
+        ..FitOutcome::empty(note)
     };
     if train.is_empty() || heldout.is_empty() {
         out.warnings.push("not enough data for a train/held-out split (need 2 episodes, or one of several seconds)".into());
@@ -290,6 +314,15 @@ pub fn fit(robot: &Robot, recs: &[Recording], opts: &FitOptions) -> FitOutcome {
     } else {
         opts.effects.clone()
     };
+    // Effects that cannot act on this data (no torque-off interval, no declared motor).
+    let (allowed, inapplicable): (Vec<String>, Vec<String>) =
+        allowed.into_iter().partition(|id| effects::by_id(id).is_none_or(|e| e.applies(recs)));
+    if !opts.effects.is_empty() && !inapplicable.is_empty() {
+        out.warnings.push(format!(
+            "not tried, cannot act on these recordings: {}",
+            inapplicable.join(", ")
+        ));
+    }
     let mut round = 0;
     loop {
         while round < opts.max_rounds {

@@ -104,6 +104,15 @@ pub struct StepIo {
     pub kd: f64,
     /// Recorded torque-enable state in force at this step.
     pub enabled: bool,
+    /// The simulator's own forces on the joint's DoF at the step's start state, from MuJoCo's
+    /// last forward pass (one physics step old at most): `qfrc_bias` (gravity, Coriolis and
+    /// centrifugal, the force the motion *needs*: the external load torque is `−bias`) and
+    /// `qfrc_passive` (springs, dampers) [N·m or N].
+    pub bias: f64,
+    pub passive: f64,
+    /// Inertia the DoF presents to its own torque, 1 / diag(D) of MuJoCo's L'DL factorisation
+    /// of the mass matrix (armature included; exact for a single DoF) [kg·m² or kg].
+    pub inertia: f64,
 }
 
 /// Per-physics-step actuator override, for effects MuJoCo cannot express (Stribeck friction,

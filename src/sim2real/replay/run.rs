@@ -194,9 +194,21 @@ impl Replayer<'_> {
                     }
                 }
             }
+            let (bias, passive, dinv) = (d.qfrc_bias(), d.qfrc_passive(), d.q_ldiag_inv());
             for i in 0..nj {
-                io[i] =
-                    StepIo { ctrl: target[i], tau: 0.0, kp: kp[i], kd: kd[i], enabled: enabled[i] };
+                let dof = self.joints[jm[i]].dofadr;
+                io[i] = StepIo {
+                    ctrl: target[i],
+                    tau: 0.0,
+                    kp: kp[i],
+                    kd: kd[i],
+                    enabled: enabled[i],
+                    bias: bias[dof],
+                    passive: passive[dof],
+                    inertia: if dinv[dof] > 0.0 { 1.0 / dinv[dof] } else { 0.0 },
+                };
+            }
+            for i in 0..nj {
                 if let Some(h) = hook.as_deref_mut() {
                     h.before_step(tk, i, cur_q[i], cur_qd[i], target[i], &mut io[i]);
                 }
