@@ -47,6 +47,28 @@ fn progress_bar(quiet: bool) -> Option<indicatif::ProgressBar> {
     Some(b)
 }
 
+/// The spinner and the fit's progress callback drawing on it (both `None` with `quiet`):
+/// `prefix`, then the round, the phase or candidate, the simulations so far and the time.
+fn fit_progress(quiet: bool, prefix: String) -> (Option<indicatif::ProgressBar>, Option<Progress>) {
+    let bar = progress_bar(quiet);
+    let progress = bar.clone().map(|b| {
+        let start = std::time::Instant::now();
+        Progress(std::sync::Arc::new(move |p: &ProgressInfo| {
+            let what = match &p.candidate {
+                Some((i, n, c)) => format!("candidate {i}/{n}: {c}"),
+                None => p.phase.to_string(),
+            };
+            b.set_message(format!(
+                "{prefix}round {}: {what} · {} simulations · {:.0} s",
+                p.round + 1,
+                p.simulations,
+                start.elapsed().as_secs_f64()
+            ));
+        }))
+    });
+    (bar, progress)
+}
+
 fn fail(msg: impl std::fmt::Display) -> i32 {
     eprintln!("modellint: {msg}");
     2
@@ -114,22 +136,7 @@ pub fn run_fit(a: FitArgs) -> i32 {
             .collect(),
         None => Default::default(),
     };
-    let bar = progress_bar(a.quiet);
-    let progress = bar.clone().map(|b| {
-        let start = std::time::Instant::now();
-        Progress(std::sync::Arc::new(move |p: &ProgressInfo| {
-            let what = match &p.candidate {
-                Some((i, n, c)) => format!("candidate {i}/{n}: {c}"),
-                None => p.phase.to_string(),
-            };
-            b.set_message(format!(
-                "round {}: {what} · {} simulations · {:.0} s",
-                p.round + 1,
-                p.simulations,
-                start.elapsed().as_secs_f64()
-            ));
-        }))
-    });
+    let (bar, progress) = fit_progress(a.quiet, String::new());
     let mut opts = FitOptions {
         holdout: a.holdout,
         effects: a.effects.clone(),
@@ -372,24 +379,7 @@ fn rotate(
     let t0 = std::time::Instant::now();
     let mut folds = Vec::new();
     for v in &values {
-        let bar = progress_bar(a.quiet);
-        let progress = bar.clone().map(|b| {
-            let start = std::time::Instant::now();
-            let v = v.clone();
-            let key = key.to_string();
-            Progress(std::sync::Arc::new(move |p: &ProgressInfo| {
-                let what = match &p.candidate {
-                    Some((i, n, c)) => format!("candidate {i}/{n}: {c}"),
-                    None => p.phase.to_string(),
-                };
-                b.set_message(format!(
-                    "hold out {key} = {v} · round {}: {what} · {} simulations · {:.0} s",
-                    p.round + 1,
-                    p.simulations,
-                    start.elapsed().as_secs_f64()
-                ));
-            }))
-        });
+        let (bar, progress) = fit_progress(a.quiet, format!("hold out {key} = {v} · "));
         let o =
             FitOptions { holdout_by: Some((key.to_string(), v.clone())), progress, ..opts.clone() };
         let ts = std::time::Instant::now();
