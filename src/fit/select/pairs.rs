@@ -61,76 +61,92 @@ pub(super) fn pair_lookahead(
     let k_before: usize = applied.iter().map(|a| a.effect.fitted()).sum();
     let mut best: Option<(Vec<Applied>, f64, usize)> = None;
     engine.report(round, "pair look-ahead", None);
+    // The pairs of the top four, and any two kept candidates that mimic each other alone
+    // ([`effects::mimicking_pairs`]) wherever they rank: a missing inertia and damping each
+    // pass alone, and a third effect can outrank one of them (the pendulum's armature, fifth).
+    let mut pairs: Vec<(&Selected, &Selected)> = Vec::new();
     for i in 0..top.len() {
         for j in i + 1..top.len() {
-            let (a, b) = (top[i], top[j]);
-            if a.effect == b.effect || !a.joints.iter().any(|x| b.joints.contains(x)) {
-                continue;
+            pairs.push((top[i], top[j]));
+        }
+    }
+    let mimic = effects::mimicking_pairs();
+    for a in kept {
+        for b in kept {
+            let listed = mimic.iter().any(|(x, y)| x.id() == a.effect && y.id() == b.effect);
+            let seen = pairs.iter().any(|(p, q)| {
+                (std::ptr::eq(*p, a) && std::ptr::eq(*q, b))
+                    || (std::ptr::eq(*p, b) && std::ptr::eq(*q, a))
+            });
+            if listed && !seen {
+                pairs.push((a, b));
             }
-            // Two friction models are two descriptions of one loss, not a pair.
-            if [&a.effect, &b.effect]
+        }
+    }
+    for (a, b) in pairs {
+        if a.effect == b.effect || !a.joints.iter().any(|x| b.joints.contains(x)) {
+            continue;
+        }
+        // Two friction models are two descriptions of one loss, not a pair.
+        if [&a.effect, &b.effect].iter().all(|id| effects::by_id(id).is_some_and(|e| e.friction()))
+        {
+            continue;
+        }
+        let mut set = applied.to_vec();
+        set.push(as_applied(a));
+        set.push(as_applied(b));
+        let set = polish_set(engine, train, heldout, set, 0.05);
+        let (Some(h), Some(t)) = (engine.errors(heldout, &set), engine.errors(train, &set)) else {
+            continue;
+        };
+        let k = effects::by_id(&a.effect).map_or(9, |e| e.fitted())
+            + effects::by_id(&b.effect).map_or(9, |e| e.fitted());
+        let group: Vec<String> = a.joints.iter().chain(&b.joints).cloned().collect();
+        let v = verdict(&h_single, &h, &group, z, opts.decisive_improvement);
+        let bic_ok = bic(t.n, t.sse, k_before + k) < bic(t_base.n, t_base.sse, k_before);
+        // Each member needed: the pair beats the set without it beyond noise.
+        let needed = (0..2).all(|m| {
+            let mut wo = set.clone();
+            wo.remove(applied.len() + m);
+            engine.errors(heldout, &wo).is_some_and(|hw| {
+                let vw = verdict(
+                    &hw,
+                    &h,
+                    &set[applied.len() + m].joints,
+                    2.0,
+                    opts.decisive_improvement,
+                );
+                vw.significant && vw.rel >= opts.min_rel_improvement
+            })
+        });
+        let ok = h.rmse() < 0.9 * h_single.rmse() && v.significant && bic_ok && needed;
+        out.tried.push(Tried {
+            round,
+            phase: "pair",
+            effect: format!("{}+{}", a.effect, b.effect),
+            joints: group.clone(),
+            params: set[applied.len()..]
                 .iter()
-                .all(|id| effects::by_id(id).is_some_and(|e| e.friction()))
-            {
-                continue;
+                .flat_map(|x| x.params.iter().take(x.effect.fitted()).copied())
+                .collect(),
+            train_rmse: t.rmse(),
+            heldout_improvement: (h_base.rmse() - h.rmse()) / h_base.rmse().max(1e-300),
+            significant: v.significant,
+            bic_decreased: bic_ok,
+            kept: false,
+        });
+        if !ok {
+            continue;
+        }
+        let better = match &best {
+            None => true,
+            Some((_, r, kb)) => {
+                (k < *kb && h.rmse() <= r * 1.01)
+                    || (h.rmse() < *r && !(k > *kb && h.rmse() > r / 1.01))
             }
-            let mut set = applied.to_vec();
-            set.push(as_applied(a));
-            set.push(as_applied(b));
-            let set = polish_set(engine, train, heldout, set, 0.05);
-            let (Some(h), Some(t)) = (engine.errors(heldout, &set), engine.errors(train, &set))
-            else {
-                continue;
-            };
-            let k = effects::by_id(&a.effect).map_or(9, |e| e.fitted())
-                + effects::by_id(&b.effect).map_or(9, |e| e.fitted());
-            let group: Vec<String> = a.joints.iter().chain(&b.joints).cloned().collect();
-            let v = verdict(&h_single, &h, &group, z, opts.decisive_improvement);
-            let bic_ok = bic(t.n, t.sse, k_before + k) < bic(t_base.n, t_base.sse, k_before);
-            // Each member needed: the pair beats the set without it beyond noise.
-            let needed = (0..2).all(|m| {
-                let mut wo = set.clone();
-                wo.remove(applied.len() + m);
-                engine.errors(heldout, &wo).is_some_and(|hw| {
-                    let vw = verdict(
-                        &hw,
-                        &h,
-                        &set[applied.len() + m].joints,
-                        2.0,
-                        opts.decisive_improvement,
-                    );
-                    vw.significant && vw.rel >= opts.min_rel_improvement
-                })
-            });
-            let ok = h.rmse() < 0.9 * h_single.rmse() && v.significant && bic_ok && needed;
-            out.tried.push(Tried {
-                round,
-                phase: "pair",
-                effect: format!("{}+{}", a.effect, b.effect),
-                joints: group.clone(),
-                params: set[applied.len()..]
-                    .iter()
-                    .flat_map(|x| x.params.iter().take(x.effect.fitted()).copied())
-                    .collect(),
-                train_rmse: t.rmse(),
-                heldout_improvement: (h_base.rmse() - h.rmse()) / h_base.rmse().max(1e-300),
-                significant: v.significant,
-                bic_decreased: bic_ok,
-                kept: false,
-            });
-            if !ok {
-                continue;
-            }
-            let better = match &best {
-                None => true,
-                Some((_, r, kb)) => {
-                    (k < *kb && h.rmse() <= r * 1.01)
-                        || (h.rmse() < *r && !(k > *kb && h.rmse() > r / 1.01))
-                }
-            };
-            if better {
-                best = Some((set, h.rmse(), k));
-            }
+        };
+        if better {
+            best = Some((set, h.rmse(), k));
         }
     }
     let (set, rmse, _) = best?;
