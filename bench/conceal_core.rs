@@ -272,7 +272,8 @@ fn mae(a: &[Vec<f64>], b: &[Vec<f64>], idx: &[usize]) -> (f64, usize) {
 }
 
 /// Runs one case end to end.
-pub fn run(case: &Case, max_rounds: usize) -> Score {
+/// Blind fit of `case` with `modellint fit`'s defaults (the tool as shipped), scored.
+pub fn run(case: &Case) -> Score {
     let t0 = Instant::now();
     let path = if case.model.is_absolute() { case.model.clone() } else { root().join(&case.model) };
     let robot = load(&path);
@@ -280,7 +281,7 @@ pub fn run(case: &Case, max_rounds: usize) -> Score {
     let o = case.synth();
     let (recs, _) = recorded(&robot, case, &hidden, &o, "fit");
     // The fit sees only the recordings and the model without the effects.
-    let opts = FitOptions { max_rounds, ..Default::default() };
+    let opts = FitOptions::default();
     let out = fit(&robot, &recs, &opts);
 
     // Detection scoring by (effect, joint).

@@ -167,7 +167,7 @@ fn main() {
     eprintln!("conceal bench: {} cases{}", cases.len(), if quick { " (--quick)" } else { "" });
     let mut scores = Vec::new();
     for (i, c) in cases.iter().enumerate() {
-        let s = run(c, 3);
+        let s = run(c);
         eprint!("[{}/{}] {}", i + 1, cases.len(), table_row(&s));
         eprintln!("    noise + quantisation floor (held-out, MAE): {:.3} mrad", 1e3 * s.mae_floor);
         for w in &s.warnings {

@@ -16,7 +16,7 @@ fn report(s: &Score) {
 /// step), held-out MAE reduced by at least 80 % (of the part above the noise floor when the
 /// floor makes 80 % of the recorded MAE unreachable: `Score::mae_ok`).
 fn single(c: Case) {
-    let s = run(&c, 3);
+    let s = run(&c);
     report(&s);
     assert_eq!(s.recall(), Some(1.0), "{}: not found; detected {:?}", c.name, s.detected);
     assert_eq!(s.fp, 0, "{}: invented effects; detected {:?}", c.name, s.detected);
@@ -131,7 +131,7 @@ fn conceal_arm3_stribeck_friction_high_noise() {
         Noise::High,
         7,
     );
-    let s = run(&c, 3);
+    let s = run(&c);
     report(&s);
     assert_eq!(s.recall(), Some(1.0), "{}: not found; detected {:?}", c.name, s.detected);
     assert_eq!(s.fp, 0, "{}: invented effects; detected {:?}", c.name, s.detected);
@@ -170,7 +170,7 @@ fn conceal_asimov_one_knee_is_not_smeared_over_both() {
         Noise::Real,
         7,
     );
-    let s = run(&c, 3);
+    let s = run(&c);
     report(&s);
     assert!(
         s.detected.iter().all(|(_, j, _)| j == "left_knee"),
@@ -190,7 +190,7 @@ fn conceal_asimov_one_knee_is_not_smeared_over_both() {
 }
 
 fn pair(c: Case) {
-    let s = run(&c, 3);
+    let s = run(&c);
     report(&s);
     assert_eq!(s.recall(), Some(1.0), "{}: detected {:?}", c.name, s.detected);
     assert_eq!(s.fp, 0, "{}: invented effects; detected {:?}", c.name, s.detected);
@@ -229,14 +229,14 @@ fn conceal_arm3_pair_armature_viscous_damping() {
 
 #[test]
 fn conceal_control_selects_nothing() {
-    let s = run(&arm3_case("arm3 control", Kind::Control, vec![], Noise::Real, 11), 3);
+    let s = run(&arm3_case("arm3 control", Kind::Control, vec![], Noise::Real, 11));
     report(&s);
     assert!(s.detected.is_empty(), "invented effects: {:?}", s.detected);
 }
 
 #[test]
 fn conceal_rig_control_selects_nothing() {
-    let s = run(&rig_case("rig control", Kind::Control, vec![], Noise::Real, 11), 3);
+    let s = run(&rig_case("rig control", Kind::Control, vec![], Noise::Real, 11));
     report(&s);
     assert!(s.detected.is_empty(), "invented effects: {:?}", s.detected);
 }

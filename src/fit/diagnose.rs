@@ -84,7 +84,7 @@ fn rms(x: &[f64]) -> f64 {
 }
 
 /// Least squares of `r` on `f` (centred unless `raw`): (coefficient, explained mean square, corr).
-fn explain(r: &[f64], f: &[f64], raw: bool) -> (f64, f64, f64) {
+pub(crate) fn explain(r: &[f64], f: &[f64], raw: bool) -> (f64, f64, f64) {
     let n = r.len().min(f.len());
     if n < 3 {
         return (0.0, 0.0, 0.0);

@@ -259,13 +259,14 @@ pub trait Effect: Declared + Sync {
     fn shown_evidence(&self) -> &'static [&'static str] {
         &[]
     }
-    /// The first parameter's value for the diagnosis's linearised re-ranking: one probe
-    /// simulation at this value, from `start` within `[lo, hi]`. `None`: no probe. Default: a
-    /// step of 5 % of the range (down when up would leave the bounds).
-    fn probe(&self, start: f64, lo: f64, hi: f64, evidence: &BTreeMap<String, f64>) -> Option<f64> {
+    /// The first parameter's values for the diagnosis's linearised re-ranking: one probe
+    /// simulation at each value, from `start` within `[lo, hi]`; the one that explains the
+    /// residual best ranks the candidate. Empty: no probe. Default: a step of 5 % of the range
+    /// (down when up would leave the bounds).
+    fn probes(&self, start: f64, lo: f64, hi: f64, evidence: &BTreeMap<String, f64>) -> Vec<f64> {
         let _ = evidence;
         let step = 0.05 * (hi - lo);
-        Some(if start + step <= hi { start + step } else { start - step })
+        vec![if start + step <= hi { start + step } else { start - step }]
     }
     fn write_back(&self, p: &[f64]) -> WriteBack;
     /// One `(attribute, value)` of [`WriteBack::Actuator`] as MJCF attributes (name, text) on the
@@ -554,7 +555,7 @@ mod tests {
             let d = e.params()[0];
             let step = 0.05 * (d.hi - d.lo);
             for (start, want) in [(d.lo, d.lo + step), (d.hi, d.hi - step)] {
-                if let Some(v) = e.probe(start, d.lo, d.hi, &none) {
+                for v in e.probes(start, d.lo, d.hi, &none) {
                     assert_eq!(v, want, "{}: from {start}", e.id());
                     stepped += 1;
                 }

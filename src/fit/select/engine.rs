@@ -335,47 +335,56 @@ impl<'a> Engine<'a> {
             })
     }
 
-    /// Linearised explained mean square of the residual by a probe step of candidate `c`
-    /// (`None` when the probe changes nothing or diverges): returns (explained MS, coefficient).
+    /// Linearised explained mean square of the residual by a probe step of candidate `c`, the
+    /// best of the effect's probes (`None` when no probe changes anything or all diverge):
+    /// returns (explained MS, coefficient, probe value).
     pub(super) fn sensitivity(
         &self,
         train: &[Recording],
         base: &[Applied],
         base_err: &Errors,
         c: &Candidate,
-    ) -> Option<(f64, f64)> {
+    ) -> Option<(f64, f64, f64)> {
         let effect = effects::by_id(c.effect)?;
         let t = JointTarget::of(self.robot, &c.joint)?;
         let m0 = model_with(self.robot, base);
-        let mut p = effect.initial(&m0, &t);
+        let p0 = effect.initial(&m0, &t);
         let (lo, hi) = effect.bounds(&m0, &t);
-        p[0] = effect.probe(p[0], lo[0], hi[0], &c.evidence)?;
-        let mut a = base.to_vec();
-        a.push(Applied { effect, joints: vec![c.joint.clone()], params: p });
-        let e = self.errors(train, &a)?;
-        let (mut rs, mut ss) = (0.0, 0.0);
-        let mut n = 0usize;
-        for ((rec, e0), e1) in train.iter().zip(&base_err.eps).zip(&e.eps) {
-            let scored = gap_mask(&rec.t, self.opts.gap_mask_s);
-            for (k, jt) in rec.joints.iter().enumerate() {
-                if !self.joints.contains(&jt.name) {
-                    continue;
-                }
-                for i in (0..rec.t.len()).filter(|&i| scored[i]) {
-                    let r = jt.q[i] - e0.q_sim[k][i];
-                    let s = e1.q_sim[k][i] - e0.q_sim[k][i];
-                    if r.is_finite() && s.is_finite() {
-                        rs += r * s;
-                        ss += s * s;
-                        n += 1;
+        let mut best: Option<(f64, f64, f64)> = None;
+        for v in effect.probes(p0[0], lo[0], hi[0], &c.evidence) {
+            let mut p = p0.clone();
+            p[0] = v;
+            let mut a = base.to_vec();
+            a.push(Applied { effect, joints: vec![c.joint.clone()], params: p });
+            let Some(e) = self.errors(train, &a) else { continue };
+            let (mut rs, mut ss) = (0.0, 0.0);
+            let mut n = 0usize;
+            for ((rec, e0), e1) in train.iter().zip(&base_err.eps).zip(&e.eps) {
+                let scored = gap_mask(&rec.t, self.opts.gap_mask_s);
+                for (k, jt) in rec.joints.iter().enumerate() {
+                    if !self.joints.contains(&jt.name) {
+                        continue;
+                    }
+                    for i in (0..rec.t.len()).filter(|&i| scored[i]) {
+                        let r = jt.q[i] - e0.q_sim[k][i];
+                        let s = e1.q_sim[k][i] - e0.q_sim[k][i];
+                        if r.is_finite() && s.is_finite() {
+                            rs += r * s;
+                            ss += s * s;
+                            n += 1;
+                        }
                     }
                 }
             }
+            if ss <= 1e-300 || n == 0 {
+                continue;
+            }
+            let ems = rs * rs / ss / n as f64;
+            if best.is_none_or(|b| ems > b.0) {
+                best = Some((ems, rs / ss, v));
+            }
         }
-        if ss <= 1e-300 || n == 0 {
-            return None;
-        }
-        Some((rs * rs / ss / n as f64, rs / ss))
+        best
     }
 
     /// Linearised standard errors of the fitted parameters of `applied.last()`.

@@ -59,7 +59,7 @@ pub(super) fn greedy_round(
     // One probe simulation per (effect, joint), independent of each other: run them in
     // parallel (each replay is itself parallel over episodes; results in a fixed order).
     let mut diag = diag;
-    let probes: Vec<Option<(f64, f64)>> = diag
+    let probes: Vec<Option<(f64, f64, f64)>> = diag
         .par_iter()
         .map(|c| {
             if covered(c.effect, &c.joint) {
@@ -74,9 +74,10 @@ pub(super) fn greedy_round(
             c.explained_rms = 0.0;
             continue;
         }
-        if let Some((ems, coef)) = sens {
+        if let Some((ems, coef, probe)) = sens {
             c.evidence.insert("feature_explained_rms".into(), c.explained_rms);
             c.evidence.insert("sensitivity_coef".into(), coef);
+            c.evidence.insert("probe".into(), probe);
             c.explained_rms = ems.sqrt();
         }
     }
