@@ -1,5 +1,5 @@
 //! Concealed-effect benchmark: hidden effects → synthetic recordings → blind `fit` → score.
-//! `bench/conceal.sh [--quick] [--filter SUBSTRING]` (see docs/conceal-benchmark.md).
+//! `bench/conceal.sh [--quick] [--filter TERM[,TERM…]]` (see docs/conceal-benchmark.md).
 
 #[path = "../bench/conceal_core.rs"]
 mod conceal_core;
@@ -159,9 +159,9 @@ fn main() {
     let cases: Vec<Case> = matrix(quick)
         .into_iter()
         .filter(|c| {
-            filter
-                .as_ref()
-                .is_none_or(|f| format!("{} {}", c.name, c.noise_label()).contains(f.as_str()))
+            // Comma-separated terms, all of which must occur (e.g. `arm3,real 12b`).
+            let label = format!("{} {}", c.name, c.noise_label());
+            filter.as_ref().is_none_or(|f| f.split(',').all(|t| label.contains(t)))
         })
         .collect();
     eprintln!("conceal bench: {} cases{}", cases.len(), if quick { " (--quick)" } else { "" });

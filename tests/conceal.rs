@@ -228,6 +228,20 @@ fn conceal_arm3_pair_armature_viscous_damping() {
 }
 
 #[test]
+fn conceal_arm3_group_with_an_exception() {
+    // Damping on every joint, three times as much on the elbow: one value for the group and the
+    // elbow's own (the pair look-ahead's "group with an exception"). A gain error on the elbow
+    // (or on all joints) mimics the extra damping and was kept instead before.
+    let mut c =
+        arm3_case("arm3 viscous_damping group + elbow", Kind::Group, vec![], Noise::Real, 7);
+    c.truth = vec![
+        ("viscous_damping", vec!["shoulder_pitch".into(), "wrist_pitch".into()], vec![0.3]),
+        ("viscous_damping", vec!["elbow_pitch".into()], vec![0.9]),
+    ];
+    pair(c);
+}
+
+#[test]
 fn conceal_control_selects_nothing() {
     let s = run(&arm3_case("arm3 control", Kind::Control, vec![], Noise::Real, 11));
     report(&s);

@@ -16,7 +16,8 @@ use super::{Errors, FitOutcome, Selected, Tried, set_uncertainty, sync_selected}
 
 /// Look-ahead for two effects that only make sense together (extra inertia *and* damping: each
 /// alone is mimicked by a delay or a gain error). The top four kept candidates of the round are
-/// paired when they act on the same joints (not two friction models), each pair is fitted
+/// paired when they act on the same joints (not two friction models; one effect on a group and
+/// on one of its members becomes the group with an exception), each pair is fitted
 /// jointly from the two single fits, and the best pair replaces the single winner when it is
 /// ≥ 10 % better on held-out (and beyond noise), and each member is needed in it (removing
 /// either is worse beyond noise). The pair with fewer parameters wins within 1 %.
@@ -64,6 +65,7 @@ pub(super) fn pair_lookahead(
     // The pairs of the top four, and any two kept candidates that mimic each other alone
     // ([`effects::mimicking_pairs`]) wherever they rank: a missing inertia and damping each
     // pass alone, and a third effect can outrank one of them (the pendulum's armature, fifth).
+    // Likewise one effect kept on a joint and on a group holding it (a group with an exception).
     let mut pairs: Vec<(&Selected, &Selected)> = Vec::new();
     for i in 0..top.len() {
         for j in i + 1..top.len() {
@@ -71,9 +73,16 @@ pub(super) fn pair_lookahead(
         }
     }
     let mimic = effects::mimicking_pairs();
+    let inside = |a: &Selected, b: &Selected| {
+        a.effect == b.effect
+            && a.joints.len() < b.joints.len()
+            && a.joints.iter().all(|j| b.joints.contains(j))
+    };
     for a in kept {
         for b in kept {
-            let listed = mimic.iter().any(|(x, y)| x.id() == a.effect && y.id() == b.effect);
+            // (Also one effect on a joint and on a group holding it, wherever they rank.)
+            let listed =
+                mimic.iter().any(|(x, y)| x.id() == a.effect && y.id() == b.effect) || inside(a, b);
             let seen = pairs.iter().any(|(p, q)| {
                 (std::ptr::eq(*p, a) && std::ptr::eq(*q, b))
                     || (std::ptr::eq(*p, b) && std::ptr::eq(*q, a))
@@ -84,23 +93,40 @@ pub(super) fn pair_lookahead(
         }
     }
     for (a, b) in pairs {
-        if a.effect == b.effect || !a.joints.iter().any(|x| b.joints.contains(x)) {
+        if !a.joints.iter().any(|x| b.joints.contains(x)) {
             continue;
         }
-        // Two friction models are two descriptions of one loss, not a pair.
-        if [&a.effect, &b.effect].iter().all(|id| effects::by_id(id).is_some_and(|e| e.friction()))
-        {
-            continue;
-        }
+        // One effect on a group and on one of its members: the group with an exception (its
+        // own value on that member), e.g. damping on every joint and more on the elbow, which a
+        // gain error on the elbow would otherwise mimic.
+        let (a, b) = if a.effect == b.effect {
+            let (small, big) = if a.joints.len() < b.joints.len() { (a, b) } else { (b, a) };
+            if !small.joints.iter().all(|j| big.joints.contains(j))
+                || small.joints.len() == big.joints.len()
+            {
+                continue;
+            }
+            let mut rest = as_applied(big);
+            rest.joints.retain(|j| !small.joints.contains(j));
+            (as_applied(small), rest)
+        } else {
+            // Two friction models are two descriptions of one loss, not a pair.
+            if [&a.effect, &b.effect]
+                .iter()
+                .all(|id| effects::by_id(id).is_some_and(|e| e.friction()))
+            {
+                continue;
+            }
+            (as_applied(a), as_applied(b))
+        };
         let mut set = applied.to_vec();
-        set.push(as_applied(a));
-        set.push(as_applied(b));
+        set.push(a.clone());
+        set.push(b.clone());
         let set = polish_set(engine, train, heldout, set, 0.05);
         let (Some(h), Some(t)) = (engine.errors(heldout, &set), engine.errors(train, &set)) else {
             continue;
         };
-        let k = effects::by_id(&a.effect).map_or(9, |e| e.fitted())
-            + effects::by_id(&b.effect).map_or(9, |e| e.fitted());
+        let k = a.effect.fitted() + b.effect.fitted();
         let group: Vec<String> = a.joints.iter().chain(&b.joints).cloned().collect();
         let v = verdict(&h_single, &h, &group, z, opts.decisive_improvement);
         let bic_ok = bic(t.n, t.sse, k_before + k) < bic(t_base.n, t_base.sse, k_before);
@@ -123,7 +149,7 @@ pub(super) fn pair_lookahead(
         out.tried.push(Tried {
             round,
             phase: "pair",
-            effect: format!("{}+{}", a.effect, b.effect),
+            effect: format!("{}+{}", a.effect.id(), b.effect.id()),
             joints: group.clone(),
             params: set[applied.len()..]
                 .iter()

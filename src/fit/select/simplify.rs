@@ -136,36 +136,37 @@ fn swap_pass(
             {
                 continue;
             }
-            if others
+            // On the joints of `cur` that `e` does not already act on (gain error on every
+            // joint next to a damping on the elbow can become a damping on the other joints).
+            let targets: Vec<String> = cur
+                .joints
                 .iter()
-                .any(|a| a.effect.id() == e.id() && a.joints.iter().any(|j| cur.joints.contains(j)))
-            {
+                .filter(|j| !others.iter().any(|a| a.effect.id() == e.id() && a.joints.contains(j)))
+                .cloned()
+                .collect();
+            if targets.is_empty() {
                 continue;
             }
             // Screen: a coarse fit (10 evaluations) of the simpler effect that leaves the
             // training error 1.5 times the current one cannot come within 5 % on held-out
-            // (`tried`: phase "swap_screen").
-            let (pc, fc) = engine.fit_budget(train, &others, e, &cur.joints, 10);
-            if pc.is_empty() || !fc.is_finite() || fc > 1.5 * train_cur {
-                out.tried.push(Tried::not_tested(
-                    round,
-                    "swap_screen",
-                    e.id(),
-                    &cur.joints,
-                    pc,
-                    fc,
-                ));
+            // (`tried`: phase "swap_screen"). Not when `e` already acts on some of the joints:
+            // its kept parameters there only come right in the joint re-fit (polish) below.
+            let partial = targets.len() < cur.joints.len();
+            let (pc, fc) = engine.fit_budget(train, &others, e, &targets, 10);
+            if !partial && (pc.is_empty() || !fc.is_finite() || fc > 1.5 * train_cur) {
+                out.tried.push(Tried::not_tested(round, "swap_screen", e.id(), &targets, pc, fc));
                 continue;
             }
-            let (p, tr) = engine.fit_one(train, &others, e, &cur.joints);
+            let (p, tr) = engine.fit_one(train, &others, e, &targets);
             if p.is_empty() || !tr.is_finite() {
                 continue;
             }
             let mut set = others.clone();
-            set.push(Applied { effect: e, joints: cur.joints.clone(), params: p });
+            set.push(Applied { effect: e, joints: targets.clone(), params: p });
             let Some(h0) = engine.errors(heldout, &set) else { continue };
-            // Hopeless before polishing: skip the joint re-fit.
-            let set = if h0.rmse() <= h_cur.rmse() * 1.10 && set.len() >= 2 {
+            // Hopeless before polishing: skip the joint re-fit (unless `e` acts on other
+            // joints too, whose kept parameters only come right in it).
+            let set = if (partial || h0.rmse() <= h_cur.rmse() * 1.10) && set.len() >= 2 {
                 polish_set(engine, train, heldout, set, 0.02)
             } else {
                 set
@@ -174,16 +175,17 @@ fn swap_pass(
             // Is the current set better than the swap beyond noise?
             let worse = verdict(&h1, &h_cur, &cur.joints, 2.0, f64::INFINITY);
             let k_set = k_all - k_cur + e.fitted();
-            let bic_ok =
-                engine.errors(train, &set).is_some_and(|t| bic(t.n, t.sse, k_set) <= bic_cur);
+            let t_set = engine.errors(train, &set);
+            let bic_ok = t_set.as_ref().is_some_and(|t| bic(t.n, t.sse, k_set) <= bic_cur);
             let ok = h1.rmse() <= h_cur.rmse() + tol && !worse.significant && bic_ok;
             out.tried.push(Tried {
                 round,
                 phase: "swap",
                 effect: e.id().into(),
-                joints: cur.joints.clone(),
+                joints: targets.clone(),
                 params: set.last().expect("pushed").params.clone(),
-                train_rmse: tr,
+                // After the joint re-fit (what the BIC compares).
+                train_rmse: t_set.as_ref().map_or(tr, |t| t.rmse()),
                 heldout_improvement: (h_cur.rmse() - h1.rmse()) / h_cur.rmse().max(1e-300),
                 significant: worse.significant,
                 bic_decreased: bic_ok,
