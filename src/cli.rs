@@ -131,19 +131,8 @@ pub struct GapCmd {
     /// Hardware spec (TOML) for joint regions. Default: <model>.toml beside the model.
     #[arg(long)]
     pub spec: Option<PathBuf>,
-    /// Control rate [Hz] of the robot's controller: one command per tick at
-    /// control_t0_s + k/rate, taken from the rows inside that tick. Default: the recording's
-    /// `control_rate_hz`; without one, each goal is held from its own timestamp.
-    #[arg(long)]
-    pub control_hz: Option<f64>,
-    /// What a row's q_cmd is: `in-force` (the command in force at the row's time, the usual
-    /// logger) or `sent-after` (the command sent right after the sample). Default: the
-    /// recording's `command_timing` key, else in-force. See docs/recording-format.md.
-    #[arg(long, value_parser = ["in-force", "sent-after"])]
-    pub command_timing: Option<String>,
-    /// Floating base: fixed (pinned), recorded (driven from base.* columns) or free.
-    #[arg(long, default_value = "fixed", value_parser = ["fixed", "recorded", "free"])]
-    pub base: String,
+    #[command(flatten)]
+    pub replay: ReplayArgs,
     /// Output format.
     #[arg(long, value_enum, default_value_t = ResultFormat::Text)]
     pub format: ResultFormat,
@@ -197,19 +186,8 @@ pub struct FitCmd {
     /// recorded state.
     #[arg(long)]
     pub window: Option<f64>,
-    /// Control rate [Hz] of the robot's controller: one command per tick at
-    /// control_t0_s + k/rate, taken from the rows inside that tick. Default: the recording's
-    /// `control_rate_hz`; without one, each goal is held from its own timestamp.
-    #[arg(long)]
-    pub control_hz: Option<f64>,
-    /// What a row's q_cmd is: `in-force` (the command in force at the row's time, the usual
-    /// logger) or `sent-after` (the command sent right after the sample). Default: the
-    /// recording's `command_timing` key, else in-force. See docs/recording-format.md.
-    #[arg(long, value_parser = ["in-force", "sent-after"])]
-    pub command_timing: Option<String>,
-    /// Floating base: fixed (pinned), recorded (driven from base.* columns) or free.
-    #[arg(long, default_value = "fixed", value_parser = ["fixed", "recorded", "free"])]
-    pub base: String,
+    #[command(flatten)]
+    pub replay: ReplayArgs,
     /// No progress on stderr.
     #[arg(long, short)]
     pub quiet: bool,
@@ -227,12 +205,41 @@ pub struct FitCmd {
     pub report: Option<PathBuf>,
 }
 
-fn base_mode(s: &str) -> crate::sim2real::replay::BaseMode {
-    use crate::sim2real::replay::BaseMode;
-    match s {
-        "recorded" => BaseMode::Recorded,
-        "free" => BaseMode::Free,
-        _ => BaseMode::Fixed,
+/// How `gap` and `fit` replay the recordings.
+#[derive(Args, Debug)]
+pub struct ReplayArgs {
+    /// Control rate [Hz] of the robot's controller: one command per tick at
+    /// control_t0_s + k/rate, taken from the rows inside that tick. Default: the recording's
+    /// `control_rate_hz`; without one, each goal is held from its own timestamp.
+    #[arg(long)]
+    pub control_hz: Option<f64>,
+    /// What a row's q_cmd is: `in-force` (the command in force at the row's time, the usual
+    /// logger) or `sent-after` (the command sent right after the sample). Default: the
+    /// recording's `command_timing` key, else in-force. See docs/recording-format.md.
+    #[arg(long, value_parser = ["in-force", "sent-after"])]
+    pub command_timing: Option<String>,
+    /// Floating base: fixed (pinned), recorded (driven from base.* columns) or free.
+    #[arg(long, default_value = "fixed", value_parser = ["fixed", "recorded", "free"])]
+    pub base: String,
+}
+
+impl ReplayArgs {
+    /// The replay options these flags ask for.
+    pub fn options(&self) -> crate::sim2real::replay::ReplayOptions {
+        use crate::sim2real::replay::BaseMode;
+        crate::sim2real::replay::ReplayOptions {
+            control_hz: self.control_hz,
+            command_timing: self
+                .command_timing
+                .as_deref()
+                .and_then(crate::sim2real::commands::CommandTiming::parse),
+            base: match self.base.as_str() {
+                "recorded" => BaseMode::Recorded,
+                "free" => BaseMode::Free,
+                _ => BaseMode::Fixed,
+            },
+            ..Default::default()
+        }
     }
 }
 
@@ -288,12 +295,7 @@ pub fn run() -> i32 {
             model: g.model,
             recordings: g.recordings,
             spec: g.spec,
-            control_hz: g.control_hz,
-            command_timing: g
-                .command_timing
-                .as_deref()
-                .and_then(crate::sim2real::commands::CommandTiming::parse),
-            base: base_mode(&g.base),
+            replay: g.replay.options(),
             json: g.format == ResultFormat::Json,
             report: g.report,
         }),
@@ -315,12 +317,7 @@ pub fn run() -> i32 {
             joints: f.joints,
             holdout: f.holdout,
             window: f.window,
-            control_hz: f.control_hz,
-            command_timing: f
-                .command_timing
-                .as_deref()
-                .and_then(crate::sim2real::commands::CommandTiming::parse),
-            base: base_mode(&f.base),
+            replay: f.replay.options(),
             quiet: f.quiet,
             json: f.format == ResultFormat::Json,
             write_model: f.write_model,

@@ -6,17 +6,9 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use modellint::model::{Robot, source::SourceMap};
+mod common;
 
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn load(path: &Path) -> Robot {
-    let mut map = SourceMap::default();
-    modellint::model::load(&mut map, path, None)
-        .unwrap_or_else(|e| panic!("{} does not load: {e}", path.display()))
-}
+use common::{kept, load, root};
 
 fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_modellint"))
@@ -225,31 +217,14 @@ fn write_model_refuses_urdf() {
 /// The Isaac Lab snippet of `--write-actuators` is valid Python for every effect it mentions.
 #[test]
 fn actuator_snippet_parses_as_python() {
-    use modellint::fit::select::Selected;
     let robot = load(&root().join("fixtures/gap/arm3.xml"));
-    let sel = |effect: &str, joint: &str, params: &[(&str, f64)]| Selected {
-        effect: effect.into(),
-        joints: vec![joint.into()],
-        params: params.iter().map(|(k, v)| (k.to_string(), *v)).collect(),
-        stderr: Default::default(),
-        identifiable: true,
-        evidence: Default::default(),
-        heldout_improvement: 0.5,
-        heldout_rmse_before: 0.0,
-        heldout_rmse_after: 0.0,
-        window_improvement: 0.0,
-        window_improvement_se: 0.0,
-        bic_before: 0.0,
-        bic_after: 0.0,
-        values: params.iter().map(|p| p.1).collect(),
-    };
     let selected = vec![
-        sel("armature", "elbow_pitch", &[("armature", 0.001489)]),
-        sel("viscous_damping", "elbow_pitch", &[("damping", 0.018939)]),
-        sel("coulomb_friction", "wrist_pitch", &[("frictionloss", 0.12)]),
-        sel("torque_limit", "wrist_pitch", &[("effort_limit", 3.5)]),
-        sel("action_delay", "shoulder_pitch", &[("delay_s", 0.02)]),
-        sel("backlash", "shoulder_pitch", &[("width", 0.01)]),
+        kept("armature", "elbow_pitch", &[("armature", 0.001489)]),
+        kept("viscous_damping", "elbow_pitch", &[("damping", 0.018939)]),
+        kept("coulomb_friction", "wrist_pitch", &[("frictionloss", 0.12)]),
+        kept("torque_limit", "wrist_pitch", &[("effort_limit", 3.5)]),
+        kept("action_delay", "shoulder_pitch", &[("delay_s", 0.02)]),
+        kept("backlash", "shoulder_pitch", &[("width", 0.01)]),
     ];
     let work = tmp("snippet");
     let files =
@@ -282,26 +257,6 @@ fn actuator_snippet_parses_as_python() {
         Err(_) => eprintln!("skipping: python3 not found; the snippet was not parsed"),
     }
     let _ = std::fs::remove_dir_all(&work);
-}
-
-/// A kept effect as `fit` reports it (only the fields write-back reads matter).
-fn kept(effect: &str, joint: &str, params: &[(&str, f64)]) -> modellint::fit::select::Selected {
-    modellint::fit::select::Selected {
-        effect: effect.into(),
-        joints: vec![joint.into()],
-        params: params.iter().map(|(k, v)| (k.to_string(), *v)).collect(),
-        stderr: Default::default(),
-        identifiable: true,
-        evidence: Default::default(),
-        heldout_improvement: 0.5,
-        heldout_rmse_before: 0.0,
-        heldout_rmse_after: 0.0,
-        window_improvement: 0.0,
-        window_improvement_se: 0.0,
-        bic_before: 0.0,
-        bic_after: 0.0,
-        values: params.iter().map(|p| p.1).collect(),
-    }
 }
 
 /// Each effect's MJCF write-back on arm3 (timestep 1 ms; `<position>` servos with kp 50, kv 1.5

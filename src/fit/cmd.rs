@@ -22,9 +22,8 @@ pub struct FitArgs {
     /// `KEY=VALUE`: hold out the episodes with that metadata value; `KEY`: every value in turn.
     pub holdout_by: Option<String>,
     pub window: Option<f64>,
-    pub control_hz: Option<f64>,
-    pub command_timing: Option<crate::sim2real::commands::CommandTiming>,
-    pub base: crate::sim2real::replay::BaseMode,
+    /// How the recordings are replayed.
+    pub replay: ReplayOptions,
     pub quiet: bool,
     pub json: bool,
     pub write_model: Option<PathBuf>,
@@ -123,12 +122,7 @@ pub fn run_fit(a: FitArgs) -> i32 {
             return fail(format!("--joints {g} matches no recorded joint"));
         }
     }
-    let replay = ReplayOptions {
-        control_hz: a.control_hz,
-        command_timing: a.command_timing,
-        base: a.base,
-        ..Default::default()
-    };
+    let replay = a.replay.clone();
     let families = match loaded.spec.as_ref() {
         Some(s) => names
             .iter()
@@ -172,11 +166,7 @@ pub fn run_fit(a: FitArgs) -> i32 {
         return 2;
     }
     let spec = loaded.spec.as_ref();
-    let region = |name: &str| {
-        spec.and_then(|s| s.joint(name))
-            .and_then(|f| f.region)
-            .unwrap_or_else(|| gap::region_from_name(name))
-    };
+    let region = |name: &str| gap::joint_region(spec, name);
     let run = |applied| -> Result<(GapReport, Vec<Episode>), String> {
         let eps: Result<Vec<Episode>, _> =
             simulate(robot, &out.heldout, applied, &replay).into_iter().collect();

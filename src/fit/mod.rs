@@ -7,6 +7,5 @@ pub mod report;
 pub mod select;
 pub mod split;
 pub mod stats;
-pub mod synth;
 pub mod writeback;
 pub mod writemodel;

@@ -232,27 +232,9 @@ fn overlays(r: &FitReport, joints: &[String]) -> String {
             "time [s]",
             "position [deg]",
             &[
-                Series {
-                    x: &t,
-                    y: jt.q.iter().map(|v| v.to_degrees()).collect(),
-                    colour: REAL,
-                    label: "real".into(),
-                    dash: "",
-                },
-                Series {
-                    x: &t,
-                    y: eb.q_sim[kb].iter().map(|v| v.to_degrees()).collect(),
-                    colour: BEFORE,
-                    label: "sim before".into(),
-                    dash: "5 3",
-                },
-                Series {
-                    x: &t,
-                    y: ea.q_sim[ka].iter().map(|v| v.to_degrees()).collect(),
-                    colour: AFTER,
-                    label: "sim after".into(),
-                    dash: "",
-                },
+                Series::degrees(&t, &jt.q, REAL, "real", ""),
+                Series::degrees(&t, &eb.q_sim[kb], BEFORE, "sim before", "5 3"),
+                Series::degrees(&t, &ea.q_sim[ka], AFTER, "sim after", ""),
             ],
             false,
         ));
@@ -281,27 +263,9 @@ fn spectra(r: &FitReport, joints: &[String]) -> String {
             "frequency [Hz]",
             "PSD [rad²/Hz]",
             &[
-                Series {
-                    x: &pb.freqs,
-                    y: pb.real.clone(),
-                    colour: REAL,
-                    label: "real".into(),
-                    dash: "",
-                },
-                Series {
-                    x: &pb.freqs,
-                    y: pb.sim.clone(),
-                    colour: BEFORE,
-                    label: "sim before".into(),
-                    dash: "5 3",
-                },
-                Series {
-                    x: &pa.freqs,
-                    y: pa.sim.clone(),
-                    colour: AFTER,
-                    label: "sim after".into(),
-                    dash: "",
-                },
+                Series::new(&pb.freqs, pb.real.clone(), REAL, "real", ""),
+                Series::new(&pb.freqs, pb.sim.clone(), BEFORE, "sim before", "5 3"),
+                Series::new(&pa.freqs, pa.sim.clone(), AFTER, "sim after", ""),
             ],
             true,
         ));

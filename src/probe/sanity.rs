@@ -43,16 +43,6 @@ const WARNING_NAMES: [&str; 7] = [
     "bad ctrl",
 ];
 
-/// splitmix64, for a deterministic command sequence.
-fn next(state: &mut u64) -> f64 {
-    *state = state.wrapping_add(0x9E3779B97F4A7C15);
-    let mut z = *state;
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58476D1CE4E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D049BB133111EB);
-    z ^= z >> 31;
-    (z >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-}
-
 pub fn run(robot: &Robot) -> Option<Sanity> {
     let b = Bench::new(robot, Setup::default())?;
     let mut d = b.data(robot);
@@ -61,7 +51,7 @@ pub fn run(robot: &Robot) -> Option<Sanity> {
     let hold = ((0.02 / dt).round() as usize).max(1);
     let nu = robot.actuators.len();
     let base: Vec<f64> = (0..nu).map(|a| bench::ctrl(&d, a)).collect();
-    let mut seed = 0x5EED_u64;
+    let mut rng = crate::util::Rng::from_state(0x5EED);
     let mut problem = None;
     let mut max_speed: f64 = 0.0;
     let mut steps = 0;
@@ -69,7 +59,7 @@ pub fn run(robot: &Robot) -> Option<Sanity> {
         if k % hold == 0 {
             for (a, act) in robot.actuators.iter().enumerate() {
                 let width = if act.ctrllimited { act.ctrlrange[1] - act.ctrlrange[0] } else { 0.2 };
-                let v = base[a] + 0.05 * width * next(&mut seed);
+                let v = base[a] + 0.05 * width * (2.0 * rng.uniform() - 1.0);
                 let v =
                     if act.ctrllimited { v.clamp(act.ctrlrange[0], act.ctrlrange[1]) } else { v };
                 bench::set_ctrl(&mut d, a, v);

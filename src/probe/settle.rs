@@ -36,6 +36,29 @@ impl super::Probe for StanceSettle {
 /// What a diverged settle says.
 pub const DIVERGED: &str = "the standing simulation diverged";
 
+/// A claim the stance-settle run checks (one run per model, so no key). A diverged run confirms
+/// it; otherwise [`StanceClaim::judge_settled`] reads the run.
+pub trait StanceClaim: std::fmt::Debug + Send + Sync + 'static {
+    fn judge_settled(&self, l: &Loaded, s: &Settle) -> super::Verdict;
+}
+
+impl<C: StanceClaim> super::Claim for C {
+    type Probe = StanceSettle;
+    fn key(&self, _: &Loaded) -> Result<(), &'static str> {
+        Ok(())
+    }
+    fn judge(&self, l: &Loaded, s: &Settle) -> super::Verdict {
+        if s.diverged {
+            return super::Verdict::new(
+                crate::finding::ProbeStatus::Confirmed,
+                Default::default(),
+                DIVERGED,
+            );
+        }
+        self.judge_settled(l, s)
+    }
+}
+
 /// What the settle measured around one foot: the body, its parent and its children.
 #[derive(Debug, Clone)]
 pub struct FootView {

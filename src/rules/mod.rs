@@ -103,6 +103,19 @@ impl Context<'_> {
     }
 }
 
+/// Gives each of `findings` the claim `claim` makes for it (a finding it returns `None` for
+/// keeps its own): how a rule names what its probe should check.
+pub fn claim_each<C: crate::probe::Claim>(
+    findings: &mut [Finding],
+    claim: impl Fn(&Finding) -> Option<C>,
+) {
+    for f in findings {
+        if let Some(c) = claim(f) {
+            f.claim = Some(std::sync::Arc::new(c));
+        }
+    }
+}
+
 pub fn kind_word(kind: ElemKind) -> &'static str {
     match kind {
         ElemKind::Body => "body",

@@ -8,15 +8,14 @@ use std::path::{Path, PathBuf};
 use crate::sim2real::gap::{self, GapOptions, GapReport};
 use crate::sim2real::input::{expand_inputs, read_recording};
 use crate::sim2real::recording;
-use crate::sim2real::replay::{self, BaseMode, ReplayOptions, Replayer};
+use crate::sim2real::replay::{self, ReplayOptions, Replayer};
 
 pub struct GapArgs {
     pub model: PathBuf,
-    pub command_timing: Option<crate::sim2real::commands::CommandTiming>,
     pub recordings: Vec<PathBuf>,
     pub spec: Option<PathBuf>,
-    pub control_hz: Option<f64>,
-    pub base: BaseMode,
+    /// How the recordings are replayed.
+    pub replay: ReplayOptions,
     pub json: bool,
     pub report: Option<PathBuf>,
 }
@@ -26,7 +25,7 @@ pub fn run_gap(a: GapArgs) -> i32 {
         Ok(l) => l,
         Err(code) => return code,
     };
-    if let Some(hz) = a.control_hz
+    if let Some(hz) = a.replay.control_hz
         && !(hz.is_finite() && hz > 0.0)
     {
         eprintln!("modellint: --control-hz must be positive, got {hz}");
@@ -56,12 +55,7 @@ pub fn run_gap(a: GapArgs) -> i32 {
         }
         recs.push(rec);
     }
-    let opts = ReplayOptions {
-        control_hz: a.control_hz,
-        command_timing: a.command_timing,
-        base: a.base,
-        ..Default::default()
-    };
+    let opts = a.replay.clone();
     let replayer = Replayer::new(robot);
     let tty = std::io::stderr().is_terminal();
     let total = recs.len();
@@ -85,11 +79,7 @@ pub fn run_gap(a: GapArgs) -> i32 {
         }
     }
     let spec = loaded.spec.as_ref();
-    let region = |name: &str| {
-        spec.and_then(|s| s.joint(name))
-            .and_then(|f| f.region)
-            .unwrap_or_else(|| gap::region_from_name(name))
-    };
+    let region = |name: &str| gap::joint_region(spec, name);
     let report = gap::compute(&recs, &eps, &region, &GapOptions::default());
     if let Some(dir) = &a.report {
         match crate::sim2real::report::write(dir, &report, &recs, &eps) {

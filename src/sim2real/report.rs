@@ -137,20 +137,8 @@ pub fn write(
             "time [s]",
             "position [deg]",
             &[
-                Series {
-                    x: &t,
-                    y: jt.q.iter().map(|v| v.to_degrees()).collect(),
-                    colour: REAL,
-                    label: "real".into(),
-                    dash: "",
-                },
-                Series {
-                    x: &t,
-                    y: ep.q_sim[k].iter().map(|v| v.to_degrees()).collect(),
-                    colour: SIM,
-                    label: "sim".into(),
-                    dash: "",
-                },
+                Series::degrees(&t, &jt.q, REAL, "real", ""),
+                Series::degrees(&t, &ep.q_sim[k], SIM, "sim", ""),
             ],
             false,
         ));
@@ -168,20 +156,8 @@ pub fn write(
             "frequency [Hz]",
             "PSD [rad²/Hz]",
             &[
-                Series {
-                    x: &p.freqs,
-                    y: p.real.clone(),
-                    colour: REAL,
-                    label: "real".into(),
-                    dash: "",
-                },
-                Series {
-                    x: &p.freqs,
-                    y: p.sim.clone(),
-                    colour: SIM,
-                    label: "sim".into(),
-                    dash: "",
-                },
+                Series::new(&p.freqs, p.real.clone(), REAL, "real", ""),
+                Series::new(&p.freqs, p.sim.clone(), SIM, "sim", ""),
             ],
             true,
         ));

@@ -85,6 +85,43 @@ pub struct Series<'a> {
     pub dash: &'static str,
 }
 
+/// The opening `<svg>` tag of a `w` × `h` figure (text at `font_size`) and its centred bold
+/// title.
+fn svg_open(w: f64, h: f64, font_size: f64, title: &str) -> String {
+    let mut o = format!(
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w:.0}" height="{h:.0}" font-family="sans-serif" font-size="{font_size}">"#
+    );
+    let _ = write!(
+        o,
+        r#"<text x="{:.1}" y="16" text-anchor="middle" font-weight="bold" font-size="12">{}</text>"#,
+        w / 2.0,
+        esc(title)
+    );
+    o
+}
+
+impl<'a> Series<'a> {
+    pub fn new(
+        x: &'a [f64],
+        y: Vec<f64>,
+        colour: &'static str,
+        label: &str,
+        dash: &'static str,
+    ) -> Series<'a> {
+        Series { x, y, colour, label: label.into(), dash }
+    }
+    /// Angles `q` [rad] plotted in degrees.
+    pub fn degrees(
+        x: &'a [f64],
+        q: &[f64],
+        colour: &'static str,
+        label: &str,
+        dash: &'static str,
+    ) -> Series<'a> {
+        Series::new(x, q.iter().map(|v| v.to_degrees()).collect(), colour, label, dash)
+    }
+}
+
 /// Line plot with round ticks, grid, legend under the title; `log_y` plots log10(y).
 pub fn line_plot(
     title: &str,
@@ -109,15 +146,7 @@ pub fn line_plot(
             }
         }
     }
-    let mut o = format!(
-        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w:.0}" height="{h:.0}" font-family="sans-serif" font-size="11">"#
-    );
-    let _ = write!(
-        o,
-        r#"<text x="{:.1}" y="16" text-anchor="middle" font-weight="bold" font-size="12">{}</text>"#,
-        w / 2.0,
-        esc(title)
-    );
+    let mut o = svg_open(w, h, 11.0, title);
     if !(x0.is_finite() && y0.is_finite()) {
         o.push_str("<text x=\"20\" y=\"70\">no data</text></svg>");
         return o;
@@ -254,15 +283,7 @@ pub fn bar_chart(
     let yt = nice_ticks(0.0, if vmax > 0.0 { vmax } else { 1.0 }, 4);
     let top = yt[yt.len() - 1];
     let py = |v: f64| mt + ph - v / top * ph;
-    let mut o = format!(
-        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w:.0}" height="{h:.0}" font-family="sans-serif" font-size="11">"#
-    );
-    let _ = write!(
-        o,
-        r#"<text x="{:.1}" y="16" text-anchor="middle" font-weight="bold" font-size="12">{}</text>"#,
-        w / 2.0,
-        esc(title)
-    );
+    let mut o = svg_open(w, h, 11.0, title);
     let mut lx = ml;
     for (l, c) in legend {
         let _ = write!(
@@ -362,15 +383,7 @@ pub fn heat_map(
     let w = (scale_x + 60.0).max(text_width(title, 12.0) + 20.0);
     let gh = ch * rows.len() as f64;
     let h = mt + gh.max(130.0) + 30.0;
-    let mut o = format!(
-        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w:.0}" height="{h:.0}" font-family="sans-serif" font-size="10">"#
-    );
-    let _ = write!(
-        o,
-        r#"<text x="{:.1}" y="16" text-anchor="middle" font-weight="bold" font-size="12">{}</text>"#,
-        w / 2.0,
-        esc(title)
-    );
+    let mut o = svg_open(w, h, 10.0, title);
     let _ = write!(
         o,
         r#"<text x="{:.1}" y="{:.1}" text-anchor="middle">episode</text>"#,

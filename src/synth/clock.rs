@@ -1,4 +1,4 @@
-//! The two clocks of the simulated logging setup, on a 1 µs time base, and the synth's own RNG.
+//! The two clocks of the simulated logging setup, on a 1 µs time base, and the RNG streams.
 //!
 //! * [`ControlClock`]: the robot's controller sends a position command at every tick
 //!   t_k = t0 + k / rate (k ≥ 0; a tick −1 covers [t0 − 1/rate, t0) when t0 > 0); the command
@@ -11,50 +11,9 @@
 //! All times are integer microseconds where they decide which tick a row belongs to, so the
 //! written `t` column (6 decimals) and the `q_cmd` of the row agree exactly.
 
-/// Deterministic splitmix64 stream (one per purpose and episode, so episodes are independent of
-/// the order they are simulated in).
-#[derive(Debug, Clone)]
-pub struct Rng(u64);
-
-impl Rng {
-    /// A stream for `(seed, purpose, episode)`.
-    pub fn stream(seed: u64, purpose: u64, episode: u64) -> Rng {
-        let mut r = Rng(seed ^ 0x6A09_E667_F3BC_C908);
-        r.0 = r.0.wrapping_add(purpose.wrapping_mul(0xBB67_AE85_84CA_A73B));
-        r.next_u64();
-        r.0 = r.0.wrapping_add(episode.wrapping_mul(0x3C6E_F372_FE94_F82B));
-        r.next_u64();
-        r
-    }
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    /// Uniform in [0, 1).
-    pub fn uniform(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-    }
-    /// Uniform in [a, b).
-    pub fn range(&mut self, a: f64, b: f64) -> f64 {
-        a + (b - a) * self.uniform()
-    }
-    /// Standard normal (Box–Muller).
-    pub fn normal(&mut self) -> f64 {
-        let u1 = self.uniform().max(1e-300);
-        let u2 = self.uniform();
-        (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
-    }
-    /// Fisher–Yates shuffle.
-    pub fn shuffle<T>(&mut self, v: &mut [T]) {
-        for i in (1..v.len()).rev() {
-            let j = (self.next_u64() % (i as u64 + 1)) as usize;
-            v.swap(i, j);
-        }
-    }
-}
+/// The tool's splitmix64 generator; the synth takes one [`Rng::stream`] per purpose and episode,
+/// so episodes are independent of the order they are simulated in.
+pub use crate::util::Rng;
 
 /// Microseconds per second.
 pub const US: f64 = 1e6;

@@ -33,16 +33,8 @@ declare_effect! {
 const LAG: &str = "lag_s";
 
 impl Effect for ActionDelay {
-    fn torque(
-        &self,
-        st: &mut EffectState,
-        _q: f64,
-        _qd: f64,
-        _q_target: f64,
-        io: &mut StepIo,
-        dt: f64,
-        p: &[f64],
-    ) {
+    fn torque(&self, cx: HookCtx<'_>) {
+        let HookCtx { st, io, dt, p, .. } = cx;
         let d = (p[0].max(0.0) / dt).min(1e5);
         st.fifo.push_back(io.ctrl);
         let k = d.floor() as usize;

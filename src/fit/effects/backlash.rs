@@ -26,16 +26,8 @@ declare_effect! {
 }
 
 impl Effect for Backlash {
-    fn torque(
-        &self,
-        _st: &mut EffectState,
-        q: f64,
-        _qd: f64,
-        _q_target: f64,
-        io: &mut StepIo,
-        _dt: f64,
-        p: &[f64],
-    ) {
+    fn torque(&self, cx: HookCtx<'_>) {
+        let HookCtx { q, io, p, .. } = cx;
         let h = 0.5 * p[0].max(0.0);
         let e = io.ctrl - q;
         let e2 = if e.abs() <= h { 0.0 } else { e - h * e.signum() };

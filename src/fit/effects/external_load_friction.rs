@@ -56,16 +56,8 @@ impl Effect for ExternalLoadFriction {
     fn stage(&self) -> u8 {
         2
     }
-    fn torque(
-        &self,
-        _st: &mut EffectState,
-        q: f64,
-        qd: f64,
-        _q_target: f64,
-        io: &mut StepIo,
-        dt: f64,
-        p: &[f64],
-    ) {
+    fn torque(&self, cx: HookCtx<'_>) {
+        let HookCtx { q, qd, io, dt, p, .. } = cx;
         let budget = p[0].max(0.0) * io.bias.abs();
         io.tau += implicit_friction(q, qd, io, dt, budget);
     }
@@ -82,27 +74,31 @@ mod tests {
         StepIo { enabled: false, bias, inertia: 0.0049, ..Default::default() }
     }
 
+    /// One 1 ms step at `q`, `qd` with friction coefficient `mu`.
+    fn step(st: &mut EffectState, q: f64, qd: f64, io: &mut StepIo, mu: f64) {
+        ExternalLoadFriction.torque(HookCtx { st, q, qd, q_target: 0.0, io, dt: 0.001, p: &[mu] });
+    }
+
     #[test]
     fn holds_at_rest_and_never_reverses() {
-        let e = ExternalLoadFriction;
         let mut st = EffectState::default();
         // At rest under a gravity load of 0.2 N·m with mu 1.5 ≥ 1: held exactly.
         let mut x = io(0.2);
-        e.torque(&mut st, 0.5, 0.0, 0.0, &mut x, 0.001, &[1.0]);
+        step(&mut st, 0.5, 0.0, &mut x, 1.0);
         assert!((x.tau - 0.2).abs() < 1e-12, "{}", x.tau);
         // Slowly moving: stopped within the step, not pushed backwards.
         let mut x = io(0.2);
         let qd = 1e-4;
-        e.torque(&mut st, 0.5, qd, 0.0, &mut x, 0.001, &[1.0]);
+        step(&mut st, 0.5, qd, &mut x, 1.0);
         let acc = (x.tau - x.bias) / x.inertia;
         assert!((qd + acc * 0.001).abs() < 1e-12);
         // Fast: the full budget against the motion.
         let mut x = io(0.2);
-        e.torque(&mut st, 0.5, 5.0, 0.0, &mut x, 0.001, &[0.5]);
+        step(&mut st, 0.5, 5.0, &mut x, 0.5);
         assert!((x.tau + 0.1).abs() < 1e-12, "{}", x.tau);
         // No load, no friction.
         let mut x = io(0.0);
-        e.torque(&mut st, 0.0, 5.0, 0.0, &mut x, 0.001, &[0.5]);
+        step(&mut st, 0.0, 5.0, &mut x, 0.5);
         assert_eq!(x.tau, 0.0);
     }
 }

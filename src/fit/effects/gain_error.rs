@@ -30,16 +30,8 @@ declare_effect! {
 }
 
 impl Effect for GainError {
-    fn torque(
-        &self,
-        _st: &mut EffectState,
-        q: f64,
-        qd: f64,
-        _q_target: f64,
-        io: &mut StepIo,
-        _dt: f64,
-        p: &[f64],
-    ) {
+    fn torque(&self, cx: HookCtx<'_>) {
+        let HookCtx { q, qd, io, p, .. } = cx;
         if io.enabled {
             io.tau += (p[0] - 1.0) * io.kp * (io.ctrl - q) - (p[1] - 1.0) * io.kd * qd;
         }

@@ -35,16 +35,8 @@ impl Effect for LoadDependentFriction {
     fn initial(&self, _m: &MjModel, _t: &JointTarget) -> Vec<f64> {
         vec![0.02, 0.02]
     }
-    fn torque(
-        &self,
-        _st: &mut EffectState,
-        q: f64,
-        qd: f64,
-        _q_target: f64,
-        io: &mut StepIo,
-        _dt: f64,
-        p: &[f64],
-    ) {
+    fn torque(&self, cx: HookCtx<'_>) {
+        let HookCtx { q, qd, io, p, .. } = cx;
         let budget = p[0].max(0.0) + p[1].max(0.0) * servo_torque(q, qd, io).abs();
         io.tau -= smooth_sign(qd, super::stribeck_friction::EPS) * budget;
     }

@@ -87,6 +87,23 @@ pub struct EffectState {
     pub started: bool,
 }
 
+/// What a hook effect sees at one physics step of one joint ([`Effect::torque`]).
+pub struct HookCtx<'a> {
+    /// The effect's own state on this joint (delay line, values set by [`Effect::start`]).
+    pub st: &'a mut EffectState,
+    /// Joint position and velocity before the step.
+    pub q: f64,
+    pub qd: f64,
+    /// The recorded command of this step (before any command effect).
+    pub q_target: f64,
+    /// The servo's inputs and what the effect may change (`ctrl`, `tau`).
+    pub io: &'a mut StepIo,
+    /// Physics time step [s].
+    pub dt: f64,
+    /// The effect's full parameter vector.
+    pub p: &'a [f64],
+}
+
 /// The model-side indices of one joint an effect is applied to.
 #[derive(Debug, Clone)]
 pub struct JointTarget {
@@ -219,18 +236,7 @@ pub trait Effect: Declared + Sync {
     fn apply_model(&self, _m: &mut MjModel, _t: &JointTarget, _p: &[f64]) {}
     /// Hook effects: called every physics step before `mj_step`; may change `io.ctrl` (command
     /// effects) or add to `io.tau` (torque effects).
-    #[allow(clippy::too_many_arguments)]
-    fn torque(
-        &self,
-        _st: &mut EffectState,
-        _q: f64,
-        _qd: f64,
-        _q_target: f64,
-        _io: &mut StepIo,
-        _dt: f64,
-        _p: &[f64],
-    ) {
-    }
+    fn torque(&self, _cx: HookCtx<'_>) {}
     /// Measurement effects: sensor reading minus true position.
     fn measurement_bias(&self, _p: &[f64]) -> f64 {
         0.0
@@ -437,7 +443,8 @@ impl ActuatorHook for Hook<'_> {
         let Some(list) = self.lists.get_mut(joint_idx) else { return };
         for (i, st) in list.iter_mut() {
             let a = &self.applied[*i];
-            a.effect.torque(st, q, qd, q_target, out, self.dt, &a.full_params());
+            let p = a.full_params();
+            a.effect.torque(HookCtx { st, q, qd, q_target, io: out, dt: self.dt, p: &p });
         }
     }
 }

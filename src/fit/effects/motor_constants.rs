@@ -58,16 +58,8 @@ impl Effect for MotorConstants {
     fn start(&self, st: &mut EffectState, meta: &BTreeMap<String, String>, _p: &[f64]) {
         st.s[0] = stall_torque(meta);
     }
-    fn torque(
-        &self,
-        st: &mut EffectState,
-        q: f64,
-        qd: f64,
-        _q_target: f64,
-        io: &mut StepIo,
-        _dt: f64,
-        p: &[f64],
-    ) {
+    fn torque(&self, cx: HookCtx<'_>) {
+        let HookCtx { st, q, qd, io, p, .. } = cx;
         if !io.enabled {
             return;
         }
@@ -103,7 +95,7 @@ mod tests {
         let (kp, kd) = (0.82, 0.387 * 0.387 / 4.02);
         let run = |err: f64, qd: f64, p: &[f64], st: &mut EffectState| {
             let mut io = StepIo { ctrl: err, kp, kd, enabled: true, ..Default::default() };
-            e.torque(st, 0.0, qd, err, &mut io, 0.001, p);
+            e.torque(HookCtx { st, q: 0.0, qd, q_target: err, io: &mut io, dt: 0.001, p });
             servo_torque(0.0, qd, &io) + io.tau
         };
         // Small error, nominal constants: the linear actuator unchanged.

@@ -40,16 +40,8 @@ impl Effect for StribeckFriction {
     fn initial(&self, _m: &MjModel, _t: &JointTarget) -> Vec<f64> {
         vec![0.1, 0.05, 0.1]
     }
-    fn torque(
-        &self,
-        _st: &mut EffectState,
-        _q: f64,
-        qd: f64,
-        _q_target: f64,
-        io: &mut StepIo,
-        _dt: f64,
-        p: &[f64],
-    ) {
+    fn torque(&self, cx: HookCtx<'_>) {
+        let HookCtx { qd, io, p, .. } = cx;
         let (fs, fd, vs) = (p[0].max(0.0), p[1].max(0.0), p[2].max(1e-4));
         io.tau -= smooth_sign(qd, EPS) * (fd + (fs - fd) * (-(qd / vs).powi(2)).exp());
     }

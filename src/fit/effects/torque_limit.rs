@@ -52,16 +52,8 @@ impl Effect for TorqueLimit {
     fn fitted(&self) -> usize {
         1
     }
-    fn torque(
-        &self,
-        _st: &mut EffectState,
-        q: f64,
-        qd: f64,
-        _q_target: f64,
-        io: &mut StepIo,
-        _dt: f64,
-        p: &[f64],
-    ) {
+    fn torque(&self, cx: HookCtx<'_>) {
+        let HookCtx { q, qd, io, p, .. } = cx;
         let raw = servo_torque(q, qd, io);
         let (e, sat, vl) = (p[0].max(0.0), p[1].max(0.0), p[2].max(1e-6));
         let hi = (sat * (1.0 - qd / vl)).clamp(0.0, e);

@@ -39,16 +39,8 @@ impl Effect for TorqueOffBraking {
             r.joints.iter().any(|j| j.enabled.as_ref().is_some_and(|e| e.iter().any(|x| !x)))
         })
     }
-    fn torque(
-        &self,
-        _st: &mut EffectState,
-        _q: f64,
-        qd: f64,
-        _q_target: f64,
-        io: &mut StepIo,
-        _dt: f64,
-        p: &[f64],
-    ) {
+    fn torque(&self, cx: HookCtx<'_>) {
+        let HookCtx { qd, io, p, .. } = cx;
         if !io.enabled {
             io.tau -= p[0].max(0.0) * io.kd * qd;
         }

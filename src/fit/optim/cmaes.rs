@@ -4,7 +4,9 @@ use nalgebra::{DMatrix, DVector, SymmetricEigen};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::{Bounds, OptResult, Rng, Space, clamp01, invalid_result, reflect01, sanitize};
+use super::{
+    Bounds, OptResult, Rng, Space, clamp01, invalid_result, reflect01, sanitize, seeded_rng,
+};
 
 /// Options for [`cmaes`].
 #[derive(Debug, Clone, Serialize)]
@@ -63,7 +65,7 @@ pub fn cmaes(
     if n == 0 {
         return OptResult { x: sp.params_of(&u0), f: f0, evals, converged: true };
     }
-    let mut rng = Rng::new(o.seed);
+    let mut rng = seeded_rng(o.seed);
     let sigma0 = if o.sigma0.is_finite() && o.sigma0 > 0.0 { o.sigma0.min(1.0) } else { 0.3 };
     let ftol = if o.ftol.is_finite() { o.ftol.max(0.0) } else { 1e-11 };
     let default_lambda = 4 + (3.0 * (n as f64).ln()).floor() as usize;
@@ -142,7 +144,7 @@ fn cma_run(
         let mut us: Vec<Vec<f64>> = Vec::with_capacity(lambda);
         let mut ys: Vec<DVector<f64>> = Vec::with_capacity(lambda);
         for _ in 0..lambda {
-            let z = DVector::from_fn(n, |_, _| rng.normal());
+            let z = DVector::from_fn(n, |_, _| rng.normal_complement());
             let y = &bmat * z.component_mul(&dvec);
             let x = &m + &y * sigma;
             let u: Vec<f64> = x.iter().map(|&v| reflect01(v)).collect();

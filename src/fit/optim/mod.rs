@@ -8,7 +8,7 @@
 //! * Parameters are optimised in a normalised `[0,1]` space derived from
 //!   [`Bounds`]; the objective is only ever called with points inside
 //!   `[lo, hi]`. Parameters with `lo == hi` are held fixed.
-//! * Everything is deterministic (own splitmix64 RNG). Parallel evaluation
+//! * Everything is deterministic (the tool's splitmix64 RNG, `util::Rng`). Parallel evaluation
 //!   (rayon) always gathers results in a fixed order, so results do not
 //!   depend on the thread count.
 //! * Invalid input (empty `x0`, length mismatch with bounds, non-finite
@@ -25,6 +25,8 @@ mod lm;
 mod nelder_mead;
 
 use serde::Serialize;
+
+pub(crate) use crate::util::Rng;
 
 pub use cmaes::{CmaesOpts, cmaes};
 pub use golden::golden_section;
@@ -55,33 +57,10 @@ pub struct OptResult {
 // Shared helpers
 // ---------------------------------------------------------------------------
 
-/// Deterministic splitmix64 generator.
-#[derive(Debug, Clone)]
-pub(crate) struct Rng {
-    state: u64,
-}
-
-impl Rng {
-    pub(crate) fn new(seed: u64) -> Self {
-        Rng { state: seed ^ 0x5DEE_CE66_D1CE_4E5B }
-    }
-    pub(crate) fn next_u64(&mut self) -> u64 {
-        self.state = self.state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    /// Uniform in [0, 1).
-    pub(crate) fn uniform(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
-    }
-    /// Standard normal (Box–Muller).
-    pub(crate) fn normal(&mut self) -> f64 {
-        let u1 = 1.0 - self.uniform(); // (0, 1]
-        let u2 = self.uniform();
-        (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
-    }
+/// The optimisers' generator: the tool's splitmix64 ([`crate::util::Rng`]) seeded with
+/// `seed ^ 0x5DEE_CE66_D1CE_4E5B`.
+pub(crate) fn seeded_rng(seed: u64) -> Rng {
+    Rng::from_state(seed ^ 0x5DEE_CE66_D1CE_4E5B)
 }
 
 /// Failed evaluations (NaN, −∞) become +∞.
@@ -178,9 +157,10 @@ mod tests {
     }
 
     pub(super) fn exp_data(seed: u64, truth: &[f64], sigma: f64) -> (Vec<f64>, Vec<f64>) {
-        let mut rng = Rng::new(seed);
+        let mut rng = seeded_rng(seed);
         let t: Vec<f64> = (0..60).map(|i| i as f64 * 0.1).collect();
-        let y = t.iter().map(|&ti| exp_model(truth, ti) + sigma * rng.normal()).collect();
+        let y =
+            t.iter().map(|&ti| exp_model(truth, ti) + sigma * rng.normal_complement()).collect();
         (t, y)
     }
 

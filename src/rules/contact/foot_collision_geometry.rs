@@ -3,11 +3,11 @@ use crate::finding::{Finding, ProbeStatus, Severity, Subject};
 use crate::lint::Loaded;
 use crate::model::mjcf::ElemKind;
 use crate::model::{GeomType, Robot};
-use crate::probe::settle::{DIVERGED, Settle};
-use crate::probe::{Claim, StanceSettle, Verdict};
+use crate::probe::settle::{Settle, StanceClaim};
+use crate::probe::{StanceSettle, Verdict};
 use crate::rules::contact::feet::{Foot, feet};
 use crate::rules::geometry::shapes::{Placed, hull_area};
-use crate::rules::{Context, Rule, RuleMeta, opt};
+use crate::rules::{Context, Rule, RuleMeta, claim_each, opt};
 use crate::util::fmt_num;
 
 declare_rule! {
@@ -116,15 +116,8 @@ pub struct FootContactUnsteady {
     pub body: usize,
 }
 
-impl Claim for FootContactUnsteady {
-    type Probe = StanceSettle;
-    fn key(&self, _: &Loaded) -> Result<(), &'static str> {
-        Ok(())
-    }
-    fn judge(&self, l: &Loaded, s: &Settle) -> Verdict {
-        if s.diverged {
-            return Verdict::new(ProbeStatus::Confirmed, Default::default(), DIVERGED);
-        }
+impl StanceClaim for FootContactUnsteady {
+    fn judge_settled(&self, l: &Loaded, s: &Settle) -> Verdict {
         let foot = s.foot(&l.robot, self.body);
         let touching =
             foot.geoms.iter().filter(|g| s.load(**g) > 0.02 * foot.load.max(1e-9)).count();
@@ -150,11 +143,10 @@ impl Rule for FootCollisionGeometry {
     fn check(&self, cx: &Context, out: &mut Vec<Finding>) {
         let first = out.len();
         self.check_feet(cx, out);
-        for f in &mut out[first..] {
-            if let Subject::Foot(b) = f.subject {
-                f.claim = Some(std::sync::Arc::new(FootContactUnsteady { body: b }));
-            }
-        }
+        claim_each(&mut out[first..], |f| match f.subject {
+            Subject::Foot(body) => Some(FootContactUnsteady { body }),
+            _ => None,
+        });
     }
 }
 

@@ -3,11 +3,11 @@ use crate::finding::{Finding, ProbeStatus, Severity, Subject};
 use crate::lint::Loaded;
 use crate::model::mjcf::ElemKind;
 use crate::model::{GeomType, Robot};
-use crate::probe::settle::{DIVERGED, Settle};
-use crate::probe::{Claim, StanceSettle, Verdict};
+use crate::probe::settle::{Settle, StanceClaim};
+use crate::probe::{StanceSettle, Verdict};
 use crate::rules::contact::feet::{Foot, feet};
 use crate::rules::geometry::shapes::{Placed, tilt};
-use crate::rules::{Context, Rule, RuleMeta, opt};
+use crate::rules::{Context, Rule, RuleMeta, claim_each, opt};
 use crate::util::fmt_num;
 
 declare_rule! {
@@ -104,15 +104,8 @@ pub struct ContactGeomUnloaded {
     pub body: usize,
 }
 
-impl Claim for ContactGeomUnloaded {
-    type Probe = StanceSettle;
-    fn key(&self, _: &Loaded) -> Result<(), &'static str> {
-        Ok(())
-    }
-    fn judge(&self, l: &Loaded, s: &Settle) -> Verdict {
-        if s.diverged {
-            return Verdict::new(ProbeStatus::Confirmed, Default::default(), DIVERGED);
-        }
+impl StanceClaim for ContactGeomUnloaded {
+    fn judge_settled(&self, l: &Loaded, s: &Settle) -> Verdict {
         let foot = s.foot(&l.robot, self.body);
         let total = foot.load;
         let unloaded: Vec<String> = foot
@@ -159,13 +152,12 @@ impl Rule for ToeTilt {
     fn check(&self, cx: &Context, out: &mut Vec<Finding>) {
         let first = out.len();
         self.check_feet(cx, out);
-        for f in &mut out[first..] {
-            if let Subject::Geom(g) = f.subject
-                && let Some(geom) = cx.robot.geoms.get(g)
-            {
-                f.claim = Some(std::sync::Arc::new(ContactGeomUnloaded { body: geom.body }));
+        claim_each(&mut out[first..], |f| match f.subject {
+            Subject::Geom(g) => {
+                cx.robot.geoms.get(g).map(|geom| ContactGeomUnloaded { body: geom.body })
             }
-        }
+            _ => None,
+        });
     }
 }
 

@@ -7,7 +7,7 @@ use crate::model::mjcf::ElemKind;
 use crate::model::{ActuatorKind, JointType, Transmission};
 use crate::probe::limit::LimitHit;
 use crate::probe::{Claim, LimitApproach, Verdict};
-use crate::rules::{Context, Rule, RuleMeta, opt};
+use crate::rules::{Context, Rule, RuleMeta, claim_each, opt};
 use crate::util::fmt_num;
 
 declare_rule! {
@@ -89,11 +89,10 @@ impl Claim for ReachesHardStop {
 
 /// Attaches [`ReachesHardStop`] to the findings about one actuator.
 pub fn claim_hard_stops(findings: &mut [Finding]) {
-    for f in findings {
-        if let Subject::Actuator(a) = f.subject {
-            f.claim = Some(std::sync::Arc::new(ReachesHardStop { actuator: a }));
-        }
-    }
+    claim_each(findings, |f| match f.subject {
+        Subject::Actuator(actuator) => Some(ReachesHardStop { actuator }),
+        _ => None,
+    });
 }
 
 impl Rule for SoftLimits {

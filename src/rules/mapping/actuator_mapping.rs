@@ -7,7 +7,7 @@ use crate::model::mjcf::ElemKind;
 use crate::model::{ActuatorKind, Transmission};
 use crate::probe::direction::Direction;
 use crate::probe::{ActuatorDirection, Claim, Verdict};
-use crate::rules::{Context, Rule, RuleMeta};
+use crate::rules::{Context, Rule, RuleMeta, claim_each};
 use crate::util::fmt_num;
 
 declare_rule! {
@@ -109,12 +109,12 @@ impl Rule for ActuatorMapping {
         let first = out.len();
         self.check_mapping(cx, out);
         // Every finding about one actuator can be driven on the bench.
-        for f in &mut out[first..] {
-            if let (Subject::Actuator(a), None) = (f.subject, &f.claim) {
-                f.claim =
-                    Some(std::sync::Arc::new(MisdirectedActuator { actuator: a, expected: None }));
+        claim_each(&mut out[first..], |f| match (f.subject, &f.claim) {
+            (Subject::Actuator(actuator), None) => {
+                Some(MisdirectedActuator { actuator, expected: None })
             }
-        }
+            _ => None,
+        });
     }
 }
 

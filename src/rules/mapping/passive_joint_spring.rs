@@ -2,9 +2,9 @@ use crate::declare_rule;
 use crate::finding::{Finding, ProbeStatus, Severity, Subject};
 use crate::lint::Loaded;
 use crate::model::mjcf::ElemKind;
-use crate::probe::settle::{DIVERGED, Settle};
-use crate::probe::{Claim, StanceSettle, Verdict};
-use crate::rules::{Context, Rule, RuleMeta};
+use crate::probe::settle::{Settle, StanceClaim};
+use crate::probe::{StanceSettle, Verdict};
+use crate::rules::{Context, Rule, RuleMeta, claim_each};
 use crate::util::fmt_num;
 
 declare_rule! {
@@ -47,15 +47,8 @@ pub struct PassiveJointCollapses {
     pub joint: usize,
 }
 
-impl Claim for PassiveJointCollapses {
-    type Probe = StanceSettle;
-    fn key(&self, _: &Loaded) -> Result<(), &'static str> {
-        Ok(())
-    }
-    fn judge(&self, l: &Loaded, s: &Settle) -> Verdict {
-        if s.diverged {
-            return Verdict::new(ProbeStatus::Confirmed, Default::default(), DIVERGED);
-        }
+impl StanceClaim for PassiveJointCollapses {
+    fn judge_settled(&self, l: &Loaded, s: &Settle) -> Verdict {
         let robot = &l.robot;
         let jt = &robot.joints[self.joint];
         let mut m = s.foot(robot, jt.body).measured;
@@ -84,11 +77,10 @@ impl Rule for PassiveJointSpring {
     fn check(&self, cx: &Context, out: &mut Vec<Finding>) {
         let first = out.len();
         self.check_joints(cx, out);
-        for f in &mut out[first..] {
-            if let Subject::Joint(j) = f.subject {
-                f.claim = Some(std::sync::Arc::new(PassiveJointCollapses { joint: j }));
-            }
-        }
+        claim_each(&mut out[first..], |f| match f.subject {
+            Subject::Joint(joint) => Some(PassiveJointCollapses { joint }),
+            _ => None,
+        });
     }
 }
 

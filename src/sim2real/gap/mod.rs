@@ -218,6 +218,13 @@ pub struct GapReport {
     pub psd: Vec<JointPsd>,
 }
 
+/// Body region of a joint: the robot spec's `region` for it, else [`region_from_name`].
+pub fn joint_region(spec: Option<&crate::spec::Spec>, name: &str) -> String {
+    spec.and_then(|s| s.joint(name))
+        .and_then(|f| f.region)
+        .unwrap_or_else(|| region_from_name(name))
+}
+
 /// Body region of a joint from its name: legs, arms, head, torso, else "other".
 pub fn region_from_name(name: &str) -> String {
     let n = name.to_lowercase();
