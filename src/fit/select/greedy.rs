@@ -9,26 +9,18 @@ use crate::fit::diagnose::{Candidate, diagnose};
 use crate::fit::effects::{self, Applied, Effect};
 use crate::fit::stats::bic;
 use crate::model::mirror::mirror_name;
-use crate::sim2real::recording::Recording;
 
-use super::engine::Engine;
 use super::pairs::{joint_pairs, pair_lookahead};
 use super::verdict::{at_bound, verdict, z_needed};
-use super::{Errors, FitOutcome, Selected, Tried, set_uncertainty};
+use super::{Errors, FitOutcome, Search, Selected, Tried, set_uncertainty};
 
 /// A candidate: effect, joint group, evidence.
 type Cand = (&'static dyn Effect, Vec<String>, BTreeMap<String, f64>);
 
 /// One greedy round: diagnose, fit the candidates, keep the best that passes the held-out gate.
 /// Returns `true` when an effect was added.
-pub(super) fn greedy_round(
-    engine: &Engine,
-    train: &[Recording],
-    heldout: &[Recording],
-    allowed: &[String],
-    round: usize,
-    out: &mut FitOutcome,
-) -> bool {
+pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bool {
+    let Search { engine, train, heldout, allowed } = *s;
     let opts = engine.opts;
     let robot = engine.robot;
     let applied = out.applied.clone();

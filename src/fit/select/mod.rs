@@ -323,11 +323,12 @@ pub fn fit(robot: &Robot, recs: &[Recording], opts: &FitOptions) -> FitOutcome {
             inapplicable.join(", ")
         ));
     }
+    let search = Search { engine: &engine, train: &train, heldout: &heldout, allowed: &allowed };
     let mut round = 0;
     loop {
         while round < opts.max_rounds {
             engine.report(round, "diagnose", None);
-            let added = greedy_round(&engine, &train, &heldout, &allowed, round, &mut out);
+            let added = greedy_round(&search, round, &mut out);
             round += 1;
             if !added {
                 break;
@@ -335,21 +336,29 @@ pub fn fit(robot: &Robot, recs: &[Recording], opts: &FitOptions) -> FitOutcome {
         }
         if out.applied.len() >= 2 {
             engine.report(round, "polish", None);
-            polish(&engine, &train, &heldout, &mut out);
+            polish(&search, &mut out);
         }
         if !opts.simplify || out.applied.is_empty() {
             break;
         }
         // A change re-opens the greedy search (bounded by `max_rounds`).
         engine.report(round, "simplify", None);
-        if !simplify(&engine, &train, &heldout, &allowed, round, &mut out)
-            || round >= opts.max_rounds
-        {
+        if !simplify(&search, round, &mut out) || round >= opts.max_rounds {
             break;
         }
     }
     engine.report(round, "done", None);
     out
+}
+
+/// What every step of the search works on: the engine, the training and held-out recordings,
+/// and the effects it may try.
+#[derive(Clone, Copy)]
+pub(super) struct Search<'a> {
+    pub(super) engine: &'a Engine<'a>,
+    pub(super) train: &'a [Recording],
+    pub(super) heldout: &'a [Recording],
+    pub(super) allowed: &'a [String],
 }
 
 /// Standard errors of `s`, the effect of `applied.last()`.

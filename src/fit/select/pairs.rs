@@ -181,11 +181,23 @@ pub(super) fn pair_lookahead(
     if let Some(t) = out.tried.iter_mut().rev().find(|t| t.phase == "pair" && t.effect == label) {
         t.kept = true;
     }
+    let what = if set[n].effect.id() == set[n + 1].effect.id() {
+        format!(
+            "{} on {} with its own value and on {} with a shared one",
+            set[n].effect.id(),
+            set[n].joints.join(","),
+            set[n + 1].joints.join(",")
+        )
+    } else {
+        format!(
+            "{} and {} on {} fitted together",
+            set[n].effect.id(),
+            set[n + 1].effect.id(),
+            set[n].joints.join(",")
+        )
+    };
     out.warnings.push(format!(
-        "{} and {} on {} fitted together: held-out RMSE {:.3e} rad, vs {:.3e} with {} alone",
-        set[n].effect.id(),
-        set[n + 1].effect.id(),
-        set[n].joints.join(","),
+        "{what}: held-out RMSE {:.3e} rad, vs {:.3e} with {} alone",
         rmse,
         h_single.rmse(),
         single.effect

@@ -11,7 +11,7 @@ use crate::sim2real::recording::Recording;
 use super::engine::Engine;
 use super::pairs::{param_slots, with_params};
 use super::verdict::verdict;
-use super::{FitOutcome, Selected, Tried, set_uncertainty, sync_selected};
+use super::{FitOutcome, Search, Selected, Tried, set_uncertainty, sync_selected};
 
 /// Occam's pass over the kept effects, judged on the held-out set:
 /// * **drop** an effect whose removal does not make the held-out error worse beyond noise (it
@@ -23,19 +23,12 @@ use super::{FitOutcome, Selected, Tried, set_uncertainty, sync_selected};
 ///   friction; a servo gain error whose only change is kd is joint damping.
 ///
 /// Returns `true` when the set changed.
-pub(super) fn simplify(
-    engine: &Engine,
-    train: &[Recording],
-    heldout: &[Recording],
-    allowed: &[String],
-    round: usize,
-    out: &mut FitOutcome,
-) -> bool {
+pub(super) fn simplify(s: &Search, round: usize, out: &mut FitOutcome) -> bool {
     let mut changed = false;
     // Each swap removes at least one parameter, so this ends.
     loop {
-        changed |= drop_pass(engine, train, heldout, round, out);
-        if !swap_pass(engine, train, heldout, allowed, round, out) {
+        changed |= drop_pass(s, round, out);
+        if !swap_pass(s, round, out) {
             return changed;
         }
         changed = true;
@@ -43,13 +36,8 @@ pub(super) fn simplify(
 }
 
 /// Drops, last kept first. Returns `true` when an effect was dropped.
-fn drop_pass(
-    engine: &Engine,
-    train: &[Recording],
-    heldout: &[Recording],
-    round: usize,
-    out: &mut FitOutcome,
-) -> bool {
+fn drop_pass(s: &Search, round: usize, out: &mut FitOutcome) -> bool {
+    let Search { engine, train, heldout, .. } = *s;
     let opts = engine.opts;
     let mut changed = false;
     let mut i = out.applied.len();
@@ -99,14 +87,8 @@ fn drop_pass(
 }
 
 /// Swaps for simpler effects. Returns `true` when a swap was made.
-fn swap_pass(
-    engine: &Engine,
-    train: &[Recording],
-    heldout: &[Recording],
-    allowed: &[String],
-    round: usize,
-    out: &mut FitOutcome,
-) -> bool {
+fn swap_pass(s: &Search, round: usize, out: &mut FitOutcome) -> bool {
+    let Search { engine, train, heldout, allowed } = *s;
     let opts = engine.opts;
     let mut changed = false;
     let mut i = 0;
@@ -248,13 +230,9 @@ fn swap_pass(
 
 /// Joint re-fit of every kept effect's fitted parameters (Nelder–Mead from the greedy values);
 /// kept only when both the training and the held-out RMSE do not get worse.
-pub(super) fn polish(
-    engine: &Engine,
-    train: &[Recording],
-    heldout: &[Recording],
-    out: &mut FitOutcome,
-) {
-    out.applied = polish_set(engine, train, heldout, std::mem::take(&mut out.applied), 0.02);
+pub(super) fn polish(s: &Search, out: &mut FitOutcome) {
+    let applied = std::mem::take(&mut out.applied);
+    out.applied = polish_set(s.engine, s.train, s.heldout, applied, 0.02);
     sync_selected(out);
 }
 
