@@ -8,6 +8,7 @@ use std::path::PathBuf;
 use serde_json::json;
 
 use crate::fit::effects::{self, simulate};
+use crate::fit::rotation;
 use crate::fit::select::{FitOptions, Progress, ProgressInfo, fit};
 use crate::sim2real::gap::{self, GapOptions, GapReport};
 use crate::sim2real::replay::{Episode, ReplayOptions};
@@ -339,13 +340,9 @@ pub fn run_fit(a: FitArgs) -> i32 {
     0
 }
 
-/// Per held-out episode: (source file name, position MAE before, after) [rad].
-type EpisodeMae = (String, f64, f64);
-
-/// `--holdout-by KEY`: leave-one-group-out over the values of metadata `KEY`. Each value is held
-/// out in turn and the whole selection runs on the other episodes; prints every fold's effects
-/// and held-out MAE before → after per episode, and the average over all episodes (each held
-/// out exactly once).
+/// `--holdout-by KEY`: leave-one-group-out over the values of metadata `KEY`
+/// ([`crate::fit::rotation`]). Prints every fold's effects and held-out MAE before → after per
+/// episode, and the average over all episodes (each held out exactly once).
 fn rotate(
     robot: &crate::model::Robot,
     recs: &[crate::sim2real::recording::Recording],
@@ -370,62 +367,35 @@ fn rotate(
     let mut folds = Vec::new();
     for v in &values {
         let (bar, progress) = fit_progress(a.quiet, format!("hold out {key} = {v} · "));
-        let o =
-            FitOptions { holdout_by: Some((key.to_string(), v.clone())), progress, ..opts.clone() };
-        let ts = std::time::Instant::now();
-        let out = fit(robot, recs, &o);
+        let f = rotation::fold(robot, recs, &FitOptions { progress, ..opts.clone() }, key, v);
         if let Some(b) = bar {
             b.finish_and_clear();
         }
-        for w in &out.warnings {
+        let f = match f {
+            Ok(f) => f,
+            Err(e) => return fail(e),
+        };
+        for w in &f.outcome.warnings {
             eprintln!("modellint: warning: {key} = {v}: {w}");
         }
-        if out.heldout.is_empty() {
-            return 2;
-        }
-        let mae = |applied: &[effects::Applied]| -> Result<Vec<f64>, String> {
-            simulate(robot, &out.heldout, applied, &o.replay)
-                .into_iter()
-                .zip(&out.heldout)
-                .map(|(e, r)| e.map(|e| episode_mae(r, &e)).map_err(|e| e.to_string()))
-                .collect()
-        };
-        let (before, after) = match (mae(&[]), mae(&out.applied)) {
-            (Ok(b), Ok(a)) => (b, a),
-            (Err(e), _) | (_, Err(e)) => return fail(e),
-        };
-        let eps: Vec<EpisodeMae> = out
-            .heldout
-            .iter()
-            .zip(before.iter().zip(&after))
-            .map(|(r, (b, a))| {
-                let name = r.source.file_name().map_or_else(
-                    || r.source.display().to_string(),
-                    |f| f.to_string_lossy().into_owned(),
-                );
-                (name, *b, *a)
-            })
-            .collect();
-        folds.push((v.clone(), out, eps, ts.elapsed().as_secs_f64()));
+        folds.push(f);
     }
-    let all: Vec<&EpisodeMae> = folds.iter().flat_map(|f| &f.2).collect();
-    let avg = |f: fn(&EpisodeMae) -> f64| all.iter().map(|e| f(e)).sum::<f64>() / all.len() as f64;
-    let (avg_b, avg_a) = (avg(|e| e.1), avg(|e| e.2));
-    let fold_avg = |eps: &[EpisodeMae], f: fn(&EpisodeMae) -> f64| {
-        eps.iter().map(f).sum::<f64>() / eps.len().max(1) as f64
-    };
+    let (avg_b, avg_a) = rotation::mean_mae(folds.iter().flat_map(|f| &f.heldout));
+    let n_eps: usize = folds.iter().map(|f| f.heldout.len()).sum();
     let text = if a.json {
         let fs: Vec<_> = folds
             .iter()
-            .map(|(v, out, eps, secs)| {
+            .map(|f| {
+                let out = &f.outcome;
+                let (b, a) = f.mean();
                 json!({
-                    "value": v,
+                    "value": f.value,
                     "train": out.train.len(),
                     "selected": out.selected.iter().map(|s| json!({"effect": s.effect, "joints": s.joints, "params": s.params})).collect::<Vec<_>>(),
-                    "heldout": eps.iter().map(|(n, b, a)| json!({"source": n, "position_mae_before": b, "position_mae_after": a})).collect::<Vec<_>>(),
-                    "position_mae_before": fold_avg(eps, |e| e.1),
-                    "position_mae_after": fold_avg(eps, |e| e.2),
-                    "seconds": secs,
+                    "heldout": f.heldout.iter().map(|e| json!({"source": e.name, "position_mae_before": e.before, "position_mae_after": e.after})).collect::<Vec<_>>(),
+                    "position_mae_before": b,
+                    "position_mae_after": a,
+                    "seconds": f.seconds,
                     "tried": out.tried,
                     "warnings": out.warnings,
                 })
@@ -436,7 +406,7 @@ fn rotate(
             "folds": fs,
             "position_mae_before": avg_b,
             "position_mae_after": avg_a,
-            "episodes": all.len(),
+            "episodes": n_eps,
             "seconds": t0.elapsed().as_secs_f64(),
         });
         serde_json::to_string_pretty(&v).unwrap_or_default() + "\n"
@@ -446,11 +416,14 @@ fn rotate(
             "cross-validation by `{key}`: each of {} values held out in turn, the selection run on the others\n",
             values.len()
         );
-        for (v, out, eps, secs) in &folds {
+        for f in &folds {
+            let out = &f.outcome;
             s.push_str(&format!(
-                "\n{key} = {v} held out ({} episodes; trained on {}; {secs:.0} s)\n",
-                eps.len(),
-                out.train.len()
+                "\n{key} = {} held out ({} episodes; trained on {}; {:.0} s)\n",
+                f.value,
+                f.heldout.len(),
+                out.train.len(),
+                f.seconds
             ));
             if out.selected.is_empty() {
                 s.push_str("  missing physics: nothing kept\n");
@@ -465,22 +438,24 @@ fn rotate(
                     ps.join(", ")
                 ));
             }
-            for (n, b, a) in eps {
+            for e in &f.heldout {
                 s.push_str(&format!(
-                    "    {n:<32} position MAE {:.2}° → {:.2}°\n",
-                    deg(*b),
-                    deg(*a)
+                    "    {:<32} position MAE {:.2}° → {:.2}°\n",
+                    e.name,
+                    deg(e.before),
+                    deg(e.after)
                 ));
             }
+            let (b, a) = f.mean();
             s.push_str(&format!(
                 "  held-out position MAE (mean over its episodes) {:.2}° → {:.2}°\n",
-                deg(fold_avg(eps, |e| e.1)),
-                deg(fold_avg(eps, |e| e.2))
+                deg(b),
+                deg(a)
             ));
         }
         s.push_str(&format!(
             "\nheld-out position MAE, mean over the {} episodes (each held out once): {:.2}° → {:.2}°  ({:.0} s)\n",
-            all.len(),
+            n_eps,
             deg(avg_b),
             deg(avg_a),
             t0.elapsed().as_secs_f64()
@@ -491,20 +466,4 @@ fn rotate(
         return 2;
     }
     0
-}
-
-/// Whole-episode position MAE over every recorded joint and sample [rad] (a sample the
-/// simulation did not reach counts as 1 rad).
-fn episode_mae(rec: &crate::sim2real::recording::Recording, ep: &Episode) -> f64 {
-    let mut sum = 0.0;
-    let mut n = 0usize;
-    for (k, j) in rec.joints.iter().enumerate() {
-        for (r, s) in j.q.iter().zip(&ep.q_sim[k]) {
-            if r.is_finite() {
-                sum += if s.is_finite() { (r - s).abs() } else { 1.0 };
-                n += 1;
-            }
-        }
-    }
-    if n == 0 { f64::NAN } else { sum / n as f64 }
 }
