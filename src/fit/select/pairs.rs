@@ -100,12 +100,11 @@ pub(super) fn pair_lookahead(
         // own value on that member), e.g. damping on every joint and more on the elbow, which a
         // gain error on the elbow would otherwise mimic.
         let (a, b) = if a.effect == b.effect {
-            let (small, big) = if a.joints.len() < b.joints.len() { (a, b) } else { (b, a) };
-            if !small.joints.iter().all(|j| big.joints.contains(j))
-                || small.joints.len() == big.joints.len()
-            {
-                continue;
-            }
+            let (small, big) = match (inside(a, b), inside(b, a)) {
+                (true, _) => (a, b),
+                (_, true) => (b, a),
+                _ => continue,
+            };
             let mut rest = as_applied(big);
             rest.joints.retain(|j| !small.joints.contains(j));
             (as_applied(small), rest)
