@@ -44,8 +44,10 @@ pub(super) fn verdict(
     let beyond = |m: f64, s: f64| m > 0.0 && m > z * s;
     let rel = (before.rmse() - after.rmse()) / before.rmse().max(1e-300);
     let (mut up, mut down) = (0usize, 0usize);
+    // A window counts as improved or worsened when it changes by more than 2 % (a limit reached
+    // a few times leaves the other windows of a lightly damped servo changed by less, either way).
     for (b, a) in wb.iter().zip(&wa) {
-        let tol = 1e-3 * b.abs();
+        let tol = 0.02 * b.abs();
         if b - a > tol {
             up += 1;
         } else if a - b > tol {
