@@ -276,12 +276,21 @@ fn mae(a: &[Vec<f64>], b: &[Vec<f64>], idx: &[usize]) -> (f64, usize) {
 pub fn run(case: &Case) -> Score {
     let t0 = Instant::now();
     let path = if case.model.is_absolute() { case.model.clone() } else { root().join(&case.model) };
-    let robot = load(&path);
+    // Model and hardware spec as `modellint fit` loads them (the spec's motor families are
+    // fitted as groups too).
+    let loaded = modellint::lint::load_for_command(&path, None)
+        .unwrap_or_else(|_| panic!("{} does not load", path.display()));
+    let robot = loaded.robot;
     let hidden = case.hidden();
     let o = case.synth();
     let (recs, _) = recorded(&robot, case, &hidden, &o, "fit");
-    // The fit sees only the recordings and the model without the effects.
-    let opts = FitOptions::default();
+    // The fit sees only the recordings and the model without the effects, with the CLI's
+    // defaults.
+    let names: Vec<String> = robot.joints.iter().map(|j| j.name.clone()).collect();
+    let opts = FitOptions {
+        families: FitOptions::motor_families(loaded.spec.as_ref(), &names),
+        ..FitOptions::default()
+    };
     let out = fit(&robot, &recs, &opts);
 
     // Detection scoring by (effect, joint).
@@ -438,7 +447,20 @@ pub fn recorded(
         .iter()
         .map(|f| read_csv(f).unwrap_or_else(|e| panic!("{}: {e}", f.display())))
         .collect();
-    let _ = std::fs::remove_dir_all(&dir);
+    // MODELLINT_CONCEAL_KEEP=DIR keeps each case's recordings (to re-run `modellint fit` on them).
+    match std::env::var_os("MODELLINT_CONCEAL_KEEP") {
+        Some(keep) => {
+            let to = PathBuf::from(keep).join(dir.file_name().unwrap_or_default());
+            let _ = std::fs::remove_dir_all(&to);
+            let _ = std::fs::create_dir_all(to.parent().unwrap_or(Path::new(".")));
+            if std::fs::rename(&dir, &to).is_err() {
+                let _ = std::fs::remove_dir_all(&dir);
+            }
+        }
+        None => {
+            let _ = std::fs::remove_dir_all(&dir);
+        }
+    }
     (recs, ds)
 }
 

@@ -158,35 +158,16 @@ fn conceal_arm3_stribeck_friction_high_noise() {
 fn conceal_asimov_one_knee_is_not_smeared_over_both() {
     // Leg joints on a test stand; damping on the left knee only. The mirror completion tries
     // both knees as a group; held-out must keep the one-joint fit: nothing on the right knee.
-    // KNOWN MISS on the independent synth (issue notes): the left knee's damping 3.0 comes out
-    // as a servo gain error (kp × 0.95, kd × 1.49: the extra kd is the damping) that leaves
-    // 0.68 mrad held-out MAE against a 0.56 mrad floor (2.3 mrad before the replay filled
-    // MuJoCo's actuator delay history); asserted here: not smeared, nothing invented
-    // elsewhere, the error within 1.5× the floor.
-    let c = asimov_case(
+    // Until the rollout difference step was widened (docs/fitting.md, "Optimiser") the damping
+    // fit stopped at 2.48 on the error's small-scale ripple and a servo gain error (kp × 0.95,
+    // kd × 1.49) won instead; now: viscous damping on the left knee within 10 %.
+    single(asimov_case(
         "asimov left knee viscous_damping",
         Kind::Single,
         vec![("viscous_damping", vec!["left_knee".to_string()], vec![3.0])],
         Noise::Real,
         7,
-    );
-    let s = run(&c);
-    report(&s);
-    assert!(
-        s.detected.iter().all(|(_, j, _)| j == "left_knee"),
-        "{}: smeared or invented; detected {:?}",
-        c.name,
-        s.detected
-    );
-    assert!(!s.detected.is_empty(), "{}: nothing found", c.name);
-    assert!(
-        s.mae_after <= 1.5 * s.mae_floor,
-        "{}: held-out MAE {} → {} (floor {})",
-        c.name,
-        s.mae_before,
-        s.mae_after,
-        s.mae_floor
-    );
+    ));
 }
 
 fn pair(c: Case) {

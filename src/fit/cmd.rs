@@ -124,13 +124,7 @@ pub fn run_fit(a: FitArgs) -> i32 {
         }
     }
     let replay = a.replay.clone();
-    let families = match loaded.spec.as_ref() {
-        Some(s) => names
-            .iter()
-            .filter_map(|n| s.joint(n).and_then(|f| f.motor).map(|m| (n.clone(), m)))
-            .collect(),
-        None => Default::default(),
-    };
+    let families = FitOptions::motor_families(loaded.spec.as_ref(), &names);
     let (bar, progress) = fit_progress(a.quiet, String::new());
     let mut opts = FitOptions {
         holdout: a.holdout,

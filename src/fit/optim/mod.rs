@@ -30,7 +30,7 @@ pub(crate) use crate::util::Rng;
 
 pub use cmaes::{CmaesOpts, cmaes};
 pub use golden::golden_section;
-pub use lm::{LmOpts, LmResult, levenberg_marquardt};
+pub use lm::{LmOpts, LmResult, ROLLOUT_REL_STEP, levenberg_marquardt};
 pub use nelder_mead::{NelderMeadOpts, nelder_mead};
 
 /// Box bounds, one entry per parameter. `lo[i] <= hi[i]`, both finite.

@@ -278,7 +278,7 @@ impl<'a> Engine<'a> {
                 };
                 let o = LmOpts {
                     max_iters: (max_evals / (k + 2)).clamp(2, 12),
-                    rel_step: 1e-3,
+                    rel_step: crate::fit::optim::ROLLOUT_REL_STEP,
                     tol: 1e-5,
                 };
                 let r = levenberg_marquardt(&res, &x0, &b, &o);

@@ -82,7 +82,8 @@ pub struct FitOptions {
     /// error on unseen episodes).
     pub decisive_improvement: f64,
     /// After the greedy rounds: drop kept effects whose removal does not hurt held-out beyond
-    /// noise, and swap each for a simpler effect that explains the data as well.
+    /// noise, merge one effect kept on two joint sets into one group, and swap each for a
+    /// simpler effect that explains the data as well.
     pub simplify: bool,
     /// Samples up to this long after a gap in a recording (dropped rows) are left out of every
     /// error sum ([`gap_mask`]): the command during the gap is unknown [s].
@@ -96,6 +97,21 @@ pub struct FitOptions {
     pub white_ratio: f64,
     /// Called at each step of the search (none: silent).
     pub progress: Option<Progress>,
+}
+
+impl FitOptions {
+    /// Joint → motor family from a hardware spec, for every joint of `names` the spec assigns a
+    /// motor (what `modellint fit` passes as [`FitOptions::families`]; empty without a spec).
+    pub fn motor_families(
+        spec: Option<&crate::spec::Spec>,
+        names: &[String],
+    ) -> BTreeMap<String, String> {
+        let Some(s) = spec else { return BTreeMap::new() };
+        names
+            .iter()
+            .filter_map(|n| s.joint(n).and_then(|f| f.motor).map(|m| (n.clone(), m)))
+            .collect()
+    }
 }
 
 impl Default for FitOptions {
@@ -151,8 +167,9 @@ pub struct Selected {
 pub struct Tried {
     pub round: usize,
     /// `add` (greedy round), `screen` / `floor` (not fitted fully / not fitted: see
-    /// docs/fitting.md), `pair`, `drop` (removal test: `kept` = the effect stays) or `swap`
-    /// (replacement by a simpler effect: `kept` = the swap was made).
+    /// docs/fitting.md), `pair`, `joint_pair`, `drop` (removal test: `kept` = the effect
+    /// stays), `merge` (one effect on two joint sets as one group: `kept` = merged), `swap`
+    /// (replacement by a simpler effect: `kept` = the swap was made) or `swap_screen`.
     pub phase: &'static str,
     pub effect: String,
     pub joints: Vec<String>,
