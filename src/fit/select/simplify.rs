@@ -44,6 +44,9 @@ fn merge_pass(s: &Search, round: usize, out: &mut FitOutcome) -> bool {
     let Search { engine, train, heldout, .. } = *s;
     let opts = engine.opts;
     let n = out.applied.len();
+    // Errors of the current set (held-out, training): the same for every candidate pair,
+    // simulated once, when the first pair qualifies.
+    let mut current = None;
     for (i, j) in (0..n).flat_map(|i| (i + 1..n).map(move |j| (i, j))) {
         let (a, b) = (&out.applied[i], &out.applied[j]);
         if a.effect.id() != b.effect.id() || a.joints.iter().any(|x| b.joints.contains(x)) {
@@ -65,9 +68,9 @@ fn merge_pass(s: &Search, round: usize, out: &mut FitOutcome) -> bool {
         if !engine.shared_start(effect, &others, &joints) {
             continue;
         }
-        let (Some(h_cur), Some(t_cur)) =
+        let (Some(h_cur), Some(t_cur)) = current.get_or_insert_with(|| {
             (engine.errors(heldout, &out.applied), engine.errors(train, &out.applied))
-        else {
+        }) else {
             continue;
         };
         let (p, tr) = engine.fit_one(train, &others, effect, &joints);
@@ -87,7 +90,7 @@ fn merge_pass(s: &Search, round: usize, out: &mut FitOutcome) -> bool {
         };
         let k_all: usize = out.applied.iter().map(|a| a.effect.fitted()).sum();
         let k_set = k_all - effect.fitted();
-        let worse = verdict(&h1, &h_cur, &joints, 2.0, f64::INFINITY);
+        let worse = verdict(&h1, h_cur, &joints, 2.0, f64::INFINITY);
         let bic_ok = bic(t1.n, t1.sse, k_set) <= bic(t_cur.n, t_cur.sse, k_all);
         let ok = h1.rmse() <= 1.05 * h_cur.rmse() && !worse.significant && bic_ok;
         let new = set.last().expect("pushed").clone();
