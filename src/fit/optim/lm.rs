@@ -12,6 +12,13 @@ use super::{Bounds, Space, clamp01};
 /// 0.04 % of the damping box, which stopped a 1e-3 difference at 2.48 for a true 3.0).
 pub const ROLLOUT_REL_STEP: f64 = 1e-2;
 
+/// [`LmOpts::stat_tol`] for rollout fits: stop once a step moves every parameter by less than a
+/// tenth of its standard error.
+pub const ROLLOUT_STAT_TOL: f64 = 0.1;
+
+/// [`LmOpts::short_step`] for rollout fits: a trial step under 1 % of the difference step.
+pub const ROLLOUT_SHORT_STEP: f64 = 1e-2;
+
 /// Options for [`levenberg_marquardt`].
 #[derive(Debug, Clone, Serialize)]
 pub struct LmOpts {
@@ -22,11 +29,31 @@ pub struct LmOpts {
     /// Convergence tolerance: relative cost decrease, normalised step size
     /// and projected-gradient size (relative to the cost).
     pub tol: f64,
+    /// Whether to return the Jacobian at the solution (for an uncertainty): one more
+    /// evaluation per free parameter when the last step was accepted.
+    pub final_jacobian: bool,
+    /// Statistical stop (0 disables): an accepted step shorter than `stat_tol` standard errors
+    /// on every free parameter ends the fit (standard errors from the Gauss–Newton covariance
+    /// `s² (JᵀJ)⁻¹` of the iteration, `s² = Σr² / (m − n)`). Further steps move the estimate by
+    /// less than the data can tell apart: on a rollout objective each costs a simulation.
+    pub stat_tol: f64,
+    /// For objectives where every evaluation is expensive (a rollout), 0 disables: a rejected
+    /// trial step shorter than `short_step` times the difference step ends the damping ladder
+    /// (the Jacobian does not resolve it), and the first rejection at a small damping goes
+    /// straight to half the Gauss–Newton step (below 1 the damping barely shortens it).
+    pub short_step: f64,
 }
 
 impl Default for LmOpts {
     fn default() -> Self {
-        LmOpts { max_iters: 100, rel_step: 1e-3, tol: 1e-8 }
+        LmOpts {
+            max_iters: 100,
+            rel_step: 1e-3,
+            tol: 1e-8,
+            final_jacobian: true,
+            stat_tol: 0.0,
+            short_step: 0.0,
+        }
     }
 }
 
@@ -37,8 +64,11 @@ pub struct LmResult {
     /// `0.5 * Σ r²` at `x` (`+∞` if the residuals could never be evaluated).
     pub cost: f64,
     /// Finite-difference Jacobian at `x`, `n_resid x n_param`, in the user's
-    /// parameter units (columns of fixed parameters are zero).
+    /// parameter units (columns of fixed parameters are zero); empty unless
+    /// [`LmOpts::final_jacobian`].
     pub jacobian: Vec<Vec<f64>>,
+    /// Number of residuals (0 when they could never be evaluated).
+    pub n_resid: usize,
     pub iters: usize,
     pub converged: bool,
 }
@@ -62,6 +92,7 @@ pub fn levenberg_marquardt(
         x,
         cost: f64::INFINITY,
         jacobian: vec![],
+        n_resid: 0,
         iters: 0,
         converged: false,
     };
@@ -137,6 +168,13 @@ pub fn levenberg_marquardt(
             converged = true;
             break;
         }
+        // Standard errors (unit space) for the statistical stop.
+        let se: Option<Vec<f64>> =
+            (o.stat_tol > 0.0 && m > n).then(|| a.clone().cholesky()).flatten().map(|ch| {
+                let inv = ch.inverse();
+                let s2 = 2.0 * cost / (m - n) as f64;
+                (0..n).map(|k| (s2 * inv[(k, k)]).max(0.0).sqrt()).collect()
+            });
         let maxdiag = (0..n).map(|k| a[(k, k)]).fold(0.0, f64::max);
         let dfloor = (maxdiag * 1e-9).max(1e-300);
         loop {
@@ -180,40 +218,47 @@ pub fn levenberg_marquardt(
             let cn = trial.as_deref().map(cost_of).unwrap_or(f64::INFINITY);
             if cn < cost {
                 let rel_drop = (cost - cn) / cost;
+                let tiny = se
+                    .as_ref()
+                    .is_some_and(|se| (0..n).all(|k| (un[k] - u[k]).abs() <= o.stat_tol * se[k]));
                 u = un;
                 res = trial.unwrap();
                 cost = cn;
                 jac = None;
                 lambda = (lambda / 3.0).max(1e-12);
-                if cost == 0.0 {
+                if cost == 0.0 || rel_drop <= tol || du <= tol || tiny {
                     converged = true;
-                } else if rel_drop <= tol || du <= tol {
-                    // Stalled: converged, or creeping along a ripple (widen first).
-                    if h < H_MAX {
-                        h = (h * 10.0).min(H_MAX);
-                        lambda = 1e-3;
-                    } else {
-                        converged = true;
-                    }
                 }
                 break;
             }
-            lambda *= 10.0;
-            if lambda > 1e16 {
+            lambda = if o.short_step > 0.0 && lambda < 0.1 { 1.0 } else { lambda * 10.0 };
+            if lambda > 1e16 || du < o.short_step * h {
                 // No descent even for tiny steps: widen the difference, or it is a local
-                // minimum up to FD accuracy.
+                // minimum up to FD accuracy. A step much shorter than the difference the
+                // Jacobian was taken over (`short_step`) is below what that Jacobian resolves:
+                // shrinking it further only replays the ripple (each trial is a simulation).
                 if h < H_MAX {
                     h = (h * 10.0).min(H_MAX);
                     lambda = 1e-3;
                     jac = None;
                     continue 'outer;
                 }
-                converged = du <= (tol * 1e3).max(1e-6);
+                converged = du <= (tol * 1e3).max(1e-6).max(o.short_step * h);
                 break 'outer;
             }
         }
     }
 
+    if !o.final_jacobian {
+        return LmResult {
+            x: sp.params_of(&u),
+            cost,
+            jacobian: vec![],
+            n_resid: m,
+            iters,
+            converged,
+        };
+    }
     // The reported Jacobian (for the uncertainty) uses the requested difference step.
     let j = match jac {
         Some(j) if h == h0 => j,
@@ -225,7 +270,7 @@ pub fn levenberg_marquardt(
             jacobian[row][i] = j[(row, k)] / sp.span[i];
         }
     }
-    LmResult { x: sp.params_of(&u), cost, jacobian, iters, converged }
+    LmResult { x: sp.params_of(&u), cost, jacobian, n_resid: m, iters, converged }
 }
 
 #[cfg(test)]
@@ -381,7 +426,15 @@ mod tests {
                 .collect::<Vec<f64>>()
         };
         let b = Bounds { lo: vec![0.0], hi: vec![5.0] };
-        let o = LmOpts { max_iters: 12, rel_step: ROLLOUT_REL_STEP, tol: 1e-5 };
+        // (The options the fit uses on rollouts.)
+        let o = LmOpts {
+            max_iters: 12,
+            rel_step: ROLLOUT_REL_STEP,
+            tol: 1e-5,
+            final_jacobian: true,
+            stat_tol: ROLLOUT_STAT_TOL,
+            short_step: ROLLOUT_SHORT_STEP,
+        };
         let fit = levenberg_marquardt(&r, &[0.0], &b, &o);
         assert!(
             (fit.x[0] - 3.0).abs() < 0.05,
@@ -395,5 +448,57 @@ mod tests {
         let smooth = |p: &[f64]| ts.iter().map(|&t| (p[0] - 3.0) * t).collect::<Vec<f64>>();
         let fit = levenberg_marquardt(&smooth, &[0.0], &b, &o);
         assert!((fit.x[0] - 3.0).abs() < 1e-6, "{:?}", fit.x);
+    }
+
+    #[test]
+    fn lm_rollout_options_save_evaluations_not_accuracy() {
+        // The rollout options (statistical stop, short damping ladder, no final Jacobian) on a
+        // noisy exponential fit: fewer residual evaluations, an estimate within a tenth of
+        // its standard error of the full fit's, and the residual count still reported.
+        use crate::fit::stats::uncertainty_from_jacobian;
+        use std::sync::atomic::{AtomicUsize, Ordering};
+        let truth = [2.0, 1.3, 0.5];
+        let (t, y) = exp_data(3, &truth, 0.05);
+        let b = Bounds { lo: vec![0.0, 0.01, -2.0], hi: vec![5.0, 5.0, 2.0] };
+        let evals = AtomicUsize::new(0);
+        let r = |p: &[f64]| {
+            evals.fetch_add(1, Ordering::Relaxed);
+            t.iter().zip(&y).map(|(&ti, &yi)| exp_model(p, ti) - yi).collect::<Vec<f64>>()
+        };
+        let full = levenberg_marquardt(&r, &[1.0, 0.5, 0.0], &b, &LmOpts::default());
+        let n_full = evals.swap(0, Ordering::Relaxed);
+        let o = LmOpts {
+            max_iters: 100,
+            rel_step: 1e-3,
+            tol: 1e-8,
+            final_jacobian: false,
+            stat_tol: ROLLOUT_STAT_TOL,
+            short_step: ROLLOUT_SHORT_STEP,
+        };
+        let quick = levenberg_marquardt(&r, &[1.0, 0.5, 0.0], &b, &o);
+        let n_quick = evals.load(Ordering::Relaxed);
+        assert!(quick.jacobian.is_empty() && quick.n_resid == t.len());
+        // (At least the final Jacobian's three columns are saved; 17 vs 24 when written.)
+        assert!(n_quick + 3 <= n_full, "{n_quick} evaluations vs {n_full}");
+        let ranges: Vec<f64> = b.lo.iter().zip(&b.hi).map(|(l, h)| h - l).collect();
+        let u = uncertainty_from_jacobian(&full.jacobian, &r(&full.x), 3, &ranges);
+        for k in 0..3 {
+            assert!(
+                (quick.x[k] - full.x[k]).abs() <= 0.1 * u.stderr[k],
+                "param {k}: {} vs {} (stderr {})",
+                quick.x[k],
+                full.x[k],
+                u.stderr[k]
+            );
+        }
+        // At a minimum already, the short ladder ends after a few trials (each a simulation on
+        // a rollout) where the plain one climbs to λ = 1e16.
+        evals.store(0, Ordering::Relaxed);
+        let again = levenberg_marquardt(&r, &full.x, &b, &o);
+        let n_again = evals.load(Ordering::Relaxed);
+        assert!(again.converged && n_again <= 12, "{n_again} evaluations from the minimum");
+        for k in 0..3 {
+            assert!((again.x[k] - full.x[k]).abs() <= 0.1 * u.stderr[k]);
+        }
     }
 }

@@ -30,7 +30,9 @@ pub(crate) use crate::util::Rng;
 
 pub use cmaes::{CmaesOpts, cmaes};
 pub use golden::golden_section;
-pub use lm::{LmOpts, LmResult, ROLLOUT_REL_STEP, levenberg_marquardt};
+pub use lm::{
+    LmOpts, LmResult, ROLLOUT_REL_STEP, ROLLOUT_SHORT_STEP, ROLLOUT_STAT_TOL, levenberg_marquardt,
+};
 pub use nelder_mead::{NelderMeadOpts, nelder_mead};
 
 /// Box bounds, one entry per parameter. `lo[i] <= hi[i]`, both finite.

@@ -26,6 +26,42 @@ pub struct Engine<'a> {
     pub joints: Vec<String>,
     /// Dataset simulations run so far (each replays every episode of a set once).
     sims: std::sync::atomic::AtomicUsize,
+    /// Results of [`Engine::fit_budget`] by [`fit_key`]: the simplify pass re-fits the same
+    /// effect on the same base the greedy rounds already fitted (swapping the only kept effect
+    /// for another is the round-1 fit of that other), and a fit is deterministic.
+    fits: std::sync::Mutex<std::collections::HashMap<String, (Vec<f64>, f64)>>,
+    /// The last [`RECENT`] simulations by [`set_key`]: the search scores the set a fit ended on
+    /// right after the fit, and the same base set for each candidate.
+    recent: std::sync::Mutex<std::collections::VecDeque<(String, Option<Errors>)>>,
+}
+
+/// How many recent simulations [`Engine::errors`] keeps.
+const RECENT: usize = 16;
+
+/// The identity of one simulation: the dataset (by address: the search holds its sets for its
+/// whole run) and the effects with their parameters' exact bits.
+fn set_key(recs: &[Recording], applied: &[Applied]) -> String {
+    use std::fmt::Write;
+    let mut k = format!("{:p}/{}", recs.as_ptr(), recs.len());
+    for a in applied {
+        let _ = write!(k, "|{}@{}:", a.effect.id(), a.joints.join(","));
+        for v in &a.params {
+            let _ = write!(k, "{:x},", v.to_bits());
+        }
+    }
+    k
+}
+
+/// The memo key of a fit: the training set (by address: the search holds one for its whole
+/// run), the base effects with their parameters' exact bits, the effect, its joints and budget.
+fn fit_key(
+    train: &[Recording],
+    base: &[Applied],
+    effect: &dyn Effect,
+    group: &[String],
+    max_evals: usize,
+) -> String {
+    format!("{}||{}@{}#{}", set_key(train, base), effect.id(), group.join(","), max_evals)
 }
 
 impl<'a> Engine<'a> {
@@ -40,7 +76,14 @@ impl<'a> Engine<'a> {
                 }
             }
         }
-        Engine { robot, opts, joints, sims: std::sync::atomic::AtomicUsize::new(0) }
+        Engine {
+            robot,
+            opts,
+            joints,
+            sims: std::sync::atomic::AtomicUsize::new(0),
+            fits: Default::default(),
+            recent: Default::default(),
+        }
     }
 
     /// Reports progress through `opts.progress`, if any.
@@ -62,6 +105,26 @@ impl<'a> Engine<'a> {
 
     /// Simulates `recs` with `applied`; `None` when an episode diverged or failed.
     pub fn errors(&self, recs: &[Recording], applied: &[Applied]) -> Option<Errors> {
+        let key = set_key(recs, applied);
+        if let Some(e) = self
+            .recent
+            .lock()
+            .ok()
+            .and_then(|r| r.iter().find(|(k, _)| *k == key).map(|(_, e)| e.clone()))
+        {
+            return e;
+        }
+        let e = self.simulate(recs, applied);
+        if let Ok(mut r) = self.recent.lock() {
+            if r.len() >= RECENT {
+                r.pop_front();
+            }
+            r.push_back((key, e.clone()));
+        }
+        e
+    }
+
+    fn simulate(&self, recs: &[Recording], applied: &[Applied]) -> Option<Errors> {
         self.sims.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         let m = model_with(self.robot, applied);
         let eps: Vec<Episode> = recs
@@ -241,10 +304,41 @@ impl<'a> Engine<'a> {
         self.fit_budget(train, base, effect, group, self.opts.max_evals)
     }
 
+    /// The result of [`Engine::fit_one`] with these arguments if it was already computed.
+    pub fn fit_known(
+        &self,
+        train: &[Recording],
+        base: &[Applied],
+        effect: &'static dyn Effect,
+        group: &[String],
+    ) -> Option<(Vec<f64>, f64)> {
+        let key = fit_key(train, base, effect, group, self.opts.max_evals);
+        self.fits.lock().ok()?.get(&key).cloned()
+    }
+
     /// [`Engine::fit_one`] with a budget of `max_evals` objective evaluations for one parameter
     /// (golden section stops earlier at its tolerance), 2 × (k − 1) times that for the simplex on
     /// k = 2 or 3 parameters; Levenberg–Marquardt iterations take k + 1 replays each.
     pub fn fit_budget(
+        &self,
+        train: &[Recording],
+        base: &[Applied],
+        effect: &'static dyn Effect,
+        group: &[String],
+        max_evals: usize,
+    ) -> (Vec<f64>, f64) {
+        let key = fit_key(train, base, effect, group, max_evals);
+        if let Some(r) = self.fits.lock().ok().and_then(|m| m.get(&key).cloned()) {
+            return r;
+        }
+        let r = self.fit_fresh(train, base, effect, group, max_evals);
+        if let Ok(mut m) = self.fits.lock() {
+            m.insert(key, r.clone());
+        }
+        r
+    }
+
+    fn fit_fresh(
         &self,
         train: &[Recording],
         base: &[Applied],
@@ -281,6 +375,9 @@ impl<'a> Engine<'a> {
                     max_iters: (max_evals / (k + 2)).clamp(2, 12),
                     rel_step: crate::fit::optim::ROLLOUT_REL_STEP,
                     tol: 1e-5,
+                    final_jacobian: false,
+                    stat_tol: crate::fit::optim::ROLLOUT_STAT_TOL,
+                    short_step: crate::fit::optim::ROLLOUT_SHORT_STEP,
                 };
                 let r = levenberg_marquardt(&res, &x0, &b, &o);
                 let n = res_len(&r);
@@ -434,5 +531,5 @@ impl<'a> Engine<'a> {
 
 /// Number of residuals behind an [`LmResult`] (the rows of its Jacobian).
 pub(super) fn res_len(r: &LmResult) -> usize {
-    r.jacobian.len()
+    r.n_resid
 }

@@ -265,6 +265,7 @@ impl FitOutcome {
 }
 
 /// Position errors of one simulation of a dataset.
+#[derive(Clone)]
 pub struct Errors {
     pub sse: f64,
     pub n: usize,

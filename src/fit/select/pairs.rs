@@ -387,7 +387,14 @@ fn fit_jointly(
         let res = |x: &[f64]| {
             engine.residuals(train, &make(x), &engine.joints, usize::MAX).unwrap_or_default()
         };
-        let o = LmOpts { max_iters: 12, rel_step: crate::fit::optim::ROLLOUT_REL_STEP, tol: 1e-5 };
+        let o = LmOpts {
+            max_iters: 12,
+            rel_step: crate::fit::optim::ROLLOUT_REL_STEP,
+            tol: 1e-5,
+            final_jacobian: false,
+            stat_tol: crate::fit::optim::ROLLOUT_STAT_TOL,
+            short_step: crate::fit::optim::ROLLOUT_SHORT_STEP,
+        };
         let r = levenberg_marquardt(&res, &x0, &b, &o);
         let n = res_len(&r);
         (r.x, if n > 0 { (2.0 * r.cost / n as f64).sqrt() } else { f64::INFINITY })

@@ -230,7 +230,11 @@ fn swap_pass(s: &Search, round: usize, out: &mut FitOutcome) -> bool {
             // (`tried`: phase "swap_screen"). Not when `e` already acts on some of the joints:
             // its kept parameters there only come right in the joint re-fit (polish) below.
             let partial = targets.len() < cur.joints.len();
-            let (pc, fc) = engine.fit_budget(train, &others, e, &targets, 10);
+            // (A full fit already made on this base, e.g. in round 1 when `others` is empty,
+            // screens better than a coarse one and costs nothing.)
+            let (pc, fc) = engine
+                .fit_known(train, &others, e, &targets)
+                .unwrap_or_else(|| engine.fit_budget(train, &others, e, &targets, 10));
             if !partial && (pc.is_empty() || !fc.is_finite() || fc > 1.5 * train_cur) {
                 out.tried.push(Tried::not_tested(round, "swap_screen", e.id(), &targets, pc, fc));
                 continue;
