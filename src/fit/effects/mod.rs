@@ -381,7 +381,7 @@ pub fn smooth_sign(v: f64, eps: f64) -> f64 {
 
 /// Servo torque the position actuator produces for this step's io.
 pub fn servo_torque(q: f64, qd: f64, io: &StepIo) -> f64 {
-    if io.enabled { io.kp * (io.ctrl - q) - io.kd * qd } else { 0.0 }
+    if io.enabled { io.kp * (io.acting_ctrl() - q) - io.kd * qd } else { 0.0 }
 }
 
 /// A copy of `robot.mj` with the MuJoCo-native effects of `applied` written in.

@@ -64,7 +64,7 @@ impl Effect for MotorConstants {
             return;
         }
         let (a, b) = (p[0].max(1e-6), p[1].max(1e-6));
-        let pd = io.kp * (io.ctrl - q);
+        let pd = io.kp * (io.acting_ctrl() - q);
         let stall = if st.s[0] > 0.0 { st.s[0] } else { f64::INFINITY };
         let law = (a / b) * pd.clamp(-stall, stall) - (a * a / b) * io.kd * qd;
         io.tau += law - (pd - io.kd * qd);

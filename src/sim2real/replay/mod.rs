@@ -97,6 +97,10 @@ pub enum ReplayError {
 pub struct StepIo {
     /// Value written to the ctrl of every position actuator of the joint (rad).
     pub ctrl: f64,
+    /// The command the joint's position actuator acts on at this step when the actuator has a
+    /// MuJoCo `delay` (read from its control history, i.e. `ctrl` as written `delay` seconds
+    /// ago); `None` without one, when it acts on `ctrl` itself. See [`StepIo::acting_ctrl`].
+    pub delayed_ctrl: Option<f64>,
     /// Generalised force added on the joint's DoF (written to `qfrc_applied`) [N·m or N].
     pub tau: f64,
     /// Recorded (or model) gains in force at this step.
@@ -113,6 +117,16 @@ pub struct StepIo {
     /// Inertia the DoF presents to its own torque, 1 / diag(D) of MuJoCo's L'DL factorisation
     /// of the mass matrix (armature included; exact for a single DoF) [kg·m² or kg].
     pub inertia: f64,
+}
+
+impl StepIo {
+    /// The command the servo acts on at this step: the delayed one when the actuator has a MuJoCo
+    /// `delay` (the Asimov legs: 20 ms), else `ctrl`. An effect that models the servo's own
+    /// torque (a gain error, a torque limit) must use this, not `ctrl`: on a delayed actuator,
+    /// `kp·(ctrl − q)` is a torque the servo does not apply for another `delay` seconds.
+    pub fn acting_ctrl(&self) -> f64 {
+        self.delayed_ctrl.unwrap_or(self.ctrl)
+    }
 }
 
 /// Per-physics-step actuator override, for effects MuJoCo cannot express (Stribeck friction,

@@ -146,6 +146,22 @@ impl Replayer<'_> {
         let mut applied_enabled = vec![true; nj];
         let mut applied_gain: Vec<Option<(f64, f64)>> = vec![None; nj];
         let mut io = vec![StepIo::default(); nj];
+        // Per recorded joint: its position actuator with a MuJoCo `delay`, and the history's
+        // interpolation order.
+        let delayed_pos: Vec<Option<(usize, i32)>> = {
+            let m = d.model();
+            let (hist, delay) = (m.actuator_history(), m.actuator_delay());
+            jm.iter()
+                .map(|&ji| {
+                    self.joints[ji].acts.iter().find_map(|&(a, kind)| {
+                        (matches!(kind, ActuatorKind::Position { .. })
+                            && hist[a][0] > 0
+                            && delay[a] > 0.0)
+                            .then_some((a, hist[a][1]))
+                    })
+                })
+                .collect()
+        };
         let t_end = rec.t[n - 1];
         let nsteps = ((t_end - t0) / dt - 1e-9).ceil().max(0.0) as usize;
         let mut diverged = None;
@@ -197,8 +213,18 @@ impl Replayer<'_> {
             let (bias, passive, dinv) = (d.qfrc_bias(), d.qfrc_passive(), d.q_ldiag_inv());
             for i in 0..nj {
                 let dof = self.joints[jm[i]].dofadr;
+                // A delayed position actuator acts on its history (filled with the first command
+                // before the first step, so at step 0 that is the command itself).
+                let delayed = delayed_pos[i].map(|(a, interp)| {
+                    let mut v = [target[i]];
+                    if k > 0 {
+                        let _ = d.read_ctrl_into(a, d.time(), interp, &mut v);
+                    }
+                    v[0]
+                });
                 io[i] = StepIo {
                     ctrl: target[i],
+                    delayed_ctrl: delayed,
                     tau: 0.0,
                     kp: kp[i],
                     kd: kd[i],
