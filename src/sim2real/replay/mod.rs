@@ -53,7 +53,7 @@ pub struct ReplayOptions {
     /// Model joints absent from the recording: `true` → their actuators get the keyframe ctrl
     /// (hold the key pose); `false` → ctrl 0.
     pub hold_unlisted_at_key: bool,
-    /// What control ticks without a row get ([`Fill`]; default: interpolated across ramps,
+    /// What control ticks without a row get ([`Fill`]; default: filled along the command's shape,
     /// held across steps; without a control rate, dropped rows' commands are interpolated,
     /// [`crate::sim2real::metrics::fill_dropped_rows`]).
     pub command_fill: Fill,
