@@ -488,44 +488,93 @@ impl<'a> Engine<'a> {
         best
     }
 
-    /// Linearised standard errors of the fitted parameters of `applied.last()`.
+    /// Linearised standard errors of the fitted parameters of `applied.last()`, the others held
+    /// at their values (used while the search runs; [`Engine::uncertainty_all`] gives the final
+    /// ones).
     pub(super) fn uncertainty(&self, train: &[Recording], applied: &[Applied]) -> (Vec<f64>, bool) {
-        let last = applied.last().expect("non-empty");
-        let effect = last.effect;
-        let t = JointTarget::of(self.robot, &last.joints[0]).expect("joint");
-        let m0 = model_with(self.robot, &applied[..applied.len() - 1]);
-        let (lo, hi) = effect.bounds(&m0, &t);
-        let k = effect.fitted().min(last.params.len());
-        let Some(r0) = self.residuals(train, applied, &last.joints, 20_000) else {
-            return (vec![f64::INFINITY; k], false);
+        let last = applied.len() - 1;
+        self.uncertainty_of(train, applied, &[last]).pop().expect("one effect")
+    }
+
+    /// Linearised standard errors of every applied effect's fitted parameters, from one joint
+    /// Jacobian: a parameter correlated with another effect's (an armature and a gain error on
+    /// one joint) gets the wider marginal error, not the one conditional on the other held fixed.
+    pub(super) fn uncertainty_all(
+        &self,
+        train: &[Recording],
+        applied: &[Applied],
+    ) -> Vec<(Vec<f64>, bool)> {
+        let all: Vec<usize> = (0..applied.len()).collect();
+        self.uncertainty_of(train, applied, &all)
+    }
+
+    /// Standard errors (and identifiability) of the fitted parameters of the effects `which`,
+    /// jointly, from finite-difference columns of the residual on their joints.
+    fn uncertainty_of(
+        &self,
+        train: &[Recording],
+        applied: &[Applied],
+        which: &[usize],
+    ) -> Vec<(Vec<f64>, bool)> {
+        // (effect index, parameter index, bound range) of every column.
+        let mut slots: Vec<(usize, usize, f64, f64)> = Vec::new();
+        let mut joints: Vec<String> = Vec::new();
+        for &ai in which {
+            let a = &applied[ai];
+            let t = JointTarget::of(self.robot, &a.joints[0]).expect("joint");
+            let m0 = model_with(self.robot, &applied[..ai]);
+            let (lo, hi) = a.effect.bounds(&m0, &t);
+            for i in 0..a.effect.fitted().min(a.params.len()) {
+                slots.push((ai, i, lo[i], hi[i]));
+            }
+            for j in &a.joints {
+                if !joints.contains(j) {
+                    joints.push(j.clone());
+                }
+            }
+        }
+        let failed = || {
+            which
+                .iter()
+                .map(|&ai| {
+                    let a = &applied[ai];
+                    (vec![f64::INFINITY; a.effect.fitted().min(a.params.len())], false)
+                })
+                .collect()
         };
-        let mut cols = Vec::with_capacity(k);
-        for i in 0..k {
-            let range = hi[i] - lo[i];
-            let mut h = 1e-3 * range.max(1e-9);
-            if last.params[i] + h > hi[i] {
+        let Some(r0) = self.residuals(train, applied, &joints, 20_000) else { return failed() };
+        let mut cols = Vec::with_capacity(slots.len());
+        for &(ai, i, lo, hi) in &slots {
+            let mut h = 1e-3 * (hi - lo).max(1e-9);
+            if applied[ai].params[i] + h > hi {
                 h = -h;
             }
             let mut a = applied.to_vec();
-            a.last_mut().unwrap().params[i] += h;
-            match self.residuals(train, &a, &last.joints, 20_000) {
+            a[ai].params[i] += h;
+            match self.residuals(train, &a, &joints, 20_000) {
                 // Residuals are real − sim, so ∂r/∂p = −∂sim/∂p; the sign does not matter for J^T J.
                 Some(r1) if r1.len() == r0.len() => {
                     cols.push(r1.iter().zip(&r0).map(|(a, b)| (a - b) / h).collect::<Vec<f64>>())
                 }
-                _ => return (vec![f64::INFINITY; k], false),
+                _ => return failed(),
             }
         }
+        let k = slots.len();
         let jac: Vec<Vec<f64>> =
             (0..r0.len()).map(|row| cols.iter().map(|c| c[row]).collect()).collect();
-        let ranges: Vec<f64> = (0..k).map(|i| hi[i] - lo[i]).collect();
+        let ranges: Vec<f64> = slots.iter().map(|s| s.3 - s.2).collect();
         // Serially correlated residuals: scaling them by √inflation scales s² (and so the
         // covariance s²(JᵀJ)⁺ and the identifiability check) by the AR(1) inflation.
         let c = ar1_variance_inflation(&r0).sqrt();
         let r0: Vec<f64> = r0.iter().map(|x| x * c).collect();
         let u = uncertainty_from_jacobian(&jac, &r0, k, &ranges);
-        let ident = u.identifiable.iter().all(|&x| x);
-        (u.stderr, ident)
+        which
+            .iter()
+            .map(|&ai| {
+                let idx: Vec<usize> = (0..k).filter(|&s| slots[s].0 == ai).collect();
+                (idx.iter().map(|&s| u.stderr[s]).collect(), idx.iter().all(|&s| u.identifiable[s]))
+            })
+            .collect()
     }
 }
 

@@ -168,6 +168,7 @@ pub struct Tried {
     pub round: usize,
     /// `add` (greedy round), `screen` / `floor` (not fitted fully / not fitted: see
     /// docs/fitting.md), `pair`, `joint_pair`, `drop` (removal test: `kept` = the effect
+    /// stays), `drop_refit` (removal with the other effects fitted again: `kept` = the effect
     /// stays), `merge` (one effect on two joint sets as one group: `kept` = merged), `swap`
     /// (replacement by a simpler effect: `kept` = the swap was made) or `swap_screen`.
     pub phase: &'static str,
@@ -365,8 +366,33 @@ pub fn fit(robot: &Robot, recs: &[Recording], opts: &FitOptions) -> FitOutcome {
             break;
         }
     }
+    if !out.applied.is_empty() {
+        engine.report(round, "standard errors", None);
+        final_uncertainty(&engine, &train, &mut out);
+    }
     engine.report(round, "done", None);
     out
+}
+
+/// The standard errors of every kept effect at the final parameters, from one joint Jacobian
+/// (the ones set while searching were taken when each effect was added, conditional on the
+/// others; a later polish, swap or drop moves the values they belong to).
+fn final_uncertainty(engine: &Engine, train: &[Recording], out: &mut FitOutcome) {
+    const UNIDENT: &str = "parameters not identifiable from this data";
+    let all = engine.uncertainty_all(train, &out.applied);
+    out.warnings.retain(|w| !w.contains(UNIDENT));
+    for ((s, a), (se, ident)) in out.selected.iter_mut().zip(&out.applied).zip(all) {
+        s.stderr =
+            a.effect.params().iter().zip(&se).map(|(d, v)| (d.name.to_string(), *v)).collect();
+        s.identifiable = ident;
+        if !ident {
+            out.warnings.push(format!(
+                "{} on {}: {UNIDENT} (excite the joint more)",
+                s.effect,
+                s.joints.join(",")
+            ));
+        }
+    }
 }
 
 /// What every step of the search works on: the engine, the training and held-out recordings,

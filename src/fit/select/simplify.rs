@@ -9,7 +9,7 @@ use crate::fit::stats::bic;
 use crate::sim2real::recording::Recording;
 
 use super::engine::Engine;
-use super::pairs::{param_slots, with_params};
+use super::pairs::{fit_jointly, param_slots, with_params};
 use super::verdict::verdict;
 use super::{FitOutcome, Search, Selected, Tried, set_uncertainty, sync_selected};
 
@@ -28,7 +28,10 @@ pub(super) fn simplify(s: &Search, round: usize, out: &mut FitOutcome) -> bool {
     // Each swap removes at least one parameter, so this ends.
     loop {
         changed |= drop_pass(s, round, out);
-        if !merge_pass(s, round, out) && !swap_pass(s, round, out) {
+        if !merge_pass(s, round, out)
+            && !refit_drop_pass(s, round, out)
+            && !swap_pass(s, round, out)
+        {
             return changed;
         }
         changed = true;
@@ -180,6 +183,74 @@ fn drop_pass(s: &Search, round: usize, out: &mut FitOutcome) -> bool {
         }
     }
     changed
+}
+
+/// Drops with a re-fit: of three or more kept effects, one can be needed only because the
+/// others were fitted without the effect that came later (a servo gain error taken with an
+/// armature before the friction was found absorbs part of the friction, and the drop test,
+/// which keeps the others' values, still needs it). Each effect in turn is removed and the
+/// rest fitted jointly again; the removal is made when that set is as good as the current one
+/// on the test of a swap (held-out RMSE within 5 %, not worse beyond noise, training BIC not
+/// higher). Of several, the one with the lowest held-out RMSE. (With two kept effects the
+/// re-fitted remainder is a single effect, which the greedy round already fitted.)
+/// Returns `true` when an effect was dropped.
+fn refit_drop_pass(s: &Search, round: usize, out: &mut FitOutcome) -> bool {
+    let Search { engine, train, heldout, .. } = *s;
+    let n = out.applied.len();
+    if n < 3 {
+        return false;
+    }
+    let (Some(h_cur), Some(t_cur)) =
+        (engine.errors(heldout, &out.applied), engine.errors(train, &out.applied))
+    else {
+        return false;
+    };
+    let k_all: usize = out.applied.iter().map(|a| a.effect.fitted()).sum();
+    let bic_cur = bic(t_cur.n, t_cur.sse, k_all);
+    let mut best: Option<(usize, Vec<Applied>, f64)> = None;
+    for i in (0..n).rev() {
+        let cur = out.applied[i].clone();
+        engine.report(round, "drop with re-fit", Some((n - i, n, cur.effect.id().to_string())));
+        let mut rest = out.applied.clone();
+        rest.remove(i);
+        let rest = fit_jointly(engine, train, rest, 0);
+        let (Some(h1), Some(t1)) = (engine.errors(heldout, &rest), engine.errors(train, &rest))
+        else {
+            continue;
+        };
+        let k_rest = k_all - cur.effect.fitted();
+        let worse = verdict(&h1, &h_cur, &cur.joints, 2.0, f64::INFINITY);
+        let bic_ok = bic(t1.n, t1.sse, k_rest) <= bic_cur;
+        let ok = h1.rmse() <= 1.05 * h_cur.rmse() && !worse.significant && bic_ok;
+        out.tried.push(Tried {
+            round,
+            phase: "drop_refit",
+            effect: cur.effect.id().into(),
+            joints: cur.joints.clone(),
+            params: cur.params.clone(),
+            train_rmse: t1.rmse(),
+            heldout_improvement: (h_cur.rmse() - h1.rmse()) / h_cur.rmse().max(1e-300),
+            significant: worse.significant,
+            bic_decreased: bic_ok,
+            kept: !ok,
+        });
+        if ok && best.as_ref().is_none_or(|(_, _, r)| h1.rmse() < *r) {
+            best = Some((i, rest, h1.rmse()));
+        }
+    }
+    let Some((i, rest, rmse)) = best else { return false };
+    let cur = &out.applied[i];
+    out.warnings.push(format!(
+        "{} on {} dropped: the other effects, fitted again without it, explain the data as well (held-out RMSE {:.3e} → {:.3e} rad)",
+        cur.effect.id(),
+        cur.joints.join(","),
+        h_cur.rmse(),
+        rmse
+    ));
+    out.selected.remove(i);
+    out.applied = rest;
+    sync_selected(out);
+    true
 }
 
 /// Swaps for simpler effects. Returns `true` when a swap was made.
