@@ -226,6 +226,24 @@ fn conceal_arm3_pair_armature_viscous_damping() {
 }
 
 #[test]
+fn conceal_arm3_pair_coulomb_armature_unquantised() {
+    // Armature passes alone and is taken with a servo gain error before the friction is found;
+    // the gain error then absorbs part of the friction and stays needed while the others keep
+    // their values. Only the drop with a re-fit of the rest removes it (the blind fit found
+    // armature 0.029 + gain error 0.735/0.726 + load-dependent friction before it).
+    pair(
+        arm3_case(
+            "arm3 coulomb_friction+armature",
+            Kind::Pair,
+            vec![("coulomb_friction", vec![0.15]), ("armature", vec![0.04])],
+            Noise::Real,
+            7,
+        )
+        .unquantised(),
+    );
+}
+
+#[test]
 fn conceal_arm3_group_with_an_exception() {
     // Damping on every joint, three times as much on the elbow: one value for the group and the
     // elbow's own (the pair look-ahead's "group with an exception"). A gain error on the elbow
