@@ -182,6 +182,8 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     let mut best_train = base_train;
     // Fewest parameters of a kept candidate whose training residual is white on every joint.
     let mut floor_k: Option<usize> = None;
+    // The lowest training RMSE of those.
+    let mut floor_train: Option<f64> = None;
     let mut ci = 0;
     while ci < cands.len() {
         let (e, group, ev) = cands[ci].clone();
@@ -196,6 +198,17 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         if floor_k.is_some_and(|k| e.fitted() > k) {
             out.tried.push(Tried::not_tested(round, "floor", e.id(), &group, vec![], f64::NAN));
             continue;
+        }
+        // Once a kept candidate leaves a white training residual, another can only win Occam's
+        // choice below by coming close to it: a coarse fit (10 evaluations) that leaves 1.5 times
+        // its training error cannot (`tried`: phase "floor_screen"). On a 12-joint robot most of
+        // a round's 30-odd candidates are fitted after the winner.
+        if let Some(ft) = floor_train {
+            let (p, f) = engine.fit_budget(train, &applied, e, &group, 10);
+            if p.is_empty() || !f.is_finite() || f > 1.5 * ft {
+                out.tried.push(Tried::not_tested(round, "floor_screen", e.id(), &group, p, f));
+                continue;
+            }
         }
         // (Only multi-parameter effects: a 1-D fit is a 9-point grid plus golden section anyway,
         // and a coarse one misses scale parameters near zero, such as a small armature.)
@@ -242,6 +255,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         });
         if keep && engine.at_floor(train, &trial, &tr_a) {
             floor_k = Some(floor_k.map_or(e.fitted(), |k| k.min(e.fitted())));
+            floor_train = Some(floor_train.map_or(tr_a.rmse(), |t: f64| t.min(tr_a.rmse())));
         }
         if keep {
             // Mirror completion: a kept one-joint candidate is also fitted on its left/right

@@ -414,6 +414,18 @@ pub(super) fn polish_set(
     applied: Vec<Applied>,
     step: f64,
 ) -> Vec<Applied> {
+    polish_budget(engine, train, heldout, applied, step, engine.opts.max_evals * 2)
+}
+
+/// [`polish_set`] with a budget of `max_evals` objective evaluations.
+pub(super) fn polish_budget(
+    engine: &Engine,
+    train: &[Recording],
+    heldout: &[Recording],
+    applied: Vec<Applied>,
+    step: f64,
+    max_evals: usize,
+) -> Vec<Applied> {
     let Some(slots) = param_slots(engine, &applied, 0, |ai| ai) else { return applied };
     let make = |x: &[f64]| with_params(&applied, &slots, x);
     let x0: Vec<f64> = slots.iter().map(|&(ai, k, ..)| applied[ai].params[k]).collect();
@@ -421,12 +433,7 @@ pub(super) fn polish_set(
         Bounds { lo: slots.iter().map(|s| s.2).collect(), hi: slots.iter().map(|s| s.3).collect() };
     let obj = |x: &[f64]| engine.errors(train, &make(x)).map_or(f64::INFINITY, |e| e.rmse());
     let f0 = obj(&x0);
-    let o = NelderMeadOpts {
-        max_evals: engine.opts.max_evals * 2,
-        xtol: 1e-4,
-        ftol: 1e-12,
-        initial_step: step,
-    };
+    let o = NelderMeadOpts { max_evals, xtol: 1e-4, ftol: 1e-12, initial_step: step };
     let r = nelder_mead(&obj, &x0, &b, &o);
     if r.f.is_nan() || r.f >= f0 {
         return applied;
