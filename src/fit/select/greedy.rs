@@ -327,10 +327,8 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         })
         .expect("the best is equivalent to itself");
     let mut accepted: Vec<Selected> = accepted.into_iter().map(|(s, ..)| s).collect();
-    let mut s = accepted.swap_remove(win);
-    if let Some(pair) =
-        pair_lookahead(engine, train, heldout, &applied, &kept_all, &s, z, round, out)
-    {
+    let mut w = accepted.swap_remove(win);
+    if let Some(pair) = pair_lookahead(s, &applied, &kept_all, &w, z, round, out) {
         for (mut p, a) in pair {
             out.applied.push(a);
             set_uncertainty(engine, train, &mut p, &out.applied, &mut out.warnings);
@@ -339,14 +337,14 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         return true;
     }
     if let Some(t) = out.tried.iter_mut().rev().find(|t| {
-        t.round == round && t.phase == "add" && t.effect == s.effect && t.joints == s.joints
+        t.round == round && t.phase == "add" && t.effect == w.effect && t.joints == w.joints
     }) {
         t.kept = true;
     }
-    let e = effects::by_id(&s.effect).expect("known");
-    out.applied.push(Applied { effect: e, joints: s.joints.clone(), params: s.values.clone() });
-    set_uncertainty(engine, train, &mut s, &out.applied, &mut out.warnings);
-    out.selected.push(s);
+    let e = effects::by_id(&w.effect).expect("known");
+    out.applied.push(Applied { effect: e, joints: w.joints.clone(), params: w.values.clone() });
+    set_uncertainty(engine, train, &mut w, &out.applied, &mut out.warnings);
+    out.selected.push(w);
     true
 }
 

@@ -12,7 +12,7 @@ use crate::sim2real::recording::Recording;
 use super::engine::{Engine, res_len};
 use super::simplify::{polish_budget, polish_set};
 use super::verdict::{Verdict, verdict};
-use super::{Errors, FitOutcome, Selected, Tried, set_uncertainty, sync_selected};
+use super::{Errors, FitOutcome, Search, Selected, Tried, set_uncertainty, sync_selected};
 
 /// Look-ahead for two effects that only make sense together (extra inertia *and* damping: each
 /// alone is mimicked by a delay or a gain error). The top four kept candidates of the round are
@@ -22,11 +22,8 @@ use super::{Errors, FitOutcome, Selected, Tried, set_uncertainty, sync_selected}
 /// training RMSE), and the best pair replaces the single winner when it is
 /// ≥ 10 % better on held-out (and beyond noise), and each member is needed in it (removing
 /// either is worse beyond noise). The pair with fewer parameters wins within 1 %.
-#[allow(clippy::too_many_arguments)]
 pub(super) fn pair_lookahead(
-    engine: &Engine,
-    train: &[Recording],
-    heldout: &[Recording],
+    s: &Search,
     applied: &[Applied],
     kept: &[Selected],
     single: &Selected,
@@ -34,6 +31,7 @@ pub(super) fn pair_lookahead(
     round: usize,
     out: &mut FitOutcome,
 ) -> Option<Vec<(Selected, Applied)>> {
+    let Search { engine, train, heldout, allowed } = *s;
     let opts = engine.opts;
     let mut top: Vec<&Selected> = kept.iter().collect();
     top.sort_by(|a, b| a.heldout_rmse_after.total_cmp(&b.heldout_rmse_after));
@@ -122,6 +120,39 @@ pub(super) fn pair_lookahead(
             (as_applied(a), as_applied(b))
         };
         sets.push((a, b));
+    }
+    // A winner with two or more parameters can stand in for two one-parameter effects that
+    // mimic each other alone (a servo gain error for damping + armature: its kd term is the
+    // damping, its kp term the inertia; load-dependent friction for Coulomb friction + armature:
+    // its load term follows the servo torque, hence the acceleration). Neither member needs to
+    // have been kept, or even tried, on the winner's joints (the diagnosis may rank Coulomb
+    // friction on another joint first), so the known mimicking pairs
+    // ([`effects::mimicking_pairs`]) with at most one parameter more than the winner are also
+    // fitted there, from fresh single fits, and compete with the winner.
+    let k_single = effects::by_id(&single.effect).map_or(0, |e| e.fitted());
+    if k_single >= 2 {
+        let joints = &single.joints;
+        let member = |e: &'static dyn effects::Effect| -> Option<Applied> {
+            if let Some(k) = kept.iter().find(|k| k.effect == e.id() && &k.joints == joints) {
+                return Some(as_applied(k));
+            }
+            let (params, f) = engine.fit_one(train, applied, e, joints);
+            f.is_finite().then(|| Applied { effect: e, joints: joints.clone(), params })
+        };
+        for (ea, eb) in effects::mimicking_pairs() {
+            let on = |x: &Applied, e: &'static dyn effects::Effect| {
+                x.effect.id() == e.id() && &x.joints == joints
+            };
+            if ea.fitted() + eb.fitted() > k_single + 1
+                || ![ea.id(), eb.id()].iter().all(|id| allowed.iter().any(|x| x == id))
+                || sets.iter().any(|(a, b)| (on(a, ea) && on(b, eb)) || (on(a, eb) && on(b, ea)))
+            {
+                continue;
+            }
+            if let (Some(a), Some(b)) = (member(ea), member(eb)) {
+                sets.push((a, b));
+            }
+        }
     }
     // Each pair is first polished coarsely (a third of the budget); only those within 25 % of the
     // best coarse training RMSE are polished fully (on arm2's delay + Coulomb dataset the right
