@@ -744,6 +744,9 @@ pub fn pendulum_single_truths() -> Vec<(&'static str, Vec<f64>)> {
 }
 
 /// The 11 single effects for an asimov knee (kp 65, armature 0.034 kg·m²); first-guess sizes.
+/// The knee's servo torque in the benchmark excitation (seed 7, amplitude 0.15) peaks at
+/// 7.9 N·m and exceeds 2 N·m in 3.6 % of the samples: a 2 N·m limit binds at the steps (a
+/// 10 N·m one never bound, so the case could not be found).
 pub fn asimov_single_truths() -> Vec<(&'static str, Vec<f64>)> {
     vec![
         ("action_delay", vec![0.015]),
@@ -753,7 +756,7 @@ pub fn asimov_single_truths() -> Vec<(&'static str, Vec<f64>)> {
         ("position_offset", vec![0.05]),
         ("gain_error", vec![0.7, 1.3]),
         ("stribeck_friction", vec![2.0, 1.0, 0.2]),
-        ("torque_limit", vec![10.0, 1e4, 1e4]),
+        ("torque_limit", vec![2.0, 1e4, 1e4]),
         ("backlash", vec![0.03]),
         ("joint_stiffness", vec![20.0]),
         ("load_dependent_friction", vec![0.5, 0.1]),

@@ -11,7 +11,7 @@ use crate::sim2real::recording::Recording;
 
 use super::engine::{Engine, res_len};
 use super::simplify::{polish_budget, polish_set};
-use super::verdict::{Verdict, verdict};
+use super::verdict::{Verdict, at_bound, verdict};
 use super::{Errors, FitOutcome, Search, Selected, Tried, set_uncertainty, sync_selected};
 
 /// Look-ahead for two effects that only make sense together (extra inertia *and* damping: each
@@ -170,6 +170,7 @@ pub(super) fn pair_lookahead(
         })
         .collect();
     let best_coarse = coarse.iter().map(|c| c.1).fold(f64::INFINITY, f64::min);
+    let mut restarts: Vec<Vec<Applied>> = Vec::new();
     for ((a, b), (set, f)) in sets.into_iter().zip(coarse) {
         let set = if f <= 1.25 * best_coarse {
             polish_set(engine, train, heldout, set, 0.02)
@@ -184,20 +185,37 @@ pub(super) fn pair_lookahead(
         let v = verdict(&h_single, &h, &group, z, opts.decisive_improvement);
         let bic_ok = bic(t.n, t.sse, k_before + k) < bic(t_base.n, t_base.sse, k_before);
         // Each member needed: the pair beats the set without it beyond noise.
-        let needed = (0..2).all(|m| {
-            let mut wo = set.clone();
-            wo.remove(applied.len() + m);
-            engine.errors(heldout, &wo).is_some_and(|hw| {
-                let vw = verdict(
-                    &hw,
-                    &h,
-                    &set[applied.len() + m].joints,
-                    2.0,
-                    opts.decisive_improvement,
-                );
-                vw.significant && vw.rel >= opts.min_rel_improvement
+        let need: Vec<bool> = (0..2)
+            .map(|m| {
+                let mut wo = set.clone();
+                wo.remove(applied.len() + m);
+                engine.errors(heldout, &wo).is_some_and(|hw| {
+                    let vw = verdict(
+                        &hw,
+                        &h,
+                        &set[applied.len() + m].joints,
+                        2.0,
+                        opts.decisive_improvement,
+                    );
+                    vw.significant && vw.rel >= opts.min_rel_improvement
+                })
             })
-        });
+            .collect();
+        let needed = need.iter().all(|&x| x);
+        // One member not needed: the other, at the values the joint fit gave it, is a restart
+        // of its single fit and competes with the winner as a single effect. So is the winner
+        // itself at the values the pair gave it.
+        let is_winner = |m: usize| {
+            let a = &set[applied.len() + m];
+            a.effect.id() == single.effect && a.joints == single.joints
+        };
+        for m in 0..2 {
+            if (!need[m] && need[1 - m]) || is_winner(1 - m) {
+                let mut wo = set.clone();
+                wo.remove(applied.len() + m);
+                restarts.push(wo);
+            }
+        }
         let ok = h.rmse() < 0.9 * h_single.rmse() && v.significant && bic_ok && needed;
         out.tried.push(Tried {
             round,
@@ -228,7 +246,19 @@ pub(super) fn pair_lookahead(
             best = Some((set, h.rmse(), k));
         }
     }
-    let (set, rmse, _) = best?;
+    let Some((set, rmse, _)) = best else {
+        return restart_winner(
+            s,
+            applied,
+            kept,
+            single,
+            (&h_base, &h_single, &t_base),
+            restarts,
+            z,
+            round,
+            out,
+        );
+    };
     let n = applied.len();
     let label = format!("{}+{}", set[n].effect.id(), set[n + 1].effect.id());
     if let Some(t) = out.tried.iter_mut().rev().find(|t| t.phase == "pair" && t.effect == label) {
@@ -279,6 +309,111 @@ pub(super) fn pair_lookahead(
     out.applied[..n].clone_from_slice(&set[..n]);
     sync_selected(out);
     Some(res)
+}
+
+/// A single effect that a failed pair re-fitted (its partner not needed) replaces the round's
+/// winner when its parameters are inside their bounds and it beats the winner beyond noise
+/// (paired test, z = 2), by ≥ 5 % held-out RMSE, with a lower training BIC: the look-ahead's
+/// joint polish is a restart of its single fit. (Asimov's knee Stribeck friction, 12-bit: the
+/// single fit stops at v_s's lower bound, where Coulomb friction wins; the Stribeck + backlash
+/// pair reaches (1.95, 0.97, 0.203) for (2, 1, 0.2) with a 0.9 mrad backlash that is not
+/// needed.) The winner itself at the values a pair gave it is the same model and replaces
+/// its own single fit when it is better on both training and held-out data (Asimov's knee
+/// load-dependent friction, 12-bit: (0.567, 0.053) alone, (0.500, 0.097) beside a delay, for
+/// (0.5, 0.1)).
+#[allow(clippy::too_many_arguments)]
+fn restart_winner(
+    s: &Search,
+    applied: &[Applied],
+    kept: &[Selected],
+    single: &Selected,
+    (h_base, h_single, t_base): (&Errors, &Errors, &Errors),
+    restarts: Vec<Vec<Applied>>,
+    z: f64,
+    round: usize,
+    out: &mut FitOutcome,
+) -> Option<Vec<(Selected, Applied)>> {
+    let engine = s.engine;
+    let opts = engine.opts;
+    let n = applied.len();
+    let k_before: usize = applied.iter().map(|a| a.effect.fitted()).sum();
+    let k_single = effects::by_id(&single.effect).map_or(0, |e| e.fitted());
+    let t_single = {
+        let mut w = applied.to_vec();
+        w.push(Applied {
+            effect: effects::by_id(&single.effect).expect("known"),
+            joints: single.joints.clone(),
+            params: single.values.clone(),
+        });
+        engine.errors(s.train, &w)?
+    };
+    let bic_single = bic(t_single.n, t_single.sse, k_before + k_single);
+    let mut best: Option<(Vec<Applied>, Errors, Errors)> = None;
+    for set in restarts {
+        let a = &set[n];
+        if at_bound(engine, &set[..n], a) {
+            continue;
+        }
+        let (Some(h), Some(t)) = (engine.errors(s.heldout, &set), engine.errors(s.train, &set))
+        else {
+            continue;
+        };
+        let group: Vec<String> = a.joints.iter().chain(&single.joints).cloned().collect();
+        let vs = verdict(h_single, &h, &group, 2.0, opts.decisive_improvement);
+        let bic_a = bic(t.n, t.sse, k_before + a.effect.fitted());
+        // The winner at other values is the same model: a better optimum on the training data
+        // that is also better on held-out replaces it. Another effect must beat it beyond noise.
+        let same = a.effect.id() == single.effect && a.joints == single.joints;
+        let ok = if same {
+            t.rmse() < t_single.rmse() && h.rmse() < h_single.rmse()
+        } else {
+            vs.significant && h.rmse() <= 0.95 * h_single.rmse() && bic_a < bic_single
+        };
+        out.tried.push(Tried {
+            round,
+            phase: "pair_restart",
+            effect: a.effect.id().into(),
+            joints: a.joints.clone(),
+            params: a.params.iter().take(a.effect.fitted()).copied().collect(),
+            train_rmse: t.rmse(),
+            heldout_improvement: (h_base.rmse() - h.rmse()) / h_base.rmse().max(1e-300),
+            significant: vs.significant,
+            bic_decreased: bic_a < bic_single,
+            kept: false,
+        });
+        if ok && best.as_ref().is_none_or(|(_, hb, _)| h.rmse() < hb.rmse()) {
+            best = Some((set, h, t));
+        }
+    }
+    let (set, h, t) = best?;
+    let a = set[n].clone();
+    let label = a.effect.id();
+    if let Some(tr) =
+        out.tried.iter_mut().rev().find(|tr| tr.phase == "pair_restart" && tr.effect == label)
+    {
+        tr.kept = true;
+    }
+    out.warnings.push(format!(
+        "{} on {} re-fitted in a pair whose partner was not needed: held-out RMSE {:.3e} rad, \
+         vs {:.3e} with {} alone",
+        label,
+        a.joints.join(","),
+        h.rmse(),
+        h_single.rmse(),
+        single.effect
+    ));
+    let v = verdict(h_base, &h, &a.joints, z, opts.decisive_improvement);
+    let evidence = kept
+        .iter()
+        .find(|k| k.effect == label && k.joints == a.joints)
+        .map(|k| k.evidence.clone())
+        .unwrap_or_else(|| single.evidence.clone());
+    let bics = (bic(t_base.n, t_base.sse, k_before), bic(t.n, t.sse, k_before + a.effect.fitted()));
+    let sel = Selected::new(&a, evidence, &v, h_base.rmse(), h.rmse(), bics);
+    // The polish may have moved the effects kept earlier: carry them over.
+    out.applied[..n].clone_from_slice(&set[..n]);
+    sync_selected(out);
+    Some(vec![(sel, a)])
 }
 
 /// When no single candidate passed the held-out gate: fit the pairs of effects that mimic each
