@@ -40,6 +40,13 @@ impl Effect for LoadDependentFriction {
         let budget = p[0].max(0.0) + p[1].max(0.0) * servo_torque(q, qd, io).abs();
         io.tau -= smooth_sign(qd, super::stribeck_friction::EPS) * budget;
     }
+    /// Coulomb friction adds its extra frictionloss to the base.
+    fn absorb(&self, other: &dyn Effect, mine: &[f64], delta: &[f64]) -> Option<Vec<f64>> {
+        match (other.id(), mine, delta) {
+            ("coulomb_friction", [f0, k], [c]) => Some(vec![f0 + c, *k]),
+            _ => None,
+        }
+    }
     fn signature(&self, s: &Samples) -> Signature {
         Signature::centred(
             s.qd.iter()

@@ -257,6 +257,16 @@ pub trait Effect: Declared + Sync {
     fn friction(&self) -> bool {
         false
     }
+    /// This effect's parameters when it also takes over what `other`, kept on the same joints,
+    /// contributes: `mine` are this effect's parameters, `delta` the change `other`'s parameters
+    /// make from their start values (for a MuJoCo-native parameter, the model's own value).
+    /// `None` (the default): `other` is not a special case of this effect. Example: Coulomb
+    /// friction c next to Stribeck friction (Fs, Fd, v_s) is Stribeck friction
+    /// (Fs + c, Fd + c, v_s).
+    fn absorb(&self, other: &dyn Effect, mine: &[f64], delta: &[f64]) -> Option<Vec<f64>> {
+        let _ = (other, mine, delta);
+        None
+    }
     /// The diagnosis: this effect's signature feature, computed from one joint's samples (the
     /// residual is least-squares fitted on it, see [`crate::fit::diagnose`]).
     fn signature(&self, s: &Samples) -> Signature;
@@ -537,6 +547,27 @@ mod tests {
             assert_eq!(p[1], e.params()[1].default);
             let full = super::Applied { params: p.to_vec(), ..a.clone() };
             assert!(matches!(full.full_params(), std::borrow::Cow::Borrowed(_)));
+        }
+    }
+
+    #[test]
+    fn friction_absorbs_only_coulomb_friction() {
+        use crate::fit::effects::{all, by_id};
+        let (st, ldf, c, d) = (
+            by_id("stribeck_friction").unwrap(),
+            by_id("load_dependent_friction").unwrap(),
+            by_id("coulomb_friction").unwrap(),
+            by_id("viscous_damping").unwrap(),
+        );
+        assert_eq!(st.absorb(c, &[1.0, 0.1, 0.2], &[0.9]), Some(vec![1.9, 1.0, 0.2]));
+        assert_eq!(ldf.absorb(c, &[0.1, 0.05], &[0.4]), Some(vec![0.5, 0.05]));
+        assert_eq!(st.absorb(d, &[1.0, 0.1, 0.2], &[0.9]), None);
+        assert_eq!(c.absorb(st, &[0.9], &[1.0, 0.1, 0.2]), None);
+        assert_eq!(st.absorb(st, &[1.0, 0.1, 0.2], &[1.0, 0.1, 0.2]), None);
+        for e in all() {
+            if !["stribeck_friction", "load_dependent_friction"].contains(&e.id()) {
+                assert_eq!(e.absorb(c, &[0.0; 4], &[0.1]), None, "{}", e.id());
+            }
         }
     }
 

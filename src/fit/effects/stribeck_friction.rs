@@ -45,6 +45,13 @@ impl Effect for StribeckFriction {
         let (fs, fd, vs) = (p[0].max(0.0), p[1].max(0.0), p[2].max(1e-4));
         io.tau -= smooth_sign(qd, EPS) * (fd + (fs - fd) * (-(qd / vs).powi(2)).exp());
     }
+    /// Coulomb friction adds its extra frictionloss to both levels.
+    fn absorb(&self, other: &dyn Effect, mine: &[f64], delta: &[f64]) -> Option<Vec<f64>> {
+        match (other.id(), mine, delta) {
+            ("coulomb_friction", [fs, fd, vs], [c]) => Some(vec![fs + c, fd + c, *vs]),
+            _ => None,
+        }
+    }
     fn signature(&self, s: &Samples) -> Signature {
         let vs = 0.2 * s.qd_rms;
         Signature::centred(s.qd.iter().map(|v| v.signum() * (-(v / vs).powi(2)).exp()).collect())

@@ -169,7 +169,8 @@ pub struct Tried {
     /// `add` (greedy round), `screen` / `floor` (not fitted fully / not fitted: see
     /// docs/fitting.md), `pair`, `joint_pair`, `drop` (removal test: `kept` = the effect
     /// stays), `drop_refit` (removal with the other effects fitted again: `kept` = the effect
-    /// stays), `merge` (one effect on two joint sets as one group: `kept` = merged), `swap`
+    /// stays), `merge` (one effect on two joint sets as one group: `kept` = merged), `fold`
+    /// (an effect taken over by another on the same joints: `kept` = folded), `swap`
     /// (replacement by a simpler effect: `kept` = the swap was made) or `swap_screen`.
     pub phase: &'static str,
     pub effect: String,

@@ -3,7 +3,7 @@
 
 use std::collections::BTreeMap;
 
-use crate::fit::effects::{self, Applied};
+use crate::fit::effects::{self, Applied, JointTarget, model_with};
 use crate::fit::optim::{Bounds, NelderMeadOpts, nelder_mead};
 use crate::fit::stats::bic;
 use crate::sim2real::recording::Recording;
@@ -29,6 +29,7 @@ pub(super) fn simplify(s: &Search, round: usize, out: &mut FitOutcome) -> bool {
     loop {
         changed |= drop_pass(s, round, out);
         if !merge_pass(s, round, out)
+            && !fold_pass(s, round, out)
             && !refit_drop_pass(s, round, out)
             && !swap_pass(s, round, out)
         {
@@ -40,8 +41,8 @@ pub(super) fn simplify(s: &Search, round: usize, out: &mut FitOutcome) -> bool {
 
 /// Merges one effect kept on two disjoint joint sets into one group sharing one parameter
 /// vector when the data do not tell the two apart (a delay found on the shoulder, then on the
-/// elbow, both 12 ms, is one delay on the arm): the group is fitted, all kept parameters
-/// polished, and the merge kept on the same test as a swap (held-out RMSE within 5 %, not worse
+/// elbow, both 12 ms, is one delay on the arm): the group is fitted (from the effect's start
+/// when the group has one, else from the two fitted values), all kept parameters polished, and the merge kept on the same test as a swap (held-out RMSE within 5 %, not worse
 /// beyond noise, a training BIC that is not higher). Returns `true` when a merge was made.
 fn merge_pass(s: &Search, round: usize, out: &mut FitOutcome) -> bool {
     let Search { engine, train, heldout, .. } = *s;
@@ -68,21 +69,32 @@ fn merge_pass(s: &Search, round: usize, out: &mut FitOutcome) -> bool {
         let mut others = out.applied.clone();
         others.remove(j);
         others.remove(i);
-        if !engine.shared_start(effect, &others, &joints) {
-            continue;
-        }
+        let shared = engine.shared_start(effect, &others, &joints);
         let (Some(h_cur), Some(t_cur)) = current.get_or_insert_with(|| {
             (engine.errors(heldout, &out.applied), engine.errors(train, &out.applied))
         }) else {
             continue;
         };
-        let (p, tr) = engine.fit_one(train, &others, effect, &joints);
-        if p.is_empty() || !tr.is_finite() {
-            continue;
-        }
         let mut set = others.clone();
-        set.push(Applied { effect, joints: joints.clone(), params: p });
-        let set = if set.len() >= 2 { polish_set(engine, train, heldout, set, 0.02) } else { set };
+        if shared {
+            let (p, tr) = engine.fit_one(train, &others, effect, &joints);
+            if p.is_empty() || !tr.is_finite() {
+                continue;
+            }
+            set.push(Applied { effect, joints: joints.clone(), params: p });
+        } else {
+            // The joints start from different model values (each joint's own armature), so
+            // the group's fit has no start of its own: it starts from the two fitted values,
+            // weighted by their joint counts, and the polish below fits it.
+            let (na, nb) = (a.joints.len() as f64, b.joints.len() as f64);
+            let p = a.params.iter().zip(&b.params).map(|(x, y)| (na * x + nb * y) / (na + nb));
+            set.push(Applied { effect, joints: joints.clone(), params: p.collect() });
+        }
+        let set = if set.len() >= 2 || !shared {
+            polish_set(engine, train, heldout, set, 0.02)
+        } else {
+            set
+        };
         let (Some(h1), Some(t1), Some(h_wo), Some(t_wo)) = (
             engine.errors(heldout, &set),
             engine.errors(train, &set),
@@ -122,6 +134,108 @@ fn merge_pass(s: &Search, round: usize, out: &mut FitOutcome) -> bool {
         ));
         out.selected.remove(j);
         let evidence = out.selected.remove(i).evidence;
+        out.applied = set;
+        sync_selected(out);
+        let v = verdict(&h_wo, &h1, &joints, 2.0, opts.decisive_improvement);
+        let bics = (bic(t_wo.n, t_wo.sse, k_set - effect.fitted()), bic(t1.n, t1.sse, k_set));
+        let mut sel = Selected::new(&new, evidence, &v, h_wo.rmse(), h1.rmse(), bics);
+        set_uncertainty(engine, train, &mut sel, &out.applied, &mut out.warnings);
+        out.selected.push(sel);
+        return true;
+    }
+    false
+}
+
+/// Folds a kept effect into another kept on the same joints of which it is a special case
+/// ([`crate::fit::effects::Effect::absorb`]): Coulomb friction found first and Stribeck
+/// friction after it on the same joints are one Stribeck friction whose two levels both carry
+/// the Coulomb part. The greedy rounds cannot get there: the second effect is fitted with the
+/// first held, and a Stribeck fit alone from its default start stops with v_s at a bound (the
+/// reason Coulomb won the first round). The folded effect starts from the absorbed values, all
+/// kept parameters are polished, and the fold is kept on the test of a merge (held-out RMSE
+/// within 5 %, not worse beyond noise, a training BIC that is not higher).
+/// Returns `true` when a fold was made.
+fn fold_pass(s: &Search, round: usize, out: &mut FitOutcome) -> bool {
+    let Search { engine, train, heldout, .. } = *s;
+    let opts = engine.opts;
+    let n = out.applied.len();
+    let mut current = None;
+    for (i, j) in (0..n).flat_map(|i| (0..n).filter(move |&j| j != i).map(move |j| (i, j))) {
+        let (a, b) = (&out.applied[i], &out.applied[j]);
+        let same =
+            a.joints.len() == b.joints.len() && a.joints.iter().all(|x| b.joints.contains(x));
+        if !same {
+            continue;
+        }
+        // `b`'s change from its start, on the model without it.
+        let mut without_b = out.applied.clone();
+        without_b.remove(j);
+        let Some(t) = JointTarget::of(engine.robot, &b.joints[0]) else { continue };
+        let m0 = model_with(engine.robot, &without_b);
+        let delta: Vec<f64> =
+            b.params.iter().zip(b.effect.initial(&m0, &t)).map(|(p, p0)| p - p0).collect();
+        let Some(absorbed) = a.effect.absorb(b.effect, &a.params, &delta) else { continue };
+        let Some(ta) = JointTarget::of(engine.robot, &a.joints[0]) else { continue };
+        let (lo, hi) = a.effect.bounds(&m0, &ta);
+        let absorbed: Vec<f64> = absorbed
+            .iter()
+            .enumerate()
+            .map(|(k, v)| if k < lo.len() && k < hi.len() { v.clamp(lo[k], hi[k]) } else { *v })
+            .collect();
+        let (Some(h_cur), Some(t_cur)) = current.get_or_insert_with(|| {
+            (engine.errors(heldout, &out.applied), engine.errors(train, &out.applied))
+        }) else {
+            continue;
+        };
+        let (effect, joints) = (a.effect, a.joints.clone());
+        let mut others = out.applied.clone();
+        others.remove(i.max(j));
+        others.remove(i.min(j));
+        let mut set = others.clone();
+        set.push(Applied { effect, joints: joints.clone(), params: absorbed });
+        let set = polish_set(engine, train, heldout, set, 0.02);
+        let (Some(h1), Some(t1), Some(h_wo), Some(t_wo)) = (
+            engine.errors(heldout, &set),
+            engine.errors(train, &set),
+            engine.errors(heldout, &others),
+            engine.errors(train, &others),
+        ) else {
+            continue;
+        };
+        let k_all: usize = out.applied.iter().map(|a| a.effect.fitted()).sum();
+        let k_set = k_all - b.effect.fitted();
+        let worse = verdict(&h1, h_cur, &joints, 2.0, f64::INFINITY);
+        let bic_ok = bic(t1.n, t1.sse, k_set) <= bic(t_cur.n, t_cur.sse, k_all);
+        let ok = h1.rmse() <= 1.05 * h_cur.rmse() && !worse.significant && bic_ok;
+        let new = set.last().expect("pushed").clone();
+        out.tried.push(Tried {
+            round,
+            phase: "fold",
+            effect: effect.id().into(),
+            joints: joints.clone(),
+            params: new.params.clone(),
+            train_rmse: t1.rmse(),
+            heldout_improvement: (h_cur.rmse() - h1.rmse()) / h_cur.rmse().max(1e-300),
+            significant: worse.significant,
+            bic_decreased: bic_ok,
+            kept: ok,
+        });
+        if !ok {
+            continue;
+        }
+        out.warnings.push(format!(
+            "{} on {} folded into {} on the same joints (held-out RMSE {:.3e} → {:.3e} rad)",
+            b.effect.id(),
+            b.joints.join(","),
+            effect.id(),
+            h_cur.rmse(),
+            h1.rmse()
+        ));
+        let absorbed_id = b.effect.id();
+        let mut evidence = out.selected[i].evidence.clone();
+        evidence.insert(format!("absorbs_{absorbed_id}"), 1.0);
+        out.selected.remove(i.max(j));
+        out.selected.remove(i.min(j));
         out.applied = set;
         sync_selected(out);
         let v = verdict(&h_wo, &h1, &joints, 2.0, opts.decisive_improvement);
@@ -447,4 +561,186 @@ pub(super) fn polish_budget(
         return applied;
     }
     new
+}
+
+#[cfg(test)]
+mod tests {
+    use std::collections::BTreeMap;
+    use std::path::Path;
+
+    use super::*;
+    use crate::fit::effects::by_id;
+    use crate::fit::select::FitOptions;
+    use crate::fit::split::split;
+    use crate::model::Robot;
+    use crate::model::source::SourceMap;
+    use crate::sim2real::recording::read_csv;
+    use crate::synth::{self, Settings, truth::Hidden};
+
+    type Pass = fn(&Search, usize, &mut FitOutcome) -> bool;
+
+    /// arm3 (each joint's armature 0.01 kg·m², or as `armature` gives) with `hidden`, recorded
+    /// by the independent synth and read back from CSV.
+    fn recorded(
+        tag: &str,
+        armature: &[(&str, f64)],
+        hidden: &[(&str, &str, &[f64])],
+    ) -> (Robot, Vec<Recording>) {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+        let mut xml = std::fs::read_to_string(root.join("fixtures/gap/arm3.xml")).expect("arm3");
+        for (j, a) in armature {
+            let from = format!("<joint name=\"{j}\"/>");
+            assert!(xml.contains(&from), "{from}");
+            xml = xml.replace(&from, &format!("<joint name=\"{j}\" armature=\"{a}\"/>"));
+        }
+        let dir =
+            std::env::temp_dir().join(format!("modellint_simplify_{tag}_{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        let path = dir.join("arm3.xml");
+        std::fs::write(&path, xml).expect("write model");
+        let robot = crate::model::load(&mut SourceMap::default(), &path, None).expect("arm3");
+        let joints: Vec<String> =
+            ["shoulder_pitch", "elbow_pitch", "wrist_pitch"].map(String::from).to_vec();
+        let hidden: Vec<Hidden> = hidden
+            .iter()
+            .map(|(e, j, p)| Hidden {
+                effect: by_id(e).expect("effect").id(),
+                joint: (*j).into(),
+                params: p.to_vec(),
+            })
+            .collect();
+        let s = Settings {
+            episodes: 8,
+            duration_s: 4.0,
+            amplitude: 0.5,
+            seed: 7,
+            ..Settings::default()
+        };
+        let ds = synth::generate(&robot, &joints, &hidden, &s, &|_, _| {}).expect("synth");
+        let files = synth::write::write(&ds, &dir.join("rec")).expect("write");
+        let recs = files.iter().map(|f| read_csv(f).expect("read")).collect();
+        let _ = std::fs::remove_dir_all(&dir);
+        (robot, recs)
+    }
+
+    fn applied(id: &str, joints: &[&str], params: &[f64]) -> Applied {
+        Applied {
+            effect: by_id(id).expect("effect"),
+            joints: joints.iter().map(|j| j.to_string()).collect(),
+            params: params.to_vec(),
+        }
+    }
+
+    /// Runs `pass` on the kept set `start`; returns the outcome and whether the set changed.
+    fn run(
+        pass: Pass,
+        robot: &Robot,
+        recs: &[Recording],
+        start: Vec<Applied>,
+    ) -> (FitOutcome, bool) {
+        let opts = FitOptions::default();
+        let engine = Engine::new(robot, recs, &opts);
+        let sp = split(recs, opts.holdout);
+        let allowed: Vec<String> = effects::all().iter().map(|e| e.id().to_string()).collect();
+        let s =
+            Search { engine: &engine, train: &sp.train, heldout: &sp.heldout, allowed: &allowed };
+        let h = engine.errors(&sp.heldout, &start).expect("replay");
+        let mut out = FitOutcome::empty(String::new());
+        for a in &start {
+            let v = verdict(&h, &h, &a.joints, 2.0, 0.5);
+            out.selected.push(Selected::new(a, BTreeMap::new(), &v, 1.0, 1.0, (0.0, 0.0)));
+        }
+        out.applied = start;
+        let changed = pass(&s, 2, &mut out);
+        (out, changed)
+    }
+
+    fn near(got: &[f64], truth: &[f64], rel: f64) -> bool {
+        got.len() == truth.len()
+            && got.iter().zip(truth).all(|(g, t)| (g - t).abs() <= rel * t.abs())
+    }
+
+    const STRIBECK: [f64; 3] = [0.3, 0.1, 0.2];
+
+    /// The Asimov failure, on arm3: Coulomb friction taken first, then a Stribeck friction with
+    /// its levels short by the Coulomb part. The fold gives one Stribeck friction at the truth.
+    #[test]
+    fn coulomb_next_to_stribeck_folds_into_stribeck() {
+        let (robot, recs) =
+            recorded("fold", &[], &[("stribeck_friction", "elbow_pitch", &STRIBECK)]);
+        let t = JointTarget::of(&robot, "elbow_pitch").expect("elbow");
+        let c0 =
+            by_id("coulomb_friction").expect("coulomb").initial(&model_with(&robot, &[]), &t)[0];
+        // Coulomb took 0.12 N·m above the model's frictionloss, Stribeck a part of the rest:
+        // folded, (0.22, 0.12, 0.14) is 20–30 % off the truth; the polish must bring it there.
+        let start = vec![
+            applied("coulomb_friction", &["elbow_pitch"], &[c0 + 0.12]),
+            applied("stribeck_friction", &["elbow_pitch"], &[0.10, 0.0, 0.14]),
+        ];
+        let (out, folded) = run(fold_pass, &robot, &recs, start);
+        assert!(folded, "no fold; tried {:?}", out.tried);
+        assert_eq!(out.applied.len(), 1, "{:?}", out.applied);
+        let a = &out.applied[0];
+        assert_eq!(a.effect.id(), "stribeck_friction");
+        assert!(near(&a.params, &STRIBECK, 0.05), "fitted {:?} for {STRIBECK:?}", a.params);
+        assert_eq!(out.selected.len(), 1);
+        assert!(out.selected[0].evidence.contains_key("absorbs_coulomb_friction"));
+        assert!(out.tried.iter().any(|t| t.phase == "fold" && t.kept));
+    }
+
+    /// Must not fire: the two frictions on different joints are not one effect.
+    #[test]
+    fn frictions_on_different_joints_do_not_fold() {
+        let (robot, recs) =
+            recorded("apart", &[], &[("stribeck_friction", "elbow_pitch", &STRIBECK)]);
+        let start = vec![
+            applied("coulomb_friction", &["shoulder_pitch"], &[0.05]),
+            applied("stribeck_friction", &["elbow_pitch"], &STRIBECK),
+        ];
+        let (out, folded) = run(fold_pass, &robot, &recs, start);
+        assert!(!folded);
+        assert_eq!(out.applied.len(), 2);
+        assert!(out.tried.iter().all(|t| t.phase != "fold"));
+    }
+
+    /// Armature 0.04 kg·m² on shoulder and elbow, whose model values differ (0.02 and 0.01):
+    /// found on each joint alone, the two are one group at the truth.
+    #[test]
+    fn armatures_from_different_model_values_merge() {
+        let (robot, recs) = recorded(
+            "merge",
+            &[("shoulder_pitch", 0.02)],
+            &[("armature", "shoulder_pitch", &[0.04]), ("armature", "elbow_pitch", &[0.04])],
+        );
+        let start = vec![
+            applied("armature", &["shoulder_pitch"], &[0.043]),
+            applied("armature", &["elbow_pitch"], &[0.038]),
+        ];
+        let (out, merged) = run(merge_pass, &robot, &recs, start);
+        assert!(merged, "no merge; tried {:?}", out.tried);
+        assert_eq!(out.applied.len(), 1, "{:?}", out.applied);
+        let a = &out.applied[0];
+        assert_eq!(a.joints, ["shoulder_pitch", "elbow_pitch"]);
+        assert!(near(&a.params, &[0.04], 0.03), "fitted {:?} for 0.04", a.params);
+        assert!(out.tried.iter().any(|t| t.phase == "merge" && t.kept));
+    }
+
+    /// Must not fire: armatures 0.03 and 0.06 are two values, not one.
+    #[test]
+    fn different_armatures_do_not_merge() {
+        let (robot, recs) = recorded(
+            "nomerge",
+            &[("shoulder_pitch", 0.02)],
+            &[("armature", "shoulder_pitch", &[0.03]), ("armature", "elbow_pitch", &[0.06])],
+        );
+        let start = vec![
+            applied("armature", &["shoulder_pitch"], &[0.03]),
+            applied("armature", &["elbow_pitch"], &[0.06]),
+        ];
+        let (out, merged) = run(merge_pass, &robot, &recs, start);
+        assert!(!merged, "merged: {:?}", out.applied);
+        assert_eq!(out.applied.len(), 2);
+        assert!(out.tried.iter().any(|t| t.phase == "merge" && !t.kept), "{:?}", out.tried);
+    }
 }
