@@ -333,6 +333,9 @@ fn restart_winner(
     round: usize,
     out: &mut FitOutcome,
 ) -> Option<Vec<(Selected, Applied)>> {
+    if restarts.is_empty() {
+        return None;
+    }
     let engine = s.engine;
     let opts = engine.opts;
     let n = applied.len();
