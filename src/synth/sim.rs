@@ -12,7 +12,7 @@
 use mujoco_rs::prelude::*;
 
 use super::clock::{Commands, US};
-use super::truth::{RealRobot, step_torque, through_play};
+use super::truth::{JointPhysics, RealRobot, step_torque, through_play};
 use crate::model::{Robot, mj};
 
 /// The floating base on a test stand: qpos address, dof address and the pinned pose.
@@ -100,6 +100,7 @@ pub fn run(
         next += 1;
     }
     let mut tau = vec![0.0; nj];
+    let mut acting = Vec::new();
     while next < samples_us.len() {
         let t = n as f64 * dt;
         {
@@ -112,7 +113,12 @@ pub fn run(
                 for s in &jp.servos {
                     ctrl[s.id] = u;
                 }
-                tau[j] = step_torque(m, jp, u, q0[j], qd0[j]);
+            }
+            for (j, jp) in real.joints.iter().enumerate() {
+                if jp.has_torque_hook() {
+                    acting_ctrl(m, &d, jp, &mut acting);
+                    tau[j] = step_torque(m, jp, &acting, q0[j], qd0[j]);
+                }
             }
             let qfrc = d.qfrc_applied_mut();
             for (jp, &t) in real.joints.iter().zip(&tau) {
@@ -141,4 +147,86 @@ pub fn run(
         std::mem::swap(&mut qd0, &mut qd1);
     }
     Ok(out)
+}
+
+/// The control each of the joint's servos acts on this step (after `ctrl` is set, before the
+/// step): its `ctrl`, or for an actuator with a MuJoCo `delay` (the Asimov legs: 20 ms) the
+/// value MuJoCo reads from its ctrl history, which is what the actuator force uses. A
+/// torque-dependent effect (friction growing with the servo torque, a torque–speed line) must
+/// see the torque the servo applies, not the one it is commanded to apply `delay` later.
+fn acting_ctrl(m: &MjModel, d: &MjData<&MjModel>, jp: &JointPhysics, out: &mut Vec<f64>) {
+    let (hist, delay) = (m.actuator_history(), m.actuator_delay());
+    out.clear();
+    for s in &jp.servos {
+        let mut v = [d.ctrl()[s.id]];
+        if hist[s.id][0] > 0 && delay[s.id] > 0.0 {
+            let _ = d.read_ctrl_into(s.id, d.time(), hist[s.id][1], &mut v);
+        }
+        out.push(v[0]);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::path::Path;
+
+    use super::*;
+    use crate::model::source::SourceMap;
+    use crate::synth::truth::{real_robot, servo_torque};
+
+    /// Over `steps` physics steps of a command that changes every step, the largest difference
+    /// between the servo torque computed before the step from [`acting_ctrl`] and the one MuJoCo
+    /// applies in it (gear × `actuator_force`), and the largest difference between the latter
+    /// and the torque of the current command.
+    fn applied_vs_computed(model: &str, joint: &str, steps: usize) -> (f64, f64) {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+        let robot =
+            crate::model::load(&mut SourceMap::default(), &root.join(model), None).expect("model");
+        let real = real_robot(&robot, &[joint.to_string()], &[]).expect("real robot");
+        let (m, jp) = (&real.model, &real.joints[0]);
+        assert!(!jp.servos.is_empty(), "{joint} has a position servo");
+        let mut d = MjData::new(m);
+        if let Some(k) = robot.key.key {
+            d.reset_keyframe(k).expect("keyframe");
+        }
+        d.forward();
+        let q_key = d.qpos()[jp.qposadr];
+        let (mut acting, mut err, mut lag) = (Vec::new(), 0.0f64, 0.0f64);
+        for k in 0..steps {
+            let t = d.time();
+            let u = q_key + 0.2 * (2.0 * std::f64::consts::PI * 3.0 * t).sin() + 1e-3 * k as f64;
+            for s in &jp.servos {
+                d.ctrl_mut()[s.id] = u;
+            }
+            let (q, qd) = (d.qpos()[jp.qposadr], d.qvel()[jp.dof]);
+            acting_ctrl(m, &d, jp, &mut acting);
+            let computed = servo_torque(m, jp, &acting, q, qd);
+            let now = servo_torque(m, jp, &vec![u; jp.servos.len()], q, qd);
+            d.step();
+            let applied: f64 = jp.servos.iter().map(|s| s.gear * d.actuator_force()[s.id]).sum();
+            err = err.max((computed - applied).abs());
+            lag = lag.max((now - applied).abs());
+        }
+        (err, lag)
+    }
+
+    /// A torque-dependent hidden effect must see the torque the servo applies. The Asimov knee
+    /// servo has a MuJoCo `delay` of 20 ms: the torque of the current command is off by
+    /// newtons-metres from the applied one, the torque from the ctrl history is the applied
+    /// one (before this, the synth's load-dependent friction used the current command while the
+    /// actuator applied the one of 20 ms before).
+    #[test]
+    fn servo_torque_is_the_applied_one_on_a_delayed_actuator() {
+        let (err, lag) = applied_vs_computed("models/asimov.xml", "left_knee", 300);
+        assert!(err < 1e-9, "computed vs applied: {err} N·m");
+        assert!(lag > 1.0, "the current command's torque is {lag} N·m off: no delay seen?");
+    }
+
+    /// Without a MuJoCo delay the acting control is the command itself.
+    #[test]
+    fn servo_torque_is_the_applied_one_without_delay() {
+        let (err, lag) = applied_vs_computed("fixtures/gap/arm3.xml", "elbow_pitch", 300);
+        assert!(err < 1e-9, "computed vs applied: {err} N·m");
+        assert!(lag < 1e-9, "no delay, yet {lag} N·m");
+    }
 }

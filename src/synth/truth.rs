@@ -16,6 +16,9 @@
 //! | position_offset | offset_rad | sensor only: recorded q = true q + offset (the servo acts on the true angle) |
 //! | stribeck_friction | static, dynamic [N·m], v_stribeck [rad/s] | `qfrc_applied` −tanh(q̇/0.02)·(Fd + (Fs − Fd)·exp(−(q̇/vs)²)) |
 //! | load_dependent_friction | frictionloss [N·m], load_coeff | `qfrc_applied` −tanh(q̇/0.02)·(f0 + k·|τ_servo|) |
+//!
+//! τ_servo is the torque the servo applies in the step (with a MuJoCo actuator `delay`, from the
+//! control the actuator reads from its ctrl history: [`servo_torque`]).
 
 use mujoco_rs::prelude::*;
 
@@ -268,15 +271,16 @@ pub fn real_robot(
     Ok(RealRobot { model, joints: out })
 }
 
-/// The torque the joint's servos produce for set-point `u` at (q, qd), from the model copy's
-/// actuator parameters (force = gain·u + b0 + b1·gear·q + b2·gear·qd, clamped to forcerange;
-/// joint torque = gear · force).
-pub fn servo_torque(m: &MjModel, jp: &JointPhysics, u: f64, q: f64, qd: f64) -> f64 {
+/// The torque the joint's servos produce at (q, qd) when servo k acts on control `ctrl[k]`
+/// (the set-point, or for an actuator with a MuJoCo `delay` the value it reads from its ctrl
+/// history), from the model copy's actuator parameters (force = gain·ctrl + b0 + b1·gear·q +
+/// b2·gear·qd, ctrl clamped to ctrlrange, force to forcerange; joint torque = gear · force).
+pub fn servo_torque(m: &MjModel, jp: &JointPhysics, ctrl: &[f64], q: f64, qd: f64) -> f64 {
     let (g, b) = (m.actuator_gainprm().as_flattened(), m.actuator_biasprm().as_flattened());
     let (fl, fr) = (m.actuator_forcelimited(), m.actuator_forcerange().as_flattened());
     let (cl, cr) = (m.actuator_ctrllimited(), m.actuator_ctrlrange().as_flattened());
     let mut tau = 0.0;
-    for s in &jp.servos {
+    for (s, &u) in jp.servos.iter().zip(ctrl) {
         let i = s.id;
         let ctrl = if cl[i] { u.clamp(cr[2 * i], cr[2 * i + 1]) } else { u };
         let mut f =
@@ -295,13 +299,13 @@ pub fn through_play(u: f64, q: f64, half_play: f64) -> f64 {
     if e.abs() <= half_play { q } else { u - half_play * e.signum() }
 }
 
-/// The joint torque added this step (qfrc_applied) by the per-step effects, for servo set-point
-/// `u` (after delay and play).
-pub fn step_torque(m: &MjModel, jp: &JointPhysics, u: f64, q: f64, qd: f64) -> f64 {
+/// The joint torque added this step (qfrc_applied) by the per-step effects, when servo k acts
+/// on control `ctrl[k]` (see [`servo_torque`]).
+pub fn step_torque(m: &MjModel, jp: &JointPhysics, ctrl: &[f64], q: f64, qd: f64) -> f64 {
     if !jp.has_torque_hook() {
         return 0.0;
     }
-    let servo = servo_torque(m, jp, u, q, qd);
+    let servo = servo_torque(m, jp, ctrl, q, qd);
     let sign = (qd / FRICTION_EPS).tanh();
     let mut tau = 0.0;
     if let Some([e, sat, vl]) = jp.torque_line {
