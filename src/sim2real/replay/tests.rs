@@ -154,7 +154,7 @@ fn held_recording(joint: &str, n: usize, dt: f64, q: f64, rate: Option<f64>) -> 
 #[test]
 fn initial_position_averages_out_the_encoder_and_keeps_the_motion() {
     let t = [0.0, 0.011, 0.020, 0.034, 0.045, 0.052, 0.066, 0.079, 0.090, 0.101];
-    let err = |i: usize| if i % 2 == 0 { 1e-3 } else { -1e-3 };
+    let err = |i: usize| if i.is_multiple_of(2) { 1e-3 } else { -1e-3 };
     let q: Vec<f64> =
         t.iter().enumerate().map(|(i, &t)| 0.2 + 0.3 * t + 2.0 * t * t + err(i)).collect();
     let qd: Vec<f64> = t.iter().map(|&t| 0.3 + 4.0 * t).collect();
