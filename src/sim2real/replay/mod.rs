@@ -237,7 +237,6 @@ impl<'m> Replayer<'m> {
         let nj = rec.joints.len();
         let mut jm = Vec::with_capacity(nj);
         let mut qd0 = Vec::with_capacity(nj);
-        let mut q0 = Vec::with_capacity(nj);
         for jt in &rec.joints {
             let ji = self.names.iter().position(|s| *s == jt.name).expect("validated");
             let info = &self.joints[ji];
@@ -251,10 +250,6 @@ impl<'m> Replayer<'m> {
             qd0.push(match &jt.qd {
                 Some(v) => v[0],
                 None => derivative(&rec.t[..n.min(3)], &jt.q[..n.min(3)])[0],
-            });
-            q0.push(match &jt.qd {
-                Some(v) => initial_position(&rec.t, &jt.q, v),
-                None => jt.q[0],
             });
         }
 
@@ -318,7 +313,6 @@ impl<'m> Replayer<'m> {
             rec,
             opts,
             jm: &jm,
-            q0: &q0,
             qd0: &qd0,
             nominal: &nominal,
             replaced: &replaced,
@@ -376,33 +370,5 @@ pub fn replay_all(
 }
 
 mod run;
-/// Rows [`initial_position`] averages over.
-pub const INITIAL_ROWS: usize = 8;
-
-/// The joint's position at the first sample, estimated from the first [`INITIAL_ROWS`] rows:
-/// the mean of `q_i − ∫ qd dt` from the first sample to row i (trapezoid on the recorded
-/// velocity). A single row carries the encoder's quantisation (±0.77 mrad at 12 bits) and its
-/// noise; averaging over rows reduces that by ~√8, while integrating the recorded velocity
-/// keeps the motion within those rows out of the average. A dry friction never forgets the
-/// start: a joint that sticks keeps an initial error within its dead band (friction / kp, mrad on
-/// a leg), and the fit then prefers a friction lower than the true one (Asimov knee,
-/// load-dependent friction (0.5, 0.1), 12-bit encoder: at the first row's q the truth's replay
-/// error is 5.4e-4 rad and (0.5, 0.09)'s 4.4e-4; from this estimate 4.3e-4 and 4.5e-4). The
-/// first row itself when fewer than two rows or any value is not finite.
-pub fn initial_position(t: &[f64], q: &[f64], qd: &[f64]) -> f64 {
-    let n = INITIAL_ROWS.min(t.len()).min(q.len()).min(qd.len());
-    let first = q.first().copied().unwrap_or(f64::NAN);
-    if n < 2 {
-        return first;
-    }
-    let (mut moved, mut sum) = (0.0, q[0]);
-    for i in 1..n {
-        moved += 0.5 * (qd[i] + qd[i - 1]) * (t[i] - t[i - 1]);
-        sum += q[i] - moved;
-    }
-    let est = sum / n as f64;
-    if est.is_finite() { est } else { first }
-}
-
 #[cfg(test)]
 mod tests;

@@ -22,8 +22,6 @@ pub(super) struct Run<'a> {
     pub opts: &'a ReplayOptions,
     /// Recorded joint → model joint index.
     pub jm: &'a [usize],
-    /// Initial position of each recorded joint ([`super::initial_position`]).
-    pub q0: &'a [f64],
     /// Initial velocity of each recorded joint.
     pub qd0: &'a [f64],
     /// (actuator, gainprm[0], biasprm[1], biasprm[2]) of each recorded joint's actuators.
@@ -46,7 +44,7 @@ impl Replayer<'_> {
         mut hook: Option<&mut dyn ActuatorHook>,
         set_gains: Option<GainSetter<M>>,
     ) -> Result<Episode, ReplayError> {
-        let Run { rec, opts, jm, q0, qd0, nominal, replaced, rate, tick0, schedule, dt } = *c;
+        let Run { rec, opts, jm, qd0, nominal, replaced, rate, tick0, schedule, dt } = *c;
         let (n, nj) = (rec.t.len(), rec.joints.len());
         let t0 = rec.t[0];
         {
@@ -55,7 +53,7 @@ impl Replayer<'_> {
                 qpos.copy_from_slice(&self.key_qpos);
             }
             for (i, &ji) in jm.iter().enumerate() {
-                qpos[self.joints[ji].qposadr] = q0[i];
+                qpos[self.joints[ji].qposadr] = rec.joints[i].q[0];
             }
             let qvel = d.qvel_mut();
             for (i, &ji) in jm.iter().enumerate() {

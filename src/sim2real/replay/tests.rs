@@ -147,27 +147,3 @@ fn held_recording(joint: &str, n: usize, dt: f64, q: f64, rate: Option<f64>) -> 
         base: None,
     }
 }
-
-/// Hand-computed: q = 0.2 + 0.3·t + 2·t² (qd = 0.3 + 4·t, linear, so the trapezoid is exact),
-/// at irregular times, each row off by ±1 mrad alternately (8 rows: the errors cancel). The
-/// estimate is 0.2 exactly; the first row alone is 1 mrad off.
-#[test]
-fn initial_position_averages_out_the_encoder_and_keeps_the_motion() {
-    let t = [0.0, 0.011, 0.020, 0.034, 0.045, 0.052, 0.066, 0.079, 0.090, 0.101];
-    let err = |i: usize| if i.is_multiple_of(2) { 1e-3 } else { -1e-3 };
-    let q: Vec<f64> =
-        t.iter().enumerate().map(|(i, &t)| 0.2 + 0.3 * t + 2.0 * t * t + err(i)).collect();
-    let qd: Vec<f64> = t.iter().map(|&t| 0.3 + 4.0 * t).collect();
-    assert_eq!(INITIAL_ROWS, 8);
-    let est = initial_position(&t, &q, &qd);
-    assert!((est - 0.2).abs() < 1e-12, "{est}");
-    assert!((q[0] - 0.2 - 1e-3).abs() < 1e-12);
-    // Fewer rows than INITIAL_ROWS: the rows there are (3 rows: errors +1, −1, +1 mrad → +1/3).
-    let est3 = initial_position(&t[..3], &q[..3], &qd[..3]);
-    assert!((est3 - (0.2 + 1e-3 / 3.0)).abs() < 1e-12, "{est3}");
-    // One row, or a value that is not finite: the first row.
-    assert_eq!(initial_position(&t[..1], &q[..1], &qd[..1]), q[0]);
-    let mut bad = qd.clone();
-    bad[2] = f64::NAN;
-    assert_eq!(initial_position(&t, &q, &bad), q[0]);
-}
