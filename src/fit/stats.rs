@@ -30,7 +30,7 @@ const NULL_SV_REL: f64 = 1e-8;
 /// absolute value, vectors being unit-norm) is considered unidentifiable.
 const NULL_COMPONENT: f64 = 0.05;
 /// A parameter whose stderr exceeds this fraction of its range is unidentifiable.
-const RANGE_FRACTION: f64 = 0.5;
+pub const RANGE_FRACTION: f64 = 0.5;
 
 fn degenerate_uncertainty(n_params: usize) -> ParamUncertainty {
     ParamUncertainty {
@@ -122,6 +122,58 @@ pub fn uncertainty_from_jacobian(
         }
     }
     ParamUncertainty { stderr, identifiable, condition_number }
+}
+
+/// Cluster-robust ("sandwich") standard errors: `c (JᵀJ)⁺ (Σ_g s_g s_gᵀ) (JᵀJ)⁺` with
+/// `s_g = J_gᵀ r_g` the score of cluster `g` (the rows whose `cluster` id is `g`) and the
+/// small-sample factor `c = G/(G − 1) · (n − 1)/(n − p)`. With one cluster per recorded episode
+/// it holds when the residuals are not independent within an episode (a replay's model error
+/// is smooth; a stick/slip that flips keeps an episode off for seconds) and when episodes
+/// disagree about a parameter — which `s²(JᵀJ)⁺` cannot see. For independent residuals it
+/// agrees with `s²(JᵀJ)⁺` on average. `None` for fewer than two clusters, fewer rows than
+/// parameters, ragged or non-finite input.
+pub fn cluster_robust_stderr(
+    jac: &[Vec<f64>],
+    residuals: &[f64],
+    cluster: &[usize],
+    n_params: usize,
+) -> Option<Vec<f64>> {
+    let (m, p) = (jac.len(), n_params);
+    if p == 0
+        || m <= p
+        || residuals.len() != m
+        || cluster.len() != m
+        || jac.iter().any(|row| row.len() != p || row.iter().any(|v| !v.is_finite()))
+        || residuals.iter().any(|v| !v.is_finite())
+    {
+        return None;
+    }
+    let mut ids: Vec<usize> = cluster.to_vec();
+    ids.sort_unstable();
+    ids.dedup();
+    let g = ids.len();
+    if g < 2 {
+        return None;
+    }
+    let j = DMatrix::from_fn(m, p, |r, c| jac[r][c]);
+    let jtj = j.transpose() * &j;
+    let smax = jtj.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
+    if !(smax > 0.0) {
+        return None;
+    }
+    let a = jtj.pseudo_inverse(NULL_SV_REL * NULL_SV_REL * smax).ok()?;
+    let mut scores = DMatrix::<f64>::zeros(p, g);
+    for (row, (&c, &r)) in cluster.iter().zip(residuals).enumerate() {
+        let k = ids.binary_search(&c).ok()?;
+        for q in 0..p {
+            scores[(q, k)] += jac[row][q] * r;
+        }
+    }
+    let meat = &scores * scores.transpose();
+    let c = g as f64 / (g - 1) as f64 * (m - 1) as f64 / (m - p) as f64;
+    let cov = &a * meat * &a * c;
+    let se: Vec<f64> = (0..p).map(|q| cov[(q, q)].max(0.0).sqrt()).collect();
+    se.iter().all(|v| v.is_finite()).then_some(se)
 }
 
 /// Variance inflation for serially correlated residuals, modelled as AR(1): `(1 + ρ)/(1 − ρ)`
@@ -334,6 +386,51 @@ mod tests {
         let disc = ((n - stt).powi(2) + 4.0 * st * st).sqrt();
         let cond = ((tr + disc) / (tr - disc)).sqrt();
         assert!(close(u.condition_number, cond, 1e-8));
+    }
+
+    #[test]
+    fn cluster_robust_stderr_by_hand() {
+        // One parameter (a mean), J = 1: se² = c Σ_g (Σ r_g)² / n², c = G/(G−1) (n−1)/(n−p).
+        let jac = vec![vec![1.0]; 6];
+        let ids = [0, 0, 0, 1, 1, 1];
+        // Two episodes that disagree: +1 throughout, −1 throughout. Scores ±3, c = 2 · 5/5:
+        // se² = 2 · 18 / 36 = 1. The classical s²(JᵀJ)⁻¹ = (6/5)/6 sees only 0.45.
+        let r = [1.0, 1.0, 1.0, -1.0, -1.0, -1.0];
+        let se = cluster_robust_stderr(&jac, &r, &ids, 1).expect("two clusters");
+        assert!(close(se[0], 1.0, 1e-12), "{se:?}");
+        let classical = uncertainty_from_jacobian(&jac, &r, 1, &[]).stderr[0];
+        assert!(close(classical, (0.2f64).sqrt(), 1e-12), "{classical}");
+        // Alternating within each episode: scores +1, −1: se² = 2 · 2 / 36.
+        let r = [1.0, -1.0, 1.0, -1.0, 1.0, -1.0];
+        let se = cluster_robust_stderr(&jac, &r, &ids, 1).expect("two clusters");
+        assert!(close(se[0], (4.0f64 / 36.0).sqrt(), 1e-12), "{se:?}");
+        // Cluster ids need not be contiguous numbers.
+        let se2 = cluster_robust_stderr(&jac, &r, &[7, 7, 7, 42, 42, 42], 1).expect("two");
+        assert!(close(se2[0], se[0], 1e-12));
+        // Two parameters y = a + b t, clusters t < 2 and t ≥ 2 (J rows [1, t], t = 0..4),
+        // residuals (1, −1, 0, 1): (JᵀJ)⁻¹ = [[14, −6], [−6, 4]]/20, scores (0, −1) and
+        // (1, 3), meat [[1, 3], [3, 10]], c = 2 · 3/2 = 3.
+        let jac: Vec<Vec<f64>> = (0..4).map(|t| vec![1.0, t as f64]).collect();
+        let se = cluster_robust_stderr(&jac, &[1.0, -1.0, 0.0, 1.0], &[0, 0, 1, 1], 2)
+            .expect("two clusters");
+        // A = inv/20 with inv = [[14, −6], [−6, 4]]: A M A = inv M inv / 400.
+        let inv = [[14.0, -6.0], [-6.0, 4.0]];
+        let meat = [[1.0, 3.0], [3.0, 10.0]];
+        let mut im = [[0.0; 2]; 2];
+        for i in 0..2 {
+            for k in 0..2 {
+                im[i][k] = (0..2).map(|l| inv[i][l] * meat[l][k]).sum();
+            }
+        }
+        for q in 0..2 {
+            let v: f64 = (0..2).map(|l| im[q][l] * inv[l][q]).sum::<f64>() / 400.0 * 3.0;
+            assert!(close(se[q], v.sqrt(), 1e-10), "{q}: {} vs {}", se[q], v.sqrt());
+        }
+        // One cluster, too few rows, NaN: no estimate.
+        let ones = vec![vec![1.0]; 3];
+        assert!(cluster_robust_stderr(&ones, &[1.0, 2.0, 3.0], &[0, 0, 0], 1).is_none());
+        assert!(cluster_robust_stderr(&ones[..1], &[1.0], &[0], 1).is_none());
+        assert!(cluster_robust_stderr(&ones, &[1.0, f64::NAN, 3.0], &[0, 1, 1], 1).is_none());
     }
 
     #[test]

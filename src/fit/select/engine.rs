@@ -9,7 +9,10 @@ use crate::fit::optim::{
     Bounds, CmaesOpts, LmOpts, LmResult, NelderMeadOpts, cmaes, golden_section,
     levenberg_marquardt, nelder_mead,
 };
-use crate::fit::stats::{ar1_variance_inflation, uncertainty_from_jacobian, white_floor};
+use crate::fit::stats::{
+    RANGE_FRACTION, ar1_variance_inflation, cluster_robust_stderr, uncertainty_from_jacobian,
+    white_floor,
+};
 use crate::model::Robot;
 use crate::sim2real::commands::Fill;
 use crate::sim2real::metrics::gap_mask;
@@ -271,9 +274,21 @@ impl<'a> Engine<'a> {
         joints: &[String],
         max_len: usize,
     ) -> Option<Vec<f64>> {
+        self.residuals_by_episode(recs, applied, joints, max_len).map(|(r, _)| r)
+    }
+
+    /// [`Engine::residuals`] with, for each residual, the index of its recording in `recs`
+    /// (the clusters of [`cluster_robust_stderr`]).
+    pub(super) fn residuals_by_episode(
+        &self,
+        recs: &[Recording],
+        applied: &[Applied],
+        joints: &[String],
+        max_len: usize,
+    ) -> Option<(Vec<f64>, Vec<usize>)> {
         let e = self.errors(recs, applied)?;
         let mut out = Vec::new();
-        for (rec, ep) in recs.iter().zip(&e.eps) {
+        for (i, (rec, ep)) in recs.iter().zip(&e.eps).enumerate() {
             let scored = gap_mask(&rec.t, self.opts.gap_mask_s);
             for (k, jt) in rec.joints.iter().enumerate() {
                 if joints.contains(&jt.name) {
@@ -283,13 +298,14 @@ impl<'a> Engine<'a> {
                             .zip(&scored)
                             .filter(|(_, s)| **s)
                             .map(|((a, b), _)| a - b)
-                            .filter(|x| x.is_finite()),
+                            .filter(|x| x.is_finite())
+                            .map(|x| (x, i)),
                     );
                 }
             }
         }
         let stride = out.len().div_ceil(max_len.max(1)).max(1);
-        Some(out.into_iter().step_by(stride).collect())
+        Some(out.into_iter().step_by(stride).unzip())
     }
 
     /// Fits `effect` on `group` on top of `base`: returns the full parameter vector and the
@@ -509,7 +525,9 @@ impl<'a> Engine<'a> {
     }
 
     /// Standard errors (and identifiability) of the fitted parameters of the effects `which`,
-    /// jointly, from finite-difference columns of the residual on their joints.
+    /// jointly, from finite-difference columns of the residual on their joints: the larger of
+    /// `s²(JᵀJ)⁺` with s² inflated for serial correlation (AR(1)) and the cluster-robust
+    /// estimate with one cluster per training episode ([`cluster_robust_stderr`]).
     fn uncertainty_of(
         &self,
         train: &[Recording],
@@ -542,7 +560,9 @@ impl<'a> Engine<'a> {
                 })
                 .collect()
         };
-        let Some(r0) = self.residuals(train, applied, &joints, 20_000) else { return failed() };
+        let Some((r0, episode)) = self.residuals_by_episode(train, applied, &joints, 20_000) else {
+            return failed();
+        };
         let mut cols = Vec::with_capacity(slots.len());
         for &(ai, i, lo, hi) in &slots {
             let mut h = 1e-3 * (hi - lo).max(1e-9);
@@ -566,8 +586,24 @@ impl<'a> Engine<'a> {
         // Serially correlated residuals: scaling them by √inflation scales s² (and so the
         // covariance s²(JᵀJ)⁺ and the identifiability check) by the AR(1) inflation.
         let c = ar1_variance_inflation(&r0).sqrt();
-        let r0: Vec<f64> = r0.iter().map(|x| x * c).collect();
-        let u = uncertainty_from_jacobian(&jac, &r0, k, &ranges);
+        let scaled: Vec<f64> = r0.iter().map(|x| x * c).collect();
+        let mut u = uncertainty_from_jacobian(&jac, &scaled, k, &ranges);
+        // Episodes that disagree about a parameter (or an error that lasts a whole episode)
+        // widen it beyond what the pooled residuals show: the larger of the two is reported,
+        // and a parameter whose error then exceeds half its range is not identifiable.
+        if let Some(robust) = cluster_robust_stderr(&jac, &r0, &episode, k) {
+            for s in 0..k {
+                if u.stderr[s].is_finite() && robust[s] > u.stderr[s] {
+                    u.stderr[s] = robust[s];
+                    if ranges[s].is_finite()
+                        && ranges[s] > 0.0
+                        && robust[s] > RANGE_FRACTION * ranges[s]
+                    {
+                        u.identifiable[s] = false;
+                    }
+                }
+            }
+        }
         which
             .iter()
             .map(|&ai| {
