@@ -24,6 +24,27 @@ pub struct ParamUncertainty {
     pub condition_number: f64,
 }
 
+impl ParamUncertainty {
+    /// Raises each finite standard error to `wider[i]` where that is larger (a cluster-robust
+    /// error beside the pooled one), with the same identifiability rule as
+    /// [`uncertainty_from_jacobian`]: an error above half the parameter's range.
+    pub fn widen(&mut self, wider: &[f64], ranges: &[f64]) {
+        for (i, &w) in wider.iter().enumerate().take(self.stderr.len()) {
+            if self.stderr[i].is_finite() && w > self.stderr[i] {
+                self.stderr[i] = w;
+                if beyond_range(w, ranges.get(i).copied()) {
+                    self.identifiable[i] = false;
+                }
+            }
+        }
+    }
+}
+
+/// Whether a standard error exceeds [`RANGE_FRACTION`] of a finite, positive parameter range.
+fn beyond_range(stderr: f64, range: Option<f64>) -> bool {
+    range.is_some_and(|r| r.is_finite() && r > 0.0 && stderr > RANGE_FRACTION * r)
+}
+
 /// Relative singular-value cutoff below which a direction counts as null.
 const NULL_SV_REL: f64 = 1e-8;
 /// A parameter whose component in a null singular vector exceeds this (in
@@ -110,11 +131,7 @@ pub fn uncertainty_from_jacobian(
             continue;
         }
         stderr[jj] = (s2 * stderr[jj]).sqrt();
-        if let Some(&range) = ranges.get(jj)
-            && range.is_finite()
-            && range > 0.0
-            && stderr[jj] > RANGE_FRACTION * range
-        {
+        if beyond_range(stderr[jj], ranges.get(jj).copied()) {
             identifiable[jj] = false;
         }
         if !stderr[jj].is_finite() {
@@ -386,6 +403,25 @@ mod tests {
         let disc = ((n - stt).powi(2) + 4.0 * st * st).sqrt();
         let cond = ((tr + disc) / (tr - disc)).sqrt();
         assert!(close(u.condition_number, cond, 1e-8));
+    }
+
+    #[test]
+    fn widen_takes_the_larger_error_and_rechecks_the_range() {
+        let mut u = ParamUncertainty {
+            stderr: vec![0.1, 0.1, f64::INFINITY, 0.3],
+            identifiable: vec![true, true, false, true],
+            condition_number: 1.0,
+        };
+        // Range 1: 0.2 stays identifiable, 0.6 > half the range does not; an infinite error
+        // stays infinite; a smaller robust error changes nothing.
+        u.widen(&[0.2, 0.6, 0.1, 0.05], &[1.0, 1.0, 1.0, 1.0]);
+        assert_eq!(u.stderr[..2], [0.2, 0.6]);
+        assert_eq!(u.identifiable[..2], [true, false]);
+        assert!(u.stderr[2].is_infinite() && !u.identifiable[2]);
+        assert_eq!((u.stderr[3], u.identifiable[3]), (0.3, true));
+        // An unbounded range never flags.
+        u.widen(&[0.2, 0.6, 0.1, 100.0], &[1.0, 1.0, 1.0, f64::INFINITY]);
+        assert_eq!((u.stderr[3], u.identifiable[3]), (100.0, true));
     }
 
     #[test]

@@ -10,8 +10,7 @@ use crate::fit::optim::{
     levenberg_marquardt, nelder_mead,
 };
 use crate::fit::stats::{
-    RANGE_FRACTION, ar1_variance_inflation, cluster_robust_stderr, uncertainty_from_jacobian,
-    white_floor,
+    ar1_variance_inflation, cluster_robust_stderr, uncertainty_from_jacobian, white_floor,
 };
 use crate::model::Robot;
 use crate::sim2real::commands::Fill;
@@ -592,17 +591,7 @@ impl<'a> Engine<'a> {
         // widen it beyond what the pooled residuals show: the larger of the two is reported,
         // and a parameter whose error then exceeds half its range is not identifiable.
         if let Some(robust) = cluster_robust_stderr(&jac, &r0, &episode, k) {
-            for s in 0..k {
-                if u.stderr[s].is_finite() && robust[s] > u.stderr[s] {
-                    u.stderr[s] = robust[s];
-                    if ranges[s].is_finite()
-                        && ranges[s] > 0.0
-                        && robust[s] > RANGE_FRACTION * ranges[s]
-                    {
-                        u.identifiable[s] = false;
-                    }
-                }
-            }
+            u.widen(&robust, &ranges);
         }
         which
             .iter()
