@@ -84,19 +84,29 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
             return;
         }
         let Some(e) = effects::by_id(c.effect) else { return };
-        let mut group = vec![c.joint.clone()];
-        if let Some(p) = mirror_name(&c.joint)
-            && engine.joints.contains(&p)
-            && !covered(c.effect, &p)
-            && diag
-                .iter()
-                .take(opts.candidates_per_round * 4)
-                .any(|d| d.effect == c.effect && d.joint == p)
-        {
-            group.push(p);
-            group.sort();
-        }
-        if cands.iter().any(|(e2, g, _)| e2.id() == e.id() && g.iter().any(|x| group.contains(x))) {
+        let group = vec![c.joint.clone()];
+        // The joint and its left/right partner as one more group when the partner also ranks
+        // high: both compete (one knee with a delay must not be smeared over both, and an
+        // effect both sides have is fitted once).
+        let pair: Option<Vec<String>> = mirror_name(&c.joint)
+            .filter(|p| {
+                engine.joints.contains(p)
+                    && !covered(c.effect, p)
+                    && diag
+                        .iter()
+                        .take(opts.candidates_per_round * 4)
+                        .any(|d| d.effect == c.effect && &d.joint == p)
+            })
+            .map(|p| sorted_pair(&c.joint, p));
+        // Only an identical group is a duplicate: a joint inside a family or all-joints group
+        // of the same effect still gets its own candidate (Coulomb friction on one knee when
+        // the diagnosis ranked it first on a hip).
+        let seen = |cands: &Vec<Cand>, g: &Vec<String>| {
+            cands.iter().any(|(e2, g2, _)| e2.id() == e.id() && g2 == g)
+        };
+        let single_new = !seen(cands, &group);
+        let pair = pair.filter(|g| !seen(cands, g));
+        if !single_new && pair.is_none() {
             return;
         }
         let mut ev = c.evidence.clone();
@@ -120,11 +130,16 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         let all: Vec<String> =
             engine.joints.iter().filter(|j| !covered(c.effect, j)).cloned().collect();
         let all_new = all.len() >= 2
-            && all.len() > group.len()
+            && all.len() > pair.as_ref().map_or(1, |p| p.len())
             && all != fam
             && !cands.iter().any(|(e2, g, _)| e2.id() == e.id() && *g == all)
             && engine.shared_start(e, &applied, &all);
-        cands.push((e, group, ev.clone()));
+        if single_new {
+            cands.push((e, group, ev.clone()));
+        }
+        if let Some(p) = pair {
+            cands.push((e, p, ev.clone()));
+        }
         if fam_new {
             cands.push((e, fam, ev.clone()));
         }
@@ -160,6 +175,27 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
                     && c.explained_rms >= 0.1 * top
             }) {
                 push(c, &mut cands);
+            }
+        }
+        // Where the error is, the ranking knows better than what it is: every effect is also
+        // tried on the top-ranked joint. (A 1 N·m Coulomb friction on Asimov's left knee: the
+        // linearised ranking put Coulomb friction first on a hip, whose fit explained nothing,
+        // and the knee was left to a two-parameter friction model plus backlash.)
+        let top_joint = diag
+            .iter()
+            .find(|c| !covered(c.effect, &c.joint) && c.explained_rms > 1e-9)
+            .map(|c| c.joint.clone());
+        if let Some(tj) = top_joint {
+            for id in allowed {
+                if cands.iter().any(|(e, g, _)| e.id() == id && *g == [tj.clone()]) {
+                    continue;
+                }
+                if let Some(c) = diag
+                    .iter()
+                    .find(|c| c.effect == id && c.joint == tj && !covered(c.effect, &c.joint))
+                {
+                    push(c, &mut cands);
+                }
             }
         }
     }
@@ -265,10 +301,9 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
                 && let Some(p) = mirror_name(j)
                 && engine.joints.contains(&p)
                 && !covered(e.id(), &p)
-                && !cands.iter().any(|(e2, g, _)| e2.id() == e.id() && g.contains(&p))
+                && let g = sorted_pair(j, p)
+                && !cands.iter().any(|(e2, g2, _)| e2.id() == e.id() && *g2 == g)
             {
-                let mut g = vec![j.clone(), p];
-                g.sort();
                 let mut ev2 = ev.clone();
                 ev2.insert("mirror_completion".into(), 1.0);
                 cands.push((e, g, ev2));
@@ -346,6 +381,13 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     set_uncertainty(engine, train, &mut w, &out.applied, &mut out.warnings);
     out.selected.push(w);
     true
+}
+
+/// A joint and its left/right partner, in name order (the order groups are compared in).
+fn sorted_pair(j: &str, p: String) -> Vec<String> {
+    let mut g = vec![j.to_string(), p];
+    g.sort();
+    g
 }
 
 #[cfg(test)]

@@ -246,20 +246,34 @@ pub(super) fn pair_lookahead(
             best = Some((set, h.rmse(), k));
         }
     }
-    let Some((set, rmse, _)) = best else {
-        return restart_winner(
-            s,
-            applied,
-            kept,
-            single,
-            (&h_base, &h_single, &t_base),
-            restarts,
-            z,
-            round,
-            out,
-        );
-    };
+    // A restart competes with the best pair by the same rule as two pairs: a single effect
+    // that a failed pair re-fitted (a servo gain at 1.0 beside a 15 ms delay on Asimov's knee)
+    // must not lose to a mimicking pair (damping + armature) it beats on held-out.
     let n = applied.len();
+    let restart = best_restart(s, applied, single, (&h_base, &h_single), restarts, round, out);
+    if let Some((rset, rh, rt)) = restart {
+        let kr = rset[n].effect.fitted();
+        let wins = match &best {
+            None => true,
+            Some((_, r, kb)) => {
+                (kr < *kb && rh.rmse() <= r * 1.01)
+                    || (rh.rmse() < *r && !(kr > *kb && rh.rmse() > r / 1.01))
+            }
+        };
+        if wins {
+            return apply_restart(
+                s,
+                applied,
+                kept,
+                single,
+                (&h_base, &h_single, &t_base),
+                (rset, rh, rt),
+                z,
+                out,
+            );
+        }
+    }
+    let (set, rmse, _) = best?;
     let label = format!("{}+{}", set[n].effect.id(), set[n + 1].effect.id());
     if let Some(t) = out.tried.iter_mut().rev().find(|t| t.phase == "pair" && t.effect == label) {
         t.kept = true;
@@ -320,19 +334,20 @@ pub(super) fn pair_lookahead(
 /// needed.) The winner itself at the values a pair gave it is the same model and replaces
 /// its own single fit when it is better on both training and held-out data (Asimov's knee
 /// load-dependent friction, 12-bit: (0.567, 0.053) alone, (0.500, 0.097) beside a delay, for
-/// (0.5, 0.1)).
-#[allow(clippy::too_many_arguments)]
-fn restart_winner(
+/// (0.5, 0.1)). It also beats a pair that passed by the rule two pairs compete by (see
+/// [`pair_lookahead`]).
+///
+/// This one evaluates the restarts: the best that passes (`tried`: phase "pair_restart" for
+/// each) as (set, held-out errors, training errors).
+fn best_restart(
     s: &Search,
     applied: &[Applied],
-    kept: &[Selected],
     single: &Selected,
-    (h_base, h_single, t_base): (&Errors, &Errors, &Errors),
+    (h_base, h_single): (&Errors, &Errors),
     restarts: Vec<Vec<Applied>>,
-    z: f64,
     round: usize,
     out: &mut FitOutcome,
-) -> Option<Vec<(Selected, Applied)>> {
+) -> Option<(Vec<Applied>, Errors, Errors)> {
     if restarts.is_empty() {
         return None;
     }
@@ -388,7 +403,24 @@ fn restart_winner(
             best = Some((set, h, t));
         }
     }
-    let (set, h, t) = best?;
+    best
+}
+
+/// Keeps the restart `(set, h, t)` from [`best_restart`] in place of the round's winner.
+#[allow(clippy::too_many_arguments)]
+fn apply_restart(
+    s: &Search,
+    applied: &[Applied],
+    kept: &[Selected],
+    single: &Selected,
+    (h_base, h_single, t_base): (&Errors, &Errors, &Errors),
+    (set, h, t): (Vec<Applied>, Errors, Errors),
+    z: f64,
+    out: &mut FitOutcome,
+) -> Option<Vec<(Selected, Applied)>> {
+    let opts = s.engine.opts;
+    let n = applied.len();
+    let k_before: usize = applied.iter().map(|a| a.effect.fitted()).sum();
     let a = set[n].clone();
     let label = a.effect.id();
     if let Some(tr) =
