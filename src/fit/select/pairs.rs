@@ -235,14 +235,7 @@ pub(super) fn pair_lookahead(
         if !ok {
             continue;
         }
-        let better = match &best {
-            None => true,
-            Some((_, r, kb)) => {
-                (k < *kb && h.rmse() <= r * 1.01)
-                    || (h.rmse() < *r && !(k > *kb && h.rmse() > r / 1.01))
-            }
-        };
-        if better {
+        if beats((h.rmse(), k), best.as_ref().map(|(_, r, kb)| (*r, *kb))) {
             best = Some((set, h.rmse(), k));
         }
     }
@@ -253,14 +246,7 @@ pub(super) fn pair_lookahead(
     let restart = best_restart(s, applied, single, (&h_base, &h_single), restarts, round, out);
     if let Some((rset, rh, rt)) = restart {
         let kr = rset[n].effect.fitted();
-        let wins = match &best {
-            None => true,
-            Some((_, r, kb)) => {
-                (kr < *kb && rh.rmse() <= r * 1.01)
-                    || (rh.rmse() < *r && !(kr > *kb && rh.rmse() > r / 1.01))
-            }
-        };
-        if wins {
+        if beats((rh.rmse(), kr), best.as_ref().map(|(_, r, kb)| (*r, *kb))) {
             return apply_restart(
                 s,
                 applied,
@@ -323,6 +309,16 @@ pub(super) fn pair_lookahead(
     out.applied[..n].clone_from_slice(&set[..n]);
     sync_selected(out);
     Some(res)
+}
+
+/// Whether a candidate with held-out RMSE `rmse` and `k` fitted parameters beats the best so
+/// far (`None`: there is none): fewer parameters win within 1 %, more parameters need a lower
+/// RMSE by more than 1 %, the same number any lower RMSE.
+fn beats((rmse, k): (f64, usize), best: Option<(f64, usize)>) -> bool {
+    match best {
+        None => true,
+        Some((r, kb)) => (k < kb && rmse <= r * 1.01) || (rmse < r && !(k > kb && rmse > r / 1.01)),
+    }
 }
 
 /// A single effect that a failed pair re-fitted (its partner not needed) replaces the round's
@@ -636,4 +632,23 @@ pub(super) fn fit_jointly(
         return set;
     }
     make(&x)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::beats;
+
+    #[test]
+    fn fewer_parameters_win_within_one_percent() {
+        assert!(beats((1.0, 2), None));
+        // Fewer parameters: within 1 % is enough.
+        assert!(beats((1.009, 1), Some((1.0, 2))));
+        assert!(!beats((1.02, 1), Some((1.0, 2))));
+        // More parameters: must be lower by more than 1 %.
+        assert!(!beats((0.995, 3), Some((1.0, 2))));
+        assert!(beats((0.98, 3), Some((1.0, 2))));
+        // Same count: any lower RMSE.
+        assert!(beats((0.999, 2), Some((1.0, 2))));
+        assert!(!beats((1.0, 2), Some((1.0, 2))));
+    }
 }
