@@ -101,11 +101,8 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         // Only an identical group is a duplicate: a joint inside a family or all-joints group
         // of the same effect still gets its own candidate (Coulomb friction on one knee when
         // the diagnosis ranked it first on a hip).
-        let seen = |cands: &Vec<Cand>, g: &Vec<String>| {
-            cands.iter().any(|(e2, g2, _)| e2.id() == e.id() && g2 == g)
-        };
-        let single_new = !seen(cands, &group);
-        let pair = pair.filter(|g| !seen(cands, g));
+        let single_new = !has_group(cands, e.id(), &group);
+        let pair = pair.filter(|g| !has_group(cands, e.id(), g));
         if !single_new && pair.is_none() {
             return;
         }
@@ -122,8 +119,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
                 .collect(),
             None => vec![],
         };
-        let fam_new =
-            fam.len() >= 3 && !cands.iter().any(|(e2, g, _)| e2.id() == e.id() && *g == fam);
+        let fam_new = fam.len() >= 3 && !has_group(cands, e.id(), &fam);
         // Every recorded joint as one group sharing the parameters (an effect the whole robot
         // has, such as a missing damping or friction, a delay or a servo gain error) — when the
         // model gives those joints the same starting value, so that one knob is meaningful.
@@ -132,7 +128,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         let all_new = all.len() >= 2
             && all.len() > pair.as_ref().map_or(1, |p| p.len())
             && all != fam
-            && !cands.iter().any(|(e2, g, _)| e2.id() == e.id() && *g == all)
+            && !has_group(cands, e.id(), &all)
             && engine.shared_start(e, &applied, &all);
         if single_new {
             cands.push((e, group, ev.clone()));
@@ -187,7 +183,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
             .map(|c| c.joint.clone());
         if let Some(tj) = top_joint {
             for id in allowed {
-                if cands.iter().any(|(e, g, _)| e.id() == id && *g == [tj.clone()]) {
+                if has_group(&cands, id, std::slice::from_ref(&tj)) {
                     continue;
                 }
                 if let Some(c) = diag
@@ -302,7 +298,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
                 && engine.joints.contains(&p)
                 && !covered(e.id(), &p)
                 && let g = sorted_pair(j, p)
-                && !cands.iter().any(|(e2, g2, _)| e2.id() == e.id() && *g2 == g)
+                && !has_group(&cands, e.id(), &g)
             {
                 let mut ev2 = ev.clone();
                 ev2.insert("mirror_completion".into(), 1.0);
@@ -381,6 +377,13 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     set_uncertainty(engine, train, &mut w, &out.applied, &mut out.warnings);
     out.selected.push(w);
     true
+}
+
+/// Whether `effect` on exactly `group` is already a candidate. Only an identical group is a
+/// duplicate: a joint inside a family or all-joints group of the same effect still gets its own
+/// candidate.
+fn has_group(cands: &[Cand], effect: &str, group: &[String]) -> bool {
+    cands.iter().any(|(e, g, _)| e.id() == effect && g == group)
 }
 
 /// A joint and its left/right partner, in name order (the order groups are compared in).

@@ -321,20 +321,18 @@ fn beats((rmse, k): (f64, usize), best: Option<(f64, usize)>) -> bool {
     }
 }
 
-/// A single effect that a failed pair re-fitted (its partner not needed) replaces the round's
-/// winner when its parameters are inside their bounds and it beats the winner beyond noise
-/// (paired test, z = 2), by ≥ 5 % held-out RMSE, with a lower training BIC: the look-ahead's
-/// joint polish is a restart of its single fit. (Asimov's knee Stribeck friction, 12-bit: the
+/// The best restart that passes, as (set, held-out errors, training errors); `tried` gets phase
+/// "pair_restart" for each one evaluated.
+///
+/// A restart is a single effect that a failed pair re-fitted (its partner not needed): the
+/// look-ahead's joint polish restarts its single fit. It passes when its parameters are inside
+/// their bounds and it beats the round's winner beyond noise (paired test, z = 2), by ≥ 5 %
+/// held-out RMSE, with a lower training BIC. (Asimov's knee Stribeck friction, 12-bit: the
 /// single fit stops at v_s's lower bound, where Coulomb friction wins; the Stribeck + backlash
 /// pair reaches (1.95, 0.97, 0.203) for (2, 1, 0.2) with a 0.9 mrad backlash that is not
-/// needed.) The winner itself at the values a pair gave it is the same model and replaces
-/// its own single fit when it is better on both training and held-out data (Asimov's knee
-/// load-dependent friction, 12-bit: (0.567, 0.053) alone, (0.500, 0.097) beside a delay, for
-/// (0.5, 0.1)). It also beats a pair that passed by the rule two pairs compete by (see
-/// [`pair_lookahead`]).
-///
-/// This one evaluates the restarts: the best that passes (`tried`: phase "pair_restart" for
-/// each) as (set, held-out errors, training errors).
+/// needed.) The winner itself at the values a pair gave it is the same model and passes when
+/// it is better on both training and held-out data (Asimov's knee load-dependent friction,
+/// 12-bit: (0.567, 0.053) alone, (0.500, 0.097) beside a delay, for (0.5, 0.1)).
 fn best_restart(
     s: &Search,
     applied: &[Applied],
@@ -402,7 +400,8 @@ fn best_restart(
     best
 }
 
-/// Keeps the restart `(set, h, t)` from [`best_restart`] in place of the round's winner.
+/// Keeps the restart `(set, h, t)` from [`best_restart`] in place of the round's winner (and of
+/// a pair that passed, when the restart beats it by the rule pairs compete by, [`beats`]).
 #[allow(clippy::too_many_arguments)]
 fn apply_restart(
     s: &Search,
