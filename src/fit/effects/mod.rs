@@ -232,7 +232,8 @@ pub trait Effect: Declared + Sync {
         let _ = (m, t);
         (self.params().iter().map(|p| p.lo).collect(), self.params().iter().map(|p| p.hi).collect())
     }
-    /// MuJoCo-native effects: write `p` into the model copy.
+    /// MuJoCo-native effects (and the native part of a hook effect): write `p` into the model
+    /// copy.
     fn apply_model(&self, _m: &mut MjModel, _t: &JointTarget, _p: &[f64]) {}
     /// Hook effects: called every physics step before `mj_step`; may change `io.ctrl` (command
     /// effects) or add to `io.tau` (torque effects).
@@ -250,6 +251,12 @@ pub trait Effect: Declared + Sync {
     /// iterations (how `mujoco.sysid` fits); `false` (the default) for kinks and dead zones
     /// (backlash, saturation, Stribeck's curve), fitted by derivative-free search.
     fn smooth(&self) -> bool {
+        false
+    }
+    /// `true` when the one fitted parameter is searched on a log scale (grid and golden
+    /// section on ln p): a scale spanning decades whose optimum is narrow, such as a torque
+    /// limit. Only for one-parameter derivative-free fits, and only with a positive lower bound.
+    fn log_search(&self) -> bool {
         false
     }
     /// `true` for the friction models (Coulomb, Stribeck, load-dependent): alternative
@@ -394,10 +401,11 @@ pub fn servo_torque(q: f64, qd: f64, io: &StepIo) -> f64 {
     if io.enabled { io.kp * (io.acting_ctrl() - q) - io.kd * qd } else { 0.0 }
 }
 
-/// A copy of `robot.mj` with the MuJoCo-native effects of `applied` written in.
+/// A copy of `robot.mj` with the MuJoCo-native effects of `applied` written in (and the
+/// MuJoCo-native part of a hook effect, such as a torque limit's force clamp).
 pub fn model_with(robot: &Robot, applied: &[Applied]) -> MjModel {
     let mut m = robot.mj.clone();
-    for a in applied.iter().filter(|a| a.effect.entry() == Entry::Model) {
+    for a in applied {
         for name in &a.joints {
             if let Some(t) = JointTarget::of(robot, name) {
                 a.effect.apply_model(&mut m, &t, &a.full_params());

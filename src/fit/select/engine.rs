@@ -398,6 +398,14 @@ impl<'a> Engine<'a> {
                 let n = res_len(&r);
                 (r.x, if n > 0 { (2.0 * r.cost / n as f64).sqrt() } else { f64::INFINITY })
             }
+            1 if effect.log_search() && lo[0] > 0.0 && hi[0] > lo[0] => {
+                // Grid and golden section on ln v: a narrow optimum a decade below the top of
+                // the range falls between two points of a uniform grid.
+                let (a, b) = (lo[0].ln(), hi[0].ln());
+                let tol = 2e-4 * (b - a);
+                let (u, f) = golden_section(&|u| obj(&[u.exp()]), a, b, tol, max_evals.min(40));
+                (vec![u.exp().clamp(lo[0], hi[0])], f)
+            }
             1 => {
                 let tol = 2e-4 * (hi[0] - lo[0]);
                 let (x, f) = golden_section(&|v| obj(&[v]), lo[0], hi[0], tol, max_evals.min(40));
