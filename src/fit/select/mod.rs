@@ -17,8 +17,8 @@
 //!
 //! This module owns the options, the outcome types and the [`fit`] entry point; the search itself
 //! is split by seam: `engine` (simulating a dataset, fitting one candidate, standard errors),
-//! `verdict` (the held-out gate), `greedy` (one round), `pairs` (effects fitted together) and
-//! `simplify` (drop, swap, polish).
+//! `verdict` (the held-out gate), `greedy` (one round), `pairs` (effects fitted together),
+//! `simplify` (drop, swap, polish) and `reshoot` (dry friction re-fitted by multiple shooting).
 //!
 //! [`diagnose`]: crate::fit::diagnose::diagnose
 //! [`improvement_beyond_noise`]: crate::fit::stats::improvement_beyond_noise
@@ -27,6 +27,7 @@
 mod engine;
 mod greedy;
 mod pairs;
+mod reshoot;
 mod simplify;
 mod verdict;
 
@@ -171,7 +172,8 @@ pub struct Tried {
     /// stays), `drop_refit` (removal with the other effects fitted again: `kept` = the effect
     /// stays), `merge` (one effect on two joint sets as one group: `kept` = merged), `fold`
     /// (an effect taken over by another on the same joints: `kept` = folded), `swap`
-    /// (replacement by a simpler effect: `kept` = the swap was made) or `swap_screen`.
+    /// (replacement by a simpler effect: `kept` = the swap was made), `swap_screen` or `reshoot`
+    /// (a friction effect re-fitted on short windows: `kept` = the re-fit replaced its values).
     pub phase: &'static str,
     pub effect: String,
     pub joints: Vec<String>,
@@ -366,6 +368,9 @@ pub fn fit(robot: &Robot, recs: &[Recording], opts: &FitOptions) -> FitOutcome {
         if !simplify(&search, round, &mut out) || round >= opts.max_rounds {
             break;
         }
+    }
+    if opts.shooting_s.is_none() {
+        reshoot::reshoot_friction(&search, &train, round, &mut out);
     }
     if !out.applied.is_empty() {
         engine.report(round, "standard errors", None);
