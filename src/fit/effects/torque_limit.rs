@@ -7,13 +7,14 @@ declare_effect! {
     ///
     /// DC-motor torque–speed line: the servo torque is clipped to
     /// [sat·(−1 − q̇/v_lim), sat·(1 − q̇/v_lim)] ∩ [−effort, effort] (Isaac Lab's DCMotor law).
-    /// Only `effort_limit` is fitted; the line parameters start unlimited. The diagnosis scans
+    /// Only `effort_limit` is fitted (on a log scale); the line parameters start unlimited. The diagnosis scans
     /// torque levels (percentiles 80–99.8 of the servo torque) for the one whose excess explains
     /// the residual best: a limit reached rarely acts only in the few largest torques. The probe
     /// starts at that level.
     ///
     /// ## Simulation
-    /// hook: servo torque clipped to the DC-motor line ∩ ±effort
+    /// model: actuator `forcerange` ±effort (MuJoCo's own clamp); hook: servo torque clipped to
+    /// the DC-motor line
     ///
     /// ## Signature
     /// `sign(τ)·max(|τ| − T, 0)` (error growing beyond a torque level T, the best of the
