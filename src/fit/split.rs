@@ -216,15 +216,7 @@ mod tests {
         let t: Vec<f64> = (0..n).map(|i| i as f64 * dt).collect();
         let mut j = JointTrace::new("a", t.iter().map(|x| x.sin()).collect());
         j.q_cmd = Some(j.q.clone());
-        Recording {
-            source: "r.csv".into(),
-            meta: Default::default(),
-            control_rate_hz: Some(100.0),
-            control_t0_s: None,
-            t,
-            joints: vec![j],
-            base: None,
-        }
+        Recording::at_100hz(t, vec![j])
     }
 
     fn named(i: usize, split: Option<&str>) -> Recording {

@@ -64,22 +64,12 @@ impl Effect for GainError {
 
 #[cfg(test)]
 mod tests {
-    use crate::fit::effects::{Applied, by_id, simulate};
-    use crate::sim2real::recording::{JointTrace, Recording};
+    use crate::fit::effects::{Applied, by_id, hinge_recording, hinge_robot, simulate};
     use crate::sim2real::replay::ReplayOptions;
 
     fn robot(dir: &std::path::Path, name: &str, kp: f64, kv: f64) -> crate::model::Robot {
-        let xml = format!(
-            r#"<mujoco><option gravity="0 0 0" timestep="0.002"/>
-  <worldbody><body><joint name="j" type="hinge" axis="0 1 0" damping="0.05"/>
-<geom type="capsule" fromto="0 0 0 0.2 0 0" size="0.02" mass="0.5"/></body></worldbody>
-  <actuator><position joint="j" kp="{kp}" kv="{kv}" delay="0.02" nsample="10"/></actuator>
-</mujoco>"#
-        );
-        let path = dir.join(name);
-        std::fs::write(&path, xml).unwrap();
-        let mut map = crate::model::source::SourceMap::default();
-        crate::model::load(&mut map, &path, None).unwrap()
+        let act = format!(r#"kp="{kp}" kv="{kv}" delay="0.02" nsample="10""#);
+        hinge_robot(dir, name, "", r#"damping="0.05""#, &act)
     }
 
     /// On an actuator with a MuJoCo `delay` (the Asimov legs: 20 ms), the gain error's hook
@@ -101,18 +91,7 @@ mod tests {
             .iter()
             .map(|&t| if t < 0.1 { 0.0 } else if t < 0.4 { 0.3 } else { 0.3 - (t - 0.4) * 0.5 })
             .collect();
-        let mut j = JointTrace::new("j", vec![0.0; n]);
-        j.q_cmd = Some(cmd);
-        j.qd = Some(vec![0.0; n]);
-        let rec = Recording {
-            source: "r.csv".into(),
-            meta: Default::default(),
-            control_rate_hz: Some(100.0),
-            control_t0_s: None,
-            t,
-            joints: vec![j],
-            base: None,
-        };
+        let rec = hinge_recording(t, cmd);
         let o = ReplayOptions::default();
         let gain = Applied {
             effect: by_id("gain_error").unwrap(),

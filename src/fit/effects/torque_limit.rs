@@ -159,22 +159,12 @@ impl Effect for TorqueLimit {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fit::effects::{Applied, by_id, simulate};
-    use crate::sim2real::recording::{JointTrace, Recording};
+    use crate::fit::effects::{Applied, by_id, hinge_recording, hinge_robot, simulate};
     use crate::sim2real::replay::ReplayOptions;
 
     fn robot(dir: &std::path::Path, name: &str, force: &str) -> crate::model::Robot {
-        let xml = format!(
-            r#"<mujoco><option gravity="0 0 0" timestep="0.002" integrator="implicitfast"/>
-  <worldbody><body><joint name="j" type="hinge" axis="0 1 0"/>
-<geom type="capsule" fromto="0 0 0 0.2 0 0" size="0.02" mass="0.5"/></body></worldbody>
-  <actuator><position joint="j" kp="50" kv="2" {force}/></actuator>
-</mujoco>"#
-        );
-        let path = dir.join(name);
-        std::fs::write(&path, xml).unwrap();
-        let mut map = crate::model::source::SourceMap::default();
-        crate::model::load(&mut map, &path, None).unwrap()
+        let act = format!(r#"kp="50" kv="2" {force}"#);
+        hinge_robot(dir, name, r#"integrator="implicitfast""#, "", &act)
     }
 
     /// The fitted effort limit acts exactly like MuJoCo's own `forcerange` written in the MJCF,
@@ -192,18 +182,7 @@ mod tests {
         let t: Vec<f64> = (0..n).map(|i| i as f64 * 0.005).collect();
         let cmd: Vec<f64> =
             t.iter().map(|&t| if t < 0.1 { 0.0 } else if t < 0.5 { 0.4 } else { -0.2 }).collect();
-        let mut j = JointTrace::new("j", vec![0.0; n]);
-        j.q_cmd = Some(cmd);
-        j.qd = Some(vec![0.0; n]);
-        let rec = Recording {
-            source: "r.csv".into(),
-            meta: Default::default(),
-            control_rate_hz: Some(100.0),
-            control_t0_s: None,
-            t,
-            joints: vec![j],
-            base: None,
-        };
+        let rec = hinge_recording(t, cmd);
         let o = ReplayOptions::default();
         let limit = Applied {
             effect: by_id("torque_limit").unwrap(),

@@ -165,6 +165,21 @@ impl Default for ParseOptions {
 }
 
 impl Recording {
+    /// A test episode ("r.csv", no metadata, no base): `joints` on the time axis `t`, controlled
+    /// at 100 Hz with ticks from the first sample.
+    #[cfg(test)]
+    pub(crate) fn at_100hz(t: Vec<f64>, joints: Vec<JointTrace>) -> Recording {
+        Recording {
+            source: "r.csv".into(),
+            meta: Default::default(),
+            control_rate_hz: Some(100.0),
+            control_t0_s: None,
+            t,
+            joints,
+            base: None,
+        }
+    }
+
     /// Errors unless every recorded joint is one of `model_joints`; the message lists, for each
     /// unknown joint, the closest model joint names (case-insensitive edit distance).
     pub fn validate_joint_names(&self, model_joints: &[String]) -> Result<(), RecordingError> {

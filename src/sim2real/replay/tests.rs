@@ -54,15 +54,7 @@ fn dropped_command_rows_are_filled_before_the_hold() {
         );
         j.q_cmd = Some(idx.iter().map(|&i| c[i]).collect());
         let t = idx.iter().map(|&i| t[i]).collect();
-        Recording {
-            source: "r.csv".into(),
-            meta: Default::default(),
-            control_rate_hz: Some(100.0),
-            control_t0_s: None,
-            t,
-            joints: vec![j],
-            base: None,
-        }
+        Recording::at_100hz(t, vec![j])
     };
     let full = replay(&robot, &rec_of(&|_| true), &ReplayOptions::default(), None).unwrap();
     let lossy = rec_of(&|i| !(50..53).contains(&i));
