@@ -396,9 +396,17 @@ pub fn smooth_sign(v: f64, eps: f64) -> f64 {
     (v / eps).tanh()
 }
 
-/// Servo torque the position actuator produces for this step's io.
+/// Servo torque the position actuator produces for this step's io, clamped to its force range
+/// as MuJoCo clamps it (`StepIo::servo_range`).
 pub fn servo_torque(q: f64, qd: f64, io: &StepIo) -> f64 {
-    if io.enabled { io.kp * (io.acting_ctrl() - q) - io.kd * qd } else { 0.0 }
+    if !io.enabled {
+        return 0.0;
+    }
+    let tau = io.kp * (io.acting_ctrl() - q) - io.kd * qd;
+    match io.servo_range {
+        Some((lo, hi)) if lo <= hi => tau.clamp(lo, hi),
+        _ => tau,
+    }
 }
 
 /// A copy of `robot.mj` with the MuJoCo-native effects of `applied` written in (and the

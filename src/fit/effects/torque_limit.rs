@@ -93,6 +93,9 @@ impl Effect for TorqueLimit {
         let (e, sat, vl) = (p[0].max(0.0), p[1].max(0.0), p[2].max(1e-6));
         let hi = (sat * (1.0 - qd / vl)).clamp(0.0, e);
         let lo = (sat * (-1.0 - qd / vl)).clamp(-e, 0.0);
+        if !(lo <= hi) {
+            return; // a non-finite velocity
+        }
         io.tau += raw.clamp(lo, hi) - raw.clamp(-e, e);
     }
     fn signature(&self, s: &Samples) -> Signature {
@@ -199,6 +202,58 @@ mod tests {
         assert!(diff(&b.q_sim[0], &c.q_sim[0]) > 0.02, "the limit never acted");
         let worst = diff(&a.q_sim[0], &b.q_sim[0]);
         assert!(worst < 1e-9, "torque_limit vs MJCF forcerange differ by {worst} rad");
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    /// Effects that read the servo torque see it as MuJoCo clamps it: the replay hands the hook
+    /// the servo's force range in joint torque (`forcerange` × gear, the fitted limit included),
+    /// and `servo_torque` clamps to it (external-load friction adds it to the joint's other
+    /// torques to decide whether the joint sticks).
+    #[test]
+    fn hooks_see_the_clamped_servo_torque() {
+        use crate::sim2real::replay::{ActuatorHook, Replayer};
+        struct Seen(Vec<Option<(f64, f64)>>);
+        impl ActuatorHook for Seen {
+            fn reset(&mut self, _joints: &[String], _dt: f64) {}
+            fn before_step(
+                &mut self,
+                _t: f64,
+                _j: usize,
+                _q: f64,
+                _qd: f64,
+                _q_target: f64,
+                out: &mut StepIo,
+            ) {
+                self.0.push(out.servo_range);
+            }
+        }
+        let dir = std::env::temp_dir().join(format!("modellint-tseen-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let geared = robot(&dir, "geared.xml", r#"gear="2" forcelimited="true" forcerange="-3 1""#);
+        let t: Vec<f64> = (0..20).map(|i| i as f64 * 0.005).collect();
+        let rec = hinge_recording(t, vec![0.4; 20]);
+        let o = ReplayOptions::default();
+        let mut seen = Seen(vec![]);
+        Replayer::new(&geared).replay(&rec, &o, Some(&mut seen)).unwrap();
+        assert!(!seen.0.is_empty() && seen.0.iter().all(|r| *r == Some((-6.0, 2.0))), "{:?}", seen.0.first());
+        // The fitted limit narrows the range: 1.5 N·m on a gear of 2 is ±0.75 of force.
+        let limit = Applied {
+            effect: by_id("torque_limit").unwrap(),
+            joints: vec!["j".into()],
+            params: vec![1.5, 1e4, 1e4],
+        };
+        let m = crate::fit::effects::model_with(&geared, &[limit]);
+        let mut seen = Seen(vec![]);
+        Replayer::with_model(&geared, &m).replay(&rec, &o, Some(&mut seen)).unwrap();
+        assert!(seen.0.iter().all(|r| *r == Some((-1.5, 1.5))), "{:?}", seen.0.first());
+        let io = StepIo {
+            ctrl: 1.0,
+            kp: 50.0,
+            enabled: true,
+            servo_range: Some((-1.5, 1.5)),
+            ..Default::default()
+        };
+        assert_eq!(servo_torque(0.0, 0.0, &io), 1.5);
         std::fs::remove_dir_all(&dir).ok();
     }
 

@@ -9,6 +9,7 @@
 //! each started from its own recorded state, the other effects held; the re-fit replaces the
 //! search's values when the full replay of the held-out episodes is closer to the recording.
 
+use super::verdict::at_bound;
 use super::{FitOutcome, Search, Tried, sync_selected};
 use crate::fit::split::windows;
 use crate::sim2real::recording::Recording;
@@ -55,6 +56,12 @@ pub(super) fn reshoot_friction(
         }
         let mut trial = out.applied.clone();
         trial[i].params = p.clone();
+        // A re-fit stopped on a bound was stretched (the short windows can leave a parameter
+        // unidentified): it does not replace values from inside the bounds.
+        if at_bound(s.engine, &base, &trial[i]) && !at_bound(s.engine, &base, &a) {
+            out.tried.push(Tried::not_tested(round, "reshoot", a.effect.id(), &a.joints, p, f));
+            continue;
+        }
         let h = s.engine.errors(s.heldout, &trial).map_or(f64::INFINITY, |e| e.rmse());
         let kept = h < h_best;
         let mut t = Tried::not_tested(round, "reshoot", a.effect.id(), &a.joints, p, f);

@@ -63,21 +63,58 @@ pub(super) fn verdict(
     Verdict { mean, se, rel, significant: beyond(mean, se) || beyond(lmean, lse) || decisive_ok }
 }
 
-/// `true` when a fitted parameter of `a` sits on its bound (within 0.5 % of the range): the
-/// effect was stretched to explain something else.
+/// `true` when a fitted parameter of `a` sits on its bound (within 0.5 % of the range, of ln p
+/// for an effect searched on a log scale — a 0.25 N·m torque limit is not at the 0.05 N·m
+/// bound): the effect was stretched to explain something else.
 pub(super) fn at_bound(engine: &Engine, base: &[Applied], a: &Applied) -> bool {
     let Some(t) = JointTarget::of(engine.robot, &a.joints[0]) else { return false };
     let m0 = model_with(engine.robot, base);
     let (lo, hi) = a.effect.bounds(&m0, &t);
+    let log = a.effect.log_search() && a.effect.fitted() == 1;
     (0..a.effect.fitted().min(a.params.len())).any(|k| {
-        let tol = 5e-3 * (hi[k] - lo[k]);
-        a.params[k] <= lo[k] + tol || a.params[k] >= hi[k] - tol
+        let (p, lo, hi) = if log && lo[k] > 0.0 && a.params[k] > 0.0 {
+            (a.params[k].ln(), lo[k].ln(), hi[k].ln())
+        } else {
+            (a.params[k], lo[k], hi[k])
+        };
+        let tol = 5e-3 * (hi - lo);
+        p <= lo + tol || p >= hi - tol
     })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A torque limit is searched on ln T, and "on the bound" is judged there too: 0.25 N·m (a
+    /// hobby servo's limit) is inside [0.05, 50], 0.0505 and 49.5 are on it.
+    #[test]
+    fn log_scale_bound_for_a_torque_limit() {
+        use crate::fit::effects::{by_id, hinge_recording, hinge_robot};
+        let dir = std::env::temp_dir().join(format!("modellint-bound-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let robot = hinge_robot(&dir, "m.xml", "", "", r#"kp="5""#);
+        let rec = hinge_recording(vec![0.0, 0.01, 0.02], vec![0.0; 3]);
+        let opts = super::super::FitOptions::default();
+        let engine = Engine::new(&robot, std::slice::from_ref(&rec), &opts);
+        let limit = |v: f64| Applied {
+            effect: by_id("torque_limit").unwrap(),
+            joints: vec!["j".into()],
+            params: vec![v, 1e4, 1e4],
+        };
+        assert!(!at_bound(&engine, &[], &limit(0.25)));
+        assert!(!at_bound(&engine, &[], &limit(2.0)));
+        assert!(at_bound(&engine, &[], &limit(0.0505)));
+        assert!(at_bound(&engine, &[], &limit(49.5)));
+        // A linear-scale parameter keeps the linear rule: damping on its lower bound.
+        let damping = Applied {
+            effect: by_id("viscous_damping").unwrap(),
+            joints: vec!["j".into()],
+            params: vec![0.0],
+        };
+        assert!(at_bound(&engine, &[], &damping));
+        std::fs::remove_dir_all(&dir).ok();
+    }
 
     fn errs(w: &[f64]) -> Errors {
         let sse: f64 = w.iter().map(|v| v * v * 10.0).sum();

@@ -101,6 +101,9 @@ pub struct StepIo {
     /// MuJoCo `delay` (read from its control history, i.e. `ctrl` as written `delay` seconds
     /// ago); `None` without one, when it acts on `ctrl` itself. See [`StepIo::acting_ctrl`].
     pub delayed_ctrl: Option<f64>,
+    /// The joint-torque range MuJoCo clamps the joint's position servo to (`forcerange` × gear,
+    /// a torque limit's fitted effort included), `None` when its force is not limited.
+    pub servo_range: Option<(f64, f64)>,
     /// Generalised force added on the joint's DoF (written to `qfrc_applied`) [N·m or N].
     pub tau: f64,
     /// Recorded (or model) gains in force at this step.

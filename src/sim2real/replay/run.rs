@@ -162,6 +162,25 @@ impl Replayer<'_> {
                 })
                 .collect()
         };
+        // Per recorded joint: the joint-torque range MuJoCo clamps its position servo's force to
+        // (`forcerange` × gear), when force-limited.
+        let servo_range: Vec<Option<(f64, f64)>> = {
+            let m = d.model();
+            let (fl, fr, gear) =
+                (m.actuator_forcelimited(), m.actuator_forcerange(), m.actuator_gear());
+            jm.iter()
+                .map(|&ji| {
+                    self.joints[ji].acts.iter().find_map(|&(a, kind)| {
+                        if !matches!(kind, ActuatorKind::Position { .. }) {
+                            return None;
+                        }
+                        let g = if gear[a][0] != 0.0 { gear[a][0] } else { 1.0 };
+                        let (x, y) = (g * fr[a][0], g * fr[a][1]);
+                        Some(fl[a].then_some((x.min(y), x.max(y))))
+                    })?
+                })
+                .collect()
+        };
         let t_end = rec.t[n - 1];
         let nsteps = ((t_end - t0) / dt - 1e-9).ceil().max(0.0) as usize;
         let mut diverged = None;
@@ -225,6 +244,7 @@ impl Replayer<'_> {
                 io[i] = StepIo {
                     ctrl: target[i],
                     delayed_ctrl: delayed,
+                    servo_range: servo_range[i],
                     tau: 0.0,
                     kp: kp[i],
                     kd: kd[i],
