@@ -123,6 +123,8 @@ pub fn edit_file(
                             tag: node.tag_name().name(),
                             kind: compiled.map(|c| c.kind),
                             timestep: robot.opt.timestep,
+                            gear: compiled.map_or(1.0, |c| c.gear),
+                            forcerange: compiled.filter(|c| c.forcelimited).map(|c| c.forcerange),
                         };
                         for (a, v) in &attrs {
                             match e.actuator_attr(a, *v, &site) {

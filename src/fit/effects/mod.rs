@@ -200,6 +200,10 @@ pub struct ActuatorSite<'a> {
     pub kind: Option<ActuatorKind>,
     /// The model's physics time step [s].
     pub timestep: f64,
+    /// The compiled actuator's gear (1 when it is not in the model) and its force range when
+    /// it is force-limited.
+    pub gear: f64,
+    pub forcerange: Option<[f64; 2]>,
 }
 
 /// What an effect contributes to a joint's Isaac Lab / mjlab `ImplicitActuatorCfg`.

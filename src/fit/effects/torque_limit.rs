@@ -24,7 +24,7 @@ declare_effect! {
     /// `tau_level` (T, the probe's start), `tau_percentile`
     ///
     /// ## Write-back
-    /// actuator `forcelimited="true" forcerange="-e e"`
+    /// position servo `forcelimited="true" forcerange` ±e / gear (inside its range)
     ///
     /// ## Isaac Lab / mjlab
     /// `effort_limit` field
@@ -143,13 +143,24 @@ impl Effect for TorqueLimit {
     fn write_back(&self, p: &[f64]) -> WriteBack {
         WriteBack::Actuator(vec![("forcerange", p[0])])
     }
+    /// As the fit simulated it ([`Self::apply_model`]): on the position servo, ±effort / gear
+    /// inside the range the actuator already has.
     fn actuator_attr(
         &self,
         _attr: &'static str,
         v: f64,
-        _act: &ActuatorSite,
+        act: &ActuatorSite,
     ) -> Result<Vec<(&'static str, String)>, String> {
-        Ok(vec![("forcelimited", "true".into()), ("forcerange", format!("{} {}", num(-v), num(v)))])
+        if act.kind.is_some_and(|k| !matches!(k, ActuatorKind::Position { .. })) {
+            return Err(format!(
+                "<{}> is not the joint's position servo (the limit was fitted on the servo)",
+                act.tag
+            ));
+        }
+        let g = if act.gear != 0.0 { act.gear.abs() } else { 1.0 };
+        let [lo0, hi0] = act.forcerange.unwrap_or([f64::NEG_INFINITY, f64::INFINITY]);
+        let (lo, hi) = (lo0.max(-v / g).min(0.0), hi0.min(v / g).max(0.0));
+        Ok(vec![("forcelimited", "true".into()), ("forcerange", format!("{} {}", num(lo), num(hi)))])
     }
     fn isaaclab(&self, params: &BTreeMap<String, f64>, _timestep: f64) -> IsaacLab {
         IsaacLab::Field(format!(
@@ -255,6 +266,26 @@ mod tests {
         };
         assert_eq!(servo_torque(0.0, 0.0, &io), 1.5);
         std::fs::remove_dir_all(&dir).ok();
+    }
+
+    /// The write-back writes what the fit simulated: ±effort / gear on the position servo,
+    /// inside the range it has; never on another actuator of the joint.
+    #[test]
+    fn write_back_divides_by_the_gear_inside_the_existing_range() {
+        let site = |kind, forcerange| ActuatorSite {
+            tag: "position",
+            kind: Some(kind),
+            timestep: 0.002,
+            gear: 2.0,
+            forcerange,
+        };
+        let servo = ActuatorKind::Position { kp: 50.0, kv: 2.0 };
+        let got = TorqueLimit.actuator_attr("forcerange", 3.0, &site(servo, None)).unwrap();
+        assert_eq!(got[1], ("forcerange", "-1.5 1.5".to_string()));
+        let got = TorqueLimit.actuator_attr("forcerange", 3.0, &site(servo, Some([-1.0, 2.0])));
+        assert_eq!(got.unwrap()[1], ("forcerange", "-1 1.5".to_string()));
+        let vel = ActuatorKind::Velocity { kv: 1.0 };
+        assert!(TorqueLimit.actuator_attr("forcerange", 3.0, &site(vel, None)).is_err());
     }
 
     /// The probes are the diagnosed levels above the lower bound, sorted, without repeats.
