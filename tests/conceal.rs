@@ -138,9 +138,10 @@ fn conceal_arm3_load_dependent_friction() {
 fn conceal_arm3_stribeck_friction_high_noise() {
     // σ 1 mrad, 3 % dropped rows: the held-out test alone cannot tell Stribeck from a 1-parameter
     // backlash; the training BIC in the Occam choice can. Found, nothing invented, the error at
-    // the floor — but on the independent synth the Stribeck velocity scale v_s is 16 % off
-    // (0.232 for 0.2; the two friction levels within 5 %): KNOWN MISS of the 10 % target at this
-    // noise level, asserted at 25 % so that it cannot get worse unnoticed (issue notes).
+    // the floor, all three parameters within 10 %. The velocity scale v_s was 16 % off (0.232
+    // for 0.2) until the kept friction was re-fitted on short windows (the reshoot, gated on a
+    // held-out improvement beyond noise: 0.2090); ungated, the re-fit followed the held-out
+    // noise to v_s 0.285.
     let c = arm3_case(
         "arm3 stribeck_friction",
         Kind::Single,
@@ -153,7 +154,8 @@ fn conceal_arm3_stribeck_friction_high_noise() {
     assert_eq!(s.recall(), Some(1.0), "{}: not found; detected {:?}", c.name, s.detected);
     assert_eq!(s.fp, 0, "{}: invented effects; detected {:?}", c.name, s.detected);
     let (_, _, p) = &s.detected[0];
-    for (got, want, tol) in [(p[0], 0.3, 0.10), (p[1], 0.1, 0.10), (p[2], 0.2, 0.25)] {
+    for (got, want) in [(p[0], 0.3), (p[1], 0.1), (p[2], 0.2)] {
+        let tol = 0.10;
         assert!(
             (got - want).abs() <= tol * want,
             "{}: {got} vs {want} (±{tol}); detected {:?}",
