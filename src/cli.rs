@@ -182,8 +182,9 @@ pub struct FitCmd {
     /// error averaged over all episodes.
     #[arg(long, value_name = "KEY[=VALUE]")]
     pub holdout_by: Option<String>,
-    /// Multiple shooting: fit on training windows of this length [s], each started from the
-    /// recorded state.
+    /// Multiple shooting: fit on training windows of this length [s] (> 0), each started from
+    /// the recorded state. Without it the search replays whole episodes and only the kept dry
+    /// friction is re-fitted on 1 s windows at the end.
     #[arg(long)]
     pub window: Option<f64>,
     #[command(flatten)]

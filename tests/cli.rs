@@ -218,6 +218,17 @@ fn fit_help_lists_the_effects() {
 }
 
 #[test]
+fn fit_window_must_be_a_positive_length() {
+    // `--window 0` used to turn windowing (and the friction re-fit) off without a word.
+    for bad in ["0", "-1", "NaN", "inf"] {
+        let w = format!("--window={bad}");
+        let (code, _, err) = modellint(&["fit", "fixtures/gap/arm3.xml", "fixtures/gap", &w]);
+        assert_eq!(code, 2, "--window {bad}: {err}");
+        assert!(err.contains("positive number of seconds"), "--window {bad}: {err}");
+    }
+}
+
+#[test]
 fn fit_holdout_by_checks_its_input() {
     // A directory without recordings: a precise error, exit 2 (also through the deprecated
     // --servo alias).
