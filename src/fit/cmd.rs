@@ -89,12 +89,12 @@ pub fn run_fit(a: FitArgs) -> i32 {
     if a.holdout < 2 {
         return fail("--holdout must be at least 2");
     }
-    if let Some(w) = a.window {
-        if !(w.is_finite() && w > 0.0) {
-            return fail(format!(
-                "--window {w}: the window length must be a positive number of seconds (e.g. 1.0)"
-            ));
-        }
+    if let Some(w) = a.window
+        && !(w.is_finite() && w > 0.0)
+    {
+        return fail(format!(
+            "--window {w}: the window length must be a positive number of seconds (e.g. 1.0)"
+        ));
     }
     let files = match crate::sim2real::input::expand_inputs(&a.recordings) {
         Ok(f) => f,
