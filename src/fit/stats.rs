@@ -255,8 +255,6 @@ pub fn aic(n: usize, rss: f64, k: usize) -> f64 {
     log_mse(n, rss) + 2.0 * k as f64
 }
 
-/// Bayesian information criterion for Gaussian residuals: `n ln(rss/n) + k ln n`.
-/// NaN when `n == 0` or `rss` is NaN/negative.
 /// The residual's white floor: per run of consecutive samples `runs`, the mean square `ms` of
 /// the residual and its white part `white = mean((r[i+1] − r[i])²) / 2`. Sensor noise and
 /// quantisation change from sample to sample; a missing effect leaves an error that changes
@@ -281,11 +279,27 @@ pub fn white_floor(runs: &[Vec<f64>]) -> (f64, f64) {
     (s2 / n2 as f64, d2 / nd as f64 / 2.0)
 }
 
+/// Bayesian information criterion for Gaussian residuals: `n ln(rss/n) + k ln n`.
+/// NaN when `n == 0` or `rss` is NaN/negative.
 pub fn bic(n: usize, rss: f64, k: usize) -> f64 {
     if n == 0 || rss.is_nan() || rss < 0.0 {
         return f64::NAN;
     }
     log_mse(n, rss) + k as f64 * (n as f64).ln()
+}
+
+/// [`bic`] with `m` independent pieces of evidence instead of `n`: `m ln(rss/n) + k ln m`.
+/// A rollout's residual is smooth: the samples of one (episode, window, joint) share one model
+/// error and are not `n` independent draws, so the plain BIC charges a parameter `ln n` against
+/// a likelihood counted `n` times, and any systematic difference, however small next to the
+/// error, reads as evidence. Counted per window, a parameter must buy a relative drop in the
+/// residual of about `ln m / m` (1.4 % at 432 windows). NaN when `m` or `n` is 0 or `rss` is
+/// NaN/negative.
+pub fn bic_pieces(m: usize, n: usize, rss: f64, k: usize) -> f64 {
+    if m == 0 || n == 0 || rss.is_nan() || rss < 0.0 {
+        return f64::NAN;
+    }
+    m as f64 * (rss.max(f64::MIN_POSITIVE) / n as f64).ln() + k as f64 * (m as f64).ln()
 }
 
 /// Paired comparison of per-window errors on held-out data, before vs after a
