@@ -189,7 +189,8 @@ pub struct FitCmd {
     pub window: Option<f64>,
     #[command(flatten)]
     pub replay: ReplayArgs,
-    /// No progress on stderr.
+    /// No progress and no notes on stderr (the search's decisions: merges, swaps, drops;
+    /// still in the JSON `notes`). Warnings and errors still print.
     #[arg(long, short)]
     pub quiet: bool,
     /// Output format.

@@ -347,6 +347,36 @@ fn synth_then_fit_end_to_end() {
     assert_eq!(mp["joints"][0], "shoulder_pitch");
     let off = mp["params"]["offset_rad"].as_f64().unwrap();
     assert!((off - 0.05).abs() < 0.005, "offset {off}");
+    assert!(v["notes"].is_array() && v["warnings"].is_array(), "{v:#}");
+    // stderr is a pipe here, not a terminal: progress comes as plain lines (round starts).
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(stderr.contains("modellint fit: round 1: "), "{stderr}");
+    // Text output: a parameter named in rad is printed in rad (degrees after it), with
+    // --quiet no progress or notes.
+    let o = std::process::Command::new(bin)
+        .args([
+            "fit",
+            model.to_str().unwrap(),
+            dir.join("episodes").to_str().unwrap(),
+            "--quiet",
+            "--effects",
+            "position_offset,armature,viscous_damping",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = String::from_utf8_lossy(&o.stdout);
+    let line = text.lines().find(|l| l.contains("offset_rad")).unwrap_or_else(|| panic!("{text}"));
+    let v: f64 = line
+        .split("offset_rad = ")
+        .nth(1)
+        .and_then(|r| r.split(' ').next())
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!((v - 0.05).abs() < 0.005 && line.contains(" rad (") && line.ends_with("°)"), "{line}");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!stderr.contains("modellint fit:") && !stderr.contains("note:"), "{stderr}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -2,7 +2,7 @@
 //! with before → after on the held-out episodes, write the model / actuator TOML / reports.
 //! Exit codes: 0 done, 2 could not do the job.
 
-use std::io::Write;
+use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
 
 use serde_json::json;
@@ -47,25 +47,48 @@ fn progress_bar(quiet: bool) -> Option<indicatif::ProgressBar> {
     Some(b)
 }
 
+/// Seconds between two plain progress lines when stderr is not a terminal.
+const LOG_EVERY_S: f64 = 30.0;
+
 /// The spinner and the fit's progress callback drawing on it (both `None` with `quiet`):
 /// `prefix`, then the round, the phase or candidate, the simulations so far and the time.
+/// When stderr is not a terminal (a CI log, `2> file`) there is no spinner: a plain line is
+/// written when a round starts and at most every [`LOG_EVERY_S`] seconds in between, so a long
+/// fit in a log still shows where it is.
 fn fit_progress(quiet: bool, prefix: String) -> (Option<indicatif::ProgressBar>, Option<Progress>) {
+    if quiet {
+        return (None, None);
+    }
+    let start = std::time::Instant::now();
+    let line = move |p: &ProgressInfo| {
+        let what = match &p.candidate {
+            Some((i, n, c)) => format!("candidate {i}/{n}: {c}"),
+            None => p.phase.to_string(),
+        };
+        format!(
+            "{prefix}round {}: {what} · {} simulations · {:.0} s",
+            p.round + 1,
+            p.simulations,
+            start.elapsed().as_secs_f64()
+        )
+    };
+    if !std::io::stderr().is_terminal() {
+        // (round of the last line, seconds at the last line)
+        let last = std::sync::Mutex::new((usize::MAX, f64::NEG_INFINITY));
+        let progress = Progress(std::sync::Arc::new(move |p: &ProgressInfo| {
+            let now = start.elapsed().as_secs_f64();
+            let Ok(mut last) = last.lock() else { return };
+            if p.round != last.0 || now - last.1 >= LOG_EVERY_S {
+                *last = (p.round, now);
+                eprintln!("modellint fit: {}", line(p));
+            }
+        }));
+        return (None, Some(progress));
+    }
     let bar = progress_bar(quiet);
-    let progress = bar.clone().map(|b| {
-        let start = std::time::Instant::now();
-        Progress(std::sync::Arc::new(move |p: &ProgressInfo| {
-            let what = match &p.candidate {
-                Some((i, n, c)) => format!("candidate {i}/{n}: {c}"),
-                None => p.phase.to_string(),
-            };
-            b.set_message(format!(
-                "{prefix}round {}: {what} · {} simulations · {:.0} s",
-                p.round + 1,
-                p.simulations,
-                start.elapsed().as_secs_f64()
-            ));
-        }))
-    });
+    let progress = bar
+        .clone()
+        .map(|b| Progress(std::sync::Arc::new(move |p: &ProgressInfo| b.set_message(line(p)))));
     (bar, progress)
 }
 
@@ -164,6 +187,11 @@ pub fn run_fit(a: FitArgs) -> i32 {
     for w in &out.warnings {
         eprintln!("modellint: warning: {w}");
     }
+    if !a.quiet {
+        for n in &out.notes {
+            eprintln!("modellint: note: {n}");
+        }
+    }
     if out.heldout.is_empty() {
         return 2;
     }
@@ -179,8 +207,8 @@ pub fn run_fit(a: FitArgs) -> i32 {
         (Ok(b), Ok(a)) => (b, a),
         (Err(e), _) | (_, Err(e)) => return fail(e),
     };
-    // Everything said on stderr after the fit also goes into the JSON `warnings`.
-    let mut notes: Vec<String> = Vec::new();
+    // Everything said on stderr after the fit also goes into the JSON `notes`.
+    let mut notes: Vec<String> = out.notes.clone();
     if let Some(dir) = &a.report {
         let page = crate::fit::report::FitReport {
             model: &a.model,
@@ -248,7 +276,8 @@ pub fn run_fit(a: FitArgs) -> i32 {
             "split": {"train": out.train.len(), "heldout": out.heldout.len(), "by_time": out.split_by_time, "note": out.split_note},
             "floor": out.floors.iter().map(|f| json!({"joint": f.joint, "residual_rms": f.ms.sqrt(), "white_floor_rms": f.white.sqrt(), "reconstruction_floor_rms": f.reconstruction.sqrt()})).collect::<Vec<_>>(),
             "stopped_at_floor": out.stopped_at_floor,
-            "warnings": out.warnings.iter().chain(&notes).collect::<Vec<_>>(),
+            "warnings": out.warnings,
+            "notes": notes,
         });
         serde_json::to_string_pretty(&v).unwrap_or_default() + "\n"
     } else {
@@ -272,11 +301,14 @@ pub fn run_fit(a: FitArgs) -> i32 {
                         .and_then(|e| e.params().iter().find(|p| p.name == k))
                         .map_or("", |p| p.unit);
                     let se = x.stderr.get(k).copied().unwrap_or(f64::INFINITY);
-                    let (v, se, unit) =
-                        if unit == "rad" { (deg(*v), deg(se), "°") } else { (*v, se, unit) };
-                    let se = if se.is_finite() { format!(" ± {se:.2e}") } else { " ± ?".into() };
-                    let sep = if unit.is_empty() || unit == "°" { "" } else { " " };
-                    format!("{k} = {v:.4}{se}{sep}{unit}")
+                    let pm = if se.is_finite() { format!(" ± {se:.2e}") } else { " ± ?".into() };
+                    match unit {
+                        // The value in the parameter's own unit (its name says rad), then
+                        // in degrees, as `gap` prints angles.
+                        "rad" => format!("{k} = {v:.6}{pm} rad ({:.4}°)", deg(*v)),
+                        "" => format!("{k} = {v:.4}{pm}"),
+                        _ => format!("{k} = {v:.4}{pm} {unit}"),
+                    }
                 })
                 .collect();
             s.push_str(&format!(
@@ -286,10 +318,17 @@ pub fn run_fit(a: FitArgs) -> i32 {
                 ps.join(", ")
             ));
             let shown = e.map_or(&[][..], |e| e.shown_evidence());
+            // `implied_*`: the diagnosis's linearised first guess, before any fit; named so that
+            // it is not read as the answer.
             let ev: Vec<String> = ["corr", "explained_share"]
                 .iter()
                 .chain(shown)
-                .filter_map(|k| x.evidence.get(*k).map(|v| format!("{k} {v:.3}")))
+                .filter_map(|k| {
+                    x.evidence.get(*k).map(|v| match k.strip_prefix("implied_") {
+                        Some(_) => format!("screen's first guess {v:.3}"),
+                        None => format!("{k} {v:.3}"),
+                    })
+                })
                 .collect();
             s.push_str(&format!(
                 "      evidence: {}; when added, held-out error {:+.0} %{}\n",
@@ -379,6 +418,11 @@ fn rotate(
         for w in &f.outcome.warnings {
             eprintln!("modellint: warning: {key} = {v}: {w}");
         }
+        if !a.quiet {
+            for n in &f.outcome.notes {
+                eprintln!("modellint: note: {key} = {v}: {n}");
+            }
+        }
         folds.push(f);
     }
     let (avg_b, avg_a) = rotation::mean_mae(folds.iter().flat_map(|f| &f.heldout));
@@ -399,6 +443,7 @@ fn rotate(
                     "seconds": f.seconds,
                     "tried": out.tried,
                     "warnings": out.warnings,
+                    "notes": out.notes,
                 })
             })
             .collect();

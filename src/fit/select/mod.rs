@@ -247,7 +247,12 @@ pub struct FitOutcome {
     pub selected: Vec<Selected>,
     pub applied: Vec<Applied>,
     pub tried: Vec<Tried>,
+    /// Something the user should act on or know is wrong (a diverged replay, a parameter the
+    /// data cannot identify, too little data to split).
     pub warnings: Vec<String>,
+    /// The search's decisions, for the record (a merge, a swap for a simpler effect, a drop, a
+    /// re-fit): printed as notes, not warnings — a correct fit makes several.
+    pub notes: Vec<String>,
 }
 
 impl FitOutcome {
@@ -264,6 +269,7 @@ impl FitOutcome {
             applied: vec![],
             tried: vec![],
             warnings: vec![],
+            notes: vec![],
         }
     }
 }

@@ -279,7 +279,7 @@ pub(super) fn pair_lookahead(
             set[n].joints.join(",")
         )
     };
-    out.warnings.push(format!(
+    out.notes.push(format!(
         "{what}: held-out RMSE {:.3e} rad, vs {:.3e} with {} alone",
         rmse,
         h_single.rmse(),
@@ -423,7 +423,7 @@ fn apply_restart(
     {
         tr.kept = true;
     }
-    out.warnings.push(format!(
+    out.notes.push(format!(
         "{} on {} re-fitted in a pair whose partner was not needed: held-out RMSE {:.3e} rad, \
          vs {:.3e} with {} alone",
         label,
@@ -528,7 +528,7 @@ pub(super) fn joint_pairs(
     {
         t.kept = true;
     }
-    out.warnings.push(format!(
+    out.notes.push(format!(
         "no single effect passed; {} and {} on {} pass together: held-out RMSE {:.3e} → {:.3e} rad",
         set[n].effect.id(),
         set[n + 1].effect.id(),

@@ -75,7 +75,7 @@ pub(super) fn reshoot_friction(
         t.kept = kept;
         out.tried.push(t);
         if kept {
-            out.warnings.push(format!(
+            out.notes.push(format!(
                 "{} on {} re-fitted on {WINDOW_S} s windows of the training episodes (multiple \
                  shooting): held-out RMSE {:.3e} → {:.3e} rad",
                 a.effect.id(),

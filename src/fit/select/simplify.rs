@@ -244,7 +244,7 @@ fn replace(
     if !ok {
         return false;
     }
-    out.warnings.push(format!(
+    out.notes.push(format!(
         "{} (held-out RMSE {:.3e} → {:.3e} rad)",
         r.message,
         h_cur.rmse(),
@@ -326,7 +326,7 @@ fn drop_pass(s: &Search, round: usize, out: &mut FitOutcome) -> bool {
             kept: keep,
         });
         if !keep {
-            out.warnings.push(format!(
+            out.notes.push(format!(
                 "{} on {} dropped: with the other effects, removing it changes the held-out RMSE by {:+.1} % (not beyond noise)",
                 a.effect.id(),
                 a.joints.join(","),
@@ -395,7 +395,7 @@ fn refit_drop_pass(s: &Search, round: usize, out: &mut FitOutcome) -> bool {
     }
     let Some((i, rest, rmse)) = best else { return false };
     let cur = &out.applied[i];
-    out.warnings.push(format!(
+    out.notes.push(format!(
         "{} on {} dropped: the other effects, fitted again without it, explain the data as well (held-out RMSE {:.3e} → {:.3e} rad)",
         cur.effect.id(),
         cur.joints.join(","),
@@ -519,7 +519,7 @@ fn swap_pass(s: &Search, round: usize, out: &mut FitOutcome) -> bool {
         {
             t.kept = true;
         }
-        out.warnings.push(format!(
+        out.notes.push(format!(
             "{} on {} replaced by the simpler {} (held-out RMSE {:.3e} → {:.3e} rad)",
             cur.effect.id(),
             cur.joints.join(","),
