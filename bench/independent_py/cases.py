@@ -1,0 +1,38 @@
+# Case definitions for realsim.py. Effect values are the REAL robot's absolute values
+# (damping, armature, frictionloss, stiffness) or scales / seconds / radians.
+STD = dict(rec_hz=88.0, jitter=0.15, drop=0.005, q_noise=0.0005, qd_noise=0.01, bits=12)
+MODELS = {
+    "leg3": dict(xml="leg3.xml", joints=["hip_pitch", "knee", "ankle"], robot="leg3_stand",
+                 amp=[0.35, 0.35, 0.3], t0_ctrl=0.0037, **STD),
+    "arm4": dict(xml="arm4.xml", joints=["yaw", "shoulder", "elbow", "wrist_roll"], robot="arm4_pedestal",
+                 amp=[0.4, 0.3, 0.35, 0.6], t0_ctrl=0.0061, **STD),
+}
+ALL3 = ["hip_pitch", "knee", "ankle"]
+ALL4 = ["yaw", "shoulder", "elbow", "wrist_roll"]
+CASES = {
+    # ---- leg3 ----
+    "L0_none": dict(model="leg3", seed=11, effects={}),
+    "L1_knee_damping": dict(model="leg3", seed=12, effects={"joints": {"knee": {"damping": 0.8}}}),
+    "L2_all_armature": dict(model="leg3", seed=13, effects={"joints": {j: {"armature": 0.06} for j in ALL3}}),
+    "L3_gain07_delay15": dict(model="leg3", seed=14,
+        effects={"delay": 0.015, "joints": {j: {"kp_scale": 0.7} for j in ALL3}}),
+    "L4_knee_stiffness_14bit": dict(model="leg3", seed=15, logging=dict(bits=14),
+        effects={"joints": {"knee": {"stiffness": 6.0}}}),
+    # ---- arm4 ----
+    "A0_none_noquant": dict(model="arm4", seed=21, logging=dict(bits=None, q_noise=0.0003), effects={}),
+    "A1_shoulder_offset": dict(model="arm4", seed=22, effects={"joints": {"shoulder": {"offset": 0.04}}}),
+    "A2_all_delay20": dict(model="arm4", seed=23, effects={"delay": 0.020}),
+    "A3_all_friction": dict(model="arm4", seed=24,
+        effects={"joints": {"yaw": {"frictionloss": 0.3}, "shoulder": {"frictionloss": 0.3},
+                            "elbow": {"frictionloss": 0.3}, "wrist_roll": {"frictionloss": 0.03}}}),
+    "A4_elbow_gain_plus_damping": dict(model="arm4", seed=25,
+        effects={"joints": {"elbow": {"kp_scale": 1.4, "kd_scale": 1.0}, "yaw": {"damping": 0.5}}}),
+}
+# ---- extra, harder cases ----
+CASES["L5_three_effects"] = dict(model="leg3", seed=16, effects={"joints": {
+    "knee": {"frictionloss": 0.5}, "ankle": {"offset": -0.03}, "hip_pitch": {"damping": 1.2}}})
+CASES["A5_wrist_armature_nosplit"] = dict(model="arm4", seed=26, episodes=4, seconds=4.0, heldout=[],
+    effects={"joints": {"wrist_roll": {"armature": 0.008}}})
+CASES["A6_shoulder_kd_only"] = dict(model="arm4", seed=27, effects={"joints": {"shoulder": {"kd_scale": 2.0}}})
+CASES["L6_ankle_delay25"] = dict(model="leg3", seed=17, effects={"joints": {"ankle": {"delay": 0.025}}})
+CASES["L7_none_10bit_noisy"] = dict(model="leg3", seed=18, logging=dict(bits=10, q_noise=0.001, qd_noise=0.03, drop=0.02), effects={})

@@ -1,0 +1,261 @@
+#!/usr/bin/env python3
+"""Independent "real robot" simulator + logger for the modellint fit tryout.
+
+usage: realsim.py CASE_NAME...   (cases defined in cases.py)
+
+Writes $INDEP_OUT/data/CASE/{nominal.xml, episodes/ep_0N.csv, truth.json} (INDEP_OUT defaults
+to out/ beside this file). Written for a new-user tryout (2026-11-26) from
+docs/recording-format.md and the independent_arm2 README only, without reading the fit's code;
+it shares nothing with `modellint synth` or the replay.
+The robot = the nominal MJCF compiled by MuJoCo, then concealed effects written into the
+MjModel arrays (dof_damping, dof_armature, dof_frictionloss, jnt_stiffness + qpos_spring=key,
+actuator gainprm/biasprm), plus an own command queue for action delay and an encoder offset.
+Logging: 100 Hz controller with phase control_t0_s, async recorder ~rate_hz with jitter,
+q = quantise(q_true + offset + N(0, q_noise)), qd + N(0, qd_noise), drops, 2 s settle.
+"""
+import json, math, os, shutil, sys
+import numpy as np
+import mujoco
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+from cases import CASES, MODELS  # noqa: E402
+
+CTRL_HZ = 100.0
+SETTLE_S = 2.0
+
+
+def conceal(m, eff, key_qpos):
+    """Apply concealed effects to MjModel m in place; return resolved [nominal, real] per joint."""
+    resolved = {}
+    for jname, e in eff.get("joints", {}).items():
+        jid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, jname)
+        assert jid >= 0, jname
+        dof = m.jnt_dofadr[jid]
+        qadr = m.jnt_qposadr[jid]
+        r = {}
+        if "damping" in e:
+            r["damping"] = [float(m.dof_damping[dof]), None]
+            m.dof_damping[dof] = e["damping"]
+            r["damping"][1] = float(m.dof_damping[dof])
+        if "armature" in e:
+            r["armature"] = [float(m.dof_armature[dof]), None]
+            m.dof_armature[dof] = e["armature"]
+            r["armature"][1] = float(m.dof_armature[dof])
+        if "frictionloss" in e:
+            r["frictionloss"] = [float(m.dof_frictionloss[dof]), None]
+            m.dof_frictionloss[dof] = e["frictionloss"]
+            r["frictionloss"][1] = float(m.dof_frictionloss[dof])
+        if "stiffness" in e:
+            r["stiffness"] = [float(m.jnt_stiffness[jid]), None]
+            m.jnt_stiffness[jid] = e["stiffness"]
+            m.qpos_spring[qadr] = key_qpos[qadr]
+            r["stiffness"][1] = float(m.jnt_stiffness[jid])
+            r["springref"] = float(m.qpos_spring[qadr])
+        if "kp_scale" in e or "kd_scale" in e:
+            aid = [a for a in range(m.nu) if m.actuator_trnid[a, 0] == jid]
+            assert len(aid) == 1
+            a = aid[0]
+            kp0 = float(m.actuator_gainprm[a, 0]); kv0 = float(-m.actuator_biasprm[a, 2])
+            sp = e.get("kp_scale", 1.0); sd = e.get("kd_scale", 1.0)
+            m.actuator_gainprm[a, 0] *= sp
+            m.actuator_biasprm[a, 1] *= sp
+            m.actuator_biasprm[a, 2] *= sd
+            r["actuator.kp"] = [kp0, float(m.actuator_gainprm[a, 0])]
+            r["actuator.kv"] = [kv0, float(-m.actuator_biasprm[a, 2])]
+            assert abs(m.actuator_gainprm[a, 0] + m.actuator_biasprm[a, 1]) < 1e-9
+        if "offset" in e:
+            r["position_offset"] = [0.0, e["offset"]]
+        if "delay" in e:
+            r["delay_s"] = [0.0, e["delay"]]
+        resolved[jname] = r
+    return resolved
+
+
+# ---------------- command generation (per episode) ----------------
+def lowpass2(x, fc, fs):
+    # critically damped 2nd-order IIR (two cascaded 1st-order), forward only
+    a = math.exp(-2 * math.pi * fc / fs)
+    y1 = np.zeros_like(x); y2 = np.zeros_like(x)
+    for i in range(1, len(x)):
+        y1[i] = a * y1[i - 1] + (1 - a) * x[i]
+        y2[i] = a * y2[i - 1] + (1 - a) * y1[i]
+    return y2
+
+
+def make_commands(rng, tick_t, centre, amp, seconds):
+    """Command per tick (ticks at tick_t, recording time) for each joint. Hold 0.3 s, then a
+    shuffled mix of 3 of: linear chirp, smoothed random walk, ramped steps, multisine."""
+    nj = len(centre)
+    kinds = list(rng.permutation(["chirp", "walk", "steps", "multisine"]))[:3]
+    cuts = np.sort(rng.uniform(0.3, seconds, 2))
+    bounds = [0.3, cuts[0], cuts[1], seconds + 0.05]
+    segs = [(kinds[i], bounds[i], bounds[i + 1]) for i in range(3)]
+    cmd = np.tile(np.asarray(centre, float), (len(tick_t), 1))
+    for j in range(nj):
+        A = amp[j]
+        prev = 0.0
+        for kind, t0, t1 in segs:
+            sel = (tick_t >= t0) & (tick_t < t1)
+            if not sel.any():
+                continue
+            tt = tick_t[sel] - t0
+            T = t1 - t0
+            if kind == "chirp":
+                f0, f1 = 0.2, rng.uniform(3.0, 4.5)
+                ph = 2 * math.pi * (f0 * tt + 0.5 * (f1 - f0) / T * tt ** 2)
+                y = 0.7 * A * np.sin(ph + rng.uniform(0, 2 * math.pi))
+            elif kind == "walk":
+                w = rng.normal(0, 1, len(tt) + 200)
+                y = lowpass2(w, rng.uniform(0.8, 2.0), CTRL_HZ)[200:]
+                y = A * y / (np.max(np.abs(y)) + 1e-9)
+            elif kind == "steps":
+                y = np.zeros(len(tt)); lvl = prev; tnext = 0.0; tr = 0.06
+                start_lvl = prev; tstart = 0.0; target = prev
+                for i, t in enumerate(tt):
+                    if t >= tnext:
+                        start_lvl = target if t > 0 else prev
+                        target = rng.uniform(-A, A); tstart = t
+                        tnext = t + rng.uniform(0.35, 0.9)
+                    s = min(1.0, (t - tstart) / tr)
+                    y[i] = start_lvl + (target - start_lvl) * s
+            else:  # multisine
+                y = np.zeros(len(tt))
+                for _ in range(3):
+                    y += np.sin(2 * math.pi * rng.uniform(0.3, 2.5) * tt + rng.uniform(0, 2 * math.pi))
+                y = A * 0.9 * y / 3.0
+            # blend from previous end value so segments join smoothly-ish
+            y = y + (prev - y[0]) * np.exp(-tt / 0.12)
+            cmd[sel, j] = centre[j] + y
+            prev = y[-1]
+    return cmd, [{"kind": k, "t0": float(a), "t1": float(min(b, seconds))} for k, a, b in segs]
+
+
+# ---------------- one episode ----------------
+def run_episode(m, joints, cfg, eff, rng, seconds, ep_idx, split, out_csv, t0_ctrl):
+    d = mujoco.MjData(m)
+    dt = m.opt.timestep
+    nj = len(joints)
+    jids = [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, j) for j in joints]
+    qadr = [m.jnt_qposadr[j] for j in jids]
+    dadr = [m.jnt_dofadr[j] for j in jids]
+    act_of = {}
+    for a in range(m.nu):
+        act_of[int(m.actuator_trnid[a, 0])] = a
+    aids = [act_of[j] for j in jids]
+    key = m.key_qpos[0]
+    centre = [float(key[a]) for a in qadr]
+    amp = cfg["amp"]
+    delay = [eff.get("joints", {}).get(j, {}).get("delay", eff.get("delay", 0.0)) for j in joints]
+    offset = [eff.get("joints", {}).get(j, {}).get("offset", 0.0) for j in joints]
+
+    # controller ticks in recording time: t0_ctrl + k/100, k from the settle start to the end
+    kmin = math.floor((-SETTLE_S - 0.1 - t0_ctrl) * CTRL_HZ)
+    kmax = math.ceil((seconds + 0.1 - t0_ctrl) * CTRL_HZ)
+    ks = np.arange(kmin, kmax + 1)
+    tick_t = t0_ctrl + ks / CTRL_HZ
+    cmd, segs = make_commands(rng, tick_t, centre, amp, seconds)
+
+    def issued_index(t):  # index of tick in force (issued) at recording time t
+        return int(math.floor((t - t0_ctrl) * CTRL_HZ + 1e-9)) - kmin
+
+    # initial state: at the first command, at rest; settle SETTLE_S s unrecorded
+    for i, a in enumerate(qadr):
+        d.qpos[a] = cmd[0, i]
+    mujoco.mj_forward(m, d)
+    nsteps = int(round((SETTLE_S + seconds + 0.05) / dt))
+    T = np.zeros(nsteps + 1); Q = np.zeros((nsteps + 1, nj)); QD = np.zeros((nsteps + 1, nj))
+    peak_tau = np.zeros(nj); sat = np.zeros(nj, int)
+    T[0] = -SETTLE_S; Q[0] = [d.qpos[a] for a in qadr]; QD[0] = [d.qvel[a] for a in dadr]
+    for s in range(nsteps):
+        t = d.time - SETTLE_S  # recording time at the start of this step
+        for i in range(nj):
+            # command reaching the actuator: the last tick issued at or before t - delay
+            k = issued_index(t - delay[i])
+            d.ctrl[aids[i]] = cmd[max(k, 0), i]
+        mujoco.mj_step(m, d)
+        T[s + 1] = d.time - SETTLE_S
+        Q[s + 1] = [d.qpos[a] for a in qadr]
+        QD[s + 1] = [d.qvel[a] for a in dadr]
+        if t >= 0:
+            f = np.array([d.actuator_force[a] for a in aids])
+            peak_tau = np.maximum(peak_tau, np.abs(f))
+            for i, a in enumerate(aids):
+                if m.actuator_forcelimited[a] and abs(f[i]) >= m.actuator_forcerange[a, 1] - 1e-6:
+                    sat[i] += 1
+
+    # asynchronous recorder
+    ts = [0.0]
+    per = 1.0 / cfg["rec_hz"]
+    while True:
+        nxt = ts[-1] + per * (1 + rng.uniform(-cfg["jitter"], cfg["jitter"]))
+        if nxt > seconds:
+            break
+        ts.append(nxt)
+    ts = np.array(ts)
+    keep = np.ones(len(ts), bool)
+    drops = rng.random(len(ts)) < cfg["drop"]
+    drops[0] = drops[-1] = False
+    keep &= ~drops
+    quantum = None if cfg["bits"] is None else 2 * math.pi / (2 ** cfg["bits"])
+    rows = []
+    for t in ts[keep]:
+        q = np.array([np.interp(t, T, Q[:, i]) for i in range(nj)])
+        qd = np.array([np.interp(t, T, QD[:, i]) for i in range(nj)])
+        qm = q + np.array(offset) + rng.normal(0, cfg["q_noise"], nj)
+        if quantum:
+            qm = np.round(qm / quantum) * quantum
+        qdm = qd + rng.normal(0, cfg["qd_noise"], nj)
+        qc = cmd[issued_index(t)]
+        rows.append((t, qm, qdm, qc))
+
+    with open(out_csv, "w") as f:
+        f.write(f"# robot: {cfg['robot']}\n# episode: {ep_idx}\n# split: {split}\n")
+        f.write(f"# control_rate_hz: {CTRL_HZ:g}\n# control_t0_s: {t0_ctrl}\n")
+        f.write("# note: recorded by an independent tryout simulator\n")
+        f.write("t," + ",".join(f"{j}.q,{j}.qd,{j}.q_cmd" for j in joints) + "\n")
+        for t, qm, qdm, qc in rows:
+            f.write(f"{t:.6f}," + ",".join(f"{qm[i]:.7f},{qdm[i]:.6f},{qc[i]:.7f}" for i in range(nj)) + "\n")
+    return {"file": os.path.relpath(out_csv, os.path.dirname(os.path.dirname(out_csv))),
+            "split": split, "seconds": seconds, "samples": int(keep.sum()), "dropped": int(drops.sum()),
+            "segments": segs, "peak_abs_tau": [round(float(x), 3) for x in peak_tau],
+            "saturated_steps": sat.tolist()}
+
+
+def main(case):
+    c = CASES[case]
+    mcfg = MODELS[c["model"]]
+    cfg = dict(mcfg)
+    cfg.update(c.get("logging", {}))
+    out = os.path.join(os.environ.get("INDEP_OUT", os.path.join(HERE, "out")), "data", case)
+    if os.path.exists(out):
+        shutil.rmtree(out)
+    os.makedirs(os.path.join(out, "episodes"))
+    src = os.path.join(HERE, "models", mcfg["xml"])
+    shutil.copy(src, os.path.join(out, "nominal.xml"))
+    m = mujoco.MjModel.from_xml_path(src)
+    eff = c.get("effects", {})
+    resolved = conceal(m, eff, m.key_qpos[0].copy())
+    if "delay" in eff:
+        resolved["_all_delay_s"] = eff["delay"]
+    rng = np.random.default_rng(c["seed"])
+    eps = []
+    n = c.get("episodes", 6); secs = c.get("seconds", 5.0)
+    heldout = set(c.get("heldout", [n - 1]))
+    for e in range(n):
+        split = "heldout" if e in heldout else "train"
+        eps.append(run_episode(m, mcfg["joints"], cfg, eff, rng, secs, e, split,
+                               os.path.join(out, "episodes", f"ep_{e:02d}.csv"), cfg["t0_ctrl"]))
+    truth = {"case": case, "model": mcfg["xml"], "joints": mcfg["joints"], "effects": eff,
+             "resolved": resolved,
+             "logging": {k: cfg[k] for k in ("rec_hz", "jitter", "drop", "q_noise", "qd_noise", "bits", "t0_ctrl", "amp")},
+             "settle_s": SETTLE_S, "control_rate_hz": CTRL_HZ, "seed": c["seed"],
+             "timestep": m.opt.timestep, "episodes": eps, "mujoco": mujoco.__version__}
+    with open(os.path.join(out, "truth.json"), "w") as f:
+        json.dump(truth, f, indent=1)
+    print(case, "ok:", [(x["samples"], x["dropped"], x["peak_abs_tau"], x["saturated_steps"]) for x in eps])
+
+
+if __name__ == "__main__":
+    for a in sys.argv[1:]:
+        main(a)

@@ -1,0 +1,43 @@
+#!/usr/bin/env bash
+# Independent-simulator benchmark for `modellint fit`: a Python/MuJoCo "real robot" (realsim.py,
+# written apart from the fit code) records each case of cases.py in the logging style of
+# ../shared/data/recordings/independent_arm2 (100 Hz controller with a phase, ~88 Hz jittered
+# asynchronous recorder, 0.5 mrad noise, 12-bit encoder, 0.5 % dropped rows, 2 s unrecorded
+# settle), `modellint fit` sees only the nominal model and the CSVs, and score.py compares its
+# JSON with the truth the simulator wrote into its MjModel.
+#
+# usage: bench/independent_py/run.sh [CASE...]      (default: every case; ~10–25 min on 2 cores)
+# Needs python3 with venv and PyPI (mujoco==3.17.0, numpy) — skips with a message otherwise.
+# Env: INDEP_OUT (default target/independent_py), MODELLINT (default target/release/modellint).
+set -uo pipefail
+here="$(cd "$(dirname "$0")" && pwd)"
+repo="$(cd "$here/../.." && pwd)"
+out="${INDEP_OUT:-$repo/target/independent_py}"
+bin="${MODELLINT:-$repo/target/release/modellint}"
+venv="$out/venv"
+mkdir -p "$out/results"
+if [ ! -x "$bin" ]; then
+  (cd "$repo" && make build >/dev/null) || { echo "cannot build modellint"; exit 2; }
+fi
+if [ ! -x "$venv/bin/python" ]; then
+  if ! python3 -m venv "$venv" >/dev/null 2>&1 ||
+     ! "$venv/bin/pip" install -q mujoco==3.17.0 numpy >/dev/null 2>&1; then
+    echo "skipping: needs python3 -m venv and PyPI (mujoco==3.17.0, numpy)"
+    exit 0
+  fi
+fi
+if [ $# -eq 0 ]; then
+  set -- $("$venv/bin/python" -c "import sys; sys.path.insert(0, '$here'); from cases import CASES; print(' '.join(CASES))")
+fi
+export INDEP_OUT="$out"
+for c in "$@"; do
+  "$venv/bin/python" "$here/realsim.py" "$c" >/dev/null || { echo "$c: recording failed"; continue; }
+  s=$(date +%s.%N)
+  "$bin" fit "$out/data/$c/nominal.xml" "$out/data/$c/episodes" --format json --quiet \
+    > "$out/results/$c.json" 2> "$out/results/$c.stderr"
+  e=$(date +%s.%N)
+  python3 -c "print(f'{$e - $s:.1f}')" > "$out/results/$c.time"
+  echo "$c: $(cat "$out/results/$c.time") s" >&2
+done
+echo "modellint $(git -C "$repo" rev-parse --short HEAD 2>/dev/null), $(nproc) cores, load $(cut -d' ' -f1-3 /proc/loadavg)"
+python3 "$here/score.py" "$out" "$@"
