@@ -258,4 +258,6 @@ def main(case):
 
 if __name__ == "__main__":
     for a in sys.argv[1:]:
+        if a not in CASES:
+            sys.exit(f"realsim.py: unknown case `{a}`; known: {', '.join(CASES)}")
         main(a)
