@@ -105,18 +105,20 @@ fn check_written(
     // The scene's include now points at the copy; the original files are untouched.
     let scene_out = std::fs::read_to_string(out).unwrap();
     assert!(scene_out.contains(&format!("file=\"fitted_{stem}.xml\"")), "{scene_out}");
-    // What stderr said is in the JSON warnings.
-    let warnings: Vec<String> =
-        v["warnings"].as_array().unwrap().iter().map(|w| w.as_str().unwrap().to_string()).collect();
+    // What stderr said is in the JSON: a warning in `warnings`, anything else (notes, the files
+    // written) in `notes`.
+    let list = |k: &str| -> Vec<String> {
+        v[k].as_array().unwrap().iter().map(|w| w.as_str().unwrap().to_string()).collect()
+    };
+    let (warnings, notes) = (list("warnings"), list("notes"));
     for line in stderr.lines().filter_map(|l| l.strip_prefix("modellint: ")) {
-        let line =
-            line.strip_prefix("note: ").or_else(|| line.strip_prefix("warning: ")).unwrap_or(line);
-        assert!(
-            warnings.iter().any(|w| w == line),
-            "stderr line `{line}` not in JSON warnings {warnings:?}"
-        );
+        let (line, key) = match line.strip_prefix("warning: ") {
+            Some(w) => (w, &warnings),
+            None => (line.strip_prefix("note: ").unwrap_or(line), &notes),
+        };
+        assert!(key.iter().any(|w| w == line), "stderr line `{line}` not in the JSON {key:?}");
     }
-    assert!(warnings.iter().any(|w| w.contains(&copy.display().to_string())), "{warnings:?}");
+    assert!(notes.iter().any(|w| w.contains(&copy.display().to_string())), "{notes:?}");
     // MuJoCo loads the written model; the fitted joints' damping differs from the input's and is
     // the hidden value.
     let before = load(scene);
