@@ -156,6 +156,24 @@ fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let quick = args.iter().any(|a| a == "--quick");
     let filter = args.iter().position(|a| a == "--filter").and_then(|i| args.get(i + 1)).cloned();
+    // An argument it does not know (a typo of --filter, or --help) is not a run of every case.
+    let known = |i: usize, a: &str| {
+        a == "--quick" || a == "--filter" || (i > 0 && args[i - 1] == "--filter")
+    };
+    if let Some((_, a)) = args.iter().enumerate().find(|(i, a)| !known(*i, a)) {
+        let help = a == "--help" || a == "-h";
+        let usage = "usage: conceal_bench [--quick] [--filter TERM[,TERM...]]\n  \
+            cases whose label has every TERM (e.g. --filter 'arm3,real 12b'; \
+            'asimov armature@all,real none');\n  \
+            markdown table on stdout, per-case rows and progress on stderr; \
+            MODELLINT_CONCEAL_KEEP=DIR keeps the recordings";
+        if help {
+            println!("{usage}");
+            return;
+        }
+        eprintln!("conceal_bench: unknown argument '{a}'\n{usage}");
+        std::process::exit(2);
+    }
     let cases: Vec<Case> = matrix(quick)
         .into_iter()
         .filter(|c| {
@@ -165,6 +183,11 @@ fn main() {
         })
         .collect();
     eprintln!("conceal bench: {} cases{}", cases.len(), if quick { " (--quick)" } else { "" });
+    if cases.is_empty() {
+        // Not "all targets met": nothing was run.
+        eprintln!("conceal_bench: no case matches --filter '{}'", filter.unwrap_or_default());
+        std::process::exit(2);
+    }
     let mut scores = Vec::new();
     for (i, c) in cases.iter().enumerate() {
         let s = run(c);
