@@ -156,8 +156,10 @@ pub enum Fill {
     /// The command before the gap held (the command changed at the first row after it).
     Hold,
     /// As [`Fill::Ramps`], but a step takes the command after the gap (it changed right after
-    /// the last row before it): the other end of what the rows allow. The fit replays this
-    /// alternative to measure the error command reconstruction alone leaves (its floor).
+    /// the last row before it): the other end of what the rows allow; and a gap filled as smooth
+    /// motion is moved by √2 × how far the same cubic misses the known ticks nearby (a
+    /// command's tick-to-tick roughness no row shows). The fit replays this alternative to
+    /// measure the error command reconstruction alone leaves (its floor).
     /// Without a control rate: as [`Fill::Hold`].
     Next,
 }
@@ -344,15 +346,73 @@ fn fill_gap(v: &mut [f64], known: &[usize], w: usize, fill: Fill) -> bool {
         set(v, &|_| hold);
         return false;
     }
+    // The alternative fill moves a smooth gap by √2 × the cubic's own error on the known ticks
+    // nearby, with a sign from the tick (half the mean square of the two replays' difference is
+    // the floor, so √2 makes a smooth gap count its whole expected error; a step its half).
+    let shift = if fill == Fill::Next {
+        std::f64::consts::SQRT_2 * cubic_error_near(v, known, w) * pseudo_sign(i as u64)
+    } else {
+        0.0
+    };
     match (w >= 1, known.get(w + 2)) {
         (true, Some(&q)) => {
             let xs = [known[w - 1], i, j, q].map(|x| x as f64);
             let ys = [v[known[w - 1]], a, b, v[q]];
-            set(v, &|k| lagrange(&xs, &ys, k as f64));
+            set(v, &|k| lagrange(&xs, &ys, k as f64) + shift);
         }
-        _ => set(v, &linear),
+        _ => set(v, &|k| linear(k) + shift),
     }
     true
+}
+
+/// How far the cubic through two known ticks on either side misses a known tick, near the gap
+/// after `known[w]`: the median |error| of leaving out, one at a time, the up to
+/// [`CUBIC_PROBES`] known ticks closest to the gap whose two neighbours on each side are known
+/// (0 when there is none). A chirp or a sine is predicted to micro-radians; a command with
+/// tick-to-tick roughness (filtered random motion) is not, and neither is its missing tick.
+fn cubic_error_near(v: &[f64], known: &[usize], w: usize) -> f64 {
+    let is_known = |k: usize| known.binary_search(&k).is_ok();
+    let mut errs: Vec<f64> = Vec::new();
+    // Known ticks by distance from the gap: alternately before and after it.
+    let (mut lo, mut hi) = (w as isize, w as isize + 1);
+    while errs.len() < CUBIC_PROBES && (lo >= 0 || (hi as usize) < known.len()) {
+        for idx in [lo, hi] {
+            if idx < 0 || idx as usize >= known.len() || errs.len() >= CUBIC_PROBES {
+                continue;
+            }
+            let m = known[idx as usize];
+            if m >= 2 && [m - 2, m - 1, m + 1, m + 2].iter().all(|&k| is_known(k)) {
+                let xs = [m - 2, m - 1, m + 1, m + 2].map(|x| x as f64);
+                let ys = [v[m - 2], v[m - 1], v[m + 1], v[m + 2]];
+                let e = v[m] - lagrange(&xs, &ys, m as f64);
+                if e.is_finite() {
+                    errs.push(e.abs());
+                }
+            }
+        }
+        lo -= 1;
+        hi += 1;
+        if hi - lo > 2 * CUBIC_REACH as isize {
+            break;
+        }
+    }
+    if errs.is_empty() {
+        return 0.0;
+    }
+    errs.sort_by(f64::total_cmp);
+    let n = errs.len();
+    if n % 2 == 1 { errs[n / 2] } else { 0.5 * (errs[n / 2 - 1] + errs[n / 2]) }
+}
+
+/// Known ticks [`cubic_error_near`] leaves out, and how many known ticks on each side of the
+/// gap it looks through for them.
+const CUBIC_PROBES: usize = 5;
+const CUBIC_REACH: usize = 12;
+
+/// +1 or −1 from a number (a tick; a fixed hash: the same recording gives the same floor).
+pub(crate) fn pseudo_sign(k: u64) -> f64 {
+    let h = (k ^ 0x9E37_79B9_7F4A_7C15).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    if (h >> 31) & 1 == 0 { 1.0 } else { -1.0 }
 }
 
 /// The polynomial through the points (`xs`, `ys`) at `x`.
@@ -571,6 +631,46 @@ mod tests {
             let err = s.at(0, k as f64 * 0.01 + 0.005) - truth[k];
             assert!(err.abs() < 5e-4, "tick {k}: {err}");
         }
+    }
+
+    /// As [`log_without`], with the fill given.
+    fn log_without_fill(truth: &[f64], missing: &[usize], fill: Fill) -> Schedule {
+        let (mut t, mut c) = (Vec::new(), Vec::new());
+        for (k, &x) in truth.iter().enumerate() {
+            if !missing.contains(&k) {
+                t.push(k as f64 * 0.01 + 0.004);
+                c.push(x);
+            }
+        }
+        reconstruct(&t, &[&c], Some(100.0), 0.0, CommandTiming::InForce, fill).unwrap()
+    }
+
+    #[test]
+    fn the_alternative_fill_moves_a_smooth_gap_by_the_cubics_own_error_nearby() {
+        // Tick-to-tick roughness ±5 mrad (filtered random motion has it): the cubic through
+        // k ± 1, k ± 2 misses every known tick by 8/3 × 5 mrad, and so the alternative fill
+        // moves the missing tick 10 by √2 × 13.3 mrad (by hand: p(x) = α + βx² through
+        // −c, c at |x| = 1, 2 gives p(0) = −5c/3).
+        let c = 0.005;
+        let rough: Vec<f64> = (0..21).map(|k| if k % 2 == 0 { c } else { -c }).collect();
+        let ramps = log_without_fill(&rough, &[10], Fill::Ramps).at(0, 0.105);
+        let next = log_without_fill(&rough, &[10], Fill::Next).at(0, 0.105);
+        let want = std::f64::consts::SQRT_2 * 8.0 / 3.0 * c;
+        assert!(((next - ramps).abs() - want).abs() < 1e-12, "{ramps} {next} {want}");
+        // A sine the cubic predicts to 0.3 mrad (its fourth derivative / 6) is moved by √2 ×
+        // that, not by its 9 mrad curvature; known ticks are never moved.
+        let sine: Vec<f64> = (0..21).map(|k| 0.2 * (0.3 * k as f64).sin()).collect();
+        let ramps = log_without_fill(&sine, &[10], Fill::Ramps);
+        let next = log_without_fill(&sine, &[10], Fill::Next);
+        let d = (next.at(0, 0.105) - ramps.at(0, 0.105)).abs();
+        assert!(d > 1e-5 && d < 1e-3, "{d}");
+        for k in [0usize, 5, 9, 11, 20] {
+            let t = k as f64 * 0.01 + 0.005;
+            assert_eq!(next.at(0, t), ramps.at(0, t), "tick {k}");
+        }
+        // A step is still taken from its other end, unmoved.
+        let step: Vec<f64> = (0..12).map(|k| if k >= 5 { 0.3 } else { 0.0 }).collect();
+        assert_eq!(log_without_fill(&step, &[5], Fill::Next).at(0, 0.055), 0.3);
     }
 
     #[test]

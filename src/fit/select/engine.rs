@@ -13,7 +13,7 @@ use crate::fit::stats::{
     ar1_variance_inflation, cluster_robust_stderr, uncertainty_from_jacobian, white_floor,
 };
 use crate::model::Robot;
-use crate::sim2real::commands::Fill;
+use crate::sim2real::commands::{Fill, pseudo_sign};
 use crate::sim2real::metrics::gap_mask;
 use crate::sim2real::recording::Recording;
 use crate::sim2real::replay::{Episode, ReplayOptions};
@@ -180,13 +180,26 @@ impl<'a> Engine<'a> {
         Some(Errors { sse, n, windows: win, eps })
     }
 
-    /// Per scored joint: the mean square of the error that command reconstruction alone leaves
-    /// on `recs` simulated with `applied` (`errs`). A control tick without a row has a command
-    /// somewhere between the commands of the known ticks around it; the replay takes one guess
-    /// ([`Fill::Ramps`]). The same model is replayed once more with every held (step) gap filled
-    /// from its *other* end ([`Fill::Next`]), and half the mean square of the difference between
-    /// the two simulations is the floor: the truth lies between the two ends, and a lightly
-    /// damped servo rings after every step whose tick is unknown. Zero when no gap is held.
+    /// Per scored joint: the mean square of the error that command reconstruction and the
+    /// replay's start state alone leave on `recs` simulated with `applied` (`errs`).
+    ///
+    /// A control tick without a row has a command somewhere between the commands of the known
+    /// ticks around it; the replay takes one guess ([`Fill::Ramps`]). The same model is replayed
+    /// once more with every held (step) gap filled from its *other* end ([`Fill::Next`]), and
+    /// half the mean square of the difference between the two simulations is the floor: the
+    /// truth lies between the two ends, and a lightly damped servo rings after every step whose
+    /// tick is unknown. A gap filled as smooth motion is moved in that replay by √2 × the
+    /// cubic's error on the known ticks nearby, so that it counts its whole expected error (a
+    /// command with tick-to-tick roughness: the independent simulator's smoothed random walk).
+    ///
+    /// The replay starts every episode from its first row, whose position carries the noise
+    /// and quantisation of any reading and whose velocity the velocity noise (or, without a
+    /// velocity column, the difference of two noisy positions); a lightly damped servo rings
+    /// from that start error for seconds. In the same second replay each episode's first
+    /// position and velocity are moved by √2 × their own noise (`start`: per scored joint, the
+    /// RMS white floor of the position and of the velocity residual, `None` without a velocity
+    /// column), with a sign from the episode and joint. Zero when no gap is held, the command
+    /// is smooth and the readings are exact.
     ///
     /// [`Fill::Ramps`]: crate::sim2real::commands::Fill::Ramps
     /// [`Fill::Next`]: crate::sim2real::commands::Fill::Next
@@ -195,14 +208,48 @@ impl<'a> Engine<'a> {
         recs: &[Recording],
         applied: &[Applied],
         errs: &Errors,
+        start: &[(f64, Option<f64>)],
     ) -> Vec<f64> {
         let alt = FitOptions {
             replay: ReplayOptions { command_fill: Fill::Next, ..self.opts.replay.clone() },
             progress: None,
             ..self.opts.clone()
         };
-        let alt = Engine::new(self.robot, recs, &alt);
-        let Some(b) = alt.errors(recs, applied) else {
+        let moved: Vec<Recording> = recs
+            .iter()
+            .enumerate()
+            .map(|(e, rec)| {
+                let mut r = rec.clone();
+                for (k, name) in self.joints.iter().enumerate() {
+                    let (Some(jt), Some(&(sq, sqd))) =
+                        (r.joints.iter_mut().find(|j| &j.name == name), start.get(k))
+                    else {
+                        continue;
+                    };
+                    let sign =
+                        |salt: u64| pseudo_sign(((e as u64) << 24) ^ ((k as u64) << 4) ^ salt);
+                    // A recording without commands replays its positions as the commands:
+                    // keep the first command where it was.
+                    if jt.q_cmd.is_none() {
+                        jt.q_cmd = Some(jt.q.clone());
+                    }
+                    if let Some(q0) = jt.q.first_mut()
+                        && sq.is_finite()
+                    {
+                        *q0 += std::f64::consts::SQRT_2 * sq * sign(1);
+                    }
+                    if let (Some(qd0), Some(sqd)) =
+                        (jt.qd.as_mut().and_then(|v| v.first_mut()), sqd)
+                        && sqd.is_finite()
+                    {
+                        *qd0 += std::f64::consts::SQRT_2 * sqd * sign(2);
+                    }
+                }
+                r
+            })
+            .collect();
+        let alt = Engine::new(self.robot, &moved, &alt);
+        let Some(b) = alt.errors(&moved, applied) else {
             return vec![0.0; self.joints.len()];
         };
         self.sims.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
@@ -228,33 +275,56 @@ impl<'a> Engine<'a> {
 
     /// Per fitted joint: (name, mean square, floors) of the residual of `recs` simulated with
     /// `applied` as `errs`. The floor is the white floor ([`white_floor`], over the runs of
-    /// samples between gaps) plus the command-reconstruction floor
+    /// samples between gaps) plus the command-reconstruction and start-state floor
     /// ([`Engine::reconstruction_floor`], of this model: one more simulation).
     pub fn floors(&self, recs: &[Recording], applied: &[Applied], errs: &Errors) -> Vec<Floor> {
-        let recon = self.reconstruction_floor(recs, applied, errs);
+        // Runs of the residual between gaps, per scored joint: of the position, and of the
+        // velocity where the recording has one.
+        let runs = |name: &String, vel: bool| -> Vec<Vec<f64>> {
+            let mut runs = Vec::new();
+            for (rec, ep) in recs.iter().zip(&errs.eps) {
+                let Some(k) = rec.joints.iter().position(|j| &j.name == name) else { continue };
+                let real =
+                    if vel { rec.joints[k].qd.as_deref() } else { Some(&rec.joints[k].q[..]) };
+                let (Some(real), sim) = (real, if vel { &ep.qd_sim[k] } else { &ep.q_sim[k] })
+                else {
+                    continue;
+                };
+                let scored = gap_mask(&rec.t, self.opts.gap_mask_s);
+                let mut run = Vec::new();
+                for ((s, r), m) in scored.iter().zip(real).zip(sim) {
+                    let e = r - m;
+                    if *s && e.is_finite() {
+                        run.push(e);
+                    } else if !run.is_empty() {
+                        runs.push(std::mem::take(&mut run));
+                    }
+                }
+                runs.push(run);
+            }
+            runs
+        };
+        let white: Vec<(f64, f64)> =
+            self.joints.iter().map(|n| white_floor(&runs(n, false))).collect();
+        let start: Vec<(f64, Option<f64>)> = self
+            .joints
+            .iter()
+            .zip(&white)
+            .map(|(n, w)| {
+                let v = runs(n, true);
+                let has_qd = v.iter().any(|r| !r.is_empty());
+                (w.1.sqrt(), has_qd.then(|| white_floor(&v).1.sqrt()))
+            })
+            .collect();
+        let recon = self.reconstruction_floor(recs, applied, errs, &start);
         self.joints
             .iter()
-            .zip(&recon)
-            .map(|(name, rc)| {
-                let mut runs = Vec::new();
-                for (rec, ep) in recs.iter().zip(&errs.eps) {
-                    let Some(k) = rec.joints.iter().position(|j| &j.name == name) else { continue };
-                    let scored = gap_mask(&rec.t, self.opts.gap_mask_s);
-                    let mut run = Vec::new();
-                    // One sample index into three parallel arrays (mask, real, sim).
-                    #[allow(clippy::needless_range_loop)]
-                    for i in 0..rec.t.len() {
-                        let e = rec.joints[k].q[i] - ep.q_sim[k][i];
-                        if scored[i] && e.is_finite() {
-                            run.push(e);
-                        } else if !run.is_empty() {
-                            runs.push(std::mem::take(&mut run));
-                        }
-                    }
-                    runs.push(run);
-                }
-                let (ms, white) = white_floor(&runs);
-                Floor { joint: name.clone(), ms, white, reconstruction: *rc }
+            .zip(white.iter().zip(&recon))
+            .map(|(name, (&(ms, white), rc))| Floor {
+                joint: name.clone(),
+                ms,
+                white,
+                reconstruction: *rc,
             })
             .collect()
     }
@@ -614,4 +684,60 @@ impl<'a> Engine<'a> {
 /// Number of residuals behind an [`LmResult`] (the rows of its Jacobian).
 pub(super) fn res_len(r: &LmResult) -> usize {
     r.n_resid
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::source::SourceMap;
+    use crate::sim2real::recording::read_csv;
+    use crate::synth::{self, Settings};
+
+    /// The lightly damped pendulum servo, clean (the exact model), logged exactly at the control
+    /// ticks (no command to reconstruct) with velocity noise `qd_noise` and nothing else: its
+    /// replay floor per joint [rad RMS].
+    fn start_floor(qd_noise: f64) -> f64 {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        let path = root.join("fixtures/synth/pendulum_servo.xml");
+        let robot = crate::model::load(&mut SourceMap::default(), &path, None).expect("pendulum");
+        let joints = vec!["servo".to_string()];
+        let s = Settings {
+            episodes: 3,
+            duration_s: 3.0,
+            log_at_ticks: true,
+            noise: 0.0,
+            quant_bits: 0,
+            qd_noise,
+            drop: 0.0,
+            seed: 5,
+            ..Settings::default()
+        };
+        let ds = synth::generate(&robot, &joints, &[], &s, &|_, _| {}).expect("synth");
+        let dir = std::env::temp_dir().join(format!(
+            "modellint_floor_{}_{}",
+            qd_noise.to_bits(),
+            std::process::id()
+        ));
+        let files = synth::write::write(&ds, &dir).expect("write");
+        let recs: Vec<Recording> = files.iter().map(|f| read_csv(f).expect("read")).collect();
+        let _ = std::fs::remove_dir_all(&dir);
+        let opts = FitOptions::default();
+        let engine = Engine::new(&robot, &recs, &opts);
+        let errs = engine.errors(&recs, &[]).expect("replay");
+        let f = engine.floors(&recs, &[], &errs);
+        assert_eq!(f.len(), 1);
+        f[0].reconstruction.sqrt()
+    }
+
+    /// The replay starts from the first row; a noisy first velocity makes a lightly damped servo
+    /// ring, and the floor counts it: nothing with exact readings logged at the ticks, and an
+    /// RMS that doubles with the velocity noise (the response is linear in the start error).
+    #[test]
+    fn the_floor_counts_the_start_state_noise() {
+        let exact = start_floor(0.0);
+        assert!(exact < 1e-6, "{exact}");
+        let (a, b) = (start_floor(0.02), start_floor(0.04));
+        assert!(a > 2e-5, "{a}");
+        assert!((b / a - 2.0).abs() < 0.3, "{a} {b}");
+    }
 }

@@ -220,7 +220,7 @@ pub struct Floor {
     pub ms: f64,
     /// White floor ([`crate::fit::stats::white_floor`]): noise and quantisation.
     pub white: f64,
-    /// Command-reconstruction floor ([`Engine::reconstruction_floor`]).
+    /// Command-reconstruction and start-state floor ([`Engine::reconstruction_floor`]).
     pub reconstruction: f64,
 }
 
