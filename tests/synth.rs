@@ -310,6 +310,13 @@ fn bad_values_exit_2_naming_the_flag() {
         assert!(err.contains(flag), "{args:?}: {err}");
     }
     assert!(!out.exists(), "nothing written on bad input");
+    // A floating-base robot without a test stand would fall while the file says `base: fixed`
+    // (the exact Asimov model 5° RMSE off its own clean recording): refused, with the fix.
+    let o = synth(&root().join("models/asimov.xml"), &out, &["--episodes", "1"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("floating base") && err.contains("--suspend 0.5"), "{err}");
+    assert!(!out.exists(), "nothing written for a floating base without --suspend");
     let h =
         Command::new(env!("CARGO_BIN_EXE_modellint")).args(["synth", "--help"]).output().unwrap();
     let h = String::from_utf8_lossy(&h.stdout);

@@ -302,6 +302,16 @@ pub fn generate(
             dofadr: f.dofadr,
             pose: [k[0], k[1], k[2] + s.suspend_m, k[3], k[4], k[5], k[6]],
         })
+    } else if let Some(f) = robot.joints.iter().find(|j| j.jtype == JointType::Free) {
+        // A free base would fall (or stand on whatever is below it) while the file says
+        // `base: fixed`, and every replay pinned to the keyframe would disagree with it by
+        // degrees: the exact model of a clean recording 5° RMSE off on the Asimov legs.
+        return Err(format!(
+            "the model has a floating base (free joint `{}`): the synth records a robot on a test \
+             stand; give --suspend M to pin the base M m above its keyframe pose (e.g. \
+             --suspend 0.5, written as base.* columns)",
+            f.name
+        ));
     } else {
         None
     };
