@@ -307,10 +307,14 @@ pub fn generate(
         // `base: fixed`, and every replay pinned to the keyframe would disagree with it by
         // degrees: the exact model of a clean recording 5° RMSE off on the Asimov legs.
         return Err(format!(
-            "the model has a floating base (free joint `{}`): the synth records a robot on a test \
-             stand; give --suspend M to pin the base M m above its keyframe pose (e.g. \
-             --suspend 0.5, written as base.* columns)",
-            f.name
+            "the model has a floating base ({}): the synth records a robot on a test stand; \
+             give --suspend M to pin the base M m above its keyframe pose (e.g. --suspend 0.5, \
+             written as base.* columns)",
+            if f.name.is_empty() {
+                "an unnamed free joint".into()
+            } else {
+                format!("free joint `{}`", f.name)
+            }
         ));
     } else {
         None
