@@ -591,14 +591,7 @@ mod tests {
 
     /// Rows in every tick except `missing`, each logging its tick's command mid-tick.
     fn log_without(truth: &[f64], missing: &[usize]) -> Schedule {
-        let (mut t, mut c) = (Vec::new(), Vec::new());
-        for (k, &x) in truth.iter().enumerate() {
-            if !missing.contains(&k) {
-                t.push(k as f64 * 0.01 + 0.004);
-                c.push(x);
-            }
-        }
-        reconstruct(&t, &[&c], Some(100.0), 0.0, CommandTiming::InForce, Fill::Ramps).unwrap()
+        log_without_fill(truth, missing, Fill::Ramps)
     }
 
     #[test]
