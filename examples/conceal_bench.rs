@@ -152,6 +152,20 @@ fn matrix(quick: bool) -> Vec<Case> {
     v
 }
 
+/// `true` when `term` occurs in `label` with no letter or digit right before or after it: `rig`
+/// is in "rig viscous_damping@j1" but not in "asimov armature@right_knee"; `knee` is in both
+/// "right_knee" and "knee ...".
+fn has_words(label: &str, term: &str) -> bool {
+    let word = |c: Option<char>| c.is_some_and(|c| c.is_alphanumeric());
+    // A term that begins (ends) with a space or punctuation needs no boundary there.
+    let (open, close) = (word(term.chars().next()), word(term.chars().next_back()));
+    !term.is_empty()
+        && label.match_indices(term).any(|(i, _)| {
+            !(open && word(label[..i].chars().next_back()))
+                && !(close && word(label[i + term.len()..].chars().next()))
+        })
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let quick = args.iter().any(|a| a == "--quick");
@@ -163,7 +177,7 @@ fn main() {
     if let Some((_, a)) = args.iter().enumerate().find(|(i, a)| !known(*i, a)) {
         let help = a == "--help" || a == "-h";
         let usage = "usage: conceal_bench [--quick] [--filter TERM[,TERM...]]\n  \
-            cases whose label has every TERM (e.g. --filter 'arm3,real 12b'; \
+            cases whose label has every TERM as whole words (e.g. --filter 'arm3,real 12b'; \
             'asimov armature@all,real none');\n  \
             markdown table on stdout, per-case rows and progress on stderr; \
             MODELLINT_CONCEAL_KEEP=DIR keeps the recordings";
@@ -177,9 +191,10 @@ fn main() {
     let cases: Vec<Case> = matrix(quick)
         .into_iter()
         .filter(|c| {
-            // Comma-separated terms, all of which must occur (e.g. `arm3,real 12b`).
+            // Comma-separated terms, all of which must occur as whole words (e.g.
+            // `arm3,real 12b`; `rig` is the rig, not `right_knee`).
             let label = format!("{} {}", c.name, c.noise_label());
-            filter.as_ref().is_none_or(|f| f.split(',').all(|t| label.contains(t)))
+            filter.as_ref().is_none_or(|f| f.split(',').all(|t| has_words(&label, t)))
         })
         .collect();
     eprintln!("conceal bench: {} cases{}", cases.len(), if quick { " (--quick)" } else { "" });

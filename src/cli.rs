@@ -125,7 +125,9 @@ pub enum Cmd {
 pub struct GapCmd {
     /// Model (MJCF or URDF).
     pub model: PathBuf,
-    /// Recordings: CSV files, BAM JSON logs, or directories (their *.csv/*.json, sorted).
+    /// Recordings: CSV files, BAM JSON logs, or directories (their *.csv/*.json, sorted; a
+    /// dataset directory with episodes/ beside truth.json, as `synth --out` writes, is read from
+    /// its episodes/).
     #[arg(required = true)]
     pub recordings: Vec<PathBuf>,
     /// Hardware spec (TOML) for joint regions. Default: <model>.toml beside the model.
@@ -159,7 +161,9 @@ pub struct FitCmd {
     /// and torque-off braking are ordinary effects now).
     #[arg(long, value_parser = ["xl330"], hide = true)]
     pub servo: Option<String>,
-    /// Recordings: CSV files, BAM JSON logs, or directories.
+    /// Recordings: CSV files, BAM JSON logs, or directories (their *.csv/*.json, sorted; a
+    /// dataset directory with episodes/ beside truth.json, as `synth --out` writes, is read from
+    /// its episodes/).
     #[arg(required = true)]
     pub recordings: Vec<PathBuf>,
     /// Hardware spec (TOML) for joint regions. Default: <model>.toml beside the model.

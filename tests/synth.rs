@@ -268,6 +268,19 @@ fn settle_starts_the_recording_at_rest_and_output_is_deterministic() {
             assert!((q[i] - q[0]).abs() < 1e-5, "{j} moved during the hold: {} → {}", q[0], q[i]);
         }
     }
+    // The output directory is a dataset `gap` (and `fit`) read as it is: its episodes/, not
+    // truth.json (which is no recording).
+    let g = Command::new(env!("CARGO_BIN_EXE_modellint"))
+        .arg("gap")
+        .arg(root().join(ARM3))
+        .arg(&out)
+        .args(["--format", "json"])
+        .output()
+        .unwrap();
+    assert_eq!(g.status.code(), Some(0), "{}", String::from_utf8_lossy(&g.stderr));
+    let gj: serde_json::Value = serde_json::from_slice(&g.stdout).unwrap();
+    let text = gj.to_string();
+    assert!(text.contains("ep_00.csv") && !text.contains("truth.json"), "{text}");
     let a = std::fs::read(out.join("episodes/ep_00.csv")).unwrap();
     let b = std::fs::read(out.join("truth.json")).unwrap();
     let out2 = tmp("settle2");

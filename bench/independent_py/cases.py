@@ -7,6 +7,13 @@ MODELS = {
     "arm4": dict(xml="arm4.xml", joints=["yaw", "shoulder", "elbow", "wrist_roll"], robot="arm4_pedestal",
                  amp=[0.4, 0.3, 0.35, 0.6], t0_ctrl=0.0061, **STD),
 }
+# ---- quad12: 12-joint quadruped lifted on a stand (torso welded, feet in the air) ----
+# 200 Hz controller (ctrl_hz; the others use realsim's default 100 Hz) and a recorder at ~176 Hz
+# ±15 % (the arm2 ratio 88/100 kept), otherwise the STD noise/quantisation/drops.
+QUAD = [f"{l}_{j}" for l in ("FL", "FR", "RL", "RR") for j in ("hip_abd", "hip_pitch", "knee")]
+MODELS["quad12"] = dict(xml="quad12.xml", joints=QUAD, robot="quad12_stand", ctrl_hz=200.0,
+                        amp=[0.25, 0.35, 0.4] * 4, t0_ctrl=0.0023, **dict(STD, rec_hz=176.0))
+QUAD_EP = dict(model="quad12", episodes=4, seconds=6.0, heldout=[3])
 ALL3 = ["hip_pitch", "knee", "ankle"]
 ALL4 = ["yaw", "shoulder", "elbow", "wrist_roll"]
 CASES = {
@@ -36,3 +43,10 @@ CASES["A5_wrist_armature_nosplit"] = dict(model="arm4", seed=26, episodes=4, sec
 CASES["A6_shoulder_kd_only"] = dict(model="arm4", seed=27, effects={"joints": {"shoulder": {"kd_scale": 2.0}}})
 CASES["L6_ankle_delay25"] = dict(model="leg3", seed=17, effects={"joints": {"ankle": {"delay": 0.025}}})
 CASES["L7_none_10bit_noisy"] = dict(model="leg3", seed=18, logging=dict(bits=10, q_noise=0.001, qd_noise=0.03, drop=0.02), effects={})
+# ---- quad12 ----
+CASES["Q0_none"] = dict(QUAD_EP, seed=41, effects={})
+CASES["Q1_all_damping"] = dict(QUAD_EP, seed=42, effects={"joints": {j: {"damping": 0.3} for j in QUAD}})
+CASES["Q2_knees_armature"] = dict(QUAD_EP, seed=43,
+    effects={"joints": {j: {"armature": 0.02} for j in QUAD if j.endswith("_knee")}})
+CASES["Q3_all_delay10"] = dict(QUAD_EP, seed=44, effects={"delay": 0.010})
+CASES["Q4_FL_hip_offset"] = dict(QUAD_EP, seed=45, effects={"joints": {"FL_hip_pitch": {"offset": 0.03}}})

@@ -10,7 +10,7 @@ it shares nothing with `modellint synth` or the replay.
 The robot = the nominal MJCF compiled by MuJoCo, then concealed effects written into the
 MjModel arrays (dof_damping, dof_armature, dof_frictionloss, jnt_stiffness + qpos_spring=key,
 actuator gainprm/biasprm), plus an own command queue for action delay and an encoder offset.
-Logging: 100 Hz controller with phase control_t0_s, async recorder ~rate_hz with jitter,
+Logging: 100 Hz controller (or the model's `ctrl_hz`) with phase control_t0_s, async recorder ~rate_hz with jitter,
 q = quantise(q_true + offset + N(0, q_noise)), qd + N(0, qd_noise), drops, 2 s settle.
 """
 import json, math, os, shutil, sys
@@ -21,7 +21,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 from cases import CASES, MODELS  # noqa: E402
 
-CTRL_HZ = 100.0
+CTRL_HZ = 100.0  # default controller rate; a model may set its own `ctrl_hz` (cases.py)
 SETTLE_S = 2.0
 
 
@@ -83,7 +83,7 @@ def lowpass2(x, fc, fs):
     return y2
 
 
-def make_commands(rng, tick_t, centre, amp, seconds):
+def make_commands(rng, tick_t, centre, amp, seconds, ctrl_hz=CTRL_HZ):
     """Command per tick (ticks at tick_t, recording time) for each joint. Hold 0.3 s, then a
     shuffled mix of 3 of: linear chirp, smoothed random walk, ramped steps, multisine."""
     nj = len(centre)
@@ -107,7 +107,7 @@ def make_commands(rng, tick_t, centre, amp, seconds):
                 y = 0.7 * A * np.sin(ph + rng.uniform(0, 2 * math.pi))
             elif kind == "walk":
                 w = rng.normal(0, 1, len(tt) + 200)
-                y = lowpass2(w, rng.uniform(0.8, 2.0), CTRL_HZ)[200:]
+                y = lowpass2(w, rng.uniform(0.8, 2.0), ctrl_hz)[200:]
                 y = A * y / (np.max(np.abs(y)) + 1e-9)
             elif kind == "steps":
                 y = np.zeros(len(tt)); lvl = prev; tnext = 0.0; tr = 0.06
@@ -146,18 +146,19 @@ def run_episode(m, joints, cfg, eff, rng, seconds, ep_idx, split, out_csv, t0_ct
     key = m.key_qpos[0]
     centre = [float(key[a]) for a in qadr]
     amp = cfg["amp"]
+    ctrl_hz = float(cfg.get("ctrl_hz", CTRL_HZ))
     delay = [eff.get("joints", {}).get(j, {}).get("delay", eff.get("delay", 0.0)) for j in joints]
     offset = [eff.get("joints", {}).get(j, {}).get("offset", 0.0) for j in joints]
 
-    # controller ticks in recording time: t0_ctrl + k/100, k from the settle start to the end
-    kmin = math.floor((-SETTLE_S - 0.1 - t0_ctrl) * CTRL_HZ)
-    kmax = math.ceil((seconds + 0.1 - t0_ctrl) * CTRL_HZ)
+    # controller ticks in recording time: t0_ctrl + k/ctrl_hz, k from the settle start to the end
+    kmin = math.floor((-SETTLE_S - 0.1 - t0_ctrl) * ctrl_hz)
+    kmax = math.ceil((seconds + 0.1 - t0_ctrl) * ctrl_hz)
     ks = np.arange(kmin, kmax + 1)
-    tick_t = t0_ctrl + ks / CTRL_HZ
-    cmd, segs = make_commands(rng, tick_t, centre, amp, seconds)
+    tick_t = t0_ctrl + ks / ctrl_hz
+    cmd, segs = make_commands(rng, tick_t, centre, amp, seconds, ctrl_hz)
 
     def issued_index(t):  # index of tick in force (issued) at recording time t
-        return int(math.floor((t - t0_ctrl) * CTRL_HZ + 1e-9)) - kmin
+        return int(math.floor((t - t0_ctrl) * ctrl_hz + 1e-9)) - kmin
 
     # initial state: at the first command, at rest; settle SETTLE_S s unrecorded
     for i, a in enumerate(qadr):
@@ -211,7 +212,7 @@ def run_episode(m, joints, cfg, eff, rng, seconds, ep_idx, split, out_csv, t0_ct
 
     with open(out_csv, "w") as f:
         f.write(f"# robot: {cfg['robot']}\n# episode: {ep_idx}\n# split: {split}\n")
-        f.write(f"# control_rate_hz: {CTRL_HZ:g}\n# control_t0_s: {t0_ctrl}\n")
+        f.write(f"# control_rate_hz: {ctrl_hz:g}\n# control_t0_s: {t0_ctrl}\n")
         f.write("# note: recorded by an independent tryout simulator\n")
         f.write("t," + ",".join(f"{j}.q,{j}.qd,{j}.q_cmd" for j in joints) + "\n")
         for t, qm, qdm, qc in rows:
@@ -249,7 +250,7 @@ def main(case):
     truth = {"case": case, "model": mcfg["xml"], "joints": mcfg["joints"], "effects": eff,
              "resolved": resolved,
              "logging": {k: cfg[k] for k in ("rec_hz", "jitter", "drop", "q_noise", "qd_noise", "bits", "t0_ctrl", "amp")},
-             "settle_s": SETTLE_S, "control_rate_hz": CTRL_HZ, "seed": c["seed"],
+             "settle_s": SETTLE_S, "control_rate_hz": float(cfg.get("ctrl_hz", CTRL_HZ)), "seed": c["seed"],
              "timestep": m.opt.timestep, "episodes": eps, "mujoco": mujoco.__version__}
     with open(os.path.join(out, "truth.json"), "w") as f:
         json.dump(truth, f, indent=1)

@@ -18,24 +18,20 @@ pub fn read_recording(path: &Path) -> Result<Recording, RecordingError> {
 }
 
 /// Expands the command-line inputs: files as given, directories to their `*.csv` (and BAM
-/// `*.json`) files in sorted order.
+/// `*.json`) files in sorted order. A dataset directory — `episodes/` beside a `truth.json`
+/// and nothing else to read, as `modellint synth --out` and the independent-simulator datasets
+/// lay it out — is read from its `episodes/`: its `truth.json` is the answer, not a recording.
 pub fn expand_inputs(inputs: &[PathBuf]) -> Result<Vec<PathBuf>, RecordingError> {
     let mut out = Vec::new();
     for p in inputs {
         if p.is_dir() {
-            let rd = std::fs::read_dir(p).map_err(|e| {
-                RecordingError::new(p, None, None, format!("cannot read directory: {e}"))
-            })?;
-            let mut files: Vec<PathBuf> = rd
-                .filter_map(|e| e.ok().map(|e| e.path()))
-                .filter(|f| {
-                    f.is_file()
-                        && f.extension().is_some_and(|x| {
-                            x.eq_ignore_ascii_case("csv") || x.eq_ignore_ascii_case("json")
-                        })
-                })
-                .collect();
-            files.sort();
+            let mut files = recording_files(p)?;
+            let episodes = p.join("episodes");
+            if episodes.is_dir()
+                && files.iter().all(|f| f.file_name().is_some_and(|n| n == "truth.json"))
+            {
+                files = recording_files(&episodes)?;
+            }
             if files.is_empty() {
                 return Err(RecordingError::new(
                     p,
@@ -52,4 +48,65 @@ pub fn expand_inputs(inputs: &[PathBuf]) -> Result<Vec<PathBuf>, RecordingError>
         }
     }
     Ok(out)
+}
+
+/// The `*.csv` and `*.json` files directly in `dir`, sorted.
+fn recording_files(dir: &Path) -> Result<Vec<PathBuf>, RecordingError> {
+    let rd = std::fs::read_dir(dir)
+        .map_err(|e| RecordingError::new(dir, None, None, format!("cannot read directory: {e}")))?;
+    let mut files: Vec<PathBuf> = rd
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|f| {
+            f.is_file()
+                && f.extension().is_some_and(|x| {
+                    x.eq_ignore_ascii_case("csv") || x.eq_ignore_ascii_case("json")
+                })
+        })
+        .collect();
+    files.sort();
+    Ok(files)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn touch(p: &Path) {
+        std::fs::create_dir_all(p.parent().unwrap()).unwrap();
+        std::fs::write(p, "x").unwrap();
+    }
+
+    /// A dataset directory (episodes/ beside truth.json) is read from its episodes; a directory
+    /// with recordings of its own is read as it is, truth.json or not.
+    #[test]
+    fn a_dataset_directory_is_read_from_its_episodes() {
+        let root = std::env::temp_dir().join(format!("modellint-inputs-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&root);
+        let ds = root.join("ds");
+        touch(&ds.join("truth.json"));
+        touch(&ds.join("episodes/ep_01.csv"));
+        touch(&ds.join("episodes/ep_00.csv"));
+        touch(&ds.join("truth_commands/ep_00.csv"));
+        let got = expand_inputs(std::slice::from_ref(&ds)).unwrap();
+        assert_eq!(got, vec![ds.join("episodes/ep_00.csv"), ds.join("episodes/ep_01.csv")]);
+        // Without truth.json too (an episodes/ directory and nothing else to read).
+        std::fs::remove_file(ds.join("truth.json")).unwrap();
+        assert_eq!(expand_inputs(std::slice::from_ref(&ds)).unwrap().len(), 2);
+
+        // Recordings at the top level: read as given, the subdirectory is not searched.
+        let flat = root.join("flat");
+        touch(&flat.join("run.csv"));
+        touch(&flat.join("truth.json"));
+        touch(&flat.join("episodes/ep_00.csv"));
+        let got = expand_inputs(std::slice::from_ref(&flat)).unwrap();
+        assert_eq!(got, vec![flat.join("run.csv"), flat.join("truth.json")]);
+
+        // Nothing to read anywhere: the error names the directory.
+        let empty = root.join("empty");
+        std::fs::create_dir_all(empty.join("episodes")).unwrap();
+        let e = expand_inputs(std::slice::from_ref(&empty)).unwrap_err();
+        assert_eq!(e.file, empty);
+        assert!(e.message.contains("no *.csv or *.json"), "{}", e.message);
+        let _ = std::fs::remove_dir_all(&root);
+    }
 }
