@@ -161,8 +161,9 @@ fn has_words(label: &str, term: &str) -> bool {
     let (open, close) = (word(term.chars().next()), word(term.chars().next_back()));
     !term.is_empty()
         && label.match_indices(term).any(|(i, _)| {
-            !(open && word(label[..i].chars().next_back()))
-                && !(close && word(label[i + term.len()..].chars().next()))
+            let glued_before = open && word(label[..i].chars().next_back());
+            let glued_after = close && word(label[i + term.len()..].chars().next());
+            !glued_before && !glued_after
         })
 }
 
