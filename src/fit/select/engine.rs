@@ -18,6 +18,7 @@ use crate::sim2real::metrics::gap_mask;
 use crate::sim2real::recording::Recording;
 use crate::sim2real::replay::{Episode, ReplayOptions};
 
+use super::start::{self, StartSens};
 use super::{Errors, FitOptions, Floor, ProgressInfo};
 
 /// The fit engine's view of a robot and dataset.
@@ -35,7 +36,12 @@ pub struct Engine<'a> {
     /// The last [`RECENT`] simulations by [`set_key`]: the search scores the set a fit ended on
     /// right after the fit, and the same base set for each candidate.
     recent: std::sync::Mutex<std::collections::VecDeque<(String, Option<Errors>)>>,
+    /// Start-state sensitivities by recording ([`start::key`]), measured once each on the
+    /// nominal model (`None`: not measurable, the recording replays from its first row).
+    starts: std::sync::Mutex<StartMemo>,
 }
+
+type StartMemo = std::collections::HashMap<String, Option<std::sync::Arc<StartSens>>>;
 
 /// How many recent simulations [`Engine::errors`] keeps.
 const RECENT: usize = 16;
@@ -85,6 +91,7 @@ impl<'a> Engine<'a> {
             sims: std::sync::atomic::AtomicUsize::new(0),
             fits: Default::default(),
             recent: Default::default(),
+            starts: Default::default(),
         }
     }
 
@@ -129,7 +136,7 @@ impl<'a> Engine<'a> {
     fn simulate(&self, recs: &[Recording], applied: &[Applied]) -> Option<Errors> {
         self.sims.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         let m = model_with(self.robot, applied);
-        let eps: Vec<Episode> = recs
+        let mut eps: Vec<Episode> = recs
             .par_iter()
             .map(|r| {
                 replay_with(self.robot, &m, r, applied, &self.opts.replay)
@@ -137,6 +144,14 @@ impl<'a> Engine<'a> {
                     .filter(|e| e.diverged.is_none())
             })
             .collect::<Option<Vec<_>>>()?;
+        if self.opts.estimate_start {
+            let sens = self.start_sensitivities(recs);
+            eps.par_iter_mut().zip(recs).zip(&sens).for_each(|((ep, rec), s)| {
+                if let Some(s) = s {
+                    s.apply(rec, ep);
+                }
+            });
+        }
         let mut sse = 0.0;
         let mut n = 0usize;
         let mut win = Vec::new();
@@ -178,6 +193,34 @@ impl<'a> Engine<'a> {
             }
         }
         Some(Errors { sse, n, windows: win, eps })
+    }
+
+    /// The start-state sensitivities of `recs` ([`StartSens`]), measured on first use.
+    fn start_sensitivities(&self, recs: &[Recording]) -> Vec<Option<std::sync::Arc<StartSens>>> {
+        let keys: Vec<String> = recs.iter().map(start::key).collect();
+        let missing: Vec<usize> = {
+            let memo = self.starts.lock().expect("memo");
+            let mut seen = std::collections::HashSet::new();
+            (0..recs.len())
+                .filter(|&i| !memo.contains_key(&keys[i]) && seen.insert(&keys[i]))
+                .collect()
+        };
+        let measured: Vec<Option<std::sync::Arc<StartSens>>> = missing
+            .par_iter()
+            .map(|&i| {
+                StartSens::measure(self.robot, &recs[i], &self.opts.replay, self.opts.gap_mask_s)
+                    .map(std::sync::Arc::new)
+            })
+            .collect();
+        if let Some(nj) = missing.iter().map(|&i| recs[i].joints.len()).max() {
+            // One replay of the first row and two per recorded joint.
+            self.sims.fetch_add(1 + 2 * nj, std::sync::atomic::Ordering::Relaxed);
+        }
+        let mut memo = self.starts.lock().expect("memo");
+        for (i, s) in missing.into_iter().zip(measured) {
+            memo.insert(keys[i].clone(), s);
+        }
+        keys.iter().map(|k| memo.get(k).cloned().flatten()).collect()
     }
 
     /// Per scored joint: the mean square of the error that command reconstruction and the
@@ -694,9 +737,8 @@ mod tests {
     use crate::synth::{self, Settings};
 
     /// The lightly damped pendulum servo, clean (the exact model), logged exactly at the control
-    /// ticks (no command to reconstruct) with velocity noise `qd_noise` and nothing else: its
-    /// replay floor per joint [rad RMS].
-    fn start_floor(qd_noise: f64) -> f64 {
+    /// ticks (no command to reconstruct) with velocity noise `qd_noise` and nothing else.
+    fn pendulum_at_ticks(qd_noise: f64) -> (crate::model::Robot, Vec<Recording>) {
         let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
         let path = root.join("fixtures/synth/pendulum_servo.xml");
         let robot = crate::model::load(&mut SourceMap::default(), &path, None).expect("pendulum");
@@ -721,12 +763,39 @@ mod tests {
         let files = synth::write::write(&ds, &dir).expect("write");
         let recs: Vec<Recording> = files.iter().map(|f| read_csv(f).expect("read")).collect();
         let _ = std::fs::remove_dir_all(&dir);
-        let opts = FitOptions::default();
+        (robot, recs)
+    }
+
+    /// [`pendulum_at_ticks`]' replay floor [rad RMS] with the replay started at the first row.
+    fn start_floor(qd_noise: f64) -> f64 {
+        let (robot, recs) = pendulum_at_ticks(qd_noise);
+        let opts = FitOptions { estimate_start: false, ..FitOptions::default() };
         let engine = Engine::new(&robot, &recs, &opts);
         let errs = engine.errors(&recs, &[]).expect("replay");
         let f = engine.floors(&recs, &[], &errs);
         assert_eq!(f.len(), 1);
         f[0].reconstruction.sqrt()
+    }
+
+    /// Exact positions, exact commands, the exact model: the only error left is the first row's
+    /// noisy velocity, ringing in the lightly damped servo. Started at the first row, the
+    /// residual is that ringing; with the start estimated from the episode it must vanish (the
+    /// true start explains the data exactly), and the floor's start part with it.
+    #[test]
+    fn an_estimated_start_removes_the_first_rows_noise() {
+        let (robot, recs) = pendulum_at_ticks(0.04);
+        let rms = |estimate_start: bool| {
+            let opts = FitOptions { estimate_start, ..FitOptions::default() };
+            let engine = Engine::new(&robot, &recs, &opts);
+            let errs = engine.errors(&recs, &[]).expect("replay");
+            let f = engine.floors(&recs, &[], &errs);
+            (errs.rmse(), f[0].reconstruction.sqrt())
+        };
+        let (read, read_floor) = rms(false);
+        let (est, est_floor) = rms(true);
+        assert!(read > 2e-5, "the first row's velocity noise rings: {read}");
+        assert!(est < read / 10.0, "estimated start: {est} vs first row {read}");
+        assert!(est_floor < read_floor / 3.0, "floor {est_floor} vs {read_floor}");
     }
 
     /// The replay starts from the first row; a noisy first velocity makes a lightly damped servo

@@ -29,6 +29,7 @@ mod greedy;
 mod pairs;
 mod reshoot;
 mod simplify;
+mod start;
 mod verdict;
 
 use std::collections::BTreeMap;
@@ -96,6 +97,10 @@ pub struct FitOptions {
     ///
     /// [`white_floor`]: crate::fit::stats::white_floor
     pub white_ratio: f64,
+    /// Estimate each episode's start state (first position and velocity of every recorded
+    /// joint) from the whole episode, with the first row as its prior, instead of starting the
+    /// replay exactly at the first row's noisy reading ([`start`]).
+    pub estimate_start: bool,
     /// Called at each step of the search (none: silent).
     pub progress: Option<Progress>,
 }
@@ -135,6 +140,7 @@ impl Default for FitOptions {
             simplify: true,
             gap_mask_s: 0.1,
             white_ratio: 1.5,
+            estimate_start: true,
             progress: None,
         }
     }
