@@ -61,6 +61,16 @@ const LEG_PREFIXES: [(&str, &str); 8] = [
     ("lh_", "rh_"),
 ];
 
+/// The joint a quadruped leg prefix is on (`FL_knee` → `knee`, `RH_KFE` → `KFE`): the same
+/// joint on every leg has the same one. `None` without a leg prefix.
+pub fn leg_joint(name: &str) -> Option<&str> {
+    LEG_PREFIXES
+        .iter()
+        .flat_map(|(l, r)| [l, r])
+        .find(|p| name.starts_with(**p) && name.len() > p.len())
+        .map(|p| &name[p.len()..])
+}
+
 /// Replace one marker occurrence: short markers (`l_`, `_l`) only as a prefix / suffix.
 fn swap(name: &str, from: &str, to: &str) -> Option<String> {
     if LEG_PREFIXES.iter().any(|(l, r)| *l == from || *r == from) {
@@ -117,6 +127,17 @@ mod tests {
         assert_eq!(mirror("RR_hip", None), Some((Side::Right, "RL_hip".into())));
         assert_eq!(mirror("LH_KFE", None), Some((Side::Left, "RH_KFE".into())));
         assert_eq!(mirror("HALF_link", None), None);
+    }
+
+    #[test]
+    fn the_same_joint_on_every_leg() {
+        assert_eq!(leg_joint("FL_calf_joint"), Some("calf_joint"));
+        assert_eq!(leg_joint("RR_calf_joint"), Some("calf_joint"));
+        assert_eq!(leg_joint("LH_KFE"), Some("KFE"));
+        assert_eq!(leg_joint("rf_hip"), Some("hip"));
+        for n in ["left_knee", "l_ankle", "FLOOR_hinge", "FL_", "knee", "hip_FL_"] {
+            assert_eq!(leg_joint(n), None, "{n}");
+        }
     }
 
     #[test]

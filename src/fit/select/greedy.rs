@@ -8,7 +8,7 @@ use rayon::prelude::*;
 use crate::fit::diagnose::{Candidate, diagnose};
 use crate::fit::effects::{self, Applied, Effect};
 use crate::fit::stats::bic;
-use crate::model::mirror::mirror_name;
+use crate::model::mirror::{leg_joint, mirror_name};
 
 use super::pairs::{joint_pairs, pair_lookahead};
 use super::verdict::{at_bound, verdict, z_needed};
@@ -120,6 +120,26 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
             None => vec![],
         };
         let fam_new = fam.len() >= 3 && !has_group(cands, e.id(), &fam);
+        // The same joint on every leg of a quadruped (`FL_knee` … `RR_knee`) as one more group
+        // when another leg's also ranks high for this effect: four knees with the same missing
+        // armature are one group, not two pairs merged later.
+        let legs: Vec<String> = match leg_joint(&c.joint) {
+            Some(part) => engine
+                .joints
+                .iter()
+                .filter(|j| leg_joint(j) == Some(part) && !covered(c.effect, j))
+                .cloned()
+                .collect(),
+            None => vec![],
+        };
+        let legs_new = legs.len() >= 3
+            && legs != fam
+            && !has_group(cands, e.id(), &legs)
+            && diag
+                .iter()
+                .take(opts.candidates_per_round * 4)
+                .any(|d| d.effect == c.effect && d.joint != c.joint && legs.contains(&d.joint))
+            && engine.shared_start(e, &applied, &legs);
         // Every recorded joint as one group sharing the parameters (an effect the whole robot
         // has, such as a missing damping or friction, a delay or a servo gain error) — when the
         // model gives those joints the same starting value, so that one knob is meaningful.
@@ -128,6 +148,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         let all_new = all.len() >= 2
             && all.len() > pair.as_ref().map_or(1, |p| p.len())
             && all != fam
+            && all != legs
             && !has_group(cands, e.id(), &all)
             && engine.shared_start(e, &applied, &all);
         if single_new {
@@ -138,6 +159,11 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         }
         if fam_new {
             cands.push((e, fam, ev.clone()));
+        }
+        if legs_new {
+            let mut ev = ev.clone();
+            ev.insert("every_leg_group".into(), 1.0);
+            cands.push((e, legs, ev));
         }
         if all_new {
             let mut ev = ev;
