@@ -240,6 +240,21 @@ fn fit_matches_truth(ds: &str) {
         v["after"]["position_mae"].as_f64().unwrap(),
     );
     assert!(a <= b + 1e-12, "{ds}: held-out MAE {b} → {a}");
+    // The fitted model's floor is the logger's noise: the white part of each joint's training
+    // residual is the RMS of a noisy, quantised reading, √(σ² + Δ²/12) from the simulator's own
+    // settings, and the residual is at it (nothing left unexplained, nothing over-fitted).
+    let rec = &truth["recording"];
+    let (sigma, quantum) = (rec["q_noise"].as_f64().unwrap(), rec["q_quantum"].as_f64().unwrap());
+    let noise = (sigma * sigma + quantum * quantum / 12.0).sqrt();
+    let floors = v["floor"].as_array().unwrap();
+    let recorded = truth["recorded_joints"].as_array().unwrap().len();
+    assert_eq!(floors.len(), recorded, "{ds}: floors {floors:?}");
+    for f in floors {
+        let white = f["white_floor_rms"].as_f64().unwrap();
+        let res = f["residual_rms"].as_f64().unwrap();
+        assert!((white / noise - 1.0).abs() < 0.1, "{ds}: white floor {white} vs noise {noise}");
+        assert!(res < 1.1 * noise, "{ds}: residual {res} vs noise {noise}");
+    }
 }
 
 #[test]

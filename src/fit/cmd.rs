@@ -365,7 +365,7 @@ pub fn run_fit(a: FitArgs) -> i32 {
                 })
                 .collect();
             s.push_str(&format!(
-                "  floor (RMS: white part of the training residual + command reconstruction and start state): {}\n",
+                "  floor of the fitted model (RMS: white part of the training residual + command reconstruction and start state): {}\n",
                 f.join(", ")
             ));
         }

@@ -244,7 +244,8 @@ pub struct FitOutcome {
     pub split_by_time: bool,
     /// Which episodes were held out and why.
     pub split_note: String,
-    /// Per fitted joint, of the model as given on the training set.
+    /// Per fitted joint, the training residual and its floor with the effects kept (the model
+    /// as given when nothing is).
     pub floors: Vec<Floor>,
     /// The search ended because the residual reached the white floor on every joint.
     pub stopped_at_floor: bool,
@@ -387,6 +388,11 @@ pub fn fit(robot: &Robot, recs: &[Recording], opts: &FitOptions) -> FitOutcome {
     if !out.applied.is_empty() {
         engine.report(round, "standard errors", None);
         final_uncertainty(&engine, &train, &mut out);
+        // The floors reported are those of the final model: with an effect missing, the
+        // residual's white part carries some of the model error too.
+        if let Some(e) = engine.errors(&train, &out.applied) {
+            out.floors = engine.floors(&train, &out.applied, &e);
+        }
     }
     engine.report(round, "done", None);
     out
