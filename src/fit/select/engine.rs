@@ -38,7 +38,9 @@ pub struct Engine<'a> {
     recent: std::sync::Mutex<std::collections::VecDeque<(String, Option<Errors>)>>,
     /// Start-state sensitivities by recording ([`start::key`]), measured once each on the
     /// nominal model (`None`: not measurable, the recording replays from its first row).
-    starts: std::sync::Mutex<StartMemo>,
+    /// Shared with the floor's alternative replay, whose recordings differ only in the first row
+    /// and the commands.
+    starts: std::sync::Arc<std::sync::Mutex<StartMemo>>,
 }
 
 type StartMemo = std::collections::HashMap<String, Option<std::sync::Arc<StartSens>>>;
@@ -291,7 +293,8 @@ impl<'a> Engine<'a> {
                 r
             })
             .collect();
-        let alt = Engine::new(self.robot, &moved, &alt);
+        let mut alt = Engine::new(self.robot, &moved, &alt);
+        alt.starts = self.starts.clone();
         let Some(b) = alt.errors(&moved, applied) else {
             return vec![0.0; self.joints.len()];
         };
