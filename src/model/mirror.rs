@@ -61,14 +61,17 @@ const LEG_PREFIXES: [(&str, &str); 8] = [
     ("lh_", "rh_"),
 ];
 
-/// The joint a quadruped leg prefix is on (`FL_knee` → `knee`, `RH_KFE` → `KFE`): the same
-/// joint on every leg has the same one. `None` without a leg prefix.
-pub fn leg_joint(name: &str) -> Option<&str> {
+/// The joint a quadruped leg prefix is on, with the prefix's convention (`FL_` `FR_` `RL_`
+/// `RR_`, or `LF_` `RF_` `LH_` `RH_`, each in one case): `FL_knee` → (0, `knee`), `RH_KFE` →
+/// (2, `KFE`). The same joint on every leg has the same pair; a hexapod's `lf_` and `rr_` are
+/// of two conventions. `None` without a leg prefix.
+pub fn leg_joint(name: &str) -> Option<(usize, &str)> {
     LEG_PREFIXES
         .iter()
-        .flat_map(|(l, r)| [l, r])
-        .find(|p| name.starts_with(**p) && name.len() > p.len())
-        .map(|p| &name[p.len()..])
+        .enumerate()
+        .flat_map(|(i, (l, r))| [(i / 2, l), (i / 2, r)])
+        .find(|(_, p)| name.starts_with(**p) && name.len() > p.len())
+        .map(|(c, p)| (c, &name[p.len()..]))
 }
 
 /// Replace one marker occurrence: short markers (`l_`, `_l`) only as a prefix / suffix.
@@ -131,10 +134,14 @@ mod tests {
 
     #[test]
     fn the_same_joint_on_every_leg() {
-        assert_eq!(leg_joint("FL_calf_joint"), Some("calf_joint"));
-        assert_eq!(leg_joint("RR_calf_joint"), Some("calf_joint"));
-        assert_eq!(leg_joint("LH_KFE"), Some("KFE"));
-        assert_eq!(leg_joint("rf_hip"), Some("hip"));
+        assert_eq!(leg_joint("FL_calf_joint"), Some((0, "calf_joint")));
+        assert_eq!(leg_joint("RR_calf_joint"), Some((0, "calf_joint")));
+        assert_eq!(leg_joint("LH_KFE"), Some((2, "KFE")));
+        assert_eq!(leg_joint("RF_KFE"), Some((2, "KFE")));
+        assert_eq!(leg_joint("rf_hip"), Some((3, "hip")));
+        // A hexapod's legs (lf lm lr rf rm rr) are not one quadruped convention.
+        assert_ne!(leg_joint("lf_coxa"), leg_joint("rr_coxa"));
+        assert_eq!(leg_joint("lm_coxa"), None);
         for n in ["left_knee", "l_ankle", "FLOOR_hinge", "FL_", "knee", "hip_FL_"] {
             assert_eq!(leg_joint(n), None, "{n}");
         }

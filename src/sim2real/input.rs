@@ -28,7 +28,9 @@ pub fn expand_inputs(inputs: &[PathBuf]) -> Result<Vec<PathBuf>, RecordingError>
             let mut files = recording_files(p)?;
             let episodes = p.join("episodes");
             if episodes.is_dir()
-                && files.iter().all(|f| f.file_name().is_some_and(|n| n == "truth.json"))
+                && files
+                    .iter()
+                    .all(|f| f.file_name().is_some_and(|n| n.eq_ignore_ascii_case("truth.json")))
             {
                 files = recording_files(&episodes)?;
             }

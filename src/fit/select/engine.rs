@@ -16,7 +16,7 @@ use crate::model::Robot;
 use crate::sim2real::commands::{Fill, pseudo_sign};
 use crate::sim2real::metrics::gap_mask;
 use crate::sim2real::recording::Recording;
-use crate::sim2real::replay::{Episode, ReplayOptions};
+use crate::sim2real::replay::{BaseMode, Episode, ReplayOptions};
 
 use super::start::{self, StartSens};
 use super::{Errors, FitOptions, Floor, ProgressInfo};
@@ -146,7 +146,8 @@ impl<'a> Engine<'a> {
                     .filter(|e| e.diverged.is_none())
             })
             .collect::<Option<Vec<_>>>()?;
-        if self.opts.estimate_start {
+        // A free base is chaotic: a start estimated on the nominal model's response is not.
+        if self.opts.estimate_start && self.opts.replay.base != BaseMode::Free {
             let sens = self.start_sensitivities(recs);
             eps.par_iter_mut().zip(recs).zip(&sens).for_each(|((ep, rec), s)| {
                 if let Some(s) = s {
@@ -201,7 +202,7 @@ impl<'a> Engine<'a> {
     fn start_sensitivities(&self, recs: &[Recording]) -> Vec<Option<std::sync::Arc<StartSens>>> {
         let keys: Vec<String> = recs.iter().map(start::key).collect();
         let missing: Vec<usize> = {
-            let memo = self.starts.lock().expect("memo");
+            let memo = self.starts.lock().unwrap_or_else(|e| e.into_inner());
             let mut seen = std::collections::HashSet::new();
             (0..recs.len())
                 .filter(|&i| !memo.contains_key(&keys[i]) && seen.insert(&keys[i]))
@@ -210,15 +211,21 @@ impl<'a> Engine<'a> {
         let measured: Vec<Option<std::sync::Arc<StartSens>>> = missing
             .par_iter()
             .map(|&i| {
-                StartSens::measure(self.robot, &recs[i], &self.opts.replay, self.opts.gap_mask_s)
-                    .map(std::sync::Arc::new)
+                StartSens::measure(
+                    self.robot,
+                    &recs[i],
+                    &self.opts.replay,
+                    self.opts.gap_mask_s,
+                    &self.joints,
+                )
+                .map(std::sync::Arc::new)
             })
             .collect();
         if let Some(nj) = missing.iter().map(|&i| recs[i].joints.len()).max() {
             // One replay of the first row and two per recorded joint.
             self.sims.fetch_add(1 + 2 * nj, std::sync::atomic::Ordering::Relaxed);
         }
-        let mut memo = self.starts.lock().expect("memo");
+        let mut memo = self.starts.lock().unwrap_or_else(|e| e.into_inner());
         for (i, s) in missing.into_iter().zip(measured) {
             memo.insert(keys[i].clone(), s);
         }

@@ -121,8 +121,9 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         };
         let fam_new = fam.len() >= 3 && !has_group(cands, e.id(), &fam);
         // The same joint on every leg of a quadruped (`FL_knee` … `RR_knee`) as one more group
-        // when another leg's also ranks high for this effect: four knees with the same missing
-        // armature are one group, not two pairs merged later.
+        // when a joint of another leg pair (not the mirror: the pair covers that) also ranks
+        // high for this effect: four knees with the same missing armature are one group, not
+        // two pairs merged later.
         let legs: Vec<String> = match leg_joint(&c.joint) {
             Some(part) => engine
                 .joints
@@ -132,13 +133,16 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
                 .collect(),
             None => vec![],
         };
+        let mirror = mirror_name(&c.joint);
         let legs_new = legs.len() >= 3
             && legs != fam
             && !has_group(cands, e.id(), &legs)
-            && diag
-                .iter()
-                .take(opts.candidates_per_round * 4)
-                .any(|d| d.effect == c.effect && d.joint != c.joint && legs.contains(&d.joint))
+            && diag.iter().take(opts.candidates_per_round * 4).any(|d| {
+                d.effect == c.effect
+                    && d.joint != c.joint
+                    && Some(&d.joint) != mirror.as_ref()
+                    && legs.contains(&d.joint)
+            })
             && engine.shared_start(e, &applied, &legs);
         // Every recorded joint as one group sharing the parameters (an effect the whole robot
         // has, such as a missing damping or friction, a delay or a servo gain error) — when the

@@ -390,9 +390,10 @@ pub fn fit(robot: &Robot, recs: &[Recording], opts: &FitOptions) -> FitOutcome {
         final_uncertainty(&engine, &train, &mut out);
         // The floors reported are those of the final model: with an effect missing, the
         // residual's white part carries some of the model error too.
-        if let Some(e) = engine.errors(&train, &out.applied) {
-            out.floors = engine.floors(&train, &out.applied, &e);
-        }
+        out.floors = match engine.errors(&train, &out.applied) {
+            Some(e) => engine.floors(&train, &out.applied, &e),
+            None => vec![],
+        };
     }
     engine.report(round, "done", None);
     out

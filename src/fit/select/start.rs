@@ -10,12 +10,13 @@
 //! the episode, under the linear response of the replay to its start state. The response
 //! (`J`, one column per start coordinate) is measured once per recording by finite differences
 //! of the nominal model's replay; every later simulation of that recording is corrected by
-//! `J·δ` with δ = (JᵀWJ + P)⁻¹ JᵀW r (W: 1/σ² of each joint's position reading; P: 1/σ² of the
-//! first row's position and velocity readings; r: the position residual after the first row),
-//! each component clamped to 3σ of its prior. An effect cannot hide in it: δ is at most a few
-//! reading errors, and `J` is a transient from the first row.
+//! `J·δ` with δ = (JᵀWJ + P)⁻¹ JᵀW r (W: 1/σ² of each scored joint's position reading; P: the
+//! inverse covariance of the first row's readings; r: the position residual after the rows the
+//! prior already holds), scaled down as a whole until no component exceeds 3σ of its prior. An
+//! effect cannot hide in it: δ is at most a few reading errors, and `J` is the transient of a
+//! start error (stored only until it has died out).
 
-use nalgebra::DMatrix;
+use nalgebra::{DMatrix, DVector};
 
 use crate::fit::effects::replay_with;
 use crate::fit::stats::white_floor;
@@ -30,31 +31,58 @@ const MIN_SIGMA_Q: f64 = 1e-5;
 const MIN_SIGMA_QD: f64 = 1e-4;
 /// The largest correction, in prior σ.
 const CLAMP: f64 = 3.0;
+/// A column's response is kept up to its last sample that moves a joint by at least this much
+/// for a one-σ start error [rad]: after it, the start error has died out.
+const NEGLIGIBLE: f64 = 1e-8;
 
-/// A recording's identity for the sensitivity memo: its file, first time, length and joints (a
-/// copy with its first row moved, or its commands filled, shares its sensitivity).
+/// A recording's identity for the sensitivity memo: its file, time base, length, joints, and
+/// a hash of what the replay reads after the first row (positions, commands, gains). A copy
+/// with its first row moved, or its missing commands written out from the positions, shares
+/// its sensitivity.
 pub(super) fn key(rec: &Recording) -> String {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    let mut eat = |x: f64| {
+        h ^= x.to_bits();
+        h = h.wrapping_mul(0x0000_0100_0000_01b3);
+    };
+    for &t in &rec.t {
+        eat(t);
+    }
+    for jt in &rec.joints {
+        for v in [Some(&jt.q), jt.q_cmd.as_ref().or(Some(&jt.q)), jt.kp.as_ref(), jt.kd.as_ref()]
+            .into_iter()
+            .flatten()
+        {
+            v.iter().skip(1).for_each(|&x| eat(x));
+        }
+        if let Some(e) = &jt.enabled {
+            e.iter().for_each(|&x| eat(f64::from(u8::from(x))));
+        }
+    }
+    eat(rec.control_rate_hz.unwrap_or(f64::NAN));
+    eat(rec.control_t0_s.unwrap_or(f64::NAN));
     let names: Vec<&str> = rec.joints.iter().map(|j| j.name.as_str()).collect();
-    format!(
-        "{}|{:x}|{}|{}",
-        rec.source.display(),
-        rec.t.first().map_or(0, |t| t.to_bits()),
-        rec.t.len(),
-        names.join(",")
-    )
+    format!("{}|{}|{}|{h:x}", rec.source.display(), rec.t.len(), names.join(","))
+}
+
+/// One start coordinate's response: ∂q_sim and ∂q̇_sim of recorded joint k at sample i, at
+/// `k·len + i`, for the first `len` samples (zero after).
+#[derive(Debug)]
+struct Column {
+    len: usize,
+    q: Vec<f64>,
+    qd: Vec<f64>,
 }
 
 /// How one recording's replay answers a change of its start state.
 #[derive(Debug)]
 pub(super) struct StartSens {
     n: usize,
-    /// Columns: (q₀, q̇₀) of each recorded joint in turn.
-    m: usize,
-    /// ∂q_sim and ∂q̇_sim of recorded joint k at sample i by column c, at `(k·n + i)·m + c`.
-    jq: Vec<f64>,
-    jqd: Vec<f64>,
-    /// Weight of each (k, i) in the data term: 1/σ² of joint k's reading, 0 where the sample is
-    /// not scored (the first row, after a gap, not finite).
+    /// (q₀, q̇₀) of each recorded joint in turn.
+    cols: Vec<Column>,
+    /// Weight of each (k, i) in the data term, at `k·n + i`: 1/σ² of joint k's reading, 0
+    /// where the sample is not scored (the rows the prior holds, after a gap, not finite, a
+    /// joint not fitted).
     w: Vec<f64>,
     /// (JᵀWJ + P)⁻¹.
     ainv: DMatrix<f64>,
@@ -63,13 +91,15 @@ pub(super) struct StartSens {
 }
 
 impl StartSens {
-    /// Measures the response of `rec`'s replay on the nominal model to each start coordinate.
-    /// `None` when a replay fails or diverges, or the recording is too short.
+    /// Measures the response of `rec`'s replay on the nominal model to each start coordinate;
+    /// the data term weighs the joints of `scored` only. `None` when a replay fails or
+    /// diverges, or the recording is too short.
     pub(super) fn measure(
         robot: &Robot,
         rec: &Recording,
         replay: &ReplayOptions,
         gap_mask_s: f64,
+        scored_joints: &[String],
     ) -> Option<StartSens> {
         let (n, nj) = (rec.t.len(), rec.joints.len());
         if n < 3 || nj == 0 {
@@ -105,22 +135,40 @@ impl StartSens {
             }
             out
         };
+        let h1 = rec.t[1] - rec.t[0];
         let mut sigma = Vec::with_capacity(m);
+        // Prior precision: per joint a 2 × 2 block. Without a velocity column the first
+        // velocity is (q₁ − q₀)/h of two readings of σ each: its error is correlated with the
+        // first position's, and q₁ is in the prior, not in the data term.
+        let mut p = DMatrix::zeros(m, m);
         for (k, jt) in rec.joints.iter().enumerate() {
             let sq = white_floor(&runs(&jt.q, &ep0.q_sim[k])).1.sqrt().max(MIN_SIGMA_Q);
-            let sqd = match &jt.qd {
-                Some(qd) => white_floor(&runs(qd, &ep0.qd_sim[k])).1.sqrt().max(MIN_SIGMA_QD),
-                // The replay's first velocity is (q₁ − q₀) / (t₁ − t₀).
-                None => (std::f64::consts::SQRT_2 * sq / (rec.t[1] - rec.t[0])).max(MIN_SIGMA_QD),
-            };
-            if !(sq.is_finite() && sqd.is_finite()) {
+            if !sq.is_finite() || !(h1 > 0.0) {
                 return None;
             }
-            sigma.push(sq);
-            sigma.push(sqd);
+            let (a, b) = (2 * k, 2 * k + 1);
+            match &jt.qd {
+                Some(qd) => {
+                    let sqd = white_floor(&runs(qd, &ep0.qd_sim[k])).1.sqrt().max(MIN_SIGMA_QD);
+                    if !sqd.is_finite() {
+                        return None;
+                    }
+                    sigma.extend([sq, sqd]);
+                    p[(a, a)] = 1.0 / (sq * sq);
+                    p[(b, b)] = 1.0 / (sqd * sqd);
+                }
+                None => {
+                    // Covariance [[σ², −σ²/h], [−σ²/h, 2σ²/h²]], inverse [[2, h], [h, h²]]/σ².
+                    sigma.extend([sq, std::f64::consts::SQRT_2 * sq / h1]);
+                    let s2 = sq * sq;
+                    p[(a, a)] = 2.0 / s2;
+                    p[(a, b)] = h1 / s2;
+                    p[(b, a)] = h1 / s2;
+                    p[(b, b)] = h1 * h1 / s2;
+                }
+            }
         }
-        let mut jq = vec![0.0; nj * n * m];
-        let mut jqd = vec![0.0; nj * n * m];
+        let mut cols = Vec::with_capacity(m);
         for (c, &h) in sigma.iter().enumerate() {
             let k = c / 2;
             let mut r = base.clone();
@@ -131,85 +179,102 @@ impl StartSens {
                 jt.qd.as_mut().expect("written out")[0] += h;
             }
             let ep = run(&r)?;
+            let dq = |kk: usize, i: usize| (ep.q_sim[kk][i] - ep0.q_sim[kk][i]) / h;
+            let dqd = |kk: usize, i: usize| (ep.qd_sim[kk][i] - ep0.qd_sim[kk][i]) / h;
+            let len = (0..n)
+                .rev()
+                .find(|&i| (0..nj).any(|kk| !(dq(kk, i).abs() * h < NEGLIGIBLE)))
+                .map_or(1, |i| i + 1);
+            let mut q = Vec::with_capacity(nj * len);
+            let mut qd = Vec::with_capacity(nj * len);
             for kk in 0..nj {
-                for i in 0..n {
-                    let at = (kk * n + i) * m + c;
-                    jq[at] = (ep.q_sim[kk][i] - ep0.q_sim[kk][i]) / h;
-                    jqd[at] = (ep.qd_sim[kk][i] - ep0.qd_sim[kk][i]) / h;
-                }
+                q.extend((0..len).map(|i| dq(kk, i)));
+                qd.extend((0..len).map(|i| dqd(kk, i)));
             }
+            cols.push(Column { len, q, qd });
         }
         let mut w = vec![0.0; nj * n];
         for (k, jt) in rec.joints.iter().enumerate() {
+            if !scored_joints.contains(&jt.name) {
+                continue;
+            }
             let wk = 1.0 / (sigma[2 * k] * sigma[2 * k]);
-            for i in 1..n {
-                let row = &jq[(k * n + i) * m..(k * n + i + 1) * m];
-                if scored[i] && jt.q[i].is_finite() && row.iter().all(|x| x.is_finite()) {
+            let first = if jt.qd.is_some() { 1 } else { 2 };
+            for i in first..n {
+                let finite = cols.iter().all(|c| i >= c.len || c.q[k * c.len + i].is_finite());
+                if scored[i] && jt.q[i].is_finite() && finite {
                     w[k * n + i] = wk;
                 }
             }
         }
-        let mut a = DMatrix::from_diagonal(&nalgebra::DVector::from_iterator(
-            m,
-            sigma.iter().map(|s| 1.0 / (s * s)),
-        ));
-        for (ki, &wi) in w.iter().enumerate() {
-            if wi == 0.0 {
-                continue;
-            }
-            let row = &jq[ki * m..(ki + 1) * m];
-            for c in 0..m {
-                for d in 0..m {
-                    a[(c, d)] += wi * row[c] * row[d];
+        let mut a = p;
+        for c in 0..m {
+            for d in c..m {
+                let (cc, cd) = (&cols[c], &cols[d]);
+                let len = cc.len.min(cd.len);
+                let mut s = 0.0;
+                for k in 0..nj {
+                    for i in 0..len {
+                        let wi = w[k * n + i];
+                        if wi != 0.0 {
+                            s += wi * cc.q[k * cc.len + i] * cd.q[k * cd.len + i];
+                        }
+                    }
+                }
+                a[(c, d)] += s;
+                if d != c {
+                    a[(d, c)] += s;
                 }
             }
         }
         let ainv = a.cholesky()?.inverse();
-        Some(StartSens { n, m, jq, jqd, w, ainv, sigma })
+        Some(StartSens { n, cols, w, ainv, sigma })
     }
 
     /// The start correction of `rec` simulated as `ep` (see the module docs); `None` when the
     /// residual is not finite where it is scored, or the shapes do not match.
     pub(super) fn correction(&self, rec: &Recording, ep: &Episode) -> Option<Vec<f64>> {
-        let (n, m) = (self.n, self.m);
-        if rec.t.len() != n || ep.q_sim.len() * 2 != m || rec.joints.len() * 2 != m {
+        let n = self.n;
+        let nj = rec.joints.len();
+        if rec.t.len() != n || ep.q_sim.len() != nj || self.cols.len() != 2 * nj {
             return None;
         }
-        let mut b = nalgebra::DVector::zeros(m);
-        for (k, jt) in rec.joints.iter().enumerate() {
-            for i in 0..n {
-                let wi = self.w[k * n + i];
-                if wi == 0.0 {
-                    continue;
-                }
-                let r = jt.q[i] - ep.q_sim[k][i];
-                if !r.is_finite() {
-                    return None;
-                }
-                let row = &self.jq[(k * n + i) * m..(k * n + i + 1) * m];
-                for c in 0..m {
-                    b[c] += wi * row[c] * r;
+        let mut b = DVector::zeros(self.cols.len());
+        for (c, col) in self.cols.iter().enumerate() {
+            for (k, jt) in rec.joints.iter().enumerate() {
+                for i in 0..col.len {
+                    let wi = self.w[k * n + i];
+                    if wi == 0.0 {
+                        continue;
+                    }
+                    let r = jt.q[i] - ep.q_sim[k][i];
+                    if !r.is_finite() {
+                        return None;
+                    }
+                    b[c] += wi * col.q[k * col.len + i] * r;
                 }
             }
         }
         let d = &self.ainv * b;
-        Some(d.iter().zip(&self.sigma).map(|(x, s)| x.clamp(-CLAMP * s, CLAMP * s)).collect())
+        // Scaled as a whole (not clamped per component: the others were chosen to go with it).
+        let over =
+            d.iter().zip(&self.sigma).map(|(x, s)| x.abs() / (CLAMP * s)).fold(1.0, f64::max);
+        Some(d.iter().map(|x| x / over).collect())
     }
 
     /// Moves `ep` (a simulation of `rec`) by its start correction. Returns the correction.
     pub(super) fn apply(&self, rec: &Recording, ep: &mut Episode) -> Option<Vec<f64>> {
         let d = self.correction(rec, ep)?;
-        let (n, m) = (self.n, self.m);
-        for (k, (qs, qds)) in ep.q_sim.iter_mut().zip(ep.qd_sim.iter_mut()).enumerate() {
-            for i in 0..n {
-                let at = (k * n + i) * m;
-                let dq: f64 = self.jq[at..at + m].iter().zip(&d).map(|(j, x)| j * x).sum();
-                let dqd: f64 = self.jqd[at..at + m].iter().zip(&d).map(|(j, x)| j * x).sum();
-                if dq.is_finite() {
-                    qs[i] += dq;
-                }
-                if dqd.is_finite() {
-                    qds[i] += dqd;
+        for (col, x) in self.cols.iter().zip(&d) {
+            for (k, (qs, qds)) in ep.q_sim.iter_mut().zip(ep.qd_sim.iter_mut()).enumerate() {
+                for i in 0..col.len {
+                    let (dq, dqd) = (col.q[k * col.len + i] * x, col.qd[k * col.len + i] * x);
+                    if dq.is_finite() {
+                        qs[i] += dq;
+                    }
+                    if dqd.is_finite() {
+                        qds[i] += dqd;
+                    }
                 }
             }
         }
