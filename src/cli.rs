@@ -191,11 +191,12 @@ pub struct FitCmd {
     /// friction is re-fitted on 1 s windows at the end.
     #[arg(long)]
     pub window: Option<f64>,
-    /// Start every replay exactly at the episode's first row. By default the fit estimates
-    /// each episode's start state (first position and velocity of every joint) from the whole
-    /// episode, with the first row's noisy reading as its prior (docs/fitting.md, step 1).
+    /// Estimate each episode's start state (first position and velocity of every joint) from
+    /// the whole episode, with the first row's noisy reading as its prior, instead of starting
+    /// every replay exactly at the first row (docs/fitting.md, step 1). Helps a lightly damped
+    /// servo; not yet for joints that stick under dry friction.
     #[arg(long)]
-    pub no_start_estimate: bool,
+    pub start_estimate: bool,
     #[command(flatten)]
     pub replay: ReplayArgs,
     /// No progress and no notes on stderr (the search's decisions: merges, swaps, drops;
@@ -328,7 +329,7 @@ pub fn run() -> i32 {
             joints: f.joints,
             holdout: f.holdout,
             window: f.window,
-            no_start_estimate: f.no_start_estimate,
+            start_estimate: f.start_estimate,
             replay: f.replay.options(),
             quiet: f.quiet,
             json: f.format == ResultFormat::Json,

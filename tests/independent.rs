@@ -277,13 +277,14 @@ fn fit_finds_friction_on_all_joints_as_one_group() {
     fit_matches_truth("arm2.all.coulomb_friction");
 }
 
-/// `--no-start-estimate` replays from the first row's reading. On the clean control both report
+/// `--start-estimate` estimates each episode's start; without it the replay starts at the first
+/// row's reading. On the clean control both report
 /// nothing; the estimated start leaves a residual no larger (weighted by each joint's noise,
 /// what the estimate minimises: the first-row start is one of its candidates) and a different
 /// floor. (arm2's servos are well damped: the two differ by ~1 %; on a lightly damped leg of
 /// the independent Python simulator the hip's residual drops 0.837 → 0.784 mrad.)
 #[test]
-fn the_start_estimate_can_be_switched_off() {
+fn the_start_estimate_can_be_switched_on() {
     let Some(d) = arm2() else { return };
     let run = |extra: &[&str]| -> serde_json::Value {
         let out = Command::new(bin())
@@ -296,7 +297,7 @@ fn the_start_estimate_can_be_switched_off() {
         assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
         serde_json::from_slice(&out.stdout).expect("json")
     };
-    let (est, first) = (run(&[]), run(&["--no-start-estimate"]));
+    let (est, first) = (run(&["--start-estimate"]), run(&[]));
     let score = |v: &serde_json::Value| -> f64 {
         assert_eq!(v["missing_physics"].as_array().unwrap().len(), 0, "{v}");
         v["floor"]

@@ -23,8 +23,8 @@ pub struct FitArgs {
     /// `KEY=VALUE`: hold out the episodes with that metadata value; `KEY`: every value in turn.
     pub holdout_by: Option<String>,
     pub window: Option<f64>,
-    /// Start every replay at the first row (no start-state estimate).
-    pub no_start_estimate: bool,
+    /// Estimate each episode's start state (else every replay starts at the first row).
+    pub start_estimate: bool,
     /// How the recordings are replayed.
     pub replay: ReplayOptions,
     pub quiet: bool,
@@ -165,7 +165,7 @@ pub fn run_fit(a: FitArgs) -> i32 {
         replay: replay.clone(),
         shooting_s: a.window,
         families,
-        estimate_start: !a.no_start_estimate,
+        estimate_start: a.start_estimate,
         progress,
         ..Default::default()
     };

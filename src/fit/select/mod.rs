@@ -99,7 +99,9 @@ pub struct FitOptions {
     pub white_ratio: f64,
     /// Estimate each episode's start state (first position and velocity of every recorded
     /// joint) from the whole episode, with the first row as its prior, instead of starting the
-    /// replay exactly at the first row's noisy reading ([`start`]).
+    /// replay exactly at the first row's noisy reading ([`start`]). Off by default: on a
+    /// sticking joint (dry friction under a delayed servo) the nominal model's response is the
+    /// wrong shape, and the Asimov knee's Stribeck friction then came with an invented backlash.
     pub estimate_start: bool,
     /// Called at each step of the search (none: silent).
     pub progress: Option<Progress>,
@@ -140,7 +142,7 @@ impl Default for FitOptions {
             simplify: true,
             gap_mask_s: 0.1,
             white_ratio: 1.5,
-            estimate_start: true,
+            estimate_start: false,
             progress: None,
         }
     }
