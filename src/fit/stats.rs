@@ -255,6 +255,21 @@ pub fn aic(n: usize, rss: f64, k: usize) -> f64 {
     log_mse(n, rss) + 2.0 * k as f64
 }
 
+/// The residual `real − sim` in runs of consecutive scored, finite samples (what
+/// [`white_floor`] takes): a sample left out ends a run.
+pub fn residual_runs(scored: &[bool], real: &[f64], sim: &[f64]) -> Vec<Vec<f64>> {
+    let mut out = vec![vec![]];
+    for ((s, a), b) in scored.iter().zip(real).zip(sim) {
+        let e = a - b;
+        if *s && e.is_finite() {
+            out.last_mut().expect("one").push(e);
+        } else if !out.last().expect("one").is_empty() {
+            out.push(vec![]);
+        }
+    }
+    out
+}
+
 /// The residual's white floor: per run of consecutive samples `runs`, the mean square `ms` of
 /// the residual and its white part `white = mean((r[i+1] − r[i])²) / 2`. Sensor noise and
 /// quantisation change from sample to sample; a missing effect leaves an error that changes

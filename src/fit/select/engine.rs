@@ -10,7 +10,8 @@ use crate::fit::optim::{
     levenberg_marquardt, nelder_mead,
 };
 use crate::fit::stats::{
-    ar1_variance_inflation, cluster_robust_stderr, uncertainty_from_jacobian, white_floor,
+    ar1_variance_inflation, cluster_robust_stderr, residual_runs, uncertainty_from_jacobian,
+    white_floor,
 };
 use crate::model::Robot;
 use crate::sim2real::commands::{Fill, pseudo_sign};
@@ -344,16 +345,7 @@ impl<'a> Engine<'a> {
                     continue;
                 };
                 let scored = gap_mask(&rec.t, self.opts.gap_mask_s);
-                let mut run = Vec::new();
-                for ((s, r), m) in scored.iter().zip(real).zip(sim) {
-                    let e = r - m;
-                    if *s && e.is_finite() {
-                        run.push(e);
-                    } else if !run.is_empty() {
-                        runs.push(std::mem::take(&mut run));
-                    }
-                }
-                runs.push(run);
+                runs.extend(residual_runs(&scored, real, sim));
             }
             runs
         };

@@ -19,7 +19,7 @@
 use nalgebra::{DMatrix, DVector};
 
 use crate::fit::effects::replay_with;
-use crate::fit::stats::white_floor;
+use crate::fit::stats::{residual_runs, white_floor};
 use crate::model::Robot;
 use crate::sim2real::metrics::gap_mask;
 use crate::sim2real::recording::{Recording, derivative};
@@ -123,18 +123,7 @@ impl StartSens {
         };
         let ep0 = run(&base)?;
         let scored = gap_mask(&rec.t, gap_mask_s);
-        let runs = |real: &[f64], sim: &[f64]| -> Vec<Vec<f64>> {
-            let mut out = vec![vec![]];
-            for ((s, a), b) in scored.iter().zip(real).zip(sim) {
-                let e = a - b;
-                if *s && e.is_finite() {
-                    out.last_mut().expect("one").push(e);
-                } else if !out.last().expect("one").is_empty() {
-                    out.push(vec![]);
-                }
-            }
-            out
-        };
+        let runs = |real: &[f64], sim: &[f64]| residual_runs(&scored, real, sim);
         let h1 = rec.t[1] - rec.t[0];
         let mut sigma = Vec::with_capacity(m);
         // Prior precision: per joint a 2 × 2 block. Without a velocity column the first
@@ -233,7 +222,7 @@ impl StartSens {
 
     /// The start correction of `rec` simulated as `ep` (see the module docs); `None` when the
     /// residual is not finite where it is scored, or the shapes do not match.
-    pub(super) fn correction(&self, rec: &Recording, ep: &Episode) -> Option<Vec<f64>> {
+    fn correction(&self, rec: &Recording, ep: &Episode) -> Option<Vec<f64>> {
         let n = self.n;
         let nj = rec.joints.len();
         if rec.t.len() != n || ep.q_sim.len() != nj || self.cols.len() != 2 * nj {
@@ -262,9 +251,10 @@ impl StartSens {
         Some(d.iter().map(|x| x / over).collect())
     }
 
-    /// Moves `ep` (a simulation of `rec`) by its start correction. Returns the correction.
-    pub(super) fn apply(&self, rec: &Recording, ep: &mut Episode) -> Option<Vec<f64>> {
-        let d = self.correction(rec, ep)?;
+    /// Moves `ep` (a simulation of `rec`) by its start correction (unchanged when there is
+    /// none, see [`StartSens::correction`]).
+    pub(super) fn apply(&self, rec: &Recording, ep: &mut Episode) {
+        let Some(d) = self.correction(rec, ep) else { return };
         for (col, x) in self.cols.iter().zip(&d) {
             for (k, (qs, qds)) in ep.q_sim.iter_mut().zip(ep.qd_sim.iter_mut()).enumerate() {
                 for i in 0..col.len {
@@ -278,6 +268,5 @@ impl StartSens {
                 }
             }
         }
-        Some(d)
     }
 }
