@@ -194,7 +194,8 @@ pub struct FitCmd {
     /// Estimate each episode's start state (first position and velocity of every joint) from
     /// the whole episode, with the first row's noisy reading as its prior, instead of starting
     /// every replay exactly at the first row (docs/fitting.md, step 1). Helps a lightly damped
-    /// servo; not yet for joints that stick under dry friction.
+    /// servo. Opt-in: beside dry friction on a delayed servo it can still let a small invented
+    /// backlash through.
     #[arg(long)]
     pub start_estimate: bool,
     #[command(flatten)]

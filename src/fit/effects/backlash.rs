@@ -26,6 +26,9 @@ declare_effect! {
 }
 
 impl Effect for Backlash {
+    fn holds_start(&self) -> bool {
+        true
+    }
     fn torque(&self, cx: HookCtx<'_>) {
         let HookCtx { q, io, p, .. } = cx;
         let h = 0.5 * p[0].max(0.0);

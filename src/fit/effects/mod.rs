@@ -268,6 +268,13 @@ pub trait Effect: Declared + Sync {
     fn friction(&self) -> bool {
         false
     }
+    /// `true` when a joint with this effect can stay where it starts for as long as it sticks
+    /// (dry friction, a dead band): a start error does not die out as it does on the smooth
+    /// model, so the start estimate leaves the joint alone (`fit --start-estimate`). Default:
+    /// the friction models.
+    fn holds_start(&self) -> bool {
+        self.friction()
+    }
     /// This effect's parameters when it also takes over what `other`, kept on the same joints,
     /// contributes: `mine` are this effect's parameters, `delta` the change `other`'s parameters
     /// make from their start values (for a MuJoCo-native parameter, the model's own value).

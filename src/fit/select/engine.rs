@@ -37,11 +37,14 @@ pub struct Engine<'a> {
     /// The last [`RECENT`] simulations by [`set_key`]: the search scores the set a fit ended on
     /// right after the fit, and the same base set for each candidate.
     recent: std::sync::Mutex<std::collections::VecDeque<(String, Option<Errors>)>>,
-    /// Start-state sensitivities by recording ([`start::key`]), measured once each on the
-    /// nominal model (`None`: not measurable, the recording replays from its first row).
+    /// Start-state sensitivities by recording ([`start::key`]) and start model
+    /// ([`Engine::set_start_model`]), measured once each (`None`: not measurable, the recording replays from its first row).
     /// Shared with the floor's alternative replay, whose recordings differ only in the first row
     /// and the commands.
     starts: std::sync::Arc<std::sync::Mutex<StartMemo>>,
+    /// The kept effects that let a joint stick ([`Effect::holds_start`]), with which the start
+    /// sensitivities are measured ([`Engine::set_start_model`]).
+    start_model: std::sync::Mutex<Vec<Applied>>,
 }
 
 type StartMemo = std::collections::HashMap<String, Option<std::sync::Arc<StartSens>>>;
@@ -95,7 +98,33 @@ impl<'a> Engine<'a> {
             fits: Default::default(),
             recent: Default::default(),
             starts: Default::default(),
+            start_model: Default::default(),
         }
+    }
+
+    /// The start estimate measures its sensitivities with the effects of `kept` that let a
+    /// joint stick ([`Effect::holds_start`], e.g. dry friction): a sticking joint keeps its
+    /// start error until it breaks away, while on the smooth model the error dies out. Called
+    /// by the search whenever its kept set may have changed; the sensitivities are measured
+    /// again (once per recording) when these effects or their values change.
+    pub fn set_start_model(&self, kept: &[Applied]) {
+        let held: Vec<Applied> = kept.iter().filter(|a| a.effect.holds_start()).cloned().collect();
+        *self.start_model.lock().unwrap_or_else(|e| e.into_inner()) = held;
+    }
+
+    /// The start model's part of every memo key (empty without the start estimate, or
+    /// without a sticking effect kept).
+    fn start_tag(&self) -> String {
+        if !self.estimates_start() {
+            return String::new();
+        }
+        let m = self.start_model.lock().unwrap_or_else(|e| e.into_inner());
+        if m.is_empty() { String::new() } else { format!("#start:{}", set_key(&[], &m)) }
+    }
+
+    fn estimates_start(&self) -> bool {
+        // A free base is chaotic: a start estimated from a linear response is not.
+        self.opts.estimate_start && self.opts.replay.base != BaseMode::Free
     }
 
     /// Reports progress through `opts.progress`, if any.
@@ -117,7 +146,7 @@ impl<'a> Engine<'a> {
 
     /// Simulates `recs` with `applied`; `None` when an episode diverged or failed.
     pub fn errors(&self, recs: &[Recording], applied: &[Applied]) -> Option<Errors> {
-        let key = set_key(recs, applied);
+        let key = set_key(recs, applied) + &self.start_tag();
         if let Some(e) = self
             .recent
             .lock()
@@ -147,12 +176,27 @@ impl<'a> Engine<'a> {
                     .filter(|e| e.diverged.is_none())
             })
             .collect::<Option<Vec<_>>>()?;
-        // A free base is chaotic: a start estimated on the nominal model's response is not.
-        if self.opts.estimate_start && self.opts.replay.base != BaseMode::Free {
-            let sens = self.start_sensitivities(recs);
+        if self.estimates_start() {
+            let (sens, model) = self.start_sensitivities(recs);
+            // A joint takes part only when the sticking effects on it are those the
+            // sensitivities were measured with (by effect: their values may move a little).
+            let sticks = |set: &[Applied], name: &String| -> Vec<&'static str> {
+                let mut ids: Vec<&'static str> = set
+                    .iter()
+                    .filter(|a| a.effect.holds_start() && a.joints.contains(name))
+                    .map(|a| a.effect.id())
+                    .collect();
+                ids.sort_unstable();
+                ids
+            };
             eps.par_iter_mut().zip(recs).zip(&sens).for_each(|((ep, rec), s)| {
                 if let Some(s) = s {
-                    s.apply(rec, ep);
+                    let kept: Vec<bool> = rec
+                        .joints
+                        .iter()
+                        .map(|j| sticks(applied, &j.name) == sticks(&model, &j.name))
+                        .collect();
+                    s.apply(rec, ep, &kept);
                 }
             });
         }
@@ -199,9 +243,15 @@ impl<'a> Engine<'a> {
         Some(Errors { sse, n, windows: win, eps })
     }
 
-    /// The start-state sensitivities of `recs` ([`StartSens`]), measured on first use.
-    fn start_sensitivities(&self, recs: &[Recording]) -> Vec<Option<std::sync::Arc<StartSens>>> {
-        let keys: Vec<String> = recs.iter().map(start::key).collect();
+    /// The start-state sensitivities of `recs` ([`StartSens`]) on the start model, measured
+    /// on first use, and that model.
+    fn start_sensitivities(
+        &self,
+        recs: &[Recording],
+    ) -> (Vec<Option<std::sync::Arc<StartSens>>>, Vec<Applied>) {
+        let model = self.start_model.lock().unwrap_or_else(|e| e.into_inner()).clone();
+        let tag = self.start_tag();
+        let keys: Vec<String> = recs.iter().map(|r| start::key(r) + &tag).collect();
         let missing: Vec<usize> = {
             let memo = self.starts.lock().unwrap_or_else(|e| e.into_inner());
             let mut seen = std::collections::HashSet::new();
@@ -218,6 +268,7 @@ impl<'a> Engine<'a> {
                     &self.opts.replay,
                     self.opts.gap_mask_s,
                     &self.joints,
+                    &model,
                 )
                 .map(std::sync::Arc::new)
             })
@@ -230,7 +281,7 @@ impl<'a> Engine<'a> {
         for (i, s) in missing.into_iter().zip(measured) {
             memo.insert(keys[i].clone(), s);
         }
-        keys.iter().map(|k| memo.get(k).cloned().flatten()).collect()
+        (keys.iter().map(|k| memo.get(k).cloned().flatten()).collect(), model)
     }
 
     /// Per scored joint: the mean square of the error that command reconstruction and the
@@ -303,6 +354,7 @@ impl<'a> Engine<'a> {
             .collect();
         let mut alt = Engine::new(self.robot, &moved, &alt);
         alt.starts = self.starts.clone();
+        alt.set_start_model(&self.start_model.lock().unwrap_or_else(|e| e.into_inner()));
         let Some(b) = alt.errors(&moved, applied) else {
             return vec![0.0; self.joints.len()];
         };
@@ -442,7 +494,7 @@ impl<'a> Engine<'a> {
         effect: &'static dyn Effect,
         group: &[String],
     ) -> Option<(Vec<f64>, f64)> {
-        let key = fit_key(train, base, effect, group, self.opts.max_evals);
+        let key = fit_key(train, base, effect, group, self.opts.max_evals) + &self.start_tag();
         self.fits.lock().ok()?.get(&key).cloned()
     }
 
@@ -457,7 +509,7 @@ impl<'a> Engine<'a> {
         group: &[String],
         max_evals: usize,
     ) -> (Vec<f64>, f64) {
-        let key = fit_key(train, base, effect, group, max_evals);
+        let key = fit_key(train, base, effect, group, max_evals) + &self.start_tag();
         if let Some(r) = self.fits.lock().ok().and_then(|m| m.get(&key).cloned()) {
             return r;
         }
@@ -798,6 +850,37 @@ mod tests {
         assert!(read > 2e-5, "the first row's velocity noise rings: {read}");
         assert!(est < read / 10.0, "estimated start: {est} vs first row {read}");
         assert!(est_floor < read_floor / 3.0, "floor {est_floor} vs {read_floor}");
+    }
+
+    /// A joint whose model can stick (here Coulomb friction, kept at zero so that the
+    /// simulation is the nominal one) is left out of the start estimate: its residual is the
+    /// one of the replay started at the first row, to the last bit; with a smooth effect kept
+    /// (viscous damping, also zero) the start is still estimated.
+    #[test]
+    fn a_joint_that_can_stick_keeps_its_first_row() {
+        let (robot, recs) = pendulum_at_ticks(0.04);
+        let kept = |id: &str| Applied {
+            effect: crate::fit::effects::by_id(id).expect("effect"),
+            joints: vec!["servo".into()],
+            params: vec![0.0],
+        };
+        let rms = |estimate_start: bool, applied: &[Applied]| {
+            let opts = FitOptions { estimate_start, ..FitOptions::default() };
+            Engine::new(&robot, &recs, &opts).errors(&recs, applied).expect("replay").rmse()
+        };
+        let read = rms(false, &[]);
+        assert_eq!(rms(true, &[kept("coulomb_friction")]).to_bits(), read.to_bits());
+        assert_eq!(rms(true, &[kept("backlash")]).to_bits(), read.to_bits());
+        assert!(rms(true, &[kept("viscous_damping")]) < read / 10.0);
+        // Once the friction is kept, the sensitivities are measured with it and the joint
+        // takes part again; a model without it is now the one left alone.
+        let opts = FitOptions { estimate_start: true, ..FitOptions::default() };
+        let engine = Engine::new(&robot, &recs, &opts);
+        engine.set_start_model(&[kept("coulomb_friction"), kept("viscous_damping")]);
+        let with = engine.errors(&recs, &[kept("coulomb_friction")]).expect("replay").rmse();
+        assert!(with < read / 10.0, "{with} vs {read}");
+        let without = engine.errors(&recs, &[]).expect("replay").rmse();
+        assert_eq!(without.to_bits(), read.to_bits());
     }
 
     /// The replay starts from the first row; a noisy first velocity makes a lightly damped servo

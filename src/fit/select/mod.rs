@@ -99,9 +99,12 @@ pub struct FitOptions {
     pub white_ratio: f64,
     /// Estimate each episode's start state (first position and velocity of every recorded
     /// joint) from the whole episode, with the first row as its prior, instead of starting the
-    /// replay exactly at the first row's noisy reading ([`start`]). Off by default: on a
-    /// sticking joint (dry friction under a delayed servo) the nominal model's response is the
-    /// wrong shape, and the Asimov knee's Stribeck friction then came with an invented backlash.
+    /// replay exactly at the first row's noisy reading ([`start`]). Off by default: on the
+    /// Asimov knee with Stribeck friction (12-bit encoders, MuJoCo's 20 ms actuator delay) it
+    /// lets an invented 3.5 mrad backlash through beside the friction, even with the response
+    /// measured on the model with the kept friction ([`Engine::set_start_model`]).
+    ///
+    /// [`Engine::set_start_model`]: Engine::set_start_model
     pub estimate_start: bool,
     /// Called at each step of the search (none: silent).
     pub progress: Option<Progress>,
@@ -364,6 +367,7 @@ pub fn fit(robot: &Robot, recs: &[Recording], opts: &FitOptions) -> FitOutcome {
     let mut round = 0;
     loop {
         while round < opts.max_rounds {
+            engine.set_start_model(&out.applied);
             engine.report(round, "diagnose", None);
             let added = greedy_round(&search, round, &mut out);
             round += 1;
@@ -371,6 +375,7 @@ pub fn fit(robot: &Robot, recs: &[Recording], opts: &FitOptions) -> FitOutcome {
                 break;
             }
         }
+        engine.set_start_model(&out.applied);
         if out.applied.len() >= 2 {
             engine.report(round, "polish", None);
             polish(&search, &mut out);
@@ -379,14 +384,17 @@ pub fn fit(robot: &Robot, recs: &[Recording], opts: &FitOptions) -> FitOutcome {
             break;
         }
         // A change re-opens the greedy search (bounded by `max_rounds`).
+        engine.set_start_model(&out.applied);
         engine.report(round, "simplify", None);
         if !simplify(&search, round, &mut out) || round >= opts.max_rounds {
             break;
         }
     }
+    engine.set_start_model(&out.applied);
     if opts.shooting_s.is_none() {
         reshoot::reshoot_friction(&search, &train, round, &mut out);
     }
+    engine.set_start_model(&out.applied);
     if !out.applied.is_empty() {
         engine.report(round, "standard errors", None);
         final_uncertainty(&engine, &train, &mut out);

@@ -9,16 +9,21 @@
 //! first row as its prior: the maximum a posteriori correction δ of the start, given the rest of
 //! the episode, under the linear response of the replay to its start state. The response
 //! (`J`, one column per start coordinate) is measured once per recording by finite differences
-//! of the nominal model's replay; every later simulation of that recording is corrected by
+//! of the replay on the start model — the nominal model with the kept effects that let a joint
+//! stick (dry friction, a dead band: a sticking joint keeps its start error until it breaks
+//! away, where the smooth model's dies out), measured again when those change — and every
+//! simulation of that recording is corrected by
 //! `J·δ` with δ = (JᵀWJ + P)⁻¹ JᵀW r (W: 1/σ² of each scored joint's position reading; P: the
 //! inverse covariance of the first row's readings; r: the position residual after the rows the
 //! prior already holds), scaled down as a whole until no component exceeds 3σ of its prior. An
 //! effect cannot hide in it: δ is at most a few reading errors, and `J` is the transient of a
-//! start error (stored only until it has died out).
+//! start error (stored only until it has died out). A joint whose sticking effects differ from
+//! the start model's (a friction candidate before it is kept) is left out: neither corrected nor
+//! in the data term.
 
 use nalgebra::{DMatrix, DVector};
 
-use crate::fit::effects::replay_with;
+use crate::fit::effects::{Applied, model_with, replay_with};
 use crate::fit::stats::{residual_runs, white_floor};
 use crate::model::Robot;
 use crate::sim2real::metrics::gap_mask;
@@ -84,14 +89,18 @@ pub(super) struct StartSens {
     /// where the sample is not scored (the rows the prior holds, after a gap, not finite, a
     /// joint not fitted).
     w: Vec<f64>,
-    /// (JᵀWJ + P)⁻¹.
+    /// P, the prior precision of the start coordinates.
+    prior: DMatrix<f64>,
+    /// JᵀWJ of the rows of each recorded joint in turn: the data term is their sum.
+    gram: Vec<DMatrix<f64>>,
+    /// (JᵀWJ + P)⁻¹ with every joint taking part.
     ainv: DMatrix<f64>,
     /// Prior σ of each column.
     sigma: Vec<f64>,
 }
 
 impl StartSens {
-    /// Measures the response of `rec`'s replay on the nominal model to each start coordinate;
+    /// Measures the response of `rec`'s replay with `applied` to each start coordinate;
     /// the data term weighs the joints of `scored` only. `None` when a replay fails or
     /// diverges, or the recording is too short.
     pub(super) fn measure(
@@ -100,6 +109,7 @@ impl StartSens {
         replay: &ReplayOptions,
         gap_mask_s: f64,
         scored_joints: &[String],
+        applied: &[Applied],
     ) -> Option<StartSens> {
         let (n, nj) = (rec.t.len(), rec.joints.len());
         if n < 3 || nj == 0 {
@@ -118,8 +128,9 @@ impl StartSens {
                 jt.qd = Some(vec![d0; n]);
             }
         }
+        let mj = model_with(robot, applied);
         let run = |r: &Recording| -> Option<Episode> {
-            replay_with(robot, &robot.mj, r, &[], replay).ok().filter(|e| e.diverged.is_none())
+            replay_with(robot, &mj, r, applied, replay).ok().filter(|e| e.diverged.is_none())
         };
         let ep0 = run(&base)?;
         let scored = gap_mask(&rec.t, gap_mask_s);
@@ -196,41 +207,59 @@ impl StartSens {
                 }
             }
         }
-        let mut a = p;
-        for c in 0..m {
-            for d in c..m {
-                let (cc, cd) = (&cols[c], &cols[d]);
-                let len = cc.len.min(cd.len);
-                let mut s = 0.0;
-                for k in 0..nj {
-                    for i in 0..len {
+        let mut gram = vec![DMatrix::zeros(m, m); nj];
+        for (k, g) in gram.iter_mut().enumerate() {
+            for c in 0..m {
+                for d in c..m {
+                    let (cc, cd) = (&cols[c], &cols[d]);
+                    let mut s = 0.0;
+                    for i in 0..cc.len.min(cd.len) {
                         let wi = w[k * n + i];
                         if wi != 0.0 {
                             s += wi * cc.q[k * cc.len + i] * cd.q[k * cd.len + i];
                         }
                     }
-                }
-                a[(c, d)] += s;
-                if d != c {
-                    a[(d, c)] += s;
+                    g[(c, d)] = s;
+                    g[(d, c)] = s;
                 }
             }
         }
-        let ainv = a.cholesky()?.inverse();
-        Some(StartSens { n, cols, w, ainv, sigma })
+        let ainv = gram.iter().fold(p.clone(), |a, g| a + g).cholesky()?.inverse();
+        Some(StartSens { n, cols, w, prior: p, gram, ainv, sigma })
     }
 
-    /// The start correction of `rec` simulated as `ep` (see the module docs); `None` when the
-    /// residual is not finite where it is scored, or the shapes do not match.
-    fn correction(&self, rec: &Recording, ep: &Episode) -> Option<Vec<f64>> {
+    /// (JᵀWJ + P)⁻¹ over the start coordinates of the joints in `kept` (index into them: the
+    /// i-th kept coordinate), with only their rows in the data term.
+    fn inverse(&self, kept: &[bool]) -> Option<DMatrix<f64>> {
+        if kept.iter().all(|&k| k) {
+            return Some(self.ainv.clone());
+        }
+        let idx: Vec<usize> = (0..self.cols.len()).filter(|&c| kept[c / 2]).collect();
+        let mut a = self.prior.select_rows(&idx).select_columns(&idx);
+        for (g, _) in self.gram.iter().zip(kept).filter(|(_, k)| **k) {
+            a += g.select_rows(&idx).select_columns(&idx);
+        }
+        Some(a.cholesky()?.inverse())
+    }
+
+    /// The start correction of `rec` simulated as `ep` (see the module docs), one value per
+    /// start coordinate (zero for the joints not in `kept`, whose rows are not in the data
+    /// term either); `None` when the residual is not finite where it is scored, or the shapes
+    /// do not match.
+    fn correction(&self, rec: &Recording, ep: &Episode, kept: &[bool]) -> Option<Vec<f64>> {
         let n = self.n;
         let nj = rec.joints.len();
-        if rec.t.len() != n || ep.q_sim.len() != nj || self.cols.len() != 2 * nj {
+        if rec.t.len() != n || ep.q_sim.len() != nj || self.cols.len() != 2 * nj || kept.len() != nj
+        {
             return None;
         }
-        let mut b = DVector::zeros(self.cols.len());
-        for (c, col) in self.cols.iter().enumerate() {
-            for (k, jt) in rec.joints.iter().enumerate() {
+        if !kept.iter().any(|&k| k) {
+            return Some(vec![0.0; 2 * nj]);
+        }
+        let idx: Vec<usize> = (0..self.cols.len()).filter(|&c| kept[c / 2]).collect();
+        let mut b = DVector::zeros(idx.len());
+        for (bc, col) in b.iter_mut().zip(idx.iter().map(|&c| &self.cols[c])) {
+            for (k, jt) in rec.joints.iter().enumerate().filter(|(k, _)| kept[*k]) {
                 for i in 0..col.len {
                     let wi = self.w[k * n + i];
                     if wi == 0.0 {
@@ -240,23 +269,42 @@ impl StartSens {
                     if !r.is_finite() {
                         return None;
                     }
-                    b[c] += wi * col.q[k * col.len + i] * r;
+                    *bc += wi * col.q[k * col.len + i] * r;
                 }
             }
         }
-        let d = &self.ainv * b;
+        let d = self.inverse(kept)? * b;
         // Scaled as a whole (not clamped per component: the others were chosen to go with it).
-        let over =
-            d.iter().zip(&self.sigma).map(|(x, s)| x.abs() / (CLAMP * s)).fold(1.0, f64::max);
-        Some(d.iter().map(|x| x / over).collect())
+        let over = d
+            .iter()
+            .zip(idx.iter().map(|&c| self.sigma[c]))
+            .map(|(x, s)| x.abs() / (CLAMP * s))
+            .fold(1.0, f64::max);
+        let mut out = vec![0.0; 2 * nj];
+        for (&c, x) in idx.iter().zip(d.iter()) {
+            out[c] = x / over;
+        }
+        Some(out)
     }
 
     /// Moves `ep` (a simulation of `rec`) by its start correction (unchanged when there is
-    /// none, see [`StartSens::correction`]).
-    pub(super) fn apply(&self, rec: &Recording, ep: &mut Episode) {
-        let Some(d) = self.correction(rec, ep) else { return };
-        for (col, x) in self.cols.iter().zip(&d) {
+    /// none, see [`StartSens::correction`]). Only the joints in `kept` (one flag per recorded
+    /// joint) take part: their start is estimated from their own rows, and only their
+    /// simulation is moved. A joint that can stay where it starts (dry friction, a dead band;
+    /// [`Effect::holds_start`]) keeps its start error for as long as it sticks; a response
+    /// measured without that effect has died out long before: the wrong shape.
+    ///
+    /// [`Effect::holds_start`]: crate::fit::effects::Effect::holds_start
+    pub(super) fn apply(&self, rec: &Recording, ep: &mut Episode, kept: &[bool]) {
+        let Some(d) = self.correction(rec, ep, kept) else { return };
+        for (col, &x) in self.cols.iter().zip(&d) {
+            if x == 0.0 {
+                continue;
+            }
             for (k, (qs, qds)) in ep.q_sim.iter_mut().zip(ep.qd_sim.iter_mut()).enumerate() {
+                if !kept[k] {
+                    continue;
+                }
                 for i in 0..col.len {
                     let (dq, dqd) = (col.q[k * col.len + i] * x, col.qd[k * col.len + i] * x);
                     if dq.is_finite() {
