@@ -66,19 +66,28 @@ pub(super) fn verdict(
 /// `true` when a fitted parameter of `a` sits on its bound (within 0.5 % of the range, of ln p
 /// for an effect searched on a log scale — a 0.25 N·m torque limit is not at the 0.05 N·m
 /// bound): the effect was stretched to explain something else.
+///
+/// A lower bound where the effect is absent (the value it starts from, e.g. no friction in a
+/// model without any) is not a limit the data push against: a small effect sits near it. There
+/// the tolerance is the 1-D search's resolution (0.02 % of the range): Coulomb friction of
+/// 0.02 N·m on [0, 5] N·m is a small friction, not a fit stuck at zero (with 0.5 % it counted
+/// as on its bound, and a worse interior rival won the round).
 pub(super) fn at_bound(engine: &Engine, base: &[Applied], a: &Applied) -> bool {
     let Some(t) = JointTarget::of(engine.robot, &a.joints[0]) else { return false };
     let m0 = model_with(engine.robot, base);
     let (lo, hi) = a.effect.bounds(&m0, &t);
+    let start = a.effect.initial(&m0, &t);
     let log = a.effect.log_search() && a.effect.fitted() == 1;
     (0..a.effect.fitted().min(a.params.len())).any(|k| {
+        let absent_lo = start.get(k).is_some_and(|&s| s == lo[k]);
         let (p, lo, hi) = if log && lo[k] > 0.0 && a.params[k] > 0.0 {
             (a.params[k].ln(), lo[k].ln(), hi[k].ln())
         } else {
             (a.params[k], lo[k], hi[k])
         };
         let tol = 5e-3 * (hi - lo);
-        p <= lo + tol || p >= hi - tol
+        let tol_lo = if absent_lo { 2e-4 * (hi - lo) } else { tol };
+        p <= lo + tol_lo || p >= hi - tol
     })
 }
 
@@ -113,6 +122,16 @@ mod tests {
             params: vec![0.0],
         };
         assert!(at_bound(&engine, &[], &damping));
+        // Where the effect is absent (no friction in the model: the lower bound), a small
+        // friction is not on the bound; one at the 1-D search's resolution is.
+        let friction = |v: f64| Applied {
+            effect: by_id("coulomb_friction").unwrap(),
+            joints: vec!["j".into()],
+            params: vec![v],
+        };
+        assert!(!at_bound(&engine, &[], &friction(0.02)));
+        assert!(at_bound(&engine, &[], &friction(0.0005)));
+        assert!(at_bound(&engine, &[], &friction(4.99)));
         std::fs::remove_dir_all(&dir).ok();
     }
 
