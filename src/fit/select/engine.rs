@@ -809,10 +809,13 @@ mod tests {
             ..Settings::default()
         };
         let ds = synth::generate(&robot, &joints, &[], &s, &|_, _| {}).expect("synth");
+        // One directory per call: tests run in parallel, several with the same noise.
+        static CALL: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
         let dir = std::env::temp_dir().join(format!(
-            "modellint_floor_{}_{}",
+            "modellint_floor_{}_{}_{}",
             qd_noise.to_bits(),
-            std::process::id()
+            std::process::id(),
+            CALL.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
         ));
         let files = synth::write::write(&ds, &dir).expect("write");
         let recs: Vec<Recording> = files.iter().map(|f| read_csv(f).expect("read")).collect();
