@@ -115,11 +115,16 @@ impl<'a> Engine<'a> {
     /// The start model's part of every memo key (empty without the start estimate, or
     /// without a sticking effect kept).
     fn start_tag(&self) -> String {
-        if !self.estimates_start() {
+        let m = self.start_model.lock().unwrap_or_else(|e| e.into_inner());
+        self.tag_of(&m)
+    }
+
+    /// [`Engine::start_tag`] of the start model `m`.
+    fn tag_of(&self, m: &[Applied]) -> String {
+        if !self.estimates_start() || m.is_empty() {
             return String::new();
         }
-        let m = self.start_model.lock().unwrap_or_else(|e| e.into_inner());
-        if m.is_empty() { String::new() } else { format!("#start:{}", set_key(&[], &m)) }
+        format!("#start:{}", set_key(&[], m))
     }
 
     fn estimates_start(&self) -> bool {
@@ -249,8 +254,9 @@ impl<'a> Engine<'a> {
         &self,
         recs: &[Recording],
     ) -> (Vec<Option<std::sync::Arc<StartSens>>>, Vec<Applied>) {
+        // One read: the model and its memo tag belong together.
         let model = self.start_model.lock().unwrap_or_else(|e| e.into_inner()).clone();
-        let tag = self.start_tag();
+        let tag = self.tag_of(&model);
         let keys: Vec<String> = recs.iter().map(|r| start::key(r) + &tag).collect();
         let missing: Vec<usize> = {
             let memo = self.starts.lock().unwrap_or_else(|e| e.into_inner());
