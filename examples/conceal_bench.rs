@@ -95,6 +95,18 @@ fn matrix(quick: bool) -> Vec<Case> {
             c
         };
         b.extend(robot_cases("arm3", &arm, "elbow_pitch", &arm3_joints(), &arm3_single_truths()));
+        // Large dry friction on the stiff arm (static 2 N·m against kp 50): the breakaway
+        // step an order of magnitude above the 11 singles' values.
+        b.push(arm(
+            "arm3 stribeck_friction@elbow_pitch large",
+            Kind::Single,
+            vec![("stribeck_friction", vec!["elbow_pitch".to_string()], vec![2.0, 1.0, 0.2])],
+        ));
+        b.push(arm(
+            "arm3 coulomb_friction@elbow_pitch large",
+            Kind::Single,
+            vec![("coulomb_friction", vec!["elbow_pitch".to_string()], vec![1.5])],
+        ));
         // Asimov legs on a test stand (12 joints), effects on the left knee or all leg joints.
         let asi = |n: &str, k, t| asimov_case(n, k, t, Noise::Real, 7);
         b.extend(robot_cases("asimov", &asi, "left_knee", &asimov_legs(), &asimov_single_truths()));

@@ -52,6 +52,9 @@ impl Effect for StribeckFriction {
             _ => None,
         }
     }
+    fn nests(&self) -> Option<&'static str> {
+        Some("coulomb_friction")
+    }
     fn signature(&self, s: &Samples) -> Signature {
         let vs = 0.2 * s.qd_rms;
         Signature::centred(s.qd.iter().map(|v| v.signum() * (-(v / vs).powi(2)).exp()).collect())

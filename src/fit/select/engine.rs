@@ -549,7 +549,13 @@ impl<'a> Engine<'a> {
             a
         };
         let obj = |x: &[f64]| self.errors(train, &make(x)).map_or(f64::INFINITY, |e| e.rmse());
-        let x0: Vec<f64> = (0..k).map(|i| full0[i].clamp(lo[i], hi[i])).collect();
+        let mut x0: Vec<f64> = (0..k).map(|i| full0[i].clamp(lo[i], hi[i])).collect();
+        if let Some(seed) = self.nested_start(train, base, effect, group, &m0, &t) {
+            let s0: Vec<f64> = (0..k).map(|i| seed[i].clamp(lo[i], hi[i])).collect();
+            if obj(&s0) < obj(&x0) {
+                x0 = s0;
+            }
+        }
         let b = Bounds { lo: lo[..k].to_vec(), hi: hi[..k].to_vec() };
         let (x, f) = match k {
             0 => (vec![], obj(&[])),
@@ -606,6 +612,28 @@ impl<'a> Engine<'a> {
         let mut p = full0.clone();
         p[..k].copy_from_slice(&x[..k]);
         (p, f)
+    }
+
+    /// The start [`Effect::nests`] gives a fit of `effect` on `group`: the simpler effect fitted
+    /// on the same base and joints (memoised: the search fits it as a candidate of its own),
+    /// taken over by `effect` from its parameter defaults ([`Effect::absorb`]).
+    fn nested_start(
+        &self,
+        train: &[Recording],
+        base: &[Applied],
+        effect: &'static dyn Effect,
+        group: &[String],
+        m0: &mujoco_rs::prelude::MjModel,
+        t: &JointTarget,
+    ) -> Option<Vec<f64>> {
+        let simple = effects::by_id(effect.nests()?)?;
+        let (p, f) = self.fit_budget(train, base, simple, group, self.opts.max_evals);
+        if p.is_empty() || !f.is_finite() {
+            return None;
+        }
+        let delta: Vec<f64> = p.iter().zip(simple.initial(m0, t)).map(|(a, b)| a - b).collect();
+        let zero: Vec<f64> = effect.params().iter().map(|d| d.default).collect();
+        effect.absorb(simple, &zero, &delta)
     }
 
     /// `true` when `effect` starts from the same parameter values on every joint of `group`
