@@ -387,7 +387,9 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
                 .then(accepted[a].0.heldout_rmse_after.total_cmp(&accepted[b].0.heldout_rmse_after))
         })
         .expect("the best is equivalent to itself");
+    let same: Vec<bool> = (0..accepted.len()).map(equivalent).collect();
     let mut accepted: Vec<Selected> = accepted.into_iter().map(|(s, ..)| s).collect();
+    let rivals = rival_notes(&accepted, win, &same);
     let mut w = accepted.swap_remove(win);
     if let Some(pair) = pair_lookahead(s, &applied, &kept_all, &w, z, round, out) {
         for (mut p, a) in pair {
@@ -402,11 +404,59 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     }) {
         t.kept = true;
     }
+    out.notes.extend(rivals);
     let e = effects::by_id(&w.effect).expect("known");
     out.applied.push(Applied { effect: e, joints: w.joints.clone(), params: w.values.clone() });
     set_uncertainty(engine, train, &mut w, &out.applied, &mut out.warnings);
     out.selected.push(w);
     true
+}
+
+/// Notes naming the rivals of the round's winner `accepted[win]`: other effects on any of its
+/// joints that explain the data as well (`same[i]`: within Occam's equivalence, see above). The
+/// simpler one is kept, but the data do not rule the rival out — on a stiff servo a static
+/// friction and a dead band both hold a joint near its command. The same effect on another
+/// joint group is not a rival (the merge and the group search decide that).
+fn rival_notes(accepted: &[Selected], win: usize, same: &[bool]) -> Vec<String> {
+    let w = &accepted[win];
+    let show = |s: &Selected| {
+        let p: Vec<String> =
+            s.params.iter().map(|(k, v)| format!("{k} {}", effects::num(*v))).collect();
+        format!("{} on {} ({})", s.effect, s.joints.join(","), p.join(", "))
+    };
+    accepted
+        .iter()
+        .enumerate()
+        .filter(|&(i, s)| {
+            i != win
+                && same.get(i) == Some(&true)
+                && s.effect != w.effect
+                && s.joints.iter().any(|j| w.joints.contains(j))
+                && !nested(&s.effect, &w.effect)
+                && !nested(&w.effect, &s.effect)
+        })
+        .map(|(_, s)| {
+            format!(
+                "{} explains these recordings as well as the kept {} (held-out RMSE {:.3e} vs \
+                 {:.3e} rad, no difference beyond noise; kept as the simpler or better one): the \
+                 data do not tell them apart",
+                show(s),
+                show(w),
+                s.heldout_rmse_after,
+                w.heldout_rmse_after
+            )
+        })
+        .collect()
+}
+
+/// Whether effect `outer` contains effect `inner` as a special case ([`Effect::absorb`]):
+/// Stribeck friction that fits as well as the kept Coulomb friction is no rival of it.
+fn nested(outer: &str, inner: &str) -> bool {
+    let (Some(o), Some(i)) = (effects::by_id(outer), effects::by_id(inner)) else {
+        return false;
+    };
+    let mine: Vec<f64> = o.params().iter().map(|p| p.default).collect();
+    o.absorb(i, &mine, &vec![0.0; i.params().len()]).is_some()
 }
 
 /// Whether `effect` on exactly `group` is already a candidate. Only an identical group is a
@@ -426,6 +476,60 @@ fn sorted_pair(j: &str, p: String) -> Vec<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn sel(effect: &str, joints: &[&str], p: &[(&str, f64)], heldout: f64) -> Selected {
+        Selected {
+            effect: effect.into(),
+            joints: joints.iter().map(|j| j.to_string()).collect(),
+            params: p.iter().map(|(k, v)| (k.to_string(), *v)).collect(),
+            stderr: BTreeMap::new(),
+            identifiable: true,
+            evidence: BTreeMap::new(),
+            heldout_improvement: 0.9,
+            heldout_rmse_before: 0.014,
+            heldout_rmse_after: heldout,
+            window_improvement: 0.0,
+            window_improvement_se: 0.0,
+            bic_before: 0.0,
+            bic_after: 0.0,
+            values: vec![],
+        }
+    }
+
+    #[test]
+    fn an_equally_good_rival_on_the_winners_joint_is_named() {
+        let acc = vec![
+            sel("stribeck_friction", &["left_knee"], &[("static", 2.0), ("dynamic", 1.0)], 7.0e-4),
+            sel("backlash", &["left_knee"], &[("backlash", 0.0369)], 7.3e-4),
+            // Equivalent but on another joint: not a rival of the knee's friction.
+            sel("armature", &["right_knee"], &[("armature", 0.02)], 7.2e-4),
+            // On the knee, but worse beyond noise (not in Occam's set).
+            sel("viscous_damping", &["left_knee"], &[("damping", 3.0)], 9.0e-4),
+            // The same effect on a group with the knee: a group question, not a rival.
+            sel("backlash", &["left_knee", "right_knee"], &[("backlash", 0.03)], 7.1e-4),
+            // Another effect on a group that contains the knee: a rival.
+            sel("coulomb_friction", &["left_knee", "right_knee"], &[("frictionloss", 1.5)], 7.1e-4),
+        ];
+        let same = [true, true, true, false, true, true];
+        let n = rival_notes(&acc, 1, &same);
+        assert_eq!(n.len(), 2, "{n:#?}");
+        assert!(n[0].starts_with("stribeck_friction on left_knee (dynamic 1, static 2) explains"));
+        assert!(n[0].contains("the kept backlash on left_knee (backlash 0.0369)"), "{}", n[0]);
+        assert!(n[0].contains("7.000e-4 vs 7.300e-4 rad"), "{}", n[0]);
+        assert!(n[1].starts_with("coulomb_friction on left_knee,right_knee (frictionloss 1.5)"));
+        // Stribeck friction as good as the kept Coulomb friction contains it: no rival.
+        let nest = vec![
+            sel("coulomb_friction", &["left_knee"], &[("frictionloss", 1.5)], 7.0e-4),
+            sel("stribeck_friction", &["left_knee"], &[("static", 1.5)], 6.9e-4),
+            sel("backlash", &["left_knee"], &[("backlash", 0.03)], 7.1e-4),
+        ];
+        let n = rival_notes(&nest, 0, &[true, true, true]);
+        assert_eq!(n.len(), 1, "{n:#?}");
+        assert!(n[0].starts_with("backlash on left_knee"), "{}", n[0]);
+        assert_eq!(rival_notes(&nest, 1, &[true, true, false]), Vec::<String>::new());
+        // Nothing equivalent: no note.
+        assert!(rival_notes(&acc, 1, &[false, true, false, false, false, false]).is_empty());
+    }
 
     #[test]
     fn mirror_names() {
