@@ -107,6 +107,11 @@ fn matrix(quick: bool) -> Vec<Case> {
             Kind::Single,
             vec![("coulomb_friction", vec!["elbow_pitch".to_string()], vec![1.5])],
         ));
+        b.push(arm(
+            "arm3 gain_error@elbow_pitch slow",
+            Kind::Single,
+            vec![("gain_error", vec!["elbow_pitch".to_string()], vec![0.4, 2.0])],
+        ));
         // Asimov legs on a test stand (12 joints), effects on the left knee or all leg joints.
         let asi = |n: &str, k, t| asimov_case(n, k, t, Noise::Real, 7);
         b.extend(robot_cases("asimov", &asi, "left_knee", &asimov_legs(), &asimov_single_truths()));

@@ -573,9 +573,32 @@ impl<'a> Engine<'a> {
                     stat_tol: crate::fit::optim::ROLLOUT_STAT_TOL,
                     short_step: crate::fit::optim::ROLLOUT_SHORT_STEP,
                 };
-                let r = levenberg_marquardt(&res, &x0, &b, &o);
-                let n = res_len(&r);
-                (r.x, if n > 0 { (2.0 * r.cost / n as f64).sqrt() } else { f64::INFINITY })
+                let lm = |start: &[f64]| {
+                    let r = levenberg_marquardt(&res, start, &b, &o);
+                    let n = res_len(&r);
+                    let f = if n > 0 { (2.0 * r.cost / n as f64).sqrt() } else { f64::INFINITY };
+                    (r.x, f, r.converged)
+                };
+                let (x, f, converged) = lm(&x0);
+                // A second basin: a servo gain error of kp × 0.4, kd × 2 on arm3's elbow was
+                // fitted from (1, 1) as kp × 0.99, kd × 5.0 — kd on its bound, 1.16 mrad
+                // against 0.68 at the truth (a stiffer, heavily damped servo follows a slow one
+                // almost as well) — or, on other recordings of it, first stepped to the corner
+                // (3, 5) and ran out of iterations walking back down the curved valley at
+                // (0.45, 2.26). A full multi-parameter fit that ends on a bound it did not
+                // start on, or before converging, is also started from the best point of a
+                // grid inside the bounds; the better fit is kept. (Not the coarse screens: they
+                // stop after two iterations by design.)
+                let again = k >= 2
+                    && max_evals >= self.opts.max_evals
+                    && (!converged || ends_on_bound(&x, &x0, &b));
+                match again.then(|| grid_best(&obj, &b)) {
+                    Some(Some(g)) => {
+                        let (x2, f2, _) = lm(&g);
+                        if f2 < f { (x2, f2) } else { (x, f) }
+                    }
+                    _ => (x, f),
+                }
             }
             1 if effect.log_search() && lo[0] > 0.0 && hi[0] > lo[0] => {
                 // Grid and golden section on ln v: a narrow optimum a decade below the top of
@@ -813,6 +836,48 @@ impl<'a> Engine<'a> {
 }
 
 /// Number of residuals behind an [`LmResult`] (the rows of its Jacobian).
+/// Whether some parameter of `x` lies on a bound of `b` (within 0.1 % of its range) that the
+/// start `x0` was not on.
+fn ends_on_bound(x: &[f64], x0: &[f64], b: &Bounds) -> bool {
+    (0..x.len()).any(|i| {
+        let tol = 1e-3 * (b.hi[i] - b.lo[i]);
+        let on = |v: f64, edge: f64| (v - edge).abs() <= tol;
+        (on(x[i], b.lo[i]) && !on(x0[i], b.lo[i])) || (on(x[i], b.hi[i]) && !on(x0[i], b.hi[i]))
+    })
+}
+
+/// The best point of a grid inside `b` (5 points per parameter for 2 parameters, 3 for more; at
+/// 10–90 % of the range, on a log scale when the lower bound is positive): `None` when every
+/// point fails.
+fn grid_best(obj: &dyn Fn(&[f64]) -> f64, b: &Bounds) -> Option<Vec<f64>> {
+    let k = b.lo.len();
+    let fr: &[f64] = if k <= 2 { &[0.1, 0.3, 0.5, 0.7, 0.9] } else { &[0.2, 0.5, 0.8] };
+    let axis = |i: usize| -> Vec<f64> {
+        let (lo, hi) = (b.lo[i], b.hi[i]);
+        fr.iter()
+            .map(|&f| if lo > 0.0 { lo * (hi / lo).powf(f) } else { lo + f * (hi - lo) })
+            .collect()
+    };
+    let axes: Vec<Vec<f64>> = (0..k).map(axis).collect();
+    let mut best: Option<(f64, Vec<f64>)> = None;
+    for n in 0..fr.len().pow(k as u32) {
+        let mut c = n;
+        let p: Vec<f64> = axes
+            .iter()
+            .map(|a| {
+                let v = a[c % a.len()];
+                c /= a.len();
+                v
+            })
+            .collect();
+        let f = obj(&p);
+        if f.is_finite() && best.as_ref().is_none_or(|(bf, _)| f < *bf) {
+            best = Some((f, p));
+        }
+    }
+    best.map(|(_, p)| p)
+}
+
 pub(super) fn res_len(r: &LmResult) -> usize {
     r.n_resid
 }
@@ -866,6 +931,42 @@ mod tests {
         let f = engine.floors(&recs, &[], &errs);
         assert_eq!(f.len(), 1);
         f[0].reconstruction.sqrt()
+    }
+
+    #[test]
+    fn a_fit_stuck_on_a_bound_gets_a_grid_start() {
+        let b = Bounds { lo: vec![0.3, 0.2], hi: vec![3.0, 5.0] };
+        // Ended on kd's upper bound from (1, 1): a restart; started there, or interior: none.
+        assert!(ends_on_bound(&[0.99, 5.0], &[1.0, 1.0], &b));
+        assert!(ends_on_bound(&[0.3004, 1.2], &[1.0, 1.0], &b));
+        assert!(!ends_on_bound(&[0.99, 5.0], &[1.0, 5.0], &b));
+        assert!(!ends_on_bound(&[0.4, 2.0], &[1.0, 1.0], &b));
+        // Two basins: a narrow one at (0.4, 2) and a wide shallow one towards the corner. The
+        // grid is log-spaced on positive bounds and its best point is in the narrow basin.
+        let obj = |x: &[f64]| {
+            let narrow = ((x[0] / 0.4).ln().powi(2) + (x[1] / 2.0).ln().powi(2)).min(0.6);
+            narrow + 0.3 * (1.0 - x[1] / 5.0)
+        };
+        let g = grid_best(&obj, &b).expect("finite");
+        assert_eq!(g.len(), 2);
+        assert!((g[0] / 0.4).ln().abs() < 0.2 && (g[1] / 2.0).ln().abs() < 0.3, "{g:?}");
+        // Three parameters on a zero lower bound: 3 linear points each, at 20 / 50 / 80 % (27
+        // evaluations, all inside the box).
+        let lin = Bounds { lo: vec![0.0, 0.0, 0.0], hi: vec![1.0, 1.0, 1.0] };
+        let count = std::cell::Cell::new(0usize);
+        let _ = grid_best(
+            &|x: &[f64]| {
+                count.set(count.get() + 1);
+                if x.iter().all(|v| (0.2..=0.8).contains(v)) { 1.0 } else { f64::NAN }
+            },
+            &lin,
+        );
+        assert_eq!(count.get(), 27);
+        // Every point fails: no start.
+        assert!(grid_best(&|_: &[f64]| f64::NAN, &b).is_none());
+        // Two parameters on positive bounds: 5 points each at 10 … 90 % of the log range.
+        let g = grid_best(&|x: &[f64]| x[0] + x[1], &b).expect("finite");
+        assert!((g[0] - 0.3 * 10f64.powf(0.1)).abs() < 1e-12, "{g:?}");
     }
 
     /// Exact positions, exact commands, the exact model: the only error left is the first row's
