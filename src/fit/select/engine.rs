@@ -835,7 +835,6 @@ impl<'a> Engine<'a> {
     }
 }
 
-/// Number of residuals behind an [`LmResult`] (the rows of its Jacobian).
 /// Whether some parameter of `x` lies on a bound of `b` (within 0.1 % of its range) that the
 /// start `x0` was not on.
 fn ends_on_bound(x: &[f64], x0: &[f64], b: &Bounds) -> bool {
@@ -878,6 +877,7 @@ fn grid_best(obj: &dyn Fn(&[f64]) -> f64, b: &Bounds) -> Option<Vec<f64>> {
     best.map(|(_, p)| p)
 }
 
+/// Number of residuals behind an [`LmResult`] (the rows of its Jacobian).
 pub(super) fn res_len(r: &LmResult) -> usize {
     r.n_resid
 }
