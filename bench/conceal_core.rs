@@ -602,6 +602,9 @@ pub const RIG: &str = "fixtures/bam_xl330/rig.xml";
 pub const ASIMOV: &str = "models/asimov.xml";
 /// Lightly damped pendulum servo (ζ ≈ 0.15).
 pub const PENDULUM: &str = "fixtures/synth/pendulum_servo.xml";
+/// A humanoid-sized knee on a stand (kp 250, 150 N·m): damping and friction beyond a small
+/// servo's fixed fit box.
+pub const HEAVY_KNEE: &str = "fixtures/synth/heavy_knee.xml";
 
 pub fn arm3_joints() -> Vec<String> {
     ["shoulder_pitch", "elbow_pitch", "wrist_pitch"].iter().map(|s| s.to_string()).collect()
@@ -701,6 +704,41 @@ pub fn asimov_case(
         suspend_m: 0.5,
         quant_bits: 12,
     }
+}
+
+pub fn heavy_knee_case(
+    name: &str,
+    kind: Kind,
+    truth: Vec<(&'static str, Vec<f64>)>,
+    noise: Noise,
+    seed: u64,
+) -> Case {
+    Case {
+        name: name.into(),
+        kind,
+        model: HEAVY_KNEE.into(),
+        joints: vec!["knee".into()],
+        truth: truth.into_iter().map(|(e, p)| (e, vec!["knee".to_string()], p)).collect(),
+        noise,
+        episodes: 6,
+        duration_s: 4.0,
+        amplitude: 0.5,
+        seed,
+        suspend_m: 0.0,
+        quant_bits: 12,
+    }
+}
+
+/// Effects on the humanoid-sized knee, each beyond the fixed bound a small servo's fit box
+/// has (damping, friction 5; stiffness 20; effort limit 50).
+pub fn heavy_knee_truths() -> Vec<(&'static str, Vec<f64>)> {
+    vec![
+        ("viscous_damping", vec![9.0]),
+        ("coulomb_friction", vec![8.0]),
+        ("stribeck_friction", vec![10.0, 6.0, 0.2]),
+        ("joint_stiffness", vec![40.0]),
+        ("torque_limit", vec![60.0]),
+    ]
 }
 
 pub fn pendulum_case(

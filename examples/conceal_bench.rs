@@ -115,6 +115,17 @@ fn matrix(quick: bool) -> Vec<Case> {
         // Asimov legs on a test stand (12 joints), effects on the left knee or all leg joints.
         let asi = |n: &str, k, t| asimov_case(n, k, t, Noise::Real, 7);
         b.extend(robot_cases("asimov", &asi, "left_knee", &asimov_legs(), &asimov_single_truths()));
+        // A humanoid-sized knee (kp 250, 150 N·m): values beyond a small servo's fit box.
+        for (e, p) in heavy_knee_truths() {
+            b.push(heavy_knee_case(
+                &format!("knee {e}"),
+                Kind::Single,
+                vec![(e, p)],
+                Noise::Real,
+                7,
+            ));
+        }
+        b.push(heavy_knee_case("knee control", Kind::Control, vec![], Noise::Real, 11));
         // The BAM XL330 rig (ζ ≈ 0.23): control and a few singles.
         for (e, p) in [
             ("action_delay", vec![0.02]),

@@ -72,6 +72,50 @@ fn conceal_arm3_position_offset() {
     ));
 }
 
+/// A humanoid-sized knee (kp 250 N·m/rad, 150 N·m): damping, dry friction and an effort
+/// limit beyond the fixed bounds sized for small servos (5 N·m·s/rad, 5 N·m, 50 N·m). Before
+/// the bounds grew with the drive, damping 9 came out as a servo gain error (kd × 2.4),
+/// Coulomb 8 as 5.0 (on its bound) plus an invented backlash, and the limit was not found.
+#[test]
+fn conceal_heavy_knee_viscous_damping() {
+    single(heavy_knee_case(
+        "knee viscous_damping",
+        Kind::Single,
+        vec![("viscous_damping", vec![9.0])],
+        Noise::Real,
+        7,
+    ));
+}
+
+#[test]
+fn conceal_heavy_knee_coulomb_friction() {
+    single(heavy_knee_case(
+        "knee coulomb_friction",
+        Kind::Single,
+        vec![("coulomb_friction", vec![8.0])],
+        Noise::Real,
+        7,
+    ));
+}
+
+#[test]
+fn conceal_heavy_knee_torque_limit() {
+    single(heavy_knee_case(
+        "knee torque_limit",
+        Kind::Single,
+        vec![("torque_limit", vec![60.0])],
+        Noise::Real,
+        7,
+    ));
+}
+
+#[test]
+fn conceal_heavy_knee_control_selects_nothing() {
+    let s = run(&heavy_knee_case("knee control", Kind::Control, vec![], Noise::Real, 11));
+    report(&s);
+    assert!(s.detected.is_empty(), "invented effects: {:?}", s.detected);
+}
+
 #[test]
 fn conceal_rig_coulomb_friction() {
     single(rig_case(

@@ -31,8 +31,10 @@ impl Effect for JointStiffness {
     fn initial(&self, m: &MjModel, t: &JointTarget) -> Vec<f64> {
         vec![get(m.jnt_stiffness(), t.jnt)]
     }
+    /// Up to the fixed bound widened for a strong drive ([`super::JointTarget::strength`]), or
+    /// 10 × the model's own value.
     fn bounds(&self, m: &MjModel, t: &JointTarget) -> (Vec<f64>, Vec<f64>) {
-        (vec![0.0], vec![Self::META.params[0].hi.max(10.0 * self.initial(m, t)[0])])
+        (vec![0.0], vec![(Self::META.params[0].hi * t.strength()).max(10.0 * self.initial(m, t)[0])])
     }
     fn apply_model(&self, m: &mut MjModel, t: &JointTarget, p: &[f64]) {
         set(m.jnt_stiffness_mut(), t.jnt, p[0].max(0.0));

@@ -35,6 +35,10 @@ impl Effect for LoadDependentFriction {
     fn initial(&self, _m: &MjModel, _t: &JointTarget) -> Vec<f64> {
         vec![0.02, 0.02]
     }
+    /// The parameter box, the frictionloss widened for a strong drive ([`super::JointTarget::strength`]).
+    fn bounds(&self, _m: &MjModel, t: &JointTarget) -> (Vec<f64>, Vec<f64>) {
+        super::bounds_for_drive(self, t, &[0])
+    }
     fn torque(&self, cx: HookCtx<'_>) {
         let HookCtx { q, qd, io, p, .. } = cx;
         let budget = p[0].max(0.0) + p[1].max(0.0) * servo_torque(q, qd, io).abs();

@@ -115,19 +115,65 @@ pub struct JointTarget {
     pub acts: Vec<usize>,
     /// Joint position at the keyframe (or qpos0).
     pub key_q: f64,
+    /// Stiffness of the joint's position servos on the joint, Σ kp·gear² [N·m/rad] (0 without
+    /// one).
+    pub servo_kp: f64,
+    /// The largest torque the joint's actuators are declared to reach [N·m]: Σ of each
+    /// force-limited actuator's `forcerange` and each motor's `ctrlrange` × gain, times gear
+    /// (0 when none is declared).
+    pub max_torque: f64,
 }
+
+/// Drive strength that the absolute parameter bounds (damping, friction, stiffness, torque) are
+/// sized for: a 100 N·m/rad servo or a 100 N·m actuator (the arms, small legs and servos the
+/// fixed bounds were set on). A stronger drive widens them in proportion ([`JointTarget::strength`]).
+const REFERENCE_DRIVE: f64 = 100.0;
 
 impl JointTarget {
     pub fn of(robot: &Robot, name: &str) -> Option<JointTarget> {
         let j = robot.joint(name)?;
+        let acts = robot.actuators_on_joint(j.id);
+        let (mut servo_kp, mut max_torque) = (0.0, 0.0);
+        for a in &acts {
+            let g = if a.gear != 0.0 { a.gear.abs() } else { 1.0 };
+            let span = |r: [f64; 2]| r[0].abs().max(r[1].abs());
+            if let ActuatorKind::Position { kp, .. } = a.kind {
+                servo_kp += kp.abs() * g * g;
+            }
+            if a.forcelimited {
+                max_torque += span(a.forcerange) * g;
+            } else if matches!(a.kind, ActuatorKind::Motor) && a.ctrllimited {
+                max_torque += a.gainprm[0].abs() * span(a.ctrlrange) * g;
+            }
+        }
+        let finite = |v: f64| if v.is_finite() { v } else { 0.0 };
         Some(JointTarget {
             jnt: j.id,
             dof: j.dofadr,
             qposadr: j.qposadr,
-            acts: robot.actuators_on_joint(j.id).iter().map(|a| a.id).collect(),
+            acts: acts.iter().map(|a| a.id).collect(),
             key_q: robot.key.qpos.get(j.qposadr).copied().unwrap_or(0.0),
+            servo_kp: finite(servo_kp),
+            max_torque: finite(max_torque),
         })
     }
+
+    /// How many times stronger the joint's drive is than the one the fixed bounds of damping,
+    /// friction and stiffness were sized for (at least 1): max(1, kp / 100 N·m/rad, torque /
+    /// 100 N·m). A humanoid knee (kp 200–300, 150–300 N·m) can carry damping and friction
+    /// beyond the 5 N·m(·s/rad) that suit a hobby servo or a small arm.
+    pub fn strength(&self) -> f64 {
+        (self.servo_kp / REFERENCE_DRIVE).max(self.max_torque / REFERENCE_DRIVE).max(1.0)
+    }
+}
+
+/// An effect's [`ParamDef`] bounds with the upper bounds of the parameters `scaled` (torques,
+/// damping) widened by the joint's drive strength ([`JointTarget::strength`]).
+pub fn bounds_for_drive(e: &dyn Effect, t: &JointTarget, scaled: &[usize]) -> (Vec<f64>, Vec<f64>) {
+    let k = t.strength();
+    let ps = e.params();
+    let hi = ps.iter().enumerate().map(|(i, p)| if scaled.contains(&i) { p.hi * k } else { p.hi });
+    (ps.iter().map(|p| p.lo).collect(), hi.collect())
 }
 
 /// How an effect enters the simulation.
@@ -606,6 +652,62 @@ pub(crate) fn hinge_recording(t: Vec<f64>, cmd: Vec<f64>) -> Recording {
 
 #[cfg(test)]
 mod tests {
+    /// Bounds on a servo of the strength the fixed bounds were set on (kp 50, 30 N·m) are the
+    /// fixed ones; a knee-sized servo (kp 400 with a gear of 2 → 1600 N·m/rad at the joint)
+    /// widens damping, friction and stiffness 16-fold and the effort limit to half a radian of
+    /// its error. The numbers are the ParamDef bounds times kp·gear²/100, worked by hand.
+    #[test]
+    fn a_strong_drive_widens_the_absolute_bounds() {
+        use super::{JointTarget, by_id, hinge_robot, model_with};
+        let dir = std::env::temp_dir().join(format!("modellint-strength-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let hi = |r: &crate::model::Robot, e: &str| {
+            let t = JointTarget::of(r, "j").unwrap();
+            by_id(e).unwrap().bounds(&model_with(r, &[]), &t).1
+        };
+        let small = hinge_robot(&dir, "small.xml", "", "", r#"kp="50" kv="2" forcerange="-30 30""#);
+        assert_eq!(JointTarget::of(&small, "j").unwrap().strength(), 1.0);
+        assert_eq!(hi(&small, "viscous_damping"), [5.0]);
+        assert_eq!(hi(&small, "coulomb_friction"), [5.0]);
+        assert_eq!(hi(&small, "joint_stiffness"), [20.0]);
+        assert_eq!(hi(&small, "stribeck_friction"), [5.0, 5.0, 2.0]);
+        assert_eq!(hi(&small, "load_dependent_friction"), [2.0, 0.5]);
+        assert_eq!(hi(&small, "torque_limit")[0], 50.0);
+        let big = hinge_robot(&dir, "big.xml", "", "", r#"kp="400" kv="10" gear="2""#);
+        let t = JointTarget::of(&big, "j").unwrap();
+        assert_eq!((t.servo_kp, t.max_torque, t.strength()), (1600.0, 0.0, 16.0));
+        assert_eq!(hi(&big, "viscous_damping"), [80.0]);
+        assert_eq!(hi(&big, "coulomb_friction"), [80.0]);
+        assert_eq!(hi(&big, "joint_stiffness"), [320.0]);
+        assert_eq!(hi(&big, "stribeck_friction"), [80.0, 80.0, 2.0]);
+        assert_eq!(hi(&big, "load_dependent_friction"), [32.0, 0.5]);
+        assert_eq!(hi(&big, "torque_limit")[0], 800.0);
+        // The torque limit's start is no limit: the top of its box, not the 50 N·m default.
+        let tl = by_id("torque_limit").unwrap();
+        assert_eq!(tl.initial(&model_with(&big, &[]), &t)[0], 800.0);
+        // A force-limited drive counts its declared torque (250 N·m × gear 2).
+        let limited = hinge_robot(
+            &dir,
+            "limited.xml",
+            "",
+            "",
+            r#"kp="20" kv="1" gear="2" forcelimited="true" forcerange="-250 250""#,
+        );
+        let t = JointTarget::of(&limited, "j").unwrap();
+        assert_eq!((t.servo_kp, t.max_torque, t.strength()), (80.0, 500.0, 5.0));
+        assert_eq!(hi(&limited, "torque_limit")[0], 500.0);
+        // So does the joint's own actuator force range.
+        let joint = hinge_robot(
+            &dir,
+            "joint.xml",
+            "",
+            r#"actuatorfrclimited="true" actuatorfrcrange="-60 60""#,
+            r#"kp="20" kv="1""#,
+        );
+        assert_eq!(hi(&joint, "torque_limit")[0], 60.0);
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
     #[test]
     fn short_parameter_vectors_are_padded_with_defaults() {
         let multi: Vec<_> = super::all().into_iter().filter(|e| e.params().len() >= 2).collect();

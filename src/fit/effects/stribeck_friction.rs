@@ -40,6 +40,10 @@ impl Effect for StribeckFriction {
     fn initial(&self, _m: &MjModel, _t: &JointTarget) -> Vec<f64> {
         vec![0.1, 0.05, 0.1]
     }
+    /// The parameter box, static and dynamic friction widened for a strong drive ([`super::JointTarget::strength`]).
+    fn bounds(&self, _m: &MjModel, t: &JointTarget) -> (Vec<f64>, Vec<f64>) {
+        super::bounds_for_drive(self, t, &[0, 1])
+    }
     fn torque(&self, cx: HookCtx<'_>) {
         let HookCtx { qd, io, p, .. } = cx;
         let (fs, fd, vs) = (p[0].max(0.0), p[1].max(0.0), p[2].max(1e-4));

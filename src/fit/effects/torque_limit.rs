@@ -58,6 +58,27 @@ impl Effect for TorqueLimit {
     fn log_search(&self) -> bool {
         true
     }
+    /// No limit: the top of the box ([`Self::bounds`]).
+    fn initial(&self, m: &MjModel, t: &JointTarget) -> Vec<f64> {
+        let (_, hi) = self.bounds(m, t);
+        self.params().iter().zip(hi).map(|(d, h)| d.default.max(h)).collect()
+    }
+    /// The effort limit reaches at least the joint's declared torque (a `forcerange`, a motor's
+    /// control range, the joint's `actuatorfrcrange`) and half a radian of its servo's error: a
+    /// humanoid knee saturating at 120 N·m must be representable, not only the 50 N·m of a
+    /// small leg.
+    fn bounds(&self, m: &MjModel, t: &JointTarget) -> (Vec<f64>, Vec<f64>) {
+        let ps = self.params();
+        let mut hi: Vec<f64> = ps.iter().map(|p| p.hi).collect();
+        let joint = match (m.jnt_actfrclimited().get(t.jnt), m.jnt_actfrcrange().get(t.jnt)) {
+            (Some(true), Some(r)) if r[0].is_finite() && r[1].is_finite() => {
+                r[0].abs().max(r[1].abs())
+            }
+            _ => 0.0,
+        };
+        hi[0] = hi[0].max(t.max_torque).max(joint).max(0.5 * t.servo_kp);
+        (ps.iter().map(|p| p.lo).collect(), hi)
+    }
     /// The effort limit is MuJoCo's own actuator force clamp (`forcerange` ±effort / gear on the
     /// joint's position servos, inside any range the model already has). A clamp added in the
     /// hook instead leaves the servo's `kv` in an implicit integrator's velocity derivative
