@@ -5,11 +5,13 @@ declare_effect! {
     /// Real PD gains = model gains × (kp_scale, kd_scale).
     ///
     /// The servo's real gains differ from the model's (firmware units, supply voltage, current
-    /// limits). A hook adds (kp_scale − 1)·kp·(ctrl − q) − (kd_scale − 1)·kd·q̇, so it also scales
-    /// gains that come from the recording's kp/kd columns.
+    /// limits). The joint's position servos get kp × kp_scale and kv × kd_scale in the model
+    /// itself, so MuJoCo treats them as its own servo (an implicit integrator's velocity
+    /// derivative, the force clamp, the actuator's delay); gains from the recording's kp/kd
+    /// columns are scaled alike by the replay.
     ///
     /// ## Simulation
-    /// hook: adds `(s_p−1)·kp·(ctrl−q) − (s_d−1)·kd·q̇` (also scales recorded kp/kd columns)
+    /// model: position servo `gainprm[0]`, `biasprm[1]` × s_p, `biasprm[2]` × s_d (recorded kp/kd columns scaled alike)
     ///
     /// ## Signature
     /// servo error `ctrl − q`
@@ -21,7 +23,7 @@ declare_effect! {
     /// comment with the parameters
     pub GainError {
         id: "gain_error",
-        entry: Torque,
+        entry: Model,
         params: [
             ParamDef { name: "kp_scale", unit: "", lo: 0.3, hi: 3.0, default: 1.0 },
             ParamDef { name: "kd_scale", unit: "", lo: 0.2, hi: 5.0, default: 1.0 },
@@ -30,10 +32,22 @@ declare_effect! {
 }
 
 impl Effect for GainError {
-    fn torque(&self, cx: HookCtx<'_>) {
-        let HookCtx { q, qd, io, p, .. } = cx;
-        if io.enabled {
-            io.tau += (p[0] - 1.0) * io.kp * (io.acting_ctrl() - q) - (p[1] - 1.0) * io.kd * qd;
+    /// Scales the gains of the joint's position servos (gain `kp`, bias `−kp`, `−kv`). Until
+    /// session 28 a hook added `(s_p−1)·kp·(ctrl−q) − (s_d−1)·kd·q̇` as an explicit torque:
+    /// under `implicitfast` the servo's own kv is integrated implicitly and the hook's share
+    /// was not, so on a knee-sized joint (kv 6, 0.4 kg·m², 2 ms) the fit came out 1.5 % low,
+    /// (0.6895, 1.4775) for (0.7, 1.5), exact under Euler.
+    fn apply_model(&self, m: &mut MjModel, t: &JointTarget, p: &[f64]) {
+        let (sp, sd) = (p[0], p[1]);
+        for &a in &t.acts {
+            let fixed_affine = m.actuator_gaintype().get(a).is_some_and(|&g| g as i32 == 0)
+                && m.actuator_biastype().get(a).is_some_and(|&b| b as i32 == 1);
+            let Some(&g0) = mj::actuator_gainprm_mut(m).get(10 * a) else { continue };
+            let Some(&[_, b1, b2, ..]) = m.actuator_biasprm().get(a) else { continue };
+            // A position servo: gain kp, bias −kp (what `ActuatorKind::Position` reads).
+            if fixed_affine && g0 > 0.0 && (b1 + g0).abs() <= 1e-9 * g0.max(1.0) {
+                mj::set_model_gains(m, a, g0 * sp, b1 * sp, b2 * sd);
+            }
         }
     }
     fn smooth(&self) -> bool {
@@ -70,6 +84,58 @@ mod tests {
     fn robot(dir: &std::path::Path, name: &str, kp: f64, kv: f64) -> crate::model::Robot {
         let act = format!(r#"kp="{kp}" kv="{kv}" delay="0.02" nsample="10""#);
         hinge_robot(dir, name, "", r#"damping="0.05""#, &act)
+    }
+
+    /// Under an implicit integrator MuJoCo integrates the servo's kv implicitly: the fitted gain
+    /// error must act exactly as MuJoCo's servo with the scaled gains, with the model's gains and
+    /// with gains from the recording's kp/kd columns (the replay scales those alike). A stiff,
+    /// light joint (kv·dt/I ≈ 0.3) makes an explicit kd term miss by millimetres. Expected
+    /// answer: MuJoCo's own replay of the model with kp 140 / kv 3.9 (and of columns 56 / 1.3
+    /// → 39.2 / 1.69), not a figure from the fit.
+    #[test]
+    fn gain_error_under_implicitfast_equals_scaled_gains_with_and_without_columns() {
+        let dir = std::env::temp_dir().join(format!("modellint-gain-impl-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let mk = |name: &str, kp: f64, kv: f64| {
+            let act = format!(r#"kp="{kp}" kv="{kv}""#);
+            hinge_robot(&dir, name, r#"integrator="implicitfast""#, "", &act)
+        };
+        let nominal = mk("nominal.xml", 200.0, 3.0);
+        let scaled = mk("scaled.xml", 140.0, 3.9);
+        let n = 200;
+        let t: Vec<f64> = (0..n).map(|i| i as f64 * 0.005).collect();
+        let cmd: Vec<f64> =
+            t.iter().map(|&t| if t < 0.1 { 0.0 } else if t < 0.5 { 0.3 } else { -0.2 }).collect();
+        let o = ReplayOptions::default();
+        let gain = Applied {
+            effect: by_id("gain_error").unwrap(),
+            joints: vec!["j".into()],
+            params: vec![0.7, 1.3],
+        };
+        let worst = |a: &[f64], b: &[f64]| {
+            a.iter().zip(b).map(|(x, y)| (x - y).abs()).fold(0.0_f64, f64::max)
+        };
+        let rec = hinge_recording(t.clone(), cmd.clone());
+        let a = simulate(&nominal, std::slice::from_ref(&rec), std::slice::from_ref(&gain), &o).remove(0);
+        let b = simulate(&scaled, std::slice::from_ref(&rec), &[], &o).remove(0).unwrap();
+        let peak = b.q_sim[0].iter().fold(0.0_f64, |m, q| m.max(q.abs()));
+        assert!(peak > 0.2, "the servo did not follow the step ({peak} rad)");
+        let d = worst(&a.unwrap().q_sim[0], &b.q_sim[0]);
+        assert!(d < 1e-9, "gain_error vs scaled gains differ by {d} rad");
+        // Recorded gains: columns kp 56 / kd 1.3 on the nominal model with the gain error
+        // equal columns 39.2 / 1.69 on it without.
+        let with_cols = |kp: f64, kd: f64| {
+            let mut r = hinge_recording(t.clone(), cmd.clone());
+            r.joints[0].kp = Some(vec![kp; n]);
+            r.joints[0].kd = Some(vec![kd; n]);
+            r
+        };
+        let (r1, r2) = (with_cols(56.0, 1.3), with_cols(56.0 * 0.7, 1.3 * 1.3));
+        let a = simulate(&nominal, std::slice::from_ref(&r1), &[gain], &o).remove(0).unwrap();
+        let b = simulate(&nominal, std::slice::from_ref(&r2), &[], &o).remove(0).unwrap();
+        let d = worst(&a.q_sim[0], &b.q_sim[0]);
+        assert!(d < 1e-9, "gain_error on recorded gains vs scaled columns differ by {d} rad");
+        std::fs::remove_dir_all(&dir).ok();
     }
 
     /// On an actuator with a MuJoCo `delay` (the Asimov legs: 20 ms), the gain error's hook

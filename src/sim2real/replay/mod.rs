@@ -312,12 +312,33 @@ impl<'m> Replayer<'m> {
                     .collect()
             })
             .collect();
+        // The model's position-servo gains relative to the robot's own (a fit's servo gain
+        // error scales them in the model copy): recorded kp/kd columns are scaled alike.
+        let gain_scale: Vec<(f64, f64)> = jm
+            .iter()
+            .zip(&nominal)
+            .map(|(&ji, nom)| {
+                self.joints[ji]
+                    .acts
+                    .iter()
+                    .zip(nom)
+                    .find_map(|(&(_, kind), &(_, g, _, b2))| match kind {
+                        ActuatorKind::Position { kp, kv } => Some((
+                            if kp > 0.0 { g / kp } else { 1.0 },
+                            if kv > 0.0 { -b2 / kv } else { 1.0 },
+                        )),
+                        _ => None,
+                    })
+                    .unwrap_or((1.0, 1.0))
+            })
+            .collect();
         let c = run::Run {
             rec,
             opts,
             jm: &jm,
             qd0: &qd0,
             nominal: &nominal,
+            gain_scale: &gain_scale,
             replaced: &replaced,
             rate,
             tick0,

@@ -26,6 +26,9 @@ pub(super) struct Run<'a> {
     pub qd0: &'a [f64],
     /// (actuator, gainprm[0], biasprm[1], biasprm[2]) of each recorded joint's actuators.
     pub nominal: &'a [Vec<(usize, f64, f64, f64)>],
+    /// (kp, kd) factor of each recorded joint's position servo in the simulated model over the
+    /// robot's own gains (1 unless a fit scales them): applied to recorded kp/kd columns.
+    pub gain_scale: &'a [(f64, f64)],
     /// Recorded joints whose actuators an [`ActuatorHook`] replaces.
     pub replaced: &'a [bool],
     pub rate: Option<f64>,
@@ -44,7 +47,8 @@ impl Replayer<'_> {
         mut hook: Option<&mut dyn ActuatorHook>,
         set_gains: Option<GainSetter<M>>,
     ) -> Result<Episode, ReplayError> {
-        let Run { rec, opts, jm, qd0, nominal, replaced, rate, tick0, schedule, dt } = *c;
+        let Run { rec, opts, jm, qd0, nominal, gain_scale, replaced, rate, tick0, schedule, dt } =
+            *c;
         let (n, nj) = (rec.t.len(), rec.joints.len());
         let t0 = rec.t[0];
         {
@@ -201,10 +205,15 @@ impl Replayer<'_> {
                 tick = Some(ti);
                 for (i, jt) in rec.joints.iter().enumerate() {
                     let nom = nominal[i].first().map(|&(_, g, b1, b2)| (g, -b1, -b2));
-                    kp[i] =
-                        jt.kp.as_ref().map_or(nom.map_or(0.0, |x| x.0), |v| zoh_at(&rec.t, v, tt));
-                    kd[i] =
-                        jt.kd.as_ref().map_or(nom.map_or(0.0, |x| x.2), |v| zoh_at(&rec.t, v, tt));
+                    let (sp, sd) = gain_scale.get(i).copied().unwrap_or((1.0, 1.0));
+                    kp[i] = jt
+                        .kp
+                        .as_ref()
+                        .map_or(nom.map_or(0.0, |x| x.0), |v| sp * zoh_at(&rec.t, v, tt));
+                    kd[i] = jt
+                        .kd
+                        .as_ref()
+                        .map_or(nom.map_or(0.0, |x| x.2), |v| sd * zoh_at(&rec.t, v, tt));
                     enabled[i] = jt.enabled.as_ref().is_none_or(|v| {
                         let j = rec.t.partition_point(|&x| x <= tt);
                         v[j.saturating_sub(1)]
