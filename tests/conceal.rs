@@ -185,6 +185,21 @@ fn conceal_arm3_stribeck_friction_large_static() {
 /// (on other recordings it ended on kd's bound, and a gain error + damping pair was kept). A
 /// multi-parameter fit that ends on a bound or before converging is started again from a
 /// grid's best point: (0.401, 2.003).
+/// A sharp breakaway (static 0.8 N·m, sliding 0.2, v_s 0.05 rad/s on arm3's elbow, 12-bit):
+/// from the Coulomb fit's start (c, c, 0.1) the simplex ended at (0.357, 0.198, 0.150), a
+/// wider, lower bump across a ridge (training RMSE 0.80 mrad against 0.67 at the truth). The
+/// Stribeck fit also runs from the best of three sharper starts when one scores better.
+#[test]
+fn conceal_arm3_stribeck_friction_sharp_breakaway() {
+    single(arm3_case(
+        "arm3 stribeck_friction sharp",
+        Kind::Single,
+        vec![("stribeck_friction", vec![0.8, 0.2, 0.05])],
+        Noise::Real,
+        7,
+    ));
+}
+
 #[test]
 fn conceal_arm3_gain_error_slow_servo() {
     single(arm3_case(

@@ -340,6 +340,13 @@ pub trait Effect: Declared + Sync {
     fn nests(&self) -> Option<&'static str> {
         None
     }
+    /// Further starts derived from the [`Effect::nests`] start, for an effect whose error
+    /// surface has more than one basin along a ridge the simplex does not cross. When one of
+    /// them is better than the start, the fit also runs from the best of them and keeps the
+    /// lower training error. Empty (the default): none.
+    fn nested_alternatives(&self, _start: &[f64]) -> Vec<Vec<f64>> {
+        vec![]
+    }
     /// The diagnosis: this effect's signature feature, computed from one joint's samples (the
     /// residual is least-squares fitted on it, see [`crate::fit::diagnose`]).
     fn signature(&self, s: &Samples) -> Signature;

@@ -549,12 +549,31 @@ impl<'a> Engine<'a> {
             a
         };
         let obj = |x: &[f64]| self.errors(train, &make(x)).map_or(f64::INFINITY, |e| e.rmse());
-        let mut x0: Vec<f64> = (0..k).map(|i| full0[i].clamp(lo[i], hi[i])).collect();
+        let clamp = |p: &[f64]| -> Vec<f64> { (0..k).map(|i| p[i].clamp(lo[i], hi[i])).collect() };
+        let mut x0: Vec<f64> = clamp(&full0);
+        // A second start for the simplex (`Effect::nested_alternatives`) when one of the
+        // alternatives scores better than the start chosen here: (start, its error).
+        let mut alt: Option<(Vec<f64>, f64)> = None;
+        let full_fit = max_evals >= self.opts.max_evals;
         if let Some(seed) = self.nested_start(train, base, effect, group, &m0, &t) {
-            let s0: Vec<f64> = (0..k).map(|i| seed[i].clamp(lo[i], hi[i])).collect();
-            if obj(&s0) < obj(&x0) {
+            let s0 = clamp(&seed);
+            let (f_init, f_seed) = (obj(&x0), obj(&s0));
+            let mut f0 = f_init;
+            if f_seed < f_init {
                 x0 = s0;
+                f0 = f_seed;
             }
+            let alternatives = if full_fit { effect.nested_alternatives(&seed) } else { vec![] };
+            alt = alternatives
+                .iter()
+                .filter(|a| a.len() >= k)
+                .map(|a| {
+                    let a = clamp(a);
+                    let f = obj(&a);
+                    (a, f)
+                })
+                .filter(|(_, f)| *f < f0)
+                .min_by(|a, b| a.1.total_cmp(&b.1));
         }
         let b = Bounds { lo: lo[..k].to_vec(), hi: hi[..k].to_vec() };
         let (x, f) = match k {
@@ -624,7 +643,13 @@ impl<'a> Engine<'a> {
                     initial_step: 0.1,
                 };
                 let r = nelder_mead(&obj, &x0, &b, &o);
-                (r.x, r.f)
+                match alt {
+                    Some((a, _)) => {
+                        let r2 = nelder_mead(&obj, &a, &b, &o);
+                        if r2.f < r.f { (r2.x, r2.f) } else { (r.x, r.f) }
+                    }
+                    None => (r.x, r.f),
+                }
             }
             _ => {
                 let o = CmaesOpts { max_evals: max_evals * 2, ..Default::default() };
