@@ -714,18 +714,12 @@ pub fn heavy_knee_case(
     seed: u64,
 ) -> Case {
     Case {
-        name: name.into(),
-        kind,
         model: HEAVY_KNEE.into(),
         joints: vec!["knee".into()],
         truth: truth.into_iter().map(|(e, p)| (e, vec!["knee".to_string()], p)).collect(),
-        noise,
         episodes: 6,
-        duration_s: 4.0,
         amplitude: 0.5,
-        seed,
-        suspend_m: 0.0,
-        quant_bits: 12,
+        ..rig_case(name, kind, vec![], noise, seed)
     }
 }
 
