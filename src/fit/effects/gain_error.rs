@@ -39,15 +39,10 @@ impl Effect for GainError {
     /// (0.6895, 1.4775) for (0.7, 1.5), exact under Euler.
     fn apply_model(&self, m: &mut MjModel, t: &JointTarget, p: &[f64]) {
         let (sp, sd) = (p[0], p[1]);
-        for &a in &t.acts {
-            let fixed_affine = m.actuator_gaintype().get(a).is_some_and(|&g| g as i32 == 0)
-                && m.actuator_biastype().get(a).is_some_and(|&b| b as i32 == 1);
+        for &a in &t.servos {
             let Some(&g0) = mj::actuator_gainprm_mut(m).get(10 * a) else { continue };
             let Some(&[_, b1, b2, ..]) = m.actuator_biasprm().get(a) else { continue };
-            // A position servo: gain kp, bias −kp (what `ActuatorKind::Position` reads).
-            if fixed_affine && g0 > 0.0 && (b1 + g0).abs() <= 1e-9 * g0.max(1.0) {
-                mj::set_model_gains(m, a, g0 * sp, b1 * sp, b2 * sd);
-            }
+            mj::set_model_gains(m, a, g0 * sp, b1 * sp, b2 * sd);
         }
     }
     fn smooth(&self) -> bool {

@@ -113,6 +113,9 @@ pub struct JointTarget {
     pub qposadr: usize,
     /// Actuators reaching the joint.
     pub acts: Vec<usize>,
+    /// Those of them that are position servos ([`ActuatorKind::Position`], as the replay
+    /// reads them).
+    pub servos: Vec<usize>,
     /// Joint position at the keyframe (or qpos0).
     pub key_q: f64,
     /// Stiffness of the joint's position servos on the joint, Σ kp·gear² [N·m/rad] (0 without
@@ -152,6 +155,11 @@ impl JointTarget {
             dof: j.dofadr,
             qposadr: j.qposadr,
             acts: acts.iter().map(|a| a.id).collect(),
+            servos: acts
+                .iter()
+                .filter(|a| matches!(a.kind, ActuatorKind::Position { .. }))
+                .map(|a| a.id)
+                .collect(),
             key_q: robot.key.qpos.get(j.qposadr).copied().unwrap_or(0.0),
             servo_kp: finite(servo_kp),
             max_torque: finite(max_torque),
