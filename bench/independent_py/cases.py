@@ -50,3 +50,24 @@ CASES["Q2_knees_armature"] = dict(QUAD_EP, seed=43,
     effects={"joints": {j: {"armature": 0.02} for j in QUAD if j.endswith("_knee")}})
 CASES["Q3_all_delay10"] = dict(QUAD_EP, seed=44, effects={"delay": 0.010})
 CASES["Q4_FL_hip_offset"] = dict(QUAD_EP, seed=45, effects={"joints": {"FL_hip_pitch": {"offset": 0.03}}})
+# ---- legs12h: humanoid legs (12 joints, kp 40–250, ±50–200 N·m) on a stand ----
+# 50 Hz policy-rate controller (a common humanoid deployment) logged at ~200 Hz ±15 %; the fit's
+# bounds must reach humanoid-sized damping and friction (beyond the 5 N·m(·s/rad) of a small
+# arm) and report a left/right pair as one group.
+H12 = [f"{s}_{j}" for s in ("left", "right")
+       for j in ("hip_yaw", "hip_roll", "hip_pitch", "knee", "ankle_pitch", "ankle_roll")]
+MODELS["legs12h"] = dict(xml="legs12h.xml", joints=H12, robot="legs12h_stand", ctrl_hz=50.0,
+                         amp=[0.25, 0.2, 0.4, 0.6, 0.3, 0.2] * 2, t0_ctrl=0.0071,
+                         **dict(STD, rec_hz=200.0))
+H12_EP = dict(model="legs12h", episodes=4, seconds=6.0, heldout=[3])
+CASES["H0_none"] = dict(H12_EP, seed=51, effects={})
+CASES["H1_knees_damping8"] = dict(H12_EP, seed=52,
+    effects={"joints": {j: {"damping": 8.0} for j in H12 if j.endswith("_knee")}})
+CASES["H2_hip_pitch_friction4"] = dict(H12_EP, seed=53,
+    effects={"joints": {j: {"frictionloss": 4.0} for j in H12 if j.endswith("_hip_pitch")}})
+CASES["H3_all_delay15"] = dict(H12_EP, seed=54, effects={"delay": 0.015})
+CASES["H4_left_knee_kp08"] = dict(H12_EP, seed=55, effects={"joints": {"left_knee": {"kp_scale": 0.8}}})
+CASES["H5_knees_armature02"] = dict(H12_EP, seed=56,
+    effects={"joints": {j: {"armature": 0.2} for j in H12 if j.endswith("_knee")}})
+CASES["H6_knees_friction10"] = dict(H12_EP, seed=57,
+    effects={"joints": {j: {"frictionloss": 10.0} for j in H12 if j.endswith("_knee")}})

@@ -6,7 +6,7 @@
 # settle), `modellint fit` sees only the nominal model and the CSVs, and score.py compares its
 # JSON with the truth the simulator wrote into its MjModel.
 #
-# usage: bench/independent_py/run.sh [CASE...]      (default: every case; ~10–25 min on 2 cores)
+# usage: bench/independent_py/run.sh [CASE...]      (default: every case; ~15–30 min on 2 cores)
 # Needs python3 with venv and PyPI (mujoco==3.17.0, numpy) — skips with a message otherwise.
 # Env: INDEP_OUT (default target/independent_py), MODELLINT (default target/release/modellint).
 set -uo pipefail
