@@ -194,7 +194,8 @@ pub struct FitCmd {
     /// Estimate each episode's start state (first position and velocity of every joint) from
     /// the whole episode, with the first row's noisy reading as its prior, instead of starting
     /// every replay exactly at the first row (docs/fitting.md, step 1). Helps a lightly damped
-    /// servo. Opt-in: validated on fewer cases than the default (docs/fitting.md, step 1).
+    /// servo. Opt-in: on every benchmark it gives the same answers as the first row
+    /// (docs/fitting.md, step 1).
     #[arg(long)]
     pub start_estimate: bool,
     #[command(flatten)]

@@ -99,10 +99,10 @@ pub struct FitOptions {
     pub white_ratio: f64,
     /// Estimate each episode's start state (first position and velocity of every recorded
     /// joint) from the whole episode, with the first row as its prior, instead of starting the
-    /// replay exactly at the first row's noisy reading ([`start`]). Off by default: on the
-    /// Asimov knee with Stribeck friction (12-bit encoders, MuJoCo's 20 ms actuator delay) it
-    /// lets an invented 3.5 mrad backlash through beside the friction, even with the response
-    /// measured on the model with the kept friction ([`Engine::set_start_model`]).
+    /// replay exactly at the first row's noisy reading ([`start`]). Off by default: re-run in
+    /// full with it on (docs/fitting.md, step 1), every benchmark gave the same answers. The
+    /// response it corrects with is measured on the model with the kept effects that let a
+    /// joint stick ([`Engine::set_start_model`]).
     ///
     /// [`Engine::set_start_model`]: Engine::set_start_model
     pub estimate_start: bool,
