@@ -342,6 +342,8 @@ fn bad_recording_timing_metadata_exits_2_with_file_and_line() {
             "one control tick",
         ),
         ("timing.csv", "# command_timing: before\nt,servo.q\n0,0\n0.01,0\n", 1, "sent_after"),
+        // A 100 Hz log of a 100 Hz controller, times in milliseconds: 1000 ticks per row.
+        ("millis.csv", "# control_rate_hz: 100\nt,servo.q\n0,0\n10,0\n20,0\n", 1, "in seconds"),
     ];
     for (name, text, line, what) in cases {
         let f = dir.join(name);

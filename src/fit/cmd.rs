@@ -133,6 +133,9 @@ pub fn run_fit(a: FitArgs) -> i32 {
                 if let Err(e) = r.validate_joint_names(&names) {
                     return fail(e);
                 }
+                if let Err(e) = crate::sim2real::replay::check_schedule(&r, &a.replay) {
+                    return fail(e);
+                }
                 recs.push(r);
             }
             Err(e) => return fail(e),

@@ -128,7 +128,15 @@ pub enum ScheduleError {
     BadRate(f64),
     /// Every row falls into one tick: the rate (or the time unit) is wrong.
     OneTick { tick: i64, rows: usize },
+    /// The rows are, at the median, more than [`MAX_TICKS_PER_ROW`] control ticks apart: the
+    /// time unit is not seconds (milli-, micro-, nanoseconds) or the rate is far too high —
+    /// and the commands of the ticks between rows are unknown either way.
+    SparseRows { ticks_per_row: f64, rows: usize },
 }
+
+/// The most control ticks a median row interval may span (a 1 kHz controller logged at
+/// 25 Hz). Millisecond timestamps of a 200 Hz log at a 50 Hz rate give 250; nanoseconds, 10⁸.
+pub const MAX_TICKS_PER_ROW: f64 = 40.0;
 
 impl std::fmt::Display for ScheduleError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -140,6 +148,12 @@ impl std::fmt::Display for ScheduleError {
                 f,
                 "all {rows} rows fall into control tick {tick}: control_rate_hz is too low for these timestamps \
                  (are the times in seconds?)"
+            ),
+            ScheduleError::SparseRows { ticks_per_row, rows } => write!(
+                f,
+                "the {rows} rows are a median {ticks_per_row:.3e} control ticks apart (at most \
+                 {MAX_TICKS_PER_ROW} make sense): are the times in seconds? (milliseconds: divide \
+                 by 1000, nanoseconds by 1e9) — or is control_rate_hz far too high?"
             ),
         }
     }
@@ -162,6 +176,22 @@ pub enum Fill {
     /// measure the error command reconstruction alone leaves (its floor).
     /// Without a control rate: as [`Fill::Hold`].
     Next,
+}
+
+/// [`ScheduleError::SparseRows`] when the median interval of the increasing times `t` spans
+/// more than [`MAX_TICKS_PER_ROW`] ticks of `rate`.
+pub fn check_row_spacing(t: &[f64], rate: f64) -> Result<(), ScheduleError> {
+    if t.len() < 2 {
+        return Ok(());
+    }
+    let mut dts: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
+    dts.sort_by(f64::total_cmp);
+    let ticks_per_row = dts[dts.len() / 2] * rate;
+    if ticks_per_row <= MAX_TICKS_PER_ROW * (1.0 + 1e-9) {
+        Ok(())
+    } else {
+        Err(ScheduleError::SparseRows { ticks_per_row, rows: t.len() })
+    }
 }
 
 /// Reconstructs the command schedule of the joints `cmds` (one trace per joint, sampled at `t`,
@@ -207,6 +237,7 @@ pub fn reconstruct(
             stats: TickStats::default(),
         });
     }
+    check_row_spacing(t, rate)?;
     let ticks: Vec<i64> = t.iter().map(|&x| tick_of(x, t0, rate, timing)).collect();
     let (k0, k1) = (ticks[0], ticks[n - 1]);
     if n >= 2 && k0 == k1 {
@@ -538,6 +569,32 @@ mod tests {
         assert_eq!(s.at(0, 0.0036), 1.0);
         assert_eq!(s.at(0, 0.0037), 2.0);
         assert_eq!(s.at(0, 0.05), 3.0);
+    }
+
+    /// A 200 Hz log of a 50 Hz controller with its times in milliseconds (250 ticks per row)
+    /// or nanoseconds (2.5 × 10⁸: before this check, a 4.8 TB tick table and an abort) is an
+    /// error; the same log in seconds, and a 1 kHz controller logged at 25 Hz (40), are not.
+    #[test]
+    fn rows_too_many_ticks_apart_are_an_error_not_an_allocation() {
+        let secs: Vec<f64> = (0..50).map(|i| i as f64 * 0.005).collect();
+        let c = [0.0; 50];
+        let run = |t: &[f64], rate: f64| {
+            reconstruct(t, &[&c], Some(rate), t[0], CommandTiming::InForce, Fill::Ramps)
+        };
+        assert!(run(&secs, 50.0).is_ok());
+        let ms: Vec<f64> = secs.iter().map(|x| x * 1e3).collect();
+        match run(&ms, 50.0) {
+            Err(ScheduleError::SparseRows { ticks_per_row, rows: 50 }) => {
+                assert!((ticks_per_row - 250.0).abs() < 1e-6, "{ticks_per_row}")
+            }
+            other => panic!("{other:?}"),
+        }
+        let ns: Vec<f64> = secs.iter().map(|x| 1.7642e18 + x * 1e9).collect();
+        assert!(matches!(run(&ns, 50.0), Err(ScheduleError::SparseRows { .. })));
+        let at_25hz: Vec<f64> = (0..50).map(|i| i as f64 * 0.04).collect();
+        assert!(run(&at_25hz, 1000.0).is_ok());
+        let msg = run(&ms, 50.0).unwrap_err().to_string();
+        assert!(msg.contains("seconds") && msg.contains("2.500e2"), "{msg}");
     }
 
     #[test]

@@ -376,7 +376,9 @@ fn assemble(path: &Path, m: Metadata, h: Header, mut cols: Vec<Vec<f64>>) -> Rec
     }
 }
 
-/// A declared control rate must not put the whole recording into one control tick.
+/// A declared control rate must not put the whole recording into one control tick, nor its
+/// rows more than [`commands::MAX_TICKS_PER_ROW`] ticks apart at the median (timestamps in
+/// milli- or nanoseconds).
 fn check_rate(
     path: &Path,
     rec: &Recording,
@@ -387,6 +389,11 @@ fn check_rate(
     let timing = rec.command_timing().unwrap_or_default();
     let t0 = rec.control_t0_s.unwrap_or(first);
     let tick = |x: f64| commands::tick_of(x, t0, rate, timing);
+    if let Err(e @ commands::ScheduleError::SparseRows { .. }) =
+        commands::check_row_spacing(&rec.t, rate)
+    {
+        return Err(err(path, ln, None, format!("control_rate_hz {rate}: {e}")));
+    }
     if tick(first) == tick(last) {
         return Err(err(
             path,

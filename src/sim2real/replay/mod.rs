@@ -362,6 +362,21 @@ impl<'m> Replayer<'m> {
     }
 }
 
+/// Whether the recording's timestamps map onto its control ticks as the replay will map them
+/// (`--control-hz`, `--command-timing` and the recording's own keys, as in
+/// [`Replayer::replay`]): `fit` and `gap` check every file before simulating anything, so a
+/// unit mistake (milliseconds, nanoseconds) is one clear error, not a failed search.
+pub fn check_schedule(rec: &Recording, opts: &ReplayOptions) -> Result<(), ReplayError> {
+    let Some(rate) = opts.control_hz.or(rec.control_rate_hz) else { return Ok(()) };
+    let timing = opts.command_timing.or_else(|| rec.command_timing()).unwrap_or_default();
+    let tick0 = rec.control_t0_s.unwrap_or(rec.t.first().copied().unwrap_or(0.0));
+    let cmds: Vec<&[f64]> =
+        rec.joints.iter().map(|jt| jt.q_cmd.as_deref().unwrap_or(&jt.q)).collect();
+    reconstruct(&rec.t, &cmds, Some(rate), tick0, timing, opts.command_fill)
+        .map(|_| ())
+        .map_err(|e| ReplayError::Setup { file: rec.source.clone(), message: e.to_string() })
+}
+
 /// [`Replayer::replay`] on `robot.mj`.
 pub fn replay(
     robot: &Robot,

@@ -51,13 +51,27 @@ impl Replayer<'_> {
             *c;
         let (n, nj) = (rec.t.len(), rec.joints.len());
         let t0 = rec.t[0];
+        // With a control rate the physics steps sit on the ticks' grid (tick0 + j·dt), so a
+        // command switches at its tick, not up to a step later by an amount that depends on
+        // where the first row happens to fall. The simulation starts at the grid point
+        // `lead` ≤ one step before the first row, from the first row's state moved back along
+        // its velocity (`lead` × q̇: sub-mrad; the first row itself is reproduced at t0).
+        let lead = match rate {
+            Some(_) if dt > 0.0 => {
+                let x = (t0 - tick0) / dt;
+                let l = (x - (x + 1e-6).floor()) * dt;
+                if l > 1e-9 * dt.max(1.0) { l } else { 0.0 }
+            }
+            _ => 0.0,
+        };
+        let ts = t0 - lead;
         {
             let qpos = d.qpos_mut();
             if self.key_qpos.len() == qpos.len() {
                 qpos.copy_from_slice(&self.key_qpos);
             }
             for (i, &ji) in jm.iter().enumerate() {
-                qpos[self.joints[ji].qposadr] = rec.joints[i].q[0];
+                qpos[self.joints[ji].qposadr] = rec.joints[i].q[0] - lead * qd0[i];
             }
             let qvel = d.qvel_mut();
             for (i, &ji) in jm.iter().enumerate() {
@@ -67,7 +81,7 @@ impl Replayer<'_> {
             if opts.hold_unlisted_at_key && self.key_ctrl.len() == ctrl.len() {
                 ctrl.copy_from_slice(&self.key_ctrl);
             }
-            d.set_time(t0);
+            d.set_time(ts);
         }
         // Base pose to pin (Fixed/Free start).
         let base_pin: Option<[f64; 7]> = self.free.map(|(qa, _)| match &rec.base {
@@ -117,7 +131,7 @@ impl Replayer<'_> {
         {
             d.qpos_mut()[qa..qa + 7].copy_from_slice(&pin);
         }
-        set_base(&mut d, t0);
+        set_base(&mut d, ts);
         d.forward();
 
         let mut q_sim = vec![vec![f64::NAN; n]; nj];
@@ -133,7 +147,7 @@ impl Replayer<'_> {
         };
         read(&d, &mut prev_q, &mut prev_qd);
         for i in 0..nj {
-            q_sim[i][0] = prev_q[i];
+            q_sim[i][0] = prev_q[i] + lead * prev_qd[i];
             qd_sim[i][0] = prev_qd[i];
         }
         let mut cur_q = prev_q.clone();
@@ -186,11 +200,11 @@ impl Replayer<'_> {
                 .collect()
         };
         let t_end = rec.t[n - 1];
-        let nsteps = ((t_end - t0) / dt - 1e-9).ceil().max(0.0) as usize;
+        let nsteps = ((t_end - ts) / dt - 1e-9).ceil().max(0.0) as usize;
         let mut diverged = None;
 
         for k in 0..nsteps {
-            let tk = t0 + k as f64 * dt;
+            let tk = ts + k as f64 * dt;
             for (i, x) in target.iter_mut().enumerate() {
                 *x = schedule.at(i, tk);
             }
@@ -285,7 +299,7 @@ impl Replayer<'_> {
                 qfrc[self.joints[ji].dofadr] = io[i].tau;
             }
             if k == 0 {
-                hold_delay_history(&mut d, t0, dt);
+                hold_delay_history(&mut d, ts, dt);
             }
             set_base(&mut d, tk);
             d.step();
@@ -300,7 +314,7 @@ impl Replayer<'_> {
                 break;
             }
             // Samples in (tk, tk + dt].
-            let t1 = t0 + (k + 1) as f64 * dt;
+            let t1 = ts + (k + 1) as f64 * dt;
             while next_sample < n && (rec.t[next_sample] <= t1 || k + 1 == nsteps) {
                 let a = ((rec.t[next_sample] - tk) / dt).clamp(0.0, 1.0);
                 for i in 0..nj {

@@ -139,3 +139,68 @@ fn held_recording(joint: &str, n: usize, dt: f64, q: f64, rate: Option<f64>) -> 
         base: None,
     }
 }
+
+/// A command switches at its control tick, wherever the first row falls. The expected
+/// trajectory is MuJoCo stepped directly on the tick grid (100 Hz ticks at t = 0, 2 ms steps,
+/// so every tick is a step boundary), the command changed exactly at each tick; the recording
+/// is that trajectory sampled 1.3 ms into every tick (first row off the step grid, at rest,
+/// before the first non-zero command). The replay must reproduce it at every row: before the
+/// fix its steps sat at 1.3 ms + k × 2 ms, every command switched 0.7 ms late, and the joint
+/// ran ~1e-3 rad behind.
+#[test]
+fn commands_switch_at_their_ticks_when_the_first_row_is_off_the_step_grid() {
+    let xml = r#"<mujoco><option gravity="0 0 0" timestep="0.002"/>
+  <worldbody><body><joint name="j" type="hinge" axis="0 1 0"/>
+<geom type="capsule" fromto="0 0 0 0.2 0 0" size="0.02" mass="0.5"/></body></worldbody>
+  <actuator><position joint="j" kp="50" kv="2"/></actuator>
+</mujoco>"#;
+    let dir = std::env::temp_dir().join(format!("modellint-ticks-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("ticks.xml");
+    std::fs::write(&path, xml).unwrap();
+    let mut map = crate::model::source::SourceMap::default();
+    let robot = crate::model::load(&mut map, &path, None).unwrap();
+    // Ticks 0–2 hold 0 (the joint rests at its command), then a new command every tick.
+    let ticks = 60usize;
+    let cmd: Vec<f64> =
+        (0..ticks).map(|k| if k < 3 { 0.0 } else { 0.3 * ((k as f64) * 0.7).sin() }).collect();
+    // Reference: 5 steps of 2 ms per tick, ctrl set at the tick.
+    let mut d = MjData::new(&robot.mj);
+    let (mut ts, mut qs, mut vs) = (vec![0.0], vec![0.0], vec![0.0]);
+    for &c in cmd.iter().take(ticks - 1) {
+        d.ctrl_mut()[0] = c;
+        for _ in 0..5 {
+            d.step();
+            ts.push(d.time());
+            qs.push(d.qpos()[0]);
+            vs.push(d.qvel()[0]);
+        }
+    }
+    // Rows 1.3 ms into each tick, linearly interpolated between steps (as the replay samples).
+    let at = |x: &[f64], t: f64| {
+        let i = ts.partition_point(|&s| s <= t).clamp(1, ts.len() - 1);
+        let a = (t - ts[i - 1]) / (ts[i] - ts[i - 1]);
+        x[i - 1] + a * (x[i] - x[i - 1])
+    };
+    let t: Vec<f64> = (0..ticks - 2).map(|k| k as f64 * 0.01 + 0.0013).collect();
+    let mut j =
+        crate::sim2real::recording::JointTrace::new("j", t.iter().map(|&x| at(&qs, x)).collect());
+    j.qd = Some(t.iter().map(|&x| at(&vs, x)).collect());
+    j.q_cmd = Some((0..t.len()).map(|k| cmd[k]).collect());
+    let rec = Recording {
+        source: "r.csv".into(),
+        meta: Default::default(),
+        control_rate_hz: Some(100.0),
+        control_t0_s: Some(0.0),
+        t: t.clone(),
+        joints: vec![j],
+        base: None,
+    };
+    let ep = replay(&robot, &rec, &ReplayOptions::default(), None).unwrap();
+    let moved = rec.joints[0].q.iter().map(|q| q.abs()).fold(0.0, f64::max);
+    assert!(moved > 0.05, "the reference barely moved: {moved}");
+    let worst =
+        ep.q_sim[0].iter().zip(&rec.joints[0].q).map(|(s, r)| (s - r).abs()).fold(0.0, f64::max);
+    assert!(worst < 1e-9, "replay off the tick-grid reference by {worst} rad");
+    std::fs::remove_dir_all(&dir).ok();
+}
