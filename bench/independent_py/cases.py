@@ -71,3 +71,10 @@ CASES["H5_knees_armature02"] = dict(H12_EP, seed=56,
     effects={"joints": {j: {"armature": 0.2} for j in H12 if j.endswith("_knee")}})
 CASES["H6_knees_friction10"] = dict(H12_EP, seed=57,
     effects={"joints": {j: {"frictionloss": 10.0} for j in H12 if j.endswith("_knee")}})
+# ---- recordings that start mid-motion (rec_start: the log begins 1 s into the motion, its
+# first row off the control ticks and the physics steps, as a real logger's would be) ----
+CASES["L8_knee_damping_midmotion"] = dict(model="leg3", seed=12, logging=dict(rec_start=1.0),
+    effects={"joints": {"knee": {"damping": 0.8}}})
+CASES["H7_none_midmotion"] = dict(H12_EP, seed=51, logging=dict(rec_start=1.0), effects={})
+CASES["H8_knees_damping8_midmotion"] = dict(H12_EP, seed=52, logging=dict(rec_start=1.0),
+    effects={"joints": {j: {"damping": 8.0} for j in H12 if j.endswith("_knee")}})

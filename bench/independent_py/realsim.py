@@ -164,27 +164,37 @@ def run_episode(m, joints, cfg, eff, rng, seconds, ep_idx, split, out_csv, t0_ct
     for i, a in enumerate(qadr):
         d.qpos[a] = cmd[0, i]
     mujoco.mj_forward(m, d)
-    nsteps = int(round((SETTLE_S + seconds + 0.05) / dt))
-    T = np.zeros(nsteps + 1); Q = np.zeros((nsteps + 1, nj)); QD = np.zeros((nsteps + 1, nj))
+    # A command reaches actuator i exactly at its tick + delay[i]: a physics step that would
+    # straddle such a switch is split there (a real servo does not wait for the simulator's
+    # next step; applying each command at the first step after its switch time added a
+    # 0.3-1.9 ms latency that no case declared).
+    t_end = seconds + 0.05
+    switches = np.unique(np.concatenate([tick_t + dl for dl in set(delay)]))
+    T = [-SETTLE_S]; Q = [[d.qpos[a] for a in qadr]]; QD = [[d.qvel[a] for a in dadr]]
     peak_tau = np.zeros(nj); sat = np.zeros(nj, int)
-    T[0] = -SETTLE_S; Q[0] = [d.qpos[a] for a in qadr]; QD[0] = [d.qvel[a] for a in dadr]
-    for s in range(nsteps):
-        t = d.time - SETTLE_S  # recording time at the start of this step
+    t = -SETTLE_S
+    while t < t_end - 1e-12:
         for i in range(nj):
             # command reaching the actuator: the last tick issued at or before t - delay
             k = issued_index(t - delay[i])
             d.ctrl[aids[i]] = cmd[max(k, 0), i]
+        nxt = switches[np.searchsorted(switches, t + 1e-9, side="right")] if switches[-1] > t + 1e-9 else np.inf
+        h = min(dt, nxt - t, t_end - t)
+        m.opt.timestep = h
         mujoco.mj_step(m, d)
-        T[s + 1] = d.time - SETTLE_S
-        Q[s + 1] = [d.qpos[a] for a in qadr]
-        QD[s + 1] = [d.qvel[a] for a in dadr]
-        if t >= 0:
+        t = nxt if h == nxt - t else t + h
+        T.append(t)
+        Q.append([d.qpos[a] for a in qadr])
+        QD.append([d.qvel[a] for a in dadr])
+        if t - h >= 0:
             f = np.array([d.actuator_force[a] for a in aids])
             peak_tau = np.maximum(peak_tau, np.abs(f))
             for i, a in enumerate(aids):
                 if m.actuator_forcelimited[a] and abs(f[i]) >= m.actuator_forcerange[a, 1] - 1e-6:
                     sat[i] += 1
 
+    m.opt.timestep = dt
+    T = np.asarray(T); Q = np.asarray(Q); QD = np.asarray(QD)
     # asynchronous recorder
     ts = [0.0]
     per = 1.0 / cfg["rec_hz"]
@@ -210,6 +220,9 @@ def run_episode(m, joints, cfg, eff, rng, seconds, ep_idx, split, out_csv, t0_ct
         qc = cmd[issued_index(t)]
         rows.append((t, qm, qdm, qc))
 
+    # `rec_start` (s): the log begins that long after the settle, mid-motion, its first row
+    # wherever the recorder's clock puts it (not on a control tick or a physics step).
+    rows = [r for r in rows if r[0] >= cfg.get("rec_start", 0.0)]
     with open(out_csv, "w") as f:
         f.write(f"# robot: {cfg['robot']}\n# episode: {ep_idx}\n# split: {split}\n")
         f.write(f"# control_rate_hz: {ctrl_hz:g}\n# control_t0_s: {t0_ctrl}\n")
@@ -218,7 +231,7 @@ def run_episode(m, joints, cfg, eff, rng, seconds, ep_idx, split, out_csv, t0_ct
         for t, qm, qdm, qc in rows:
             f.write(f"{t:.6f}," + ",".join(f"{qm[i]:.7f},{qdm[i]:.6f},{qc[i]:.7f}" for i in range(nj)) + "\n")
     return {"file": os.path.relpath(out_csv, os.path.dirname(os.path.dirname(out_csv))),
-            "split": split, "seconds": seconds, "samples": int(keep.sum()), "dropped": int(drops.sum()),
+            "split": split, "seconds": seconds, "samples": len(rows), "dropped": int(drops.sum()),
             "segments": segs, "peak_abs_tau": [round(float(x), 3) for x in peak_tau],
             "saturated_steps": sat.tolist()}
 
@@ -249,7 +262,7 @@ def main(case):
                                os.path.join(out, "episodes", f"ep_{e:02d}.csv"), cfg["t0_ctrl"]))
     truth = {"case": case, "model": mcfg["xml"], "joints": mcfg["joints"], "effects": eff,
              "resolved": resolved,
-             "logging": {k: cfg[k] for k in ("rec_hz", "jitter", "drop", "q_noise", "qd_noise", "bits", "t0_ctrl", "amp")},
+             "logging": {k: cfg[k] for k in ("rec_hz", "jitter", "drop", "q_noise", "qd_noise", "bits", "t0_ctrl", "amp", "rec_start") if k in cfg},
              "settle_s": SETTLE_S, "control_rate_hz": float(cfg.get("ctrl_hz", CTRL_HZ)), "seed": c["seed"],
              "timestep": m.opt.timestep, "episodes": eps, "mujoco": mujoco.__version__}
     with open(os.path.join(out, "truth.json"), "w") as f:
