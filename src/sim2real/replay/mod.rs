@@ -364,8 +364,9 @@ impl<'m> Replayer<'m> {
 
 /// Whether the recording's timestamps map onto its control ticks as the replay will map them
 /// (`--control-hz`, `--command-timing` and the recording's own keys, as in
-/// [`Replayer::replay`]): `fit` and `gap` check every file before simulating anything, so a
-/// unit mistake (milliseconds, nanoseconds) is one clear error, not a failed search.
+/// [`Replayer::replay`], which repeats this derivation): `fit` checks every file before
+/// simulating anything, so a unit mistake (milliseconds, nanoseconds) is one clear error, not
+/// a failed search (`gap` gets the same error from its replay).
 pub fn check_schedule(rec: &Recording, opts: &ReplayOptions) -> Result<(), ReplayError> {
     let Some(rate) = opts.control_hz.or(rec.control_rate_hz) else { return Ok(()) };
     let timing = opts.command_timing.or_else(|| rec.command_timing()).unwrap_or_default();
