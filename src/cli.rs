@@ -222,8 +222,9 @@ pub struct FitCmd {
 #[derive(Args, Debug)]
 pub struct ReplayArgs {
     /// Control rate [Hz] of the robot's controller: one command per tick at
-    /// control_t0_s + k/rate, taken from the rows inside that tick. Default: the recording's
-    /// `control_rate_hz`; without one, each goal is held from its own timestamp.
+    /// control_t0_s + k/rate, taken from the rows inside that tick (without control_t0_s the
+    /// ticks' phase is found from where the command changes between rows). Default: the
+    /// recording's `control_rate_hz`; without one, each goal is held from its own timestamp.
     #[arg(long)]
     pub control_hz: Option<f64>,
     /// What a row's q_cmd is: `in-force` (the command in force at the row's time, the usual

@@ -78,3 +78,14 @@ CASES["L8_knee_damping_midmotion"] = dict(model="leg3", seed=12, logging=dict(re
 CASES["H7_none_midmotion"] = dict(H12_EP, seed=51, logging=dict(rec_start=1.0), effects={})
 CASES["H8_knees_damping8_midmotion"] = dict(H12_EP, seed=52, logging=dict(rec_start=1.0),
     effects={"joints": {j: {"damping": 8.0} for j in H12 if j.endswith("_knee")}})
+# ---- logs that do not declare control_t0_s (most real ones), starting mid-motion: the
+# ticks' phase must come from the rows (ticks at 0.0071 + k/50, first row ~1 s in) ----
+CASES["H9_none_no_t0"] = dict(H12_EP, seed=51, logging=dict(rec_start=1.0, declare_t0=False),
+    effects={})
+CASES["H10_knees_damping8_no_t0"] = dict(H12_EP, seed=52,
+    logging=dict(rec_start=1.0, declare_t0=False),
+    effects={"joints": {j: {"damping": 8.0} for j in H12 if j.endswith("_knee")}})
+# The same with the arm2-style recorder (88 Hz, slower than the 100 Hz controller): most ticks
+# hold one row or none, so the command changes alone leave several phases open.
+CASES["L9_knee_damping_no_t0"] = dict(model="leg3", seed=12,
+    logging=dict(rec_start=1.0, declare_t0=False), effects={"joints": {"knee": {"damping": 0.8}}})

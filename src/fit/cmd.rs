@@ -126,21 +126,20 @@ pub fn run_fit(a: FitArgs) -> i32 {
         Err(e) => return fail(e),
     };
     let names: Vec<String> = robot.joints.iter().map(|j| j.name.clone()).collect();
-    let mut recs = Vec::new();
-    for f in &files {
-        match crate::sim2real::input::read_recording(f) {
-            Ok(r) => {
-                if let Err(e) = r.validate_joint_names(&names) {
-                    return fail(e);
-                }
-                if let Err(e) = crate::sim2real::replay::check_schedule(&r, &a.replay) {
-                    return fail(e);
-                }
-                recs.push(r);
-            }
-            Err(e) => return fail(e),
+    let inputs = match crate::sim2real::input::read_for_replay(&files, &names, &a.replay) {
+        Ok(x) => x,
+        Err(e) => return fail(e),
+    };
+    // Said now (before minutes of fitting) and again in the JSON.
+    for w in &inputs.warnings {
+        eprintln!("modellint: warning: {w}");
+    }
+    if !a.quiet {
+        for n in &inputs.notes {
+            eprintln!("modellint: note: {n}");
         }
     }
+    let recs = inputs.recs;
     let mut joints = Vec::new();
     if let Some(g) = &a.joints {
         let m = match globset::Glob::new(g) {
@@ -213,8 +212,9 @@ pub fn run_fit(a: FitArgs) -> i32 {
         (Ok(b), Ok(a)) => (b, a),
         (Err(e), _) | (_, Err(e)) => return fail(e),
     };
-    // Everything said on stderr after the fit also goes into the JSON `notes`.
-    let mut notes: Vec<String> = out.notes.clone();
+    // Everything said on stderr also goes into the JSON `notes` / `warnings`.
+    let mut notes: Vec<String> = inputs.notes.iter().chain(&out.notes).cloned().collect();
+    let warnings: Vec<String> = inputs.warnings.iter().chain(&out.warnings).cloned().collect();
     if let Some(dir) = &a.report {
         let page = crate::fit::report::FitReport {
             model: &a.model,
@@ -282,7 +282,7 @@ pub fn run_fit(a: FitArgs) -> i32 {
             "split": {"train": out.train.len(), "heldout": out.heldout.len(), "by_time": out.split_by_time, "note": out.split_note},
             "floor": out.floors.iter().map(|f| json!({"joint": f.joint, "residual_rms": f.ms.sqrt(), "white_floor_rms": f.white.sqrt(), "reconstruction_floor_rms": f.reconstruction.sqrt()})).collect::<Vec<_>>(),
             "stopped_at_floor": out.stopped_at_floor,
-            "warnings": out.warnings,
+            "warnings": warnings,
             "notes": notes,
         });
         serde_json::to_string_pretty(&v).unwrap_or_default() + "\n"

@@ -6,7 +6,7 @@ use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 
 use crate::sim2real::gap::{self, GapOptions, GapReport};
-use crate::sim2real::input::{expand_inputs, read_recording};
+use crate::sim2real::input::{expand_inputs, read_for_replay, read_recording};
 use crate::sim2real::recording;
 use crate::sim2real::replay::{self, ReplayOptions, Replayer};
 
@@ -40,21 +40,20 @@ pub fn run_gap(a: GapArgs) -> i32 {
     };
     let robot = &loaded.robot;
     let names: Vec<String> = robot.joints.iter().map(|j| j.name.clone()).collect();
-    let mut recs = Vec::with_capacity(files.len());
-    for f in &files {
-        let rec = match read_recording(f) {
-            Ok(r) => r,
-            Err(e) => {
-                eprintln!("modellint: {e}");
-                return 2;
-            }
-        };
-        if let Err(e) = rec.validate_joint_names(&names) {
+    let inputs = match read_for_replay(&files, &names, &a.replay) {
+        Ok(x) => x,
+        Err(e) => {
             eprintln!("modellint: {e}");
             return 2;
         }
-        recs.push(rec);
+    };
+    for w in &inputs.warnings {
+        eprintln!("modellint: warning: {w}");
     }
+    for n in &inputs.notes {
+        eprintln!("modellint: note: {n}");
+    }
+    let recs = inputs.recs;
     let opts = a.replay.clone();
     let replayer = Replayer::new(robot);
     let tty = std::io::stderr().is_terminal();

@@ -194,6 +194,267 @@ pub fn check_row_spacing(t: &[f64], rate: f64) -> Result<(), ScheduleError> {
     }
 }
 
+/// Where the recorded command changes put the control ticks' edges.
+///
+/// A row logs the command in force at its time, so when two rows less than one tick apart
+/// carry different commands, a tick edge lies between them (for [`CommandTiming::SentAfter`] as
+/// well: the two rows' commands belong to different ticks). Every such change is an interval
+/// the tick grid must hit; the phases (time within a tick period) that hit the most of them
+/// are where the ticks can be. A recorder faster than the controller puts rows at every phase,
+/// so a few hundred changes pin the phase to tens of microseconds. A slower one (88 Hz beside
+/// 100 Hz ticks) leaves rows less than a tick apart rarely, and several disjoint phase intervals
+/// then agree with every change; among them the rows decide by the command's own shape
+/// ([`roughness`]): a controller's command sampled on its true ticks is a smooth staircase, on a
+/// wrong grid some rows land a tick early or late and the command jumps back and forth. A
+/// recorder locked to the ticks leaves the whole span between two of its rows open (the first
+/// row's time is then as good as any).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TickPhase {
+    /// Command changes between rows less than one tick apart.
+    pub changes: usize,
+    /// How many of them the best phases agree with.
+    pub agree: usize,
+    /// The chosen phases: the grid `start + k / rate` for `start` in `[start, start + width]`.
+    /// They agree with `agree` changes; among several such intervals, the one (or the part of
+    /// one, between the phases of two rows) that leaves the command smoothest; on a tie the
+    /// candidate's, else the widest.
+    pub start: f64,
+    pub width: f64,
+    /// How many changes the candidate origin agrees with.
+    pub agree_candidate: usize,
+    /// Disjoint phase intervals that tie for the most agreements (1: the changes alone decide).
+    pub optima: usize,
+    /// With several optima: the roughness of the smoothest other interval over the chosen
+    /// one's (≥ 1; near 1: the command's shape does not tell them apart either).
+    pub margin: Option<f64>,
+    /// The candidate lies in the chosen phases.
+    pub candidate_chosen: bool,
+    /// The candidate lies in the interval of best agreement that holds the chosen phases (it may
+    /// map a row or two near a tick edge to the other tick than the chosen phases do).
+    pub candidate_in_run: bool,
+}
+
+impl TickPhase {
+    /// The middle of the chosen phases, as the grid point at or before `t`.
+    pub fn origin_at_or_before(&self, t: f64, rate: f64) -> f64 {
+        let p = 1.0 / rate;
+        let mid = self.start + 0.5 * self.width;
+        t - (t - mid).rem_euclid(p)
+    }
+}
+
+/// Budget of (phase part × row) roughness evaluations per recording (~0.1 s).
+const MAX_ROUGHNESS_WORK: usize = 20_000_000;
+
+/// Finds the tick phase the rows' command changes agree with ([`TickPhase`]); `candidate` is the
+/// origin the caller would use otherwise (a declared `control_t0_s`, or the first row's time),
+/// scored alongside. `None` without any change between rows closer than a tick.
+pub fn tick_phase(t: &[f64], cmds: &[&[f64]], rate: f64, candidate: f64) -> Option<TickPhase> {
+    if !(rate.is_finite() && rate > 0.0) || t.len() < 2 {
+        return None;
+    }
+    let p = 1.0 / rate;
+    // Timestamps printed to the microsecond: an edge within 1 µs of a row counts as on it.
+    let eps = 1e-6_f64.max(TICK_EPS * p);
+    let origin = t[0];
+    let phase = |x: f64| (x - origin).rem_euclid(p);
+    // (start phase, length) of every change's interval.
+    let mut spans: Vec<(f64, f64)> = Vec::new();
+    for i in 0..t.len() - 1 {
+        let len = t[i + 1] - t[i] + 2.0 * eps;
+        if !(len < p) {
+            continue;
+        }
+        if cmds.iter().any(|c| (c[i + 1] - c[i]).abs() > 1e-9) {
+            spans.push(((phase(t[i]) - eps).rem_euclid(p), len));
+        }
+    }
+    if spans.is_empty() {
+        return None;
+    }
+    let covers = |x: f64| spans.iter().filter(|&&(s, l)| (x - s).rem_euclid(p) <= l).count();
+    // Sweep the period: +1 where an interval starts, −1 where it ends (starts first on ties,
+    // the intervals are closed); the count at phase 0 is the number of wrapping intervals.
+    let mut ev: Vec<(f64, i32)> = Vec::with_capacity(2 * spans.len());
+    let mut count: i64 = 0;
+    for &(s, l) in &spans {
+        let e = s + l;
+        ev.push((s, 1));
+        if e >= p {
+            count += 1;
+            ev.push((e - p, -1));
+        } else {
+            ev.push((e, -1));
+        }
+    }
+    ev.sort_by(|a, b| a.0.total_cmp(&b.0).then(b.1.cmp(&a.1)));
+    // Segments [from, to) of constant count around the period.
+    let mut segs: Vec<(f64, f64, i64)> = Vec::new();
+    let mut at = 0.0;
+    for &(x, d) in &ev {
+        if x > at {
+            segs.push((at, x, count));
+            at = x;
+        }
+        count += d as i64;
+    }
+    segs.push((at, p, count));
+    let best = segs.iter().map(|s| s.2).max().unwrap_or(0);
+    // Merge the best segments into intervals (also across the period's end).
+    let mut runs: Vec<(f64, f64)> = Vec::new();
+    for &(a, b, c) in &segs {
+        if c != best {
+            continue;
+        }
+        match runs.last_mut() {
+            Some(r) if (r.1 - a).abs() <= 1e-15 => r.1 = b,
+            _ => runs.push((a, b)),
+        }
+    }
+    if runs.len() > 1 {
+        let (f, l) = (runs[0], runs[runs.len() - 1]);
+        if f.0 <= 1e-15 && (l.1 - p).abs() <= 1e-15 {
+            runs.pop();
+            runs[0] = (l.0 - p, f.1);
+        }
+    }
+    let cand = phase(candidate);
+    let holds = |r: &(f64, f64)| (cand - r.0).rem_euclid(p) <= r.1 - r.0;
+    let widest = |rs: &[(f64, f64)]| {
+        rs.iter().copied().max_by(|a, b| (a.1 - a.0).total_cmp(&(b.1 - b.0))).unwrap_or((0.0, 0.0))
+    };
+    let mut pick = runs.iter().find(|r| holds(r)).copied().unwrap_or_else(|| widest(&runs));
+    let mut pick_run = pick;
+    let mut margin = None;
+    if runs.len() > 1 {
+        // Each interval maps the rows to ticks one way between the phases of two rows: score
+        // every such part (within a budget of part × row evaluations) by the roughness it
+        // leaves, take the smoothest, and compare it with the best of the other intervals.
+        let mut phases: Vec<f64> = t.iter().map(|&x| phase(x)).collect();
+        phases.sort_by(f64::total_cmp);
+        phases.dedup_by(|a, b| (*a - *b).abs() <= 1e-12);
+        let mut parts: Vec<(usize, f64, f64)> = Vec::new();
+        for (ri, &(a, b)) in runs.iter().enumerate() {
+            let mut edges = vec![a];
+            for &ph in &phases {
+                for x in [ph - p, ph] {
+                    if x > a && x < b {
+                        edges.push(x);
+                    }
+                }
+            }
+            edges.sort_by(f64::total_cmp);
+            edges.push(b);
+            parts.extend(edges.windows(2).map(|w| (ri, w[0], w[1])));
+        }
+        if parts.len() * t.len() > MAX_ROUGHNESS_WORK {
+            // Too many to score one by one: each interval at its middle.
+            parts = runs.iter().enumerate().map(|(ri, &(a, b))| (ri, a, b)).collect();
+        }
+        let costs: Vec<f64> = parts
+            .iter()
+            .map(|&(_, a, b)| roughness(t, cmds, rate, origin + 0.5 * (a + b)))
+            .collect();
+        let c0 = costs.iter().copied().fold(f64::INFINITY, f64::min);
+        let tie: Vec<usize> = (0..parts.len()).filter(|&i| costs[i] <= c0).collect();
+        let span = |i: usize| (parts[i].1, parts[i].2);
+        let first = tie.iter().copied().find(|&i| holds(&span(i))).unwrap_or_else(|| {
+            tie.iter()
+                .copied()
+                .max_by(|&x, &y| (span(x).1 - span(x).0).total_cmp(&(span(y).1 - span(y).0)))
+                .unwrap_or(0)
+        });
+        let run = parts[first].0;
+        // Neighbouring parts of the same interval that tie are one interval.
+        let (mut lo, mut hi) = span(first);
+        for &i in &tie {
+            if parts[i].0 == run && (parts[i].1 - hi).abs() <= 1e-12 {
+                hi = parts[i].2;
+            }
+        }
+        for &i in tie.iter().rev() {
+            if parts[i].0 == run && (parts[i].2 - lo).abs() <= 1e-12 {
+                lo = parts[i].1;
+            }
+        }
+        pick = (lo, hi);
+        pick_run = runs[run];
+        let others = (0..parts.len())
+            .filter(|&i| parts[i].0 != run)
+            .map(|i| costs[i])
+            .fold(f64::INFINITY, f64::min);
+        margin = Some(if c0 > 0.0 {
+            others / c0
+        } else if others > 0.0 {
+            f64::INFINITY
+        } else {
+            1.0
+        });
+    }
+    Some(TickPhase {
+        changes: spans.len(),
+        agree: best as usize,
+        start: origin + pick.0,
+        width: pick.1 - pick.0,
+        agree_candidate: covers(cand),
+        optima: runs.len(),
+        margin,
+        candidate_chosen: holds(&pick),
+        candidate_in_run: holds(&pick_run),
+    })
+}
+
+/// How far the rows' commands, mapped onto the tick grid `t0 + k / rate` (the first row of each
+/// tick), are from a smooth staircase: the sum over rows and joints, where the command moves
+/// through a tick (strictly monotone across its neighbours), of how far the tick's command
+/// misses the cubic through the two ticks with rows on either side, in units of the
+/// joint's median command change between such ticks and capped at [`ROUGH_CAP`] (a step costs
+/// about the same on any grid; a smooth command sampled on the wrong grid costs where a row
+/// landed a tick off).
+fn roughness(t: &[f64], cmds: &[&[f64]], rate: f64, t0: f64) -> f64 {
+    let mut ks: Vec<f64> = Vec::new();
+    let mut rows: Vec<usize> = Vec::new();
+    for (i, &x) in t.iter().enumerate() {
+        let k = tick_of(x, t0, rate, CommandTiming::InForce);
+        if ks.last() != Some(&(k as f64)) {
+            ks.push(k as f64);
+            rows.push(i);
+        }
+    }
+    let n = rows.len();
+    if n < 5 {
+        return 0.0;
+    }
+    let mut total = 0.0;
+    for c in cmds {
+        let v: Vec<f64> = rows.iter().map(|&i| c[i]).collect();
+        let mut d: Vec<f64> =
+            v.windows(2).map(|w| (w[1] - w[0]).abs()).filter(|&x| x > 1e-9).collect();
+        if d.is_empty() {
+            continue;
+        }
+        d.sort_by(f64::total_cmp);
+        let scale = d[d.len() / 2];
+        for m in 2..n - 2 {
+            // Only where the command moves through the tick (steps and holds look alike on
+            // every grid).
+            if !((v[m - 1] < v[m] && v[m] < v[m + 1]) || (v[m - 1] > v[m] && v[m] > v[m + 1])) {
+                continue;
+            }
+            let xs = [ks[m - 2], ks[m - 1], ks[m + 1], ks[m + 2]];
+            let ys = [v[m - 2], v[m - 1], v[m + 1], v[m + 2]];
+            let r = (v[m] - lagrange(&xs, &ys, ks[m])).abs() / scale;
+            if r.is_finite() {
+                total += r.min(ROUGH_CAP);
+            }
+        }
+    }
+    total
+}
+
+/// Cap of one row's roughness, in median command changes.
+const ROUGH_CAP: f64 = 3.0;
+
 /// Reconstructs the command schedule of the joints `cmds` (one trace per joint, sampled at `t`,
 /// increasing). `rate = None`: [`Schedule::Events`]. `fill` says what an empty tick (or dropped
 /// row) gets.
@@ -574,6 +835,29 @@ mod tests {
     /// A 200 Hz log of a 50 Hz controller with its times in milliseconds (250 ticks per row)
     /// or nanoseconds (2.5 × 10⁸: before this check, a 4.8 TB tick table and an abort) is an
     /// error; the same log in seconds, and a 1 kHz controller logged at 25 Hz (40), are not.
+    #[test]
+    fn the_tick_phase_is_where_every_command_change_allows_an_edge() {
+        // 10 Hz ticks at 0.05 + k/10; rows every 30 ms, each logging the command in force (a
+        // row exactly at a tick carries that tick's command). Changes: 0.03 → 0.06 (edge 0.05),
+        // 0.12 → 0.15 (edge 0.15, on the row), 0.24 → 0.27 (edge 0.25). Phases (mod 0.1) allowed:
+        // [0.03, 0.06] ∩ [0.02, 0.05] ∩ [0.04, 0.07] = [0.04, 0.05].
+        let t: Vec<f64> = (0..10).map(|i| 0.03 * i as f64).collect();
+        let c: Vec<f64> = t.iter().map(|&x| ((x - 0.05) * 10.0 + 1e-9).floor()).collect();
+        let p = tick_phase(&t, &[&c], 10.0, t[0]).expect("changes");
+        assert_eq!((p.changes, p.agree, p.optima), (3, 3, 1));
+        assert!((p.start.rem_euclid(0.1) - 0.04).abs() < 2e-6, "{p:?}");
+        assert!((p.width - 0.01).abs() < 3e-6, "{p:?}");
+        // The first row (phase 0) is outside: it agrees with the changes around 0.05 and 0.15?
+        // No: [0.03, 0.06] and [0.02, 0.05] do not hold 0 (mod 0.1); [0.04, 0.07] neither.
+        assert_eq!(p.agree_candidate, 0);
+        assert!((p.origin_at_or_before(0.0, 10.0) - (0.045 - 0.1)).abs() < 2e-6);
+        // Scored at the true origin: all three.
+        assert_eq!(tick_phase(&t, &[&c], 10.0, 0.05).expect("changes").agree_candidate, 3);
+        // Rows a whole tick apart say nothing.
+        let t2: Vec<f64> = (0..5).map(|i| 0.1 * i as f64 + 0.01).collect();
+        assert_eq!(tick_phase(&t2, &[&t2], 10.0, 0.0), None);
+    }
+
     #[test]
     fn rows_too_many_ticks_apart_are_an_error_not_an_allocation() {
         let secs: Vec<f64> = (0..50).map(|i| i as f64 * 0.005).collect();

@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 
 use crate::sim2real::bam;
 use crate::sim2real::recording::{self, Recording, RecordingError};
+use crate::sim2real::replay::{self, ReplayOptions};
 
 /// Reads one recording file: BAM JSON (sniffed) or CSV.
 pub fn read_recording(path: &Path) -> Result<Recording, RecordingError> {
@@ -15,6 +16,37 @@ pub fn read_recording(path: &Path) -> Result<Recording, RecordingError> {
     } else {
         recording::parse_csv(path, &text)
     }
+}
+
+/// Recordings read for a replay, with what reading them found out about their control ticks.
+pub struct ReplayInputs {
+    pub recs: Vec<Recording>,
+    /// [`replay::origin_messages`]: estimated tick origins (notes), contradicted ones and
+    /// command columns that fit no tick grid (warnings).
+    pub notes: Vec<String>,
+    pub warnings: Vec<String>,
+}
+
+/// Reads `files` for `gap` and `fit`: each recording's joints must be the model's
+/// (`model_joints`) and its timestamps must map onto its control ticks
+/// ([`replay::check_schedule`]); a missing `control_t0_s` is estimated from the rows when the
+/// first row's time contradicts them ([`replay::resolve_tick_origin`]). The first error ends it.
+pub fn read_for_replay(
+    files: &[PathBuf],
+    model_joints: &[String],
+    opts: &ReplayOptions,
+) -> Result<ReplayInputs, String> {
+    let mut recs = Vec::with_capacity(files.len());
+    let mut origins = Vec::with_capacity(files.len());
+    for f in files {
+        let mut r = read_recording(f).map_err(|e| e.to_string())?;
+        r.validate_joint_names(model_joints).map_err(|e| e.to_string())?;
+        replay::check_schedule(&r, opts).map_err(|e| e.to_string())?;
+        origins.push((f.clone(), replay::resolve_tick_origin(&mut r, opts)));
+        recs.push(r);
+    }
+    let (notes, warnings) = replay::origin_messages(&origins);
+    Ok(ReplayInputs { recs, notes, warnings })
 }
 
 /// Expands the command-line inputs: files as given, directories to their `*.csv` (and BAM

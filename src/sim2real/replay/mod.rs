@@ -228,8 +228,7 @@ impl<'m> Replayer<'m> {
             return Err(setup(format!("need at least 2 samples, found {n}")));
         }
         rec.validate_joint_names(&self.names)?;
-        let rate = opts.control_hz.or(rec.control_rate_hz);
-        let timing = opts.command_timing.or_else(|| rec.command_timing()).unwrap_or_default();
+        let (rate, _, tick0) = timing_of(rec, opts);
         if opts.base == BaseMode::Recorded && rec.base.is_none() && self.free.is_some() {
             return Err(setup(
                 "--base recorded needs base.x … base.qz columns; the recording has none".into(),
@@ -256,11 +255,8 @@ impl<'m> Replayer<'m> {
             });
         }
 
-        let cmds: Vec<&[f64]> =
-            rec.joints.iter().map(|jt| jt.q_cmd.as_deref().unwrap_or(&jt.q)).collect();
-        let tick0 = rec.control_t0_s.unwrap_or(rec.t[0]);
-        let schedule = reconstruct(&rec.t, &cmds, rate, tick0, timing, opts.command_fill)
-            .map_err(|e| setup(e.to_string()))?;
+        let schedule =
+            schedule_of(rec, opts, opts.command_fill).map_err(|e| setup(e.to_string()))?;
         if let Some(h) = hook.as_deref_mut() {
             let names: Vec<String> = rec.joints.iter().map(|j| j.name.clone()).collect();
             h.reset(&names, mj::raw(self.model).opt.timestep);
@@ -362,18 +358,40 @@ impl<'m> Replayer<'m> {
     }
 }
 
-/// Whether the recording's timestamps map onto its control ticks as the replay will map them
-/// (`--control-hz`, `--command-timing` and the recording's own keys, as in
-/// [`Replayer::replay`], which repeats this derivation): `fit` checks every file before
-/// simulating anything, so a unit mistake (milliseconds, nanoseconds) is one clear error, not
-/// a failed search (`gap` gets the same error from its replay).
-pub fn check_schedule(rec: &Recording, opts: &ReplayOptions) -> Result<(), ReplayError> {
-    let Some(rate) = opts.control_hz.or(rec.control_rate_hz) else { return Ok(()) };
+/// The command traces the replay follows: each joint's `q_cmd` (its `q` when it has none).
+pub fn command_traces(rec: &Recording) -> Vec<&[f64]> {
+    rec.joints.iter().map(|jt| jt.q_cmd.as_deref().unwrap_or(&jt.q)).collect()
+}
+
+/// The control rate, command timing and tick origin the replay uses for `rec`: `--control-hz`
+/// and `--command-timing` over the recording's keys; ticks at `control_t0_s + k / rate`
+/// (`t[0]` when absent — [`resolve_tick_origin`] estimates it from the rows first).
+pub fn timing_of(rec: &Recording, opts: &ReplayOptions) -> (Option<f64>, CommandTiming, f64) {
+    let rate = opts.control_hz.or(rec.control_rate_hz);
     let timing = opts.command_timing.or_else(|| rec.command_timing()).unwrap_or_default();
     let tick0 = rec.control_t0_s.unwrap_or(rec.t.first().copied().unwrap_or(0.0));
-    let cmds: Vec<&[f64]> =
-        rec.joints.iter().map(|jt| jt.q_cmd.as_deref().unwrap_or(&jt.q)).collect();
-    reconstruct(&rec.t, &cmds, Some(rate), tick0, timing, opts.command_fill)
+    (rate, timing, tick0)
+}
+
+/// The reconstructed command schedule of `rec` as the replay sees it, with `fill`.
+pub fn schedule_of(
+    rec: &Recording,
+    opts: &ReplayOptions,
+    fill: Fill,
+) -> Result<crate::sim2real::commands::Schedule, crate::sim2real::commands::ScheduleError> {
+    let (rate, timing, tick0) = timing_of(rec, opts);
+    reconstruct(&rec.t, &command_traces(rec), rate, tick0, timing, fill)
+}
+
+/// Whether the recording's timestamps map onto its control ticks as the replay will map them
+/// ([`schedule_of`]): `fit` checks every file before simulating anything, so a unit mistake
+/// (milliseconds, nanoseconds) is one clear error, not a failed search (`gap` gets the same
+/// error from its replay).
+pub fn check_schedule(rec: &Recording, opts: &ReplayOptions) -> Result<(), ReplayError> {
+    if opts.control_hz.or(rec.control_rate_hz).is_none() {
+        return Ok(());
+    }
+    schedule_of(rec, opts, opts.command_fill)
         .map(|_| ())
         .map_err(|e| ReplayError::Setup { file: rec.source.clone(), message: e.to_string() })
 }
@@ -409,6 +427,8 @@ pub fn replay_all(
         .collect()
 }
 
+mod origin;
 mod run;
+pub use origin::{TickOrigin, origin_messages, resolve_tick_origin};
 #[cfg(test)]
 mod tests;

@@ -1,0 +1,349 @@
+//! Where a recording's control ticks are when it does not say (`control_t0_s` absent), and
+//! whether the rows agree with it when it does.
+//!
+//! Without `control_t0_s` the ticks used to be put at the first row's time. A recorder that
+//! samples asynchronously (most do: a logging thread beside the control loop) starts anywhere
+//! within a tick, so every command then switched up to one tick early or late in the replay —
+//! a lag the fit explained as wrong gains, armature or damping (an independent humanoid
+//! simulator's clean logs, 50 Hz control, ~200 Hz recorder: knee kp × 1.08, kd × 0.74). The rows
+//! themselves show where the ticks are: see [`tick_phase`].
+
+use std::path::PathBuf;
+
+use crate::sim2real::commands::{TickPhase, tick_phase};
+use crate::sim2real::recording::Recording;
+
+use super::{ReplayOptions, command_traces, timing_of};
+
+/// Fewest command changes between close rows before the rows' phase overrules the first row's
+/// time, or is held against a declared `control_t0_s`.
+pub const MIN_CHANGES: usize = 8;
+
+/// Share of the command changes one tick grid must agree with for the command column to be a
+/// per-tick command at the given rate.
+const GRID_SHARE: f64 = 0.9;
+
+/// Below this [`TickPhase::margin`] the command's shape does not tell the phases the changes
+/// allow apart.
+const SHAPE_MARGIN: f64 = 1.05;
+
+/// A declared `control_t0_s` outside the phases the command's shape chose is reported only from
+/// this margin on.
+const SHAPE_WARN_MARGIN: f64 = 1.5;
+
+/// What [`resolve_tick_origin`] found.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum TickOrigin {
+    /// No control rate (each goal holds from its own timestamp), or too few command changes to
+    /// tell anything.
+    Unknown,
+    /// The origin in use (declared, or the first row's time) agrees with the rows.
+    Agrees,
+    /// No `control_t0_s`, and the rows put the ticks elsewhere than the first row: the origin
+    /// is now `t0`, the middle of the phases the rows allow (± `half_width` s), found from the
+    /// `changes` alone or (`by_shape`) with the command's shape choosing among several phases
+    /// the changes allow.
+    Estimated { t0: f64, half_width: f64, changes: usize, by_shape: bool },
+    /// No `control_t0_s`, and `optima` phase intervals fit the changes and the command's shape
+    /// equally well (a recorder slower than the controller, a command of steps and holds): the
+    /// origin is `t0` — the first row's time when it is one of them (`kept`).
+    Ambiguous { t0: f64, optima: usize, kept: bool },
+    /// The declared `control_t0_s` contradicts `missed` of the `changes`, or (`missed` 0) the
+    /// command's shape clearly prefers other phases (kept: it is the user's; the rows suggest
+    /// `suggested`).
+    Contradicted { declared: f64, suggested: f64, half_width: f64, missed: usize, changes: usize },
+    /// No tick grid at this rate agrees with more than `agree` of the `changes`: the command
+    /// column changes within ticks (an interpolated target?) or the rate is wrong.
+    NoGrid { rate: f64, agree: usize, changes: usize },
+}
+
+/// Checks the recording's tick origin against its rows and, when `control_t0_s` is absent and
+/// the first row's time contradicts them, sets it to the rows' estimate (so that the replay,
+/// every slice of the recording and the fit's windows all use it).
+pub fn resolve_tick_origin(rec: &mut Recording, opts: &ReplayOptions) -> TickOrigin {
+    let (Some(rate), _, tick0) = timing_of(rec, opts) else { return TickOrigin::Unknown };
+    let Some(tp) = tick_phase(&rec.t, &command_traces(rec), rate, tick0) else {
+        return TickOrigin::Unknown;
+    };
+    judge(rec, rate, &tp)
+}
+
+fn judge(rec: &mut Recording, rate: f64, tp: &TickPhase) -> TickOrigin {
+    let TickPhase { changes, agree, agree_candidate, width, optima, .. } = *tp;
+    if changes < MIN_CHANGES {
+        return TickOrigin::Unknown;
+    }
+    if (agree as f64) < GRID_SHARE * changes as f64 {
+        return TickOrigin::NoGrid { rate, agree, changes };
+    }
+    let first = rec.t[0];
+    match rec.control_t0_s {
+        None => {
+            let ambiguous = optima > 1 && tp.margin.is_some_and(|m| m < SHAPE_MARGIN);
+            if ambiguous {
+                // The first row's time stays when the changes allow it.
+                let kept = agree_candidate >= agree;
+                let t0 = if kept { first } else { tp.origin_at_or_before(first, rate) };
+                if !kept {
+                    rec.control_t0_s = Some(t0);
+                }
+                return TickOrigin::Ambiguous { t0, optima, kept };
+            }
+            if tp.candidate_chosen {
+                return TickOrigin::Agrees;
+            }
+            let t0 = tp.origin_at_or_before(first, rate);
+            rec.control_t0_s = Some(t0);
+            TickOrigin::Estimated { t0, half_width: 0.5 * width, changes, by_shape: optima > 1 }
+        }
+        // A declared origin a few changes off (timestamp jitter, a slightly wrong rate over a
+        // long log) is not worth a warning; one that misses many is.
+        // A declared origin is held against the shape only when the shape is clear.
+        Some(declared) => {
+            let missed = agree - agree_candidate.min(agree);
+            let by_shape = !tp.candidate_in_run
+                && optima > 1
+                && tp.margin.is_some_and(|m| m >= SHAPE_WARN_MARGIN);
+            if missed <= (changes / 20).max(2) && !by_shape {
+                return TickOrigin::Agrees;
+            }
+            TickOrigin::Contradicted {
+                declared,
+                suggested: tp.origin_at_or_before(declared, rate),
+                half_width: 0.5 * width,
+                missed,
+                changes,
+            }
+        }
+    }
+}
+
+fn file_name(p: &std::path::Path) -> String {
+    p.file_name().map_or_else(|| p.display().to_string(), |n| n.to_string_lossy().into_owned())
+}
+
+/// Lists up to three items, then "and N more".
+fn some_of(items: &[String]) -> String {
+    let mut s = items.iter().take(3).cloned().collect::<Vec<_>>().join("; ");
+    if items.len() > 3 {
+        s.push_str(&format!("; and {} more", items.len() - 3));
+    }
+    s
+}
+
+/// One note and warnings summing up the origins of a set of recordings: `(notes, warnings)`.
+pub fn origin_messages(items: &[(PathBuf, TickOrigin)]) -> (Vec<String>, Vec<String>) {
+    let (mut notes, mut warnings) = (Vec::new(), Vec::new());
+    let mut est = Vec::new();
+    let mut widest: f64 = 0.0;
+    let mut contra = Vec::new();
+    let mut nogrid = Vec::new();
+    let mut ambiguous = Vec::new();
+    for (p, o) in items {
+        match *o {
+            TickOrigin::Estimated { t0, half_width, changes, by_shape } => {
+                widest = widest.max(half_width);
+                let how = if by_shape { " and the command's shape" } else { "" };
+                est.push(format!(
+                    "{}: control_t0_s = {t0:.6} (from {changes} changes{how})",
+                    file_name(p)
+                ));
+            }
+            TickOrigin::Ambiguous { t0, optima, kept } => {
+                let what = if kept { "the first row's time" } else { "one of them" };
+                ambiguous.push(format!(
+                    "{}: {optima} tick phases fit equally; {what} is used ({t0:.6})",
+                    file_name(p)
+                ));
+            }
+            TickOrigin::Contradicted { declared, suggested, half_width, missed, changes } => {
+                let why = if missed > 0 {
+                    format!("disagrees with {missed} of {changes} command changes")
+                } else {
+                    "makes the command jump back and forth between ticks".to_string()
+                };
+                contra.push(format!(
+                    "{}: control_t0_s {declared} {why}; the rows put the ticks at {suggested:.6} ± {:.3} ms",
+                    file_name(p),
+                    half_width * 1e3
+                ));
+            }
+            TickOrigin::NoGrid { rate, agree, changes } => nogrid.push(format!(
+                "{}: at best {agree} of {changes} command changes fit one {rate} Hz tick grid",
+                file_name(p)
+            )),
+            TickOrigin::Unknown | TickOrigin::Agrees => {}
+        }
+    }
+    if !est.is_empty() {
+        notes.push(format!(
+            "{} of {} recordings have no control_t0_s and their first row is not on a control tick: the ticks' \
+             phase was estimated from where the command changes between rows (to ± {:.3} ms) — {}. Declare \
+             `# control_t0_s:` (the time of any control tick) to use your own",
+            est.len(),
+            items.len(),
+            widest * 1e3,
+            some_of(&est)
+        ));
+    }
+    if !ambiguous.is_empty() {
+        warnings.push(format!(
+            "no control_t0_s, and the rows cannot place the control ticks (rows rarely less than a tick apart, \
+             or a command of steps and holds): {}. Commands may switch up to one tick early or late in the replay; \
+             declare `# control_t0_s:` (the time of any control tick) if the logger knows it",
+            some_of(&ambiguous)
+        ));
+    }
+    if !contra.is_empty() {
+        warnings.push(format!(
+            "the declared control tick origin contradicts the rows (each row's command is the one in force at its \
+             time, so the command can only change across a tick): {}. The declared value is used; if it is wrong, \
+             the replay switches every command at the wrong time and the fit reads that as gains or damping",
+            some_of(&contra)
+        ));
+    }
+    if !nogrid.is_empty() {
+        warnings.push(format!(
+            "the command column changes between rows that no tick grid separates: {}. Is control_rate_hz right, \
+             and is q_cmd the command in force per control tick (not a target interpolated per row)?",
+            some_of(&nogrid)
+        ));
+    }
+    (notes, warnings)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sim2real::recording::JointTrace;
+
+    /// Rows of an asynchronous recorder (`rec_hz`, intervals ± `jitter` × 50 %, a deterministic
+    /// sequence) from 7.31 ms on, logging the command `f(tick time)` of the ticks
+    /// `tick_t0 + k / rate`.
+    fn log_of(
+        tick_t0: f64,
+        rate: f64,
+        rec_hz: f64,
+        jitter: f64,
+        f: impl Fn(f64) -> f64,
+    ) -> Recording {
+        let mut t = Vec::new();
+        let mut x: f64 = 0.00731;
+        let mut s: u64 = 12345;
+        while x < 10.0 {
+            t.push((x * 1e6).round() / 1e6);
+            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            let u = (s >> 11) as f64 / (1u64 << 53) as f64;
+            x += (1.0 + jitter * (u - 0.5)) / rec_hz;
+        }
+        let cmd: Vec<f64> =
+            t.iter().map(|&x| f(tick_t0 + ((x - tick_t0) * rate + 1e-9).floor() / rate)).collect();
+        let mut j = JointTrace::new("j", cmd.clone());
+        j.q_cmd = Some(cmd);
+        let mut r = Recording::at_100hz(t, vec![j]);
+        r.control_rate_hz = Some(rate);
+        r
+    }
+
+    /// A ramp of 0.5 rad/s, logged at ~`rec_hz`.
+    fn async_log(tick_t0: f64, rate: f64, rec_hz: f64, _seconds: f64) -> Recording {
+        log_of(tick_t0, rate, rec_hz, 0.6, |x| 0.5 * x)
+    }
+
+    /// Phase error of `t0` against ticks at `truth + k / rate`, in seconds (−½ … ½ tick).
+    fn phase_err(t0: f64, truth: f64, rate: f64) -> f64 {
+        (((t0 - truth) * rate + 0.5).rem_euclid(1.0) - 0.5) / rate
+    }
+
+    #[test]
+    fn a_recorder_slower_than_the_controller_is_placed_by_the_commands_shape() {
+        // 88 Hz rows beside 100 Hz ticks at phase 3.7 ms (independent_arm2's logging): rows less
+        // than a tick apart are rare and several phases fit every change; the command's shape
+        // (a chirp-like smooth motion) picks the right one.
+        let f = |x: f64| 0.3 * (2.0 * std::f64::consts::PI * (0.4 + 0.05 * x) * x).sin();
+        let mut r = log_of(0.0037, 100.0, 88.0, 0.3, f);
+        let o = resolve_tick_origin(&mut r, &ReplayOptions::default());
+        let TickOrigin::Estimated { t0, by_shape, .. } = o else { panic!("{o:?}") };
+        assert!(by_shape, "{o:?}");
+        assert!(phase_err(t0, 0.0037, 100.0).abs() < 100e-6, "{o:?}");
+        // A command of steps and holds: the shape does not tell; said, and the first row kept
+        // when the changes allow it.
+        let step = |x: f64| 0.1 * ((x * 13.0).floor() % 3.0);
+        let mut r = log_of(0.0037, 100.0, 88.0, 0.3, step);
+        let o = resolve_tick_origin(&mut r, &ReplayOptions::default());
+        assert!(matches!(o, TickOrigin::Ambiguous { kept: true, .. }), "{o:?}");
+        assert_eq!(r.control_t0_s, None);
+        let (notes, w) = origin_messages(&[(PathBuf::from("s.csv"), o)]);
+        assert!(notes.is_empty() && w[0].contains("s.csv: "), "{w:?}");
+    }
+
+    #[test]
+    fn an_asynchronous_log_without_control_t0_gets_the_ticks_phase_from_its_rows() {
+        // Ticks at 0.0123 + k/50; the first row at 7.31 ms is 15 ms after the tick before it.
+        let mut r = async_log(0.0123, 50.0, 200.0, 10.0);
+        let o = resolve_tick_origin(&mut r, &ReplayOptions::default());
+        let TickOrigin::Estimated { t0, half_width, changes, by_shape } = o else {
+            panic!("{o:?}")
+        };
+        // The grid point at or before the first row: 0.0123 − 0.02.
+        assert!((t0 - (0.0123 - 0.02)).abs() < 50e-6, "t0 {t0}");
+        assert!(half_width < 100e-6, "half width {half_width}");
+        assert!(changes > 400 && !by_shape, "{o:?}");
+        assert_eq!(r.control_t0_s, Some(t0));
+        // A second pass agrees with what the first set.
+        assert_eq!(resolve_tick_origin(&mut r, &ReplayOptions::default()), TickOrigin::Agrees);
+    }
+
+    #[test]
+    fn rows_that_start_on_a_tick_keep_the_first_rows_time() {
+        let mut r = async_log(0.00731, 50.0, 200.0, 10.0);
+        assert_eq!(resolve_tick_origin(&mut r, &ReplayOptions::default()), TickOrigin::Agrees);
+        assert_eq!(r.control_t0_s, None);
+    }
+
+    #[test]
+    fn a_declared_origin_the_rows_contradict_is_kept_and_reported() {
+        let mut r = async_log(0.0123, 50.0, 200.0, 10.0);
+        r.control_t0_s = Some(0.0);
+        let o = resolve_tick_origin(&mut r, &ReplayOptions::default());
+        let TickOrigin::Contradicted { declared, suggested, .. } = o else { panic!("{o:?}") };
+        assert_eq!(declared, 0.0);
+        assert!((suggested - (0.0123 - 0.02)).abs() < 50e-6, "{suggested}");
+        assert_eq!(r.control_t0_s, Some(0.0));
+        let (notes, warnings) = origin_messages(&[(PathBuf::from("a/ep.csv"), o)]);
+        assert!(notes.is_empty());
+        assert!(warnings[0].contains("ep.csv: control_t0_s 0 disagrees"), "{warnings:?}");
+        // The right one, declared, is quiet.
+        r.control_t0_s = Some(0.0123 + 3.0 * 0.02);
+        assert_eq!(resolve_tick_origin(&mut r, &ReplayOptions::default()), TickOrigin::Agrees);
+    }
+
+    #[test]
+    fn a_command_that_changes_within_ticks_fits_no_grid() {
+        // The same rows, but the command is interpolated per row (changes at every row).
+        let mut r = async_log(0.0123, 50.0, 200.0, 10.0);
+        let c: Vec<f64> = r.t.iter().map(|&x| 0.3 * x).collect();
+        r.joints[0].q_cmd = Some(c);
+        let o = resolve_tick_origin(&mut r, &ReplayOptions::default());
+        assert!(matches!(o, TickOrigin::NoGrid { rate: 50.0, .. }), "{o:?}");
+        assert_eq!(r.control_t0_s, None);
+        let (_, w) = origin_messages(&[(PathBuf::from("x.csv"), o)]);
+        assert!(w[0].contains("x.csv: at best"), "{w:?}");
+    }
+
+    #[test]
+    fn without_a_rate_or_with_a_held_command_nothing_is_said() {
+        let mut r = async_log(0.0123, 50.0, 200.0, 10.0);
+        r.control_rate_hz = None;
+        assert_eq!(resolve_tick_origin(&mut r, &ReplayOptions::default()), TickOrigin::Unknown);
+        let mut r = async_log(0.0123, 50.0, 200.0, 10.0);
+        let n = r.t.len();
+        r.joints[0].q_cmd = Some(vec![0.2; n]);
+        assert_eq!(resolve_tick_origin(&mut r, &ReplayOptions::default()), TickOrigin::Unknown);
+        // --control-hz gives a rate to a recording without one.
+        let mut r = async_log(0.0123, 50.0, 200.0, 10.0);
+        r.control_rate_hz = None;
+        let o = ReplayOptions { control_hz: Some(50.0), ..Default::default() };
+        assert!(matches!(resolve_tick_origin(&mut r, &o), TickOrigin::Estimated { .. }));
+    }
+}
