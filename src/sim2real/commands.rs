@@ -220,6 +220,12 @@ pub struct TickPhase {
     /// candidate's, else the widest.
     pub start: f64,
     pub width: f64,
+    /// The estimate (one grid point): the candidate's phase when it is among the chosen ones,
+    /// else their end before it; kept a timestamp quantum (at least 2 µs) inside the ends when
+    /// they are that wide, so that no row stamped at an end is put into the wrong tick. Not the
+    /// middle: a logger locked to the controller that stamps its rows just after each tick
+    /// leaves nearly the whole period open, and its middle is half a tick from the truth.
+    pub best: f64,
     /// How many changes the candidate origin agrees with.
     pub agree_candidate: usize,
     /// Disjoint phase intervals that tie for the most agreements (1: the changes alone decide).
@@ -235,12 +241,26 @@ pub struct TickPhase {
 }
 
 impl TickPhase {
-    /// The middle of the chosen phases, as the grid point at or before `t`.
+    /// The estimate, as the grid point at or before `t`.
     pub fn origin_at_or_before(&self, t: f64, rate: f64) -> f64 {
-        let p = 1.0 / rate;
-        let mid = self.start + 0.5 * self.width;
-        t - (t - mid).rem_euclid(p)
+        t - (t - self.best).rem_euclid(1.0 / rate)
     }
+    /// The estimate, as the grid point nearest `t`.
+    pub fn origin_nearest(&self, t: f64, rate: f64) -> f64 {
+        let p = 1.0 / rate;
+        self.best + ((t - self.best) / p).round() * p
+    }
+}
+
+/// The resolution of printed timestamps: the coarsest of 1 ms, 100 µs, 10 µs that every time is
+/// a multiple of (within float printing error), else 1 µs.
+pub fn time_quantum(t: &[f64]) -> f64 {
+    for q in [1e-3, 1e-4, 1e-5] {
+        if t.len() >= 4 && t.iter().all(|&x| ((x / q) - (x / q).round()).abs() < 1e-3) {
+            return q;
+        }
+    }
+    1e-6
 }
 
 /// Budget of (phase part × row) roughness evaluations per recording (~0.1 s).
@@ -254,8 +274,9 @@ pub fn tick_phase(t: &[f64], cmds: &[&[f64]], rate: f64, candidate: f64) -> Opti
         return None;
     }
     let p = 1.0 / rate;
-    // Timestamps printed to the microsecond: an edge within 1 µs of a row counts as on it.
-    let eps = 1e-6_f64.max(TICK_EPS * p);
+    // A row's true sampling time is within half the timestamps' resolution of its stamp (1 µs
+    // at least): each change's interval is widened by that much at both ends.
+    let eps = 1e-6_f64.max(TICK_EPS * p).max(0.5 * time_quantum(t));
     let origin = t[0];
     let phase = |x: f64| (x - origin).rem_euclid(p);
     // (start phase, length) of every change's interval.
@@ -330,26 +351,39 @@ pub fn tick_phase(t: &[f64], cmds: &[&[f64]], rate: f64, candidate: f64) -> Opti
         // Each interval maps the rows to ticks one way between the phases of two rows: score
         // every such part (within a budget of part × row evaluations) by the roughness it
         // leaves, take the smoothest, and compare it with the best of the other intervals.
-        let mut phases: Vec<f64> = t.iter().map(|&x| phase(x)).collect();
-        phases.sort_by(f64::total_cmp);
-        phases.dedup_by(|a, b| (*a - *b).abs() <= 1e-12);
+        // Past the budget: each interval at its middle, and of those only the widest ones
+        // (and the candidate's) the budget allows.
+        let budget = (MAX_ROUGHNESS_WORK / t.len().max(1)).max(2);
         let mut parts: Vec<(usize, f64, f64)> = Vec::new();
-        for (ri, &(a, b)) in runs.iter().enumerate() {
-            let mut edges = vec![a];
-            for &ph in &phases {
-                for x in [ph - p, ph] {
-                    if x > a && x < b {
-                        edges.push(x);
-                    }
+        if runs.len() <= budget {
+            let mut phases: Vec<f64> = t.iter().map(|&x| phase(x)).collect();
+            phases.sort_by(f64::total_cmp);
+            phases.dedup_by(|a, b| (*a - *b).abs() <= 1e-12);
+            for (ri, &(a, b)) in runs.iter().enumerate() {
+                let mut edges = vec![a];
+                // Row phases inside (a, b), also one period back (a run may start below 0).
+                let from = phases.partition_point(|&x| x <= a.max(0.0));
+                edges.extend(phases[from..].iter().copied().take_while(|&x| x < b));
+                if a < 0.0 {
+                    let from = phases.partition_point(|&x| x - p <= a);
+                    edges.extend(
+                        phases[from..].iter().map(|&x| x - p).take_while(|&x| x < b.min(0.0)),
+                    );
                 }
+                edges.sort_by(f64::total_cmp);
+                edges.push(b);
+                parts.extend(edges.windows(2).map(|w| (ri, w[0], w[1])));
             }
-            edges.sort_by(f64::total_cmp);
-            edges.push(b);
-            parts.extend(edges.windows(2).map(|w| (ri, w[0], w[1])));
         }
-        if parts.len() * t.len() > MAX_ROUGHNESS_WORK {
-            // Too many to score one by one: each interval at its middle.
-            parts = runs.iter().enumerate().map(|(ri, &(a, b))| (ri, a, b)).collect();
+        if parts.len() > budget || parts.is_empty() {
+            let mut idx: Vec<usize> = (0..runs.len()).collect();
+            idx.sort_by(|&x, &y| (runs[y].1 - runs[y].0).total_cmp(&(runs[x].1 - runs[x].0)));
+            let own = (0..runs.len()).find(|&i| holds(&runs[i]));
+            idx.truncate(budget - 1);
+            if let Some(o) = own.filter(|o| !idx.contains(o)) {
+                idx.push(o);
+            }
+            parts = idx.into_iter().map(|ri| (ri, runs[ri].0, runs[ri].1)).collect();
         }
         let costs: Vec<f64> = parts
             .iter()
@@ -391,11 +425,21 @@ pub fn tick_phase(t: &[f64], cmds: &[&[f64]], rate: f64, candidate: f64) -> Opti
             1.0
         });
     }
+    let (lo, hi) = pick;
+    let m = (0.5 * (hi - lo)).min(2.0 * eps);
+    // The candidate's offset after the interval's start; outside, the end before it: a row
+    // logs the command in force, so the tick comes before the rows that show a new command
+    // (rows locked just after the ticks leave the whole period but their own phases open, and
+    // the end after them would put every command most of a tick early).
+    let (w, c) = (hi - lo, (cand - lo).rem_euclid(p));
+    let offset = if c <= w { c.clamp(m, w - m) } else { w - m };
+    let chosen = lo + offset;
     Some(TickPhase {
         changes: spans.len(),
         agree: best as usize,
         start: origin + pick.0,
         width: pick.1 - pick.0,
+        best: origin + chosen,
         agree_candidate: covers(cand),
         optima: runs.len(),
         margin,
@@ -524,6 +568,27 @@ pub fn reconstruct(
                     rep[k] = Some(i);
                 }
             }
+        }
+    }
+    // A tick whose rows disagree (stamps rounded to 1 ms, stamp jitter, a first row stamped at
+    // the tick but sampled before it): the row nearest the tick's middle, the one whose tick
+    // is least in doubt. (The first row of such a tick carried the previous tick's command in
+    // an independent tryout's logs: 78 mrad spikes in the replay.)
+    if conflicting > 0 && timing == CommandTiming::InForce {
+        let mid = |k: usize| t0 + ((k as i64 + k0) as f64 + 0.5) / rate;
+        let mut i = 0;
+        while i < n {
+            let k = (ticks[i] - k0) as usize;
+            let mut j = i;
+            while j < n && ticks[j] == ticks[i] {
+                j += 1;
+            }
+            let disagree = (i + 1..j).any(|m| cmds.iter().any(|c| (c[m] - c[i]).abs() > 1e-9));
+            if disagree {
+                rep[k] =
+                    (i..j).min_by(|&a, &b| (t[a] - mid(k)).abs().total_cmp(&(t[b] - mid(k)).abs()));
+            }
+            i = j;
         }
     }
     let known: Vec<usize> = (0..len).filter(|&k| rep[k].is_some()).collect();
@@ -819,7 +884,18 @@ mod tests {
         let s =
             reconstruct(&t, &[&c], Some(100.0), 0.0, CommandTiming::InForce, Fill::Ramps).unwrap();
         assert_eq!(s.stats().unwrap().conflicting, 1);
-        assert_eq!(s.at(0, 0.005), 1.0);
+        // The tick's command is that of its row nearest the tick's middle (0.005): 0.004's.
+        assert_eq!(s.at(0, 0.005), 1.5);
+        // A row stamped at the tick that still logs the previous command (sampled just before
+        // it) does not make the tick stale: ticks [0.01, 0.02) and [0.02, 0.03).
+        let t = [0.006, 0.010, 0.013, 0.016, 0.020, 0.024, 0.027];
+        let c = [1.0, 1.0, 2.0, 2.0, 2.0, 3.0, 3.0];
+        let s =
+            reconstruct(&t, &[&c], Some(100.0), 0.0, CommandTiming::InForce, Fill::Ramps).unwrap();
+        assert_eq!(s.stats().unwrap().conflicting, 2);
+        assert_eq!((s.at(0, 0.011), s.at(0, 0.021)), (2.0, 3.0));
+        // Rows that agree keep the first row's command (nothing to decide).
+        assert_eq!(s.at(0, 0.001), 1.0);
     }
 
     #[test]
@@ -840,17 +916,22 @@ mod tests {
         // 10 Hz ticks at 0.05 + k/10; rows every 30 ms, each logging the command in force (a
         // row exactly at a tick carries that tick's command). Changes: 0.03 → 0.06 (edge 0.05),
         // 0.12 → 0.15 (edge 0.15, on the row), 0.24 → 0.27 (edge 0.25). Phases (mod 0.1) allowed:
-        // [0.03, 0.06] ∩ [0.02, 0.05] ∩ [0.04, 0.07] = [0.04, 0.05].
+        // [0.03, 0.06] ∩ [0.02, 0.05] ∩ [0.04, 0.07] = [0.04, 0.05], each end 0.5 ms wider (the
+        // times are multiples of 1 ms: a row's true time is within 0.5 ms of its stamp).
         let t: Vec<f64> = (0..10).map(|i| 0.03 * i as f64).collect();
         let c: Vec<f64> = t.iter().map(|&x| ((x - 0.05) * 10.0 + 1e-9).floor()).collect();
         let p = tick_phase(&t, &[&c], 10.0, t[0]).expect("changes");
         assert_eq!((p.changes, p.agree, p.optima), (3, 3, 1));
-        assert!((p.start.rem_euclid(0.1) - 0.04).abs() < 2e-6, "{p:?}");
-        assert!((p.width - 0.01).abs() < 3e-6, "{p:?}");
+        assert!((p.start.rem_euclid(0.1) - 0.0395).abs() < 2e-6, "{p:?}");
+        assert!((p.width - 0.011).abs() < 3e-6, "{p:?}");
         // The first row (phase 0) is outside: it agrees with the changes around 0.05 and 0.15?
         // No: [0.03, 0.06] and [0.02, 0.05] do not hold 0 (mod 0.1); [0.04, 0.07] neither.
         assert_eq!(p.agree_candidate, 0);
-        assert!((p.origin_at_or_before(0.0, 10.0) - (0.045 - 0.1)).abs() < 2e-6);
+        // The estimate: the first row's phase (0 ≡ 0.1) is not allowed, so the end of the
+        // allowed phases before it (the tick precedes the rows showing a new command), kept one
+        // timestamp quantum inside (times in multiples of 1 ms; each change's interval was
+        // widened by half of it at each end: [0.0395, 0.0505]): 0.0495, the truth 0.05.
+        assert!((p.origin_at_or_before(0.0, 10.0) - (0.0495 - 0.1)).abs() < 2e-6, "{p:?}");
         // Scored at the true origin: all three.
         assert_eq!(tick_phase(&t, &[&c], 10.0, 0.05).expect("changes").agree_candidate, 3);
         // Rows a whole tick apart say nothing.

@@ -13,7 +13,7 @@ use std::path::PathBuf;
 use crate::sim2real::commands::{TickPhase, tick_phase};
 use crate::sim2real::recording::Recording;
 
-use super::{ReplayOptions, command_traces, timing_of};
+use super::{ReplayOptions, timing_of};
 
 /// Fewest command changes between close rows before the rows' phase overrules the first row's
 /// time, or is held against a declared `control_t0_s`.
@@ -34,16 +34,20 @@ const SHAPE_WARN_MARGIN: f64 = 1.5;
 /// What [`resolve_tick_origin`] found.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum TickOrigin {
-    /// No control rate (each goal holds from its own timestamp), or too few command changes to
-    /// tell anything.
+    /// No control rate (each goal holds from its own timestamp), no recorded command, or a
+    /// declared origin with too few command changes to check it.
     Unknown,
+    /// No `control_t0_s`, and fewer than [`MIN_CHANGES`] command changes between rows less
+    /// than a tick apart (a logger locked to the controller, a command held for seconds): the
+    /// first row's time is used as a tick, unchecked.
+    Unobservable,
     /// The origin in use (declared, or the first row's time) agrees with the rows.
     Agrees,
     /// No `control_t0_s`, and the rows put the ticks elsewhere than the first row: the origin
     /// is now `t0`, the middle of the phases the rows allow (± `half_width` s), found from the
     /// `changes` alone or (`by_shape`) with the command's shape choosing among several phases
     /// the changes allow.
-    Estimated { t0: f64, half_width: f64, changes: usize, by_shape: bool },
+    Estimated { t0: f64, half_width: f64, changes: usize, by_shape: bool, period: f64 },
     /// No `control_t0_s`, and `optima` phase intervals fit the changes and the command's shape
     /// equally well (a recorder slower than the controller, a command of steps and holds): the
     /// origin is `t0` — the first row's time when it is one of them (`kept`).
@@ -62,17 +66,23 @@ pub enum TickOrigin {
 /// every slice of the recording and the fit's windows all use it).
 pub fn resolve_tick_origin(rec: &mut Recording, opts: &ReplayOptions) -> TickOrigin {
     let (Some(rate), _, tick0) = timing_of(rec, opts) else { return TickOrigin::Unknown };
-    let Some(tp) = tick_phase(&rec.t, &command_traces(rec), rate, tick0) else {
-        return TickOrigin::Unknown;
+    // Only recorded commands say where the ticks are (a joint without q_cmd is replayed to its
+    // q, which changes at every row).
+    let cmds: Vec<&[f64]> = rec.joints.iter().filter_map(|j| j.q_cmd.as_deref()).collect();
+    let unseen = if rec.control_t0_s.is_none() && !cmds.is_empty() {
+        TickOrigin::Unobservable
+    } else {
+        TickOrigin::Unknown
     };
+    let Some(tp) = tick_phase(&rec.t, &cmds, rate, tick0) else { return unseen };
+    if tp.changes < MIN_CHANGES {
+        return unseen;
+    }
     judge(rec, rate, &tp)
 }
 
 fn judge(rec: &mut Recording, rate: f64, tp: &TickPhase) -> TickOrigin {
     let TickPhase { changes, agree, agree_candidate, width, optima, .. } = *tp;
-    if changes < MIN_CHANGES {
-        return TickOrigin::Unknown;
-    }
     if (agree as f64) < GRID_SHARE * changes as f64 {
         return TickOrigin::NoGrid { rate, agree, changes };
     }
@@ -94,22 +104,32 @@ fn judge(rec: &mut Recording, rate: f64, tp: &TickPhase) -> TickOrigin {
             }
             let t0 = tp.origin_at_or_before(first, rate);
             rec.control_t0_s = Some(t0);
-            TickOrigin::Estimated { t0, half_width: 0.5 * width, changes, by_shape: optima > 1 }
+            TickOrigin::Estimated {
+                t0,
+                half_width: 0.5 * width,
+                changes,
+                by_shape: optima > 1,
+                period: 1.0 / rate,
+            }
         }
         // A declared origin a few changes off (timestamp jitter, a slightly wrong rate over a
         // long log) is not worth a warning; one that misses many is.
         // A declared origin is held against the shape only when the shape is clear.
         Some(declared) => {
             let missed = agree - agree_candidate.min(agree);
+            let suggested = tp.origin_nearest(declared, rate);
+            // The shape's choice overrules a declared value only when it is far (a tenth of
+            // a tick) from it: timestamp jitter splits the right phase into neighbouring parts.
             let by_shape = !tp.candidate_in_run
                 && optima > 1
-                && tp.margin.is_some_and(|m| m >= SHAPE_WARN_MARGIN);
+                && tp.margin.is_some_and(|m| m >= SHAPE_WARN_MARGIN)
+                && (suggested - declared).abs() > 0.1 / rate;
             if missed <= (changes / 20).max(2) && !by_shape {
                 return TickOrigin::Agrees;
             }
             TickOrigin::Contradicted {
                 declared,
-                suggested: tp.origin_at_or_before(declared, rate),
+                suggested,
                 half_width: 0.5 * width,
                 missed,
                 changes,
@@ -139,9 +159,19 @@ pub fn origin_messages(items: &[(PathBuf, TickOrigin)]) -> (Vec<String>, Vec<Str
     let mut contra = Vec::new();
     let mut nogrid = Vec::new();
     let mut ambiguous = Vec::new();
+    let mut unseen = Vec::new();
+    let mut wide = Vec::new();
     for (p, o) in items {
         match *o {
-            TickOrigin::Estimated { t0, half_width, changes, by_shape } => {
+            TickOrigin::Estimated { t0, half_width, period, .. } if half_width > 0.25 * period => {
+                wide.push(format!(
+                    "{}: control_t0_s = {t0:.6}, the phases allowed span {:.1} of the {:.1} ms tick",
+                    file_name(p),
+                    2e3 * half_width,
+                    1e3 * period
+                ));
+            }
+            TickOrigin::Estimated { t0, half_width, changes, by_shape, .. } => {
                 widest = widest.max(half_width);
                 let how = if by_shape { " and the command's shape" } else { "" };
                 est.push(format!(
@@ -172,6 +202,7 @@ pub fn origin_messages(items: &[(PathBuf, TickOrigin)]) -> (Vec<String>, Vec<Str
                 "{}: at best {agree} of {changes} command changes fit one {rate} Hz tick grid",
                 file_name(p)
             )),
+            TickOrigin::Unobservable => unseen.push(file_name(p)),
             TickOrigin::Unknown | TickOrigin::Agrees => {}
         }
     }
@@ -188,10 +219,30 @@ pub fn origin_messages(items: &[(PathBuf, TickOrigin)]) -> (Vec<String>, Vec<Str
     }
     if !ambiguous.is_empty() {
         warnings.push(format!(
-            "no control_t0_s, and the rows cannot place the control ticks (rows rarely less than a tick apart, \
-             or a command of steps and holds): {}. Commands may switch up to one tick early or late in the replay; \
+            "no control_t0_s, and the rows cannot place the control ticks (rows seldom less than a tick apart, \
+             timestamps that jitter, or a command of steps and holds): {}. Commands may switch up to one tick early or late in the replay; \
              declare `# control_t0_s:` (the time of any control tick) if the logger knows it",
             some_of(&ambiguous)
+        ));
+    }
+    if !wide.is_empty() {
+        warnings.push(format!(
+            "no control_t0_s, and the rows leave most of a tick open for the ticks' phase (a logger locked to the \
+             controller: its rows keep one phase): the ticks are put just before the rows that show each new \
+             command — {}. If the rows are stamped before the ticks instead, every command switches most of a tick \
+             early; declare `# control_t0_s:` if the logger knows when the controller ticks",
+            some_of(&wide)
+        ));
+    }
+    if !unseen.is_empty() {
+        notes.push(format!(
+            "{} of {} recordings have no control_t0_s and too few command changes between rows less than a tick \
+             apart to place the control ticks (a logger locked to the controller, or a command held for long): \
+             their first row's time is taken as a tick — {}. If the logger knows when the controller ticks, \
+             declare `# control_t0_s:`",
+            unseen.len(),
+            items.len(),
+            some_of(&unseen)
         ));
     }
     if !contra.is_empty() {
@@ -282,7 +333,7 @@ mod tests {
         // Ticks at 0.0123 + k/50; the first row at 7.31 ms is 15 ms after the tick before it.
         let mut r = async_log(0.0123, 50.0, 200.0, 10.0);
         let o = resolve_tick_origin(&mut r, &ReplayOptions::default());
-        let TickOrigin::Estimated { t0, half_width, changes, by_shape } = o else {
+        let TickOrigin::Estimated { t0, half_width, changes, by_shape, .. } = o else {
             panic!("{o:?}")
         };
         // The grid point at or before the first row: 0.0123 − 0.02.
@@ -339,6 +390,22 @@ mod tests {
         let mut r = async_log(0.0123, 50.0, 200.0, 10.0);
         let n = r.t.len();
         r.joints[0].q_cmd = Some(vec![0.2; n]);
+        // (without control_t0_s, the first row's time is used unchecked: said in a note)
+        let o = resolve_tick_origin(&mut r, &ReplayOptions::default());
+        assert_eq!(o, TickOrigin::Unobservable);
+        let (notes, w) = origin_messages(&[(PathBuf::from("h.csv"), o)]);
+        assert!(w.is_empty() && notes[0].contains("too few command changes"), "{notes:?}");
+        r.control_t0_s = Some(0.0);
+        assert_eq!(resolve_tick_origin(&mut r, &ReplayOptions::default()), TickOrigin::Unknown);
+        // A joint without q_cmd (replayed to its q, which changes at every row) says nothing
+        // about the ticks: the other joint's commands place them.
+        let mut r = async_log(0.0123, 50.0, 200.0, 10.0);
+        let q: Vec<f64> = r.t.iter().map(|&x| (3.0 * x).sin()).collect();
+        r.joints.push(JointTrace::new("passive", q));
+        let o = resolve_tick_origin(&mut r, &ReplayOptions::default());
+        assert!(matches!(o, TickOrigin::Estimated { .. }), "{o:?}");
+        r.joints.remove(0);
+        r.control_t0_s = None;
         assert_eq!(resolve_tick_origin(&mut r, &ReplayOptions::default()), TickOrigin::Unknown);
         // --control-hz gives a rate to a recording without one.
         let mut r = async_log(0.0123, 50.0, 200.0, 10.0);
