@@ -182,7 +182,9 @@ pub struct Tried {
     /// docs/fitting.md), `pair`, `joint_pair`, `drop` (removal test: `kept` = the effect
     /// stays), `drop_refit` (removal with the other effects fitted again: `kept` = the effect
     /// stays), `merge` (one effect on two joint sets as one group: `kept` = merged), `fold`
-    /// (an effect taken over by another on the same joints: `kept` = folded), `swap`
+    /// (an effect taken over by another on the same joints: `kept` = folded), `plain_friction`
+    /// (a load-shaped friction beside Coulomb friction replaced by Coulomb friction of its
+    /// joints' own: `kept` = replaced), `swap`
     /// (replacement by a simpler effect: `kept` = the swap was made), `swap_screen` or `reshoot`
     /// (a friction effect re-fitted on short windows: `kept` = the re-fit replaced its values).
     pub phase: &'static str,
