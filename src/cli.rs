@@ -235,9 +235,21 @@ pub struct ReplayArgs {
     /// Floating base: fixed (pinned), recorded (driven from base.* columns) or free.
     #[arg(long, default_value = "fixed", value_parser = ["fixed", "recorded", "free"])]
     pub base: String,
+    /// CSV columns to skip, as glob patterns on the header name (comma-separated or repeated),
+    /// e.g. `--ignore-columns 'imu.*,*.temperature'`: a log's extra signals. Without it any
+    /// column that is not t, base.* or <joint>.<q|qd|q_cmd|tau|kp|kd|enabled> is an error.
+    #[arg(long, value_delimiter = ',', value_name = "GLOB")]
+    pub ignore_columns: Vec<String>,
 }
 
 impl ReplayArgs {
+    /// How the recordings are read (`--ignore-columns`).
+    pub fn parse_options(&self) -> crate::sim2real::recording::ParseOptions {
+        crate::sim2real::recording::ParseOptions {
+            ignore_columns: self.ignore_columns.clone(),
+            ..Default::default()
+        }
+    }
     /// The replay options these flags ask for.
     pub fn options(&self) -> crate::sim2real::replay::ReplayOptions {
         use crate::sim2real::replay::BaseMode;
@@ -309,6 +321,7 @@ pub fn run() -> i32 {
             model: g.model,
             recordings: g.recordings,
             spec: g.spec,
+            parse: g.replay.parse_options(),
             replay: g.replay.options(),
             json: g.format == ResultFormat::Json,
             report: g.report,
@@ -332,6 +345,7 @@ pub fn run() -> i32 {
             holdout: f.holdout,
             window: f.window,
             start_estimate: f.start_estimate,
+            parse: f.replay.parse_options(),
             replay: f.replay.options(),
             quiet: f.quiet,
             json: f.format == ResultFormat::Json,

@@ -362,6 +362,38 @@ fn bad_recording_timing_metadata_exits_2_with_file_and_line() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// A log with extra signals (an IMU, a temperature per joint): exit 2 at the header line naming
+/// the column and `--ignore-columns`; with the patterns, `gap` runs and prints what it found.
+#[test]
+fn extra_columns_are_skipped_with_ignore_columns() {
+    let dir = std::env::temp_dir().join(format!("modellint_extra_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let model = concat!(env!("CARGO_MANIFEST_DIR"), "/fixtures/bam_xl330/rig.xml");
+    let f = dir.join("extra.csv");
+    let mut text = String::from("# robot: rig\nt,servo.q,servo.q_cmd,imu.wx,servo.temperature\n");
+    for i in 0..200 {
+        let t = i as f64 * 0.01;
+        text.push_str(&format!("{t:.2},0,{:.3},0.5,41\n", if t < 1.0 { 0.0 } else { 0.2 }));
+    }
+    std::fs::write(&f, text).unwrap();
+    let path = f.to_str().unwrap();
+    let (code, _, err) = modellint(&["gap", model, path]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains(&format!("{path}:2:")) && err.contains("--ignore-columns '*.wx'"),
+        "{err}"
+    );
+    let (code, out, err) =
+        modellint(&["gap", model, path, "--ignore-columns", "imu.*,*.temperature"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("gap: 1 episode(s), 200 samples"), "{out}");
+    let (code, _, err) =
+        modellint(&["gap", model, path, "--ignore-columns", "a[", "--ignore-columns", "imu.*"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("--ignore-columns a["), "{err}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// `fit --holdout-by KEY` end to end on recordings made by the independent synth (a clean
 /// pendulum servo, nothing concealed), two episodes per value of a header key: two folds, every
 /// episode held out exactly once, nothing kept (the truth), and the overall mean equal to the

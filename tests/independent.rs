@@ -217,6 +217,18 @@ fn gap_mae(model: &Path, dir: &Path) -> (Vec<f64>, String) {
     assert_eq!(out.status.code(), Some(0), "{err}");
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("json");
     let mae = v["per_joint"].as_array().unwrap().iter().map(|j| j["mae"].as_f64().unwrap());
+    // What stderr says about the recordings is in the JSON too.
+    for key in ["notes", "warnings"] {
+        let said: Vec<&str> =
+            v[key].as_array().map_or(vec![], |a| a.iter().map(|x| x.as_str().unwrap()).collect());
+        for s in &said {
+            assert!(err.contains(s), "{key} {s} not on stderr: {err}");
+        }
+        assert_eq!(
+            said.len(),
+            err.matches(&format!("modellint: {}: ", &key[..key.len() - 1])).count()
+        );
+    }
     (mae.collect(), err)
 }
 

@@ -26,6 +26,8 @@ pub struct FitArgs {
     /// Estimate each episode's start state (else every replay starts at the first row).
     pub start_estimate: bool,
     /// How the recordings are replayed.
+    /// How the recordings are read (`--ignore-columns`).
+    pub parse: crate::sim2real::recording::ParseOptions,
     pub replay: ReplayOptions,
     pub quiet: bool,
     pub json: bool,
@@ -126,7 +128,8 @@ pub fn run_fit(a: FitArgs) -> i32 {
         Err(e) => return fail(e),
     };
     let names: Vec<String> = robot.joints.iter().map(|j| j.name.clone()).collect();
-    let inputs = match crate::sim2real::input::read_for_replay(&files, &names, &a.replay) {
+    let inputs = match crate::sim2real::input::read_for_replay(&files, &names, &a.replay, &a.parse)
+    {
         Ok(x) => x,
         Err(e) => return fail(e),
     };

@@ -14,6 +14,8 @@ pub struct GapArgs {
     pub model: PathBuf,
     pub recordings: Vec<PathBuf>,
     pub spec: Option<PathBuf>,
+    /// How the recordings are read (`--ignore-columns`).
+    pub parse: recording::ParseOptions,
     /// How the recordings are replayed.
     pub replay: ReplayOptions,
     pub json: bool,
@@ -40,7 +42,7 @@ pub fn run_gap(a: GapArgs) -> i32 {
     };
     let robot = &loaded.robot;
     let names: Vec<String> = robot.joints.iter().map(|j| j.name.clone()).collect();
-    let inputs = match read_for_replay(&files, &names, &a.replay) {
+    let inputs = match read_for_replay(&files, &names, &a.replay, &a.parse) {
         Ok(x) => x,
         Err(e) => {
             eprintln!("modellint: {e}");
@@ -53,7 +55,7 @@ pub fn run_gap(a: GapArgs) -> i32 {
     for n in &inputs.notes {
         eprintln!("modellint: note: {n}");
     }
-    let recs = inputs.recs;
+    let (recs, notes, warnings) = (inputs.recs, inputs.notes, inputs.warnings);
     let opts = a.replay.clone();
     let replayer = Replayer::new(robot);
     let tty = std::io::stderr().is_terminal();
@@ -79,7 +81,9 @@ pub fn run_gap(a: GapArgs) -> i32 {
     }
     let spec = loaded.spec.as_ref();
     let region = |name: &str| gap::joint_region(spec, name);
-    let report = gap::compute(&recs, &eps, &region, &GapOptions::default());
+    let mut report = gap::compute(&recs, &eps, &region, &GapOptions::default());
+    report.notes = notes;
+    report.warnings = warnings;
     if let Some(dir) = &a.report {
         match crate::sim2real::report::write(dir, &report, &recs, &eps) {
             Ok(p) => eprintln!("modellint: report written to {}", p.display()),

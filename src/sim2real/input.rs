@@ -4,17 +4,22 @@
 use std::path::{Path, PathBuf};
 
 use crate::sim2real::bam;
-use crate::sim2real::recording::{self, Recording, RecordingError};
+use crate::sim2real::recording::{self, ParseOptions, Recording, RecordingError};
 use crate::sim2real::replay::{self, ReplayOptions};
 
 /// Reads one recording file: BAM JSON (sniffed) or CSV.
 pub fn read_recording(path: &Path) -> Result<Recording, RecordingError> {
+    read_recording_with(path, &ParseOptions::default())
+}
+
+/// [`read_recording`] with CSV parse options (`--ignore-columns`).
+pub fn read_recording_with(path: &Path, opts: &ParseOptions) -> Result<Recording, RecordingError> {
     let text = std::fs::read_to_string(path)
         .map_err(|e| RecordingError::new(path, None, None, format!("cannot read file: {e}")))?;
     if bam::is_bam_json(&text) {
         Ok(bam::bam_recording(bam::parse_bam(path, &text)?))
     } else {
-        recording::parse_csv(path, &text)
+        recording::parse_csv_with(path, &text, opts)
     }
 }
 
@@ -35,11 +40,12 @@ pub fn read_for_replay(
     files: &[PathBuf],
     model_joints: &[String],
     opts: &ReplayOptions,
+    parse: &ParseOptions,
 ) -> Result<ReplayInputs, String> {
     let mut recs = Vec::with_capacity(files.len());
     let mut origins = Vec::with_capacity(files.len());
     for f in files {
-        let mut r = read_recording(f).map_err(|e| e.to_string())?;
+        let mut r = read_recording_with(f, parse).map_err(|e| e.to_string())?;
         r.validate_joint_names(model_joints).map_err(|e| e.to_string())?;
         replay::check_schedule(&r, opts).map_err(|e| e.to_string())?;
         origins.push((f.clone(), replay::resolve_tick_origin(&mut r, opts)));

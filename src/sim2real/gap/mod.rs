@@ -214,6 +214,12 @@ pub struct GapReport {
     pub localisation: Localisation,
     /// Sources of episodes that diverged (excluded from pooled metrics).
     pub diverged: Vec<String>,
+    /// What reading the recordings found out (e.g. a control tick origin estimated from the
+    /// rows, `sim2real::replay::origin_messages`); also printed on stderr. Absent when empty.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub notes: Vec<String>,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
     #[serde(skip)]
     pub psd: Vec<JointPsd>,
 }
@@ -652,6 +658,8 @@ pub fn compute(
             causes,
         },
         diverged,
+        notes: Vec::new(),
+        warnings: Vec::new(),
         psd,
     }
 }

@@ -42,7 +42,17 @@ pub fn parse_csv_with(
         let last = lines.iter().rev().find(|(_, l)| !l.trim().is_empty()).map_or(1, |(n, _)| *n);
         return Err(err(path, last, None, "no header row (only metadata/comment lines)".into()));
     };
-    let header = parse_header(path, header_ln, header)?;
+    let mut ignore = globset::GlobSetBuilder::new();
+    for g in &opts.ignore_columns {
+        let glob = globset::Glob::new(g).map_err(|e| {
+            RecordingError::new(path, None, None, format!("--ignore-columns {g}: {e}"))
+        })?;
+        ignore.add(glob);
+    }
+    let ignore = ignore
+        .build()
+        .map_err(|e| RecordingError::new(path, None, None, format!("--ignore-columns: {e}")))?;
+    let header = parse_header(path, header_ln, header, &ignore)?;
     let (cols, row_lines) = parse_rows(path, &header, &lines[idx + 1..])?;
     let rate_line = meta.rate_line;
     let rec = assemble(path, meta, header, cols);
@@ -134,6 +144,7 @@ enum Field {
     Time,
     Joint(usize, usize), // joint index, suffix index in JOINT_SUFFIXES
     Base(usize),         // index in BASE_SUFFIXES
+    Ignored,             // --ignore-columns
 }
 
 /// The header row: what each column holds.
@@ -149,7 +160,12 @@ struct Header<'a> {
     t_col: usize,
 }
 
-fn parse_header<'a>(path: &Path, ln: usize, header: &'a str) -> Result<Header<'a>, RecordingError> {
+fn parse_header<'a>(
+    path: &Path,
+    ln: usize,
+    header: &'a str,
+    ignore: &globset::GlobSet,
+) -> Result<Header<'a>, RecordingError> {
     let err = |col: Option<&str>, msg: String| err(path, ln, col, msg);
     let names: Vec<&str> = header.split(',').map(str::trim).collect();
     let mut h = Header {
@@ -172,12 +188,15 @@ fn parse_header<'a>(path: &Path, ln: usize, header: &'a str) -> Result<Header<'a
         let field = if name == "t" {
             t_col = Some(ci);
             Field::Time
+        } else if ignore.is_match(name) {
+            Field::Ignored
         } else {
             let Some((joint, suffix)) = name.rsplit_once('.') else {
                 return Err(err(
                     Some(name),
                     format!(
-                        "header: column '{name}' is neither 't', 'base.<x|y|z|qw|qx|qy|qz>' nor '<joint>.<suffix>'"
+                        "header: column '{name}' is neither 't', 'base.<x|y|z|qw|qx|qy|qz>' nor '<joint>.<suffix>' \
+                         (an extra signal? skip it with --ignore-columns '{name}')"
                     ),
                 ));
             };
@@ -191,7 +210,8 @@ fn parse_header<'a>(path: &Path, ln: usize, header: &'a str) -> Result<Header<'a
                     return Err(err(
                         Some(name),
                         format!(
-                            "header: column '{name}' has unknown suffix '.{suffix}' (expected one of .{})",
+                            "header: column '{name}' has unknown suffix '.{suffix}' (expected one of .{}; an \
+                             extra signal? skip it with --ignore-columns '*.{suffix}')",
                             JOINT_SUFFIXES.join(", .")
                         ),
                     ));
@@ -225,8 +245,16 @@ fn parse_header<'a>(path: &Path, ln: usize, header: &'a str) -> Result<Header<'a
     Ok(h)
 }
 
-/// Every joint has its `.q`; the base has all seven columns or none.
+/// At least one joint; every joint has its `.q`; the base has all seven columns or none.
 fn check_header(path: &Path, h: &Header) -> Result<(), RecordingError> {
+    if h.joint_names.is_empty() {
+        return Err(err(
+            path,
+            h.line,
+            None,
+            "header: no joint column ('<joint>.q'): nothing to compare".into(),
+        ));
+    }
     for (ji, cols) in h.joint_cols.iter().enumerate() {
         if cols[0].is_none() {
             let present: Vec<String> = cols
@@ -303,6 +331,9 @@ fn parse_rows(
             ));
         }
         for (ci, s) in parts.iter().enumerate() {
+            if h.fields[ci] == Field::Ignored {
+                continue;
+            }
             let v = parse_field(h.fields[ci], s).map_err(|m| {
                 err(path, ln, Some(names[ci]), format!("column '{}': {m}", names[ci]))
             })?;

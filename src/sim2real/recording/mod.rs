@@ -156,11 +156,15 @@ pub struct ParseOptions {
     /// joints are continuous (wheels, turntables accumulate angle): for such recordings raise
     /// this, e.g. to `f64::INFINITY`.
     pub max_abs_rad: f64,
+    /// Columns to skip (glob patterns on the header name, e.g. `imu.*`, `*.temperature`): a
+    /// log's extra signals. Any other column that is not `t`, `base.*` or `<joint>.<suffix>`
+    /// is an error (a misspelt `q_cmd` must not be dropped silently).
+    pub ignore_columns: Vec<String>,
 }
 
 impl Default for ParseOptions {
     fn default() -> Self {
-        ParseOptions { max_abs_rad: 10.0 }
+        ParseOptions { max_abs_rad: 10.0, ignore_columns: Vec::new() }
     }
 }
 

@@ -137,7 +137,11 @@ fn degrees_are_rejected_with_adjustable_threshold() {
     let e = parse_err(text);
     assert_eq!(e.line, Some(3));
     assert!(e.message.contains("looks like degrees"), "{e}");
-    let ok = parse_csv_with(p(), text, &ParseOptions { max_abs_rad: f64::INFINITY });
+    let ok = parse_csv_with(
+        p(),
+        text,
+        &ParseOptions { max_abs_rad: f64::INFINITY, ..Default::default() },
+    );
     assert!(ok.is_ok());
     let e = parse_err("t,knee.q,knee.q_cmd\n0,0,0\n0.01,0,-30\n");
     assert_eq!(e.column.as_deref(), Some("knee.q_cmd"));
@@ -192,4 +196,28 @@ fn derived_velocities_exact_for_quadratic_on_irregular_grid() {
     }
     assert!((qd[0] - (2.0 - 3.0 * 0.004)).abs() < 1e-9);
     assert_eq!(r.joints[1].qd, Some(vec![7.0; 6]));
+}
+
+#[test]
+fn extra_columns_are_an_error_unless_ignored_by_pattern() {
+    let text = "t,knee.q,imu.wx,knee.temperature,battery\n0,0.1,5,40,24\n0.01,0.2,6,41,x\n";
+    // Unknown suffix / not a column name at all: an error naming the column and the way out.
+    let e = parse_err(text);
+    assert_eq!((e.line, e.column.as_deref()), (Some(1), Some("imu.wx")), "{e}");
+    assert!(e.message.contains("--ignore-columns '*.wx'"), "{e}");
+    let skip = |g: &[&str]| ParseOptions {
+        ignore_columns: g.iter().map(|s| s.to_string()).collect(),
+        ..Default::default()
+    };
+    let e = parse_csv_with(p(), text, &skip(&["imu.*", "*.temperature"])).unwrap_err();
+    assert_eq!(e.column.as_deref(), Some("battery"), "{e}");
+    assert!(e.message.contains("--ignore-columns 'battery'"), "{e}");
+    // Skipped columns are not parsed (battery's 'x' is no error) and leave no joint behind.
+    let r = parse_csv_with(p(), text, &skip(&["imu.*", "*.temperature", "battery"])).unwrap();
+    assert_eq!(r.joints.len(), 1);
+    assert_eq!((r.joints[0].name.as_str(), r.joints[0].q.clone()), ("knee", vec![0.1, 0.2]));
+    // A pattern cannot hide the time column; a bad pattern is an error.
+    let r = parse_csv_with(p(), text, &skip(&["*", "battery"])).unwrap_err();
+    assert!(r.message.contains("no joint column"), "{r}");
+    assert!(parse_csv_with(p(), text, &skip(&["a[", "battery"])).is_err());
 }
