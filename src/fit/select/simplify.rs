@@ -260,18 +260,13 @@ fn plain_friction_pass(s: &Search, round: usize, out: &mut FitOutcome) -> bool {
         let (ok, worse, bic_ok) =
             simpler_set_ok((&h1, &t1, k_set), (&*h_cur, &*t_cur, k_cur), &joints, true, false);
         let new = set.last().expect("pushed").clone();
-        out.tried.push(Tried {
+        out.tried.push(tested(
             round,
-            phase: "plain_friction",
-            effect: plain.id().into(),
-            joints: joints.clone(),
-            params: new.params.clone(),
-            train_rmse: t1.rmse(),
-            heldout_improvement: (h_cur.rmse() - h1.rmse()) / h_cur.rmse().max(1e-300),
-            significant: worse,
-            bic_decreased: bic_ok,
-            kept: ok,
-        });
+            "plain_friction",
+            &new,
+            (&h1, &t1, &*h_cur),
+            (ok, worse, bic_ok),
+        ));
         if !ok {
             continue;
         }
@@ -349,6 +344,30 @@ fn values_agree(
         })
 }
 
+/// The record of a replacement set tested against the current one: its new effect `new`, the
+/// set's held-out and training errors and the current held-out error, and
+/// [`simpler_set_ok`]'s (made, worse beyond noise, BIC not higher).
+fn tested(
+    round: usize,
+    phase: &'static str,
+    new: &Applied,
+    (h1, t1, h_cur): (&Errors, &Errors, &Errors),
+    (ok, worse, bic_ok): (bool, bool, bool),
+) -> Tried {
+    Tried {
+        round,
+        phase,
+        effect: new.effect.id().into(),
+        joints: new.joints.clone(),
+        params: new.params.clone(),
+        train_rmse: t1.rmse(),
+        heldout_improvement: (h_cur.rmse() - h1.rmse()) / h_cur.rmse().max(1e-300),
+        significant: worse,
+        bic_decreased: bic_ok,
+        kept: ok,
+    }
+}
+
 /// Tests a [`Replacement`] on the test of a swap (held-out RMSE within 5 % of the current
 /// set's, not worse beyond noise, a training BIC that is not higher), records it in `tried`,
 /// and makes it when it passes. `cur`: the current set's (held-out, training) errors.
@@ -390,18 +409,7 @@ fn replace(
         merge,
         merge && r.agree,
     );
-    out.tried.push(Tried {
-        round,
-        phase: r.phase,
-        effect: new.effect.id().into(),
-        joints: new.joints.clone(),
-        params: new.params.clone(),
-        train_rmse: t1.rmse(),
-        heldout_improvement: (h_cur.rmse() - h1.rmse()) / h_cur.rmse().max(1e-300),
-        significant: worse,
-        bic_decreased: bic_ok,
-        kept: ok,
-    });
+    out.tried.push(tested(round, r.phase, &new, (&h1, &t1, h_cur), (ok, worse, bic_ok)));
     if !ok {
         return false;
     }
