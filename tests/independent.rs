@@ -278,6 +278,45 @@ fn a_missing_control_t0_is_recovered_from_the_rows() {
     let _ = std::fs::remove_dir_all(&root);
 }
 
+/// Unix-epoch timestamps (ROS logs, 1.7e9 s): `gap` on arm2.none's episodes shifted by 1.7e9 s
+/// (its `control_t0_s` with them) gives the position error of the originals (before the times
+/// were rebased, the simulation clock drifted a rounding per step: 3.2× on a humanoid log).
+#[test]
+fn epoch_timestamps_replay_as_the_originals() {
+    let Some(d) = arm2() else { return };
+    let dir = std::env::temp_dir().join(format!("modellint-epoch-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("mkdir");
+    for ep in 0..4 {
+        let text = std::fs::read_to_string(d.join(format!("arm2.none/episodes/ep_{ep:02}.csv")))
+            .expect("csv");
+        let mut out = String::new();
+        for l in text.lines() {
+            if let Some(v) = l.strip_prefix("# control_t0_s: ") {
+                let v: f64 = v.trim().parse().expect("t0");
+                out.push_str(&format!("# control_t0_s: {:.6}\n", 1.7e9 + v));
+            } else if l.starts_with('#') || l.starts_with("t,") {
+                out.push_str(l);
+                out.push('\n');
+            } else {
+                let (t, rest) = l.split_once(',').expect("row");
+                let t: f64 = t.parse().expect("t");
+                out.push_str(&format!("{:.6},{rest}\n", 1.7e9 + t));
+            }
+        }
+        std::fs::write(dir.join(format!("ep_{ep:02}.csv")), out).expect("write");
+    }
+    let model = d.join("arm2.xml");
+    let (orig, _) = gap_mae(&model, &d.join("arm2.none/episodes"));
+    let (epoch, err) = gap_mae(&model, &dir);
+    for j in 0..orig.len() {
+        eprintln!("joint {j}: MAE {:.4} mrad, from 1.7e9 s {:.4}", orig[j] * 1e3, epoch[j] * 1e3);
+        assert!((epoch[j] - orig[j]).abs() <= 0.02 * orig[j], "joint {j}: {epoch:?} vs {orig:?}");
+    }
+    assert!(!err.contains("warning"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// Runs `fit` on one data set and checks it against truth.json: exactly the hidden effects,
 /// parameters within 10 % (delay within 1.5 ms).
 fn fit_matches_truth(ds: &str) {

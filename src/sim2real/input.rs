@@ -46,6 +46,7 @@ pub fn read_for_replay(
     let mut origins = Vec::with_capacity(files.len());
     for f in files {
         let mut r = read_recording_with(f, parse).map_err(|e| e.to_string())?;
+        rebase_time(&mut r);
         r.validate_joint_names(model_joints).map_err(|e| e.to_string())?;
         replay::check_schedule(&r, opts).map_err(|e| e.to_string())?;
         origins.push((f.clone(), replay::resolve_tick_origin(&mut r, opts)));
@@ -53,6 +54,33 @@ pub fn read_for_replay(
     }
     let (notes, warnings) = replay::origin_messages(&origins);
     Ok(ReplayInputs { recs, notes, warnings })
+}
+
+/// Metadata key recording the whole seconds [`rebase_time`] took off a recording's times.
+pub const KEY_TIME_OFFSET: &str = "time_offset_s";
+
+/// Times above this [s] are shifted to start near 0 before the replay.
+const REBASE_ABOVE_S: f64 = 1e4;
+
+/// Shifts a recording whose times are large (Unix-epoch stamps, ~1.7e9 s: a double resolves
+/// only 0.24 µs there, and MuJoCo's clock, advanced step by step from it, drifts by a rounding
+/// per step) by the whole seconds of its first time, `control_t0_s` with it (the ticks' phase
+/// is unchanged); the offset is kept in the metadata (`time_offset_s`). On an independent
+/// simulator's humanoid logs stamped from 1.7e9 s the replay's position error was 3.2× that of
+/// the same logs from 1 s.
+pub fn rebase_time(r: &mut Recording) {
+    let Some(&first) = r.t.first() else { return };
+    if !(first.abs() > REBASE_ABOVE_S) {
+        return;
+    }
+    let off = first.floor();
+    for x in &mut r.t {
+        *x -= off;
+    }
+    if let Some(t0) = r.control_t0_s.as_mut() {
+        *t0 -= off;
+    }
+    r.meta.insert(KEY_TIME_OFFSET.to_string(), format!("{off}"));
 }
 
 /// Expands the command-line inputs: files as given, directories to their `*.csv` (and BAM
@@ -114,6 +142,22 @@ mod tests {
     fn touch(p: &Path) {
         std::fs::create_dir_all(p.parent().unwrap()).unwrap();
         std::fs::write(p, "x").unwrap();
+    }
+
+    /// Unix-epoch stamps are shifted by whole seconds, the ticks' origin with them; small
+    /// times are left alone.
+    #[test]
+    fn epoch_times_are_rebased_by_whole_seconds() {
+        let t: Vec<f64> = (0..5).map(|i| 1.7e9 + 1.0015 + 0.005 * i as f64).collect();
+        let mut r = Recording::at_100hz(t, vec![recording::JointTrace::new("j", vec![0.0; 5])]);
+        r.control_t0_s = Some(1.7e9 + 0.0071);
+        rebase_time(&mut r);
+        assert!((r.t[0] - 0.0015).abs() < 1e-6 && (r.t[4] - 0.0215).abs() < 1e-6, "{:?}", r.t);
+        assert!((r.control_t0_s.unwrap() - 0.0071 + 1.0).abs() < 1e-6, "{:?}", r.control_t0_s);
+        assert_eq!(r.meta.get(KEY_TIME_OFFSET).map(String::as_str), Some("1700000001"));
+        let mut small = Recording::at_100hz(vec![3.5, 3.6], vec![]);
+        rebase_time(&mut small);
+        assert_eq!((small.t[0], small.meta.len()), (3.5, 0));
     }
 
     /// A dataset directory (episodes/ beside truth.json) is read from its episodes; a directory
