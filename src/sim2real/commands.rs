@@ -294,51 +294,7 @@ pub fn tick_phase(t: &[f64], cmds: &[&[f64]], rate: f64, candidate: f64) -> Opti
         return None;
     }
     let covers = |x: f64| spans.iter().filter(|&&(s, l)| (x - s).rem_euclid(p) <= l).count();
-    // Sweep the period: +1 where an interval starts, −1 where it ends (starts first on ties,
-    // the intervals are closed); the count at phase 0 is the number of wrapping intervals.
-    let mut ev: Vec<(f64, i32)> = Vec::with_capacity(2 * spans.len());
-    let mut count: i64 = 0;
-    for &(s, l) in &spans {
-        let e = s + l;
-        ev.push((s, 1));
-        if e >= p {
-            count += 1;
-            ev.push((e - p, -1));
-        } else {
-            ev.push((e, -1));
-        }
-    }
-    ev.sort_by(|a, b| a.0.total_cmp(&b.0).then(b.1.cmp(&a.1)));
-    // Segments [from, to) of constant count around the period.
-    let mut segs: Vec<(f64, f64, i64)> = Vec::new();
-    let mut at = 0.0;
-    for &(x, d) in &ev {
-        if x > at {
-            segs.push((at, x, count));
-            at = x;
-        }
-        count += d as i64;
-    }
-    segs.push((at, p, count));
-    let best = segs.iter().map(|s| s.2).max().unwrap_or(0);
-    // Merge the best segments into intervals (also across the period's end).
-    let mut runs: Vec<(f64, f64)> = Vec::new();
-    for &(a, b, c) in &segs {
-        if c != best {
-            continue;
-        }
-        match runs.last_mut() {
-            Some(r) if (r.1 - a).abs() <= 1e-15 => r.1 = b,
-            _ => runs.push((a, b)),
-        }
-    }
-    if runs.len() > 1 {
-        let (f, l) = (runs[0], runs[runs.len() - 1]);
-        if f.0 <= 1e-15 && (l.1 - p).abs() <= 1e-15 {
-            runs.pop();
-            runs[0] = (l.0 - p, f.1);
-        }
-    }
+    let (best, runs) = best_runs(&spans, p);
     let cand = phase(candidate);
     let holds = |r: &(f64, f64)| (cand - r.0).rem_euclid(p) <= r.1 - r.0;
     let widest = |rs: &[(f64, f64)]| {
@@ -446,6 +402,57 @@ pub fn tick_phase(t: &[f64], cmds: &[&[f64]], rate: f64, candidate: f64) -> Opti
         candidate_chosen: holds(&pick),
         candidate_in_run: holds(&pick_run),
     })
+}
+
+/// The phase intervals in `[0, p)` (the first may start below 0 when it wraps) that lie in the
+/// most of the closed circular intervals `spans` (start phase, length), and that count.
+fn best_runs(spans: &[(f64, f64)], p: f64) -> (i64, Vec<(f64, f64)>) {
+    // Sweep the period: +1 where an interval starts, −1 where it ends (starts first on ties,
+    // the intervals are closed); the count at phase 0 is the number of wrapping intervals.
+    let mut ev: Vec<(f64, i32)> = Vec::with_capacity(2 * spans.len());
+    let mut count: i64 = 0;
+    for &(s, l) in spans {
+        let e = s + l;
+        ev.push((s, 1));
+        if e >= p {
+            count += 1;
+            ev.push((e - p, -1));
+        } else {
+            ev.push((e, -1));
+        }
+    }
+    ev.sort_by(|a, b| a.0.total_cmp(&b.0).then(b.1.cmp(&a.1)));
+    // Segments [from, to) of constant count around the period.
+    let mut segs: Vec<(f64, f64, i64)> = Vec::new();
+    let mut at = 0.0;
+    for &(x, d) in &ev {
+        if x > at {
+            segs.push((at, x, count));
+            at = x;
+        }
+        count += d as i64;
+    }
+    segs.push((at, p, count));
+    let best = segs.iter().map(|s| s.2).max().unwrap_or(0);
+    // Merge the best segments into intervals (also across the period's end).
+    let mut runs: Vec<(f64, f64)> = Vec::new();
+    for &(a, b, c) in &segs {
+        if c != best {
+            continue;
+        }
+        match runs.last_mut() {
+            Some(r) if (r.1 - a).abs() <= 1e-15 => r.1 = b,
+            _ => runs.push((a, b)),
+        }
+    }
+    if runs.len() > 1 {
+        let (f, l) = (runs[0], runs[runs.len() - 1]);
+        if f.0 <= 1e-15 && (l.1 - p).abs() <= 1e-15 {
+            runs.pop();
+            runs[0] = (l.0 - p, f.1);
+        }
+    }
+    (best, runs)
 }
 
 /// How far the rows' commands, mapped onto the tick grid `t0 + k / rate` (the first row of each

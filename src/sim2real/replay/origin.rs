@@ -114,7 +114,6 @@ fn judge(rec: &mut Recording, rate: f64, tp: &TickPhase) -> TickOrigin {
         }
         // A declared origin a few changes off (timestamp jitter, a slightly wrong rate over a
         // long log) is not worth a warning; one that misses many is.
-        // A declared origin is held against the shape only when the shape is clear.
         Some(declared) => {
             let missed = agree - agree_candidate.min(agree);
             let suggested = tp.origin_nearest(declared, rate);
