@@ -394,6 +394,38 @@ fn extra_columns_are_skipped_with_ignore_columns() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// `gap DIR --format json > DIR/gap.json` run twice: the shell creates the empty gap.json before
+/// modellint reads the directory; it and the report it then holds are skipped with a note (and
+/// in the JSON), not read as a broken BAM log.
+#[test]
+fn a_report_written_into_the_data_directory_is_not_read_as_a_recording() {
+    let dir = std::env::temp_dir().join(format!("modellint_selfjson_{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let model = concat!(env!("CARGO_MANIFEST_DIR"), "/fixtures/bam_xl330/rig.xml");
+    let mut text = String::from("# robot: rig\nt,servo.q,servo.q_cmd\n");
+    for i in 0..200 {
+        let t = i as f64 * 0.01;
+        text.push_str(&format!("{t:.2},0,{:.3}\n", if t < 1.0 { 0.0 } else { 0.2 }));
+    }
+    std::fs::write(dir.join("run.csv"), text).unwrap();
+    let report = dir.join("gap.json");
+    std::fs::write(&report, "").unwrap();
+    let d = dir.to_str().unwrap();
+    let (code, out, err) = modellint(&["gap", model, d, "--format", "json"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("not read") && err.contains("gap.json"), "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert!(v["notes"][0].as_str().unwrap().contains("gap.json"), "{out}");
+    std::fs::write(&report, &out).unwrap();
+    let (code, again, err) = modellint(&["gap", model, d, "--format", "json"]);
+    assert_eq!((code, again), (0, out), "{err}");
+    // Named on the command line, it is read (and is not a recording).
+    let (code, _, err) = modellint(&["gap", model, report.to_str().unwrap()]);
+    assert_eq!(code, 2, "{err}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// `fit --holdout-by KEY` end to end on recordings made by the independent synth (a clean
 /// pendulum servo, nothing concealed), two episodes per value of a header key: two folds, every
 /// episode held out exactly once, nothing kept (the truth), and the overall mean equal to the

@@ -206,7 +206,7 @@ fn bam_logs_replay_on_the_rig() {
         return;
     };
     let robot = load(&root().join("fixtures/bam_xl330/rig.xml"));
-    let files = modellint::sim2real::input::expand_inputs(&[dir]).unwrap();
+    let files = modellint::sim2real::input::expand_inputs(&[dir]).unwrap().files;
     assert_eq!(files.len(), 16);
     let recs: Vec<Recording> =
         files.iter().map(|f| modellint::sim2real::input::read_recording(f).unwrap()).collect();
@@ -366,7 +366,7 @@ fn cli_convert_bam() {
         eprintln!("SKIPPED cli_convert_bam: ../shared/data absent");
         return;
     };
-    let input = modellint::sim2real::input::expand_inputs(&[dir]).unwrap()[0].clone();
+    let input = modellint::sim2real::input::expand_inputs(&[dir]).unwrap().files[0].clone();
     let out = std::env::temp_dir().join(format!("modellint-convert-{}.csv", std::process::id()));
     let o = bin().arg("convert").arg(&input).arg(&out).output().unwrap();
     assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));

@@ -128,11 +128,14 @@ pub fn run_fit(a: FitArgs) -> i32 {
         Err(e) => return fail(e),
     };
     let names: Vec<String> = robot.joints.iter().map(|j| j.name.clone()).collect();
-    let inputs = match crate::sim2real::input::read_for_replay(&files, &names, &a.replay, &a.parse)
-    {
-        Ok(x) => x,
-        Err(e) => return fail(e),
-    };
+    let mut inputs =
+        match crate::sim2real::input::read_for_replay(&files.files, &names, &a.replay, &a.parse) {
+            Ok(x) => x,
+            Err(e) => return fail(e),
+        };
+    if let Some(n) = files.skipped_note() {
+        inputs.notes.insert(0, n);
+    }
     // Said now (before minutes of fitting) and again in the JSON.
     for w in &inputs.warnings {
         eprintln!("modellint: warning: {w}");

@@ -42,13 +42,16 @@ pub fn run_gap(a: GapArgs) -> i32 {
     };
     let robot = &loaded.robot;
     let names: Vec<String> = robot.joints.iter().map(|j| j.name.clone()).collect();
-    let inputs = match read_for_replay(&files, &names, &a.replay, &a.parse) {
+    let mut inputs = match read_for_replay(&files.files, &names, &a.replay, &a.parse) {
         Ok(x) => x,
         Err(e) => {
             eprintln!("modellint: {e}");
             return 2;
         }
     };
+    if let Some(n) = files.skipped_note() {
+        inputs.notes.insert(0, n);
+    }
     for w in &inputs.warnings {
         eprintln!("modellint: warning: {w}");
     }

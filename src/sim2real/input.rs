@@ -83,34 +83,61 @@ pub fn rebase_time(r: &mut Recording) {
     r.meta.insert(KEY_TIME_OFFSET.to_string(), format!("{off}"));
 }
 
-/// Expands the command-line inputs: files as given, directories to their `*.csv` (and BAM
-/// `*.json`) files in sorted order. A dataset directory — `episodes/` beside a `truth.json`
-/// and nothing else to read, as `modellint synth --out` and the independent-simulator datasets
-/// lay it out — is read from its `episodes/`: its `truth.json` is the answer, not a recording.
-pub fn expand_inputs(inputs: &[PathBuf]) -> Result<Vec<PathBuf>, RecordingError> {
-    let mut out = Vec::new();
+/// The recordings a command line names: [`expand_inputs`].
+#[derive(Debug, Default, PartialEq)]
+pub struct Inputs {
+    /// Files to read, in order.
+    pub files: Vec<PathBuf>,
+    /// `*.json` files found in a directory that are not BAM logs (a `truth.json`, a report
+    /// written there, an empty file a shell redirection has just created): not read.
+    pub skipped: Vec<PathBuf>,
+}
+
+impl Inputs {
+    /// One note naming the skipped files, if any.
+    pub fn skipped_note(&self) -> Option<String> {
+        if self.skipped.is_empty() {
+            return None;
+        }
+        let names: Vec<String> = self.skipped.iter().map(|p| p.display().to_string()).collect();
+        Some(format!(
+            "not read, JSON files in a directory that are not BAM logs: {} (name a file on the \
+             command line to read it whatever it holds)",
+            names.join(", ")
+        ))
+    }
+}
+
+/// Expands the command-line inputs: files as given, directories to their `*.csv` files and
+/// BAM `*.json` logs in sorted order (other JSON there is skipped and listed: a `truth.json`,
+/// a report, `gap --format json > dir/gap.json`'s empty file). A dataset directory —
+/// `episodes/` beside a `truth.json` and nothing else to read, as `modellint synth --out` and
+/// the independent-simulator datasets lay it out — is read from its `episodes/`.
+pub fn expand_inputs(inputs: &[PathBuf]) -> Result<Inputs, RecordingError> {
+    let mut out = Inputs::default();
     for p in inputs {
         if p.is_dir() {
-            let mut files = recording_files(p)?;
+            let (mut files, mut skipped) = recording_files(p)?;
             let episodes = p.join("episodes");
-            if episodes.is_dir()
-                && files
-                    .iter()
-                    .all(|f| f.file_name().is_some_and(|n| n.eq_ignore_ascii_case("truth.json")))
-            {
-                files = recording_files(&episodes)?;
+            if episodes.is_dir() && files.is_empty() {
+                (files, skipped) = recording_files(&episodes)?;
             }
             if files.is_empty() {
-                return Err(RecordingError::new(
-                    p,
-                    None,
-                    None,
-                    "directory holds no *.csv or *.json recordings",
-                ));
+                let why = if skipped.is_empty() {
+                    "directory holds no *.csv or *.json recordings".to_string()
+                } else {
+                    format!(
+                        "directory holds no *.csv or *.json recordings ({} JSON file(s) there \
+                         are not BAM logs)",
+                        skipped.len()
+                    )
+                };
+                return Err(RecordingError::new(p, None, None, why));
             }
-            out.extend(files);
+            out.files.extend(files);
+            out.skipped.extend(skipped);
         } else if p.is_file() {
-            out.push(p.clone());
+            out.files.push(p.clone());
         } else {
             return Err(RecordingError::new(p, None, None, "no such file or directory"));
         }
@@ -118,21 +145,31 @@ pub fn expand_inputs(inputs: &[PathBuf]) -> Result<Vec<PathBuf>, RecordingError>
     Ok(out)
 }
 
-/// The `*.csv` and `*.json` files directly in `dir`, sorted.
-fn recording_files(dir: &Path) -> Result<Vec<PathBuf>, RecordingError> {
+/// The `*.csv` files and BAM `*.json` logs directly in `dir`, sorted, and the other `*.json`
+/// files there.
+fn recording_files(dir: &Path) -> Result<(Vec<PathBuf>, Vec<PathBuf>), RecordingError> {
     let rd = std::fs::read_dir(dir)
         .map_err(|e| RecordingError::new(dir, None, None, format!("cannot read directory: {e}")))?;
-    let mut files: Vec<PathBuf> = rd
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|f| {
-            f.is_file()
-                && f.extension().is_some_and(|x| {
-                    x.eq_ignore_ascii_case("csv") || x.eq_ignore_ascii_case("json")
-                })
-        })
-        .collect();
+    let mut files: Vec<PathBuf> = Vec::new();
+    let mut skipped: Vec<PathBuf> = Vec::new();
+    for f in rd.filter_map(|e| e.ok().map(|e| e.path())) {
+        if !f.is_file() {
+            continue;
+        }
+        let Some(ext) = f.extension() else { continue };
+        if ext.eq_ignore_ascii_case("csv") {
+            files.push(f);
+        } else if ext.eq_ignore_ascii_case("json") {
+            // Unreadable files are kept: reading them reports the error at the file.
+            match std::fs::read_to_string(&f) {
+                Ok(text) if !bam::is_bam_json(&text) => skipped.push(f),
+                _ => files.push(f),
+            }
+        }
+    }
     files.sort();
-    Ok(files)
+    skipped.sort();
+    Ok((files, skipped))
 }
 
 #[cfg(test)]
@@ -143,6 +180,8 @@ mod tests {
         std::fs::create_dir_all(p.parent().unwrap()).unwrap();
         std::fs::write(p, "x").unwrap();
     }
+
+    const BAM: &str = r#"{"entries": [{"timestamp": 0, "goal_position": 0}]}"#;
 
     /// Unix-epoch stamps are shifted by whole seconds, the ticks' origin with them; small
     /// times are left alone.
@@ -172,10 +211,11 @@ mod tests {
         touch(&ds.join("episodes/ep_00.csv"));
         touch(&ds.join("truth_commands/ep_00.csv"));
         let got = expand_inputs(std::slice::from_ref(&ds)).unwrap();
-        assert_eq!(got, vec![ds.join("episodes/ep_00.csv"), ds.join("episodes/ep_01.csv")]);
+        assert_eq!(got.files, vec![ds.join("episodes/ep_00.csv"), ds.join("episodes/ep_01.csv")]);
+        assert!(got.skipped.is_empty());
         // Without truth.json too (an episodes/ directory and nothing else to read).
         std::fs::remove_file(ds.join("truth.json")).unwrap();
-        assert_eq!(expand_inputs(std::slice::from_ref(&ds)).unwrap().len(), 2);
+        assert_eq!(expand_inputs(std::slice::from_ref(&ds)).unwrap().files.len(), 2);
 
         // Recordings at the top level: read as given, the subdirectory is not searched.
         let flat = root.join("flat");
@@ -183,7 +223,9 @@ mod tests {
         touch(&flat.join("truth.json"));
         touch(&flat.join("episodes/ep_00.csv"));
         let got = expand_inputs(std::slice::from_ref(&flat)).unwrap();
-        assert_eq!(got, vec![flat.join("run.csv"), flat.join("truth.json")]);
+        assert_eq!(got.files, vec![flat.join("run.csv")]);
+        assert_eq!(got.skipped, vec![flat.join("truth.json")]);
+        assert!(got.skipped_note().unwrap().contains("truth.json"));
 
         // Nothing to read anywhere: the error names the directory.
         let empty = root.join("empty");
@@ -191,6 +233,31 @@ mod tests {
         let e = expand_inputs(std::slice::from_ref(&empty)).unwrap_err();
         assert_eq!(e.file, empty);
         assert!(e.message.contains("no *.csv or *.json"), "{}", e.message);
+        let _ = std::fs::remove_dir_all(&root);
+    }
+
+    /// In a directory, JSON that is not a BAM log is skipped and listed (a report written
+    /// there, the empty file `gap --format json > dir/gap.json` creates before modellint runs);
+    /// BAM logs are read; a file named on the command line is read whatever it holds.
+    #[test]
+    fn json_in_a_directory_that_is_not_a_bam_log_is_skipped() {
+        let root = std::env::temp_dir().join(format!("modellint-json-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&root);
+        touch(&root.join("b.csv"));
+        std::fs::write(root.join("gap.json"), "").unwrap();
+        std::fs::write(root.join("report.json"), r#"{"joints": []}"#).unwrap();
+        std::fs::write(root.join("a.json"), BAM).unwrap();
+        let got = expand_inputs(std::slice::from_ref(&root)).unwrap();
+        assert_eq!(got.files, vec![root.join("a.json"), root.join("b.csv")]);
+        assert_eq!(got.skipped, vec![root.join("gap.json"), root.join("report.json")]);
+        let named = expand_inputs(&[root.join("gap.json")]).unwrap();
+        assert!(named.files == vec![root.join("gap.json")] && named.skipped.is_empty());
+        // Only non-BAM JSON: an error that says so.
+        for f in ["a.json", "b.csv"] {
+            std::fs::remove_file(root.join(f)).unwrap();
+        }
+        let e = expand_inputs(std::slice::from_ref(&root)).unwrap_err();
+        assert!(e.message.contains("2 JSON file(s) there are not BAM logs"), "{}", e.message);
         let _ = std::fs::remove_dir_all(&root);
     }
 }
