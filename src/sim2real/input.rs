@@ -44,15 +44,30 @@ pub fn read_for_replay(
 ) -> Result<ReplayInputs, String> {
     let mut recs = Vec::with_capacity(files.len());
     let mut origins = Vec::with_capacity(files.len());
+    let mut trimmed = Vec::new();
     for f in files {
         let mut r = read_recording_with(f, parse).map_err(|e| e.to_string())?;
         rebase_time(&mut r);
         r.validate_joint_names(model_joints).map_err(|e| e.to_string())?;
         replay::check_schedule(&r, opts).map_err(|e| e.to_string())?;
         origins.push((f.clone(), replay::resolve_tick_origin(&mut r, opts)));
+        let cut = replay::trim_unknown_start(&mut r, opts);
+        if cut > 0 {
+            trimmed.push(cut);
+        }
         recs.push(r);
     }
-    let (notes, warnings) = replay::origin_messages(&origins);
+    let (mut notes, warnings) = replay::origin_messages(&origins);
+    if !trimmed.is_empty() {
+        notes.push(format!(
+            "command_timing sent_after: a row logs the next tick's command, so the command in \
+             force at the first row of a file is unknown; the replay of {} file(s) starts at \
+             the first row after a tick ({}–{} row(s) left out)",
+            trimmed.len(),
+            trimmed.iter().min().unwrap_or(&0),
+            trimmed.iter().max().unwrap_or(&0)
+        ));
+    }
     Ok(ReplayInputs { recs, notes, warnings })
 }
 

@@ -429,6 +429,6 @@ pub fn replay_all(
 
 mod origin;
 mod run;
-pub use origin::{TickOrigin, origin_messages, resolve_tick_origin};
+pub use origin::{TickOrigin, origin_messages, resolve_tick_origin, trim_unknown_start};
 #[cfg(test)]
 mod tests;

@@ -10,7 +10,7 @@
 
 use std::path::PathBuf;
 
-use crate::sim2real::commands::{TickPhase, tick_phase};
+use crate::sim2real::commands::{CommandTiming, TickPhase, tick_of, tick_phase};
 use crate::sim2real::recording::Recording;
 
 use super::{ReplayOptions, timing_of};
@@ -59,6 +59,27 @@ pub enum TickOrigin {
     /// No tick grid at this rate agrees with more than `agree` of the `changes`: the command
     /// column changes within ticks (an interpolated target?) or the rate is wrong.
     NoGrid { rate: f64, agree: usize, changes: usize },
+}
+
+/// With [`CommandTiming::SentAfter`] a row logs the command sent *after* it, the next tick's:
+/// the command in force at the rows before the first tick edge after the first row is unknown
+/// (an independent tryout's humanoid logs, starting mid-motion: the next tick's command applied
+/// from the first row on, up to 34 mrad off over the next 0.2 s). Those rows are dropped, so the
+/// replay starts from a row whose command in force is known exactly; the tick origin is made
+/// explicit first (it defaults to the first row's time). Returns the number of rows dropped (0
+/// for in-force logs, without a control rate, or when fewer than 2 rows would remain).
+pub fn trim_unknown_start(rec: &mut Recording, opts: &ReplayOptions) -> usize {
+    let (rate, timing, tick0) = timing_of(rec, opts);
+    let (Some(rate), CommandTiming::SentAfter) = (rate, timing) else { return 0 };
+    let Some(&first) = rec.t.first() else { return 0 };
+    let edge = tick0 + tick_of(first, tick0, rate, timing) as f64 / rate;
+    let n = rec.t.partition_point(|&x| x < edge - 1e-6 / rate);
+    if n == 0 || rec.t.len() - n < 2 {
+        return 0;
+    }
+    rec.control_t0_s = Some(tick0);
+    rec.drop_leading_rows(n);
+    n
 }
 
 /// Checks the recording's tick origin against its rows and, when `control_t0_s` is absent and
@@ -342,6 +363,46 @@ mod tests {
         assert_eq!(r.control_t0_s, Some(t0));
         // A second pass agrees with what the first set.
         assert_eq!(resolve_tick_origin(&mut r, &ReplayOptions::default()), TickOrigin::Agrees);
+    }
+
+    /// Sent-after logs drop the rows before the first tick edge (their command in force is the
+    /// unlogged previous tick's) and keep the ticks where they were; in-force logs, a first row
+    /// on a tick, or too short a log keep every row.
+    #[test]
+    fn sent_after_logs_start_at_the_first_tick_edge() {
+        let t: Vec<f64> = (0..8).map(|i| 0.004 + 0.005 * i as f64).collect();
+        let mut j = JointTrace::new("a", (0..8).map(|i| i as f64).collect());
+        j.q_cmd = Some((0..8).map(|i| 10.0 * i as f64).collect());
+        j.qd = Some(vec![0.5; 8]);
+        let mut r = Recording::at_100hz(t, vec![j]);
+        r.control_t0_s = Some(0.0);
+        let sa =
+            ReplayOptions { command_timing: Some(CommandTiming::SentAfter), ..Default::default() };
+        let mut in_force = r.clone();
+        assert_eq!(trim_unknown_start(&mut in_force, &ReplayOptions::default()), 0);
+        assert_eq!(in_force, r);
+        let mut cut = r.clone();
+        // Rows at 4 and 9 ms belong to tick 1 (sent at 10 ms): tick 0's command is unknown.
+        assert_eq!(trim_unknown_start(&mut cut, &sa), 2);
+        assert_eq!(cut.t, r.t[2..].to_vec());
+        assert_eq!(cut.joints[0].q_cmd.as_deref(), Some(&[20.0, 30.0, 40.0, 50.0, 60.0, 70.0][..]));
+        assert_eq!((cut.joints[0].q.len(), cut.joints[0].qd.as_ref().unwrap().len()), (6, 6));
+        assert_eq!(cut.control_t0_s, Some(0.0));
+        // Without control_t0_s the first row is the ticks' origin (its own edge): nothing to cut,
+        // and the origin, kept implicit, is unchanged.
+        let mut undeclared = r.clone();
+        undeclared.control_t0_s = None;
+        assert_eq!(trim_unknown_start(&mut undeclared, &sa), 0);
+        // A first row exactly on a tick (0.01 printed as 0.010000000000000002) is kept.
+        let mut on = r.clone();
+        on.t[0] = 0.010000000000000002 - 0.01;
+        on.control_t0_s = Some(-0.01);
+        assert_eq!(trim_unknown_start(&mut on, &sa), 0);
+        // Two rows, both before the edge: nothing left to replay, so nothing is cut.
+        let mut short = r.clone();
+        short.drop_leading_rows(6);
+        short.t = vec![0.011, 0.012];
+        assert_eq!(trim_unknown_start(&mut short, &sa), 0);
     }
 
     #[test]
