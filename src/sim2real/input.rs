@@ -45,9 +45,14 @@ pub fn read_for_replay(
     let mut recs = Vec::with_capacity(files.len());
     let mut origins = Vec::with_capacity(files.len());
     let mut trimmed = Vec::new();
+    let mut duplicates = Vec::new();
     for f in files {
         let mut r = read_recording_with(f, parse).map_err(|e| e.to_string())?;
         rebase_time(&mut r);
+        if let Some(d) = r.meta.get(recording::KEY_DUPLICATE_ROWS) {
+            duplicates
+                .push(format!("{} ({d})", f.file_name().unwrap_or_default().to_string_lossy()));
+        }
         r.validate_joint_names(model_joints).map_err(|e| e.to_string())?;
         replay::check_schedule(&r, opts).map_err(|e| e.to_string())?;
         origins.push((f.clone(), replay::resolve_tick_origin(&mut r, opts)));
@@ -58,6 +63,12 @@ pub fn read_for_replay(
         recs.push(r);
     }
     let (mut notes, warnings) = replay::origin_messages(&origins);
+    if !duplicates.is_empty() {
+        notes.push(format!(
+            "rows that repeat the row before them exactly were left out (a sample logged twice): {}",
+            duplicates.join(", ")
+        ));
+    }
     if !trimmed.is_empty() {
         notes.push(format!(
             "command_timing sent_after: a row logs the next tick's command, so the command in \

@@ -53,9 +53,12 @@ pub fn parse_csv_with(
         .build()
         .map_err(|e| RecordingError::new(path, None, None, format!("--ignore-columns: {e}")))?;
     let header = parse_header(path, header_ln, header, &ignore)?;
-    let (cols, row_lines) = parse_rows(path, &header, &lines[idx + 1..])?;
+    let (cols, row_lines, duplicates) = parse_rows(path, &header, &lines[idx + 1..])?;
     let rate_line = meta.rate_line;
-    let rec = assemble(path, meta, header, cols);
+    let mut rec = assemble(path, meta, header, cols);
+    if duplicates > 0 {
+        rec.meta.insert(super::KEY_DUPLICATE_ROWS.to_string(), duplicates.to_string());
+    }
     rec.check_inner(opts, Some(&row_lines))?;
     check_rate(path, &rec, rate_line)?;
     Ok(rec)
@@ -298,16 +301,20 @@ fn check_header(path: &Path, h: &Header) -> Result<(), RecordingError> {
     Ok(())
 }
 
-/// The data rows after the header, column-major, with the source line of each row.
+/// The data rows after the header, column-major, with the source line of each row, and how
+/// many rows repeated the row before them character for character (a logger that wrote a
+/// sample twice): those are left out. A repeated time with other values stays an error.
 fn parse_rows(
     path: &Path,
     h: &Header,
     lines: &[(usize, &str)],
-) -> Result<(Vec<Vec<f64>>, Vec<usize>), RecordingError> {
+) -> Result<(Vec<Vec<f64>>, Vec<usize>, usize), RecordingError> {
     let names = &h.names;
     let mut cols: Vec<Vec<f64>> = vec![Vec::new(); names.len()];
     let mut row_lines: Vec<usize> = Vec::new();
     let mut blank_at: Option<usize> = None;
+    let mut previous: Option<&str> = None;
+    let mut duplicates = 0usize;
     for &(ln, raw) in lines {
         if raw.trim().is_empty() {
             blank_at.get_or_insert(ln);
@@ -316,6 +323,11 @@ fn parse_rows(
         if let Some(b) = blank_at {
             return Err(err(path, b, None, "empty line inside the data rows".into()));
         }
+        if previous == Some(raw.trim()) {
+            duplicates += 1;
+            continue;
+        }
+        previous = Some(raw.trim());
         let parts: Vec<&str> = raw.split(',').map(str::trim).collect();
         if parts.len() != names.len() {
             return Err(err(
@@ -350,7 +362,7 @@ fn parse_rows(
             format!("need at least 2 data rows, found {}", row_lines.len()),
         ));
     }
-    Ok((cols, row_lines))
+    Ok((cols, row_lines, duplicates))
 }
 
 /// One field: `.enabled` takes 0/1/false/true, every other column a finite number.

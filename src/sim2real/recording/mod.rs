@@ -60,6 +60,10 @@ impl Split {
     }
 }
 
+/// Metadata key set by the CSV reader: how many rows repeated the row before them exactly and
+/// were left out.
+pub const KEY_DUPLICATE_ROWS: &str = "duplicate_rows_dropped";
+
 const JOINT_SUFFIXES: [&str; 7] = ["q", "qd", "q_cmd", "tau", "kp", "kd", "enabled"];
 const BASE_SUFFIXES: [&str; 7] = ["x", "y", "z", "qw", "qx", "qy", "qz"];
 

@@ -98,8 +98,16 @@ fn row_errors_name_the_line() {
     let e = parse_err("t,a.q\n0,1\n0.2,1\n0.1,1\n");
     assert_eq!(e.line, Some(4));
     assert!(e.message.contains("t = 0.1 at line 4 is not after t = 0.2 at line 3"), "{e}");
-    let e = parse_err("t,a.q\n0,1\n0,1\n");
+    let e = parse_err("t,a.q\n0,1\n0,2\n");
     assert!(e.message.contains("not strictly increasing"), "{e}");
+    // A row logged twice, character for character, is left out and counted; not when the
+    // repeat is further back (the times then go backwards: an error).
+    let ok = parse_csv(Path::new("rec.csv"), "t,a.q\n0,1\n0.1,2\n0.1,2\n0.2,3\n").unwrap();
+    assert_eq!(ok.t, vec![0.0, 0.1, 0.2]);
+    assert_eq!(ok.meta.get(super::KEY_DUPLICATE_ROWS).map(String::as_str), Some("1"));
+    assert!(parse_csv(Path::new("rec.csv"), "t,a.q\n0,1\n0.1,2\n0,1\n").is_err());
+    let clean = parse_csv(Path::new("rec.csv"), "t,a.q\n0,1\n0.1,2\n").unwrap();
+    assert!(clean.meta.is_empty());
     let e = parse_err("t,a.q,a.enabled\n0,1,1\n0.1,1,2\n");
     assert!(e.message.contains("expected 0 or 1"), "{e}");
     let e = parse_err("t,a.q\n0,,\n");
