@@ -53,7 +53,7 @@ pub fn parse_csv_with(
         .build()
         .map_err(|e| RecordingError::new(path, None, None, format!("--ignore-columns: {e}")))?;
     let header = parse_header(path, header_ln, header, &ignore)?;
-    let (cols, row_lines, duplicates) = parse_rows(path, &header, &lines[idx + 1..])?;
+    let Rows { cols, lines: row_lines, duplicates } = parse_rows(path, &header, &lines[idx + 1..])?;
     let rate_line = meta.rate_line;
     let mut rec = assemble(path, meta, header, cols);
     if duplicates > 0 {
@@ -301,14 +301,19 @@ fn check_header(path: &Path, h: &Header) -> Result<(), RecordingError> {
     Ok(())
 }
 
-/// The data rows after the header, column-major, with the source line of each row, and how
-/// many rows repeated the row before them character for character (a logger that wrote a
-/// sample twice): those are left out. A repeated time with other values stays an error.
-fn parse_rows(
-    path: &Path,
-    h: &Header,
-    lines: &[(usize, &str)],
-) -> Result<(Vec<Vec<f64>>, Vec<usize>, usize), RecordingError> {
+/// The data rows after the header.
+struct Rows {
+    /// Column-major values.
+    cols: Vec<Vec<f64>>,
+    /// The source line of each row.
+    lines: Vec<usize>,
+    /// Rows that repeated the row before them character for character (a logger that wrote a
+    /// sample twice): left out. A repeated time with other values stays an error.
+    duplicates: usize,
+}
+
+/// [`Rows`] of the lines after the header.
+fn parse_rows(path: &Path, h: &Header, lines: &[(usize, &str)]) -> Result<Rows, RecordingError> {
     let names = &h.names;
     let mut cols: Vec<Vec<f64>> = vec![Vec::new(); names.len()];
     let mut row_lines: Vec<usize> = Vec::new();
@@ -362,7 +367,7 @@ fn parse_rows(
             format!("need at least 2 data rows, found {}", row_lines.len()),
         ));
     }
-    Ok((cols, row_lines, duplicates))
+    Ok(Rows { cols, lines: row_lines, duplicates })
 }
 
 /// One field: `.enabled` takes 0/1/false/true, every other column a finite number.
