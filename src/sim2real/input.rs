@@ -46,8 +46,10 @@ pub fn read_for_replay(
     let mut origins = Vec::with_capacity(files.len());
     let mut trimmed = Vec::new();
     let mut duplicates = Vec::new();
+    // Unknown joints are reported at the header line, before any value is checked.
+    let parse = ParseOptions { model_joints: Some(model_joints.to_vec()), ..parse.clone() };
     for f in files {
-        let mut r = read_recording_with(f, parse).map_err(|e| e.to_string())?;
+        let mut r = read_recording_with(f, &parse).map_err(|e| e.to_string())?;
         rebase_time(&mut r);
         if let Some(d) = r.meta.get(recording::KEY_DUPLICATE_ROWS) {
             duplicates

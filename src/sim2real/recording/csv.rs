@@ -53,6 +53,12 @@ pub fn parse_csv_with(
         .build()
         .map_err(|e| RecordingError::new(path, None, None, format!("--ignore-columns: {e}")))?;
     let header = parse_header(path, header_ln, header, &ignore)?;
+    if let Some(model) = &opts.model_joints
+        && let Some((col, msg)) =
+            super::unknown_joints(header.joint_names.iter().map(String::as_str), model)
+    {
+        return Err(err(path, header_ln, Some(&col), msg));
+    }
     let Rows { cols, lines: row_lines, duplicates } = parse_rows(path, &header, &lines[idx + 1..])?;
     let rate_line = meta.rate_line;
     let mut rec = assemble(path, meta, header, cols);

@@ -164,12 +164,42 @@ pub struct ParseOptions {
     /// log's extra signals. Any other column that is not `t`, `base.*` or `<joint>.<suffix>`
     /// is an error (a misspelt `q_cmd` must not be dropped silently).
     pub ignore_columns: Vec<String>,
+    /// The model's joints, when known: a header naming any other joint is an error at the
+    /// header line, before any value is read (a misspelt joint is the first thing to fix).
+    pub model_joints: Option<Vec<String>>,
 }
 
 impl Default for ParseOptions {
     fn default() -> Self {
-        ParseOptions { max_abs_rad: 10.0, ignore_columns: Vec::new() }
+        ParseOptions { max_abs_rad: 10.0, ignore_columns: Vec::new(), model_joints: None }
     }
+}
+
+/// For joints `names` not in `model_joints`: the first one's `.q` column and a message listing
+/// each with the closest model joint names (case-insensitive edit distance).
+pub(crate) fn unknown_joints<'a>(
+    names: impl IntoIterator<Item = &'a str>,
+    model_joints: &[String],
+) -> Option<(String, String)> {
+    let mut problems = Vec::new();
+    let mut first_col = None;
+    for name in names {
+        if model_joints.iter().any(|m| m == name) {
+            continue;
+        }
+        first_col.get_or_insert_with(|| format!("{name}.q"));
+        let near = near_matches(name, model_joints, 3);
+        if near.is_empty() {
+            problems.push(format!("unknown joint '{name}'"));
+        } else {
+            problems.push(format!(
+                "unknown joint '{name}' (did you mean {}?)",
+                near.iter().map(|s| format!("'{s}'")).collect::<Vec<_>>().join(", ")
+            ));
+        }
+    }
+    let col = first_col?;
+    Some((col, format!("{} not in the model: {}", problems.len(), problems.join("; "))))
 }
 
 impl Recording {
@@ -215,33 +245,10 @@ impl Recording {
     /// Errors unless every recorded joint is one of `model_joints`; the message lists, for each
     /// unknown joint, the closest model joint names (case-insensitive edit distance).
     pub fn validate_joint_names(&self, model_joints: &[String]) -> Result<(), RecordingError> {
-        let mut problems = Vec::new();
-        let mut first_col = None;
-        for j in &self.joints {
-            if model_joints.contains(&j.name) {
-                continue;
-            }
-            first_col.get_or_insert_with(|| format!("{}.q", j.name));
-            let near = near_matches(&j.name, model_joints, 3);
-            if near.is_empty() {
-                problems.push(format!("unknown joint '{}'", j.name));
-            } else {
-                problems.push(format!(
-                    "unknown joint '{}' (did you mean {}?)",
-                    j.name,
-                    near.iter().map(|s| format!("'{s}'")).collect::<Vec<_>>().join(", ")
-                ));
-            }
+        match unknown_joints(self.joints.iter().map(|j| j.name.as_str()), model_joints) {
+            None => Ok(()),
+            Some((col, msg)) => Err(RecordingError::new(&self.source, None, Some(&col), msg)),
         }
-        if problems.is_empty() {
-            return Ok(());
-        }
-        Err(RecordingError::new(
-            &self.source,
-            None,
-            first_col.as_deref(),
-            format!("{} not in the model: {}", problems.len(), problems.join("; ")),
-        ))
     }
 
     /// Fills `qd` where absent with the derivative of `q`: the three-point central difference

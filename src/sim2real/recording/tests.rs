@@ -229,3 +229,19 @@ fn extra_columns_are_an_error_unless_ignored_by_pattern() {
     assert!(r.message.contains("no joint column"), "{r}");
     assert!(parse_csv_with(p(), text, &skip(&["a[", "battery"])).is_err());
 }
+
+/// With the model's joints given, a misspelt joint is reported at the header line, before its
+/// values are checked (a log in degrees under a wrong name used to report the degrees first).
+#[test]
+fn unknown_joints_are_reported_at_the_header_before_any_value() {
+    let text = "# robot: r\nt,shouldr.q,elbow.q\n0,57.3,0\n0.01,57.3,0\n";
+    let model = vec!["shoulder".to_string(), "elbow".to_string()];
+    let opts = ParseOptions { model_joints: Some(model.clone()), ..Default::default() };
+    let e = parse_csv_with(p(), text, &opts).unwrap_err();
+    assert_eq!((e.line, e.column.as_deref()), (Some(2), Some("shouldr.q")), "{e}");
+    assert!(e.message.contains("unknown joint 'shouldr' (did you mean 'shoulder'?)"), "{e}");
+    // Without the model's joints: the values are checked (degrees), the names later.
+    assert!(parse_err(text).message.contains("looks like degrees"));
+    let fixed = text.replace("shouldr", "shoulder").replace("57.3", "1");
+    assert!(parse_csv_with(p(), &fixed, &opts).is_ok());
+}
