@@ -89,3 +89,11 @@ CASES["H10_knees_damping8_no_t0"] = dict(H12_EP, seed=52,
 # hold one row or none, so the command changes alone leave several phases open.
 CASES["L9_knee_damping_no_t0"] = dict(model="leg3", seed=12,
     logging=dict(rec_start=1.0, declare_t0=False), effects={"joints": {"knee": {"damping": 0.8}}})
+# ---- a controller 300 ppm off its nominal rate on the recorder's clock (49.985 Hz, the header
+# says 50; no control_t0_s, from 1 s into the motion): rows near the tick edges land in the
+# wrong tick unless the rate is fitted from the rows ----
+CASES["H11_none_rate_off"] = dict(H12_EP, seed=51,
+    logging=dict(rec_start=1.0, declare_t0=False, ctrl_hz=49.985, declared_hz=50.0), effects={})
+CASES["H12_knees_damping8_rate_off"] = dict(H12_EP, seed=52,
+    logging=dict(rec_start=1.0, declare_t0=False, ctrl_hz=49.985, declared_hz=50.0),
+    effects={"joints": {j: {"damping": 8.0} for j in H12 if j.endswith("_knee")}})

@@ -225,7 +225,10 @@ def run_episode(m, joints, cfg, eff, rng, seconds, ep_idx, split, out_csv, t0_ct
     rows = [r for r in rows if r[0] >= cfg.get("rec_start", 0.0)]
     with open(out_csv, "w") as f:
         f.write(f"# robot: {cfg['robot']}\n# episode: {ep_idx}\n# split: {split}\n")
-        f.write(f"# control_rate_hz: {ctrl_hz:g}\n")
+        # `declared_hz`: the rate the header states when the controller really runs at
+        # `ctrl_hz` on the recorder's clock (a policy loop off its nominal rate, or two clocks
+        # that drift apart).
+        f.write(f"# control_rate_hz: {cfg.get('declared_hz', ctrl_hz):g}\n")
         # `declare_t0: False`: the log does not say when the controller ticks (most real logs
         # do not); its first row is wherever the recorder's clock puts it.
         if cfg.get("declare_t0", True):
@@ -266,7 +269,7 @@ def main(case):
                                os.path.join(out, "episodes", f"ep_{e:02d}.csv"), cfg["t0_ctrl"]))
     truth = {"case": case, "model": mcfg["xml"], "joints": mcfg["joints"], "effects": eff,
              "resolved": resolved,
-             "logging": {k: cfg[k] for k in ("rec_hz", "jitter", "drop", "q_noise", "qd_noise", "bits", "t0_ctrl", "amp", "rec_start", "declare_t0") if k in cfg},
+             "logging": {k: cfg[k] for k in ("rec_hz", "jitter", "drop", "q_noise", "qd_noise", "bits", "t0_ctrl", "amp", "rec_start", "declare_t0", "ctrl_hz", "declared_hz") if k in cfg},
              "settle_s": SETTLE_S, "control_rate_hz": float(cfg.get("ctrl_hz", CTRL_HZ)), "seed": c["seed"],
              "timestep": m.opt.timestep, "episodes": eps, "mujoco": mujoco.__version__}
     with open(os.path.join(out, "truth.json"), "w") as f:

@@ -274,22 +274,10 @@ pub fn tick_phase(t: &[f64], cmds: &[&[f64]], rate: f64, candidate: f64) -> Opti
         return None;
     }
     let p = 1.0 / rate;
-    // A row's true sampling time is within half the timestamps' resolution of its stamp (1 µs
-    // at least): each change's interval is widened by that much at both ends.
-    let eps = 1e-6_f64.max(TICK_EPS * p).max(0.5 * time_quantum(t));
+    let eps = change_eps(t, p);
     let origin = t[0];
     let phase = |x: f64| (x - origin).rem_euclid(p);
-    // (start phase, length) of every change's interval.
-    let mut spans: Vec<(f64, f64)> = Vec::new();
-    for i in 0..t.len() - 1 {
-        let len = t[i + 1] - t[i] + 2.0 * eps;
-        if !(len < p) {
-            continue;
-        }
-        if cmds.iter().any(|c| (c[i + 1] - c[i]).abs() > 1e-9) {
-            spans.push(((phase(t[i]) - eps).rem_euclid(p), len));
-        }
-    }
+    let spans = change_spans(t, cmds, p, eps);
     if spans.is_empty() {
         return None;
     }
@@ -401,6 +389,114 @@ pub fn tick_phase(t: &[f64], cmds: &[&[f64]], rate: f64, candidate: f64) -> Opti
         margin,
         candidate_chosen: holds(&pick),
         candidate_in_run: holds(&pick_run),
+    })
+}
+
+/// A row's true sampling time is within half the timestamps' resolution of its stamp (1 µs at
+/// least): each change's interval is widened by that much at both ends.
+fn change_eps(t: &[f64], p: f64) -> f64 {
+    1e-6_f64.max(TICK_EPS * p).max(0.5 * time_quantum(t))
+}
+
+/// (start phase after `t[0]`, length) of every command change between rows less than one
+/// period `p` apart: each holds a tick edge.
+fn change_spans(t: &[f64], cmds: &[&[f64]], p: f64, eps: f64) -> Vec<(f64, f64)> {
+    let mut spans: Vec<(f64, f64)> = Vec::new();
+    for i in 0..t.len().saturating_sub(1) {
+        let len = t[i + 1] - t[i] + 2.0 * eps;
+        if !(len < p) {
+            continue;
+        }
+        if cmds.iter().any(|c| (c[i + 1] - c[i]).abs() > 1e-9) {
+            spans.push(((t[i] - t[0] - eps).rem_euclid(p), len));
+        }
+    }
+    spans
+}
+
+/// How many of the command changes the best phase of a `rate` grid agrees with, of how many.
+pub fn grid_agreement(t: &[f64], cmds: &[&[f64]], rate: f64) -> (usize, usize) {
+    if !(rate.is_finite() && rate > 0.0) || t.len() < 2 {
+        return (0, 0);
+    }
+    let p = 1.0 / rate;
+    let spans = change_spans(t, cmds, p, change_eps(t, p));
+    if spans.is_empty() {
+        return (0, 0);
+    }
+    (best_runs(&spans, p).0 as usize, spans.len())
+}
+
+/// How many of the command changes the `rate` grid through `origin` agrees with.
+pub fn agreement_at(t: &[f64], cmds: &[&[f64]], rate: f64, origin: f64) -> usize {
+    if !(rate.is_finite() && rate > 0.0) || t.len() < 2 {
+        return 0;
+    }
+    let p = 1.0 / rate;
+    let x = (origin - t[0]).rem_euclid(p);
+    change_spans(t, cmds, p, change_eps(t, p))
+        .iter()
+        .filter(|&&(s, l)| (x - s).rem_euclid(p) <= l)
+        .count()
+}
+
+/// A control rate near `rate` that the command changes fit: [`fit_rate`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RateFit {
+    /// The middle of the rates that agree with the most changes.
+    pub rate: f64,
+    /// Half the span of those rates.
+    pub half_width: f64,
+    pub agree: usize,
+    pub changes: usize,
+}
+
+/// Most rates [`fit_rate`] tries.
+const MAX_RATE_STEPS: usize = 4001;
+
+/// The control rate within `rate` × (1 ± `rel`) whose best tick phase agrees with the most
+/// command changes (a controller that runs slightly off its nominal rate, or a logger's clock
+/// that drifts against the controller's: at 100 ppm the grid slides a tenth of a 50 Hz tick
+/// over 20 s, and rows near the edges land in the wrong tick). Steps small enough that the
+/// grid moves at most 1/50 tick over the log between two rates; the middle of the best rates
+/// nearest `rate`. `None` without changes.
+pub fn fit_rate(t: &[f64], cmds: &[&[f64]], rate: f64, rel: f64) -> Option<RateFit> {
+    let (&first, &last) = (t.first()?, t.last()?);
+    let span = last - first;
+    if !(rate.is_finite() && rate > 0.0 && span > 0.0) {
+        return None;
+    }
+    let step = (0.02 / (span * rate)).max(2.0 * rel / (MAX_RATE_STEPS - 1) as f64);
+    let n = (rel / step).floor() as i64;
+    let mut scored: Vec<(f64, usize, usize)> = Vec::with_capacity(2 * n as usize + 1);
+    for i in -n..=n {
+        let r = rate * (1.0 + i as f64 * step);
+        let (agree, changes) = grid_agreement(t, cmds, r);
+        scored.push((r, agree, changes));
+    }
+    let share = |x: &(f64, usize, usize)| if x.2 == 0 { 0.0 } else { x.1 as f64 / x.2 as f64 };
+    let best = scored.iter().map(share).fold(0.0, f64::max);
+    if best <= 0.0 {
+        return None;
+    }
+    // The run of best rates nearest the nominal one.
+    let is_best = |x: &(f64, usize, usize)| share(x) >= best - 1e-12;
+    let centre = n as usize;
+    let nearest =
+        (0..scored.len()).filter(|&i| is_best(&scored[i])).min_by_key(|&i| i.abs_diff(centre))?;
+    let (mut lo, mut hi) = (nearest, nearest);
+    while lo > 0 && is_best(&scored[lo - 1]) {
+        lo -= 1;
+    }
+    while hi + 1 < scored.len() && is_best(&scored[hi + 1]) {
+        hi += 1;
+    }
+    let mid = scored[(lo + hi) / 2];
+    Some(RateFit {
+        rate: 0.5 * (scored[lo].0 + scored[hi].0),
+        half_width: 0.5 * (scored[hi].0 - scored[lo].0) + 0.5 * step * rate,
+        agree: mid.1,
+        changes: mid.2,
     })
 }
 

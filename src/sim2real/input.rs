@@ -45,6 +45,7 @@ pub fn read_for_replay(
     let mut recs = Vec::with_capacity(files.len());
     let mut origins = Vec::with_capacity(files.len());
     let mut trimmed = Vec::new();
+    let mut rates = Vec::new();
     let mut duplicates = Vec::new();
     // Unknown joints are reported at the header line, before any value is checked.
     let parse = ParseOptions { model_joints: Some(model_joints.to_vec()), ..parse.clone() };
@@ -57,6 +58,9 @@ pub fn read_for_replay(
         }
         r.validate_joint_names(model_joints).map_err(|e| e.to_string())?;
         replay::check_schedule(&r, opts).map_err(|e| e.to_string())?;
+        if let Some(fix) = replay::resolve_rate(&mut r, opts) {
+            rates.push((f.clone(), fix));
+        }
         origins.push((f.clone(), replay::resolve_tick_origin(&mut r, opts)));
         let cut = replay::trim_unknown_start(&mut r, opts);
         if cut > 0 {
@@ -64,7 +68,8 @@ pub fn read_for_replay(
         }
         recs.push(r);
     }
-    let (mut notes, warnings) = replay::origin_messages(&origins);
+    let (mut notes, mut warnings) = replay::origin_messages(&origins);
+    warnings.extend(replay::rate_messages(&rates));
     if !duplicates.is_empty() {
         notes.push(format!(
             "rows that repeat the row before them exactly were left out (a sample logged twice): {}",

@@ -429,6 +429,9 @@ pub fn replay_all(
 
 mod origin;
 mod run;
-pub use origin::{TickOrigin, origin_messages, resolve_tick_origin, trim_unknown_start};
+pub use origin::{
+    KEY_TIME_SCALE, RateFix, TickOrigin, origin_messages, rate_messages, resolve_rate,
+    resolve_tick_origin, trim_unknown_start,
+};
 #[cfg(test)]
 mod tests;

@@ -10,7 +10,9 @@
 
 use std::path::PathBuf;
 
-use crate::sim2real::commands::{CommandTiming, TickPhase, tick_of, tick_phase};
+use crate::sim2real::commands::{
+    CommandTiming, RateFit, TickPhase, agreement_at, fit_rate, grid_agreement, tick_of, tick_phase,
+};
 use crate::sim2real::recording::Recording;
 
 use super::{ReplayOptions, timing_of};
@@ -59,6 +61,110 @@ pub enum TickOrigin {
     /// No tick grid at this rate agrees with more than `agree` of the `changes`: the command
     /// column changes within ticks (an interpolated target?) or the rate is wrong.
     NoGrid { rate: f64, agree: usize, changes: usize },
+}
+
+/// How far from the nominal rate [`resolve_rate`] looks (± 0.5 %).
+const RATE_SEARCH: f64 = 0.005;
+
+/// What [`resolve_rate`] found: the control rate in use fits no tick grid as well as one
+/// nearby, and the recording's clock was rescaled to it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RateFix {
+    /// The rate in use (`control_rate_hz` or `--control-hz`) and how many of the command
+    /// changes its best grid agrees with.
+    pub declared: f64,
+    pub declared_agree: usize,
+    /// The rate the changes fit on the recording's own clock ([`fit_rate`]).
+    pub fit: RateFit,
+}
+
+/// Metadata key: the factor [`resolve_rate`] scaled the recording's times by.
+pub const KEY_TIME_SCALE: &str = "time_scale";
+
+/// When the recorded command changes miss every tick grid at the control rate in use (more than
+/// 2 % of them at its best phase), but fit one at a rate within ± 0.5 % of it (missing at most
+/// half as many) — a logger's clock that drifts against the controller's, or a controller off
+/// its nominal rate (a policy loop timed by `sleep`) — the recording's times are rescaled about
+/// its tick origin (or first row) so that the ticks come at the rate in use: the physics steps
+/// stay on the ticks, and the motion's own time changes by the clocks' ppm. At 100 ppm a 50 Hz
+/// grid slides a tenth of a tick over 20 s and the rows near the tick edges land in the wrong
+/// tick (an independent simulator's humanoid logs: position MAE 0.54 → 0.77 mrad, peaks 9 mrad).
+pub fn resolve_rate(rec: &mut Recording, opts: &ReplayOptions) -> Option<RateFix> {
+    let (Some(rate), _, tick0) = timing_of(rec, opts) else { return None };
+    let cmds: Vec<&[f64]> = rec.joints.iter().filter_map(|j| j.q_cmd.as_deref()).collect();
+    if cmds.is_empty() {
+        return None;
+    }
+    // Misses at the best phase, or at the declared origin (a slow drift leaves the best phase
+    // a few misses, spread over both ends; the origin declared at the log's start misses the
+    // late ones).
+    let (best, changes) = grid_agreement(&rec.t, &cmds, rate);
+    let agree = match rec.control_t0_s {
+        Some(t0) => best.min(agreement_at(&rec.t, &cmds, rate, t0)),
+        None => best,
+    };
+    let missed = changes - agree;
+    if changes < MIN_CHANGES || missed <= rate_slack(changes) {
+        return None;
+    }
+    let fit = fit_rate(&rec.t, &cmds, rate, RATE_SEARCH)?;
+    let fit_missed = fit.changes - fit.agree;
+    if fit.agree < MIN_CHANGES
+        || (fit.agree as f64) < GRID_SHARE * fit.changes as f64
+        || 2 * fit_missed > missed
+        || (fit.rate - rate).abs() <= fit.half_width
+    {
+        return None;
+    }
+    let scale = fit.rate / rate;
+    for x in &mut rec.t {
+        *x = tick0 + (*x - tick0) * scale;
+    }
+    for j in &mut rec.joints {
+        if let Some(qd) = j.qd.as_mut() {
+            for v in qd {
+                *v /= scale;
+            }
+        }
+    }
+    rec.meta.insert(KEY_TIME_SCALE.to_string(), format!("{scale}"));
+    Some(RateFix { declared: rate, declared_agree: agree, fit })
+}
+
+/// Command changes no phase of the right grid may miss before the rate is questioned (rows
+/// stamped late by a busy logger, a timestamp rounded across an edge).
+fn rate_slack(changes: usize) -> usize {
+    (changes / 50).max(2)
+}
+
+/// The warning for the [`RateFix`]es of several files.
+pub fn rate_messages(items: &[(PathBuf, RateFix)]) -> Option<String> {
+    if items.is_empty() {
+        return None;
+    }
+    let list: Vec<String> = items
+        .iter()
+        .map(|(p, f)| {
+            format!(
+                "{}: ticks at {:.5} ± {:.5} Hz on its clock ({:+.0} ppm; {} of {} changes fit, \
+                 {} at {} Hz)",
+                file_name(p),
+                f.fit.rate,
+                f.fit.half_width,
+                1e6 * (f.fit.rate / f.declared - 1.0),
+                f.fit.agree,
+                f.fit.changes,
+                f.declared_agree,
+                f.declared
+            )
+        })
+        .collect();
+    Some(format!(
+        "the command changes fit a tick grid at a rate slightly off the control rate given (a \
+         logger's clock drifting against the controller's, or a controller off its nominal \
+         rate) — {}: each file's times are rescaled to put its ticks at the rate given",
+        some_of(&list)
+    ))
 }
 
 /// With [`CommandTiming::SentAfter`] a row logs the command sent *after* it, the next tick's:
@@ -324,6 +430,42 @@ mod tests {
     /// Phase error of `t0` against ticks at `truth + k / rate`, in seconds (−½ … ½ tick).
     fn phase_err(t0: f64, truth: f64, rate: f64) -> f64 {
         (((t0 - truth) * rate + 0.5).rem_euclid(1.0) - 0.5) / rate
+    }
+
+    /// A controller 300 ppm slow against the logger's clock (ticks at 49.985 Hz, 50 declared,
+    /// 10 s at ~200 Hz): the rows' changes fit the slower rate, and the times are rescaled so
+    /// that the ticks come at 50 Hz through the declared origin; an exact log, and one whose
+    /// declared origin alone is wrong, are left alone.
+    #[test]
+    fn a_drifting_clock_is_rescaled_to_the_declared_rate() {
+        let truth = 50.0 * (1.0 - 300e-6);
+        let mut r = async_log(0.0071, truth, 200.0, 10.0);
+        r.control_rate_hz = Some(50.0);
+        r.control_t0_s = Some(0.0071);
+        let before = r.clone();
+        let fix = resolve_rate(&mut r, &ReplayOptions::default()).expect("drift found");
+        assert!((fix.fit.rate / truth - 1.0).abs() < 50e-6, "{fix:?}");
+        assert!(
+            fix.fit.agree + 2 >= fix.fit.changes && fix.declared_agree + 20 < fix.fit.changes,
+            "{fix:?}"
+        );
+        // Tick k (at 0.0071 + k / truth on the log's clock) is now at 0.0071 + k / 50.
+        let cmds = [r.joints[0].q_cmd.as_deref().unwrap()];
+        let agree = agreement_at(&r.t, &cmds, 50.0, 0.0071);
+        let (_, changes) = grid_agreement(&r.t, &cmds, 50.0);
+        assert!(changes - agree <= rate_slack(changes), "{agree} of {changes}");
+        let last = before.t.len() - 1;
+        let scaled = 0.0071 + (before.t[last] - 0.0071) * fix.fit.rate / 50.0;
+        assert!((r.t[last] - scaled).abs() < 1e-9 && r.meta.contains_key(KEY_TIME_SCALE));
+        let msg = rate_messages(&[(PathBuf::from("ep.csv"), fix)]).unwrap();
+        assert!(msg.contains("ep.csv: ticks at 49.98") && msg.contains(" ppm; 49"), "{msg}");
+        // The exact rate: nothing to do.
+        let mut exact = async_log(0.0071, 50.0, 200.0, 10.0);
+        exact.control_t0_s = Some(0.0071);
+        assert_eq!(resolve_rate(&mut exact, &ReplayOptions::default()), None);
+        // The right rate with a wrong origin is the origin's problem, not the rate's.
+        exact.control_t0_s = Some(0.0171);
+        assert_eq!(resolve_rate(&mut exact, &ReplayOptions::default()), None);
     }
 
     #[test]
