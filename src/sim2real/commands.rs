@@ -416,15 +416,23 @@ fn change_spans(t: &[f64], cmds: &[&[f64]], p: f64, eps: f64) -> Vec<(f64, f64)>
 
 /// How many of the command changes the best phase of a `rate` grid agrees with, of how many.
 pub fn grid_agreement(t: &[f64], cmds: &[&[f64]], rate: f64) -> (usize, usize) {
+    let (agree, changes, _) = grid_agreement_width(t, cmds, rate);
+    (agree, changes)
+}
+
+/// [`grid_agreement`] and the width [s] of the widest phase interval that agrees with that many.
+fn grid_agreement_width(t: &[f64], cmds: &[&[f64]], rate: f64) -> (usize, usize, f64) {
     if !(rate.is_finite() && rate > 0.0) || t.len() < 2 {
-        return (0, 0);
+        return (0, 0, 0.0);
     }
     let p = 1.0 / rate;
     let spans = change_spans(t, cmds, p, change_eps(t, p));
     if spans.is_empty() {
-        return (0, 0);
+        return (0, 0, 0.0);
     }
-    (best_runs(&spans, p).0 as usize, spans.len())
+    let (best, runs) = best_runs(&spans, p);
+    let width = runs.iter().map(|r| r.1 - r.0).fold(0.0, f64::max);
+    (best as usize, spans.len(), width)
 }
 
 /// How many of the command changes the `rate` grid through `origin` agrees with.
@@ -458,8 +466,10 @@ const MAX_RATE_STEPS: usize = 4001;
 /// command changes (a controller that runs slightly off its nominal rate, or a logger's clock
 /// that drifts against the controller's: at 100 ppm the grid slides a tenth of a 50 Hz tick
 /// over 20 s, and rows near the edges land in the wrong tick). Steps small enough that the
-/// grid moves at most 1/50 tick over the log between two rates; the middle of the best rates
-/// nearest `rate`. `None` without changes.
+/// grid moves at most 1/50 tick over the log between two rates. Among the best rates (the run
+/// of them nearest `rate`), the one that leaves the widest phase interval open: off the true
+/// rate the changes' intervals slide against each other and their common part shrinks.
+/// `None` without changes.
 pub fn fit_rate(t: &[f64], cmds: &[&[f64]], rate: f64, rel: f64) -> Option<RateFit> {
     let (&first, &last) = (t.first()?, t.last()?);
     let span = last - first;
@@ -468,19 +478,19 @@ pub fn fit_rate(t: &[f64], cmds: &[&[f64]], rate: f64, rel: f64) -> Option<RateF
     }
     let step = (0.02 / (span * rate)).max(2.0 * rel / (MAX_RATE_STEPS - 1) as f64);
     let n = (rel / step).floor() as i64;
-    let mut scored: Vec<(f64, usize, usize)> = Vec::with_capacity(2 * n as usize + 1);
+    let mut scored: Vec<(f64, usize, usize, f64)> = Vec::with_capacity(2 * n as usize + 1);
     for i in -n..=n {
         let r = rate * (1.0 + i as f64 * step);
-        let (agree, changes) = grid_agreement(t, cmds, r);
-        scored.push((r, agree, changes));
+        let (agree, changes, width) = grid_agreement_width(t, cmds, r);
+        scored.push((r, agree, changes, width));
     }
-    let share = |x: &(f64, usize, usize)| if x.2 == 0 { 0.0 } else { x.1 as f64 / x.2 as f64 };
+    let share = |x: &(f64, usize, usize, f64)| if x.2 == 0 { 0.0 } else { x.1 as f64 / x.2 as f64 };
     let best = scored.iter().map(share).fold(0.0, f64::max);
     if best <= 0.0 {
         return None;
     }
     // The run of best rates nearest the nominal one.
-    let is_best = |x: &(f64, usize, usize)| share(x) >= best - 1e-12;
+    let is_best = |x: &(f64, usize, usize, f64)| share(x) >= best - 1e-12;
     let centre = n as usize;
     let nearest =
         (0..scored.len()).filter(|&i| is_best(&scored[i])).min_by_key(|&i| i.abs_diff(centre))?;
@@ -491,12 +501,15 @@ pub fn fit_rate(t: &[f64], cmds: &[&[f64]], rate: f64, rel: f64) -> Option<RateF
     while hi + 1 < scored.len() && is_best(&scored[hi + 1]) {
         hi += 1;
     }
-    let mid = scored[(lo + hi) / 2];
+    // The widest open phase within the run (the middle of a tie).
+    let wmax = scored[lo..=hi].iter().map(|x| x.3).fold(0.0, f64::max);
+    let top: Vec<usize> = (lo..=hi).filter(|&i| scored[i].3 >= wmax - 1e-12).collect();
+    let pick = scored[top[top.len() / 2]];
     Some(RateFit {
-        rate: 0.5 * (scored[lo].0 + scored[hi].0),
+        rate: pick.0,
         half_width: 0.5 * (scored[hi].0 - scored[lo].0) + 0.5 * step * rate,
-        agree: mid.1,
-        changes: mid.2,
+        agree: pick.1,
+        changes: pick.2,
     })
 }
 

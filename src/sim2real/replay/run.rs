@@ -203,14 +203,21 @@ impl Replayer<'_> {
         let nsteps = ((t_end - ts) / dt - 1e-9).ceil().max(0.0) as usize;
         let mut diverged = None;
 
+        // With a control rate, a step takes the command in force at its middle: a tick that
+        // falls inside a step (a tick period that is no multiple of the timestep: 40 Hz with
+        // 2 ms steps, 30 Hz, a rate fitted from the rows) switches at the nearest step edge, not
+        // at the next one — no lag on average, at most half a step either way. A tick on a
+        // step edge (the usual case, the steps sitting on the ticks' grid) is unaffected.
+        // Without a rate each goal still takes effect at the first step at or after its time.
+        let probe = if rate.is_some() { 0.5 * dt } else { 0.0 };
         for k in 0..nsteps {
             let tk = ts + k as f64 * dt;
             for (i, x) in target.iter_mut().enumerate() {
-                *x = schedule.at(i, tk);
+                *x = schedule.at(i, tk + probe);
             }
             let (ti, tt) = match rate {
                 Some(r) => {
-                    let ti = ((tk - tick0) * r + 1e-6).floor() as i64;
+                    let ti = ((tk + probe - tick0) * r + 1e-6).floor() as i64;
                     (ti, tick0 + ti as f64 / r)
                 }
                 None => (k as i64, tk),
