@@ -136,6 +136,13 @@ pub fn run_fit(a: FitArgs) -> i32 {
     if let Some(n) = files.skipped_note() {
         inputs.notes.insert(0, n);
     }
+    // The nominal model's own discretisation error beside its gap to the recordings.
+    if let Some(w) = crate::sim2real::replay::timestep_check(robot, &inputs.recs, &a.replay)
+        .as_ref()
+        .and_then(crate::sim2real::replay::timestep_note)
+    {
+        inputs.notes.push(w);
+    }
     // Said now (before minutes of fitting) and again in the JSON.
     for w in &inputs.warnings {
         eprintln!("modellint: warning: {w}");

@@ -87,6 +87,11 @@ pub fn run_gap(a: GapArgs) -> i32 {
     let mut report = gap::compute(&recs, &eps, &region, &GapOptions::default());
     report.notes = notes;
     report.warnings = warnings;
+    report.timestep = replay::timestep_check(robot, &recs, &opts);
+    if let Some(n) = report.timestep.as_ref().and_then(replay::timestep_note) {
+        eprintln!("modellint: note: {n}");
+        report.notes.push(n);
+    }
     if let Some(dir) = &a.report {
         match crate::sim2real::report::write(dir, &report, &recs, &eps) {
             Ok(p) => eprintln!("modellint: report written to {}", p.display()),

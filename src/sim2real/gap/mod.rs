@@ -220,6 +220,10 @@ pub struct GapReport {
     pub notes: Vec<String>,
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub warnings: Vec<String>,
+    /// The replay at a quarter of the model's timestep against the replay at its own
+    /// (`sim2real::replay::timestep_check`), when both ran.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub timestep: Option<crate::sim2real::replay::TimestepCheck>,
     #[serde(skip)]
     pub psd: Vec<JointPsd>,
 }
@@ -660,6 +664,7 @@ pub fn compute(
         diverged,
         notes: Vec::new(),
         warnings: Vec::new(),
+        timestep: None,
         psd,
     }
 }

@@ -429,9 +429,11 @@ pub fn replay_all(
 
 mod origin;
 mod run;
+mod timestep;
 pub use origin::{
     KEY_TIME_SCALE, RateFix, TickOrigin, origin_messages, rate_messages, resolve_rate,
     resolve_tick_origin, trim_unknown_start,
 };
+pub use timestep::{JointTimestep, TimestepCheck, timestep_check, timestep_note};
 #[cfg(test)]
 mod tests;

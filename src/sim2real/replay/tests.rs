@@ -264,3 +264,65 @@ fn ticks_between_step_edges_switch_at_the_nearest_edge() {
     assert!(worst < 1e-9, "replay off the nearest-edge reference by {worst} rad");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// The timestep check: a servo too stiff for a 5 ms step moves its own replay by far more than
+/// at 0.1 ms, and the note names the joint; recordings made at the model's own steps sit on its
+/// replay (gap 0), so the note's share rule fires only with a gap to compare.
+#[test]
+fn a_timestep_too_coarse_for_the_servo_is_measured() {
+    let model = |dt: &str| {
+        format!(
+            r#"<mujoco><option gravity="0 0 0" timestep="{dt}" integrator="implicitfast"/>
+  <worldbody><body><joint name="j" type="hinge" axis="0 1 0"/>
+<geom type="capsule" fromto="0 0 0 0.2 0 0" size="0.02" mass="0.5"/></body></worldbody>
+  <actuator><position joint="j" kp="20" kv="0.3"/></actuator>
+</mujoco>"#
+        )
+    };
+    let t: Vec<f64> = (0..200).map(|k| k as f64 * 0.01).collect();
+    let cmd: Vec<f64> =
+        t.iter().map(|&x| if (x * 2.0).fract() < 0.5 { 0.3 } else { -0.3 }).collect();
+    let mut j = crate::sim2real::recording::JointTrace::new("j", vec![0.0; t.len()]);
+    j.q_cmd = Some(cmd);
+    j.qd = Some(vec![0.0; t.len()]);
+    let mut rec = Recording {
+        source: "r.csv".into(),
+        meta: Default::default(),
+        control_rate_hz: Some(100.0),
+        control_t0_s: Some(0.0),
+        t,
+        joints: vec![j],
+        base: None,
+    };
+    let mut disc = Vec::new();
+    for dt in ["0.005", "0.0001"] {
+        let (robot, dir) = robot_from_xml(&format!("dt{}", dt.len()), &model(dt));
+        // The recording: the model's own replay at its own steps.
+        let ep = replay(&robot, &rec, &ReplayOptions::default(), None).unwrap();
+        rec.joints[0].q = ep.q_sim[0].clone();
+        let c =
+            super::timestep_check(&robot, std::slice::from_ref(&rec), &ReplayOptions::default())
+                .unwrap();
+        assert_eq!((c.per_joint.len(), c.fine_timestep), (1, c.timestep / 4.0));
+        assert!(c.per_joint[0].gap_mae < 1e-12, "{c:?}");
+        disc.push(c.per_joint[0].discretisation_mae);
+        std::fs::remove_dir_all(&dir).ok();
+    }
+    assert!(disc[0] > 1e-3 && disc[1] < 0.02 * disc[0], "{disc:?}");
+    let c = super::TimestepCheck {
+        timestep: 0.005,
+        fine_timestep: 0.00125,
+        per_joint: vec![super::JointTimestep {
+            name: "j".into(),
+            discretisation_mae: disc[0],
+            gap_mae: 3.0 * disc[0],
+        }],
+    };
+    let n = super::timestep_note(&c).unwrap();
+    assert!(n.contains("timestep (5.000 ms)") && n.contains("j "), "{n}");
+    let quiet = super::TimestepCheck {
+        per_joint: vec![super::JointTimestep { gap_mae: 5.0 * disc[0], ..c.per_joint[0].clone() }],
+        ..c
+    };
+    assert_eq!(super::timestep_note(&quiet), None);
+}
