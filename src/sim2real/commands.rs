@@ -270,11 +270,23 @@ const MAX_ROUGHNESS_WORK: usize = 20_000_000;
 /// origin the caller would use otherwise (a declared `control_t0_s`, or the first row's time),
 /// scored alongside. `None` without any change between rows closer than a tick.
 pub fn tick_phase(t: &[f64], cmds: &[&[f64]], rate: f64, candidate: f64) -> Option<TickPhase> {
+    tick_phase_q(t, cmds, rate, candidate, time_quantum(t))
+}
+
+/// [`tick_phase`] for timestamps of resolution `quantum` (known from before a rescale that
+/// left them off any decimal grid).
+pub fn tick_phase_q(
+    t: &[f64],
+    cmds: &[&[f64]],
+    rate: f64,
+    candidate: f64,
+    quantum: f64,
+) -> Option<TickPhase> {
     if !(rate.is_finite() && rate > 0.0) || t.len() < 2 {
         return None;
     }
     let p = 1.0 / rate;
-    let eps = change_eps(t, p);
+    let eps = change_eps_q(quantum, p);
     let origin = t[0];
     let phase = |x: f64| (x - origin).rem_euclid(p);
     let spans = change_spans(t, cmds, p, eps);
@@ -395,7 +407,12 @@ pub fn tick_phase(t: &[f64], cmds: &[&[f64]], rate: f64, candidate: f64) -> Opti
 /// A row's true sampling time is within half the timestamps' resolution of its stamp (1 µs at
 /// least): each change's interval is widened by that much at both ends.
 fn change_eps(t: &[f64], p: f64) -> f64 {
-    1e-6_f64.max(TICK_EPS * p).max(0.5 * time_quantum(t))
+    change_eps_q(time_quantum(t), p)
+}
+
+/// [`change_eps`] for timestamps of resolution `quantum`.
+fn change_eps_q(quantum: f64, p: f64) -> f64 {
+    1e-6_f64.max(TICK_EPS * p).max(0.5 * quantum)
 }
 
 /// (start phase after `t[0]`, length) of every command change between rows less than one
@@ -416,17 +433,23 @@ fn change_spans(t: &[f64], cmds: &[&[f64]], p: f64, eps: f64) -> Vec<(f64, f64)>
 
 /// How many of the command changes the best phase of a `rate` grid agrees with, of how many.
 pub fn grid_agreement(t: &[f64], cmds: &[&[f64]], rate: f64) -> (usize, usize) {
-    let (agree, changes, _) = grid_agreement_width(t, cmds, rate);
+    let (agree, changes, _) = grid_agreement_width(t, cmds, rate, time_quantum(t));
     (agree, changes)
 }
 
-/// [`grid_agreement`] and the width [s] of the widest phase interval that agrees with that many.
-fn grid_agreement_width(t: &[f64], cmds: &[&[f64]], rate: f64) -> (usize, usize, f64) {
+/// [`grid_agreement`] and the width [s] of the widest phase interval that agrees with that many,
+/// for timestamps of resolution `quantum`.
+fn grid_agreement_width(
+    t: &[f64],
+    cmds: &[&[f64]],
+    rate: f64,
+    quantum: f64,
+) -> (usize, usize, f64) {
     if !(rate.is_finite() && rate > 0.0) || t.len() < 2 {
         return (0, 0, 0.0);
     }
     let p = 1.0 / rate;
-    let spans = change_spans(t, cmds, p, change_eps(t, p));
+    let spans = change_spans(t, cmds, p, change_eps_q(quantum, p));
     if spans.is_empty() {
         return (0, 0, 0.0);
     }
@@ -478,10 +501,11 @@ pub fn fit_rate(t: &[f64], cmds: &[&[f64]], rate: f64, rel: f64) -> Option<RateF
     }
     let step = (0.02 / (span * rate)).max(2.0 * rel / (MAX_RATE_STEPS - 1) as f64);
     let n = (rel / step).floor() as i64;
+    let quantum = time_quantum(t);
     let mut scored: Vec<(f64, usize, usize, f64)> = Vec::with_capacity(2 * n as usize + 1);
     for i in -n..=n {
         let r = rate * (1.0 + i as f64 * step);
-        let (agree, changes, width) = grid_agreement_width(t, cmds, r);
+        let (agree, changes, width) = grid_agreement_width(t, cmds, r, quantum);
         scored.push((r, agree, changes, width));
     }
     let share = |x: &(f64, usize, usize, f64)| if x.2 == 0 { 0.0 } else { x.1 as f64 / x.2 as f64 };

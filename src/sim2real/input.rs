@@ -44,7 +44,6 @@ pub fn read_for_replay(
 ) -> Result<ReplayInputs, String> {
     let mut recs = Vec::with_capacity(files.len());
     let mut origins = Vec::with_capacity(files.len());
-    let mut trimmed = Vec::new();
     let mut rates = Vec::new();
     let mut duplicates = Vec::new();
     // Unknown joints are reported at the header line, before any value is checked.
@@ -62,10 +61,6 @@ pub fn read_for_replay(
             rates.push((f.clone(), fix));
         }
         origins.push((f.clone(), replay::resolve_tick_origin(&mut r, opts)));
-        let cut = replay::trim_unknown_start(&mut r, opts);
-        if cut > 0 {
-            trimmed.push(cut);
-        }
         recs.push(r);
     }
     let (mut notes, mut warnings) = replay::origin_messages(&origins);
@@ -74,16 +69,6 @@ pub fn read_for_replay(
         notes.push(format!(
             "rows that repeat the row before them exactly were left out (a sample logged twice): {}",
             duplicates.join(", ")
-        ));
-    }
-    if !trimmed.is_empty() {
-        notes.push(format!(
-            "command_timing sent_after: a row logs the next tick's command, so the command in \
-             force at the first row of a file is unknown; the replay of {} file(s) starts at \
-             the first row after a tick ({}–{} row(s) left out)",
-            trimmed.len(),
-            trimmed.iter().min().unwrap_or(&0),
-            trimmed.iter().max().unwrap_or(&0)
         ));
     }
     Ok(ReplayInputs { recs, notes, warnings })

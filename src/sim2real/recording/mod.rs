@@ -218,30 +218,6 @@ impl Recording {
         }
     }
 
-    /// Removes the first `n` rows from every trace.
-    pub fn drop_leading_rows(&mut self, n: usize) {
-        let n = n.min(self.t.len());
-        fn cut<T>(v: &mut Vec<T>, n: usize) {
-            v.drain(..n.min(v.len()));
-        }
-        cut(&mut self.t, n);
-        for j in &mut self.joints {
-            cut(&mut j.q, n);
-            for v in
-                [&mut j.qd, &mut j.q_cmd, &mut j.tau, &mut j.kp, &mut j.kd].into_iter().flatten()
-            {
-                cut(v, n);
-            }
-            if let Some(e) = j.enabled.as_mut() {
-                cut(e, n);
-            }
-        }
-        if let Some(b) = self.base.as_mut() {
-            cut(&mut b.pos, n);
-            cut(&mut b.quat, n);
-        }
-    }
-
     /// Errors unless every recorded joint is one of `model_joints`; the message lists, for each
     /// unknown joint, the closest model joint names (case-insensitive edit distance).
     pub fn validate_joint_names(&self, model_joints: &[String]) -> Result<(), RecordingError> {

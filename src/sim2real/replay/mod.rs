@@ -432,7 +432,7 @@ mod run;
 mod timestep;
 pub use origin::{
     KEY_TIME_SCALE, RateFix, TickOrigin, origin_messages, rate_messages, resolve_rate,
-    resolve_tick_origin, trim_unknown_start,
+    resolve_tick_origin,
 };
 pub use timestep::{JointTimestep, TimestepCheck, timestep_check, timestep_note};
 #[cfg(test)]

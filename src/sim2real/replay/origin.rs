@@ -11,7 +11,7 @@
 use std::path::PathBuf;
 
 use crate::sim2real::commands::{
-    CommandTiming, RateFit, TickPhase, agreement_at, fit_rate, grid_agreement, tick_of, tick_phase,
+    RateFit, TickPhase, agreement_at, fit_rate, grid_agreement, tick_phase_q, time_quantum,
 };
 use crate::sim2real::recording::Recording;
 
@@ -81,6 +81,10 @@ pub struct RateFix {
 /// Metadata key: the factor [`resolve_rate`] scaled the recording's times by.
 pub const KEY_TIME_SCALE: &str = "time_scale";
 
+/// Metadata key: the resolution of the timestamps before [`resolve_rate`] rescaled them (1 ms
+/// stamps are off every decimal grid after it), scaled with them.
+pub const KEY_TIME_QUANTUM: &str = "time_quantum_s";
+
 /// When the recorded command changes miss every tick grid at the control rate in use (more than
 /// 2 % of them at its best phase), but fit one at a rate within ± 0.5 % of it (missing at most
 /// half as many) — a logger's clock that drifts against the controller's, or a controller off
@@ -104,19 +108,31 @@ pub fn resolve_rate(rec: &mut Recording, opts: &ReplayOptions) -> Option<RateFix
         None => best,
     };
     let missed = changes - agree;
-    if changes < MIN_CHANGES || missed <= rate_slack(changes) {
+    // A command that changes within ticks (interpolated per row) fits no grid at any rate:
+    // nothing to search for.
+    if changes < MIN_CHANGES || missed <= rate_slack(changes) || 2 * best < changes {
         return None;
     }
     let fit = fit_rate(&rec.t, &cmds, rate, RATE_SEARCH)?;
     let fit_missed = fit.changes - fit.agree;
-    if fit.agree < MIN_CHANGES
-        || (fit.agree as f64) < GRID_SHARE * fit.changes as f64
-        || 2 * fit_missed > missed
-        || (fit.rate - rate).abs() <= fit.half_width
-    {
+    if fit.agree < MIN_CHANGES || (fit.agree as f64) < GRID_SHARE * fit.changes as f64 {
+        return None;
+    }
+    // Either the fitted rate's best phase clearly beats the given rate's, or (a slow drift the
+    // best phase absorbs) the declared origin, which missed the changes at the given rate,
+    // agrees at the fitted one. A wrong origin at the right rate does neither: at any rate
+    // near it the declared origin still misses the changes at the log's start.
+    let nominal_missed = changes - best;
+    let grid_better = fit_missed < nominal_missed && 2 * fit_missed <= nominal_missed;
+    let origin_better = rec.control_t0_s.is_some_and(|t0| {
+        let at_fit = fit.changes - agreement_at(&rec.t, &cmds, fit.rate, t0).min(fit.changes);
+        2 * at_fit <= missed && at_fit <= rate_slack(fit.changes)
+    });
+    if !(grid_better || origin_better) {
         return None;
     }
     let scale = fit.rate / rate;
+    let quantum = time_quantum(&rec.t) * scale;
     for x in &mut rec.t {
         *x = tick0 + (*x - tick0) * scale;
     }
@@ -128,6 +144,7 @@ pub fn resolve_rate(rec: &mut Recording, opts: &ReplayOptions) -> Option<RateFix
         }
     }
     rec.meta.insert(KEY_TIME_SCALE.to_string(), format!("{scale}"));
+    rec.meta.insert(KEY_TIME_QUANTUM.to_string(), format!("{quantum}"));
     Some(RateFix { declared: rate, declared_agree: agree, fit })
 }
 
@@ -167,27 +184,6 @@ pub fn rate_messages(items: &[(PathBuf, RateFix)]) -> Option<String> {
     ))
 }
 
-/// With [`CommandTiming::SentAfter`] a row logs the command sent *after* it, the next tick's:
-/// the command in force at the rows before the first tick edge after the first row is unknown
-/// (an independent tryout's humanoid logs, starting mid-motion: the next tick's command applied
-/// from the first row on, up to 34 mrad off over the next 0.2 s). Those rows are dropped, so the
-/// replay starts from a row whose command in force is known exactly; the tick origin is made
-/// explicit first (it defaults to the first row's time). Returns the number of rows dropped (0
-/// for in-force logs, without a control rate, or when fewer than 2 rows would remain).
-pub fn trim_unknown_start(rec: &mut Recording, opts: &ReplayOptions) -> usize {
-    let (rate, timing, tick0) = timing_of(rec, opts);
-    let (Some(rate), CommandTiming::SentAfter) = (rate, timing) else { return 0 };
-    let Some(&first) = rec.t.first() else { return 0 };
-    let edge = tick0 + tick_of(first, tick0, rate, timing) as f64 / rate;
-    let n = rec.t.partition_point(|&x| x < edge - 1e-6 / rate);
-    if n == 0 || rec.t.len() - n < 2 {
-        return 0;
-    }
-    rec.control_t0_s = Some(tick0);
-    rec.drop_leading_rows(n);
-    n
-}
-
 /// Checks the recording's tick origin against its rows and, when `control_t0_s` is absent and
 /// the first row's time contradicts them, sets it to the rows' estimate (so that the replay,
 /// every slice of the recording and the fit's windows all use it).
@@ -201,7 +197,13 @@ pub fn resolve_tick_origin(rec: &mut Recording, opts: &ReplayOptions) -> TickOri
     } else {
         TickOrigin::Unknown
     };
-    let Some(tp) = tick_phase(&rec.t, &cmds, rate, tick0) else { return unseen };
+    // Rescaled times ([`resolve_rate`]) keep the resolution their stamps had.
+    let quantum = rec
+        .meta
+        .get(KEY_TIME_QUANTUM)
+        .and_then(|q| q.parse::<f64>().ok())
+        .unwrap_or_else(|| time_quantum(&rec.t));
+    let Some(tp) = tick_phase_q(&rec.t, &cmds, rate, tick0, quantum) else { return unseen };
     if tp.changes < MIN_CHANGES {
         return unseen;
     }
@@ -457,6 +459,9 @@ mod tests {
         let last = before.t.len() - 1;
         let scaled = 0.0071 + (before.t[last] - 0.0071) * fix.fit.rate / 50.0;
         assert!((r.t[last] - scaled).abs() < 1e-9 && r.meta.contains_key(KEY_TIME_SCALE));
+        // The stamps' 1 µs resolution is kept (rescaled, they are off the decimal grid).
+        let q: f64 = r.meta[KEY_TIME_QUANTUM].parse().unwrap();
+        assert!((q - 1e-6 * fix.fit.rate / 50.0).abs() < 1e-15, "{q}");
         let msg = rate_messages(&[(PathBuf::from("ep.csv"), fix)]).unwrap();
         assert!(msg.contains("ep.csv: ticks at 49.98") && msg.contains(" ppm; 49"), "{msg}");
         // The exact rate: nothing to do.
@@ -505,46 +510,6 @@ mod tests {
         assert_eq!(r.control_t0_s, Some(t0));
         // A second pass agrees with what the first set.
         assert_eq!(resolve_tick_origin(&mut r, &ReplayOptions::default()), TickOrigin::Agrees);
-    }
-
-    /// Sent-after logs drop the rows before the first tick edge (their command in force is the
-    /// unlogged previous tick's) and keep the ticks where they were; in-force logs, a first row
-    /// on a tick, or too short a log keep every row.
-    #[test]
-    fn sent_after_logs_start_at_the_first_tick_edge() {
-        let t: Vec<f64> = (0..8).map(|i| 0.004 + 0.005 * i as f64).collect();
-        let mut j = JointTrace::new("a", (0..8).map(|i| i as f64).collect());
-        j.q_cmd = Some((0..8).map(|i| 10.0 * i as f64).collect());
-        j.qd = Some(vec![0.5; 8]);
-        let mut r = Recording::at_100hz(t, vec![j]);
-        r.control_t0_s = Some(0.0);
-        let sa =
-            ReplayOptions { command_timing: Some(CommandTiming::SentAfter), ..Default::default() };
-        let mut in_force = r.clone();
-        assert_eq!(trim_unknown_start(&mut in_force, &ReplayOptions::default()), 0);
-        assert_eq!(in_force, r);
-        let mut cut = r.clone();
-        // Rows at 4 and 9 ms belong to tick 1 (sent at 10 ms): tick 0's command is unknown.
-        assert_eq!(trim_unknown_start(&mut cut, &sa), 2);
-        assert_eq!(cut.t, r.t[2..].to_vec());
-        assert_eq!(cut.joints[0].q_cmd.as_deref(), Some(&[20.0, 30.0, 40.0, 50.0, 60.0, 70.0][..]));
-        assert_eq!((cut.joints[0].q.len(), cut.joints[0].qd.as_ref().unwrap().len()), (6, 6));
-        assert_eq!(cut.control_t0_s, Some(0.0));
-        // Without control_t0_s the first row is the ticks' origin (its own edge): nothing to cut,
-        // and the origin, kept implicit, is unchanged.
-        let mut undeclared = r.clone();
-        undeclared.control_t0_s = None;
-        assert_eq!(trim_unknown_start(&mut undeclared, &sa), 0);
-        // A first row exactly on a tick (0.01 printed as 0.010000000000000002) is kept.
-        let mut on = r.clone();
-        on.t[0] = 0.010000000000000002 - 0.01;
-        on.control_t0_s = Some(-0.01);
-        assert_eq!(trim_unknown_start(&mut on, &sa), 0);
-        // Two rows, both before the edge: nothing left to replay, so nothing is cut.
-        let mut short = r.clone();
-        short.drop_leading_rows(6);
-        short.t = vec![0.011, 0.012];
-        assert_eq!(trim_unknown_start(&mut short, &sa), 0);
     }
 
     #[test]

@@ -178,30 +178,8 @@ fn commands_switch_at_their_ticks_when_the_first_row_is_off_the_step_grid() {
         }
     }
     // Rows 1.3 ms into each tick, linearly interpolated between steps (as the replay samples).
-    let at = |x: &[f64], t: f64| {
-        let i = ts.partition_point(|&s| s <= t).clamp(1, ts.len() - 1);
-        let a = (t - ts[i - 1]) / (ts[i] - ts[i - 1]);
-        x[i - 1] + a * (x[i] - x[i - 1])
-    };
     let t: Vec<f64> = (0..ticks - 2).map(|k| k as f64 * 0.01 + 0.0013).collect();
-    let mut j =
-        crate::sim2real::recording::JointTrace::new("j", t.iter().map(|&x| at(&qs, x)).collect());
-    j.qd = Some(t.iter().map(|&x| at(&vs, x)).collect());
-    j.q_cmd = Some((0..t.len()).map(|k| cmd[k]).collect());
-    let rec = Recording {
-        source: "r.csv".into(),
-        meta: Default::default(),
-        control_rate_hz: Some(100.0),
-        control_t0_s: Some(0.0),
-        t: t.clone(),
-        joints: vec![j],
-        base: None,
-    };
-    let ep = replay(&robot, &rec, &ReplayOptions::default(), None).unwrap();
-    let moved = rec.joints[0].q.iter().map(|q| q.abs()).fold(0.0, f64::max);
-    assert!(moved > 0.05, "the reference barely moved: {moved}");
-    let worst =
-        ep.q_sim[0].iter().zip(&rec.joints[0].q).map(|(s, r)| (s - r).abs()).fold(0.0, f64::max);
+    let worst = worst_against_reference(&robot, (&ts, &qs, &vs), &t, &cmd, 100.0);
     assert!(worst < 1e-9, "replay off the tick-grid reference by {worst} rad");
     std::fs::remove_dir_all(&dir).ok();
 }
@@ -235,32 +213,10 @@ fn ticks_between_step_edges_switch_at_the_nearest_edge() {
         qs.push(d.qpos()[0]);
         vs.push(d.qvel()[0]);
     }
-    let at = |x: &[f64], t: f64| {
-        let i = ts.partition_point(|&s| s <= t).clamp(1, ts.len() - 1);
-        let a = (t - ts[i - 1]) / (ts[i] - ts[i - 1]);
-        x[i - 1] + a * (x[i] - x[i - 1])
-    };
     // One row 5 ms into each tick, the first at t = 0 on a tick and a step edge.
     let t: Vec<f64> =
         (0..ticks - 3).map(|k| if k == 0 { 0.0 } else { k as f64 / rate + 0.005 }).collect();
-    let mut j =
-        crate::sim2real::recording::JointTrace::new("j", t.iter().map(|&x| at(&qs, x)).collect());
-    j.qd = Some(t.iter().map(|&x| at(&vs, x)).collect());
-    j.q_cmd = Some((0..t.len()).map(|k| cmd[k]).collect());
-    let rec = Recording {
-        source: "r.csv".into(),
-        meta: Default::default(),
-        control_rate_hz: Some(rate),
-        control_t0_s: Some(0.0),
-        t: t.clone(),
-        joints: vec![j],
-        base: None,
-    };
-    let ep = replay(&robot, &rec, &ReplayOptions::default(), None).unwrap();
-    let moved = rec.joints[0].q.iter().map(|q| q.abs()).fold(0.0, f64::max);
-    assert!(moved > 0.05, "the reference barely moved: {moved}");
-    let worst =
-        ep.q_sim[0].iter().zip(&rec.joints[0].q).map(|(s, r)| (s - r).abs()).fold(0.0, f64::max);
+    let worst = worst_against_reference(&robot, (&ts, &qs, &vs), &t, &cmd, rate);
     assert!(worst < 1e-9, "replay off the nearest-edge reference by {worst} rad");
     std::fs::remove_dir_all(&dir).ok();
 }
@@ -325,4 +281,39 @@ fn a_timestep_too_coarse_for_the_servo_is_measured() {
         ..c
     };
     assert_eq!(super::timestep_note(&quiet), None);
+}
+
+/// A recording of the reference trajectory `(ts, qs, vs)` (MuJoCo stepped by hand) sampled at
+/// `t` (linearly between steps, as the replay samples), logging tick k's command `cmd[k]` at
+/// row k, ticks at `rate` from 0; replayed, its largest position error. Asserts the reference
+/// moved.
+fn worst_against_reference(
+    robot: &Robot,
+    (ts, qs, vs): (&[f64], &[f64], &[f64]),
+    t: &[f64],
+    cmd: &[f64],
+    rate: f64,
+) -> f64 {
+    let at = |x: &[f64], t: f64| {
+        let i = ts.partition_point(|&s| s <= t).clamp(1, ts.len() - 1);
+        let a = (t - ts[i - 1]) / (ts[i] - ts[i - 1]);
+        x[i - 1] + a * (x[i] - x[i - 1])
+    };
+    let mut j =
+        crate::sim2real::recording::JointTrace::new("j", t.iter().map(|&x| at(qs, x)).collect());
+    j.qd = Some(t.iter().map(|&x| at(vs, x)).collect());
+    j.q_cmd = Some(cmd[..t.len()].to_vec());
+    let rec = Recording {
+        source: "r.csv".into(),
+        meta: Default::default(),
+        control_rate_hz: Some(rate),
+        control_t0_s: Some(0.0),
+        t: t.to_vec(),
+        joints: vec![j],
+        base: None,
+    };
+    let ep = replay(robot, &rec, &ReplayOptions::default(), None).unwrap();
+    let moved = rec.joints[0].q.iter().map(|q| q.abs()).fold(0.0, f64::max);
+    assert!(moved > 0.05, "the reference barely moved: {moved}");
+    ep.q_sim[0].iter().zip(&rec.joints[0].q).map(|(s, r)| (s - r).abs()).fold(0.0, f64::max)
 }

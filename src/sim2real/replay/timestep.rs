@@ -36,14 +36,18 @@ pub struct TimestepCheck {
 }
 
 /// Replays `recs` with the model at its timestep and at a quarter of it. `None` when either
-/// replay fails or diverges (a model whose timestep cannot change: nothing to say).
+/// replay fails or diverges, or the model has actuators with a `delay` (their history buffer
+/// is sized for the model's timestep).
 pub fn timestep_check(
     robot: &Robot,
     recs: &[Recording],
     opts: &ReplayOptions,
 ) -> Option<TimestepCheck> {
     let dt = mj::raw(&robot.mj).opt.timestep;
-    if !(dt > 0.0) || recs.is_empty() {
+    // An actuator `delay` keeps a history of `nsample` steps: at a quarter of the timestep it
+    // would cover a quarter of the delay.
+    let delayed = robot.mj.actuator_history().iter().any(|h| h[0] > 0);
+    if !(dt > 0.0) || recs.is_empty() || delayed {
         return None;
     }
     let mut fine = robot.mj.clone();
@@ -101,8 +105,11 @@ const NOTE_SHARE: f64 = 0.25;
 /// with the discretisation twice that; hardware logs are not, and there it says how much of
 /// the gap the timestep may be.)
 pub fn timestep_note(c: &TimestepCheck) -> Option<String> {
-    let mut hit: Vec<&JointTimestep> =
-        c.per_joint.iter().filter(|j| j.discretisation_mae >= NOTE_SHARE * j.gap_mae).collect();
+    let mut hit: Vec<&JointTimestep> = c
+        .per_joint
+        .iter()
+        .filter(|j| j.gap_mae > 0.0 && j.discretisation_mae >= NOTE_SHARE * j.gap_mae)
+        .collect();
     if hit.is_empty() {
         return None;
     }
