@@ -146,6 +146,13 @@ fn held_recording(joint: &str, n: usize, dt: f64, q: f64, rate: Option<f64>) -> 
     }
 }
 
+/// A position servo on a light link, 2 ms steps, no gravity: the two tick-timing tests.
+const SERVO_2MS: &str = r#"<mujoco><option gravity="0 0 0" timestep="0.002"/>
+  <worldbody><body><joint name="j" type="hinge" axis="0 1 0"/>
+<geom type="capsule" fromto="0 0 0 0.2 0 0" size="0.02" mass="0.5"/></body></worldbody>
+  <actuator><position joint="j" kp="50" kv="2"/></actuator>
+</mujoco>"#;
+
 /// A command switches at its control tick, wherever the first row falls. The expected
 /// trajectory is MuJoCo stepped directly on the tick grid (100 Hz ticks at t = 0, 2 ms steps,
 /// so every tick is a step boundary), the command changed exactly at each tick; the recording
@@ -155,12 +162,7 @@ fn held_recording(joint: &str, n: usize, dt: f64, q: f64, rate: Option<f64>) -> 
 /// ran up to 9.6 mrad behind.
 #[test]
 fn commands_switch_at_their_ticks_when_the_first_row_is_off_the_step_grid() {
-    let xml = r#"<mujoco><option gravity="0 0 0" timestep="0.002"/>
-  <worldbody><body><joint name="j" type="hinge" axis="0 1 0"/>
-<geom type="capsule" fromto="0 0 0 0.2 0 0" size="0.02" mass="0.5"/></body></worldbody>
-  <actuator><position joint="j" kp="50" kv="2"/></actuator>
-</mujoco>"#;
-    let (robot, dir) = robot_from_xml("ticks", xml);
+    let (robot, dir) = robot_from_xml("ticks", SERVO_2MS);
     // Ticks 0–2 hold 0 (the joint rests at its command), then a new command every tick.
     let ticks = 60usize;
     let cmd: Vec<f64> =
@@ -191,12 +193,7 @@ fn commands_switch_at_their_ticks_when_the_first_row_is_off_the_step_grid() {
 /// clean humanoid logs at 49.985 Hz replayed at 1.40 mrad MAE (1.10 after).
 #[test]
 fn ticks_between_step_edges_switch_at_the_nearest_edge() {
-    let xml = r#"<mujoco><option gravity="0 0 0" timestep="0.002"/>
-  <worldbody><body><joint name="j" type="hinge" axis="0 1 0"/>
-<geom type="capsule" fromto="0 0 0 0.2 0 0" size="0.02" mass="0.5"/></body></worldbody>
-  <actuator><position joint="j" kp="50" kv="2"/></actuator>
-</mujoco>"#;
-    let (robot, dir) = robot_from_xml("ticks30", xml);
+    let (robot, dir) = robot_from_xml("ticks30", SERVO_2MS);
     let rate = 30.0;
     let ticks = 40usize;
     let cmd: Vec<f64> =
