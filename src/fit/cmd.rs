@@ -137,7 +137,7 @@ pub fn run_fit(a: FitArgs) -> i32 {
         inputs.notes.insert(0, n);
     }
     // The nominal model's own discretisation error beside its gap to the recordings.
-    if let Some(w) = crate::sim2real::replay::timestep_check(robot, &inputs.recs, &a.replay)
+    if let Some(w) = crate::sim2real::replay::timestep_check(robot, &inputs.recs, &a.replay, None)
         .as_ref()
         .and_then(crate::sim2real::replay::timestep_note)
     {

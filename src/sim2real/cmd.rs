@@ -87,7 +87,7 @@ pub fn run_gap(a: GapArgs) -> i32 {
     let mut report = gap::compute(&recs, &eps, &region, &GapOptions::default());
     report.notes = notes;
     report.warnings = warnings;
-    report.timestep = replay::timestep_check(robot, &recs, &opts);
+    report.timestep = replay::timestep_check(robot, &recs, &opts, Some(&eps));
     if let Some(n) = report.timestep.as_ref().and_then(replay::timestep_note) {
         eprintln!("modellint: note: {n}");
         report.notes.push(n);

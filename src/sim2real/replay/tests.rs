@@ -253,10 +253,22 @@ fn a_timestep_too_coarse_for_the_servo_is_measured() {
         // The recording: the model's own replay at its own steps.
         let ep = replay(&robot, &rec, &ReplayOptions::default(), None).unwrap();
         rec.joints[0].q = ep.q_sim[0].clone();
-        let c =
-            super::timestep_check(&robot, std::slice::from_ref(&rec), &ReplayOptions::default())
-                .unwrap();
+        let c = super::timestep_check(
+            &robot,
+            std::slice::from_ref(&rec),
+            &ReplayOptions::default(),
+            None,
+        )
+        .unwrap();
         assert_eq!((c.per_joint.len(), c.fine_timestep), (1, c.timestep / 4.0));
+        // `gap` hands in the replay it already made: the same answer.
+        let given = super::timestep_check(
+            &robot,
+            std::slice::from_ref(&rec),
+            &ReplayOptions::default(),
+            Some(std::slice::from_ref(&ep)),
+        );
+        assert_eq!(given.as_ref(), Some(&c));
         assert!(c.per_joint[0].gap_mae < 1e-12, "{c:?}");
         disc.push(c.per_joint[0].discretisation_mae);
         std::fs::remove_dir_all(&dir).ok();

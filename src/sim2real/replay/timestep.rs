@@ -12,7 +12,7 @@ use crate::model::Robot;
 use crate::model::mj;
 use crate::sim2real::recording::Recording;
 
-use super::{ReplayOptions, Replayer, replay_all};
+use super::{Episode, ReplayOptions, Replayer, replay_all};
 
 /// Divisor of the timestep for the reference replay.
 pub const REFINE: f64 = 4.0;
@@ -35,13 +35,15 @@ pub struct TimestepCheck {
     pub per_joint: Vec<JointTimestep>,
 }
 
-/// Replays `recs` with the model at its timestep and at a quarter of it. `None` when either
+/// Replays `recs` with the model at its timestep (or takes `base`, that replay already made,
+/// one episode per recording) and at a quarter of it. `None` when either
 /// replay fails or diverges, or the model has actuators with a `delay` (their history buffer
 /// is sized for the model's timestep).
 pub fn timestep_check(
     robot: &Robot,
     recs: &[Recording],
     opts: &ReplayOptions,
+    base: Option<&[Episode]>,
 ) -> Option<TimestepCheck> {
     let dt = mj::raw(&robot.mj).opt.timestep;
     // An actuator `delay` keeps a history of `nsample` steps: at a quarter of the timestep it
@@ -52,16 +54,23 @@ pub fn timestep_check(
     }
     let mut fine = robot.mj.clone();
     fine.opt_mut().timestep = dt / REFINE;
-    let base: Vec<_> = replay_all(&Replayer::new(robot), recs, opts, None)
-        .into_iter()
-        .collect::<Result<_, _>>()
-        .ok()?;
+    let owned: Vec<Episode>;
+    let base: &[Episode] = match base {
+        Some(b) if b.len() == recs.len() => b,
+        _ => {
+            owned = replay_all(&Replayer::new(robot), recs, opts, None)
+                .into_iter()
+                .collect::<Result<_, _>>()
+                .ok()?;
+            &owned
+        }
+    };
     let refined: Vec<_> = replay_all(&Replayer::with_model(robot, &fine), recs, opts, None)
         .into_iter()
         .collect::<Result<_, _>>()
         .ok()?;
     let mut per_joint: Vec<(String, f64, f64, usize)> = Vec::new();
-    for ((rec, a), b) in recs.iter().zip(&base).zip(&refined) {
+    for ((rec, a), b) in recs.iter().zip(base).zip(&refined) {
         if a.diverged.is_some() || b.diverged.is_some() {
             return None;
         }
