@@ -97,3 +97,13 @@ CASES["H11_none_rate_off"] = dict(H12_EP, seed=51,
 CASES["H12_knees_damping8_rate_off"] = dict(H12_EP, seed=52,
     logging=dict(rec_start=1.0, declare_t0=False, ctrl_hz=49.985, declared_hz=50.0),
     effects={"joints": {j: {"damping": 8.0} for j in H12 if j.endswith("_knee")}})
+# ---- the robot moves in (nearly) continuous time: it integrates at an eighth of the model's
+# timestep, as hardware does against a model stepped at 2 ms (humanoid) or 1 ms; the model's own
+# discretisation is then part of the gap, and must not come out as physics ----
+CASES["H13_none_fine"] = dict(H12_EP, seed=51, logging=dict(physics_div=8), effects={})
+CASES["H14_knees_damping8_fine"] = dict(H12_EP, seed=52, logging=dict(physics_div=8),
+    effects={"joints": {j: {"damping": 8.0} for j in H12 if j.endswith("_knee")}})
+CASES["L10_none_fine"] = dict(model="leg3", seed=11, logging=dict(physics_div=8), effects={})
+CASES["L11_knee_damping_fine"] = dict(model="leg3", seed=12, logging=dict(physics_div=8),
+    effects={"joints": {"knee": {"damping": 0.8}}})
+CASES["Q5_none_fine"] = dict(QUAD_EP, seed=41, logging=dict(physics_div=8), effects={})

@@ -168,6 +168,9 @@ def run_episode(m, joints, cfg, eff, rng, seconds, ep_idx, split, out_csv, t0_ct
     # straddle such a switch is split there (a real servo does not wait for the simulator's
     # next step; applying each command at the first step after its switch time added a
     # 0.3-1.9 ms latency that no case declared).
+    # `physics_div`: the robot integrates at timestep / physics_div (hardware moves in continuous
+    # time; the model a user trains with steps at its own timestep).
+    h_max = dt / float(cfg.get("physics_div", 1))
     t_end = seconds + 0.05
     switches = np.unique(np.concatenate([tick_t + dl for dl in set(delay)]))
     T = [-SETTLE_S]; Q = [[d.qpos[a] for a in qadr]]; QD = [[d.qvel[a] for a in dadr]]
@@ -179,7 +182,7 @@ def run_episode(m, joints, cfg, eff, rng, seconds, ep_idx, split, out_csv, t0_ct
             k = issued_index(t - delay[i])
             d.ctrl[aids[i]] = cmd[max(k, 0), i]
         nxt = switches[np.searchsorted(switches, t + 1e-9, side="right")] if switches[-1] > t + 1e-9 else np.inf
-        h = min(dt, nxt - t, t_end - t)
+        h = min(h_max, nxt - t, t_end - t)
         m.opt.timestep = h
         mujoco.mj_step(m, d)
         t = nxt if h == nxt - t else t + h
@@ -269,7 +272,7 @@ def main(case):
                                os.path.join(out, "episodes", f"ep_{e:02d}.csv"), cfg["t0_ctrl"]))
     truth = {"case": case, "model": mcfg["xml"], "joints": mcfg["joints"], "effects": eff,
              "resolved": resolved,
-             "logging": {k: cfg[k] for k in ("rec_hz", "jitter", "drop", "q_noise", "qd_noise", "bits", "t0_ctrl", "amp", "rec_start", "declare_t0", "ctrl_hz", "declared_hz") if k in cfg},
+             "logging": {k: cfg[k] for k in ("rec_hz", "jitter", "drop", "q_noise", "qd_noise", "bits", "t0_ctrl", "amp", "rec_start", "declare_t0", "ctrl_hz", "declared_hz", "physics_div") if k in cfg},
              "settle_s": SETTLE_S, "control_rate_hz": float(cfg.get("ctrl_hz", CTRL_HZ)), "seed": c["seed"],
              "timestep": m.opt.timestep, "episodes": eps, "mujoco": mujoco.__version__}
     with open(os.path.join(out, "truth.json"), "w") as f:

@@ -293,7 +293,7 @@ pub fn run_fit(a: FitArgs) -> i32 {
             "diagnosis": out.diagnosis.iter().take(20).collect::<Vec<_>>(),
             "tried": out.tried,
             "split": {"train": out.train.len(), "heldout": out.heldout.len(), "by_time": out.split_by_time, "note": out.split_note},
-            "floor": out.floors.iter().map(|f| json!({"joint": f.joint, "residual_rms": f.ms.sqrt(), "white_floor_rms": f.white.sqrt(), "reconstruction_floor_rms": f.reconstruction.sqrt()})).collect::<Vec<_>>(),
+            "floor": out.floors.iter().map(|f| json!({"joint": f.joint, "residual_rms": f.ms.sqrt(), "white_floor_rms": f.white.sqrt(), "reconstruction_floor_rms": f.reconstruction.sqrt(), "discretisation_floor_rms": f.discretisation.sqrt()})).collect::<Vec<_>>(),
             "stopped_at_floor": out.stopped_at_floor,
             "warnings": warnings,
             "notes": notes,
@@ -371,22 +371,31 @@ pub fn run_fit(a: FitArgs) -> i32 {
             after.gap_overall
         ));
         if !out.floors.is_empty() {
+            // The timestep's part only when the recordings move in finer time than the model.
+            let disc = out.floors.iter().any(|f| f.discretisation > 0.0);
             let f: Vec<String> = out
                 .floors
                 .iter()
                 .map(|f| {
+                    let d = if disc {
+                        format!(" + {:.3}°", deg(f.discretisation.sqrt()))
+                    } else {
+                        String::new()
+                    };
                     format!(
-                        "{} {:.3}° + {:.3}°",
+                        "{} {:.3}° + {:.3}°{d}",
                         f.joint,
                         deg(f.white.sqrt()),
                         deg(f.reconstruction.sqrt())
                     )
                 })
                 .collect();
-            s.push_str(&format!(
-                "  floor of the fitted model (RMS: white part of the training residual + command reconstruction and start state): {}\n",
-                f.join(", ")
-            ));
+            let parts = if disc {
+                "white part of the training residual + command reconstruction and start state + the model's timestep"
+            } else {
+                "white part of the training residual + command reconstruction and start state"
+            };
+            s.push_str(&format!("  floor of the fitted model (RMS: {parts}): {}\n", f.join(", ")));
         }
         if !out.split_note.is_empty() {
             s.push_str(&format!("  ({})\n", out.split_note));

@@ -235,12 +235,15 @@ pub struct Floor {
     pub white: f64,
     /// Command-reconstruction and start-state floor ([`Engine::reconstruction_floor`]).
     pub reconstruction: f64,
+    /// Discretisation floor ([`Engine::discretisation_floor`]): what the model's own timestep
+    /// explains when the recordings move in continuous time.
+    pub discretisation: f64,
 }
 
 impl Floor {
-    /// The residual is within `ratio` of the floor (white + reconstruction).
+    /// The residual is within `ratio` of the floor (white + reconstruction + discretisation).
     pub fn reached(&self, ratio: f64) -> bool {
-        self.ms <= ratio * (self.white + self.reconstruction)
+        self.ms <= ratio * (self.white + self.reconstruction + self.discretisation)
     }
 }
 

@@ -434,6 +434,6 @@ pub use origin::{
     KEY_TIME_SCALE, RateFix, TickOrigin, origin_messages, rate_messages, resolve_rate,
     resolve_tick_origin,
 };
-pub use timestep::{JointTimestep, TimestepCheck, timestep_check, timestep_note};
+pub use timestep::{JointTimestep, REFINE, TimestepCheck, timestep_check, timestep_note};
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;

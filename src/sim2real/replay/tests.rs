@@ -121,7 +121,7 @@ fn delayed_actuator_starts_from_the_first_command_not_zero() {
 
 /// The robot of MJCF text `xml`, loaded from a file in a fresh temporary directory (returned,
 /// for the caller to remove).
-fn robot_from_xml(tag: &str, xml: &str) -> (Robot, std::path::PathBuf) {
+pub(crate) fn robot_from_xml(tag: &str, xml: &str) -> (Robot, std::path::PathBuf) {
     let dir = std::env::temp_dir().join(format!("modellint-{tag}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("model.xml");
