@@ -107,3 +107,11 @@ CASES["L10_none_fine"] = dict(model="leg3", seed=11, logging=dict(physics_div=8)
 CASES["L11_knee_damping_fine"] = dict(model="leg3", seed=12, logging=dict(physics_div=8),
     effects={"joints": {"knee": {"damping": 0.8}}})
 CASES["Q5_none_fine"] = dict(QUAD_EP, seed=41, logging=dict(physics_div=8), effects={})
+# The controller off its rate (as H11/H12) on a robot in near-continuous time: H11's
+# simulator splits its 2 ms steps at ticks that drift across them, a discretisation no
+# fixed-step replay has; hardware has none.
+CASES["H15_none_rate_off_fine"] = dict(H12_EP, seed=51, effects={},
+    logging=dict(rec_start=1.0, declare_t0=False, ctrl_hz=49.985, declared_hz=50.0, physics_div=8))
+CASES["H16_knees_damping8_rate_off_fine"] = dict(H12_EP, seed=52,
+    logging=dict(rec_start=1.0, declare_t0=False, ctrl_hz=49.985, declared_hz=50.0, physics_div=8),
+    effects={"joints": {j: {"damping": 8.0} for j in H12 if j.endswith("_knee")}})

@@ -758,6 +758,27 @@ pub fn reconstruct(
             stats.interpolated += j - i - 1;
         }
     }
+    // A `sent_after` log's first row is sampled before the first tick it shows: the command in
+    // force there is the tick before, which no row logs. Held at the first logged command, it
+    // switched a tick early (up to 34 mrad of start transient on an independent tryout's logs).
+    // It is extrapolated along the first ticks' shape when they move on one slope (a ramp, or a
+    // smooth curve whose slope changes by less than half from tick to tick); else held.
+    let first_tick_t = t0 + k0 as f64 / rate;
+    if timing == CommandTiming::SentAfter && t[0] < first_tick_t - TICK_EPS / rate {
+        for v in out.iter_mut() {
+            let before = match v.get(..3) {
+                Some(&[a, b, c]) if a.is_finite() && b.is_finite() && c.is_finite() => {
+                    let (s1, s2) = (b - a, c - b);
+                    if (s1 - s2).abs() <= 1e-6 + 0.5 * s1.abs().max(s2.abs()) { a - s1 } else { a }
+                }
+                _ => v[0],
+            };
+            v.insert(0, before);
+        }
+        stats.ticks += 1;
+        stats.interpolated += 1;
+        return Ok(Schedule::Ticks { t0, rate, k0: k0 - 1, cmd: out, stats });
+    }
     Ok(Schedule::Ticks { t0, rate, k0, cmd: out, stats })
 }
 
@@ -1012,9 +1033,45 @@ mod tests {
         assert_eq!(s.at(0, 0.012), 1.0);
         assert_eq!(s.at(0, 0.022), 2.0);
         assert_eq!(s.at(0, 0.031), 3.0);
+        // Before the first tick a row shows: the tick no row logs, along the ramp (1, 2, 3).
+        assert_eq!(s.at(0, 0.005), 0.0);
         let f =
             reconstruct(&t, &[&c], Some(100.0), 0.0, CommandTiming::InForce, Fill::Ramps).unwrap();
         assert_eq!(f.at(0, 0.012), 2.0);
+    }
+
+    /// A `sent_after` log that starts mid-tick: the tick in force at its first row is
+    /// extrapolated along a ramp or a smooth curve, held before a step or a hold, and not
+    /// added when the first row sits exactly on its tick.
+    #[test]
+    fn sent_after_fills_the_tick_before_the_first_row() {
+        let t = [0.013, 0.023, 0.033, 0.043];
+        let at_start = |c: &[f64]| {
+            let s = reconstruct(&t, &[c], Some(100.0), 0.0, CommandTiming::SentAfter, Fill::Ramps)
+                .unwrap();
+            assert_eq!(s.at(0, 0.02), c[0]);
+            s.at(0, 0.013)
+        };
+        // Ramp: rows log ticks 2..5 (0.02 … 0.05); tick 1 (0.01–0.02) is one slope back.
+        assert!((at_start(&[0.2, 0.3, 0.4, 0.5]) - 0.1).abs() < 1e-12);
+        // Smooth: slopes 0.10 then 0.08, the first slope back.
+        assert!((at_start(&[1.0, 1.1, 1.18, 1.24]) - 0.9).abs() < 1e-12);
+        // A step right after the first logged tick, and a hold: the first command held.
+        assert_eq!(at_start(&[0.0, 0.5, 0.5, 0.5]), 0.0);
+        assert_eq!(at_start(&[0.7, 0.7, 0.7, 0.7]), 0.7);
+        // First row exactly on its tick: it logs the command sent there; nothing before it.
+        let on = [0.02, 0.03, 0.04];
+        let s = reconstruct(
+            &on,
+            &[&[0.2, 0.3, 0.4]],
+            Some(100.0),
+            0.0,
+            CommandTiming::SentAfter,
+            Fill::Ramps,
+        )
+        .unwrap();
+        assert_eq!(s.stats().unwrap().ticks, 3);
+        assert_eq!(s.at(0, 0.02), 0.2);
     }
 
     #[test]

@@ -1,7 +1,8 @@
 //! Whether the model's timestep is fine enough for the recorded motion: the replay at a quarter
 //! of the timestep against the replay at the model's own. A real robot moves in continuous
 //! time; when the model's discretisation alone moves the replay by a good part of its gap to
-//! the recordings, `fit` explains that part as physics. Measured on an independent simulator's
+//! the recordings, that part is no physics the model lacks (`fit` counts it in its floor:
+//! `fit::select::Engine::discretisation_floor`). Measured on an independent simulator's
 //! clean humanoid legs (kp 150–250 servos, `implicitfast`, 2 ms): recorded at 0.5 ms steps, the
 //! 2 ms replay sat 1.40 mrad (MAE) from them against 0.59 at matched steps, and `fit` reported
 //! a 0.6 ms action delay and kd × 1.007 on all twelve joints.
@@ -138,8 +139,8 @@ pub fn timestep_note(c: &TimestepCheck) -> Option<String> {
         "the model's timestep ({:.3} ms) moves the replay itself: at {:.3} ms it lands, on {} \
          of {} joints, a quarter of the gap to the recordings or more away (MAE, timestep vs \
          gap: {}{more}). If the recordings come from hardware, which moves in continuous time, \
-         up to that much of the gap is the discretisation, and `fit` reports it as an action \
-         delay, a gain error or damping; a smaller timestep removes it",
+         up to that much of the gap is the discretisation (`fit` counts the part a finer \
+         replay removes as floor, not physics); a smaller timestep removes it",
         1e3 * c.timestep,
         1e3 * c.fine_timestep,
         hit.len(),
