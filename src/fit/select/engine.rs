@@ -46,7 +46,7 @@ pub struct Engine<'a> {
     /// sensitivities are measured ([`Engine::set_start_model`]).
     start_model: std::sync::Mutex<Vec<Applied>>,
     /// The discretisation floor ([`Engine::discretisation_floor`]) by [`set_key`], and by
-    /// dataset alone (the largest measured).
+    /// dataset alone (the latest measured).
     disc: std::sync::Mutex<Vec<(String, Vec<f64>)>>,
 }
 
@@ -424,7 +424,8 @@ impl<'a> Engine<'a> {
             })
             .collect();
         let recon = self.reconstruction_floor(recs, applied, errs, &start);
-        let disc = self.discretisation_floor(recs, applied);
+        let base: Vec<f64> = white.iter().zip(&recon).map(|(w, r)| w.1 + r).collect();
+        let disc = self.discretisation_floor(recs, applied, &base);
         self.joints
             .iter()
             .zip(white.iter().zip(&recon))
@@ -439,50 +440,58 @@ impl<'a> Engine<'a> {
             .collect()
     }
 
-    /// Per fitted joint, the part of the residual mean square that the model's own timestep
-    /// explains when the recordings move in (nearer) continuous time, as hardware does: the
-    /// recordings are replayed at the model's timestep and at a quarter of it, and the floor is
-    /// how much closer the finer replay comes, `max(0, ms(timestep) − ms(timestep / 4))`, at
-    /// most the two replays' own mean square difference. Recordings simulated at the model's
-    /// own timestep (every synth) come closer to the coarse replay: zero. Measured with the
-    /// effects `applied` (a missing effect moves both replays), once per set, and never below
-    /// what an earlier set of this dataset measured: a fitted effect absorbs part of the
-    /// discretisation error (knee damping 8 fitted as 8.3 on such recordings), after which
-    /// the floor measured with it shrinks and the next round would explain the rest with an
-    /// invented effect. A model with actuators with a `delay` (their history is sized for the
-    /// timestep) takes the earlier measurement, or zero.
+    /// Per fitted joint, the model's own timestep's part of the residual mean square when the
+    /// recordings move in finer time than the model, as hardware moves in continuous time.
+    /// Each dataset is replayed with `applied` at the model's timestep and at a quarter of it.
+    /// The recordings count as finer than the model when on more than half of the joints the
+    /// finer replay comes closer to them by at least half of the two replays' own mean square
+    /// difference (`ms(coarse) − ms(fine) ≥ ½ ms(coarse − fine)`), counting only joints whose
+    /// residual noise plus that difference can explain (`ms(coarse) ≤ 4 (base + ms(coarse −
+    /// fine))`, `base`: the joint's white and reconstruction floor): a large missing effect
+    /// makes either replay closer by chance. Then every joint's part is `ms(coarse − fine)`, a
+    /// property of the model and the motion that an effect fitted to absorb some of the
+    /// discretisation does not shrink; else zero. Recordings simulated at the model's own step
+    /// (every synth) are farther from the finer replay: zero. Once per set of effects; a set
+    /// that cannot be measured (actuators with a `delay`: their history is sized for the
+    /// timestep) takes the dataset's latest measurement, or zero.
     ///
-    /// Why: an independent simulator's clean humanoid legs, integrated at an eighth of the
-    /// model's 2 ms timestep, sit 1.4 mrad from the 2 ms replay against 0.6 at matched steps;
-    /// without this floor `fit` explained the difference as a 0.6 ms action delay and a kd
-    /// scale of 1.007 on all twelve joints.
-    pub fn discretisation_floor(&self, recs: &[Recording], applied: &[Applied]) -> Vec<f64> {
+    /// Why: an independent simulator's clean humanoid legs integrated at an eighth of the
+    /// model's 2 ms step sit 1.2 mrad from the 2 ms replay; without this part `fit` explained
+    /// it as damping and a 0.6 ms action delay on all twelve joints; measured per joint as how
+    /// much closer the finer replay comes, knee damping fitted as 8.3 for 8 took the knees'
+    /// part to zero and the next round kept a delay and a gain error on every joint.
+    pub fn discretisation_floor(
+        &self,
+        recs: &[Recording],
+        applied: &[Applied],
+        base: &[f64],
+    ) -> Vec<f64> {
         let (set, key) = (set_key(recs, &[]), set_key(recs, applied));
         let memo = |k: &str| -> Option<Vec<f64>> {
             let m = self.disc.lock().unwrap_or_else(|e| e.into_inner());
-            m.iter().find(|(x, _)| x == k).map(|(_, d)| d.clone())
+            m.iter().rev().find(|(x, _)| x == k).map(|(_, d)| d.clone())
         };
         if let Some(d) = memo(&key) {
             return d;
         }
-        let most = memo(&set);
-        let d = match (self.measure_discretisation(recs, applied), most) {
-            (Some(d), Some(m)) => d.iter().zip(&m).map(|(a, b)| a.max(*b)).collect(),
-            (Some(d), None) => d,
-            (None, Some(m)) => m,
-            (None, None) => vec![0.0; self.joints.len()],
+        let d = match self.measure_discretisation(recs, applied) {
+            Some(sums) => discretisation_part(&sums, base),
+            None => memo(&set).unwrap_or_else(|| vec![0.0; self.joints.len()]),
         };
         let mut m = self.disc.lock().unwrap_or_else(|e| e.into_inner());
-        m.retain(|(x, _)| *x != set);
-        if key != set {
-            m.push((key, d.clone()));
-        }
+        m.push((key, d.clone()));
         m.push((set, d.clone()));
         d
     }
 
-    /// [`Engine::discretisation_floor`] measured with `applied`; `None` when it cannot be.
-    fn measure_discretisation(&self, recs: &[Recording], applied: &[Applied]) -> Option<Vec<f64>> {
+    /// Per fitted joint, the mean squares (coarse − real, fine − real, coarse − fine) of the
+    /// replays at the model's timestep and at a quarter of it with `applied`; `None` when they
+    /// cannot be made.
+    fn measure_discretisation(
+        &self,
+        recs: &[Recording],
+        applied: &[Applied],
+    ) -> Option<Vec<[f64; 3]>> {
         let m = model_with(self.robot, applied);
         let dt = m.opt().timestep;
         if !(dt > 0.0) || recs.is_empty() || m.actuator_history().iter().any(|h| h[0] > 0) {
@@ -504,10 +513,10 @@ impl<'a> Engine<'a> {
             1 + crate::sim2real::replay::REFINE as usize,
             std::sync::atomic::Ordering::Relaxed,
         );
-        self.joints
+        let sums = self
+            .joints
             .iter()
             .map(|name| {
-                // Sums of squares: coarse − real, fine − real, coarse − fine.
                 let (mut sc, mut sf, mut scf, mut n) = (0.0, 0.0, 0.0, 0usize);
                 for ((rec, c), f) in recs.iter().zip(&coarse).zip(&fine) {
                     let Some(k) = rec.joints.iter().position(|j| &j.name == name) else { continue };
@@ -523,10 +532,11 @@ impl<'a> Engine<'a> {
                         }
                     }
                 }
-                if n == 0 { 0.0 } else { ((sc - sf) / n as f64).clamp(0.0, scf / n as f64) }
+                let n = n.max(1) as f64;
+                [sc / n, sf / n, scf / n]
             })
-            .collect::<Vec<f64>>()
-            .into()
+            .collect();
+        Some(sums)
     }
 
     /// `true` when every fitted joint's residual of `recs` simulated with `applied` as `errs` is within
@@ -954,6 +964,22 @@ impl<'a> Engine<'a> {
                 (idx.iter().map(|&s| u.stderr[s]).collect(), idx.iter().all(|&s| u.identifiable[s]))
             })
             .collect()
+    }
+}
+
+/// [`Engine::discretisation_floor`]'s decision on the per-joint mean squares `sums` (coarse −
+/// real, fine − real, coarse − fine) and the joints' white + reconstruction floors `base`.
+fn discretisation_part(sums: &[[f64; 3]], base: &[f64]) -> Vec<f64> {
+    let moved = sums.iter().filter(|s| s[2] > 0.0).count();
+    let votes = sums
+        .iter()
+        .zip(base)
+        .filter(|([c, f, d], b)| *d > 0.0 && *c <= 4.0 * (*b + d) && c - f >= 0.5 * d)
+        .count();
+    if moved > 0 && 2 * votes > moved {
+        sums.iter().map(|s| s[2]).collect()
+    } else {
+        vec![0.0; sums.len()]
     }
 }
 
