@@ -139,8 +139,9 @@ pub fn timestep_note(c: &TimestepCheck) -> Option<String> {
         "the model's timestep ({:.3} ms) moves the replay itself: at {:.3} ms it lands, on {} \
          of {} joints, a quarter of the gap to the recordings or more away (MAE, timestep vs \
          gap: {}{more}). If the recordings come from hardware, which moves in continuous time, \
-         up to that much of the gap is the discretisation (`fit` counts the part a finer \
-         replay removes as floor, not physics); a smaller timestep removes it",
+         up to that much of the gap is the discretisation (`fit` counts it as floor, not \
+         physics, when the recordings are closer to the finer replay); a smaller timestep \
+         removes it",
         1e3 * c.timestep,
         1e3 * c.fine_timestep,
         hit.len(),
