@@ -9,7 +9,7 @@ mod common;
 
 use common::{hidden, kept, load, root, synth_into, synth_recordings};
 use modellint::fit::effects;
-use modellint::fit::select::{FitOptions, fit};
+use modellint::fit::select::{FitOptions, SearchPolicy, fit};
 use modellint::synth::Settings;
 
 const JOINTS: [&str; 3] = ["shoulder_pitch", "elbow_pitch", "wrist_pitch"];
@@ -51,7 +51,7 @@ fn check_ranked(
     );
     let opts = FitOptions {
         effects: allowed.iter().map(|s| s.to_string()).collect(),
-        max_rounds: 1,
+        policy: SearchPolicy { max_rounds: 1, ..Default::default() },
         ..Default::default()
     };
     let t0 = std::time::Instant::now();
@@ -454,7 +454,7 @@ fn motor_family_is_fitted_as_one_group() {
     let families = joints.iter().map(|j| (j.clone(), "m1".to_string())).collect();
     let opts = FitOptions {
         effects: vec!["armature".into(), "viscous_damping".into()],
-        max_rounds: 1,
+        policy: SearchPolicy { max_rounds: 1, ..Default::default() },
         families,
         ..Default::default()
     };
@@ -477,7 +477,7 @@ fn multiple_shooting_windows_recover_delay() {
     );
     let opts = FitOptions {
         effects: vec!["action_delay".into(), "viscous_damping".into()],
-        max_rounds: 1,
+        policy: SearchPolicy { max_rounds: 1, ..Default::default() },
         shooting_s: Some(1.0),
         ..Default::default()
     };
@@ -498,7 +498,14 @@ fn two_effects_on_two_joints_are_both_found() {
         hidden("action_delay", "wrist_pitch", &[0.02]),
     ];
     let recs = synth_recordings("fit_two", &robot, &joints(), &truth, &setup(9));
-    let out = fit(&robot, &recs, &FitOptions { max_rounds: 3, ..Default::default() });
+    let out = fit(
+        &robot,
+        &recs,
+        &FitOptions {
+            policy: SearchPolicy { max_rounds: 3, ..Default::default() },
+            ..Default::default()
+        },
+    );
     let got: Vec<(String, String, f64)> =
         out.selected.iter().map(|s| (s.effect.clone(), s.joints.join(","), s.values[0])).collect();
     eprintln!("{got:?}");

@@ -209,6 +209,15 @@ pub fn run_fit(a: FitArgs) -> i32 {
         for n in &out.notes {
             eprintln!("modellint: note: {n}");
         }
+        let c = &out.cost;
+        eprintln!(
+            "modellint: note: search cost: {} rollouts in {} batches ({:.1} s simulating), {} dataset simulations; screens saved {} full fits",
+            c.rollouts.rollouts,
+            c.rollouts.batches,
+            c.rollouts.seconds,
+            c.simulations,
+            c.fits_saved_by_screens
+        );
     }
     if out.heldout.is_empty() {
         return 2;
@@ -295,6 +304,7 @@ pub fn run_fit(a: FitArgs) -> i32 {
             "split": {"train": out.train.len(), "heldout": out.heldout.len(), "by_time": out.split_by_time, "note": out.split_note},
             "floor": out.floors.iter().map(|f| json!({"joint": f.joint, "residual_rms": f.ms.sqrt(), "white_floor_rms": f.white.sqrt(), "reconstruction_floor_rms": f.reconstruction.sqrt(), "discretisation_floor_rms": f.discretisation.sqrt()})).collect::<Vec<_>>(),
             "stopped_at_floor": out.stopped_at_floor,
+            "search": out.cost,
             "warnings": warnings,
             "notes": notes,
         });

@@ -4,6 +4,7 @@ pub mod diagnose;
 pub mod effects;
 pub mod optim;
 pub mod report;
+pub mod rollout;
 pub mod rotation;
 pub mod select;
 pub mod split;

@@ -48,6 +48,9 @@ impl Effect for ExternalLoadFriction {
     fn friction(&self) -> bool {
         true
     }
+    fn plain_variant(&self) -> Option<&'static dyn Effect> {
+        Some(&super::coulomb_friction::CoulombFriction)
+    }
     fn signature(&self, s: &Samples) -> Signature {
         // No feature of its own: the sign of the velocity (as Coulomb friction); the greedy
         // round re-ranks every candidate by its simulated sensitivity.

@@ -32,6 +32,9 @@ impl Effect for LoadDependentFriction {
     fn friction(&self) -> bool {
         true
     }
+    fn plain_variant(&self) -> Option<&'static dyn Effect> {
+        Some(&super::coulomb_friction::CoulombFriction)
+    }
     fn initial(&self, _m: &MjModel, _t: &JointTarget) -> Vec<f64> {
         vec![0.02, 0.02]
     }

@@ -31,6 +31,7 @@ pub mod docs;
 macro_rules! registry {
     ($($module:ident::$effect:ident),* $(,)?) => {
         $(mod $module;)*
+        $(pub use $module::$effect;)*
 
         /// Every effect, in the fit engine's preference order (simpler first).
         pub fn all() -> Vec<&'static dyn Effect> {
@@ -321,6 +322,13 @@ pub trait Effect: Declared + Sync {
     /// descriptions of one loss, never a pair that only makes sense together.
     fn friction(&self) -> bool {
         false
+    }
+    /// The plain model this one elaborates, when both describe the same loss (Coulomb
+    /// friction for the load- or velocity-shaped friction models): beside it on the same
+    /// joints the two split one loss in two, and the search prefers the plain one alone.
+    /// `None` (the default): this effect is plain, or elaborates none.
+    fn plain_variant(&self) -> Option<&'static dyn Effect> {
+        None
     }
     /// `true` when a joint with this effect can stay where it starts for as long as it sticks
     /// (dry friction, a dead band): a start error does not die out as it does on the smooth

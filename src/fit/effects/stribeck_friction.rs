@@ -37,6 +37,9 @@ impl Effect for StribeckFriction {
     fn friction(&self) -> bool {
         true
     }
+    fn plain_variant(&self) -> Option<&'static dyn Effect> {
+        Some(&super::coulomb_friction::CoulombFriction)
+    }
     fn initial(&self, _m: &MjModel, _t: &JointTarget) -> Vec<f64> {
         vec![0.1, 0.05, 0.1]
     }

@@ -11,7 +11,8 @@ use crate::fit::stats::bic;
 use crate::model::mirror::{leg_joint, mirror_name};
 
 use super::pairs::{joint_pairs, pair_lookahead};
-use super::verdict::{at_bound, verdict, z_needed};
+use super::policy::Phase;
+use super::verdict::{at_bound, verdict};
 use super::{Errors, FitOutcome, Search, Selected, Tried, set_uncertainty};
 
 /// A candidate: effect, joint group, evidence.
@@ -38,7 +39,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     if round == 0 {
         out.floors = floors.clone();
     }
-    if floors.iter().all(|f| f.reached(opts.white_ratio)) {
+    if floors.iter().all(|f| f.reached(opts.policy.white_ratio)) {
         out.stopped_at_floor = true;
         return false;
     }
@@ -94,7 +95,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
                     && !covered(c.effect, p)
                     && diag
                         .iter()
-                        .take(opts.candidates_per_round * 4)
+                        .take(opts.policy.rank_window())
                         .any(|d| d.effect == c.effect && &d.joint == p)
             })
             .map(|p| sorted_pair(&c.joint, p));
@@ -119,7 +120,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
                 .collect(),
             None => vec![],
         };
-        let fam_new = fam.len() >= 3 && !has_group(cands, e.id(), &fam);
+        let fam_new = fam.len() >= opts.policy.min_group && !has_group(cands, e.id(), &fam);
         // The same joint on every leg of a quadruped (`FL_knee` … `RR_knee`) as one more group
         // when a joint of another leg pair (not the mirror: the pair covers that) also ranks
         // high for this effect: four knees with the same missing armature are one group, not
@@ -134,10 +135,10 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
             None => vec![],
         };
         let mirror = mirror_name(&c.joint);
-        let legs_new = legs.len() >= 3
+        let legs_new = legs.len() >= opts.policy.min_group
             && legs != fam
             && !has_group(cands, e.id(), &legs)
-            && diag.iter().take(opts.candidates_per_round * 4).any(|d| {
+            && diag.iter().take(opts.policy.rank_window()).any(|d| {
                 d.effect == c.effect
                     && d.joint != c.joint
                     && Some(&d.joint) != mirror.as_ref()
@@ -176,12 +177,12 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         }
     };
     for c in &diag {
-        if cands.len() >= opts.candidates_per_round {
+        if cands.len() >= opts.policy.candidates_per_round {
             break;
         }
         push(c, &mut cands);
     }
-    if opts.every_effect {
+    if opts.policy.every_effect {
         // The best-ranked joint of every other effect: the linearised ranking is only a guide
         // (a doubled inertia or a saturation is far from linear).
         // Effects whose best joint explains less than a tenth of the top candidate are left out.
@@ -198,7 +199,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
                 c.effect == id
                     && !covered(c.effect, &c.joint)
                     && c.explained_rms > 1e-9
-                    && c.explained_rms >= 0.1 * top
+                    && c.explained_rms >= opts.policy.minor_effect_share * top
             }) {
                 push(c, &mut cands);
             }
@@ -231,10 +232,10 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     // One-parameter candidates first (a 1-D fit is cheap), in rank order; then the
     // multi-parameter ones, each screened against the best of those (below).
     cands.sort_by_key(|(e, ..)| e.fitted() >= 2);
-    let z = z_needed(cands.len());
+    let z = opts.policy.z_needed(cands.len());
     let k_before: usize = applied.iter().map(|a| a.effect.fitted()).sum();
     let bic_before = bic(tr_err.n, tr_err.sse, k_before);
-    let mut accepted: Vec<(Selected, bool, Errors)> = Vec::new();
+    let mut accepted: Vec<(Selected, bool, Errors, usize)> = Vec::new();
     // Every single fit of the round, for the joint pairs when no single one passes.
     let mut fitted: Vec<Applied> = Vec::new();
     // Screen for the multi-parameter candidates: a coarse fit (10
@@ -251,14 +252,21 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         let (e, group, ev) = cands[ci].clone();
         engine.report(
             round,
-            "fit",
+            Phase::Add,
             Some((ci + 1, cands.len(), format!("{} on {}", e.id(), group.join(",")))),
         );
         ci += 1;
         // A kept candidate already left a white training residual: one with more parameters
         // cannot explain more, and Occam's choice would not take it (`tried`: phase "floor").
         if floor_k.is_some_and(|k| e.fitted() > k) {
-            out.tried.push(Tried::not_tested(round, "floor", e.id(), &group, vec![], f64::NAN));
+            out.tried.push(Tried::not_tested(
+                round,
+                Phase::Floor,
+                e.id(),
+                &group,
+                vec![],
+                f64::NAN,
+            ));
             continue;
         }
         // Once a kept candidate leaves a white training residual, another can only win Occam's
@@ -266,18 +274,28 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         // its training error cannot (`tried`: phase "floor_screen"). On a 12-joint robot most of
         // a round's 30-odd candidates are fitted after the winner.
         if let Some(ft) = floor_train {
-            let (p, f) = engine.fit_budget(train, &applied, e, &group, 10);
-            if p.is_empty() || !f.is_finite() || f > 1.5 * ft {
-                out.tried.push(Tried::not_tested(round, "floor_screen", e.id(), &group, p, f));
+            let (p, f) = engine.fit_budget(train, &applied, e, &group, opts.policy.screen_evals);
+            if p.is_empty() || !f.is_finite() || f > opts.policy.floor_screen_ratio * ft {
+                out.tried.push(Tried::not_tested(round, Phase::FloorScreen, e.id(), &group, p, f));
                 continue;
             }
         }
         // (Only multi-parameter effects: a 1-D fit is a 9-point grid plus golden section anyway,
         // and a coarse one misses scale parameters near zero, such as a small armature.)
         if e.fitted() >= 2 {
-            let (p, f) = engine.fit_budget(train, &applied, e, &group, 10);
-            if p.is_empty() || !f.is_finite() || base_train - f < 0.5 * (base_train - best_train) {
-                out.tried.push(Tried::not_tested(round, "screen", e.id(), &group, p.clone(), f));
+            let (p, f) = engine.fit_budget(train, &applied, e, &group, opts.policy.screen_evals);
+            if p.is_empty()
+                || !f.is_finite()
+                || base_train - f < opts.policy.screen_share * (base_train - best_train)
+            {
+                out.tried.push(Tried::not_tested(
+                    round,
+                    Phase::Screen,
+                    e.id(),
+                    &group,
+                    p.clone(),
+                    f,
+                ));
                 // Its coarse fit still starts a joint pair fit (gain error + delay: neither
                 // alone explains much).
                 if !p.is_empty() && f.is_finite() {
@@ -301,11 +319,12 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         };
         let bic_after = bic(tr_a.n, tr_a.sse, k_before + e.fitted());
         // Paired test on the windows of the candidate's joints (others barely move).
-        let v = verdict(&ho_err, &ho_a, &group, z, opts.decisive_improvement);
-        let keep = v.significant && v.rel >= opts.min_rel_improvement && bic_after < bic_before;
-        out.tried.push(Tried {
+        let v = verdict(&ho_err, &ho_a, &group, opts.policy.gate_z(z));
+        let keep =
+            v.significant && v.rel >= opts.policy.min_rel_improvement && bic_after < bic_before;
+        let logged = out.log(Tried {
             round,
-            phase: "add",
+            phase: Phase::Add,
             effect: e.id().into(),
             joints: group.clone(),
             params: p.clone(),
@@ -340,13 +359,14 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
                 Selected::new(a, ev, &v, ho_err.rmse(), ho_a.rmse(), (bic_before, bic_after)),
                 bound,
                 ho_a,
+                logged,
             ));
         }
     }
     let kept_all: Vec<Selected> = accepted.iter().map(|(s, ..)| s.clone()).collect();
     // A candidate with a parameter on its bound only wins when no interior one is kept.
-    if accepted.iter().any(|(_, b, _)| !b) {
-        accepted.retain(|(_, b, _)| !b);
+    if accepted.iter().any(|(_, b, ..)| !b) {
+        accepted.retain(|(_, b, ..)| !b);
     }
     let Some(ib) = (0..accepted.len()).min_by(|&a, &b| {
         accepted[a].0.heldout_rmse_after.total_cmp(&accepted[b].0.heldout_rmse_after)
@@ -367,16 +387,16 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     // beat beyond noise (paired test, z = 2) and whose training BIC is not higher (the training
     // set is larger than the held-out one: a better fit that pays for its parameters there is
     // not noise).
-    let (best_s, _, best_e) = &accepted[ib];
+    let (best_s, _, best_e, _) = &accepted[ib];
     let equivalent = |i: usize| {
-        let (s, _, e) = &accepted[i];
+        let (s, _, e, _) = &accepted[i];
         if i == ib {
             return true;
         }
         let group: Vec<String> = s.joints.iter().chain(&best_s.joints).cloned().collect();
-        s.heldout_rmse_after <= best_s.heldout_rmse_after * 1.05
+        s.heldout_rmse_after <= best_s.heldout_rmse_after * engine.opts.policy.simpler_within
             && s.bic_after <= best_s.bic_after
-            && !verdict(e, best_e, &group, 2.0, f64::INFINITY).significant
+            && !verdict(e, best_e, &group, engine.opts.policy.noise_gate()).significant
     };
     let win = (0..accepted.len())
         .filter(|&i| equivalent(i))
@@ -388,6 +408,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         })
         .expect("the best is equivalent to itself");
     let same: Vec<bool> = (0..accepted.len()).map(equivalent).collect();
+    let logged = accepted[win].3;
     let mut accepted: Vec<Selected> = accepted.into_iter().map(|(s, ..)| s).collect();
     let rivals = rival_notes(&accepted, win, &same);
     let mut w = accepted.swap_remove(win);
@@ -399,11 +420,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         }
         return true;
     }
-    if let Some(t) = out.tried.iter_mut().rev().find(|t| {
-        t.round == round && t.phase == "add" && t.effect == w.effect && t.joints == w.joints
-    }) {
-        t.kept = true;
-    }
+    out.tried[logged].kept = true;
     out.notes.extend(rivals);
     let e = effects::by_id(&w.effect).expect("known");
     out.applied.push(Applied { effect: e, joints: w.joints.clone(), params: w.values.clone() });
@@ -476,6 +493,9 @@ fn sorted_pair(j: &str, p: String) -> Vec<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::fit::effects::{
+        Armature, Backlash, CoulombFriction, Effect, StribeckFriction, ViscousDamping,
+    };
 
     fn sel(effect: &str, joints: &[&str], p: &[(&str, f64)], heldout: f64) -> Selected {
         Selected {
@@ -499,16 +519,26 @@ mod tests {
     #[test]
     fn an_equally_good_rival_on_the_winners_joint_is_named() {
         let acc = vec![
-            sel("stribeck_friction", &["left_knee"], &[("static", 2.0), ("dynamic", 1.0)], 7.0e-4),
-            sel("backlash", &["left_knee"], &[("backlash", 0.0369)], 7.3e-4),
+            sel(
+                StribeckFriction.id(),
+                &["left_knee"],
+                &[("static", 2.0), ("dynamic", 1.0)],
+                7.0e-4,
+            ),
+            sel(Backlash.id(), &["left_knee"], &[(Backlash.id(), 0.0369)], 7.3e-4),
             // Equivalent but on another joint: not a rival of the knee's friction.
-            sel("armature", &["right_knee"], &[("armature", 0.02)], 7.2e-4),
+            sel(Armature.id(), &["right_knee"], &[(Armature.id(), 0.02)], 7.2e-4),
             // On the knee, but worse beyond noise (not in Occam's set).
-            sel("viscous_damping", &["left_knee"], &[("damping", 3.0)], 9.0e-4),
+            sel(ViscousDamping.id(), &["left_knee"], &[("damping", 3.0)], 9.0e-4),
             // The same effect on a group with the knee: a group question, not a rival.
-            sel("backlash", &["left_knee", "right_knee"], &[("backlash", 0.03)], 7.1e-4),
+            sel(Backlash.id(), &["left_knee", "right_knee"], &[(Backlash.id(), 0.03)], 7.1e-4),
             // Another effect on a group that contains the knee: a rival.
-            sel("coulomb_friction", &["left_knee", "right_knee"], &[("frictionloss", 1.5)], 7.1e-4),
+            sel(
+                CoulombFriction.id(),
+                &["left_knee", "right_knee"],
+                &[("frictionloss", 1.5)],
+                7.1e-4,
+            ),
         ];
         let same = [true, true, true, false, true, true];
         let n = rival_notes(&acc, 1, &same);
@@ -519,9 +549,9 @@ mod tests {
         assert!(n[1].starts_with("coulomb_friction on left_knee,right_knee (frictionloss 1.5)"));
         // Stribeck friction as good as the kept Coulomb friction contains it: no rival.
         let nest = vec![
-            sel("coulomb_friction", &["left_knee"], &[("frictionloss", 1.5)], 7.0e-4),
-            sel("stribeck_friction", &["left_knee"], &[("static", 1.5)], 6.9e-4),
-            sel("backlash", &["left_knee"], &[("backlash", 0.03)], 7.1e-4),
+            sel(CoulombFriction.id(), &["left_knee"], &[("frictionloss", 1.5)], 7.0e-4),
+            sel(StribeckFriction.id(), &["left_knee"], &[("static", 1.5)], 6.9e-4),
+            sel(Backlash.id(), &["left_knee"], &[(Backlash.id(), 0.03)], 7.1e-4),
         ];
         let n = rival_notes(&nest, 0, &[true, true, true]);
         assert_eq!(n.len(), 1, "{n:#?}");

@@ -27,8 +27,12 @@
 mod engine;
 mod greedy;
 mod pairs;
+mod policy;
+mod polish;
+mod prune;
 mod reshoot;
 mod simplify;
+mod solve;
 mod start;
 mod verdict;
 
@@ -38,16 +42,18 @@ use serde::Serialize;
 
 use crate::fit::diagnose::Candidate;
 use crate::fit::effects::{self, Applied};
+use crate::fit::rollout::RolloutStats;
 use crate::fit::split::{Split, split, split_by_key, windows};
 use crate::model::Robot;
 use crate::sim2real::recording::Recording;
 use crate::sim2real::replay::{Episode, ReplayOptions};
 
 pub use engine::Engine;
-pub use verdict::z_needed;
+pub use policy::{Phase, SearchPolicy};
 
 use greedy::greedy_round;
-use simplify::{polish, simplify};
+use polish::polish;
+use simplify::simplify;
 use verdict::Verdict;
 
 #[derive(Debug, Clone)]
@@ -66,37 +72,14 @@ pub struct FitOptions {
     pub window_s: f64,
     /// Multiple shooting: cut training episodes into windows of this length [s].
     pub shooting_s: Option<f64>,
-    pub max_rounds: usize,
-    pub candidates_per_round: usize,
-    /// Minimum relative held-out RMSE improvement for an effect to be kept.
-    pub min_rel_improvement: f64,
-    /// Objective evaluations per candidate fit.
-    pub max_evals: usize,
-    /// Joint → motor family (from the spec): a family of three or more fitted joints is also
-    /// tried as one group sharing the parameters.
+    /// Joint → motor family (from the spec): a family of `policy.min_group` or more fitted
+    /// joints is also tried as one group sharing the parameters.
     pub families: BTreeMap<String, String>,
-    /// Besides the top `candidates_per_round`, also fit the best-ranked joint group of every
-    /// other allowed effect (the linearised ranking misses strongly nonlinear effects).
-    pub every_effect: bool,
-    /// A candidate that cuts the held-out RMSE by at least this fraction, with more than twice
-    /// as many held-out windows improved as worsened, is kept without the paired z test (an
-    /// effect confined to a few windows, e.g. saturation, cannot pass it; noise cannot halve the
-    /// error on unseen episodes).
-    pub decisive_improvement: f64,
-    /// After the greedy rounds: drop kept effects whose removal does not hurt held-out beyond
-    /// noise, merge one effect kept on two joint sets into one group, and swap each for a
-    /// simpler effect that explains the data as well.
-    pub simplify: bool,
     /// Samples up to this long after a gap in a recording (dropped rows) are left out of every
     /// error sum ([`gap_mask`]): the command during the gap is unknown [s].
     ///
     /// [`gap_mask`]: crate::sim2real::metrics::gap_mask
     pub gap_mask_s: f64,
-    /// The search stops when every fitted joint's training residual has a mean square within
-    /// this factor of its white floor ([`white_floor`]): what is left is noise.
-    ///
-    /// [`white_floor`]: crate::fit::stats::white_floor
-    pub white_ratio: f64,
     /// Estimate each episode's start state (first position and velocity of every recorded
     /// joint) from the whole episode, with the first row as its prior, instead of starting the
     /// replay exactly at the first row's noisy reading ([`start`]). Off by default: re-run in
@@ -106,6 +89,8 @@ pub struct FitOptions {
     ///
     /// [`Engine::set_start_model`]: Engine::set_start_model
     pub estimate_start: bool,
+    /// Every budget and threshold of the search ([`SearchPolicy`]).
+    pub policy: SearchPolicy,
     /// Called at each step of the search (none: silent).
     pub progress: Option<Progress>,
 }
@@ -135,17 +120,10 @@ impl Default for FitOptions {
             replay: ReplayOptions::default(),
             window_s: 0.5,
             shooting_s: None,
-            max_rounds: 4,
-            candidates_per_round: 4,
-            min_rel_improvement: 0.02,
-            max_evals: 60,
             families: BTreeMap::new(),
-            every_effect: true,
-            decisive_improvement: 0.5,
-            simplify: true,
             gap_mask_s: 0.1,
-            white_ratio: 1.5,
             estimate_start: false,
+            policy: SearchPolicy::default(),
             progress: None,
         }
     }
@@ -187,7 +165,7 @@ pub struct Tried {
     /// joints' own: `kept` = replaced), `swap`
     /// (replacement by a simpler effect: `kept` = the swap was made), `swap_screen` or `reshoot`
     /// (a friction effect re-fitted on short windows: `kept` = the re-fit replaced its values).
-    pub phase: &'static str,
+    pub phase: Phase,
     pub effect: String,
     pub joints: Vec<String>,
     pub params: Vec<f64>,
@@ -203,7 +181,7 @@ impl Tried {
     /// the best training improvement; `floor`: a kept candidate already left a white residual).
     pub(super) fn not_tested(
         round: usize,
-        phase: &'static str,
+        phase: Phase,
         effect: &str,
         joints: &[String],
         params: Vec<f64>,
@@ -270,9 +248,32 @@ pub struct FitOutcome {
     /// The search's decisions, for the record (a merge, a swap for a simpler effect, a drop, a
     /// re-fit): printed as notes, not warnings — a correct fit makes several.
     pub notes: Vec<String>,
+    /// What the search cost.
+    pub cost: SearchCost,
+}
+
+/// What a search cost: simulations asked for, rollouts run, and the full fits its screens
+/// saved (JSON `search`).
+#[derive(Debug, Clone, Copy, Default, Serialize)]
+pub struct SearchCost {
+    /// Dataset simulations the search asked for (the memo answers repeats without rollouts).
+    pub simulations: usize,
+    /// What the rollout service ran (episodes replayed, batches, wall time in batches).
+    #[serde(flatten)]
+    pub rollouts: RolloutStats,
+    /// Candidates left without a full nonlinear fit by a screen (phases `screen`, `floor`,
+    /// `floor_screen`, `swap_screen`).
+    pub fits_saved_by_screens: usize,
 }
 
 impl FitOutcome {
+    /// Appends `t` to the log of what was tried; returns its index (the search marks an entry
+    /// `kept` through it).
+    pub(super) fn log(&mut self, t: Tried) -> usize {
+        self.tried.push(t);
+        self.tried.len() - 1
+    }
+
     fn empty(split_note: String) -> Self {
         FitOutcome {
             train: vec![],
@@ -287,6 +288,7 @@ impl FitOutcome {
             tried: vec![],
             warnings: vec![],
             notes: vec![],
+            cost: SearchCost::default(),
         }
     }
 }
@@ -312,9 +314,12 @@ impl Errors {
 #[derive(Debug, Clone)]
 pub struct ProgressInfo {
     pub round: usize,
-    pub phase: &'static str,
+    pub phase: Phase,
     pub candidate: Option<(usize, usize, String)>,
+    /// Dataset simulations asked for so far.
     pub simulations: usize,
+    /// Episodes replayed so far (rollouts of the rollout service).
+    pub rollouts: usize,
 }
 
 /// A progress callback (`modellint fit` draws it on stderr).
@@ -371,9 +376,9 @@ pub fn fit(robot: &Robot, recs: &[Recording], opts: &FitOptions) -> FitOutcome {
     let search = Search { engine: &engine, train: &train, heldout: &heldout, allowed: &allowed };
     let mut round = 0;
     loop {
-        while round < opts.max_rounds {
+        while round < opts.policy.max_rounds {
             engine.set_start_model(&out.applied);
-            engine.report(round, "diagnose", None);
+            engine.report(round, Phase::Diagnose, None);
             let added = greedy_round(&search, round, &mut out);
             round += 1;
             if !added {
@@ -382,16 +387,16 @@ pub fn fit(robot: &Robot, recs: &[Recording], opts: &FitOptions) -> FitOutcome {
         }
         engine.set_start_model(&out.applied);
         if out.applied.len() >= 2 {
-            engine.report(round, "polish", None);
+            engine.report(round, Phase::Polish, None);
             polish(&search, &mut out);
         }
-        if !opts.simplify || out.applied.is_empty() {
+        if !opts.policy.simplify || out.applied.is_empty() {
             break;
         }
         // A change re-opens the greedy search (bounded by `max_rounds`).
         engine.set_start_model(&out.applied);
-        engine.report(round, "simplify", None);
-        if !simplify(&search, round, &mut out) || round >= opts.max_rounds {
+        engine.report(round, Phase::Simplify, None);
+        if !simplify(&search, round, &mut out) || round >= opts.policy.max_rounds {
             break;
         }
     }
@@ -401,7 +406,7 @@ pub fn fit(robot: &Robot, recs: &[Recording], opts: &FitOptions) -> FitOutcome {
     }
     engine.set_start_model(&out.applied);
     if !out.applied.is_empty() {
-        engine.report(round, "standard errors", None);
+        engine.report(round, Phase::StandardErrors, None);
         final_uncertainty(&engine, &train, &mut out);
         // The floors reported are those of the final model: with an effect missing, the
         // residual's white part carries some of the model error too.
@@ -410,7 +415,21 @@ pub fn fit(robot: &Robot, recs: &[Recording], opts: &FitOptions) -> FitOutcome {
             None => vec![],
         };
     }
-    engine.report(round, "done", None);
+    engine.report(round, Phase::Done, None);
+    out.cost = SearchCost {
+        simulations: engine.simulations(),
+        rollouts: engine.rollout_stats(),
+        fits_saved_by_screens: out
+            .tried
+            .iter()
+            .filter(|t| {
+                matches!(
+                    t.phase,
+                    Phase::Screen | Phase::Floor | Phase::FloorScreen | Phase::SwapScreen
+                )
+            })
+            .count(),
+    };
     out
 }
 

@@ -4,13 +4,13 @@
 
 use std::collections::BTreeMap;
 
-use crate::fit::effects::{self, Applied, JointTarget, model_with};
-use crate::fit::optim::{Bounds, LmOpts, NelderMeadOpts, levenberg_marquardt, nelder_mead};
+use crate::fit::effects::{self, Applied};
 use crate::fit::stats::bic;
 use crate::sim2real::recording::Recording;
 
-use super::engine::{Engine, res_len};
-use super::simplify::{polish_budget, polish_set};
+use super::engine::Engine;
+use super::policy::Phase;
+use super::polish::{fit_jointly, polish_budget, polish_set};
 use super::verdict::{Verdict, at_bound, verdict};
 use super::{Errors, FitOutcome, Search, Selected, Tried, set_uncertainty, sync_selected};
 
@@ -37,7 +37,7 @@ pub(super) fn pair_lookahead(
     top.sort_by(|a, b| a.heldout_rmse_after.total_cmp(&b.heldout_rmse_after));
     top.truncate(4);
     // A single effect that leaves under 5 % of the error needs no partner.
-    if single.heldout_improvement >= 0.95 {
+    if single.heldout_improvement >= opts.policy.pair_needless_improvement {
         return None;
     }
     let as_applied = |s: &Selected| Applied {
@@ -59,8 +59,8 @@ pub(super) fn pair_lookahead(
     let h_base = engine.errors(heldout, applied)?;
     let t_base = engine.errors(train, applied)?;
     let k_before: usize = applied.iter().map(|a| a.effect.fitted()).sum();
-    let mut best: Option<(Vec<Applied>, f64, usize)> = None;
-    engine.report(round, "pair look-ahead", None);
+    let mut best: Option<(Vec<Applied>, f64, usize, usize)> = None;
+    engine.report(round, Phase::Pair, None);
     // The pairs of the top four, and any two kept candidates that mimic each other alone
     // ([`effects::mimicking_pairs`]) wherever they rank: a missing inertia and damping each
     // pass alone, and a third effect can outrank one of them (the pendulum's armature, fifth).
@@ -164,7 +164,14 @@ pub(super) fn pair_lookahead(
             let mut set = applied.to_vec();
             set.push(a.clone());
             set.push(b.clone());
-            let set = polish_budget(engine, train, heldout, set, 0.05, opts.max_evals * 2 / 3);
+            let set = polish_budget(
+                engine,
+                train,
+                heldout,
+                set,
+                opts.policy.coarse_polish_step,
+                opts.policy.max_evals * 2 / 3,
+            );
             let f = engine.errors(train, &set).map_or(f64::INFINITY, |e| e.rmse());
             (set, f)
         })
@@ -172,8 +179,8 @@ pub(super) fn pair_lookahead(
     let best_coarse = coarse.iter().map(|c| c.1).fold(f64::INFINITY, f64::min);
     let mut restarts: Vec<Vec<Applied>> = Vec::new();
     for ((a, b), (set, f)) in sets.into_iter().zip(coarse) {
-        let set = if f <= 1.25 * best_coarse {
-            polish_set(engine, train, heldout, set, 0.02)
+        let set = if f <= opts.policy.pair_full_fit_within * best_coarse {
+            polish_set(engine, train, heldout, set, opts.policy.polish_step)
         } else {
             set
         };
@@ -182,7 +189,7 @@ pub(super) fn pair_lookahead(
         };
         let k = a.effect.fitted() + b.effect.fitted();
         let group: Vec<String> = a.joints.iter().chain(&b.joints).cloned().collect();
-        let v = verdict(&h_single, &h, &group, z, opts.decisive_improvement);
+        let v = verdict(&h_single, &h, &group, opts.policy.gate_z(z));
         let bic_ok = bic(t.n, t.sse, k_before + k) < bic(t_base.n, t_base.sse, k_before);
         // Each member needed: the pair beats the set without it beyond noise.
         let need: Vec<bool> = (0..2)
@@ -190,14 +197,8 @@ pub(super) fn pair_lookahead(
                 let mut wo = set.clone();
                 wo.remove(applied.len() + m);
                 engine.errors(heldout, &wo).is_some_and(|hw| {
-                    let vw = verdict(
-                        &hw,
-                        &h,
-                        &set[applied.len() + m].joints,
-                        2.0,
-                        opts.decisive_improvement,
-                    );
-                    vw.significant && vw.rel >= opts.min_rel_improvement
+                    let vw = verdict(&hw, &h, &set[applied.len() + m].joints, opts.policy.gate());
+                    vw.significant && vw.rel >= opts.policy.min_rel_improvement
                 })
             })
             .collect();
@@ -216,10 +217,11 @@ pub(super) fn pair_lookahead(
                 restarts.push(wo);
             }
         }
-        let ok = h.rmse() < 0.9 * h_single.rmse() && v.significant && bic_ok && needed;
-        out.tried.push(Tried {
+        let ok =
+            h.rmse() < opts.policy.pair_gain * h_single.rmse() && v.significant && bic_ok && needed;
+        let logged = out.log(Tried {
             round,
-            phase: "pair",
+            phase: Phase::Pair,
             effect: format!("{}+{}", a.effect.id(), b.effect.id()),
             joints: group.clone(),
             params: set[applied.len()..]
@@ -235,8 +237,8 @@ pub(super) fn pair_lookahead(
         if !ok {
             continue;
         }
-        if beats((h.rmse(), k), best.as_ref().map(|(_, r, kb)| (*r, *kb))) {
-            best = Some((set, h.rmse(), k));
+        if opts.policy.beats((h.rmse(), k), best.as_ref().map(|(_, r, kb, _)| (*r, *kb))) {
+            best = Some((set, h.rmse(), k, logged));
         }
     }
     // A restart competes with the best pair by the same rule as two pairs: a single effect
@@ -244,26 +246,23 @@ pub(super) fn pair_lookahead(
     // must not lose to a mimicking pair (damping + armature) it beats on held-out.
     let n = applied.len();
     let restart = best_restart(s, applied, single, (&h_base, &h_single), restarts, round, out);
-    if let Some((rset, rh, rt)) = restart {
+    if let Some((rset, rh, rt, logged)) = restart {
         let kr = rset[n].effect.fitted();
-        if beats((rh.rmse(), kr), best.as_ref().map(|(_, r, kb)| (*r, *kb))) {
+        if opts.policy.beats((rh.rmse(), kr), best.as_ref().map(|(_, r, kb, _)| (*r, *kb))) {
             return apply_restart(
                 s,
                 applied,
                 kept,
                 single,
                 (&h_base, &h_single, &t_base),
-                (rset, rh, rt),
+                (rset, rh, rt, logged),
                 z,
                 out,
             );
         }
     }
-    let (set, rmse, _) = best?;
-    let label = format!("{}+{}", set[n].effect.id(), set[n + 1].effect.id());
-    if let Some(t) = out.tried.iter_mut().rev().find(|t| t.phase == "pair" && t.effect == label) {
-        t.kept = true;
-    }
+    let (set, rmse, _, logged) = best?;
+    out.tried[logged].kept = true;
     let what = if set[n].effect.id() == set[n + 1].effect.id() {
         format!(
             "{} on {} with its own value and on {} with a shared one",
@@ -294,7 +293,7 @@ pub(super) fn pair_lookahead(
         let mut wo = set.clone();
         wo.remove(n + m);
         let (hw, tw) = (engine.errors(heldout, &wo)?, engine.errors(train, &wo)?);
-        let v = verdict(&hw, &h_pair, &a.joints, 2.0, opts.decisive_improvement);
+        let v = verdict(&hw, &h_pair, &a.joints, opts.policy.gate());
         let evidence = kept
             .iter()
             .find(|s| s.effect == a.effect.id() && s.joints == a.joints)
@@ -309,16 +308,6 @@ pub(super) fn pair_lookahead(
     out.applied[..n].clone_from_slice(&set[..n]);
     sync_selected(out);
     Some(res)
-}
-
-/// Whether a candidate with held-out RMSE `rmse` and `k` fitted parameters beats the best so
-/// far (`None`: there is none): fewer parameters win within 1 %, more parameters need a lower
-/// RMSE by more than 1 %, the same number any lower RMSE.
-fn beats((rmse, k): (f64, usize), best: Option<(f64, usize)>) -> bool {
-    match best {
-        None => true,
-        Some((r, kb)) => (k < kb && rmse <= r * 1.01) || (rmse < r && !(k > kb && rmse > r / 1.01)),
-    }
 }
 
 /// The best restart that passes, as (set, held-out errors, training errors); `tried` gets phase
@@ -341,7 +330,7 @@ fn best_restart(
     restarts: Vec<Vec<Applied>>,
     round: usize,
     out: &mut FitOutcome,
-) -> Option<(Vec<Applied>, Errors, Errors)> {
+) -> Option<(Vec<Applied>, Errors, Errors, usize)> {
     if restarts.is_empty() {
         return None;
     }
@@ -360,7 +349,7 @@ fn best_restart(
         engine.errors(s.train, &w)?
     };
     let bic_single = bic(t_single.n, t_single.sse, k_before + k_single);
-    let mut best: Option<(Vec<Applied>, Errors, Errors)> = None;
+    let mut best: Option<(Vec<Applied>, Errors, Errors, usize)> = None;
     for set in restarts {
         let a = &set[n];
         if at_bound(engine, &set[..n], a) {
@@ -371,7 +360,7 @@ fn best_restart(
             continue;
         };
         let group: Vec<String> = a.joints.iter().chain(&single.joints).cloned().collect();
-        let vs = verdict(h_single, &h, &group, 2.0, opts.decisive_improvement);
+        let vs = verdict(h_single, &h, &group, opts.policy.gate());
         let bic_a = bic(t.n, t.sse, k_before + a.effect.fitted());
         // The winner at other values is the same model: a better optimum on the training data
         // that is also better on held-out replaces it. Another effect must beat it beyond noise.
@@ -379,11 +368,13 @@ fn best_restart(
         let ok = if same {
             t.rmse() < t_single.rmse() && h.rmse() < h_single.rmse()
         } else {
-            vs.significant && h.rmse() <= 0.95 * h_single.rmse() && bic_a < bic_single
+            vs.significant
+                && h.rmse() <= opts.policy.restart_gain * h_single.rmse()
+                && bic_a < bic_single
         };
-        out.tried.push(Tried {
+        let logged = out.log(Tried {
             round,
-            phase: "pair_restart",
+            phase: Phase::PairRestart,
             effect: a.effect.id().into(),
             joints: a.joints.clone(),
             params: a.params.iter().take(a.effect.fitted()).copied().collect(),
@@ -393,15 +384,15 @@ fn best_restart(
             bic_decreased: bic_a < bic_single,
             kept: false,
         });
-        if ok && best.as_ref().is_none_or(|(_, hb, _)| h.rmse() < hb.rmse()) {
-            best = Some((set, h, t));
+        if ok && best.as_ref().is_none_or(|(_, hb, ..)| h.rmse() < hb.rmse()) {
+            best = Some((set, h, t, logged));
         }
     }
     best
 }
 
 /// Keeps the restart `(set, h, t)` from [`best_restart`] in place of the round's winner (and of
-/// a pair that passed, when the restart beats it by the rule pairs compete by, [`beats`]).
+/// a pair that passed, when the restart beats it by the rule pairs compete by, [`SearchPolicy::beats`]).
 #[allow(clippy::too_many_arguments)]
 fn apply_restart(
     s: &Search,
@@ -409,7 +400,7 @@ fn apply_restart(
     kept: &[Selected],
     single: &Selected,
     (h_base, h_single, t_base): (&Errors, &Errors, &Errors),
-    (set, h, t): (Vec<Applied>, Errors, Errors),
+    (set, h, t, logged): (Vec<Applied>, Errors, Errors, usize),
     z: f64,
     out: &mut FitOutcome,
 ) -> Option<Vec<(Selected, Applied)>> {
@@ -418,11 +409,7 @@ fn apply_restart(
     let k_before: usize = applied.iter().map(|a| a.effect.fitted()).sum();
     let a = set[n].clone();
     let label = a.effect.id();
-    if let Some(tr) =
-        out.tried.iter_mut().rev().find(|tr| tr.phase == "pair_restart" && tr.effect == label)
-    {
-        tr.kept = true;
-    }
+    out.tried[logged].kept = true;
     out.notes.push(format!(
         "{} on {} re-fitted in a pair whose partner was not needed: held-out RMSE {:.3e} rad, \
          vs {:.3e} with {} alone",
@@ -432,7 +419,7 @@ fn apply_restart(
         h_single.rmse(),
         single.effect
     ));
-    let v = verdict(h_base, &h, &a.joints, z, opts.decisive_improvement);
+    let v = verdict(h_base, &h, &a.joints, opts.policy.gate_z(z));
     let evidence = kept
         .iter()
         .find(|k| k.effect == label && k.joints == a.joints)
@@ -467,8 +454,8 @@ pub(super) fn joint_pairs(
     let n = applied.len();
     let k_before: usize = applied.iter().map(|a| a.effect.fitted()).sum();
     let bic_before = bic(tr_err.n, tr_err.sse, k_before);
-    let mut best: Option<(Vec<Applied>, Errors, Verdict, f64)> = None;
-    engine.report(round, "joint pairs", None);
+    let mut best: Option<(Vec<Applied>, Errors, Verdict, f64, usize)> = None;
+    engine.report(round, Phase::JointPair, None);
     for (ea, eb) in effects::mimicking_pairs().into_iter().map(|(a, b)| (a.id(), b.id())) {
         for a in fitted.iter().filter(|x| x.effect.id() == ea) {
             let Some(b) = fitted.iter().find(|x| x.effect.id() == eb && x.joints == a.joints)
@@ -484,23 +471,23 @@ pub(super) fn joint_pairs(
                 continue;
             };
             let k = a.effect.fitted() + b.effect.fitted();
-            let v = verdict(ho_err, &h, &a.joints, z, opts.decisive_improvement);
+            let v = verdict(ho_err, &h, &a.joints, opts.policy.gate_z(z));
             let bic_after = bic(t.n, t.sse, k_before + k);
             let needed = (0..2).all(|m| {
                 let mut wo = set.clone();
                 wo.remove(n + m);
                 engine.errors(heldout, &wo).is_some_and(|hw| {
-                    let vw = verdict(&hw, &h, &a.joints, 2.0, opts.decisive_improvement);
-                    vw.significant && vw.rel >= opts.min_rel_improvement
+                    let vw = verdict(&hw, &h, &a.joints, opts.policy.gate());
+                    vw.significant && vw.rel >= opts.policy.min_rel_improvement
                 })
             });
             let ok = v.significant
-                && v.rel >= opts.min_rel_improvement
+                && v.rel >= opts.policy.min_rel_improvement
                 && bic_after < bic_before
                 && needed;
-            out.tried.push(Tried {
+            let logged = out.log(Tried {
                 round,
-                phase: "joint_pair",
+                phase: Phase::JointPair,
                 effect: format!("{ea}+{eb}"),
                 joints: a.joints.clone(),
                 params: set[n..]
@@ -514,20 +501,12 @@ pub(super) fn joint_pairs(
                 kept: false,
             });
             if ok && best.as_ref().is_none_or(|(_, hb, ..)| h.rmse() < hb.rmse()) {
-                best = Some((set, h, v, bic_after));
+                best = Some((set, h, v, bic_after, logged));
             }
         }
     }
-    let Some((set, h, v, bic_after)) = best else { return false };
-    let label = format!("{}+{}", set[n].effect.id(), set[n + 1].effect.id());
-    if let Some(t) = out
-        .tried
-        .iter_mut()
-        .rev()
-        .find(|t| t.phase == "joint_pair" && t.effect == label && t.joints == set[n].joints)
-    {
-        t.kept = true;
-    }
+    let Some((set, h, v, bic_after, logged)) = best else { return false };
+    out.tried[logged].kept = true;
     out.notes.push(format!(
         "no single effect passed; {} and {} on {} pass together: held-out RMSE {:.3e} → {:.3e} rad",
         set[n].effect.id(),
@@ -551,103 +530,4 @@ pub(super) fn joint_pairs(
         out.selected.push(sel);
     }
     true
-}
-
-/// One fitted parameter of a set of applied effects: (effect index, parameter index, lo, hi).
-type Slot = (usize, usize, f64, f64);
-
-/// The fitted parameters of `set[first..]` with their bounds; effect `ai`'s bounds come from the
-/// model with `set[..base(ai)]` applied. `None` when an effect's joint is not in the model.
-pub(super) fn param_slots(
-    engine: &Engine,
-    set: &[Applied],
-    first: usize,
-    base: impl Fn(usize) -> usize,
-) -> Option<Vec<Slot>> {
-    let mut slots = Vec::new();
-    for (ai, a) in set.iter().enumerate().skip(first) {
-        let t = JointTarget::of(engine.robot, &a.joints[0])?;
-        let m0 = model_with(engine.robot, &set[..base(ai)]);
-        let (lo, hi) = a.effect.bounds(&m0, &t);
-        for k in 0..a.effect.fitted().min(a.params.len()) {
-            slots.push((ai, k, lo[k], hi[k]));
-        }
-    }
-    Some(slots)
-}
-
-/// `set` with the parameters of `slots` set to `x`.
-pub(super) fn with_params(set: &[Applied], slots: &[Slot], x: &[f64]) -> Vec<Applied> {
-    let mut a = set.to_vec();
-    for (&(ai, k, ..), v) in slots.iter().zip(x) {
-        a[ai].params[k] = *v;
-    }
-    a
-}
-
-/// Fits the effects `set[first..]` jointly on `train` (the ones before stay fixed), starting from
-/// their current parameters: Levenberg–Marquardt when all are smooth, else Nelder–Mead. Returns
-/// the set unchanged when the joint fit does not lower the training error.
-pub(super) fn fit_jointly(
-    engine: &Engine,
-    train: &[Recording],
-    set: Vec<Applied>,
-    first: usize,
-) -> Vec<Applied> {
-    let Some(slots) = param_slots(engine, &set, first, |_| first) else { return set };
-    let make = |x: &[f64]| with_params(&set, &slots, x);
-    let x0: Vec<f64> =
-        slots.iter().map(|&(ai, k, lo, hi)| set[ai].params[k].clamp(lo, hi)).collect();
-    let b =
-        Bounds { lo: slots.iter().map(|s| s.2).collect(), hi: slots.iter().map(|s| s.3).collect() };
-    let obj = |x: &[f64]| engine.errors(train, &make(x)).map_or(f64::INFINITY, |e| e.rmse());
-    let f0 = obj(&x0);
-    let (x, f) = if set[first..].iter().all(|a| a.effect.smooth()) {
-        let res = |x: &[f64]| {
-            engine.residuals(train, &make(x), &engine.joints, usize::MAX).unwrap_or_default()
-        };
-        let o = LmOpts {
-            max_iters: 12,
-            rel_step: crate::fit::optim::ROLLOUT_REL_STEP,
-            tol: 1e-5,
-            final_jacobian: false,
-            stat_tol: crate::fit::optim::ROLLOUT_STAT_TOL,
-            short_step: crate::fit::optim::ROLLOUT_SHORT_STEP,
-        };
-        let r = levenberg_marquardt(&res, &x0, &b, &o);
-        let n = res_len(&r);
-        (r.x, if n > 0 { (2.0 * r.cost / n as f64).sqrt() } else { f64::INFINITY })
-    } else {
-        let o = NelderMeadOpts {
-            max_evals: engine.opts.max_evals * 3,
-            xtol: 1e-4,
-            ftol: 1e-12,
-            initial_step: 0.1,
-        };
-        let r = nelder_mead(&obj, &x0, &b, &o);
-        (r.x, r.f)
-    };
-    if !(f < f0) {
-        return set;
-    }
-    make(&x)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::beats;
-
-    #[test]
-    fn fewer_parameters_win_within_one_percent() {
-        assert!(beats((1.0, 2), None));
-        // Fewer parameters: within 1 % is enough.
-        assert!(beats((1.009, 1), Some((1.0, 2))));
-        assert!(!beats((1.02, 1), Some((1.0, 2))));
-        // More parameters: must be lower by more than 1 %.
-        assert!(!beats((0.995, 3), Some((1.0, 2))));
-        assert!(beats((0.98, 3), Some((1.0, 2))));
-        // Same count: any lower RMSE.
-        assert!(beats((0.999, 2), Some((1.0, 2))));
-        assert!(!beats((1.0, 2), Some((1.0, 2))));
-    }
 }

@@ -10,6 +10,7 @@
 //! search's values when the full replay of the held-out episodes is closer to the recording,
 //! beyond noise on the effect's joints.
 
+use super::policy::Phase;
 use super::verdict::{at_bound, verdict};
 use super::{FitOutcome, Search, Tried, sync_selected};
 use crate::fit::split::windows;
@@ -43,7 +44,11 @@ pub(super) fn reshoot_friction(
         if !a.effect.friction() {
             continue;
         }
-        s.engine.report(round, "reshoot", Some((i + 1, out.applied.len(), a.effect.id().into())));
+        s.engine.report(
+            round,
+            Phase::Reshoot,
+            Some((i + 1, out.applied.len(), a.effect.id().into())),
+        );
         let base: Vec<_> = out
             .applied
             .iter()
@@ -51,7 +56,8 @@ pub(super) fn reshoot_friction(
             .filter(|(j, _)| *j != i)
             .map(|(_, x)| x.clone())
             .collect();
-        let (p, f) = s.engine.fit_budget(&win, &base, a.effect, &a.joints, s.engine.opts.max_evals);
+        let (p, f) =
+            s.engine.fit_budget(&win, &base, a.effect, &a.joints, s.engine.opts.policy.max_evals);
         if p.is_empty() || !f.is_finite() {
             continue;
         }
@@ -60,16 +66,23 @@ pub(super) fn reshoot_friction(
         // A re-fit stopped on a bound was stretched (the short windows can leave a parameter
         // unidentified): it does not replace values from inside the bounds.
         if at_bound(s.engine, &base, &trial[i]) && !at_bound(s.engine, &base, &a) {
-            out.tried.push(Tried::not_tested(round, "reshoot", a.effect.id(), &a.joints, p, f));
+            out.tried.push(Tried::not_tested(
+                round,
+                Phase::Reshoot,
+                a.effect.id(),
+                &a.joints,
+                p,
+                f,
+            ));
             continue;
         }
         let Some(h_err) = s.engine.errors(s.heldout, &trial) else { continue };
         let (h, hb) = (h_err.rmse(), h_best.rmse());
         // Beyond noise on the effect's joints (paired windows, z = 2): at high noise a re-fit
         // that only follows the held-out noise moved arm3's Stribeck friction off the truth.
-        let v = verdict(&h_best, &h_err, &a.joints, 2.0, s.engine.opts.decisive_improvement);
+        let v = verdict(&h_best, &h_err, &a.joints, s.engine.opts.policy.gate());
         let kept = h < hb && v.significant;
-        let mut t = Tried::not_tested(round, "reshoot", a.effect.id(), &a.joints, p, f);
+        let mut t = Tried::not_tested(round, Phase::Reshoot, a.effect.id(), &a.joints, p, f);
         t.heldout_improvement = if hb > 0.0 { 1.0 - h / hb } else { 0.0 };
         t.significant = v.significant;
         t.kept = kept;

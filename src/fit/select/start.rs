@@ -23,9 +23,9 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use crate::fit::effects::{Applied, model_with, replay_with};
+use crate::fit::effects::{Applied, model_with};
+use crate::fit::rollout::Rollouts;
 use crate::fit::stats::{residual_runs, white_floor};
-use crate::model::Robot;
 use crate::sim2real::metrics::gap_mask;
 use crate::sim2real::recording::{Recording, derivative};
 use crate::sim2real::replay::{Episode, ReplayOptions};
@@ -104,7 +104,7 @@ impl StartSens {
     /// the data term weighs the joints of `scored` only. `None` when a replay fails or
     /// diverges, or the recording is too short.
     pub(super) fn measure(
-        robot: &Robot,
+        rollouts: &Rollouts<'_>,
         rec: &Recording,
         replay: &ReplayOptions,
         gap_mask_s: f64,
@@ -128,10 +128,8 @@ impl StartSens {
                 jt.qd = Some(vec![d0; n]);
             }
         }
-        let mj = model_with(robot, applied);
-        let run = |r: &Recording| -> Option<Episode> {
-            replay_with(robot, &mj, r, applied, replay).ok().filter(|e| e.diverged.is_none())
-        };
+        let mj = model_with(rollouts.robot(), applied);
+        let run = |r: &Recording| -> Option<Episode> { rollouts.run_on(&mj, r, applied, replay) };
         let ep0 = run(&base)?;
         let scored = gap_mask(&rec.t, gap_mask_s);
         let runs = |real: &[f64], sim: &[f64]| residual_runs(&scored, real, sim);

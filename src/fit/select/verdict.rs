@@ -1,17 +1,39 @@
-//! The held-out gate: how strong the paired test must be ([`z_needed`]), whether a change is
-//! beyond noise ([`verdict`]), and whether a fit sits on a parameter bound ([`at_bound`]).
+//! The held-out gate: whether a change is beyond noise ([`verdict`], at the strength a [`Gate`]
+//! asks), and whether a fit sits on a parameter bound ([`at_bound`]).
 
 use crate::fit::effects::{Applied, JointTarget, model_with};
 use crate::fit::stats::improvement_beyond_noise;
 
 use super::Errors;
 use super::engine::Engine;
+use super::policy::SearchPolicy;
 
-/// z the paired held-out test needs when `m` candidates compete in one round: 2 for up to four,
-/// then growing like a Bonferroni correction (2.35 for 8, 2.69 for 16) so that fitting more
-/// candidates does not buy more false discoveries.
-pub fn z_needed(m: usize) -> f64 {
-    2.0 + 0.5 * (m.max(4) as f64 / 4.0).ln()
+/// How strong a held-out comparison must be ([`SearchPolicy::gate`] and its variants).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Gate {
+    /// z of the paired per-window test [standard errors].
+    pub(super) z: f64,
+    /// Relative improvement that passes without the z test (∞: never) [fraction].
+    pub(super) decisive: f64,
+    /// A window counts as improved or worsened beyond this relative change [fraction].
+    pub(super) window_change: f64,
+}
+
+impl SearchPolicy {
+    /// The gate between two fitted sets: `z_decision`, decisive improvements pass.
+    pub(super) fn gate(&self) -> Gate {
+        self.gate_z(self.z_decision)
+    }
+
+    /// The gate of a round's candidates: `z` ([`SearchPolicy::z_needed`]).
+    pub(super) fn gate_z(&self, z: f64) -> Gate {
+        Gate { z, decisive: self.decisive_improvement, window_change: self.window_change }
+    }
+
+    /// Only the paired z test (is a change worse beyond noise?).
+    pub(super) fn noise_gate(&self) -> Gate {
+        Gate { decisive: f64::INFINITY, ..self.gate() }
+    }
 }
 
 /// Held-out comparison of `after` against `before` on the windows of `group`.
@@ -24,16 +46,12 @@ pub(super) struct Verdict {
     pub(super) significant: bool,
 }
 
-/// `significant`: the paired per-window improvement (absolute, or of the log error) exceeds `z`
-/// standard errors, or the improvement is decisive (relative ≥ `decisive` over all joints or
-/// over the group's windows, with more than twice as many windows improved as worsened).
-pub(super) fn verdict(
-    before: &Errors,
-    after: &Errors,
-    group: &[String],
-    z: f64,
-    decisive: f64,
-) -> Verdict {
+/// `significant`: the paired per-window improvement (absolute, or of the log error) exceeds
+/// `gate.z` standard errors, or the improvement is decisive (relative ≥ `gate.decisive` over
+/// all joints or over the group's windows, with more than twice as many windows improved as
+/// worsened).
+pub(super) fn verdict(before: &Errors, after: &Errors, group: &[String], gate: Gate) -> Verdict {
+    let Gate { z, decisive, window_change } = gate;
     let on = |w: &[(String, f64)]| {
         w.iter().filter(|(j, _)| group.contains(j)).map(|(_, v)| *v).collect::<Vec<f64>>()
     };
@@ -44,10 +62,11 @@ pub(super) fn verdict(
     let beyond = |m: f64, s: f64| m > 0.0 && m > z * s;
     let rel = (before.rmse() - after.rmse()) / before.rmse().max(1e-300);
     let (mut up, mut down) = (0usize, 0usize);
-    // A window counts as improved or worsened when it changes by more than 2 % (a limit reached
-    // a few times leaves the other windows of a lightly damped servo changed by less, either way).
+    // A window counts as improved or worsened when it changes by more than `window_change` (a
+    // limit reached a few times leaves the other windows of a lightly damped servo changed by
+    // less, either way).
     for (b, a) in wb.iter().zip(&wa) {
-        let tol = 0.02 * b.abs();
+        let tol = window_change * b.abs();
         if b - a > tol {
             up += 1;
         } else if a - b > tol {
@@ -94,6 +113,7 @@ pub(super) fn at_bound(engine: &Engine, base: &[Applied], a: &Applied) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::fit::effects::{CoulombFriction, Effect, TorqueLimit, ViscousDamping};
 
     /// A torque limit is searched on ln T, and "on the bound" is judged there too: 0.25 N·m (a
     /// hobby servo's limit) is inside [0.05, 50], 0.0505 and 49.5 are on it.
@@ -107,7 +127,7 @@ mod tests {
         let opts = super::super::FitOptions::default();
         let engine = Engine::new(&robot, std::slice::from_ref(&rec), &opts);
         let limit = |v: f64| Applied {
-            effect: by_id("torque_limit").unwrap(),
+            effect: by_id(TorqueLimit.id()).unwrap(),
             joints: vec!["j".into()],
             params: vec![v, 1e4, 1e4],
         };
@@ -117,7 +137,7 @@ mod tests {
         assert!(at_bound(&engine, &[], &limit(49.5)));
         // A linear-scale parameter keeps the linear rule: damping on its lower bound.
         let damping = Applied {
-            effect: by_id("viscous_damping").unwrap(),
+            effect: by_id(ViscousDamping.id()).unwrap(),
             joints: vec!["j".into()],
             params: vec![0.0],
         };
@@ -125,7 +145,7 @@ mod tests {
         // Where the effect is absent (no friction in the model: the lower bound), a small
         // friction is not on the bound; one at the 1-D search's resolution is.
         let friction = |v: f64| Applied {
-            effect: by_id("coulomb_friction").unwrap(),
+            effect: by_id(CoulombFriction.id()).unwrap(),
             joints: vec!["j".into()],
             params: vec![v],
         };
@@ -146,20 +166,14 @@ mod tests {
     }
 
     #[test]
-    fn z_grows_with_the_number_of_candidates() {
-        assert_eq!(z_needed(1), 2.0);
-        assert_eq!(z_needed(4), 2.0);
-        assert!((z_needed(8) - 2.3466).abs() < 1e-3);
-        assert!(z_needed(16) > z_needed(8));
-    }
-
-    #[test]
     fn verdict_paired_decisive_and_noise() {
         let g = vec!["a".to_string()];
         // Consistent 10 % improvement in every window: significant by the paired test.
         let before: Vec<f64> = (0..16).map(|i| 1.0 + 0.05 * (i % 3) as f64).collect();
         let after: Vec<f64> = before.iter().map(|v| 0.9 * v).collect();
-        assert!(verdict(&errs(&before), &errs(&after), &g, 2.0, 0.5).significant);
+        assert!(
+            verdict(&errs(&before), &errs(&after), &g, SearchPolicy::default().gate()).significant
+        );
         // A saturation event: 3 of 16 windows improve 20-fold, the rest are unchanged. The
         // paired tests fail (too few informative windows), the decisive path accepts.
         let mut before = vec![1.0; 16];
@@ -168,8 +182,13 @@ mod tests {
             before[i] = big;
             after[i] = 1.0;
         }
-        assert!(!verdict(&errs(&before), &errs(&after), &g, 2.0, f64::INFINITY).significant);
-        assert!(verdict(&errs(&before), &errs(&after), &g, 2.0, 0.5).significant);
+        assert!(
+            !verdict(&errs(&before), &errs(&after), &g, SearchPolicy::default().noise_gate())
+                .significant
+        );
+        assert!(
+            verdict(&errs(&before), &errs(&after), &g, SearchPolicy::default().gate()).significant
+        );
         // Noise: as many windows worse as better, tiny mean change: not significant.
         let before: Vec<f64> = (0..16).map(|i| 1.0 + 0.01 * ((i * 7) % 5) as f64).collect();
         let after: Vec<f64> = before
@@ -177,7 +196,9 @@ mod tests {
             .enumerate()
             .map(|(i, v)| v + if i % 2 == 0 { 0.01 } else { -0.011 })
             .collect();
-        assert!(!verdict(&errs(&before), &errs(&after), &g, 2.0, 0.5).significant);
+        assert!(
+            !verdict(&errs(&before), &errs(&after), &g, SearchPolicy::default().gate()).significant
+        );
         // A big improvement on one window and worse on most others is not decisive.
         let mut after = before.clone();
         after[0] = 0.0;
@@ -186,7 +207,9 @@ mod tests {
         }
         let mut b2 = before.clone();
         b2[0] = 10.0;
-        assert!(!verdict(&errs(&b2), &errs(&after), &g, 2.0, 0.5).significant);
+        assert!(
+            !verdict(&errs(&b2), &errs(&after), &g, SearchPolicy::default().gate()).significant
+        );
     }
 
     /// Windows of several joints: `(joint, value)`.
@@ -216,12 +239,12 @@ mod tests {
         }
         let (b, a) = (errs_of(&before), errs_of(&after));
         let knee = vec!["knee".to_string()];
-        let v = verdict(&b, &a, &knee, 2.0, 0.5);
+        let v = verdict(&b, &a, &knee, SearchPolicy::default().gate());
         assert!(v.rel < 0.5, "overall {:.3}", v.rel);
         assert!(v.significant);
         // The same change judged over every joint's windows is not decisive.
         let all = vec!["knee".to_string(), "other".to_string()];
-        assert!(!verdict(&b, &a, &all, 2.0, 0.5).significant);
+        assert!(!verdict(&b, &a, &all, SearchPolicy::default().gate()).significant);
         // Nor on the knee when it worsens as many windows as it improves.
         let mut worse = after.clone();
         for (i, w) in worse.iter_mut().take(16).enumerate() {
@@ -229,6 +252,6 @@ mod tests {
                 w.1 = 1.1;
             }
         }
-        assert!(!verdict(&b, &errs_of(&worse), &knee, 2.0, 0.5).significant);
+        assert!(!verdict(&b, &errs_of(&worse), &knee, SearchPolicy::default().gate()).significant);
     }
 }

@@ -1,0 +1,249 @@
+use super::fitting::{ends_on_bound, grid_best};
+use super::floors::discretisation_part;
+use super::*;
+use crate::fit::effects::{Backlash, CoulombFriction, Effect, ViscousDamping};
+use crate::fit::optim::Bounds;
+use crate::model::source::SourceMap;
+use crate::sim2real::commands::pseudo_sign;
+use crate::sim2real::recording::read_csv;
+use crate::synth::{self, Settings};
+
+/// The lightly damped pendulum servo, clean (the exact model), logged exactly at the control
+/// ticks (no command to reconstruct) with velocity noise `qd_noise` and nothing else.
+fn pendulum_at_ticks(qd_noise: f64) -> (crate::model::Robot, Vec<Recording>) {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let path = root.join("fixtures/synth/pendulum_servo.xml");
+    let robot = crate::model::load(&mut SourceMap::default(), &path, None).expect("pendulum");
+    let joints = vec!["servo".to_string()];
+    let s = Settings {
+        episodes: 3,
+        duration_s: 3.0,
+        log_at_ticks: true,
+        noise: 0.0,
+        quant_bits: 0,
+        qd_noise,
+        drop: 0.0,
+        seed: 5,
+        ..Settings::default()
+    };
+    let ds = synth::generate(&robot, &joints, &[], &s, &|_, _| {}).expect("synth");
+    // One directory per call: tests run in parallel, several with the same noise.
+    static CALL: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let dir = std::env::temp_dir().join(format!(
+        "modellint_floor_{}_{}_{}",
+        qd_noise.to_bits(),
+        std::process::id(),
+        CALL.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
+    ));
+    let files = synth::write::write(&ds, &dir).expect("write");
+    let recs: Vec<Recording> = files.iter().map(|f| read_csv(f).expect("read")).collect();
+    let _ = std::fs::remove_dir_all(&dir);
+    (robot, recs)
+}
+
+/// [`pendulum_at_ticks`]' replay floor [rad RMS] with the replay started at the first row.
+fn start_floor(qd_noise: f64) -> f64 {
+    let (robot, recs) = pendulum_at_ticks(qd_noise);
+    let opts = FitOptions { estimate_start: false, ..FitOptions::default() };
+    let engine = Engine::new(&robot, &recs, &opts);
+    let errs = engine.errors(&recs, &[]).expect("replay");
+    let f = engine.floors(&recs, &[], &errs);
+    assert_eq!(f.len(), 1);
+    f[0].reconstruction.sqrt()
+}
+
+#[test]
+fn a_fit_stuck_on_a_bound_gets_a_grid_start() {
+    let b = Bounds { lo: vec![0.3, 0.2], hi: vec![3.0, 5.0] };
+    // Ended on kd's upper bound from (1, 1): a restart; started there, or interior: none.
+    assert!(ends_on_bound(&[0.99, 5.0], &[1.0, 1.0], &b));
+    assert!(ends_on_bound(&[0.3004, 1.2], &[1.0, 1.0], &b));
+    assert!(!ends_on_bound(&[0.99, 5.0], &[1.0, 5.0], &b));
+    assert!(!ends_on_bound(&[0.4, 2.0], &[1.0, 1.0], &b));
+    // Two basins: a narrow one at (0.4, 2) and a wide shallow one towards the corner. The
+    // grid is log-spaced on positive bounds and its best point is in the narrow basin.
+    let obj = |x: &[f64]| {
+        let narrow = ((x[0] / 0.4).ln().powi(2) + (x[1] / 2.0).ln().powi(2)).min(0.6);
+        narrow + 0.3 * (1.0 - x[1] / 5.0)
+    };
+    let g = grid_best(&obj, &b).expect("finite");
+    assert_eq!(g.len(), 2);
+    assert!((g[0] / 0.4).ln().abs() < 0.2 && (g[1] / 2.0).ln().abs() < 0.3, "{g:?}");
+    // Three parameters on a zero lower bound: 3 linear points each, at 20 / 50 / 80 % (27
+    // evaluations, all inside the box).
+    let lin = Bounds { lo: vec![0.0, 0.0, 0.0], hi: vec![1.0, 1.0, 1.0] };
+    let count = std::cell::Cell::new(0usize);
+    let _ = grid_best(
+        &|x: &[f64]| {
+            count.set(count.get() + 1);
+            if x.iter().all(|v| (0.2..=0.8).contains(v)) { 1.0 } else { f64::NAN }
+        },
+        &lin,
+    );
+    assert_eq!(count.get(), 27);
+    // Every point fails: no start.
+    assert!(grid_best(&|_: &[f64]| f64::NAN, &b).is_none());
+    // Two parameters on positive bounds: 5 points each at 10 … 90 % of the log range.
+    let g = grid_best(&|x: &[f64]| x[0] + x[1], &b).expect("finite");
+    assert!((g[0] - 0.3 * 10f64.powf(0.1)).abs() < 1e-12, "{g:?}");
+}
+
+/// Exact positions, exact commands, the exact model: the only error left is the first row's
+/// noisy velocity, ringing in the lightly damped servo. Started at the first row, the
+/// residual is that ringing; with the start estimated from the episode it must vanish (the
+/// true start explains the data exactly), and the floor's start part with it.
+#[test]
+fn an_estimated_start_removes_the_first_rows_noise() {
+    let (robot, recs) = pendulum_at_ticks(0.04);
+    let rms = |estimate_start: bool| {
+        let opts = FitOptions { estimate_start, ..FitOptions::default() };
+        let engine = Engine::new(&robot, &recs, &opts);
+        let errs = engine.errors(&recs, &[]).expect("replay");
+        let f = engine.floors(&recs, &[], &errs);
+        (errs.rmse(), f[0].reconstruction.sqrt())
+    };
+    let (read, read_floor) = rms(false);
+    let (est, est_floor) = rms(true);
+    assert!(read > 2e-5, "the first row's velocity noise rings: {read}");
+    assert!(est < read / 10.0, "estimated start: {est} vs first row {read}");
+    assert!(est_floor < read_floor / 3.0, "floor {est_floor} vs {read_floor}");
+}
+
+/// A joint whose model can stick (here Coulomb friction, kept at zero so that the
+/// simulation is the nominal one) is left out of the start estimate: its residual is the
+/// one of the replay started at the first row, to the last bit; with a smooth effect kept
+/// (viscous damping, also zero) the start is still estimated.
+#[test]
+fn a_joint_that_can_stick_keeps_its_first_row() {
+    let (robot, recs) = pendulum_at_ticks(0.04);
+    let kept = |id: &str| Applied {
+        effect: crate::fit::effects::by_id(id).expect("effect"),
+        joints: vec!["servo".into()],
+        params: vec![0.0],
+    };
+    let rms = |estimate_start: bool, applied: &[Applied]| {
+        let opts = FitOptions { estimate_start, ..FitOptions::default() };
+        Engine::new(&robot, &recs, &opts).errors(&recs, applied).expect("replay").rmse()
+    };
+    let read = rms(false, &[]);
+    assert_eq!(rms(true, &[kept(CoulombFriction.id())]).to_bits(), read.to_bits());
+    assert_eq!(rms(true, &[kept(Backlash.id())]).to_bits(), read.to_bits());
+    assert!(rms(true, &[kept(ViscousDamping.id())]) < read / 10.0);
+    // Once the friction is kept, the sensitivities are measured with it and the joint
+    // takes part again; a model without it is now the one left alone.
+    let opts = FitOptions { estimate_start: true, ..FitOptions::default() };
+    let engine = Engine::new(&robot, &recs, &opts);
+    engine.set_start_model(&[kept(CoulombFriction.id()), kept(ViscousDamping.id())]);
+    let with = engine.errors(&recs, &[kept(CoulombFriction.id())]).expect("replay").rmse();
+    assert!(with < read / 10.0, "{with} vs {read}");
+    let without = engine.errors(&recs, &[]).expect("replay").rmse();
+    assert_eq!(without.to_bits(), read.to_bits());
+}
+
+/// The replay starts from the first row; a noisy first velocity makes a lightly damped servo
+/// ring, and the floor counts it: nothing with exact readings logged at the ticks, and an
+/// RMS that doubles with the velocity noise (the response is linear in the start error).
+/// A servo too stiff for its model's 5 ms step, recorded in nearly continuous time: MuJoCo
+/// stepped by hand at 5 ms / 16, one row at each 100 Hz tick with the tick's command and a
+/// small noise. The model's own replay misses it by its discretisation alone; the floor
+/// counts that part (about the replays' own difference) and the search stops there with
+/// nothing fitted. Recorded at the model's own steps, the floor has no timestep part.
+#[test]
+fn recordings_in_continuous_time_count_the_timestep_as_floor() {
+    let xml = r#"<mujoco><option gravity="0 0 0" timestep="0.005" integrator="implicitfast"/>
+  <worldbody><body><joint name="j" type="hinge" axis="0 1 0" damping="0.02"/>
+<geom type="capsule" fromto="0 0 0 0.2 0 0" size="0.02" mass="0.5"/></body></worldbody>
+  <actuator><position joint="j" kp="20" kv="0.3"/></actuator></mujoco>"#;
+    let (robot, dir) = crate::sim2real::replay::tests::robot_from_xml("disc-floor", xml);
+    // `sub` physics steps per model step; rows at the ticks (10 ms = 2 model steps).
+    let record = |sub: usize| -> Vec<Recording> {
+        let mut m = robot.mj.clone();
+        m.opt_mut().timestep = 0.005 / sub as f64;
+        (0..4)
+            .map(|e| {
+                let ticks = 300usize;
+                // A new level every 0.2–0.3 s, from a fixed sequence.
+                let cmd: Vec<f64> =
+                    (0..ticks).map(|k| 0.4 * ((k / (20 + 5 * e) + e) as f64 * 2.3).sin()).collect();
+                let mut d = mujoco_rs::prelude::MjData::new(&m);
+                let (mut q, mut qd) = (Vec::new(), Vec::new());
+                for (k, c) in cmd.iter().enumerate() {
+                    let noise = 2e-4 * pseudo_sign((e * 1000 + k) as u64);
+                    q.push(d.qpos()[0] + noise);
+                    qd.push(d.qvel()[0]);
+                    d.ctrl_mut()[0] = *c;
+                    for _ in 0..2 * sub {
+                        d.step();
+                    }
+                }
+                let mut j = crate::sim2real::recording::JointTrace::new("j", q);
+                j.q_cmd = Some(cmd);
+                j.qd = Some(qd);
+                Recording {
+                    source: format!("ep{e}.csv").into(),
+                    meta: Default::default(),
+                    control_rate_hz: Some(100.0),
+                    control_t0_s: Some(0.0),
+                    t: (0..ticks).map(|k| k as f64 * 0.01).collect(),
+                    joints: vec![j],
+                    base: None,
+                }
+            })
+            .collect()
+    };
+    let opts = FitOptions { estimate_start: false, ..FitOptions::default() };
+    let floor_of = |recs: &[Recording]| {
+        let engine = Engine::new(&robot, recs, &opts);
+        let errs = engine.errors(recs, &[]).expect("replay");
+        engine.floors(recs, &[], &errs).remove(0)
+    };
+    // Continuous time: the residual is well above noise, the timestep part carries it.
+    let cont = record(16);
+    let f = floor_of(&cont);
+    // (The replay at a quarter of the step is not continuous either: it takes about
+    // two thirds of the residual.)
+    assert!(f.ms > 5.0 * (f.white + f.reconstruction), "{f:?}");
+    assert!(f.discretisation > 0.5 * f.ms && f.discretisation <= f.ms, "{f:?}");
+    assert!(f.reached(opts.policy.white_ratio), "{f:?}");
+    let out = super::super::fit(&robot, &cont, &opts);
+    assert!(out.selected.is_empty() && out.stopped_at_floor, "{:?}", out.selected);
+    // The model's own steps: no timestep part, the floor is the noise.
+    let own = record(1);
+    let f = floor_of(&own);
+    assert_eq!(f.discretisation, 0.0, "{f:?}");
+    assert!(f.reached(opts.policy.white_ratio), "{f:?}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// The timestep's part: the recordings count as finer than the model on a majority of
+/// the joints that moved (the finer replay closer by at least half the replays'
+/// difference, on joints whose residual that difference and the floor can explain); then
+/// every joint gets its replays' difference. Hand-made mean squares [coarse, fine, diff].
+#[test]
+fn the_timestep_part_needs_most_joints_closer_to_the_finer_replay() {
+    let base = [1.0, 1.0, 1.0];
+    // Two of three joints closer to the finer replay by its whole shift: all three count.
+    let finer = [[3.0, 1.0, 2.0], [2.0, 1.5, 0.5], [1.5, 1.4, 0.5]];
+    assert_eq!(discretisation_part(&finer, &base), vec![2.0, 0.5, 0.5]);
+    // One of three (the others farther from the finer replay): none.
+    let one = [[3.0, 1.0, 2.0], [1.0, 1.5, 0.5], [1.0, 1.5, 0.5]];
+    assert_eq!(discretisation_part(&one, &base), vec![0.0; 3]);
+    // Closer by less than half the shift: no vote.
+    let little = [[3.0, 2.5, 2.0], [2.0, 1.9, 0.5], [1.5, 1.4, 0.5]];
+    assert_eq!(discretisation_part(&little, &base), vec![0.0; 3]);
+    // A residual far beyond the floor and the shift (a missing effect): no vote, however
+    // much closer the finer replay happens to be.
+    let big = [[40.0, 30.0, 2.0], [30.0, 25.0, 0.5], [1.5, 1.2, 0.5]];
+    assert_eq!(discretisation_part(&big, &base), vec![0.0; 3]);
+    // No joint moved between the replays.
+    assert_eq!(discretisation_part(&[[1.0, 1.0, 0.0]], &[1.0]), vec![0.0]);
+}
+
+#[test]
+fn the_floor_counts_the_start_state_noise() {
+    let exact = start_floor(0.0);
+    assert!(exact < 1e-6, "{exact}");
+    let (a, b) = (start_floor(0.02), start_floor(0.04));
+    assert!(a > 2e-5, "{a}");
+    assert!((b / a - 2.0).abs() < 0.3, "{a} {b}");
+}

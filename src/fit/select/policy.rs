@@ -1,0 +1,292 @@
+//! The search's policy in one place: every budget and threshold the selection decides with,
+//! named, with its meaning, its unit and its default ([`SearchPolicy`]); the search's phases
+//! ([`Phase`]); and the typed log of what was tried ([`Tried`], [`Log`]).
+//!
+//! docs/fitting.md ("The policy") lists the same table. A threshold that is not here is not
+//! part of the search.
+
+use serde::Serialize;
+
+/// Every knob of the selection. Ratios of RMSE are of the held-out (or training, where said)
+/// position RMSE over the fitted joints; "z" is in standard errors of the paired per-window
+/// improvement ([`crate::fit::stats::improvement_beyond_noise`]).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SearchPolicy {
+    // ---- budgets ----
+    /// Greedy rounds at most (each adds at most one effect, or one pair) [count]. Default 4.
+    pub max_rounds: usize,
+    /// Candidates taken from the top of the linearised ranking each round [count]. Default 4.
+    pub candidates_per_round: usize,
+    /// Objective evaluations of one candidate's full fit [rollouts of the training set].
+    /// Golden section uses at most 40 of them, the simplex 2 × (k − 1) × this on k = 2 or 3
+    /// parameters, Levenberg–Marquardt this / (k + 2) iterations (2–12). Default 60.
+    pub max_evals: usize,
+    /// Objective evaluations of a coarse screening fit [rollouts]. Default 10.
+    pub screen_evals: usize,
+    /// A partner joint "ranks high" when it is among the top `rank_depth ×
+    /// candidates_per_round` entries of the ranking [multiple]. Default 4.
+    pub rank_depth: usize,
+    /// Fewest joints of a motor-family or every-leg group [count]. Default 3.
+    pub min_group: usize,
+    /// Also fit the best-ranked group of every other allowed effect, and every effect on the
+    /// top-ranked joint (the linear ranking is only a guide for strongly nonlinear effects).
+    /// Default on.
+    pub every_effect: bool,
+    /// Run the simplification passes (drop, merge, fold, swap) after the greedy rounds.
+    /// Default on.
+    pub simplify: bool,
+
+    // ---- when to stop ----
+    /// Every fitted joint's training residual mean square within this factor of its floor
+    /// (white + reconstruction + discretisation) stops the search [ratio of mean squares].
+    /// Default 1.5.
+    pub white_ratio: f64,
+
+    // ---- the held-out gate ----
+    /// Smallest relative held-out RMSE improvement for an effect to be kept [fraction].
+    /// Default 0.02.
+    pub min_rel_improvement: f64,
+    /// A candidate that cuts the held-out RMSE (over all joints or over its own windows) by at
+    /// least this fraction, with more than twice as many windows improved as worsened, passes
+    /// without the paired z test (an effect confined to a few windows cannot pass it)
+    /// [fraction]. Default 0.5.
+    pub decisive_improvement: f64,
+    /// z of a paired held-out comparison between two fitted sets (drop, merge, swap, pair
+    /// members, restarts) [standard errors]. A round's own candidates need
+    /// [`SearchPolicy::z_needed`], which grows with their number. Default 2.0.
+    pub z_decision: f64,
+    /// Growth of the round's z with the number of candidates m: z = `z_decision` +
+    /// `z_growth` × ln(max(m, 4) / 4) (a Bonferroni-like correction: 2.35 for 8, 2.69 for 16)
+    /// [standard errors]. Default 0.5.
+    pub z_growth: f64,
+    /// A window counts as improved (worsened) when its RMSE changes by more than this fraction
+    /// [fraction]. Default 0.02.
+    pub window_change: f64,
+
+    // ---- screens (candidates not fitted in full) ----
+    /// A multi-parameter candidate is fitted in full only when its coarse fit reaches this
+    /// share of the best training improvement of the round so far [fraction]. Default 0.5.
+    pub screen_share: f64,
+    /// Once a kept candidate leaves a white training residual (or when a swap is screened), a
+    /// candidate whose coarse fit leaves more than this times that training RMSE is not fitted
+    /// [ratio of RMSE]. Default 1.5.
+    pub floor_screen_ratio: f64,
+    /// The extra effects of `every_effect` are left out when their best joint explains less
+    /// than this share of the top candidate's explained RMS [fraction]. Default 0.1.
+    pub minor_effect_share: f64,
+
+    // ---- Occam's choices ----
+    /// A simpler candidate (or set) whose held-out RMSE is within this factor of the best's,
+    /// not worse beyond noise, wins [ratio of RMSE]. Default 1.05.
+    pub simpler_within: f64,
+    /// Fewer parameters win within this factor; more parameters need to be lower by more
+    /// [ratio of RMSE]. Default 1.01.
+    pub occam_within: f64,
+
+    // ---- pairs (two effects fitted together) ----
+    /// A single effect whose held-out improvement is at least this needs no partner
+    /// [fraction]. Default 0.95.
+    pub pair_needless_improvement: f64,
+    /// Pairs whose coarse joint fit is within this factor of the best pair's are fitted fully
+    /// [ratio of training RMSE]. Default 1.25.
+    pub pair_full_fit_within: f64,
+    /// A pair replaces the single winner only below this factor of its held-out RMSE
+    /// [ratio of RMSE]. Default 0.9.
+    pub pair_gain: f64,
+    /// A single effect re-fitted by a failed pair replaces the winner only below this factor of
+    /// its held-out RMSE [ratio of RMSE]. Default 0.95.
+    pub restart_gain: f64,
+
+    // ---- joint polish (Nelder–Mead over every kept parameter) ----
+    /// Initial simplex step of a full polish [fraction of each parameter's range].
+    /// Default 0.02.
+    pub polish_step: f64,
+    /// Initial simplex step of a pair's coarse polish [fraction of range]. Default 0.05.
+    pub coarse_polish_step: f64,
+    /// A swap's set is polished when its unpolished held-out RMSE is within this factor of the
+    /// current one [ratio of RMSE]. Default 1.10.
+    pub swap_polish_within: f64,
+}
+
+impl Default for SearchPolicy {
+    fn default() -> Self {
+        SearchPolicy {
+            max_rounds: 4,
+            candidates_per_round: 4,
+            max_evals: 60,
+            screen_evals: 10,
+            rank_depth: 4,
+            min_group: 3,
+            every_effect: true,
+            simplify: true,
+            white_ratio: 1.5,
+            min_rel_improvement: 0.02,
+            decisive_improvement: 0.5,
+            z_decision: 2.0,
+            z_growth: 0.5,
+            window_change: 0.02,
+            screen_share: 0.5,
+            floor_screen_ratio: 1.5,
+            minor_effect_share: 0.1,
+            simpler_within: 1.05,
+            occam_within: 1.01,
+            pair_needless_improvement: 0.95,
+            pair_full_fit_within: 1.25,
+            pair_gain: 0.9,
+            restart_gain: 0.95,
+            polish_step: 0.02,
+            coarse_polish_step: 0.05,
+            swap_polish_within: 1.10,
+        }
+    }
+}
+
+impl SearchPolicy {
+    /// z the paired held-out test needs when `m` candidates compete in one round:
+    /// `z_decision` for up to four, then growing like a Bonferroni correction so that fitting
+    /// more candidates does not buy more false discoveries.
+    pub fn z_needed(&self, m: usize) -> f64 {
+        self.z_decision + self.z_growth * (m.max(4) as f64 / 4.0).ln()
+    }
+
+    /// How deep in the ranking a partner joint still counts as ranking high [entries].
+    pub fn rank_window(&self) -> usize {
+        self.candidates_per_round * self.rank_depth
+    }
+
+    /// Whether a candidate with held-out RMSE `rmse` and `k` fitted parameters beats the best
+    /// so far (`None`: there is none): fewer parameters win within `occam_within`, more
+    /// parameters need a lower RMSE by more than that, the same number any lower RMSE.
+    pub fn beats(&self, (rmse, k): (f64, usize), best: Option<(f64, usize)>) -> bool {
+        let w = self.occam_within;
+        match best {
+            None => true,
+            Some((r, kb)) => (k < kb && rmse <= r * w) || (rmse < r && !(k > kb && rmse > r / w)),
+        }
+    }
+}
+
+/// Where the search is. Progress lines name it; the log's entries carry the phase that tried
+/// them (JSON: snake_case names).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Phase {
+    /// The residual is ranked by the linearised screen.
+    Diagnose,
+    /// A candidate of a greedy round fitted in full and put to the held-out gate.
+    Add,
+    /// Not fitted in full: its coarse fit did not reach the round's screen.
+    Screen,
+    /// Not fitted: a kept candidate with fewer parameters already left a white residual.
+    Floor,
+    /// Not fitted in full: its coarse fit could not come near a kept white-residual candidate.
+    FloorScreen,
+    /// Two effects fitted together (the pair look-ahead).
+    Pair,
+    /// A single effect re-fitted by a failed pair, competing with the round's winner.
+    PairRestart,
+    /// The same effect on two joints fitted jointly when no single one passed.
+    JointPair,
+    /// Joint polish of every kept parameter.
+    Polish,
+    /// The simplification passes as a whole.
+    Simplify,
+    /// Removal test (`kept` = the effect stays).
+    Drop,
+    /// Removal with the other effects fitted again (`kept` = the effect stays).
+    DropRefit,
+    /// One effect on two joint sets as one group (`kept` = merged).
+    Merge,
+    /// An effect taken over by another on the same joints (`kept` = folded).
+    Fold,
+    /// A friction variant beside plain friction replaced by the plain one (`kept` = replaced).
+    PlainFriction,
+    /// Replacement by a simpler effect (`kept` = the swap was made).
+    Swap,
+    /// A swap not fitted in full: its coarse fit could not come close.
+    SwapScreen,
+    /// Dry friction re-fitted on short windows (`kept` = the re-fit replaced its values).
+    Reshoot,
+    /// Standard errors of the kept set.
+    StandardErrors,
+    /// The search has ended.
+    Done,
+}
+
+impl Phase {
+    /// The phase as the log and the progress line spell it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Phase::Diagnose => "diagnose",
+            Phase::Add => "add",
+            Phase::Screen => "screen",
+            Phase::Floor => "floor",
+            Phase::FloorScreen => "floor_screen",
+            Phase::Pair => "pair",
+            Phase::PairRestart => "pair_restart",
+            Phase::JointPair => "joint_pair",
+            Phase::Polish => "polish",
+            Phase::Simplify => "simplify",
+            Phase::Drop => "drop",
+            Phase::DropRefit => "drop_refit",
+            Phase::Merge => "merge",
+            Phase::Fold => "fold",
+            Phase::PlainFriction => "plain_friction",
+            Phase::Swap => "swap",
+            Phase::SwapScreen => "swap_screen",
+            Phase::Reshoot => "reshoot",
+            Phase::StandardErrors => "standard_errors",
+            Phase::Done => "done",
+        }
+    }
+}
+
+/// What a progress line says the search is doing in a phase.
+impl std::fmt::Display for Phase {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Phase::Add => "fit",
+            Phase::Pair => "pair look-ahead",
+            Phase::JointPair => "joint pairs",
+            Phase::DropRefit => "drop with re-fit",
+            Phase::StandardErrors => "standard errors",
+            p => p.name(),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn z_grows_with_the_number_of_candidates() {
+        let p = SearchPolicy::default();
+        assert_eq!(p.z_needed(1), 2.0);
+        assert_eq!(p.z_needed(4), 2.0);
+        assert!((p.z_needed(8) - 2.3466).abs() < 1e-3);
+        assert!((p.z_needed(16) - 2.6931).abs() < 1e-3);
+    }
+
+    #[test]
+    fn fewer_parameters_win_within_one_percent() {
+        let p = SearchPolicy::default();
+        assert!(p.beats((1.0, 2), None));
+        // Fewer parameters: within 1 % is enough.
+        assert!(p.beats((1.009, 1), Some((1.0, 2))));
+        assert!(!p.beats((1.02, 1), Some((1.0, 2))));
+        // More parameters: must be lower by more than 1 %.
+        assert!(!p.beats((0.995, 3), Some((1.0, 2))));
+        assert!(p.beats((0.98, 3), Some((1.0, 2))));
+        // Same count: any lower RMSE.
+        assert!(p.beats((0.999, 2), Some((1.0, 2))));
+        assert!(!p.beats((1.0, 2), Some((1.0, 2))));
+    }
+
+    #[test]
+    fn phases_serialise_as_their_names() {
+        for p in [Phase::Add, Phase::FloorScreen, Phase::PairRestart, Phase::StandardErrors] {
+            assert_eq!(serde_json::to_value(p).unwrap(), serde_json::json!(p.name()));
+        }
+    }
+}
