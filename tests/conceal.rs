@@ -1,5 +1,6 @@
 //! Concealed-effect benchmark, reduced (the full matrix: `bench/conceal.sh`, results in
-//! docs/conceal-benchmark.md). Hidden effects → synthetic recordings at 88 Hz with jitter,
+//! docs/conceal-benchmark.md). The cases on the 12-joint Asimov legs take minutes each on two
+//! cores and are `#[ignore]`d here: `bench/conceal_long.sh` runs them. Hidden effects → synthetic recordings at 88 Hz with jitter,
 //! noise, 12-bit quantisation and drops → blind `fit` → scored against the truth, with the
 //! held-out MAE measured on fresh episodes the fit never saw.
 
@@ -265,6 +266,7 @@ fn conceal_arm3_stribeck_friction_high_noise() {
 }
 
 #[test]
+#[ignore = "12-joint legs, minutes each: bench/conceal_long.sh runs them"]
 fn conceal_asimov_one_knee_is_not_smeared_over_both() {
     // Leg joints on a test stand; damping on the left knee only. The mirror completion tries
     // both knees as a group; held-out must keep the one-joint fit: nothing on the right knee.
@@ -286,6 +288,7 @@ fn conceal_asimov_one_knee_is_not_smeared_over_both() {
 /// not needed; that Stribeck fit is a restart of the single one and now wins (held-out
 /// −86 %, MAE 13.9 → 0.66 mrad against a 0.54 floor). Fails if the pair restart goes.
 #[test]
+#[ignore = "12-joint legs, minutes each: bench/conceal_long.sh runs them"]
 fn conceal_asimov_knee_stribeck_12bit() {
     single(asimov_case(
         "asimov stribeck_friction@left_knee",
@@ -302,6 +305,7 @@ fn conceal_asimov_knee_stribeck_12bit() {
 /// pair. The joint and its mirror pair now compete; fitted on the one knee it is 15.0 ms
 /// (held-out −66 %, at the noise floor). Fails if the one-joint candidate goes again.
 #[test]
+#[ignore = "12-joint legs, minutes each: bench/conceal_long.sh runs them"]
 fn conceal_asimov_knee_delay_one_side_unquantised() {
     single(
         asimov_case(
@@ -320,6 +324,7 @@ fn conceal_asimov_knee_delay_one_side_unquantised() {
 /// load coefficient to it: (0.488, 0.088), 12 % low. The kept friction is now re-fitted on 1 s
 /// windows (multiple shooting; `reshoot`): (0.490, 0.099). Fails if that re-fit goes.
 #[test]
+#[ignore = "12-joint legs, minutes each: bench/conceal_long.sh runs them"]
 fn conceal_asimov_knee_load_dependent_friction_12bit() {
     single(asimov_case(
         "asimov load_dependent_friction@left_knee",
@@ -336,6 +341,7 @@ fn conceal_asimov_knee_load_dependent_friction_12bit() {
 /// needs a log-scale search (a uniform grid over 0.05–50 N·m misses the narrow optimum, and
 /// nothing was found): 1.996, at the noise floor. Fails if either goes.
 #[test]
+#[ignore = "12-joint legs, minutes each: bench/conceal_long.sh runs them"]
 fn conceal_asimov_knee_torque_limit_unquantised() {
     single(
         asimov_case(
@@ -439,6 +445,7 @@ fn conceal_rig_control_selects_nothing() {
 /// Both are kept, as a pair, within target. Until a hook's servo torque read the delayed
 /// command, the truth could not even be represented: gain error alone (0.645, 1.232) won.
 #[test]
+#[ignore = "12-joint legs, minutes each: bench/conceal_long.sh runs them"]
 fn conceal_asimov_knee_gain_error_and_delay_from_the_cli() {
     use std::process::Command;
     let bin = env!("CARGO_BIN_EXE_modellint");
@@ -493,6 +500,7 @@ fn conceal_asimov_knee_gain_error_and_delay_from_the_cli() {
 /// fresh single fits. (Coulomb friction + armature, where load-dependent friction stood in, is
 /// the benchmark's.)
 #[test]
+#[ignore = "12-joint legs, minutes each: bench/conceal_long.sh runs them"]
 fn conceal_asimov_knee_damping_armature_beats_gain_error() {
     pair(
         asimov_case(

@@ -43,7 +43,7 @@ fn progress_bar(quiet: bool) -> Option<indicatif::ProgressBar> {
     }
     let b = indicatif::ProgressBar::with_draw_target(None, indicatif::ProgressDrawTarget::stderr());
     if let Ok(style) =
-        indicatif::ProgressStyle::with_template("{spinner} modellint fit: {wide_msg}")
+        indicatif::ProgressStyle::with_template("{spinner} [{elapsed}] modellint fit: {wide_msg}")
     {
         b.set_style(style);
     }
@@ -55,26 +55,40 @@ fn progress_bar(quiet: bool) -> Option<indicatif::ProgressBar> {
 const LOG_EVERY_S: f64 = 30.0;
 
 /// The spinner and the fit's progress callback drawing on it (both `None` with `quiet`):
-/// `prefix`, then the round, the phase or candidate, the simulations so far and the time.
-/// When stderr is not a terminal (a CI log, `2> file`) there is no spinner: a plain line is
-/// written when a round starts and at most every [`LOG_EVERY_S`] seconds in between, so a long
-/// fit in a log still shows where it is.
+/// `prefix`, then the round, the phase or candidate i/n, the rollouts so far, the time and,
+/// once a round has fitted a candidate, an estimate of the time its remaining candidates take
+/// (their mean so far × how many are left). The search reports after every dataset
+/// simulation, so on a terminal the line moves at least as often as a simulation ends, and
+/// the spinner's clock every 200 ms. When stderr is not a terminal (a CI log, `2> file`) there
+/// is no spinner: a plain line is written when a round starts and at most every
+/// [`LOG_EVERY_S`] seconds in between, so a long fit in a log still shows where it is.
 fn fit_progress(quiet: bool, prefix: String) -> (Option<indicatif::ProgressBar>, Option<Progress>) {
     if quiet {
         return (None, None);
     }
     let start = std::time::Instant::now();
+    // ((round, phase, candidates), time its first candidate started) for the estimate.
+    let round_start = std::sync::Mutex::new((None, 0.0f64));
     let line = move |p: &ProgressInfo| {
+        let now = start.elapsed().as_secs_f64();
         let what = match &p.candidate {
-            Some((i, n, c)) => format!("candidate {i}/{n}: {c}"),
+            Some((i, n, c)) => {
+                let mut rs = round_start.lock().unwrap_or_else(|e| e.into_inner());
+                let key = Some((p.round, p.phase, *n));
+                if rs.0 != key {
+                    *rs = (key, now);
+                }
+                let eta = if *i > 1 {
+                    let per = (now - rs.1) / (*i - 1) as f64;
+                    format!(" · ≈ {:.0} s left in this phase", per * (n - i + 1) as f64)
+                } else {
+                    String::new()
+                };
+                format!("{} {i}/{n}{eta}: {c}", p.phase)
+            }
             None => p.phase.to_string(),
         };
-        format!(
-            "{prefix}round {}: {what} · {} simulations · {:.0} s",
-            p.round + 1,
-            p.simulations,
-            start.elapsed().as_secs_f64()
-        )
+        format!("{prefix}round {} · {} rollouts · {what}", p.round + 1, p.rollouts)
     };
     if !std::io::stderr().is_terminal() {
         // (round of the last line, seconds at the last line)
@@ -84,7 +98,7 @@ fn fit_progress(quiet: bool, prefix: String) -> (Option<indicatif::ProgressBar>,
             let Ok(mut last) = last.lock() else { return };
             if p.round != last.0 || now - last.1 >= LOG_EVERY_S {
                 *last = (p.round, now);
-                eprintln!("modellint fit: {}", line(p));
+                eprintln!("modellint fit: [{now:.0} s] {}", line(p));
             }
         }));
         return (None, Some(progress));

@@ -49,6 +49,8 @@ pub struct Engine<'a> {
     /// The discretisation floor ([`Engine::discretisation_floor`]) by [`set_key`], and by
     /// dataset alone (the latest measured).
     disc: std::sync::Mutex<Vec<(String, Vec<f64>)>>,
+    /// Where the search last reported it was ([`Engine::report`]).
+    place: std::sync::Mutex<Option<ProgressInfo>>,
 }
 
 type StartMemo = std::collections::HashMap<String, Option<std::sync::Arc<StartSens>>>;
@@ -105,6 +107,7 @@ impl<'a> Engine<'a> {
             starts: Default::default(),
             start_model: Default::default(),
             disc: Default::default(),
+            place: Default::default(),
         }
     }
 
@@ -138,16 +141,32 @@ impl<'a> Engine<'a> {
         self.opts.estimate_start && self.opts.replay.base != BaseMode::Free
     }
 
-    /// Reports progress through `opts.progress`, if any.
+    /// Reports progress through `opts.progress`, if any, and remembers where the search is:
+    /// every dataset simulation after it reports the same place with its counts updated
+    /// ([`Engine::heartbeat`]).
     pub fn report(&self, round: usize, phase: Phase, candidate: Option<(usize, usize, String)>) {
         if let Some(p) = &self.opts.progress {
-            (p.0)(&ProgressInfo {
+            let info = ProgressInfo {
                 round,
                 phase,
                 candidate,
                 simulations: self.sims.load(std::sync::atomic::Ordering::Relaxed),
                 rollouts: self.rollouts.stats().rollouts,
-            });
+            };
+            (p.0)(&info);
+            *self.place.lock().unwrap_or_else(|e| e.into_inner()) = Some(info);
+        }
+    }
+
+    /// Reports the place of the last [`Engine::report`] again with the counts of now (the
+    /// display decides how often to draw).
+    fn heartbeat(&self) {
+        let Some(p) = &self.opts.progress else { return };
+        let place = self.place.lock().unwrap_or_else(|e| e.into_inner()).clone();
+        if let Some(mut info) = place {
+            info.simulations = self.sims.load(std::sync::atomic::Ordering::Relaxed);
+            info.rollouts = self.rollouts.stats().rollouts;
+            (p.0)(&info);
         }
     }
 
@@ -198,8 +217,9 @@ impl<'a> Engine<'a> {
 
     fn simulate(&self, recs: &[Recording], applied: &[Applied]) -> Option<Errors> {
         self.sims.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        let mut eps: Vec<Episode> =
-            self.rollouts.run_one(SetSpec::of(applied), recs, &self.opts.replay)?;
+        let eps = self.rollouts.run_one(SetSpec::of(applied), recs, &self.opts.replay);
+        self.heartbeat();
+        let mut eps: Vec<Episode> = eps?;
         if self.estimates_start() {
             let (sens, model) = self.start_sensitivities(recs);
             // A joint takes part only when the sticking effects on it are those the
