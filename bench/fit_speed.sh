@@ -1,10 +1,12 @@
 #!/usr/bin/env bash
-# Blind-fit speed, end to end from the CLI (issue 12's targets on 2 cores): recordings made by
-# `modellint synth` (its own MuJoCo loop, 100 Hz controller, async ~88 Hz recorder, noise, 12-bit
-# encoder, drops), then `modellint fit MODEL EPISODES` with every effect allowed, as a user runs
-# it. Prints wall and CPU seconds per case, what was fitted, and the medians against the targets:
-#   single-joint case ≤ 10 s median, 3-joint arm ≤ 30 s, 12-joint robot (4 × 6 s episodes) ≤ 90 s.
-# With ../shared/data the seven independent arm2 datasets are timed too.
+# Blind-fit speed, end to end from the CLI, on 2 cores: recordings made by `modellint synth` (its
+# own MuJoCo loop, 100 Hz controller, async ~88 Hz recorder, noise, 12-bit encoder, drops), then
+# `modellint fit MODEL EPISODES` with every effect allowed, as a user runs it, and the same data
+# fitted *told* (`fit --told EFFECT@JOINTS` with the true effects and joints: no search, what
+# mujoco.sysid does when given the parameters). Prints per case the blind wall and CPU seconds,
+# the told wall seconds, their ratio (target <= 3), the rollouts of the blind search, what was
+# fitted, and the medians against the targets: single-joint <= 5 s, three-joint arm <= 10 s,
+# 12-joint legs (4 x 6 s) <= 90 s. With ../shared/data the seven independent arm2 datasets too.
 # Figures only (no pass/fail): the machine is shared; quote ratios from one run.
 #   bench/fit_speed.sh            # all groups
 #   bench/fit_speed.sh --quick    # single-joint and arm2 only
@@ -19,22 +21,52 @@ quick=0
 
 TIMEFORMAT='%R %U %S'
 declare -A times
-row() { # group name model episodes-dir
-  local group=$1 name=$2 model=$3 eps=$4 t wall cpu fitted
-  t=$({ time "$bin" fit "$model" "$eps" --quiet --format json >"$work/out.json" 2>/dev/null || true; } 2>&1)
-  read -r wall u s <<<"$t"
-  cpu=$(python3 -c "print(f'{$u + $s:.1f}')")
-  fitted=$(python3 - "$work/out.json" <<'EOF'
+ratios=""
+told_of() { # episodes-dir -> --told arguments from the dataset's truth.json (none for a control)
+  python3 - "$1/../truth.json" <<'PYEOF'
 import json, sys
 try:
     d = json.load(open(sys.argv[1]))
 except Exception:
-    print("(fit failed)"); sys.exit()
+    sys.exit()
+eff = d.get("effects", [])
+groups = {}
+if eff and isinstance(eff[0], dict):            # modellint synth: one entry per (effect, joint)
+    for e in eff:
+        key = (e["effect"], json.dumps(e.get("params", {}), sort_keys=True))
+        groups.setdefault(key, []).append(e["joint"])
+else:                                           # independent arm2: effects x joints
+    for e in eff:
+        if e != "none":
+            groups[(e, "")] = list(d.get("joints", []))
+print(" ".join(f"--told {k[0]}@{'+'.join(v)}" for k, v in groups.items()))
+PYEOF
+}
+row() { # group name model episodes-dir
+  local group=$1 name=$2 model=$3 eps=$4 t wall cpu fitted told twall ratio rollouts
+  t=$({ time "$bin" fit "$model" "$eps" --quiet --format json >"$work/out.json" 2>/dev/null || true; } 2>&1)
+  read -r wall u s <<<"$t"
+  cpu=$(python3 -c "print(f'{$u + $s:.1f}')")
+  read -r rollouts fitted < <(python3 - "$work/out.json" <<'PYEOF'
+import json, sys
+try:
+    d = json.load(open(sys.argv[1]))
+except Exception:
+    print("- (fit failed)"); sys.exit()
 m = d.get("missing_physics", [])
-print("; ".join(f"{x['effect']}@{'+'.join(x['joints'])}" for x in m) or "(nothing)")
-EOF
+print(d.get("search", {}).get("rollouts", "-"),
+      "; ".join(f"{x['effect']}@{'+'.join(x['joints'])}" for x in m) or "(nothing)")
+PYEOF
 )
-  printf '%-8s %-34s %8s %8s  %s\n' "$group" "$name" "$wall" "$cpu" "$fitted"
+  told=$(told_of "$eps")
+  twall="-"; ratio="-"
+  if [ -n "$told" ]; then
+    t=$({ time "$bin" fit "$model" "$eps" $told --quiet --format json >/dev/null 2>&1 || true; } 2>&1)
+    read -r twall u s <<<"$t"
+    ratio=$(python3 -c "print(f'{$wall / $twall:.1f}')")
+    ratios="$ratios $ratio"
+  fi
+  printf '%-8s %-34s %8s %8s %8s %6s %9s  %s\n' "$group" "$name" "$wall" "$cpu" "$twall" "$ratio" "$rollouts" "$fitted"
   times[$group]="${times[$group]:-} $wall"
 }
 n_case=0
@@ -45,7 +77,7 @@ synth() { # model effects extra... → sets $eps to the episodes directory
   eps="$work/c$n_case/episodes"
 }
 
-printf '%-8s %-34s %8s %8s  %s\n' group case "wall s" "cpu s" fitted
+printf '%-8s %-34s %8s %8s %8s %6s %9s  %s\n' group case "wall s" "cpu s" "told s" ratio rollouts fitted
 pend=fixtures/synth/pendulum_servo.xml
 for c in "none" "viscous_damping=0.03" "action_delay=0.015" "armature=0.003" "coulomb_friction=0.03" "gain_error=0.7,1.3"; do
   synth "$pend" "$c" --amplitude 0.8 --seed 5
@@ -76,7 +108,8 @@ echo
 for g in single arm2 arm3 legs12; do
   [ -n "${times[$g]:-}" ] || continue
   med=$(python3 -c "import statistics,sys; print(f'{statistics.median(map(float, sys.argv[1:])):.1f}')" ${times[$g]})
-  case $g in single) tgt="≤ 10 s";; arm3) tgt="≤ 30 s";; legs12) tgt="≤ 90 s";; *) tgt="(2 joints)";; esac
+  case $g in single) tgt="≤ 5 s";; arm3) tgt="≤ 10 s";; legs12) tgt="≤ 90 s";; *) tgt="(2 joints)";; esac
   printf 'median wall %-7s %6s s   target %s\n' "$g" "$med" "$tgt"
 done
+[ -n "$ratios" ] && python3 -c "import statistics,sys; r=list(map(float, sys.argv[1:])); print(f'blind / told wall time: median {statistics.median(r):.1f}, max {max(r):.1f} over {len(r)} cases   target <= 3')" $ratios
 echo "load average at the end: $(cut -d' ' -f1-3 /proc/loadavg) (2 cores; wall times stretch with load)"

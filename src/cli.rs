@@ -175,6 +175,12 @@ pub struct FitCmd {
     /// Only fit joints matching this glob (e.g. '*knee*').
     #[arg(long)]
     pub joints: Option<String>,
+    /// Told fit: no search — fit exactly EFFECT on JOINTS (`+`-separated, `*` for every fitted
+    /// joint as one group), repeatable; several are fitted jointly. For when the physics is
+    /// known and only its value is wanted, and as the reference a blind search is timed
+    /// against. E.g. `--told viscous_damping@left_knee+right_knee`.
+    #[arg(long, value_name = "EFFECT@JOINTS")]
+    pub told: Vec<String>,
     /// Hold out one episode in N, spread over the sorted list; episodes whose header says
     /// `split: heldout` are held out instead when there are any (a single episode is split in
     /// time windows).
@@ -342,6 +348,7 @@ pub fn run() -> i32 {
             spec: f.spec,
             effects: f.effects,
             joints: f.joints,
+            told: f.told,
             holdout: f.holdout,
             window: f.window,
             start_estimate: f.start_estimate,

@@ -19,6 +19,8 @@ pub struct FitArgs {
     pub spec: Option<PathBuf>,
     pub effects: Vec<String>,
     pub joints: Option<String>,
+    /// `EFFECT@JOINTS`: fit exactly these, no search (`+`-separated joints, `*` for all).
+    pub told: Vec<String>,
     pub holdout: usize,
     /// `KEY=VALUE`: hold out the episodes with that metadata value; `KEY`: every value in turn.
     pub holdout_by: Option<String>,
@@ -110,6 +112,48 @@ fn fit_progress(quiet: bool, prefix: String) -> (Option<indicatif::ProgressBar>,
     (bar, progress)
 }
 
+/// `--told EFFECT@JOINTS` values as (effect id, joint group): joints `+`-separated, `*` for
+/// every fitted joint (those of `--joints`, else every recorded one).
+fn parse_told(
+    told: &[String],
+    recs: &[crate::sim2real::recording::Recording],
+    fitted: &[String],
+) -> Result<Vec<(String, Vec<String>)>, String> {
+    let recorded: Vec<String> = {
+        let mut v: Vec<String> = Vec::new();
+        for j in recs.iter().flat_map(|r| &r.joints) {
+            if !v.contains(&j.name) {
+                v.push(j.name.clone());
+            }
+        }
+        v
+    };
+    let all = if fitted.is_empty() { recorded.clone() } else { fitted.to_vec() };
+    told.iter()
+        .map(|t| {
+            let (id, js) = t
+                .split_once('@')
+                .ok_or_else(|| format!("--told {t}: expected EFFECT@JOINTS, e.g. viscous_damping@left_knee+right_knee or armature@*"))?;
+            if effects::by_id(id).is_none() {
+                let ids: Vec<&str> = effects::all().iter().map(|e| e.id()).collect();
+                return Err(format!("--told {t}: unknown effect `{id}`; known: {}", ids.join(", ")));
+            }
+            let joints: Vec<String> = if js == "*" {
+                all.clone()
+            } else {
+                js.split('+').map(str::to_string).collect()
+            };
+            if let Some(j) = joints.iter().find(|j| !recorded.contains(j)) {
+                return Err(format!(
+                    "--told {t}: joint `{j}` is not recorded; recorded: {}",
+                    recorded.join(", ")
+                ));
+            }
+            Ok((id.to_string(), joints))
+        })
+        .collect()
+}
+
 fn fail(msg: impl std::fmt::Display) -> i32 {
     eprintln!("modellint: {msg}");
     2
@@ -184,6 +228,10 @@ pub fn run_fit(a: FitArgs) -> i32 {
             return fail(format!("--joints {g} matches no recorded joint"));
         }
     }
+    let told = match parse_told(&a.told, &recs, &joints) {
+        Ok(t) => t,
+        Err(e) => return fail(e),
+    };
     let replay = a.replay.clone();
     let families = FitOptions::motor_families(loaded.spec.as_ref(), &names);
     let (bar, progress) = fit_progress(a.quiet, String::new());
@@ -196,6 +244,7 @@ pub fn run_fit(a: FitArgs) -> i32 {
         families,
         estimate_start: a.start_estimate,
         progress,
+        told,
         ..Default::default()
     };
     if let Some(by) = &a.holdout_by {

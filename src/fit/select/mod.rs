@@ -34,6 +34,7 @@ mod reshoot;
 mod simplify;
 mod solve;
 mod start;
+mod told;
 mod verdict;
 
 use std::collections::BTreeMap;
@@ -91,6 +92,9 @@ pub struct FitOptions {
     pub estimate_start: bool,
     /// Every budget and threshold of the search ([`SearchPolicy`]).
     pub policy: SearchPolicy,
+    /// Told fit: no search, fit exactly these (effect id, joint group) on the training set,
+    /// jointly when there are several, and report their held-out improvement (`fit --told`).
+    pub told: Vec<(String, Vec<String>)>,
     /// Called at each step of the search (none: silent).
     pub progress: Option<Progress>,
 }
@@ -124,6 +128,7 @@ impl Default for FitOptions {
             gap_mask_s: 0.1,
             estimate_start: false,
             policy: SearchPolicy::default(),
+            told: vec![],
             progress: None,
         }
     }
@@ -374,6 +379,16 @@ pub fn fit(robot: &Robot, recs: &[Recording], opts: &FitOptions) -> FitOutcome {
         ));
     }
     let search = Search { engine: &engine, train: &train, heldout: &heldout, allowed: &allowed };
+    if !opts.told.is_empty() {
+        told::fit_told(&search, &opts.told, &mut out);
+        if !out.applied.is_empty() {
+            engine.report(0, Phase::StandardErrors, None);
+            final_uncertainty(&engine, &train, &mut out);
+        }
+        engine.report(0, Phase::Done, None);
+        out.cost = search_cost(&engine, &out);
+        return out;
+    }
     let mut round = 0;
     loop {
         while round < opts.policy.max_rounds {
@@ -416,7 +431,13 @@ pub fn fit(robot: &Robot, recs: &[Recording], opts: &FitOptions) -> FitOutcome {
         };
     }
     engine.report(round, Phase::Done, None);
-    out.cost = SearchCost {
+    out.cost = search_cost(&engine, &out);
+    out
+}
+
+/// What the search behind `out` cost.
+fn search_cost(engine: &Engine, out: &FitOutcome) -> SearchCost {
+    SearchCost {
         simulations: engine.simulations(),
         rollouts: engine.rollout_stats(),
         fits_saved_by_screens: out
@@ -429,8 +450,7 @@ pub fn fit(robot: &Robot, recs: &[Recording], opts: &FitOptions) -> FitOutcome {
                 )
             })
             .count(),
-    };
-    out
+    }
 }
 
 /// The standard errors of every kept effect at the final parameters, from one joint Jacobian

@@ -207,6 +207,8 @@ pub enum Phase {
     SwapScreen,
     /// Dry friction re-fitted on short windows (`kept` = the re-fit replaced its values).
     Reshoot,
+    /// An effect the user named (`fit --told`), fitted without a search.
+    Told,
     /// Standard errors of the kept set.
     StandardErrors,
     /// The search has ended.
@@ -235,6 +237,7 @@ impl Phase {
             Phase::Swap => "swap",
             Phase::SwapScreen => "swap_screen",
             Phase::Reshoot => "reshoot",
+            Phase::Told => "told",
             Phase::StandardErrors => "standard_errors",
             Phase::Done => "done",
         }
