@@ -51,6 +51,8 @@ pub struct Engine<'a> {
     disc: std::sync::Mutex<Vec<(String, Vec<f64>)>>,
     /// Where the search last reported it was ([`Engine::report`]).
     place: std::sync::Mutex<Option<ProgressInfo>>,
+    /// Rollouts booked to each phase ([`Engine::rollouts_by_phase`]).
+    by_phase: std::sync::Mutex<std::collections::BTreeMap<&'static str, usize>>,
 }
 
 type StartMemo = std::collections::HashMap<String, Option<std::sync::Arc<StartSens>>>;
@@ -108,6 +110,7 @@ impl<'a> Engine<'a> {
             start_model: Default::default(),
             disc: Default::default(),
             place: Default::default(),
+            by_phase: Default::default(),
         }
     }
 
@@ -145,17 +148,36 @@ impl<'a> Engine<'a> {
     /// every dataset simulation after it reports the same place with its counts updated
     /// ([`Engine::heartbeat`]).
     pub fn report(&self, round: usize, phase: Phase, candidate: Option<(usize, usize, String)>) {
+        let info = ProgressInfo {
+            round,
+            phase,
+            candidate,
+            simulations: self.sims.load(std::sync::atomic::Ordering::Relaxed),
+            rollouts: self.rollouts.stats().rollouts,
+        };
+        self.account(info.rollouts);
         if let Some(p) = &self.opts.progress {
-            let info = ProgressInfo {
-                round,
-                phase,
-                candidate,
-                simulations: self.sims.load(std::sync::atomic::Ordering::Relaxed),
-                rollouts: self.rollouts.stats().rollouts,
-            };
             (p.0)(&info);
-            *self.place.lock().unwrap_or_else(|e| e.into_inner()) = Some(info);
         }
+        *self.place.lock().unwrap_or_else(|e| e.into_inner()) = Some(info);
+    }
+
+    /// Books the rollouts run since the last report to the phase reported then.
+    fn account(&self, now: usize) {
+        let phase = self.place.lock().unwrap_or_else(|e| e.into_inner()).as_ref().map(|p| p.phase);
+        let mut b = self.by_phase.lock().unwrap_or_else(|e| e.into_inner());
+        let done = b.values().sum::<usize>();
+        if let Some(ph) = phase
+            && now > done
+        {
+            *b.entry(ph.name()).or_default() += now - done;
+        }
+    }
+
+    /// Rollouts by the phase of the search that ran them (up to the last report).
+    pub fn rollouts_by_phase(&self) -> std::collections::BTreeMap<&'static str, usize> {
+        self.account(self.rollouts.stats().rollouts);
+        self.by_phase.lock().unwrap_or_else(|e| e.into_inner()).clone()
     }
 
     /// Reports the place of the last [`Engine::report`] again with the counts of now (the

@@ -259,7 +259,7 @@ pub struct FitOutcome {
 
 /// What a search cost: simulations asked for, rollouts run, and the full fits its screens
 /// saved (JSON `search`).
-#[derive(Debug, Clone, Copy, Default, Serialize)]
+#[derive(Debug, Clone, Default, Serialize)]
 pub struct SearchCost {
     /// Dataset simulations the search asked for (the memo answers repeats without rollouts).
     pub simulations: usize,
@@ -269,6 +269,9 @@ pub struct SearchCost {
     /// Candidates left without a full nonlinear fit by a screen (phases `screen`, `floor`,
     /// `floor_screen`, `swap_screen`).
     pub fits_saved_by_screens: usize,
+    /// Rollouts by the phase that ran them (`diagnose` includes the floors and the
+    /// linearised ranking's probes; `add` the candidates' fits and held-out tests).
+    pub rollouts_by_phase: BTreeMap<&'static str, usize>,
 }
 
 impl FitOutcome {
@@ -450,6 +453,7 @@ fn search_cost(engine: &Engine, out: &FitOutcome) -> SearchCost {
                 )
             })
             .count(),
+        rollouts_by_phase: engine.rollouts_by_phase(),
     }
 }
 

@@ -166,6 +166,125 @@ impl SearchPolicy {
     }
 }
 
+/// Every field of [`SearchPolicy`] as (name, unit, meaning): docs/fitting.md's policy table is
+/// generated from it with the defaults ([`SearchPolicy::table`]); a test keeps it complete.
+pub const FIELDS: &[(&str, &str, &str)] = &[
+    ("max_rounds", "count", "greedy rounds at most (each adds one effect or one pair)"),
+    (
+        "candidates_per_round",
+        "count",
+        "candidates taken from the top of the linearised ranking each round",
+    ),
+    (
+        "max_evals",
+        "rollouts of the training set",
+        "budget of one candidate's full fit: line search ≤ 40, simplex 2 (k − 1) × this, Levenberg–Marquardt this / (k + 2) iterations (2–12)",
+    ),
+    ("screen_evals", "rollouts of the training set", "budget of a coarse screening fit"),
+    (
+        "rank_depth",
+        "× candidates_per_round",
+        "a partner joint ranks high within this depth of the ranking",
+    ),
+    ("min_group", "joints", "fewest joints of a motor-family or every-leg group"),
+    (
+        "every_effect",
+        "on/off",
+        "also fit the best group of every other effect, and every effect on the top-ranked joint",
+    ),
+    ("simplify", "on/off", "run drop, merge, fold and swap after the greedy rounds"),
+    (
+        "white_ratio",
+        "ratio of mean squares",
+        "stop when every joint's training residual is within this factor of its floor",
+    ),
+    (
+        "min_rel_improvement",
+        "fraction",
+        "smallest relative held-out RMSE improvement that keeps an effect",
+    ),
+    (
+        "decisive_improvement",
+        "fraction",
+        "a held-out improvement this large (most windows better) passes without the z test",
+    ),
+    ("z_decision", "standard errors", "z of a paired held-out comparison between two fitted sets"),
+    (
+        "z_growth",
+        "standard errors",
+        "a round's z: z_decision + z_growth × ln(max(m, 4) / 4) for m candidates",
+    ),
+    (
+        "window_change",
+        "fraction",
+        "a window counts as improved or worsened beyond this relative change",
+    ),
+    (
+        "screen_share",
+        "fraction",
+        "a multi-parameter candidate is fitted fully only when its coarse fit reaches this share of the round's best training improvement",
+    ),
+    (
+        "floor_screen_ratio",
+        "ratio of RMSE",
+        "after a white-residual winner (or for a swap), a coarse fit above this × its training RMSE is not fitted fully",
+    ),
+    (
+        "minor_effect_share",
+        "fraction",
+        "every_effect leaves out effects explaining less than this share of the top candidate",
+    ),
+    (
+        "simpler_within",
+        "ratio of RMSE",
+        "a simpler candidate or set within this factor of the best, not worse beyond noise, wins",
+    ),
+    (
+        "occam_within",
+        "ratio of RMSE",
+        "fewer parameters win within this factor; more need to be lower by more",
+    ),
+    (
+        "pair_needless_improvement",
+        "fraction",
+        "a single effect improving held-out by this much needs no partner",
+    ),
+    (
+        "pair_full_fit_within",
+        "ratio of RMSE",
+        "pairs whose coarse joint fit is within this factor of the best pair's are fitted fully",
+    ),
+    (
+        "pair_gain",
+        "ratio of RMSE",
+        "a pair replaces the single winner only below this factor of its held-out RMSE",
+    ),
+    (
+        "restart_gain",
+        "ratio of RMSE",
+        "a single effect re-fitted in a failed pair replaces the winner only below this factor",
+    ),
+    ("polish_step", "fraction of range", "initial simplex step of a joint polish"),
+    ("coarse_polish_step", "fraction of range", "initial simplex step of a pair's coarse polish"),
+    (
+        "swap_polish_within",
+        "ratio of RMSE",
+        "a swap's set is polished when its unpolished held-out RMSE is within this factor",
+    ),
+];
+
+impl SearchPolicy {
+    /// The policy as a markdown table (name, default, unit, meaning), in [`FIELDS`] order.
+    pub fn table(&self) -> String {
+        let v = serde_json::to_value(self).unwrap_or_default();
+        let mut s = String::from("| setting | default | unit | meaning |\n|---|---|---|---|\n");
+        for (name, unit, meaning) in FIELDS {
+            s.push_str(&format!("| `{name}` | {} | {unit} | {meaning} |\n", v[*name]));
+        }
+        s
+    }
+}
+
 /// Where the search is. Progress lines name it; the log's entries carry the phase that tried
 /// them (JSON: snake_case names).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -284,6 +403,28 @@ mod tests {
         // Same count: any lower RMSE.
         assert!(p.beats((0.999, 2), Some((1.0, 2))));
         assert!(!p.beats((1.0, 2), Some((1.0, 2))));
+    }
+
+    /// Every policy field is in the table, and docs/fitting.md holds the generated table
+    /// (`MODELLINT_UPDATE_DOCS=1` rewrites it).
+    #[test]
+    fn the_policy_table_is_complete_and_in_the_docs() {
+        let v = serde_json::to_value(SearchPolicy::default()).unwrap();
+        let keys: Vec<&String> = v.as_object().unwrap().keys().collect();
+        assert_eq!(keys.len(), FIELDS.len());
+        for k in keys {
+            assert!(FIELDS.iter().any(|(n, ..)| n == k), "{k} is not in FIELDS");
+        }
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/fitting.md");
+        let doc = std::fs::read_to_string(&path).expect("docs/fitting.md");
+        let table = SearchPolicy::default().table();
+        let want = crate::fit::effects::docs::splice(&doc, "policy", &table)
+            .expect("docs/fitting.md: no `<!-- generated: policy -->`");
+        if want != doc && std::env::var_os("MODELLINT_UPDATE_DOCS").is_some() {
+            std::fs::write(&path, &want).expect("write docs/fitting.md");
+            return;
+        }
+        assert!(want == doc, "docs/fitting.md's policy table differs: MODELLINT_UPDATE_DOCS=1");
     }
 
     #[test]
