@@ -1,5 +1,7 @@
 //! 1-D bounded minimisation: a coarse grid, then golden-section refinement.
 
+use rayon::prelude::*;
+
 use super::sanitize;
 
 /// 1-D bounded minimisation on `[lo, hi]` returning `(x, f(x))`.
@@ -11,7 +13,7 @@ use super::sanitize;
 /// The best point ever evaluated is returned. `lo > hi` is swapped;
 /// non-finite bounds or `max_evals == 0` return `f = +∞` without evaluating.
 pub fn golden_section(
-    f: &dyn Fn(f64) -> f64,
+    f: &(dyn Fn(f64) -> f64 + Sync),
     lo: f64,
     hi: f64,
     tol: f64,
@@ -30,13 +32,16 @@ pub fn golden_section(
     let (lo, hi) = if lo <= hi { (lo, hi) } else { (hi, lo) };
     let mut evals = 0usize;
     let mut best = (lo, f64::INFINITY);
-    let ev = |x: f64, evals: &mut usize, best: &mut (f64, f64)| -> f64 {
+    let ev_known = |x: f64, v: f64, evals: &mut usize, best: &mut (f64, f64)| -> f64 {
         *evals += 1;
-        let v = sanitize(f(x));
+        let v = sanitize(v);
         if v < best.1 || best.1 == f64::INFINITY && *evals == 1 {
             *best = (x, v);
         }
         v
+    };
+    let ev = |x: f64, evals: &mut usize, best: &mut (f64, f64)| -> f64 {
+        ev_known(x, f(x), evals, best)
     };
     if hi == lo {
         let v = ev(lo, &mut evals, &mut best);
@@ -51,7 +56,11 @@ pub fn golden_section(
     }
     let grid: Vec<f64> =
         (0..n_grid).map(|i| lo + (hi - lo) * i as f64 / (n_grid - 1) as f64).collect();
-    let gf: Vec<f64> = grid.iter().map(|&x| ev(x, &mut evals, &mut best)).collect();
+    // The grid's points are independent: evaluated as one parallel batch, then taken in order
+    // (the same best, ties included, as one after another).
+    let raw: Vec<f64> = grid.par_iter().map(|&x| f(x)).collect();
+    let gf: Vec<f64> =
+        grid.iter().zip(raw).map(|(&x, v)| ev_known(x, v, &mut evals, &mut best)).collect();
     // First index of the minimum (deterministic on ties).
     let ib = (0..n_grid).fold(0, |b, i| if gf[i] < gf[b] { i } else { b });
     let mut a = grid[ib.saturating_sub(1)];

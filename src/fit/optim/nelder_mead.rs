@@ -1,5 +1,6 @@
 //! Bounded Nelder–Mead simplex minimisation, with restarts when the simplex collapses.
 
+use rayon::prelude::*;
 use serde::Serialize;
 
 use super::{Bounds, OptResult, Space, clamp01, invalid_result, sanitize};
@@ -33,7 +34,7 @@ impl Default for NelderMeadOpts {
 /// face can otherwise stall); it is declared converged when a restart no
 /// longer improves the best value by more than `ftol`.
 pub fn nelder_mead(
-    f: &dyn Fn(&[f64]) -> f64,
+    f: &(dyn Fn(&[f64]) -> f64 + Sync),
     x0: &[f64],
     b: &Bounds,
     o: &NelderMeadOpts,
@@ -84,16 +85,23 @@ pub fn nelder_mead(
         };
         let mut pts: Vec<Vec<f64>> = vec![best_u.clone()];
         let mut fs: Vec<f64> = vec![best_f];
-        for i in 0..n {
-            if evals >= o.max_evals {
-                break 'restarts;
-            }
-            let mut p = best_u.clone();
-            p[i] = if p[i] + step <= 1.0 { p[i] + step } else { p[i] - step };
-            p[i] = clamp01(p[i]);
-            let fp = feval(&p, &mut evals);
-            pts.push(p);
-            fs.push(fp);
+        // The n new vertices are independent: one parallel batch, within the budget (as many
+        // as one after another would have evaluated before running out).
+        let count = n.min(o.max_evals.saturating_sub(evals));
+        let verts: Vec<Vec<f64>> = (0..count)
+            .map(|i| {
+                let mut p = best_u.clone();
+                p[i] = if p[i] + step <= 1.0 { p[i] + step } else { p[i] - step };
+                p[i] = clamp01(p[i]);
+                p
+            })
+            .collect();
+        let vf: Vec<f64> = verts.par_iter().map(|p| sanitize(f(&sp.params_of(p)))).collect();
+        evals += count;
+        pts.extend(verts);
+        fs.extend(vf);
+        if count < n {
+            break 'restarts;
         }
 
         loop {
