@@ -348,9 +348,12 @@ fn synth_then_fit_end_to_end() {
     let off = mp["params"]["offset_rad"].as_f64().unwrap();
     assert!((off - 0.05).abs() < 0.005, "offset {off}");
     assert!(v["notes"].is_array() && v["warnings"].is_array(), "{v:#}");
-    // stderr is a pipe here, not a terminal: progress comes as plain lines (round starts).
+    // stderr is a pipe here, not a terminal: progress comes as plain lines (round starts,
+    // with the time and the rollouts so far), and the search's cost as a note.
     let stderr = String::from_utf8_lossy(&o.stderr);
-    assert!(stderr.contains("modellint fit: round 1: "), "{stderr}");
+    assert!(stderr.contains("modellint fit: [") && stderr.contains(" s] round 1 · "), "{stderr}");
+    assert!(stderr.contains(" rollouts · diagnose"), "{stderr}");
+    assert!(stderr.contains("note: search cost: "), "{stderr}");
     // Text output: a parameter named in rad is printed in rad (degrees after it), with
     // --quiet no progress or notes.
     let o = std::process::Command::new(bin)
