@@ -58,6 +58,7 @@ fn render_one(map: &SourceMap, handler: &GraphicalReportHandler, f: &Finding) ->
     if let Some(p) = &f.probe {
         let verb = match p.status {
             ProbeStatus::Confirmed => "confirmed by",
+            ProbeStatus::Measured => "measured by",
             ProbeStatus::Refuted => "refuted by",
             ProbeStatus::Inconclusive => "inconclusive:",
             ProbeStatus::Skipped => "not probed:",

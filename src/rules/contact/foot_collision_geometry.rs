@@ -1,10 +1,10 @@
 use crate::declare_rule;
-use crate::finding::{Finding, ProbeStatus, Severity, Subject};
+use crate::finding::{Finding, Severity, Subject};
 use crate::lint::Loaded;
 use crate::model::mjcf::ElemKind;
 use crate::model::{GeomType, Robot};
 use crate::probe::settle::{Settle, StanceClaim};
-use crate::probe::{StanceSettle, Verdict};
+use crate::probe::{Preconditions, StanceSettle, Verdict};
 use crate::rules::contact::feet::{Foot, feet};
 use crate::rules::geometry::shapes::{Placed, hull_area};
 use crate::rules::{Context, Rule, RuleMeta, claim_each, opt};
@@ -43,8 +43,11 @@ declare_rule! {
     /// right feet make the gait asymmetric.
     ///
     /// ## How it is confirmed
-    /// Static; probe `stance-settle` settles the robot in the keyframe pose and counts the
-    /// active foot contacts and their spread.
+    /// Probe `stance-settle` (on a floor, feet loaded, robot upright: otherwise inconclusive)
+    /// confirms mesh, non-primitive and support-polygon findings when the foot's contacts
+    /// chatter (> 5 changes/s) or penetrate (> 5 mm). Radius, condim, friction and left/right
+    /// mismatch are facts of the file: no stance run confirms or refutes them (a stance run
+    /// does not measure friction).
     ///
     /// ## How to fix
     /// Replace mesh foot collision with several capsules (radius ≈12 mm) at heel, midfoot and
@@ -117,7 +120,7 @@ pub struct FootContactUnsteady {
 }
 
 impl StanceClaim for FootContactUnsteady {
-    fn judge_settled(&self, l: &Loaded, s: &Settle) -> Verdict {
+    fn judge_settled(&self, l: &Loaded, s: &Settle, pre: &Preconditions) -> Verdict {
         let foot = s.foot(&l.robot, self.body);
         let touching =
             foot.geoms.iter().filter(|g| s.load(**g) > 0.02 * foot.load.max(1e-9)).count();
@@ -127,12 +130,13 @@ impl StanceClaim for FootContactUnsteady {
             fmt_num(foot.penetration * 1000.0, 3),
             touching
         );
-        let st = if foot.chatter_per_s > 5.0 || foot.penetration > 0.005 {
-            ProbeStatus::Confirmed
+        if foot.chatter_per_s > 5.0 || foot.penetration > 0.005 {
+            Verdict::confirmed(pre, foot.measured, note)
         } else {
-            ProbeStatus::Inconclusive
-        };
-        Verdict::new(st, foot.measured, note)
+            // Steady contact in one 1 s stance does not show the geometry is sound (it shows
+            // nothing about slip, rolling or other poses): no verdict.
+            Verdict::inconclusive(pre, foot.measured, format!("steady stance contact ({note})"))
+        }
     }
 }
 
@@ -245,6 +249,7 @@ impl FootCollisionGeometry {
                         .note("the contact radius sets where the contact point sits and how the foot rolls over an edge; a radius this far outside the usual millimetre-to-centimetre range is usually a unit or scale error")
                         .help("check the geom's size (MuJoCo sizes are in metres; a sphere's size is its radius)")
                         .subject(subj)
+                        .fact()
                         .measured(r, "m")
                         .expected(0.5 * (rmin + rmax), "m"),
                 );
@@ -282,6 +287,7 @@ impl FootCollisionGeometry {
                             "set condim=\"3\" on foot and toe geoms (and not higher on the floor)",
                         )
                         .subject(subj)
+                        .fact()
                         .measured(c as f64, "")
                         .expected(3.0, ""),
                 );
@@ -322,6 +328,7 @@ impl FootCollisionGeometry {
                         .note("foot friction decides when the foot slips; a policy trained on grippier feet than the hardware's learns pushes that slip on the real floor")
                         .help(format!("set friction=\"{} …\" on the foot and toe geoms; MuJoCo combines friction by the maximum of the two geoms, so the floor's friction must not exceed it", fmt_num(mu, 3)))
                         .subject(subj)
+                        .fact()
                         .measured(v, "")
                         .expected(mu, ""),
                 );
@@ -415,7 +422,8 @@ impl FootCollisionGeometry {
                         .secondary(lloc, "left foot")
                         .note("asymmetric foot contact makes the two legs behave differently, and the policy learns a limp the hardware does not need")
                         .help("make the right foot's collision geoms the mirror image of the left's")
-                        .subject(Subject::Foot(r.root)),
+                        .subject(Subject::Foot(r.root))
+                        .fact(),
                 );
         }
     }

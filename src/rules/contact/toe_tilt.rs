@@ -1,10 +1,10 @@
 use crate::declare_rule;
-use crate::finding::{Finding, ProbeStatus, Severity, Subject};
+use crate::finding::{Finding, Severity, Subject};
 use crate::lint::Loaded;
 use crate::model::mjcf::ElemKind;
 use crate::model::{GeomType, Robot};
 use crate::probe::settle::{Settle, StanceClaim};
-use crate::probe::{StanceSettle, Verdict};
+use crate::probe::{Preconditions, StanceSettle, Verdict};
 use crate::rules::contact::feet::{Foot, feet};
 use crate::rules::geometry::shapes::{Placed, tilt};
 use crate::rules::{Context, Rule, RuleMeta, claim_each, opt};
@@ -105,7 +105,7 @@ pub struct ContactGeomUnloaded {
 }
 
 impl StanceClaim for ContactGeomUnloaded {
-    fn judge_settled(&self, l: &Loaded, s: &Settle) -> Verdict {
+    fn judge_settled(&self, l: &Loaded, s: &Settle, pre: &Preconditions) -> Verdict {
         let foot = s.foot(&l.robot, self.body);
         let total = foot.load;
         let unloaded: Vec<String> = foot
@@ -114,16 +114,25 @@ impl StanceClaim for ContactGeomUnloaded {
             .filter(|g| s.load(**g) < 0.02 * total)
             .map(|g| crate::rules::display_name(&l.robot.geoms[*g].name, *g))
             .collect();
-        let m = foot.measured;
-        if total <= 1e-6 {
-            Verdict::new(
-                ProbeStatus::Inconclusive,
-                m,
-                "the foot carries no load at all after settling",
-            )
-        } else if !unloaded.is_empty() {
-            Verdict::new(
-                ProbeStatus::Confirmed,
+        let mut m = s.stance_measured();
+        m.extend(foot.measured);
+        let share = if s.weight > 0.0 { total / s.weight } else { 0.0 };
+        let pre = pre.clone().check(
+            "foot_loaded",
+            share >= FOOT_MIN_SHARE,
+            format!(
+                "the foot carries {} % of the robot's weight (need ≥ {} %)",
+                fmt_num(100.0 * share, 3),
+                fmt_num(100.0 * FOOT_MIN_SHARE, 3)
+            ),
+        );
+        if let Some(p) = pre.unmet() {
+            let why = p.detail.clone();
+            return Verdict::inconclusive(&pre, m, why);
+        }
+        if !unloaded.is_empty() {
+            Verdict::confirmed(
+                &pre,
                 m,
                 format!(
                     "after 1 s standing, {} carr{} < 2 % of the foot's {} N",
@@ -133,8 +142,8 @@ impl StanceClaim for ContactGeomUnloaded {
                 ),
             )
         } else {
-            Verdict::new(
-                ProbeStatus::Refuted,
+            Verdict::refuted_or_inconclusive(
+                &pre,
                 m,
                 format!(
                     "every contact geom of the foot carries load ({} N in all)",
@@ -144,6 +153,9 @@ impl StanceClaim for ContactGeomUnloaded {
         }
     }
 }
+
+/// Smallest share of the robot's weight one foot must carry for its geoms' loads to count.
+pub const FOOT_MIN_SHARE: f64 = 0.05;
 
 impl Rule for ToeTilt {
     fn meta(&self) -> &'static RuleMeta {
