@@ -23,6 +23,13 @@ declare_rule! {
     /// 0.5 mm, so mesh export noise does not count). Problems are reported once per foot, listing
     /// the geoms, at the first offending geom's attribute.
     ///
+    /// condim and friction are judged as MuJoCo combines them for each foot geom with the ground
+    /// geoms it may touch (world-body geoms whose contype/conaffinity allow the pair): the larger
+    /// condim and friction of the two, or the higher-`priority` geom's (`model::contact`). A
+    /// condim-1 foot on a condim-3 floor has condim-3 contacts and is not reported. With no
+    /// ground geom in the file (a robot file without its scene), the geom's own values are
+    /// judged and the message says so.
+    ///
     /// Friction and condim are matters of intent: MuJoCo's default friction 1 and condim 6
     /// (rolling friction, common on quadruped feet) are deliberate choices in many public models.
     /// Unless the intended values are stated — `friction` / `friction_tolerance` set under
@@ -102,8 +109,7 @@ fn type_word(t: GeomType) -> &'static str {
 
 /// Masks allow a contact between two geoms.
 fn may_collide(robot: &Robot, a: usize, b: usize) -> bool {
-    let (x, y) = (&robot.geoms[a], &robot.geoms[b]);
-    (x.contype & y.conaffinity) != 0 || (y.contype & x.conaffinity) != 0
+    crate::model::contact::may_collide(&robot.geoms[a], &robot.geoms[b])
 }
 
 /// Left/right feet match when every geom has a partner of the same type whose sizes agree within
@@ -254,11 +260,54 @@ impl FootCollisionGeometry {
                         .expected(0.5 * (rmin + rmax), "m"),
                 );
             }
-            // condim.
-            let bad_c: Vec<usize> =
-                foot.geoms.iter().copied().filter(|&g| robot.geoms[g].condim != 3).collect();
-            if let Some(&g0) = bad_c.first() {
-                let c = robot.geoms[g0].condim;
+            // condim and friction as MuJoCo combines them with the ground the foot touches
+            // (model::contact): a condim-1 foot on a condim-3 floor has condim-3 contacts.
+            let eff = |g: usize| -> Vec<(Option<usize>, i32, f64)> {
+                let ground = crate::model::contact::ground_partners(robot, g);
+                let own = &robot.geoms[g];
+                if ground.is_empty() {
+                    return vec![(None, own.condim, own.friction[0])];
+                }
+                ground
+                    .iter()
+                    .map(|&o| {
+                        let c = crate::model::contact::combine(own, &robot.geoms[o]);
+                        (Some(o), c.condim, c.friction[0])
+                    })
+                    .collect()
+            };
+            let with = |g: usize, o: Option<usize>, what: &str| match o {
+                Some(o) => {
+                    let (mine, theirs) = (&robot.geoms[g], &robot.geoms[o]);
+                    let val = |x: &crate::model::Geom| {
+                        if what == "condim" {
+                            x.condim.to_string()
+                        } else {
+                            fmt_num(x.friction[0], 3)
+                        }
+                    };
+                    let rule = match crate::model::contact::combine(mine, theirs).by_priority {
+                        Some(w) if w == o => "the higher-priority ground geom's",
+                        Some(_) => "the higher-priority foot geom's",
+                        None => "the larger of the two",
+                    };
+                    format!(
+                        "{rule}: {what} {} on the foot, {} on ground geom {}",
+                        val(mine),
+                        val(theirs),
+                        gname(robot, o)
+                    )
+                }
+                None => format!(
+                    "the geom's own {what}: no ground geom in this file, MuJoCo combines it with the floor's by maximum or priority",
+                ),
+            };
+            let bad_c: Vec<(usize, Option<usize>, i32)> = foot
+                .geoms
+                .iter()
+                .filter_map(|&g| eff(g).into_iter().find(|e| e.1 != 3).map(|(o, c, _)| (g, o, c)))
+                .collect();
+            if let Some(&(g0, o0, c)) = bad_c.first() {
                 let why = match c {
                     1 => "condim 1 is frictionless contact: the foot slides freely",
                     4 | 6 => {
@@ -268,20 +317,29 @@ impl FootCollisionGeometry {
                         "only condim 3 (normal force plus 2-D sliding friction) matches the identified contact model"
                     }
                 };
+                let geoms: Vec<usize> = bad_c.iter().map(|b| b.0).collect();
                 let mut f = cx.at_attr(
                     ElemKind::Geom,
                     g0,
                     &robot.geoms[g0].name,
                     "condim",
-                    format!("{label} uses condim {c} (expected 3): {}", list(robot, &bad_c)),
+                    format!(
+                        "{label} contacts use condim {c} (expected 3; {}): {}",
+                        with(g0, o0, "condim"),
+                        list(robot, &geoms)
+                    ),
                 );
                 if c != 1 && !stated && cx.level == cx.meta.default_level {
                     f.severity = Severity::Info;
                 }
+                if let Some(o) = o0 {
+                    let oloc = robot.elem_loc(ElemKind::Geom, o, &robot.geoms[o].name);
+                    f = f.secondary(oloc, format!("ground geom, condim {}", robot.geoms[o].condim));
+                }
                 out.push(
-                    f.label(format!("condim {c}"))
+                    f.label(format!("condim {}", robot.geoms[g0].condim))
                         .note(format!(
-                            "{why}; MuJoCo uses the larger condim of the two contacting geoms"
+                            "{why}; MuJoCo uses the larger condim of the two contacting geoms, or the higher-priority geom's"
                         ))
                         .help(
                             "set condim=\"3\" on foot and toe geoms (and not higher on the floor)",
@@ -293,21 +351,25 @@ impl FootCollisionGeometry {
                 );
             }
             // Friction.
-            let bad_f: Vec<usize> = foot
+            let bad_f: Vec<(usize, Option<usize>, f64)> = foot
                 .geoms
                 .iter()
-                .copied()
-                .filter(|&g| (robot.geoms[g].friction[0] - mu).abs() > mu_tol)
+                .filter_map(|&g| {
+                    eff(g)
+                        .into_iter()
+                        .find(|e| (e.2 - mu).abs() > mu_tol)
+                        .map(|(o, _, v)| (g, o, v))
+                })
                 .collect();
-            if let Some(&g0) = bad_f.first() {
-                let v = robot.geoms[g0].friction[0];
+            if let Some(&(g0, o0, v)) = bad_f.first() {
+                let geoms: Vec<usize> = bad_f.iter().map(|b| b.0).collect();
                 let mut f = cx.at_attr(
                     ElemKind::Geom,
                     g0,
                     &robot.geoms[g0].name,
                     "friction",
                     format!(
-                        "{label} has sliding friction {} (expected {} ± {}{}): {}",
+                        "{label} contacts have sliding friction {} (expected {} ± {}{}; {}): {}",
                         fmt_num(v, 3),
                         fmt_num(mu, 3),
                         fmt_num(mu_tol, 3),
@@ -316,7 +378,8 @@ impl FootCollisionGeometry {
                         } else {
                             ", the Asimov identified value; no intended value stated"
                         },
-                        list(robot, &bad_f)
+                        with(g0, o0, "friction"),
+                        list(robot, &geoms)
                     ),
                 );
                 if !stated && cx.level == cx.meta.default_level {
@@ -324,9 +387,9 @@ impl FootCollisionGeometry {
                 }
                 out.push(
                     f
-                        .label(format!("friction {}", fmt_num(v, 3)))
+                        .label(format!("friction {}", fmt_num(robot.geoms[g0].friction[0], 3)))
                         .note("foot friction decides when the foot slips; a policy trained on grippier feet than the hardware's learns pushes that slip on the real floor")
-                        .help(format!("set friction=\"{} …\" on the foot and toe geoms; MuJoCo combines friction by the maximum of the two geoms, so the floor's friction must not exceed it", fmt_num(mu, 3)))
+                        .help(format!("set friction=\"{} …\" on the foot and toe geoms; MuJoCo combines friction by the maximum of the two geoms (or takes the higher-priority geom's), so the floor's friction must not exceed it", fmt_num(mu, 3)))
                         .subject(subj)
                         .fact()
                         .measured(v, "")
