@@ -5,7 +5,7 @@ use crate::model::mjcf::ElemKind;
 use crate::model::{GeomType, Robot};
 use crate::probe::settle::{Settle, StanceClaim};
 use crate::probe::{Preconditions, StanceSettle, Verdict};
-use crate::rules::contact::feet::{Foot, feet};
+use crate::rules::contact::feet::{Foot, FootKind, feet};
 use crate::rules::geometry::shapes::{Placed, hull_area};
 use crate::rules::{Context, Rule, RuleMeta, claim_each, opt};
 use crate::util::fmt_num;
@@ -38,7 +38,12 @@ declare_rule! {
     ///
     /// Foot bodies come from the spec's `robot.foot_bodies` globs; without them, from body names
     /// containing `foot`, `ankle_roll`, `toe` or `sole`; failing that, the leaf bodies whose
-    /// collision geoms reach within 3 cm of the robot's lowest point.
+    /// collision geoms reach within 3 cm of the robot's lowest point. Only floating-base robots
+    /// have feet (a fixed-base arm gets no foot rule unless the spec names feet). Robot
+    /// families: a wheel (a sphere, cylinder or ellipsoid on an unlimited hinge) is not a foot;
+    /// a point foot (spheres touching down within 2 cm of each other, as on quadrupeds) is judged
+    /// by its ground geoms only — a shank geom above the foot sphere is not a foot — and gets no
+    /// support-polygon finding.
     ///
     /// ## Why is this bad?
     /// Contact is system identification too. Mesh contact against the floor produces few,
@@ -170,7 +175,18 @@ impl FootCollisionGeometry {
         // Intended friction/condim stated by the user (config), not just this rule's default.
         let stated =
             cx.options.contains_key("friction") || cx.options.contains_key("friction_tolerance");
-        let all_feet = feet(robot, cx.spec);
+        // A wheel is not a foot; a point foot is judged by the geoms that touch the ground only
+        // (a shank cylinder above the foot sphere is not a foot).
+        let all_feet: Vec<Foot> = feet(robot, cx.spec)
+            .into_iter()
+            .filter(|f| f.kind != FootKind::Wheel)
+            .map(|mut f| {
+                if f.kind == FootKind::Point {
+                    f.geoms = f.ground.clone();
+                }
+                f
+            })
+            .collect();
         for foot in &all_feet {
             let label = foot.label(robot);
             let subj = Subject::Foot(foot.root);
@@ -396,7 +412,10 @@ impl FootCollisionGeometry {
                         .expected(mu, ""),
                 );
             }
-            // Support polygon.
+            // Support polygon (a point foot touches down at one spot by design).
+            if foot.kind == FootKind::Point {
+                continue;
+            }
             let placed: Vec<(usize, Placed)> =
                 foot.geoms.iter().map(|&g| (g, Placed::of(robot, g))).collect();
             let zmin = placed.iter().map(|(_, p)| p.lowest()[2]).fold(f64::INFINITY, f64::min);

@@ -5,7 +5,7 @@ use crate::model::mjcf::ElemKind;
 use crate::model::{GeomType, Robot};
 use crate::probe::settle::{Settle, StanceClaim};
 use crate::probe::{Preconditions, StanceSettle, Verdict};
-use crate::rules::contact::feet::{Foot, feet};
+use crate::rules::contact::feet::{Foot, FootKind, feet};
 use crate::rules::geometry::shapes::{Placed, tilt};
 use crate::rules::{Context, Rule, RuleMeta, claim_each, opt};
 use crate::util::fmt_num;
@@ -28,6 +28,9 @@ declare_rule! {
     /// containing `foot`, `ankle_roll`, `toe` or `sole`; failing that, the leaf bodies whose
     /// collision geoms reach within 3 cm of the robot's lowest point. Bodies below a foot body
     /// are its toes.
+    ///
+    /// Only flat feet are checked: a point foot (quadruped sphere) or a wheel has no sole to
+    /// tilt (robot families: `rules::contact::feet`).
     ///
     /// ## Why is this bad?
     /// A toe capsule a few millimetres below the sole turns a flat foot into a rocker: the robot
@@ -180,7 +183,8 @@ impl ToeTilt {
         let max_tilt = cx.opt("max_tilt");
         let window = cx.opt("contact_window");
         let pose = pose_word(robot);
-        for foot in feet(robot, cx.spec) {
+        // A point foot or a wheel has no sole to tilt.
+        for foot in feet(robot, cx.spec).into_iter().filter(|f| f.kind == FootKind::Flat) {
             let low: Vec<(usize, f64)> =
                 foot.geoms.iter().map(|&g| (g, Placed::of(robot, g).lowest()[2])).collect();
             let zmin = low.iter().map(|x| x.1).fold(f64::INFINITY, f64::min);
