@@ -377,3 +377,44 @@ fn effective_armature_and_damping_from_actuators_and_tendons() {
     assert!((r.actuators[1].gear - 2.0).abs() < 1e-12);
     assert!(matches!(r.actuators[2].kind, modellint::model::ActuatorKind::DcMotor { .. }));
 }
+
+/// The "skipped without a spec" notice lists exactly the rules that do not run without one: no
+/// fixture linted without a spec has a finding of a listed rule, and every rule listed as
+/// skipped or weakened exists.
+#[test]
+fn spec_notice_lists_exactly_the_rules_that_did_not_run() {
+    let ids: Vec<&str> = all_meta().iter().map(|m| m.id).collect();
+    for (id, _) in modellint::spec_use::SKIPPED.iter().chain(modellint::spec_use::WEAKENED) {
+        assert!(ids.contains(id), "unknown rule in the spec notice: {id}");
+    }
+    let mut checked = 0;
+    for m in all_meta() {
+        for path in fixtures(m.id) {
+            if path.with_extension("toml").exists() {
+                continue;
+            }
+            let input = LintInput {
+                model: path.clone(),
+                spec: None,
+                config: None,
+                select: vec![],
+                ignore: vec![],
+            };
+            let Ok(l) = load(&input) else { continue };
+            if l.spec.is_some() {
+                continue;
+            }
+            checked += 1;
+            for f in run_rules(&l) {
+                assert!(
+                    !modellint::spec_use::SKIPPED.iter().any(|(id, _)| *id == f.rule),
+                    "{}: `{}` is listed as skipped without a spec but reported: {}",
+                    path.display(),
+                    f.rule,
+                    f.message
+                );
+            }
+        }
+    }
+    assert!(checked > 20, "only {checked} spec-less fixtures");
+}
