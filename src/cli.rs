@@ -52,9 +52,13 @@ pub struct CheckArgs {
     /// Rule configuration. Default: modellint.toml beside the model or in the working directory.
     #[arg(long)]
     pub config: Option<PathBuf>,
-    /// Output format. Default: github when GITHUB_ACTIONS=true, else text.
-    #[arg(long, value_enum)]
+    /// Output format (also `--output-format`). Default: github when GITHUB_ACTIONS=true, else
+    /// text. `concise`: one line per finding, `file:line:col: level rule message`.
+    #[arg(long, value_enum, alias = "output-format")]
     pub format: Option<Format>,
+    /// After the findings, print how many each rule produced (stderr for json and sarif).
+    #[arg(long)]
+    pub statistics: bool,
     /// Lowest severity that makes the exit code 1.
     #[arg(long, value_parser = ["error", "warning", "info"])]
     pub fail_on: Option<String>,
@@ -412,7 +416,32 @@ fn check(a: CheckArgs) -> i32 {
     let mut skipped = Vec::new();
     let mut errors = Vec::new();
     let mut code = 0;
+    // A scene and the robot file it includes, both given: the robot is linted once, inside the
+    // scene (which has the floor and the spec search of both).
+    let canon = |p: &std::path::Path| std::fs::canonicalize(p).unwrap_or_else(|_| p.to_path_buf());
+    let included: Vec<(PathBuf, PathBuf)> = if multi {
+        a.models
+            .iter()
+            .flat_map(|m| {
+                crate::spec_use::includes(m).into_iter().map(move |i| (canon(&i), m.clone()))
+            })
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let mut seen_models: Vec<PathBuf> = Vec::new();
     for model in &a.models {
+        let c = canon(model);
+        if seen_models.contains(&c) {
+            continue;
+        }
+        seen_models.push(c.clone());
+        if let Some((_, by)) = included.iter().find(|(i, by)| *i == c && canon(by) != c) {
+            let why = format!("included by {} (linted there)", by.display());
+            eprintln!("modellint: skipping {}: {why}", model.display());
+            skipped.push(output::NotLinted::skipped(model, why));
+            continue;
+        }
         if multi && let Some(why) = crate::lint::not_a_model(model) {
             eprintln!("modellint: skipping {}: {why}", model.display());
             skipped.push(output::NotLinted::skipped(model, why));
@@ -442,6 +471,16 @@ fn check(a: CheckArgs) -> i32 {
         code = code.max(exit_code(&findings, fail_on));
         runs.push((model.display().to_string(), loaded, findings));
     }
+    // Two scenes that include one robot file report its findings once: a finding of one rule at
+    // one place with one message is kept the first time only.
+    let mut seen_findings = std::collections::BTreeSet::new();
+    for (_, l, fs) in runs.iter_mut() {
+        fs.retain(|f| {
+            let p = output::position(&l.sources, f.primary);
+            let at = canon(std::path::Path::new(&p.file));
+            seen_findings.insert((f.rule, at, p.line, p.column, f.message.clone()))
+        });
+    }
     let reports: Vec<output::Report> = runs
         .iter()
         .map(|(m, l, f)| output::Report {
@@ -462,6 +501,17 @@ fn check(a: CheckArgs) -> i32 {
             None => String::new(),
         }
     };
+    let mut text = text;
+    if a.statistics {
+        let all: Vec<&crate::finding::Finding> =
+            reports.iter().flat_map(|r| r.findings.iter()).collect();
+        let stats = output::statistics(&all);
+        if matches!(format, Format::Json | Format::Sarif) {
+            eprint!("{stats}");
+        } else {
+            text.push_str(&stats);
+        }
+    }
     let mut stdout = std::io::stdout().lock();
     let written = stdout.write_all(text.as_bytes()).is_ok();
     crate::model::cache::finish();

@@ -62,6 +62,13 @@ pub fn discover(model: &Path) -> SpecSearch {
     SpecSearch { path, searched }
 }
 
+/// Every file `model` includes (directly or through other includes), as MuJoCo resolves them.
+pub fn includes(model: &Path) -> Vec<PathBuf> {
+    let mut seen = vec![model.to_path_buf()];
+    included_files(model, model.parent().unwrap_or(Path::new("")), &mut seen, 0);
+    seen.into_iter().skip(1).collect()
+}
+
 /// Included files of an MJCF file (paths relative to the main model's directory, as MuJoCo
 /// resolves them), depth first. Unreadable or malformed files are skipped here: the loader
 /// reports them with their location.

@@ -59,14 +59,21 @@ pub fn may_collide(a: &Geom, b: &Geom) -> bool {
     (a.contype & b.conaffinity) != 0 || (b.contype & a.conaffinity) != 0
 }
 
-/// The world body's colliding geoms that `geom` may touch (the floor, terrain): what a foot
-/// actually stands on.
+/// The world body's colliding planes, height fields and boxes that `geom` may touch (the
+/// floor, terrain): what a foot actually stands on.
 pub fn ground_partners(robot: &Robot, geom: usize) -> Vec<usize> {
+    use super::GeomType;
     let g = &robot.geoms[geom];
     robot
         .geoms
         .iter()
-        .filter(|o| o.body == 0 && o.id != geom && o.collides() && may_collide(g, o))
+        .filter(|o| {
+            o.body == 0
+                && o.id != geom
+                && o.collides()
+                && matches!(o.gtype, GeomType::Plane | GeomType::Hfield | GeomType::Box)
+                && may_collide(g, o)
+        })
         .map(|o| o.id)
         .collect()
 }
