@@ -27,7 +27,9 @@ Compiled-model cache: MuJoCo's binary model is cached (keyed by a hash of the mo
 includes, meshes, textures and the spec), so an unchanged re-lint of a mesh-heavy model with\n\
 --no-probe takes under 100 ms (Booster T1 and Unitree H1 scenes: about 70 ms, bench/run.sh)\n\
 instead of a full MuJoCo compile, as a pre-commit hook re-runs it.\n\
---no-cache disables it; --cache-dir or $MODELLINT_CACHE_DIR moves it.\n\n\
+--no-cache disables it; --cache-dir or $MODELLINT_CACHE_DIR moves it; its size is capped at\n\
+$MODELLINT_CACHE_MAX_MB megabytes (default 300, least recently used entries evicted first);\n\
+`modellint cache clean` empties it.\n\n\
 Exit codes: 0 no finding at or above --fail-on; 1 findings; 2 modellint could not do its job.",
     after_help = "Examples:\n  modellint models/asimov.xml\n  modellint robot.xml --spec robot.toml --format sarif > modellint.sarif\n  modellint robot.xml --no-probe --fail-on warning     # pre-commit speed\n  modellint rules                                      # list rule ids\n  modellint rule underdamped-pd-gains                  # a rule's documentation",
     args_conflicts_with_subcommands = true
@@ -87,6 +89,17 @@ pub struct CheckArgs {
     pub color: String,
 }
 
+#[derive(Subcommand, Debug, Clone)]
+pub enum CacheCmd {
+    /// Remove every cached compiled model.
+    Clean {
+        /// Cache directory. Default: $MODELLINT_CACHE_DIR, else $XDG_CACHE_HOME/modellint,
+        /// else ~/.cache/modellint.
+        #[arg(long)]
+        dir: Option<PathBuf>,
+    },
+}
+
 #[derive(Subcommand, Debug)]
 pub enum Cmd {
     /// List every rule: id, group, default level, probe.
@@ -104,6 +117,12 @@ pub enum Cmd {
         /// Only check that the files are current; exit 1 when not.
         #[arg(long)]
         check: bool,
+    },
+    /// Manage the compiled-model cache (`modellint cache clean`). Its size is capped at
+    /// $MODELLINT_CACHE_MAX_MB megabytes (default 300), least recently used entries first out.
+    Cache {
+        #[command(subcommand)]
+        action: CacheCmd,
     },
     /// Replay real recordings in MuJoCo and measure the sim-to-real gap (the Booster T1 sim-to-real study's replay and metrics).
     Gap(GapCmd),
@@ -321,6 +340,24 @@ pub fn run() -> i32 {
             }
         },
         Some(Cmd::GenDocs { out, check }) => gen_docs(&out, check),
+        Some(Cmd::Cache { action: CacheCmd::Clean { dir } }) => {
+            match dir.or_else(crate::model::cache::default_dir) {
+                Some(d) => {
+                    let (n, bytes) = crate::model::cache::clean(&d);
+                    println!(
+                        "modellint: removed {n} cache entr{} ({:.1} MB) from {}",
+                        if n == 1 { "y" } else { "ies" },
+                        bytes as f64 / 1048576.0,
+                        d.display()
+                    );
+                    0
+                }
+                None => {
+                    eprintln!("modellint: no cache directory (set --dir or $MODELLINT_CACHE_DIR)");
+                    2
+                }
+            }
+        }
         Some(Cmd::Gap(g)) => crate::sim2real::cmd::run_gap(crate::sim2real::cmd::GapArgs {
             model: g.model,
             recordings: g.recordings,

@@ -559,3 +559,38 @@ fn a_scene_and_its_robot_file_are_linted_once() {
     let hooks = std::fs::read_to_string(".pre-commit-hooks.yaml").unwrap();
     assert!(hooks.contains("entry: modellint --no-probe --output-format concise"), "{hooks}");
 }
+
+/// The compiled-model cache stays under its cap (least recently used out) and `cache clean`
+/// empties it.
+#[test]
+fn cache_is_capped_and_cleaned() {
+    let dir = std::env::temp_dir().join(format!("modellint-cli-cache-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let d = dir.to_str().unwrap();
+    let run = |model: &str, cap_mb: &str| {
+        Command::new(env!("CARGO_BIN_EXE_modellint"))
+            .args([model, "--no-probe", "--cache-dir", d])
+            .env("MODELLINT_CACHE_MAX_MB", cap_mb)
+            .output()
+            .unwrap()
+    };
+    let count = || {
+        std::fs::read_dir(&dir)
+            .map(|r| {
+                r.filter(|e| e.as_ref().unwrap().path().extension().is_some_and(|x| x == "mjb"))
+                    .count()
+            })
+            .unwrap_or(0)
+    };
+    run("fixtures/rules/soft-limits/invalid.xml", "100");
+    run("fixtures/include/scene.xml", "100");
+    assert_eq!(count(), 2);
+    // A cap of 0.015 MB holds one small entry: the older one is evicted.
+    run("fixtures/rules/soft-limits/valid.xml", "0.015");
+    assert_eq!(count(), 1);
+    let (code, out, _) = modellint(&["cache", "clean", "--dir", d]);
+    assert_eq!(code, 0, "{out}");
+    assert!(out.contains("removed 1 cache entry"), "{out}");
+    assert_eq!(count(), 0);
+    let _ = std::fs::remove_dir_all(&dir);
+}
