@@ -27,7 +27,9 @@ Compiled-model cache: MuJoCo's binary model is cached (keyed by a hash of the mo
 includes, meshes, textures and the spec), so an unchanged re-lint of a mesh-heavy model with\n\
 --no-probe takes under 100 ms (Booster T1 and Unitree H1 scenes: about 70 ms, bench/run.sh)\n\
 instead of a full MuJoCo compile, as a pre-commit hook re-runs it.\n\
---no-cache disables it; --cache-dir or $MODELLINT_CACHE_DIR moves it.\n\n\
+--no-cache disables it; --cache-dir or $MODELLINT_CACHE_DIR moves it; its size is capped at\n\
+$MODELLINT_CACHE_MAX_MB megabytes (default 300, least recently used entries evicted first);\n\
+`modellint cache clean` empties it.\n\n\
 Exit codes: 0 no finding at or above --fail-on; 1 findings; 2 modellint could not do its job.",
     after_help = "Examples:\n  modellint models/asimov.xml\n  modellint robot.xml --spec robot.toml --format sarif > modellint.sarif\n  modellint robot.xml --no-probe --fail-on warning     # pre-commit speed\n  modellint rules                                      # list rule ids\n  modellint rule underdamped-pd-gains                  # a rule's documentation",
     args_conflicts_with_subcommands = true
@@ -52,9 +54,13 @@ pub struct CheckArgs {
     /// Rule configuration. Default: modellint.toml beside the model or in the working directory.
     #[arg(long)]
     pub config: Option<PathBuf>,
-    /// Output format. Default: github when GITHUB_ACTIONS=true, else text.
-    #[arg(long, value_enum)]
+    /// Output format (also `--output-format`). Default: github when GITHUB_ACTIONS=true, else
+    /// text. `concise`: one line per finding, `file:line:col: level rule message`.
+    #[arg(long, value_enum, alias = "output-format")]
     pub format: Option<Format>,
+    /// After the findings, print how many each rule produced (stderr for json and sarif).
+    #[arg(long)]
+    pub statistics: bool,
     /// Lowest severity that makes the exit code 1.
     #[arg(long, value_parser = ["error", "warning", "info"])]
     pub fail_on: Option<String>,
@@ -83,6 +89,17 @@ pub struct CheckArgs {
     pub color: String,
 }
 
+#[derive(Subcommand, Debug, Clone)]
+pub enum CacheCmd {
+    /// Remove every cached compiled model.
+    Clean {
+        /// Cache directory. Default: $MODELLINT_CACHE_DIR, else $XDG_CACHE_HOME/modellint,
+        /// else ~/.cache/modellint.
+        #[arg(long)]
+        dir: Option<PathBuf>,
+    },
+}
+
 #[derive(Subcommand, Debug)]
 pub enum Cmd {
     /// List every rule: id, group, default level, probe.
@@ -100,6 +117,12 @@ pub enum Cmd {
         /// Only check that the files are current; exit 1 when not.
         #[arg(long)]
         check: bool,
+    },
+    /// Manage the compiled-model cache (`modellint cache clean`). Its size is capped at
+    /// $MODELLINT_CACHE_MAX_MB megabytes (default 300), least recently used entries first out.
+    Cache {
+        #[command(subcommand)]
+        action: CacheCmd,
     },
     /// Replay real recordings in MuJoCo and measure the sim-to-real gap (the Booster T1 sim-to-real study's replay and metrics).
     Gap(GapCmd),
@@ -323,6 +346,24 @@ pub fn run() -> i32 {
             }
         },
         Some(Cmd::GenDocs { out, check }) => gen_docs(&out, check),
+        Some(Cmd::Cache { action: CacheCmd::Clean { dir } }) => {
+            match dir.or_else(crate::model::cache::default_dir) {
+                Some(d) => {
+                    let (n, bytes) = crate::model::cache::clean(&d);
+                    println!(
+                        "modellint: removed {n} cache entr{} ({:.1} MB) from {}",
+                        if n == 1 { "y" } else { "ies" },
+                        bytes as f64 / 1048576.0,
+                        d.display()
+                    );
+                    0
+                }
+                None => {
+                    eprintln!("modellint: no cache directory (set --dir or $MODELLINT_CACHE_DIR)");
+                    2
+                }
+            }
+        }
         Some(Cmd::Gap(g)) => crate::sim2real::cmd::run_gap(crate::sim2real::cmd::GapArgs {
             model: g.model,
             recordings: g.recordings,
@@ -419,7 +460,32 @@ fn check(a: CheckArgs) -> i32 {
     let mut skipped = Vec::new();
     let mut errors = Vec::new();
     let mut code = 0;
+    // A scene and the robot file it includes, both given: the robot is linted once, inside the
+    // scene (which has the floor and the spec search of both).
+    let canon = |p: &std::path::Path| std::fs::canonicalize(p).unwrap_or_else(|_| p.to_path_buf());
+    let included: Vec<(PathBuf, PathBuf)> = if multi {
+        a.models
+            .iter()
+            .flat_map(|m| {
+                crate::spec_use::includes(m).into_iter().map(move |i| (canon(&i), m.clone()))
+            })
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let mut seen_models: Vec<PathBuf> = Vec::new();
     for model in &a.models {
+        let c = canon(model);
+        if seen_models.contains(&c) {
+            continue;
+        }
+        seen_models.push(c.clone());
+        if let Some((_, by)) = included.iter().find(|(i, by)| *i == c && canon(by) != c) {
+            let why = format!("included by {} (linted there)", by.display());
+            eprintln!("modellint: skipping {}: {why}", model.display());
+            skipped.push(output::NotLinted::skipped(model, why));
+            continue;
+        }
         if multi && let Some(why) = crate::lint::not_a_model(model) {
             eprintln!("modellint: skipping {}: {why}", model.display());
             skipped.push(output::NotLinted::skipped(model, why));
@@ -449,6 +515,16 @@ fn check(a: CheckArgs) -> i32 {
         code = code.max(exit_code(&findings, fail_on));
         runs.push((model.display().to_string(), loaded, findings));
     }
+    // Two scenes that include one robot file report its findings once: a finding of one rule at
+    // one place with one message is kept the first time only.
+    let mut seen_findings = std::collections::BTreeSet::new();
+    for (_, l, fs) in runs.iter_mut() {
+        fs.retain(|f| {
+            let p = output::position(&l.sources, f.primary);
+            let at = canon(std::path::Path::new(&p.file));
+            seen_findings.insert((f.rule, at, p.line, p.column, f.message.clone()))
+        });
+    }
     let reports: Vec<output::Report> = runs
         .iter()
         .map(|(m, l, f)| output::Report {
@@ -469,6 +545,17 @@ fn check(a: CheckArgs) -> i32 {
             None => String::new(),
         }
     };
+    let mut text = text;
+    if a.statistics {
+        let all: Vec<&crate::finding::Finding> =
+            reports.iter().flat_map(|r| r.findings.iter()).collect();
+        let stats = output::statistics(&all);
+        if matches!(format, Format::Json | Format::Sarif) {
+            eprint!("{stats}");
+        } else {
+            text.push_str(&stats);
+        }
+    }
     let mut stdout = std::io::stdout().lock();
     let written = stdout.write_all(text.as_bytes()).is_ok();
     crate::model::cache::finish();

@@ -68,9 +68,15 @@ pub enum Subject {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum ProbeStatus {
+    /// The experiment reproduced the consequence the finding predicts.
     Confirmed,
-    Refuted,
+    /// Numbers about the consequence, no verdict (a fact of the file gets no other result).
+    Measured,
+    /// The experiment could not test the claim (`reason` says why).
     Inconclusive,
+    /// The claim's recorded preconditions were all met and the consequence did not occur.
+    Refuted,
+    /// The probe was not run for this finding (`reason` says why).
     Skipped,
 }
 
@@ -79,6 +85,11 @@ pub enum ProbeStatus {
 pub struct ProbeOutcome {
     pub name: String,
     pub status: ProbeStatus,
+    /// Why the run could not test the claim (inconclusive) or was not run (skipped).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reason: Option<String>,
+    /// What the experiment had to reach before its result could speak about the claim.
+    pub preconditions: Vec<crate::probe::Precondition>,
     pub measured: BTreeMap<String, f64>,
     pub steps: usize,
     /// One sentence: "confirmed by …: measured ζ = 0.31 (predicted 0.29)".
@@ -111,6 +122,10 @@ pub struct Finding {
     /// What the rule's probe can check about this finding (the rule's typed claim).
     pub claim: Option<std::sync::Arc<dyn crate::probe::ProbeCheck>>,
     pub probe: Option<ProbeOutcome>,
+    /// A fact of the file (no range, no damping, ctrlrange equal to the hard range, zero
+    /// armature, no actuator): simulation never refutes or downgrades it; its probe, if any, is
+    /// a [`crate::probe::Measure`] of the consequence.
+    pub fact: bool,
 }
 
 impl Finding {
@@ -137,6 +152,7 @@ impl Finding {
             data: BTreeMap::new(),
             claim: None,
             probe: None,
+            fact: false,
         }
     }
     pub fn note(mut self, s: impl Into<String>) -> Self {
@@ -174,8 +190,23 @@ impl Finding {
     }
     /// The claim the rule's probe checks (`--no-probe` leaves it unchecked).
     pub fn claim(mut self, c: impl crate::probe::Claim) -> Self {
-        self.claim = Some(std::sync::Arc::new(c));
+        self.claim = Some(std::sync::Arc::new(crate::probe::AsClaim(c)));
         self
+    }
+    /// Marks the finding a fact of the file: no probe can refute or downgrade it.
+    pub fn fact(mut self) -> Self {
+        self.fact = true;
+        self
+    }
+    /// A fact of the file whose probe measures the consequence (implies [`Finding::fact`]).
+    pub fn measure(mut self, m: impl crate::probe::Measure) -> Self {
+        self.set_measure(m);
+        self
+    }
+    /// In place: [`Finding::measure`].
+    pub fn set_measure(&mut self, m: impl crate::probe::Measure) {
+        self.fact = true;
+        self.claim = Some(std::sync::Arc::new(crate::probe::AsMeasure(m)));
     }
     pub fn secondary(mut self, loc: Loc, text: impl Into<String>) -> Self {
         self.labels.push(Label { loc, text: text.into() });

@@ -479,3 +479,118 @@ fn holdout_by_rotates_over_the_values_of_a_key() {
     assert!((v["position_mae_before"].as_f64().unwrap() - mean).abs() < 1e-12, "{v}");
     assert_eq!(v["episodes"], 4);
 }
+
+/// `--output-format concise`: one `file:line:col: level rule message` line per finding, and
+/// `--statistics` counts them per rule.
+#[test]
+fn concise_output_and_statistics() {
+    let (code, out, _) = modellint(&[
+        "fixtures/rules/soft-limits/invalid.xml",
+        "--no-probe",
+        "--output-format",
+        "concise",
+        "--statistics",
+    ]);
+    assert_eq!(code, 1, "{out}");
+    let lines: Vec<&str> = out.lines().collect();
+    let findings: Vec<&str> =
+        lines.iter().copied().filter(|l| l.starts_with("fixtures/")).collect();
+    assert!(!findings.is_empty(), "{out}");
+    for l in &findings {
+        let mut parts = l.splitn(4, ':');
+        let (file, line, col, rest) =
+            (parts.next().unwrap(), parts.next().unwrap(), parts.next().unwrap(), parts.next());
+        assert_eq!(file, "fixtures/rules/soft-limits/invalid.xml");
+        assert!(line.parse::<usize>().is_ok() && col.parse::<usize>().is_ok(), "{l}");
+        let rest = rest.unwrap().trim_start();
+        let level = rest.split(' ').next().unwrap();
+        assert!(["error", "warning", "info"].contains(&level), "{l}");
+    }
+    // The statistics: one row per rule with its count, and the total.
+    let total = lines.iter().find(|l| l.trim_end().ends_with("total")).expect("a total line");
+    assert_eq!(total.split_whitespace().next().unwrap(), findings.len().to_string());
+    let soft = findings.iter().filter(|l| l.contains(" soft-limits ")).count();
+    let row = lines.iter().find(|l| l.split_whitespace().nth(1) == Some("soft-limits")).unwrap();
+    assert_eq!(row.split_whitespace().next().unwrap(), soft.to_string());
+    // Same findings, same order as the text output's count.
+    let (_, text, _) = modellint(&["fixtures/rules/soft-limits/invalid.xml", "--no-probe"]);
+    let summary = text.lines().last().unwrap();
+    let n: usize = summary
+        .split([':', ','])
+        .filter_map(|p| p.split_whitespace().next().and_then(|x| x.parse::<usize>().ok()))
+        .sum();
+    assert_eq!(n, findings.len(), "{summary}");
+}
+
+/// A scene and the robot file it includes, both given (as a hook passes every staged file):
+/// the robot is linted once, inside the scene, and no finding is printed twice.
+#[test]
+fn a_scene_and_its_robot_file_are_linted_once() {
+    let (_, out, err) = modellint(&[
+        "fixtures/include/scene.xml",
+        "fixtures/include/robot.xml",
+        "--no-probe",
+        "--output-format",
+        "concise",
+    ]);
+    assert!(
+        err.contains("skipping fixtures/include/robot.xml: included by fixtures/include/scene.xml"),
+        "{err}"
+    );
+    let lines: Vec<&str> = out.lines().collect();
+    let mut uniq = lines.clone();
+    uniq.sort();
+    uniq.dedup();
+    assert_eq!(uniq.len(), lines.len(), "duplicated findings:\n{out}");
+    // The robot alone gives the same robot-file findings as the scene pass (not fewer).
+    let (_, alone, _) =
+        modellint(&["fixtures/include/robot.xml", "--no-probe", "--output-format", "concise"]);
+    assert!(!alone.is_empty() && !out.is_empty());
+    // Given twice, one model is linted once.
+    let (_, twice, _) = modellint(&[
+        "fixtures/include/robot.xml",
+        "fixtures/include/robot.xml",
+        "--no-probe",
+        "--output-format",
+        "concise",
+    ]);
+    assert_eq!(twice, alone);
+    // The pre-commit hook uses the concise form.
+    let hooks = std::fs::read_to_string(".pre-commit-hooks.yaml").unwrap();
+    assert!(hooks.contains("entry: modellint --no-probe --output-format concise"), "{hooks}");
+}
+
+/// The compiled-model cache stays under its cap (least recently used out) and `cache clean`
+/// empties it.
+#[test]
+fn cache_is_capped_and_cleaned() {
+    let dir = std::env::temp_dir().join(format!("modellint-cli-cache-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let d = dir.to_str().unwrap();
+    let run = |model: &str, cap_mb: &str| {
+        Command::new(env!("CARGO_BIN_EXE_modellint"))
+            .args([model, "--no-probe", "--cache-dir", d])
+            .env("MODELLINT_CACHE_MAX_MB", cap_mb)
+            .output()
+            .unwrap()
+    };
+    let count = || {
+        std::fs::read_dir(&dir)
+            .map(|r| {
+                r.filter(|e| e.as_ref().unwrap().path().extension().is_some_and(|x| x == "mjb"))
+                    .count()
+            })
+            .unwrap_or(0)
+    };
+    run("fixtures/rules/soft-limits/invalid.xml", "100");
+    run("fixtures/include/scene.xml", "100");
+    assert_eq!(count(), 2);
+    // A cap of 0.015 MB holds one small entry: the older one is evicted.
+    run("fixtures/rules/soft-limits/valid.xml", "0.015");
+    assert_eq!(count(), 1);
+    let (code, out, _) = modellint(&["cache", "clean", "--dir", d]);
+    assert_eq!(code, 0, "{out}");
+    assert!(out.contains("removed 1 cache entry"), "{out}");
+    assert_eq!(count(), 0);
+    let _ = std::fs::remove_dir_all(&dir);
+}

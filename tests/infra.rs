@@ -199,8 +199,8 @@ fn missing_spec_is_reported_once_with_where_it_looked() {
         err.contains("fixtures/include/scene.toml") && err.contains("fixtures/include/robot.toml"),
         "{err}"
     );
-    assert!(err.contains("skipped without a spec: armature-mismatch"), "{err}");
-    assert!(err.contains("weakened without a spec:"), "{err}");
+    assert!(err.contains("skipped without a spec: missing-action-delay, urdf-mjcf-drift"), "{err}");
+    assert!(err.contains("weakened without a spec: armature-mismatch"), "{err}");
     // Rules switched off are not listed.
     let (_, _, err) =
         modellint(&["fixtures/include/scene.xml", "--no-probe", "--ignore", "armature-mismatch"]);
@@ -211,7 +211,10 @@ fn missing_spec_is_reported_once_with_where_it_looked() {
         v["spec"]["searched"].as_array().unwrap().iter().map(base).collect();
     assert_eq!(searched, ["scene.toml", "robot.toml"]);
     assert!(
-        v["spec"]["skipped_rules"].as_array().unwrap().iter().any(|r| r == "armature-mismatch")
+        v["spec"]["skipped_rules"].as_array().unwrap().iter().any(|r| r == "missing-action-delay")
+    );
+    assert!(
+        v["spec"]["weakened_rules"].as_array().unwrap().iter().any(|r| r == "armature-mismatch")
     );
     // A given spec is not searched for.
     let (_, _, err) = modellint(&["models/asimov.xml", "--no-probe"]);

@@ -84,3 +84,127 @@ fn settle_probe_loads_every_geom_of_a_flat_foot() {
         assert!(load > 0.02 * total / 2.0, "geom {} carries {load} N of {total} N", g.name);
     }
 }
+
+/// Lints one fixture with its probes (the spec beside it, if any) and returns the findings of
+/// `rule`.
+fn probed(path: &str, rule: &str) -> Vec<modellint::finding::Finding> {
+    let toml = Path::new(path).with_extension("toml");
+    let input = LintInput {
+        model: Path::new(path).to_path_buf(),
+        spec: toml.exists().then_some(toml),
+        config: None,
+        select: vec![],
+        ignore: vec![],
+    };
+    let l = load(&input).unwrap_or_else(|e| panic!("{e}"));
+    let mut fs = run_rules(&l);
+    fs.retain(|f| f.rule == rule);
+    assert!(!fs.is_empty(), "{path}: no {rule} finding");
+    modellint::lint::confirm(&l, &mut fs);
+    fs
+}
+
+fn outcome(f: &modellint::finding::Finding) -> modellint::finding::ProbeOutcome {
+    f.probe.clone().unwrap_or_else(|| panic!("not probed: {}", f.message))
+}
+
+#[test]
+fn stance_without_a_floor_is_inconclusive_and_the_fact_keeps_its_level() {
+    let fs =
+        probed("fixtures/rules/passive-joint-spring/invalid_no_floor.xml", "passive-joint-spring");
+    for f in &fs {
+        let p = outcome(f);
+        assert!(f.fact, "{}", f.message);
+        assert_eq!(p.status, ProbeStatus::Inconclusive, "{}", p.note);
+        assert!(p.reason.as_deref().unwrap_or("").contains("no floor"), "{:?}", p.reason);
+        let floor = p.preconditions.iter().find(|c| c.name == "floor").expect("recorded");
+        assert!(!floor.met);
+        assert_ne!(f.severity, modellint::finding::Severity::Info);
+        assert!(!f.message.contains("refuted"));
+    }
+}
+
+#[test]
+fn stance_on_a_floor_records_every_precondition_met() {
+    // The same passive toe on a floor: the stance run stands, loads the foot and measures.
+    let fs = probed("fixtures/rules/passive-joint-spring/invalid.xml", "passive-joint-spring");
+    let p = outcome(&fs[0]);
+    assert_eq!(p.status, ProbeStatus::Measured, "{}", p.note);
+    let names: Vec<_> = p.preconditions.iter().map(|c| (c.name, c.met)).collect();
+    assert_eq!(
+        names,
+        [
+            ("floor", true),
+            ("settled", true),
+            ("free_base", true),
+            ("feet_loaded", true),
+            ("upright", true)
+        ]
+    );
+}
+
+#[test]
+fn an_undamped_spring_is_measured_by_a_ring_down_never_refuted() {
+    let fs = probed(
+        "fixtures/rules/passive-joint-spring/invalid_nospec_spring_ringing.xml",
+        "passive-joint-spring",
+    );
+    let p = outcome(&fs[0]);
+    assert_eq!(p.name, "ring-down");
+    assert_eq!(p.status, ProbeStatus::Measured, "{}", p.note);
+    // No damping: the amplitude after 20 periods is the release amplitude, within 2 %.
+    let ratio = p.measured["amplitude_ratio"];
+    assert!((ratio - 1.0).abs() < 0.02, "amplitude ratio {ratio}");
+    assert!(!p.measured.contains_key("ring_time_s"), "an undamped spring never stops ringing");
+    // The measured period is the analytic 2π√(I/k) (I = armature + link inertia at the keyframe).
+    assert!(p.measured["period_s"] > 0.2 && p.measured["period_s"] < 0.3, "{:?}", p.measured);
+}
+
+#[test]
+fn a_ring_down_the_timestep_cannot_resolve_is_inconclusive() {
+    let fs = probed(
+        "fixtures/rules/passive-joint-spring/invalid_nospec_spring.xml",
+        "passive-joint-spring",
+    );
+    let p = outcome(&fs[0]);
+    assert_eq!(p.status, ProbeStatus::Inconclusive, "{}", p.note);
+    let c = p.preconditions.iter().find(|c| c.name == "period_resolved").unwrap();
+    assert!(!c.met);
+    assert_eq!(fs[0].severity, modellint::finding::Severity::Warning);
+}
+
+#[test]
+fn no_range_is_measured_not_refuted_by_the_limit_probe() {
+    let fs = probed("fixtures/rules/soft-limits/invalid_no_range_nospec.xml", "soft-limits");
+    let p = outcome(&fs[0]);
+    assert!(fs[0].fact);
+    assert_eq!(p.status, ProbeStatus::Measured, "{}", p.note);
+    assert!(p.note.contains("no stop acts on it"), "{}", p.note);
+    assert!(p.measured["q_max"] - p.measured["q_min"] > 1.0);
+}
+
+#[test]
+fn ctrlrange_equal_to_range_is_never_refuted_with_or_without_a_spec() {
+    // Without a spec, a servo strong enough to get there: measured, the stop engaged or not.
+    let fs = probed("fixtures/rules/soft-limits/invalid.xml", "soft-limits");
+    let p = outcome(&fs[0]);
+    assert_eq!(p.status, ProbeStatus::Measured, "{}", p.note);
+    assert_eq!(fs[0].severity, modellint::finding::Severity::Warning);
+    // With soft_limit_factor = 0.9 and a servo too weak to reach the commanded end:
+    // inconclusive with the reason, still a warning.
+    let fs = probed("fixtures/rules/soft-limits/invalid_equal_spec.xml", "soft-limits");
+    let p = outcome(&fs[0]);
+    assert_eq!(p.status, ProbeStatus::Inconclusive, "{}", p.note);
+    let c = p.preconditions.iter().find(|c| c.name == "reached_commanded_extreme" && !c.met);
+    assert!(c.is_some(), "{:?}", p.preconditions);
+    assert_eq!(fs[0].severity, modellint::finding::Severity::Warning);
+}
+
+#[test]
+fn a_toe_tilt_refutation_records_its_met_preconditions() {
+    let fs = probed("fixtures/rules/toe-tilt/invalid_box.xml", "toe-tilt");
+    let p = outcome(&fs[0]);
+    assert_eq!(p.status, ProbeStatus::Refuted, "{}", p.note);
+    assert!(p.preconditions.iter().all(|c| c.met));
+    assert!(p.preconditions.iter().any(|c| c.name == "foot_loaded"));
+}

@@ -123,7 +123,8 @@ fn fixtures_produce_exactly_their_findings() {
 
 /// Snapshots with the probes run, for every invalid fixture of a rule with a probe: what each
 /// probe concluded about each finding is reviewed like the rest of the output. Every such rule
-/// has at least one fixture whose findings the probe really checked (confirmed or refuted), and a
+/// has at least one fixture whose findings the probe really checked (confirmed, refuted or
+/// measured; a fact is never refuted), and a
 /// finding's claim is for the probe its rule names.
 #[test]
 fn probed_fixtures_match_their_snapshots() {
@@ -142,12 +143,23 @@ fn probed_fixtures_match_their_snapshots() {
             }
             let (findings, rendered) = lint_probed(&path, m.id, true);
             for f in findings.iter().filter(|f| f.rule == m.id) {
+                let named = |n: &str| n == probe || m.also_probes.contains(&n);
                 if let Some(c) = &f.claim {
-                    assert_eq!(c.probe_name(), probe, "{}: claim of {}", path.display(), m.id);
+                    assert!(named(c.probe_name()), "{}: claim of {}", path.display(), m.id);
                 }
                 if let Some(p) = &f.probe {
-                    assert_eq!(p.name, probe, "{}", path.display());
-                    if matches!(p.status, ProbeStatus::Confirmed | ProbeStatus::Refuted) {
+                    assert!(named(&p.name), "{}", path.display());
+                    // A fact is never refuted.
+                    assert!(
+                        !(f.fact && p.status == ProbeStatus::Refuted),
+                        "{}: fact refuted: {}",
+                        path.display(),
+                        f.message
+                    );
+                    if matches!(
+                        p.status,
+                        ProbeStatus::Confirmed | ProbeStatus::Refuted | ProbeStatus::Measured
+                    ) {
                         decided += 1;
                     }
                 }
@@ -171,7 +183,7 @@ fn probed_fixtures_match_their_snapshots() {
         }
         if decided == 0 {
             failures.push(format!(
-                "rule {}: no fixture finding was confirmed or refuted by `{probe}`",
+                "rule {}: no fixture finding was confirmed, refuted or measured by `{probe}`",
                 m.id
             ));
         }
@@ -364,4 +376,45 @@ fn effective_armature_and_damping_from_actuators_and_tendons() {
     assert!(r.actuators[0].ctrllimited);
     assert!((r.actuators[1].gear - 2.0).abs() < 1e-12);
     assert!(matches!(r.actuators[2].kind, modellint::model::ActuatorKind::DcMotor { .. }));
+}
+
+/// The "skipped without a spec" notice lists exactly the rules that do not run without one: no
+/// fixture linted without a spec has a finding of a listed rule, and every rule listed as
+/// skipped or weakened exists.
+#[test]
+fn spec_notice_lists_exactly_the_rules_that_did_not_run() {
+    let ids: Vec<&str> = all_meta().iter().map(|m| m.id).collect();
+    for (id, _) in modellint::spec_use::SKIPPED.iter().chain(modellint::spec_use::WEAKENED) {
+        assert!(ids.contains(id), "unknown rule in the spec notice: {id}");
+    }
+    let mut checked = 0;
+    for m in all_meta() {
+        for path in fixtures(m.id) {
+            if path.with_extension("toml").exists() {
+                continue;
+            }
+            let input = LintInput {
+                model: path.clone(),
+                spec: None,
+                config: None,
+                select: vec![],
+                ignore: vec![],
+            };
+            let Ok(l) = load(&input) else { continue };
+            if l.spec.is_some() {
+                continue;
+            }
+            checked += 1;
+            for f in run_rules(&l) {
+                assert!(
+                    !modellint::spec_use::SKIPPED.iter().any(|(id, _)| *id == f.rule),
+                    "{}: `{}` is listed as skipped without a spec but reported: {}",
+                    path.display(),
+                    f.rule,
+                    f.message
+                );
+            }
+        }
+    }
+    assert!(checked > 20, "only {checked} spec-less fixtures");
 }

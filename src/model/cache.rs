@@ -129,8 +129,87 @@ fn entry(dir: &Path, key: &str) -> PathBuf {
     dir.join(format!("{key}.mjb"))
 }
 
-/// The cached compiled model, when present and readable.
+/// Default size cap of the cache directory, bytes (`MODELLINT_CACHE_MAX_MB` overrides it).
+pub const DEFAULT_MAX_BYTES: u64 = 300 * 1024 * 1024;
+
+/// The size cap: `$MODELLINT_CACHE_MAX_MB` (megabytes) when set and valid, else the default.
+pub fn max_bytes() -> u64 {
+    std::env::var("MODELLINT_CACHE_MAX_MB")
+        .ok()
+        .and_then(|v| v.trim().parse::<f64>().ok())
+        .filter(|v| v.is_finite() && *v >= 0.0)
+        .map(|mb| (mb * 1024.0 * 1024.0) as u64)
+        .unwrap_or(DEFAULT_MAX_BYTES)
+}
+
+/// The cache's entries with their size and last use (modification time, set on every hit).
+fn entries(dir: &Path) -> Vec<(PathBuf, u64, std::time::SystemTime)> {
+    let Ok(rd) = std::fs::read_dir(dir) else { return Vec::new() };
+    let mut v: Vec<_> = rd
+        .filter_map(|e| e.ok())
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|x| x == "mjb"))
+        .filter_map(|p| {
+            let m = std::fs::metadata(&p).ok()?;
+            Some((p, m.len(), m.modified().ok()?))
+        })
+        .collect();
+    // Least recently used first; ties by name, so eviction is deterministic.
+    v.sort_by(|a, b| a.2.cmp(&b.2).then(a.0.cmp(&b.0)));
+    v
+}
+
+/// Removes least-recently-used entries until the directory holds at most `cap` bytes of them.
+/// `keep` (the entry just written) goes last. Returns the number removed.
+pub fn evict(dir: &Path, cap: u64, keep: Option<&Path>) -> usize {
+    let mut v = entries(dir);
+    if let Some(k) = keep
+        && let Some(i) = v.iter().position(|e| e.0 == k)
+    {
+        let e = v.remove(i);
+        v.push(e);
+    }
+    let mut total: u64 = v.iter().map(|e| e.1).sum();
+    let mut removed = 0;
+    for (p, len, _) in v {
+        if total <= cap {
+            break;
+        }
+        if std::fs::remove_file(&p).is_ok() {
+            total = total.saturating_sub(len);
+            removed += 1;
+        }
+    }
+    removed
+}
+
+/// `modellint cache clean`: removes every entry (and leftover temporary files). Returns (files,
+/// bytes) removed.
+pub fn clean(dir: &Path) -> (usize, u64) {
+    let Ok(rd) = std::fs::read_dir(dir) else { return (0, 0) };
+    let (mut n, mut bytes) = (0, 0);
+    for p in rd.filter_map(|e| e.ok()).map(|e| e.path()) {
+        let name = p.file_name().map(|x| x.to_string_lossy().into_owned()).unwrap_or_default();
+        let ours = p.extension().is_some_and(|x| x == "mjb")
+            || (name.starts_with('.') && name.ends_with(".tmp"));
+        if !ours {
+            continue;
+        }
+        let len = std::fs::metadata(&p).map(|m| m.len()).unwrap_or(0);
+        if std::fs::remove_file(&p).is_ok() {
+            n += 1;
+            bytes += len;
+        }
+    }
+    (n, bytes)
+}
+
+/// The cached compiled model, when present and readable. A hit marks the entry as used now
+/// (its modification time), for the least-recently-used eviction.
 pub fn load(dir: &Path, key: &str) -> Option<MjModel> {
+    if let Ok(f) = std::fs::File::options().write(true).open(entry(dir, key)) {
+        let _ = f.set_modified(std::time::SystemTime::now());
+    }
     let file = std::fs::File::open(entry(dir, key)).ok()?;
     match Mapped::new(&file) {
         // MuJoCo copies the buffer into its own model: map the file instead of reading it, which
@@ -232,11 +311,36 @@ pub fn store(dir: &Path, key: &str, bytes: &[u8]) {
     if std::fs::write(&tmp, bytes).is_ok() && std::fs::rename(&tmp, entry(dir, key)).is_err() {
         let _ = std::fs::remove_file(&tmp);
     }
+    evict(dir, max_bytes(), Some(&entry(dir, key)));
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn eviction_removes_least_recently_used_until_under_the_cap() {
+        let dir = std::env::temp_dir().join(format!("modellint-cache-test-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let t0 = std::time::SystemTime::now() - std::time::Duration::from_secs(100);
+        for (i, k) in ["a", "b", "c"].iter().enumerate() {
+            let p = entry(&dir, k);
+            std::fs::write(&p, vec![0u8; 1000]).unwrap();
+            let f = std::fs::File::options().write(true).open(&p).unwrap();
+            f.set_modified(t0 + std::time::Duration::from_secs(10 * i as u64)).unwrap();
+        }
+        std::fs::write(dir.join("unrelated.txt"), b"x").unwrap();
+        // "a" is the oldest, but was just written: "b" goes first, then "c".
+        assert_eq!(evict(&dir, 2000, Some(&entry(&dir, "a"))), 1);
+        assert!(!entry(&dir, "b").exists() && entry(&dir, "a").exists());
+        assert_eq!(evict(&dir, 1000, Some(&entry(&dir, "a"))), 1);
+        assert!(!entry(&dir, "c").exists() && entry(&dir, "a").exists());
+        assert_eq!(evict(&dir, 5000, None), 0);
+        assert_eq!(clean(&dir), (1, 1000));
+        assert!(dir.join("unrelated.txt").exists(), "clean removes only cache entries");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 
     fn h(parts: &[&[u8]]) -> (u64, u64) {
         let mut x = Hash::new();

@@ -166,6 +166,10 @@ pub(super) fn extract(
     let gf = mj.geom_friction().as_flattened();
     let gg = mj.geom_group();
     let gd = mj.geom_dataid();
+    let gpr = mj.geom_priority();
+    let gsm = mj.geom_solmix();
+    let gsr = mj.geom_solref();
+    let gsi = mj.geom_solimp();
     let grb = mj.geom_rbound();
     let geoms = (0..ngeom)
         .map(|i| Geom {
@@ -181,6 +185,10 @@ pub(super) fn extract(
             group: gg[i],
             mesh: if gtp[i] == 7 { gd[i] } else { -1 },
             rbound: grb[i],
+            priority: gpr[i],
+            solmix: gsm[i],
+            solref: [gsr[i][0], gsr[i][1]],
+            solimp: [gsi[i][0], gsi[i][1], gsi[i][2], gsi[i][3], gsi[i][4]],
         })
         .collect();
     let keys = (0..nkey).map(|i| mj::name_at(&mj, mj.name_keyadr(), i)).collect();

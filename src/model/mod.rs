@@ -3,6 +3,7 @@
 
 pub mod cache;
 mod checks;
+pub mod contact;
 mod extract;
 pub mod mirror;
 pub mod mj;
@@ -201,6 +202,12 @@ pub struct Geom {
     pub group: i32,
     pub mesh: i32,
     pub rbound: f64,
+    /// Contact priority: of two geoms in contact, the higher one's parameters are used.
+    pub priority: i32,
+    /// Weight of this geom's solref/solimp when mixed with a geom of equal priority.
+    pub solmix: f64,
+    pub solref: [f64; 2],
+    pub solimp: [f64; 5],
 }
 
 impl Geom {

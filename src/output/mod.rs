@@ -18,6 +18,47 @@ pub enum Format {
     Sarif,
     /// GitHub Actions workflow annotations.
     Github,
+    /// One line per finding: `file:line:col: level rule message` (hooks, editors, grep).
+    Concise,
+}
+
+/// One line per finding: `file:line:col: level rule message`.
+pub fn concise(map: &SourceMap, findings: &[Finding]) -> String {
+    let mut out = String::new();
+    for f in findings {
+        let p = position(map, f.primary);
+        let msg = f.message.replace('\n', " ");
+        out.push_str(&format!(
+            "{}:{}:{}: {} {} {}\n",
+            p.file,
+            p.line,
+            p.column,
+            f.severity.as_str(),
+            f.rule,
+            msg
+        ));
+    }
+    out
+}
+
+/// `--statistics`: findings per rule, most first (ties by rule id), then the total.
+pub fn statistics(findings: &[&Finding]) -> String {
+    let mut by: std::collections::BTreeMap<&str, (usize, crate::finding::Severity)> =
+        std::collections::BTreeMap::new();
+    for f in findings {
+        let e = by.entry(f.rule).or_insert((0, f.severity));
+        e.0 += 1;
+        e.1 = e.1.max(f.severity);
+    }
+    let mut rows: Vec<(&str, usize, crate::finding::Severity)> =
+        by.into_iter().map(|(r, (n, s))| (r, n, s)).collect();
+    rows.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(b.0)));
+    let mut out = String::new();
+    for (rule, n, sev) in &rows {
+        out.push_str(&format!("{n:>5}  {rule:<28} {}\n", sev.as_str()));
+    }
+    out.push_str(&format!("{:>5}  total\n", findings.len()));
+    out
 }
 
 /// `--color` of the command line (any subcommand): 0 auto, 1 always, 2 never. Set once by the CLI.
@@ -74,6 +115,7 @@ pub fn render(
         Format::Json => json::render(map, model, findings, None),
         Format::Sarif => sarif::render(&[(map, findings)], &[]),
         Format::Github => github::render(map, findings),
+        Format::Concise => concise(map, findings),
     }
 }
 
@@ -169,6 +211,21 @@ pub fn render_many(
                 out.push_str(&github::render(r.sources, r.findings));
             }
             out.push_str(&github::render_errors(errors));
+            out
+        }
+        Format::Concise => {
+            let mut out = String::new();
+            for r in reports {
+                out.push_str(&concise(r.sources, r.findings));
+            }
+            for e in errors {
+                let at = match (e.line, e.column) {
+                    (Some(l), Some(c)) => format!("{}:{l}:{c}", e.file),
+                    (Some(l), None) => format!("{}:{l}:1", e.file),
+                    _ => format!("{}:1:1", e.file),
+                };
+                out.push_str(&format!("{at}: error load {}\n", e.message.replace('\n', " ")));
+            }
             out
         }
     }

@@ -13,6 +13,10 @@ pub fn render(map: &SourceMap, findings: &[Finding], color: bool) -> String {
     render_titled(map, findings, color, None)
 }
 
+/// How many findings of one rule on one model the text output shows in full; the others are
+/// grouped one line each after them.
+pub const GROUP_FULL: usize = 3;
+
 /// As `render`; with `model`, the summary line names the model (several models per call).
 pub fn render_titled(
     map: &SourceMap,
@@ -23,8 +27,41 @@ pub fn render_titled(
     let theme = if color { GraphicalTheme::unicode() } else { GraphicalTheme::unicode_nocolor() };
     let handler = GraphicalReportHandler::new_themed(theme).with_width(100);
     let mut out = String::new();
+    // Repeated findings of one rule: the first GROUP_FULL in full, the rest one line each in a
+    // group at the end, so that a model with many of one problem stays readable.
+    let mut shown: std::collections::BTreeMap<&str, usize> = std::collections::BTreeMap::new();
+    let mut rest: std::collections::BTreeMap<&str, Vec<&Finding>> =
+        std::collections::BTreeMap::new();
     for f in findings {
-        out.push_str(&render_one(map, &handler, f));
+        let n = shown.entry(f.rule).or_insert(0);
+        if *n < GROUP_FULL {
+            *n += 1;
+            out.push_str(&render_one(map, &handler, f));
+        } else {
+            rest.entry(f.rule).or_default().push(f);
+        }
+    }
+    for (rule, fs) in &rest {
+        out.push_str(&format!(
+            "{rule}: {} more finding(s) of this rule ({GROUP_FULL} shown in full above)\n",
+            fs.len()
+        ));
+        for f in fs {
+            let p = super::position(map, f.primary);
+            let probe = match &f.probe {
+                Some(o) => format!(" [{} by probe `{}`]", status_word(o.status), o.name),
+                None => String::new(),
+            };
+            out.push_str(&format!(
+                "  {}:{}:{}: {} {}{probe}\n",
+                p.file,
+                p.line,
+                p.column,
+                f.severity.as_str(),
+                f.message.replace('\n', " ")
+            ));
+        }
+        out.push('\n');
     }
     let count = |s: Severity| findings.iter().filter(|f| f.severity == s).count();
     out.push_str(&format!(
@@ -35,6 +72,16 @@ pub fn render_titled(
         count(Severity::Info)
     ));
     out
+}
+
+fn status_word(s: ProbeStatus) -> &'static str {
+    match s {
+        ProbeStatus::Confirmed => "confirmed",
+        ProbeStatus::Measured => "measured",
+        ProbeStatus::Refuted => "refuted",
+        ProbeStatus::Inconclusive => "inconclusive",
+        ProbeStatus::Skipped => "not run",
+    }
 }
 
 fn render_one(map: &SourceMap, handler: &GraphicalReportHandler, f: &Finding) -> String {
@@ -58,6 +105,7 @@ fn render_one(map: &SourceMap, handler: &GraphicalReportHandler, f: &Finding) ->
     if let Some(p) = &f.probe {
         let verb = match p.status {
             ProbeStatus::Confirmed => "confirmed by",
+            ProbeStatus::Measured => "measured by",
             ProbeStatus::Refuted => "refuted by",
             ProbeStatus::Inconclusive => "inconclusive:",
             ProbeStatus::Skipped => "not probed:",

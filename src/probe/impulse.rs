@@ -53,6 +53,39 @@ pub struct StepResponse {
     pub inertia: Option<f64>,
     pub kp: f64,
     pub kd: f64,
+    /// Final level of the response as a fraction of the commanded step (1: it got there).
+    pub final_level: f64,
+    /// The response touched the joint's range limits (the stop, not the servo, shaped it).
+    pub touched_limit: bool,
+}
+
+/// Largest |final level − 1| of a step response that counts as having followed the step.
+pub const STEP_TOLERANCE: f64 = 0.2;
+
+impl StepResponse {
+    /// What the run had to reach before a measured ζ or ω_n can refute a claim.
+    pub fn preconditions(&self) -> super::Preconditions {
+        super::Preconditions::new()
+            .check(
+                "step_followed",
+                (self.final_level - 1.0).abs() <= STEP_TOLERANCE,
+                format!(
+                    "the joint settled at {} % of the commanded step (need {}–{} %)",
+                    crate::util::fmt_num(100.0 * self.final_level, 3),
+                    crate::util::fmt_num(100.0 * (1.0 - STEP_TOLERANCE), 3),
+                    crate::util::fmt_num(100.0 * (1.0 + STEP_TOLERANCE), 3)
+                ),
+            )
+            .check(
+                "clear_of_limits",
+                !self.touched_limit,
+                if self.touched_limit {
+                    "the step response touched the joint's range limit"
+                } else {
+                    "the step response stayed clear of the joint's range limits"
+                },
+            )
+    }
 }
 
 /// PD gains acting on a joint: from its position actuator, else from the spec (through a motor).
@@ -152,9 +185,17 @@ pub fn step_response(
             inertia: None,
             kp,
             kd,
+            final_level: f64::NAN,
+            touched_limit: false,
         });
     }
-    Some(analyse(&y, dt, kp, kd, steps))
+    let mut r = analyse(&y, dt, kp, kd, steps);
+    r.touched_limit = j.limited
+        && y.iter().any(|v| {
+            let q = q_eq + v * delta;
+            q <= j.range[0] + 1e-6 || q >= j.range[1] - 1e-6
+        });
+    Some(r)
 }
 
 /// Second-order identification from a normalised step response.
@@ -195,7 +236,18 @@ pub fn analyse(y: &[f64], dt: f64, kp: f64, kd: f64, steps: usize) -> StepRespon
         zeta = Some(z);
     }
     let inertia = omega_n.map(|w| kp / (w * w));
-    StepResponse { steps, diverged: false, overshoot, zeta, omega_n, inertia, kp, kd }
+    StepResponse {
+        steps,
+        diverged: false,
+        overshoot,
+        zeta,
+        omega_n,
+        inertia,
+        kp,
+        kd,
+        final_level: yf,
+        touched_limit: false,
+    }
 }
 
 /// What a diverged step response says.
@@ -226,6 +278,9 @@ pub fn measured_map(r: &StepResponse) -> BTreeMap<String, f64> {
     }
     m.insert("kp".into(), r.kp);
     m.insert("kd".into(), r.kd);
+    if r.final_level.is_finite() {
+        m.insert("final_level".into(), r.final_level);
+    }
     m
 }
 

@@ -1,11 +1,17 @@
-//! Probe `limit-approach`: command one joint to the extreme of its actuator's control range and
-//! record whether it reaches the hard stop.
+//! Probe `limit-approach`: command one joint to each end of its actuator's control range and
+//! record where the joint goes and whether it meets a hard stop.
 //!
-//! * Drives: the joint's position actuator to the end of its ctrlrange nearer the joint limit
-//!   (both ends tried), other DoFs frozen, contacts off, gravity on.
-//! * Measures: whether MuJoCo's joint-limit constraint becomes active with force, and the joint
-//!   velocity at the first moment it does (the impact velocity).
-//! * Confirms `soft-limits` when the commanded extreme drives the joint into the hard stop.
+//! * Drives: the joint's actuator to each end of its ctrlrange (the joint's range × gear when the
+//!   actuator has no ctrlrange) for 1 s, other DoFs frozen, contacts off, gravity on.
+//! * Measures, per end: the commanded target referred to the joint, the joint position the run
+//!   ends at, the smallest and largest position reached, whether MuJoCo's joint-limit
+//!   constraint became active with force, and the joint velocity at its first activation
+//!   (impact velocity).
+//! * Preconditions it records for a soft-limit measurement: the joint has a hard stop; at each
+//!   end the joint came within 5 % of its range of the commanded target (else the servo could
+//!   not drive the command there, and the run says nothing about the stop).
+//! * The soft-limit findings are facts of the file: the probe measures their consequence (the
+//!   stop engaged, at what speed) and never refutes them.
 //! * Budget: 2 × 1 s at the model's timestep.
 
 use super::bench::{self, Bench, Setup};
@@ -28,12 +34,58 @@ impl super::Probe for LimitApproach {
     }
 }
 
-#[derive(Debug, Clone)]
+/// One end of the control range.
+#[derive(Debug, Clone, Default)]
+pub struct EndRun {
+    /// Commanded target referred to the joint (ctrl / gear for a position servo), rad or m.
+    pub target: f64,
+    /// Joint position at the end of the run.
+    pub reached: f64,
+    /// Smallest and largest joint position of this end's run (the keyframe position included).
+    pub q_lo: f64,
+    pub q_hi: f64,
+    pub hit: bool,
+    pub impact_velocity: f64,
+    pub max_limit_force: f64,
+}
+
+#[derive(Debug, Clone, Default)]
 pub struct LimitHit {
     pub steps: usize,
     pub hit: bool,
     pub impact_velocity: f64,
     pub max_limit_force: f64,
+    /// Smallest and largest joint position over both runs.
+    pub q_min: f64,
+    pub q_max: f64,
+    /// The joint has a range (`limited`).
+    pub stop_exists: bool,
+    pub range: [f64; 2],
+    /// The runs at the lower and upper end of the control range.
+    pub ends: [EndRun; 2],
+}
+
+impl LimitHit {
+    /// Where each end's run could get: the commanded target, or the hard stop in front of it.
+    pub fn reachable(&self, k: usize) -> f64 {
+        let t = self.ends[k].target;
+        if self.stop_exists { t.clamp(self.range[0], self.range[1]) } else { t }
+    }
+    /// How far (rad or m) each end's run stayed from where it could get: 0 when the joint
+    /// reached or passed it (a soft stop lets the joint pass its range a little).
+    pub fn shortfall(&self) -> [f64; 2] {
+        [0, 1].map(|k| {
+            let goal = self.reachable(k);
+            let e = &self.ends[k];
+            if goal < e.q_lo {
+                e.q_lo - goal
+            } else if goal > e.q_hi {
+                goal - e.q_hi
+            } else {
+                0.0
+            }
+        })
+    }
 }
 
 pub fn run(robot: &Robot, act: usize) -> Option<LimitHit> {
@@ -54,26 +106,52 @@ pub fn run(robot: &Robot, act: usize) -> Option<LimitHit> {
     } else {
         (j.range[0] * a.gear, j.range[1] * a.gear)
     };
-    let mut out = LimitHit { steps: 0, hit: false, impact_velocity: 0.0, max_limit_force: 0.0 };
-    for target in [lo, hi] {
+    let g = if a.gear != 0.0 { a.gear } else { 1.0 };
+    let mut out = LimitHit {
+        q_min: f64::INFINITY,
+        q_max: f64::NEG_INFINITY,
+        stop_exists: j.limited,
+        range: j.range,
+        ..Default::default()
+    };
+    for (k, ctrl) in [lo, hi].into_iter().enumerate() {
         let mut d = b.data(robot);
         let n = (1.0 / b.dt()).ceil() as usize;
         let mut first = true;
+        let q0 = bench::qpos(&d, j.qposadr);
+        let mut end = EndRun { target: ctrl / g, q_lo: q0, q_hi: q0, ..Default::default() };
         for _ in 0..n {
-            bench::set_ctrl(&mut d, act, target);
+            bench::set_ctrl(&mut d, act, ctrl);
             b.step(&mut d);
             out.steps += 1;
+            let q = bench::qpos(&d, j.qposadr);
+            if q.is_finite() {
+                out.q_min = out.q_min.min(q);
+                out.q_max = out.q_max.max(q);
+                end.q_lo = end.q_lo.min(q);
+                end.q_hi = end.q_hi.max(q);
+            }
             for (ty, id, f) in mj::constraint_forces(&d) {
                 if ty == 3 && id == j.id as i32 && f.abs() > 1e-9 {
                     if first {
-                        out.impact_velocity =
-                            out.impact_velocity.max(bench::qvel(&d, j.dofadr).abs());
+                        end.impact_velocity = bench::qvel(&d, j.dofadr).abs();
                         first = false;
                     }
-                    out.hit = true;
-                    out.max_limit_force = out.max_limit_force.max(f.abs());
+                    end.hit = true;
+                    end.max_limit_force = end.max_limit_force.max(f.abs());
                 }
             }
+        }
+        end.reached = bench::qpos(&d, j.qposadr);
+        out.hit |= end.hit;
+        out.impact_velocity = out.impact_velocity.max(end.impact_velocity);
+        out.max_limit_force = out.max_limit_force.max(end.max_limit_force);
+        out.ends[k] = end;
+    }
+    // Position servos only: a motor's "ctrl / gear" is a torque, not a target.
+    if !matches!(a.kind, crate::model::ActuatorKind::Position { .. }) {
+        for e in &mut out.ends {
+            e.target = f64::NAN;
         }
     }
     Some(out)

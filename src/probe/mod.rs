@@ -14,6 +14,7 @@ pub mod direction;
 pub mod impulse;
 pub mod limit;
 pub mod penetration;
+pub mod ringdown;
 pub mod sanity;
 pub mod settle;
 
@@ -28,6 +29,7 @@ pub use direction::ActuatorDirection;
 pub use impulse::ImpulseResponse;
 pub use limit::LimitApproach;
 pub use penetration::KeyframePenetration;
+pub use ringdown::RingDown;
 pub use sanity::WholeModelSanity;
 pub use settle::StanceSettle;
 
@@ -49,10 +51,73 @@ pub trait Probe: 'static {
     fn steps(out: &Self::Output) -> usize;
 }
 
-/// What a probe's verdict on one finding says.
+/// One condition the experiment had to reach before its result can speak about the claim
+/// ("the model has a floor", "the feet carry ≥ 50 % of the weight", "the joint reached the
+/// commanded extreme"). Every verdict records the ones its probe checked, met or not, in the
+/// JSON output.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Precondition {
+    /// Stable snake_case name (`floor`, `feet_loaded`, `upright`, `stop_exists`, …).
+    pub name: &'static str,
+    pub met: bool,
+    /// What was measured, in one phrase ("the feet carry 3 % of the weight, need ≥ 50 %").
+    pub detail: String,
+}
+
+/// The preconditions of one run, checked in order.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Preconditions(Vec<Precondition>);
+
+/// Proof that every recorded precondition of a run was met. Its field is private: the only way
+/// to get one is [`Preconditions::all_met`], and a refutation ([`Verdict::refuted`]) cannot be
+/// built without it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Met(Vec<Precondition>);
+
+impl Preconditions {
+    pub fn new() -> Self {
+        Preconditions(Vec::new())
+    }
+    /// Records one precondition.
+    pub fn check(mut self, name: &'static str, met: bool, detail: impl Into<String>) -> Self {
+        self.0.push(Precondition { name, met, detail: detail.into() });
+        self
+    }
+    pub fn list(&self) -> &[Precondition] {
+        &self.0
+    }
+    /// The first unmet precondition's detail, if any.
+    pub fn unmet(&self) -> Option<&Precondition> {
+        self.0.iter().find(|p| !p.met)
+    }
+    /// Every precondition met: the proof a refutation needs. Otherwise the reason.
+    pub fn all_met(&self) -> Result<Met, String> {
+        match self.unmet() {
+            Some(p) => Err(p.detail.clone()),
+            None => Ok(Met(self.0.clone())),
+        }
+    }
+}
+
+/// What a probe's run says about a finding.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Status {
+    /// The experiment reproduced the consequence the finding predicts.
+    Confirmed,
+    /// Numbers about the consequence, no verdict (the only result a fact of the file can get).
+    Measured,
+    /// The experiment could not test the claim; why.
+    Inconclusive(String),
+    /// The claim's preconditions were met and its predicted consequence did not occur.
+    Refuted(Met),
+}
+
+/// A probe's verdict on one finding.
 #[derive(Debug, Clone)]
 pub struct Verdict {
-    pub status: ProbeStatus,
+    pub status: Status,
+    /// The preconditions the run checked (met or not).
+    pub preconditions: Vec<Precondition>,
     /// Measured values, for the JSON/SARIF output.
     pub measured: BTreeMap<String, f64>,
     /// One sentence for the human output ("measured ζ = 0.31 (predicted 0.29)").
@@ -60,12 +125,113 @@ pub struct Verdict {
 }
 
 impl Verdict {
-    pub fn new(
-        status: ProbeStatus,
+    pub fn confirmed(
+        pre: &Preconditions,
         measured: BTreeMap<String, f64>,
         note: impl Into<String>,
     ) -> Self {
-        Verdict { status, measured, note: note.into() }
+        Verdict {
+            status: Status::Confirmed,
+            preconditions: pre.0.clone(),
+            measured,
+            note: note.into(),
+        }
+    }
+    pub fn measured(
+        pre: &Preconditions,
+        measured: BTreeMap<String, f64>,
+        note: impl Into<String>,
+    ) -> Self {
+        Verdict {
+            status: Status::Measured,
+            preconditions: pre.0.clone(),
+            measured,
+            note: note.into(),
+        }
+    }
+    /// The experiment could not test the claim: `reason` is the note.
+    pub fn inconclusive(
+        pre: &Preconditions,
+        measured: BTreeMap<String, f64>,
+        reason: impl Into<String>,
+    ) -> Self {
+        let reason = reason.into();
+        Verdict {
+            status: Status::Inconclusive(reason.clone()),
+            preconditions: pre.0.clone(),
+            measured,
+            note: reason,
+        }
+    }
+    /// Refuted: needs the proof that every precondition was met.
+    pub fn refuted(met: Met, measured: BTreeMap<String, f64>, note: impl Into<String>) -> Self {
+        let preconditions = met.0.clone();
+        Verdict { status: Status::Refuted(met), preconditions, measured, note: note.into() }
+    }
+    /// Refuted when every precondition was met, else inconclusive with the unmet one's detail.
+    pub fn refuted_or_inconclusive(
+        pre: &Preconditions,
+        measured: BTreeMap<String, f64>,
+        note: impl Into<String>,
+    ) -> Self {
+        match pre.all_met() {
+            Ok(met) => Verdict::refuted(met, measured, note),
+            Err(why) => Verdict::inconclusive(pre, measured, why),
+        }
+    }
+    pub fn probe_status(&self) -> ProbeStatus {
+        match self.status {
+            Status::Confirmed => ProbeStatus::Confirmed,
+            Status::Measured => ProbeStatus::Measured,
+            Status::Inconclusive(_) => ProbeStatus::Inconclusive,
+            Status::Refuted(_) => ProbeStatus::Refuted,
+        }
+    }
+}
+
+/// What a probe's run says about a fact of the file (no range, no damping, ctrlrange equal to
+/// the hard range, zero armature, no actuator): numbers about its consequence, or why the run
+/// could not measure it. There is no refuted (and no confirmed) variant: simulation does not
+/// decide a fact.
+#[derive(Debug, Clone)]
+pub struct Measurement {
+    /// `None`: measured; `Some(reason)`: the run could not measure the consequence.
+    pub inconclusive: Option<String>,
+    pub preconditions: Vec<Precondition>,
+    pub measured: BTreeMap<String, f64>,
+    pub note: String,
+}
+
+impl Measurement {
+    /// Measured when every precondition was met, else inconclusive with the unmet one's detail.
+    pub fn new(
+        pre: &Preconditions,
+        measured: BTreeMap<String, f64>,
+        note: impl Into<String>,
+    ) -> Self {
+        let note = note.into();
+        match pre.unmet() {
+            None => {
+                Measurement { inconclusive: None, preconditions: pre.0.clone(), measured, note }
+            }
+            Some(p) => Measurement {
+                inconclusive: Some(p.detail.clone()),
+                preconditions: pre.0.clone(),
+                measured,
+                note: p.detail.clone(),
+            },
+        }
+    }
+    fn into_verdict(self) -> Verdict {
+        Verdict {
+            status: match self.inconclusive {
+                None => Status::Measured,
+                Some(r) => Status::Inconclusive(r),
+            },
+            preconditions: self.preconditions,
+            measured: self.measured,
+            note: self.note,
+        }
     }
 }
 
@@ -79,6 +245,15 @@ pub trait Claim: Debug + Send + Sync + 'static {
     fn judge(&self, l: &Loaded, out: &<Self::Probe as Probe>::Output) -> Verdict;
 }
 
+/// What a probe measures about a fact of the file (the finding is marked `fact`): the
+/// consequence, never a verdict on the fact itself.
+pub trait Measure: Debug + Send + Sync + 'static {
+    type Probe: Probe;
+    /// The run this measurement needs, or why the finding cannot be probed.
+    fn key(&self, l: &Loaded) -> Result<<Self::Probe as Probe>::Key, &'static str>;
+    fn measure(&self, l: &Loaded, out: &<Self::Probe as Probe>::Output) -> Measurement;
+}
+
 /// A [`Claim`] with its probe type erased, as a finding carries it.
 pub trait ProbeCheck: Debug + Send + Sync {
     /// The name of the probe the claim is for.
@@ -89,40 +264,83 @@ pub trait ProbeCheck: Debug + Send + Sync {
     fn outcome(&self, l: &Loaded, runs: &Runs) -> ProbeOutcome;
 }
 
-impl<C: Claim> ProbeCheck for C {
+fn not_run(name: &str, why: &str) -> ProbeOutcome {
+    ProbeOutcome {
+        name: name.into(),
+        status: ProbeStatus::Skipped,
+        reason: Some(why.into()),
+        preconditions: Vec::new(),
+        measured: BTreeMap::new(),
+        steps: 0,
+        note: why.into(),
+    }
+}
+
+fn outcome_of(name: &str, v: Verdict, steps: usize) -> ProbeOutcome {
+    ProbeOutcome {
+        name: name.into(),
+        status: v.probe_status(),
+        reason: match &v.status {
+            Status::Inconclusive(r) => Some(r.clone()),
+            _ => None,
+        },
+        preconditions: v.preconditions,
+        measured: v.measured,
+        steps,
+        note: v.note,
+    }
+}
+
+/// A [`Claim`] as a finding carries it.
+#[derive(Debug)]
+pub struct AsClaim<C>(pub C);
+
+/// A [`Measure`] as a finding carries it.
+#[derive(Debug)]
+pub struct AsMeasure<M>(pub M);
+
+impl<C: Claim> ProbeCheck for AsClaim<C> {
     fn probe_name(&self) -> &'static str {
         C::Probe::NAME
     }
     fn plan(&self, plan: &mut Plan<'_>) {
-        if let Ok(key) = self.key(plan.l) {
+        if let Ok(key) = self.0.key(plan.l) {
             plan.add::<C::Probe>(key);
         }
     }
     fn outcome(&self, l: &Loaded, runs: &Runs) -> ProbeOutcome {
         let name = C::Probe::NAME;
-        let skipped = |why: &str| ProbeOutcome {
-            name: name.into(),
-            status: ProbeStatus::Skipped,
-            measured: BTreeMap::new(),
-            steps: 0,
-            note: why.into(),
-        };
-        let key = match self.key(l) {
+        let key = match self.0.key(l) {
             Ok(k) => k,
-            Err(why) => return skipped(why),
+            Err(why) => return not_run(name, why),
         };
         match runs.get::<C::Probe>(key) {
+            Some(out) => outcome_of(name, self.0.judge(l, out), C::Probe::steps(out)),
+            None => not_run(name, C::Probe::UNAVAILABLE),
+        }
+    }
+}
+
+impl<M: Measure> ProbeCheck for AsMeasure<M> {
+    fn probe_name(&self) -> &'static str {
+        M::Probe::NAME
+    }
+    fn plan(&self, plan: &mut Plan<'_>) {
+        if let Ok(key) = self.0.key(plan.l) {
+            plan.add::<M::Probe>(key);
+        }
+    }
+    fn outcome(&self, l: &Loaded, runs: &Runs) -> ProbeOutcome {
+        let name = M::Probe::NAME;
+        let key = match self.0.key(l) {
+            Ok(k) => k,
+            Err(why) => return not_run(name, why),
+        };
+        match runs.get::<M::Probe>(key) {
             Some(out) => {
-                let v = self.judge(l, out);
-                ProbeOutcome {
-                    name: name.into(),
-                    status: v.status,
-                    measured: v.measured,
-                    steps: C::Probe::steps(out),
-                    note: v.note,
-                }
+                outcome_of(name, self.0.measure(l, out).into_verdict(), M::Probe::steps(out))
             }
-            None => skipped(C::Probe::UNAVAILABLE),
+            None => not_run(name, M::Probe::UNAVAILABLE),
         }
     }
 }
@@ -210,7 +428,12 @@ pub fn confirm(findings: &mut [Finding], mut plan: Plan<'_>) -> Runs {
     let runs = plan.run();
     for f in findings.iter_mut() {
         let Some(c) = f.claim.clone() else { continue };
-        let p = c.outcome(l, &runs);
+        let mut p = c.outcome(l, &runs);
+        if f.fact && p.status == ProbeStatus::Refuted {
+            // Unreachable through `Finding::measure` (a `Measurement` has no refuted variant);
+            // kept so that no path downgrades a fact of the file.
+            p.status = ProbeStatus::Measured;
+        }
         if p.status == ProbeStatus::Refuted && f.severity > Severity::Info {
             f.severity = Severity::Info;
             f.message = format!("{} (refuted by simulation)", f.message);
@@ -229,6 +452,8 @@ mod tests {
     use crate::model::source::Loc;
 
     static RUNS: AtomicUsize = AtomicUsize::new(0);
+    /// The tests that run `Echo` hold this, so the run counter sees one test's runs.
+    static ECHO: std::sync::Mutex<()> = std::sync::Mutex::new(());
 
     /// A probe that counts its runs and echoes its key (no run for key 0).
     struct Echo;
@@ -258,13 +483,20 @@ mod tests {
             self.key.ok_or("no key")
         }
         fn judge(&self, _: &Loaded, out: &usize) -> Verdict {
-            let st = if *out > self.bound { ProbeStatus::Confirmed } else { ProbeStatus::Refuted };
-            Verdict::new(st, BTreeMap::from([("echo".to_string(), *out as f64)]), format!("{out}"))
+            let m = BTreeMap::from([("echo".to_string(), *out as f64)]);
+            // Precondition: the echo is odd (an even echo cannot test the bound).
+            let pre = Preconditions::new().check("odd", out % 2 == 1, "the echo is even");
+            if *out > self.bound {
+                Verdict::confirmed(&pre, m, format!("{out}"))
+            } else {
+                Verdict::refuted_or_inconclusive(&pre, m, format!("{out}"))
+            }
         }
     }
 
     #[test]
     fn each_run_once_and_each_claim_judged() {
+        let _g = ECHO.lock().unwrap_or_else(|e| e.into_inner());
         let input = LintInput {
             model: "fixtures/rules/underdamped-pd-gains/invalid.xml".into(),
             spec: None,
@@ -278,7 +510,7 @@ mod tests {
             |key, bound| Finding::new("x", Severity::Error, "m", at).claim(Above { key, bound });
         let mut fs = vec![
             finding(Some(3), 1),
-            finding(Some(3), 5),
+            finding(Some(3), 5), // odd echo: the precondition holds, so refuted
             finding(Some(7), 1),
             finding(Some(0), 1),
             finding(None, 1),
@@ -299,5 +531,66 @@ mod tests {
         assert_eq!(status(4), Some((ProbeStatus::Skipped, 0, "no key".into())));
         assert!(fs[5].probe.is_none());
         assert!(fs.iter().take(5).all(|f| f.probe.as_ref().is_some_and(|p| p.name == "echo")));
+    }
+
+    /// Measures the echo of a fact: never a verdict; inconclusive when the echo is even.
+    #[derive(Debug)]
+    struct EchoFact(usize);
+    impl Measure for EchoFact {
+        type Probe = Echo;
+        fn key(&self, _: &Loaded) -> Result<usize, &'static str> {
+            Ok(self.0)
+        }
+        fn measure(&self, _: &Loaded, out: &usize) -> Measurement {
+            let pre = Preconditions::new().check("odd", out % 2 == 1, "the echo is even");
+            Measurement::new(&pre, BTreeMap::new(), format!("echo {out}"))
+        }
+    }
+
+    #[test]
+    fn unmet_precondition_is_inconclusive_and_facts_are_never_refuted() {
+        let _g = ECHO.lock().unwrap_or_else(|e| e.into_inner());
+        let input = LintInput {
+            model: "fixtures/rules/underdamped-pd-gains/invalid.xml".into(),
+            spec: None,
+            config: None,
+            select: vec![],
+            ignore: vec![],
+        };
+        let l = load(&input).unwrap();
+        let at = Loc { file: 0, start: 0, end: 1 };
+        let mut fs = vec![
+            // Even echo at or below the bound: the precondition fails, so not refuted.
+            Finding::new("x", Severity::Error, "m", at).claim(Above { key: Some(4), bound: 5 }),
+            Finding::new("x", Severity::Error, "fact", at).measure(EchoFact(3)),
+            Finding::new("x", Severity::Error, "fact", at).measure(EchoFact(4)),
+        ];
+        confirm(&mut fs, Plan::new(&l));
+        let p0 = fs[0].probe.clone().unwrap();
+        assert_eq!(p0.status, ProbeStatus::Inconclusive);
+        assert_eq!(p0.reason.as_deref(), Some("the echo is even"));
+        assert_eq!(p0.preconditions.len(), 1);
+        assert!(!p0.preconditions[0].met);
+        assert_eq!(fs[0].severity, Severity::Error);
+        assert!(fs[1].fact && fs[2].fact);
+        assert_eq!(fs[1].probe.as_ref().unwrap().status, ProbeStatus::Measured);
+        assert_eq!(fs[2].probe.as_ref().unwrap().status, ProbeStatus::Inconclusive);
+        assert!(fs[1..].iter().all(|f| f.severity == Severity::Error && f.message == "fact"));
+        // A fact never takes a claim that could refute it.
+        let mut f = vec![Finding::new("x", Severity::Error, "fact", at).fact()];
+        crate::rules::claim_each(&mut f, |_| Some(Above { key: Some(3), bound: 5 }));
+        assert!(f[0].claim.is_none());
+    }
+
+    #[test]
+    fn a_refutation_needs_every_precondition_met() {
+        let pre = Preconditions::new().check("a", true, "a ok").check("b", false, "b failed");
+        assert_eq!(pre.all_met(), Err("b failed".to_string()));
+        let v = Verdict::refuted_or_inconclusive(&pre, BTreeMap::new(), "no effect");
+        assert_eq!(v.status, Status::Inconclusive("b failed".into()));
+        let ok = Preconditions::new().check("a", true, "a ok");
+        let v = Verdict::refuted_or_inconclusive(&ok, BTreeMap::new(), "no effect");
+        assert!(matches!(v.status, Status::Refuted(_)));
+        assert_eq!(v.preconditions, ok.list());
     }
 }

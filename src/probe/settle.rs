@@ -5,9 +5,15 @@
 //!   tilt of the foot body from level, contact chatter (contacts appearing or disappearing per
 //!   second over the last 0.5 s), deepest penetration; per passive joint: deflection from the
 //!   keyframe.
-//! * Confirms `toe-tilt` when a foot contact geom carries (almost) no load or the foot rocks;
-//!   `foot-collision-geometry` when contacts chatter or penetrate; `passive-joint-spring` when a
-//!   passive joint collapses (deflects > 0.2 rad or reaches its limit).
+//! * Preconditions every stance verdict records (unmet → inconclusive with the reason): the
+//!   model has a floor (a colliding plane, height field or box on the world body: lint the
+//!   scene, not the bare robot file); the run did not diverge; the base is free-floating; the
+//!   floor carries at least [`MIN_SUPPORT`] of the robot's weight over the last 0.3 s; the base
+//!   stays upright (tilt ≤ [`MAX_TILT_DEG`]°, drop ≤ [`MAX_DROP`] of its keyframe height or
+//!   [`MIN_DROP_ALLOWED`]).
+//! * Confirms `toe-tilt` when a foot contact geom carries (almost) no load;
+//!   `foot-collision-geometry` when contacts chatter or penetrate; measures the deflection of a
+//!   passive joint for `passive-joint-spring`.
 //! * Budget: 1 s at the model's timestep.
 
 use std::collections::{BTreeMap, BTreeSet};
@@ -39,7 +45,8 @@ pub const DIVERGED: &str = "the standing simulation diverged";
 /// A claim the stance-settle run checks (one run per model, so no key). A diverged run confirms
 /// it; otherwise [`StanceClaim::judge_settled`] reads the run.
 pub trait StanceClaim: std::fmt::Debug + Send + Sync + 'static {
-    fn judge_settled(&self, l: &Loaded, s: &Settle) -> super::Verdict;
+    /// Called only when every stance precondition (`pre`) was met.
+    fn judge_settled(&self, l: &Loaded, s: &Settle, pre: &super::Preconditions) -> super::Verdict;
 }
 
 impl<C: StanceClaim> super::Claim for C {
@@ -48,16 +55,23 @@ impl<C: StanceClaim> super::Claim for C {
         Ok(())
     }
     fn judge(&self, l: &Loaded, s: &Settle) -> super::Verdict {
-        if s.diverged {
-            return super::Verdict::new(
-                crate::finding::ProbeStatus::Confirmed,
-                Default::default(),
-                DIVERGED,
-            );
+        let pre = s.preconditions();
+        if let Some(p) = pre.unmet() {
+            return super::Verdict::inconclusive(&pre, s.stance_measured(), p.detail.clone());
         }
-        self.judge_settled(l, s)
+        self.judge_settled(l, s, &pre)
     }
 }
+
+/// Smallest share of the robot's weight the floor must carry for a stance verdict.
+pub const MIN_SUPPORT: f64 = 0.5;
+/// Largest base tilt (degrees from the keyframe) of a robot that still counts as upright.
+pub const MAX_TILT_DEG: f64 = 30.0;
+/// Largest base drop, as a fraction of the base's keyframe height, of an upright robot (at
+/// least [`MIN_DROP_ALLOWED`]: a small model settling onto its feet drops a few centimetres).
+pub const MAX_DROP: f64 = 0.5;
+/// The drop any robot may show while settling, m.
+pub const MIN_DROP_ALLOWED: f64 = 0.1;
 
 /// What the settle measured around one foot: the body, its parent and its children.
 #[derive(Debug, Clone)]
@@ -77,6 +91,70 @@ pub struct FootView {
 }
 
 impl Settle {
+    /// The stance preconditions of this run, in order (see the module docs).
+    pub fn preconditions(&self) -> super::Preconditions {
+        let share = if self.weight > 0.0 { self.support_load / self.weight } else { 0.0 };
+        super::Preconditions::new()
+            .check(
+                "floor",
+                self.floor,
+                if self.floor {
+                    "the model has a floor".to_string()
+                } else {
+                    "the model has no floor (no colliding plane, height field or box on the world body): lint the scene that includes the robot".to_string()
+                },
+            )
+            .check(
+                "settled",
+                !self.diverged,
+                if self.diverged { DIVERGED } else { "the standing simulation stayed finite" },
+            )
+            .check(
+                "free_base",
+                self.free_base,
+                if self.free_base {
+                    "the base is free-floating"
+                } else {
+                    "the base is fixed to the world, so standing does not load the feet"
+                },
+            )
+            .check(
+                "feet_loaded",
+                share >= MIN_SUPPORT,
+                format!(
+                    "the floor carries {} % of the robot's weight after 1 s standing (need ≥ {} %)",
+                    crate::util::fmt_num(100.0 * share, 3),
+                    crate::util::fmt_num(100.0 * MIN_SUPPORT, 3)
+                ),
+            )
+            .check(
+                "upright",
+                self.base_tilt_deg <= MAX_TILT_DEG && self.base_drop <= self.max_drop(),
+                format!(
+                    "the base tilted {}° and dropped {} m (upright: ≤ {}°, ≤ {} m)",
+                    crate::util::fmt_num(self.base_tilt_deg, 3),
+                    crate::util::fmt_num(self.base_drop, 3),
+                    crate::util::fmt_num(MAX_TILT_DEG, 3),
+                    crate::util::fmt_num(self.max_drop(), 3)
+                ),
+            )
+    }
+
+    /// The largest drop of the base that still counts as upright, m.
+    pub fn max_drop(&self) -> f64 {
+        (MAX_DROP * self.base_height).max(MIN_DROP_ALLOWED)
+    }
+
+    /// The whole-robot figures every stance verdict reports.
+    pub fn stance_measured(&self) -> BTreeMap<String, f64> {
+        BTreeMap::from([
+            ("support_load_n".to_string(), self.support_load),
+            ("weight_n".to_string(), self.weight),
+            ("base_drop_m".to_string(), self.base_drop),
+            ("base_tilt_deg".to_string(), self.base_tilt_deg),
+        ])
+    }
+
     /// The mean load of one geom, N (0 when it never touched anything).
     pub fn load(&self, geom: usize) -> f64 {
         self.geom_load.get(&geom).copied().unwrap_or(0.0)
@@ -138,8 +216,20 @@ pub struct Settle {
     pub body_tilt_deg: BTreeMap<usize, f64>,
     /// Final qpos per joint id minus keyframe.
     pub joint_deflection: BTreeMap<usize, f64>,
-    /// Final base height minus keyframe, m.
+    /// Keyframe base height minus final, m (positive: the base fell).
     pub base_drop: f64,
+    /// Keyframe height of the base, m.
+    pub base_height: f64,
+    /// Final tilt of the base body from its keyframe orientation, degrees.
+    pub base_tilt_deg: f64,
+    /// The world body has a colliding plane, height field or box.
+    pub floor: bool,
+    /// The robot has a free joint.
+    pub free_base: bool,
+    /// The robot's weight, N.
+    pub weight: f64,
+    /// Mean total normal force of the robot's contacts with world geoms over the last 0.3 s, N.
+    pub support_load: f64,
 }
 
 pub fn run(robot: &Robot) -> Option<Settle> {
@@ -157,7 +247,26 @@ pub fn run(robot: &Robot) -> Option<Settle> {
         .iter()
         .find(|j| j.jtype == crate::model::JointType::Free)
         .map(|j| robot.key.qpos[j.qposadr + 2]);
-    let mut out = Settle::default();
+    let floor = robot.geoms.iter().any(|g| {
+        g.body == 0
+            && g.collides()
+            && matches!(
+                g.gtype,
+                crate::model::GeomType::Plane
+                    | crate::model::GeomType::Hfield
+                    | crate::model::GeomType::Box
+            )
+    });
+    let g = robot.opt.gravity;
+    let mut out = Settle {
+        floor,
+        weight: robot.bodies.iter().map(|b| b.mass).sum::<f64>()
+            * (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt(),
+        free_base: robot.joints.iter().any(|j| j.jtype == crate::model::JointType::Free),
+        base_height: base_z0.unwrap_or(0.0),
+        ..Default::default()
+    };
+    let mut support_sum = 0.0;
     let mut load_sum: BTreeMap<usize, f64> = BTreeMap::new();
     let mut prev: BTreeSet<(usize, usize)> = BTreeSet::new();
     let mut changes: BTreeMap<usize, usize> = BTreeMap::new();
@@ -178,6 +287,10 @@ pub fn run(robot: &Robot) -> Option<Settle> {
             }
             let (g1, g2) = (g1 as usize, g2 as usize);
             now.insert((g1.min(g2), g1.max(g2)));
+            let world = |g: usize| gbody[g] == 0;
+            if step >= load_from && world(g1) != world(g2) {
+                support_sum += d.contact_force(ci)[0].abs();
+            }
             for g in [g1, g2] {
                 let body = gbody[g].max(0) as usize;
                 if body == 0 {
@@ -205,6 +318,7 @@ pub fn run(robot: &Robot) -> Option<Settle> {
         prev = now;
     }
     let nload = (n - load_from) as f64;
+    out.support_load = support_sum / nload;
     out.geom_load = load_sum.into_iter().map(|(g, s)| (g, s / nload)).collect();
     let window = (n - chatter_from) as f64 * dt;
     out.chatter_per_s = changes.into_iter().map(|(b, c)| (b, c as f64 / window)).collect();
@@ -227,6 +341,7 @@ pub fn run(robot: &Robot) -> Option<Settle> {
         (base_z0, robot.joints.iter().find(|j| j.jtype == crate::model::JointType::Free))
     {
         out.base_drop = z0 - q[fj.qposadr + 2];
+        out.base_tilt_deg = out.body_tilt_deg.get(&fj.body).copied().unwrap_or(0.0);
     }
     Some(out)
 }

@@ -36,6 +36,8 @@ pub struct RuleMeta {
     /// [`crate::probe::Probe::NAME`] of the type named in `declare_rule!`, whose claims the
     /// rule's findings carry.
     pub probe: Option<&'static str>,
+    /// Further probes whose measurements some of the rule's findings carry.
+    pub also_probes: &'static [&'static str],
     pub options: &'static [RuleOption],
     /// Markdown from the rule's doc comment.
     pub docs: &'static str,
@@ -110,8 +112,25 @@ pub fn claim_each<C: crate::probe::Claim>(
     claim: impl Fn(&Finding) -> Option<C>,
 ) {
     for f in findings {
+        if f.fact {
+            continue; // a fact carries a measurement, never a claim that could refute it
+        }
         if let Some(c) = claim(f) {
-            f.claim = Some(std::sync::Arc::new(c));
+            f.claim = Some(std::sync::Arc::new(crate::probe::AsClaim(c)));
+        }
+    }
+}
+
+/// Gives each of `findings` the measurement `measure` makes for it and marks it a fact of the
+/// file: its probe measures the consequence and cannot refute it.
+pub fn measure_each<M: crate::probe::Measure>(
+    findings: &mut [Finding],
+    measure: impl Fn(&Finding) -> Option<M>,
+) {
+    for f in findings {
+        if let Some(m) = measure(f) {
+            f.fact = true;
+            f.claim = Some(std::sync::Arc::new(crate::probe::AsMeasure(m)));
         }
     }
 }
@@ -152,6 +171,7 @@ macro_rules! declare_rule {
             group: $group:expr,
             level: $lvl:expr,
             probe: $probe:ident,
+            $(also: [$($also:ident),* $(,)?],)?
             options: [$($opt:expr),* $(,)?] $(,)?
         }
     ) => {
@@ -163,6 +183,7 @@ macro_rules! declare_rule {
                 group: $group,
                 default_level: $lvl,
                 probe: $crate::declare_rule!(@probe $probe),
+                also_probes: &[$($(<$also as $crate::probe::Probe>::NAME),*)?],
                 options: &[$($opt),*],
                 docs: concat!($($doc, "\n"),*),
             };
@@ -267,7 +288,14 @@ pub fn doc_page(m: &RuleMeta) -> String {
         "Group: `{}` · default level: `{}` · probe: {}\n\n",
         m.group,
         m.default_level.as_str(),
-        m.probe.map(|p| format!("`{p}`")).unwrap_or_else(|| "none (static only)".into())
+        match m.probe {
+            Some(p) => std::iter::once(p)
+                .chain(m.also_probes.iter().copied())
+                .map(|p| format!("`{p}`"))
+                .collect::<Vec<_>>()
+                .join(", "),
+            None => "none (static only)".into(),
+        }
     ));
     // Doc comments arrive with one leading space per line.
     for line in m.docs.lines() {

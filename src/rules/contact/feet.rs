@@ -6,14 +6,41 @@
 //! collision geoms reach within 3 cm of the robot's lowest collision point at the keyframe.
 //! Each matched body that has no matched ancestor is a foot root; its descendants (and any
 //! other matched body on the same side, e.g. a separately matched toe) are its toe bodies.
+//!
+//! Only a floating-base robot has feet (unless the spec names them): a fixed-base arm or a
+//! test rig gets no foot rules. Each foot is classified by its ground geoms (the collision
+//! geoms whose lowest point at the keyframe is within [`GROUND_WINDOW`] of the foot's lowest):
+//! a **point foot** touches down through spheres whose lowest points lie within
+//! [`POINT_SPREAD`] of each other (the quadruped's foot sphere; flat-foot rules do not apply); a
+//! **wheel** touches down through a sphere, cylinder or ellipsoid on a body turned by an
+//! unlimited hinge (no foot rules apply); anything else is a **flat foot**.
 
 pub use crate::model::mirror::{Side, side_of};
 use crate::model::{GeomType, Robot};
 use crate::rules::geometry::shapes::Placed;
 use crate::spec::Spec;
 
+/// How far above the foot's lowest point a geom may reach and still touch the ground, m.
+pub const GROUND_WINDOW: f64 = 0.01;
+/// Largest horizontal spread of the contact points of a point foot, m.
+pub const POINT_SPREAD: f64 = 0.02;
+
+/// The robot family a foot belongs to, by how it touches the ground.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FootKind {
+    /// A sole or a set of contacts that spans a support polygon (humanoids).
+    Flat,
+    /// One small contact region through spheres (point-foot quadrupeds).
+    Point,
+    /// A rolling wheel.
+    Wheel,
+}
+
 #[derive(Debug, Clone)]
 pub struct Foot {
+    pub kind: FootKind,
+    /// The collision geoms that touch the ground (within [`GROUND_WINDOW`] of the lowest).
+    pub ground: Vec<usize>,
     pub side: Option<Side>,
     /// The foot body (subject of findings).
     pub root: usize,
@@ -74,6 +101,9 @@ pub fn feet(robot: &Robot, spec: Option<&Spec>) -> Vec<Foot> {
     // Only a floating-base robot (a legged one) has feet to guess at: a fixed-base arm or a
     // test rig does not.
     let floating = robot.joints.iter().any(|j| j.jtype == crate::model::JointType::Free);
+    if !floating && !from_spec {
+        return Vec::new();
+    }
     if matched.is_empty() && !from_spec && floating {
         // Leaf bodies whose collision geoms touch down.
         let lowest = |b: usize| {
@@ -106,13 +136,46 @@ pub fn feet(robot: &Robot, spec: Option<&Spec>) -> Vec<Foot> {
                 continue;
             }
         }
-        out.push(Foot { side, root, toes, geoms: Vec::new() });
+        out.push(Foot {
+            kind: FootKind::Flat,
+            ground: Vec::new(),
+            side,
+            root,
+            toes,
+            geoms: Vec::new(),
+        });
     }
     for f in &mut out {
         let mut bodies = vec![f.root];
         bodies.extend(f.toes.iter().copied());
         f.geoms = bodies.iter().flat_map(|&b| contact_geoms(robot, b)).collect();
         f.geoms.sort();
+        let low: Vec<(usize, [f64; 3])> =
+            f.geoms.iter().map(|&g| (g, Placed::of(robot, g).lowest())).collect();
+        let zmin = low.iter().map(|x| x.1[2]).fold(f64::INFINITY, f64::min);
+        let ground: Vec<(usize, [f64; 3])> =
+            low.into_iter().filter(|x| x.1[2] <= zmin + GROUND_WINDOW).collect();
+        f.ground = ground.iter().map(|x| x.0).collect();
+        let spread = ground
+            .iter()
+            .flat_map(|a| ground.iter().map(move |b| (a.1[0] - b.1[0]).hypot(a.1[1] - b.1[1])))
+            .fold(0.0, f64::max);
+        let wheel = ground.iter().any(|&(g, _)| {
+            let geom = &robot.geoms[g];
+            matches!(geom.gtype, GeomType::Sphere | GeomType::Cylinder | GeomType::Ellipsoid)
+                && robot.joints.iter().any(|j| {
+                    j.body == geom.body && j.jtype == crate::model::JointType::Hinge && !j.limited
+                })
+        });
+        let spheres = !ground.is_empty()
+            && ground.iter().all(|&(g, _)| robot.geoms[g].gtype == GeomType::Sphere);
+        f.kind = if wheel {
+            FootKind::Wheel
+        } else if spheres && spread <= POINT_SPREAD {
+            FootKind::Point
+        } else {
+            FootKind::Flat
+        };
     }
     out.retain(|f| !f.geoms.is_empty());
     out.sort_by_key(|f| (f.side.map(|s| s as u8).unwrap_or(2), f.root));

@@ -1,11 +1,11 @@
 use crate::declare_rule;
-use crate::finding::{Finding, ProbeStatus, Severity, Subject};
+use crate::finding::{Finding, Severity, Subject};
 use crate::lint::Loaded;
 use crate::model::mjcf::ElemKind;
 use crate::model::{GeomType, Robot};
 use crate::probe::settle::{Settle, StanceClaim};
-use crate::probe::{StanceSettle, Verdict};
-use crate::rules::contact::feet::{Foot, feet};
+use crate::probe::{Preconditions, StanceSettle, Verdict};
+use crate::rules::contact::feet::{Foot, FootKind, feet};
 use crate::rules::geometry::shapes::{Placed, hull_area};
 use crate::rules::{Context, Rule, RuleMeta, claim_each, opt};
 use crate::util::fmt_num;
@@ -23,6 +23,13 @@ declare_rule! {
     /// 0.5 mm, so mesh export noise does not count). Problems are reported once per foot, listing
     /// the geoms, at the first offending geom's attribute.
     ///
+    /// condim and friction are judged as MuJoCo combines them for each foot geom with the ground
+    /// geoms it may touch (world-body geoms whose contype/conaffinity allow the pair): the larger
+    /// condim and friction of the two, or the higher-`priority` geom's (`model::contact`). A
+    /// condim-1 foot on a condim-3 floor has condim-3 contacts and is not reported. With no
+    /// ground geom in the file (a robot file without its scene), the geom's own values are
+    /// judged and the message says so.
+    ///
     /// Friction and condim are matters of intent: MuJoCo's default friction 1 and condim 6
     /// (rolling friction, common on quadruped feet) are deliberate choices in many public models.
     /// Unless the intended values are stated — `friction` / `friction_tolerance` set under
@@ -31,7 +38,12 @@ declare_rule! {
     ///
     /// Foot bodies come from the spec's `robot.foot_bodies` globs; without them, from body names
     /// containing `foot`, `ankle_roll`, `toe` or `sole`; failing that, the leaf bodies whose
-    /// collision geoms reach within 3 cm of the robot's lowest point.
+    /// collision geoms reach within 3 cm of the robot's lowest point. Only floating-base robots
+    /// have feet (a fixed-base arm gets no foot rule unless the spec names feet). Robot
+    /// families: a wheel (a sphere, cylinder or ellipsoid on an unlimited hinge) is not a foot;
+    /// a point foot (spheres touching down within 2 cm of each other, as on quadrupeds) is judged
+    /// by its ground geoms only — a shank geom above the foot sphere is not a foot — and gets no
+    /// support-polygon finding.
     ///
     /// ## Why is this bad?
     /// Contact is system identification too. Mesh contact against the floor produces few,
@@ -43,8 +55,11 @@ declare_rule! {
     /// right feet make the gait asymmetric.
     ///
     /// ## How it is confirmed
-    /// Static; probe `stance-settle` settles the robot in the keyframe pose and counts the
-    /// active foot contacts and their spread.
+    /// Probe `stance-settle` (on a floor, feet loaded, robot upright: otherwise inconclusive)
+    /// confirms mesh, non-primitive and support-polygon findings when the foot's contacts
+    /// chatter (> 5 changes/s) or penetrate (> 5 mm). Radius, condim, friction and left/right
+    /// mismatch are facts of the file: no stance run confirms or refutes them (a stance run
+    /// does not measure friction).
     ///
     /// ## How to fix
     /// Replace mesh foot collision with several capsules (radius ≈12 mm) at heel, midfoot and
@@ -99,8 +114,7 @@ fn type_word(t: GeomType) -> &'static str {
 
 /// Masks allow a contact between two geoms.
 fn may_collide(robot: &Robot, a: usize, b: usize) -> bool {
-    let (x, y) = (&robot.geoms[a], &robot.geoms[b]);
-    (x.contype & y.conaffinity) != 0 || (y.contype & x.conaffinity) != 0
+    crate::model::contact::may_collide(&robot.geoms[a], &robot.geoms[b])
 }
 
 /// Left/right feet match when every geom has a partner of the same type whose sizes agree within
@@ -117,7 +131,7 @@ pub struct FootContactUnsteady {
 }
 
 impl StanceClaim for FootContactUnsteady {
-    fn judge_settled(&self, l: &Loaded, s: &Settle) -> Verdict {
+    fn judge_settled(&self, l: &Loaded, s: &Settle, pre: &Preconditions) -> Verdict {
         let foot = s.foot(&l.robot, self.body);
         let touching =
             foot.geoms.iter().filter(|g| s.load(**g) > 0.02 * foot.load.max(1e-9)).count();
@@ -127,12 +141,13 @@ impl StanceClaim for FootContactUnsteady {
             fmt_num(foot.penetration * 1000.0, 3),
             touching
         );
-        let st = if foot.chatter_per_s > 5.0 || foot.penetration > 0.005 {
-            ProbeStatus::Confirmed
+        if foot.chatter_per_s > 5.0 || foot.penetration > 0.005 {
+            Verdict::confirmed(pre, foot.measured, note)
         } else {
-            ProbeStatus::Inconclusive
-        };
-        Verdict::new(st, foot.measured, note)
+            // Steady contact in one 1 s stance does not show the geometry is sound (it shows
+            // nothing about slip, rolling or other poses): no verdict.
+            Verdict::inconclusive(pre, foot.measured, format!("steady stance contact ({note})"))
+        }
     }
 }
 
@@ -160,7 +175,18 @@ impl FootCollisionGeometry {
         // Intended friction/condim stated by the user (config), not just this rule's default.
         let stated =
             cx.options.contains_key("friction") || cx.options.contains_key("friction_tolerance");
-        let all_feet = feet(robot, cx.spec);
+        // A wheel is not a foot; a point foot is judged by the geoms that touch the ground only
+        // (a shank cylinder above the foot sphere is not a foot).
+        let all_feet: Vec<Foot> = feet(robot, cx.spec)
+            .into_iter()
+            .filter(|f| f.kind != FootKind::Wheel)
+            .map(|mut f| {
+                if f.kind == FootKind::Point {
+                    f.geoms = f.ground.clone();
+                }
+                f
+            })
+            .collect();
         for foot in &all_feet {
             let label = foot.label(robot);
             let subj = Subject::Foot(foot.root);
@@ -245,15 +271,59 @@ impl FootCollisionGeometry {
                         .note("the contact radius sets where the contact point sits and how the foot rolls over an edge; a radius this far outside the usual millimetre-to-centimetre range is usually a unit or scale error")
                         .help("check the geom's size (MuJoCo sizes are in metres; a sphere's size is its radius)")
                         .subject(subj)
+                        .fact()
                         .measured(r, "m")
                         .expected(0.5 * (rmin + rmax), "m"),
                 );
             }
-            // condim.
-            let bad_c: Vec<usize> =
-                foot.geoms.iter().copied().filter(|&g| robot.geoms[g].condim != 3).collect();
-            if let Some(&g0) = bad_c.first() {
-                let c = robot.geoms[g0].condim;
+            // condim and friction as MuJoCo combines them with the ground the foot touches
+            // (model::contact): a condim-1 foot on a condim-3 floor has condim-3 contacts.
+            let eff = |g: usize| -> Vec<(Option<usize>, i32, f64)> {
+                let ground = crate::model::contact::ground_partners(robot, g);
+                let own = &robot.geoms[g];
+                if ground.is_empty() {
+                    return vec![(None, own.condim, own.friction[0])];
+                }
+                ground
+                    .iter()
+                    .map(|&o| {
+                        let c = crate::model::contact::combine(own, &robot.geoms[o]);
+                        (Some(o), c.condim, c.friction[0])
+                    })
+                    .collect()
+            };
+            let with = |g: usize, o: Option<usize>, what: &str| match o {
+                Some(o) => {
+                    let (mine, theirs) = (&robot.geoms[g], &robot.geoms[o]);
+                    let val = |x: &crate::model::Geom| {
+                        if what == "condim" {
+                            x.condim.to_string()
+                        } else {
+                            fmt_num(x.friction[0], 3)
+                        }
+                    };
+                    let rule = match crate::model::contact::combine(mine, theirs).by_priority {
+                        Some(w) if w == o => "the higher-priority ground geom's",
+                        Some(_) => "the higher-priority foot geom's",
+                        None => "the larger of the two",
+                    };
+                    format!(
+                        "{rule}: {what} {} on the foot, {} on ground geom {}",
+                        val(mine),
+                        val(theirs),
+                        gname(robot, o)
+                    )
+                }
+                None => format!(
+                    "the geom's own {what}: no ground geom in this file, MuJoCo combines it with the floor's by maximum or priority",
+                ),
+            };
+            let bad_c: Vec<(usize, Option<usize>, i32)> = foot
+                .geoms
+                .iter()
+                .filter_map(|&g| eff(g).into_iter().find(|e| e.1 != 3).map(|(o, c, _)| (g, o, c)))
+                .collect();
+            if let Some(&(g0, o0, c)) = bad_c.first() {
                 let why = match c {
                     1 => "condim 1 is frictionless contact: the foot slides freely",
                     4 | 6 => {
@@ -263,45 +333,59 @@ impl FootCollisionGeometry {
                         "only condim 3 (normal force plus 2-D sliding friction) matches the identified contact model"
                     }
                 };
+                let geoms: Vec<usize> = bad_c.iter().map(|b| b.0).collect();
                 let mut f = cx.at_attr(
                     ElemKind::Geom,
                     g0,
                     &robot.geoms[g0].name,
                     "condim",
-                    format!("{label} uses condim {c} (expected 3): {}", list(robot, &bad_c)),
+                    format!(
+                        "{label} contacts use condim {c} (expected 3; {}): {}",
+                        with(g0, o0, "condim"),
+                        list(robot, &geoms)
+                    ),
                 );
                 if c != 1 && !stated && cx.level == cx.meta.default_level {
                     f.severity = Severity::Info;
                 }
+                if let Some(o) = o0 {
+                    let oloc = robot.elem_loc(ElemKind::Geom, o, &robot.geoms[o].name);
+                    f = f.secondary(oloc, format!("ground geom, condim {}", robot.geoms[o].condim));
+                }
                 out.push(
-                    f.label(format!("condim {c}"))
+                    f.label(format!("condim {}", robot.geoms[g0].condim))
                         .note(format!(
-                            "{why}; MuJoCo uses the larger condim of the two contacting geoms"
+                            "{why}; MuJoCo uses the larger condim of the two contacting geoms, or the higher-priority geom's"
                         ))
                         .help(
                             "set condim=\"3\" on foot and toe geoms (and not higher on the floor)",
                         )
                         .subject(subj)
+                        .fact()
                         .measured(c as f64, "")
                         .expected(3.0, ""),
                 );
             }
             // Friction.
-            let bad_f: Vec<usize> = foot
+            let bad_f: Vec<(usize, Option<usize>, f64)> = foot
                 .geoms
                 .iter()
-                .copied()
-                .filter(|&g| (robot.geoms[g].friction[0] - mu).abs() > mu_tol)
+                .filter_map(|&g| {
+                    eff(g)
+                        .into_iter()
+                        .find(|e| (e.2 - mu).abs() > mu_tol)
+                        .map(|(o, _, v)| (g, o, v))
+                })
                 .collect();
-            if let Some(&g0) = bad_f.first() {
-                let v = robot.geoms[g0].friction[0];
+            if let Some(&(g0, o0, v)) = bad_f.first() {
+                let geoms: Vec<usize> = bad_f.iter().map(|b| b.0).collect();
                 let mut f = cx.at_attr(
                     ElemKind::Geom,
                     g0,
                     &robot.geoms[g0].name,
                     "friction",
                     format!(
-                        "{label} has sliding friction {} (expected {} ± {}{}): {}",
+                        "{label} contacts have sliding friction {} (expected {} ± {}{}; {}): {}",
                         fmt_num(v, 3),
                         fmt_num(mu, 3),
                         fmt_num(mu_tol, 3),
@@ -310,7 +394,8 @@ impl FootCollisionGeometry {
                         } else {
                             ", the Asimov identified value; no intended value stated"
                         },
-                        list(robot, &bad_f)
+                        with(g0, o0, "friction"),
+                        list(robot, &geoms)
                     ),
                 );
                 if !stated && cx.level == cx.meta.default_level {
@@ -318,15 +403,19 @@ impl FootCollisionGeometry {
                 }
                 out.push(
                     f
-                        .label(format!("friction {}", fmt_num(v, 3)))
+                        .label(format!("friction {}", fmt_num(robot.geoms[g0].friction[0], 3)))
                         .note("foot friction decides when the foot slips; a policy trained on grippier feet than the hardware's learns pushes that slip on the real floor")
-                        .help(format!("set friction=\"{} …\" on the foot and toe geoms; MuJoCo combines friction by the maximum of the two geoms, so the floor's friction must not exceed it", fmt_num(mu, 3)))
+                        .help(format!("set friction=\"{} …\" on the foot and toe geoms; MuJoCo combines friction by the maximum of the two geoms (or takes the higher-priority geom's), so the floor's friction must not exceed it", fmt_num(mu, 3)))
                         .subject(subj)
+                        .fact()
                         .measured(v, "")
                         .expected(mu, ""),
                 );
             }
-            // Support polygon.
+            // Support polygon (a point foot touches down at one spot by design).
+            if foot.kind == FootKind::Point {
+                continue;
+            }
             let placed: Vec<(usize, Placed)> =
                 foot.geoms.iter().map(|&g| (g, Placed::of(robot, g))).collect();
             let zmin = placed.iter().map(|(_, p)| p.lowest()[2]).fold(f64::INFINITY, f64::min);
@@ -415,7 +504,8 @@ impl FootCollisionGeometry {
                         .secondary(lloc, "left foot")
                         .note("asymmetric foot contact makes the two legs behave differently, and the policy learns a limp the hardware does not need")
                         .help("make the right foot's collision geoms the mirror image of the left's")
-                        .subject(Subject::Foot(r.root)),
+                        .subject(Subject::Foot(r.root))
+                        .fact(),
                 );
         }
     }

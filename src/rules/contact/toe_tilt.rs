@@ -1,11 +1,11 @@
 use crate::declare_rule;
-use crate::finding::{Finding, ProbeStatus, Severity, Subject};
+use crate::finding::{Finding, Severity, Subject};
 use crate::lint::Loaded;
 use crate::model::mjcf::ElemKind;
 use crate::model::{GeomType, Robot};
 use crate::probe::settle::{Settle, StanceClaim};
-use crate::probe::{StanceSettle, Verdict};
-use crate::rules::contact::feet::{Foot, feet};
+use crate::probe::{Preconditions, StanceSettle, Verdict};
+use crate::rules::contact::feet::{Foot, FootKind, feet};
 use crate::rules::geometry::shapes::{Placed, tilt};
 use crate::rules::{Context, Rule, RuleMeta, claim_each, opt};
 use crate::util::fmt_num;
@@ -28,6 +28,9 @@ declare_rule! {
     /// containing `foot`, `ankle_roll`, `toe` or `sole`; failing that, the leaf bodies whose
     /// collision geoms reach within 3 cm of the robot's lowest point. Bodies below a foot body
     /// are its toes.
+    ///
+    /// Only flat feet are checked: a point foot (quadruped sphere) or a wheel has no sole to
+    /// tilt (robot families: `rules::contact::feet`).
     ///
     /// ## Why is this bad?
     /// A toe capsule a few millimetres below the sole turns a flat foot into a rocker: the robot
@@ -105,7 +108,7 @@ pub struct ContactGeomUnloaded {
 }
 
 impl StanceClaim for ContactGeomUnloaded {
-    fn judge_settled(&self, l: &Loaded, s: &Settle) -> Verdict {
+    fn judge_settled(&self, l: &Loaded, s: &Settle, pre: &Preconditions) -> Verdict {
         let foot = s.foot(&l.robot, self.body);
         let total = foot.load;
         let unloaded: Vec<String> = foot
@@ -114,16 +117,25 @@ impl StanceClaim for ContactGeomUnloaded {
             .filter(|g| s.load(**g) < 0.02 * total)
             .map(|g| crate::rules::display_name(&l.robot.geoms[*g].name, *g))
             .collect();
-        let m = foot.measured;
-        if total <= 1e-6 {
-            Verdict::new(
-                ProbeStatus::Inconclusive,
-                m,
-                "the foot carries no load at all after settling",
-            )
-        } else if !unloaded.is_empty() {
-            Verdict::new(
-                ProbeStatus::Confirmed,
+        let mut m = s.stance_measured();
+        m.extend(foot.measured);
+        let share = if s.weight > 0.0 { total / s.weight } else { 0.0 };
+        let pre = pre.clone().check(
+            "foot_loaded",
+            share >= FOOT_MIN_SHARE,
+            format!(
+                "the foot carries {} % of the robot's weight (need ≥ {} %)",
+                fmt_num(100.0 * share, 3),
+                fmt_num(100.0 * FOOT_MIN_SHARE, 3)
+            ),
+        );
+        if let Some(p) = pre.unmet() {
+            let why = p.detail.clone();
+            return Verdict::inconclusive(&pre, m, why);
+        }
+        if !unloaded.is_empty() {
+            Verdict::confirmed(
+                &pre,
                 m,
                 format!(
                     "after 1 s standing, {} carr{} < 2 % of the foot's {} N",
@@ -133,8 +145,8 @@ impl StanceClaim for ContactGeomUnloaded {
                 ),
             )
         } else {
-            Verdict::new(
-                ProbeStatus::Refuted,
+            Verdict::refuted_or_inconclusive(
+                &pre,
                 m,
                 format!(
                     "every contact geom of the foot carries load ({} N in all)",
@@ -144,6 +156,9 @@ impl StanceClaim for ContactGeomUnloaded {
         }
     }
 }
+
+/// Smallest share of the robot's weight one foot must carry for its geoms' loads to count.
+pub const FOOT_MIN_SHARE: f64 = 0.05;
 
 impl Rule for ToeTilt {
     fn meta(&self) -> &'static RuleMeta {
@@ -168,7 +183,8 @@ impl ToeTilt {
         let max_tilt = cx.opt("max_tilt");
         let window = cx.opt("contact_window");
         let pose = pose_word(robot);
-        for foot in feet(robot, cx.spec) {
+        // A point foot or a wheel has no sole to tilt.
+        for foot in feet(robot, cx.spec).into_iter().filter(|f| f.kind == FootKind::Flat) {
             let low: Vec<(usize, f64)> =
                 foot.geoms.iter().map(|&g| (g, Placed::of(robot, g).lowest()[2])).collect();
             let zmin = low.iter().map(|x| x.1).fold(f64::INFINITY, f64::min);

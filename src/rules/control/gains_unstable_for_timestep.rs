@@ -1,9 +1,9 @@
 use crate::declare_rule;
-use crate::finding::{Finding, ProbeStatus, Severity, Subject};
+use crate::finding::{Finding, Severity, Subject};
 use crate::lint::Loaded;
 use crate::model::mjcf::ElemKind;
 use crate::probe::impulse::{DIVERGED, StepResponse, measured_map};
-use crate::probe::{Claim, ImpulseResponse, Verdict};
+use crate::probe::{Claim, ImpulseResponse, Preconditions, Verdict};
 use crate::rules::control::underdamped_pd_gains::{GainSource, pd_joints};
 use crate::rules::{Context, Rule, RuleMeta, opt};
 use crate::util::fmt_num;
@@ -58,13 +58,14 @@ impl Claim for DistortedByTimestep {
     }
     fn judge(&self, _: &Loaded, r: &StepResponse) -> Verdict {
         let m = measured_map(r);
+        let pre = r.preconditions();
         if r.diverged {
-            return Verdict::new(ProbeStatus::Confirmed, m, DIVERGED);
+            return Verdict::confirmed(&Preconditions::new(), m, DIVERGED);
         }
         let p = self.omega_n;
         match r.omega_n {
-            Some(w) if ((w - p) / p).abs() > 0.1 => Verdict::new(
-                ProbeStatus::Confirmed,
+            Some(w) if ((w - p) / p).abs() > 0.1 => Verdict::confirmed(
+                &pre,
                 m,
                 format!(
                     "integration distorts the response: measured ω_n = {} rad/s vs {} rad/s analytic",
@@ -72,8 +73,8 @@ impl Claim for DistortedByTimestep {
                     fmt_num(p, 3)
                 ),
             ),
-            _ => Verdict::new(
-                ProbeStatus::Refuted,
+            _ => Verdict::refuted_or_inconclusive(
+                &pre,
                 m,
                 format!("stable and accurate step response (ζ = {})", r.zeta_text()),
             ),

@@ -1,10 +1,10 @@
 use crate::declare_rule;
-use crate::finding::{Finding, ProbeStatus, Severity, Subject};
+use crate::finding::{Finding, Severity, Subject};
 use crate::lint::Loaded;
 use crate::model::mjcf::ElemKind;
 use crate::model::{ActuatorKind, Robot, Transmission};
 use crate::probe::impulse::{DIVERGED, StepResponse, measured_map};
-use crate::probe::{Claim, ImpulseResponse, Verdict};
+use crate::probe::{Claim, ImpulseResponse, Preconditions, Verdict};
 use crate::rules::{Context, Rule, RuleMeta, opt};
 use crate::spec::v;
 use crate::util::fmt_num;
@@ -60,22 +60,23 @@ impl Claim for Underdamped {
     }
     fn judge(&self, _: &Loaded, r: &StepResponse) -> Verdict {
         let m = measured_map(r);
+        let pre = r.preconditions();
         if r.diverged {
-            return Verdict::new(ProbeStatus::Confirmed, m, DIVERGED);
+            return Verdict::confirmed(&Preconditions::new(), m, DIVERGED);
         }
         let zs = r.zeta_text();
         let pred = format!(" (predicted {})", fmt_num(self.predicted, 3));
         match r.zeta {
-            Some(z) if z < self.threshold => Verdict::new(
-                ProbeStatus::Confirmed,
+            Some(z) if z < self.threshold => Verdict::confirmed(
+                &pre,
                 m,
                 format!(
                     "measured ζ = {zs}{pred}, overshoot {:.1} % on a 0.05 rad step",
                     100.0 * r.overshoot
                 ),
             ),
-            _ => Verdict::new(
-                ProbeStatus::Refuted,
+            _ => Verdict::refuted_or_inconclusive(
+                &pre,
                 m,
                 format!("measured ζ = {zs}{pred} is not below {}", self.threshold),
             ),

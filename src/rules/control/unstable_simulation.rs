@@ -44,6 +44,8 @@ pub fn finding(l: &Loaded, level: Severity, run: &Sanity) -> Option<Finding> {
     f.probe = Some(ProbeOutcome {
         name: WholeModelSanity::NAME.into(),
         status: ProbeStatus::Confirmed,
+        reason: None,
+        preconditions: Vec::new(),
         measured: BTreeMap::from([("max_speed".to_string(), run.max_speed)]),
         steps: run.steps,
         note: msg,

@@ -3,12 +3,12 @@ use std::collections::BTreeMap;
 use mujoco_rs::prelude::*;
 
 use crate::declare_rule;
-use crate::finding::{Finding, ProbeStatus, Severity, Subject};
+use crate::finding::{Finding, Severity, Subject};
 use crate::lint::Loaded;
 use crate::model::mjcf::ElemKind;
 use crate::model::{GeomType, Robot};
 use crate::probe::penetration::{self, Penetration};
-use crate::probe::{Claim, KeyframePenetration, Verdict};
+use crate::probe::{Claim, KeyframePenetration, Preconditions, Verdict};
 use crate::rules::{Context, Rule, RuleMeta, opt};
 use crate::util::fmt_num;
 
@@ -105,9 +105,17 @@ impl Claim for PushedApart {
             m.insert("clear_time_s".into(), t);
         }
         let pushes = p.contact_force > 0.0; // NaN: no force
+        let pre = Preconditions::new().check(
+            "overlap_at_keyframe",
+            p.depth0 < 0.0,
+            format!(
+                "the pair's compiled geometry overlaps by {} m at the keyframe",
+                fmt_num(-p.depth0, 3)
+            ),
+        );
         if !pushes {
-            return Verdict::new(
-                ProbeStatus::Refuted,
+            return Verdict::refuted_or_inconclusive(
+                &pre,
                 m,
                 "MuJoCo applies no force between the pair at the keyframe (the contact is inactive, e.g. its gap exceeds the overlap)",
             );
@@ -125,8 +133,8 @@ impl Claim for PushedApart {
                 fmt_num(penetration::DURATION, 3)
             )
         };
-        Verdict::new(
-            ProbeStatus::Confirmed,
+        Verdict::confirmed(
+            &pre,
             m,
             format!(
                 "at the keyframe (base on a stand, commands held) MuJoCo pushes the pair apart with {} N; {motion}",

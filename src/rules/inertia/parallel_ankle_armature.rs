@@ -21,7 +21,8 @@ declare_rule! {
     /// actuator, or `passive = true` in the spec) that carry it — e.g. passive neck joints with
     /// 0.0565056 = 2 × 0.0282528, the parallel ankle's value — and on single-motor joints that
     /// carry it while the model shows elsewhere which joints really are two-motor ones (two
-    /// tendon actuators reach them). Armature is the effective value (joint + actuator·gear² +
+    /// tendon actuators reach them, or they are ankle joints carrying the doubled value: the
+    /// parallel RSU ankle). Armature is the effective value (joint + actuator·gear² +
     /// tendon).
     ///
     /// ## Why is this bad?
@@ -257,9 +258,17 @@ fn doubled_without_spec(cx: &Context, out: &mut Vec<Finding>) {
     for (value, base, passive_ids, single_ids) in hits {
         let base_joints =
             &bases.iter().find(|(b, _)| same(*b, base)).map(|x| x.1.clone()).unwrap_or_default();
-        // Single-motor joints count only when the model shows which joints are two-motor ones.
-        let parallel: Vec<usize> =
-            single_ids.iter().copied().filter(|&i| tendon_motor_count(robot, i) >= 2).collect();
+        // Single-motor joints count only when the model shows which joints are two-motor ones:
+        // two tendon actuators reach them, or they are ankles (the parallel RSU ankle is the
+        // design that doubles armature) carrying the doubled value.
+        let parallel: Vec<usize> = single_ids
+            .iter()
+            .copied()
+            .filter(|&i| {
+                tendon_motor_count(robot, i) >= 2
+                    || robot.joints[i].name.to_lowercase().contains("ankle")
+            })
+            .collect();
         let flagged_single: Vec<usize> = if parallel.is_empty() {
             Vec::new()
         } else {

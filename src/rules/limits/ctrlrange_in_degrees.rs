@@ -4,7 +4,7 @@ use crate::model::mjcf::ElemKind;
 use crate::model::source::XNode;
 use crate::model::{Actuator, ActuatorKind, JointType, Robot, Transmission};
 use crate::probe::LimitApproach;
-use crate::rules::limits::soft_limits::ReachesHardStop;
+use crate::rules::limits::soft_limits::HardStopExposure;
 use crate::rules::{Context, Rule, RuleMeta, opt};
 use crate::util::fmt_num;
 
@@ -22,8 +22,10 @@ declare_rule! {
     /// action normalisation in the training stack is off by a factor of 57.3.
     ///
     /// ## How it is confirmed
-    /// Probe `limit-approach`: the actuator is commanded to the ends of its ctrlrange and the
-    /// probe checks whether the joint slams into its hard stop.
+    /// A fact of the file (the numbers of `ctrlrange`, `range` and `<compiler angle>`), never
+    /// refuted by simulation. Probe `limit-approach` measures the consequence: the actuator is
+    /// commanded to the ends of its ctrlrange and the probe records whether the joint slams into
+    /// its hard stop, and how fast.
     ///
     /// ## How to fix
     /// Write `ctrlrange` in radians (the help gives the converted values), or use
@@ -111,7 +113,7 @@ impl Rule for CtrlrangeInDegrees {
                 .note("`<compiler angle=\"degree\">` converts joint ranges but never ctrlrange: the servo target range is 57.3× too wide and the policy's action scaling is wrong")
                 .help(format!("ctrlrange=\"{} {}\" (radians), or inheritrange=\"0.9\"", fmt_num(rad[0], 4), fmt_num(rad[1], 4)))
                 .subject(Subject::Actuator(a.id))
-                .claim(ReachesHardStop { actuator: a.id })
+                .measure(HardStopExposure { actuator: a.id })
                 .measured(a.ctrlrange[1] - a.ctrlrange[0], "rad")
                 .expected(j.range[1] - j.range[0], "rad");
             out.push(f);

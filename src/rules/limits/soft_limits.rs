@@ -1,13 +1,13 @@
 use std::collections::BTreeMap;
 
 use crate::declare_rule;
-use crate::finding::{Finding, ProbeStatus, Severity, Subject};
+use crate::finding::{Finding, Severity, Subject};
 use crate::lint::Loaded;
 use crate::model::mjcf::ElemKind;
 use crate::model::{ActuatorKind, JointType, Transmission};
 use crate::probe::limit::LimitHit;
-use crate::probe::{Claim, LimitApproach, Verdict};
-use crate::rules::{Context, Rule, RuleMeta, claim_each, opt};
+use crate::probe::{LimitApproach, Measure, Measurement, Preconditions};
+use crate::rules::{Context, Rule, RuleMeta, measure_each, opt};
 use crate::util::fmt_num;
 
 declare_rule! {
@@ -25,8 +25,12 @@ declare_rule! {
     /// shock loads near the limits on the real robot.
     ///
     /// ## How it is confirmed
-    /// Probe `limit-approach`: the actuator is commanded to the ends of its ctrlrange and the
-    /// probe checks whether the joint reaches its hard stop (constraint force at the limit).
+    /// These findings are facts of the file (the numbers of `ctrlrange` and `range`); no
+    /// simulation refutes them. Probe `limit-approach` measures the consequence: the actuator is
+    /// commanded to each end of its ctrlrange and the probe records where the joint goes and
+    /// whether the hard stop engages (impact speed, limit force). When the servo cannot drive
+    /// the joint to within 5 % of its range of a commanded end, the measurement is
+    /// inconclusive and says so. For a joint with no range it measures how far the joint swings.
     ///
     /// ## How to fix
     /// Set `ctrlrange` to the centred soft range given in the help (or
@@ -49,50 +53,154 @@ fn rng(r: [f64; 2], u: &str) -> String {
     format!("[{}, {}] {u}", fmt_num(r[0], 4), fmt_num(r[1], 4))
 }
 
-/// What the `limit-approach` probe checks: commanding the actuator's ctrlrange extremes drives
-/// its joint into the hard stop.
+/// What the `limit-approach` probe measures about a soft-limit finding — a fact of the file
+/// (the numbers of `ctrlrange` and `range`), so never refuted: commanding each end of the
+/// ctrlrange, where the joint goes and whether its hard stop engages (at what speed, with what
+/// force). Preconditions: the joint has a stop, and the servo drove the joint to within 5 % of
+/// its range of each commanded end (else: inconclusive, the run says nothing about the stop).
 #[derive(Debug)]
-pub struct ReachesHardStop {
+pub struct HardStopExposure {
     pub actuator: usize,
 }
 
-impl Claim for ReachesHardStop {
+/// A joint with no range: commanding the ctrlrange ends, how far the joint swings.
+#[derive(Debug)]
+pub struct SwingWithoutStop {
+    pub actuator: usize,
+}
+
+fn limit_map(h: &LimitHit) -> BTreeMap<String, f64> {
+    let mut m = BTreeMap::from([
+        ("hit".to_string(), if h.hit { 1.0 } else { 0.0 }),
+        ("impact_velocity".to_string(), h.impact_velocity),
+        ("max_limit_force".to_string(), h.max_limit_force),
+        ("q_min".to_string(), h.q_min),
+        ("q_max".to_string(), h.q_max),
+    ]);
+    for (k, e) in ["lo", "hi"].iter().zip(&h.ends) {
+        if e.target.is_finite() {
+            m.insert(format!("target_{k}"), e.target);
+        }
+        m.insert(format!("reached_{k}"), e.reached);
+    }
+    m
+}
+
+/// Fraction of the joint range within which the servo counts as having reached its target.
+pub const REACH_TOLERANCE: f64 = 0.05;
+
+impl Measure for HardStopExposure {
     type Probe = LimitApproach;
     fn key(&self, _: &Loaded) -> Result<usize, &'static str> {
         Ok(self.actuator)
     }
-    fn judge(&self, _: &Loaded, h: &LimitHit) -> Verdict {
-        let m = BTreeMap::from([
-            ("hit".to_string(), if h.hit { 1.0 } else { 0.0 }),
-            ("impact_velocity".to_string(), h.impact_velocity),
-            ("max_limit_force".to_string(), h.max_limit_force),
-        ]);
-        if h.hit {
-            Verdict::new(
-                ProbeStatus::Confirmed,
-                m,
+    fn measure(&self, _: &Loaded, h: &LimitHit) -> Measurement {
+        let span = (h.range[1] - h.range[0]).abs().max(1e-9);
+        let short = h.shortfall();
+        let mut pre = Preconditions::new().check(
+            "stop_exists",
+            h.stop_exists,
+            if h.stop_exists {
+                "the joint has a hard range"
+            } else {
+                "the joint has no hard range"
+            },
+        );
+        for (k, e) in ["lower", "upper"].iter().zip(&h.ends) {
+            if !e.target.is_finite() {
+                continue;
+            }
+            let i = usize::from(*k == "upper");
+            let ok = short[i] <= REACH_TOLERANCE * span;
+            pre = pre.check(
+                "reached_commanded_extreme",
+                ok,
                 format!(
-                    "commanding the ctrlrange extreme drove the joint into its hard stop at {} rad/s (limit force up to {} N·m)",
-                    fmt_num(h.impact_velocity, 3),
-                    fmt_num(h.max_limit_force, 3)
+                    "commanded to the {k} ctrlrange end ({} rad), the joint came within {} rad of it or of the stop before it (tolerance {} rad)",
+                    fmt_num(e.target, 4),
+                    fmt_num(short[i], 3),
+                    fmt_num(REACH_TOLERANCE * span, 3)
                 ),
+            );
+        }
+        let note = if h.hit {
+            format!(
+                "commanding the ctrlrange ends drove the joint into its hard stop at {} rad/s (limit force up to {} N·m)",
+                fmt_num(h.impact_velocity, 3),
+                fmt_num(h.max_limit_force, 3)
             )
         } else {
-            Verdict::new(
-                ProbeStatus::Refuted,
-                m,
-                "the commanded extremes never reached the hard stop",
+            format!(
+                "commanding the ctrlrange ends moved the joint over [{}, {}] rad without engaging its hard stop {}",
+                fmt_num(h.q_min, 4),
+                fmt_num(h.q_max, 4),
+                rng(h.range, "rad")
             )
-        }
+        };
+        Measurement::new(&pre, limit_map(h), note)
     }
 }
 
-/// Attaches [`ReachesHardStop`] to the findings about one actuator.
-pub fn claim_hard_stops(findings: &mut [Finding]) {
-    claim_each(findings, |f| match f.subject {
-        Subject::Actuator(actuator) => Some(ReachesHardStop { actuator }),
+impl Measure for SwingWithoutStop {
+    type Probe = LimitApproach;
+    fn key(&self, l: &Loaded) -> Result<usize, &'static str> {
+        match l.robot.actuators.get(self.actuator) {
+            Some(a) if a.ctrllimited => Ok(self.actuator),
+            _ => Err("neither the joint nor its actuator has a range to command"),
+        }
+    }
+    fn measure(&self, _: &Loaded, h: &LimitHit) -> Measurement {
+        let note = format!(
+            "commanded to its ctrlrange ends, the joint swung over [{}, {}] rad; no stop acts on it",
+            fmt_num(h.q_min, 4),
+            fmt_num(h.q_max, 4)
+        );
+        Measurement::new(&Preconditions::new(), limit_map(h), note)
+    }
+}
+
+/// Attaches the limit-approach measurement to the findings about one actuator (all facts).
+pub fn measure_hard_stops(cx: &Context, findings: &mut [Finding]) {
+    let robot = cx.robot;
+    measure_each(findings, |f| match f.subject {
+        Subject::Actuator(actuator) => {
+            let limited = robot
+                .actuators
+                .get(actuator)
+                .and_then(|a| (a.target >= 0).then(|| robot.joints.get(a.target as usize)))
+                .flatten()
+                .is_some_and(|j| j.limited);
+            Some(if limited {
+                Stop::Exposure(HardStopExposure { actuator })
+            } else {
+                Stop::Swing(SwingWithoutStop { actuator })
+            })
+        }
         _ => None,
     });
+}
+
+/// One of the two measurements, by whether the joint has a range.
+#[derive(Debug)]
+pub enum Stop {
+    Exposure(HardStopExposure),
+    Swing(SwingWithoutStop),
+}
+
+impl Measure for Stop {
+    type Probe = LimitApproach;
+    fn key(&self, l: &Loaded) -> Result<usize, &'static str> {
+        match self {
+            Stop::Exposure(m) => m.key(l),
+            Stop::Swing(m) => m.key(l),
+        }
+    }
+    fn measure(&self, l: &Loaded, h: &LimitHit) -> Measurement {
+        match self {
+            Stop::Exposure(m) => m.measure(l, h),
+            Stop::Swing(m) => m.measure(l, h),
+        }
+    }
 }
 
 impl Rule for SoftLimits {
@@ -102,7 +210,7 @@ impl Rule for SoftLimits {
     fn check(&self, cx: &Context, out: &mut Vec<Finding>) {
         let first = out.len();
         self.check_ranges(cx, out);
-        claim_hard_stops(&mut out[first..]);
+        measure_hard_stops(cx, &mut out[first..]);
     }
 }
 

@@ -1,12 +1,12 @@
 use std::collections::BTreeMap;
 
 use crate::declare_rule;
-use crate::finding::{Finding, ProbeStatus, Severity, Subject};
+use crate::finding::{Finding, Severity, Subject};
 use crate::lint::Loaded;
 use crate::model::mjcf::ElemKind;
 use crate::model::{ActuatorKind, Transmission};
 use crate::probe::direction::Direction;
-use crate::probe::{ActuatorDirection, Claim, Verdict};
+use crate::probe::{ActuatorDirection, Claim, Preconditions, Verdict};
 use crate::rules::{Context, Rule, RuleMeta, claim_each};
 use crate::util::fmt_num;
 
@@ -63,8 +63,9 @@ impl Claim for MisdirectedActuator {
         for (j, dq) in &d.moved {
             m.insert(format!("dq.{}", robot.joints[*j].name), *dq);
         }
+        let none = Preconditions::new();
         if d.moved.is_empty() {
-            return Verdict::new(ProbeStatus::Confirmed, m, "a positive command moved no joint");
+            return Verdict::confirmed(&none, m, "a positive command moved no joint");
         }
         let act = &robot.actuators[self.actuator];
         let target = (act.target >= 0).then_some(act.target as usize);
@@ -72,32 +73,46 @@ impl Claim for MisdirectedActuator {
             target.and_then(|t| d.moved.iter().find(|(j, _)| *j == t)).map(|(_, dq)| *dq);
         if let Some(expected) = self.expected {
             return match on_target {
-                Some(dq) if dq.signum() != f64::from(expected).signum() => Verdict::new(
-                    ProbeStatus::Confirmed,
+                Some(dq) if dq.signum() != f64::from(expected).signum() => Verdict::confirmed(
+                    &none,
                     m,
                     format!(
                         "a positive command moved the joint by {} rad: opposite to the spec's direction {expected:+}",
                         fmt_num(dq, 3)
                     ),
                 ),
-                Some(dq) => Verdict::new(
-                    ProbeStatus::Refuted,
+                Some(dq) => Verdict::refuted_or_inconclusive(
+                    &Preconditions::new().check(
+                        "target_moved",
+                        true,
+                        "a positive command moved the targeted joint",
+                    ),
                     m,
                     format!(
                         "a positive command moved the joint by {} rad, as the spec says",
                         fmt_num(dq, 3)
                     ),
                 ),
-                None => {
-                    Verdict::new(ProbeStatus::Inconclusive, m, "the targeted joint did not move")
-                }
+                None => Verdict::inconclusive(
+                    &Preconditions::new().check(
+                        "target_moved",
+                        false,
+                        "the targeted joint did not move",
+                    ),
+                    m,
+                    "the targeted joint did not move",
+                ),
             };
         }
         let biggest = d.moved.iter().max_by(|a, b| a.1.abs().total_cmp(&b.1.abs())).map(|x| x.0);
         let names: Vec<String> =
             d.moved.iter().map(|(j, dq)| format!("{} {:+.4}", robot.joints[*j].name, dq)).collect();
-        let st = if biggest != target { ProbeStatus::Confirmed } else { ProbeStatus::Inconclusive };
-        Verdict::new(st, m, format!("a positive command moved: {}", names.join(", ")))
+        let note = format!("a positive command moved: {}", names.join(", "));
+        if biggest != target {
+            Verdict::confirmed(&none, m, note)
+        } else {
+            Verdict::inconclusive(&none, m, note)
+        }
     }
 }
 

@@ -1,10 +1,13 @@
 use crate::declare_rule;
-use crate::finding::{Finding, ProbeStatus, Severity, Subject};
+use std::collections::BTreeMap;
+
+use crate::finding::{Finding, Severity, Subject};
 use crate::lint::Loaded;
 use crate::model::mjcf::ElemKind;
-use crate::probe::settle::{Settle, StanceClaim};
-use crate::probe::{StanceSettle, Verdict};
-use crate::rules::{Context, Rule, RuleMeta, claim_each};
+use crate::probe::ringdown::{MIN_STEPS_PER_PERIOD, Ring};
+use crate::probe::settle::Settle;
+use crate::probe::{Measure, Measurement, Preconditions, RingDown, StanceSettle};
+use crate::rules::{Context, Rule, RuleMeta};
 use crate::util::fmt_num;
 
 declare_rule! {
@@ -25,8 +28,13 @@ declare_rule! {
     /// collision geometry it never touches the ground.
     ///
     /// ## How it is confirmed
-    /// Probe `stance-settle`: the robot is settled at the standing keyframe and the toe's
-    /// deflection and contact are measured.
+    /// Every finding of this rule is a fact of the file (a value that is zero or absent), so no
+    /// simulation refutes it; probes measure the consequence. Missing damping: probe
+    /// `ring-down` releases the joint from its spring's rest position on a fixed stand and
+    /// measures how long it rings (inconclusive when the joint cannot move, e.g. held by a
+    /// closed loop). Missing spring, range or collision geometry: probe `stance-settle`
+    /// measures the joint's deflection under the standing load (inconclusive without a floor,
+    /// with the feet unloaded or the robot fallen).
     ///
     /// ## How to fix
     /// Give the joint the identified `stiffness`, `damping` and `range`, and add simple collision
@@ -36,22 +44,29 @@ declare_rule! {
         group: "mapping",
         level: Severity::Error,
         probe: StanceSettle,
+        also: [RingDown],
         options: [],
     }
 }
 
-/// What the `stance-settle` probe checks: under the standing load the passive joint deflects
-/// more than 0.2 rad or onto its limit.
+/// What the `stance-settle` probe measures about a passive joint (a fact of the file: no
+/// spring, no range, no collision geometry): its deflection under the standing load. Needs the
+/// stance preconditions (a floor, the feet loaded, the robot upright); never a verdict.
 #[derive(Debug)]
-pub struct PassiveJointCollapses {
+pub struct StanceDeflection {
     pub joint: usize,
 }
 
-impl StanceClaim for PassiveJointCollapses {
-    fn judge_settled(&self, l: &Loaded, s: &Settle) -> Verdict {
+impl Measure for StanceDeflection {
+    type Probe = StanceSettle;
+    fn key(&self, _: &Loaded) -> Result<(), &'static str> {
+        Ok(())
+    }
+    fn measure(&self, l: &Loaded, s: &Settle) -> Measurement {
         let robot = &l.robot;
         let jt = &robot.joints[self.joint];
-        let mut m = s.foot(robot, jt.body).measured;
+        let mut m = s.stance_measured();
+        m.extend(s.foot(robot, jt.body).measured);
         let defl = s.joint_deflection.get(&self.joint).copied().unwrap_or(0.0);
         m.insert("deflection_rad".into(), defl);
         let q = robot.key.qpos.get(jt.qposadr).copied().unwrap_or(0.0) + defl;
@@ -61,12 +76,78 @@ impl StanceClaim for PassiveJointCollapses {
             fmt_num(defl, 3),
             if at_limit { ", onto its limit" } else { "" }
         );
-        let st = if defl.abs() > 0.2 || at_limit {
-            ProbeStatus::Confirmed
-        } else {
-            ProbeStatus::Refuted
+        Measurement::new(&s.preconditions(), m, note)
+    }
+}
+
+/// What the `ring-down` probe measures about a spring joint with no damping (a fact of the
+/// file): released from its rest position, how long it rings. Never a verdict.
+#[derive(Debug)]
+pub struct SpringRings {
+    pub joint: usize,
+}
+
+impl Measure for SpringRings {
+    type Probe = RingDown;
+    fn key(&self, l: &Loaded) -> Result<usize, &'static str> {
+        match l.robot.joints.get(self.joint) {
+            Some(j) if j.stiffness > 0.0 => Ok(self.joint),
+            _ => Err("the joint has no spring to ring"),
+        }
+    }
+    fn measure(&self, _: &Loaded, r: &Ring) -> Measurement {
+        let mut m = BTreeMap::from([
+            ("release".to_string(), r.release),
+            ("max_motion".to_string(), r.max_motion),
+            ("amplitude_ratio".to_string(), r.amplitude_ratio),
+            ("periods".to_string(), r.periods),
+            ("duration_s".to_string(), r.duration),
+        ]);
+        if r.period.is_finite() {
+            m.insert("period_s".into(), r.period);
+        }
+        if r.zeta.is_finite() {
+            m.insert("zeta".into(), r.zeta);
+        }
+        if let Some(t) = r.ring_time {
+            m.insert("ring_time_s".into(), t);
+        }
+        let steps_per_period = r.undamped_period / r.dt;
+        let pre = Preconditions::new().check(
+            "joint_moved",
+            r.max_motion >= 0.5 * r.release,
+            format!(
+                "released {} from its spring's rest position, the joint moved at most {} (a closed loop or an equality holds it)",
+                fmt_num(r.release, 3),
+                fmt_num(r.max_motion, 3)
+            ),
+        ).check(
+            "period_resolved",
+            steps_per_period >= MIN_STEPS_PER_PERIOD,
+            format!(
+                "the spring's period 2π√(I/k) ({} s) spans {} timesteps (need ≥ {}): the integrator, not the model's damping, decides the decay",
+                fmt_num(r.undamped_period, 3),
+                fmt_num(steps_per_period, 3),
+                fmt_num(MIN_STEPS_PER_PERIOD, 3)
+            ),
+        );
+        let note = match r.ring_time {
+            None => format!(
+                "released {} from rest, the spring still rings at {} % of the release after {} s ({} periods, ζ = {})",
+                fmt_num(r.release, 3),
+                fmt_num(100.0 * r.amplitude_ratio, 3),
+                fmt_num(r.duration, 3),
+                fmt_num(r.periods, 3),
+                if r.zeta.is_finite() { fmt_num(r.zeta, 3) } else { "n/a".into() }
+            ),
+            Some(t) => format!(
+                "released {} from rest, the spring rings for {} s before staying under 10 % of the release (ζ = {})",
+                fmt_num(r.release, 3),
+                fmt_num(t, 3),
+                if r.zeta.is_finite() { fmt_num(r.zeta, 3) } else { "n/a".into() }
+            ),
         };
-        Verdict::new(st, m, note)
+        Measurement::new(&pre, m, note)
     }
 }
 
@@ -77,10 +158,16 @@ impl Rule for PassiveJointSpring {
     fn check(&self, cx: &Context, out: &mut Vec<Finding>) {
         let first = out.len();
         self.check_joints(cx, out);
-        claim_each(&mut out[first..], |f| match f.subject {
-            Subject::Joint(joint) => Some(PassiveJointCollapses { joint }),
-            _ => None,
-        });
+        // Every finding of this rule is a fact of the file; probes only measure consequences.
+        for f in &mut out[first..] {
+            match f.subject {
+                Subject::Joint(joint) if f.data.contains_key("undamped") => {
+                    f.set_measure(SpringRings { joint })
+                }
+                Subject::Joint(joint) => f.set_measure(StanceDeflection { joint }),
+                _ => f.fact = true,
+            }
+        }
     }
 }
 
@@ -102,7 +189,8 @@ impl PassiveJointSpring {
                         .help("set the joint's identified damping (N·m·s/rad) and its hardware range=\"lo hi\"; a spec with `passive = true` checks the rest")
                         .subject(Subject::Joint(j.id))
                         .measured(0.0, "N·m·s/rad")
-                        .with("stiffness", j.stiffness);
+                        .with("stiffness", j.stiffness)
+                        .with("undamped", 1.0);
                     if cx.level == cx.meta.default_level {
                         f.severity = Severity::Warning;
                     }
@@ -143,7 +231,10 @@ impl PassiveJointSpring {
                     .note("an undamped spring joint rings after every touchdown, feeding oscillation into the contact the policy learns from")
                     .help("set the identified damping (N·m·s/rad) on the joint");
                 out.push(
-                    warn(spec_label(f)).subject(Subject::Joint(j.id)).with("damping", j.damping),
+                    warn(spec_label(f))
+                        .subject(Subject::Joint(j.id))
+                        .with("damping", j.damping)
+                        .with("undamped", 1.0),
                 );
             }
             if !j.limited {
