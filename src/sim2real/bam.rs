@@ -49,7 +49,10 @@ struct RawEntry {
     timestamp: f64,
     position: f64,
     speed: f64,
-    goal_position: f64,
+    /// The servo's command. Optional here so that a log without it is named as such (an
+    /// error at the entry for `gap` / `fit` unless `--no-command`), not as "not a BAM log".
+    #[serde(default)]
+    goal_position: Option<f64>,
     torque_enable: BoolLike,
     // Not imported, only compared when looking for exact duplicates.
     #[serde(default)]
@@ -77,13 +80,23 @@ impl BoolLike {
 }
 
 /// Cheap sniff: does this text look like a BAM log (a JSON object with `entries` holding
-/// `timestamp` and `goal_position`)? Does not validate.
+/// `timestamp` and `goal_position`, or `timestamp`, `position` and `torque_enable`: a log
+/// whose command key is missing is still read as one, and said so)? Does not validate.
 pub fn is_bam_json(text: &str) -> bool {
     let t = text.trim_start_matches('\u{feff}').trim_start();
     t.starts_with('{')
         && t.contains("\"entries\"")
         && t.contains("\"timestamp\"")
-        && t.contains("\"goal_position\"")
+        && (t.contains("\"goal_position\"")
+            || (t.contains("\"position\"") && t.contains("\"torque_enable\"")))
+}
+
+/// The 1-based line of entry `i` of a BAM log's `entries` (the line of its `timestamp` key),
+/// for error messages; `None` when the text does not show it.
+pub fn entry_line(text: &str, i: usize) -> Option<usize> {
+    let start = text.find("\"entries\"")?;
+    let (k, _) = text[start..].match_indices("\"timestamp\"").nth(i)?;
+    Some(1 + text[..start + k].matches('\n').count())
 }
 
 pub fn read_bam(path: &Path) -> Result<BamLog, RecordingError> {
@@ -93,8 +106,8 @@ pub fn read_bam(path: &Path) -> Result<BamLog, RecordingError> {
 }
 
 pub fn parse_bam(path: &Path, text: &str) -> Result<BamLog, RecordingError> {
-    let err = |msg: String| RecordingError::new(path, None, None, msg);
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    let at = |i: usize, msg: String| RecordingError::new(path, entry_line(text, i), None, msg);
     if text.trim().is_empty() {
         return Err(RecordingError::new(path, Some(1), None, "empty file"));
     }
@@ -115,25 +128,29 @@ pub fn parse_bam(path: &Path, text: &str) -> Result<BamLog, RecordingError> {
                 continue;
             }
             if e.timestamp == prev.timestamp {
-                return Err(err(format!(
-                    "entries {} and {i} share timestamp {} but differ",
-                    i - 1,
-                    e.timestamp
-                )));
+                return Err(at(
+                    i,
+                    format!("entries {} and {i} share timestamp {} but differ", i - 1, e.timestamp),
+                ));
             }
             if e.timestamp < prev.timestamp {
-                return Err(err(format!(
-                    "timestamp not increasing: entry {i} has {} after entry {} with {}",
-                    e.timestamp,
-                    i - 1,
-                    prev.timestamp
-                )));
+                return Err(at(
+                    i,
+                    format!(
+                        "timestamp not increasing: entry {i} has {} after entry {} with {}",
+                        e.timestamp,
+                        i - 1,
+                        prev.timestamp
+                    ),
+                ));
             }
         }
         t.push(e.timestamp);
         q.push(e.position);
         qd.push(e.speed);
-        q_cmd.push(e.goal_position);
+        if let Some(g) = e.goal_position {
+            q_cmd.push(g);
+        }
         enabled.push(e.torque_enable.get());
     }
     let mut meta = BTreeMap::new();
@@ -147,9 +164,23 @@ pub fn parse_bam(path: &Path, text: &str) -> Result<BamLog, RecordingError> {
     if dropped > 0 {
         meta.insert("dropped_duplicates".to_string(), dropped.to_string());
     }
+    // Every entry has its command, or none has (then the joint has no command: `gap` / `fit`
+    // decide, as for a CSV without `q_cmd`); some without it is an error at the first.
+    let with_cmd = raw.entries.iter().filter(|e| e.goal_position.is_some()).count();
+    if with_cmd != 0 && with_cmd != raw.entries.len() {
+        let i = raw.entries.iter().position(|e| e.goal_position.is_none()).unwrap_or(0);
+        return Err(at(
+            i,
+            format!(
+                "entry {i} has no 'goal_position' (the servo's command), while {with_cmd} of the \
+                 {} entries have one",
+                raw.entries.len()
+            ),
+        ));
+    }
     let mut joint = JointTrace::new(BAM_JOINT, q);
     joint.qd = Some(qd);
-    joint.q_cmd = Some(q_cmd);
+    joint.q_cmd = (with_cmd > 0).then_some(q_cmd);
     joint.enabled = Some(enabled);
     let recording = Recording {
         source: path.to_path_buf(),
