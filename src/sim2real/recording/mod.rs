@@ -60,6 +60,11 @@ impl Split {
     }
 }
 
+/// The most median row intervals a recording may span (or 40 per row, if more): a time far
+/// from the others is an error at its line ([`Recording::check`]). 10⁵: a 1000 s pause in a
+/// 100 Hz log.
+pub const MAX_SPAN_INTERVALS: f64 = 1e5;
+
 /// Metadata key set by the CSV reader: how many rows repeated the row before them exactly and
 /// were left out.
 pub const KEY_DUPLICATE_ROWS: &str = "duplicate_rows_dropped";
