@@ -136,6 +136,8 @@ enum Op {
     Value(Index, usize),
     ScaleLine(Index, usize),
     Byte(Index, u8),
+    /// CSV: a column removed from the header and every row (a logger that left out a signal).
+    DeleteColumn(Index),
 }
 
 fn op() -> impl Strategy<Value = Op> {
@@ -154,6 +156,14 @@ fn op() -> impl Strategy<Value = Op> {
 
 fn ops() -> impl Strategy<Value = Vec<Op>> {
     prop::collection::vec(op(), 1..4)
+}
+
+/// For a CSV: the mutations above and removed columns.
+fn csv_ops() -> impl Strategy<Value = Vec<Op>> {
+    prop::collection::vec(
+        prop_oneof![4 => op(), 1 => any::<Index>().prop_map(Op::DeleteColumn)],
+        1..4,
+    )
 }
 
 /// Byte ranges of the numbers in `text` (not inside names such as `joint1`).
@@ -269,6 +279,18 @@ fn apply(text: &str, ops: &[Op]) -> String {
                 if s.is_char_boundary(k) && s.as_bytes().get(k).is_some_and(u8::is_ascii) {
                     s.replace_range(k..k + 1, &(*b as char).to_string());
                 }
+            }
+            Op::DeleteColumn(i) => {
+                let Some(h) = lines.iter().position(|l| l.starts_with("t,")) else { continue };
+                let k = i.index(lines[h].split(',').count());
+                for l in &mut lines[h..] {
+                    let mut f: Vec<&str> = l.split(',').collect();
+                    if k < f.len() {
+                        f.remove(k);
+                    }
+                    *l = f.join(",");
+                }
+                s = lines.join("\n");
             }
         }
     }
@@ -462,8 +484,9 @@ fn property_mutated_recordings_replay_or_fail_at_a_line() {
     let base = arm3_recording();
     let opts = replay::ReplayOptions::default();
     let (ok, err) = (std::cell::Cell::new(0), std::cell::Cell::new(0));
+    let no_cmd = std::cell::Cell::new(0);
     runner(3, 128)
-        .run(&ops(), |ops| {
+        .run(&csv_ops(), |ops| {
             let text = apply(&base, &ops);
             let p = dir.join("rec.csv");
             std::fs::write(&p, &text).unwrap();
@@ -474,6 +497,12 @@ fn property_mutated_recordings_replay_or_fail_at_a_line() {
                 &ParseOptions::default(),
             ) {
                 Ok(inp) => {
+                    // Every joint of arm3 is driven: none may be replayed without its command.
+                    for r in &inp.recs {
+                        for j in &r.joints {
+                            prop_assert!(j.q_cmd.is_some(), "{} read without a command", j.name);
+                        }
+                    }
                     let replayer = replay::Replayer::new(&robot);
                     let mut eps = Vec::new();
                     for r in replay::replay_all(&replayer, &inp.recs, &opts, None) {
@@ -494,13 +523,41 @@ fn property_mutated_recordings_replay_or_fail_at_a_line() {
                 }
                 Err(e) => {
                     names_a_line(&e, &p, &text)?;
+                    // A header that lost a driven joint's q_cmd column (and nothing else wrong
+                    // before it): the error is that, at the header line.
+                    if let Some((h, header)) =
+                        text.split('\n').enumerate().find(|(_, l)| l.starts_with("t,"))
+                    {
+                        let cols: Vec<&str> = header.split(',').collect();
+                        let lost =
+                            ["shoulder_pitch", "elbow_pitch", "wrist_pitch"].iter().find(|j| {
+                                cols.contains(&format!("{j}.q").as_str())
+                                    && !cols.contains(&format!("{j}.q_cmd").as_str())
+                            });
+                        if let Some(j) = lost
+                            && e.contains("has positions but no")
+                        {
+                            no_cmd.set(no_cmd.get() + 1);
+                            prop_assert!(
+                                e.starts_with(&format!("{}:{}: ", p.display(), h + 1))
+                                    && e.contains(&format!("'{j}.q_cmd' column")),
+                                "{}",
+                                e
+                            );
+                        }
+                    }
                     err.set(err.get() + 1);
                 }
             }
             Ok(())
         })
         .unwrap_or_else(|e| panic!("{e}"));
-    eprintln!("mutated recordings: {} replayed, {} located errors", ok.get(), err.get());
+    eprintln!(
+        "mutated recordings: {} replayed, {} located errors ({} of them a lost q_cmd column)",
+        ok.get(),
+        err.get(),
+        no_cmd.get()
+    );
     assert!(ok.get() > 0 && err.get() > 0, "{} ok, {} errors", ok.get(), err.get());
     std::fs::remove_dir_all(&dir).ok();
 }
