@@ -120,6 +120,8 @@ fn no_command_leaves_the_joint_out_of_the_scores_and_the_fit() {
     let joints: Vec<&str> =
         v["per_joint"].as_array().unwrap().iter().map(|j| j["name"].as_str().unwrap()).collect();
     assert_eq!(joints, ["shoulder_pitch", "wrist_pitch"], "{out}");
+    // arm3's links hang side by side from a fixed base: nothing moves with the elbow.
+    assert!(!err.contains("warning"), "{err}");
     assert!(v["notes"].to_string().contains("--no-command"), "{}", v["notes"]);
     // The shoulder's score is the one it has with the elbow's command recorded: the joints are
     // decoupled in arm3, and the elbow is still replayed.
@@ -239,6 +241,21 @@ fn a_passive_joint_needs_no_command() {
             && !err.contains("'pendulum'"),
         "{err}"
     );
+    // Left out with the flag, the arm still carries the pendulum: a warning says that the
+    // pendulum's score feels the arm replayed to its own positions (one kinematic chain).
+    let (code, out, err) = run(&[
+        "gap",
+        model.to_str().unwrap(),
+        f.to_str().unwrap(),
+        "--no-command",
+        "arm",
+        "--format",
+        "json",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("warning: --no-command") && err.contains("(arm → pendulum)"), "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).expect("json");
+    assert!(v["warnings"].to_string().contains("arm → pendulum"), "{}", v["warnings"]);
     std::fs::remove_dir_all(&d).ok();
 }
 
