@@ -171,6 +171,30 @@ fn no_command_leaves_the_joint_out_of_the_scores_and_the_fit() {
     for f in v["floor"].as_array().unwrap() {
         assert_ne!(f["joint"], "elbow_pitch", "{f}");
     }
+    // Cross-validation over a metadata key: every fold leaves the elbow out of its MAE.
+    for (i, run_id) in ["a", "b"].iter().enumerate() {
+        let f = d.join(format!("ep{i}.csv"));
+        let text = std::fs::read_to_string(&f).unwrap();
+        std::fs::write(&f, format!("# run: {run_id}\n{text}")).unwrap();
+    }
+    let (code, out, err) = run(&[
+        "fit",
+        &arm3(),
+        dir,
+        "--no-command",
+        "elbow_pitch",
+        "--effects",
+        "viscous_damping",
+        "--holdout-by",
+        "run",
+        "--format",
+        "json",
+        "--quiet",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).expect("json");
+    assert_eq!(v["folds"].as_array().map(Vec::len), Some(2), "{out}");
+    assert!(v["position_mae_before"].as_f64().is_some_and(f64::is_finite), "{out}");
     // Asked to fit only the elbow: nothing is left.
     let (code, _, err) =
         run(&["fit", &arm3(), dir, "--no-command", "elbow_pitch", "--joints", "elbow_pitch"]);
