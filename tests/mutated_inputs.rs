@@ -562,6 +562,75 @@ fn property_mutated_recordings_replay_or_fail_at_a_line() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// A BAM servo log written here, one entry per line (a sine on the rig's servo, 1.5 s).
+fn bam_log() -> String {
+    let e: Vec<String> = (0..300)
+        .map(|i| {
+            let t = 0.005 * i as f64 + 0.0012;
+            format!(
+                "  {{\"timestamp\": {t:.4}, \"position\": {:.5}, \"speed\": {:.4}, \"goal_position\": {:.5}, \"torque_enable\": true, \"load\": 12}}",
+                0.3 * (2.0 * t).sin(),
+                0.6 * (2.0 * t).cos(),
+                0.31 * (2.0 * t + 0.05).sin()
+            )
+        })
+        .collect();
+    format!(
+        "{{\"mass\": 0.49, \"length\": 0.1, \"kp\": 400, \"vin\": 7.4, \"motor\": \"xl330\",\n \"trajectory\": \"sin\",\n \"entries\": [\n{}\n]}}\n",
+        e.join(",\n")
+    )
+}
+
+/// Mutated BAM logs read for a replay against the rig (as `gap` and `fit` read them), replayed:
+/// a rejection names the file and a line inside it.
+#[test]
+fn property_mutated_bam_logs_replay_or_fail_at_a_line() {
+    modellint::model::mj::silence_warnings();
+    use modellint::sim2real::{input, recording::ParseOptions, replay};
+    let dir = tmp("bam");
+    let robot = {
+        let mut map = modellint::model::source::SourceMap::default();
+        modellint::model::load(&mut map, Path::new("fixtures/bam_xl330/rig.xml"), None).unwrap()
+    };
+    let base = bam_log();
+    let opts = replay::ReplayOptions::default();
+    let (ok, err) = (std::cell::Cell::new(0), std::cell::Cell::new(0));
+    runner(5, 96)
+        .run(&ops(), |ops| {
+            let text = apply(&base, &ops);
+            let p = dir.join("log.json");
+            std::fs::write(&p, &text).unwrap();
+            match input::read_for_replay(
+                std::slice::from_ref(&p),
+                &robot,
+                &opts,
+                &ParseOptions::default(),
+            ) {
+                Ok(inp) => {
+                    for r in &inp.recs {
+                        prop_assert!(r.joints.iter().all(|j| j.q_cmd.is_some()));
+                    }
+                    let replayer = replay::Replayer::new(&robot);
+                    for r in replay::replay_all(&replayer, &inp.recs, &opts, None) {
+                        if let Err(e) = r {
+                            names_a_line(&e.to_string(), &p, &text)?;
+                        }
+                    }
+                    ok.set(ok.get() + 1);
+                }
+                Err(e) => {
+                    names_a_line(&e, &p, &text)?;
+                    err.set(err.get() + 1);
+                }
+            }
+            Ok(())
+        })
+        .unwrap_or_else(|e| panic!("{e}"));
+    eprintln!("mutated BAM logs: {} replayed, {} located errors", ok.get(), err.get());
+    assert!(ok.get() > 0 && err.get() > 0, "{} ok, {} errors", ok.get(), err.get());
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// The built binary on a few mutated inputs of each kind: exit 0, 1 or 2, never a panic or a
 /// signal; exit 2 names the mutated file with a line.
 #[test]

@@ -94,9 +94,21 @@ pub fn is_bam_json(text: &str) -> bool {
 /// The 1-based line of entry `i` of a BAM log's `entries` (the line of its `timestamp` key),
 /// for error messages; `None` when the text does not show it.
 pub fn entry_line(text: &str, i: usize) -> Option<usize> {
-    let start = text.find("\"entries\"")?;
-    let (k, _) = text[start..].match_indices("\"timestamp\"").nth(i)?;
-    Some(1 + text[..start + k].matches('\n').count())
+    entry_lines(text).get(i).copied()
+}
+
+/// The 1-based line of every entry's `timestamp` key after `entries`, in one pass.
+fn entry_lines(text: &str) -> Vec<usize> {
+    let Some(start) = text.find("\"entries\"") else { return Vec::new() };
+    let mut line = 1 + text[..start].matches('\n').count();
+    let mut at = start;
+    let mut out = Vec::new();
+    for (k, _) in text[start..].match_indices("\"timestamp\"") {
+        line += text[at..start + k].matches('\n').count();
+        at = start + k;
+        out.push(line);
+    }
+    out
 }
 
 pub fn read_bam(path: &Path) -> Result<BamLog, RecordingError> {
@@ -107,7 +119,8 @@ pub fn read_bam(path: &Path) -> Result<BamLog, RecordingError> {
 
 pub fn parse_bam(path: &Path, text: &str) -> Result<BamLog, RecordingError> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-    let at = |i: usize, msg: String| RecordingError::new(path, entry_line(text, i), None, msg);
+    let lines = entry_lines(text);
+    let at = |i: usize, msg: String| RecordingError::new(path, lines.get(i).copied(), None, msg);
     if text.trim().is_empty() {
         return Err(RecordingError::new(path, Some(1), None, "empty file"));
     }
@@ -119,6 +132,8 @@ pub fn parse_bam(path: &Path, text: &str) -> Result<BamLog, RecordingError> {
     let mut qd = Vec::with_capacity(raw.entries.len());
     let mut q_cmd = Vec::with_capacity(raw.entries.len());
     let mut enabled = Vec::with_capacity(raw.entries.len());
+    // The line of each entry kept (exact duplicates are dropped), for the recording's checks.
+    let mut kept_lines = Vec::with_capacity(raw.entries.len());
     let mut dropped = 0usize;
     for (i, e) in raw.entries.iter().enumerate() {
         if i > 0 {
@@ -145,6 +160,7 @@ pub fn parse_bam(path: &Path, text: &str) -> Result<BamLog, RecordingError> {
                 ));
             }
         }
+        kept_lines.push(lines.get(i).copied().unwrap_or(0));
         t.push(e.timestamp);
         q.push(e.position);
         qd.push(e.speed);
@@ -191,7 +207,10 @@ pub fn parse_bam(path: &Path, text: &str) -> Result<BamLog, RecordingError> {
         joints: vec![joint],
         base: None,
     };
-    recording.check(&ParseOptions::default())?;
+    // Lines only when every kept entry's line is known (the text shows one `timestamp` key
+    // per entry).
+    let known = lines.len() == raw.entries.len();
+    recording.check_at_lines(&ParseOptions::default(), known.then_some(&kept_lines[..]))?;
     Ok(BamLog {
         mass: raw.mass,
         length: raw.length,
@@ -298,6 +317,38 @@ mod tests {
         assert!(e.message.contains("missing field"), "{e}");
         assert!(parse_bam(p, "{\"mass\": ").is_err());
         assert!(!is_bam_json("t,a.q\n0,1\n"));
+    }
+
+    /// One entry per line: errors about an entry, and the recording's checks, name its line;
+    /// entries without `goal_position` give a joint without a command, some without it an error.
+    #[test]
+    fn errors_name_the_entry_line() {
+        let p = Path::new("x.json");
+        let lines = |e: &[String]| {
+            format!(
+                "{{\"mass\": 0.49, \"length\": 0.1, \"kp\": 400, \"vin\": 7.4, \"motor\": \"xl330\", \"trajectory\": \"s\", \"entries\": [\n{}\n]}}",
+                e.join(",\n")
+            )
+        };
+        let e = parse_bam(p, &lines(&[entry(0.0, 0.0), entry(0.005, 0.1), entry(0.004, 0.2)]))
+            .expect_err("disorder");
+        assert_eq!(e.line, Some(4), "{e}");
+        let mut far: Vec<String> = (0..20).map(|i| entry(0.005 * i as f64, 0.0)).collect();
+        far.push(entry(1e12, 0.0));
+        let e = parse_bam(p, &lines(&far)).expect_err("a time far from the others");
+        assert_eq!(e.line, Some(22), "{e}");
+        let no_goal: Vec<String> = (0..3)
+            .map(|i| entry(0.005 * i as f64, 0.0).replace(", \"goal_position\": 0.1", ""))
+            .collect();
+        let text = lines(&no_goal);
+        assert!(is_bam_json(&text));
+        let b = parse_bam(p, &text).expect("parses");
+        assert!(b.recording.joints[0].q_cmd.is_none());
+        let mut some = no_goal.clone();
+        some[0] = entry(0.0, 0.0);
+        let e = parse_bam(p, &lines(&some)).expect_err("some without goal_position");
+        assert_eq!(e.line, Some(3), "{e}");
+        assert!(e.message.contains("entry 1 has no 'goal_position'"), "{e}");
     }
 
     #[test]

@@ -13,6 +13,16 @@ impl Recording {
         self.check_inner(opts, None)
     }
 
+    /// [`Recording::check`] with the 1-based source line of every sample, when known (a BAM
+    /// log's entries): errors then name the line.
+    pub fn check_at_lines(
+        &self,
+        opts: &ParseOptions,
+        row_lines: Option<&[usize]>,
+    ) -> Result<(), RecordingError> {
+        self.check_inner(opts, row_lines)
+    }
+
     /// `row_lines[i]` is the 1-based source line of sample `i`, when known.
     pub(super) fn check_inner(
         &self,
