@@ -269,13 +269,23 @@ pub struct ReplayArgs {
     /// column that is not t, base.* or <joint>.<q|qd|q_cmd|tau|kp|kd|enabled> is an error.
     #[arg(long, value_delimiter = ',', value_name = "GLOB")]
     pub ignore_columns: Vec<String>,
+    /// Joints (glob patterns on joint names, comma-separated or repeated) that an actuator of
+    /// the model drives but that are recorded without their <joint>.q_cmd column (BAM: without
+    /// `goal_position`): replayed following their recorded positions as their command, and left
+    /// out of the scores and of the fit, with a note (a warning names the scored joints in
+    /// the same kinematic chain: they feel the left-out joint's servo lag). Without it such a
+    /// joint is an error at the header line: its positions would be taken for the command. A
+    /// joint no actuator drives (a passive joint) needs no command and no flag.
+    #[arg(long, value_delimiter = ',', value_name = "JOINT")]
+    pub no_command: Vec<String>,
 }
 
 impl ReplayArgs {
-    /// How the recordings are read (`--ignore-columns`).
+    /// How the recordings are read (`--ignore-columns`, `--no-command`).
     pub fn parse_options(&self) -> crate::sim2real::recording::ParseOptions {
         crate::sim2real::recording::ParseOptions {
             ignore_columns: self.ignore_columns.clone(),
+            no_command: self.no_command.clone(),
             ..Default::default()
         }
     }

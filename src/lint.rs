@@ -57,10 +57,21 @@ pub fn load_with_cache(input: &LintInput, cache_dir: Option<&Path>) -> Result<Lo
     let robot = crate::model::load_cached(
         &mut sources,
         &input.model,
-        keyframe.as_deref(),
+        keyframe.as_ref().map(|k| k.name.as_str()),
         cache_dir,
         &extra,
-    )?;
+    )
+    .map_err(|e| match (&keyframe, &spec_path) {
+        // A keyframe the model lacks is the spec's mistake: said at its `keyframe` key.
+        (Some(k), Some(p)) if e.message.starts_with("keyframe `") => LoadError {
+            file: p.clone(),
+            line: Some(k.line),
+            column: Some(k.column),
+            message: format!("[robot] keyframe: {}", e.message),
+            snippet: None,
+        },
+        _ => e,
+    })?;
     let names: Vec<String> = robot.joints.iter().map(|j| j.name.clone()).collect();
     let spec = match spec_path {
         Some(p) => Some(crate::spec::load(&mut sources, &p, &names)?),
@@ -69,10 +80,29 @@ pub fn load_with_cache(input: &LintInput, cache_dir: Option<&Path>) -> Result<Lo
     Ok(Loaded { sources, robot, spec, config, spec_search })
 }
 
-fn peek_keyframe(path: &Path) -> Option<String> {
+/// The spec's `[robot] keyframe` and where its value is (1-based line and column).
+struct SpecKeyframe {
+    name: String,
+    line: usize,
+    column: usize,
+}
+
+fn peek_keyframe(path: &Path) -> Option<SpecKeyframe> {
+    #[derive(serde::Deserialize)]
+    struct Peek {
+        robot: Option<PeekRobot>,
+    }
+    #[derive(serde::Deserialize)]
+    struct PeekRobot {
+        keyframe: Option<toml::Spanned<String>>,
+    }
     let text = std::fs::read_to_string(path).ok()?;
-    let v: toml::Table = toml::from_str(&text).ok()?;
-    v.get("robot")?.get("keyframe")?.as_str().map(str::to_string)
+    let k = toml::from_str::<Peek>(&text).ok()?.robot?.keyframe?;
+    let start = k.span().start.min(text.len());
+    let before = &text[..start];
+    let line = 1 + before.matches('\n').count();
+    let column = 1 + before.rsplit('\n').next().map_or(0, |l| l.chars().count());
+    Some(SpecKeyframe { name: k.into_inner(), line, column })
 }
 
 crate::declare_rule! {

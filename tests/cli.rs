@@ -332,18 +332,43 @@ fn bad_recording_timing_metadata_exits_2_with_file_and_line() {
     std::fs::create_dir_all(&dir).unwrap();
     let model = concat!(env!("CARGO_MANIFEST_DIR"), "/fixtures/bam_xl330/rig.xml");
     let cases = [
-        ("split.csv", "# robot: rig\n# split: validation\nt,servo.q\n0,0\n0.01,0\n", 2, "train"),
-        ("rate.csv", "# control_rate_hz: 0\nt,servo.q\n0,0\n0.01,0\n", 1, "positive"),
-        ("negrate.csv", "# control_rate_hz: -100\nt,servo.q\n0,0\n0.01,0\n", 1, "positive"),
+        (
+            "split.csv",
+            "# robot: rig\n# split: validation\nt,servo.q,servo.q_cmd\n0,0,0\n0.01,0,0\n",
+            2,
+            "train",
+        ),
+        (
+            "rate.csv",
+            "# control_rate_hz: 0\nt,servo.q,servo.q_cmd\n0,0,0\n0.01,0,0\n",
+            1,
+            "positive",
+        ),
+        (
+            "negrate.csv",
+            "# control_rate_hz: -100\nt,servo.q,servo.q_cmd\n0,0,0\n0.01,0,0\n",
+            1,
+            "positive",
+        ),
         (
             "onetick.csv",
-            "# a: b\n# c: d\n# control_rate_hz: 2\nt,servo.q\n0,0\n0.1,0\n0.2,0\n0.49,0\n",
+            "# a: b\n# c: d\n# control_rate_hz: 2\nt,servo.q,servo.q_cmd\n0,0,0\n0.1,0,0\n0.2,0,0\n0.49,0,0\n",
             3,
             "one control tick",
         ),
-        ("timing.csv", "# command_timing: before\nt,servo.q\n0,0\n0.01,0\n", 1, "sent_after"),
+        (
+            "timing.csv",
+            "# command_timing: before\nt,servo.q,servo.q_cmd\n0,0,0\n0.01,0,0\n",
+            1,
+            "sent_after",
+        ),
         // A 100 Hz log of a 100 Hz controller, times in milliseconds: 1000 ticks per row.
-        ("millis.csv", "# control_rate_hz: 100\nt,servo.q\n0,0\n10,0\n20,0\n", 1, "in seconds"),
+        (
+            "millis.csv",
+            "# control_rate_hz: 100\nt,servo.q,servo.q_cmd\n0,0,0\n10,0,0\n20,0,0\n",
+            1,
+            "in seconds",
+        ),
     ];
     for (name, text, line, what) in cases {
         let f = dir.join(name);

@@ -284,8 +284,10 @@ fn cli_truncated_csv_is_exit_2_with_line() {
 
 #[test]
 fn cli_non_monotonic_time_is_exit_2_with_line() {
-    let p =
-        tmp("nonmono.csv", "# control_rate_hz: 100\nt,shoulder_pitch.q\n0,0\n0.02,0.1\n0.01,0.2\n");
+    let p = tmp(
+        "nonmono.csv",
+        "# control_rate_hz: 100\nt,shoulder_pitch.q,shoulder_pitch.q_cmd\n0,0,0\n0.02,0.1,0\n0.01,0.2,0\n",
+    );
     let o = bin().args(["gap", &arm()]).arg(&p).output().unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "stderr: {err}");

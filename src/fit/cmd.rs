@@ -11,6 +11,7 @@ use crate::fit::effects::{self, simulate};
 use crate::fit::rotation;
 use crate::fit::select::{FitOptions, Progress, ProgressInfo, fit};
 use crate::sim2real::gap::{self, GapOptions, GapReport};
+use crate::sim2real::recording::Recording;
 use crate::sim2real::replay::{Episode, ReplayOptions};
 
 pub struct FitArgs {
@@ -187,7 +188,7 @@ pub fn run_fit(a: FitArgs) -> i32 {
     };
     let names: Vec<String> = robot.joints.iter().map(|j| j.name.clone()).collect();
     let mut inputs =
-        match crate::sim2real::input::read_for_replay(&files.files, &names, &a.replay, &a.parse) {
+        match crate::sim2real::input::read_for_replay(&files.files, robot, &a.replay, &a.parse) {
             Ok(x) => x,
             Err(e) => return fail(e),
         };
@@ -211,6 +212,7 @@ pub fn run_fit(a: FitArgs) -> i32 {
         }
     }
     let recs = inputs.recs;
+    let unscored = inputs.unscored;
     let mut joints = Vec::new();
     if let Some(g) = &a.joints {
         let m = match globset::Glob::new(g) {
@@ -226,6 +228,26 @@ pub fn run_fit(a: FitArgs) -> i32 {
         }
         if joints.is_empty() {
             return fail(format!("--joints {g} matches no recorded joint"));
+        }
+    }
+    // Joints left out with --no-command: replayed, never fitted nor scored (the fit scores
+    // the joints it fits).
+    if !unscored.is_empty() {
+        if joints.is_empty() {
+            for r in &recs {
+                for j in &r.joints {
+                    if !joints.contains(&j.name) {
+                        joints.push(j.name.clone());
+                    }
+                }
+            }
+        }
+        joints.retain(|j| !unscored.contains(j));
+        if joints.is_empty() {
+            return fail(format!(
+                "no joint left to fit: the joints chosen are left out by --no-command ({})",
+                unscored.join(", ")
+            ));
         }
     }
     let told = match parse_told(&a.told, &recs, &joints) {
@@ -257,7 +279,7 @@ pub fn run_fit(a: FitArgs) -> i32 {
                 if let Some(b) = bar {
                     b.finish_and_clear();
                 }
-                return rotate(robot, &recs, &opts, by, &a);
+                return rotate(robot, &recs, &opts, by, &a, &unscored);
             }
         }
     }
@@ -287,13 +309,16 @@ pub fn run_fit(a: FitArgs) -> i32 {
     }
     let spec = loaded.spec.as_ref();
     let region = |name: &str| gap::joint_region(spec, name);
-    let run = |applied| -> Result<(GapReport, Vec<Episode>), String> {
+    let run = |applied| -> Result<(GapReport, Vec<Recording>, Vec<Episode>), String> {
         let eps: Result<Vec<Episode>, _> =
             simulate(robot, &out.heldout, applied, &replay).into_iter().collect();
         let eps = eps.map_err(|e| e.to_string())?;
-        Ok((gap::compute(&out.heldout, &eps, &region, &GapOptions::default()), eps))
+        // The held-out episodes as scored: without the joints left out by --no-command.
+        let (recs, eps) = crate::sim2real::input::scored_view(&out.heldout, &eps, &unscored)
+            .ok_or_else(|| "no scored joint in the held-out episodes".to_string())?;
+        Ok((gap::compute(&recs, &eps, &region, &GapOptions::default()), recs, eps))
     };
-    let ((before, eps_b), (after, eps_a)) = match (run(&[]), run(&out.applied)) {
+    let ((before, heldout, eps_b), (after, _, eps_a)) = match (run(&[]), run(&out.applied)) {
         (Ok(b), Ok(a)) => (b, a),
         (Err(e), _) | (_, Err(e)) => return fail(e),
     };
@@ -306,7 +331,7 @@ pub fn run_fit(a: FitArgs) -> i32 {
             selected: &out.selected,
             before: &before,
             after: &after,
-            recs: &out.heldout,
+            recs: &heldout,
             eps_before: &eps_b,
             eps_after: &eps_a,
         };
@@ -490,6 +515,7 @@ fn rotate(
     opts: &FitOptions,
     key: &str,
     a: &FitArgs,
+    unscored: &[String],
 ) -> i32 {
     if a.write_model.is_some() || a.write_actuators.is_some() || a.report.is_some() {
         return fail(format!(
@@ -508,7 +534,8 @@ fn rotate(
     let mut folds = Vec::new();
     for v in &values {
         let (bar, progress) = fit_progress(a.quiet, format!("hold out {key} = {v} · "));
-        let f = rotation::fold(robot, recs, &FitOptions { progress, ..opts.clone() }, key, v);
+        let f =
+            rotation::fold(robot, recs, &FitOptions { progress, ..opts.clone() }, key, v, unscored);
         if let Some(b) = bar {
             b.finish_and_clear();
         }

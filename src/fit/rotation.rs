@@ -47,14 +47,16 @@ pub fn mean_mae<'a>(eps: impl Iterator<Item = &'a EpisodeMae>) -> (f64, f64) {
 }
 
 /// The fold holding out the episodes whose metadata `key` equals `value`: the selection with
-/// `opts` (its `holdout_by` replaced) and the held-out MAE before → after. Errors: no held-out
-/// episode, or a held-out replay that fails.
+/// `opts` (its `holdout_by` replaced) and the held-out MAE before → after, on every recorded
+/// joint but `unscored` (`--no-command`: replayed, not scored). Errors: no held-out episode,
+/// or a held-out replay that fails.
 pub fn fold(
     robot: &Robot,
     recs: &[Recording],
     opts: &FitOptions,
     key: &str,
     value: &str,
+    unscored: &[String],
 ) -> Result<Fold, String> {
     let ts = Instant::now();
     let o = FitOptions { holdout_by: Some((key.to_string(), value.to_string())), ..opts.clone() };
@@ -66,7 +68,7 @@ pub fn fold(
         simulate(robot, &out.heldout, applied, &o.replay)
             .into_iter()
             .zip(&out.heldout)
-            .map(|(e, r)| e.map(|e| episode_mae(r, &e)).map_err(|e| e.to_string()))
+            .map(|(e, r)| e.map(|e| episode_mae(r, &e, unscored)).map_err(|e| e.to_string()))
             .collect()
     };
     let (before, after) = (mae(&[])?, mae(&out.applied)?);
@@ -91,12 +93,15 @@ pub fn fold(
     })
 }
 
-/// Whole-episode position MAE over every recorded joint and sample [rad] (a sample the
-/// simulation did not reach counts as 1 rad).
-pub fn episode_mae(rec: &Recording, ep: &Episode) -> f64 {
+/// Whole-episode position MAE over every recorded joint but `skip`, and every sample [rad] (a
+/// sample the simulation did not reach counts as 1 rad).
+pub fn episode_mae(rec: &Recording, ep: &Episode, skip: &[String]) -> f64 {
     let mut sum = 0.0;
     let mut n = 0usize;
     for (k, j) in rec.joints.iter().enumerate() {
+        if skip.contains(&j.name) {
+            continue;
+        }
         for (r, s) in j.q.iter().zip(&ep.q_sim[k]) {
             if r.is_finite() {
                 sum += if s.is_finite() { (r - s).abs() } else { 1.0 };
@@ -146,6 +151,6 @@ mod tests {
             diverged: None,
         };
         // |0| + |−0.05| + 1 over three counted samples.
-        assert!((episode_mae(&rec, &ep) - 1.05 / 3.0).abs() < 1e-12);
+        assert!((episode_mae(&rec, &ep, &[]) - 1.05 / 3.0).abs() < 1e-12);
     }
 }

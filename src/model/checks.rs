@@ -85,6 +85,26 @@ pub(super) fn check_numbers(map: &SourceMap, n: &XNode) -> Result<(), LoadError>
     Ok(())
 }
 
+/// URDF: two `<link>`s (or two `<joint>`s) with one name. MuJoCo rejects
+/// it as "repeated URDF name" without saying which or where; here it is the second one's `name`.
+pub(super) fn check_urdf_names(map: &SourceMap, root: &XNode) -> Result<(), LoadError> {
+    for tag in ["link", "joint"] {
+        let mut seen: Vec<&str> = Vec::new();
+        for c in root.children_tagged(tag) {
+            let Some(a) = c.attr("name") else { continue };
+            if seen.contains(&a.value.as_str()) {
+                return Err(LoadError::at(
+                    map,
+                    a.loc,
+                    format!("URDF: a second <{tag}> named \"{}\" (names must be unique)", a.value),
+                ));
+            }
+            seen.push(&a.value);
+        }
+    }
+    Ok(())
+}
+
 /// Asset attributes that name files MuJoCo reads (cube and skybox textures use the six faces).
 const FILE_ATTRS: &[&str] =
     &["file", "fileright", "fileleft", "fileup", "filedown", "filefront", "fileback"];

@@ -411,6 +411,9 @@ pub fn load_cached(
         }
     };
     check_numbers(map, &tree)?;
+    if format == Format::Urdf {
+        checks::check_urdf_names(map, &tree)?;
+    }
     let model_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let assets =
         if format == Format::Mjcf { Some(check_assets(map, &tree, &model_dir)?) } else { None };
@@ -450,7 +453,9 @@ pub fn load_cached(
                 let msg = format!("MuJoCo could not compile the model: {e}");
                 mujoco_error_location(map, first, &msg)
                     .or_else(|| missing_file_location(map, first, &msg))
-                    .unwrap_or_else(|| LoadError::plain(path, msg))
+                    // MuJoCo did not say where: the model's root element, so that the error
+                    // still names a line of the file.
+                    .unwrap_or_else(|| LoadError::at(map, tree.loc, msg))
             })?;
             if let (Some(dir), Some(k), Some(bytes)) =
                 (cache_dir, &key, cache_dir.and_then(|_| cache::serialize(&m)))

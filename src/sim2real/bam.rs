@@ -49,7 +49,10 @@ struct RawEntry {
     timestamp: f64,
     position: f64,
     speed: f64,
-    goal_position: f64,
+    /// The servo's command. Optional here so that a log without it is named as such (an
+    /// error at the entry for `gap` / `fit` unless `--no-command`), not as "not a BAM log".
+    #[serde(default)]
+    goal_position: Option<f64>,
     torque_enable: BoolLike,
     // Not imported, only compared when looking for exact duplicates.
     #[serde(default)]
@@ -77,13 +80,35 @@ impl BoolLike {
 }
 
 /// Cheap sniff: does this text look like a BAM log (a JSON object with `entries` holding
-/// `timestamp` and `goal_position`)? Does not validate.
+/// `timestamp` and `goal_position`, or `timestamp`, `position` and `torque_enable`: a log
+/// whose command key is missing is still read as one, and said so)? Does not validate.
 pub fn is_bam_json(text: &str) -> bool {
     let t = text.trim_start_matches('\u{feff}').trim_start();
     t.starts_with('{')
         && t.contains("\"entries\"")
         && t.contains("\"timestamp\"")
-        && t.contains("\"goal_position\"")
+        && (t.contains("\"goal_position\"")
+            || (t.contains("\"position\"") && t.contains("\"torque_enable\"")))
+}
+
+/// The 1-based line of entry `i` of a BAM log's `entries` (the line of its `timestamp` key),
+/// for error messages; `None` when the text does not show it.
+pub fn entry_line(text: &str, i: usize) -> Option<usize> {
+    entry_lines(text).get(i).copied()
+}
+
+/// The 1-based line of every entry's `timestamp` key after `entries`, in one pass.
+fn entry_lines(text: &str) -> Vec<usize> {
+    let Some(start) = text.find("\"entries\"") else { return Vec::new() };
+    let mut line = 1 + text[..start].matches('\n').count();
+    let mut at = start;
+    let mut out = Vec::new();
+    for (k, _) in text[start..].match_indices("\"timestamp\"") {
+        line += text[at..start + k].matches('\n').count();
+        at = start + k;
+        out.push(line);
+    }
+    out
 }
 
 pub fn read_bam(path: &Path) -> Result<BamLog, RecordingError> {
@@ -93,8 +118,9 @@ pub fn read_bam(path: &Path) -> Result<BamLog, RecordingError> {
 }
 
 pub fn parse_bam(path: &Path, text: &str) -> Result<BamLog, RecordingError> {
-    let err = |msg: String| RecordingError::new(path, None, None, msg);
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    let lines = entry_lines(text);
+    let at = |i: usize, msg: String| RecordingError::new(path, lines.get(i).copied(), None, msg);
     if text.trim().is_empty() {
         return Err(RecordingError::new(path, Some(1), None, "empty file"));
     }
@@ -106,6 +132,8 @@ pub fn parse_bam(path: &Path, text: &str) -> Result<BamLog, RecordingError> {
     let mut qd = Vec::with_capacity(raw.entries.len());
     let mut q_cmd = Vec::with_capacity(raw.entries.len());
     let mut enabled = Vec::with_capacity(raw.entries.len());
+    // The line of each entry kept (exact duplicates are dropped), for the recording's checks.
+    let mut kept_lines = Vec::with_capacity(raw.entries.len());
     let mut dropped = 0usize;
     for (i, e) in raw.entries.iter().enumerate() {
         if i > 0 {
@@ -115,25 +143,30 @@ pub fn parse_bam(path: &Path, text: &str) -> Result<BamLog, RecordingError> {
                 continue;
             }
             if e.timestamp == prev.timestamp {
-                return Err(err(format!(
-                    "entries {} and {i} share timestamp {} but differ",
-                    i - 1,
-                    e.timestamp
-                )));
+                return Err(at(
+                    i,
+                    format!("entries {} and {i} share timestamp {} but differ", i - 1, e.timestamp),
+                ));
             }
             if e.timestamp < prev.timestamp {
-                return Err(err(format!(
-                    "timestamp not increasing: entry {i} has {} after entry {} with {}",
-                    e.timestamp,
-                    i - 1,
-                    prev.timestamp
-                )));
+                return Err(at(
+                    i,
+                    format!(
+                        "timestamp not increasing: entry {i} has {} after entry {} with {}",
+                        e.timestamp,
+                        i - 1,
+                        prev.timestamp
+                    ),
+                ));
             }
         }
+        kept_lines.push(lines.get(i).copied().unwrap_or(0));
         t.push(e.timestamp);
         q.push(e.position);
         qd.push(e.speed);
-        q_cmd.push(e.goal_position);
+        if let Some(g) = e.goal_position {
+            q_cmd.push(g);
+        }
         enabled.push(e.torque_enable.get());
     }
     let mut meta = BTreeMap::new();
@@ -147,9 +180,23 @@ pub fn parse_bam(path: &Path, text: &str) -> Result<BamLog, RecordingError> {
     if dropped > 0 {
         meta.insert("dropped_duplicates".to_string(), dropped.to_string());
     }
+    // Every entry has its command, or none has (then the joint has no command: `gap` / `fit`
+    // decide, as for a CSV without `q_cmd`); some without it is an error at the first.
+    let with_cmd = raw.entries.iter().filter(|e| e.goal_position.is_some()).count();
+    if with_cmd != 0 && with_cmd != raw.entries.len() {
+        let i = raw.entries.iter().position(|e| e.goal_position.is_none()).unwrap_or(0);
+        return Err(at(
+            i,
+            format!(
+                "entry {i} has no 'goal_position' (the servo's command), while {with_cmd} of the \
+                 {} entries have one",
+                raw.entries.len()
+            ),
+        ));
+    }
     let mut joint = JointTrace::new(BAM_JOINT, q);
     joint.qd = Some(qd);
-    joint.q_cmd = Some(q_cmd);
+    joint.q_cmd = (with_cmd > 0).then_some(q_cmd);
     joint.enabled = Some(enabled);
     let recording = Recording {
         source: path.to_path_buf(),
@@ -160,7 +207,10 @@ pub fn parse_bam(path: &Path, text: &str) -> Result<BamLog, RecordingError> {
         joints: vec![joint],
         base: None,
     };
-    recording.check(&ParseOptions::default())?;
+    // Lines only when every kept entry's line is known (the text shows one `timestamp` key
+    // per entry).
+    let known = lines.len() == raw.entries.len();
+    recording.check_at_lines(&ParseOptions::default(), known.then_some(&kept_lines[..]))?;
     Ok(BamLog {
         mass: raw.mass,
         length: raw.length,
@@ -267,6 +317,38 @@ mod tests {
         assert!(e.message.contains("missing field"), "{e}");
         assert!(parse_bam(p, "{\"mass\": ").is_err());
         assert!(!is_bam_json("t,a.q\n0,1\n"));
+    }
+
+    /// One entry per line: errors about an entry, and the recording's checks, name its line;
+    /// entries without `goal_position` give a joint without a command, some without it an error.
+    #[test]
+    fn errors_name_the_entry_line() {
+        let p = Path::new("x.json");
+        let lines = |e: &[String]| {
+            format!(
+                "{{\"mass\": 0.49, \"length\": 0.1, \"kp\": 400, \"vin\": 7.4, \"motor\": \"xl330\", \"trajectory\": \"s\", \"entries\": [\n{}\n]}}",
+                e.join(",\n")
+            )
+        };
+        let e = parse_bam(p, &lines(&[entry(0.0, 0.0), entry(0.005, 0.1), entry(0.004, 0.2)]))
+            .expect_err("disorder");
+        assert_eq!(e.line, Some(4), "{e}");
+        let mut far: Vec<String> = (0..20).map(|i| entry(0.005 * i as f64, 0.0)).collect();
+        far.push(entry(1e12, 0.0));
+        let e = parse_bam(p, &lines(&far)).expect_err("a time far from the others");
+        assert_eq!(e.line, Some(22), "{e}");
+        let no_goal: Vec<String> = (0..3)
+            .map(|i| entry(0.005 * i as f64, 0.0).replace(", \"goal_position\": 0.1", ""))
+            .collect();
+        let text = lines(&no_goal);
+        assert!(is_bam_json(&text));
+        let b = parse_bam(p, &text).expect("parses");
+        assert!(b.recording.joints[0].q_cmd.is_none());
+        let mut some = no_goal.clone();
+        some[0] = entry(0.0, 0.0);
+        let e = parse_bam(p, &lines(&some)).expect_err("some without goal_position");
+        assert_eq!(e.line, Some(3), "{e}");
+        assert!(e.message.contains("entry 1 has no 'goal_position'"), "{e}");
     }
 
     #[test]

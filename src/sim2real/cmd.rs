@@ -6,7 +6,7 @@ use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 
 use crate::sim2real::gap::{self, GapOptions, GapReport};
-use crate::sim2real::input::{expand_inputs, read_for_replay, read_recording};
+use crate::sim2real::input::{expand_inputs, read_for_replay, read_recording, scored_view};
 use crate::sim2real::recording;
 use crate::sim2real::replay::{self, ReplayOptions, Replayer};
 
@@ -41,8 +41,7 @@ pub fn run_gap(a: GapArgs) -> i32 {
         }
     };
     let robot = &loaded.robot;
-    let names: Vec<String> = robot.joints.iter().map(|j| j.name.clone()).collect();
-    let mut inputs = match read_for_replay(&files.files, &names, &a.replay, &a.parse) {
+    let mut inputs = match read_for_replay(&files.files, robot, &a.replay, &a.parse) {
         Ok(x) => x,
         Err(e) => {
             eprintln!("modellint: {e}");
@@ -58,7 +57,8 @@ pub fn run_gap(a: GapArgs) -> i32 {
     for n in &inputs.notes {
         eprintln!("modellint: note: {n}");
     }
-    let (recs, notes, warnings) = (inputs.recs, inputs.notes, inputs.warnings);
+    let (recs, notes, warnings, unscored) =
+        (inputs.recs, inputs.notes, inputs.warnings, inputs.unscored);
     let opts = a.replay.clone();
     let replayer = Replayer::new(robot);
     let tty = std::io::stderr().is_terminal();
@@ -82,18 +82,34 @@ pub fn run_gap(a: GapArgs) -> i32 {
             }
         }
     }
+    // Joints left out with --no-command are replayed (the others move with them), not scored.
+    let (srecs, seps) = match scored_view(&recs, &eps, &unscored) {
+        Some(v) => v,
+        None => {
+            eprintln!(
+                "modellint: nothing left to score: every recorded joint is left out by \
+                 --no-command ({})",
+                unscored.join(", ")
+            );
+            return 2;
+        }
+    };
     let spec = loaded.spec.as_ref();
     let region = |name: &str| gap::joint_region(spec, name);
-    let mut report = gap::compute(&recs, &eps, &region, &GapOptions::default());
+    let mut report = gap::compute(&srecs, &seps, &region, &GapOptions::default());
     report.notes = notes;
     report.warnings = warnings;
-    report.timestep = replay::timestep_check(robot, &recs, &opts, Some(&eps));
+    // On the whole replay (the fine one must drive the same joints), reported on the scored.
+    report.timestep = replay::timestep_check(robot, &recs, &opts, Some(&eps)).map(|mut c| {
+        c.per_joint.retain(|j| !unscored.contains(&j.name));
+        c
+    });
     if let Some(n) = report.timestep.as_ref().and_then(replay::timestep_note) {
         eprintln!("modellint: note: {n}");
         report.notes.push(n);
     }
     if let Some(dir) = &a.report {
-        match crate::sim2real::report::write(dir, &report, &recs, &eps) {
+        match crate::sim2real::report::write(dir, &report, &srecs, &seps) {
             Ok(p) => eprintln!("modellint: report written to {}", p.display()),
             Err(e) => {
                 eprintln!("modellint: cannot write report in {}: {e}", dir.display());

@@ -138,7 +138,15 @@ pub enum ScheduleError {
     /// time unit is not seconds (milli-, micro-, nanoseconds) or the rate is far too high —
     /// and the commands of the ticks between rows are unknown either way.
     SparseRows { ticks_per_row: f64, rows: usize },
+    /// The rows span more than [`MAX_SCHEDULE_TICKS`] control ticks (a time far from the
+    /// others): one command per tick would not fit in memory.
+    Span { ticks: f64 },
 }
+
+/// The most control ticks a schedule holds (10⁸: 28 h at 1 kHz). The recording's own check
+/// ([`crate::sim2real::recording::MAX_SPAN_INTERVALS`]) rejects far shorter spans of a log's
+/// rows first, at the line; this bound keeps a recording built in code from allocating past it.
+pub const MAX_SCHEDULE_TICKS: f64 = 1e8;
 
 /// The most control ticks a median row interval may span (a 1 kHz controller logged at
 /// 25 Hz). Millisecond timestamps of a 200 Hz log at a 50 Hz rate give 250; nanoseconds, 10⁸.
@@ -160,6 +168,11 @@ impl std::fmt::Display for ScheduleError {
                 "the {rows} rows are a median {ticks_per_row:.3e} control ticks apart (at most \
                  {MAX_TICKS_PER_ROW} make sense): are the times in seconds? (milliseconds: divide \
                  by 1000, nanoseconds by 1e9) — or is control_rate_hz far too high?"
+            ),
+            ScheduleError::Span { ticks } => write!(
+                f,
+                "the rows span {ticks:.3e} control ticks (at most {MAX_SCHEDULE_TICKS:.0e}): a \
+                 time far from the others?"
             ),
         }
     }
@@ -248,6 +261,10 @@ pub fn reconstruct(
     let (k0, k1) = (ticks[0], ticks[n - 1]);
     if n >= 2 && k0 == k1 {
         return Err(ScheduleError::OneTick { tick: k0, rows: n });
+    }
+    let span = k1 as f64 - k0 as f64 + 1.0;
+    if !(span <= MAX_SCHEDULE_TICKS) {
+        return Err(ScheduleError::Span { ticks: span });
     }
     let len = (k1 - k0 + 1) as usize;
     // Representative row of each tick: the first row of the tick (in force: closest to the

@@ -3,21 +3,34 @@
 
 use std::path::{Path, PathBuf};
 
+use crate::model::Robot;
 use crate::sim2real::bam;
 use crate::sim2real::recording::{self, ParseOptions, Recording, RecordingError};
-use crate::sim2real::replay::{self, ReplayOptions};
+use crate::sim2real::replay::{self, Episode, ReplayOptions};
 
 /// Reads one recording file: BAM JSON (sniffed) or CSV.
 pub fn read_recording(path: &Path) -> Result<Recording, RecordingError> {
     read_recording_with(path, &ParseOptions::default())
 }
 
-/// [`read_recording`] with CSV parse options (`--ignore-columns`).
+/// [`read_recording`] with parse options (`--ignore-columns` for CSV; for both formats the
+/// model's joints and which of them must have a command, [`ParseOptions::actuated_joints`]).
 pub fn read_recording_with(path: &Path, opts: &ParseOptions) -> Result<Recording, RecordingError> {
     let text = std::fs::read_to_string(path)
         .map_err(|e| RecordingError::new(path, None, None, format!("cannot read file: {e}")))?;
     if bam::is_bam_json(&text) {
-        Ok(bam::bam_recording(bam::parse_bam(path, &text)?))
+        let rec = bam::bam_recording(bam::parse_bam(path, &text)?);
+        if let Some(model) = &opts.model_joints {
+            rec.validate_joint_names(model)?;
+        }
+        // A log whose entries have no `goal_position`: at the first entry, naming the key.
+        recording::uncommanded_joints(
+            rec.joints.iter().map(|j| (j.name.as_str(), j.q_cmd.is_some())),
+            opts,
+            |_| "'goal_position' key in its entries (the servo's command)".to_string(),
+        )
+        .map_err(|m| RecordingError::new(path, bam::entry_line(&text, 0), None, m))?;
+        Ok(rec)
     } else {
         recording::parse_csv_with(path, &text, opts)
     }
@@ -30,32 +43,72 @@ pub struct ReplayInputs {
     /// command columns that fit no tick grid (warnings).
     pub notes: Vec<String>,
     pub warnings: Vec<String>,
+    /// Driven joints recorded without a command in some file, accepted with `--no-command`:
+    /// replayed following their recorded positions, left out of the scores and of the fit
+    /// ([`scored_view`]); a note in `notes` says so.
+    pub unscored: Vec<String>,
 }
 
-/// Reads `files` for `gap` and `fit`: each recording's joints must be the model's
-/// (`model_joints`) and its timestamps must map onto its control ticks
-/// ([`replay::check_schedule`]); a missing `control_t0_s` is estimated from the rows when the
-/// first row's time contradicts them ([`replay::resolve_tick_origin`]). The first error ends it.
+/// Reads `files` for `gap` and `fit`: each recording's joints must be the model's, a joint an
+/// actuator of the model drives must have its command (else an error at the header line, or
+/// with `--no-command` it is left out of the scores: [`ReplayInputs::unscored`]), and its
+/// timestamps must map onto its control ticks ([`replay::check_schedule`]); a missing
+/// `control_t0_s` is estimated from the rows when the first row's time contradicts them
+/// ([`replay::resolve_tick_origin`]). The first error ends it.
 pub fn read_for_replay(
     files: &[PathBuf],
-    model_joints: &[String],
+    robot: &Robot,
     opts: &ReplayOptions,
     parse: &ParseOptions,
 ) -> Result<ReplayInputs, String> {
+    let model_joints: Vec<String> = robot.joints.iter().map(|j| j.name.clone()).collect();
+    let actuated: Vec<String> = robot
+        .joints
+        .iter()
+        .filter(|j| !robot.actuators_on_joint(j.id).is_empty())
+        .map(|j| j.name.clone())
+        .collect();
+    // A pattern that names no joint of the model is a typo, not a choice.
+    let matcher = recording::no_command_matcher(&parse.no_command)?;
+    for g in &parse.no_command {
+        let one = recording::no_command_matcher(std::slice::from_ref(g))?;
+        if !model_joints.iter().any(|j| one.is_match(j)) {
+            return Err(format!(
+                "--no-command {g}: matches no joint of the model ({} joints)",
+                model_joints.len()
+            ));
+        }
+    }
     let mut recs = Vec::with_capacity(files.len());
     let mut origins = Vec::with_capacity(files.len());
     let mut rates = Vec::new();
     let mut duplicates = Vec::new();
-    // Unknown joints are reported at the header line, before any value is checked.
-    let parse = ParseOptions { model_joints: Some(model_joints.to_vec()), ..parse.clone() };
+    // joint → the files where it has no command (accepted by --no-command).
+    let mut unscored: Vec<(String, Vec<String>)> = Vec::new();
+    // Unknown joints and driven joints without a command are reported at the header line,
+    // before any value is checked.
+    let parse = ParseOptions {
+        model_joints: Some(model_joints.clone()),
+        actuated_joints: Some(actuated.clone()),
+        ..parse.clone()
+    };
     for f in files {
         let mut r = read_recording_with(f, &parse).map_err(|e| e.to_string())?;
+        for j in &r.joints {
+            if j.q_cmd.is_none() && actuated.contains(&j.name) && matcher.is_match(&j.name) {
+                let name = f.file_name().unwrap_or_default().to_string_lossy().into_owned();
+                match unscored.iter_mut().find(|(n, _)| *n == j.name) {
+                    Some((_, fs)) => fs.push(name),
+                    None => unscored.push((j.name.clone(), vec![name])),
+                }
+            }
+        }
         rebase_time(&mut r);
         if let Some(d) = r.meta.get(recording::KEY_DUPLICATE_ROWS) {
             duplicates
                 .push(format!("{} ({d})", f.file_name().unwrap_or_default().to_string_lossy()));
         }
-        r.validate_joint_names(model_joints).map_err(|e| e.to_string())?;
+        r.validate_joint_names(&model_joints).map_err(|e| e.to_string())?;
         replay::check_schedule(&r, opts).map_err(|e| e.to_string())?;
         if let Some(fix) = replay::resolve_rate(&mut r, opts) {
             rates.push((f.clone(), fix));
@@ -71,7 +124,133 @@ pub fn read_for_replay(
             duplicates.join(", ")
         ));
     }
-    Ok(ReplayInputs { recs, notes, warnings })
+    if !unscored.is_empty()
+        && recs.iter().all(|r| r.joints.iter().all(|j| unscored.iter().any(|(u, _)| *u == j.name)))
+    {
+        let names: Vec<&str> = unscored.iter().map(|(j, _)| j.as_str()).collect();
+        return Err(format!(
+            "nothing left to score: every recorded joint is left out by --no-command ({})",
+            names.join(", ")
+        ));
+    }
+    if !unscored.is_empty() {
+        let list: Vec<String> = unscored
+            .iter()
+            .map(|(j, fs)| {
+                let shown: Vec<&str> = fs.iter().take(3).map(String::as_str).collect();
+                let more = if fs.len() > 3 { ", …" } else { "" };
+                format!(
+                    "{j} (no command in {} of {} file(s): {}{more})",
+                    fs.len(),
+                    files.len(),
+                    shown.join(", ")
+                )
+            })
+            .collect();
+        notes.push(format!(
+            "--no-command: left out of the scores and of the fit, replayed following their \
+             recorded positions as their command: {}",
+            list.join("; ")
+        ));
+    }
+    let unscored: Vec<String> = unscored.into_iter().map(|(j, _)| j).collect();
+    if let Some(w) = coupling_warning(robot, &recs, &unscored, opts) {
+        warnings.push(w);
+    }
+    Ok(ReplayInputs { recs, notes, warnings, unscored })
+}
+
+/// Whether joints `a` and `b` of `robot` are in one kinematic chain (one's body is the other's,
+/// or an ancestor of it): then each one's motion loads the other (inertia, gravity).
+fn same_chain(robot: &Robot, a: &str, b: &str) -> bool {
+    let body = |n: &str| robot.joint(n).map(|j| j.body);
+    let (Some(ba), Some(bb)) = (body(a), body(b)) else { return false };
+    let ancestor = |anc: usize, mut x: usize| {
+        for _ in 0..robot.bodies.len() + 1 {
+            if x == anc {
+                return true;
+            }
+            match robot.bodies.get(x) {
+                Some(b) if b.parent != x => x = b.parent,
+                _ => return false,
+            }
+        }
+        false
+    };
+    ancestor(ba, bb) || ancestor(bb, ba)
+}
+
+/// A warning naming the scored joints that move with a joint left out by `--no-command` (one
+/// kinematic chain, or any joint on a free base): that joint is replayed to its own positions,
+/// so its servo moves it behind its recorded motion, and their scores and fits carry that.
+fn coupling_warning(
+    robot: &Robot,
+    recs: &[Recording],
+    unscored: &[String],
+    opts: &ReplayOptions,
+) -> Option<String> {
+    let mut scored: Vec<&str> = Vec::new();
+    for r in recs {
+        for j in &r.joints {
+            if !unscored.contains(&j.name) && !scored.contains(&j.name.as_str()) {
+                scored.push(&j.name);
+            }
+        }
+    }
+    let free = opts.base == replay::BaseMode::Free;
+    let parts: Vec<String> = unscored
+        .iter()
+        .filter_map(|u| {
+            let near: Vec<&str> =
+                scored.iter().copied().filter(|s| free || same_chain(robot, u, s)).collect();
+            (!near.is_empty()).then(|| format!("{u} → {}", near.join(", ")))
+        })
+        .collect();
+    if parts.is_empty() {
+        return None;
+    }
+    Some(format!(
+        "--no-command: a joint left out is replayed to its own recorded positions, and its \
+         servo moves it behind them (a servo lags its command); the scored joints in its \
+         kinematic chain{} feel that lag in their inertia and gravity load, and their scores \
+         and any fit on them carry it ({}). On independent_arm2's clean control, with the \
+         elbow left out this way, the shoulder's position MAE is 1.08° against 0.03° with the \
+         elbow's command: record the command, or leave out only joints that move apart from \
+         the scored ones",
+        if free { " (all of them: the base is free)" } else { "" },
+        parts.join("; ")
+    ))
+}
+
+/// `recs` and their replays `eps` without the joints `unscored` (same order otherwise; an
+/// episode with no joint left is left out): what `gap` and `fit` score. `None` when no joint
+/// is left in any recording.
+pub fn scored_view(
+    recs: &[Recording],
+    eps: &[Episode],
+    unscored: &[String],
+) -> Option<(Vec<Recording>, Vec<Episode>)> {
+    let mut rs = Vec::with_capacity(recs.len());
+    let mut es = Vec::with_capacity(eps.len());
+    for (r, e) in recs.iter().zip(eps) {
+        let keep: Vec<bool> = r.joints.iter().map(|j| !unscored.contains(&j.name)).collect();
+        let mut r = r.clone();
+        let mut flags = keep.iter();
+        r.joints.retain(|_| *flags.next().unwrap_or(&true));
+        let mut e = e.clone();
+        let pick = |v: &[Vec<f64>]| -> Vec<Vec<f64>> {
+            v.iter().zip(&keep).filter(|(_, k)| **k).map(|(x, _)| x.clone()).collect()
+        };
+        e.q_sim = pick(&e.q_sim);
+        e.qd_sim = pick(&e.qd_sim);
+        e.joints =
+            e.joints.iter().zip(&keep).filter(|(_, k)| **k).map(|(n, _)| n.clone()).collect();
+        if !r.joints.is_empty() {
+            rs.push(r);
+            es.push(e);
+        }
+    }
+    (!rs.is_empty()).then_some((rs, es))
 }
 
 /// Metadata key recording the whole seconds [`rebase_time`] took off a recording's times.

@@ -2,11 +2,25 @@
 
 use super::{ParseOptions, Recording, RecordingError};
 
+/// With many rows, the span may be this many median intervals per row
+/// ([`super::MAX_SPAN_INTERVALS`] otherwise).
+const MAX_INTERVALS_PER_ROW: f64 = 40.0;
+
 impl Recording {
     /// Checks consistency (lengths, finiteness, strictly increasing time, at least two samples,
     /// positions not in degrees). Errors name the sample index (no line numbers).
     pub fn check(&self, opts: &ParseOptions) -> Result<(), RecordingError> {
         self.check_inner(opts, None)
+    }
+
+    /// [`Recording::check`] with the 1-based source line of every sample, when known (a BAM
+    /// log's entries): errors then name the line.
+    pub fn check_at_lines(
+        &self,
+        opts: &ParseOptions,
+        row_lines: Option<&[usize]>,
+    ) -> Result<(), RecordingError> {
+        self.check_inner(opts, row_lines)
     }
 
     /// `row_lines[i]` is the 1-based source line of sample `i`, when known.
@@ -43,6 +57,40 @@ impl Recording {
                     ),
                 ));
             }
+        }
+        // A time far from the others (a stamp in another unit, a corrupted value): the replay
+        // would step across the whole span, and a control-tick schedule would hold a command
+        // per tick of it.
+        let mut dts: Vec<f64> = self.t.windows(2).map(|w| w[1] - w[0]).collect();
+        dts.sort_by(f64::total_cmp);
+        let median = dts[dts.len() / 2];
+        let span = self.t[n - 1] - self.t[0];
+        let limit = super::MAX_SPAN_INTERVALS.max(MAX_INTERVALS_PER_ROW * n as f64);
+        if !(span / median <= limit) {
+            let (i, gap) = self
+                .t
+                .windows(2)
+                .map(|w| w[1] - w[0])
+                .enumerate()
+                .max_by(|a, b| a.1.total_cmp(&b.1))
+                .unwrap_or((0, span));
+            // The row on the far side: the first one when the jump follows it, else the next.
+            let odd = if i == 0 { 0 } else { i + 1 };
+            return Err(err(
+                odd,
+                Some("t"),
+                format!(
+                    "time jumps by {gap:.6e} s from t = {} at {} to t = {} at {}, while the median \
+                     interval between rows is {median:.3e} s: the rows would span {:.3e} \
+                     intervals (at most {limit:.0e}). A time stamp in another unit or a wrong \
+                     value? (a long pause: split the recording there)",
+                    self.t[i],
+                    at(i),
+                    self.t[i + 1],
+                    at(i + 1),
+                    span / median
+                ),
+            ));
         }
         let check_vec = |col: &str, v: &[f64]| -> Result<(), RecordingError> {
             if v.len() != n {

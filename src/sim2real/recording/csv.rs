@@ -59,6 +59,15 @@ pub fn parse_csv_with(
     {
         return Err(err(path, header_ln, Some(&col), msg));
     }
+    // A driven joint without its command: at the header line too, before any value is read.
+    let has_cmd = header.joint_cols.iter().map(|c| c[2].is_some());
+    if let Err(msg) = super::uncommanded_joints(
+        header.joint_names.iter().map(String::as_str).zip(has_cmd),
+        opts,
+        |j| format!("'{j}.q_cmd' column"),
+    ) {
+        return Err(err(path, header_ln, None, msg));
+    }
     let Rows { cols, lines: row_lines, duplicates } = parse_rows(path, &header, &lines[idx + 1..])?;
     let rate_line = meta.rate_line;
     let mut rec = assemble(path, meta, header, cols);

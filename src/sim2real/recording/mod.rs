@@ -60,6 +60,11 @@ impl Split {
     }
 }
 
+/// The most median row intervals a recording may span (or 40 per row, if more): a time far
+/// from the others is an error at its line ([`Recording::check`]). 10⁵: a 1000 s pause in a
+/// 100 Hz log.
+pub const MAX_SPAN_INTERVALS: f64 = 1e5;
+
 /// Metadata key set by the CSV reader: how many rows repeated the row before them exactly and
 /// were left out.
 pub const KEY_DUPLICATE_ROWS: &str = "duplicate_rows_dropped";
@@ -167,12 +172,76 @@ pub struct ParseOptions {
     /// The model's joints, when known: a header naming any other joint is an error at the
     /// header line, before any value is read (a misspelt joint is the first thing to fix).
     pub model_joints: Option<Vec<String>>,
+    /// The model's joints that an actuator drives, when known: a recorded one without its
+    /// `<joint>.q_cmd` column is an error at the header line (the replay would have no command
+    /// for its servo), unless [`ParseOptions::no_command`] names it. A joint no actuator
+    /// drives (a passive joint) may be recorded as positions only.
+    pub actuated_joints: Option<Vec<String>>,
+    /// Glob patterns on joint names (`--no-command`): driven joints recorded without a command
+    /// that are accepted; `gap` and `fit` leave them out of their scores and of the fit
+    /// ([`uncommanded_joints`]).
+    pub no_command: Vec<String>,
 }
 
 impl Default for ParseOptions {
     fn default() -> Self {
-        ParseOptions { max_abs_rad: 10.0, ignore_columns: Vec::new(), model_joints: None }
+        ParseOptions {
+            max_abs_rad: 10.0,
+            ignore_columns: Vec::new(),
+            model_joints: None,
+            actuated_joints: None,
+            no_command: Vec::new(),
+        }
     }
+}
+
+/// The `--no-command` patterns as one matcher; the error names the bad pattern.
+pub fn no_command_matcher(patterns: &[String]) -> Result<globset::GlobSet, String> {
+    let mut b = globset::GlobSetBuilder::new();
+    for g in patterns {
+        b.add(globset::Glob::new(g).map_err(|e| format!("--no-command {g}: {e}"))?);
+    }
+    b.build().map_err(|e| format!("--no-command: {e}"))
+}
+
+/// Of the recorded joints `(name, has a command)`, those an actuator drives
+/// (`opts.actuated_joints`) that have no command: `Ok` with the ones `opts.no_command` accepts,
+/// else `Err` with a message naming every joint that is not accepted. `missing(joint)` says
+/// what is missing where (`'elbow.q_cmd' column`, `'goal_position' key`).
+pub fn uncommanded_joints<'a>(
+    joints: impl IntoIterator<Item = (&'a str, bool)>,
+    opts: &ParseOptions,
+    missing: impl Fn(&str) -> String,
+) -> Result<Vec<String>, String> {
+    let Some(actuated) = &opts.actuated_joints else { return Ok(Vec::new()) };
+    let accept = no_command_matcher(&opts.no_command)?;
+    let (mut accepted, mut refused) = (Vec::new(), Vec::new());
+    for (name, has_cmd) in joints {
+        if has_cmd || !actuated.iter().any(|a| a == name) {
+            continue;
+        }
+        if accept.is_match(name) {
+            accepted.push(name.to_string());
+        } else {
+            refused.push(name.to_string());
+        }
+    }
+    if refused.is_empty() {
+        return Ok(accepted);
+    }
+    let what: Vec<String> = refused
+        .iter()
+        .map(|j| format!("joint '{j}' has positions but no {}", missing(j)))
+        .collect();
+    let one = if refused.len() == 1 { "it" } else { "them" };
+    Err(format!(
+        "{}, and the model drives {one} with an actuator: without the command the replay cannot \
+         know what the servo was tracking (replaying it to its own positions would explain the \
+         missing command as physics). Record the command, or leave {one} out of the scores and \
+         the fit with --no-command {}",
+        what.join("; "),
+        refused.join(",")
+    ))
 }
 
 /// For joints `names` not in `model_joints`: the first one's `.q` column and a message listing

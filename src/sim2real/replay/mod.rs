@@ -5,7 +5,9 @@
 //! 1. Initialise: model joints take the keyframe `qpos` (or `qpos0`), recorded joints the first
 //!    recorded `q`, their velocity the first recorded `qd` (or the derivative of `q`).
 //! 2. Commands: [`crate::sim2real::commands`] reconstructs the command in force at every moment
-//!    from `q_cmd` (or `q` when the recording has no command): with a control rate (`control_hz`
+//!    from `q_cmd` (or `q` when the joint has no command: `gap` and `fit` accept that only for
+//!    a joint no actuator drives, or one left out of the scores with `--no-command`,
+//!    [`crate::sim2real::input::read_for_replay`]): with a control rate (`control_hz`
 //!    option, else the recording's `control_rate_hz`) one command per control tick at
 //!    `control_t0_s + k/rate` (`t[0]` when absent), held over the tick; without one, each goal
 //!    held from its own timestamp. Every physics step applies the command in force at the step's
@@ -358,7 +360,8 @@ impl<'m> Replayer<'m> {
     }
 }
 
-/// The command traces the replay follows: each joint's `q_cmd` (its `q` when it has none).
+/// The command traces the replay follows: each joint's `q_cmd` (its `q` when it has none; the
+/// CLI's inputs allow that only where it drives nothing or is not scored, see the module docs).
 pub fn command_traces(rec: &Recording) -> Vec<&[f64]> {
     rec.joints.iter().map(|jt| jt.q_cmd.as_deref().unwrap_or(&jt.q)).collect()
 }
