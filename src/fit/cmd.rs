@@ -290,19 +290,19 @@ pub fn run_fit(a: FitArgs) -> i32 {
     for w in &out.warnings {
         eprintln!("modellint: warning: {w}");
     }
+    let c = &out.cost;
+    let cost_note = format!(
+        "search cost: {} rollouts in {} batches ({:.1} s simulating), {} dataset simulations; screens saved {} full fits",
+        c.rollouts.rollouts,
+        c.rollouts.batches,
+        c.rollouts.seconds,
+        c.simulations,
+        c.fits_saved_by_screens
+    );
     if !a.quiet {
-        for n in &out.notes {
+        for n in out.notes.iter().chain([&cost_note]) {
             eprintln!("modellint: note: {n}");
         }
-        let c = &out.cost;
-        eprintln!(
-            "modellint: note: search cost: {} rollouts in {} batches ({:.1} s simulating), {} dataset simulations; screens saved {} full fits",
-            c.rollouts.rollouts,
-            c.rollouts.batches,
-            c.rollouts.seconds,
-            c.simulations,
-            c.fits_saved_by_screens
-        );
     }
     if out.heldout.is_empty() {
         return 2;
@@ -323,7 +323,8 @@ pub fn run_fit(a: FitArgs) -> i32 {
         (Err(e), _) | (_, Err(e)) => return fail(e),
     };
     // Everything said on stderr also goes into the JSON `notes` / `warnings`.
-    let mut notes: Vec<String> = inputs.notes.iter().chain(&out.notes).cloned().collect();
+    let mut notes: Vec<String> =
+        inputs.notes.iter().chain(&out.notes).chain([&cost_note]).cloned().collect();
     let warnings: Vec<String> = inputs.warnings.iter().chain(&out.warnings).cloned().collect();
     if let Some(dir) = &a.report {
         let page = crate::fit::report::FitReport {
