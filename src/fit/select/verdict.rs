@@ -82,6 +82,12 @@ pub(super) fn verdict(before: &Errors, after: &Errors, group: &[String], gate: G
     Verdict { mean, se, rel, significant: beyond(mean, se) || beyond(lmean, lse) || decisive_ok }
 }
 
+/// A fitted parameter this close to a bound sits on it [fraction of the range, of ln p on a
+/// log scale].
+const AT_BOUND: f64 = 5e-3;
+/// The same to a lower bound where the effect is absent: the line search's resolution [fraction].
+const AT_ABSENT: f64 = 2e-4;
+
 /// `true` when a fitted parameter of `a` sits on its bound (within 0.5 % of the range, of ln p
 /// for an effect searched on a log scale — a 0.25 N·m torque limit is not at the 0.05 N·m
 /// bound): the effect was stretched to explain something else.
@@ -104,8 +110,8 @@ pub(super) fn at_bound(engine: &Engine, base: &[Applied], a: &Applied) -> bool {
         } else {
             (a.params[k], lo[k], hi[k])
         };
-        let tol = 5e-3 * (hi - lo);
-        let tol_lo = if absent_lo { 2e-4 * (hi - lo) } else { tol };
+        let tol = AT_BOUND * (hi - lo);
+        let tol_lo = if absent_lo { AT_ABSENT * (hi - lo) } else { tol };
         p <= lo + tol_lo || p >= hi - tol
     })
 }

@@ -12,6 +12,15 @@ use super::super::Errors;
 use super::super::solve::{Method, Problem, solve};
 use super::{Engine, fit_key};
 
+/// Finite-difference step of the standard errors' Jacobian [fraction of the parameter's range].
+const FD_STEP: f64 = 1e-3;
+/// A fit ends on a bound within this distance of it [fraction of the range].
+const ON_BOUND: f64 = 1e-3;
+/// Where a restart grid puts its points for two parameters, and for more [fractions of the
+/// range, on a log scale when the lower bound is positive].
+const GRID_FINE: [f64; 5] = [0.1, 0.3, 0.5, 0.7, 0.9];
+const GRID_COARSE: [f64; 3] = [0.2, 0.5, 0.8];
+
 impl Engine<'_> {
     /// Residual vector (real − sim) on `joints`, subsampled to at most `max_len` entries.
     pub(in crate::fit::select) fn residuals(
@@ -377,7 +386,7 @@ impl Engine<'_> {
         };
         let mut cols = Vec::with_capacity(slots.len());
         for &(ai, i, lo, hi) in &slots {
-            let mut h = 1e-3 * (hi - lo).max(1e-9);
+            let mut h = FD_STEP * (hi - lo).max(1e-9);
             if applied[ai].params[i] + h > hi {
                 h = -h;
             }
@@ -420,7 +429,7 @@ impl Engine<'_> {
 /// start `x0` was not on.
 pub(super) fn ends_on_bound(x: &[f64], x0: &[f64], b: &Bounds) -> bool {
     (0..x.len()).any(|i| {
-        let tol = 1e-3 * (b.hi[i] - b.lo[i]);
+        let tol = ON_BOUND * (b.hi[i] - b.lo[i]);
         let on = |v: f64, edge: f64| (v - edge).abs() <= tol;
         (on(x[i], b.lo[i]) && !on(x0[i], b.lo[i])) || (on(x[i], b.hi[i]) && !on(x0[i], b.hi[i]))
     })
@@ -431,7 +440,7 @@ pub(super) fn ends_on_bound(x: &[f64], x0: &[f64], b: &Bounds) -> bool {
 /// point fails.
 pub(super) fn grid_best(obj: &dyn Fn(&[f64]) -> f64, b: &Bounds) -> Option<Vec<f64>> {
     let k = b.lo.len();
-    let fr: &[f64] = if k <= 2 { &[0.1, 0.3, 0.5, 0.7, 0.9] } else { &[0.2, 0.5, 0.8] };
+    let fr: &[f64] = if k <= 2 { &GRID_FINE } else { &GRID_COARSE };
     let axis = |i: usize| -> Vec<f64> {
         let (lo, hi) = (b.lo[i], b.hi[i]);
         fr.iter()

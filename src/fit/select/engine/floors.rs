@@ -12,6 +12,13 @@ use crate::sim2real::replay::{Episode, REFINE, ReplayOptions};
 use super::super::{Errors, FitOptions, Floor};
 use super::{Engine, set_key};
 
+/// The discretisation decision counts a joint only when its residual mean square is within
+/// this factor of its noise floor plus the two replays' difference [ratio of mean squares].
+const EXPLAINABLE: f64 = 4.0;
+/// A joint votes for continuous time when the finer replay comes closer by at least this share
+/// of the two replays' mean square difference [fraction].
+const CLOSER: f64 = 0.5;
+
 impl Engine<'_> {
     /// Per scored joint: the mean square of the error that command reconstruction and the
     /// replay's start state alone leave on `recs` simulated with `applied` (`errs`).
@@ -266,7 +273,7 @@ pub(super) fn discretisation_part(sums: &[[f64; 3]], base: &[f64]) -> Vec<f64> {
     let votes = sums
         .iter()
         .zip(base)
-        .filter(|([c, f, d], b)| *d > 0.0 && *c <= 4.0 * (*b + d) && c - f >= 0.5 * d)
+        .filter(|([c, f, d], b)| *d > 0.0 && *c <= EXPLAINABLE * (*b + d) && c - f >= CLOSER * d)
         .count();
     if moved > 0 && 2 * votes > moved {
         sums.iter().map(|s| s[2]).collect()
