@@ -38,6 +38,10 @@ pub struct Engine<'a> {
     /// The last [`RECENT`] simulations by [`set_key`]: the search scores the set a fit ended on
     /// right after the fit, and the same base set for each candidate.
     recent: std::sync::Mutex<std::collections::VecDeque<(String, Option<Errors>)>>,
+    /// The training RMSE of every simulation a fit's objective asked for, by [`set_key`]: the
+    /// screen's coarse fit and the full fit that follows it start alike (the same grid, the same
+    /// first simplex), so the full fit re-uses the coarse one's rollouts.
+    scores: std::sync::Mutex<std::collections::HashMap<String, f64>>,
     /// Start-state sensitivities by recording ([`start::key`]) and start model
     /// ([`Engine::set_start_model`]), measured once each (`None`: not measurable, the recording replays from its first row).
     /// Shared with the floor's alternative replay, whose recordings differ only in the first row
@@ -106,6 +110,7 @@ impl<'a> Engine<'a> {
             sims: std::sync::atomic::AtomicUsize::new(0),
             fits: Default::default(),
             recent: Default::default(),
+            scores: Default::default(),
             starts: Default::default(),
             start_model: Default::default(),
             disc: Default::default(),
@@ -235,6 +240,20 @@ impl<'a> Engine<'a> {
             r.push_back((key, e.clone()));
         }
         e
+    }
+
+    /// The RMSE of `recs` simulated with `applied` (infinite when it diverged), remembered for
+    /// the whole search.
+    pub(in crate::fit::select) fn score(&self, recs: &[Recording], applied: &[Applied]) -> f64 {
+        let key = set_key(recs, applied) + &self.start_tag();
+        if let Some(f) = self.scores.lock().ok().and_then(|m| m.get(&key).copied()) {
+            return f;
+        }
+        let f = self.errors(recs, applied).map_or(f64::INFINITY, |e| e.rmse());
+        if let Ok(mut m) = self.scores.lock() {
+            m.insert(key, f);
+        }
+        f
     }
 
     fn simulate(&self, recs: &[Recording], applied: &[Applied]) -> Option<Errors> {

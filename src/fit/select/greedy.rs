@@ -12,6 +12,7 @@ use crate::model::mirror::{leg_joint, mirror_name};
 
 use super::pairs::{joint_pairs, pair_lookahead};
 use super::policy::Phase;
+use super::screen::Screen;
 use super::verdict::{at_bound, verdict};
 use super::{Errors, FitOutcome, Search, Selected, Tried, set_uncertainty};
 
@@ -48,31 +49,13 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         applied.iter().any(|a| a.effect.id() == id && a.joints.iter().any(|x| x == j))
     };
     // Re-rank the diagnosis by the linearised (Gauss–Newton) explained residual: the
-    // residual projected on the simulated sensitivity to a probe step of the effect.
-    // One probe simulation per (effect, joint), independent of each other: run them in
-    // parallel (each replay is itself parallel over episodes; results in a fixed order).
+    // residual projected on the simulated sensitivity to a probe step of the effect
+    // ([`Screen`]), which also predicts every candidate group below.
     let mut diag = diag;
-    let probes: Vec<Option<(f64, f64, f64)>> = diag
-        .par_iter()
-        .map(|c| {
-            if covered(c.effect, &c.joint) {
-                None
-            } else {
-                engine.sensitivity(train, &applied, &tr_err, c)
-            }
-        })
-        .collect();
-    for (c, sens) in diag.iter_mut().zip(probes) {
-        if covered(c.effect, &c.joint) {
-            c.explained_rms = 0.0;
-            continue;
-        }
-        if let Some((ems, coef, probe)) = sens {
-            c.evidence.insert("feature_explained_rms".into(), c.explained_rms);
-            c.evidence.insert("sensitivity_coef".into(), coef);
-            c.evidence.insert("probe".into(), probe);
-            c.explained_rms = ems.sqrt();
-        }
+    let screen =
+        Screen::build(engine, (train, heldout), &applied, (&tr_err, &ho_err), &mut diag, &covered);
+    for c in diag.iter_mut().filter(|c| covered(c.effect, &c.joint)) {
+        c.explained_rms = 0.0;
     }
     diag.sort_by(|a, b| b.explained_rms.total_cmp(&a.explained_rms));
     if round == 0 {
@@ -229,8 +212,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     if cands.is_empty() {
         return false;
     }
-    // One-parameter candidates first (a 1-D fit is cheap), in rank order; then the
-    // multi-parameter ones, each screened against the best of those (below).
+    // One-parameter candidates first, in rank order; then the multi-parameter ones.
     cands.sort_by_key(|(e, ..)| e.fitted() >= 2);
     let z = opts.policy.z_needed(cands.len());
     let k_before: usize = applied.iter().map(|a| a.effect.fitted()).sum();
@@ -238,17 +220,62 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     let mut accepted: Vec<(Selected, bool, Errors, usize)> = Vec::new();
     // Every single fit of the round, for the joint pairs when no single one passes.
     let mut fitted: Vec<Applied> = Vec::new();
-    // Screen for the multi-parameter candidates: a coarse fit (10
-    // evaluations per parameter) must reach at least half of the best training improvement of
-    // the fully fitted ones.
+    // The screen: a coarse fit (`screen_evals` rollouts of the training set) of every candidate
+    // of one size (one parameter; then more), those candidates in parallel. Only a candidate
+    // whose coarse training improvement reaches `screen_share` of the round's best improvement
+    // so far (coarse or full) is fitted in full (the others: phase "screen"); the full fit goes
+    // on from the coarse one. Once a kept candidate leaves a white residual, the larger ones
+    // are not fitted at all (phase "floor").
     let base_train = tr_err.rmse();
-    let mut best_train = base_train;
+    let gain = |f: f64| if f.is_finite() { base_train - f } else { f64::NEG_INFINITY };
+    let mut best_gain = 0.0f64;
+    let mut coarse: Vec<Option<(Vec<f64>, f64)>> = vec![None; cands.len()];
+    // The one-parameter candidates are `cands[..n1]`, the others `cands[n1..n0]`; mirror
+    // completions come after `n0`.
+    let n0 = cands.len();
+    let n1 = cands.iter().take_while(|(e, ..)| e.fitted() < 2).count();
+    let (mut ones_screened, mut more_screened) = (n1 == 0, n1 == n0);
     // Fewest parameters of a kept candidate whose training residual is white on every joint.
     let mut floor_k: Option<usize> = None;
     // The lowest training RMSE of those.
     let mut floor_train: Option<f64> = None;
     let mut ci = 0;
     while ci < cands.len() {
+        // The coarse fits of a size's candidates, which are then taken best first: the
+        // one-parameter ones at the start; the others once the best of those was judged and
+        // left more to explain than noise (or at once when there are none).
+        let block = if !ones_screened {
+            ones_screened = true;
+            Some(0..n1)
+        } else if !more_screened && floor_k.is_none() && (ci >= 1 || n1 == 0) {
+            more_screened = true;
+            Some(n1..n0)
+        } else {
+            None
+        };
+        if let Some(range) = block {
+            engine.report(
+                round,
+                Phase::Screen,
+                Some((ci + 1, cands.len(), format!("coarse fits of {} candidates", range.len()))),
+            );
+            let fits: Vec<(Vec<f64>, f64)> = cands[range.clone()]
+                .par_iter()
+                .map(|(e, g, _)| {
+                    engine.fit_budget(train, &applied, *e, g, opts.policy.screen_evals)
+                })
+                .collect();
+            for f in &fits {
+                best_gain = best_gain.max(gain(f.1));
+            }
+            let mut both: Vec<(Cand, (Vec<f64>, f64))> =
+                cands[range.clone()].iter().cloned().zip(fits).collect();
+            both.sort_by(|a, b| a.1.1.total_cmp(&b.1.1));
+            for (k, (c, f)) in both.into_iter().enumerate() {
+                cands[range.start + k] = c;
+                coarse[range.start + k] = Some(f);
+            }
+        }
         let (e, group, ev) = cands[ci].clone();
         engine.report(
             round,
@@ -256,59 +283,43 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
             Some((ci + 1, cands.len(), format!("{} on {}", e.id(), group.join(",")))),
         );
         ci += 1;
+        let predicted = screen.predict(e.id(), &group);
+        let not_tested = |phase, p: Vec<f64>, f: f64| Tried {
+            predicted,
+            ..Tried::not_tested(round, phase, e.id(), &group, p, f)
+        };
         // A kept candidate already left a white training residual: one with more parameters
         // cannot explain more, and Occam's choice would not take it (`tried`: phase "floor").
         if floor_k.is_some_and(|k| e.fitted() > k) {
-            out.tried.push(Tried::not_tested(
-                round,
-                Phase::Floor,
-                e.id(),
-                &group,
-                vec![],
-                f64::NAN,
-            ));
+            out.tried.push(not_tested(Phase::Floor, vec![], f64::NAN));
+            continue;
+        }
+        let (cp, cf) = match coarse.get(ci - 1).cloned().flatten() {
+            Some(c) => c,
+            // A candidate added during the round (a mirror completion).
+            None => engine.fit_budget(train, &applied, e, &group, opts.policy.screen_evals),
+        };
+        if cp.is_empty() || gain(cf) <= 0.0 || gain(cf) < opts.policy.screen_share * best_gain {
+            out.tried.push(not_tested(Phase::Screen, cp.clone(), cf));
+            // Its coarse fit still starts a joint pair fit (gain error + delay: neither alone
+            // explains much).
+            if !cp.is_empty() && cf.is_finite() {
+                fitted.push(Applied { effect: e, joints: group.clone(), params: cp });
+            }
             continue;
         }
         // Once a kept candidate leaves a white training residual, another can only win Occam's
-        // choice below by coming close to it: a coarse fit (10 evaluations) that leaves 1.5 times
-        // its training error cannot (`tried`: phase "floor_screen"). On a 12-joint robot most of
-        // a round's 30-odd candidates are fitted after the winner.
-        if let Some(ft) = floor_train {
-            let (p, f) = engine.fit_budget(train, &applied, e, &group, opts.policy.screen_evals);
-            if p.is_empty() || !f.is_finite() || f > opts.policy.floor_screen_ratio * ft {
-                out.tried.push(Tried::not_tested(round, Phase::FloorScreen, e.id(), &group, p, f));
-                continue;
-            }
-        }
-        // (Only multi-parameter effects: a 1-D fit is a 9-point grid plus golden section anyway,
-        // and a coarse one misses scale parameters near zero, such as a small armature.)
-        if e.fitted() >= 2 {
-            let (p, f) = engine.fit_budget(train, &applied, e, &group, opts.policy.screen_evals);
-            if p.is_empty()
-                || !f.is_finite()
-                || base_train - f < opts.policy.screen_share * (base_train - best_train)
-            {
-                out.tried.push(Tried::not_tested(
-                    round,
-                    Phase::Screen,
-                    e.id(),
-                    &group,
-                    p.clone(),
-                    f,
-                ));
-                // Its coarse fit still starts a joint pair fit (gain error + delay: neither
-                // alone explains much).
-                if !p.is_empty() && f.is_finite() {
-                    fitted.push(Applied { effect: e, joints: group.clone(), params: p });
-                }
-                continue;
-            }
+        // choice below by coming close to it: one whose coarse fit leaves `floor_screen_ratio`
+        // times its training error cannot (`tried`: phase "floor_screen").
+        if floor_train.is_some_and(|ft| cf > opts.policy.floor_screen_ratio * ft) {
+            out.tried.push(not_tested(Phase::FloorScreen, cp, cf));
+            continue;
         }
         let (p, train_rmse) = engine.fit_one(train, &applied, e, &group);
         if p.is_empty() || !train_rmse.is_finite() {
             continue;
         }
-        best_train = best_train.min(train_rmse);
+        best_gain = best_gain.max(gain(train_rmse));
         fitted.push(Applied { effect: e, joints: group.clone(), params: p.clone() });
         let mut trial = applied.clone();
         trial.push(Applied { effect: e, joints: group.clone(), params: p.clone() });
@@ -333,6 +344,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
             significant: v.significant,
             bic_decreased: bic_after < bic_before,
             kept: false,
+            predicted,
         });
         if keep && engine.at_floor(train, &trial, &tr_a) {
             floor_k = Some(floor_k.map_or(e.fitted(), |k| k.min(e.fitted())));

@@ -31,6 +31,7 @@ mod policy;
 mod polish;
 mod prune;
 mod reshoot;
+mod screen;
 mod simplify;
 mod solve;
 mod start;
@@ -179,6 +180,10 @@ pub struct Tried {
     pub significant: bool,
     pub bic_decreased: bool,
     pub kept: bool,
+    /// What the linearised screen predicted for this candidate before its fit (greedy rounds
+    /// only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub predicted: Option<screen::Prediction>,
 }
 
 impl Tried {
@@ -203,6 +208,7 @@ impl Tried {
             significant: false,
             bic_decreased: false,
             kept: false,
+            predicted: None,
         }
     }
 }

@@ -233,6 +233,7 @@ pub(super) fn pair_lookahead(
             significant: v.significant,
             bic_decreased: bic_ok,
             kept: false,
+            predicted: None,
         });
         if !ok {
             continue;
@@ -383,6 +384,7 @@ fn best_restart(
             significant: vs.significant,
             bic_decreased: bic_a < bic_single,
             kept: false,
+            predicted: None,
         });
         if ok && best.as_ref().is_none_or(|(_, hb, ..)| h.rmse() < hb.rmse()) {
             best = Some((set, h, t, logged));
@@ -499,6 +501,7 @@ pub(super) fn joint_pairs(
                 significant: v.significant,
                 bic_decreased: bic_after < bic_before,
                 kept: false,
+                predicted: None,
             });
             if ok && best.as_ref().is_none_or(|(_, hb, ..)| h.rmse() < hb.rmse()) {
                 best = Some((set, h, v, bic_after, logged));

@@ -21,7 +21,7 @@ pub struct SearchPolicy {
     /// Golden section uses at most 40 of them, the simplex 2 × (k − 1) × this on k = 2 or 3
     /// parameters, Levenberg–Marquardt this / (k + 2) iterations (2–12). Default 60.
     pub max_evals: usize,
-    /// Objective evaluations of a coarse screening fit [rollouts]. Default 10.
+    /// Objective evaluations of a coarse screening fit [rollouts of the training set]. Default 6.
     pub screen_evals: usize,
     /// A partner joint "ranks high" when it is among the top `rank_depth ×
     /// candidates_per_round` entries of the ranking [multiple]. Default 4.
@@ -64,8 +64,8 @@ pub struct SearchPolicy {
     pub window_change: f64,
 
     // ---- screens (candidates not fitted in full) ----
-    /// A multi-parameter candidate is fitted in full only when its coarse fit reaches this
-    /// share of the best training improvement of the round so far [fraction]. Default 0.5.
+    /// A candidate is fitted in full only when its coarse fit reaches this share of the best
+    /// training improvement of the round so far (coarse or full) [fraction]. Default 0.5.
     pub screen_share: f64,
     /// Once a kept candidate leaves a white training residual (or when a swap is screened), a
     /// candidate whose coarse fit leaves more than this times that training RMSE is not fitted
@@ -114,7 +114,7 @@ impl Default for SearchPolicy {
             max_rounds: 4,
             candidates_per_round: 4,
             max_evals: 60,
-            screen_evals: 10,
+            screen_evals: 6,
             rank_depth: 4,
             min_group: 3,
             every_effect: true,
@@ -222,7 +222,7 @@ pub const FIELDS: &[(&str, &str, &str)] = &[
     (
         "screen_share",
         "fraction",
-        "a multi-parameter candidate is fitted fully only when its coarse fit reaches this share of the round's best training improvement",
+        "a candidate is fitted fully only when its coarse fit reaches this share of the round's best training improvement so far (coarse or full)",
     ),
     (
         "floor_screen_ratio",

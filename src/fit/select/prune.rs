@@ -46,6 +46,7 @@ pub(super) fn drop_pass(s: &Search, round: usize, out: &mut FitOutcome) -> bool 
             significant: v.significant,
             bic_decreased: bic_dec,
             kept: keep,
+            predicted: None,
         });
         if !keep {
             out.notes.push(format!(
@@ -114,6 +115,7 @@ pub(super) fn refit_drop_pass(s: &Search, round: usize, out: &mut FitOutcome) ->
             significant: worse,
             bic_decreased: bic_ok,
             kept: !ok,
+            predicted: None,
         });
         if ok && best.as_ref().is_none_or(|(_, _, r)| h1.rmse() < *r) {
             best = Some((i, rest, h1.rmse()));
@@ -276,6 +278,7 @@ pub(super) fn swap_pass(s: &Search, round: usize, out: &mut FitOutcome) -> bool 
                 significant: worse,
                 bic_decreased: bic_ok,
                 kept: false,
+                predicted: None,
             });
             let better = match &best {
                 None => true,

@@ -370,6 +370,7 @@ fn tested(
         significant: worse,
         bic_decreased: bic_ok,
         kept: ok,
+        predicted: None,
     }
 }
 

@@ -77,6 +77,7 @@ pub(super) fn fit_told(s: &Search, told: &[(String, Vec<String>)], out: &mut Fit
             significant: v.significant,
             bic_decreased: bics.1 < bics.0,
             kept: true,
+            predicted: None,
         });
         out.selected.push(sel);
     }

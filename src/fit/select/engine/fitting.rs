@@ -1,14 +1,11 @@
-//! Fitting one candidate on top of a kept set, the linearised screen's sensitivity of the
-//! residual to a probe step, and the standard errors of a fit.
+//! Fitting one candidate on top of a kept set, and the standard errors of a fit.
 
-use crate::fit::diagnose::Candidate;
 use crate::fit::effects::{self, Applied, Effect, JointTarget, model_with};
 use crate::fit::optim::Bounds;
 use crate::fit::stats::{ar1_variance_inflation, cluster_robust_stderr, uncertainty_from_jacobian};
 use crate::sim2real::metrics::gap_mask;
 use crate::sim2real::recording::Recording;
 
-use super::super::Errors;
 use super::super::solve::{Method, Problem, solve};
 use super::{Engine, fit_key};
 
@@ -133,14 +130,14 @@ impl Engine<'_> {
             a.push(Applied { effect, joints: group.to_vec(), params: p });
             a
         };
-        let obj = |x: &[f64]| self.errors(train, &make(x)).map_or(f64::INFINITY, |e| e.rmse());
+        let obj = |x: &[f64]| self.score(train, &make(x));
         let clamp = |p: &[f64]| -> Vec<f64> { (0..k).map(|i| p[i].clamp(lo[i], hi[i])).collect() };
         let mut x0: Vec<f64> = clamp(&full0);
         // A second start for the simplex (`Effect::nested_alternatives`) when one of the
         // alternatives scores better than the start chosen here: (start, its error).
         let mut alt: Option<(Vec<f64>, f64)> = None;
         let full_fit = max_evals >= self.opts.policy.max_evals;
-        if let Some(seed) = self.nested_start(train, base, effect, group, &m0, &t) {
+        if let Some(seed) = self.nested_start(train, base, (effect, group), max_evals, (&m0, &t)) {
             let s0 = clamp(&seed);
             let (f_init, f_seed) = (obj(&x0), obj(&s0));
             let mut f0 = f_init;
@@ -159,6 +156,21 @@ impl Engine<'_> {
                 })
                 .filter(|(_, f)| *f < f0)
                 .min_by(|a, b| a.1.total_cmp(&b.1));
+        }
+        // A full least-squares fit goes on from where the screen's coarse fit of the same
+        // candidate stopped, when that is better than the start (its first iterations are the
+        // coarse fit's: their residual vectors are not kept).
+        let x_start = x0.clone();
+        if full_fit && effect.smooth() && k > 0 {
+            let coarse = fit_key(train, base, effect, group, self.opts.policy.screen_evals)
+                + &self.start_tag();
+            let known = self.fits.lock().ok().and_then(|m| m.get(&coarse).cloned());
+            if let Some((p, f)) = known
+                && p.len() >= k
+                && f < obj(&x0)
+            {
+                x0 = clamp(&p);
+            }
         }
         let b = Bounds { lo: lo[..k].to_vec(), hi: hi[..k].to_vec() };
         let res = |x: &[f64]| {
@@ -183,7 +195,7 @@ impl Engine<'_> {
                 // stop after two iterations by design.)
                 let again = k >= 2
                     && max_evals >= self.opts.policy.max_evals
-                    && (!first.converged || ends_on_bound(&first.x, &x0, &b));
+                    && (!first.converged || ends_on_bound(&first.x, &x_start, &b));
                 match again.then(|| grid_best(&obj, &b)) {
                     Some(Some(g)) => {
                         let second = solve(&problem, &g, method);
@@ -226,17 +238,17 @@ impl Engine<'_> {
     /// The start [`Effect::nests`] gives a fit of `effect` on `group`: the simpler effect fitted
     /// on the same base and joints (memoised: the search fits it as a candidate of its own),
     /// taken over by `effect` from its parameter defaults ([`Effect::absorb`]).
+    /// (A coarse fit starts from the simpler effect's coarse fit: the screen has it already.)
     fn nested_start(
         &self,
         train: &[Recording],
         base: &[Applied],
-        effect: &'static dyn Effect,
-        group: &[String],
-        m0: &mujoco_rs::prelude::MjModel,
-        t: &JointTarget,
+        (effect, group): (&'static dyn Effect, &[String]),
+        max_evals: usize,
+        (m0, t): (&mujoco_rs::prelude::MjModel, &JointTarget),
     ) -> Option<Vec<f64>> {
         let simple = effects::by_id(effect.nests()?)?;
-        let (p, f) = self.fit_budget(train, base, simple, group, self.opts.policy.max_evals);
+        let (p, f) = self.fit_budget(train, base, simple, group, max_evals);
         if p.is_empty() || !f.is_finite() {
             return None;
         }
@@ -267,58 +279,6 @@ impl Engine<'_> {
                         .zip(&w[1])
                         .all(|(a, b)| (a - b).abs() <= 1e-9 * a.abs().max(b.abs()).max(1.0))
             })
-    }
-
-    /// Linearised explained mean square of the residual by a probe step of candidate `c`, the
-    /// best of the effect's probes (`None` when no probe changes anything or all diverge):
-    /// returns (explained MS, coefficient, probe value).
-    pub(in crate::fit::select) fn sensitivity(
-        &self,
-        train: &[Recording],
-        base: &[Applied],
-        base_err: &Errors,
-        c: &Candidate,
-    ) -> Option<(f64, f64, f64)> {
-        let effect = effects::by_id(c.effect)?;
-        let t = JointTarget::of(self.robot, &c.joint)?;
-        let m0 = model_with(self.robot, base);
-        let p0 = effect.initial(&m0, &t);
-        let (lo, hi) = effect.bounds(&m0, &t);
-        let mut best: Option<(f64, f64, f64)> = None;
-        for v in effect.probes(p0[0], lo[0], hi[0], &c.evidence) {
-            let mut p = p0.clone();
-            p[0] = v;
-            let mut a = base.to_vec();
-            a.push(Applied { effect, joints: vec![c.joint.clone()], params: p });
-            let Some(e) = self.errors(train, &a) else { continue };
-            let (mut rs, mut ss) = (0.0, 0.0);
-            let mut n = 0usize;
-            for ((rec, e0), e1) in train.iter().zip(&base_err.eps).zip(&e.eps) {
-                let scored = gap_mask(&rec.t, self.opts.gap_mask_s);
-                for (k, jt) in rec.joints.iter().enumerate() {
-                    if !self.joints.contains(&jt.name) {
-                        continue;
-                    }
-                    for i in (0..rec.t.len()).filter(|&i| scored[i]) {
-                        let r = jt.q[i] - e0.q_sim[k][i];
-                        let s = e1.q_sim[k][i] - e0.q_sim[k][i];
-                        if r.is_finite() && s.is_finite() {
-                            rs += r * s;
-                            ss += s * s;
-                            n += 1;
-                        }
-                    }
-                }
-            }
-            if ss <= 1e-300 || n == 0 {
-                continue;
-            }
-            let ems = rs * rs / ss / n as f64;
-            if best.is_none_or(|b| ems > b.0) {
-                best = Some((ems, rs / ss, v));
-            }
-        }
-        best
     }
 
     /// Linearised standard errors of the fitted parameters of `applied.last()`, the others held

@@ -1,0 +1,258 @@
+//! The linearised screen: one probe simulation per (effect, joint) gives the residual's
+//! sensitivity to that effect there (a finite-difference Jacobian column, on the training and on
+//! the held-out episodes); every candidate group of one effect — a joint, a mirror pair, a motor
+//! family, every leg, every joint — is the sum of its joints' columns (one shared parameter moved
+//! on all of them, to first order). On that linear model each candidate gets, without a fit of
+//! its own, the training residual it would leave and the held-out reduction its training
+//! coefficient would give.
+//!
+//! Only sums over the samples are kept (each column's dot product with the residual and with the
+//! effect's other columns), so memory does not grow with the recordings' length.
+
+use std::collections::BTreeMap;
+
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::fit::diagnose::Candidate;
+use crate::fit::effects::{self, Applied, JointTarget, model_with};
+use crate::sim2real::metrics::gap_mask;
+use crate::sim2real::recording::Recording;
+
+use super::{Engine, Errors};
+
+/// The residual of one simulated dataset, sample by sample over (episode, fitted joint, scored
+/// sample); `None` where the recording or the replay is not finite or the sample follows a gap.
+fn aligned(engine: &Engine, recs: &[Recording], e: &Errors) -> Vec<Option<f64>> {
+    let mut out = Vec::new();
+    for (rec, ep) in recs.iter().zip(&e.eps) {
+        let scored = gap_mask(&rec.t, engine.opts.gap_mask_s);
+        for (k, jt) in rec.joints.iter().enumerate() {
+            if !engine.joints.contains(&jt.name) {
+                continue;
+            }
+            out.extend((0..rec.t.len()).map(|i| {
+                let r = jt.q[i] - ep.q_sim[k][i];
+                (scored[i] && r.is_finite()).then_some(r)
+            }));
+        }
+    }
+    out
+}
+
+/// Change of the simulated positions from `base` to `moved`, on the samples of [`aligned`]
+/// (zero where the residual is not scored or the moved replay is not finite).
+fn change(
+    engine: &Engine,
+    recs: &[Recording],
+    base: &Errors,
+    moved: &Errors,
+    r: &[Option<f64>],
+) -> Vec<f64> {
+    let mut out = Vec::with_capacity(r.len());
+    for ((rec, e0), e1) in recs.iter().zip(&base.eps).zip(&moved.eps) {
+        for (k, jt) in rec.joints.iter().enumerate() {
+            if !engine.joints.contains(&jt.name) {
+                continue;
+            }
+            out.extend((0..rec.t.len()).map(|i| {
+                let s = e1.q_sim[k][i] - e0.q_sim[k][i];
+                if s.is_finite() { s } else { 0.0 }
+            }));
+        }
+    }
+    for (s, r) in out.iter_mut().zip(r) {
+        if r.is_none() {
+            *s = 0.0;
+        }
+    }
+    out
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+fn dot_r(a: &[f64], r: &[Option<f64>]) -> f64 {
+    a.iter().zip(r).map(|(x, y)| x * y.unwrap_or(0.0)).sum()
+}
+
+/// One effect's linear model: per joint, the column's dot product with the residual (`b`,
+/// training; `c`, held-out) and with the effect's other columns (`g`, `h`), per unit of the
+/// effect's first parameter.
+#[derive(Debug, Clone, Default)]
+struct EffectModel {
+    joints: Vec<String>,
+    b: Vec<f64>,
+    g: Vec<Vec<f64>>,
+    c: Vec<f64>,
+    h: Vec<Vec<f64>>,
+}
+
+/// What the linear model predicts for one candidate (effect, joint group).
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct Prediction {
+    /// Training residual RMSE after the linear step [rad].
+    pub train_rmse: f64,
+    /// Relative held-out RMSE reduction of the training step (negative: worse on held-out).
+    pub heldout_improvement: f64,
+    /// The step of the effect's first parameter that the training residual asks for.
+    pub step: f64,
+}
+
+/// The linear model of every (effect, joint) the round's diagnosis lists.
+pub(super) struct Screen {
+    models: BTreeMap<&'static str, EffectModel>,
+    train_ss: f64,
+    train_n: usize,
+    held_ss: f64,
+}
+
+/// One probe of a candidate: the probe value, its step from the start, the training column.
+struct Probe {
+    v: f64,
+    step: f64,
+    column: Vec<f64>,
+    explained: f64,
+}
+
+impl Screen {
+    /// Probes every uncovered candidate of `diag` (one effect at a time, its joints in
+    /// parallel; the best of the effect's probes on training, then that probe on held-out),
+    /// and sets each candidate's `explained_rms` to the linear explained RMS on training.
+    pub(super) fn build(
+        engine: &Engine,
+        sets: (&[Recording], &[Recording]),
+        base: &[Applied],
+        errs: (&Errors, &Errors),
+        diag: &mut [Candidate],
+        covered: &(dyn Fn(&str, &str) -> bool + Sync),
+    ) -> Screen {
+        let (train, heldout) = sets;
+        let (tr_err, ho_err) = errs;
+        let r = aligned(engine, train, tr_err);
+        let rh = aligned(engine, heldout, ho_err);
+        let train_ss: f64 = r.iter().flatten().map(|x| x * x).sum();
+        let train_n = r.iter().flatten().count();
+        let held_ss: f64 = rh.iter().flatten().map(|x| x * x).sum();
+        let mut models: BTreeMap<&'static str, EffectModel> = BTreeMap::new();
+        let mut ids: Vec<&'static str> = diag.iter().map(|c| c.effect).collect();
+        ids.sort_unstable();
+        ids.dedup();
+        let m0 = model_with(engine.robot, base);
+        for id in ids {
+            let Some(effect) = effects::by_id(id) else { continue };
+            let idx: Vec<usize> = (0..diag.len())
+                .filter(|&i| diag[i].effect == id && !covered(id, &diag[i].joint))
+                .collect();
+            let probes: Vec<Option<(Probe, Vec<f64>)>> = idx
+                .par_iter()
+                .map(|&i| {
+                    let c = &diag[i];
+                    let t = JointTarget::of(engine.robot, &c.joint)?;
+                    let p0 = effect.initial(&m0, &t);
+                    let (lo, hi) = effect.bounds(&m0, &t);
+                    let with = |v: f64, recs: &[Recording]| {
+                        let mut p = p0.clone();
+                        p[0] = v;
+                        let mut a = base.to_vec();
+                        a.push(Applied { effect, joints: vec![c.joint.clone()], params: p });
+                        engine.errors(recs, &a)
+                    };
+                    let mut best: Option<Probe> = None;
+                    for v in effect.probes(p0[0], lo[0], hi[0], &c.evidence) {
+                        let step = v - p0[0];
+                        if step == 0.0 {
+                            continue;
+                        }
+                        let Some(e) = with(v, train) else { continue };
+                        let mut column = change(engine, train, tr_err, &e, &r);
+                        let ss = dot(&column, &column);
+                        if ss <= 1e-300 {
+                            continue;
+                        }
+                        let rs = dot_r(&column, &r);
+                        let explained = rs * rs / ss;
+                        if best.as_ref().is_none_or(|b| explained > b.explained) {
+                            column.iter_mut().for_each(|x| *x /= step);
+                            best = Some(Probe { v, step, column, explained });
+                        }
+                    }
+                    let best = best?;
+                    let held = match with(best.v, heldout) {
+                        Some(e) => {
+                            let mut h = change(engine, heldout, ho_err, &e, &rh);
+                            h.iter_mut().for_each(|x| *x /= best.step);
+                            h
+                        }
+                        None => vec![0.0; rh.len()],
+                    };
+                    Some((best, held))
+                })
+                .collect();
+            let mut m = EffectModel::default();
+            let mut cols: Vec<(&Vec<f64>, &Vec<f64>)> = Vec::new();
+            for (&i, p) in idx.iter().zip(&probes) {
+                let c = &mut diag[i];
+                let Some((p, held)) = p else { continue };
+                if train_n > 0 {
+                    c.evidence.insert("feature_explained_rms".into(), c.explained_rms);
+                    let coef = dot_r(&p.column, &r) / dot(&p.column, &p.column) / p.step;
+                    c.evidence.insert("sensitivity_coef".into(), coef);
+                    c.evidence.insert("probe".into(), p.v);
+                    c.explained_rms = (p.explained / train_n as f64).sqrt();
+                }
+                m.joints.push(c.joint.clone());
+                m.b.push(dot_r(&p.column, &r));
+                m.c.push(dot_r(held, &rh));
+                cols.push((&p.column, held));
+            }
+            let n = cols.len();
+            m.g = vec![vec![0.0; n]; n];
+            m.h = vec![vec![0.0; n]; n];
+            for a in 0..n {
+                for b in a..n {
+                    let g = dot(cols[a].0, cols[b].0);
+                    let h = dot(cols[a].1, cols[b].1);
+                    m.g[a][b] = g;
+                    m.g[b][a] = g;
+                    m.h[a][b] = h;
+                    m.h[b][a] = h;
+                }
+            }
+            if n > 0 {
+                models.insert(id, m);
+            }
+        }
+        Screen { models, train_ss, train_n, held_ss }
+    }
+
+    /// The linear prediction for `effect` on `group` (one parameter shared by the group); `None`
+    /// when a joint of the group has no column.
+    pub(super) fn predict(&self, effect: &str, group: &[String]) -> Option<Prediction> {
+        let m = self.models.get(effect)?;
+        let ix: Vec<usize> = group
+            .iter()
+            .map(|j| m.joints.iter().position(|x| x == j))
+            .collect::<Option<Vec<_>>>()?;
+        let b: f64 = ix.iter().map(|&i| m.b[i]).sum();
+        let c: f64 = ix.iter().map(|&i| m.c[i]).sum();
+        let g: f64 =
+            ix.iter().flat_map(|&i| ix.iter().map(move |&j| (i, j))).map(|(i, j)| m.g[i][j]).sum();
+        let h: f64 =
+            ix.iter().flat_map(|&i| ix.iter().map(move |&j| (i, j))).map(|(i, j)| m.h[i][j]).sum();
+        if g <= 1e-300 || self.train_n == 0 {
+            return None;
+        }
+        let step = b / g;
+        let train_left = (self.train_ss - b * b / g).max(0.0);
+        let held_left = (self.held_ss - 2.0 * step * c + step * step * h).max(0.0);
+        let heldout_improvement =
+            if self.held_ss > 0.0 { 1.0 - (held_left / self.held_ss).sqrt() } else { 0.0 };
+        Some(Prediction {
+            train_rmse: (train_left / self.train_n as f64).sqrt(),
+            heldout_improvement,
+            step,
+        })
+    }
+}
