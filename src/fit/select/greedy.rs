@@ -299,7 +299,12 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
             // A candidate added during the round (a mirror completion).
             None => engine.fit_budget(train, &applied, e, &group, opts.policy.screen_evals),
         };
-        if cp.is_empty() || gain(cf) <= 0.0 || gain(cf) < opts.policy.screen_share * best_gain {
+        // Either the coarse fit or the linearised step must reach the share: a coarse grid can
+        // miss a narrow basin (a torque limit) that the linear step sees, and the linear step
+        // misses what is far from linear (a resonance moved by damping).
+        let reaches = |g: f64| g > 0.0 && g >= opts.policy.screen_share * best_gain;
+        let linear_gain = predicted.map_or(f64::NEG_INFINITY, |p| gain(p.train_rmse));
+        if cp.is_empty() || !(reaches(gain(cf)) || reaches(linear_gain)) {
             out.tried.push(not_tested(Phase::Screen, cp.clone(), cf));
             // Its coarse fit still starts a joint pair fit (gain error + delay: neither alone
             // explains much).
