@@ -246,3 +246,121 @@ fn mcap_joint_states_and_commands_give_the_csv_gap_and_fit() {
     assert!(err.contains("no topic '/cmd'") && err.contains("/joint_states"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The rows of a CSV with every `.q`/`.q_cmd` in degrees and `.qd` in deg/s, and a
+/// `# units: deg, deg/s` header (plain string handling, not modellint's reader).
+fn in_degrees(csv: &str) -> String {
+    let mut out = String::from("# units: deg, deg/s\n");
+    let mut header: Vec<String> = Vec::new();
+    for line in csv.lines() {
+        if line.starts_with("# units:") {
+            continue;
+        }
+        if line.starts_with('#') {
+            out.push_str(line);
+            out.push('\n');
+            continue;
+        }
+        if header.is_empty() {
+            header = line.split(',').map(str::to_string).collect();
+            out.push_str(line);
+            out.push('\n');
+            continue;
+        }
+        let vals: Vec<String> = line
+            .split(',')
+            .zip(&header)
+            .map(|(v, h)| {
+                let x: f64 = v.parse().unwrap();
+                if h == "t" { v.to_string() } else { format!("{}", x.to_degrees()) }
+            })
+            .collect();
+        out.push_str(&vals.join(","));
+        out.push('\n');
+    }
+    out
+}
+
+/// `# units: deg, deg/s` is honoured (the same gap as in radians); an unknown unit and any
+/// other unit key are errors at their line.
+#[test]
+fn csv_unit_declarations_are_honoured() {
+    let dir = tmp("units");
+    let ds = synth(&dir);
+    let rad = ds.join("episodes/ep_00.csv");
+    let deg = dir.join("deg.csv");
+    std::fs::write(&deg, in_degrees(&std::fs::read_to_string(&rad).unwrap())).unwrap();
+    same(&gap(&[&rad], &[]), &gap(&[&deg], &[]), 1e-9, "degrees");
+    let text = std::fs::read_to_string(&deg).unwrap();
+    for (bad, want) in [
+        ("# units: deg, furlong/s\n", "unknown unit 'furlong/s'"),
+        ("# units: mm\n", "applies to no column"),
+        ("# units: elbow_pitch.qd=deg\n", "cannot be in deg"),
+        ("# time_unit: ms\n", "metadata 'time_unit'"),
+    ] {
+        let f = dir.join("bad.csv");
+        std::fs::write(&f, format!("{bad}{}", &text[text.find('\n').unwrap() + 1..])).unwrap();
+        let o = run(&["gap", model().to_str().unwrap(), f.to_str().unwrap()]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(err.contains(&format!("{}:1: ", f.display())) && err.contains(want), "{err}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Files of a kind modellint does not read, or JSON that is not a BAM log, are named as what
+/// they are, never read as CSV.
+#[test]
+fn files_of_the_wrong_kind_are_named() {
+    let dir = tmp("kinds");
+    let ds = synth(&dir);
+    let m = model();
+    let gap_err = |f: &Path| {
+        let o = run(&["gap", m.to_str().unwrap(), f.to_str().unwrap()]);
+        assert_eq!(o.status.code(), Some(2));
+        String::from_utf8_lossy(&o.stderr).into_owned()
+    };
+    let err = gap_err(&ds.join("truth.json"));
+    assert!(err.contains("answer key") && err.contains("episodes/"), "{err}");
+    assert!(!err.contains("--ignore-columns"), "{err}");
+    let other = dir.join("other.json");
+    std::fs::write(&other, r#"{"robot": "arm3", "joints": []}"#).unwrap();
+    let err = gap_err(&other);
+    assert!(err.contains("other.json is JSON with the keys joints, robot"), "{err}");
+    assert!(err.contains("not a BAM servo log") && !err.contains("--ignore-columns"), "{err}");
+    let bag = dir.join("run.bag");
+    std::fs::write(&bag, b"#ROSBAG V2.0\n\0\0\0").unwrap();
+    assert!(gap_err(&bag).contains("is a ROS 1 bag"));
+    // numpy.save (one array) and a torch.save file (torch when installed, else a zip laid
+    // out as torch.save writes it: archive/data.pkl beside the tensors' storage).
+    let py = r#"
+import sys, zipfile, pickle
+out = sys.argv[1]
+try:
+    import numpy as np
+    np.save(out + "/one.npy", np.zeros((4, 2)))
+except ImportError:
+    pass
+try:
+    import torch
+    torch.save({"dof_pos": torch.zeros(4, 2)}, out + "/run.pt")
+except ImportError:
+    with zipfile.ZipFile(out + "/run.pt", "w") as z:
+        z.writestr("archive/data.pkl", pickle.dumps({"dof_pos": [0.0]}))
+        z.writestr("archive/version", "3\n")
+"#;
+    match Command::new(python()).args(["-c", py]).arg(&dir).output() {
+        Ok(o) if o.status.success() => {
+            let err = gap_err(&dir.join("run.pt"));
+            assert!(err.contains("run.pt is a PyTorch file"), "{err}");
+            if dir.join("one.npy").is_file() {
+                let err = gap_err(&dir.join("one.npy"));
+                assert!(err.contains("is a single NumPy array"), "{err}");
+            } else {
+                eprintln!("skipping .npy: numpy not installed");
+            }
+        }
+        _ => eprintln!("skipping .pt/.npy: cannot run {}", python().display()),
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -88,7 +88,7 @@ pub fn read_log(
     opts: &ParseOptions,
 ) -> Option<Result<Vec<Recording>, RecordingError>> {
     let err = |m: String| RecordingError::new(path, None, None, m);
-    let name = path.display();
+    let name = file_name(path);
     let kind = sniff(path, bytes);
     let map = match opts.log_map.resolve() {
         Ok(m) => m,
@@ -110,7 +110,7 @@ pub fn read_log(
                 .map(|(ep, cols)| {
                     // Several episodes in one file: each named `FILE#episode_N`.
                     let src = match (many, ep) {
-                        (true, Some(k)) => PathBuf::from(format!("{name}#episode_{k}")),
+                        (true, Some(k)) => PathBuf::from(format!("{}#episode_{k}", path.display())),
                         _ => path.to_path_buf(),
                     };
                     assemble(&src, cols, &map, opts)
@@ -145,6 +145,12 @@ pub fn read_log(
     })
 }
 
+/// The file's name (the error's location already gives its path).
+fn file_name(path: &Path) -> String {
+    path.file_name()
+        .map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned())
+}
+
 fn kind_name(k: Kind) -> &'static str {
     match k {
         Kind::Npz => "NumPy .npz",
@@ -157,7 +163,7 @@ fn kind_name(k: Kind) -> &'static str {
 /// The error for JSON that is not a BAM log: what it is (its top-level keys; the answer key of
 /// a simulated dataset) and what is expected.
 pub fn not_bam_json(path: &Path, text: &str) -> RecordingError {
-    let name = path.display();
+    let name = file_name(path);
     let v: Result<serde_json::Value, _> = serde_json::from_str(text);
     let what = match &v {
         Err(e) => {

@@ -256,7 +256,7 @@ pub(crate) fn assemble(
         meta.insert("command".into(), c.clone());
     }
     if let Some(u) = &map.units {
-        meta.insert("converted_from_units".into(), u.clone());
+        meta.insert(super::units::KEY_CONVERTED.into(), u.clone());
     }
     if let Some(ct) = map.command_timing.as_deref().or(cols.command_timing) {
         if crate::sim2real::commands::CommandTiming::parse(ct).is_none() {

@@ -11,6 +11,8 @@ use super::Recording;
 
 /// Metadata key of the unit declaration.
 pub const KEY_UNITS: &str = "units";
+/// Metadata key the declaration is kept under once the values are in SI.
+pub const KEY_CONVERTED: &str = "converted_from_units";
 
 #[derive(Clone, Copy, PartialEq, Debug)]
 enum Dim {
@@ -92,7 +94,7 @@ fn unit(u: &str) -> Option<(Dim, f64)> {
 /// Is `key` (a metadata key) a unit declaration other than `units`?
 pub fn other_unit_key(key: &str) -> bool {
     let k = key.to_lowercase();
-    k != KEY_UNITS && k.contains("unit")
+    k != KEY_UNITS && k != KEY_CONVERTED && k.contains("unit")
 }
 
 /// Converts `rec` by its `units` declaration (`decl`, from its header; `names` are the CSV's
@@ -196,7 +198,7 @@ pub fn apply(rec: &mut Recording, decl: &str, names: &[&str]) -> Result<(), Stri
         }
     }
     if let Some(v) = rec.meta.remove(KEY_UNITS) {
-        rec.meta.insert("converted_from_units".into(), v);
+        rec.meta.insert(KEY_CONVERTED.into(), v);
     }
     Ok(())
 }
