@@ -233,9 +233,9 @@ pub struct FitCmd {
     pub window: Option<f64>,
     /// Estimate each episode's start state (first position and velocity of every joint) from
     /// the whole episode, with the first row's noisy reading as its prior, instead of starting
-    /// every replay exactly at the first row (docs/fitting.md, step 1). Helps a lightly damped
+    /// every replay exactly at the first row (`modellint docs fitting`, step 1). Helps a lightly damped
     /// servo. Opt-in: on every benchmark it gives the same answers as the first row
-    /// (docs/fitting.md, step 1).
+    /// (`modellint docs fitting`, step 1).
     #[arg(long)]
     pub start_estimate: bool,
     #[command(flatten)]
@@ -269,7 +269,7 @@ pub struct ReplayArgs {
     pub control_hz: Option<f64>,
     /// What a row's q_cmd is: `in-force` (the command in force at the row's time, the usual
     /// logger) or `sent-after` (the command sent right after the sample). Default: the
-    /// recording's `command_timing` key, else in-force. See docs/recording-format.md.
+    /// recording's `command_timing` key, else in-force. See `modellint docs recording-format`.
     #[arg(long, value_parser = ["in-force", "sent-after"])]
     pub command_timing: Option<String>,
     /// Floating base: fixed (pinned), recorded (driven from base.* columns) or free.
