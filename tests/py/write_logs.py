@@ -8,7 +8,7 @@ read here with Python's csv module, not with modellint. Written under OUT_DIR:
 * csv/NAME.csv        the equivalent CSV (t, <j>.q, <j>.qd, <j>.q_cmd, control_rate_hz; for
                       mcap also control_t0_s = the first command's stamp)
 * npz  (numpy):       npz/NAME.npz with t, dof_pos, des_dof_pos, dof_vel (time x joint) in
-                      DEGREES, joint_names
+                      DEGREES, joint_names, a scalar control_rate_hz
 * lerobot (pyarrow):  lerobot/meta/info.json (fps, names "main_<joint>") and
                       lerobot/data/chunk-000/file-000.parquet, every episode in one file
 * mcap (mcap, mcap-ros2-support): mcap/NAME.mcap, /joint_states (sensor_msgs/JointState, one
@@ -88,7 +88,8 @@ def main():
             np.savez(os.path.join(out, "npz", name + ".npz"),
                      t=np.array(cols["t"]), dof_pos=np.array(q) * deg,
                      des_dof_pos=np.array(qc) * deg, dof_vel=np.array(qd) * deg,
-                     joint_names=np.array(joints))
+                     joint_names=np.array(joints),
+                     control_rate_hz=np.float64(meta["control_rate_hz"]))
         elif fmt == "lerobot":
             write_equiv(os.path.join(out, "csv"), name, meta, cols, joints)
             fps = float(meta["control_rate_hz"])

@@ -105,10 +105,11 @@ fn decode(descr: &str, body: &[u8], count: usize) -> Result<NpyData, String> {
         _ => (false, descr),
     };
     let kind = rest.chars().next().ok_or("empty dtype")?;
-    let size: usize = rest[1..].parse().map_err(|_| format!("unsupported dtype '{descr}'"))?;
     if kind == 'O' {
         return Err("an object array (pickled Python objects): not read".into());
     }
+    let size: usize =
+        rest[kind.len_utf8()..].parse().map_err(|_| format!("unsupported dtype '{descr}'"))?;
     let width = if kind == 'U' { 4 * size } else { size };
     let need = count.checked_mul(width).ok_or("shape overflows")?;
     if body.len() < need {
@@ -203,7 +204,7 @@ pub fn parse_npz(bytes: &[u8]) -> Result<Vec<(String, NpyArray)>, String> {
         let mut f = zip.by_index(i).map_err(|e| format!("zip member {i}: {e}"))?;
         let name = f.name().map_err(|e| format!("zip member {i}: {e}"))?.into_owned();
         let Some(key) = name.strip_suffix(".npy") else { continue };
-        let mut buf = Vec::with_capacity(f.size().min(1 << 30) as usize);
+        let mut buf = Vec::new();
         f.read_to_end(&mut buf).map_err(|e| format!("member '{name}': {e}"))?;
         let a = parse_npy(&buf).map_err(|e| format!("array '{key}': {e}"))?;
         out.push((key.to_string(), a));
@@ -365,6 +366,11 @@ pub(crate) fn npz_columns(
         None => None,
     };
     let q_cmd = command.as_deref().map(matrix).transpose()?;
+    let scalar = |k: &str| match get(k).map(|a| (&a.data, a.shape.is_empty())) {
+        Some((NpyData::Num(v), true)) => v.first().copied().filter(|x| x.is_finite() && *x > 0.0),
+        _ => None,
+    };
+    let control_rate_hz = scalar("control_rate_hz").or_else(|| scalar("fps"));
     let mut meta = BTreeMap::new();
     for (key, a) in &arrays {
         // Scalars (a rate, a seed) are kept as metadata.
@@ -384,6 +390,7 @@ pub(crate) fn npz_columns(
         qd: velocity.as_deref().map(matrix).transpose()?,
         tau: effort.as_deref().map(matrix).transpose()?,
         meta,
+        control_rate_hz,
         ..Default::default()
     })
 }

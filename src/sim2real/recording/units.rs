@@ -117,7 +117,10 @@ pub fn apply(rec: &mut Recording, decl: &str, names: &[&str]) -> Result<(), Stri
                         }
                     }
                 }
-                if !any {
+                // A kind the file does not have (`rad/s` without `.qd` columns) is vacuously
+                // honoured; a length, linear velocity or force without its columns meant a
+                // slide joint's, which a bare unit does not name.
+                if !any && matches!(d, Dim::Length | Dim::LinVel | Dim::Force) {
                     return Err(format!(
                         "units: '{item}' applies to no column (a bare {} unit is for {}); name the \
                          columns: e.g. `rail.q={item}`",
