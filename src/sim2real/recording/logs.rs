@@ -90,6 +90,18 @@ pub fn read_log(
     let err = |m: String| RecordingError::new(path, None, None, m);
     let name = file_name(path);
     let kind = sniff(path, bytes);
+    if matches!(kind, Kind::Text | Kind::Json) {
+        // A mapping given for a CSV or BAM file would be ignored: an error, not a silence.
+        if !opts.log_map.is_empty() {
+            return Some(Err(err(format!(
+                "--log-map and the --log-* flags apply to .npz, parquet and MCAP logs; {name} is \
+                 {}: a CSV declares its units with `# units: deg, deg/s` and names its columns \
+                 <joint>.q, <joint>.q_cmd",
+                if kind == Kind::Json { "JSON" } else { "CSV text" }
+            ))));
+        }
+        return None;
+    }
     let map = match opts.log_map.resolve() {
         Ok(m) => m,
         Err(e) => return Some(Err(e)),
@@ -99,7 +111,7 @@ pub fn read_log(
         Ok(vec![assemble(path, cols, &map, opts)?])
     };
     Some(match kind {
-        Kind::Text | Kind::Json => return None,
+        Kind::Text | Kind::Json => unreachable!("returned above"),
         Kind::Npz => one(super::npy::npz_columns(bytes, &map)),
         Kind::Mcap => one(super::rosbag::mcap_columns(bytes, &map)),
         Kind::Parquet => (|| {

@@ -204,7 +204,7 @@ pub(crate) fn assemble(
             )));
         }
     };
-    for (from, _) in &map.rename {
+    for from in map.rename.keys() {
         if !names.contains(from) {
             return Err(err(format!(
                 "rename: no joint '{from}' in the log (its joints: {})",

@@ -212,55 +212,6 @@ pub fn parse_npz(bytes: &[u8]) -> Result<Vec<(String, NpyArray)>, String> {
     Ok(out)
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn npy(descr: &str, fortran: bool, shape: &str, body: &[u8]) -> Vec<u8> {
-        let mut h = format!(
-            "{{'descr': '{descr}', 'fortran_order': {}, 'shape': {shape}, }}",
-            if fortran { "True" } else { "False" }
-        );
-        while (10 + h.len() + 1) % 64 != 0 {
-            h.push(' ');
-        }
-        h.push('\n');
-        let mut b = MAGIC.to_vec();
-        b.extend([1, 0]);
-        b.extend((h.len() as u16).to_le_bytes());
-        b.extend(h.as_bytes());
-        b.extend(body);
-        b
-    }
-
-    #[test]
-    fn reads_dtypes_orders_and_refuses_objects() {
-        let body: Vec<u8> =
-            [1.0f64, 2.0, 3.0, 4.0, 5.0, 6.0].iter().flat_map(|x| x.to_le_bytes()).collect();
-        let c = parse_npy(&npy("<f8", false, "(2, 3)", &body)).unwrap();
-        assert_eq!(
-            (c.shape.clone(), c.data),
-            (vec![2, 3], NpyData::Num(vec![1.0, 2.0, 3.0, 4.0, 5.0, 6.0]))
-        );
-        let f = parse_npy(&npy("<f8", true, "(2, 3)", &body)).unwrap();
-        assert_eq!(f.data, NpyData::Num(vec![1.0, 3.0, 5.0, 2.0, 4.0, 6.0]));
-        let be: Vec<u8> = [-2i32, 7].iter().flat_map(|x| x.to_be_bytes()).collect();
-        assert_eq!(
-            parse_npy(&npy(">i4", false, "(2,)", &be)).unwrap().data,
-            NpyData::Num(vec![-2.0, 7.0])
-        );
-        let s: Vec<u8> = "ab\0\0c\0\0\0".chars().flat_map(|c| (c as u32).to_le_bytes()).collect();
-        assert_eq!(
-            parse_npy(&npy("<U4", false, "(2,)", &s)).unwrap().data,
-            NpyData::Str(vec!["ab".into(), "c".into()])
-        );
-        assert!(parse_npy(&npy("|O", false, "(2,)", &[0; 16])).unwrap_err().contains("object"));
-        assert!(parse_npy(&npy("<f8", false, "(3,)", &[0; 16])).unwrap_err().contains("truncated"));
-        assert!(parse_npy(b"\x93NUMPY").is_err());
-        assert!(parse_npy(b"PK").is_err());
-    }
-}
-
 /// Default keys of the measured positions, the command, the velocities, the torques, the time
 /// and the joint names in a `.npz` of joint arrays (Isaac Gym / Isaac Lab / legged_gym names
 /// first).
@@ -393,4 +344,53 @@ pub(crate) fn npz_columns(
         control_rate_hz,
         ..Default::default()
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn npy(descr: &str, fortran: bool, shape: &str, body: &[u8]) -> Vec<u8> {
+        let mut h = format!(
+            "{{'descr': '{descr}', 'fortran_order': {}, 'shape': {shape}, }}",
+            if fortran { "True" } else { "False" }
+        );
+        while (10 + h.len() + 1) % 64 != 0 {
+            h.push(' ');
+        }
+        h.push('\n');
+        let mut b = MAGIC.to_vec();
+        b.extend([1, 0]);
+        b.extend((h.len() as u16).to_le_bytes());
+        b.extend(h.as_bytes());
+        b.extend(body);
+        b
+    }
+
+    #[test]
+    fn reads_dtypes_orders_and_refuses_objects() {
+        let body: Vec<u8> =
+            [1.0f64, 2.0, 3.0, 4.0, 5.0, 6.0].iter().flat_map(|x| x.to_le_bytes()).collect();
+        let c = parse_npy(&npy("<f8", false, "(2, 3)", &body)).unwrap();
+        assert_eq!(
+            (c.shape.clone(), c.data),
+            (vec![2, 3], NpyData::Num(vec![1.0, 2.0, 3.0, 4.0, 5.0, 6.0]))
+        );
+        let f = parse_npy(&npy("<f8", true, "(2, 3)", &body)).unwrap();
+        assert_eq!(f.data, NpyData::Num(vec![1.0, 3.0, 5.0, 2.0, 4.0, 6.0]));
+        let be: Vec<u8> = [-2i32, 7].iter().flat_map(|x| x.to_be_bytes()).collect();
+        assert_eq!(
+            parse_npy(&npy(">i4", false, "(2,)", &be)).unwrap().data,
+            NpyData::Num(vec![-2.0, 7.0])
+        );
+        let s: Vec<u8> = "ab\0\0c\0\0\0".chars().flat_map(|c| (c as u32).to_le_bytes()).collect();
+        assert_eq!(
+            parse_npy(&npy("<U4", false, "(2,)", &s)).unwrap().data,
+            NpyData::Str(vec!["ab".into(), "c".into()])
+        );
+        assert!(parse_npy(&npy("|O", false, "(2,)", &[0; 16])).unwrap_err().contains("object"));
+        assert!(parse_npy(&npy("<f8", false, "(3,)", &[0; 16])).unwrap_err().contains("truncated"));
+        assert!(parse_npy(b"\x93NUMPY").is_err());
+        assert!(parse_npy(b"PK").is_err());
+    }
 }

@@ -105,6 +105,9 @@ pub(crate) fn float64_array(data: &[u8]) -> Result<Sample, String> {
     Ok(Sample { position: c.doubles()?, ..Default::default() })
 }
 
+/// topic → (schema name, [(log time ns, raw message)]).
+type ByTopic = BTreeMap<String, (String, Vec<(u64, Vec<u8>)>)>;
+
 /// Topics of a file: (topic, schema name, message count).
 type Topics = Vec<(String, String, usize)>;
 
@@ -113,7 +116,7 @@ pub(crate) fn mcap_columns(bytes: &[u8], map: &LogMap) -> Result<Columns, String
     let stream =
         ::mcap::MessageStream::new(bytes).map_err(|e| format!("not a readable MCAP file: {e}"))?;
     // topic → (schema, [(log time ns, raw message)])
-    let mut by_topic: BTreeMap<String, (String, Vec<(u64, Vec<u8>)>)> = BTreeMap::new();
+    let mut by_topic: ByTopic = BTreeMap::new();
     for m in stream {
         let m = m.map_err(|e| format!("MCAP: {e}"))?;
         let schema = m.channel.schema.as_ref().map(|s| s.name.clone()).unwrap_or_default();
