@@ -212,6 +212,38 @@ fn lerobot_dataset_gives_the_csv_gap_and_fit() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// LeRobot's own time stamps are float32 (frame_index / fps): a recorder on the control ticks
+/// (synth --log-at-ticks, ticks from 0), its stamps stored as float32, gives the CSV's gap (each
+/// stamp put back on the fps grid; a float32 a rounding before a tick edge would take the
+/// previous tick's command).
+#[test]
+fn lerobot_float32_stamps_on_the_fps_grid() {
+    let dir = tmp("lerobot32");
+    let ds = dir.join("ds");
+    let o = Command::new(bin())
+        .args(["synth", model().to_str().unwrap(), "--log-at-ticks", "--control-phase", "0"])
+        .args(["--episodes", "2", "--duration", "3", "--out"])
+        .arg(&ds)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = dir.join("out");
+    if !write_logs("lerobot32", &ds, &out) {
+        return;
+    }
+    let map = dir.join("map.toml");
+    std::fs::write(
+        &map,
+        "command_timing = \"in_force\"\n[rename]\nmain_shoulder_pitch = \"shoulder_pitch\"\n\
+         main_elbow_pitch = \"elbow_pitch\"\nmain_wrist_pitch = \"wrist_pitch\"\n",
+    )
+    .unwrap();
+    let a = gap(&[&out.join("csv")], &[]);
+    let b = gap(&[&out.join("lerobot")], &["--log-map", map.to_str().unwrap()]);
+    same(&a, &b, 1e-12, "gap");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// MCAP written by mcap-ros2-support: /joint_states (JointState per recorded row) and a
 /// Float64MultiArray command per control tick, stamped from 1.7·10⁹ s. With the control rate
 /// in the mapping, the command in force at each row and the ticks' origin come from the

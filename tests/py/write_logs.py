@@ -11,6 +11,7 @@ read here with Python's csv module, not with modellint. Written under OUT_DIR:
                       DEGREES, joint_names, a scalar control_rate_hz
 * lerobot (pyarrow):  lerobot/meta/info.json (fps, names "main_<joint>") and
                       lerobot/data/chunk-000/file-000.parquet, every episode in one file
+* lerobot32:          the same with the timestamp column in float32, as LeRobot writes it
 * mcap (mcap, mcap-ros2-support): mcap/NAME.mcap, /joint_states (sensor_msgs/JointState, one
                       message per row) and /forward_position_controller/commands
                       (std_msgs/Float64MultiArray, one per control tick, from truth_commands),
@@ -61,7 +62,7 @@ def main():
     try:
         if fmt == "npz":
             import numpy as np
-        elif fmt == "lerobot":
+        elif fmt in ("lerobot", "lerobot32"):
             import pyarrow as pa
             import pyarrow.parquet as pq
         elif fmt == "mcap":
@@ -90,7 +91,7 @@ def main():
                      des_dof_pos=np.array(qc) * deg, dof_vel=np.array(qd) * deg,
                      joint_names=np.array(joints),
                      control_rate_hz=np.float64(meta["control_rate_hz"]))
-        elif fmt == "lerobot":
+        elif fmt in ("lerobot", "lerobot32"):
             write_equiv(os.path.join(out, "csv"), name, meta, cols, joints)
             fps = float(meta["control_rate_hz"])
             for i in range(n):
@@ -155,8 +156,11 @@ uint32 stride"""
                                "name": joints, "position": q[i], "velocity": qd[i], "effort": []}
                         w.write_message("/joint_states", js, msg, log_time=stamp, publish_time=stamp)
                 w.finish()
-    if fmt == "lerobot":
+    if fmt in ("lerobot", "lerobot32"):
         root = os.path.join(out, "lerobot")
+        if fmt == "lerobot32":
+            # As LeRobot stores it: 32-bit time stamps (frame_index / fps).
+            table["timestamp"] = pa.array(table["timestamp"], type=pa.float32())
         os.makedirs(os.path.join(root, "meta"), exist_ok=True)
         os.makedirs(os.path.join(root, "data", "chunk-000"), exist_ok=True)
         with open(os.path.join(root, "meta", "info.json"), "w") as f:
