@@ -300,3 +300,30 @@ fn log_map_files_and_flags() {
     assert!(e.message.contains("comand"), "{e}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A file's kind comes from its first bytes; the kinds not read are named with what to do.
+#[test]
+fn kinds_by_magic_bytes() {
+    let k = |name: &str, b: &[u8]| sniff(Path::new(name), b);
+    assert_eq!(k("x.csv", b"t,a.q\n0,1\n"), Kind::Text);
+    assert_eq!(k("x.csv", b"\xef\xbb\xbf  {\"a\": 1}"), Kind::Json);
+    assert_eq!(k("x.bin", b"PAR1\0\0"), Kind::Parquet);
+    assert_eq!(k("x", b"\x89MCAP0\r\n"), Kind::Mcap);
+    assert_eq!(k("x.csv", b"#ROSBAG V2.0\n"), Kind::Ros1Bag);
+    assert_eq!(k("x.db3", b"SQLite format 3\0"), Kind::Sqlite);
+    assert_eq!(k("x.h5", b"\x89HDF\r\n\x1a\n"), Kind::Hdf5);
+    assert_eq!(k("x.pkl", b"\x80\x04\x95"), Kind::Pickle);
+    assert_eq!(k("x.pt", b"\x80\x02\x8a"), Kind::PyTorch);
+    assert_eq!(k("x.npy", b"\x93NUMPY\x01\x00"), Kind::Npy);
+    assert_eq!(k("x.dat", b"ab\0cd"), Kind::Binary);
+    let opts = ParseOptions::default();
+    for (name, bytes, want) in [
+        ("run.db3", &b"SQLite format 3\0"[..], "run.db3 is an SQLite database"),
+        ("run.h5", &b"\x89HDF\r\n\x1a\n"[..], "run.h5 is an HDF5 file"),
+        ("run.pkl", &b"\x80\x04\x95"[..], "run.pkl is a Python pickle"),
+    ] {
+        let e = read_log(Path::new(name), bytes, &opts).unwrap().unwrap_err();
+        assert!(e.message.contains(want), "{e}");
+    }
+    assert!(read_log(Path::new("x.csv"), b"t,a.q\n", &opts).is_none());
+}
