@@ -135,12 +135,21 @@ pub enum Cmd {
     /// encoder, drops), with the answer key. `modellint synth --help` explains every knob.
     #[command(long_about = crate::synth::cmd::LONG_ABOUT)]
     Synth(crate::synth::cmd::SynthCmd),
-    /// Convert a BAM servo log (JSON) to the CSV recording format (adds the servo.kp column).
+    /// Convert a recording to the CSV format: a BAM servo log (adds the servo.kp column), a
+    /// NumPy .npz, LeRobot parquet (one CSV per episode: OUT_ep<N>.csv) or MCAP file.
     Convert {
-        /// BAM JSON log.
+        /// Recording (BAM JSON, .npz, .parquet, .mcap, CSV).
         input: PathBuf,
         /// CSV file to write.
         output: PathBuf,
+        #[command(flatten)]
+        log: crate::cli_logs::LogArgs,
+    },
+    /// Print a documentation page (`modellint docs recording-format`); without a topic, list them.
+    Docs {
+        /// Topic: architecture, ci, conceal-benchmark, fitting, gap, probes, recording-format,
+        /// spec, synth.
+        topic: Option<String>,
     },
 }
 
@@ -148,9 +157,10 @@ pub enum Cmd {
 pub struct GapCmd {
     /// Model (MJCF or URDF).
     pub model: PathBuf,
-    /// Recordings: CSV files, BAM JSON logs, or directories (their *.csv/*.json, sorted; a
-    /// dataset directory with episodes/ beside truth.json, as `synth --out` writes, is read from
-    /// its episodes/).
+    /// Recordings: CSV files, BAM JSON logs, NumPy .npz, LeRobot parquet, MCAP files, or
+    /// directories (their recordings, sorted; a dataset directory with episodes/ beside
+    /// truth.json, as `synth --out` writes, is read from its episodes/; a LeRobot dataset from
+    /// its data/).
     #[arg(required = true)]
     pub recordings: Vec<PathBuf>,
     /// Hardware spec (TOML) for joint regions. Default: <model>.toml beside the model.
@@ -184,9 +194,10 @@ pub struct FitCmd {
     /// and torque-off braking are ordinary effects now).
     #[arg(long, value_parser = ["xl330"], hide = true)]
     pub servo: Option<String>,
-    /// Recordings: CSV files, BAM JSON logs, or directories (their *.csv/*.json, sorted; a
-    /// dataset directory with episodes/ beside truth.json, as `synth --out` writes, is read from
-    /// its episodes/).
+    /// Recordings: CSV files, BAM JSON logs, NumPy .npz, LeRobot parquet, MCAP files, or
+    /// directories (their recordings, sorted; a dataset directory with episodes/ beside
+    /// truth.json, as `synth --out` writes, is read from its episodes/; a LeRobot dataset from
+    /// its data/).
     #[arg(required = true)]
     pub recordings: Vec<PathBuf>,
     /// Hardware spec (TOML) for joint regions. Default: <model>.toml beside the model.
@@ -222,9 +233,9 @@ pub struct FitCmd {
     pub window: Option<f64>,
     /// Estimate each episode's start state (first position and velocity of every joint) from
     /// the whole episode, with the first row's noisy reading as its prior, instead of starting
-    /// every replay exactly at the first row (docs/fitting.md, step 1). Helps a lightly damped
+    /// every replay exactly at the first row (`modellint docs fitting`, step 1). Helps a lightly damped
     /// servo. Opt-in: on every benchmark it gives the same answers as the first row
-    /// (docs/fitting.md, step 1).
+    /// (`modellint docs fitting`, step 1).
     #[arg(long)]
     pub start_estimate: bool,
     #[command(flatten)]
@@ -258,7 +269,7 @@ pub struct ReplayArgs {
     pub control_hz: Option<f64>,
     /// What a row's q_cmd is: `in-force` (the command in force at the row's time, the usual
     /// logger) or `sent-after` (the command sent right after the sample). Default: the
-    /// recording's `command_timing` key, else in-force. See docs/recording-format.md.
+    /// recording's `command_timing` key, else in-force. See `modellint docs recording-format`.
     #[arg(long, value_parser = ["in-force", "sent-after"])]
     pub command_timing: Option<String>,
     /// Floating base: fixed (pinned), recorded (driven from base.* columns) or free.
@@ -278,6 +289,8 @@ pub struct ReplayArgs {
     /// joint no actuator drives (a passive joint) needs no command and no flag.
     #[arg(long, value_delimiter = ',', value_name = "JOINT")]
     pub no_command: Vec<String>,
+    #[command(flatten)]
+    pub log: crate::cli_logs::LogArgs,
 }
 
 impl ReplayArgs {
@@ -286,6 +299,7 @@ impl ReplayArgs {
         crate::sim2real::recording::ParseOptions {
             ignore_columns: self.ignore_columns.clone(),
             no_command: self.no_command.clone(),
+            log_map: self.log.to_map(),
             ..Default::default()
         }
     }
@@ -412,7 +426,10 @@ pub fn run() -> i32 {
             report: f.report,
         }),
         Some(Cmd::Synth(s)) => crate::synth::cmd::run(s),
-        Some(Cmd::Convert { input, output }) => crate::sim2real::cmd::run_convert(&input, &output),
+        Some(Cmd::Convert { input, output, log }) => {
+            crate::sim2real::cmd::run_convert(&input, &output, &log.to_map())
+        }
+        Some(Cmd::Docs { topic }) => crate::cli_logs::docs(topic.as_deref()),
         None => check(cli.check),
     }
 }

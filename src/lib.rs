@@ -7,6 +7,7 @@
 // touched anyway.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 pub mod cli;
+pub mod cli_logs;
 pub mod config;
 pub mod error;
 pub mod finding;

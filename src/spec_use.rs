@@ -96,7 +96,7 @@ pub fn missing_note(model: &Path, s: &SpecSearch, enabled: &dyn Fn(&str) -> bool
     let skipped: Vec<&str> = SKIPPED.iter().map(|r| r.0).filter(|id| enabled(id)).collect();
     let weakened: Vec<&str> = WEAKENED.iter().map(|r| r.0).filter(|id| enabled(id)).collect();
     let mut out = format!(
-        "modellint: {}: no hardware spec found (looked for {}; pass --spec FILE.toml, docs/spec.md)",
+        "modellint: {}: no hardware spec found (looked for {}; pass --spec FILE.toml; `modellint docs spec`)",
         model.display(),
         looked.join(", ")
     );

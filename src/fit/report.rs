@@ -238,6 +238,20 @@ fn overlays(r: &FitReport, joints: &[String]) -> String {
             ],
             false,
         ));
+        // The error over time: where in the episode the fit closed the gap, and where not.
+        let err = |sim: &[f64]| -> Vec<f64> {
+            sim.iter().zip(&jt.q).map(|(s, q)| (s - q).to_degrees()).collect()
+        };
+        h.push_str(&line_plot(
+            &format!("{jn}: error sim − real, {file}"),
+            "time [s]",
+            "error [deg]",
+            &[
+                Series::new(&t, err(&ea.q_sim[ka]), AFTER, "after", ""),
+                Series::new(&t, err(&eb.q_sim[kb]), BEFORE, "before", "5 3"),
+            ],
+            false,
+        ));
     }
     h.push_str("</div>");
     h

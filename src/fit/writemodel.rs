@@ -83,13 +83,15 @@ fn closure(model: &Path) -> Result<Vec<Src>, String> {
     Ok(files)
 }
 
-/// Relative path from directory `from` to `to` (both absolute), or `to` when none exists.
+/// Relative path from directory `from` to `to` (both absolute), or `to` when none exists (no
+/// common root: another drive). Relative even when only the root is shared (/tmp/out vs
+/// /work/models: `../../work/models`): the written model and the original tree then move
+/// together, as a repository checkout does, and no machine's absolute path is written into it.
 fn relative(from: &Path, to: &Path) -> PathBuf {
     let f: Vec<Component> = from.components().collect();
     let t: Vec<Component> = to.components().collect();
     let common = f.iter().zip(&t).take_while(|(a, b)| a == b).count();
-    // Only the root in common (/tmp/out vs /work/models): the absolute path reads better.
-    if common <= usize::from(to.has_root()) {
+    if common == 0 {
         return to.to_path_buf();
     }
     let mut r = PathBuf::new();
@@ -329,7 +331,10 @@ mod tests {
         );
         assert_eq!(relative(Path::new("/a/b"), Path::new("/a/b")), PathBuf::from("."));
         assert_eq!(relative(Path::new("/a/b"), Path::new("/a/b/c")), PathBuf::from("c"));
-        assert_eq!(relative(Path::new("/tmp/out"), Path::new("/work/m")), PathBuf::from("/work/m"));
+        assert_eq!(
+            relative(Path::new("/tmp/out"), Path::new("/work/m")),
+            PathBuf::from("../../work/m")
+        );
     }
 
     #[test]

@@ -6,7 +6,7 @@ use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 
 use crate::sim2real::gap::{self, GapOptions, GapReport};
-use crate::sim2real::input::{expand_inputs, read_for_replay, read_recording, scored_view};
+use crate::sim2real::input::{expand_inputs, read_for_replay, read_recordings_with, scored_view};
 use crate::sim2real::recording;
 use crate::sim2real::replay::{self, ReplayOptions, Replayer};
 
@@ -138,18 +138,34 @@ fn exit_code(r: &GapReport) -> i32 {
     if r.diverged.is_empty() { 0 } else { 1 }
 }
 
-/// `modellint convert IN.json OUT.csv`: BAM log → CSV with the `servo.kp` column.
-pub fn run_convert(input: &Path, output: &Path) -> i32 {
-    let rec = match read_recording(input) {
+/// `modellint convert IN OUT.csv`: a BAM log (→ CSV with the `servo.kp` column), a NumPy
+/// `.npz`, LeRobot parquet or MCAP file → CSV. A file of several episodes writes
+/// `OUT_ep<N>.csv` for each.
+pub fn run_convert(input: &Path, output: &Path, map: &recording::LogMap) -> i32 {
+    let opts = recording::ParseOptions { log_map: map.clone(), ..Default::default() };
+    let recs = match read_recordings_with(input, &opts) {
         Ok(r) => r,
         Err(e) => {
             eprintln!("modellint: {e}");
             return 2;
         }
     };
-    if let Err(e) = std::fs::write(output, recording::write_csv(&rec)) {
-        eprintln!("modellint: cannot write {}: {e}", output.display());
-        return 2;
+    let many = recs.len() > 1;
+    for (i, rec) in recs.iter().enumerate() {
+        let out = if many {
+            let stem = output.file_stem().unwrap_or_default().to_string_lossy();
+            let ep = rec.meta.get("episode_index").cloned().unwrap_or_else(|| i.to_string());
+            output.with_file_name(format!("{stem}_ep{ep}.csv"))
+        } else {
+            output.to_path_buf()
+        };
+        if let Err(e) = std::fs::write(&out, recording::write_csv(rec)) {
+            eprintln!("modellint: cannot write {}: {e}", out.display());
+            return 2;
+        }
+        if many {
+            eprintln!("modellint: wrote {}", out.display());
+        }
     }
     0
 }

@@ -13,11 +13,48 @@ pub fn read_recording(path: &Path) -> Result<Recording, RecordingError> {
     read_recording_with(path, &ParseOptions::default())
 }
 
-/// [`read_recording`] with parse options (`--ignore-columns` for CSV; for both formats the
-/// model's joints and which of them must have a command, [`ParseOptions::actuated_joints`]).
-pub fn read_recording_with(path: &Path, opts: &ParseOptions) -> Result<Recording, RecordingError> {
-    let text = std::fs::read_to_string(path)
+/// The recordings of one file, whatever its kind ([`recording::sniff`]): CSV, BAM JSON, NumPy
+/// `.npz`, LeRobot parquet (one recording per episode), MCAP; any other kind is an error
+/// naming it.
+pub fn read_recordings_with(
+    path: &Path,
+    opts: &ParseOptions,
+) -> Result<Vec<Recording>, RecordingError> {
+    let bytes = std::fs::read(path)
         .map_err(|e| RecordingError::new(path, None, None, format!("cannot read file: {e}")))?;
+    if let Some(r) = recording::read_log(path, &bytes, opts) {
+        return r;
+    }
+    let text = String::from_utf8(bytes).map_err(|e| {
+        RecordingError::new(
+            path,
+            None,
+            None,
+            format!("not UTF-8 text (byte {}): not a CSV file", e.utf8_error().valid_up_to()),
+        )
+    })?;
+    parse_text(path, &text, opts).map(|r| vec![r])
+}
+
+/// [`read_recording`] with parse options (`--ignore-columns` for CSV; for every format the
+/// model's joints and which of them must have a command, [`ParseOptions::actuated_joints`]).
+/// A file of several recordings (a LeRobot file of several episodes) is an error here.
+pub fn read_recording_with(path: &Path, opts: &ParseOptions) -> Result<Recording, RecordingError> {
+    let mut v = read_recordings_with(path, opts)?;
+    if v.len() != 1 {
+        return Err(RecordingError::new(
+            path,
+            None,
+            None,
+            format!("holds {} episodes: pick one with --log-episode N", v.len()),
+        ));
+    }
+    Ok(v.remove(0))
+}
+
+/// CSV text or JSON (a BAM log; other JSON is an error saying what it is).
+fn parse_text(path: &Path, text: &str, opts: &ParseOptions) -> Result<Recording, RecordingError> {
+    let text = text.to_string();
     if bam::is_bam_json(&text) {
         let rec = bam::bam_recording(bam::parse_bam(path, &text)?);
         if let Some(model) = &opts.model_joints {
@@ -31,6 +68,8 @@ pub fn read_recording_with(path: &Path, opts: &ParseOptions) -> Result<Recording
         )
         .map_err(|m| RecordingError::new(path, bam::entry_line(&text, 0), None, m))?;
         Ok(rec)
+    } else if recording::sniff(path, text.as_bytes()) == recording::Kind::Json {
+        Err(recording::not_bam_json(path, &text))
     } else {
         recording::parse_csv_with(path, &text, opts)
     }
@@ -92,8 +131,17 @@ pub fn read_for_replay(
         actuated_joints: Some(actuated.clone()),
         ..parse.clone()
     };
-    for f in files {
-        let mut r = read_recording_with(f, &parse).map_err(|e| e.to_string())?;
+    let read: Vec<(PathBuf, Recording)> = {
+        let mut v = Vec::with_capacity(files.len());
+        for f in files {
+            for r in read_recordings_with(f, &parse).map_err(|e| e.to_string())? {
+                // A file of several episodes: each is named by its own source.
+                v.push((if r.source == *f { f.clone() } else { r.source.clone() }, r));
+            }
+        }
+        v
+    };
+    for (f, mut r) in read {
         for j in &r.joints {
             if j.q_cmd.is_none() && actuated.contains(&j.name) && matcher.is_match(&j.name) {
                 let name = f.file_name().unwrap_or_default().to_string_lossy().into_owned();
@@ -254,7 +302,7 @@ pub fn scored_view(
 }
 
 /// Metadata key recording the whole seconds [`rebase_time`] took off a recording's times.
-pub const KEY_TIME_OFFSET: &str = "time_offset_s";
+pub const KEY_TIME_OFFSET: &str = recording::KEY_TIME_OFFSET;
 
 /// Times above this [s] are shifted to start near 0 before the replay.
 const REBASE_ABOVE_S: f64 = 1e4;
@@ -313,7 +361,19 @@ impl Inputs {
 pub fn expand_inputs(inputs: &[PathBuf]) -> Result<Inputs, RecordingError> {
     let mut out = Inputs::default();
     for p in inputs {
-        if p.is_dir() {
+        if p.is_dir() && p.join("meta/info.json").is_file() && p.join("data").is_dir() {
+            // A LeRobot dataset: its data/chunk-*/ parquet files.
+            let files = parquet_files(&p.join("data"))?;
+            if files.is_empty() {
+                return Err(RecordingError::new(
+                    p,
+                    None,
+                    None,
+                    "LeRobot dataset without parquet files under data/",
+                ));
+            }
+            out.files.extend(files);
+        } else if p.is_dir() {
             let (mut files, mut skipped) = recording_files(p)?;
             let episodes = p.join("episodes");
             if episodes.is_dir() && files.is_empty() {
@@ -321,10 +381,11 @@ pub fn expand_inputs(inputs: &[PathBuf]) -> Result<Inputs, RecordingError> {
             }
             if files.is_empty() {
                 let why = if skipped.is_empty() {
-                    "directory holds no *.csv or *.json recordings".to_string()
+                    "directory holds no recordings (*.csv, *.json, *.npz, *.parquet, *.mcap)"
+                        .to_string()
                 } else {
                     format!(
-                        "directory holds no *.csv or *.json recordings ({} JSON file(s) there \
+                        "directory holds no recordings (*.csv, *.json, *.npz, *.parquet, *.mcap; {} JSON file(s) there \
                          are not BAM logs)",
                         skipped.len()
                     )
@@ -354,7 +415,7 @@ fn recording_files(dir: &Path) -> Result<(Vec<PathBuf>, Vec<PathBuf>), Recording
             continue;
         }
         let Some(ext) = f.extension() else { continue };
-        if ext.eq_ignore_ascii_case("csv") {
+        if ["csv", "npz", "parquet", "mcap"].iter().any(|e| ext.eq_ignore_ascii_case(e)) {
             files.push(f);
         } else if ext.eq_ignore_ascii_case("json") {
             // Unreadable files are kept: reading them reports the error at the file.
@@ -367,6 +428,25 @@ fn recording_files(dir: &Path) -> Result<(Vec<PathBuf>, Vec<PathBuf>), Recording
     files.sort();
     skipped.sort();
     Ok((files, skipped))
+}
+
+/// The `*.parquet` files under `dir` (one level of subdirectories: LeRobot's `chunk-000/`),
+/// sorted.
+fn parquet_files(dir: &Path) -> Result<Vec<PathBuf>, RecordingError> {
+    let read = |d: &Path| {
+        std::fs::read_dir(d)
+            .map(|rd| rd.filter_map(|e| e.ok().map(|e| e.path())).collect::<Vec<_>>())
+            .map_err(|e| RecordingError::new(d, None, None, format!("cannot read directory: {e}")))
+    };
+    let mut out = Vec::new();
+    for e in read(dir)? {
+        let entries = if e.is_dir() { read(&e)? } else { vec![e] };
+        out.extend(entries.into_iter().filter(|f| {
+            f.is_file() && f.extension().is_some_and(|x| x.eq_ignore_ascii_case("parquet"))
+        }));
+    }
+    out.sort();
+    Ok(out)
 }
 
 #[cfg(test)]
@@ -429,7 +509,7 @@ mod tests {
         std::fs::create_dir_all(empty.join("episodes")).unwrap();
         let e = expand_inputs(std::slice::from_ref(&empty)).unwrap_err();
         assert_eq!(e.file, empty);
-        assert!(e.message.contains("no *.csv or *.json"), "{}", e.message);
+        assert!(e.message.contains("directory holds no recordings"), "{}", e.message);
         let _ = std::fs::remove_dir_all(&root);
     }
 

@@ -142,6 +142,15 @@ pub fn write(
             ],
             false,
         ));
+        let err: Vec<f64> =
+            ep.q_sim[k].iter().zip(&jt.q).map(|(s, q)| (s - q).to_degrees()).collect();
+        html.push_str(&line_plot(
+            &format!("{jn}: error sim − real"),
+            "time [s]",
+            "error [deg]",
+            &[Series::new(&t, err, SIM, "sim − real", "")],
+            false,
+        ));
     }
     html.push_str("</div><h2>Per-joint error</h2>");
     html.push_str(&bars(r));

@@ -122,7 +122,9 @@ impl<'a> Series<'a> {
     }
 }
 
-/// Line plot with round ticks, grid, legend under the title; `log_y` plots log10(y).
+/// Line plot with round ticks, grid, legend under the title; `log_y` plots log10(y). The
+/// first series is drawn last, on top of the others (the measured trace, which a fitted
+/// simulation's line would otherwise hide where they agree); the legend keeps the given order.
 pub fn line_plot(
     title: &str,
     xlabel: &str,
@@ -206,8 +208,10 @@ pub fn line_plot(
         mt + ph / 2.0,
         esc(ylabel)
     );
-    let mut lx = ml;
-    for s in series {
+    let dash_of = |s: &Series| {
+        if s.dash.is_empty() { String::new() } else { format!(r#" stroke-dasharray="{}""#, s.dash) }
+    };
+    for s in series.iter().rev() {
         let n = s.x.len().min(s.y.len());
         let step = (n / 1500).max(1);
         let mut d = String::new();
@@ -221,22 +225,22 @@ pub fn line_plot(
             let _ = write!(d, "{}{:.1},{:.1} ", if pen { "L" } else { "M" }, px(s.x[i]), py(y));
             pen = true;
         }
-        let dash = if s.dash.is_empty() {
-            String::new()
-        } else {
-            format!(r#" stroke-dasharray="{}""#, s.dash)
-        };
         let _ = write!(
             o,
-            r#"<path d="{d}" fill="none" stroke="{}" stroke-width="1.3"{dash}/>"#,
-            s.colour
+            r#"<path d="{d}" fill="none" stroke="{}" stroke-width="1.3"{}/>"#,
+            s.colour,
+            dash_of(s)
         );
-        // Legend between the title and the plot.
+    }
+    // Legend between the title and the plot.
+    let mut lx = ml;
+    for s in series {
         let _ = write!(
             o,
-            r#"<line x1="{lx:.1}" y1="31" x2="{:.1}" y2="31" stroke="{}" stroke-width="2"{dash}/>"#,
+            r#"<line x1="{lx:.1}" y1="31" x2="{:.1}" y2="31" stroke="{}" stroke-width="2"{}/>"#,
             lx + 18.0,
-            s.colour
+            s.colour,
+            dash_of(s)
         );
         let _ = write!(o, r#"<text x="{:.1}" y="35">{}</text>"#, lx + 22.0, esc(&s.label));
         lx += 32.0 + text_width(&s.label, 11.0);
@@ -500,6 +504,26 @@ mod tests {
             "{t:?}"
         );
         assert!(t.iter().all(|v| v.fract() == 0.0));
+    }
+
+    /// The first series (the real trace) is drawn last, over the others; the legend keeps the
+    /// given order.
+    #[test]
+    fn the_first_series_is_drawn_on_top() {
+        let x = [0.0, 1.0, 2.0];
+        let svg = line_plot(
+            "t",
+            "x",
+            "y",
+            &[
+                Series::new(&x, vec![0.0, 1.0, 0.0], "#111111", "real", ""),
+                Series::new(&x, vec![0.0, 1.0, 0.1], "#222222", "sim", ""),
+            ],
+            false,
+        );
+        let path = |c: &str| svg.find(&format!(r#"fill="none" stroke="{c}""#)).unwrap();
+        assert!(path("#111111") > path("#222222"), "{svg}");
+        assert!(svg.find(">real<").unwrap() < svg.find(">sim<").unwrap(), "{svg}");
     }
 
     #[test]

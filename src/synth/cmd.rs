@@ -34,7 +34,7 @@ effects in their order (missing ones at their defaults), e.g.
 
 Output: OUT/episodes/ep_00.csv … (the last --heldout episodes carry `split: heldout`),
 OUT/truth_commands/ep_00.csv (every tick's exact command), OUT/truth.json (effects, settings,
-per-joint noise + quantisation floor, dropped rows). See docs/synth.md.";
+per-joint noise + quantisation floor, dropped rows). See `modellint docs synth`.";
 
 #[derive(Args, Debug)]
 pub struct SynthCmd {

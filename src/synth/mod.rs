@@ -261,14 +261,64 @@ pub fn driven_joints(robot: &Robot, glob: Option<&str>) -> Result<Vec<String>, S
         .map(|j| j.name.clone())
         .collect();
     if v.is_empty() {
+        let why = no_servo_reason(robot, m.as_ref());
         return Err(match glob {
             Some(g) => {
-                format!("--joints `{g}`: no hinge/slide joint with a position actuator matches")
+                format!(
+                    "--joints `{g}`: no hinge/slide joint with a position actuator matches{why}"
+                )
             }
-            None => "the model has no hinge/slide joint with a position actuator to drive".into(),
+            None => {
+                format!("the model has no hinge/slide joint with a position actuator to drive{why}")
+            }
         });
     }
     Ok(v)
+}
+
+/// Why no joint has a position servo: what drives the (matching) joints instead, and what
+/// `synth` needs. Empty when there is no hinge/slide joint at all.
+fn no_servo_reason(robot: &Robot, m: Option<&globset::GlobMatcher>) -> String {
+    use crate::model::ActuatorKind;
+    let mut by_kind: Vec<(&str, Vec<&str>)> = Vec::new();
+    for j in robot.joints.iter().filter(|j| j.is_scalar()) {
+        if m.is_some_and(|m| !m.is_match(&j.name)) {
+            continue;
+        }
+        let acts = robot.actuators_on_joint(j.id);
+        let kind = match acts.first().map(|a| &a.kind) {
+            None => "no actuator (passive)",
+            Some(ActuatorKind::Motor) => "torque actuators (<motor>)",
+            Some(ActuatorKind::Velocity { .. }) => "velocity actuators",
+            Some(ActuatorKind::DcMotor { .. }) => "DC motors (<dcmotor>)",
+            Some(_) => "general actuators without a position servo",
+        };
+        match by_kind.iter_mut().find(|(k, _)| *k == kind) {
+            Some((_, v)) => v.push(&j.name),
+            None => by_kind.push((kind, vec![&j.name])),
+        }
+    }
+    if by_kind.is_empty() {
+        return String::new();
+    }
+    let parts: Vec<String> = by_kind
+        .iter()
+        .map(|(k, v)| {
+            let shown: Vec<&str> = v.iter().take(4).copied().collect();
+            let more =
+                if v.len() > 4 { format!(", … ({} joints)", v.len()) } else { String::new() };
+            format!("{k}: {}{more}", shown.join(", "))
+        })
+        .collect();
+    format!(
+        ". Its joints have {}. synth simulates a robot tracking position commands through its \
+         servos (the controller, the servo's PD law and what the recorder logs: q, qd, q_cmd); \
+         with torque actuators the servo law is in your controller, not in the model. Add the \
+         servo to the model: a <position kp=\"…\" kv=\"…\"> actuator per joint with your \
+         controller's PD gains (and forcerange = the motor's torque limit); `gap` and `fit` \
+         replay q_cmd through such actuators too",
+        parts.join("; ")
+    )
 }
 
 /// Generates the dataset. `progress(done, total)` is called after each episode.

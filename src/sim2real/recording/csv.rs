@@ -70,7 +70,15 @@ pub fn parse_csv_with(
     }
     let Rows { cols, lines: row_lines, duplicates } = parse_rows(path, &header, &lines[idx + 1..])?;
     let rate_line = meta.rate_line;
+    let units = meta.units_line;
+    let names = header.names.clone();
     let mut rec = assemble(path, meta, header, cols);
+    // Declared units: converted to SI before any check (degrees are then radians).
+    if let Some(ln) = units
+        && let Some(decl) = rec.meta.get(super::units::KEY_UNITS).cloned()
+    {
+        super::units::apply(&mut rec, &decl, &names).map_err(|m| err(path, ln, None, m))?;
+    }
     if duplicates > 0 {
         rec.meta.insert(super::KEY_DUPLICATE_ROWS.to_string(), duplicates.to_string());
     }
@@ -89,6 +97,8 @@ struct Metadata {
     control_rate_hz: Option<f64>,
     /// Line of the `control_rate_hz` key.
     rate_line: Option<usize>,
+    /// Line of the `units` key.
+    units_line: Option<usize>,
     control_t0_s: Option<f64>,
 }
 
@@ -101,6 +111,7 @@ fn parse_metadata(
         meta: BTreeMap::new(),
         control_rate_hz: None,
         rate_line: None,
+        units_line: None,
         control_t0_s: None,
     };
     let mut idx = 0;
@@ -143,6 +154,15 @@ fn parse_metadata(
                 m.control_t0_s = Some(x);
             }
             continue;
+        }
+        if k == super::units::KEY_UNITS {
+            m.units_line = Some(ln);
+        } else if super::units::other_unit_key(k) {
+            return Err(err(format!(
+                "metadata '{k}': units are declared with one key, `# units: deg, deg/s` (a unit \
+                 per kind of column) or `# units: knee.q=deg` (per column); see `modellint docs \
+                 recording-format`"
+            )));
         }
         if k == KEY_SPLIT && Split::parse(v).is_none() {
             return Err(err(format!("metadata '{k}' must be `train` or `heldout`, found '{v}'")));

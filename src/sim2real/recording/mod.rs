@@ -23,8 +23,14 @@
 
 mod check;
 mod csv;
+mod lerobot;
+pub mod logs;
+pub mod mapping;
+pub mod npy;
+mod rosbag;
 #[cfg(test)]
 mod tests;
+mod units;
 mod write;
 
 use serde::Serialize;
@@ -33,7 +39,13 @@ use std::fmt;
 use std::path::{Path, PathBuf};
 
 pub use csv::{parse_csv, parse_csv_with, read_csv};
+pub use logs::{Kind, not_bam_json, read_log, sniff};
+pub use mapping::LogMap;
 pub use write::write_csv;
+
+/// Metadata key of the whole seconds taken off a recording's times (`gap`/`fit` shift
+/// Unix-epoch stamps; the MCAP reader does it in integer nanoseconds).
+pub const KEY_TIME_OFFSET: &str = "time_offset_s";
 
 /// Metadata key parsed into [`Recording::control_rate_hz`].
 pub const KEY_CONTROL_RATE: &str = "control_rate_hz";
@@ -181,6 +193,9 @@ pub struct ParseOptions {
     /// that are accepted; `gap` and `fit` leave them out of their scores and of the fit
     /// ([`uncommanded_joints`]).
     pub no_command: Vec<String>,
+    /// How a log of another format (.npz, parquet, MCAP) maps onto joints (`--log-map` and
+    /// the `--log-*` flags).
+    pub log_map: LogMap,
 }
 
 impl Default for ParseOptions {
@@ -191,6 +206,7 @@ impl Default for ParseOptions {
             model_joints: None,
             actuated_joints: None,
             no_command: Vec::new(),
+            log_map: LogMap::default(),
         }
     }
 }

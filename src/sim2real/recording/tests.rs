@@ -245,3 +245,85 @@ fn unknown_joints_are_reported_at_the_header_before_any_value() {
     let fixed = text.replace("shouldr", "shoulder").replace("57.3", "1");
     assert!(parse_csv_with(p(), &fixed, &opts).is_ok());
 }
+
+/// `# units:` converts to SI before the checks: bare units by column kind, patterns per column
+/// (winning over a bare unit); all-SI declarations are left as they are.
+#[test]
+fn unit_declarations_convert_to_si() {
+    let text = "# units: deg, deg/s, t=ms, hip.q=rad\nt,knee.q,knee.qd,knee.q_cmd,hip.q\n\
+                0,90,180,45,0.5\n10,-90,0,0,0.25\n";
+    let r = parse_csv(p(), text).expect("parses");
+    let knee = r.joint("knee").unwrap();
+    let close = |a: f64, b: f64| (a - b).abs() < 1e-12;
+    assert!(close(knee.q[0], std::f64::consts::FRAC_PI_2) && close(knee.q[1], -knee.q[0]));
+    assert!(close(knee.qd.as_ref().unwrap()[0], std::f64::consts::PI));
+    assert!(close(knee.q_cmd.as_ref().unwrap()[0], std::f64::consts::FRAC_PI_4));
+    assert_eq!(r.joint("hip").unwrap().q, vec![0.5, 0.25]);
+    assert!(close(r.t[1], 0.01));
+    assert!(!r.meta.contains_key("units"));
+    assert_eq!(
+        r.meta.get("converted_from_units").map(String::as_str),
+        Some("deg, deg/s, t=ms, hip.q=rad")
+    );
+    // Round trip: the written CSV is in SI and reads back the same.
+    assert_eq!(parse_csv(p(), &write_csv(&r)).expect("re-parses").joints, r.joints);
+    let si = parse_csv(p(), "# units: rad, rad/s\nt,a.q\n0,0.1\n1,0.2\n").unwrap();
+    assert_eq!(si.meta.get("units").map(String::as_str), Some("rad, rad/s"));
+    for (decl, want) in [
+        ("furlong", "unknown unit 'furlong'"),
+        ("a.q=rpm", "cannot be in rpm"),
+        ("b.*=deg", "names no column"),
+        ("m", "applies to no column"),
+    ] {
+        let e = parse_err(&format!("# robot: x\n# units: {decl}\nt,a.q\n0,0.1\n1,0.2\n"));
+        assert_eq!(e.line, Some(2), "{e}");
+        assert!(e.message.contains(want), "{decl}: {e}");
+    }
+    let e = parse_err("# time_unit: ms\nt,a.q\n0,0.1\n1,0.2\n");
+    assert!(e.line == Some(1) && e.message.contains("one key"), "{e}");
+}
+
+/// A --log-map TOML: unknown keys at their line; flags override the file.
+#[test]
+fn log_map_files_and_flags() {
+    let dir = std::env::temp_dir().join(format!("modellint-logmap-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let f = dir.join("map.toml");
+    std::fs::write(&f, "units = \"deg\"\ncommand = \"a\"\n[rename]\nx = \"y\"\n").unwrap();
+    let flags = LogMap { file: Some(f.clone()), command: Some("b".into()), ..Default::default() };
+    let m = flags.resolve().unwrap();
+    assert_eq!((m.units.as_deref(), m.command.as_deref()), (Some("deg"), Some("b")));
+    assert_eq!(m.rename.get("x").map(String::as_str), Some("y"));
+    std::fs::write(&f, "units = \"deg\"\n\ncomand = \"a\"\n").unwrap();
+    let e = flags.resolve().unwrap_err();
+    assert_eq!(e.line, Some(3), "{e}");
+    assert!(e.message.contains("comand"), "{e}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A file's kind comes from its first bytes; the kinds not read are named with what to do.
+#[test]
+fn kinds_by_magic_bytes() {
+    let k = |name: &str, b: &[u8]| sniff(Path::new(name), b);
+    assert_eq!(k("x.csv", b"t,a.q\n0,1\n"), Kind::Text);
+    assert_eq!(k("x.csv", b"\xef\xbb\xbf  {\"a\": 1}"), Kind::Json);
+    assert_eq!(k("x.bin", b"PAR1\0\0"), Kind::Parquet);
+    assert_eq!(k("x", b"\x89MCAP0\r\n"), Kind::Mcap);
+    assert_eq!(k("x.csv", b"#ROSBAG V2.0\n"), Kind::Ros1Bag);
+    assert_eq!(k("x.db3", b"SQLite format 3\0"), Kind::Sqlite);
+    assert_eq!(k("x.h5", b"\x89HDF\r\n\x1a\n"), Kind::Hdf5);
+    assert_eq!(k("x.pkl", b"\x80\x04\x95"), Kind::Pickle);
+    assert_eq!(k("x.pt", b"\x80\x02\x8a"), Kind::PyTorch);
+    assert_eq!(k("x.npy", b"\x93NUMPY\x01\x00"), Kind::Npy);
+    assert_eq!(k("x.dat", b"ab\0cd"), Kind::Binary);
+    let opts = ParseOptions::default();
+    for (name, bytes, want) in [
+        ("run.db3", &b"SQLite format 3\0"[..], "run.db3 is an SQLite database"),
+        ("run.h5", &b"\x89HDF\r\n\x1a\n"[..], "run.h5 is an HDF5 file"),
+        ("run.pkl", &b"\x80\x04\x95"[..], "run.pkl is a Python pickle"),
+    ] {
+        let e = read_log(Path::new(name), bytes, &opts).unwrap().unwrap_err();
+        assert!(e.message.contains(want), "{e}");
+    }
+    assert!(read_log(Path::new("x.csv"), b"t,a.q\n", &opts).is_none());
+}

@@ -1,0 +1,403 @@
+//! Readers of real log formats, each on files written in the test by the format's own Python
+//! library (tests/py/write_logs.py: numpy, pyarrow, mcap + mcap-ros2-support), from a
+//! `modellint synth` dataset read there with Python's csv module. Each format must give the
+//! same `gap` (and `fit`) as the equivalent CSV the same script writes. Skips visibly when
+//! python3 or the library is missing (`scripts/setup-py-fixtures.sh` installs them into
+//! target/pyfixtures; `$MODELLINT_FIXTURE_PYTHON` names another interpreter).
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use serde_json::Value;
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn bin() -> &'static str {
+    env!("CARGO_BIN_EXE_modellint")
+}
+
+fn python() -> PathBuf {
+    if let Some(p) = std::env::var_os("MODELLINT_FIXTURE_PYTHON") {
+        return PathBuf::from(p);
+    }
+    let venv = root().join("target/pyfixtures/bin/python");
+    if venv.is_file() { venv } else { PathBuf::from("python3") }
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("modellint-logs-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn model() -> PathBuf {
+    root().join("fixtures/gap/arm3.xml")
+}
+
+/// A synth dataset of arm3 with a hidden elbow damping (3 episodes of 3 s).
+fn synth(dir: &Path) -> PathBuf {
+    let ds = dir.join("ds");
+    let o = Command::new(bin())
+        .args(["synth", model().to_str().unwrap(), "--effects", "viscous_damping@elbow*=0.3"])
+        .args(["--episodes", "3", "--duration", "3", "--out"])
+        .arg(&ds)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+    ds
+}
+
+/// Runs the Python writer; `false` (with a visible skip) when python3 or the library is missing.
+fn write_logs(fmt: &str, ds: &Path, out: &Path) -> bool {
+    let script = root().join("tests/py/write_logs.py");
+    let o = match Command::new(python()).arg(&script).args([fmt]).arg(ds).arg(out).output() {
+        Ok(o) => o,
+        Err(e) => {
+            eprintln!("skipping {fmt}: cannot run {}: {e}", python().display());
+            return false;
+        }
+    };
+    if o.status.code() == Some(3) {
+        eprintln!(
+            "skipping {fmt}: {} (run scripts/setup-py-fixtures.sh)",
+            String::from_utf8_lossy(&o.stderr).trim()
+        );
+        return false;
+    }
+    assert!(o.status.success(), "write_logs.py {fmt}: {}", String::from_utf8_lossy(&o.stderr));
+    true
+}
+
+fn run(args: &[&str]) -> Output {
+    Command::new(bin()).args(args).output().unwrap()
+}
+
+fn json_of(o: &Output) -> Value {
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+    serde_json::from_slice(&o.stdout).unwrap()
+}
+
+/// Equal JSON but for file names (strings naming a source), numbers within `rel`.
+fn same(a: &Value, b: &Value, rel: f64, at: &str) {
+    match (a, b) {
+        (Value::Number(x), Value::Number(y)) => {
+            let (x, y) = (x.as_f64().unwrap(), y.as_f64().unwrap());
+            assert!((x - y).abs() <= rel * x.abs().max(y.abs()).max(1e-9), "{at}: {x} vs {y}");
+        }
+        (Value::Array(x), Value::Array(y)) => {
+            assert_eq!(x.len(), y.len(), "{at}: lengths");
+            for (i, (p, q)) in x.iter().zip(y).enumerate() {
+                same(p, q, rel, &format!("{at}[{i}]"));
+            }
+        }
+        (Value::Object(x), Value::Object(y)) => {
+            for (k, v) in x {
+                if ["file", "files", "source", "episode", "notes", "warnings"].contains(&k.as_str())
+                {
+                    continue;
+                }
+                let w = y.get(k).unwrap_or_else(|| panic!("{at}.{k} missing"));
+                same(v, w, rel, &format!("{at}.{k}"));
+            }
+        }
+        _ => assert_eq!(a, b, "{at}"),
+    }
+}
+
+fn gap(inputs: &[&Path], extra: &[&str]) -> Value {
+    let m = model();
+    let mut args = vec!["gap", m.to_str().unwrap()];
+    args.extend(inputs.iter().map(|p| p.to_str().unwrap()));
+    args.extend(["--format", "json"]);
+    args.extend(extra);
+    json_of(&run(&args))
+}
+
+fn fit(inputs: &[&Path], extra: &[&str]) -> Value {
+    let m = model();
+    let mut args = vec!["fit", m.to_str().unwrap()];
+    args.extend(inputs.iter().map(|p| p.to_str().unwrap()));
+    args.extend(["--format", "json", "--quiet", "--effects", "viscous_damping,armature"]);
+    args.extend(extra);
+    json_of(&run(&args))
+}
+
+/// The fitted elbow damping of a fit's JSON.
+fn damping(v: &Value) -> f64 {
+    let mp = &v["missing_physics"][0];
+    assert_eq!(mp["effect"], "viscous_damping", "{v:#}");
+    mp["params"].as_object().unwrap().values().next().unwrap().as_f64().unwrap()
+}
+
+/// NumPy `.npz` of `dof_pos` / `des_dof_pos` / `dof_vel` in degrees with `t` and
+/// `joint_names` (numpy.savez): `--log-units deg` gives the CSV's gap and fit.
+#[test]
+fn npz_in_degrees_gives_the_csv_gap_and_fit() {
+    let dir = tmp("npz");
+    let ds = synth(&dir);
+    let out = dir.join("out");
+    if !write_logs("npz", &ds, &out) {
+        return;
+    }
+    let csv = out.join("csv");
+    let npz = out.join("npz");
+    let a = gap(&[&csv], &[]);
+    // The rate from the file's scalar `control_rate_hz`.
+    let b = gap(&[&npz], &["--log-units", "deg"]);
+    same(&a, &b, 1e-9, "gap");
+    let fa = fit(&[&csv], &[]);
+    let fb = fit(&[&npz], &["--log-units", "deg", "--control-hz", "100"]);
+    let (da, db) = (damping(&fa), damping(&fb));
+    assert!((da - 0.3).abs() < 0.06, "csv fit {da}");
+    assert!((da - db).abs() <= 1e-6 * da, "npz fit {db} vs csv {da}");
+    // Without the unit the degrees are refused, never read as radians.
+    let o = run(&["gap", model().to_str().unwrap(), npz.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("looks like degrees"), "{err}");
+    // convert writes the CSV the other commands read.
+    let conv = dir.join("ep_00.csv");
+    let o = run(&[
+        "convert",
+        npz.join("ep_00.npz").to_str().unwrap(),
+        conv.to_str().unwrap(),
+        "--log-units",
+        "deg",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+    let c = gap(&[&conv], &["--control-hz", "100"]);
+    let d = gap(&[&csv.join("ep_00.csv")], &[]);
+    same(&d, &c, 1e-9, "convert");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A LeRobot dataset (pyarrow: every episode in one parquet file, meta/info.json with fps and
+/// joint names): a --log-map TOML renames the joints and says the action is the command in
+/// force; the dataset directory gives the CSV's gap and fit.
+#[test]
+fn lerobot_dataset_gives_the_csv_gap_and_fit() {
+    let dir = tmp("lerobot");
+    let ds = synth(&dir);
+    let out = dir.join("out");
+    if !write_logs("lerobot", &ds, &out) {
+        return;
+    }
+    let map = dir.join("map.toml");
+    std::fs::write(
+        &map,
+        "command_timing = \"in_force\"\n[rename]\nmain_shoulder_pitch = \"shoulder_pitch\"\n\
+         main_elbow_pitch = \"elbow_pitch\"\nmain_wrist_pitch = \"wrist_pitch\"\n",
+    )
+    .unwrap();
+    let csv = out.join("csv");
+    let lr = out.join("lerobot");
+    let flag = ["--log-map", map.to_str().unwrap()];
+    let a = gap(&[&csv], &[]);
+    let b = gap(&[&lr], &flag);
+    same(&a, &b, 1e-9, "gap");
+    let (da, db) = (damping(&fit(&[&csv], &[])), damping(&fit(&[&lr], &flag)));
+    assert!((da - 0.3).abs() < 0.06 && (da - db).abs() <= 1e-6 * da, "{da} vs {db}");
+    // Without the renames: the log's names are not the model's, and the message says how.
+    let o = run(&["gap", model().to_str().unwrap(), lr.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("main_elbow_pitch") && err.contains("rename"), "{err}");
+    // One episode by its index.
+    let one = gap(&[&lr], &["--log-map", map.to_str().unwrap(), "--log-episode", "1"]);
+    let c = gap(&[&csv.join("ep_01.csv")], &[]);
+    same(&c, &one, 1e-9, "episode 1");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// LeRobot's own time stamps are float32 (frame_index / fps): a recorder on the control ticks
+/// (synth --log-at-ticks, ticks from 0), its stamps stored as float32, gives the CSV's gap (each
+/// stamp put back on the fps grid; a float32 a rounding before a tick edge would take the
+/// previous tick's command).
+#[test]
+fn lerobot_float32_stamps_on_the_fps_grid() {
+    let dir = tmp("lerobot32");
+    let ds = dir.join("ds");
+    let o = Command::new(bin())
+        .args(["synth", model().to_str().unwrap(), "--log-at-ticks", "--control-phase", "0"])
+        .args(["--episodes", "2", "--duration", "3", "--out"])
+        .arg(&ds)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = dir.join("out");
+    if !write_logs("lerobot32", &ds, &out) {
+        return;
+    }
+    let map = dir.join("map.toml");
+    std::fs::write(
+        &map,
+        "command_timing = \"in_force\"\n[rename]\nmain_shoulder_pitch = \"shoulder_pitch\"\n\
+         main_elbow_pitch = \"elbow_pitch\"\nmain_wrist_pitch = \"wrist_pitch\"\n",
+    )
+    .unwrap();
+    let a = gap(&[&out.join("csv")], &[]);
+    let b = gap(&[&out.join("lerobot")], &["--log-map", map.to_str().unwrap()]);
+    same(&a, &b, 1e-12, "gap");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// MCAP written by mcap-ros2-support: /joint_states (JointState per recorded row) and a
+/// Float64MultiArray command per control tick, stamped from 1.7·10⁹ s. With the control rate
+/// in the mapping, the command in force at each row and the ticks' origin come from the
+/// command stamps: the CSV's gap and fit.
+#[test]
+fn mcap_joint_states_and_commands_give_the_csv_gap_and_fit() {
+    let dir = tmp("mcap");
+    let ds = synth(&dir);
+    let out = dir.join("out");
+    if !write_logs("mcap", &ds, &out) {
+        return;
+    }
+    let map = dir.join("map.toml");
+    std::fs::write(&map, "control_rate_hz = 100\n").unwrap();
+    let csv = out.join("csv");
+    let mc = out.join("mcap");
+    let flag = ["--log-map", map.to_str().unwrap()];
+    let a = gap(&[&csv], &[]);
+    let b = gap(&[&mc], &flag);
+    same(&a, &b, 1e-9, "gap");
+    let (da, db) = (damping(&fit(&[&csv], &[])), damping(&fit(&[&mc], &flag)));
+    assert!((da - 0.3).abs() < 0.06 && (da - db).abs() <= 1e-6 * da, "{da} vs {db}");
+    // A command topic that is not there is named, with the topics the file has.
+    let o = run(&[
+        "gap",
+        model().to_str().unwrap(),
+        mc.join("ep_00.mcap").to_str().unwrap(),
+        "--log-command",
+        "/cmd",
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("no topic '/cmd'") && err.contains("/joint_states"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The rows of a CSV with every `.q`/`.q_cmd` in degrees and `.qd` in deg/s, and a
+/// `# units: deg, deg/s` header (plain string handling, not modellint's reader).
+fn in_degrees(csv: &str) -> String {
+    let mut out = String::from("# units: deg, deg/s\n");
+    let mut header: Vec<String> = Vec::new();
+    for line in csv.lines() {
+        if line.starts_with("# units:") {
+            continue;
+        }
+        if line.starts_with('#') {
+            out.push_str(line);
+            out.push('\n');
+            continue;
+        }
+        if header.is_empty() {
+            header = line.split(',').map(str::to_string).collect();
+            out.push_str(line);
+            out.push('\n');
+            continue;
+        }
+        let vals: Vec<String> = line
+            .split(',')
+            .zip(&header)
+            .map(|(v, h)| {
+                let x: f64 = v.parse().unwrap();
+                if h == "t" { v.to_string() } else { format!("{}", x.to_degrees()) }
+            })
+            .collect();
+        out.push_str(&vals.join(","));
+        out.push('\n');
+    }
+    out
+}
+
+/// `# units: deg, deg/s` is honoured (the same gap as in radians); an unknown unit and any
+/// other unit key are errors at their line.
+#[test]
+fn csv_unit_declarations_are_honoured() {
+    let dir = tmp("units");
+    let ds = synth(&dir);
+    let rad = ds.join("episodes/ep_00.csv");
+    let deg = dir.join("deg.csv");
+    std::fs::write(&deg, in_degrees(&std::fs::read_to_string(&rad).unwrap())).unwrap();
+    same(&gap(&[&rad], &[]), &gap(&[&deg], &[]), 1e-9, "degrees");
+    // A --log-* flag on a CSV would be ignored: an error instead.
+    let o = run(&["gap", model().to_str().unwrap(), rad.to_str().unwrap(), "--log-units", "deg"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.code() == Some(2) && err.contains("# units: deg, deg/s"), "{err}");
+    let text = std::fs::read_to_string(&deg).unwrap();
+    for (bad, want) in [
+        ("# units: deg, furlong/s\n", "unknown unit 'furlong/s'"),
+        ("# units: mm\n", "applies to no column"),
+        ("# units: elbow_pitch.qd=deg\n", "cannot be in deg"),
+        ("# time_unit: ms\n", "metadata 'time_unit'"),
+    ] {
+        let f = dir.join("bad.csv");
+        std::fs::write(&f, format!("{bad}{}", &text[text.find('\n').unwrap() + 1..])).unwrap();
+        let o = run(&["gap", model().to_str().unwrap(), f.to_str().unwrap()]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(err.contains(&format!("{}:1: ", f.display())) && err.contains(want), "{err}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Files of a kind modellint does not read, or JSON that is not a BAM log, are named as what
+/// they are, never read as CSV.
+#[test]
+fn files_of_the_wrong_kind_are_named() {
+    let dir = tmp("kinds");
+    let ds = synth(&dir);
+    let m = model();
+    let gap_err = |f: &Path| {
+        let o = run(&["gap", m.to_str().unwrap(), f.to_str().unwrap()]);
+        assert_eq!(o.status.code(), Some(2));
+        String::from_utf8_lossy(&o.stderr).into_owned()
+    };
+    let err = gap_err(&ds.join("truth.json"));
+    assert!(err.contains("answer key") && err.contains("episodes/"), "{err}");
+    assert!(!err.contains("--ignore-columns"), "{err}");
+    let other = dir.join("other.json");
+    std::fs::write(&other, r#"{"robot": "arm3", "joints": []}"#).unwrap();
+    let err = gap_err(&other);
+    assert!(err.contains("other.json is JSON with the keys joints, robot"), "{err}");
+    assert!(err.contains("not a BAM servo log") && !err.contains("--ignore-columns"), "{err}");
+    let bag = dir.join("run.bag");
+    std::fs::write(&bag, b"#ROSBAG V2.0\n\0\0\0").unwrap();
+    assert!(gap_err(&bag).contains("is a ROS 1 bag"));
+    // numpy.save (one array) and a torch.save file (torch when installed, else a zip laid
+    // out as torch.save writes it: archive/data.pkl beside the tensors' storage).
+    let py = r#"
+import sys, zipfile, pickle
+out = sys.argv[1]
+try:
+    import numpy as np
+    np.save(out + "/one.npy", np.zeros((4, 2)))
+except ImportError:
+    pass
+try:
+    import torch
+    torch.save({"dof_pos": torch.zeros(4, 2)}, out + "/run.pt")
+except ImportError:
+    with zipfile.ZipFile(out + "/run.pt", "w") as z:
+        z.writestr("archive/data.pkl", pickle.dumps({"dof_pos": [0.0]}))
+        z.writestr("archive/version", "3\n")
+"#;
+    match Command::new(python()).args(["-c", py]).arg(&dir).output() {
+        Ok(o) if o.status.success() => {
+            let err = gap_err(&dir.join("run.pt"));
+            assert!(err.contains("run.pt is a PyTorch file"), "{err}");
+            if dir.join("one.npy").is_file() {
+                let err = gap_err(&dir.join("one.npy"));
+                assert!(err.contains("is a single NumPy array"), "{err}");
+            } else {
+                eprintln!("skipping .npy: numpy not installed");
+            }
+        }
+        _ => eprintln!("skipping .pt/.npy: cannot run {}", python().display()),
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
