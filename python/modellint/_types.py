@@ -165,6 +165,11 @@ class Findings(list):
         """The findings at or above `severity` (what `--fail-on severity` fails on)."""
         return [f for f in self if f.at_least(severity)]
 
+    def __str__(self) -> str:
+        """One line per finding (`file:line:col: severity [rule] message`) and the counts."""
+        counts = ", ".join(f"{self.summary.get(s, 0)} {s}" for s in reversed(SEVERITIES))
+        return "\n".join([str(f) for f in self] + [f"{self.model}: {counts}"])
+
 
 # ---------------------------------------------------------------- gap
 

@@ -49,6 +49,21 @@ class UsageError(ModellintError, ValueError):
     CLI's, naming the flag."""
 
 
+_UNKNOWN = re.compile(r"unexpected argument '--([^'=\s]+)")
+
+
+def _usage_text(text: str) -> str:
+    """clap's message in the API's words: an unknown flag is an unknown keyword option."""
+    m = _UNKNOWN.search(text)
+    if m:
+        name = m.group(1).replace("-", "_")
+        return (
+            f"unknown option `{name}`: the keyword options are the flags of the `modellint` "
+            f"command (`modellint gap --help`, `modellint fit --help`, `modellint --help`)"
+        )
+    return text.strip().removeprefix("error: ")
+
+
 _AT = re.compile(r"^(?P<file>.+?):(?P<line>\d+): (?P<msg>.*)$", re.S)
 
 
@@ -71,12 +86,13 @@ def from_native(err: Exception, recordings: Optional[dict] = None) -> ModellintE
     if kind == "model":
         return ModelError(text, file, line, column)
     if kind == "usage":
-        return UsageError(text.strip())
+        return UsageError(_usage_text(text))
     file, line, message = _split_location(text)
     if file is None:
         return ModellintError(message)
     if recordings and os.path.abspath(file) in recordings:
         name, header_lines = recordings[os.path.abspath(file)]
-        row = f" (row {line - header_lines})" if line is not None and line > header_lines else ""
-        return RecordingError(f"{message}{row}", f"<recording {name}>", line, None)
+        row = line - header_lines if line is not None and line > header_lines else None
+        where = f" (row {row} of the arrays)" if row is not None else ""
+        return RecordingError(f"{message}{where}", f"<recording {name}>", row, None)
     return RecordingError(message, file, line, None)
