@@ -147,7 +147,8 @@ assert runs[0]["results"], "no results"' "$d/modellint.sarif"; then
 fi
 
 # The Python API in the fresh venv, with no environment variable: the issue's one-liner, then
-# the pytest suite (python/tests: the API against this venv's `modellint` command's JSON).
+# the pytest suite (python/tests: the API against this venv's `modellint` command's JSON; pytest,
+# numpy and tqdm from PyPI).
 out="$(cd "$root" && env -i PATH="$work/venv/bin:/usr/bin:/bin" HOME="${HOME:-/tmp}" python -c \
   "import modellint; print(modellint.lint('models/asimov.xml'))" 2>&1)"
 if grep -q "models/asimov.xml:.*error \[underdamped-pd-gains\]" <<<"$out"; then
@@ -162,7 +163,7 @@ case "$lib" in
   */site-packages/mujoco/libmujoco.so.3.17.0) ok "venv: import modellint loads libmujoco from the mujoco package ($lib)" ;;
   *) bad "venv: import modellint loaded libmujoco from '${lib:-nowhere}', not from the mujoco package" ;;
 esac
-if "$work/venv/bin/python" -m pip install --quiet pytest numpy >"$work/pytest-install.log" 2>&1; then
+if "$work/venv/bin/python" -m pip install --quiet pytest numpy tqdm >"$work/pytest-install.log" 2>&1; then
   t0=$(now)
   (cd "$root" && env -i PATH="$work/venv/bin:/usr/bin:/bin" HOME="${HOME:-/tmp}" \
     PYTHONDONTWRITEBYTECODE=1 python -m pytest -p no:cacheprovider -q python/tests) >"$work/pytest.log" 2>&1
@@ -175,7 +176,7 @@ if "$work/venv/bin/python" -m pip install --quiet pytest numpy >"$work/pytest-in
     bad "pytest python/tests exited $code (log above; full log $work/pytest.log)"
   fi
 else
-  echo "test-wheel: skipping: pytest python/tests: cannot install pytest and numpy from PyPI ($(tail -n 1 "$work/pytest-install.log"))" >&2
+  echo "test-wheel: skipping: pytest python/tests: cannot install pytest, numpy and tqdm from PyPI ($(tail -n 1 "$work/pytest-install.log"))" >&2
 fi
 
 # 3. pip install --user (scripts in <userbase>/bin, packages in <userbase>/lib/python3.N/site-packages).

@@ -132,7 +132,7 @@ class _Reporter:
                 self.bar = tqdm(desc=f"modellint {what}", unit=unit, file=sys.stderr, leave=False)
 
     def callback(self) -> Optional[Callable[[dict], None]]:
-        return self if (self.user or self.bar) else None
+        return self if (self.user is not None or self.bar is not None) else None
 
     def __call__(self, d: dict) -> None:
         p = FitProgress(**d)

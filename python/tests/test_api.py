@@ -314,3 +314,11 @@ def test_independent_arm2_gap_and_told_fit_are_the_cli_json(cli):
     )
     # truth.json: +0.8 N·m·s/rad on the elbow (made by the independent simulator).
     assert f.effects[0].params["damping"] == pytest.approx(0.8, rel=0.1)
+
+
+def test_tqdm_bar_when_tqdm_is_importable(arm3_data, capsys):
+    pytest.importorskip("tqdm")
+    f = modellint.fit(ARM3, arm3_data, told=["viscous_damping@elbow_pitch"])
+    err = capsys.readouterr().err
+    assert "modellint fit" in err and "rollout" in err
+    assert f.effects[0].effect == "viscous_damping"
