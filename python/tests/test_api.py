@@ -280,8 +280,8 @@ def test_fit_releases_the_gil(arm3_data):
     th.join()
     took = time.perf_counter() - t0
     gaps = np.diff([t0] + stamps)
-    # Holding the GIL would stall this loop for the whole fit (≈ 2 s).
-    assert took > 0.5 and gaps.max() < took / 2, (took, gaps.max())
+    # Holding the GIL would stall this loop for the whole fit (≈ 2 s here): one gap of ≈ took.
+    assert gaps.max() < took / 2, (took, gaps.max())
 
 
 def test_an_exception_in_the_progress_callback_is_raised(arm3_data):
