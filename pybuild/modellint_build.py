@@ -1,4 +1,5 @@
-"""PEP 517 build backend for the modellint wheel: maturin, after laying out MuJoCo for the link.
+"""PEP 517 build backend for the modellint wheel: maturin, after laying out MuJoCo for the link
+and building the `modellint` binary.
 
 mujoco-rs links against `libmujoco.so` in `.mujoco/lib` (`.cargo/config.toml`). `mujoco==3.17.0`
 is a build requirement (pyproject.toml), so the library is already installed in the build
@@ -6,24 +7,32 @@ environment; copying it from there means `pip install .` needs no step before it
 download. `scripts/setup-mujoco.sh` (used by `make`) lays out the same files from the same wheel.
 
 The installed binary does not use this copy: it finds `libmujoco.so.3.17.0` inside the installed
-`mujoco` package through an rpath relative to itself (build.rs, feature `wheel`).
+`mujoco` package through an rpath relative to itself (build.rs); so does the extension module
+(python/native/build.rs).
+
+maturin builds the extension module `modellint._native` (pyproject.toml); the `modellint` command
+is the Rust binary, built here with `cargo build --release --locked --bin modellint` (the same
+build as `make build`, so after it nothing recompiles) and put in the wheel's data scripts
+(`tool.maturin.data`), which pip installs on PATH.
 """
 
 import importlib.util
+import json
 import os
 import shutil
+import subprocess
 from pathlib import Path
 
 import maturin
 from maturin import (  # noqa: F401  (re-exported PEP 517 hooks)
-    build_sdist,
     get_requires_for_build_sdist,
     get_requires_for_build_wheel,
-    prepare_metadata_for_build_wheel,
 )
 
 VERSION = "3.17.0"
 ROOT = Path(__file__).resolve().parent.parent
+# `tool.maturin.data` in pyproject.toml: maturin wants it to exist for every hook.
+DATA = ROOT / "target" / "wheel-data"
 
 
 def _lay_out_mujoco() -> None:
@@ -55,11 +64,47 @@ def _lay_out_mujoco() -> None:
             shutil.copyfile(h, dest / h.name)
 
 
+def _build_binary() -> None:
+    """`cargo build --release --locked --bin modellint`, copied (stripped) to the data scripts."""
+    cargo = os.environ.get("CARGO", "cargo")
+    subprocess.run(
+        [cargo, "build", "--release", "--locked", "--bin", "modellint"], cwd=ROOT, check=True
+    )
+    meta = subprocess.run(
+        [cargo, "metadata", "--format-version", "1", "--no-deps", "--locked"],
+        cwd=ROOT,
+        check=True,
+        stdout=subprocess.PIPE,
+    )
+    binary = Path(json.loads(meta.stdout)["target_directory"]) / "release" / "modellint"
+    scripts = DATA / "scripts"
+    scripts.mkdir(parents=True, exist_ok=True)
+    dest = scripts / "modellint"
+    shutil.copyfile(binary, str(dest) + ".part")
+    os.chmod(str(dest) + ".part", 0o755)
+    strip = shutil.which("strip")
+    if strip:
+        subprocess.run([strip, "--strip-all", str(dest) + ".part"], check=True)
+    os.replace(str(dest) + ".part", dest)
+
+
+def prepare_metadata_for_build_wheel(metadata_directory, config_settings=None):
+    DATA.mkdir(parents=True, exist_ok=True)
+    return maturin.prepare_metadata_for_build_wheel(metadata_directory, config_settings)
+
+
+def build_sdist(sdist_directory, config_settings=None):
+    DATA.mkdir(parents=True, exist_ok=True)
+    return maturin.build_sdist(sdist_directory, config_settings)
+
+
 def build_wheel(wheel_directory, config_settings=None, metadata_directory=None):
     _lay_out_mujoco()
+    _build_binary()
     return maturin.build_wheel(wheel_directory, config_settings, metadata_directory)
 
 
 def build_editable(wheel_directory, config_settings=None, metadata_directory=None):
     _lay_out_mujoco()
+    _build_binary()
     return maturin.build_editable(wheel_directory, config_settings, metadata_directory)

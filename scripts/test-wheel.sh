@@ -2,8 +2,10 @@
 # End-to-end test of the Python package (pyproject.toml): build the wheel the way `pip install .`
 # does (PEP 517, build isolation: maturin and mujoco==3.17.0 come from PyPI), install the built
 # wheel into a fresh venv (mujoco comes from PyPI as its dependency), and run `modellint` there
-# with no environment variable pointing at MuJoCo. Also installs it with `pip install --user`
-# into a private user base, and with uv / pipx when they are on PATH.
+# with no environment variable pointing at MuJoCo; then the Python API there: `import modellint`
+# and the pytest suite python/tests (pytest and numpy from PyPI; skipped visibly without them).
+# Also installs it with `pip install --user` into a private user base, and with uv / pipx when
+# they are on PATH.
 #
 # The wheel build re-uses target/ (same binary as `cargo build --release`, see build.rs), so after
 # `make build` it takes well under a minute. Skips visibly (exit 0, "skipping: ...") when python3,
@@ -42,17 +44,19 @@ size=$(stat -c %s "$whl")
 echo "test-wheel: built $(basename "$whl") ($(awk -v s="$size" 'BEGIN { printf "%.2f MB", s / 1e6 }')) in $(secs "$t0" "$t1") s"
 ok "wheel built"
 
-# The wheel holds the binary and metadata only: libmujoco must come from the mujoco package.
+# The wheel holds the binary, the Python package with its extension module, and metadata:
+# libmujoco must come from the mujoco package.
 if python3 - "$whl" <<'PY'
 import sys, zipfile
 names = zipfile.ZipFile(sys.argv[1]).namelist()
 assert any(n.endswith(".data/scripts/modellint") for n in names), names
+assert "modellint/__init__.py" in names and "modellint/_native.abi3.so" in names, names
 assert not any("libmujoco" in n for n in names), [n for n in names if "libmujoco" in n]
 meta = [n for n in names if n.endswith("METADATA")][0]
 text = zipfile.ZipFile(sys.argv[1]).read(meta).decode()
 assert "Requires-Dist: mujoco==3.17.0" in text, text
 PY
-then ok "wheel has scripts/modellint, no libmujoco, Requires-Dist mujoco==3.17.0"; else bad "wheel contents"; fi
+then ok "wheel has scripts/modellint and modellint/_native, no libmujoco, Requires-Dist mujoco==3.17.0"; else bad "wheel contents"; fi
 
 # 2. A fresh venv with only the built wheel (and its dependency mujoco from PyPI).
 python3 -m venv "$work/venv"
@@ -140,6 +144,39 @@ assert runs[0]["results"], "no results"' "$d/modellint.sarif"; then
       fi
     fi
   done
+fi
+
+# The Python API in the fresh venv, with no environment variable: the issue's one-liner, then
+# the pytest suite (python/tests: the API against this venv's `modellint` command's JSON; pytest,
+# numpy and tqdm from PyPI).
+out="$(cd "$root" && env -i PATH="$work/venv/bin:/usr/bin:/bin" HOME="${HOME:-/tmp}" python -c \
+  "import modellint; print(modellint.lint('models/asimov.xml'))" 2>&1)"
+if grep -q "models/asimov.xml:.*error \[underdamped-pd-gains\]" <<<"$out"; then
+  ok "venv: python -c 'import modellint; print(modellint.lint(\"models/asimov.xml\"))' lists the findings"
+else
+  bad "venv: modellint.lint('models/asimov.xml'): $(tail -n 5 <<<"$out")"
+fi
+lib="$(cd "$root" && env -i PATH="$work/venv/bin:/usr/bin:/bin" LD_DEBUG=libs python -c "import modellint" 2>&1 \
+  | sed -n 's/.*calling init: \(.*libmujoco\.so\.3\.17\.0\).*/\1/p' | head -n 1)"
+[ -n "$lib" ] && lib="$(readlink -f "$lib")" # site-packages/modellint/../mujoco/…
+case "$lib" in
+  */site-packages/mujoco/libmujoco.so.3.17.0) ok "venv: import modellint loads libmujoco from the mujoco package ($lib)" ;;
+  *) bad "venv: import modellint loaded libmujoco from '${lib:-nowhere}', not from the mujoco package" ;;
+esac
+if "$work/venv/bin/python" -m pip install --quiet pytest numpy tqdm >"$work/pytest-install.log" 2>&1; then
+  t0=$(now)
+  (cd "$root" && env -i PATH="$work/venv/bin:/usr/bin:/bin" HOME="${HOME:-/tmp}" \
+    PYTHONDONTWRITEBYTECODE=1 python -m pytest -p no:cacheprovider -q python/tests) >"$work/pytest.log" 2>&1
+  code=$?
+  t1=$(now)
+  tail -n 15 "$work/pytest.log"
+  if [ "$code" = 0 ]; then
+    ok "pytest python/tests: $(tail -n 1 "$work/pytest.log" | tr -d '=') ($(secs "$t0" "$t1") s)"
+  else
+    bad "pytest python/tests exited $code (log above; full log $work/pytest.log)"
+  fi
+else
+  echo "test-wheel: skipping: pytest python/tests: cannot install pytest, numpy and tqdm from PyPI ($(tail -n 1 "$work/pytest-install.log"))" >&2
 fi
 
 # 3. pip install --user (scripts in <userbase>/bin, packages in <userbase>/lib/python3.N/site-packages).

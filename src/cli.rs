@@ -258,6 +258,58 @@ pub struct FitCmd {
     pub report: Option<PathBuf>,
 }
 
+impl GapCmd {
+    /// What `modellint gap` runs ([`crate::sim2real::cmd::gap`]); the Python API parses its
+    /// options with these same flags.
+    pub fn into_args(self) -> crate::sim2real::cmd::GapArgs {
+        crate::sim2real::cmd::GapArgs {
+            model: self.model,
+            recordings: self.recordings,
+            spec: self.spec,
+            parse: self.replay.parse_options(),
+            replay: self.replay.options(),
+            json: self.format == ResultFormat::Json,
+            report: self.report,
+        }
+    }
+}
+
+impl FitCmd {
+    /// What `modellint fit` runs ([`crate::fit::cmd::run_fit`]); the Python API parses its
+    /// options with these same flags.
+    pub fn into_args(self) -> crate::fit::cmd::FitArgs {
+        let f = self;
+        crate::fit::cmd::FitArgs {
+            holdout_by: match (&f.servo, &f.holdout_by) {
+                (Some(_), None) => {
+                    eprintln!(
+                        "modellint: note: --servo is deprecated; it means --holdout-by kp (every \
+                     firmware gain held out in turn)"
+                    );
+                    Some("kp".to_string())
+                }
+                _ => f.holdout_by,
+            },
+            model: f.model,
+            recordings: f.recordings,
+            spec: f.spec,
+            effects: f.effects,
+            joints: f.joints,
+            told: f.told,
+            holdout: f.holdout,
+            window: f.window,
+            start_estimate: f.start_estimate,
+            parse: f.replay.parse_options(),
+            replay: f.replay.options(),
+            quiet: f.quiet,
+            json: f.format == ResultFormat::Json,
+            write_model: f.write_model,
+            write_actuators: f.write_actuators,
+            report: f.report,
+        }
+    }
+}
+
 /// How `gap` and `fit` replay the recordings.
 #[derive(Args, Debug)]
 pub struct ReplayArgs {
@@ -388,43 +440,8 @@ pub fn run() -> i32 {
                 }
             }
         }
-        Some(Cmd::Gap(g)) => crate::sim2real::cmd::run_gap(crate::sim2real::cmd::GapArgs {
-            model: g.model,
-            recordings: g.recordings,
-            spec: g.spec,
-            parse: g.replay.parse_options(),
-            replay: g.replay.options(),
-            json: g.format == ResultFormat::Json,
-            report: g.report,
-        }),
-        Some(Cmd::Fit(f)) => crate::fit::cmd::run_fit(crate::fit::cmd::FitArgs {
-            holdout_by: match (&f.servo, &f.holdout_by) {
-                (Some(_), None) => {
-                    eprintln!(
-                        "modellint: note: --servo is deprecated; it means --holdout-by kp (every \
-                         firmware gain held out in turn)"
-                    );
-                    Some("kp".to_string())
-                }
-                _ => f.holdout_by,
-            },
-            model: f.model,
-            recordings: f.recordings,
-            spec: f.spec,
-            effects: f.effects,
-            joints: f.joints,
-            told: f.told,
-            holdout: f.holdout,
-            window: f.window,
-            start_estimate: f.start_estimate,
-            parse: f.replay.parse_options(),
-            replay: f.replay.options(),
-            quiet: f.quiet,
-            json: f.format == ResultFormat::Json,
-            write_model: f.write_model,
-            write_actuators: f.write_actuators,
-            report: f.report,
-        }),
+        Some(Cmd::Gap(g)) => crate::sim2real::cmd::run_gap(g.into_args()),
+        Some(Cmd::Fit(f)) => crate::fit::cmd::run_fit(f.into_args()),
         Some(Cmd::Synth(s)) => crate::synth::cmd::run(s),
         Some(Cmd::Convert { input, output, log }) => {
             crate::sim2real::cmd::run_convert(&input, &output, &log.to_map())
@@ -546,11 +563,7 @@ fn check(a: CheckArgs) -> i32 {
     // one place with one message is kept the first time only.
     let mut seen_findings = std::collections::BTreeSet::new();
     for (_, l, fs) in runs.iter_mut() {
-        fs.retain(|f| {
-            let p = output::position(&l.sources, f.primary);
-            let at = canon(std::path::Path::new(&p.file));
-            seen_findings.insert((f.rule, at, p.line, p.column, f.message.clone()))
-        });
+        crate::lint::drop_repeated(&mut seen_findings, l, fs);
     }
     let reports: Vec<output::Report> = runs
         .iter()
@@ -558,7 +571,7 @@ fn check(a: CheckArgs) -> i32 {
             model: m.clone(),
             sources: &l.sources,
             findings: f,
-            spec: Some(spec_info(l)),
+            spec: Some(crate::lint::spec_info(l)),
         })
         .collect();
     let text = if multi {
@@ -590,22 +603,4 @@ fn check(a: CheckArgs) -> i32 {
         return 2;
     }
     code
-}
-
-fn spec_info(l: &crate::lint::Loaded) -> output::SpecInfo {
-    let enabled = |id: &str| crate::rules::find_meta(id).is_some_and(|m| l.config.enabled(m));
-    let missing = l.spec.is_none();
-    let ids = |v: &[(&str, &str)]| {
-        if missing {
-            v.iter().map(|r| r.0).filter(|id| enabled(id)).map(str::to_string).collect()
-        } else {
-            vec![]
-        }
-    };
-    output::SpecInfo {
-        path: l.spec_search.path.as_ref().map(|p| p.display().to_string()),
-        searched: l.spec_search.searched.iter().map(|p| p.display().to_string()).collect(),
-        skipped_rules: ids(crate::spec_use::SKIPPED),
-        weakened_rules: ids(crate::spec_use::WEAKENED),
-    }
 }

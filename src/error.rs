@@ -66,3 +66,30 @@ impl std::fmt::Display for LoadError {
 }
 
 impl std::error::Error for LoadError {}
+
+/// Why `gap` or `fit` could not do its job (exit 2): the CLI prints it, the Python API raises it.
+#[derive(Debug, Clone)]
+pub enum CmdError {
+    /// The model or its spec could not be loaded (`file:line:col`, rendered with a snippet).
+    Load(LoadError),
+    /// One line: an unreadable recording (`file:line: message`), an invalid option.
+    Message(String),
+    /// Already said as warnings on the way (e.g. no episode could be held out): the CLI prints
+    /// nothing more; the text is what the Python API raises.
+    Said(String),
+}
+
+impl std::fmt::Display for CmdError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            CmdError::Load(e) => e.fmt(f),
+            CmdError::Message(m) | CmdError::Said(m) => f.write_str(m),
+        }
+    }
+}
+
+impl From<String> for CmdError {
+    fn from(m: String) -> Self {
+        CmdError::Message(m)
+    }
+}

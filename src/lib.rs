@@ -18,6 +18,7 @@ pub mod output;
 pub mod probe;
 pub mod rules;
 pub mod sim2real;
+pub mod sink;
 pub mod spec;
 pub mod spec_use;
 pub mod synth;

@@ -1,5 +1,6 @@
 //! One lint run: load model, spec and config; run the enabled rules; apply suppressions.
 
+use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
 use crate::config::Config;
@@ -293,6 +294,14 @@ pub fn exit_code(findings: &[Finding], fail_on: Severity) -> i32 {
 /// For the subcommands (gap, fit, synth): load a model and its spec with no rule selection, or
 /// print the located error to stderr. `Err` carries the exit code (2).
 pub fn load_for_command(model: &Path, spec: Option<PathBuf>) -> Result<Loaded, i32> {
+    load_for_api(model, spec).map_err(|e| {
+        eprint!("{}", crate::output::text::render_error(&e, crate::output::color_on_stderr()));
+        2
+    })
+}
+
+/// [`load_for_command`] returning the error instead of printing it.
+pub fn load_for_api(model: &Path, spec: Option<PathBuf>) -> Result<Loaded, LoadError> {
     let input = LintInput {
         model: model.to_path_buf(),
         spec,
@@ -300,8 +309,56 @@ pub fn load_for_command(model: &Path, spec: Option<PathBuf>) -> Result<Loaded, i
         select: vec![],
         ignore: vec![],
     };
-    load(&input).map_err(|e| {
-        eprint!("{}", crate::output::text::render_error(&e, crate::output::color_on_stderr()));
-        2
-    })
+    load(&input)
+}
+
+/// The spec in use, where it was looked for and, without one, the rules skipped or weakened
+/// (the JSON's `spec`).
+pub fn spec_info(l: &Loaded) -> crate::output::SpecInfo {
+    let enabled = |id: &str| crate::rules::find_meta(id).is_some_and(|m| l.config.enabled(m));
+    let missing = l.spec.is_none();
+    let ids = |v: &[(&str, &str)]| {
+        if missing {
+            v.iter().map(|r| r.0).filter(|id| enabled(id)).map(str::to_string).collect()
+        } else {
+            vec![]
+        }
+    };
+    crate::output::SpecInfo {
+        path: l.spec_search.path.as_ref().map(|p| p.display().to_string()),
+        searched: l.spec_search.searched.iter().map(|p| p.display().to_string()).collect(),
+        skipped_rules: ids(crate::spec_use::SKIPPED),
+        weakened_rules: ids(crate::spec_use::WEAKENED),
+    }
+}
+
+/// A finding of one rule at one place (canonical file, line, column) with one message.
+pub type FindingKey = (&'static str, PathBuf, usize, usize, String);
+
+/// Keeps the first of repeated findings (two scenes that include one robot file report its
+/// findings once); `seen` carries what earlier models reported.
+pub fn drop_repeated(seen: &mut BTreeSet<FindingKey>, l: &Loaded, findings: &mut Vec<Finding>) {
+    findings.retain(|f| {
+        let p = crate::output::position(&l.sources, f.primary);
+        let at = std::fs::canonicalize(&p.file).unwrap_or_else(|_| PathBuf::from(&p.file));
+        seen.insert((f.rule, at, p.line, p.column, f.message.clone()))
+    });
+}
+
+/// `modellint MODEL --format json` for one model (`Err`: what makes that exit 2), returned
+/// instead of printed: the Python API's `lint`. `cache_dir`: the compiled-model cache, as the
+/// CLI's `--cache-dir` (None: no cache).
+pub fn lint_json(
+    input: &LintInput,
+    probe: bool,
+    cache_dir: Option<&Path>,
+) -> Result<String, LoadError> {
+    let loaded = load_with_cache(input, cache_dir)?;
+    let mut findings = lint(&loaded, probe);
+    drop_repeated(&mut BTreeSet::new(), &loaded, &mut findings);
+    let model = input.model.display().to_string();
+    let info = spec_info(&loaded);
+    let out = crate::output::json::render(&loaded.sources, &model, &findings, Some(&info));
+    crate::model::cache::finish();
+    Ok(out)
 }

@@ -7,12 +7,14 @@ use std::path::PathBuf;
 
 use serde_json::json;
 
+use crate::error::CmdError;
 use crate::fit::effects::{self, simulate};
-use crate::fit::rotation;
-use crate::fit::select::{FitOptions, Progress, ProgressInfo, fit};
+use crate::fit::select::{FitOptions, FitOutcome, Progress, ProgressInfo, fit};
+use crate::lint::Loaded;
 use crate::sim2real::gap::{self, GapOptions, GapReport};
 use crate::sim2real::recording::Recording;
 use crate::sim2real::replay::{Episode, ReplayOptions};
+use crate::sink::{Sink, Stderr};
 
 pub struct FitArgs {
     pub model: PathBuf,
@@ -65,7 +67,10 @@ const LOG_EVERY_S: f64 = 30.0;
 /// the spinner's clock every 200 ms. When stderr is not a terminal (a CI log, `2> file`) there
 /// is no spinner: a plain line is written when a round starts and at most every
 /// [`LOG_EVERY_S`] seconds in between, so a long fit in a log still shows where it is.
-fn fit_progress(quiet: bool, prefix: String) -> (Option<indicatif::ProgressBar>, Option<Progress>) {
+pub(crate) fn fit_progress(
+    quiet: bool,
+    prefix: String,
+) -> (Option<indicatif::ProgressBar>, Option<Progress>) {
     if quiet {
         return (None, None);
     }
@@ -155,43 +160,46 @@ fn parse_told(
         .collect()
 }
 
-fn fail(msg: impl std::fmt::Display) -> i32 {
-    eprintln!("modellint: {msg}");
-    2
+/// What [`prepare`] read: the model, the recordings and the fit's options (without progress).
+pub struct Prepared {
+    pub loaded: Loaded,
+    pub recs: Vec<Recording>,
+    /// Joints left out with `--no-command`: replayed, never fitted nor scored.
+    pub unscored: Vec<String>,
+    pub opts: FitOptions,
+    /// `--holdout-by KEY` (no `=VALUE`): every value of KEY held out in turn.
+    pub rotate_by: Option<String>,
+    /// What reading the recordings found out (also printed through the sink).
+    pub notes: Vec<String>,
+    pub warnings: Vec<String>,
 }
 
-pub fn run_fit(a: FitArgs) -> i32 {
-    let loaded = match crate::lint::load_for_command(&a.model, a.spec.clone()) {
-        Ok(l) => l,
-        Err(code) => return code,
-    };
+/// Everything before the search: loads the model, checks the options, reads the recordings
+/// (their warnings and notes go to `sink` at once, before minutes of fitting).
+pub fn prepare(a: &FitArgs, sink: &dyn Sink) -> Result<Prepared, CmdError> {
+    let loaded = crate::lint::load_for_api(&a.model, a.spec.clone()).map_err(CmdError::Load)?;
     let robot = &loaded.robot;
     for e in &a.effects {
         if effects::by_id(e).is_none() {
             let ids: Vec<String> = effects::all().iter().map(|e| e.id().to_string()).collect();
-            return fail(format!("unknown effect `{e}`; known: {}", ids.join(", ")));
+            return Err(format!("unknown effect `{e}`; known: {}", ids.join(", ")).into());
         }
     }
     if a.holdout < 2 {
-        return fail("--holdout must be at least 2");
+        return Err("--holdout must be at least 2".to_string().into());
     }
     if let Some(w) = a.window
         && !(w.is_finite() && w > 0.0)
     {
-        return fail(format!(
+        return Err(format!(
             "--window {w}: the window length must be a positive number of seconds (e.g. 1.0)"
-        ));
+        )
+        .into());
     }
-    let files = match crate::sim2real::input::expand_inputs(&a.recordings) {
-        Ok(f) => f,
-        Err(e) => return fail(e),
-    };
+    let files = crate::sim2real::input::expand_inputs(&a.recordings).map_err(|e| e.to_string())?;
     let names: Vec<String> = robot.joints.iter().map(|j| j.name.clone()).collect();
     let mut inputs =
-        match crate::sim2real::input::read_for_replay(&files.files, robot, &a.replay, &a.parse) {
-            Ok(x) => x,
-            Err(e) => return fail(e),
-        };
+        crate::sim2real::input::read_for_replay(&files.files, robot, &a.replay, &a.parse)?;
     if let Some(n) = files.skipped_note() {
         inputs.notes.insert(0, n);
     }
@@ -204,21 +212,16 @@ pub fn run_fit(a: FitArgs) -> i32 {
     }
     // Said now (before minutes of fitting) and again in the JSON.
     for w in &inputs.warnings {
-        eprintln!("modellint: warning: {w}");
+        sink.warning(w);
     }
-    if !a.quiet {
-        for n in &inputs.notes {
-            eprintln!("modellint: note: {n}");
-        }
+    for n in &inputs.notes {
+        sink.note(n);
     }
     let recs = inputs.recs;
     let unscored = inputs.unscored;
     let mut joints = Vec::new();
     if let Some(g) = &a.joints {
-        let m = match globset::Glob::new(g) {
-            Ok(x) => x.compile_matcher(),
-            Err(e) => return fail(format!("--joints: {e}")),
-        };
+        let m = globset::Glob::new(g).map_err(|e| format!("--joints: {e}"))?.compile_matcher();
         for r in &recs {
             for j in &r.joints {
                 if m.is_match(&j.name) && !joints.contains(&j.name) {
@@ -227,7 +230,7 @@ pub fn run_fit(a: FitArgs) -> i32 {
             }
         }
         if joints.is_empty() {
-            return fail(format!("--joints {g} matches no recorded joint"));
+            return Err(format!("--joints {g} matches no recorded joint").into());
         }
     }
     // Joints left out with --no-command: replayed, never fitted nor scored (the fit scores
@@ -244,51 +247,74 @@ pub fn run_fit(a: FitArgs) -> i32 {
         }
         joints.retain(|j| !unscored.contains(j));
         if joints.is_empty() {
-            return fail(format!(
+            return Err(format!(
                 "no joint left to fit: the joints chosen are left out by --no-command ({})",
                 unscored.join(", ")
-            ));
+            )
+            .into());
         }
     }
-    let told = match parse_told(&a.told, &recs, &joints) {
-        Ok(t) => t,
-        Err(e) => return fail(e),
-    };
-    let replay = a.replay.clone();
+    let told = parse_told(&a.told, &recs, &joints)?;
     let families = FitOptions::motor_families(loaded.spec.as_ref(), &names);
-    let (bar, progress) = fit_progress(a.quiet, String::new());
     let mut opts = FitOptions {
         holdout: a.holdout,
         effects: a.effects.clone(),
         joints,
-        replay: replay.clone(),
+        replay: a.replay.clone(),
         shooting_s: a.window,
         families,
         estimate_start: a.start_estimate,
-        progress,
         told,
         ..Default::default()
     };
+    let mut rotate_by = None;
     if let Some(by) = &a.holdout_by {
         match by.split_once('=') {
             Some((k, v)) if !k.is_empty() && !v.is_empty() => {
                 opts.holdout_by = Some((k.to_string(), v.to_string()))
             }
-            Some(_) => return fail(format!("--holdout-by {by}: expected KEY or KEY=VALUE")),
-            None => {
-                if let Some(b) = bar {
-                    b.finish_and_clear();
-                }
-                return rotate(robot, &recs, &opts, by, &a, &unscored);
-            }
+            Some(_) => return Err(format!("--holdout-by {by}: expected KEY or KEY=VALUE").into()),
+            None => rotate_by = Some(by.clone()),
         }
     }
-    let out = fit(robot, &recs, &opts);
-    if let Some(b) = bar {
-        b.finish_and_clear();
-    }
+    Ok(Prepared {
+        loaded,
+        recs,
+        unscored,
+        opts,
+        rotate_by,
+        notes: inputs.notes,
+        warnings: inputs.warnings,
+    })
+}
+
+/// One fit's result: what the search kept and the held-out episodes before → after it.
+pub struct FitRun {
+    pub out: FitOutcome,
+    pub before: GapReport,
+    pub after: GapReport,
+    /// Everything said through the sink, also in the JSON.
+    pub notes: Vec<String>,
+    pub warnings: Vec<String>,
+}
+
+/// The search on `p` (with `progress`; `searched` is called when it ends, before anything
+/// more is said), the held-out episodes before → after, and the files `a` asks for (report,
+/// model, actuator TOML).
+pub fn fit_once(
+    a: &FitArgs,
+    p: &Prepared,
+    sink: &dyn Sink,
+    progress: Option<Progress>,
+    searched: &dyn Fn(),
+) -> Result<FitRun, CmdError> {
+    let robot = &p.loaded.robot;
+    let replay = &p.opts.replay;
+    let opts = FitOptions { progress, ..p.opts.clone() };
+    let out = fit(robot, &p.recs, &opts);
+    searched();
     for w in &out.warnings {
-        eprintln!("modellint: warning: {w}");
+        sink.warning(w);
     }
     let c = &out.cost;
     let cost_note = format!(
@@ -299,33 +325,34 @@ pub fn run_fit(a: FitArgs) -> i32 {
         c.simulations,
         c.fits_saved_by_screens
     );
-    if !a.quiet {
-        for n in out.notes.iter().chain([&cost_note]) {
-            eprintln!("modellint: note: {n}");
-        }
+    for n in out.notes.iter().chain([&cost_note]) {
+        sink.note(n);
     }
     if out.heldout.is_empty() {
-        return 2;
+        let why = if out.warnings.is_empty() {
+            "no episode could be held out".to_string()
+        } else {
+            out.warnings.join("; ")
+        };
+        return Err(CmdError::Said(why));
     }
-    let spec = loaded.spec.as_ref();
+    let spec = p.loaded.spec.as_ref();
     let region = |name: &str| gap::joint_region(spec, name);
     let run = |applied| -> Result<(GapReport, Vec<Recording>, Vec<Episode>), String> {
         let eps: Result<Vec<Episode>, _> =
-            simulate(robot, &out.heldout, applied, &replay).into_iter().collect();
+            simulate(robot, &out.heldout, applied, replay).into_iter().collect();
         let eps = eps.map_err(|e| e.to_string())?;
         // The held-out episodes as scored: without the joints left out by --no-command.
-        let (recs, eps) = crate::sim2real::input::scored_view(&out.heldout, &eps, &unscored)
+        let (recs, eps) = crate::sim2real::input::scored_view(&out.heldout, &eps, &p.unscored)
             .ok_or_else(|| "no scored joint in the held-out episodes".to_string())?;
         Ok((gap::compute(&recs, &eps, &region, &GapOptions::default()), recs, eps))
     };
-    let ((before, heldout, eps_b), (after, _, eps_a)) = match (run(&[]), run(&out.applied)) {
-        (Ok(b), Ok(a)) => (b, a),
-        (Err(e), _) | (_, Err(e)) => return fail(e),
-    };
+    let (before, heldout, eps_b) = run(&[])?;
+    let (after, _, eps_a) = run(&out.applied)?;
     // Everything said on stderr also goes into the JSON `notes` / `warnings`.
     let mut notes: Vec<String> =
-        inputs.notes.iter().chain(&out.notes).chain([&cost_note]).cloned().collect();
-    let warnings: Vec<String> = inputs.warnings.iter().chain(&out.warnings).cloned().collect();
+        p.notes.iter().chain(&out.notes).chain([&cost_note]).cloned().collect();
+    let warnings: Vec<String> = p.warnings.iter().chain(&out.warnings).cloned().collect();
     if let Some(dir) = &a.report {
         let page = crate::fit::report::FitReport {
             model: &a.model,
@@ -336,170 +363,70 @@ pub fn run_fit(a: FitArgs) -> i32 {
             eps_before: &eps_b,
             eps_after: &eps_a,
         };
-        match crate::fit::report::write(dir, &page) {
-            Ok(p) => {
-                let msg = format!("report written to {}", p.display());
-                eprintln!("modellint: {msg}");
-                notes.push(msg);
-            }
-            Err(e) => return fail(format!("cannot write report in {}: {e}", dir.display())),
-        }
+        let path = crate::fit::report::write(dir, &page)
+            .map_err(|e| format!("cannot write report in {}: {e}", dir.display()))?;
+        let msg = format!("report written to {}", path.display());
+        sink.said(&msg);
+        notes.push(msg);
     }
     if let Some(path) = &a.write_model {
-        match crate::fit::writemodel::write_model(&a.model, robot, &out.selected, path) {
-            Ok(w) => {
-                for n in w.notes {
-                    eprintln!("modellint: note: {n}");
-                    notes.push(n);
-                }
-                let list: Vec<String> = w.files.iter().map(|p| p.display().to_string()).collect();
-                let msg = format!("fitted model written to {}", list.join(", "));
-                eprintln!("modellint: {msg}");
-                notes.push(msg);
-            }
-            Err(e) => return fail(e),
-        }
+        notes.extend(write_model(&a.model, robot, &out.selected, path, sink)?);
     }
     if let Some(path) = &a.write_actuators {
-        match crate::fit::writeback::write_actuators(path, robot, &out.selected) {
-            Ok(files) => {
-                let list: Vec<String> = files.iter().map(|p| p.display().to_string()).collect();
-                let msg = format!("actuator parameters written to {}", list.join(", "));
-                eprintln!("modellint: {msg}");
-                notes.push(msg);
-            }
-            Err(e) => return fail(e),
-        }
+        let files = crate::fit::writeback::write_actuators(path, robot, &out.selected)?;
+        let list: Vec<String> = files.iter().map(|p| p.display().to_string()).collect();
+        let msg = format!("actuator parameters written to {}", list.join(", "));
+        sink.said(&msg);
+        notes.push(msg);
     }
+    Ok(FitRun { out, before, after, notes, warnings })
+}
+
+/// `--write-model`: the model with the MuJoCo-expressible fitted values; returns the notes it
+/// made (also said through `sink`).
+pub fn write_model(
+    model: &std::path::Path,
+    robot: &crate::model::Robot,
+    selected: &[crate::fit::select::Selected],
+    path: &std::path::Path,
+    sink: &dyn Sink,
+) -> Result<Vec<String>, CmdError> {
+    let w = crate::fit::writemodel::write_model(model, robot, selected, path)?;
+    let mut notes = Vec::new();
+    for n in w.notes {
+        sink.note_always(&n);
+        notes.push(n);
+    }
+    let list: Vec<String> = w.files.iter().map(|p| p.display().to_string()).collect();
+    let msg = format!("fitted model written to {}", list.join(", "));
+    sink.said(&msg);
+    notes.push(msg);
+    Ok(notes)
+}
+
+pub fn run_fit(a: FitArgs) -> i32 {
+    let sink = Stderr::new(a.quiet);
+    let p = match prepare(&a, &sink) {
+        Ok(p) => p,
+        Err(e) => return crate::sim2real::cmd::report_error(&e),
+    };
+    if let Some(key) = &p.rotate_by {
+        return crate::fit::cmd_rotate::rotate(&p, key, &a);
+    }
+    let (bar, progress) = fit_progress(a.quiet, String::new());
+    let done = || {
+        if let Some(b) = &bar {
+            b.finish_and_clear();
+        }
+    };
+    let r = match fit_once(&a, &p, &sink, progress, &done) {
+        Ok(r) => r,
+        Err(e) => return crate::sim2real::cmd::report_error(&e),
+    };
     let text = if a.json {
-        let mp: Vec<_> = out
-            .selected
-            .iter()
-            .map(|s| {
-                json!({
-                    "effect": s.effect, "joints": s.joints, "params": s.params,
-                    "stderr": s.stderr.iter().map(|(k, v)| (k.clone(), if v.is_finite() { json!(v) } else { serde_json::Value::Null })).collect::<serde_json::Map<_, _>>(),
-                    "identifiable": s.identifiable, "evidence": s.evidence, "heldout_improvement": s.heldout_improvement,
-                    "heldout_rmse_before": s.heldout_rmse_before, "heldout_rmse_after": s.heldout_rmse_after,
-                })
-            })
-            .collect();
-        let v = json!({
-            "missing_physics": mp,
-            "before": before,
-            "after": after,
-            "diagnosis": out.diagnosis.iter().take(20).collect::<Vec<_>>(),
-            "tried": out.tried,
-            "split": {"train": out.train.len(), "heldout": out.heldout.len(), "by_time": out.split_by_time, "note": out.split_note},
-            "floor": out.floors.iter().map(|f| json!({"joint": f.joint, "residual_rms": f.ms.sqrt(), "white_floor_rms": f.white.sqrt(), "reconstruction_floor_rms": f.reconstruction.sqrt(), "discretisation_floor_rms": f.discretisation.sqrt()})).collect::<Vec<_>>(),
-            "stopped_at_floor": out.stopped_at_floor,
-            "search": out.cost,
-            "warnings": warnings,
-            "notes": notes,
-        });
-        serde_json::to_string_pretty(&v).unwrap_or_default() + "\n"
+        serde_json::to_string_pretty(&fit_json(&r)).unwrap_or_default() + "\n"
     } else {
-        // Human output: angles in degrees (as `gap`), SI in JSON; one before → after figure.
-        let deg = |rad: f64| rad.to_degrees();
-        let mut s = String::from("missing physics\n");
-        if out.selected.is_empty() {
-            s.push_str(if out.stopped_at_floor {
-                "  nothing: the training residual is at its noise floor on every joint (nothing left to explain)\n"
-            } else {
-                "  nothing: no candidate effect improved the held-out error beyond noise\n"
-            });
-        }
-        for x in &out.selected {
-            let e = effects::by_id(&x.effect);
-            let ps: Vec<String> = x
-                .params
-                .iter()
-                .map(|(k, v)| {
-                    let unit = e
-                        .and_then(|e| e.params().iter().find(|p| p.name == k))
-                        .map_or("", |p| p.unit);
-                    let se = x.stderr.get(k).copied().unwrap_or(f64::INFINITY);
-                    let pm = if se.is_finite() { format!(" ± {se:.2e}") } else { " ± ?".into() };
-                    match unit {
-                        // The value in the parameter's own unit (its name says rad), then
-                        // in degrees, as `gap` prints angles.
-                        "rad" => format!("{k} = {v:.6}{pm} rad ({:.4}°)", deg(*v)),
-                        "" => format!("{k} = {v:.4}{pm}"),
-                        _ => format!("{k} = {v:.4}{pm} {unit}"),
-                    }
-                })
-                .collect();
-            s.push_str(&format!(
-                "  {:<24} {:<28} {}\n",
-                x.effect,
-                x.joints.join(","),
-                ps.join(", ")
-            ));
-            let shown = e.map_or(&[][..], |e| e.shown_evidence());
-            // `implied_*`: the diagnosis's linearised first guess, before any fit; named so that
-            // it is not read as the answer.
-            let ev: Vec<String> = ["corr", "explained_share"]
-                .iter()
-                .chain(shown)
-                .filter_map(|k| {
-                    x.evidence.get(*k).map(|v| match k.strip_prefix("implied_") {
-                        Some(_) => format!("screen's first guess {v:.3}"),
-                        None => format!("{k} {v:.3}"),
-                    })
-                })
-                .collect();
-            s.push_str(&format!(
-                "      evidence: {}; when added, held-out error {:+.0} %{}\n",
-                if ev.is_empty() { "fitted jointly".to_string() } else { ev.join(", ") },
-                -100.0 * x.heldout_improvement,
-                if x.identifiable { "" } else { "  [not identifiable]" }
-            ));
-        }
-        s.push_str(&format!(
-            "\nheld-out ({} episode{}{}): before → after\n  position MAE   {:.3}° → {:.3}°\n  position RMSE  {:.3}° → {:.3}°\n  correlation    {:.3} → {:.3}\n  gap score      {:.3} → {:.3}\n",
-            out.heldout.len(),
-            if out.heldout.len() == 1 { "" } else { "s" },
-            if out.split_by_time { ", time windows" } else { "" },
-            deg(before.position_mae),
-            deg(after.position_mae),
-            deg(before.position_rmse),
-            deg(after.position_rmse),
-            before.correlation_mean,
-            after.correlation_mean,
-            before.gap_overall,
-            after.gap_overall
-        ));
-        if !out.floors.is_empty() {
-            // The timestep's part only when the recordings move in finer time than the model.
-            let disc = out.floors.iter().any(|f| f.discretisation > 0.0);
-            let f: Vec<String> = out
-                .floors
-                .iter()
-                .map(|f| {
-                    let d = if disc {
-                        format!(" + {:.3}°", deg(f.discretisation.sqrt()))
-                    } else {
-                        String::new()
-                    };
-                    format!(
-                        "{} {:.3}° + {:.3}°{d}",
-                        f.joint,
-                        deg(f.white.sqrt()),
-                        deg(f.reconstruction.sqrt())
-                    )
-                })
-                .collect();
-            let parts = if disc {
-                "white part of the training residual + command reconstruction and start state + the model's timestep"
-            } else {
-                "white part of the training residual + command reconstruction and start state"
-            };
-            s.push_str(&format!("  floor of the fitted model (RMS: {parts}): {}\n", f.join(", ")));
-        }
-        if !out.split_note.is_empty() {
-            s.push_str(&format!("  ({})\n", out.split_note));
-        }
-        s
+        fit_text(&r)
     };
     if std::io::stdout().lock().write_all(text.as_bytes()).is_err() {
         return 2;
@@ -507,138 +434,133 @@ pub fn run_fit(a: FitArgs) -> i32 {
     0
 }
 
-/// `--holdout-by KEY`: leave-one-group-out over the values of metadata `KEY`
-/// ([`crate::fit::rotation`]). Prints every fold's effects and held-out MAE before → after per
-/// episode, and the average over all episodes (each held out exactly once).
-fn rotate(
-    robot: &crate::model::Robot,
-    recs: &[crate::sim2real::recording::Recording],
-    opts: &FitOptions,
-    key: &str,
-    a: &FitArgs,
-    unscored: &[String],
-) -> i32 {
-    if a.write_model.is_some() || a.write_actuators.is_some() || a.report.is_some() {
-        return fail(format!(
-            "--holdout-by {key} rotates over every value of `{key}` (one fit per value); give \
-             --holdout-by {key}=VALUE to write a model, actuator TOML or report"
-        ));
+/// What `modellint fit --format json` prints (and the Python API returns).
+pub fn fit_json(r: &FitRun) -> serde_json::Value {
+    let (out, before, after) = (&r.out, &r.before, &r.after);
+    let (warnings, notes) = (&r.warnings, &r.notes);
+    let mp: Vec<_> = out
+        .selected
+        .iter()
+        .map(|s| {
+            json!({
+                "effect": s.effect, "joints": s.joints, "params": s.params,
+                "stderr": s.stderr.iter().map(|(k, v)| (k.clone(), if v.is_finite() { json!(v) } else { serde_json::Value::Null })).collect::<serde_json::Map<_, _>>(),
+                "identifiable": s.identifiable, "evidence": s.evidence, "heldout_improvement": s.heldout_improvement,
+                "heldout_rmse_before": s.heldout_rmse_before, "heldout_rmse_after": s.heldout_rmse_after,
+            })
+        })
+        .collect();
+    let v = json!({
+        "missing_physics": mp,
+        "before": before,
+        "after": after,
+        "diagnosis": out.diagnosis.iter().take(20).collect::<Vec<_>>(),
+        "tried": out.tried,
+        "split": {"train": out.train.len(), "heldout": out.heldout.len(), "by_time": out.split_by_time, "note": out.split_note},
+        "floor": out.floors.iter().map(|f| json!({"joint": f.joint, "residual_rms": f.ms.sqrt(), "white_floor_rms": f.white.sqrt(), "reconstruction_floor_rms": f.reconstruction.sqrt(), "discretisation_floor_rms": f.discretisation.sqrt()})).collect::<Vec<_>>(),
+        "stopped_at_floor": out.stopped_at_floor,
+        "search": out.cost,
+        "warnings": warnings,
+        "notes": notes,
+    });
+    v
+}
+
+/// The human output: angles in degrees (as `gap`), SI in JSON; one before → after figure.
+fn fit_text(r: &FitRun) -> String {
+    let (out, before, after) = (&r.out, &r.before, &r.after);
+    let deg = |rad: f64| rad.to_degrees();
+    let mut s = String::from("missing physics\n");
+    if out.selected.is_empty() {
+        s.push_str(if out.stopped_at_floor {
+            "  nothing: the training residual is at its noise floor on every joint (nothing left to explain)\n"
+        } else {
+            "  nothing: no candidate effect improved the held-out error beyond noise\n"
+        });
     }
-    let values = crate::fit::split::key_values(recs, key);
-    if values.len() < 2 {
-        return fail(format!(
-            "--holdout-by {key}: need at least two values of `{key}` to hold one out (found {})",
-            values.len()
-        ));
-    }
-    let t0 = std::time::Instant::now();
-    let mut folds = Vec::new();
-    for v in &values {
-        let (bar, progress) = fit_progress(a.quiet, format!("hold out {key} = {v} · "));
-        let f =
-            rotation::fold(robot, recs, &FitOptions { progress, ..opts.clone() }, key, v, unscored);
-        if let Some(b) = bar {
-            b.finish_and_clear();
-        }
-        let f = match f {
-            Ok(f) => f,
-            Err(e) => return fail(e),
-        };
-        for w in &f.outcome.warnings {
-            eprintln!("modellint: warning: {key} = {v}: {w}");
-        }
-        if !a.quiet {
-            for n in &f.outcome.notes {
-                eprintln!("modellint: note: {key} = {v}: {n}");
-            }
-        }
-        folds.push(f);
-    }
-    let (avg_b, avg_a) = rotation::mean_mae(folds.iter().flat_map(|f| &f.heldout));
-    let n_eps: usize = folds.iter().map(|f| f.heldout.len()).sum();
-    let text = if a.json {
-        let fs: Vec<_> = folds
+    for x in &out.selected {
+        let e = effects::by_id(&x.effect);
+        let ps: Vec<String> = x
+            .params
             .iter()
-            .map(|f| {
-                let out = &f.outcome;
-                let (b, a) = f.mean();
-                json!({
-                    "value": f.value,
-                    "train": out.train.len(),
-                    "selected": out.selected.iter().map(|s| json!({"effect": s.effect, "joints": s.joints, "params": s.params})).collect::<Vec<_>>(),
-                    "heldout": f.heldout.iter().map(|e| json!({"source": e.name, "position_mae_before": e.before, "position_mae_after": e.after})).collect::<Vec<_>>(),
-                    "position_mae_before": b,
-                    "position_mae_after": a,
-                    "seconds": f.seconds,
-                    "tried": out.tried,
-                    "warnings": out.warnings,
-                    "notes": out.notes,
+            .map(|(k, v)| {
+                let unit =
+                    e.and_then(|e| e.params().iter().find(|p| p.name == k)).map_or("", |p| p.unit);
+                let se = x.stderr.get(k).copied().unwrap_or(f64::INFINITY);
+                let pm = if se.is_finite() { format!(" ± {se:.2e}") } else { " ± ?".into() };
+                match unit {
+                    // The value in the parameter's own unit (its name says rad), then
+                    // in degrees, as `gap` prints angles.
+                    "rad" => format!("{k} = {v:.6}{pm} rad ({:.4}°)", deg(*v)),
+                    "" => format!("{k} = {v:.4}{pm}"),
+                    _ => format!("{k} = {v:.4}{pm} {unit}"),
+                }
+            })
+            .collect();
+        s.push_str(&format!("  {:<24} {:<28} {}\n", x.effect, x.joints.join(","), ps.join(", ")));
+        let shown = e.map_or(&[][..], |e| e.shown_evidence());
+        // `implied_*`: the diagnosis's linearised first guess, before any fit; named so that
+        // it is not read as the answer.
+        let ev: Vec<String> = ["corr", "explained_share"]
+            .iter()
+            .chain(shown)
+            .filter_map(|k| {
+                x.evidence.get(*k).map(|v| match k.strip_prefix("implied_") {
+                    Some(_) => format!("screen's first guess {v:.3}"),
+                    None => format!("{k} {v:.3}"),
                 })
             })
             .collect();
-        let v = json!({
-            "holdout_by": key,
-            "folds": fs,
-            "position_mae_before": avg_b,
-            "position_mae_after": avg_a,
-            "episodes": n_eps,
-            "seconds": t0.elapsed().as_secs_f64(),
-        });
-        serde_json::to_string_pretty(&v).unwrap_or_default() + "\n"
-    } else {
-        let deg = |x: f64| x.to_degrees();
-        let mut s = format!(
-            "cross-validation by `{key}`: each of {} values held out in turn, the selection run on the others\n",
-            values.len()
-        );
-        for f in &folds {
-            let out = &f.outcome;
-            s.push_str(&format!(
-                "\n{key} = {} held out ({} episodes; trained on {}; {:.0} s)\n",
-                f.value,
-                f.heldout.len(),
-                out.train.len(),
-                f.seconds
-            ));
-            if out.selected.is_empty() {
-                s.push_str("  missing physics: nothing kept\n");
-            }
-            for x in &out.selected {
-                let ps: Vec<String> =
-                    x.params.iter().map(|(k, v)| format!("{k} = {v:.4}")).collect();
-                s.push_str(&format!(
-                    "  {:<24} {:<12} {}\n",
-                    x.effect,
-                    x.joints.join(","),
-                    ps.join(", ")
-                ));
-            }
-            for e in &f.heldout {
-                s.push_str(&format!(
-                    "    {:<32} position MAE {:.2}° → {:.2}°\n",
-                    e.name,
-                    deg(e.before),
-                    deg(e.after)
-                ));
-            }
-            let (b, a) = f.mean();
-            s.push_str(&format!(
-                "  held-out position MAE (mean over its episodes) {:.2}° → {:.2}°\n",
-                deg(b),
-                deg(a)
-            ));
-        }
         s.push_str(&format!(
-            "\nheld-out position MAE, mean over the {} episodes (each held out once): {:.2}° → {:.2}°  ({:.0} s)\n",
-            n_eps,
-            deg(avg_b),
-            deg(avg_a),
-            t0.elapsed().as_secs_f64()
+            "      evidence: {}; when added, held-out error {:+.0} %{}\n",
+            if ev.is_empty() { "fitted jointly".to_string() } else { ev.join(", ") },
+            -100.0 * x.heldout_improvement,
+            if x.identifiable { "" } else { "  [not identifiable]" }
         ));
-        s
-    };
-    if std::io::stdout().lock().write_all(text.as_bytes()).is_err() {
-        return 2;
     }
-    0
+    s.push_str(&format!(
+        "\nheld-out ({} episode{}{}): before → after\n  position MAE   {:.3}° → {:.3}°\n  position RMSE  {:.3}° → {:.3}°\n  correlation    {:.3} → {:.3}\n  gap score      {:.3} → {:.3}\n",
+        out.heldout.len(),
+        if out.heldout.len() == 1 { "" } else { "s" },
+        if out.split_by_time { ", time windows" } else { "" },
+        deg(before.position_mae),
+        deg(after.position_mae),
+        deg(before.position_rmse),
+        deg(after.position_rmse),
+        before.correlation_mean,
+        after.correlation_mean,
+        before.gap_overall,
+        after.gap_overall
+    ));
+    if !out.floors.is_empty() {
+        // The timestep's part only when the recordings move in finer time than the model.
+        let disc = out.floors.iter().any(|f| f.discretisation > 0.0);
+        let f: Vec<String> = out
+            .floors
+            .iter()
+            .map(|f| {
+                let d = if disc {
+                    format!(" + {:.3}°", deg(f.discretisation.sqrt()))
+                } else {
+                    String::new()
+                };
+                format!(
+                    "{} {:.3}° + {:.3}°{d}",
+                    f.joint,
+                    deg(f.white.sqrt()),
+                    deg(f.reconstruction.sqrt())
+                )
+            })
+            .collect();
+        let parts = if disc {
+            "white part of the training residual + command reconstruction and start state + the model's timestep"
+        } else {
+            "white part of the training residual + command reconstruction and start state"
+        };
+        s.push_str(&format!("  floor of the fitted model (RMS: {parts}): {}\n", f.join(", ")));
+    }
+    if !out.split_note.is_empty() {
+        s.push_str(&format!("  ({})\n", out.split_note));
+    }
+    s
 }

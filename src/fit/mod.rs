@@ -1,5 +1,6 @@
 //! Fitting: name the missing physics, add it, fit it, show the held-out improvement.
 pub mod cmd;
+pub mod cmd_rotate;
 pub mod diagnose;
 pub mod effects;
 pub mod optim;
