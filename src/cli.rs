@@ -31,7 +31,7 @@ instead of a full MuJoCo compile, as a pre-commit hook re-runs it.\n\
 $MODELLINT_CACHE_MAX_MB megabytes (default 300, least recently used entries evicted first);\n\
 `modellint cache clean` empties it.\n\n\
 Exit codes: 0 no finding at or above --fail-on; 1 findings; 2 modellint could not do its job.",
-    after_help = "Examples:\n  modellint models/asimov.xml\n  modellint robot.xml --spec robot.toml --format sarif > modellint.sarif\n  modellint robot.xml --no-probe --fail-on warning     # pre-commit speed\n  modellint rules                                      # list rule ids\n  modellint rule underdamped-pd-gains                  # a rule's documentation",
+    after_help = "Examples:\n  modellint models/asimov.xml\n  modellint robot.xml --spec robot.toml --format sarif > modellint.sarif\n  modellint robot.xml --no-probe --fail-on warning     # pre-commit speed\n  modellint init-spec robot.xml                        # start robot.toml from the model\n  modellint rules                                      # list rule ids\n  modellint rule underdamped-pd-gains                  # a rule's documentation",
     args_conflicts_with_subcommands = true
 )]
 pub struct Cli {
@@ -123,6 +123,20 @@ pub enum Cmd {
     Cache {
         #[command(subcommand)]
         action: CacheCmd,
+    },
+    /// Write a commented hardware-spec template derived from the model, so the spec-driven
+    /// checks run at once (docs/spec.md).
+    #[command(long_about = crate::spec_init::LONG_ABOUT)]
+    InitSpec {
+        /// Model (MJCF or URDF).
+        model: PathBuf,
+        /// Where to write the spec; `-` for stdout. Default: <model>.toml beside the model, which
+        /// `modellint MODEL` then finds by itself.
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+        /// Replace an existing file.
+        #[arg(long)]
+        force: bool,
     },
     /// Replay real recordings in MuJoCo and measure the sim-to-real gap (the Booster T1 sim-to-real study's replay and metrics).
     Gap(GapCmd),
@@ -374,6 +388,9 @@ pub fn run() -> i32 {
                 }
             }
         }
+        Some(Cmd::InitSpec { model, output, force }) => {
+            crate::spec_init::run(&model, output.as_deref(), force)
+        }
         Some(Cmd::Gap(g)) => crate::sim2real::cmd::run_gap(crate::sim2real::cmd::GapArgs {
             model: g.model,
             recordings: g.recordings,
@@ -577,18 +594,21 @@ fn check(a: CheckArgs) -> i32 {
 
 fn spec_info(l: &crate::lint::Loaded) -> output::SpecInfo {
     let enabled = |id: &str| crate::rules::find_meta(id).is_some_and(|m| l.config.enabled(m));
-    let missing = l.spec.is_none();
-    let ids = |v: &[(&str, &str)]| {
-        if missing {
-            v.iter().map(|r| r.0).filter(|id| enabled(id)).map(str::to_string).collect()
-        } else {
-            vec![]
+    let (skipped, weakened): (Vec<&str>, Vec<&str>) = match &l.spec {
+        None => (
+            crate::spec_use::SKIPPED.iter().map(|r| r.0).collect(),
+            crate::spec_use::WEAKENED.iter().map(|r| r.0).collect(),
+        ),
+        Some(spec) => {
+            let (s, w) = crate::spec_use::waiting(spec, &l.robot);
+            (s.iter().map(|r| r.0).collect(), w.iter().map(|r| r.0).collect())
         }
     };
+    let ids = |v: Vec<&str>| v.into_iter().filter(|id| enabled(id)).map(str::to_string).collect();
     output::SpecInfo {
         path: l.spec_search.path.as_ref().map(|p| p.display().to_string()),
         searched: l.spec_search.searched.iter().map(|p| p.display().to_string()).collect(),
-        skipped_rules: ids(crate::spec_use::SKIPPED),
-        weakened_rules: ids(crate::spec_use::WEAKENED),
+        skipped_rules: ids(skipped),
+        weakened_rules: ids(weakened),
     }
 }

@@ -18,6 +18,7 @@ pub mod probe;
 pub mod rules;
 pub mod sim2real;
 pub mod spec;
+pub mod spec_init;
 pub mod spec_use;
 pub mod synth;
 pub mod util;

@@ -254,12 +254,17 @@ pub fn confirm(l: &Loaded, findings: &mut Vec<Finding>) {
     sort_findings(findings);
 }
 
-/// The note for a run without a spec (None when a spec is in use).
+/// The note for a run without a spec, or with one that leaves rules without their facts (None:
+/// every rule has what it needs).
 pub fn missing_spec_note(l: &Loaded) -> Option<String> {
-    if l.spec.is_some() {
-        return None;
-    }
     let enabled = |id: &str| crate::rules::find_meta(id).is_some_and(|m| l.config.enabled(m));
+    if let Some(spec) = &l.spec {
+        let (mut skipped, mut weakened) = crate::spec_use::waiting(spec, &l.robot);
+        skipped.retain(|(id, _)| enabled(id));
+        weakened.retain(|(id, _)| enabled(id));
+        let path = l.spec_search.path.as_deref().unwrap_or(Path::new("spec"));
+        return crate::spec_use::waiting_note(&l.robot.path, path, &skipped, &weakened);
+    }
     Some(crate::spec_use::missing_note(&l.robot.path, &l.spec_search, &enabled))
 }
 
