@@ -276,3 +276,27 @@ fn condim1_feet_on_a_condim3_floor_get_dim3_contacts_in_mujoco() {
         assert!((b.friction - 0.6).abs() < 1e-12);
     }
 }
+
+/// Both sides of a mirror-symmetric model get the mirror-image experiment, so the same
+/// numbers and the same verdict (the right joint steps as the mirror of the left: opposite sign
+/// for the roll axes, which a mirror reverses; the same sign for the pitch axes).
+#[test]
+fn mirror_pairs_get_the_same_step_response() {
+    let l = loaded("fixtures/probes/mirror_humanoid.xml");
+    for (a, b) in [("left_hip_roll", "right_hip_roll"), ("left_hip_pitch", "right_hip_pitch")] {
+        let ra = impulse::step_response(&l.robot, l.robot.joint(a).unwrap().id, None).unwrap();
+        let rb = impulse::step_response(&l.robot, l.robot.joint(b).unwrap().id, None).unwrap();
+        let (za, zb) = (ra.zeta.expect("rings"), rb.zeta.expect("rings"));
+        assert!((za - zb).abs() < 1e-6 * za, "{a} ζ {za} vs {b} ζ {zb}");
+        assert!((ra.overshoot - rb.overshoot).abs() < 1e-6, "{} vs {}", ra.overshoot, rb.overshoot);
+        let (wa, wb) = (ra.omega_n.unwrap(), rb.omega_n.unwrap());
+        assert!((wa - wb).abs() < 1e-6 * wa, "{a} ω {wa} vs {b} ω {wb}");
+    }
+    let fs = probed("fixtures/probes/mirror_humanoid.xml", "underdamped-pd-gains");
+    let verdict = |n: &str| {
+        let f = fs.iter().find(|f| f.message.contains(&format!("`{n}`"))).unwrap();
+        (f.severity, outcome(f).status)
+    };
+    assert_eq!(verdict("left_hip_roll"), verdict("right_hip_roll"));
+    assert_eq!(verdict("left_hip_pitch"), verdict("right_hip_pitch"));
+}
