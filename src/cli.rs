@@ -28,7 +28,7 @@ includes, meshes, textures and the spec), so an unchanged re-lint of a mesh-heav
 --no-probe takes under 100 ms (Booster T1 and Unitree H1 scenes: about 70 ms, bench/run.sh)\n\
 instead of a full MuJoCo compile, as a pre-commit hook re-runs it.\n\
 --no-cache disables it; --cache-dir or $MODELLINT_CACHE_DIR moves it; its size is capped at\n\
-$MODELLINT_CACHE_MAX_MB megabytes (default 300, least recently used entries evicted first);\n\
+--cache-max or $MODELLINT_CACHE_MAX_MB megabytes (default 300, least recently used entries evicted first);\n\
 `modellint cache clean` empties it.\n\n\
 Exit codes: 0 no finding at or above --fail-on; 1 findings; 2 modellint could not do its job.",
     after_help = "Examples:\n  modellint models/asimov.xml\n  modellint robot.xml --spec robot.toml --format sarif > modellint.sarif\n  modellint robot.xml --no-probe --fail-on warning     # pre-commit speed\n  modellint init-spec robot.xml                        # start robot.toml from the model\n  modellint rules                                      # list rule ids\n  modellint rule underdamped-pd-gains                  # a rule's documentation",
@@ -80,6 +80,10 @@ pub struct CheckArgs {
     /// Always compile the model with MuJoCo; neither read nor write the cache.
     #[arg(long)]
     pub no_cache: bool,
+    /// Size cap of the compiled-model cache, megabytes (least recently used entries out).
+    /// Default: $MODELLINT_CACHE_MAX_MB, else 300.
+    #[arg(long, value_name = "MB", value_parser = parse_mb)]
+    pub cache_max: Option<f64>,
     /// URDF `package://NAME/...` meshes: the directory of package NAME (repeatable; before
     /// ROS_PACKAGE_PATH). Every subcommand.
     #[arg(long, global = true, value_name = "NAME=DIR", value_parser = crate::model::urdf_packages::parse_package_arg)]
@@ -322,6 +326,13 @@ impl ReplayArgs {
     }
 }
 
+fn parse_mb(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
+        _ => Err(format!("`{s}` is not a size in megabytes (a number ≥ 0)")),
+    }
+}
+
 fn use_color(choice: &str) -> bool {
     match choice {
         "always" => true,
@@ -478,6 +489,9 @@ fn check(a: CheckArgs) -> i32 {
         }
     });
     let cli_fail_on = a.fail_on.as_deref().and_then(Severity::parse);
+    if let Some(mb) = a.cache_max {
+        crate::model::cache::set_max_mb(mb);
+    }
     let cache_dir = if a.no_cache {
         None
     } else {
