@@ -110,12 +110,12 @@ pub fn missing_note(model: &Path, s: &SpecSearch, enabled: &dyn Fn(&str) -> bool
     out
 }
 
+/// Rule ids with the spec keys each is missing.
+pub type Waiting = Vec<(&'static str, String)>;
+
 /// Rules a spec in use leaves without the facts they need (keys not set, e.g. placeholders of
 /// `modellint init-spec` not filled in): (skipped, weakened), each rule with the missing keys.
-pub fn waiting(
-    spec: &crate::spec::Spec,
-    robot: &crate::model::Robot,
-) -> (Vec<(&'static str, String)>, Vec<(&'static str, String)>) {
+pub fn waiting(spec: &crate::spec::Spec, robot: &crate::model::Robot) -> (Waiting, Waiting) {
     use crate::spec::v;
     let r = &spec.robot;
     let mut skipped = Vec::new();

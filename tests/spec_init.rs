@@ -90,10 +90,7 @@ fn loads_and_adds_nothing(model: &Path, spec: &Path) -> String {
 }
 
 /// Joint → (family, peak torque, region) as a spec resolves them, through the spec loader.
-fn resolve(
-    model: &Path,
-    spec: &Path,
-) -> BTreeMap<String, (Option<String>, Option<f64>, Option<String>)> {
+fn resolve(model: &Path, spec: &Path) -> Resolved {
     let mut map = modellint::model::source::SourceMap::default();
     let robot = modellint::model::load(&mut map, model, None).unwrap();
     let names: Vec<String> = robot.joints.iter().map(|j| j.name.clone()).collect();
