@@ -28,10 +28,10 @@ includes, meshes, textures and the spec), so an unchanged re-lint of a mesh-heav
 --no-probe takes under 100 ms (Booster T1 and Unitree H1 scenes: about 70 ms, bench/run.sh)\n\
 instead of a full MuJoCo compile, as a pre-commit hook re-runs it.\n\
 --no-cache disables it; --cache-dir or $MODELLINT_CACHE_DIR moves it; its size is capped at\n\
-$MODELLINT_CACHE_MAX_MB megabytes (default 300, least recently used entries evicted first);\n\
+--cache-max or $MODELLINT_CACHE_MAX_MB megabytes (default 300, least recently used entries evicted first);\n\
 `modellint cache clean` empties it.\n\n\
 Exit codes: 0 no finding at or above --fail-on; 1 findings; 2 modellint could not do its job.",
-    after_help = "Examples:\n  modellint models/asimov.xml\n  modellint robot.xml --spec robot.toml --format sarif > modellint.sarif\n  modellint robot.xml --no-probe --fail-on warning     # pre-commit speed\n  modellint rules                                      # list rule ids\n  modellint rule underdamped-pd-gains                  # a rule's documentation",
+    after_help = "Examples:\n  modellint models/asimov.xml\n  modellint robot.xml --spec robot.toml --format sarif > modellint.sarif\n  modellint robot.xml --no-probe --fail-on warning     # pre-commit speed\n  modellint init-spec robot.xml                        # start robot.toml from the model\n  modellint rules                                      # list rule ids\n  modellint rule underdamped-pd-gains                  # a rule's documentation",
     args_conflicts_with_subcommands = true
 )]
 pub struct Cli {
@@ -80,6 +80,10 @@ pub struct CheckArgs {
     /// Always compile the model with MuJoCo; neither read nor write the cache.
     #[arg(long)]
     pub no_cache: bool,
+    /// Size cap of the compiled-model cache, megabytes (least recently used entries out).
+    /// Default: $MODELLINT_CACHE_MAX_MB, else 300.
+    #[arg(long, value_name = "MB", value_parser = parse_mb)]
+    pub cache_max: Option<f64>,
     /// URDF `package://NAME/...` meshes: the directory of package NAME (repeatable; before
     /// ROS_PACKAGE_PATH). Every subcommand.
     #[arg(long, global = true, value_name = "NAME=DIR", value_parser = crate::model::urdf_packages::parse_package_arg)]
@@ -123,6 +127,20 @@ pub enum Cmd {
     Cache {
         #[command(subcommand)]
         action: CacheCmd,
+    },
+    /// Write a commented hardware-spec template derived from the model, so the spec-driven
+    /// checks run at once (docs/spec.md).
+    #[command(long_about = crate::spec_init::LONG_ABOUT)]
+    InitSpec {
+        /// Model (MJCF or URDF).
+        model: PathBuf,
+        /// Where to write the spec; `-` for stdout. Default: <model>.toml beside the model, which
+        /// `modellint MODEL` then finds by itself.
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+        /// Replace an existing file.
+        #[arg(long)]
+        force: bool,
     },
     /// Replay real recordings in MuJoCo and measure the sim-to-real gap (the Booster T1 sim-to-real study's replay and metrics).
     Gap(GapCmd),
@@ -374,6 +392,13 @@ impl ReplayArgs {
     }
 }
 
+fn parse_mb(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
+        _ => Err(format!("`{s}` is not a size in megabytes (a number ≥ 0)")),
+    }
+}
+
 fn use_color(choice: &str) -> bool {
     match choice {
         "always" => true,
@@ -440,6 +465,9 @@ pub fn run() -> i32 {
                 }
             }
         }
+        Some(Cmd::InitSpec { model, output, force }) => {
+            crate::spec_init::run(&model, output.as_deref(), force)
+        }
         Some(Cmd::Gap(g)) => crate::sim2real::cmd::run_gap(g.into_args()),
         Some(Cmd::Fit(f)) => crate::fit::cmd::run_fit(f.into_args()),
         Some(Cmd::Synth(s)) => crate::synth::cmd::run(s),
@@ -495,6 +523,9 @@ fn check(a: CheckArgs) -> i32 {
         }
     });
     let cli_fail_on = a.fail_on.as_deref().and_then(Severity::parse);
+    if let Some(mb) = a.cache_max {
+        crate::model::cache::set_max_mb(mb);
+    }
     let cache_dir = if a.no_cache {
         None
     } else {

@@ -20,6 +20,7 @@ pub mod rules;
 pub mod sim2real;
 pub mod sink;
 pub mod spec;
+pub mod spec_init;
 pub mod spec_use;
 pub mod synth;
 pub mod util;

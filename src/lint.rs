@@ -255,12 +255,17 @@ pub fn confirm(l: &Loaded, findings: &mut Vec<Finding>) {
     sort_findings(findings);
 }
 
-/// The note for a run without a spec (None when a spec is in use).
+/// The note for a run without a spec, or with one that leaves rules without their facts (None:
+/// every rule has what it needs).
 pub fn missing_spec_note(l: &Loaded) -> Option<String> {
-    if l.spec.is_some() {
-        return None;
-    }
     let enabled = |id: &str| crate::rules::find_meta(id).is_some_and(|m| l.config.enabled(m));
+    if let Some(spec) = &l.spec {
+        let (mut skipped, mut weakened) = crate::spec_use::waiting(spec, &l.robot);
+        skipped.retain(|(id, _)| enabled(id));
+        weakened.retain(|(id, _)| enabled(id));
+        let path = l.spec_search.path.as_deref().unwrap_or(Path::new("spec"));
+        return crate::spec_use::waiting_note(&l.robot.path, path, &skipped, &weakened);
+    }
     Some(crate::spec_use::missing_note(&l.robot.path, &l.spec_search, &enabled))
 }
 
@@ -316,19 +321,22 @@ pub fn load_for_api(model: &Path, spec: Option<PathBuf>) -> Result<Loaded, LoadE
 /// (the JSON's `spec`).
 pub fn spec_info(l: &Loaded) -> crate::output::SpecInfo {
     let enabled = |id: &str| crate::rules::find_meta(id).is_some_and(|m| l.config.enabled(m));
-    let missing = l.spec.is_none();
-    let ids = |v: &[(&str, &str)]| {
-        if missing {
-            v.iter().map(|r| r.0).filter(|id| enabled(id)).map(str::to_string).collect()
-        } else {
-            vec![]
+    let (skipped, weakened): (Vec<&str>, Vec<&str>) = match &l.spec {
+        None => (
+            crate::spec_use::SKIPPED.iter().map(|r| r.0).collect(),
+            crate::spec_use::WEAKENED.iter().map(|r| r.0).collect(),
+        ),
+        Some(spec) => {
+            let (s, w) = crate::spec_use::waiting(spec, &l.robot);
+            (s.iter().map(|r| r.0).collect(), w.iter().map(|r| r.0).collect())
         }
     };
+    let ids = |v: Vec<&str>| v.into_iter().filter(|id| enabled(id)).map(str::to_string).collect();
     crate::output::SpecInfo {
         path: l.spec_search.path.as_ref().map(|p| p.display().to_string()),
         searched: l.spec_search.searched.iter().map(|p| p.display().to_string()).collect(),
-        skipped_rules: ids(crate::spec_use::SKIPPED),
-        weakened_rules: ids(crate::spec_use::WEAKENED),
+        skipped_rules: ids(skipped),
+        weakened_rules: ids(weakened),
     }
 }
 

@@ -110,6 +110,95 @@ pub fn missing_note(model: &Path, s: &SpecSearch, enabled: &dyn Fn(&str) -> bool
     out
 }
 
+/// Rule ids with the spec keys each is missing.
+pub type Waiting = Vec<(&'static str, String)>;
+
+/// Rules a spec in use leaves without the facts they need (keys not set, e.g. placeholders of
+/// `modellint init-spec` not filled in): (skipped, weakened), each rule with the missing keys.
+pub fn waiting(spec: &crate::spec::Spec, robot: &crate::model::Robot) -> (Waiting, Waiting) {
+    use crate::spec::v;
+    let r = &spec.robot;
+    let mut skipped = Vec::new();
+    let mut weakened = Vec::new();
+    let mut keys = Vec::new();
+    if r.control_hz.is_none() {
+        keys.push("robot.control_hz");
+    }
+    if r.action_delay_steps.is_none() {
+        keys.push("robot.action_delay_steps");
+    }
+    if !keys.is_empty() && !robot.actuators.is_empty() {
+        skipped.push(("missing-action-delay", keys.join(", ")));
+    }
+    // Only when there is a URDF to compare with: `<model>.urdf` beside the model.
+    if r.companion_urdf.is_none()
+        && robot.format == crate::model::Format::Mjcf
+        && robot.path.with_extension("urdf").is_file()
+    {
+        skipped.push(("urdf-mjcf-drift", "robot.companion_urdf".to_string()));
+    }
+    // Families the actuated joints use, and what each states.
+    let mut used: Vec<String> = robot
+        .joints
+        .iter()
+        .filter(|j| j.is_scalar() && !robot.actuators_on_joint(j.id).is_empty())
+        .filter_map(|j| spec.joint(&j.name).filter(|f| !f.passive)?.motor)
+        .collect();
+    used.sort();
+    used.dedup();
+    let motors: Vec<&crate::spec::Motor> = used.iter().filter_map(|f| spec.motor(f)).collect();
+    let any = |f: &dyn Fn(&crate::spec::Motor) -> bool| motors.iter().any(|m| f(m));
+    if !any(&|m| v(&m.rotor_inertia).is_some_and(|x| x > 0.0) && v(&m.gear_ratio).is_some()) {
+        let what = "motors.*.rotor_inertia and gear_ratio".to_string();
+        weakened.push(("armature-mismatch", what.clone()));
+        weakened.push(("parallel-ankle-armature", what));
+    }
+    if !any(&|m| m.peak_torque.is_some()) {
+        weakened.push(("effort-limit-mismatch", "motors.*.peak_torque".to_string()));
+    }
+    let torque_driven = robot.joints.iter().any(|j| {
+        j.is_scalar()
+            && robot
+                .actuators_on_joint(j.id)
+                .iter()
+                .any(|a| a.kind == crate::model::ActuatorKind::Motor)
+    });
+    if torque_driven && !any(&|m| m.kp.is_some() && m.kd.is_some()) {
+        let what = "motors.*.kp and kd (the model drives joints by torque)".to_string();
+        weakened.push(("underdamped-pd-gains", what.clone()));
+        weakened.push(("gains-unstable-for-timestep", what));
+    }
+    (skipped, weakened)
+}
+
+/// The note for a run whose spec leaves rules without their facts (`None`: nothing waits).
+pub fn waiting_note(
+    model: &Path,
+    spec_path: &Path,
+    skipped: &[(&str, String)],
+    weakened: &[(&str, String)],
+) -> Option<String> {
+    if skipped.is_empty() && weakened.is_empty() {
+        return None;
+    }
+    let list = |v: &[(&str, String)]| {
+        v.iter().map(|(id, k)| format!("{id} ({k})")).collect::<Vec<_>>().join(", ")
+    };
+    let mut out = format!(
+        "modellint: {}: the spec {} does not set every fact the rules use",
+        model.display(),
+        spec_path.display()
+    );
+    if !skipped.is_empty() {
+        out.push_str(&format!("\n  not run: {}", list(skipped)));
+    }
+    if !weakened.is_empty() {
+        out.push_str(&format!("\n  run as without a spec: {}", list(weakened)));
+    }
+    out.push('\n');
+    Some(out)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

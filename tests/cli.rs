@@ -613,6 +613,21 @@ fn cache_is_capped_and_cleaned() {
     // A cap of 0.015 MB holds one small entry: the older one is evicted.
     run("fixtures/rules/soft-limits/valid.xml", "0.015");
     assert_eq!(count(), 1);
+    // --cache-max beside the variable, and before it: the flag's 100 MB keeps both entries
+    // although the variable says 0.015 MB.
+    let with_flag = |model: &str, flag: &str, env: &str| {
+        Command::new(env!("CARGO_BIN_EXE_modellint"))
+            .args([model, "--no-probe", "--cache-dir", d, "--cache-max", flag])
+            .env("MODELLINT_CACHE_MAX_MB", env)
+            .output()
+            .unwrap()
+    };
+    with_flag("fixtures/rules/soft-limits/invalid.xml", "100", "0.015");
+    assert_eq!(count(), 2);
+    with_flag("fixtures/include/scene.xml", "0.015", "100");
+    assert_eq!(count(), 1);
+    let bad = with_flag("fixtures/include/scene.xml", "-3", "100");
+    assert_eq!(bad.status.code(), Some(2));
     let (code, out, _) = modellint(&["cache", "clean", "--dir", d]);
     assert_eq!(code, 0, "{out}");
     assert!(out.contains("removed 1 cache entry"), "{out}");

@@ -208,3 +208,95 @@ fn a_toe_tilt_refutation_records_its_met_preconditions() {
     assert!(p.preconditions.iter().all(|c| c.met));
     assert!(p.preconditions.iter().any(|c| c.name == "foot_loaded"));
 }
+
+/// The condim/friction findings of `foot-collision-geometry` whose probe is `foot-slide`.
+fn slide_findings(path: &str) -> Vec<modellint::finding::Finding> {
+    let fs = probed(path, "foot-collision-geometry");
+    let out: Vec<_> = fs
+        .into_iter()
+        .filter(|f| f.probe.as_ref().is_some_and(|p| p.name == "foot-slide"))
+        .collect();
+    assert!(!out.is_empty(), "{path}: no condim/friction finding measured by foot-slide");
+    out
+}
+
+#[test]
+fn slide_without_a_floor_is_inconclusive_with_the_reason() {
+    for f in slide_findings("fixtures/rules/foot-collision-geometry/invalid_condim1_no_floor.xml") {
+        let p = outcome(&f);
+        assert!(f.fact);
+        assert_eq!(p.status, ProbeStatus::Inconclusive, "{}", p.note);
+        assert!(p.reason.as_deref().unwrap_or("").contains("no floor"), "{:?}", p.reason);
+        assert!(!p.preconditions.iter().find(|c| c.name == "floor").unwrap().met);
+        assert_ne!(f.severity, modellint::finding::Severity::Info);
+    }
+}
+
+#[test]
+fn slide_reads_the_contact_mujoco_built_and_frictionless_feet_slide() {
+    // Floor condim 1 with the higher priority: MuJoCo builds dim-1 contacts; a push of 5 % of
+    // the weight for 0.5 s on frictionless contacts moves the foot ½·(0.05 g)·t² ≈ 61 mm.
+    for f in
+        slide_findings("fixtures/rules/foot-collision-geometry/invalid_priority_floor_condim1.xml")
+    {
+        let p = outcome(&f);
+        assert_eq!(p.status, ProbeStatus::Measured, "{}", p.note);
+        assert_eq!(p.measured["contact_dim"], 1.0);
+        let free_slide = 0.5 * 0.05 * 9.81 * 0.5 * 0.5;
+        let s = p.measured["slide_m"];
+        assert!(
+            (s - free_slide).abs() < 0.1 * free_slide,
+            "slid {s} m, frictionless {free_slide} m"
+        );
+        assert!(p.preconditions.iter().all(|c| c.met), "{:?}", p.preconditions);
+    }
+    // condim 6, friction 1 on a condim-3 floor: dim-6 contacts at μ 1 hold the push.
+    for f in slide_findings("fixtures/rules/foot-collision-geometry/invalid_default_friction.xml") {
+        let p = outcome(&f);
+        assert_eq!(p.status, ProbeStatus::Measured, "{}", p.note);
+        assert_eq!(p.measured["contact_dim"], 6.0);
+        assert_eq!(p.measured["contact_friction"], 1.0);
+        assert!(p.measured["slide_m"] < 0.002, "{}", p.note);
+    }
+}
+
+/// The static rule leaves condim-1 feet on a condim-3 floor alone because MuJoCo combines them
+/// to dim 3; the contacts MuJoCo really builds say the same.
+#[test]
+fn condim1_feet_on_a_condim3_floor_get_dim3_contacts_in_mujoco() {
+    let l =
+        loaded("fixtures/rules/foot-collision-geometry/valid_condim1_feet_on_condim3_floor.xml");
+    let s = modellint::probe::slide::run(&l.robot).unwrap();
+    let feet: Vec<usize> =
+        l.robot.geoms.iter().filter(|g| g.body != 0 && g.condim == 1).map(|g| g.id).collect();
+    assert!(!feet.is_empty());
+    for g in feet {
+        let b = s.built.get(&g).unwrap_or_else(|| panic!("geom {g} never touched the floor"));
+        assert_eq!((b.dim, b.dim_min), (3, 3), "geom {g}");
+        assert!((b.friction - 0.6).abs() < 1e-12);
+    }
+}
+
+/// Both sides of a mirror-symmetric model get the mirror-image experiment, so the same
+/// numbers and the same verdict (the right joint steps as the mirror of the left: opposite sign
+/// for the roll axes, which a mirror reverses; the same sign for the pitch axes).
+#[test]
+fn mirror_pairs_get_the_same_step_response() {
+    let l = loaded("fixtures/probes/mirror_humanoid.xml");
+    for (a, b) in [("left_hip_roll", "right_hip_roll"), ("left_hip_pitch", "right_hip_pitch")] {
+        let ra = impulse::step_response(&l.robot, l.robot.joint(a).unwrap().id, None).unwrap();
+        let rb = impulse::step_response(&l.robot, l.robot.joint(b).unwrap().id, None).unwrap();
+        let (za, zb) = (ra.zeta.expect("rings"), rb.zeta.expect("rings"));
+        assert!((za - zb).abs() < 1e-6 * za, "{a} ζ {za} vs {b} ζ {zb}");
+        assert!((ra.overshoot - rb.overshoot).abs() < 1e-6, "{} vs {}", ra.overshoot, rb.overshoot);
+        let (wa, wb) = (ra.omega_n.unwrap(), rb.omega_n.unwrap());
+        assert!((wa - wb).abs() < 1e-6 * wa, "{a} ω {wa} vs {b} ω {wb}");
+    }
+    let fs = probed("fixtures/probes/mirror_humanoid.xml", "underdamped-pd-gains");
+    let verdict = |n: &str| {
+        let f = fs.iter().find(|f| f.message.contains(&format!("`{n}`"))).unwrap();
+        (f.severity, outcome(f).status)
+    };
+    assert_eq!(verdict("left_hip_roll"), verdict("right_hip_roll"));
+    assert_eq!(verdict("left_hip_pitch"), verdict("right_hip_pitch"));
+}

@@ -132,8 +132,22 @@ fn entry(dir: &Path, key: &str) -> PathBuf {
 /// Default size cap of the cache directory, bytes (`MODELLINT_CACHE_MAX_MB` overrides it).
 pub const DEFAULT_MAX_BYTES: u64 = 300 * 1024 * 1024;
 
-/// The size cap: `$MODELLINT_CACHE_MAX_MB` (megabytes) when set and valid, else the default.
+/// The cap given on the command line (`--cache-max MB`), bytes; before the environment.
+static CLI_MAX: std::sync::OnceLock<u64> = std::sync::OnceLock::new();
+
+/// Sets the cap for this process (`--cache-max MB`); a negative or non-finite value is ignored.
+pub fn set_max_mb(mb: f64) {
+    if mb.is_finite() && mb >= 0.0 {
+        let _ = CLI_MAX.set((mb * 1024.0 * 1024.0) as u64);
+    }
+}
+
+/// The size cap: `--cache-max` when given, else `$MODELLINT_CACHE_MAX_MB` (megabytes) when set
+/// and valid, else the default.
 pub fn max_bytes() -> u64 {
+    if let Some(&b) = CLI_MAX.get() {
+        return b;
+    }
     std::env::var("MODELLINT_CACHE_MAX_MB")
         .ok()
         .and_then(|v| v.trim().parse::<f64>().ok())

@@ -124,7 +124,8 @@ pub fn render(
 pub struct SpecInfo {
     pub path: Option<String>,
     pub searched: Vec<String>,
-    /// Rules skipped / weakened because there is no spec (empty when a spec is in use).
+    /// Rules skipped / weakened because there is no spec, or because the spec in use leaves
+    /// their keys unset (`spec_use::waiting`).
     pub skipped_rules: Vec<String>,
     pub weakened_rules: Vec<String>,
 }

@@ -147,12 +147,16 @@ pub fn step_response(
         steps += 1;
     }
     let q_eq = bench::qpos(&d, j.qposadr);
-    // Step of 0.05 rad (or 5 % of the range) towards the side with more room.
+    // Step of 0.05 rad (or 5 % of the range) towards the side with more room; the right joint
+    // of a left/right pair steps as the mirror image of its left partner (`mirror_sign`).
     let (lo, hi) = if j.limited { (j.range[0], j.range[1]) } else { (-1e9, 1e9) };
-    let mut delta = 0.05f64.min(0.05 * (hi - lo).abs().max(1e-3));
-    if q_eq + delta > hi - delta && q_eq - delta > lo {
-        delta = -delta;
-    }
+    let size = 0.05f64.min(0.05 * (hi - lo).abs().max(1e-3));
+    let own = step_sign(q_eq, size, lo, hi);
+    let sign = match mirror_sign(robot, &d, joint) {
+        Some(s) if step_sign(q_eq, size, lo, hi) == s || room(q_eq, s * size, lo, hi) => s,
+        _ => own,
+    };
+    let delta = sign * size;
     let new_target = if is_position { target + delta / gear } else { target + delta };
     let mut y = Vec::with_capacity(resp);
     let warn0 = bench::warnings(&d);
@@ -196,6 +200,62 @@ pub fn step_response(
             q <= j.range[0] + 1e-6 || q >= j.range[1] - 1e-6
         });
     Some(r)
+}
+
+/// Room for a step of `delta` from `q` inside [lo, hi] (with the step again as margin).
+fn room(q: f64, delta: f64, lo: f64, hi: f64) -> bool {
+    if delta > 0.0 { q + 2.0 * delta <= hi } else { q + 2.0 * delta >= lo }
+}
+
+/// +1, or −1 when a positive step would come within one step of the upper limit and a
+/// negative one has room.
+fn step_sign(q: f64, size: f64, lo: f64, hi: f64) -> f64 {
+    if q + size > hi - size && q - size > lo { -1.0 } else { 1.0 }
+}
+
+/// For the right joint of a left/right pair: the step sign that mirrors its left partner's
+/// step across the robot's sagittal plane, so both sides of a mirror-symmetric model get the
+/// same experiment. The plane's normal is the line between the two joints' anchors; a hinge
+/// axis is an axial vector, so its mirror image is `2(a·n)n − a`, and the right joint steps
+/// with the left's sign when its own axis points along that image, against it otherwise.
+/// `None` for a left or unpaired joint, or when the axes are not mirror images (±).
+pub fn mirror_sign(
+    robot: &Robot,
+    d: &mujoco_rs::prelude::MjData<&mujoco_rs::prelude::MjModel>,
+    joint: usize,
+) -> Option<f64> {
+    let j = robot.joints.get(joint)?;
+    let (side, other) = crate::model::mirror::mirror(&j.name, None)?;
+    if side != crate::model::mirror::Side::Right {
+        return None;
+    }
+    let p = robot.joint(&other).filter(|p| p.is_scalar() && p.jtype == j.jtype)?;
+    let (xa, xn) = (d.xaxis(), d.xanchor());
+    let (ar, al) = (*xa.get(j.id)?, *xa.get(p.id)?);
+    let (pr, pl) = (*xn.get(j.id)?, *xn.get(p.id)?);
+    let mut n = [pl[0] - pr[0], pl[1] - pr[1], pl[2] - pr[2]];
+    let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+    if !(len > 1e-9) {
+        return None;
+    }
+    n.iter_mut().for_each(|x| *x /= len);
+    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    let an = dot(al, n);
+    // A slide axis is a polar vector: its mirror image is a − 2(a·n)n.
+    let image: [f64; 3] = if j.jtype == crate::model::JointType::Slide {
+        [0, 1, 2].map(|i| al[i] - 2.0 * an * n[i])
+    } else {
+        [0, 1, 2].map(|i| 2.0 * an * n[i] - al[i])
+    };
+    let c = dot(ar, image);
+    if c.abs() < 0.9 {
+        return None;
+    }
+    // The left partner's own choice, from its keyframe position and range.
+    let (lo, hi) = if p.limited { (p.range[0], p.range[1]) } else { (-1e9, 1e9) };
+    let size = 0.05f64.min(0.05 * (hi - lo).abs().max(1e-3));
+    let ql = robot.key.qpos.get(p.qposadr).copied().unwrap_or(0.0);
+    Some(step_sign(ql, size, lo, hi) * c.signum())
 }
 
 /// Second-order identification from a normalised step response.

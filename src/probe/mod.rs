@@ -17,6 +17,7 @@ pub mod penetration;
 pub mod ringdown;
 pub mod sanity;
 pub mod settle;
+pub mod slide;
 
 use std::any::{Any, TypeId};
 use std::collections::BTreeMap;
@@ -32,6 +33,7 @@ pub use penetration::KeyframePenetration;
 pub use ringdown::RingDown;
 pub use sanity::WholeModelSanity;
 pub use settle::StanceSettle;
+pub use slide::FootSlide;
 
 /// One kind of probe simulation.
 pub trait Probe: 'static {

@@ -4,7 +4,8 @@ use crate::lint::Loaded;
 use crate::model::mjcf::ElemKind;
 use crate::model::{GeomType, Robot};
 use crate::probe::settle::{Settle, StanceClaim};
-use crate::probe::{Preconditions, StanceSettle, Verdict};
+use crate::probe::slide::{FootSlide, PUSH_S, PUSH_SHARE, Slide};
+use crate::probe::{Measure, Measurement, Preconditions, StanceSettle, Verdict};
 use crate::rules::contact::feet::{Foot, FootKind, feet};
 use crate::rules::geometry::shapes::{Placed, hull_area};
 use crate::rules::{Context, Rule, RuleMeta, claim_each, opt};
@@ -59,7 +60,11 @@ declare_rule! {
     /// confirms mesh, non-primitive and support-polygon findings when the foot's contacts
     /// chatter (> 5 changes/s) or penetrate (> 5 mm). Radius, condim, friction and left/right
     /// mismatch are facts of the file: no stance run confirms or refutes them (a stance run
-    /// does not measure friction).
+    /// does not measure friction). Probe `foot-slide` measures the condim and friction findings:
+    /// the contact dimension and sliding friction MuJoCo built for the foot's ground contacts
+    /// (`mjContact.dim`, `mjContact.friction`) and how far the foot slides under a sideways push
+    /// of 5 % of the weight (inconclusive without a floor, a loaded upright stance, or a foot
+    /// geom touching the ground).
     ///
     /// ## How to fix
     /// Replace mesh foot collision with several capsules (radius ≈12 mm) at heel, midfoot and
@@ -71,6 +76,7 @@ declare_rule! {
         group: "contact",
         level: Severity::Warning,
         probe: StanceSettle,
+        also: [FootSlide],
         options: [
             opt("allow_boxes", 1.0, "bool", "1: box feet are acceptable primitives; 0: only capsules and spheres"),
             opt("min_radius", 0.003, "m", "smallest capsule/sphere radius"),
@@ -361,7 +367,7 @@ impl FootCollisionGeometry {
                             "set condim=\"3\" on foot and toe geoms (and not higher on the floor)",
                         )
                         .subject(subj)
-                        .fact()
+                        .measure(ContactAsBuilt { geoms: geoms.clone(), body: foot.root })
                         .measured(c as f64, "")
                         .expected(3.0, ""),
                 );
@@ -407,7 +413,7 @@ impl FootCollisionGeometry {
                         .note("foot friction decides when the foot slips; a policy trained on grippier feet than the hardware's learns pushes that slip on the real floor")
                         .help(format!("set friction=\"{} …\" on the foot and toe geoms; MuJoCo combines friction by the maximum of the two geoms (or takes the higher-priority geom's), so the floor's friction must not exceed it", fmt_num(mu, 3)))
                         .subject(subj)
-                        .fact()
+                        .measure(ContactAsBuilt { geoms: geoms.clone(), body: foot.root })
                         .measured(v, "")
                         .expected(mu, ""),
                 );
@@ -508,5 +514,78 @@ impl FootCollisionGeometry {
                         .fact(),
                 );
         }
+    }
+}
+
+/// What the `foot-slide` probe measures about a condim or friction finding (a fact of the file):
+/// the contacts MuJoCo built for the foot's geoms against the ground, and the foot's slide under
+/// a small sideways push. Never a verdict.
+#[derive(Debug)]
+pub struct ContactAsBuilt {
+    /// The geoms the finding lists.
+    pub geoms: Vec<usize>,
+    /// The foot body whose slide is reported.
+    pub body: usize,
+}
+
+impl Measure for ContactAsBuilt {
+    type Probe = FootSlide;
+    fn key(&self, _: &Loaded) -> Result<(), &'static str> {
+        Ok(())
+    }
+    fn measure(&self, l: &Loaded, s: &Slide) -> Measurement {
+        let robot = &l.robot;
+        let built: Vec<(usize, crate::probe::slide::Built)> =
+            self.geoms.iter().filter_map(|g| Some((*g, *s.built.get(g)?))).collect();
+        let pre = s.preconditions().check(
+            "touches_ground",
+            !built.is_empty(),
+            if built.is_empty() {
+                format!(
+                    "no listed geom of the foot ({}) touched the ground during the push",
+                    list(robot, &self.geoms)
+                )
+            } else {
+                format!(
+                    "{} of the {} listed geoms touched the ground",
+                    built.len(),
+                    self.geoms.len()
+                )
+            },
+        );
+        let travel = s.travel.get(&self.body).copied().unwrap_or(0.0);
+        let mut m = std::collections::BTreeMap::from([
+            ("push_share".to_string(), PUSH_SHARE),
+            ("slide_m".to_string(), travel),
+            ("support_load_n".to_string(), s.support_load),
+            ("weight_n".to_string(), s.weight),
+        ]);
+        let Some(&(g0, b0)) = built.first() else {
+            return Measurement::new(&pre, m, "no ground contact to measure".to_string());
+        };
+        let dim = built.iter().map(|b| b.1.dim).max().unwrap_or(b0.dim);
+        let dim_min = built.iter().map(|b| b.1.dim_min).min().unwrap_or(b0.dim_min);
+        m.insert("contact_dim".into(), dim as f64);
+        m.insert("contact_dim_min".into(), dim_min as f64);
+        m.insert("contact_friction".into(), b0.friction);
+        let dims =
+            if dim == dim_min { format!("dim-{dim}") } else { format!("dim-{dim_min}…{dim}") };
+        let note = format!(
+            "MuJoCo built {dims} ground contacts{} for {}; pushed sideways with {} % of its weight for {} s, the foot slid {} mm",
+            if dim >= 3 {
+                format!(" with sliding friction {}", fmt_num(b0.friction, 3))
+            } else {
+                " (no friction)".to_string()
+            },
+            if built.len() == 1 {
+                gname(robot, g0)
+            } else {
+                list(robot, &built.iter().map(|b| b.0).collect::<Vec<_>>())
+            },
+            fmt_num(100.0 * PUSH_SHARE, 3),
+            fmt_num(PUSH_S, 3),
+            fmt_num(1000.0 * travel, 3)
+        );
+        Measurement::new(&pre, m, note)
     }
 }

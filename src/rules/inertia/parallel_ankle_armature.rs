@@ -15,7 +15,8 @@ declare_rule! {
     /// joints that carry a doubled value: twice their own family's, or the parallel family's
     /// N-motor value copied onto them.
     ///
-    /// Without a spec (for joints the spec gives no motor family) it detects reuse of the model's
+    /// Without a spec (for joints the spec gives no motor family, or one without rotor_inertia and
+    /// gear_ratio) it detects reuse of the model's
     /// own doubled values: a value that is exactly 2 × another value the model gives actuated
     /// joints (within `exact_tolerance`) is a two-motor value. Reported on passive joints (no
     /// actuator, or `passive = true` in the spec) that carry it — e.g. passive neck joints with
@@ -211,7 +212,8 @@ impl Rule for ParallelAnkleArmature {
     }
 }
 
-/// Reuse of the model's own doubled values, for joints the spec gives no motor family.
+/// Reuse of the model's own doubled values, for joints the spec gives no motor family (or one
+/// without rotor inertia and gear ratio).
 fn doubled_without_spec(cx: &Context, out: &mut Vec<Finding>) {
     let robot = cx.robot;
     let etol = cx.opt("exact_tolerance");
@@ -220,7 +222,16 @@ fn doubled_without_spec(cx: &Context, out: &mut Vec<Finding>) {
     let passive = |j: &Joint| {
         robot.actuators_on_joint(j.id).is_empty() || cx.facts(&j.name).is_some_and(|f| f.passive)
     };
-    let has_family = |j: &Joint| cx.facts(&j.name).is_some_and(|f| f.motor.is_some() && !f.passive);
+    // A family whose single-motor value the spec states (rotor inertia and gear ratio); a family
+    // left as a placeholder (`modellint init-spec`) checks as if the spec were absent.
+    let has_family = |j: &Joint| {
+        cx.facts(&j.name).is_some_and(|f| {
+            !f.passive
+                && f.motor
+                    .as_deref()
+                    .is_some_and(|m| cx.spec.and_then(|s| single_value(s, m)).is_some())
+        })
+    };
     let same = |a: f64, b: f64| (a - b).abs() <= etol * a.abs().max(b.abs());
     // Distinct values carried by actuated joints, each with its joints.
     let mut bases: Vec<(f64, Vec<usize>)> = Vec::new();
