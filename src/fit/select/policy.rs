@@ -64,8 +64,9 @@ pub struct SearchPolicy {
     pub window_change: f64,
 
     // ---- screens (candidates not fitted in full) ----
-    /// A candidate is fitted in full only when its coarse fit reaches this share of the best
-    /// training improvement of the round so far (coarse or full) [fraction]. Default 0.5.
+    /// A candidate is fitted in full only when its coarse fit, or its linearised step, reaches
+    /// this share of the best training improvement of the round so far (coarse or full)
+    /// [fraction]. Default 0.5.
     pub screen_share: f64,
     /// Once a kept candidate leaves a white training residual (or when a swap is screened), a
     /// candidate whose coarse fit leaves more than this times that training RMSE is not fitted
@@ -222,7 +223,7 @@ pub const FIELDS: &[(&str, &str, &str)] = &[
     (
         "screen_share",
         "fraction",
-        "a candidate is fitted fully only when its coarse fit reaches this share of the round's best training improvement so far (coarse or full)",
+        "a candidate is fitted fully only when its coarse fit, or its linearised step, reaches this share of the round's best training improvement so far (coarse or full)",
     ),
     (
         "floor_screen_ratio",
