@@ -283,10 +283,13 @@ pub fn run_fit(a: FitArgs) -> i32 {
             }
         }
     }
-    let out = fit(robot, &recs, &opts);
+    let mut out = fit(robot, &recs, &opts);
     if let Some(b) = bar {
         b.finish_and_clear();
     }
+    // Kept effects at the model's own value within their uncertainty are not missing physics.
+    let within = crate::fit::absent::split_off(robot, &mut out.selected);
+    out.notes.extend(within);
     for w in &out.warnings {
         eprintln!("modellint: warning: {w}");
     }
@@ -405,6 +408,8 @@ pub fn run_fit(a: FitArgs) -> i32 {
         if out.selected.is_empty() {
             s.push_str(if out.stopped_at_floor {
                 "  nothing: the training residual is at its noise floor on every joint (nothing left to explain)\n"
+            } else if !out.applied.is_empty() {
+                "  nothing beyond its uncertainty: every kept effect is the model's own value within two standard errors (see the notes)\n"
             } else {
                 "  nothing: no candidate effect improved the held-out error beyond noise\n"
             });

@@ -1,4 +1,5 @@
 //! Fitting: name the missing physics, add it, fit it, show the held-out improvement.
+pub mod absent;
 pub mod cmd;
 pub mod diagnose;
 pub mod effects;
