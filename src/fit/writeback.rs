@@ -394,3 +394,6 @@ fn regex_escape(name: &str) -> String {
     }
     o
 }
+
+#[cfg(test)]
+mod tests;
