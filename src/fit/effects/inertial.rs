@@ -26,6 +26,8 @@ pub struct BodyAxes {
     pub along: [f64; 3],
     /// Unit vector across the link in the joint's plane of motion: joint axis × `along`.
     pub across: [f64; 3],
+    /// The joint's axis (unit; `along`'s perpendicular when the model gives none).
+    pub axis: [f64; 3],
     /// The link's length scale [m]: the largest of twice the centre of mass's distance, the
     /// distance to a child body, and 5 cm.
     pub length: f64,
@@ -67,6 +69,7 @@ impl BodyAxes {
         let c = axis.cross(&along);
         let across = if c.norm() > 1e-6 { c.normalize() } else { perpendicular(along) };
         let length = (2.0 * v3(com).norm()).max(child_len).max(0.05);
+        let axis = if axis.norm() > 1e-9 { axis.normalize() } else { perpendicular(along) };
         let finite = |x: f64| if x.is_finite() { x } else { 0.0 };
         Some(BodyAxes {
             body: b,
@@ -75,6 +78,7 @@ impl BodyAxes {
             com,
             along: along.into(),
             across: across.into(),
+            axis: axis.into(),
             length: finite(length),
         })
     }
@@ -83,6 +87,15 @@ impl BodyAxes {
     /// `c` across it.
     pub fn point(&self, a: f64, c: f64) -> Vector3<f64> {
         v3(self.com) + a * v3(self.along) + c * v3(self.across)
+    }
+
+    /// A rotation whose last column is the joint axis and whose first two span the plane
+    /// perpendicular to it (the plane a hinge turns the body in).
+    pub fn joint_frame(&self) -> Matrix3<f64> {
+        let a = v3(self.axis);
+        let w = a.cross(&v3(self.along));
+        let w = if w.norm() > 1e-6 { w.normalize() } else { perpendicular(a) };
+        Matrix3::from_columns(&[w, a.cross(&w), a])
     }
 }
 

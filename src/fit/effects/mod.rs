@@ -59,6 +59,7 @@ registry![
     motor_constants::MotorConstants,
     link_mass::LinkMass,
     com_offset::ComOffset,
+    link_inertia::LinkInertia,
 ];
 
 /// One fitted parameter: name, unit, bounds and default (the value meaning "effect absent"
@@ -424,6 +425,10 @@ pub trait Effect: Declared + Sync {
     /// stage 2) runs last.
     fn stage(&self) -> u8 {
         if self.entry() == Entry::Command { 0 } else { 1 }
+    }
+    /// `false` for an effect tried only when named (`--effects`, `--told`). Default: `true`.
+    fn by_default(&self) -> bool {
+        true
     }
 }
 

@@ -214,3 +214,33 @@ fn body_effects_move_the_arm_as_mujoco_composes_the_body() {
     assert!(d < 1e-6, "com_offset vs the moved capsule: {d}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `link_inertia` scales the forearm's inertia about the elbow axis through its centre of mass
+/// by `inertia_scale` and leaves its mass and centre of mass; every scale in the bounds is a
+/// valid body (principal moments obey the triangle inequality) — a capsule squashed to a
+/// quarter and stretched to four times.
+#[test]
+fn link_inertia_scales_the_moment_about_the_joint_axis_and_stays_a_body() {
+    use super::{Applied, by_id, inertial, model_with};
+    let dir = std::env::temp_dir().join(format!("modellint-inertia-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let robot = arm_with(&dir, "arm.xml", "", r#"fromto="0 0 0 0 0 -0.25""#);
+    let b = robot.mj.jnt_bodyid()[robot.joint("elbow").unwrap().id] as usize;
+    let (m0, c0, i0) = inertial::read(&robot.mj, b).unwrap();
+    let y: nalgebra::Vector3<f64> = nalgebra::Vector3::y();
+    for k in [0.25, 0.7, 1.0, 2.5, 4.0] {
+        let a = Applied {
+            effect: by_id("link_inertia").unwrap(),
+            joints: vec!["elbow".into()],
+            params: vec![k],
+        };
+        let m = model_with(&robot, &[a]);
+        let (m1, c1, i1) = inertial::read(&m, b).unwrap();
+        assert_eq!(m1, m0);
+        assert!((c1 - c0).norm() < 1e-12);
+        let (about0, about1) = (y.dot(&(i0 * y)), y.dot(&(i1 * y)));
+        assert!((about1 - k * about0).abs() < 1e-12, "{k}: {about1} vs {}", k * about0);
+        assert!(inertial::valid(m.body_inertia()[b]), "{k}: {:?}", m.body_inertia()[b]);
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
