@@ -56,6 +56,8 @@ fn a_payload_on_the_shank_is_found_and_written_into_its_inertial() {
         .map(|m| (m["effect"].as_str().unwrap().into(), m["joints"].to_string()))
         .collect();
     assert_eq!(found, [("link_mass".to_string(), r#"["knee"]"#.to_string())], "{found:?}");
+    // With the payload fitted, nothing is left above the floors.
+    assert_eq!(v["unexplained"].as_array().map(Vec::len), Some(0), "{}", v["unexplained"]);
     let p = &mp[0]["params"];
     let (dm, off) = (p["added_mass"].as_f64().unwrap(), p["offset"].as_f64().unwrap());
     assert!((dm - mass).abs() <= 0.1 * mass, "added mass {dm} for {mass}");
@@ -80,4 +82,17 @@ fn a_payload_on_the_shank_is_found_and_written_into_its_inertial() {
 fn the_same_leg_without_a_payload_gives_nothing() {
     let v = fit("R0_none", &[]);
     assert_eq!(v["missing_physics"].as_array().map(Vec::len), Some(0), "{}", v["missing_physics"]);
+    assert_eq!(v["unexplained"].as_array().map(Vec::len), Some(0), "{}", v["unexplained"]);
+}
+
+/// Told to explain the payload with joint effects only, the fit keeps what helps and says
+/// that the knee's residual is still far above its floor, where and how large.
+#[test]
+fn a_payload_the_effects_allowed_cannot_name_is_an_unexplained_residual() {
+    let v = fit("R1_shank_payload", &["--effects", "armature,viscous_damping"]);
+    let u = v["unexplained"].as_array().unwrap();
+    let knee = u.iter().find(|x| x["joint"] == "knee").expect("the knee is unexplained");
+    assert!(knee["residual_rms"].as_f64().unwrap() > 3.0 * knee["floor_rms"].as_f64().unwrap());
+    let w = v["warnings"].to_string();
+    assert!(w.contains("unexplained residual on knee"), "{w}");
 }

@@ -129,3 +129,9 @@ CASES["L14_thigh_payload"] = dict(model="leg3", seed=30,
 CASES["R1_shank_payload"] = dict(model="leg3", seed=61, episodes=4, seconds=4.0, heldout=[3],
     effects={"bodies": {"shank": {"payload": {"mass": 0.6, "pos": [0.0, 0.0, -0.25]}}}})
 CASES["R0_none"] = dict(model="leg3", seed=60, episodes=4, seconds=4.0, heldout=[3], effects={})
+# The shank's inertia about its principal x and y axes (y: the knee's axis) doubled, mass and
+# centre of mass kept; `link_inertia` is tried only when named, so the fit is told the effects
+# it may use (fit_args).
+CASES["L15_shank_inertia"] = dict(model="leg3", seed=31,
+    effects={"bodies": {"shank": {"inertia_scale": [2.0, 2.0, 1.0]}}},
+    fit_args=["--effects", "link_inertia,armature,link_mass,com_offset,viscous_damping,gain_error"])

@@ -100,6 +100,18 @@ def real_model(src, eff):
             c.add_geom(type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[pl.get("radius", 0.03), 0, 0],
                        mass=pl["mass"], contype=0, conaffinity=0)
             r["payload"] = {"mass": pl["mass"], "pos": list(pl["pos"])}
+        if "inertia_scale" in e:
+            # The body's own mass properties made explicit, its principal moments scaled
+            # (mass and centre of mass kept): MuJoCo's compiler checks the result is a body.
+            k = e["inertia_scale"]
+            b.explicitinertial = True
+            b.mass = float(nominal.body_mass[bid])
+            b.ipos = [float(x) for x in nominal.body_ipos[bid]]
+            b.iquat = [float(x) for x in nominal.body_iquat[bid]]
+            b.inertia = [float(nominal.body_inertia[bid][i]) * k[i] for i in range(3)]
+            r["inertia_scale"] = list(k)
+            r["nominal_inertia"] = [float(x) for x in nominal.body_inertia[bid]]
+            r["nominal_iquat"] = [float(x) for x in nominal.body_iquat[bid]]
         if "com_shift" in e:
             d = e["com_shift"]
             for g in b.geoms:

@@ -45,7 +45,8 @@ def unit(v):
 
 
 def body_pairs(resolved):
-    """{(effect, joint): {param: (value, absolute tolerance or None for 10 %)}} of body effects."""
+    """{(effect, joint): {param: (value, absolute tolerance or None for 10 %)}} of body effects
+    (link_inertia: the moment about the joint axis through the centre of mass, real / nominal)."""
     out = {}
     for r in resolved.get("_bodies", {}).values():
         j, com, a = r["joint"], r["nominal_com"], r["joint_axis"]
@@ -56,6 +57,17 @@ def body_pairs(resolved):
             length = 2 * sum(x * x for x in com) ** 0.5
             off = dot([p["pos"][k] - com[k] for k in range(3)], u)
             out[("link_mass", j)] = {"added_mass": (p["mass"], None), "offset": (off, 0.1 * length)}
+        if "inertia_scale" in r:
+            # The moment about the joint axis through the centre of mass, real over nominal.
+            q = r["nominal_iquat"]
+            w, x, y, z = q
+            R = [[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                 [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                 [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]]
+            aa = [dot([R[k][i] for k in range(3)], a) for i in range(3)]  # axis in the inertia frame
+            i0 = sum(r["nominal_inertia"][i] * aa[i] ** 2 for i in range(3))
+            i1 = sum(r["nominal_inertia"][i] * r["inertia_scale"][i] * aa[i] ** 2 for i in range(3))
+            out[("link_inertia", j)] = {"inertia_scale": (i1 / i0, None)}
         if "com_shift" in r:
             d = r["com_shift"]
             w = unit([a[1] * u[2] - a[2] * u[1], a[2] * u[0] - a[0] * u[2], a[0] * u[1] - a[1] * u[0]])

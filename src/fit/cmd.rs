@@ -290,6 +290,8 @@ pub fn run_fit(a: FitArgs) -> i32 {
     // Kept effects at the model's own value within their uncertainty are not missing physics.
     let within = crate::fit::absent::split_off(robot, &mut out.selected);
     out.notes.extend(within);
+    let unexplained = crate::fit::unexplained::unexplained(&out.floors, opts.policy.white_ratio);
+    out.warnings.extend(unexplained.iter().map(|u| u.message()));
     for w in &out.warnings {
         eprintln!("modellint: warning: {w}");
     }
@@ -396,6 +398,7 @@ pub fn run_fit(a: FitArgs) -> i32 {
             "split": {"train": out.train.len(), "heldout": out.heldout.len(), "by_time": out.split_by_time, "note": out.split_note},
             "floor": out.floors.iter().map(|f| json!({"joint": f.joint, "residual_rms": f.ms.sqrt(), "white_floor_rms": f.white.sqrt(), "reconstruction_floor_rms": f.reconstruction.sqrt(), "discretisation_floor_rms": f.discretisation.sqrt()})).collect::<Vec<_>>(),
             "stopped_at_floor": out.stopped_at_floor,
+            "unexplained": unexplained.iter().map(|u| json!({"joint": u.joint, "residual_rms": u.residual_rms, "floor_rms": u.floor_rms})).collect::<Vec<_>>(),
             "search": out.cost,
             "warnings": warnings,
             "notes": notes,
