@@ -93,12 +93,21 @@ mod tests {
         let armed = effects::hinge_robot(&dir, "arm.xml", "", r#"armature="0.03""#, r#"kp="50""#);
         let zero = sel("armature", &[("armature", 0.0, 0.008)]);
         assert!(within_uncertainty(&bare, &zero).is_some_and(|n| n.contains("armature on j")));
-        assert!(within_uncertainty(&bare, &sel("armature", &[("armature", 0.04, 0.008)])).is_none());
-        assert!(within_uncertainty(&armed, &sel("armature", &[("armature", 0.031, 0.002)])).is_some());
-        assert!(within_uncertainty(&armed, &sel("armature", &[("armature", 0.04, 0.002)])).is_none());
+        assert!(
+            within_uncertainty(&bare, &sel("armature", &[("armature", 0.04, 0.008)])).is_none()
+        );
+        assert!(
+            within_uncertainty(&armed, &sel("armature", &[("armature", 0.031, 0.002)])).is_some()
+        );
+        assert!(
+            within_uncertainty(&armed, &sel("armature", &[("armature", 0.04, 0.002)])).is_none()
+        );
         let gain = sel("gain_error", &[("kp_scale", 1.2, 0.01), ("kd_scale", 1.0, 0.01)]);
         assert!(within_uncertainty(&bare, &gain).is_none());
-        let lost = sel("gain_error", &[("kp_scale", 3.0, f64::INFINITY), ("kd_scale", 0.36, f64::INFINITY)]);
+        let lost = sel(
+            "gain_error",
+            &[("kp_scale", 3.0, f64::INFINITY), ("kd_scale", 0.36, f64::INFINITY)],
+        );
         assert!(within_uncertainty(&bare, &lost).is_some());
         let mut list = vec![zero, gain, lost];
         let notes = split_off(&bare, &mut list);

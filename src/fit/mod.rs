@@ -9,7 +9,7 @@ pub mod rollout;
 pub mod rotation;
 pub mod select;
 pub mod split;
-pub mod unexplained;
 pub mod stats;
+pub mod unexplained;
 pub mod writeback;
 pub mod writemodel;

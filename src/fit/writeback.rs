@@ -156,7 +156,10 @@ pub fn edit_file(
                     found.insert((i, j.clone()));
                     let Some(body) = node.parent_element().filter(|b| b.has_tag_name("body"))
                     else {
-                        warnings.push(format!("{} on {j}: the joint is not in a <body>; not written", s.effect));
+                        warnings.push(format!(
+                            "{} on {j}: the joint is not in a <body>; not written",
+                            s.effect
+                        ));
                         continue;
                     };
                     if !bodies_done.insert(body.range().start) {

@@ -161,7 +161,15 @@ fn arm_recording() -> crate::sim2real::recording::Recording {
         j
     };
     let sh = mk("shoulder", &|x| if x < 0.5 { 0.0 } else { 0.6 * (3.0 * x).sin() });
-    let el = mk("elbow", &|x| if x < 0.3 { 0.0 } else if x < 0.9 { 0.8 } else { -0.4 });
+    let el = mk("elbow", &|x| {
+        if x < 0.3 {
+            0.0
+        } else if x < 0.9 {
+            0.8
+        } else {
+            -0.4
+        }
+    });
     Recording::at_100hz(t, vec![sh, el])
 }
 
@@ -175,7 +183,12 @@ fn replay_gap(a: &crate::model::Robot, ea: &[super::Applied], b: &crate::model::
     let y = super::simulate(b, std::slice::from_ref(&rec), &[], &opts).remove(0).unwrap();
     let moved = x.q_sim.iter().flatten().map(|v| v.abs()).fold(0.0, f64::max);
     assert!(moved > 0.3, "the arm moves ({moved})");
-    x.q_sim.iter().flatten().zip(y.q_sim.iter().flatten()).map(|(p, q)| (p - q).abs()).fold(0.0, f64::max)
+    x.q_sim
+        .iter()
+        .flatten()
+        .zip(y.q_sim.iter().flatten())
+        .map(|(p, q)| (p - q).abs())
+        .fold(0.0, f64::max)
 }
 
 /// `link_mass` on the elbow moves the arm as MuJoCo's own compiler composes a forearm carrying
