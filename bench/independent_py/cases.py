@@ -135,3 +135,6 @@ CASES["R0_none"] = dict(model="leg3", seed=60, episodes=4, seconds=4.0, heldout=
 CASES["L15_shank_inertia"] = dict(model="leg3", seed=31,
     effects={"bodies": {"shank": {"inertia_scale": [2.0, 2.0, 1.0]}}},
     fit_args=["--effects", "link_inertia,armature,link_mass,com_offset,viscous_damping,gain_error"])
+# Humanoid legs: the same 1.5 kg payload on both shanks (a mirror pair of bodies; kp 250 knees).
+CASES["H17_shanks_payload"] = dict(H12_EP, seed=58, effects={"bodies": {
+    s + "_shank": {"payload": {"mass": 1.5, "pos": [0.0, 0.0, -0.3]}} for s in ("left", "right")}})
