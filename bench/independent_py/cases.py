@@ -115,3 +115,26 @@ CASES["H15_none_rate_off_fine"] = dict(H12_EP, seed=51, effects={},
 CASES["H16_knees_damping8_rate_off_fine"] = dict(H12_EP, seed=52,
     logging=dict(rec_start=1.0, declare_t0=False, ctrl_hz=49.985, declared_hz=50.0, physics_div=8),
     effects={"joints": {j: {"damping": 8.0} for j in H12 if j.endswith("_knee")}})
+# ---- body effects (issue 48): the link's mass properties differ from the model's. Built with
+# MjSpec before compiling (realsim.real_model): a payload is a child body holding a sphere of its
+# mass, a centre-of-mass shift moves every geom of the body. ----
+CASES["L12_shank_payload"] = dict(model="leg3", seed=19,
+    effects={"bodies": {"shank": {"payload": {"mass": 0.6, "pos": [0.0, 0.0, -0.25]}}}})
+CASES["L13_shank_com_shift"] = dict(model="leg3", seed=20,
+    effects={"bodies": {"shank": {"com_shift": [0.03, 0.0, -0.04]}}})
+CASES["L14_thigh_payload"] = dict(model="leg3", seed=30,
+    effects={"bodies": {"thigh": {"payload": {"mass": 1.0, "pos": [0.0, 0.0, -0.12]}}}})
+# Reduced versions for `make test` (tests/independent_body.rs; recordings committed in
+# fixtures/independent_py/): 4 episodes × 4 s, the last held out.
+CASES["R1_shank_payload"] = dict(model="leg3", seed=61, episodes=4, seconds=4.0, heldout=[3],
+    effects={"bodies": {"shank": {"payload": {"mass": 0.6, "pos": [0.0, 0.0, -0.25]}}}})
+CASES["R0_none"] = dict(model="leg3", seed=60, episodes=4, seconds=4.0, heldout=[3], effects={})
+# The shank's inertia about its principal x and y axes (y: the knee's axis) doubled, mass and
+# centre of mass kept; `link_inertia` is tried only when named, so the fit is told the effects
+# it may use (fit_args).
+CASES["L15_shank_inertia"] = dict(model="leg3", seed=31,
+    effects={"bodies": {"shank": {"inertia_scale": [2.0, 2.0, 1.0]}}},
+    fit_args=["--effects", "link_inertia,armature,link_mass,com_offset,viscous_damping,gain_error"])
+# Humanoid legs: the same 1.5 kg payload on both shanks (a mirror pair of bodies; kp 250 knees).
+CASES["H17_shanks_payload"] = dict(H12_EP, seed=58, effects={"bodies": {
+    s + "_shank": {"payload": {"mass": 1.5, "pos": [0.0, 0.0, -0.3]}} for s in ("left", "right")}})

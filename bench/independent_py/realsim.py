@@ -10,6 +10,9 @@ it shares nothing with `modellint synth` or the replay.
 The robot = the nominal MJCF compiled by MuJoCo, then concealed effects written into the
 MjModel arrays (dof_damping, dof_armature, dof_frictionloss, jnt_stiffness + qpos_spring=key,
 actuator gainprm/biasprm), plus an own command queue for action delay and an encoder offset.
+Body effects (`bodies`) are built through MuJoCo's own model editor before compiling: a payload
+is a child body with a sphere geom of its mass (MuJoCo composes it), a centre-of-mass shift moves
+every geom of the body (the whole mass distribution translated).
 Logging: 100 Hz controller (or the model's `ctrl_hz`) with phase control_t0_s, async recorder ~rate_hz with jitter,
 q = quantise(q_true + offset + N(0, q_noise)), qd + N(0, qd_noise), drops, 2 s settle.
 """
@@ -70,6 +73,60 @@ def conceal(m, eff, key_qpos):
             r["delay_s"] = [0.0, e["delay"]]
         resolved[jname] = r
     return resolved
+
+
+def real_model(src, eff):
+    """The robot's MjModel: the nominal MJCF with the concealed body effects built in by
+    MjSpec (so MuJoCo's compiler, not this script, combines masses and inertias). Returns
+    (model, resolved body truth)."""
+    bodies = eff.get("bodies", {})
+    if not bodies:
+        return mujoco.MjModel.from_xml_path(src), {}
+    nominal = mujoco.MjModel.from_xml_path(src)
+    spec = mujoco.MjSpec.from_file(src)
+    resolved = {}
+    for bname, e in bodies.items():
+        b = spec.body(bname)
+        assert b is not None, bname
+        bid = mujoco.mj_name2id(nominal, mujoco.mjtObj.mjOBJ_BODY, bname)
+        jid = [j for j in range(nominal.njnt) if nominal.jnt_bodyid[j] == bid]
+        r = {"nominal_mass": float(nominal.body_mass[bid]),
+             "nominal_com": [float(x) for x in nominal.body_ipos[bid]],
+             "joint_axis": [float(x) for x in nominal.jnt_axis[jid[0]]] if jid else None,
+             "joint": mujoco.mj_id2name(nominal, mujoco.mjtObj.mjOBJ_JOINT, jid[0]) if jid else None}
+        if "payload" in e:
+            pl = e["payload"]
+            c = b.add_body(name=f"{bname}_payload", pos=pl["pos"])
+            c.add_geom(type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[pl.get("radius", 0.03), 0, 0],
+                       mass=pl["mass"], contype=0, conaffinity=0)
+            r["payload"] = {"mass": pl["mass"], "pos": list(pl["pos"])}
+        if "inertia_scale" in e:
+            # The body's own mass properties made explicit, its principal moments scaled
+            # (mass and centre of mass kept): MuJoCo's compiler checks the result is a body.
+            k = e["inertia_scale"]
+            b.explicitinertial = True
+            b.mass = float(nominal.body_mass[bid])
+            b.ipos = [float(x) for x in nominal.body_ipos[bid]]
+            b.iquat = [float(x) for x in nominal.body_iquat[bid]]
+            b.inertia = [float(nominal.body_inertia[bid][i]) * k[i] for i in range(3)]
+            r["inertia_scale"] = list(k)
+            r["nominal_inertia"] = [float(x) for x in nominal.body_inertia[bid]]
+            r["nominal_iquat"] = [float(x) for x in nominal.body_iquat[bid]]
+        if "com_shift" in e:
+            d = e["com_shift"]
+            for g in b.geoms:
+                if not any(math.isnan(x) for x in g.fromto):
+                    g.fromto = [g.fromto[k] + d[k % 3] for k in range(6)]
+                else:
+                    g.pos = [g.pos[k] + d[k] for k in range(3)]
+            r["com_shift"] = list(d)
+        resolved[bname] = r
+    m = spec.compile()
+    for bname, r in resolved.items():
+        bid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, bname)
+        r["real_body_com"] = [float(x) for x in m.body_ipos[bid]]
+        r["real_subtree_mass"] = float(m.body_subtreemass[bid])
+    return m, resolved
 
 
 # ---------------- command generation (per episode) ----------------
@@ -257,9 +314,11 @@ def main(case):
     os.makedirs(os.path.join(out, "episodes"))
     src = os.path.join(HERE, "models", mcfg["xml"])
     shutil.copy(src, os.path.join(out, "nominal.xml"))
-    m = mujoco.MjModel.from_xml_path(src)
     eff = c.get("effects", {})
+    m, body_truth = real_model(src, eff)
     resolved = conceal(m, eff, m.key_qpos[0].copy())
+    if body_truth:
+        resolved["_bodies"] = body_truth
     if "delay" in eff:
         resolved["_all_delay_s"] = eff["delay"]
     rng = np.random.default_rng(c["seed"])

@@ -32,8 +32,10 @@ fi
 export INDEP_OUT="$out"
 for c in "$@"; do
   "$venv/bin/python" "$here/realsim.py" "$c" >/dev/null || { echo "$c: recording failed"; continue; }
+  extra=$("$venv/bin/python" -c "import sys; sys.path.insert(0, '$here'); from cases import CASES; print(' '.join(CASES['$c'].get('fit_args', [])))")
   s=$(date +%s.%N)
-  "$bin" fit "$out/data/$c/nominal.xml" "$out/data/$c/episodes" --format json --quiet \
+  # shellcheck disable=SC2086
+  "$bin" fit "$out/data/$c/nominal.xml" "$out/data/$c/episodes" --format json --quiet $extra \
     > "$out/results/$c.json" 2> "$out/results/$c.stderr"
   e=$(date +%s.%N)
   python3 -c "print(f'{$e - $s:.1f}')" > "$out/results/$c.time"

@@ -6,8 +6,13 @@ usage: score.py OUT_DIR CASE...   (reads OUT_DIR/data/CASE/truth.json and OUT_DI
 The truth is what realsim.py wrote into its MjModel (truth.json `effects`), mapped to the fit's
 effect ids: damping → viscous_damping, armature → armature, frictionloss → coulomb_friction,
 stiffness → joint_stiffness, kp_scale / kd_scale → gain_error, offset → position_offset,
-delay → action_delay. A case passes when every concealed (effect, joint) is reported, nothing
-else is, and every fitted value is within 10 % of the truth (a delay within 1.5 ms, issue 12's target).
+delay → action_delay; a body's payload → link_mass (added_mass; offset = the payload's distance
+from the modelled centre of mass along the link, the direction from the joint to that centre), a
+body's centre-of-mass shift → com_offset (along that direction; across = joint axis × it), both on
+the joint whose child the body is. A case passes when every concealed (effect, joint) is reported, nothing
+else is, and every fitted value is within 10 % of the truth (a delay within 1.5 ms, issue 12's target; a
+payload's offset within 10 % of the link length 2·|com|, a centre-of-mass shift's components
+within 10 % of the shift's length).
 Prints one Markdown row per case and a summary line; exit 1 when a case fails.
 """
 import json
@@ -23,7 +28,7 @@ MAP = {"damping": ("viscous_damping", "damping"), "armature": ("armature", "arma
 def truth_pairs(eff):
     """{(effect, joint): {param: value}} of the concealed effects."""
     out = {}
-    for j, e in eff.get("joints", {}).items():
+    for j, e in eff.get("joints", {}).items():  # body effects: body_pairs
         for k, v in e.items():
             if k in ("kp_scale", "kd_scale"):
                 g = out.setdefault(("gain_error", j), {"kp_scale": 1.0, "kd_scale": 1.0})
@@ -31,6 +36,43 @@ def truth_pairs(eff):
             else:
                 eid, p = MAP[k]
                 out[(eid, j)] = {p: v}
+    return out
+
+
+def unit(v):
+    n = sum(x * x for x in v) ** 0.5
+    return [x / n for x in v] if n > 1e-12 else None
+
+
+def body_pairs(resolved):
+    """{(effect, joint): {param: (value, absolute tolerance or None for 10 %)}} of body effects
+    (link_inertia: the moment about the joint axis through the centre of mass, real / nominal)."""
+    out = {}
+    for r in resolved.get("_bodies", {}).values():
+        j, com, a = r["joint"], r["nominal_com"], r["joint_axis"]
+        u = unit(com)
+        dot = lambda x, y: sum(p * q for p, q in zip(x, y))
+        if "payload" in r:
+            p = r["payload"]
+            length = 2 * sum(x * x for x in com) ** 0.5
+            off = dot([p["pos"][k] - com[k] for k in range(3)], u)
+            out[("link_mass", j)] = {"added_mass": (p["mass"], None), "offset": (off, 0.1 * length)}
+        if "inertia_scale" in r:
+            # The moment about the joint axis through the centre of mass, real over nominal.
+            q = r["nominal_iquat"]
+            w, x, y, z = q
+            R = [[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                 [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                 [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]]
+            aa = [dot([R[k][i] for k in range(3)], a) for i in range(3)]  # axis in the inertia frame
+            i0 = sum(r["nominal_inertia"][i] * aa[i] ** 2 for i in range(3))
+            i1 = sum(r["nominal_inertia"][i] * r["inertia_scale"][i] * aa[i] ** 2 for i in range(3))
+            out[("link_inertia", j)] = {"inertia_scale": (i1 / i0, None)}
+        if "com_shift" in r:
+            d = r["com_shift"]
+            w = unit([a[1] * u[2] - a[2] * u[1], a[2] * u[0] - a[0] * u[2], a[0] * u[1] - a[1] * u[0]])
+            tol = 0.1 * sum(x * x for x in d) ** 0.5
+            out[("com_offset", j)] = {"along": (dot(d, u), tol), "across": (dot(d, w), tol)}
     return out
 
 
@@ -44,6 +86,9 @@ def main():
             rows.append(f"| {c} | no truth ({e}; cases: see cases.py) | – | – | – | **no** |")
             continue
         truth = truth_pairs(t["effects"])
+        tols = body_pairs(t.get("resolved", {}))
+        for k, v in tols.items():
+            truth[k] = {p: x[0] for p, x in v.items()}
         if "delay" in t["effects"]:
             for j in t["joints"]:
                 truth[("action_delay", j)] = {"delay_s": t["effects"]["delay"]}
@@ -68,7 +113,12 @@ def main():
                 if fv is None:
                     ok = False
                     continue
-                if p == "delay_s":
+                tol = tols.get(key, {}).get(p, (None, None))[1]
+                if tol is not None:
+                    e = abs(fv - tv)
+                    errs.append(f"{p} {fv:.4g} vs {tv:.4g}")
+                    ok &= e <= tol
+                elif p == "delay_s":
                     e = abs(fv - tv) * 1e3  # ms
                     errs.append(f"{e:.2f} ms")
                     ok &= e <= 1.5

@@ -293,6 +293,8 @@ pub struct FitRun {
     pub out: FitOutcome,
     pub before: GapReport,
     pub after: GapReport,
+    /// Joints the final model leaves above the search's white ratio of their floor.
+    pub unexplained: Vec<crate::fit::unexplained::Unexplained>,
     /// Everything said through the sink, also in the JSON.
     pub notes: Vec<String>,
     pub warnings: Vec<String>,
@@ -311,8 +313,13 @@ pub fn fit_once(
     let robot = &p.loaded.robot;
     let replay = &p.opts.replay;
     let opts = FitOptions { progress, ..p.opts.clone() };
-    let out = fit(robot, &p.recs, &opts);
+    let mut out = fit(robot, &p.recs, &opts);
     searched();
+    // Kept effects at the model's own value within their uncertainty are not missing physics.
+    let within = crate::fit::absent::split_off(robot, &mut out.selected);
+    out.notes.extend(within);
+    let unexplained = crate::fit::unexplained::unexplained(&out.floors, opts.policy.white_ratio);
+    out.warnings.extend(unexplained.iter().map(|u| u.message()));
     for w in &out.warnings {
         sink.warning(w);
     }
@@ -379,7 +386,7 @@ pub fn fit_once(
         sink.said(&msg);
         notes.push(msg);
     }
-    Ok(FitRun { out, before, after, notes, warnings })
+    Ok(FitRun { out, before, after, unexplained, notes, warnings })
 }
 
 /// `--write-model`: the model with the MuJoCo-expressible fitted values; returns the notes it
@@ -459,6 +466,7 @@ pub fn fit_json(r: &FitRun) -> serde_json::Value {
         "split": {"train": out.train.len(), "heldout": out.heldout.len(), "by_time": out.split_by_time, "note": out.split_note},
         "floor": out.floors.iter().map(|f| json!({"joint": f.joint, "residual_rms": f.ms.sqrt(), "white_floor_rms": f.white.sqrt(), "reconstruction_floor_rms": f.reconstruction.sqrt(), "discretisation_floor_rms": f.discretisation.sqrt()})).collect::<Vec<_>>(),
         "stopped_at_floor": out.stopped_at_floor,
+        "unexplained": r.unexplained.iter().map(|u| json!({"joint": u.joint, "residual_rms": u.residual_rms, "floor_rms": u.floor_rms})).collect::<Vec<_>>(),
         "search": out.cost,
         "warnings": warnings,
         "notes": notes,
@@ -474,6 +482,8 @@ fn fit_text(r: &FitRun) -> String {
     if out.selected.is_empty() {
         s.push_str(if out.stopped_at_floor {
             "  nothing: the training residual is at its noise floor on every joint (nothing left to explain)\n"
+        } else if !out.applied.is_empty() {
+            "  nothing beyond its uncertainty: every kept effect is the model's own value within two standard errors (see the notes)\n"
         } else {
             "  nothing: no candidate effect improved the held-out error beyond noise\n"
         });

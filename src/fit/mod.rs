@@ -1,4 +1,5 @@
 //! Fitting: name the missing physics, add it, fit it, show the held-out improvement.
+pub mod absent;
 pub mod cmd;
 pub mod cmd_rotate;
 pub mod diagnose;
@@ -10,5 +11,6 @@ pub mod rotation;
 pub mod select;
 pub mod split;
 pub mod stats;
+pub mod unexplained;
 pub mod writeback;
 pub mod writemodel;

@@ -32,7 +32,7 @@ pub fn unwritten(
     for (i, s) in selected.iter().enumerate() {
         let Some(e) = effects::by_id(&s.effect) else { continue };
         match e.write_back(&s.values) {
-            WriteBack::Joint(_) => {
+            WriteBack::Joint(_) | WriteBack::Inertial => {
                 for j in s.joints.iter().filter(|j| !found.contains(&(i, (*j).clone()))) {
                     warnings.push(format!(
                         "{}: <joint name=\"{j}\"> not found {where_}; not written",
@@ -82,6 +82,10 @@ pub fn edit_file(
     };
     let in_actuator =
         |n: &roxmltree::Node| n.parent_element().is_some_and(|p| p.has_tag_name("actuator"));
+    // Whole-element edits (start, end, text): a body's `<inertial>`, once per body.
+    let mut element_edits: Vec<(usize, usize, String)> = Vec::new();
+    let mut bodies_done = BTreeSet::new();
+    let mut with_all: Option<mujoco_rs::prelude::MjModel> = None;
     for (i, s) in selected.iter().enumerate() {
         let Some(e) = effects::by_id(&s.effect) else { continue };
         match e.write_back(&s.values) {
@@ -140,6 +144,41 @@ pub fn edit_file(
                     }
                 }
             }
+            WriteBack::Inertial => {
+                for j in &s.joints {
+                    let Some(node) = doc.descendants().find(|n| {
+                        n.has_tag_name("joint")
+                            && n.attribute("name") == Some(j.as_str())
+                            && !in_actuator(n)
+                    }) else {
+                        continue;
+                    };
+                    found.insert((i, j.clone()));
+                    let Some(body) = node.parent_element().filter(|b| b.has_tag_name("body"))
+                    else {
+                        warnings.push(format!(
+                            "{} on {j}: the joint is not in a <body>; not written",
+                            s.effect
+                        ));
+                        continue;
+                    };
+                    if !bodies_done.insert(body.range().start) {
+                        continue;
+                    }
+                    if inertia_from_geoms(&doc) {
+                        warnings.push(format!(
+                            "{} on {j}: <compiler inertiafromgeom=\"true\"> ignores <inertial>; not written",
+                            s.effect
+                        ));
+                        continue;
+                    }
+                    let m = with_all.get_or_insert_with(|| model_with_selected(robot, selected));
+                    let Some(text) = robot.joint(j).and_then(|jj| inertial_text(m, jj.id)) else {
+                        continue;
+                    };
+                    element_edits.push(inertial_edit(xml, body, text));
+                }
+            }
             WriteBack::TomlOnly => {}
         }
     }
@@ -166,12 +205,81 @@ pub fn edit_file(
             edits.push((at, at, insert));
         }
     }
+    edits.extend(element_edits);
     edits.sort_by_key(|e| std::cmp::Reverse(e.0));
     let mut out = xml.to_string();
     for (s, e, r) in edits {
         out.replace_range(s..e, &r);
     }
     Ok((out, warnings))
+}
+
+/// `true` when the document's `<compiler>` computes every body's inertia from its geoms.
+fn inertia_from_geoms(doc: &roxmltree::Document) -> bool {
+    doc.descendants()
+        .any(|n| n.has_tag_name("compiler") && n.attribute("inertiafromgeom") == Some("true"))
+}
+
+/// The model with every selected effect applied (what the body effects' write-back reads).
+fn model_with_selected(robot: &Robot, selected: &[Selected]) -> mujoco_rs::prelude::MjModel {
+    let applied: Vec<effects::Applied> = selected
+        .iter()
+        .filter_map(|s| {
+            Some(effects::Applied {
+                effect: effects::by_id(&s.effect)?,
+                joints: s.joints.clone(),
+                params: s.values.clone(),
+            })
+        })
+        .collect();
+    effects::model_with(robot, &applied)
+}
+
+/// A value with 9 significant digits, as the shortest text that reads back as it (an inertia
+/// of 1e-7 kg·m² must not round to 0 as `num`'s 6 decimals would).
+fn sig(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return "0".into();
+    }
+    let r: f64 = format!("{v:.8e}").parse().unwrap_or(v);
+    format!("{r}")
+}
+
+/// `<inertial …/>` of joint `jnt`'s child body as the model `m` holds it (body frame).
+fn inertial_text(m: &mujoco_rs::prelude::MjModel, jnt: usize) -> Option<String> {
+    let b = usize::try_from(*m.jnt_bodyid().get(jnt)?).ok()?;
+    let join = |v: &[f64]| v.iter().map(|x| sig(*x)).collect::<Vec<_>>().join(" ");
+    Some(format!(
+        "<inertial pos=\"{}\" quat=\"{}\" mass=\"{}\" diaginertia=\"{}\"/>",
+        join(m.body_ipos().get(b)?),
+        join(m.body_iquat().get(b)?),
+        sig(*m.body_mass().get(b)?),
+        join(m.body_inertia().get(b)?)
+    ))
+}
+
+/// The edit that puts `text` in place of `body`'s `<inertial>` element, or — without one —
+/// as its first child, indented as the body's first child is.
+fn inertial_edit(xml: &str, body: roxmltree::Node, text: String) -> (usize, usize, String) {
+    if let Some(old) = body.children().find(|c| c.has_tag_name("inertial")) {
+        let r = old.range();
+        return (r.start, r.end, text);
+    }
+    let after_attrs = body
+        .attributes()
+        .next_back()
+        .map_or(body.range().start + 1 + body.tag_name().name().len(), |a| a.range().end);
+    let at = xml[after_attrs..].find('>').map_or(after_attrs, |k| after_attrs + k + 1);
+    let indent = body
+        .children()
+        .find(|c| c.is_element())
+        .map(|c| {
+            let line = xml[..c.range().start].rfind('\n').map_or(0, |k| k + 1);
+            xml[line..c.range().start].to_string()
+        })
+        .filter(|w| w.chars().all(char::is_whitespace))
+        .unwrap_or_default();
+    (at, at, format!("\n{indent}{text}"))
 }
 
 /// TOML with every selected effect (parameters, standard errors), and an Isaac Lab / mjlab
@@ -289,3 +397,6 @@ fn regex_escape(name: &str) -> String {
     }
     o
 }
+
+#[cfg(test)]
+mod tests;

@@ -25,6 +25,7 @@ use crate::sim2real::replay::{
 };
 
 pub mod docs;
+pub mod inertial;
 
 /// The effect registry: one `module::Type` per effect, in the fit engine's preference order
 /// (simpler first). Declares each module and [`all`].
@@ -56,6 +57,9 @@ registry![
     external_load_friction::ExternalLoadFriction,
     torque_off_braking::TorqueOffBraking,
     motor_constants::MotorConstants,
+    link_mass::LinkMass,
+    com_offset::ComOffset,
+    link_inertia::LinkInertia,
 ];
 
 /// One fitted parameter: name, unit, bounds and default (the value meaning "effect absent"
@@ -78,6 +82,8 @@ pub enum WriteBack {
     Actuator(Vec<(&'static str, f64)>),
     /// MuJoCo cannot express it: written to the actuator TOML only.
     TomlOnly,
+    /// The joint's child body's `<inertial>`, from the model copy with every kept effect.
+    Inertial,
 }
 
 /// Per-joint, per-episode state of a hook effect (reset at every episode start).
@@ -126,6 +132,8 @@ pub struct JointTarget {
     /// force-limited actuator's `forcerange` and each motor's `ctrlrange` × gain, times gear
     /// (0 when none is declared).
     pub max_torque: f64,
+    /// The joint's child body as given (body effects; `None` on the world body).
+    pub body: Option<inertial::BodyAxes>,
 }
 
 /// Drive strength that the absolute parameter bounds (damping, friction, stiffness, torque) are
@@ -164,6 +172,7 @@ impl JointTarget {
             key_q: robot.key.qpos.get(j.qposadr).copied().unwrap_or(0.0),
             servo_kp: finite(servo_kp),
             max_torque: finite(max_torque),
+            body: inertial::BodyAxes::of(&robot.mj, j.id),
         })
     }
 
@@ -416,6 +425,10 @@ pub trait Effect: Declared + Sync {
     /// stage 2) runs last.
     fn stage(&self) -> u8 {
         if self.entry() == Entry::Command { 0 } else { 1 }
+    }
+    /// `false` for an effect tried only when named (`--effects`, `--told`). Default: `true`.
+    fn by_default(&self) -> bool {
+        true
     }
 }
 

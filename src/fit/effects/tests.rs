@@ -128,3 +128,132 @@ fn num_trims_zeros_and_negative_zero() {
     assert_eq!(super::num(-1e-9), "0");
     assert_eq!(super::num(1.23456789), "1.234568");
 }
+
+/// A two-link arm under gravity (shoulder and elbow position servos), written to `dir/name` with
+/// `extra` inside the forearm body and `forearm` as the forearm's geom attributes, and loaded.
+#[cfg(test)]
+fn arm_with(dir: &std::path::Path, name: &str, extra: &str, forearm: &str) -> crate::model::Robot {
+    let xml = format!(
+        r#"<mujoco><option gravity="0 0 -9.81" timestep="0.002"/>
+  <worldbody><body name="upper"><joint name="shoulder" type="hinge" axis="0 1 0"/>
+    <geom type="capsule" fromto="0 0 0 0 0 -0.3" size="0.03" mass="1.2"/>
+    <body name="fore" pos="0 0 -0.3"><joint name="elbow" type="hinge" axis="0 1 0"/>
+      <geom type="capsule" {forearm} size="0.025" mass="0.8"/>{extra}
+    </body></body></worldbody>
+  <actuator><position joint="shoulder" kp="60" kv="2"/><position joint="elbow" kp="30" kv="1"/></actuator>
+</mujoco>"#
+    );
+    let path = dir.join(name);
+    std::fs::write(&path, xml).expect("write the test model");
+    let mut map = crate::model::source::SourceMap::default();
+    crate::model::load(&mut map, &path, None).expect("load the test model")
+}
+
+/// Both joints commanded through steps and a sine for 1.5 s at 100 Hz.
+#[cfg(test)]
+fn arm_recording() -> crate::sim2real::recording::Recording {
+    use crate::sim2real::recording::{JointTrace, Recording};
+    let t: Vec<f64> = (0..150).map(|i| i as f64 * 0.01).collect();
+    let mk = |name: &str, f: &dyn Fn(f64) -> f64| {
+        let mut j = JointTrace::new(name, vec![0.0; t.len()]);
+        j.q_cmd = Some(t.iter().map(|&x| f(x)).collect());
+        j.qd = Some(vec![0.0; t.len()]);
+        j
+    };
+    let sh = mk("shoulder", &|x| if x < 0.5 { 0.0 } else { 0.6 * (3.0 * x).sin() });
+    let el = mk("elbow", &|x| {
+        if x < 0.3 {
+            0.0
+        } else if x < 0.9 {
+            0.8
+        } else {
+            -0.4
+        }
+    });
+    Recording::at_100hz(t, vec![sh, el])
+}
+
+/// Largest difference between the replays of `a` (with effects `ea`) and `b` (with none).
+#[cfg(test)]
+fn replay_gap(a: &crate::model::Robot, ea: &[super::Applied], b: &crate::model::Robot) -> f64 {
+    use crate::sim2real::replay::ReplayOptions;
+    let rec = arm_recording();
+    let opts = ReplayOptions::default();
+    let x = super::simulate(a, std::slice::from_ref(&rec), ea, &opts).remove(0).unwrap();
+    let y = super::simulate(b, std::slice::from_ref(&rec), &[], &opts).remove(0).unwrap();
+    let moved = x.q_sim.iter().flatten().map(|v| v.abs()).fold(0.0, f64::max);
+    assert!(moved > 0.3, "the arm moves ({moved})");
+    x.q_sim
+        .iter()
+        .flatten()
+        .zip(y.q_sim.iter().flatten())
+        .map(|(p, q)| (p - q).abs())
+        .fold(0.0, f64::max)
+}
+
+/// `link_mass` on the elbow moves the arm as MuJoCo's own compiler composes a forearm carrying
+/// a 0.3 kg sphere (0.5 mm: a point) as a child body 0.07 m beyond its centre of mass (along the link) — the
+/// parallel-axis algebra of `inertial.rs` against MuJoCo's; `com_offset` (along 0.02, across
+/// −0.015) as the forearm's capsule moved by (0.015, 0, −0.02) (across = joint axis y × link
+/// axis −z = −x). Without the effects the replays differ by centimetres.
+#[test]
+fn body_effects_move_the_arm_as_mujoco_composes_the_body() {
+    use super::{Applied, by_id};
+    let dir = std::env::temp_dir().join(format!("modellint-body-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let nominal = arm_with(&dir, "nominal.xml", "", r#"fromto="0 0 0 0 0 -0.25""#);
+    let payload = arm_with(
+        &dir,
+        "payload.xml",
+        r#"<body pos="0 0 -0.195"><geom type="sphere" size="0.0005" mass="0.3"/></body>"#,
+        r#"fromto="0 0 0 0 0 -0.25""#,
+    );
+    let link_mass = Applied {
+        effect: by_id("link_mass").unwrap(),
+        joints: vec!["elbow".into()],
+        params: vec![0.3, 0.07],
+    };
+    assert!(replay_gap(&nominal, &[], &payload) > 5e-3);
+    let d = replay_gap(&nominal, std::slice::from_ref(&link_mass), &payload);
+    assert!(d < 1e-6, "link_mass vs the composed payload: {d}");
+    let shifted = arm_with(&dir, "shifted.xml", "", r#"fromto="0.015 0 -0.02 0.015 0 -0.27""#);
+    let com = Applied {
+        effect: by_id("com_offset").unwrap(),
+        joints: vec!["elbow".into()],
+        params: vec![0.02, -0.015],
+    };
+    assert!(replay_gap(&nominal, &[], &shifted) > 2e-3);
+    let d = replay_gap(&nominal, &[com], &shifted);
+    assert!(d < 1e-6, "com_offset vs the moved capsule: {d}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// `link_inertia` scales the forearm's inertia about the elbow axis through its centre of mass
+/// by `inertia_scale` and leaves its mass and centre of mass; every scale in the bounds is a
+/// valid body (principal moments obey the triangle inequality) — a capsule squashed to a
+/// quarter and stretched to four times.
+#[test]
+fn link_inertia_scales_the_moment_about_the_joint_axis_and_stays_a_body() {
+    use super::{Applied, by_id, inertial, model_with};
+    let dir = std::env::temp_dir().join(format!("modellint-inertia-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let robot = arm_with(&dir, "arm.xml", "", r#"fromto="0 0 0 0 0 -0.25""#);
+    let b = robot.mj.jnt_bodyid()[robot.joint("elbow").unwrap().id] as usize;
+    let (m0, c0, i0) = inertial::read(&robot.mj, b).unwrap();
+    let y: nalgebra::Vector3<f64> = nalgebra::Vector3::y();
+    for k in [0.25, 0.7, 1.0, 2.5, 4.0] {
+        let a = Applied {
+            effect: by_id("link_inertia").unwrap(),
+            joints: vec!["elbow".into()],
+            params: vec![k],
+        };
+        let m = model_with(&robot, &[a]);
+        let (m1, c1, i1) = inertial::read(&m, b).unwrap();
+        assert_eq!(m1, m0);
+        assert!((c1 - c0).norm() < 1e-12);
+        let (about0, about1) = (y.dot(&(i0 * y)), y.dot(&(i1 * y)));
+        assert!((about1 - k * about0).abs() < 1e-12, "{k}: {about1} vs {}", k * about0);
+        assert!(inertial::valid(m.body_inertia()[b]), "{k}: {:?}", m.body_inertia()[b]);
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -374,7 +374,7 @@ pub fn fit(robot: &Robot, recs: &[Recording], opts: &FitOptions) -> FitOutcome {
         return out;
     }
     let allowed: Vec<String> = if opts.effects.is_empty() {
-        effects::all().iter().map(|e| e.id().to_string()).collect()
+        effects::all().iter().filter(|e| e.by_default()).map(|e| e.id().to_string()).collect()
     } else {
         opts.effects.clone()
     };
