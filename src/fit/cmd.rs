@@ -325,8 +325,9 @@ pub fn fit_once(
     }
     let c = &out.cost;
     let cost_note = format!(
-        "search cost: {} rollouts in {} batches ({:.1} s simulating), {} dataset simulations; screens saved {} full fits",
+        "search cost: {} rollouts ({:.0} s of recording replayed) in {} batches ({:.1} s simulating), {} dataset simulations; screens saved {} full fits",
         c.rollouts.rollouts,
+        c.rollouts.simulated_s,
         c.rollouts.batches,
         c.rollouts.seconds,
         c.simulations,

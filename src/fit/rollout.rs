@@ -42,6 +42,10 @@ pub struct RolloutStats {
     pub batches: usize,
     /// Wall time spent inside batches [s].
     pub seconds: f64,
+    /// Recording time replayed, summed over the rollouts [s]: the search's cost in units that
+    /// do not depend on the machine's load (a rollout of a short screen prefix costs less than
+    /// one of a whole episode).
+    pub simulated_s: f64,
 }
 
 /// The rollout service of one `fit` run (shared by every phase of the search).
@@ -50,6 +54,8 @@ pub struct Rollouts<'r> {
     rollouts: AtomicUsize,
     batches: AtomicUsize,
     nanos: AtomicU64,
+    /// Recording time replayed [µs].
+    sim_us: AtomicU64,
 }
 
 impl<'r> Rollouts<'r> {
@@ -59,6 +65,7 @@ impl<'r> Rollouts<'r> {
             rollouts: AtomicUsize::new(0),
             batches: AtomicUsize::new(0),
             nanos: AtomicU64::new(0),
+            sim_us: AtomicU64::new(0),
         }
     }
 
@@ -102,6 +109,8 @@ impl<'r> Rollouts<'r> {
             .collect();
         self.rollouts.fetch_add(jobs.len(), Ordering::Relaxed);
         self.batches.fetch_add(1, Ordering::Relaxed);
+        let per_set: u64 = recs.iter().map(duration_us).sum();
+        self.sim_us.fetch_add(per_set * sets.len() as u64, Ordering::Relaxed);
         let ns = u64::try_from(t0.elapsed().as_nanos()).unwrap_or(u64::MAX);
         self.nanos.fetch_add(ns, Ordering::Relaxed);
         let mut it = eps.into_iter();
@@ -132,6 +141,7 @@ impl<'r> Rollouts<'r> {
             .ok()
             .filter(|e| e.diverged.is_none());
         self.rollouts.fetch_add(1, Ordering::Relaxed);
+        self.sim_us.fetch_add(duration_us(rec), Ordering::Relaxed);
         let ns = u64::try_from(t0.elapsed().as_nanos()).unwrap_or(u64::MAX);
         self.nanos.fetch_add(ns, Ordering::Relaxed);
         ep
@@ -142,7 +152,16 @@ impl<'r> Rollouts<'r> {
             rollouts: self.rollouts.load(Ordering::Relaxed),
             batches: self.batches.load(Ordering::Relaxed),
             seconds: self.nanos.load(Ordering::Relaxed) as f64 * 1e-9,
+            simulated_s: self.sim_us.load(Ordering::Relaxed) as f64 * 1e-6,
         }
+    }
+}
+
+/// A recording's span from its first to its last row [µs].
+fn duration_us(r: &Recording) -> u64 {
+    match (r.t.first(), r.t.last()) {
+        (Some(a), Some(b)) if b > a => ((b - a) * 1e6).round() as u64,
+        _ => 0,
     }
 }
 
@@ -175,6 +194,8 @@ mod tests {
         assert_ne!(q(out[0][0].as_ref().unwrap()), q(&lone[0]), "damping changes the motion");
         let s = svc.stats();
         assert_eq!((s.rollouts, s.batches), (6, 2));
+        // 6 rollouts of 199 × 5 ms.
+        assert!((s.simulated_s - 6.0 * 0.995).abs() < 1e-9, "{}", s.simulated_s);
         assert!(s.seconds > 0.0);
         let _ = std::fs::remove_dir_all(&dir);
     }

@@ -50,6 +50,32 @@ pub fn slice_recording(rec: &Recording, i0: usize, i1: usize) -> Recording {
     r
 }
 
+/// The first `total_s / recs.len()` seconds of every recording (all of one that is shorter):
+/// about `total_s` seconds in all, spread over every episode's start. A set that is not longer
+/// than `total_s` (or `total_s <= 0`) comes back whole.
+pub fn prefixes(recs: &[Recording], total_s: f64) -> Vec<Recording> {
+    let dur = |r: &Recording| match (r.t.first(), r.t.last()) {
+        (Some(a), Some(b)) => b - a,
+        _ => 0.0,
+    };
+    let all: f64 = recs.iter().map(dur).sum();
+    if total_s <= 0.0 || recs.is_empty() || all <= total_s {
+        return recs.to_vec();
+    }
+    let each = total_s / recs.len() as f64;
+    recs.iter()
+        .map(|r| {
+            if dur(r) <= each {
+                return r.clone();
+            }
+            let i1 = r.t.partition_point(|&x| x <= r.t[0] + each).max(2).min(r.t.len());
+            let mut p = slice_recording(r, 0, i1);
+            p.source = r.source.clone();
+            p
+        })
+        .collect()
+}
+
 /// Cuts a recording into windows of about `len_s` (the last one absorbs the remainder).
 pub fn windows(rec: &Recording, len_s: f64) -> Vec<Recording> {
     let n = rec.t.len();
@@ -226,6 +252,22 @@ mod tests {
             r.meta.insert("split".into(), s.into());
         }
         r
+    }
+
+    #[test]
+    fn prefixes_take_an_equal_start_of_every_episode() {
+        let (a, b) = (rec(1001, 0.01), rec(501, 0.01)); // 10 s and 5 s
+        let p = prefixes(&[a.clone(), b.clone()], 6.0);
+        assert_eq!(p.len(), 2);
+        assert!((p[0].t.last().unwrap() - 3.0).abs() < 0.011, "{:?}", p[0].t.last());
+        assert!((p[1].t.last().unwrap() - 3.0).abs() < 0.011);
+        assert_eq!(p[0].joints[0].q[..], a.joints[0].q[..p[0].t.len()]);
+        assert_eq!(p[0].source, a.source, "a prefix keeps its episode's name");
+        // Shorter than the share: whole. Not longer than the total, or no total: all whole.
+        let p = prefixes(&[a.clone(), rec(101, 0.01)], 6.0);
+        assert_eq!(p[1].t.len(), 101);
+        assert_eq!(prefixes(&[a.clone(), b.clone()], 15.0)[0].t.len(), 1001);
+        assert_eq!(prefixes(&[a, b], 0.0)[1].t.len(), 501);
     }
 
     #[test]

@@ -55,8 +55,9 @@ pub struct Engine<'a> {
     disc: std::sync::Mutex<Vec<(String, Vec<f64>)>>,
     /// Where the search last reported it was ([`Engine::report`]).
     place: std::sync::Mutex<Option<ProgressInfo>>,
-    /// Rollouts booked to each phase ([`Engine::rollouts_by_phase`]).
-    by_phase: std::sync::Mutex<std::collections::BTreeMap<&'static str, usize>>,
+    /// Rollouts and recording seconds replayed, booked to each phase
+    /// ([`Engine::rollouts_by_phase`]).
+    by_phase: std::sync::Mutex<std::collections::BTreeMap<&'static str, (usize, f64)>>,
 }
 
 type StartMemo = std::collections::HashMap<String, Option<std::sync::Arc<StartSens>>>;
@@ -160,28 +161,33 @@ impl<'a> Engine<'a> {
             simulations: self.sims.load(std::sync::atomic::Ordering::Relaxed),
             rollouts: self.rollouts.stats().rollouts,
         };
-        self.account(info.rollouts);
+        self.account();
         if let Some(p) = &self.opts.progress {
             (p.0)(&info);
         }
         *self.place.lock().unwrap_or_else(|e| e.into_inner()) = Some(info);
     }
 
-    /// Books the rollouts run since the last report to the phase reported then.
-    fn account(&self, now: usize) {
+    /// Books the rollouts (and recording seconds) run since the last report to the phase
+    /// reported then.
+    fn account(&self) {
+        let now = self.rollouts.stats();
         let phase = self.place.lock().unwrap_or_else(|e| e.into_inner()).as_ref().map(|p| p.phase);
         let mut b = self.by_phase.lock().unwrap_or_else(|e| e.into_inner());
-        let done = b.values().sum::<usize>();
+        let done = b.values().map(|v| v.0).sum::<usize>();
+        let done_s = b.values().map(|v| v.1).sum::<f64>();
         if let Some(ph) = phase
-            && now > done
+            && now.rollouts > done
         {
-            *b.entry(ph.name()).or_default() += now - done;
+            let e = b.entry(ph.name()).or_default();
+            e.0 += now.rollouts - done;
+            e.1 += (now.simulated_s - done_s).max(0.0);
         }
     }
 
-    /// Rollouts by the phase of the search that ran them (up to the last report).
-    pub fn rollouts_by_phase(&self) -> std::collections::BTreeMap<&'static str, usize> {
-        self.account(self.rollouts.stats().rollouts);
+    /// Rollouts and recording seconds replayed, by the phase of the search that ran them.
+    pub fn rollouts_by_phase(&self) -> std::collections::BTreeMap<&'static str, (usize, f64)> {
+        self.account();
         self.by_phase.lock().unwrap_or_else(|e| e.into_inner()).clone()
     }
 

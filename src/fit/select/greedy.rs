@@ -22,7 +22,7 @@ type Cand = (&'static dyn Effect, Vec<String>, BTreeMap<String, f64>);
 /// One greedy round: diagnose, fit the candidates, keep the best that passes the held-out gate.
 /// Returns `true` when an effect was added.
 pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bool {
-    let Search { engine, train, heldout, allowed } = *s;
+    let Search { engine, train, screen: short, heldout, allowed } = *s;
     let opts = engine.opts;
     let robot = engine.robot;
     let applied = out.applied.clone();
@@ -32,6 +32,12 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     };
     let Some(ho_err) = engine.errors(heldout, &applied) else {
         out.warnings.push("the held-out replay diverged with the current model; stopping".into());
+        return false;
+    };
+    // The screen's data (the start of every training episode): the same as the training set's
+    // when that is short.
+    let Some(sh_err) = engine.errors(short, &applied) else {
+        out.warnings.push("the training replay diverged with the current model; stopping".into());
         return false;
     };
     // Nothing left to explain: on every fitted joint the training residual is (nearly) white,
@@ -52,8 +58,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     // residual projected on the simulated sensitivity to a probe step of the effect
     // ([`Screen`]), which also predicts every candidate group below.
     let mut diag = diag;
-    let screen =
-        Screen::build(engine, (train, heldout), &applied, (&tr_err, &ho_err), &mut diag, &covered);
+    let screen = Screen::build(engine, short, &applied, &sh_err, &mut diag, &covered);
     for c in diag.iter_mut().filter(|c| covered(c.effect, &c.joint)) {
         c.explained_rms = 0.0;
     }
@@ -226,8 +231,12 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     // so far (coarse or full) is fitted in full (the others: phase "screen"); the full fit goes
     // on from the coarse one. Once a kept candidate leaves a white residual, the larger ones
     // are not fitted at all (phase "floor").
-    let base_train = tr_err.rmse();
-    let gain = |f: f64| if f.is_finite() { base_train - f } else { f64::NEG_INFINITY };
+    // Gains are relative (1 − RMSE after / before) so that the screen's, on its shorter data,
+    // and a full fit's, on the whole training set, compare.
+    let rel =
+        |f: f64, before: f64| if f.is_finite() { 1.0 - f / before } else { f64::NEG_INFINITY };
+    let (base_train, base_short) = (tr_err.rmse(), sh_err.rmse());
+    let gain = |f: f64| rel(f, base_short);
     let mut best_gain = 0.0f64;
     let mut coarse: Vec<Option<(Vec<f64>, f64)>> = vec![None; cands.len()];
     // The one-parameter candidates are `cands[..n1]`, the others `cands[n1..n0]`; mirror
@@ -237,7 +246,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     let (mut ones_screened, mut more_screened) = (n1 == 0, n1 == n0);
     // Fewest parameters of a kept candidate whose training residual is white on every joint.
     let mut floor_k: Option<usize> = None;
-    // The lowest training RMSE of those.
+    // The lowest training RMSE of those, relative to the round's start.
     let mut floor_train: Option<f64> = None;
     let mut ci = 0;
     while ci < cands.len() {
@@ -262,7 +271,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
             let fits: Vec<(Vec<f64>, f64)> = cands[range.clone()]
                 .par_iter()
                 .map(|(e, g, _)| {
-                    engine.fit_budget(train, &applied, *e, g, opts.policy.screen_evals)
+                    engine.fit_budget(short, &applied, *e, g, opts.policy.screen_evals)
                 })
                 .collect();
             for f in &fits {
@@ -297,7 +306,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         let (cp, cf) = match coarse.get(ci - 1).cloned().flatten() {
             Some(c) => c,
             // A candidate added during the round (a mirror completion).
-            None => engine.fit_budget(train, &applied, e, &group, opts.policy.screen_evals),
+            None => engine.fit_budget(short, &applied, e, &group, opts.policy.screen_evals),
         };
         // Either the coarse fit or the linearised step must reach the share: a coarse grid can
         // miss a narrow basin (a torque limit) that the linear step sees, and the linear step
@@ -316,15 +325,16 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         // Once a kept candidate leaves a white training residual, another can only win Occam's
         // choice below by coming close to it: one whose coarse fit leaves `floor_screen_ratio`
         // times its training error cannot (`tried`: phase "floor_screen").
-        if floor_train.is_some_and(|ft| cf > opts.policy.floor_screen_ratio * ft) {
+        if floor_train.is_some_and(|ft| cf / base_short > opts.policy.floor_screen_ratio * ft) {
             out.tried.push(not_tested(Phase::FloorScreen, cp, cf));
             continue;
         }
-        let (p, train_rmse) = engine.fit_one(train, &applied, e, &group);
+        let start = (cf < base_short).then_some(cp.as_slice());
+        let (p, train_rmse) = engine.fit_from(train, &applied, (e, &group), start);
         if p.is_empty() || !train_rmse.is_finite() {
             continue;
         }
-        best_gain = best_gain.max(gain(train_rmse));
+        best_gain = best_gain.max(rel(train_rmse, base_train));
         fitted.push(Applied { effect: e, joints: group.clone(), params: p.clone() });
         let mut trial = applied.clone();
         trial.push(Applied { effect: e, joints: group.clone(), params: p.clone() });
@@ -353,7 +363,8 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         });
         if keep && engine.at_floor(train, &trial, &tr_a) {
             floor_k = Some(floor_k.map_or(e.fitted(), |k| k.min(e.fitted())));
-            floor_train = Some(floor_train.map_or(tr_a.rmse(), |t: f64| t.min(tr_a.rmse())));
+            let r = tr_a.rmse() / base_train;
+            floor_train = Some(floor_train.map_or(r, |t: f64| t.min(r)));
         }
         if keep {
             // Mirror completion: a kept one-joint candidate is also fitted on its left/right

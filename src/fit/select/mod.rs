@@ -45,7 +45,7 @@ use serde::Serialize;
 use crate::fit::diagnose::Candidate;
 use crate::fit::effects::{self, Applied};
 use crate::fit::rollout::RolloutStats;
-use crate::fit::split::{Split, split, split_by_key, windows};
+use crate::fit::split::{Split, prefixes, split, split_by_key, windows};
 use crate::model::Robot;
 use crate::sim2real::recording::Recording;
 use crate::sim2real::replay::{Episode, ReplayOptions};
@@ -278,6 +278,8 @@ pub struct SearchCost {
     /// Rollouts by the phase that ran them (`diagnose` includes the floors and the
     /// linearised ranking's probes; `add` the candidates' fits and held-out tests).
     pub rollouts_by_phase: BTreeMap<&'static str, usize>,
+    /// Recording seconds replayed by phase (the screen's rollouts are short).
+    pub simulated_s_by_phase: BTreeMap<&'static str, f64>,
 }
 
 impl FitOutcome {
@@ -387,7 +389,14 @@ pub fn fit(robot: &Robot, recs: &[Recording], opts: &FitOptions) -> FitOutcome {
             inapplicable.join(", ")
         ));
     }
-    let search = Search { engine: &engine, train: &train, heldout: &heldout, allowed: &allowed };
+    let screen = prefixes(&train, opts.policy.screen_seconds);
+    let search = Search {
+        engine: &engine,
+        train: &train,
+        screen: &screen,
+        heldout: &heldout,
+        allowed: &allowed,
+    };
     if !opts.told.is_empty() {
         told::fit_told(&search, &opts.told, &mut out);
         if !out.applied.is_empty() {
@@ -446,6 +455,7 @@ pub fn fit(robot: &Robot, recs: &[Recording], opts: &FitOptions) -> FitOutcome {
 
 /// What the search behind `out` cost.
 fn search_cost(engine: &Engine, out: &FitOutcome) -> SearchCost {
+    let by_phase = engine.rollouts_by_phase();
     SearchCost {
         simulations: engine.simulations(),
         rollouts: engine.rollout_stats(),
@@ -459,7 +469,11 @@ fn search_cost(engine: &Engine, out: &FitOutcome) -> SearchCost {
                 )
             })
             .count(),
-        rollouts_by_phase: engine.rollouts_by_phase(),
+        rollouts_by_phase: by_phase.iter().map(|(k, v)| (*k, v.0)).collect(),
+        simulated_s_by_phase: by_phase
+            .iter()
+            .map(|(k, v)| (*k, (v.1 * 10.0).round() / 10.0))
+            .collect(),
     }
 }
 
@@ -490,6 +504,9 @@ fn final_uncertainty(engine: &Engine, train: &[Recording], out: &mut FitOutcome)
 pub(super) struct Search<'a> {
     pub(super) engine: &'a Engine<'a>,
     pub(super) train: &'a [Recording],
+    /// The start of every training episode, `screen_seconds` in all
+    /// ([`crate::fit::split::prefixes`]): what the screen simulates.
+    pub(super) screen: &'a [Recording],
     pub(super) heldout: &'a [Recording],
     pub(super) allowed: &'a [String],
 }

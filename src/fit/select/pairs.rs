@@ -31,7 +31,7 @@ pub(super) fn pair_lookahead(
     round: usize,
     out: &mut FitOutcome,
 ) -> Option<Vec<(Selected, Applied)>> {
-    let Search { engine, train, heldout, allowed } = *s;
+    let Search { engine, train, heldout, allowed, .. } = *s;
     let opts = engine.opts;
     let mut top: Vec<&Selected> = kept.iter().collect();
     top.sort_by(|a, b| a.heldout_rmse_after.total_cmp(&b.heldout_rmse_after));

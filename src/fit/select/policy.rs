@@ -23,6 +23,11 @@ pub struct SearchPolicy {
     pub max_evals: usize,
     /// Objective evaluations of a coarse screening fit [rollouts of the training set]. Default 6.
     pub screen_evals: usize,
+    /// Seconds of recording the screen simulates for each evaluation: the first
+    /// `screen_seconds / n` of each of the n training episodes (all of a shorter one); the
+    /// whole training set when it is not longer. The screen's cost then does not grow with the
+    /// length of the logs; full fits and every held-out test use all the data [s]. Default 10.
+    pub screen_seconds: f64,
     /// A partner joint "ranks high" when it is among the top `rank_depth ×
     /// candidates_per_round` entries of the ranking [multiple]. Default 4.
     pub rank_depth: usize,
@@ -116,6 +121,7 @@ impl Default for SearchPolicy {
             candidates_per_round: 4,
             max_evals: 60,
             screen_evals: 6,
+            screen_seconds: 10.0,
             rank_depth: 4,
             min_group: 3,
             every_effect: true,
@@ -181,7 +187,12 @@ pub const FIELDS: &[(&str, &str, &str)] = &[
         "rollouts of the training set",
         "budget of one candidate's full fit: line search ≤ 40, simplex 2 (k − 1) × this, Levenberg–Marquardt this / (k + 2) iterations (2–12)",
     ),
-    ("screen_evals", "rollouts of the training set", "budget of a coarse screening fit"),
+    ("screen_evals", "rollouts of the screen's data", "budget of a coarse screening fit"),
+    (
+        "screen_seconds",
+        "s",
+        "recording the screen simulates per evaluation: the first screen_seconds / n of each of the n training episodes (the whole set when not longer); full fits and held-out tests use all data",
+    ),
     (
         "rank_depth",
         "× candidates_per_round",

@@ -168,7 +168,7 @@ pub(super) fn simpler_set_ok(
 
 /// Swaps for simpler effects. Returns `true` when a swap was made.
 pub(super) fn swap_pass(s: &Search, round: usize, out: &mut FitOutcome) -> bool {
-    let Search { engine, train, heldout, allowed } = *s;
+    let Search { engine, train, screen: short, heldout, allowed } = *s;
     let opts = engine.opts;
     let mut changed = false;
     let mut i = 0;
@@ -188,6 +188,8 @@ pub(super) fn swap_pass(s: &Search, round: usize, out: &mut FitOutcome) -> bool 
         let k_all: usize = out.applied.iter().map(|a| a.effect.fitted()).sum();
         let t_cur = engine.errors(train, &out.applied);
         let train_cur = t_cur.as_ref().map_or(f64::INFINITY, |e| e.rmse());
+        // The screen's data with the current set (the coarse fits below are made there).
+        let short_cur = engine.score(short, &out.applied);
         let mut best: Option<(Vec<Applied>, f64, usize, usize)> = None;
         for e in effects::all() {
             if !allowed.iter().any(|a| a == e.id())
@@ -213,14 +215,18 @@ pub(super) fn swap_pass(s: &Search, round: usize, out: &mut FitOutcome) -> bool 
             // its kept parameters there only come right in the joint re-fit (polish) below.
             let partial = targets.len() < cur.joints.len();
             // (A full fit already made on this base, e.g. in round 1 when `others` is empty,
-            // screens better than a coarse one and costs nothing.)
-            let (pc, fc) = engine.fit_known(train, &others, e, &targets).unwrap_or_else(|| {
-                engine.fit_budget(train, &others, e, &targets, opts.policy.screen_evals)
-            });
+            // screens better than a coarse one and costs nothing.) Each error is compared with
+            // the current set's on the same data.
+            let (pc, fc, on) = match engine.fit_known(train, &others, e, &targets) {
+                Some((p, f)) => (p, f, train_cur),
+                None => {
+                    let (p, f) =
+                        engine.fit_budget(short, &others, e, &targets, opts.policy.screen_evals);
+                    (p, f, short_cur)
+                }
+            };
             if !partial
-                && (pc.is_empty()
-                    || !fc.is_finite()
-                    || fc > opts.policy.floor_screen_ratio * train_cur)
+                && (pc.is_empty() || !fc.is_finite() || fc > opts.policy.floor_screen_ratio * on)
             {
                 out.tried.push(Tried::not_tested(
                     round,
@@ -232,7 +238,8 @@ pub(super) fn swap_pass(s: &Search, round: usize, out: &mut FitOutcome) -> bool 
                 ));
                 continue;
             }
-            let (p, tr) = engine.fit_one(train, &others, e, &targets);
+            let start = (!pc.is_empty() && fc.is_finite()).then_some(pc.as_slice());
+            let (p, tr) = engine.fit_from(train, &others, (e, &targets), start);
             if p.is_empty() || !tr.is_finite() {
                 continue;
             }

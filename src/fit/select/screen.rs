@@ -1,10 +1,9 @@
 //! The linearised screen: one probe simulation per (effect, joint) gives the residual's
-//! sensitivity to that effect there (a finite-difference Jacobian column, on the training and on
-//! the held-out episodes); every candidate group of one effect — a joint, a mirror pair, a motor
-//! family, every leg, every joint — is the sum of its joints' columns (one shared parameter moved
-//! on all of them, to first order). On that linear model each candidate gets, without a fit of
-//! its own, the training residual it would leave and the held-out reduction its training
-//! coefficient would give.
+//! sensitivity to that effect there (a finite-difference Jacobian column, on the screen's data:
+//! the start of every training episode); every candidate group of one effect — a joint, a mirror
+//! pair, a motor family, every leg, every joint — is the sum of its joints' columns (one shared
+//! parameter moved on all of them, to first order). On that linear model each candidate gets,
+//! without a fit of its own, the residual it would leave.
 //!
 //! Only sums over the samples are kept (each column's dot product with the residual and with the
 //! effect's other columns), so memory does not grow with the recordings' length.
@@ -77,25 +76,20 @@ fn dot_r(a: &[f64], r: &[Option<f64>]) -> f64 {
     a.iter().zip(r).map(|(x, y)| x * y.unwrap_or(0.0)).sum()
 }
 
-/// One effect's linear model: per joint, the column's dot product with the residual (`b`,
-/// training; `c`, held-out) and with the effect's other columns (`g`, `h`), per unit of the
-/// effect's first parameter.
+/// One effect's linear model: per joint, the column's dot product with the residual (`b`) and
+/// with the effect's other columns (`g`), per unit of the effect's first parameter.
 #[derive(Debug, Clone, Default)]
 struct EffectModel {
     joints: Vec<String>,
     b: Vec<f64>,
     g: Vec<Vec<f64>>,
-    c: Vec<f64>,
-    h: Vec<Vec<f64>>,
 }
 
 /// What the linear model predicts for one candidate (effect, joint group).
 #[derive(Debug, Clone, Copy, Serialize)]
 pub struct Prediction {
-    /// Training residual RMSE after the linear step [rad].
+    /// Residual RMSE on the screen's data after the linear step [rad].
     pub train_rmse: f64,
-    /// Relative held-out RMSE reduction of the training step (negative: worse on held-out).
-    pub heldout_improvement: f64,
     /// The step of the effect's first parameter that the training residual asks for.
     pub step: f64,
 }
@@ -105,7 +99,6 @@ pub(super) struct Screen {
     models: BTreeMap<&'static str, EffectModel>,
     train_ss: f64,
     train_n: usize,
-    held_ss: f64,
 }
 
 /// One probe of a candidate: the probe value, its step from the start, the training column.
@@ -117,24 +110,21 @@ struct Probe {
 }
 
 impl Screen {
-    /// Probes every uncovered candidate of `diag` (one effect at a time, its joints in
-    /// parallel; the best of the effect's probes on training, then that probe on held-out),
-    /// and sets each candidate's `explained_rms` to the linear explained RMS on training.
+    /// Probes every uncovered candidate of `diag` on `train` (the screen's data; `tr_err` its
+    /// residual with `base`), one effect at a time, its joints in parallel, keeping the best of
+    /// the effect's probe values; sets each candidate's `explained_rms` to the linear explained
+    /// RMS.
     pub(super) fn build(
         engine: &Engine,
-        sets: (&[Recording], &[Recording]),
+        train: &[Recording],
         base: &[Applied],
-        errs: (&Errors, &Errors),
+        tr_err: &Errors,
         diag: &mut [Candidate],
         covered: &(dyn Fn(&str, &str) -> bool + Sync),
     ) -> Screen {
-        let (train, heldout) = sets;
-        let (tr_err, ho_err) = errs;
         let r = aligned(engine, train, tr_err);
-        let rh = aligned(engine, heldout, ho_err);
         let train_ss: f64 = r.iter().flatten().map(|x| x * x).sum();
         let train_n = r.iter().flatten().count();
-        let held_ss: f64 = rh.iter().flatten().map(|x| x * x).sum();
         let mut models: BTreeMap<&'static str, EffectModel> = BTreeMap::new();
         let mut ids: Vec<&'static str> = diag.iter().map(|c| c.effect).collect();
         ids.sort_unstable();
@@ -145,7 +135,7 @@ impl Screen {
             let idx: Vec<usize> = (0..diag.len())
                 .filter(|&i| diag[i].effect == id && !covered(id, &diag[i].joint))
                 .collect();
-            let probes: Vec<Option<(Probe, Vec<f64>)>> = idx
+            let probes: Vec<Option<Probe>> = idx
                 .par_iter()
                 .map(|&i| {
                     let c = &diag[i];
@@ -178,23 +168,14 @@ impl Screen {
                             best = Some(Probe { v, step, column, explained });
                         }
                     }
-                    let best = best?;
-                    let held = match with(best.v, heldout) {
-                        Some(e) => {
-                            let mut h = change(engine, heldout, ho_err, &e, &rh);
-                            h.iter_mut().for_each(|x| *x /= best.step);
-                            h
-                        }
-                        None => vec![0.0; rh.len()],
-                    };
-                    Some((best, held))
+                    best
                 })
                 .collect();
             let mut m = EffectModel::default();
-            let mut cols: Vec<(&Vec<f64>, &Vec<f64>)> = Vec::new();
+            let mut cols: Vec<&Vec<f64>> = Vec::new();
             for (&i, p) in idx.iter().zip(&probes) {
                 let c = &mut diag[i];
-                let Some((p, held)) = p else { continue };
+                let Some(p) = p else { continue };
                 if train_n > 0 {
                     c.evidence.insert("feature_explained_rms".into(), c.explained_rms);
                     let coef = dot_r(&p.column, &r) / dot(&p.column, &p.column) / p.step;
@@ -204,27 +185,22 @@ impl Screen {
                 }
                 m.joints.push(c.joint.clone());
                 m.b.push(dot_r(&p.column, &r));
-                m.c.push(dot_r(held, &rh));
-                cols.push((&p.column, held));
+                cols.push(&p.column);
             }
             let n = cols.len();
             m.g = vec![vec![0.0; n]; n];
-            m.h = vec![vec![0.0; n]; n];
             for a in 0..n {
                 for b in a..n {
-                    let g = dot(cols[a].0, cols[b].0);
-                    let h = dot(cols[a].1, cols[b].1);
+                    let g = dot(cols[a], cols[b]);
                     m.g[a][b] = g;
                     m.g[b][a] = g;
-                    m.h[a][b] = h;
-                    m.h[b][a] = h;
                 }
             }
             if n > 0 {
                 models.insert(id, m);
             }
         }
-        Screen { models, train_ss, train_n, held_ss }
+        Screen { models, train_ss, train_n }
     }
 
     /// The linear prediction for `effect` on `group` (one parameter shared by the group); `None`
@@ -236,23 +212,12 @@ impl Screen {
             .map(|j| m.joints.iter().position(|x| x == j))
             .collect::<Option<Vec<_>>>()?;
         let b: f64 = ix.iter().map(|&i| m.b[i]).sum();
-        let c: f64 = ix.iter().map(|&i| m.c[i]).sum();
         let g: f64 =
             ix.iter().flat_map(|&i| ix.iter().map(move |&j| (i, j))).map(|(i, j)| m.g[i][j]).sum();
-        let h: f64 =
-            ix.iter().flat_map(|&i| ix.iter().map(move |&j| (i, j))).map(|(i, j)| m.h[i][j]).sum();
         if g <= 1e-300 || self.train_n == 0 {
             return None;
         }
-        let step = b / g;
         let train_left = (self.train_ss - b * b / g).max(0.0);
-        let held_left = (self.held_ss - 2.0 * step * c + step * step * h).max(0.0);
-        let heldout_improvement =
-            if self.held_ss > 0.0 { 1.0 - (held_left / self.held_ss).sqrt() } else { 0.0 };
-        Some(Prediction {
-            train_rmse: (train_left / self.train_n as f64).sqrt(),
-            heldout_improvement,
-            step,
-        })
+        Some(Prediction { train_rmse: (train_left / self.train_n as f64).sqrt(), step: b / g })
     }
 }

@@ -70,7 +70,29 @@ impl Engine<'_> {
         effect: &'static dyn Effect,
         group: &[String],
     ) -> (Vec<f64>, f64) {
-        self.fit_budget(train, base, effect, group, self.opts.policy.max_evals)
+        self.fit_from(train, base, (effect, group), None)
+    }
+
+    /// [`Engine::fit_one`] continued from `start` (a coarse fit of the same candidate, e.g. on
+    /// the screen's shorter data): a least-squares fit starts there instead of at the effect's
+    /// initial values. Memoised like [`Engine::fit_one`] (the first start of a candidate wins).
+    pub fn fit_from(
+        &self,
+        train: &[Recording],
+        base: &[Applied],
+        (effect, group): (&'static dyn Effect, &[String]),
+        start: Option<&[f64]>,
+    ) -> (Vec<f64>, f64) {
+        let max_evals = self.opts.policy.max_evals;
+        let key = fit_key(train, base, effect, group, max_evals) + &self.start_tag();
+        if let Some(r) = self.fits.lock().ok().and_then(|m| m.get(&key).cloned()) {
+            return r;
+        }
+        let r = self.fit_fresh(train, base, effect, group, max_evals, start);
+        if let Ok(mut m) = self.fits.lock() {
+            m.insert(key, r.clone());
+        }
+        r
     }
 
     /// The result of [`Engine::fit_one`] with these arguments if it was already computed.
@@ -101,7 +123,7 @@ impl Engine<'_> {
         if let Some(r) = self.fits.lock().ok().and_then(|m| m.get(&key).cloned()) {
             return r;
         }
-        let r = self.fit_fresh(train, base, effect, group, max_evals);
+        let r = self.fit_fresh(train, base, effect, group, max_evals, None);
         if let Ok(mut m) = self.fits.lock() {
             m.insert(key, r.clone());
         }
@@ -115,6 +137,7 @@ impl Engine<'_> {
         effect: &'static dyn Effect,
         group: &[String],
         max_evals: usize,
+        start: Option<&[f64]>,
     ) -> (Vec<f64>, f64) {
         let Some(t) = JointTarget::of(self.robot, &group[0]) else {
             return (vec![], f64::INFINITY);
@@ -157,15 +180,17 @@ impl Engine<'_> {
                 .filter(|(_, f)| *f < f0)
                 .min_by(|a, b| a.1.total_cmp(&b.1));
         }
-        // A full least-squares fit goes on from where the screen's coarse fit of the same
-        // candidate stopped, when that is better than the start (its first iterations are the
-        // coarse fit's: their residual vectors are not kept).
+        // A full least-squares fit goes on from where a coarse fit of the same candidate
+        // stopped (the caller's `start`, which improved on the effect's initial values there),
+        // or, when the coarse fit was made on these data, from it if it is better than the start.
         let x_start = x0.clone();
         if full_fit && effect.smooth() && k > 0 {
             let coarse = fit_key(train, base, effect, group, self.opts.policy.screen_evals)
                 + &self.start_tag();
             let known = self.fits.lock().ok().and_then(|m| m.get(&coarse).cloned());
-            if let Some((p, f)) = known
+            if let Some(p) = start.filter(|p| p.len() >= k) {
+                x0 = clamp(p);
+            } else if let Some((p, f)) = known
                 && p.len() >= k
                 && f < obj(&x0)
             {
