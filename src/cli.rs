@@ -23,10 +23,10 @@ with real recordings, name the physics it is missing and fit it.\n\n\
 Hardware facts come from a TOML spec beside the model (models/asimov.toml for models/asimov.xml),\n\
 else beside a file it includes (a scene's robot file), or --spec; without one modellint says which\n\
 rules were skipped or weakened; rule settings from modellint.toml beside the model or in the working directory.\n\n\
-Compiled-model cache: MuJoCo's binary model is cached (keyed by a hash of the model XML, its\n\
-includes, meshes, textures and the spec), so an unchanged re-lint of a mesh-heavy model with\n\
---no-probe takes under 100 ms (Booster T1 and Unitree H1 scenes: about 70 ms, bench/run.sh)\n\
-instead of a full MuJoCo compile, as a pre-commit hook re-runs it.\n\
+Lint cache: each run's result is cached (a few kB, keyed by a hash of the model XML, its includes,\n\
+meshes, textures, the spec, the config and the options), so an unchanged re-lint is answered\n\
+without compiling (Booster T1 and Unitree H1 scenes: 10-40 ms, bench/cache_cap.sh) instead of a\n\
+full MuJoCo compile, as a pre-commit hook re-runs it.\n\
 --no-cache disables it; --cache-dir or $MODELLINT_CACHE_DIR moves it; its size is capped at\n\
 --cache-max or $MODELLINT_CACHE_MAX_MB megabytes (default 300, least recently used entries evicted first);\n\
 `modellint cache clean` empties it.\n\n\
@@ -73,14 +73,14 @@ pub struct CheckArgs {
     /// Static pass only: skip the MuJoCo probe simulations (for pre-commit hooks).
     #[arg(long)]
     pub no_probe: bool,
-    /// Directory of the compiled-model cache. Default: $MODELLINT_CACHE_DIR, else
+    /// Directory of the lint cache. Default: $MODELLINT_CACHE_DIR, else
     /// $XDG_CACHE_HOME/modellint, else ~/.cache/modellint.
     #[arg(long)]
     pub cache_dir: Option<PathBuf>,
-    /// Always compile the model with MuJoCo; neither read nor write the cache.
+    /// Always lint (compile the model with MuJoCo); neither read nor write the cache.
     #[arg(long)]
     pub no_cache: bool,
-    /// Size cap of the compiled-model cache, megabytes (least recently used entries out).
+    /// Size cap of the lint cache, megabytes (least recently used entries out).
     /// Default: $MODELLINT_CACHE_MAX_MB, else 300.
     #[arg(long, value_name = "MB", value_parser = parse_mb)]
     pub cache_max: Option<f64>,
@@ -95,7 +95,7 @@ pub struct CheckArgs {
 
 #[derive(Subcommand, Debug, Clone)]
 pub enum CacheCmd {
-    /// Remove every cached compiled model.
+    /// Remove every cached lint result (and compiled models of earlier versions).
     Clean {
         /// Cache directory. Default: $MODELLINT_CACHE_DIR, else $XDG_CACHE_HOME/modellint,
         /// else ~/.cache/modellint.
@@ -122,7 +122,7 @@ pub enum Cmd {
         #[arg(long)]
         check: bool,
     },
-    /// Manage the compiled-model cache (`modellint cache clean`). Its size is capped at
+    /// Manage the lint cache (`modellint cache clean`). Its size is capped at
     /// $MODELLINT_CACHE_MAX_MB megabytes (default 300), least recently used entries first out.
     Cache {
         #[command(subcommand)]

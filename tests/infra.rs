@@ -1,5 +1,5 @@
 //! Lint infrastructure end to end from the CLI: locations under `<include>`, trailing content
-//! after the root element, several models per call, spec discovery, the compiled-model cache and
+//! after the root element, several models per call, spec discovery, the lint cache and
 //! the self-collision probe. Expected lines come from the hand-built fixtures (fixtures/include,
 //! fixtures/infra), not from modellint's own output.
 
