@@ -23,10 +23,10 @@ with real recordings, name the physics it is missing and fit it.\n\n\
 Hardware facts come from a TOML spec beside the model (models/asimov.toml for models/asimov.xml),\n\
 else beside a file it includes (a scene's robot file), or --spec; without one modellint says which\n\
 rules were skipped or weakened; rule settings from modellint.toml beside the model or in the working directory.\n\n\
-Compiled-model cache: MuJoCo's binary model is cached (keyed by a hash of the model XML, its\n\
-includes, meshes, textures and the spec), so an unchanged re-lint of a mesh-heavy model with\n\
---no-probe takes under 100 ms (Booster T1 and Unitree H1 scenes: about 70 ms, bench/run.sh)\n\
-instead of a full MuJoCo compile, as a pre-commit hook re-runs it.\n\
+Lint cache: each run's result is cached (a few kB, keyed by a hash of the model XML, its includes,\n\
+meshes, textures, the spec, the config and the options), so an unchanged re-lint is answered\n\
+without compiling (Booster T1 and Unitree H1 scenes: 10-40 ms, bench/cache_cap.sh) instead of a\n\
+full MuJoCo compile, as a pre-commit hook re-runs it.\n\
 --no-cache disables it; --cache-dir or $MODELLINT_CACHE_DIR moves it; its size is capped at\n\
 --cache-max or $MODELLINT_CACHE_MAX_MB megabytes (default 300, least recently used entries evicted first);\n\
 `modellint cache clean` empties it.\n\n\
@@ -73,14 +73,14 @@ pub struct CheckArgs {
     /// Static pass only: skip the MuJoCo probe simulations (for pre-commit hooks).
     #[arg(long)]
     pub no_probe: bool,
-    /// Directory of the compiled-model cache. Default: $MODELLINT_CACHE_DIR, else
+    /// Directory of the lint cache. Default: $MODELLINT_CACHE_DIR, else
     /// $XDG_CACHE_HOME/modellint, else ~/.cache/modellint.
     #[arg(long)]
     pub cache_dir: Option<PathBuf>,
-    /// Always compile the model with MuJoCo; neither read nor write the cache.
+    /// Always lint (compile the model with MuJoCo); neither read nor write the cache.
     #[arg(long)]
     pub no_cache: bool,
-    /// Size cap of the compiled-model cache, megabytes (least recently used entries out).
+    /// Size cap of the lint cache, megabytes (least recently used entries out).
     /// Default: $MODELLINT_CACHE_MAX_MB, else 300.
     #[arg(long, value_name = "MB", value_parser = parse_mb)]
     pub cache_max: Option<f64>,
@@ -95,7 +95,7 @@ pub struct CheckArgs {
 
 #[derive(Subcommand, Debug, Clone)]
 pub enum CacheCmd {
-    /// Remove every cached compiled model.
+    /// Remove every cached lint result (and compiled models of earlier versions).
     Clean {
         /// Cache directory. Default: $MODELLINT_CACHE_DIR, else $XDG_CACHE_HOME/modellint,
         /// else ~/.cache/modellint.
@@ -122,7 +122,7 @@ pub enum Cmd {
         #[arg(long)]
         check: bool,
     },
-    /// Manage the compiled-model cache (`modellint cache clean`). Its size is capped at
+    /// Manage the lint cache (`modellint cache clean`). Its size is capped at
     /// $MODELLINT_CACHE_MAX_MB megabytes (default 300), least recently used entries first out.
     Cache {
         #[command(subcommand)]
@@ -514,7 +514,6 @@ fn check(a: CheckArgs) -> i32 {
         );
         return 2;
     }
-    let multi = a.models.len() > 1;
     let format = a.format.unwrap_or_else(|| {
         if std::env::var("GITHUB_ACTIONS").is_ok_and(|v| v == "true") {
             Format::Github
@@ -522,7 +521,6 @@ fn check(a: CheckArgs) -> i32 {
             Format::Text
         }
     });
-    let cli_fail_on = a.fail_on.as_deref().and_then(Severity::parse);
     if let Some(mb) = a.cache_max {
         crate::model::cache::set_max_mb(mb);
     }
@@ -531,6 +529,46 @@ fn check(a: CheckArgs) -> i32 {
     } else {
         a.cache_dir.clone().or_else(crate::model::cache::default_dir)
     };
+    // Everything else that shapes what is printed joins the key of the lint cache.
+    let opts = vec![format!(
+        "{format:?} {color} {err_color} {} {} {:?} {:?} {:?} {} {:?}",
+        crate::output::color_on_stderr(),
+        a.statistics,
+        a.fail_on,
+        a.select,
+        a.ignore,
+        a.no_probe,
+        a.package
+    )];
+    let key = cache_dir
+        .as_ref()
+        .and_then(|_| crate::lint_cache::key(&a.models, &a.spec, &a.config, &opts));
+    let hit =
+        cache_dir.as_deref().zip(key.as_deref()).and_then(|(d, k)| crate::lint_cache::load(d, k));
+    let run = hit.unwrap_or_else(|| {
+        let run = check_models(&a, format, color, err_color);
+        if let (Some(d), Some(k)) = (&cache_dir, &key) {
+            crate::lint_cache::store(d, k, &run);
+        }
+        run
+    });
+    eprint!("{}", run.stderr);
+    if std::io::stdout().lock().write_all(run.stdout.as_bytes()).is_err() {
+        return 2;
+    }
+    run.code
+}
+
+/// Lints every model: what `check` prints (stdout, stderr) and its exit code.
+fn check_models(
+    a: &CheckArgs,
+    format: Format,
+    color: bool,
+    err_color: bool,
+) -> crate::lint_cache::Entry {
+    let multi = a.models.len() > 1;
+    let cli_fail_on = a.fail_on.as_deref().and_then(Severity::parse);
+    let mut err = String::new();
     let mut runs = Vec::new();
     let mut skipped = Vec::new();
     let mut errors = Vec::new();
@@ -557,12 +595,12 @@ fn check(a: CheckArgs) -> i32 {
         seen_models.push(c.clone());
         if let Some((_, by)) = included.iter().find(|(i, by)| *i == c && canon(by) != c) {
             let why = format!("included by {} (linted there)", by.display());
-            eprintln!("modellint: skipping {}: {why}", model.display());
+            err.push_str(&format!("modellint: skipping {}: {why}\n", model.display()));
             skipped.push(output::NotLinted::skipped(model, why));
             continue;
         }
         if multi && let Some(why) = crate::lint::not_a_model(model) {
-            eprintln!("modellint: skipping {}: {why}", model.display());
+            err.push_str(&format!("modellint: skipping {}: {why}\n", model.display()));
             skipped.push(output::NotLinted::skipped(model, why));
             continue;
         }
@@ -573,17 +611,17 @@ fn check(a: CheckArgs) -> i32 {
             select: a.select.clone(),
             ignore: a.ignore.clone(),
         };
-        let loaded = match crate::lint::load_with_cache(&input, cache_dir.as_deref()) {
+        let loaded = match crate::lint::load(&input) {
             Ok(l) => l,
             Err(e) => {
-                eprint!("{}", output::text::render_error(&e, err_color));
+                err.push_str(&output::text::render_error(&e, err_color));
                 errors.push(output::NotLinted::from_error(model, &e));
                 code = 2;
                 continue;
             }
         };
         if let Some(note) = crate::lint::missing_spec_note(&loaded) {
-            eprint!("{note}");
+            err.push_str(&note);
         }
         let findings = lint(&loaded, !a.no_probe);
         let fail_on = cli_fail_on.or(loaded.config.fail_on).unwrap_or(Severity::Error);
@@ -622,16 +660,10 @@ fn check(a: CheckArgs) -> i32 {
             reports.iter().flat_map(|r| r.findings.iter()).collect();
         let stats = output::statistics(&all);
         if matches!(format, Format::Json | Format::Sarif) {
-            eprint!("{stats}");
+            err.push_str(&stats);
         } else {
             text.push_str(&stats);
         }
     }
-    let mut stdout = std::io::stdout().lock();
-    let written = stdout.write_all(text.as_bytes()).is_ok();
-    crate::model::cache::finish();
-    if !written {
-        return 2;
-    }
-    code
+    crate::lint_cache::Entry { stdout: text, stderr: err, code }
 }

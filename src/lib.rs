@@ -13,6 +13,7 @@ pub mod error;
 pub mod finding;
 pub mod fit;
 pub mod lint;
+pub mod lint_cache;
 pub mod model;
 pub mod output;
 pub mod probe;

@@ -31,11 +31,6 @@ pub struct Loaded {
 
 /// Loads everything a lint run needs; every failure is a located `LoadError` (exit 2).
 pub fn load(input: &LintInput) -> Result<Loaded, LoadError> {
-    load_with_cache(input, None)
-}
-
-/// As `load`, with MuJoCo's compiled model cached in `cache_dir` (model/cache.rs).
-pub fn load_with_cache(input: &LintInput, cache_dir: Option<&Path>) -> Result<Loaded, LoadError> {
     crate::model::mj::silence_warnings();
     let mut sources = SourceMap::default();
     let config = match input.config.clone().or_else(|| crate::config::discover(&input.model)) {
@@ -54,25 +49,19 @@ pub fn load_with_cache(input: &LintInput, cache_dir: Option<&Path>) -> Result<Lo
     let spec_path = spec_search.path.clone();
     // The spec may name the keyframe, so read its robot table before compiling the model.
     let keyframe = spec_path.as_ref().and_then(|p| peek_keyframe(p));
-    let extra: Vec<PathBuf> = spec_path.iter().cloned().collect();
-    let robot = crate::model::load_cached(
-        &mut sources,
-        &input.model,
-        keyframe.as_ref().map(|k| k.name.as_str()),
-        cache_dir,
-        &extra,
-    )
-    .map_err(|e| match (&keyframe, &spec_path) {
-        // A keyframe the model lacks is the spec's mistake: said at its `keyframe` key.
-        (Some(k), Some(p)) if e.message.starts_with("keyframe `") => LoadError {
-            file: p.clone(),
-            line: Some(k.line),
-            column: Some(k.column),
-            message: format!("[robot] keyframe: {}", e.message),
-            snippet: None,
-        },
-        _ => e,
-    })?;
+    let robot =
+        crate::model::load(&mut sources, &input.model, keyframe.as_ref().map(|k| k.name.as_str()))
+            .map_err(|e| match (&keyframe, &spec_path) {
+                // A keyframe the model lacks is the spec's mistake: said at its `keyframe` key.
+                (Some(k), Some(p)) if e.message.starts_with("keyframe `") => LoadError {
+                    file: p.clone(),
+                    line: Some(k.line),
+                    column: Some(k.column),
+                    message: format!("[robot] keyframe: {}", e.message),
+                    snippet: None,
+                },
+                _ => e,
+            })?;
     let names: Vec<String> = robot.joints.iter().map(|j| j.name.clone()).collect();
     let spec = match spec_path {
         Some(p) => Some(crate::spec::load(&mut sources, &p, &names)?),
@@ -354,19 +343,37 @@ pub fn drop_repeated(seen: &mut BTreeSet<FindingKey>, l: &Loaded, findings: &mut
 }
 
 /// `modellint MODEL --format json` for one model (`Err`: what makes that exit 2), returned
-/// instead of printed: the Python API's `lint`. `cache_dir`: the compiled-model cache, as the
-/// CLI's `--cache-dir` (None: no cache).
+/// instead of printed: the Python API's `lint`. `cache_dir`: the lint cache, as the CLI's
+/// `--cache-dir` (None: no cache); a hit answers without compiling (src/lint_cache.rs).
 pub fn lint_json(
     input: &LintInput,
     probe: bool,
     cache_dir: Option<&Path>,
 ) -> Result<String, LoadError> {
-    let loaded = load_with_cache(input, cache_dir)?;
+    let opts =
+        [format!("api-json probe={probe}"), format!("{:?} {:?}", input.select, input.ignore)];
+    let key = cache_dir.and_then(|_| {
+        crate::lint_cache::key(
+            std::slice::from_ref(&input.model),
+            &input.spec,
+            &input.config,
+            &opts,
+        )
+    });
+    let hit = cache_dir.zip(key.as_deref()).and_then(|(d, k)| crate::lint_cache::load(d, k));
+    if let Some(hit) = hit {
+        return Ok(hit.stdout);
+    }
+    let loaded = load(input)?;
     let mut findings = lint(&loaded, probe);
     drop_repeated(&mut BTreeSet::new(), &loaded, &mut findings);
     let model = input.model.display().to_string();
     let info = spec_info(&loaded);
     let out = crate::output::json::render(&loaded.sources, &model, &findings, Some(&info));
-    crate::model::cache::finish();
+    if let (Some(d), Some(k)) = (cache_dir, &key) {
+        let entry =
+            crate::lint_cache::Entry { stdout: out.clone(), stderr: String::new(), code: 0 };
+        crate::lint_cache::store(d, k, &entry);
+    }
     Ok(out)
 }

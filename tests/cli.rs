@@ -585,7 +585,7 @@ fn a_scene_and_its_robot_file_are_linted_once() {
     assert!(hooks.contains("entry: modellint --no-probe --output-format concise"), "{hooks}");
 }
 
-/// The compiled-model cache stays under its cap (least recently used out) and `cache clean`
+/// The lint cache stays under its cap (least recently used out) and `cache clean`
 /// empties it.
 #[test]
 fn cache_is_capped_and_cleaned() {
@@ -602,31 +602,34 @@ fn cache_is_capped_and_cleaned() {
     let count = || {
         std::fs::read_dir(&dir)
             .map(|r| {
-                r.filter(|e| e.as_ref().unwrap().path().extension().is_some_and(|x| x == "mjb"))
+                r.filter(|e| e.as_ref().unwrap().path().extension().is_some_and(|x| x == "lint"))
                     .count()
             })
             .unwrap_or(0)
     };
+    // Entries are the printed results: invalid.xml 3 kB, the scene 8.6 kB, valid.xml 1.7 kB.
     run("fixtures/rules/soft-limits/invalid.xml", "100");
     run("fixtures/include/scene.xml", "100");
     assert_eq!(count(), 2);
-    // A cap of 0.015 MB holds one small entry: the older one is evicted.
-    run("fixtures/rules/soft-limits/valid.xml", "0.015");
+    // A cap of 0.004 MB holds the small valid.xml entry alone: the older two are evicted.
+    run("fixtures/rules/soft-limits/valid.xml", "0.004");
     assert_eq!(count(), 1);
     // --cache-max beside the variable, and before it: the flag's 100 MB keeps both entries
-    // although the variable says 0.015 MB.
-    let with_flag = |model: &str, flag: &str, env: &str| {
+    // although the variable says 0.004 MB.
+    let with_flag = |model: &str, flag: &str, env: &str, more: &[&str]| {
         Command::new(env!("CARGO_BIN_EXE_modellint"))
             .args([model, "--no-probe", "--cache-dir", d, "--cache-max", flag])
+            .args(more)
             .env("MODELLINT_CACHE_MAX_MB", env)
             .output()
             .unwrap()
     };
-    with_flag("fixtures/rules/soft-limits/invalid.xml", "100", "0.015");
+    with_flag("fixtures/rules/soft-limits/invalid.xml", "100", "0.004", &[]);
     assert_eq!(count(), 2);
-    with_flag("fixtures/include/scene.xml", "0.015", "100");
+    // Another result (with --statistics, a new entry) under the flag's 0.004 MB: alone again.
+    with_flag("fixtures/rules/soft-limits/valid.xml", "0.004", "100", &["--statistics"]);
     assert_eq!(count(), 1);
-    let bad = with_flag("fixtures/include/scene.xml", "-3", "100");
+    let bad = with_flag("fixtures/include/scene.xml", "-3", "100", &[]);
     assert_eq!(bad.status.code(), Some(2));
     let (code, out, _) = modellint(&["cache", "clean", "--dir", d]);
     assert_eq!(code, 0, "{out}");

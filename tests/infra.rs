@@ -1,5 +1,5 @@
 //! Lint infrastructure end to end from the CLI: locations under `<include>`, trailing content
-//! after the root element, several models per call, spec discovery, the compiled-model cache and
+//! after the root element, several models per call, spec discovery, the lint cache and
 //! the self-collision probe. Expected lines come from the hand-built fixtures (fixtures/include,
 //! fixtures/infra), not from modellint's own output.
 
@@ -396,20 +396,27 @@ fn self_collision_probe_measures_contacts_at_the_keyframe() {
 }
 
 fn run_with_cache(args: &[&str], cache: &Path) -> (i32, String) {
+    let (code, out, _) = run_with_cache_err(args, cache);
+    (code, out)
+}
+
+/// Exit code, stdout and stderr, byte for byte.
+fn run_with_cache_err(args: &[&str], cache: &Path) -> (i32, String, String) {
     let out = Command::new(env!("CARGO_BIN_EXE_modellint"))
         .args(args)
         .env_remove("GITHUB_ACTIONS")
         .env("MODELLINT_CACHE_DIR", cache)
         .output()
         .unwrap();
-    (out.status.code().unwrap_or(-1), String::from_utf8_lossy(&out.stdout).into())
+    let text = |b: &[u8]| String::from_utf8_lossy(b).into_owned();
+    (out.status.code().unwrap_or(-1), text(&out.stdout), text(&out.stderr))
 }
 
 fn entries(dir: &Path) -> Vec<std::path::PathBuf> {
     let mut v: Vec<_> = std::fs::read_dir(dir)
         .map(|r| {
             r.filter_map(|e| e.ok().map(|e| e.path()))
-                .filter(|p| p.extension().is_some_and(|e| e == "mjb"))
+                .filter(|p| p.extension().is_some_and(|e| e == "lint"))
                 .collect()
         })
         .unwrap_or_default();
@@ -417,10 +424,10 @@ fn entries(dir: &Path) -> Vec<std::path::PathBuf> {
     v
 }
 
-/// The compiled-model cache: the same findings with and without it, a new entry whenever the
-/// model XML or a mesh it reads changes (never a stale model), and a corrupt entry is ignored.
+/// The lint cache: the same findings with and without it, a new entry whenever the model XML
+/// or a mesh it reads changes (never a stale result), and a corrupt entry is ignored.
 #[test]
-fn compiled_model_cache_gives_the_same_findings_and_follows_every_input() {
+fn lint_cache_gives_the_same_findings_and_follows_every_input() {
     let root = std::env::temp_dir().join(format!("modellint-cache-test-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&root);
     let cache = root.join("cache");
@@ -441,12 +448,12 @@ fn compiled_model_cache_gives_the_same_findings_and_follows_every_input() {
     let (c0, no_cache) = run_with_cache(&[m, "--format", "json", "--no-cache"], &cache);
     assert!(entries(&cache).is_empty(), "--no-cache must not write");
     let (c1, cold) = run_with_cache(&args, &cache);
-    assert_eq!(entries(&cache).len(), 1, "the cold run stores the compiled model");
+    assert_eq!(entries(&cache).len(), 1, "the cold run stores its result");
     let (c2, warm) = run_with_cache(&args, &cache);
     assert_eq!(entries(&cache).len(), 1, "the warm run reuses it");
     assert_eq!((c0, c1), (c1, c2));
     assert_eq!(no_cache, cold);
-    assert_eq!(no_cache, warm, "same findings (incl. probes) from the cached model");
+    assert_eq!(no_cache, warm, "same findings (incl. probes) from the cache");
     // --cache-dir overrides the environment.
     let other = root.join("other");
     let (_, via_flag) =
@@ -460,10 +467,13 @@ fn compiled_model_cache_gives_the_same_findings_and_follows_every_input() {
     assert_eq!(changed, changed_nc);
     assert_ne!(changed, warm, "kp 50 → 5000 changes the findings");
     assert_eq!(entries(&cache).len(), 2);
-    // A changed mesh (the XML untouched): a new entry.
+    // A changed mesh (the XML untouched): a new entry, and the result follows the mesh (the
+    // bob's mass is spread over a taller tetrahedron: another inertia, other numbers).
     std::fs::write(model_dir.join("bob.obj"), obj.replace("v 0 0 0.1", "v 0 0 0.2")).unwrap();
-    let (_, _) = run_with_cache(&args, &cache);
+    let (_, mesh_changed) = run_with_cache(&args, &cache);
     assert_eq!(entries(&cache).len(), 3, "the mesh is part of the key");
+    let (_, mesh_nc) = run_with_cache(&[m, "--format", "json", "--no-cache"], &cache);
+    assert_eq!(mesh_changed, mesh_nc, "no stale result after a mesh edit");
     // A corrupt entry is ignored: the model is compiled again, same output.
     for e in entries(&cache) {
         std::fs::write(e, b"not a MuJoCo model").unwrap();
@@ -471,5 +481,51 @@ fn compiled_model_cache_gives_the_same_findings_and_follows_every_input() {
     let (_, after_corrupt) = run_with_cache(&args, &cache);
     let (_, nc) = run_with_cache(&[m, "--format", "json", "--no-cache"], &cache);
     assert_eq!(after_corrupt, nc);
+    let _ = std::fs::remove_dir_all(&root);
+}
+
+/// The lint cache follows a file the model includes, and the spec found beside it: an edit of
+/// either is never answered from an entry of the old text; text output and the notes on stderr
+/// are byte-identical warm and cold.
+#[test]
+fn lint_cache_follows_included_files_and_the_spec() {
+    let root = std::env::temp_dir().join(format!("modellint-cache-inc-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&root);
+    let cache = root.join("cache");
+    let dir = root.join("model");
+    std::fs::create_dir_all(&dir).unwrap();
+    let robot = |range: &str| {
+        format!(
+            "<mujoco model=\"arm\">\n  <worldbody>\n    <body name=\"link\" pos=\"0 0 1\">\n      <joint name=\"hinge\" axis=\"0 1 0\" {range} armature=\"0.01\"/>\n      <geom type=\"capsule\" size=\"0.02\" fromto=\"0 0 0 0 0 -0.3\" mass=\"1\"/>\n    </body>\n  </worldbody>\n  <actuator><position joint=\"hinge\" kp=\"20\" kv=\"1\" ctrlrange=\"-1 1\"/></actuator>\n</mujoco>\n"
+        )
+    };
+    std::fs::write(dir.join("robot.xml"), robot("range=\"-2 2\"")).unwrap();
+    let scene = dir.join("scene.xml");
+    std::fs::write(
+        &scene,
+        "<mujoco model=\"scene\">\n  <include file=\"robot.xml\"/>\n  <worldbody>\n    <geom name=\"floor\" type=\"plane\" size=\"0 0 0.05\"/>\n  </worldbody>\n</mujoco>\n",
+    )
+    .unwrap();
+    let s = scene.to_str().unwrap();
+    let args = [s, "--no-probe", "--color", "never"];
+    let nc_args = [s, "--no-probe", "--color", "never", "--no-cache"];
+    let cold = run_with_cache_err(&args, &cache);
+    let warm = run_with_cache_err(&args, &cache);
+    assert_eq!(entries(&cache).len(), 1);
+    assert_eq!(cold, warm, "exit code, stdout and stderr byte-identical warm and cold");
+    assert_eq!(cold, run_with_cache_err(&nc_args, &cache));
+    assert!(cold.2.contains("no hardware spec found"), "{}", cold.2);
+    // The included robot file loses its range: the scene's result changes with it.
+    std::fs::write(dir.join("robot.xml"), robot("")).unwrap();
+    let edited = run_with_cache_err(&args, &cache);
+    assert_eq!(entries(&cache).len(), 2, "the included file is part of the key");
+    assert_ne!(edited.1, warm.1, "an edit of the included file changes the findings");
+    assert_eq!(edited, run_with_cache_err(&nc_args, &cache));
+    // A spec appears beside the included robot file (found by the run): a new result.
+    std::fs::write(dir.join("robot.toml"), "[robot]\nname = \"arm\"\n").unwrap();
+    let with_spec = run_with_cache_err(&args, &cache);
+    assert_eq!(entries(&cache).len(), 3, "the spec found is part of the key");
+    assert!(!with_spec.2.contains("no hardware spec found"), "{}", with_spec.2);
+    assert_eq!(with_spec, run_with_cache_err(&nc_args, &cache));
     let _ = std::fs::remove_dir_all(&root);
 }

@@ -254,3 +254,36 @@ fn same_partition(ours: &Resolved, theirs: &Resolved, exact: bool) {
         }
     }
 }
+
+/// `count` as the template's spec resolves it, per joint (through the spec loader).
+fn counts(model: &Path, spec: &Path) -> BTreeMap<String, u32> {
+    let mut map = modellint::model::source::SourceMap::default();
+    let robot = modellint::model::load(&mut map, model, None).unwrap();
+    let names: Vec<String> = robot.joints.iter().map(|j| j.name.clone()).collect();
+    let s = modellint::spec::load(&mut map, spec, &names).unwrap_or_else(|e| panic!("{e}"));
+    names.iter().filter_map(|n| Some((n.clone(), s.joint(n)?.count))).collect()
+}
+
+/// A parallel ankle the model shows (two tendon actuators drive pitch and roll of each ankle):
+/// count = 2 on the ankle joints, 1 on the single-motor hips and knees. A serial ankle cross
+/// with one actuator per joint gets 1 and the comment that says how to tell a two-motor ankle.
+#[test]
+fn parallel_ankle_count_follows_the_tendon_actuators() {
+    let par = Path::new("fixtures/spec_init/parallel_ankle.xml");
+    let spec = write_template(par, "parallel");
+    loads_and_adds_nothing(par, &spec);
+    let c = counts(par, &spec);
+    for side in ["left", "right"] {
+        assert_eq!(c[&format!("{side}_ankle_pitch")], 2, "{c:?}");
+        assert_eq!(c[&format!("{side}_ankle_roll")], 2, "{c:?}");
+        assert_eq!(c[&format!("{side}_hip_pitch")], 1, "single motor: {c:?}");
+        assert_eq!(c[&format!("{side}_knee")], 1, "single motor: {c:?}");
+    }
+    let ser = Path::new("fixtures/spec_init/serial_ankle.xml");
+    let spec = write_template(ser, "serial");
+    loads_and_adds_nothing(ser, &spec);
+    let c = counts(ser, &spec);
+    assert!(c.values().all(|&n| n == 1), "no joint has two motors in the model: {c:?}");
+    let text = std::fs::read_to_string(&spec).unwrap();
+    assert!(text.contains("2 if two motors in the shank drive this ankle"), "{text}");
+}

@@ -168,7 +168,7 @@ def lint(
     the CLI's order, each confirmed or refuted by its MuJoCo probe unless `probes=False`
     (`--no-probe`). `spec`: the hardware spec TOML (default: `<model>.toml` beside the model,
     as the CLI); `config`: modellint.toml; `select` / `ignore`: rule ids or groups; `cache`:
-    the compiled-model cache (`--no-cache` when False); `packages`: URDF `package://` dirs.
+    the lint cache (`--no-cache` when False); `packages`: URDF `package://` dirs.
 
     Raises ModelError (with .file, .line, .column) when the model, spec or config cannot be
     loaded (the CLI's exit code 2)."""

@@ -1,16 +1,14 @@
-//! Compiled-model cache: MuJoCo's binary model (the `.mjb` of `mj_saveModel`), keyed by a hash
-//! of every file the compile reads (the model XML and its includes, mesh/texture/height-field
-//! files, and the spec), the modellint version and the MuJoCo version. An unchanged re-lint
-//! (a pre-commit hook on the same meshes) loads the binary instead of compiling. The XML source
-//! map that locations come from is still parsed every time: it is cheap.
+//! The lint cache directory: one small entry per lint run (what it printed and its exit code,
+//! `src/lint_cache.rs`), keyed by a hash of every file the run reads (the model XML and its
+//! includes, mesh/texture/height-field files, the spec, the config), the modellint and MuJoCo
+//! versions and the options. An unchanged re-lint (a pre-commit hook on the same meshes) is
+//! answered from its entry without compiling the model; any edited input is a new key.
 //!
 //! Directory: `--cache-dir`, else `$MODELLINT_CACHE_DIR`, else `$XDG_CACHE_HOME/modellint`, else
 //! `~/.cache/modellint`. `--no-cache` disables it. A cache that cannot be read or written is
-//! ignored (the model is compiled as without a cache).
+//! ignored (the lint runs as without a cache). Its size is capped (least recently used out).
 
 use std::path::{Path, PathBuf};
-
-use mujoco_rs::prelude::*;
 
 /// The default cache directory (None when no home directory is known).
 pub fn default_dir() -> Option<PathBuf> {
@@ -107,26 +105,47 @@ impl Hash {
     }
 }
 
-/// Hash key of a compile: tool and MuJoCo versions, then each input's path and bytes, in order.
-/// `None` when a file cannot be read (then the model is compiled and not cached).
-pub fn key(inputs: &[(PathBuf, Option<&str>)]) -> Option<String> {
-    let mut h = Hash::new();
-    h.field(env!("CARGO_PKG_VERSION").as_bytes());
-    h.field(mujoco_rs::mujoco_c::mjVERSION_HEADER.to_string().as_bytes());
-    for (path, text) in inputs {
-        let abs = std::fs::canonicalize(path).unwrap_or_else(|_| path.clone());
-        h.field(abs.to_string_lossy().as_bytes());
-        match text {
-            Some(t) => h.field(t.as_bytes()),
-            None => h.field(&std::fs::read(path).ok()?),
-        }
+/// Builds a cache key: the tool and MuJoCo versions, then fields and files in order.
+pub struct KeyBuilder(Hash);
+
+impl Default for KeyBuilder {
+    fn default() -> Self {
+        let mut h = Hash::new();
+        h.field(env!("CARGO_PKG_VERSION").as_bytes());
+        h.field(mujoco_rs::mujoco_c::mjVERSION_HEADER.to_string().as_bytes());
+        KeyBuilder(h)
     }
-    let (a, b) = h.finish();
-    Some(format!("{a:016x}{b:016x}"))
+}
+
+impl KeyBuilder {
+    /// A length-prefixed field (an option, a path as given).
+    pub fn field(&mut self, data: &[u8]) {
+        self.0.field(data);
+    }
+    /// A file: its canonical path and its bytes. `None` when it cannot be read.
+    pub fn file(&mut self, path: &Path) -> Option<()> {
+        let abs = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
+        self.0.field(abs.to_string_lossy().as_bytes());
+        self.0.field(&std::fs::read(path).ok()?);
+        Some(())
+    }
+    pub fn finish(self) -> String {
+        let (a, b) = self.0.finish();
+        format!("{a:016x}{b:016x}")
+    }
+}
+
+/// The extension of an entry. Entries of the compiled-model cache of earlier versions
+/// (`.mjb`, tens of MB each) are counted and evicted too, and removed by `cache clean`.
+const EXT: &str = "lint";
+const OLD_EXT: &str = "mjb";
+
+fn ours(p: &Path) -> bool {
+    p.extension().is_some_and(|x| x == EXT || x == OLD_EXT)
 }
 
 fn entry(dir: &Path, key: &str) -> PathBuf {
-    dir.join(format!("{key}.mjb"))
+    dir.join(format!("{key}.{EXT}"))
 }
 
 /// Default size cap of the cache directory, bytes (`MODELLINT_CACHE_MAX_MB` overrides it).
@@ -162,7 +181,7 @@ fn entries(dir: &Path) -> Vec<(PathBuf, u64, std::time::SystemTime)> {
     let mut v: Vec<_> = rd
         .filter_map(|e| e.ok())
         .map(|e| e.path())
-        .filter(|p| p.extension().is_some_and(|x| x == "mjb"))
+        .filter(|p| ours(p))
         .filter_map(|p| {
             let m = std::fs::metadata(&p).ok()?;
             Some((p, m.len(), m.modified().ok()?))
@@ -204,9 +223,7 @@ pub fn clean(dir: &Path) -> (usize, u64) {
     let (mut n, mut bytes) = (0, 0);
     for p in rd.filter_map(|e| e.ok()).map(|e| e.path()) {
         let name = p.file_name().map(|x| x.to_string_lossy().into_owned()).unwrap_or_default();
-        let ours = p.extension().is_some_and(|x| x == "mjb")
-            || (name.starts_with('.') && name.ends_with(".tmp"));
-        if !ours {
+        if !(ours(&p) || (name.starts_with('.') && name.ends_with(".tmp"))) {
             continue;
         }
         let len = std::fs::metadata(&p).map(|m| m.len()).unwrap_or(0);
@@ -218,102 +235,14 @@ pub fn clean(dir: &Path) -> (usize, u64) {
     (n, bytes)
 }
 
-/// The cached compiled model, when present and readable. A hit marks the entry as used now
-/// (its modification time), for the least-recently-used eviction.
-pub fn load(dir: &Path, key: &str) -> Option<MjModel> {
-    if let Ok(f) = std::fs::File::options().write(true).open(entry(dir, key)) {
+/// The bytes of an entry, when present and readable. A hit marks the entry as used now (its
+/// modification time), for the least-recently-used eviction.
+pub fn load(dir: &Path, key: &str) -> Option<Vec<u8>> {
+    let path = entry(dir, key);
+    if let Ok(f) = std::fs::File::options().write(true).open(&path) {
         let _ = f.set_modified(std::time::SystemTime::now());
     }
-    let file = std::fs::File::open(entry(dir, key)).ok()?;
-    match Mapped::new(&file) {
-        // MuJoCo copies the buffer into its own model: map the file instead of reading it, which
-        // saves one copy of tens of megabytes (the mesh BVHs) on every warm run.
-        Some(map) => MjModel::from_buffer(map.bytes()).ok(),
-        None => MjModel::from_buffer(&std::fs::read(entry(dir, key)).ok()?).ok(),
-    }
-}
-
-/// A read-only memory map of a whole file (Unix), unmapped on drop.
-struct Mapped {
-    ptr: *mut std::ffi::c_void,
-    len: usize,
-}
-
-#[cfg(unix)]
-unsafe extern "C" {
-    fn mmap(
-        addr: *mut std::ffi::c_void,
-        len: usize,
-        prot: i32,
-        flags: i32,
-        fd: i32,
-        off: i64,
-    ) -> *mut std::ffi::c_void;
-    fn munmap(addr: *mut std::ffi::c_void, len: usize) -> i32;
-}
-
-impl Mapped {
-    #[cfg(unix)]
-    fn new(file: &std::fs::File) -> Option<Mapped> {
-        use std::os::fd::AsRawFd;
-        const PROT_READ: i32 = 1;
-        const MAP_PRIVATE: i32 = 2;
-        let len = usize::try_from(file.metadata().ok()?.len()).ok()?;
-        if len == 0 {
-            return None;
-        }
-        // SAFETY: maps `len` bytes of an open, regular file read-only and private; the mapping is
-        // only read through `bytes()` while `self` lives and is unmapped once in `drop`. A cache
-        // entry is replaced by rename, never rewritten in place, so the mapped bytes do not change.
-        let ptr =
-            unsafe { mmap(std::ptr::null_mut(), len, PROT_READ, MAP_PRIVATE, file.as_raw_fd(), 0) };
-        (ptr as isize != -1 && !ptr.is_null()).then_some(Mapped { ptr, len })
-    }
-    #[cfg(not(unix))]
-    fn new(_file: &std::fs::File) -> Option<Mapped> {
-        None
-    }
-    fn bytes(&self) -> &[u8] {
-        // SAFETY: `ptr` maps `len` readable bytes for the lifetime of `self` (see `new`).
-        unsafe { std::slice::from_raw_parts(self.ptr as *const u8, self.len) }
-    }
-}
-
-impl Drop for Mapped {
-    fn drop(&mut self) {
-        #[cfg(unix)]
-        // SAFETY: unmaps exactly the mapping created in `new`.
-        unsafe {
-            munmap(self.ptr, self.len);
-        }
-    }
-}
-
-/// The model as MuJoCo's binary format, ready to write.
-pub fn serialize(m: &MjModel) -> Option<Vec<u8>> {
-    let mut buf = vec![0u8; m.size()];
-    m.save_to_buffer(&mut buf).ok()?;
-    Some(buf)
-}
-
-static PENDING: std::sync::Mutex<Vec<std::thread::JoinHandle<()>>> =
-    std::sync::Mutex::new(Vec::new());
-
-/// Writes an entry in the background (overlapping the lint); `finish` waits for the writes.
-pub fn store_in_background(dir: &Path, key: &str, bytes: Vec<u8>) {
-    let (dir, key) = (dir.to_path_buf(), key.to_string());
-    let handle = std::thread::spawn(move || store(&dir, &key, &bytes));
-    if let Ok(mut p) = PENDING.lock() {
-        p.push(handle);
-    }
-}
-
-/// Waits for the background cache writes of this process (the CLI calls it before exiting).
-pub fn finish() {
-    let handles: Vec<_> = PENDING.lock().map(|mut p| std::mem::take(&mut *p)).unwrap_or_default();
-    for h in handles {
-        let _ = h.join();
-    }
+    std::fs::read(path).ok()
 }
 
 /// Writes an entry atomically (temporary file, then rename); failures are ignored.

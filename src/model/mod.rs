@@ -382,21 +382,27 @@ impl Robot {
     }
 }
 
-/// Loads an MJCF or URDF model. `keyframe` names the standing keyframe, when known.
-pub fn load(map: &mut SourceMap, path: &Path, keyframe: Option<&str>) -> Result<Robot, LoadError> {
-    load_cached(map, path, keyframe, None, &[])
+/// The files a lint of `path` reads as a model, without compiling it (the lint cache's key):
+/// the XML and its includes and, for MJCF, every asset file it names. A file that is not a
+/// robot model is its only input. `None` for URDF (MuJoCo resolves its mesh paths its own way)
+/// and when the files cannot be listed (the model does not load).
+pub fn inputs(path: &Path) -> Option<Vec<PathBuf>> {
+    let mut map = SourceMap::default();
+    let tree = source::parse_xml_tree(&mut map, path, true).ok()?;
+    let files = map.files.iter().map(|f| f.path.clone());
+    match tree.tag.as_str() {
+        "mujoco" => {
+            let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+            let assets = check_assets(&map, &tree, &dir).ok()?;
+            Some(files.chain(assets).collect())
+        }
+        "robot" => None,
+        _ => Some(files.collect()),
+    }
 }
 
-/// As `load`, with the compiled model taken from (or written to) the cache in `cache_dir`.
-/// `extra_inputs` (the spec) join the cache key. URDF models are always compiled: MuJoCo
-/// resolves their mesh paths its own way, so their inputs are not known here.
-pub fn load_cached(
-    map: &mut SourceMap,
-    path: &Path,
-    keyframe: Option<&str>,
-    cache_dir: Option<&Path>,
-    extra_inputs: &[PathBuf],
-) -> Result<Robot, LoadError> {
+/// Loads an MJCF or URDF model. `keyframe` names the standing keyframe, when known.
+pub fn load(map: &mut SourceMap, path: &Path, keyframe: Option<&str>) -> Result<Robot, LoadError> {
     let first = map.files.len();
     let tree = source::parse_xml_tree(map, path, true)?;
     let format = match tree.tag.as_str() {
@@ -415,56 +421,28 @@ pub fn load_cached(
         checks::check_urdf_names(map, &tree)?;
     }
     let model_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    let assets =
-        if format == Format::Mjcf { Some(check_assets(map, &tree, &model_dir)?) } else { None };
+    if format == Format::Mjcf {
+        check_assets(map, &tree, &model_dir)?;
+    }
     let src = match format {
         Format::Mjcf => mjcf::index_mjcf(&tree),
         Format::Urdf => mjcf::index_urdf(&tree),
     };
-    let key = match (cache_dir, &assets) {
-        (Some(_), Some(assets)) => {
-            let mut inputs: Vec<(PathBuf, Option<&str>)> = map.files[first..]
-                .iter()
-                .map(|f| (f.path.clone(), Some(f.text.as_str())))
-                .collect();
-            inputs.extend(assets.iter().chain(extra_inputs).map(|p| (p.clone(), None)));
-            cache::key(&inputs)
-        }
-        _ => None,
-    };
-    let cached = match (cache_dir, &key) {
-        (Some(dir), Some(k)) => cache::load(dir, k),
-        _ => None,
-    };
-    let mj = match cached {
-        Some(m) => m,
-        None => {
-            // URDF `package://` meshes: MuJoCo compiles a resolved copy (same line numbers).
-            let resolved = if format == Format::Urdf {
-                urdf_packages::resolved_copy(map, first)?
-            } else {
-                None
-            };
-            let m = MjModel::from_xml(resolved.as_deref().unwrap_or(path));
-            if let Some(t) = &resolved {
-                let _ = std::fs::remove_file(t);
-            }
-            let m = m.map_err(|e| {
-                let msg = format!("MuJoCo could not compile the model: {e}");
-                mujoco_error_location(map, first, &msg)
-                    .or_else(|| missing_file_location(map, first, &msg))
-                    // MuJoCo did not say where: the model's root element, so that the error
-                    // still names a line of the file.
-                    .unwrap_or_else(|| LoadError::at(map, tree.loc, msg))
-            })?;
-            if let (Some(dir), Some(k), Some(bytes)) =
-                (cache_dir, &key, cache_dir.and_then(|_| cache::serialize(&m)))
-            {
-                cache::store_in_background(dir, k, bytes);
-            }
-            m
-        }
-    };
+    // URDF `package://` meshes: MuJoCo compiles a resolved copy (same line numbers).
+    let resolved =
+        if format == Format::Urdf { urdf_packages::resolved_copy(map, first)? } else { None };
+    let m = MjModel::from_xml(resolved.as_deref().unwrap_or(path));
+    if let Some(t) = &resolved {
+        let _ = std::fs::remove_file(t);
+    }
+    let mj = m.map_err(|e| {
+        let msg = format!("MuJoCo could not compile the model: {e}");
+        mujoco_error_location(map, first, &msg)
+            .or_else(|| missing_file_location(map, first, &msg))
+            // MuJoCo did not say where: the model's root element, so that the error still
+            // names a line of the file.
+            .unwrap_or_else(|| LoadError::at(map, tree.loc, msg))
+    })?;
     let mut robot = extract(path, format, tree, src, mj);
     let key = choose_key(&robot.keys, keyframe);
     if let Some(want) = keyframe

@@ -18,6 +18,7 @@ pub mod ringdown;
 pub mod sanity;
 pub mod settle;
 pub mod slide;
+pub mod stance;
 
 use std::any::{Any, TypeId};
 use std::collections::BTreeMap;

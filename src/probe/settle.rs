@@ -63,15 +63,7 @@ impl<C: StanceClaim> super::Claim for C {
     }
 }
 
-/// Smallest share of the robot's weight the floor must carry for a stance verdict.
-pub const MIN_SUPPORT: f64 = 0.5;
-/// Largest base tilt (degrees from the keyframe) of a robot that still counts as upright.
-pub const MAX_TILT_DEG: f64 = 30.0;
-/// Largest base drop, as a fraction of the base's keyframe height, of an upright robot (at
-/// least [`MIN_DROP_ALLOWED`]: a small model settling onto its feet drops a few centimetres).
-pub const MAX_DROP: f64 = 0.5;
-/// The drop any robot may show while settling, m.
-pub const MIN_DROP_ALLOWED: f64 = 0.1;
+pub use super::stance::{MAX_DROP, MAX_TILT_DEG, MIN_DROP_ALLOWED, MIN_SUPPORT};
 
 /// What the settle measured around one foot: the body, its parent and its children.
 #[derive(Debug, Clone)]
@@ -93,56 +85,31 @@ pub struct FootView {
 impl Settle {
     /// The stance preconditions of this run, in order (see the module docs).
     pub fn preconditions(&self) -> super::Preconditions {
-        let share = if self.weight > 0.0 { self.support_load / self.weight } else { 0.0 };
-        super::Preconditions::new()
-            .check(
-                "floor",
-                self.floor,
-                if self.floor {
-                    "the model has a floor".to_string()
-                } else {
-                    "the model has no floor (no colliding plane, height field or box on the world body): lint the scene that includes the robot".to_string()
-                },
-            )
-            .check(
-                "settled",
-                !self.diverged,
-                if self.diverged { DIVERGED } else { "the standing simulation stayed finite" },
-            )
-            .check(
-                "free_base",
-                self.free_base,
-                if self.free_base {
-                    "the base is free-floating"
-                } else {
-                    "the base is fixed to the world, so standing does not load the feet"
-                },
-            )
-            .check(
-                "feet_loaded",
-                share >= MIN_SUPPORT,
-                format!(
-                    "the floor carries {} % of the robot's weight after 1 s standing (need ≥ {} %)",
-                    crate::util::fmt_num(100.0 * share, 3),
-                    crate::util::fmt_num(100.0 * MIN_SUPPORT, 3)
-                ),
-            )
-            .check(
-                "upright",
-                self.base_tilt_deg <= MAX_TILT_DEG && self.base_drop <= self.max_drop(),
-                format!(
-                    "the base tilted {}° and dropped {} m (upright: ≤ {}°, ≤ {} m)",
-                    crate::util::fmt_num(self.base_tilt_deg, 3),
-                    crate::util::fmt_num(self.base_drop, 3),
-                    crate::util::fmt_num(MAX_TILT_DEG, 3),
-                    crate::util::fmt_num(self.max_drop(), 3)
-                ),
-            )
+        let figures = super::stance::Figures {
+            floor: self.floor,
+            diverged: self.diverged,
+            free_base: self.free_base,
+            weight: self.weight,
+            support_load: self.support_load,
+            base_tilt_deg: self.base_tilt_deg,
+            base_drop: self.base_drop,
+            base_height: self.base_height,
+        };
+        super::stance::preconditions(
+            &figures,
+            &super::stance::Words {
+                finite: "the standing simulation stayed finite",
+                diverged: DIVERGED,
+                fixed_base: "the base is fixed to the world, so standing does not load the feet",
+                loaded_when: "after 1 s standing",
+                upright_when: "",
+            },
+        )
     }
 
     /// The largest drop of the base that still counts as upright, m.
     pub fn max_drop(&self) -> f64 {
-        (MAX_DROP * self.base_height).max(MIN_DROP_ALLOWED)
+        super::stance::max_drop(self.base_height)
     }
 
     /// The whole-robot figures every stance verdict reports.
@@ -242,27 +209,12 @@ pub fn run(robot: &Robot) -> Option<Settle> {
     let nbody = mj::raw(&b.m).nbody as usize;
     let gbody = b.m.geom_bodyid().to_vec();
     let x0: Vec<f64> = d.xmat().as_flattened().to_vec();
-    let base_z0 = robot
-        .joints
-        .iter()
-        .find(|j| j.jtype == crate::model::JointType::Free)
-        .map(|j| robot.key.qpos[j.qposadr + 2]);
-    let floor = robot.geoms.iter().any(|g| {
-        g.body == 0
-            && g.collides()
-            && matches!(
-                g.gtype,
-                crate::model::GeomType::Plane
-                    | crate::model::GeomType::Hfield
-                    | crate::model::GeomType::Box
-            )
-    });
-    let g = robot.opt.gravity;
+    let start = super::stance::start(robot);
+    let base_z0 = start.base_z0;
     let mut out = Settle {
-        floor,
-        weight: robot.bodies.iter().map(|b| b.mass).sum::<f64>()
-            * (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt(),
-        free_base: robot.joints.iter().any(|j| j.jtype == crate::model::JointType::Free),
+        floor: start.floor,
+        weight: start.weight,
+        free_base: start.free_base,
         base_height: base_z0.unwrap_or(0.0),
         ..Default::default()
     };

@@ -8,7 +8,7 @@
 //!   body its horizontal travel during the push. A contact of dim 1 has no friction cone and
 //!   slides under any push; a dim ≥ 3 contact holds a push below μ × its normal load.
 //! * Preconditions (unmet → inconclusive with the reason): a floor, a finite run, a free base,
-//!   the floor carrying ≥ [`MIN_SUPPORT`] of the weight before the push, the base upright after
+//!   the floor carrying ≥ [`MIN_SUPPORT`](super::stance::MIN_SUPPORT) of the weight before the push, the base upright after
 //!   it, and — per measurement — the subject's geoms touching the ground during the push.
 //! * Used by `foot-collision-geometry`'s condim and friction findings (facts of the file: a
 //!   measurement, never a verdict).
@@ -17,9 +17,9 @@
 use std::collections::BTreeMap;
 
 use super::bench::{Bench, Setup};
-use super::settle::{MAX_DROP, MAX_TILT_DEG, MIN_DROP_ALLOWED, MIN_SUPPORT};
+use super::stance::is_ground;
 use crate::lint::Loaded;
-use crate::model::{GeomType, JointType, Robot, mj};
+use crate::model::{JointType, Robot, mj};
 
 /// Standing time before the push, s.
 pub const SETTLE_S: f64 = 0.5;
@@ -82,62 +82,27 @@ pub struct Slide {
 impl Slide {
     /// The whole-run preconditions (floor, finite, free base, loaded, upright).
     pub fn preconditions(&self) -> super::Preconditions {
-        let share = if self.weight > 0.0 { self.support_load / self.weight } else { 0.0 };
-        let max_drop = (MAX_DROP * self.base_height).max(MIN_DROP_ALLOWED);
-        let f = crate::util::fmt_num;
-        super::Preconditions::new()
-            .check(
-                "floor",
-                self.floor,
-                if self.floor {
-                    "the model has a floor".to_string()
-                } else {
-                    "the model has no floor (no colliding plane, height field or box on the world body): lint the scene that includes the robot".to_string()
-                },
-            )
-            .check(
-                "settled",
-                !self.diverged,
-                if self.diverged { "the push simulation diverged" } else { "the run stayed finite" },
-            )
-            .check(
-                "free_base",
-                self.free_base,
-                if self.free_base {
-                    "the base is free-floating"
-                } else {
-                    "the base is fixed to the world: nothing can slide"
-                },
-            )
-            .check(
-                "feet_loaded",
-                share >= MIN_SUPPORT,
-                format!(
-                    "the floor carries {} % of the robot's weight before the push (need ≥ {} %)",
-                    f(100.0 * share, 3),
-                    f(100.0 * MIN_SUPPORT, 3)
-                ),
-            )
-            .check(
-                "upright",
-                self.base_tilt_deg <= MAX_TILT_DEG && self.base_drop <= max_drop,
-                format!(
-                    "after the push the base tilted {}° and dropped {} m (upright: ≤ {}°, ≤ {} m)",
-                    f(self.base_tilt_deg, 3),
-                    f(self.base_drop, 3),
-                    f(MAX_TILT_DEG, 3),
-                    f(max_drop, 3)
-                ),
-            )
+        let figures = super::stance::Figures {
+            floor: self.floor,
+            diverged: self.diverged,
+            free_base: self.free_base,
+            weight: self.weight,
+            support_load: self.support_load,
+            base_tilt_deg: self.base_tilt_deg,
+            base_drop: self.base_drop,
+            base_height: self.base_height,
+        };
+        super::stance::preconditions(
+            &figures,
+            &super::stance::Words {
+                finite: "the run stayed finite",
+                diverged: "the push simulation diverged",
+                fixed_base: "the base is fixed to the world: nothing can slide",
+                loaded_when: "before the push",
+                upright_when: "after the push ",
+            },
+        )
     }
-}
-
-fn is_ground(robot: &Robot, g: usize) -> bool {
-    robot.geoms.get(g).is_some_and(|g| {
-        g.body == 0
-            && g.collides()
-            && matches!(g.gtype, GeomType::Plane | GeomType::Hfield | GeomType::Box)
-    })
 }
 
 pub fn run(robot: &Robot) -> Option<Slide> {
@@ -153,11 +118,12 @@ pub fn run(robot: &Robot) -> Option<Slide> {
     let gmag = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
     let free: Vec<&crate::model::Joint> =
         robot.joints.iter().filter(|j| j.jtype == JointType::Free).collect();
-    let base_z0 = free.first().map(|j| robot.key.qpos.get(j.qposadr + 2).copied().unwrap_or(0.0));
+    let start = super::stance::start(robot);
+    let base_z0 = start.base_z0;
     let mut out = Slide {
-        floor: (0..robot.geoms.len()).any(|g| is_ground(robot, g)),
-        free_base: !free.is_empty(),
-        weight: robot.bodies.iter().map(|b| b.mass).sum::<f64>() * gmag,
+        floor: start.floor,
+        free_base: start.free_base,
+        weight: start.weight,
         base_height: base_z0.unwrap_or(0.0),
         ..Default::default()
     };

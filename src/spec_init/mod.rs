@@ -18,6 +18,8 @@ use crate::model::{ActuatorKind, Robot};
 use crate::rules::limits::effort_limit_mismatch::joint_torque_limit;
 use crate::util::fmt_num;
 
+mod count;
+
 /// One motor family of the template.
 #[derive(Debug, Clone)]
 pub struct Family {
@@ -550,10 +552,7 @@ pub fn template(robot: &Robot, model_display: &str) -> String {
                 let _ = writeln!(w);
                 let _ = writeln!(w, "[joints.{}]", quote(&pat));
                 let _ = writeln!(w, "motor = {}", quote(&f.name));
-                let _ = writeln!(
-                    w,
-                    "count = 1                     # motors driving the joint: 2 for a parallel (RSU) ankle"
-                );
+                let _ = writeln!(w, "{}", count::count_line(robot, &group));
                 let _ = writeln!(
                     w,
                     "# direction = 1               # the hardware's gear sign, +1 or −1"
@@ -615,7 +614,8 @@ tell:
     peak_torque; rotor_inertia, gear_ratio, velocity_limit, kp/kd, friction are placeholders
     (the comment shows the model's armature and servo gains);
   - [joints."<glob>"]: each actuated joint (left/right pairs as `{left,right}_knee`) with its
-    family, count = 1 (2 for a two-motor parallel ankle) and a region guessed from its name;
+    family, count (the number of tendon actuators when two or more drive it, a parallel linkage the
+    model shows; else 1, with how to tell a two-motor ankle) and a region guessed from its name;
     joints no actuator drives as passive = true.
 
 The values are the model's own, so the spec agrees with the model as it is; check each against

@@ -1,0 +1,124 @@
+//! What the stance probes (`stance-settle`, `foot-slide`) share: the ground the robot stands on,
+//! the robot's weight and base at the keyframe before a run, and the stance preconditions every
+//! verdict of theirs records (a floor, a finite run, a free base, the feet loaded, the base
+//! upright), each probe saying in its own words when it measured them.
+
+use crate::model::{GeomType, JointType, Robot};
+
+/// Smallest share of the robot's weight the floor must carry for a stance verdict.
+pub const MIN_SUPPORT: f64 = 0.5;
+/// Largest base tilt (degrees from the keyframe) of a robot that still counts as upright.
+pub const MAX_TILT_DEG: f64 = 30.0;
+/// Largest base drop, as a fraction of the base's keyframe height, of an upright robot (at
+/// least [`MIN_DROP_ALLOWED`]: a small model settling onto its feet drops a few centimetres).
+pub const MAX_DROP: f64 = 0.5;
+/// The drop any robot may show while settling, m.
+pub const MIN_DROP_ALLOWED: f64 = 0.1;
+
+/// A geom the robot can stand on: a colliding plane, height field or box on the world body.
+pub fn is_ground(robot: &Robot, g: usize) -> bool {
+    robot.geoms.get(g).is_some_and(|g| {
+        g.body == 0
+            && g.collides()
+            && matches!(g.gtype, GeomType::Plane | GeomType::Hfield | GeomType::Box)
+    })
+}
+
+/// What a stance run knows before it steps.
+#[derive(Debug, Clone, Copy)]
+pub struct Start {
+    /// The world body has a geom to stand on ([`is_ground`]).
+    pub floor: bool,
+    /// The robot has a free joint.
+    pub free_base: bool,
+    /// The robot's weight, N.
+    pub weight: f64,
+    /// Keyframe height of the (first) free joint's body, m; `None` without a free joint.
+    pub base_z0: Option<f64>,
+}
+
+pub fn start(robot: &Robot) -> Start {
+    let g = robot.opt.gravity;
+    let gmag = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
+    let free = robot.joints.iter().find(|j| j.jtype == JointType::Free);
+    Start {
+        floor: (0..robot.geoms.len()).any(|g| is_ground(robot, g)),
+        free_base: free.is_some(),
+        weight: robot.bodies.iter().map(|b| b.mass).sum::<f64>() * gmag,
+        base_z0: free.map(|j| robot.key.qpos.get(j.qposadr + 2).copied().unwrap_or(0.0)),
+    }
+}
+
+/// The largest drop of a base at keyframe height `base_height` that still counts as upright, m.
+pub fn max_drop(base_height: f64) -> f64 {
+    (MAX_DROP * base_height).max(MIN_DROP_ALLOWED)
+}
+
+/// The figures of one run that the stance preconditions judge.
+#[derive(Debug, Clone, Copy)]
+pub struct Figures {
+    pub floor: bool,
+    pub diverged: bool,
+    pub free_base: bool,
+    pub weight: f64,
+    pub support_load: f64,
+    pub base_tilt_deg: f64,
+    pub base_drop: f64,
+    pub base_height: f64,
+}
+
+/// How a probe words its preconditions: the run's finite / diverged sentences, why a fixed base
+/// fails it, when the load was measured ("after 1 s standing") and when the base was judged
+/// upright ("" or "after the push ").
+pub struct Words {
+    pub finite: &'static str,
+    pub diverged: &'static str,
+    pub fixed_base: &'static str,
+    pub loaded_when: &'static str,
+    pub upright_when: &'static str,
+}
+
+/// The stance preconditions of a run, in order: floor, settled, free_base, feet_loaded, upright.
+pub fn preconditions(f: &Figures, w: &Words) -> super::Preconditions {
+    let share = if f.weight > 0.0 { f.support_load / f.weight } else { 0.0 };
+    let max_drop = max_drop(f.base_height);
+    let n = crate::util::fmt_num;
+    super::Preconditions::new()
+        .check(
+            "floor",
+            f.floor,
+            if f.floor {
+                "the model has a floor".to_string()
+            } else {
+                "the model has no floor (no colliding plane, height field or box on the world body): lint the scene that includes the robot".to_string()
+            },
+        )
+        .check("settled", !f.diverged, if f.diverged { w.diverged } else { w.finite })
+        .check(
+            "free_base",
+            f.free_base,
+            if f.free_base { "the base is free-floating" } else { w.fixed_base },
+        )
+        .check(
+            "feet_loaded",
+            share >= MIN_SUPPORT,
+            format!(
+                "the floor carries {} % of the robot's weight {} (need ≥ {} %)",
+                n(100.0 * share, 3),
+                w.loaded_when,
+                n(100.0 * MIN_SUPPORT, 3)
+            ),
+        )
+        .check(
+            "upright",
+            f.base_tilt_deg <= MAX_TILT_DEG && f.base_drop <= max_drop,
+            format!(
+                "{}the base tilted {}° and dropped {} m (upright: ≤ {}°, ≤ {} m)",
+                w.upright_when,
+                n(f.base_tilt_deg, 3),
+                n(f.base_drop, 3),
+                n(MAX_TILT_DEG, 3),
+                n(max_drop, 3)
+            ),
+        )
+}
