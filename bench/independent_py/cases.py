@@ -165,3 +165,9 @@ CASES.update({
     "K10_shank_com_shift": dict(CHAIN_L, seed=81, effects={"bodies": {"shank": {
         "joint": "knee", "com_shift": [0.03, 0.0, -0.04]}}}),
 })
+# Reduced chainsim cases for `make test` (tests/independent_chain.rs; recordings committed in
+# fixtures/independent_py/): 4 episodes × 4 s, the last held out.
+CHAIN_R = dict(CHAIN_L, episodes=4, seconds=4.0, heldout=[3])
+CASES["KR0_leg_none"] = dict(CHAIN_R, seed=90, effects={})
+CASES["KR1_shank_payload"] = dict(CHAIN_R, seed=91, effects={"bodies": {"shank": {
+    "joint": "knee", "payload": {"mass": 0.6, "pos": [0.0, 0.0, -0.25]}}}})
