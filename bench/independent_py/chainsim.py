@@ -237,7 +237,7 @@ class Robot:
         return np.concatenate([q0, np.zeros(self.n), qm, np.zeros(len(self.back))])
 
 
-def run_episode(robot, links, cfg, eff, rng, seconds, ep_idx, split, out_csv, t0_ctrl):
+def run_episode(robot, links, cfg, rng, seconds, ep_idx, split, out_csv, t0_ctrl):
     joints = [l["joint"] for l in links]
     nj = len(joints)
     centre = [l["key"] for l in links]
@@ -334,7 +334,7 @@ def main(case, cases, models):
     eps = []
     for e in range(n):
         split = "heldout" if e in heldout else "train"
-        eps.append(run_episode(robot, links, cfg, eff, rng, secs, e, split,
+        eps.append(run_episode(robot, links, cfg, rng, secs, e, split,
                                os.path.join(out, "episodes", f"ep_{e:02d}.csv"), cfg["t0_ctrl"]))
     truth = {"case": case, "simulator": "chainsim.py", "model": mcfg["xml"],
              "joints": [l["joint"] for l in links], "effects": eff, "resolved": resolved,
