@@ -138,3 +138,36 @@ CASES["L15_shank_inertia"] = dict(model="leg3", seed=31,
 # Humanoid legs: the same 1.5 kg payload on both shanks (a mirror pair of bodies; kp 250 knees).
 CASES["H17_shanks_payload"] = dict(H12_EP, seed=58, effects={"bodies": {
     s + "_shank": {"payload": {"mass": 1.5, "pos": [0.0, 0.0, -0.3]}} for s in ("left", "right")}})
+# ---- chainsim.py (`sim: chain`): the robot is the numpy planar-chain simulator with its own
+# physics, not MuJoCo (its header says what it models). The hard classes of issues 46 and 48:
+# backlash (a motor behind a gear play), Stribeck against Coulomb friction on a light servo,
+# armature on every joint, a payload and a centre-of-mass shift, and controls of several seeds.
+MODELS["leg3_chain"] = dict(MODELS["leg3"], chain="leg3", key=[-0.4, 0.8, -0.4])
+MODELS["pendulum_chain"] = dict(xml="../../../fixtures/synth/pendulum_servo.xml", chain="pendulum",
+                                joints=["servo"], robot="pendulum_servo", key=[0.0], amp=[0.4],
+                                t0_ctrl=0.0043, **STD)
+CHAIN_P = dict(sim="chain", model="pendulum_chain")
+CHAIN_L = dict(sim="chain", model="leg3_chain")
+STRIBECK = {"static": 0.06, "dynamic": 0.03, "v_stribeck": 0.2}
+CASES.update({
+    "K0_pend_none": dict(CHAIN_P, seed=71, effects={}),
+    "K1_pend_none": dict(CHAIN_P, seed=72, effects={}),
+    # the same commands (seed) with Stribeck friction and with Coulomb friction at its sliding level
+    "K2_pend_stribeck": dict(CHAIN_P, seed=73, effects={"joints": {"servo": {"stribeck": STRIBECK}}}),
+    "K3_pend_coulomb": dict(CHAIN_P, seed=73, effects={"joints": {"servo": {"frictionloss": 0.03}}}),
+    "K4_leg_none": dict(CHAIN_L, seed=75, effects={}),
+    "K5_leg_none": dict(CHAIN_L, seed=76, effects={}),
+    "K6_knee_backlash": dict(CHAIN_L, seed=77, effects={"joints": {"knee": {"backlash": 0.04}}}),
+    "K7_all_backlash": dict(CHAIN_L, seed=78, effects={"joints": {j: {"backlash": 0.03} for j in ALL3}}),
+    "K8_all_armature": dict(CHAIN_L, seed=79, effects={"joints": {j: {"armature": 0.06} for j in ALL3}}),
+    "K9_shank_payload": dict(CHAIN_L, seed=80, effects={"bodies": {"shank": {
+        "joint": "knee", "payload": {"mass": 0.6, "pos": [0.0, 0.0, -0.25]}}}}),
+    "K10_shank_com_shift": dict(CHAIN_L, seed=81, effects={"bodies": {"shank": {
+        "joint": "knee", "com_shift": [0.03, 0.0, -0.04]}}}),
+})
+# Reduced chainsim cases for `make test` (tests/independent_chain.rs; recordings committed in
+# fixtures/independent_py/): 4 episodes × 4 s, the last held out.
+CHAIN_R = dict(CHAIN_L, episodes=4, seconds=4.0, heldout=[3])
+CASES["KR0_leg_none"] = dict(CHAIN_R, seed=90, effects={})
+CASES["KR1_shank_payload"] = dict(CHAIN_R, seed=91, effects={"bodies": {"shank": {
+    "joint": "knee", "payload": {"mass": 0.6, "pos": [0.0, 0.0, -0.25]}}}})

@@ -4,7 +4,10 @@
 # ../shared/data/recordings/independent_arm2 (100 Hz controller with a phase, ~88 Hz jittered
 # asynchronous recorder, 0.5 mrad noise, 12-bit encoder, 0.5 % dropped rows, 2 s unrecorded
 # settle), `modellint fit` sees only the nominal model and the CSVs, and score.py compares its
-# JSON with the truth the simulator wrote into its MjModel.
+# JSON with the truth the simulator wrote into its MjModel. Cases with `sim: "chain"` (K*) are
+# recorded instead by chainsim.py, a numpy planar-chain simulator with its own physics (backlash
+# behind a motor, Stribeck friction, body effects composed by hand); `chainsim.py --selftest`
+# checks its physics.
 #
 # usage: bench/independent_py/run.sh [CASE...]      (default: every case; ~15–30 min on 2 cores)
 # Needs python3 with venv and PyPI (mujoco==3.17.0, numpy) — skips with a message otherwise.
@@ -31,7 +34,9 @@ if [ $# -eq 0 ]; then
 fi
 export INDEP_OUT="$out"
 for c in "$@"; do
-  "$venv/bin/python" "$here/realsim.py" "$c" >/dev/null || { echo "$c: recording failed"; continue; }
+  # `sim: chain` cases are recorded by chainsim.py (own numpy physics), the others by realsim.py
+  sim=$("$venv/bin/python" -c "import sys; sys.path.insert(0, '$here'); from cases import CASES; print('chainsim' if CASES.get('$c', {}).get('sim') == 'chain' else 'realsim')")
+  "$venv/bin/python" "$here/$sim.py" "$c" >/dev/null || { echo "$c: recording failed"; continue; }
   extra=$("$venv/bin/python" -c "import sys; sys.path.insert(0, '$here'); from cases import CASES; print(' '.join(CASES['$c'].get('fit_args', [])))")
   s=$(date +%s.%N)
   # shellcheck disable=SC2086

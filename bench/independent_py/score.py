@@ -6,7 +6,8 @@ usage: score.py OUT_DIR CASE...   (reads OUT_DIR/data/CASE/truth.json and OUT_DI
 The truth is what realsim.py wrote into its MjModel (truth.json `effects`), mapped to the fit's
 effect ids: damping → viscous_damping, armature → armature, frictionloss → coulomb_friction,
 stiffness → joint_stiffness, kp_scale / kd_scale → gain_error, offset → position_offset,
-delay → action_delay; a body's payload → link_mass (added_mass; offset = the payload's distance
+delay → action_delay, backlash (total play) → backlash, stribeck → stribeck_friction (static,
+dynamic, v_stribeck); a body's payload → link_mass (added_mass; offset = the payload's distance
 from the modelled centre of mass along the link, the direction from the joint to that centre), a
 body's centre-of-mass shift → com_offset (along that direction; across = joint axis × it), both on
 the joint whose child the body is. A case passes when every concealed (effect, joint) is reported, nothing
@@ -22,7 +23,7 @@ import sys
 MAP = {"damping": ("viscous_damping", "damping"), "armature": ("armature", "armature"),
        "frictionloss": ("coulomb_friction", "frictionloss"),
        "stiffness": ("joint_stiffness", "stiffness"), "offset": ("position_offset", "offset_rad"),
-       "delay": ("action_delay", "delay_s")}
+       "delay": ("action_delay", "delay_s"), "backlash": ("backlash", "backlash_rad")}
 
 
 def truth_pairs(eff):
@@ -33,6 +34,8 @@ def truth_pairs(eff):
             if k in ("kp_scale", "kd_scale"):
                 g = out.setdefault(("gain_error", j), {"kp_scale": 1.0, "kd_scale": 1.0})
                 g[k] = v
+            elif k == "stribeck":  # chainsim.py: {static, dynamic, v_stribeck}, the fit's names
+                out[("stribeck_friction", j)] = dict(v)
             else:
                 eid, p = MAP[k]
                 out[(eid, j)] = {p: v}
