@@ -381,11 +381,11 @@ pub fn expand_inputs(inputs: &[PathBuf]) -> Result<Inputs, RecordingError> {
             }
             if files.is_empty() {
                 let why = if skipped.is_empty() {
-                    "directory holds no recordings (*.csv, *.json, *.npz, *.parquet, *.mcap)"
+                    "directory holds no recordings (*.csv, *.json, *.npz, *.pt, *.parquet, *.mcap)"
                         .to_string()
                 } else {
                     format!(
-                        "directory holds no recordings (*.csv, *.json, *.npz, *.parquet, *.mcap; {} JSON file(s) there \
+                        "directory holds no recordings (*.csv, *.json, *.npz, *.pt, *.parquet, *.mcap; {} JSON file(s) there \
                          are not BAM logs)",
                         skipped.len()
                     )
@@ -403,8 +403,8 @@ pub fn expand_inputs(inputs: &[PathBuf]) -> Result<Inputs, RecordingError> {
     Ok(out)
 }
 
-/// The `*.csv` files and BAM `*.json` logs directly in `dir`, sorted, and the other `*.json`
-/// files there.
+/// The recordings (`*.csv`, `*.npz`, `*.pt`, `*.parquet`, `*.mcap`, BAM `*.json`) directly in
+/// `dir`, sorted, and the other `*.json` files there.
 fn recording_files(dir: &Path) -> Result<(Vec<PathBuf>, Vec<PathBuf>), RecordingError> {
     let rd = std::fs::read_dir(dir)
         .map_err(|e| RecordingError::new(dir, None, None, format!("cannot read directory: {e}")))?;
@@ -415,7 +415,7 @@ fn recording_files(dir: &Path) -> Result<(Vec<PathBuf>, Vec<PathBuf>), Recording
             continue;
         }
         let Some(ext) = f.extension() else { continue };
-        if ["csv", "npz", "parquet", "mcap"].iter().any(|e| ext.eq_ignore_ascii_case(e)) {
+        if ["csv", "npz", "pt", "pth", "parquet", "mcap"].iter().any(|e| ext.eq_ignore_ascii_case(e)) {
             files.push(f);
         } else if ext.eq_ignore_ascii_case("json") {
             // Unreadable files are kept: reading them reports the error at the file.

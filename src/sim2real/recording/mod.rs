@@ -27,9 +27,11 @@ mod lerobot;
 pub mod logs;
 pub mod mapping;
 pub mod npy;
+mod pickle;
 mod rosbag;
 #[cfg(test)]
 mod tests;
+mod torch_pt;
 mod units;
 mod write;
 
