@@ -415,3 +415,44 @@ fn files_of_the_wrong_kind_are_named() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A recording with a command and no control rate is replayed with each goal held from its
+/// row's time; `gap` and `fit` say so (stderr and JSON `warnings`), with the interval of the
+/// command's changes, and stay silent once the rate is given or `control_rate_hz: none` is
+/// declared. The CSVs are fixtures/pt/arm3_damping's with the rate line taken out by plain
+/// string handling.
+#[test]
+fn a_log_without_control_rate_is_a_warning() {
+    let dir = tmp("norate");
+    let src = root().join("fixtures/pt/arm3_damping/csv");
+    let (bare, none) = (dir.join("bare"), dir.join("none"));
+    for d in [&bare, &none] {
+        std::fs::create_dir_all(d).unwrap();
+    }
+    for ep in ["ep_00.csv", "ep_01.csv", "ep_02.csv"] {
+        let text = std::fs::read_to_string(src.join(ep)).unwrap();
+        assert!(text.starts_with("# control_rate_hz: 100\n"), "{ep}");
+        let body = &text["# control_rate_hz: 100\n".len()..];
+        std::fs::write(bare.join(ep), body).unwrap();
+        std::fs::write(none.join(ep), format!("# control_rate_hz: none\n{body}")).unwrap();
+    }
+    let warned = |v: &Value| {
+        v["warnings"].as_array().is_some_and(|w| {
+            w.iter().any(|x| x.as_str().unwrap().contains("have a command but no control rate"))
+        })
+    };
+    let m = model();
+    let o = run(&["gap", m.to_str().unwrap(), bare.to_str().unwrap(), "--format", "json"]);
+    let (v, err) = (json_of(&o), String::from_utf8_lossy(&o.stderr).into_owned());
+    assert!(warned(&v), "{v:#}");
+    assert!(err.contains("3 of 3 recordings have a command but no control rate"), "{err}");
+    // The recorder's rows (≈ 87 Hz) are slower than the 100 Hz controller: the command changes
+    // at nearly every row, every 11.5 ms (median).
+    assert!(err.contains("changes every 11.5 ms") && err.contains("--control-hz"), "{err}");
+    assert!(warned(&fit(&[&bare], &[])));
+    // Given or declared: no warning.
+    assert!(!warned(&gap(&[&bare], &["--control-hz", "100"])));
+    assert!(!warned(&gap(&[&none], &[])));
+    assert!(!warned(&gap(&[&src], &[])));
+    let _ = std::fs::remove_dir_all(&dir);
+}

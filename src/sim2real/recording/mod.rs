@@ -51,6 +51,9 @@ pub const KEY_TIME_OFFSET: &str = "time_offset_s";
 
 /// Metadata key parsed into [`Recording::control_rate_hz`].
 pub const KEY_CONTROL_RATE: &str = "control_rate_hz";
+/// `control_rate_hz: none`: the log declares that no control loop paces its commands (each
+/// acts from its own row's time, as a servo takes goals as they arrive); kept in the metadata.
+pub const RATE_NONE: &str = "none";
 /// Metadata key parsed into [`Recording::control_t0_s`].
 pub const KEY_CONTROL_T0: &str = "control_t0_s";
 
