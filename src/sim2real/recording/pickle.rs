@@ -403,7 +403,7 @@ fn opcode_name(op: u8) -> &'static str {
         b'i' | b'o' => "INST/OBJ: makes a class instance",
         b'P' => "PERSID",
         b'I' | b'L' | b'F' | b'S' | b'V' => "a text-mode (protocol 0) opcode",
-        0x8f | 0x90 | 0x91 => "a set opcode",
+        0x8f..=0x91 => "a set opcode",
         0x97 | 0x98 => "an out-of-band buffer",
         _ => "unknown",
     }

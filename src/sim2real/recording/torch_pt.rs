@@ -11,6 +11,9 @@ use std::rc::Rc;
 use super::npy::{NpyArray, NpyData};
 use super::pickle::{Dtype, TensorRef, Value, unpickle};
 
+/// A storage's bytes by its key (each member read once).
+type Loader<'a> = dyn FnMut(&str) -> Result<Rc<Vec<u8>>, String> + 'a;
+
 /// The format's name in messages and `source_format`.
 pub const FORMAT: &str = "PyTorch .pt";
 
@@ -74,7 +77,7 @@ pub fn parse_pt(bytes: &[u8]) -> Result<Vec<(String, NpyArray)>, String> {
 /// The named arrays of an unpickled root (a dict), storages from `load`.
 fn arrays_of(
     root: &Value,
-    load: &mut dyn FnMut(&str) -> Result<Rc<Vec<u8>>, String>,
+    load: &mut Loader<'_>,
     big: bool,
 ) -> Result<Vec<(String, NpyArray)>, String> {
     if !matches!(root, Value::Dict(_)) {
@@ -109,7 +112,7 @@ fn what(v: &Value) -> &'static str {
 /// Walks the unpickled object: the storages' loader, their byte order, and a budget of values
 /// visited (a list or dict that holds itself many times is an error, not a long walk).
 struct Walk<'a> {
-    load: &'a mut dyn FnMut(&str) -> Result<Rc<Vec<u8>>, String>,
+    load: &'a mut Loader<'a>,
     big: bool,
     budget: usize,
 }
