@@ -1,5 +1,6 @@
 //! Readers of real log formats, each on files written in the test by the format's own Python
-//! library (tests/py/write_logs.py: numpy, pyarrow, mcap + mcap-ros2-support), from a
+//! library (tests/py/write_logs.py: numpy, pyarrow, mcap + mcap-ros2-support; PyTorch files,
+//! written by the same script with torch, are committed under fixtures/pt), from a
 //! `modellint synth` dataset read there with Python's csv module. Each format must give the
 //! same `gap` (and `fit`) as the equivalent CSV the same script writes. Skips visibly when
 //! python3 or the library is missing (`scripts/setup-py-fixtures.sh` installs them into
@@ -172,6 +173,35 @@ fn npz_in_degrees_gives_the_csv_gap_and_fit() {
     let d = gap(&[&csv.join("ep_00.csv")], &[]);
     same(&d, &c, 1e-9, "convert");
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// PyTorch `.pt` dicts written by torch.save (fixtures/pt/arm3_damping, committed: torch is too
+/// large for CI): a strided `dof_pos`, a list of per-row tensors as `des_dof_pos`, names and
+/// rate in the dict. The directory of .pt files gives the gap and the fit of the equivalent CSV
+/// the same script wrote, and the concealed elbow damping is recovered.
+#[test]
+fn pt_dicts_give_the_csv_gap_and_fit() {
+    let fx = root().join("fixtures/pt/arm3_damping");
+    let (csv, pt) = (fx.join("csv"), fx.join("pt"));
+    same(&gap(&[&csv], &[]), &gap(&[&pt], &[]), 1e-12, "gap");
+    let (fa, fb) = (fit(&[&csv], &[]), fit(&[&pt], &[]));
+    let (da, db) = (damping(&fa), damping(&fb));
+    assert!((da - 0.3).abs() < 0.06, "csv fit {da}");
+    assert_eq!(da, db, "pt fit vs csv fit");
+    for k in ["missing_physics", "before", "after"] {
+        same(&fa[k], &fb[k], 1e-12, k);
+    }
+    // The mapping flags apply as to an .npz: the command named by key.
+    let o = run(&[
+        "gap",
+        model().to_str().unwrap(),
+        pt.join("ep_00.pt").to_str().unwrap(),
+        "--log-command",
+        "q_target",
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("no array 'q_target'") && err.contains("des_dof_pos"), "{err}");
 }
 
 /// A LeRobot dataset (pyarrow: every episode in one parquet file, meta/info.json with fps and
@@ -368,36 +398,61 @@ fn files_of_the_wrong_kind_are_named() {
     let bag = dir.join("run.bag");
     std::fs::write(&bag, b"#ROSBAG V2.0\n\0\0\0").unwrap();
     assert!(gap_err(&bag).contains("is a ROS 1 bag"));
-    // numpy.save (one array) and a torch.save file (torch when installed, else a zip laid
-    // out as torch.save writes it: archive/data.pkl beside the tensors' storage).
-    let py = r#"
-import sys, zipfile, pickle
-out = sys.argv[1]
-try:
-    import numpy as np
-    np.save(out + "/one.npy", np.zeros((4, 2)))
-except ImportError:
-    pass
-try:
-    import torch
-    torch.save({"dof_pos": torch.zeros(4, 2)}, out + "/run.pt")
-except ImportError:
-    with zipfile.ZipFile(out + "/run.pt", "w") as z:
-        z.writestr("archive/data.pkl", pickle.dumps({"dof_pos": [0.0]}))
-        z.writestr("archive/version", "3\n")
-"#;
+    // A legacy-format torch.save file (fixtures/pt, written by torch) is named as such.
+    let err = gap_err(&root().join("fixtures/pt/legacy.pt"));
+    assert!(err.contains("legacy.pt is a PyTorch file of the legacy format"), "{err}");
+    // A torch.save whose pickle calls numpy: the global is named, nothing is run.
+    let err = gap_err(&root().join("fixtures/pt/numpy_inside.pt"));
+    assert!(err.contains("PyTorch .pt") && err.contains("_reconstruct"), "{err}");
+    // numpy.save (one array).
+    let py = "import sys, numpy as np; np.save(sys.argv[1] + '/one.npy', np.zeros((4, 2)))";
     match Command::new(python()).args(["-c", py]).arg(&dir).output() {
         Ok(o) if o.status.success() => {
-            let err = gap_err(&dir.join("run.pt"));
-            assert!(err.contains("run.pt is a PyTorch file"), "{err}");
-            if dir.join("one.npy").is_file() {
-                let err = gap_err(&dir.join("one.npy"));
-                assert!(err.contains("is a single NumPy array"), "{err}");
-            } else {
-                eprintln!("skipping .npy: numpy not installed");
-            }
+            let err = gap_err(&dir.join("one.npy"));
+            assert!(err.contains("is a single NumPy array"), "{err}");
         }
-        _ => eprintln!("skipping .pt/.npy: cannot run {}", python().display()),
+        _ => eprintln!("skipping .npy: numpy not installed for {}", python().display()),
     }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A recording with a command and no control rate is replayed with each goal held from its
+/// row's time; `gap` and `fit` say so (stderr and JSON `warnings`), with the interval of the
+/// command's changes, and stay silent once the rate is given or `control_rate_hz: none` is
+/// declared. The CSVs are fixtures/pt/arm3_damping's with the rate line taken out by plain
+/// string handling.
+#[test]
+fn a_log_without_control_rate_is_a_warning() {
+    let dir = tmp("norate");
+    let src = root().join("fixtures/pt/arm3_damping/csv");
+    let (bare, none) = (dir.join("bare"), dir.join("none"));
+    for d in [&bare, &none] {
+        std::fs::create_dir_all(d).unwrap();
+    }
+    for ep in ["ep_00.csv", "ep_01.csv", "ep_02.csv"] {
+        let text = std::fs::read_to_string(src.join(ep)).unwrap();
+        assert!(text.starts_with("# control_rate_hz: 100\n"), "{ep}");
+        let body = &text["# control_rate_hz: 100\n".len()..];
+        std::fs::write(bare.join(ep), body).unwrap();
+        std::fs::write(none.join(ep), format!("# control_rate_hz: none\n{body}")).unwrap();
+    }
+    let warned = |v: &Value| {
+        v["warnings"].as_array().is_some_and(|w| {
+            w.iter().any(|x| x.as_str().unwrap().contains("have a command but no control rate"))
+        })
+    };
+    let m = model();
+    let o = run(&["gap", m.to_str().unwrap(), bare.to_str().unwrap(), "--format", "json"]);
+    let (v, err) = (json_of(&o), String::from_utf8_lossy(&o.stderr).into_owned());
+    assert!(warned(&v), "{v:#}");
+    assert!(err.contains("3 of 3 recordings have a command but no control rate"), "{err}");
+    // The recorder's rows (≈ 87 Hz) are slower than the 100 Hz controller: the command changes
+    // at nearly every row, every 11.5 ms (median).
+    assert!(err.contains("changes every 11.5 ms") && err.contains("--control-hz"), "{err}");
+    assert!(warned(&fit(&[&bare], &[])));
+    // Given or declared: no warning.
+    assert!(!warned(&gap(&[&bare], &["--control-hz", "100"])));
+    assert!(!warned(&gap(&[&none], &[])));
+    assert!(!warned(&gap(&[&src], &[])));
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -29,6 +29,9 @@ from ._types import (
     Findings,
     FitProgress,
     FitResult,
+    Fold,
+    HeldOutEpisode,
+    RotationResult,
     GapResult,
     JointGap,
     Label,
@@ -56,6 +59,9 @@ __all__ = [
     "GapResult",
     "JointGap",
     "FitResult",
+    "RotationResult",
+    "Fold",
+    "HeldOutEpisode",
     "Effect",
     "FitProgress",
     "ModellintError",
@@ -224,7 +230,7 @@ def fit(
     spec: Optional[PathLike] = None,
     progress: Progress = None,
     **options: Any,
-) -> FitResult:
+) -> Union[FitResult, RotationResult]:
     """Names the physics the model is missing from `recordings`, fits it and measures the
     held-out improvement, as `modellint fit MODEL RECORDINGS --format json`. `recordings` as for
     `gap`. `options`: the CLI's flags — `effects=[...]`, `joints="*knee*"`,
@@ -232,6 +238,12 @@ def fit(
     `window`, `start_estimate`, `write_model`, `write_actuators`, `report`, the replay options of
     `gap`. `progress`: a callable given a FitProgress (round, phase, candidate, rollouts) as the
     search goes; None shows a tqdm bar when tqdm is installed; False nothing.
+
+    `holdout_by="KEY"` (no `=VALUE`) holds out every value of the metadata KEY in turn, one fit
+    per value, as `fit --holdout-by KEY`: the result is then a RotationResult.
+
+    Ctrl-C (KeyboardInterrupt) stops the fit within about a second and is raised; so is an
+    exception the progress callback raises (the fit stops at once).
 
     `FitResult.write_model(path)` writes the fitted model afterwards."""
     with tempfile.TemporaryDirectory(prefix="modellint-") as tmp:
@@ -242,6 +254,7 @@ def fit(
             out, native = _call(_native.fit, argv, rep.callback(), recordings=written)
         finally:
             rep.close()
-    result = FitResult.from_json(json.loads(out), native)
+    d = json.loads(out)
+    result = RotationResult.from_json(d) if "holdout_by" in d else FitResult.from_json(d, native)
     _warn(result.warnings)
     return result

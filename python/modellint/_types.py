@@ -344,3 +344,79 @@ class FitResult:
             return list(self._native.write_model(str(path)))
         except _native.NativeError as e:
             raise errors.from_native(e) from None
+
+
+# ---------------------------------------------------------------- holdout_by rotation
+
+
+@dataclass(frozen=True)
+class HeldOutEpisode:
+    """One held-out episode of a rotation fold: its position MAE [rad] without and with the
+    fold's effects."""
+
+    source: str
+    position_mae_before: float
+    position_mae_after: float
+
+
+@dataclass(frozen=True)
+class Fold:
+    """One fold of `holdout_by="KEY"`: the selection run with KEY = `value` held out."""
+
+    value: str
+    train: int
+    effects: Tuple[Tuple[str, Tuple[str, ...], Dict[str, float]], ...]
+    heldout: Tuple[HeldOutEpisode, ...]
+    position_mae_before: float
+    position_mae_after: float
+    warnings: Tuple[str, ...]
+    notes: Tuple[str, ...]
+    raw: Dict[str, Any] = field(repr=False, compare=False)
+
+    @classmethod
+    def from_json(cls, d: dict) -> "Fold":
+        return cls(
+            value=d["value"],
+            train=d["train"],
+            effects=tuple((s["effect"], tuple(s["joints"]), dict(s["params"])) for s in d["selected"]),
+            heldout=tuple(
+                HeldOutEpisode(e["source"], e["position_mae_before"], e["position_mae_after"])
+                for e in d["heldout"]
+            ),
+            position_mae_before=d["position_mae_before"],
+            position_mae_after=d["position_mae_after"],
+            warnings=tuple(d.get("warnings") or ()),
+            notes=tuple(d.get("notes") or ()),
+            raw=d,
+        )
+
+
+@dataclass(frozen=True)
+class RotationResult:
+    """`fit(..., holdout_by="KEY")` (the CLI's `fit --holdout-by KEY`): every value of KEY held
+    out in turn, one fit per value; the held-out position MAE [rad] before → after, per fold and
+    averaged over every episode (each held out once). Nothing to write: a model comes from one
+    fit (`holdout_by="KEY=VALUE"`)."""
+
+    holdout_by: str
+    folds: Tuple[Fold, ...]
+    position_mae_before: float
+    position_mae_after: float
+    episodes: int
+    raw: Dict[str, Any] = field(repr=False, compare=False)
+
+    @property
+    def warnings(self) -> Tuple[str, ...]:
+        """Every fold's warnings, each prefixed `KEY = VALUE: ` (as the CLI prints them)."""
+        return tuple(f"{self.holdout_by} = {f.value}: {w}" for f in self.folds for w in f.warnings)
+
+    @classmethod
+    def from_json(cls, d: dict) -> "RotationResult":
+        return cls(
+            holdout_by=d["holdout_by"],
+            folds=tuple(Fold.from_json(f) for f in d["folds"]),
+            position_mae_before=d["position_mae_before"],
+            position_mae_after=d["position_mae_after"],
+            episodes=d["episodes"],
+            raw=d,
+        )

@@ -314,6 +314,9 @@ pub fn fit_once(
     let replay = &p.opts.replay;
     let opts = FitOptions { progress, ..p.opts.clone() };
     let mut out = fit(robot, &p.recs, &opts);
+    if opts.cancel.as_ref().is_some_and(|c| c.is_set()) {
+        return Err(CmdError::Message("the fit was cancelled".into()));
+    }
     searched();
     // Kept effects at the model's own value within their uncertainty are not missing physics.
     let within = crate::fit::absent::split_off(robot, &mut out.selected);

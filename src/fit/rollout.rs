@@ -51,6 +51,8 @@ pub struct RolloutStats {
 /// The rollout service of one `fit` run (shared by every phase of the search).
 pub struct Rollouts<'r> {
     robot: &'r Robot,
+    /// When set, every replay fails at once (a cancelled fit).
+    cancel: Option<crate::fit::select::Cancel>,
     rollouts: AtomicUsize,
     batches: AtomicUsize,
     nanos: AtomicU64,
@@ -62,11 +64,22 @@ impl<'r> Rollouts<'r> {
     pub fn new(robot: &'r Robot) -> Self {
         Rollouts {
             robot,
+            cancel: None,
             rollouts: AtomicUsize::new(0),
             batches: AtomicUsize::new(0),
             nanos: AtomicU64::new(0),
             sim_us: AtomicU64::new(0),
         }
+    }
+
+    /// The service stops replaying (each replay `None`) once `cancel` is set.
+    pub fn with_cancel(mut self, cancel: Option<crate::fit::select::Cancel>) -> Self {
+        self.cancel = cancel;
+        self
+    }
+
+    fn cancelled(&self) -> bool {
+        self.cancel.as_ref().is_some_and(|c| c.is_set())
     }
 
     pub fn robot(&self) -> &'r Robot {
@@ -102,6 +115,9 @@ impl<'r> Rollouts<'r> {
         let eps: Vec<Option<Episode>> = jobs
             .par_iter()
             .map(|&(s, e)| {
+                if self.cancelled() {
+                    return None;
+                }
                 replay_with(self.robot, &models[s], &recs[e], sets[s].applied, opts)
                     .ok()
                     .filter(|ep| ep.diverged.is_none())
@@ -136,6 +152,9 @@ impl<'r> Rollouts<'r> {
         applied: &[Applied],
         opts: &ReplayOptions,
     ) -> Option<Episode> {
+        if self.cancelled() {
+            return None;
+        }
         let t0 = Instant::now();
         let ep = replay_with(self.robot, model, rec, applied, opts)
             .ok()

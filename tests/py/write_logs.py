@@ -9,6 +9,10 @@ read here with Python's csv module, not with modellint. Written under OUT_DIR:
                       mcap also control_t0_s = the first command's stamp)
 * npz  (numpy):       npz/NAME.npz with t, dof_pos, des_dof_pos, dof_vel (time x joint) in
                       DEGREES, joint_names, a scalar control_rate_hz
+* pt   (torch):       pt/NAME.pt, torch.save of a dict: time (float64 tensor), dof_pos (a
+                      non-contiguous float64 view: the transpose of a joint x time tensor),
+                      des_dof_pos (a list of per-row float64 tensors, as a logger appends them),
+                      dof_vel, joint_names (list of str), control_rate_hz (float); radians
 * lerobot (pyarrow):  lerobot/meta/info.json (fps, names "main_<joint>") and
                       lerobot/data/chunk-000/file-000.parquet, every episode in one file
 * lerobot32:          the same with the timestamp column in float32, as LeRobot writes it
@@ -62,6 +66,8 @@ def main():
     try:
         if fmt == "npz":
             import numpy as np
+        elif fmt == "pt":
+            import torch
         elif fmt in ("lerobot", "lerobot32"):
             import pyarrow as pa
             import pyarrow.parquet as pq
@@ -91,6 +97,17 @@ def main():
                      des_dof_pos=np.array(qc) * deg, dof_vel=np.array(qd) * deg,
                      joint_names=np.array(joints),
                      control_rate_hz=np.float64(meta["control_rate_hz"]))
+        elif fmt == "pt":
+            write_equiv(os.path.join(out, "csv"), name, meta, cols, joints)
+            os.makedirs(os.path.join(out, "pt"), exist_ok=True)
+            f64 = torch.float64
+            torch.save({"time": torch.tensor(cols["t"], dtype=f64),
+                        "dof_pos": torch.tensor(q, dtype=f64).t().contiguous().t(),
+                        "des_dof_pos": [torch.tensor(r, dtype=f64) for r in qc],
+                        "dof_vel": torch.tensor(qd, dtype=f64),
+                        "joint_names": list(joints),
+                        "control_rate_hz": float(meta["control_rate_hz"])},
+                       os.path.join(out, "pt", name + ".pt"))
         elif fmt in ("lerobot", "lerobot32"):
             write_equiv(os.path.join(out, "csv"), name, meta, cols, joints)
             fps = float(meta["control_rate_hz"])

@@ -10,13 +10,14 @@
 //! option); python/modellint/errors.py turns them into typed exceptions.
 
 use std::path::PathBuf;
-use std::sync::{Arc, Mutex};
-use std::time::Instant;
+use std::sync::{Arc, Mutex, mpsc};
+use std::time::{Duration, Instant};
 
 use clap::Parser;
 use modellint::cli::{Cli, Cmd};
 use modellint::error::{CmdError, LoadError};
-use modellint::fit::select::{Progress, ProgressInfo, Selected};
+use modellint::fit::cmd_rotate::{rotate_run, rotation_json};
+use modellint::fit::select::{Cancel, Progress, ProgressInfo, Selected};
 use modellint::sink::{Silent, Sink};
 use pyo3::create_exception;
 use pyo3::exceptions::PyException;
@@ -57,16 +58,17 @@ fn parse(argv: Vec<String>) -> PyResult<Cli> {
 }
 
 /// A Python progress callback, called with a dict; the first exception it raises is kept (and
-/// raised when the work ends) and the callback is not called again.
+/// raised when the work ends), the callback is not called again, and a fit is cancelled.
 #[derive(Clone)]
 struct Callback {
     f: Arc<Py<PyAny>>,
     error: Arc<Mutex<Option<PyErr>>>,
+    cancel: Option<Cancel>,
 }
 
 impl Callback {
     fn new(f: Py<PyAny>) -> Self {
-        Callback { f: Arc::new(f), error: Arc::new(Mutex::new(None)) }
+        Callback { f: Arc::new(f), error: Arc::new(Mutex::new(None)), cancel: None }
     }
     fn call(&self, fill: impl FnOnce(&Bound<'_, PyDict>) -> PyResult<()>) {
         let Ok(mut err) = self.error.lock() else { return };
@@ -77,6 +79,9 @@ impl Callback {
             let d = PyDict::new(py);
             if let Err(e) = fill(&d).and_then(|_| self.f.call1(py, (d,))) {
                 *err = Some(e);
+                if let Some(c) = &self.cancel {
+                    c.set();
+                }
             }
         });
     }
@@ -189,7 +194,8 @@ fn fit(
         return Err(usage("expected `fit` and its arguments"));
     };
     let args = f.into_args();
-    let cb = progress.map(Callback::new);
+    let cancel = Cancel::default();
+    let cb = progress.map(|f| Callback { cancel: Some(cancel.clone()), ..Callback::new(f) });
     let hook = cb.clone().map(|c| {
         let start = Instant::now();
         Progress(Arc::new(move |p: &ProgressInfo| {
@@ -203,23 +209,86 @@ fn fit(
             })
         }))
     });
-    let run = py.detach(move || {
-        let p = modellint::fit::cmd::prepare(&args, &Silent)?;
-        if let Some(key) = &p.rotate_by {
-            return Err(CmdError::Message(format!(
-                "holdout_by=\"{key}\" (every value of `{key}` held out in turn) is the CLI's \
-                 `fit --holdout-by {key}`; the Python API fits once: give holdout_by=\"{key}=VALUE\""
-            )));
+    let flag = cancel.clone();
+    let run = interruptible(py, cancel, move || {
+        let mut p = modellint::fit::cmd::prepare(&args, &Silent)?;
+        p.opts.cancel = Some(flag);
+        if let Some(key) = p.rotate_by.clone() {
+            // `holdout_by="KEY"`: the rotation's JSON; nothing kept to write.
+            let mut fold_progress = |_: Option<&str>| hook.clone();
+            let r = rotate_run(&p, &key, &args, &Silent, &mut fold_progress)?;
+            let json = serde_json::to_string_pretty(&rotation_json(&r))
+                .map_err(|e| CmdError::Message(format!("cannot serialise the result: {e}")))?;
+            let kept = Fitted { model: args.model, spec: args.spec, selected: vec![] };
+            return Ok((json + "\n", kept));
         }
         let r = modellint::fit::cmd::fit_once(&args, &p, &Silent, hook, &|| {})?;
         let json = serde_json::to_string_pretty(&modellint::fit::cmd::fit_json(&r))
             .map_err(|e| CmdError::Message(format!("cannot serialise the result: {e}")))?;
         Ok((json + "\n", Fitted { model: args.model, spec: args.spec, selected: r.out.selected }))
-    });
+    })?;
     if let Some(c) = &cb {
         c.raised()?;
     }
     run.map_err(cmd_error)
+}
+
+/// How often a long run checks for Ctrl-C.
+const SIGNAL_POLL: Duration = Duration::from_millis(100);
+
+/// Runs `work` on a thread of its own while this (the calling, Python's main) thread, without
+/// the GIL, checks Python's signals every [`SIGNAL_POLL`]: on KeyboardInterrupt (or any
+/// exception a signal handler raises) it sets `cancel`, which the fit core polls before each
+/// replay, waits for the work to wind down and raises the exception. Python runs signal
+/// handlers only on its main thread, and only when that thread asks: the work's own threads
+/// (the progress callback is called from them) cannot see a Ctrl-C.
+fn interruptible<T: Send + 'static>(
+    py: Python<'_>,
+    cancel: Cancel,
+    work: impl FnOnce() -> T + Send + 'static,
+) -> PyResult<T> {
+    let (tx, rx) = mpsc::channel();
+    let worker = std::thread::spawn(move || {
+        let _ = tx.send(work());
+    });
+    let mut rx = rx;
+    loop {
+        let (got, back) = py.detach(move || (rx.recv_timeout(SIGNAL_POLL), rx));
+        rx = back;
+        match got {
+            Ok(v) => {
+                let _ = worker.join();
+                return Ok(v);
+            }
+            Err(mpsc::RecvTimeoutError::Timeout) => {
+                if let Err(e) = py.check_signals() {
+                    cancel.set();
+                    py.detach(move || {
+                        let _ = rx.recv();
+                        let _ = worker.join();
+                    });
+                    return Err(e);
+                }
+            }
+            Err(mpsc::RecvTimeoutError::Disconnected) => {
+                let why = match worker.join() {
+                    Err(p) => p
+                        .downcast_ref::<&str>()
+                        .map(|s| s.to_string())
+                        .or_else(|| p.downcast_ref::<String>().cloned())
+                        .unwrap_or_default(),
+                    Ok(()) => String::new(),
+                };
+                return Err(NativeError::new_err((
+                    "run",
+                    format!("internal error: the fit stopped without a result ({why})"),
+                    None::<String>,
+                    None::<usize>,
+                    None::<usize>,
+                )));
+            }
+        }
+    }
 }
 
 #[pymodule]

@@ -107,7 +107,7 @@ impl<'a> Engine<'a> {
             robot,
             opts,
             joints,
-            rollouts: std::sync::Arc::new(Rollouts::new(robot)),
+            rollouts: std::sync::Arc::new(Rollouts::new(robot).with_cancel(opts.cancel.clone())),
             sims: std::sync::atomic::AtomicUsize::new(0),
             fits: Default::default(),
             recent: Default::default(),

@@ -98,6 +98,23 @@ pub struct FitOptions {
     pub told: Vec<(String, Vec<String>)>,
     /// Called at each step of the search (none: silent).
     pub progress: Option<Progress>,
+    /// Set from outside (the Python API on Ctrl-C) to stop the search: every replay after it
+    /// fails at once, so the search runs out within a replay's time; the outcome is then
+    /// meaningless and the caller discards it ([`Cancel::is_set`]).
+    pub cancel: Option<Cancel>,
+}
+
+/// A flag that stops a running fit ([`FitOptions::cancel`]).
+#[derive(Debug, Clone, Default)]
+pub struct Cancel(pub std::sync::Arc<std::sync::atomic::AtomicBool>);
+
+impl Cancel {
+    pub fn set(&self) {
+        self.0.store(true, std::sync::atomic::Ordering::Relaxed);
+    }
+    pub fn is_set(&self) -> bool {
+        self.0.load(std::sync::atomic::Ordering::Relaxed)
+    }
 }
 
 impl FitOptions {
@@ -131,6 +148,7 @@ impl Default for FitOptions {
             policy: SearchPolicy::default(),
             told: vec![],
             progress: None,
+            cancel: None,
         }
     }
 }

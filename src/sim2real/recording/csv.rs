@@ -6,7 +6,7 @@ use std::path::Path;
 
 use super::{
     BASE_SUFFIXES, BaseTrace, JOINT_SUFFIXES, JointTrace, KEY_CONTROL_RATE, KEY_CONTROL_T0,
-    KEY_SPLIT, ParseOptions, Recording, RecordingError, Split,
+    KEY_SPLIT, ParseOptions, RATE_NONE, Recording, RecordingError, Split,
 };
 use crate::sim2real::commands::{self, CommandTiming, KEY_COMMAND_TIMING};
 
@@ -139,6 +139,11 @@ fn parse_metadata(
             || (k == KEY_CONTROL_T0 && m.control_t0_s.is_some())
         {
             return Err(err(format!("duplicate metadata key '{k}'")));
+        }
+        if k == KEY_CONTROL_RATE && v == RATE_NONE {
+            // Declared: no control loop (each command acts from its own row's time).
+            m.meta.insert(k.to_string(), v.to_string());
+            continue;
         }
         if k == KEY_CONTROL_RATE || k == KEY_CONTROL_T0 {
             let x: f64 = v.parse().ok().filter(|x: &f64| x.is_finite()).ok_or_else(|| {

@@ -1,7 +1,7 @@
 //! Which kind of file a recording is (by its first bytes, then its name), and the readers of
-//! logs other than CSV and BAM JSON: NumPy `.npz`, LeRobot parquet, MCAP. A file of a kind that
-//! is not read (a PyTorch `.pt`, a ROS 1 bag, a single `.npy` array, JSON that is not a BAM
-//! log) is named as what it is, with what to do.
+//! logs other than CSV and BAM JSON: NumPy `.npz`, PyTorch `.pt`, LeRobot parquet, MCAP. A file
+//! of a kind that is not read (a ROS 1 bag, a single `.npy` array, a legacy-format `.pt`, JSON
+//! that is not a BAM log) is named as what it is, with what to do.
 
 use std::path::{Path, PathBuf};
 
@@ -17,7 +17,10 @@ pub enum Kind {
     Json,
     Npz,
     Npy,
+    /// `torch.save`'s zip format (read).
     PyTorch,
+    /// `torch.save`'s legacy format: pickles back to back (not read).
+    LegacyPyTorch,
     /// A zip archive of something else.
     Zip,
     Parquet,
@@ -63,7 +66,7 @@ pub fn sniff(path: &Path, bytes: &[u8]) -> Kind {
         return Kind::Hdf5;
     }
     if bytes.first() == Some(&0x80) && matches!(bytes.get(1), Some(2..=5)) {
-        return if ext == "pt" || ext == "pth" { Kind::PyTorch } else { Kind::Pickle };
+        return if ext == "pt" || ext == "pth" { Kind::LegacyPyTorch } else { Kind::Pickle };
     }
     let head = &bytes[..bytes.len().min(4096)];
     if head.contains(&0) {
@@ -77,8 +80,8 @@ pub fn sniff(path: &Path, bytes: &[u8]) -> Kind {
 }
 
 const READ: &str = "modellint reads recordings as CSV (`modellint docs recording-format`), BAM \
-                    servo logs (JSON), NumPy .npz dicts of joint arrays, LeRobot parquet and \
-                    MCAP (ROS 2) files";
+                    servo logs (JSON), NumPy .npz and PyTorch .pt dicts of joint arrays, \
+                    LeRobot parquet and MCAP (ROS 2) files";
 
 /// Reads a log of a binary kind: `None` for text (CSV or JSON, read by the caller), else its
 /// recordings (several for a LeRobot file of several episodes) or an error naming the kind.
@@ -94,7 +97,7 @@ pub fn read_log(
         // A mapping given for a CSV or BAM file would be ignored: an error, not a silence.
         if !opts.log_map.is_empty() {
             return Some(Err(err(format!(
-                "--log-map and the --log-* flags apply to .npz, parquet and MCAP logs; {name} is \
+                "--log-map and the --log-* flags apply to .npz, .pt, parquet and MCAP logs; {name} is \
                  {}: a CSV declares its units with `# units: deg, deg/s` and names its columns \
                  <joint>.q, <joint>.q_cmd",
                 if kind == Kind::Json { "JSON" } else { "CSV text" }
@@ -133,9 +136,12 @@ pub fn read_log(
             "{name} is a single NumPy array (.npy); modellint reads a dict of joint arrays: \
              save one with numpy.savez('run.npz', dof_pos=…, des_dof_pos=…, t=…)"
         ))),
-        Kind::PyTorch => Err(err(format!(
-            "{name} is a PyTorch file (torch.save); it is not read: save its tensors with \
-             numpy.savez('run.npz', **{{k: v.numpy() for k, v in d.items()}}) and read that. {READ}"
+        Kind::PyTorch => one(super::torch_pt::pt_columns(bytes, &map)),
+        Kind::LegacyPyTorch => Err(err(format!(
+            "{name} is a PyTorch file of the legacy format (torch < 1.6, or \
+             _use_new_zipfile_serialization=False); it is not read: save it again with a current \
+             torch.save (the zip format) or as numpy.savez('run.npz', **{{k: v.numpy() for k, v \
+             in d.items()}})"
         ))),
         Kind::Zip => Err(err(format!(
             "{name} is a zip archive of neither .npy arrays nor a PyTorch file. {READ}"
@@ -166,6 +172,7 @@ fn file_name(path: &Path) -> String {
 fn kind_name(k: Kind) -> &'static str {
     match k {
         Kind::Npz => "NumPy .npz",
+        Kind::PyTorch => super::torch_pt::FORMAT,
         Kind::Parquet => "LeRobot parquet",
         Kind::Mcap => "MCAP",
         _ => "log",

@@ -27,9 +27,11 @@ mod lerobot;
 pub mod logs;
 pub mod mapping;
 pub mod npy;
+mod pickle;
 mod rosbag;
 #[cfg(test)]
 mod tests;
+mod torch_pt;
 mod units;
 mod write;
 
@@ -49,6 +51,9 @@ pub const KEY_TIME_OFFSET: &str = "time_offset_s";
 
 /// Metadata key parsed into [`Recording::control_rate_hz`].
 pub const KEY_CONTROL_RATE: &str = "control_rate_hz";
+/// `control_rate_hz: none`: the log declares that no control loop paces its commands (each
+/// acts from its own row's time, as a servo takes goals as they arrive); kept in the metadata.
+pub const RATE_NONE: &str = "none";
 /// Metadata key parsed into [`Recording::control_t0_s`].
 pub const KEY_CONTROL_T0: &str = "control_t0_s";
 

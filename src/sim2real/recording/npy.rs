@@ -229,8 +229,17 @@ pub(crate) fn npz_columns(
     bytes: &[u8],
     map: &super::mapping::LogMap,
 ) -> Result<super::mapping::Columns, String> {
+    arrays_columns(parse_npz(bytes)?, map, "NumPy .npz")
+}
+
+/// The [`super::mapping::Columns`] of named joint arrays (an `.npz`'s, a PyTorch `.pt` dict's):
+/// `n × k`, time first; `n` for one joint.
+pub(crate) fn arrays_columns(
+    arrays: Vec<(String, NpyArray)>,
+    map: &super::mapping::LogMap,
+    format: &'static str,
+) -> Result<super::mapping::Columns, String> {
     use super::mapping::{Columns, columns_of, pick};
-    let arrays = parse_npz(bytes)?;
     let keys: Vec<String> = arrays.iter().map(|(k, _)| k.clone()).collect();
     let get = |k: &str| arrays.iter().find(|(n, _)| n == k).map(|(_, a)| a);
     let num = |k: &str| -> Result<(&NpyArray, &Vec<f64>), String> {
@@ -326,11 +335,12 @@ pub(crate) fn npz_columns(
     for (key, a) in &arrays {
         // Scalars (a rate, a seed) are kept as metadata.
         if let (NpyData::Num(v), true) = (&a.data, a.shape.is_empty()) {
-            meta.insert(format!("npz.{key}"), format!("{}", v[0]));
+            let prefix = if format == super::torch_pt::FORMAT { "pt" } else { "npz" };
+            meta.insert(format!("{prefix}.{key}"), format!("{}", v[0]));
         }
     }
     Ok(Columns {
-        format: "NumPy .npz",
+        format,
         t,
         names,
         measured_key: measured.clone(),

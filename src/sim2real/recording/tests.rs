@@ -313,7 +313,7 @@ fn kinds_by_magic_bytes() {
     assert_eq!(k("x.db3", b"SQLite format 3\0"), Kind::Sqlite);
     assert_eq!(k("x.h5", b"\x89HDF\r\n\x1a\n"), Kind::Hdf5);
     assert_eq!(k("x.pkl", b"\x80\x04\x95"), Kind::Pickle);
-    assert_eq!(k("x.pt", b"\x80\x02\x8a"), Kind::PyTorch);
+    assert_eq!(k("x.pt", b"\x80\x02\x8a"), Kind::LegacyPyTorch);
     assert_eq!(k("x.npy", b"\x93NUMPY\x01\x00"), Kind::Npy);
     assert_eq!(k("x.dat", b"ab\0cd"), Kind::Binary);
     let opts = ParseOptions::default();

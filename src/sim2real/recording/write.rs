@@ -1,6 +1,8 @@
 //! Writing the CSV format.
 
-use super::{BASE_SUFFIXES, JOINT_SUFFIXES, KEY_CONTROL_RATE, KEY_CONTROL_T0, Recording};
+use super::{
+    BASE_SUFFIXES, JOINT_SUFFIXES, KEY_CONTROL_RATE, KEY_CONTROL_T0, RATE_NONE, Recording,
+};
 
 /// Serialises a recording; `parse_csv(write_csv(r))` gives back `r` exactly (except `source`)
 /// for any recording `parse_csv` would accept. Metadata keys must not contain ':' and neither
@@ -16,7 +18,9 @@ pub fn write_csv(rec: &Recording) -> String {
         let _ = writeln!(out, "# {KEY_CONTROL_T0}: {t0}");
     }
     for (k, v) in &rec.meta {
-        if k == KEY_CONTROL_RATE || k == KEY_CONTROL_T0 {
+        // `control_rate_hz: none` (no rate, declared) is kept; a number is the field's.
+        let declared_none = rec.control_rate_hz.is_none() && v == RATE_NONE;
+        if (k == KEY_CONTROL_RATE && !declared_none) || k == KEY_CONTROL_T0 {
             continue;
         }
         let _ = writeln!(out, "# {}: {}", clean(k), clean(v));
