@@ -4,16 +4,16 @@
 # `modellint fit MODEL EPISODES` with every effect allowed, as a user runs it, and the same data
 # fitted *told* (`fit --told EFFECT@JOINTS` with the true effects and joints: no search, what
 # mujoco.sysid does when given the parameters). Prints per case the blind wall and CPU seconds,
-# the told wall seconds, their ratio (target <= 3), the rollouts of the blind search, what was
-# fitted, and the medians against the targets: single-joint <= 5 s, three-joint arm <= 10 s,
+# the told wall seconds, their ratio (target <= 3), the same ratio in recording seconds
+# replayed (JSON search.simulated_s: the load-independent cost), the rollouts of the blind
+# search, what was fitted, and the medians against the targets: single-joint <= 5 s, three-joint arm <= 10 s,
 # 12-joint legs (4 x 6 s) <= 90 s. With ../shared/data the seven independent arm2 datasets too.
 # Figures only (no pass/fail): the machine is shared; quote ratios from one run.
 #   bench/fit_speed.sh            # all groups
 #   bench/fit_speed.sh --quick    # single-joint and arm2 only
 set -euo pipefail
 cd "$(dirname "$0")/.."
-make -s build >/dev/null
-bin=./target/release/modellint
+if [ -n "${MODELLINT:-}" ]; then bin=$MODELLINT; else make -s build >/dev/null; bin=./target/release/modellint; fi
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 quick=0
@@ -22,6 +22,7 @@ quick=0
 TIMEFORMAT='%R %U %S'
 declare -A times
 ratios=""
+sratios=""
 told_of() { # episodes-dir -> --told arguments from the dataset's truth.json (none for a control)
   python3 - "$1/../truth.json" <<'PYEOF'
 import json, sys
@@ -43,30 +44,35 @@ print(" ".join(f"--told {k[0]}@{'+'.join(v)}" for k, v in groups.items()))
 PYEOF
 }
 row() { # group name model episodes-dir
-  local group=$1 name=$2 model=$3 eps=$4 t wall cpu fitted told twall ratio rollouts
+  local group=$1 name=$2 model=$3 eps=$4 t wall cpu fitted told twall ratio rollouts sim tsim sratio
   t=$({ time "$bin" fit "$model" "$eps" --quiet --format json >"$work/out.json" 2>/dev/null || true; } 2>&1)
   read -r wall u s <<<"$t"
   cpu=$(python3 -c "print(f'{$u + $s:.1f}')")
-  read -r rollouts fitted < <(python3 - "$work/out.json" <<'PYEOF'
+  read -r rollouts sim fitted < <(python3 - "$work/out.json" <<'PYEOF'
 import json, sys
 try:
     d = json.load(open(sys.argv[1]))
 except Exception:
-    print("- (fit failed)"); sys.exit()
+    print("- - (fit failed)"); sys.exit()
 m = d.get("missing_physics", [])
-print(d.get("search", {}).get("rollouts", "-"),
+print(d.get("search", {}).get("rollouts", "-"), d.get("search", {}).get("simulated_s", "-"),
       "; ".join(f"{x['effect']}@{'+'.join(x['joints'])}" for x in m) or "(nothing)")
 PYEOF
 )
   told=$(told_of "$eps")
-  twall="-"; ratio="-"
+  twall="-"; ratio="-"; sratio="-"
   if [ -n "$told" ]; then
-    t=$({ time "$bin" fit "$model" "$eps" $told --quiet --format json >/dev/null 2>&1 || true; } 2>&1)
+    t=$({ time "$bin" fit "$model" "$eps" $told --quiet --format json >"$work/told.json" 2>/dev/null || true; } 2>&1)
     read -r twall u s <<<"$t"
     ratio=$(python3 -c "print(f'{$wall / $twall:.1f}')")
     ratios="$ratios $ratio"
+    tsim=$(python3 -c "import json; print(json.load(open('$work/told.json'))['search']['simulated_s'])" 2>/dev/null || echo -)
+    if [ "$tsim" != "-" ] && [ "$sim" != "-" ]; then
+      sratio=$(python3 -c "print(f'{$sim / $tsim:.1f}')")
+      sratios="$sratios $sratio"
+    fi
   fi
-  printf '%-8s %-34s %8s %8s %8s %6s %9s  %s\n' "$group" "$name" "$wall" "$cpu" "$twall" "$ratio" "$rollouts" "$fitted"
+  printf '%-8s %-34s %8s %8s %8s %6s %6s %9s  %s\n' "$group" "$name" "$wall" "$cpu" "$twall" "$ratio" "$sratio" "$rollouts" "$fitted"
   times[$group]="${times[$group]:-} $wall"
 }
 n_case=0
@@ -77,7 +83,7 @@ synth() { # model effects extra... → sets $eps to the episodes directory
   eps="$work/c$n_case/episodes"
 }
 
-printf '%-8s %-34s %8s %8s %8s %6s %9s  %s\n' group case "wall s" "cpu s" "told s" ratio rollouts fitted
+printf '%-8s %-34s %8s %8s %8s %6s %6s %9s  %s\n' group case "wall s" "cpu s" "told s" ratio "sim r" rollouts fitted
 pend=fixtures/synth/pendulum_servo.xml
 for c in "none" "viscous_damping=0.03" "action_delay=0.015" "armature=0.003" "coulomb_friction=0.03" "gain_error=0.7,1.3"; do
   synth "$pend" "$c" --amplitude 0.8 --seed 5
@@ -113,3 +119,4 @@ for g in single arm2 arm3 legs12; do
 done
 [ -n "$ratios" ] && python3 -c "import statistics,sys; r=list(map(float, sys.argv[1:])); print(f'blind / told wall time: median {statistics.median(r):.1f}, max {max(r):.1f} over {len(r)} cases   target <= 3')" $ratios
 echo "load average at the end: $(cut -d' ' -f1-3 /proc/loadavg) (2 cores; wall times stretch with load)"
+[ -n "$sratios" ] && python3 -c "import statistics,sys; r=list(map(float, sys.argv[1:])); print(f'blind / told recording seconds replayed: median {statistics.median(r):.1f}, max {max(r):.1f} over {len(r)} cases')" $sratios

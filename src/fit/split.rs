@@ -50,10 +50,13 @@ pub fn slice_recording(rec: &Recording, i0: usize, i1: usize) -> Recording {
     r
 }
 
-/// The first `total_s / recs.len()` seconds of every recording (all of one that is shorter):
-/// about `total_s` seconds in all, spread over every episode's start. A set that is not longer
-/// than `total_s` (or `total_s <= 0`) comes back whole.
-pub fn prefixes(recs: &[Recording], total_s: f64) -> Vec<Recording> {
+/// About `total_s` seconds of `recs`, spread evenly: from each of the n recordings the stretch
+/// of `total_s / n` seconds with the largest summed `weight` (one weight per sample, e.g. the
+/// squared residual: where the model is most wrong), the earliest of equal ones — the start
+/// when the weights are equal. A recording that is not longer comes whole; a set that is not
+/// longer than `total_s` (or `total_s <= 0`) comes back whole. A stretch replays from its
+/// first row's recorded state (as [`windows`] do).
+pub fn segments(recs: &[Recording], weight: &[Vec<f64>], total_s: f64) -> Vec<Recording> {
     let dur = |r: &Recording| match (r.t.first(), r.t.last()) {
         (Some(a), Some(b)) => b - a,
         _ => 0.0,
@@ -64,13 +67,41 @@ pub fn prefixes(recs: &[Recording], total_s: f64) -> Vec<Recording> {
     }
     let each = total_s / recs.len() as f64;
     recs.iter()
-        .map(|r| {
-            if dur(r) <= each {
+        .enumerate()
+        .map(|(k, r)| {
+            let n = r.t.len();
+            if dur(r) <= each || n < 3 {
                 return r.clone();
             }
-            let i1 = r.t.partition_point(|&x| x <= r.t[0] + each).max(2).min(r.t.len());
-            let mut p = slice_recording(r, 0, i1);
-            p.source = r.source.clone();
+            let w = |i: usize| {
+                weight
+                    .get(k)
+                    .and_then(|v| v.get(i))
+                    .copied()
+                    .filter(|x| x.is_finite())
+                    .unwrap_or(0.0)
+            };
+            // Sliding stretch [i0, i1) with t[i1 - 1] - t[i0] <= each.
+            let (mut best, mut best_sum) = ((0usize, 0usize), f64::NEG_INFINITY);
+            let (mut i1, mut sum) = (0usize, 0.0);
+            for i0 in 0..n {
+                while i1 < n && r.t[i1] - r.t[i0] <= each {
+                    sum += w(i1);
+                    i1 += 1;
+                }
+                if i1 - i0 >= 2 && sum > best_sum {
+                    best = (i0, i1);
+                    best_sum = sum;
+                }
+                if i1 == n {
+                    break;
+                }
+                sum -= w(i0);
+            }
+            let mut p = slice_recording(r, best.0, best.1);
+            if best.0 == 0 {
+                p.source = r.source.clone();
+            }
             p
         })
         .collect()
@@ -255,19 +286,30 @@ mod tests {
     }
 
     #[test]
-    fn prefixes_take_an_equal_start_of_every_episode() {
+    fn segments_take_the_heaviest_stretch_of_every_episode() {
         let (a, b) = (rec(1001, 0.01), rec(501, 0.01)); // 10 s and 5 s
-        let p = prefixes(&[a.clone(), b.clone()], 6.0);
+        // Equal weights: the start of each.
+        let p = segments(&[a.clone(), b.clone()], &[], 6.0);
         assert_eq!(p.len(), 2);
         assert!((p[0].t.last().unwrap() - 3.0).abs() < 0.011, "{:?}", p[0].t.last());
         assert!((p[1].t.last().unwrap() - 3.0).abs() < 0.011);
         assert_eq!(p[0].joints[0].q[..], a.joints[0].q[..p[0].t.len()]);
-        assert_eq!(p[0].source, a.source, "a prefix keeps its episode's name");
+        assert_eq!(p[0].source, a.source, "a start keeps its episode's name");
+        // The weight sits at 6–7 s of the first: its stretch holds it.
+        let w0: Vec<f64> =
+            (0..1001).map(|i| if (600..700).contains(&i) { 1.0 } else { 0.0 }).collect();
+        let p = segments(&[a.clone(), b.clone()], &[w0, vec![0.0; 501]], 6.0);
+        assert!(
+            p[0].t[0] <= 6.0 && *p[0].t.last().unwrap() >= 6.99,
+            "{:?}",
+            (p[0].t[0], p[0].t.last())
+        );
+        assert_eq!(p[1].t[0], 0.0);
         // Shorter than the share: whole. Not longer than the total, or no total: all whole.
-        let p = prefixes(&[a.clone(), rec(101, 0.01)], 6.0);
+        let p = segments(&[a.clone(), rec(101, 0.01)], &[], 6.0);
         assert_eq!(p[1].t.len(), 101);
-        assert_eq!(prefixes(&[a.clone(), b.clone()], 15.0)[0].t.len(), 1001);
-        assert_eq!(prefixes(&[a, b], 0.0)[1].t.len(), 501);
+        assert_eq!(segments(&[a.clone(), b.clone()], &[], 15.0)[0].t.len(), 1001);
+        assert_eq!(segments(&[a, b], &[], 0.0)[1].t.len(), 501);
     }
 
     #[test]

@@ -111,7 +111,7 @@ pub fn help() -> String {
     for e in all() {
         s.push_str(&format!("  {:<24} {}\n", e.id(), summary(e.meta())));
     }
-    s.push_str("\nParameters, how each enters the simulation and its write-back: docs/fitting.md.");
+    s.push_str("\nParameters, how each enters the simulation and its write-back: `modellint docs fitting`.");
     s
 }
 

@@ -55,6 +55,10 @@ pub struct Engine<'a> {
     disc: std::sync::Mutex<Vec<(String, Vec<f64>)>>,
     /// Where the search last reported it was ([`Engine::report`]).
     place: std::sync::Mutex<Option<ProgressInfo>>,
+    /// The screen's data sets by the training set and effects they were chosen for
+    /// ([`Engine::screen_set`]). Held for the whole search: the memo keys a dataset by its
+    /// address, which must not be re-used by another set.
+    screens: std::sync::Mutex<std::collections::HashMap<String, std::sync::Arc<Vec<Recording>>>>,
     /// Rollouts and recording seconds replayed, booked to each phase
     /// ([`Engine::rollouts_by_phase`]).
     by_phase: std::sync::Mutex<std::collections::BTreeMap<&'static str, (usize, f64)>>,
@@ -117,6 +121,7 @@ impl<'a> Engine<'a> {
             disc: Default::default(),
             place: Default::default(),
             by_phase: Default::default(),
+            screens: Default::default(),
         }
     }
 
@@ -225,6 +230,25 @@ impl<'a> Engine<'a> {
         e.rollouts = self.rollouts.clone();
         e.starts = self.starts.clone();
         e
+    }
+
+    /// The screen's data for `train` simulated with `applied` (made by `make` on first use, then
+    /// the same set: its simulations are remembered).
+    pub(in crate::fit::select) fn screen_set(
+        &self,
+        train: &[Recording],
+        applied: &[Applied],
+        make: impl FnOnce() -> Vec<Recording>,
+    ) -> std::sync::Arc<Vec<Recording>> {
+        let key = set_key(train, applied) + &self.start_tag();
+        if let Some(s) = self.screens.lock().ok().and_then(|m| m.get(&key).cloned()) {
+            return s;
+        }
+        let s = std::sync::Arc::new(make());
+        if let Ok(mut m) = self.screens.lock() {
+            m.insert(key, s.clone());
+        }
+        s
     }
 
     /// Simulates `recs` with `applied`; `None` when an episode diverged or failed.

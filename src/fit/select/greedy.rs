@@ -12,7 +12,7 @@ use crate::model::mirror::{leg_joint, mirror_name};
 
 use super::pairs::{joint_pairs, pair_lookahead};
 use super::policy::Phase;
-use super::screen::Screen;
+use super::screen::{Screen, screen_data};
 use super::verdict::{at_bound, verdict};
 use super::{Errors, FitOutcome, Search, Selected, Tried, set_uncertainty};
 
@@ -22,7 +22,7 @@ type Cand = (&'static dyn Effect, Vec<String>, BTreeMap<String, f64>);
 /// One greedy round: diagnose, fit the candidates, keep the best that passes the held-out gate.
 /// Returns `true` when an effect was added.
 pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bool {
-    let Search { engine, train, screen: short, heldout, allowed } = *s;
+    let Search { engine, train, heldout, allowed } = *s;
     let opts = engine.opts;
     let robot = engine.robot;
     let applied = out.applied.clone();
@@ -34,8 +34,10 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         out.warnings.push("the held-out replay diverged with the current model; stopping".into());
         return false;
     };
-    // The screen's data (the start of every training episode): the same as the training set's
-    // when that is short.
+    // The screen's data (the stretch of every training episode where the residual is
+    // largest): the training set itself when that is short.
+    let short_set = engine.screen_set(train, &applied, || screen_data(engine, train, &tr_err));
+    let short = &short_set[..];
     let Some(sh_err) = engine.errors(short, &applied) else {
         out.warnings.push("the training replay diverged with the current model; stopping".into());
         return false;
@@ -316,8 +318,9 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         if cp.is_empty() || !(reaches(gain(cf)) || reaches(linear_gain)) {
             out.tried.push(not_tested(Phase::Screen, cp.clone(), cf));
             // Its coarse fit still starts a joint pair fit (gain error + delay: neither alone
-            // explains much).
-            if !cp.is_empty() && cf.is_finite() {
+            // explains much) — when it explains something: at least `min_rel_improvement` of
+            // the screen's data (a member that explains nothing alone starts no pair).
+            if !cp.is_empty() && gain(cf) >= opts.policy.min_rel_improvement {
                 fitted.push(Applied { effect: e, joints: group.clone(), params: cp });
             }
             continue;

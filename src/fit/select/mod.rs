@@ -45,7 +45,7 @@ use serde::Serialize;
 use crate::fit::diagnose::Candidate;
 use crate::fit::effects::{self, Applied};
 use crate::fit::rollout::RolloutStats;
-use crate::fit::split::{Split, prefixes, split, split_by_key, windows};
+use crate::fit::split::{Split, split, split_by_key, windows};
 use crate::model::Robot;
 use crate::sim2real::recording::Recording;
 use crate::sim2real::replay::{Episode, ReplayOptions};
@@ -407,14 +407,7 @@ pub fn fit(robot: &Robot, recs: &[Recording], opts: &FitOptions) -> FitOutcome {
             inapplicable.join(", ")
         ));
     }
-    let screen = prefixes(&train, opts.policy.screen_seconds);
-    let search = Search {
-        engine: &engine,
-        train: &train,
-        screen: &screen,
-        heldout: &heldout,
-        allowed: &allowed,
-    };
+    let search = Search { engine: &engine, train: &train, heldout: &heldout, allowed: &allowed };
     if !opts.told.is_empty() {
         told::fit_told(&search, &opts.told, &mut out);
         if !out.applied.is_empty() {
@@ -522,9 +515,6 @@ fn final_uncertainty(engine: &Engine, train: &[Recording], out: &mut FitOutcome)
 pub(super) struct Search<'a> {
     pub(super) engine: &'a Engine<'a>,
     pub(super) train: &'a [Recording],
-    /// The start of every training episode, `screen_seconds` in all
-    /// ([`crate::fit::split::prefixes`]): what the screen simulates.
-    pub(super) screen: &'a [Recording],
     pub(super) heldout: &'a [Recording],
     pub(super) allowed: &'a [String],
 }

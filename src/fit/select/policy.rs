@@ -23,9 +23,9 @@ pub struct SearchPolicy {
     pub max_evals: usize,
     /// Objective evaluations of a coarse screening fit [rollouts of the training set]. Default 6.
     pub screen_evals: usize,
-    /// Seconds of recording the screen simulates for each evaluation: the first
-    /// `screen_seconds / n` of each of the n training episodes (all of a shorter one); the
-    /// whole training set when it is not longer. The screen's cost then does not grow with the
+    /// Seconds of recording the screen simulates for each evaluation: from each of the n
+    /// training episodes the stretch of `screen_seconds / n` where the residual is largest (all
+    /// of a shorter one); the whole training set when it is not longer. The screen's cost then does not grow with the
     /// length of the logs; full fits and every held-out test use all the data [s]. Default 10.
     pub screen_seconds: f64,
     /// A partner joint "ranks high" when it is among the top `rank_depth ×
@@ -191,7 +191,7 @@ pub const FIELDS: &[(&str, &str, &str)] = &[
     (
         "screen_seconds",
         "s",
-        "recording the screen simulates per evaluation: the first screen_seconds / n of each of the n training episodes (the whole set when not longer); full fits and held-out tests use all data",
+        "recording the screen simulates per evaluation: from each of the n training episodes the stretch of screen_seconds / n with the largest residual (the whole set when not longer); full fits and held-out tests use all data",
     ),
     (
         "rank_depth",

@@ -168,7 +168,7 @@ pub(super) fn simpler_set_ok(
 
 /// Swaps for simpler effects. Returns `true` when a swap was made.
 pub(super) fn swap_pass(s: &Search, round: usize, out: &mut FitOutcome) -> bool {
-    let Search { engine, train, screen: short, heldout, allowed } = *s;
+    let Search { engine, train, heldout, allowed } = *s;
     let opts = engine.opts;
     let mut changed = false;
     let mut i = 0;
@@ -188,7 +188,12 @@ pub(super) fn swap_pass(s: &Search, round: usize, out: &mut FitOutcome) -> bool 
         let k_all: usize = out.applied.iter().map(|a| a.effect.fitted()).sum();
         let t_cur = engine.errors(train, &out.applied);
         let train_cur = t_cur.as_ref().map_or(f64::INFINITY, |e| e.rmse());
-        // The screen's data with the current set (the coarse fits below are made there).
+        // The screen's data for the current set (the coarse fits below are made there).
+        let short_set = engine.screen_set(train, &out.applied, || match &t_cur {
+            Some(e) => super::screen::screen_data(engine, train, e),
+            None => train.to_vec(),
+        });
+        let short = &short_set[..];
         let short_cur = engine.score(short, &out.applied);
         let mut best: Option<(Vec<Applied>, f64, usize, usize)> = None;
         for e in effects::all() {

@@ -15,6 +15,7 @@ use serde::Serialize;
 
 use crate::fit::diagnose::Candidate;
 use crate::fit::effects::{self, Applied, JointTarget, model_with};
+use crate::fit::split::segments;
 use crate::sim2real::metrics::gap_mask;
 use crate::sim2real::recording::Recording;
 
@@ -66,6 +67,33 @@ fn change(
         }
     }
     out
+}
+
+/// The screen's data: about `screen_seconds` of `recs` in all, from each episode the stretch
+/// where the residual of `e` (summed over the fitted joints' scored samples) is largest — the
+/// missing physics shows most where the model is most wrong ([`segments`]).
+pub(super) fn screen_data(engine: &Engine, recs: &[Recording], e: &Errors) -> Vec<Recording> {
+    let weight: Vec<Vec<f64>> = recs
+        .iter()
+        .zip(&e.eps)
+        .map(|(rec, ep)| {
+            let scored = gap_mask(&rec.t, engine.opts.gap_mask_s);
+            let mut w = vec![0.0; rec.t.len()];
+            for (k, jt) in rec.joints.iter().enumerate() {
+                if !engine.joints.contains(&jt.name) {
+                    continue;
+                }
+                for (i, wi) in w.iter_mut().enumerate() {
+                    let r = jt.q[i] - ep.q_sim[k][i];
+                    if scored[i] && r.is_finite() {
+                        *wi += r * r;
+                    }
+                }
+            }
+            w
+        })
+        .collect();
+    segments(recs, &weight, engine.opts.policy.screen_seconds)
 }
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {

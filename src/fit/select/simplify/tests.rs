@@ -73,13 +73,7 @@ fn run(pass: Pass, robot: &Robot, recs: &[Recording], start: Vec<Applied>) -> (F
     let engine = Engine::new(robot, recs, &opts);
     let sp = split(recs, opts.holdout);
     let allowed: Vec<String> = effects::all().iter().map(|e| e.id().to_string()).collect();
-    let s = Search {
-        engine: &engine,
-        train: &sp.train,
-        screen: &sp.train,
-        heldout: &sp.heldout,
-        allowed: &allowed,
-    };
+    let s = Search { engine: &engine, train: &sp.train, heldout: &sp.heldout, allowed: &allowed };
     let h = engine.errors(&sp.heldout, &start).expect("replay");
     let mut out = FitOutcome::empty(String::new());
     for a in &start {
