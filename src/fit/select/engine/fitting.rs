@@ -83,16 +83,7 @@ impl Engine<'_> {
         (effect, group): (&'static dyn Effect, &[String]),
         start: Option<&[f64]>,
     ) -> (Vec<f64>, f64) {
-        let max_evals = self.opts.policy.max_evals;
-        let key = fit_key(train, base, effect, group, max_evals) + &self.start_tag();
-        if let Some(r) = self.fits.lock().ok().and_then(|m| m.get(&key).cloned()) {
-            return r;
-        }
-        let r = self.fit_fresh(train, base, effect, group, max_evals, start);
-        if let Ok(mut m) = self.fits.lock() {
-            m.insert(key, r.clone());
-        }
-        r
+        self.fit_memo(train, base, (effect, group), self.opts.policy.max_evals, start)
     }
 
     /// The result of [`Engine::fit_one`] with these arguments if it was already computed.
@@ -119,11 +110,24 @@ impl Engine<'_> {
         group: &[String],
         max_evals: usize,
     ) -> (Vec<f64>, f64) {
+        self.fit_memo(train, base, (effect, group), max_evals, None)
+    }
+
+    /// A fit with `max_evals` from `start` (see [`Engine::fit_from`]), remembered by
+    /// [`fit_key`]: the first fit of a candidate on a base answers every later request.
+    fn fit_memo(
+        &self,
+        train: &[Recording],
+        base: &[Applied],
+        (effect, group): (&'static dyn Effect, &[String]),
+        max_evals: usize,
+        start: Option<&[f64]>,
+    ) -> (Vec<f64>, f64) {
         let key = fit_key(train, base, effect, group, max_evals) + &self.start_tag();
         if let Some(r) = self.fits.lock().ok().and_then(|m| m.get(&key).cloned()) {
             return r;
         }
-        let r = self.fit_fresh(train, base, effect, group, max_evals, None);
+        let r = self.fit_fresh(train, base, effect, group, max_evals, start);
         if let Ok(mut m) = self.fits.lock() {
             m.insert(key, r.clone());
         }
