@@ -7,7 +7,8 @@
 # the told wall seconds, their ratio (target <= 3), the same ratio in recording seconds
 # replayed (JSON search.simulated_s: the load-independent cost), the rollouts of the blind
 # search, what was fitted, and the medians against the targets: single-joint <= 5 s, three-joint arm <= 10 s,
-# 12-joint legs (4 x 6 s) <= 90 s. With ../shared/data the seven independent arm2 datasets too.
+# 12-joint legs (4 x 6 s) <= 90 s, the same with 4 x 25 s of 200 Hz logs <= 3 min, the 23-joint
+# Booster T1 (4 x 10 s) <= 5 min. With ../shared/data the seven independent arm2 datasets and T1.
 # Figures only (no pass/fail): the machine is shared; quote ratios from one run.
 #   bench/fit_speed.sh            # all groups
 #   bench/fit_speed.sh --quick    # single-joint and arm2 only
@@ -109,12 +110,26 @@ if [ $quick = 0 ]; then
     synth "$asi" "$c" --episodes 4 --duration 6 --suspend 0.5 --amplitude 0.15 --heldout 1 --seed 7
     row legs12 "asimov (4 x 6 s) $c" "$asi" "$eps"
   done
+  # Long logs: 4 x 25 s at 200 Hz. (The amplitude is smaller than above: at 0.15 for 25 s the
+  # feet touch each other, the replay's error is then discontinuous in the knee damping, and
+  # even a told fit stops at 2.1 for 3.0 — see docs/fitting.md, Known limits.)
+  synth "$asi" "viscous_damping@*_knee=3.0" --episodes 4 --duration 25 --suspend 0.5 \
+    --amplitude 0.08 --heldout 1 --seed 7 --sample-hz 200 --control-hz 200
+  row legs25 "asimov (4 x 25 s, 200 Hz) knee damping" "$asi" "$eps"
+  t1=../shared/data/models/booster_t1/t1.xml
+  if [ -f "$t1" ]; then
+    synth "$t1" "viscous_damping@*Knee*=2.0" --episodes 4 --duration 10 --suspend 0.5 \
+      --amplitude 0.15 --heldout 1 --seed 7
+    row t1 "booster t1 23 joints (4 x 10 s) knee damping" "$t1" "$eps"
+  else
+    echo "t1       (skipping: $t1 is absent)"
+  fi
 fi
 echo
-for g in single arm2 arm3 legs12; do
+for g in single arm2 arm3 legs12 legs25 t1; do
   [ -n "${times[$g]:-}" ] || continue
   med=$(python3 -c "import statistics,sys; print(f'{statistics.median(map(float, sys.argv[1:])):.1f}')" ${times[$g]})
-  case $g in single) tgt="≤ 5 s";; arm3) tgt="≤ 10 s";; legs12) tgt="≤ 90 s";; *) tgt="(2 joints)";; esac
+  case $g in single) tgt="≤ 5 s";; arm3) tgt="≤ 10 s";; legs12) tgt="≤ 90 s";; legs25) tgt="≤ 180 s";; t1) tgt="≤ 300 s";; *) tgt="(2 joints)";; esac
   printf 'median wall %-7s %6s s   target %s\n' "$g" "$med" "$tgt"
 done
 [ -n "$ratios" ] && python3 -c "import statistics,sys; r=list(map(float, sys.argv[1:])); print(f'blind / told wall time: median {statistics.median(r):.1f}, max {max(r):.1f} over {len(r)} cases   target <= 3')" $ratios

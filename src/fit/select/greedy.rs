@@ -9,6 +9,7 @@ use crate::fit::diagnose::{Candidate, diagnose};
 use crate::fit::effects::{self, Applied, Effect};
 use crate::fit::stats::bic;
 use crate::model::mirror::{leg_joint, mirror_name};
+use crate::sim2real::recording::Recording;
 
 use super::pairs::{joint_pairs, pair_lookahead};
 use super::policy::Phase;
@@ -37,7 +38,9 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     // The screen's data (the stretch of every training episode where the residual is
     // largest): the training set itself when that is short.
     let short_set = engine.screen_set(train, &applied, || screen_data(engine, train, &tr_err));
-    let short = &short_set[..];
+    // (When the training set is not longer than the screen's, it is the training set itself,
+    // so that coarse and full fits share the memo.)
+    let short = if same_data(&short_set, train) { train } else { &short_set[..] };
     let Some(sh_err) = engine.errors(short, &applied) else {
         out.warnings.push("the training replay diverged with the current model; stopping".into());
         return false;
@@ -332,12 +335,15 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
             out.tried.push(not_tested(Phase::FloorScreen, cp, cf));
             continue;
         }
+        // The full fit runs on the screen's data too (its cost does not grow with the log's
+        // length); the held-out gate and the training BIC below use all data, and the round's
+        // winner is refined on the whole training set ([`refine`]).
         let start = (cf < base_short).then_some(cp.as_slice());
-        let (p, train_rmse) = engine.fit_from(train, &applied, (e, &group), start);
-        if p.is_empty() || !train_rmse.is_finite() {
+        let (p, fit_rmse) = engine.fit_from(short, &applied, (e, &group), start);
+        if p.is_empty() || !fit_rmse.is_finite() {
             continue;
         }
-        best_gain = best_gain.max(rel(train_rmse, base_train));
+        best_gain = best_gain.max(gain(fit_rmse));
         fitted.push(Applied { effect: e, joints: group.clone(), params: p.clone() });
         let mut trial = applied.clone();
         trial.push(Applied { effect: e, joints: group.clone(), params: p.clone() });
@@ -346,6 +352,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         else {
             continue;
         };
+        let train_rmse = tr_a.rmse();
         let bic_after = bic(tr_a.n, tr_a.sse, k_before + e.fitted());
         // Paired test on the windows of the candidate's joints (others barely move).
         let v = verdict(&ho_err, &ho_a, &group, opts.policy.gate_z(z));
@@ -443,6 +450,9 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     let mut accepted: Vec<Selected> = accepted.into_iter().map(|(s, ..)| s).collect();
     let rivals = rival_notes(&accepted, win, &same);
     let mut w = accepted.swap_remove(win);
+    if !std::ptr::eq(short, train) {
+        w = refine(s, &applied, w, (&tr_err, &ho_err), z);
+    }
     if let Some(pair) = pair_lookahead(s, &applied, &kept_all, &w, z, round, out) {
         for (mut p, a) in pair {
             out.applied.push(a);
@@ -458,6 +468,44 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     set_uncertainty(engine, train, &mut w, &out.applied, &mut out.warnings);
     out.selected.push(w);
     true
+}
+
+/// The round's winner `w`, fitted on the screen's data, fitted again on the whole training set
+/// from those values; the refit replaces it when it lowers the training error (its held-out
+/// figures are measured again).
+fn refine(
+    s: &Search,
+    applied: &[Applied],
+    w: Selected,
+    (tr, ho): (&Errors, &Errors),
+    z: f64,
+) -> Selected {
+    let engine = s.engine;
+    let Some(e) = effects::by_id(&w.effect) else { return w };
+    let (p, f) = engine.fit_from(s.train, applied, (e, &w.joints), Some(&w.values));
+    let mut trial = applied.to_vec();
+    trial.push(Applied { effect: e, joints: w.joints.clone(), params: p });
+    let (Some(tr_a), Some(ho_a)) =
+        (engine.errors(s.train, &trial), engine.errors(s.heldout, &trial))
+    else {
+        return w;
+    };
+    let mut old = applied.to_vec();
+    old.push(Applied { effect: e, joints: w.joints.clone(), params: w.values.clone() });
+    if !f.is_finite() || engine.errors(s.train, &old).is_none_or(|t| tr_a.rmse() >= t.rmse()) {
+        return w;
+    }
+    let k_before: usize = applied.iter().map(|a| a.effect.fitted()).sum();
+    let v = verdict(ho, &ho_a, &w.joints, engine.opts.policy.gate_z(z));
+    let bics = (bic(tr.n, tr.sse, k_before), bic(tr_a.n, tr_a.sse, k_before + e.fitted()));
+    let a = trial.last().expect("pushed");
+    Selected::new(a, w.evidence, &v, ho.rmse(), ho_a.rmse(), bics)
+}
+
+/// Whether `a` holds the same recordings as `b` (a screen set that came back whole).
+fn same_data(a: &[Recording], b: &[Recording]) -> bool {
+    a.len() == b.len()
+        && a.iter().zip(b).all(|(x, y)| x.t.len() == y.t.len() && x.t.first() == y.t.first())
 }
 
 /// Notes naming the rivals of the round's winner `accepted[win]`: other effects on any of its

@@ -11,6 +11,7 @@ use crate::sim2real::recording::Recording;
 use super::engine::Engine;
 use super::policy::Phase;
 use super::polish::{fit_jointly, polish_budget, polish_set};
+use super::screen::screen_data;
 use super::verdict::{Verdict, at_bound, verdict};
 use super::{Errors, FitOutcome, Search, Selected, Tried, set_uncertainty, sync_selected};
 
@@ -154,10 +155,12 @@ pub(super) fn pair_lookahead(
             }
         }
     }
-    // Each pair is first polished coarsely (a third of the budget); only those within 25 % of the
-    // best coarse training RMSE are polished fully (on arm2's delay + Coulomb dataset the right
-    // pair, a delay on both joints, reaches 0.69 mrad where the twelve others stay at 4–12 mrad;
-    // the look-ahead took 1,738 of the fit's 3,879 simulations, now 885).
+    // Each pair is first polished coarsely (a third of the budget) on the round's screen data
+    // (the stretch of each training episode where the residual is largest); only those within
+    // `pair_full_fit_within` of the best coarse RMSE there are polished fully on the whole
+    // training set (on arm2's delay + Coulomb dataset the right pair, a delay on both joints,
+    // reaches 0.69 mrad where the twelve others stay at 4–12 mrad).
+    let short = engine.screen_set(train, applied, || screen_data(engine, train, &t_base));
     let coarse: Vec<(Vec<Applied>, f64)> = sets
         .iter()
         .map(|(a, b)| {
@@ -166,13 +169,13 @@ pub(super) fn pair_lookahead(
             set.push(b.clone());
             let set = polish_budget(
                 engine,
-                train,
+                &short,
                 heldout,
                 set,
                 opts.policy.coarse_polish_step,
                 opts.policy.max_evals * 2 / 3,
             );
-            let f = engine.errors(train, &set).map_or(f64::INFINITY, |e| e.rmse());
+            let f = engine.errors(&short, &set).map_or(f64::INFINITY, |e| e.rmse());
             (set, f)
         })
         .collect();

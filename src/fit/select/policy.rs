@@ -17,16 +17,18 @@ pub struct SearchPolicy {
     pub max_rounds: usize,
     /// Candidates taken from the top of the linearised ranking each round [count]. Default 4.
     pub candidates_per_round: usize,
-    /// Objective evaluations of one candidate's full fit [rollouts of the training set].
+    /// Objective evaluations of one candidate's full fit [rollouts of the data fitted].
     /// Golden section uses at most 40 of them, the simplex 2 × (k − 1) × this on k = 2 or 3
     /// parameters, Levenberg–Marquardt this / (k + 2) iterations (2–12). Default 60.
     pub max_evals: usize,
-    /// Objective evaluations of a coarse screening fit [rollouts of the training set]. Default 6.
+    /// Objective evaluations of a coarse screening fit [rollouts of the screen's data]. Default 6.
     pub screen_evals: usize,
     /// Seconds of recording the screen simulates for each evaluation: from each of the n
     /// training episodes the stretch of `screen_seconds / n` where the residual is largest (all
     /// of a shorter one); the whole training set when it is not longer. The screen's cost then does not grow with the
-    /// length of the logs; full fits and every held-out test use all the data [s]. Default 10.
+    /// length of the logs: candidates' coarse and full fits run there; the round's winner is
+    /// re-fitted on the whole training set, and every held-out test uses all the data [s].
+    /// Default 10.
     pub screen_seconds: f64,
     /// A partner joint "ranks high" when it is among the top `rank_depth ×
     /// candidates_per_round` entries of the ranking [multiple]. Default 4.
@@ -184,14 +186,14 @@ pub const FIELDS: &[(&str, &str, &str)] = &[
     ),
     (
         "max_evals",
-        "rollouts of the training set",
+        "rollouts of the data fitted",
         "budget of one candidate's full fit: line search ≤ 40, simplex 2 (k − 1) × this, Levenberg–Marquardt this / (k + 2) iterations (2–12)",
     ),
     ("screen_evals", "rollouts of the screen's data", "budget of a coarse screening fit"),
     (
         "screen_seconds",
         "s",
-        "recording the screen simulates per evaluation: from each of the n training episodes the stretch of screen_seconds / n with the largest residual (the whole set when not longer); full fits and held-out tests use all data",
+        "recording the screen simulates per evaluation: from each of the n training episodes the stretch of screen_seconds / n with the largest residual (the whole set when not longer); coarse and full candidate fits and the pair look-ahead's coarse polish run there, the round's winner is re-fitted on the whole training set, held-out tests use all data",
     ),
     (
         "rank_depth",
