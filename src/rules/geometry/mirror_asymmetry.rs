@@ -41,7 +41,7 @@ declare_rule! {
         probe: None,
         options: [
             opt("tolerance", 0.01, "ratio", "relative difference tolerated between mirrored scalars"),
-            opt("range_tolerance", 0.001, "rad or m", "absolute difference tolerated between mirrored range ends"),
+            opt("range_tolerance", 0.005, "rad or m", "absolute difference tolerated between mirrored range ends (0.005 rad ≈ 0.3°: calibrated hardware limits differ by a few mrad)"),
             opt("geom_tolerance", 0.02, "ratio", "relative size difference tolerated between mirrored collision geoms (or 0.5 mm)"),
         ],
     }
