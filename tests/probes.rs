@@ -300,3 +300,25 @@ fn mirror_pairs_get_the_same_step_response() {
     assert_eq!(verdict("left_hip_roll"), verdict("right_hip_roll"));
     assert_eq!(verdict("left_hip_pitch"), verdict("right_hip_pitch"));
 }
+
+/// Dry friction that is a large share of the step's servo torque shapes the step response (here
+/// it stops the ringing: measured ζ ≈ 0.9 against the viscous 0.22), so the run can neither
+/// confirm nor refute a damping claim; without the friction the same servo confirms it.
+#[test]
+fn dry_friction_makes_the_step_response_inconclusive_not_a_refutation() {
+    let fs = probed("fixtures/probes/servo_dry_friction.xml", "underdamped-pd-gains");
+    let p = outcome(&fs[0]);
+    assert_eq!(p.status, ProbeStatus::Inconclusive, "{}", p.note);
+    let why = p.reason.as_deref().unwrap_or("");
+    assert!(why.contains("frictionloss 1 N·m"), "{why}");
+    let fr = p.preconditions.iter().find(|c| c.name == "friction_small").expect("recorded");
+    assert!(!fr.met);
+    assert_eq!(fs[0].severity, modellint::finding::Severity::Error);
+    assert!(!fs[0].message.contains("refuted"));
+
+    let fs = probed("fixtures/probes/servo_underdamped.xml", "underdamped-pd-gains");
+    let p = outcome(&fs[0]);
+    assert_eq!(p.status, ProbeStatus::Confirmed, "{}", p.note);
+    assert!(p.preconditions.iter().all(|c| c.met), "{:?}", p.preconditions);
+    assert!(p.preconditions.iter().any(|c| c.name == "friction_small"));
+}

@@ -28,7 +28,7 @@ pub fn markers(spec: Option<&Spec>) -> Vec<(String, String)> {
     {
         v.push((l.clone(), r.clone()));
     }
-    for (l, r) in LEG_PREFIXES {
+    for (l, r) in leg_prefixes() {
         v.push((l.to_string(), r.to_string()));
     }
     for (l, r) in [
@@ -49,34 +49,37 @@ pub fn markers(spec: Option<&Spec>) -> Vec<(String, String)> {
     v
 }
 
-/// Quadruped leg prefixes: front/rear (or fore/hind) left ↔ right. Only ever a name's prefix.
-const LEG_PREFIXES: [(&str, &str); 8] = [
-    ("FL_", "FR_"),
-    ("RL_", "RR_"),
-    ("fl_", "fr_"),
-    ("rl_", "rr_"),
-    ("LF_", "RF_"),
-    ("LH_", "RH_"),
-    ("lf_", "rf_"),
-    ("lh_", "rh_"),
+/// Quadruped leg prefixes, by naming convention: front/rear (or fore/hind) left ↔ right. Only
+/// ever a name's prefix. Hind legs are `RL_`/`RR_` or `HL_`/`HR_` (Spot's `hl_`/`hr_`) beside
+/// `FL_`/`FR_`; `LH_`/`RH_` beside `LF_`/`RF_` (ANYmal).
+const LEG_CONVENTIONS: [&[(&str, &str)]; 4] = [
+    &[("FL_", "FR_"), ("RL_", "RR_"), ("HL_", "HR_")],
+    &[("fl_", "fr_"), ("rl_", "rr_"), ("hl_", "hr_")],
+    &[("LF_", "RF_"), ("LH_", "RH_")],
+    &[("lf_", "rf_"), ("lh_", "rh_")],
 ];
 
+/// Every quadruped leg prefix pair.
+fn leg_prefixes() -> impl Iterator<Item = &'static (&'static str, &'static str)> {
+    LEG_CONVENTIONS.iter().flat_map(|c| c.iter())
+}
+
 /// The joint a quadruped leg prefix is on, with the prefix's convention (`FL_` `FR_` `RL_`
-/// `RR_`, or `LF_` `RF_` `LH_` `RH_`, each in one case): `FL_knee` → (0, `knee`), `RH_KFE` →
-/// (2, `KFE`). The same joint on every leg has the same pair; a hexapod's `lf_` and `rr_` are
-/// of two conventions. `None` without a leg prefix.
+/// `RR_` `HL_` `HR_`, or `LF_` `RF_` `LH_` `RH_`, each in one case): `FL_knee` → (0, `knee`),
+/// `RH_KFE` → (2, `KFE`). The same joint on every leg has the same pair; a hexapod's `lf_` and
+/// `rr_` are of two conventions. `None` without a leg prefix.
 pub fn leg_joint(name: &str) -> Option<(usize, &str)> {
-    LEG_PREFIXES
+    LEG_CONVENTIONS
         .iter()
         .enumerate()
-        .flat_map(|(i, (l, r))| [(i / 2, l), (i / 2, r)])
+        .flat_map(|(c, pairs)| pairs.iter().flat_map(move |(l, r)| [(c, l), (c, r)]))
         .find(|(_, p)| name.starts_with(**p) && name.len() > p.len())
         .map(|(c, p)| (c, &name[p.len()..]))
 }
 
 /// Replace one marker occurrence: short markers (`l_`, `_l`) only as a prefix / suffix.
 fn swap(name: &str, from: &str, to: &str) -> Option<String> {
-    if LEG_PREFIXES.iter().any(|(l, r)| *l == from || *r == from) {
+    if leg_prefixes().any(|(l, r)| *l == from || *r == from) {
         return name.starts_with(from).then(|| format!("{to}{}", &name[from.len()..]));
     }
     let short = from.trim_matches('_').len() <= 1;
@@ -130,6 +133,11 @@ mod tests {
         assert_eq!(mirror("RR_hip", None), Some((Side::Right, "RL_hip".into())));
         assert_eq!(mirror("LH_KFE", None), Some((Side::Left, "RH_KFE".into())));
         assert_eq!(mirror("HALF_link", None), None);
+        // Spot's hind legs.
+        assert_eq!(mirror("hl_kn", None), Some((Side::Left, "hr_kn".into())));
+        assert_eq!(mirror("hr_uleg", None), Some((Side::Right, "hl_uleg".into())));
+        assert_eq!(mirror("HL_hip", None), Some((Side::Left, "HR_hip".into())));
+        assert_eq!(mirror("LL_HR", None), None);
     }
 
     #[test]
@@ -139,6 +147,7 @@ mod tests {
         assert_eq!(leg_joint("LH_KFE"), Some((2, "KFE")));
         assert_eq!(leg_joint("RF_KFE"), Some((2, "KFE")));
         assert_eq!(leg_joint("rf_hip"), Some((3, "hip")));
+        assert_eq!(leg_joint("hl_kn"), leg_joint("fr_kn"));
         // A hexapod's legs (lf lm lr rf rm rr) are not one quadruped convention.
         assert_ne!(leg_joint("lf_coxa"), leg_joint("rr_coxa"));
         assert_eq!(leg_joint("lm_coxa"), None);

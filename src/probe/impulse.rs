@@ -57,23 +57,36 @@ pub struct StepResponse {
     pub final_level: f64,
     /// The response touched the joint's range limits (the stop, not the servo, shaped it).
     pub touched_limit: bool,
+    /// Size of the step, rad (or m): 0.05, or 5 % of a smaller range.
+    pub step: f64,
+    /// The joint's dry friction (`frictionloss`), N·m (or N).
+    pub frictionloss: f64,
 }
 
 /// Largest |final level − 1| of a step response that counts as having followed the step.
 pub const STEP_TOLERANCE: f64 = 0.2;
+/// Largest dry friction, as a share of the servo torque of the step (kp × step), under which
+/// the step response measures the viscous damping ratio: above it Coulomb friction, not
+/// damping, shapes the response (it stalls the joint short of the target or stops the ringing).
+pub const FRICTION_SHARE: f64 = 0.2;
 
 impl StepResponse {
-    /// What the run had to reach before a measured ζ or ω_n can refute a claim.
-    pub fn preconditions(&self) -> super::Preconditions {
+    /// What a run needs before its ω_n or shape can say anything about the servo: dry friction
+    /// small against the step's servo torque, and the response clear of the joint's stops.
+    pub fn dynamics_preconditions(&self) -> super::Preconditions {
+        let n = crate::util::fmt_num;
+        let servo = self.kp * self.step;
         super::Preconditions::new()
             .check(
-                "step_followed",
-                (self.final_level - 1.0).abs() <= STEP_TOLERANCE,
+                "friction_small",
+                self.frictionloss <= FRICTION_SHARE * servo,
                 format!(
-                    "the joint settled at {} % of the commanded step (need {}–{} %)",
-                    crate::util::fmt_num(100.0 * self.final_level, 3),
-                    crate::util::fmt_num(100.0 * (1.0 - STEP_TOLERANCE), 3),
-                    crate::util::fmt_num(100.0 * (1.0 + STEP_TOLERANCE), 3)
+                    "the joint's frictionloss {} N·m is {} % of the servo torque of the step (kp × {} rad = {} N·m; need ≤ {} %): dry friction, not damping, shapes the response",
+                    n(self.frictionloss, 3),
+                    n(100.0 * self.frictionloss / servo.max(1e-12), 3),
+                    n(self.step, 3),
+                    n(servo, 3),
+                    n(100.0 * FRICTION_SHARE, 3)
                 ),
             )
             .check(
@@ -85,6 +98,37 @@ impl StepResponse {
                     "the step response stayed clear of the joint's range limits"
                 },
             )
+    }
+
+    /// What the run had to reach before a measured ζ can confirm or refute a damping claim, or
+    /// a clean response refute a distortion claim: the [`Self::dynamics_preconditions`], the
+    /// joint settled at the step, and its oscillation (if any) decays.
+    pub fn preconditions(&self) -> super::Preconditions {
+        let n = crate::util::fmt_num;
+        let mut pre = self.dynamics_preconditions();
+        pre = pre
+            .check(
+                "step_followed",
+                (self.final_level - 1.0).abs() <= STEP_TOLERANCE,
+                format!(
+                    "the joint settled at {} % of the commanded step (need {}–{} %)",
+                    n(100.0 * self.final_level, 3),
+                    n(100.0 * (1.0 - STEP_TOLERANCE), 3),
+                    n(100.0 * (1.0 + STEP_TOLERANCE), 3)
+                ),
+            )
+            .check(
+                "decaying",
+                self.zeta.is_none_or(|z| z >= 0.0),
+                match self.zeta {
+                    Some(z) if z < 0.0 => format!(
+                        "the response's peaks grow (ζ from their decay {}): not a damped second-order response",
+                        n(z, 3)
+                    ),
+                    _ => "the response's oscillation (if any) decays".to_string(),
+                },
+            );
+        pre
     }
 }
 
@@ -157,7 +201,8 @@ pub fn step_response(
         _ => own,
     };
     let delta = sign * size;
-    let new_target = if is_position { target + delta / gear } else { target + delta };
+    // A position actuator of gear g holds q = ctrl / g: a step of delta in q is g·delta in ctrl.
+    let new_target = if is_position { target + delta * gear } else { target + delta };
     let mut y = Vec::with_capacity(resp);
     let warn0 = bench::warnings(&d);
     let mut diverged = false;
@@ -191,9 +236,13 @@ pub fn step_response(
             kd,
             final_level: f64::NAN,
             touched_limit: false,
+            step: size,
+            frictionloss: j.frictionloss,
         });
     }
     let mut r = analyse(&y, dt, kp, kd, steps);
+    r.step = size;
+    r.frictionloss = j.frictionloss;
     r.touched_limit = j.limited
         && y.iter().any(|v| {
             let q = q_eq + v * delta;
@@ -307,6 +356,8 @@ pub fn analyse(y: &[f64], dt: f64, kp: f64, kd: f64, steps: usize) -> StepRespon
         kd,
         final_level: yf,
         touched_limit: false,
+        step: 0.05,
+        frictionloss: 0.0,
     }
 }
 
@@ -368,6 +419,24 @@ mod tests {
             assert!((r.zeta.unwrap() - z).abs() < 0.03 * z, "zeta {z}: {:?}", r.zeta);
             assert!((r.omega_n.unwrap() - w).abs() < 0.02 * w, "omega {w}: {:?}", r.omega_n);
         }
+    }
+
+    #[test]
+    fn growing_peaks_are_not_a_damping_measurement() {
+        // Peaks that grow (stick-slip, a contact pushing): the log decrement gives ζ < 0.
+        let dt = 0.001;
+        let y: Vec<f64> = (0..4000)
+            .map(|i| {
+                let t = i as f64 * dt;
+                let a = if t < 3.0 { 0.02 * (1.0 + t) } else { 0.0 };
+                1.0 + a * (20.0 * t).sin()
+            })
+            .collect();
+        let r = analyse(&y, dt, 1.0, 0.1, 4000);
+        assert!(r.zeta.is_some_and(|z| z < 0.0), "{:?}", r.zeta);
+        let pre = r.preconditions();
+        let p = pre.list().iter().find(|p| p.name == "decaying").unwrap();
+        assert!(!p.met && p.detail.contains("peaks grow"), "{}", p.detail);
     }
 
     #[test]

@@ -128,11 +128,16 @@ pub struct Verdict {
 }
 
 impl Verdict {
+    /// Confirmed: only when every recorded precondition was met; otherwise inconclusive with
+    /// the unmet one's detail (a run that could not test the claim confirms nothing either).
     pub fn confirmed(
         pre: &Preconditions,
         measured: BTreeMap<String, f64>,
         note: impl Into<String>,
     ) -> Self {
+        if let Some(p) = pre.unmet() {
+            return Verdict::inconclusive(pre, measured, p.detail.clone());
+        }
         Verdict {
             status: Status::Confirmed,
             preconditions: pre.0.clone(),
@@ -583,6 +588,17 @@ mod tests {
         let mut f = vec![Finding::new("x", Severity::Error, "fact", at).fact()];
         crate::rules::claim_each(&mut f, |_| Some(Above { key: Some(3), bound: 5 }));
         assert!(f[0].claim.is_none());
+    }
+
+    #[test]
+    fn a_confirmation_needs_every_precondition_met() {
+        let pre = Preconditions::new().check("a", true, "a ok").check("b", false, "b failed");
+        let v = Verdict::confirmed(&pre, BTreeMap::new(), "the consequence occurred");
+        assert_eq!(v.status, Status::Inconclusive("b failed".into()));
+        assert_eq!(v.preconditions, pre.list());
+        let ok = Preconditions::new().check("a", true, "a ok");
+        let v = Verdict::confirmed(&ok, BTreeMap::new(), "the consequence occurred");
+        assert_eq!(v.status, Status::Confirmed);
     }
 
     #[test]

@@ -15,9 +15,10 @@ declare_rule! {
     /// ## What it does
     /// Checks the collision geometry of each foot (its foot and toe bodies): contact must use
     /// primitives, not meshes — capsules or spheres, and boxes unless `allow_boxes = 0`; capsule,
-    /// sphere and cylinder radii within [`min_radius`, `max_radius`] (3–50 mm by default: a
-    /// sanity range, not one robot's design — the Asimov feet use about 12 mm, common reference
-    /// feet 5 mm corner spheres); `condim` 3; sliding friction within `friction_tolerance` of
+    /// sphere and cylinder radii of the geoms that touch the ground within [`min_radius`,
+    /// `max_radius`] (0.5–50 mm by default: a sanity range against unit and scale errors, not
+    /// one robot's design — the Asimov feet use about 12 mm, common reference feet 5 mm corner
+    /// spheres, Menagerie's Unitree G1 1 mm corner points); `condim` 3; sliding friction within `friction_tolerance` of
     /// `friction`; at least three non-collinear
     /// ground contact points whose support polygon reaches both the heel and the toe third of the
     /// foot; and left and right feet with the same number and sizes of geoms (sizes within 2 % or
@@ -44,7 +45,9 @@ declare_rule! {
     /// families: a wheel (a sphere, cylinder or ellipsoid on an unlimited hinge) is not a foot;
     /// a point foot (spheres touching down within 2 cm of each other, as on quadrupeds) is judged
     /// by its ground geoms only — a shank geom above the foot sphere is not a foot — and gets no
-    /// support-polygon finding.
+    /// support-polygon finding. On a flat foot, geom types and radii are judged on the ground
+    /// geoms too (within 10 mm of the foot's lowest point at the keyframe: an ankle housing above
+    /// the sole is not a foot contact); meshes on any of the foot's geoms.
     ///
     /// ## Why is this bad?
     /// Contact is system identification too. Mesh contact against the floor produces few,
@@ -79,7 +82,7 @@ declare_rule! {
         also: [FootSlide],
         options: [
             opt("allow_boxes", 1.0, "bool", "1: box feet are acceptable primitives; 0: only capsules and spheres"),
-            opt("min_radius", 0.003, "m", "smallest capsule/sphere radius"),
+            opt("min_radius", 0.0005, "m", "smallest capsule/sphere radius"),
             opt("max_radius", 0.05, "m", "largest capsule/sphere radius"),
             opt("friction", 0.6, "", "expected sliding friction of foot geoms"),
             opt("friction_tolerance", 0.2, "", "allowed deviation from `friction`"),
@@ -233,9 +236,11 @@ impl FootCollisionGeometry {
                 }
                 out.push(f);
             }
-            // Non-preferred primitives.
+            // Non-preferred primitives and radii: judged on the geoms that touch the ground
+            // (within GROUND_WINDOW of the foot's lowest point at the keyframe); an ankle
+            // housing above the sole is not a foot contact.
             let odd: Vec<usize> = foot
-                .geoms
+                .ground
                 .iter()
                 .copied()
                 .filter(|&g| match robot.geoms[g].gtype {
@@ -255,7 +260,7 @@ impl FootCollisionGeometry {
             }
             // Radius.
             let bad_r: Vec<usize> = foot
-                .geoms
+                .ground
                 .iter()
                 .copied()
                 .filter(|&g| {

@@ -64,8 +64,10 @@ impl Claim for DistortedByTimestep {
         }
         let p = self.omega_n;
         match r.omega_n {
+            // A distorted response need not follow the step or decay: that is the consequence
+            // claimed. It must still be the servo's response (no dry friction, clear of stops).
             Some(w) if ((w - p) / p).abs() > 0.1 => Verdict::confirmed(
-                &pre,
+                &r.dynamics_preconditions(),
                 m,
                 format!(
                     "integration distorts the response: measured ω_n = {} rad/s vs {} rad/s analytic",

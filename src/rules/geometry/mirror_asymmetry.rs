@@ -15,8 +15,8 @@ declare_rule! {
     /// when equal or mirrored, `[a, b]` ↔ `[−b, −a]`, as for roll and yaw joints), actuator
     /// kp/kv and gear, actuator force and control ranges (equal or mirrored), body masses, and
     /// the types and sizes of each body pair's collision geoms (which covers the feet).
-    /// Quadruped legs pair by their `FL_`/`FR_`, `RL_`/`RR_` (and ANYmal-style `LF_`/`RF_`,
-    /// `LH_`/`RH_`) prefixes. Scalars are compared with relative `tolerance`, ranges with
+    /// Quadruped legs pair by their `FL_`/`FR_`, `RL_`/`RR_` or `HL_`/`HR_` (Spot-style hind
+    /// legs; and ANYmal-style `LF_`/`RF_`, `LH_`/`RH_`) prefixes, in either case. Scalars are compared with relative `tolerance`, ranges with
     /// absolute `range_tolerance`. Collision geoms are matched one to one by type, and sizes
     /// agree within `geom_tolerance` (relative) or 0.5 mm: enough for the 0.1–0.2 mm export noise
     /// of mesh-derived sizes (meshes are compared by their own compiled size), while a box 28 %
@@ -41,7 +41,7 @@ declare_rule! {
         probe: None,
         options: [
             opt("tolerance", 0.01, "ratio", "relative difference tolerated between mirrored scalars"),
-            opt("range_tolerance", 0.001, "rad or m", "absolute difference tolerated between mirrored range ends"),
+            opt("range_tolerance", 0.005, "rad or m", "absolute difference tolerated between mirrored range ends (0.005 rad ≈ 0.3°: calibrated hardware limits differ by a few mrad)"),
             opt("geom_tolerance", 0.02, "ratio", "relative size difference tolerated between mirrored collision geoms (or 0.5 mm)"),
         ],
     }

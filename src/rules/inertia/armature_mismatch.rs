@@ -193,8 +193,9 @@ impl Rule for ArmatureMismatch {
     }
 }
 
-/// The copy-paste sign without a spec: one armature on every actuated joint while their force
-/// limits span `effort_spread` × or more.
+/// The copy-paste sign without a spec: one armature on every actuated hinge while their torque
+/// limits span `effort_spread` × or more. Slide joints (armature in kg, force limits in N, e.g.
+/// a gripper's fingers) are not compared with hinges.
 fn uniform_without_spec(cx: &Context, out: &mut Vec<Finding>) {
     let robot = cx.robot;
     let spread_min = cx.opt("effort_spread");
@@ -202,7 +203,7 @@ fn uniform_without_spec(cx: &Context, out: &mut Vec<Finding>) {
         .joints
         .iter()
         .filter(|j| {
-            j.is_scalar()
+            j.jtype == crate::model::JointType::Hinge
                 && !robot.actuators_on_joint(j.id).is_empty()
                 && !cx.facts(&j.name).is_some_and(|f| f.passive)
         })
@@ -240,7 +241,7 @@ fn uniform_without_spec(cx: &Context, out: &mut Vec<Finding>) {
             cx,
             j,
             format!(
-                "every one of the {} actuated joints has the same armature {} kg·m², while their force limits span {}–{} N·m ({}×, `{}` to `{}`)",
+                "every one of the {} actuated hinge joints has the same armature {} kg·m², while their torque limits span {}–{} N·m ({}×, `{}` to `{}`)",
                 joints.len(),
                 fmt_num(a0, 4),
                 fmt_num(lo, 4),
