@@ -188,6 +188,8 @@ CHAIN_S = dict(sim="chain", model="stance3_chain")
 CASES["KS0_stance_none"] = dict(CHAIN_S, seed=82, effects={})
 CASES["KS1_trunk_com_shift"] = dict(CHAIN_S, seed=83, effects={"bodies": {"trunk": {
     "joint": "hip_pitch", "com_shift": [0.04, 0.0, -0.03]}}})
+# KS2's battery sits off the trunk's axis (8 cm behind it): the composite body is a mass on the
+# axis and a centre of mass moved across it, which no single body effect is.
 CASES["KS2_trunk_battery"] = dict(CHAIN_S, seed=84, effects={"bodies": {"trunk": {
     "joint": "hip_pitch", "payload": {"mass": 1.5, "pos": [-0.08, 0.0, 0.32]}}}})
 # Reduced for `make test` (tests/independent_chain.rs): 4 episodes × 4 s, the last held out.
