@@ -2,87 +2,59 @@
 //! committed in `fixtures/independent_py/`, see its README): a concealed payload on the shank of
 //! a three-joint leg must come out as a `link_mass` on the knee's child body with the payload's
 //! mass within 10 % and its place within 10 % of the link's length, written back into the
-//! shank's `<inertial>`; the same leg with nothing concealed must give nothing. Every expected
-//! value is read from the simulator's `truth.json`.
+//! shank's `<inertial>`; the same leg with nothing concealed must give nothing, and so must a
+//! battery moving the centre of mass of the trunk the leg hangs from on its test stand (welded
+//! to the world, it loads no recorded joint). Every expected value is read from the simulator's
+//! `truth.json`.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
 
-fn case(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures/independent_py").join(name)
-}
-
-fn json(path: &Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(path).expect("read")).expect("json")
-}
-
-/// `modellint fit --format json` on a case (extra arguments appended).
-fn fit(name: &str, extra: &[&str]) -> serde_json::Value {
-    let d = case(name);
-    let o = Command::new(env!("CARGO_BIN_EXE_modellint"))
-        .arg("fit")
-        .arg(d.join("nominal.xml"))
-        .arg(d.join("episodes"))
-        .args(["--format", "json", "--quiet"])
-        .args(extra)
-        .output()
-        .expect("run modellint");
-    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
-    serde_json::from_slice(&o.stdout).expect("fit JSON")
-}
-
-fn v3(v: &serde_json::Value) -> [f64; 3] {
-    let a: Vec<f64> = v.as_array().expect("array").iter().map(|x| x.as_f64().unwrap()).collect();
-    [a[0], a[1], a[2]]
-}
+use common::indep::{TruthBody, assert_nothing, assert_payload_found, fit, truth};
 
 #[test]
 fn a_payload_on_the_shank_is_found_and_written_into_its_inertial() {
-    let truth = json(&case("R1_shank_payload/truth.json"));
-    let shank = &truth["resolved"]["_bodies"]["shank"];
-    let mass = shank["payload"]["mass"].as_f64().unwrap();
-    let pos = v3(&shank["payload"]["pos"]);
-    let com = v3(&shank["nominal_com"]);
-    let len = 2.0 * (com[0] * com[0] + com[1] * com[1] + com[2] * com[2]).sqrt();
-    // The payload's distance from the modelled centre of mass, along the joint → centre line.
-    let along = (0..3).map(|k| (pos[k] - com[k]) * com[k]).sum::<f64>() / (0.5 * len);
+    let truth = truth("R1_shank_payload");
+    let shank = TruthBody::of(&truth, "shank");
+    let (mass, _) = shank.payload();
+    let pos = common::indep::v3(&shank.b["payload"]["pos"]);
+    let com = shank.com;
     let out = std::env::temp_dir().join(format!("modellint-indep-body-{}", std::process::id()));
     std::fs::create_dir_all(&out).unwrap();
     let written = out.join("fitted.xml");
     let v = fit("R1_shank_payload", &["--write-model", written.to_str().unwrap()]);
-    let mp = v["missing_physics"].as_array().unwrap();
-    let found: Vec<(String, String)> = mp
-        .iter()
-        .map(|m| (m["effect"].as_str().unwrap().into(), m["joints"].to_string()))
-        .collect();
-    assert_eq!(found, [("link_mass".to_string(), r#"["knee"]"#.to_string())], "{found:?}");
+    assert_payload_found(&v, &shank, "knee");
     // With the payload fitted, nothing is left above the floors.
     assert_eq!(v["unexplained"].as_array().map(Vec::len), Some(0), "{}", v["unexplained"]);
-    let p = &mp[0]["params"];
-    let (dm, off) = (p["added_mass"].as_f64().unwrap(), p["offset"].as_f64().unwrap());
-    assert!((dm - mass).abs() <= 0.1 * mass, "added mass {dm} for {mass}");
-    assert!((off - along).abs() <= 0.1 * len, "offset {off} for {along} (link {len} m)");
     // The written model's shank is the nominal shank plus the fitted point: mass and centre of
     // mass as the truth's composite body within the same 10 %.
-    let mut map = modellint::model::source::SourceMap::default();
-    let robot = modellint::model::load(&mut map, &written, None).expect("the written model loads");
+    let robot = common::load(&written);
     let b = robot.mj.body_mass();
     let ipos = robot.mj.body_ipos();
     let id = robot.joint("knee").unwrap().id;
     let body = robot.mj.jnt_bodyid()[id] as usize;
-    let m0 = shank["nominal_mass"].as_f64().unwrap();
+    let m0 = shank.b["nominal_mass"].as_f64().unwrap();
     assert!((b[body] - (m0 + mass)).abs() <= 0.1 * mass, "written mass {}", b[body]);
     let c_true: Vec<f64> = (0..3).map(|k| (m0 * com[k] + mass * pos[k]) / (m0 + mass)).collect();
     let dc: f64 = (0..3).map(|k| (ipos[body][k] - c_true[k]).powi(2)).sum::<f64>().sqrt();
-    assert!(dc <= 0.1 * len * mass / (m0 + mass), "written centre of mass off by {dc} m");
+    assert!(dc <= 0.1 * shank.len * mass / (m0 + mass), "written centre of mass off by {dc} m");
     std::fs::remove_dir_all(&out).ok();
 }
 
 #[test]
 fn the_same_leg_without_a_payload_gives_nothing() {
-    let v = fit("R0_none", &[]);
-    assert_eq!(v["missing_physics"].as_array().map(Vec::len), Some(0), "{}", v["missing_physics"]);
-    assert_eq!(v["unexplained"].as_array().map(Vec::len), Some(0), "{}", v["unexplained"]);
+    assert_nothing(&fit("R0_none", &[]));
+}
+
+/// A 1 kg battery on the test stand's trunk and its centre of mass moved 3 cm: the trunk is
+/// welded to the world, so no recorded joint carries it and nothing can be said about it —
+/// the fit must report nothing (not a body effect on the hip's thigh, not a joint effect).
+#[test]
+fn a_battery_on_the_trunk_of_a_leg_on_a_stand_is_not_reported() {
+    let truth = truth("RS1_stand_trunk_battery");
+    let stand = &truth["resolved"]["_bodies"]["stand"];
+    assert!(stand["joint"].is_null(), "the stand must be welded: {stand}");
+    assert!(stand["payload"]["mass"].as_f64().unwrap() > 0.0);
+    assert_nothing(&fit("RS1_stand_trunk_battery", &[]));
 }
 
 /// Told to explain the payload with joint effects only, the fit keeps what helps and says
@@ -95,4 +67,39 @@ fn a_payload_the_effects_allowed_cannot_name_is_an_unexplained_residual() {
     assert!(knee["residual_rms"].as_f64().unwrap() > 3.0 * knee["floor_rms"].as_f64().unwrap());
     let w = v["warnings"].to_string();
     assert!(w.contains("unexplained residual on knee"), "{w}");
+}
+
+/// `--holdout-by` rotates the held-out episodes; a told armature on the knee of the leg that
+/// has none comes out at the model's own value within its uncertainty in every fold, and is
+/// then a note, not a selected effect (as in a single fit).
+#[test]
+fn the_rotation_does_not_list_an_effect_at_the_models_own_value() {
+    let v = fit("R0_none", &["--holdout-by", "episode", "--told", "armature@knee"]);
+    let folds = v["folds"].as_array().unwrap();
+    assert_eq!(folds.len(), 4, "{v}");
+    for f in folds {
+        assert_eq!(f["selected"].as_array().map(Vec::len), Some(0), "{}", f["selected"]);
+        let notes = f["notes"].to_string();
+        assert!(notes.contains("armature on knee") && notes.contains("within 2"), "{notes}");
+    }
+}
+
+/// The same 0.25 kg sensor at the foot end of all four shanks of the quadruped on its stand:
+/// one `link_mass` on the four knees' child bodies as one group (every leg), mass and place
+/// within 10 %.
+#[test]
+fn the_same_payload_on_every_shank_is_one_group() {
+    let truth = truth("QR6_shanks_payload");
+    let v = fit("QR6_shanks_payload", &[]);
+    let knees = r#"["FL_knee","FR_knee","RL_knee","RR_knee"]"#;
+    let found = common::indep::found(&v);
+    assert_eq!(found, [("link_mass".into(), knees.into())], "{found:?}");
+    for leg in ["FL", "FR", "RL", "RR"] {
+        let shank = TruthBody::of(&truth, &format!("{leg}_shank"));
+        let (mass, along) = shank.payload();
+        let p = &v["missing_physics"][0]["params"];
+        let (dm, off) = (p["added_mass"].as_f64().unwrap(), p["offset"].as_f64().unwrap());
+        assert!((dm - mass).abs() <= 0.1 * mass, "{leg}: added mass {dm} for {mass}");
+        assert!((off - along).abs() <= 0.1 * shank.len, "{leg}: offset {off} for {along}");
+    }
 }

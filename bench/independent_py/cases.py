@@ -171,3 +171,36 @@ CHAIN_R = dict(CHAIN_L, episodes=4, seconds=4.0, heldout=[3])
 CASES["KR0_leg_none"] = dict(CHAIN_R, seed=90, effects={})
 CASES["KR1_shank_payload"] = dict(CHAIN_R, seed=91, effects={"bodies": {"shank": {
     "joint": "knee", "payload": {"mass": 0.6, "pos": [0.0, 0.0, -0.25]}}}})
+# ---- the trunk's centre of mass (issue 48): observable only where the legs carry the trunk.
+# On a test stand (the trunk welded to the world: leg3's `stand` body) a battery moving the
+# trunk's centre of mass acts on no recorded joint — the fit must report nothing. Standing on a
+# pinned foot (chainsim, models/stance3.xml: the chain rooted at the foot, the trunk the hip's
+# child body, an inverted chain held up by its servos) it loads every joint and must come out
+# as a body effect on the hip's child body, the trunk.
+CASES["L16_stand_trunk_battery"] = dict(model="leg3", seed=32, effects={"bodies": {"stand": {
+    "payload": {"mass": 1.0, "pos": [-0.06, 0.0, 0.03]}, "com_shift": [0.03, 0.0, 0.0]}}})
+CASES["RS1_stand_trunk_battery"] = dict(CASES["L16_stand_trunk_battery"], seed=62, episodes=4,
+                                        seconds=4.0, heldout=[3])
+MODELS["stance3_chain"] = dict(xml="stance3.xml", chain="stance3", joints=["ankle", "knee", "hip_pitch"],
+                               robot="stance3_pinned_foot", key=[0.15, -0.4, 0.3], amp=[0.1, 0.15, 0.15],
+                               t0_ctrl=0.0053, **STD)
+CHAIN_S = dict(sim="chain", model="stance3_chain")
+CASES["KS0_stance_none"] = dict(CHAIN_S, seed=82, effects={})
+CASES["KS1_trunk_com_shift"] = dict(CHAIN_S, seed=83, effects={"bodies": {"trunk": {
+    "joint": "hip_pitch", "com_shift": [0.04, 0.0, -0.03]}}})
+# KS2's battery sits off the trunk's axis (8 cm behind it): the composite body is a mass on the
+# axis and a centre of mass moved across it, which no single body effect is.
+CASES["KS2_trunk_battery"] = dict(CHAIN_S, seed=84, effects={"bodies": {"trunk": {
+    "joint": "hip_pitch", "payload": {"mass": 1.5, "pos": [-0.08, 0.0, 0.32]}}}})
+# Reduced for `make test` (tests/independent_chain.rs): 4 episodes × 4 s, the last held out.
+CHAIN_SR = dict(CHAIN_S, episodes=4, seconds=4.0, heldout=[3])
+CASES["KSR0_stance_none"] = dict(CHAIN_SR, seed=92, effects={})
+CASES["KSR1_trunk_com_shift"] = dict(CHAIN_SR, seed=93, effects={"bodies": {"trunk": {
+    "joint": "hip_pitch", "com_shift": [0.04, 0.0, -0.03]}}})
+# ---- every leg (issue 48): the same 0.25 kg sensor at the foot end of all four shanks of the
+# quadruped on its stand; one body effect on the four knees' child bodies, one group.
+QUAD_PAYLOAD = {"payload": {"mass": 0.25, "pos": [0.0, 0.0, -0.2]}}
+CASES["Q6_shanks_payload"] = dict(QUAD_EP, seed=46, effects={"bodies": {
+    f"{l}_shank": QUAD_PAYLOAD for l in ("FL", "FR", "RL", "RR")}})
+CASES["QR6_shanks_payload"] = dict(CASES["Q6_shanks_payload"], seed=66, episodes=3, seconds=4.0,
+                                   heldout=[2])

@@ -68,6 +68,14 @@ CHAINS = {
         dict(joint="ankle", pos=(0.0, -0.32), parts=[(0.9, (0.05, -0.03), box_iyy(0.9, 0.10, 0.02))],
              armature=0.012, kp=30.0, kv=1.0, force=25.0, range=(-1.0, 1.0)),
     ],
+    "stance3": [  # bench/independent_py/models/stance3.xml: the foot pinned, the trunk on top
+        dict(joint="ankle", pos=(0.0, 0.0), parts=[(1.7, (0.0, 0.16), capsule_iyy(1.7, 0.03, 0.32))],
+             armature=0.03, kp=400.0, kv=8.0, force=200.0, range=(-0.6, 0.6)),
+        dict(joint="knee", pos=(0.0, 0.32), parts=[(2.6, (0.0, 0.18), capsule_iyy(2.6, 0.04, 0.36))],
+             armature=0.04, kp=300.0, kv=6.0, force=150.0, range=(-1.2, 0.4)),
+        dict(joint="hip_pitch", pos=(0.0, 0.36), parts=[(8.0, (0.0, 0.2), box_iyy(8.0, 0.08, 0.2))],
+             armature=0.04, kp=200.0, kv=4.0, force=100.0, range=(-0.6, 1.2)),
+    ],
     "pendulum": [  # fixtures/synth/pendulum_servo.xml: a massless arm, 0.5 kg at 0.1 m
         dict(joint="servo", pos=(0.0, 0.0), parts=[(0.5, (0.0, -0.1), 1e-8)],
              armature=0.0, kp=2.0, kv=0.0335, force=None, range=(-2.0, 2.0)),
@@ -442,7 +450,8 @@ def selftest():
         print("skip the comparison with MuJoCo: no mujoco module")
     else:
         for name, xml, key in (("pendulum", "../../fixtures/synth/pendulum_servo.xml", [0.0]),
-                               ("leg3", "models/leg3.xml", [-0.4, 0.8, -0.4])):
+                               ("leg3", "models/leg3.xml", [-0.4, 0.8, -0.4]),
+                               ("stance3", "models/stance3.xml", [0.15, -0.4, 0.3])):
             m = mujoco.MjModel.from_xml_path(os.path.join(HERE, xml))
             for l in CHAINS[name]:
                 bid = m.jnt_bodyid[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, l["joint"])]

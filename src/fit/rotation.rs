@@ -48,7 +48,9 @@ pub fn mean_mae<'a>(eps: impl Iterator<Item = &'a EpisodeMae>) -> (f64, f64) {
 
 /// The fold holding out the episodes whose metadata `key` equals `value`: the selection with
 /// `opts` (its `holdout_by` replaced) and the held-out MAE before → after, on every recorded
-/// joint but `unscored` (`--no-command`: replayed, not scored). Errors: no held-out episode,
+/// joint but `unscored` (`--no-command`: replayed, not scored). A kept effect within its
+/// uncertainty of the model as given moves from `selected` to a note ([`crate::fit::absent`]).
+/// Errors: no held-out episode,
 /// or a held-out replay that fails.
 pub fn fold(
     robot: &Robot,
@@ -60,7 +62,11 @@ pub fn fold(
 ) -> Result<Fold, String> {
     let ts = Instant::now();
     let o = FitOptions { holdout_by: Some((key.to_string(), value.to_string())), ..opts.clone() };
-    let out = fit(robot, recs, &o);
+    let mut out = fit(robot, recs, &o);
+    // As in a single fit: a kept effect at the model's own value within its uncertainty is not
+    // missing physics (a note; it stays in the fitted replay).
+    let within = crate::fit::absent::split_off(robot, &mut out.selected);
+    out.notes.extend(within);
     if out.heldout.is_empty() {
         return Err(format!("{key} = {value}: no held-out episode"));
     }

@@ -82,6 +82,10 @@ pub fn edit_file(
     };
     let in_actuator =
         |n: &roxmltree::Node| n.parent_element().is_some_and(|p| p.has_tag_name("actuator"));
+    let joint_node = |j: &str| {
+        doc.descendants()
+            .find(|n| n.has_tag_name("joint") && n.attribute("name") == Some(j) && !in_actuator(n))
+    };
     // Whole-element edits (start, end, text): a body's `<inertial>`, once per body.
     let mut element_edits: Vec<(usize, usize, String)> = Vec::new();
     let mut bodies_done = BTreeSet::new();
@@ -91,13 +95,7 @@ pub fn edit_file(
         match e.write_back(&s.values) {
             WriteBack::Joint(attrs) => {
                 for j in &s.joints {
-                    let Some(node) = doc.descendants().find(|n| {
-                        n.has_tag_name("joint")
-                            && n.attribute("name") == Some(j.as_str())
-                            && !in_actuator(n)
-                    }) else {
-                        continue;
-                    };
+                    let Some(node) = joint_node(j) else { continue };
                     found.insert((i, j.clone()));
                     for (a, v) in &attrs {
                         add(node, a, num(*v));
@@ -146,13 +144,7 @@ pub fn edit_file(
             }
             WriteBack::Inertial => {
                 for j in &s.joints {
-                    let Some(node) = doc.descendants().find(|n| {
-                        n.has_tag_name("joint")
-                            && n.attribute("name") == Some(j.as_str())
-                            && !in_actuator(n)
-                    }) else {
-                        continue;
-                    };
+                    let Some(node) = joint_node(j) else { continue };
                     found.insert((i, j.clone()));
                     let Some(body) = node.parent_element().filter(|b| b.has_tag_name("body"))
                     else {

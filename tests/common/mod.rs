@@ -1,6 +1,8 @@
 //! Helpers shared by the integration tests (`mod common;`). Each test binary uses a subset.
 #![allow(dead_code)]
 
+pub mod indep;
+
 use std::path::{Path, PathBuf};
 
 use modellint::fit::select::Selected;

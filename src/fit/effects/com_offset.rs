@@ -43,13 +43,5 @@ impl Effect for ComOffset {
             inertial::shift(m, b.body, d);
         }
     }
-    fn smooth(&self) -> bool {
-        true
-    }
-    fn signature(&self, s: &Samples) -> Signature {
-        Signature::centred(s.tau.clone())
-    }
-    fn write_back(&self, _p: &[f64]) -> WriteBack {
-        WriteBack::Inertial
-    }
+    inertial::body_effect_methods!(tau);
 }

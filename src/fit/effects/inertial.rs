@@ -9,6 +9,8 @@
 use mujoco_rs::prelude::*;
 use nalgebra::{Matrix3, Rotation3, SymmetricEigen, UnitQuaternion, Vector3};
 
+use super::JointTarget;
+
 /// The nominal (compiled, as given) mass properties of a joint's child body and the link's
 /// directions, from which the body effects' parameters are measured. Read once from the model
 /// as given, so that the parameters mean the same whatever else is applied to the copy.
@@ -83,6 +85,17 @@ impl BodyAxes {
         })
     }
 
+    /// Whether `self` and `other` are alike links (mirror links, the same link on every leg), so
+    /// that one body-effect parameter vector means the same on both: mass, subtree mass, the
+    /// centre of mass's distance from the joint and the link's length within 1 %.
+    pub fn alike(&self, other: &BodyAxes) -> bool {
+        let near = |a: f64, b: f64| (a - b).abs() <= 0.01 * a.abs().max(b.abs()).max(1e-9);
+        near(self.mass, other.mass)
+            && near(self.subtree_mass, other.subtree_mass)
+            && near(v3(self.com).norm(), v3(other.com).norm())
+            && near(self.length, other.length)
+    }
+
     /// A point in the body frame: the nominal centre of mass moved by `a` along the link and
     /// `c` across it.
     pub fn point(&self, a: f64, c: f64) -> Vector3<f64> {
@@ -98,6 +111,33 @@ impl BodyAxes {
         Matrix3::from_columns(&[w, a.cross(&w), a])
     }
 }
+
+/// [`crate::fit::effects::Effect::alike`] of the body effects: both joints have a child body,
+/// and the two bodies are alike.
+pub fn alike_targets(a: &JointTarget, b: &JointTarget) -> bool {
+    matches!((&a.body, &b.body), (Some(x), Some(y)) if x.alike(y))
+}
+
+/// The [`crate::fit::effects::Effect`] methods every body effect shares, in its `impl`: smooth
+/// in its parameters, diagnosed by the centred `$feature` of the samples (`tau`, `qdd`), written
+/// back as the body's `<inertial>`, and grouped over alike links only ([`alike_targets`]).
+macro_rules! body_effect_methods {
+    ($feature:ident) => {
+        fn smooth(&self) -> bool {
+            true
+        }
+        fn signature(&self, s: &Samples) -> Signature {
+            Signature::centred(s.$feature.clone())
+        }
+        fn write_back(&self, _p: &[f64]) -> WriteBack {
+            WriteBack::Inertial
+        }
+        fn alike(&self, a: &JointTarget, b: &JointTarget) -> bool {
+            inertial::alike_targets(a, b)
+        }
+    };
+}
+pub(crate) use body_effect_methods;
 
 /// Body `b`'s mass, centre of mass and full inertia tensor about it, in the body frame.
 pub fn read(m: &MjModel, b: usize) -> Option<(f64, Vector3<f64>, Matrix3<f64>)> {

@@ -38,15 +38,7 @@ impl Effect for LinkInertia {
             inertial::scale_extent(m, b.body, &b.joint_frame(), [s, s, 0.0]);
         }
     }
-    fn smooth(&self) -> bool {
-        true
-    }
-    fn signature(&self, s: &Samples) -> Signature {
-        Signature::centred(s.qdd.clone())
-    }
-    fn write_back(&self, _p: &[f64]) -> WriteBack {
-        WriteBack::Inertial
-    }
+    inertial::body_effect_methods!(qdd);
     fn by_default(&self) -> bool {
         false
     }

@@ -47,13 +47,5 @@ impl Effect for LinkMass {
             inertial::add_point_mass(m, b.body, p[0], b.point(p[1], 0.0));
         }
     }
-    fn smooth(&self) -> bool {
-        true
-    }
-    fn signature(&self, s: &Samples) -> Signature {
-        Signature::centred(s.tau.clone())
-    }
-    fn write_back(&self, _p: &[f64]) -> WriteBack {
-        WriteBack::Inertial
-    }
+    inertial::body_effect_methods!(tau);
 }

@@ -430,6 +430,13 @@ pub trait Effect: Declared + Sync {
     fn by_default(&self) -> bool {
         true
     }
+    /// Whether one parameter vector means the same thing on targets `a` and `b`, so that the
+    /// two may share it in a group (mirror links, every leg). Default: `true`; the body effects
+    /// need alike bodies ([`inertial::BodyAxes::alike`]).
+    fn alike(&self, a: &JointTarget, b: &JointTarget) -> bool {
+        let _ = (a, b);
+        true
+    }
 }
 
 /// A value as MJCF / TOML / Python text: 6 decimals, trailing zeros trimmed, no `-0`.
@@ -651,40 +658,10 @@ pub(crate) fn get(a: &[f64], i: usize) -> f64 {
     a.get(i).copied().unwrap_or(0.0)
 }
 
-/// A one-hinge test model (a 0.5 kg capsule 0.2 m long, no gravity, 2 ms step) with one
-/// position actuator, written to `dir/name` and loaded: `option`, `joint` and `actuator` are
-/// extra attributes of `<option>`, the hinge `j` and the `<position>` element.
 #[cfg(test)]
-pub(crate) fn hinge_robot(
-    dir: &std::path::Path,
-    name: &str,
-    option: &str,
-    joint: &str,
-    actuator: &str,
-) -> Robot {
-    let xml = format!(
-        r#"<mujoco><option gravity="0 0 0" timestep="0.002" {option}/>
-  <worldbody><body><joint name="j" type="hinge" axis="0 1 0" {joint}/>
-<geom type="capsule" fromto="0 0 0 0.2 0 0" size="0.02" mass="0.5"/></body></worldbody>
-  <actuator><position joint="j" {actuator}/></actuator>
-</mujoco>"#
-    );
-    let path = dir.join(name);
-    std::fs::write(&path, xml).expect("write the test model");
-    let mut map = crate::model::source::SourceMap::default();
-    crate::model::load(&mut map, &path, None).expect("load the test model")
-}
-
-/// [`hinge_robot`]'s joint commanded to `cmd` at the sample times `t` (positions and
-/// velocities recorded as 0: only the replay is looked at).
+mod testkit;
 #[cfg(test)]
-pub(crate) fn hinge_recording(t: Vec<f64>, cmd: Vec<f64>) -> Recording {
-    let n = t.len();
-    let mut j = crate::sim2real::recording::JointTrace::new("j", vec![0.0; n]);
-    j.q_cmd = Some(cmd);
-    j.qd = Some(vec![0.0; n]);
-    Recording::at_100hz(t, vec![j])
-}
+pub(crate) use testkit::{hinge_recording, hinge_robot};
 
 #[cfg(test)]
 mod tests;

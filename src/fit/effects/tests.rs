@@ -257,3 +257,22 @@ fn link_inertia_scales_the_moment_about_the_joint_axis_and_stays_a_body() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A body effect groups only alike links: the quadruped's four shanks (0.5 kg capsule and a
+/// 0.1 kg foot each) are alike, a shank and a thigh are not; a joint effect groups any joints.
+#[test]
+fn body_effects_group_alike_links_only() {
+    use super::{JointTarget, by_id};
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("bench/independent_py/models/quad12.xml");
+    let mut map = crate::model::source::SourceMap::default();
+    let robot = crate::model::load(&mut map, &path, None).expect("load quad12");
+    let t = |j: &str| JointTarget::of(&robot, j).unwrap();
+    let (fl, rr, thigh) = (t("FL_knee"), t("RR_knee"), t("FL_hip_pitch"));
+    for id in ["link_mass", "com_offset", "link_inertia"] {
+        let e = by_id(id).unwrap();
+        assert!(e.alike(&fl, &rr), "{id}: two shanks");
+        assert!(!e.alike(&fl, &thigh), "{id}: a shank and a thigh");
+    }
+    assert!(by_id("armature").unwrap().alike(&fl, &thigh));
+}

@@ -287,7 +287,8 @@ impl Engine<'_> {
     }
 
     /// `true` when `effect` starts from the same parameter values on every joint of `group`
-    /// (within 1e-9, relative), so that the group can share one parameter vector.
+    /// (within 1e-9, relative) and finds their targets alike ([`Effect::alike`]: a body effect
+    /// needs alike links), so that the group can share one parameter vector.
     pub fn shared_start(
         &self,
         effect: &'static dyn Effect,
@@ -295,12 +296,11 @@ impl Engine<'_> {
         group: &[String],
     ) -> bool {
         let m0 = model_with(self.robot, base);
-        let starts: Vec<Vec<f64>> = group
-            .iter()
-            .filter_map(|j| JointTarget::of(self.robot, j))
-            .map(|t| effect.initial(&m0, &t))
-            .collect();
+        let targets: Vec<JointTarget> =
+            group.iter().filter_map(|j| JointTarget::of(self.robot, j)).collect();
+        let starts: Vec<Vec<f64>> = targets.iter().map(|t| effect.initial(&m0, t)).collect();
         starts.len() == group.len()
+            && targets.windows(2).all(|w| effect.alike(&w[0], &w[1]))
             && starts.windows(2).all(|w| {
                 w[0].len() == w[1].len()
                     && w[0]
