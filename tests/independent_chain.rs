@@ -2,8 +2,7 @@
 //! planar chain, no MuJoCo; committed in `fixtures/independent_py/`, see its README): the
 //! three-joint leg with a 0.6 kg payload composed into its shank by hand must come out as a
 //! `link_mass` on the knee with the payload's mass within 10 % and its place within 10 % of the
-//! link's length; the same leg with nothing concealed must give nothing (ignored: a known
-//! failure, see the test). Every expected value is read from the simulator's `truth.json`.
+//! link's length; the same leg with nothing concealed must give nothing. Every expected value is read from the simulator's `truth.json`.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -59,12 +58,12 @@ fn a_payload_composed_by_the_robots_own_physics_is_found_on_the_knee() {
     assert!((off - along).abs() <= 0.1 * len, "offset {off} for {along} (link {len} m)");
 }
 
-/// Known failure, kept as the regression test of its fix: this clean leg moves in continuous
-/// time (RK4 at 4 kHz) against a model stepped at 1 ms, and the fit reports a 0.81 ms action
-/// delay on all three joints (held-out 1.64 → 1.01 mrad) instead of counting the model's
-/// discretisation as floor. `cargo test --release --test independent_chain -- --ignored`.
+/// The same leg with nothing concealed gives nothing: it moves in continuous time (RK4 at
+/// 4 kHz) against a model stepped at 1 ms, and the model's own discretisation (the replay's
+/// distance from its continuous-time limit, extrapolated from replays at 1, ½ and ¼ ms) is
+/// floor, not physics. (Counted from the ¼ ms replay alone it came out as a 0.81 ms action
+/// delay on all three joints.)
 #[test]
-#[ignore = "known failure: the continuous-time clean leg comes out with a 0.81 ms action delay"]
 fn the_own_physics_leg_without_a_payload_gives_nothing() {
     let v = fit("KR0_leg_none");
     assert_eq!(v["missing_physics"].as_array().map(Vec::len), Some(0), "{}", v["missing_physics"]);

@@ -257,7 +257,12 @@ impl<'a> Engine<'a> {
     }
 
     /// [`Engine::errors`] with the model's timestep divided by `refine`.
-    pub fn errors_at(&self, recs: &[Recording], applied: &[Applied], refine: u32) -> Option<Errors> {
+    pub fn errors_at(
+        &self,
+        recs: &[Recording],
+        applied: &[Applied],
+        refine: u32,
+    ) -> Option<Errors> {
         let mut key = set_key(recs, applied) + &self.start_tag();
         if refine > 1 {
             key += &format!("#dt/{refine}");

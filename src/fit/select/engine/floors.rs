@@ -201,12 +201,7 @@ impl Engine<'_> {
             return d;
         }
         let d = match self.measure_discretisation(recs, applied) {
-            Some(sums) => {
-                if std::env::var_os("MODELLINT_DEBUG_DISC").is_some() {
-                    eprintln!("DISC key={} sums={:?} base={:?}", applied.len(), sums, base);
-                }
-                discretisation_part(&sums, base)
-            }
+            Some(sums) => discretisation_part(&sums, base),
             None => memo(&latest).unwrap_or_else(|| vec![0.0; self.joints.len()]),
         };
         let mut m = self.disc.lock().unwrap_or_else(|e| e.into_inner());
