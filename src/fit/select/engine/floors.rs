@@ -167,18 +167,20 @@ impl Engine<'_> {
 
     /// Per fitted joint, the model's own timestep's part of the residual mean square when the
     /// recordings move in finer time than the model, as hardware moves in continuous time.
-    /// Each dataset is replayed with `applied` at the model's timestep and at a quarter of it.
-    /// The recordings count as finer than the model when on more than half of the joints the
-    /// finer replay comes closer to them by at least half of the two replays' own mean square
-    /// difference (`ms(coarse) − ms(fine) ≥ ½ ms(coarse − fine)`), counting only joints whose
-    /// residual noise plus that difference can explain (`ms(coarse) ≤ 4 (base + ms(coarse −
-    /// fine))`, `base`: the joint's white and reconstruction floor): a large missing effect
-    /// makes either replay closer by chance. Then every joint's part is `ms(coarse − fine)`, a
-    /// property of the model and the motion that an effect fitted to absorb some of the
-    /// discretisation does not shrink; else zero. Recordings simulated at the model's own step
-    /// (every synth) are farther from the finer replay: zero. Once per set of effects; a set
-    /// that cannot be measured (actuators with a `delay`: their history is sized for the
-    /// timestep) takes the dataset's latest measurement, or zero.
+    /// Each dataset is replayed with `applied` at the model's timestep ("coarse") and, by
+    /// extrapolation from two finer replays, in continuous time ("fine",
+    /// [`Engine::measure_discretisation`]). The recordings count as finer than the model when
+    /// on more than half of the joints the fine replay comes closer to them by at least half of
+    /// the two replays' own mean square difference (`ms(coarse) − ms(fine) ≥ ½ ms(coarse −
+    /// fine)`), counting only joints whose residual noise plus that difference can explain
+    /// (`ms(coarse) ≤ 4 (base + ms(coarse − fine))`, `base`: the joint's white and
+    /// reconstruction floor): a large missing effect makes either replay closer by chance. Then
+    /// every joint's part is `ms(coarse − fine)`, a property of the model and the motion that an
+    /// effect fitted to absorb some of the discretisation does not shrink; else zero.
+    /// Recordings simulated at the model's own step (every synth) are farther from the fine
+    /// replay: zero. Once per set of effects; a set that cannot be measured (actuators with a
+    /// `delay`: their history is sized for the timestep) takes the dataset's latest
+    /// measurement, or zero.
     ///
     /// Why: an independent simulator's clean humanoid legs integrated at an eighth of the
     /// model's 2 ms step sit 1.2 mrad from the 2 ms replay; without this part `fit` explained
