@@ -5,8 +5,7 @@
 //! link's length; one leg standing on a pinned foot (the chain rooted at the foot, the trunk on
 //! top, held up by the servos) with the trunk's centre of mass moved must come out as a
 //! `com_offset` on the hip's child body, the trunk, both components within 10 % of the shift;
-//! the same robots with nothing concealed must give nothing (the hanging leg ignored: a known
-//! failure, see the test). Every expected value is read from the simulator's `truth.json`.
+//! the same robots with nothing concealed must give nothing. Every expected value is read from the simulator's `truth.json`.
 
 mod common;
 
@@ -23,12 +22,12 @@ fn a_payload_composed_by_the_robots_own_physics_is_found_on_the_knee() {
     assert_payload_found(&fit("KR1_shank_payload", &[]), &TruthBody::of(&truth, "shank"), "knee");
 }
 
-/// Known failure, kept as the regression test of its fix: this clean leg moves in continuous
-/// time (RK4 at 4 kHz) against a model stepped at 1 ms, and the fit reports a 0.81 ms action
-/// delay on all three joints (held-out 1.64 → 1.01 mrad) instead of counting the model's
-/// discretisation as floor. `cargo test --release --test independent_chain -- --ignored`.
+/// The same leg with nothing concealed gives nothing: it moves in continuous time (RK4 at
+/// 4 kHz) against a model stepped at 1 ms, and the model's own discretisation (the replay's
+/// distance from its continuous-time limit, extrapolated from replays at 1, ½ and ¼ ms) is
+/// floor, not physics. (Counted from the ¼ ms replay alone it came out as a 0.81 ms action
+/// delay on all three joints.)
 #[test]
-#[ignore = "known failure: the continuous-time clean leg comes out with a 0.81 ms action delay"]
 fn the_own_physics_leg_without_a_payload_gives_nothing() {
     assert_nothing(&fit("KR0_leg_none", &[]));
 }

@@ -253,7 +253,20 @@ impl<'a> Engine<'a> {
 
     /// Simulates `recs` with `applied`; `None` when an episode diverged or failed.
     pub fn errors(&self, recs: &[Recording], applied: &[Applied]) -> Option<Errors> {
-        let key = set_key(recs, applied) + &self.start_tag();
+        self.errors_at(recs, applied, 1)
+    }
+
+    /// [`Engine::errors`] with the model's timestep divided by `refine`.
+    pub fn errors_at(
+        &self,
+        recs: &[Recording],
+        applied: &[Applied],
+        refine: u32,
+    ) -> Option<Errors> {
+        let mut key = set_key(recs, applied) + &self.start_tag();
+        if refine > 1 {
+            key += &format!("#dt/{refine}");
+        }
         if let Some(e) = self
             .recent
             .lock()
@@ -262,7 +275,7 @@ impl<'a> Engine<'a> {
         {
             return e;
         }
-        let e = self.simulate(recs, applied);
+        let e = self.simulate(recs, applied, refine);
         if let Ok(mut r) = self.recent.lock() {
             if r.len() >= RECENT {
                 r.pop_front();
@@ -286,9 +299,10 @@ impl<'a> Engine<'a> {
         f
     }
 
-    fn simulate(&self, recs: &[Recording], applied: &[Applied]) -> Option<Errors> {
-        self.sims.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        let eps = self.rollouts.run_one(SetSpec::of(applied), recs, &self.opts.replay);
+    fn simulate(&self, recs: &[Recording], applied: &[Applied], refine: u32) -> Option<Errors> {
+        self.sims.fetch_add(refine.max(1) as usize, std::sync::atomic::Ordering::Relaxed);
+        let set = SetSpec { applied, refine: refine.max(1) };
+        let eps = self.rollouts.run_one(set, recs, &self.opts.replay);
         self.heartbeat();
         let mut eps: Vec<Episode> = eps?;
         if self.estimates_start() {

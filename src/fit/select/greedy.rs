@@ -11,6 +11,7 @@ use crate::fit::stats::bic;
 use crate::model::mirror::{leg_joint, mirror_name};
 use crate::sim2real::recording::Recording;
 
+use super::discretisation::{Judged, beyond_discretisation};
 use super::pairs::{joint_pairs, pair_lookahead};
 use super::policy::Phase;
 use super::screen::{Screen, screen_data};
@@ -358,6 +359,14 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         let v = verdict(&ho_err, &ho_a, &group, opts.policy.gate_z(z));
         let keep =
             v.significant && v.rel >= opts.policy.min_rel_improvement && bic_after < bic_before;
+        let judged = Judged {
+            base: &applied,
+            trial: &trial,
+            gate: opts.policy.gate_z(z),
+            floors: &floors,
+            round,
+        };
+        let keep = keep && beyond_discretisation(engine, heldout, &judged, out);
         let logged = out.log(Tried {
             round,
             phase: Phase::Add,

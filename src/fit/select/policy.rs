@@ -48,6 +48,10 @@ pub struct SearchPolicy {
     /// (white + reconstruction + discretisation) stops the search [ratio of mean squares].
     /// Default 1.5.
     pub white_ratio: f64,
+    /// Ratio r between the timesteps of the replays that measure the model's own time
+    /// discretisation: dt, dt / r and dt / r², extrapolated to continuous time (the
+    /// discretisation floor, and the test of a kept effect at dt / r²) [ratio]. Default 2.
+    pub discretisation_refine: usize,
 
     // ---- the held-out gate ----
     /// Smallest relative held-out RMSE improvement for an effect to be kept [fraction].
@@ -129,6 +133,7 @@ impl Default for SearchPolicy {
             every_effect: true,
             simplify: true,
             white_ratio: 1.5,
+            discretisation_refine: 2,
             min_rel_improvement: 0.02,
             decisive_improvement: 0.5,
             z_decision: 2.0,
@@ -211,6 +216,11 @@ pub const FIELDS: &[(&str, &str, &str)] = &[
         "white_ratio",
         "ratio of mean squares",
         "stop when every joint's training residual is within this factor of its floor",
+    ),
+    (
+        "discretisation_refine",
+        "ratio",
+        "the model's time discretisation is measured by replays at dt, dt / r and dt / r² (extrapolated to continuous time); a kept effect must also pass the held-out gate at dt / r²",
     ),
     (
         "min_rel_improvement",
@@ -314,6 +324,9 @@ pub enum Phase {
     Floor,
     /// Not fitted in full: its coarse fit could not come near a kept white-residual candidate.
     FloorScreen,
+    /// Passed the held-out gate at the model's timestep but not at a finer one: the model's
+    /// own time discretisation, not physics (a note).
+    Discretisation,
     /// Two effects fitted together (the pair look-ahead).
     Pair,
     /// A single effect re-fitted by a failed pair, competing with the round's winner.
@@ -357,6 +370,7 @@ impl Phase {
             Phase::Screen => "screen",
             Phase::Floor => "floor",
             Phase::FloorScreen => "floor_screen",
+            Phase::Discretisation => "discretisation",
             Phase::Pair => "pair",
             Phase::PairRestart => "pair_restart",
             Phase::JointPair => "joint_pair",

@@ -7,7 +7,7 @@ use crate::fit::stats::{residual_runs, white_floor};
 use crate::sim2real::commands::{Fill, pseudo_sign};
 use crate::sim2real::metrics::gap_mask;
 use crate::sim2real::recording::Recording;
-use crate::sim2real::replay::{Episode, REFINE, ReplayOptions};
+use crate::sim2real::replay::{Episode, ReplayOptions};
 
 use super::super::{Errors, FitOptions, Floor};
 use super::{Engine, set_key};
@@ -167,18 +167,20 @@ impl Engine<'_> {
 
     /// Per fitted joint, the model's own timestep's part of the residual mean square when the
     /// recordings move in finer time than the model, as hardware moves in continuous time.
-    /// Each dataset is replayed with `applied` at the model's timestep and at a quarter of it.
-    /// The recordings count as finer than the model when on more than half of the joints the
-    /// finer replay comes closer to them by at least half of the two replays' own mean square
-    /// difference (`ms(coarse) − ms(fine) ≥ ½ ms(coarse − fine)`), counting only joints whose
-    /// residual noise plus that difference can explain (`ms(coarse) ≤ 4 (base + ms(coarse −
-    /// fine))`, `base`: the joint's white and reconstruction floor): a large missing effect
-    /// makes either replay closer by chance. Then every joint's part is `ms(coarse − fine)`, a
-    /// property of the model and the motion that an effect fitted to absorb some of the
-    /// discretisation does not shrink; else zero. Recordings simulated at the model's own step
-    /// (every synth) are farther from the finer replay: zero. Once per set of effects; a set
-    /// that cannot be measured (actuators with a `delay`: their history is sized for the
-    /// timestep) takes the dataset's latest measurement, or zero.
+    /// Each dataset is replayed with `applied` at the model's timestep ("coarse") and, by
+    /// extrapolation from two finer replays, in continuous time ("fine",
+    /// [`Engine::measure_discretisation`]). The recordings count as finer than the model when
+    /// on more than half of the joints the fine replay comes closer to them by at least half of
+    /// the two replays' own mean square difference (`ms(coarse) − ms(fine) ≥ ½ ms(coarse −
+    /// fine)`), counting only joints whose residual noise plus that difference can explain
+    /// (`ms(coarse) ≤ 4 (base + ms(coarse − fine))`, `base`: the joint's white and
+    /// reconstruction floor): a large missing effect makes either replay closer by chance. Then
+    /// every joint's part is `ms(coarse − fine)`, a property of the model and the motion that an
+    /// effect fitted to absorb some of the discretisation does not shrink; else zero.
+    /// Recordings simulated at the model's own step (every synth) are farther from the fine
+    /// replay: zero. Once per set of effects; a set that cannot be measured (actuators with a
+    /// `delay`: their history is sized for the timestep) takes the dataset's latest
+    /// measurement, or zero.
     ///
     /// Why: an independent simulator's clean humanoid legs integrated at an eighth of the
     /// model's 2 ms step sit 1.2 mrad from the 2 ms replay; without this part `fit` explained
@@ -211,9 +213,22 @@ impl Engine<'_> {
         d
     }
 
-    /// Per fitted joint, the mean squares (coarse − real, fine − real, coarse − fine) of the
-    /// replays at the model's timestep and at a quarter of it with `applied`; `None` when they
-    /// cannot be made.
+    /// Per fitted joint, the mean squares (coarse − real, continuous − real, coarse −
+    /// continuous) of the replay at the model's timestep and of its continuous-time limit with
+    /// `applied`; `None` when they cannot be made.
+    ///
+    /// The continuous-time limit is measured, not assumed: the dataset is replayed at dt, dt/r
+    /// and dt/r² (r: [`SearchPolicy::discretisation_refine`]), and the two refinements' RMS
+    /// changes give the integrator's observed convergence ratio ρ = ‖q(dt/r) − q(dt/r²)‖ /
+    /// ‖q(dt) − q(dt/r)‖ (r^−p for an order-p method), with which the finest replay is
+    /// extrapolated (Richardson): q∞ = q(dt/r²) + ρ / (1 − ρ) · (q(dt/r²) − q(dt/r)). ρ is
+    /// taken at most 1/r (first order: MuJoCo has no integrator of lower order; a larger
+    /// observed ratio is not converging and is not extrapolated further). The finest replay
+    /// alone holds 1/r² of a first-order method's error: on a lightly damped servo at 1 ms
+    /// that left 3/8 of the discretisation outside the floor, and the search fitted it as
+    /// an action delay.
+    ///
+    /// [`SearchPolicy::discretisation_refine`]: super::super::policy::SearchPolicy::discretisation_refine
     fn measure_discretisation(
         &self,
         recs: &[Recording],
@@ -221,38 +236,63 @@ impl Engine<'_> {
     ) -> Option<Vec<[f64; 3]>> {
         let m = model_with(self.robot, applied);
         let dt = m.opt().timestep;
+        let r = self.opts.policy.discretisation_refine.max(2);
         if !(dt > 0.0) || recs.is_empty() || m.actuator_history().iter().any(|h| h[0] > 0) {
             return None;
         }
-        // One batch: the model's own timestep and a quarter of it.
-        let sets = [SetSpec::of(applied), SetSpec { applied, refine: REFINE as u32 }];
-        let mut both = self.rollouts().run(&sets, recs, &self.opts.replay).into_iter();
-        let mut whole = || -> Option<Vec<Episode>> { both.next()?.into_iter().collect() };
-        let (coarse, fine) = (whole()?, whole()?);
-        self.sims.fetch_add(
-            1 + crate::sim2real::replay::REFINE as usize,
-            std::sync::atomic::Ordering::Relaxed,
-        );
-        let sums = self
-            .joints
-            .iter()
-            .map(|name| {
-                let (mut sc, mut sf, mut scf, mut n) = (0.0, 0.0, 0.0, 0usize);
-                for ((rec, c), f) in recs.iter().zip(&coarse).zip(&fine) {
-                    let Some(k) = rec.joints.iter().position(|j| &j.name == name) else { continue };
-                    let scored = gap_mask(&rec.t, self.opts.gap_mask_s);
-                    // The first sample is the start state in both replays: not counted.
-                    let rows = rec.joints[k].q.iter().zip(&c.q_sim[k]).zip(&f.q_sim[k]);
-                    for (((&q, &a), &b), &s) in rows.zip(&scored).skip(1) {
-                        if s && q.is_finite() && a.is_finite() && b.is_finite() {
-                            sc += (q - a) * (q - a);
-                            sf += (q - b) * (q - b);
-                            scf += (a - b) * (a - b);
-                            n += 1;
-                        }
+        // One batch: the model's own timestep, dt / r and dt / r².
+        let sets = [
+            SetSpec::of(applied),
+            SetSpec { applied, refine: r as u32 },
+            SetSpec { applied, refine: (r * r) as u32 },
+        ];
+        let mut all = self.rollouts().run(&sets, recs, &self.opts.replay).into_iter();
+        let mut whole = || -> Option<Vec<Episode>> { all.next()?.into_iter().collect() };
+        let (coarse, half, fine) = (whole()?, whole()?, whole()?);
+        self.sims.fetch_add(1 + r + r * r, std::sync::atomic::Ordering::Relaxed);
+        // The scored samples of a joint: (recording index, joint index, sample index).
+        let samples = |name: &String| -> Vec<(usize, usize, usize)> {
+            let mut v = Vec::new();
+            for (e, rec) in recs.iter().enumerate() {
+                let Some(k) = rec.joints.iter().position(|j| &j.name == name) else { continue };
+                let scored = gap_mask(&rec.t, self.opts.gap_mask_s);
+                // The first sample is the start state in every replay: not counted.
+                for (i, &s) in scored.iter().enumerate().skip(1) {
+                    let q = rec.joints[k].q.get(i).copied().unwrap_or(f64::NAN);
+                    let ok = [&coarse, &half, &fine].iter().all(|eps| {
+                        eps[e].q_sim.get(k).and_then(|v| v.get(i)).is_some_and(|x| x.is_finite())
+                    });
+                    if s && q.is_finite() && ok {
+                        v.push((e, k, i));
                     }
                 }
-                let n = n.max(1) as f64;
+            }
+            v
+        };
+        let per_joint: Vec<Vec<(usize, usize, usize)>> = self.joints.iter().map(samples).collect();
+        // The observed convergence ratio over every joint.
+        let (mut d1, mut d2) = (0.0, 0.0);
+        for &(e, k, i) in per_joint.iter().flatten() {
+            let (a, b, c) = (coarse[e].q_sim[k][i], half[e].q_sim[k][i], fine[e].q_sim[k][i]);
+            d1 += (a - b) * (a - b);
+            d2 += (b - c) * (b - c);
+        }
+        let rho = if d1 > 0.0 { (d2 / d1).sqrt().min(1.0 / r as f64) } else { 0.0 };
+        let ext = rho / (1.0 - rho);
+        let sums = per_joint
+            .iter()
+            .map(|idx| {
+                let (mut sc, mut sf, mut scf) = (0.0, 0.0, 0.0);
+                for &(e, k, i) in idx {
+                    let q = recs[e].joints[k].q[i];
+                    let a = coarse[e].q_sim[k][i];
+                    let (b, c) = (half[e].q_sim[k][i], fine[e].q_sim[k][i]);
+                    let inf = c + ext * (c - b);
+                    sc += (q - a) * (q - a);
+                    sf += (q - inf) * (q - inf);
+                    scf += (a - inf) * (a - inf);
+                }
+                let n = idx.len().max(1) as f64;
                 [sc / n, sf / n, scf / n]
             })
             .collect();

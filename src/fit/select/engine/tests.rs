@@ -200,10 +200,12 @@ fn recordings_in_continuous_time_count_the_timestep_as_floor() {
     // Continuous time: the residual is well above noise, the timestep part carries it.
     let cont = record(16);
     let f = floor_of(&cont);
-    // (The replay at a quarter of the step is not continuous either: it takes about
-    // two thirds of the residual.)
+    // The part is extrapolated to continuous time from the replays at dt, dt/2 and dt/4: about
+    // all of the residual above the noise (the recordings, at dt/16, still hold 1/16 of a
+    // first-order method's error, so the part may exceed it a little).
     assert!(f.ms > 5.0 * (f.white + f.reconstruction), "{f:?}");
-    assert!(f.discretisation > 0.5 * f.ms && f.discretisation <= f.ms, "{f:?}");
+    let above = f.ms - f.white - f.reconstruction;
+    assert!(f.discretisation > 0.8 * above && f.discretisation < 1.5 * above, "{f:?}");
     assert!(f.reached(opts.policy.white_ratio), "{f:?}");
     let out = super::super::fit(&robot, &cont, &opts);
     assert!(out.selected.is_empty() && out.stopped_at_floor, "{:?}", out.selected);

@@ -1,0 +1,202 @@
+//! The held-out gate at a finer timestep: an effect that only makes up for the model's own time
+//! discretisation is reported as a note, not as missing physics.
+//!
+//! A real robot moves in continuous time; MuJoCo steps its model at `dt` (semi-implicit Euler
+//! or another fixed-step method), which on a lightly damped servo looks like a sub-millisecond
+//! action delay or a little armature. When the recordings move in finer time than the model
+//! (the discretisation floor, [`Engine::discretisation_floor`], has a part on some joint), a
+//! candidate that passed the held-out gate at `dt` is judged again with both sides replayed at
+//! `dt / r²` ([`SearchPolicy::discretisation_refine`]), where the integration error is a
+//! fraction of what it is at `dt`: an effect that is physics still improves the held-out
+//! recordings beyond noise there; one that absorbed the integration error does not (an
+//! action delay shorter than the integrator's equivalent phase lag makes the finer replay
+//! worse).
+//!
+//! [`Engine::discretisation_floor`]: super::engine::Engine::discretisation_floor
+//! [`SearchPolicy::discretisation_refine`]: super::policy::SearchPolicy::discretisation_refine
+
+use crate::fit::effects::{Applied, num};
+use crate::sim2real::recording::Recording;
+
+use super::engine::Engine;
+use super::policy::Phase;
+use super::verdict::{Gate, verdict};
+use super::{FitOutcome, Floor, Tried};
+
+/// What [`beyond_discretisation`] judges: the round's base set, the base with the candidate
+/// (its last entry), the gate the candidate passed and the round's floors.
+pub(super) struct Judged<'a> {
+    pub(super) base: &'a [Applied],
+    pub(super) trial: &'a [Applied],
+    pub(super) gate: Gate,
+    pub(super) floors: &'a [Floor],
+    pub(super) round: usize,
+}
+
+/// `true` when the candidate (the last effect of `j.trial`), which passed the held-out gate at
+/// the model's timestep, is physics beyond the model's time discretisation: the recordings do
+/// not move in finer time than the model (no discretisation part in `j.floors`: nothing is
+/// simulated), or the candidate also passes `j.gate` (and `min_rel_improvement`) with both
+/// sides replayed on `heldout` at `dt / r²`. Otherwise the attempt is logged (phase
+/// `discretisation`) and a note says so.
+pub(super) fn beyond_discretisation(
+    engine: &Engine,
+    heldout: &[Recording],
+    j: &Judged,
+    out: &mut FitOutcome,
+) -> bool {
+    let Some(cand) = j.trial.last() else { return true };
+    if !j.floors.iter().any(|f| f.discretisation > 0.0) {
+        return true;
+    }
+    let r = engine.opts.policy.discretisation_refine.max(2);
+    let k = (r * r) as u32;
+    let (Some(before), Some(after)) =
+        (engine.errors_at(heldout, j.base, k), engine.errors_at(heldout, j.trial, k))
+    else {
+        // Not measurable at the finer step: the gate at `dt` stands.
+        return true;
+    };
+    let v = verdict(&before, &after, &cand.joints, j.gate);
+    if v.significant && v.rel >= engine.opts.policy.min_rel_improvement {
+        return true;
+    }
+    out.log(Tried {
+        round: j.round,
+        phase: Phase::Discretisation,
+        effect: cand.effect.id().into(),
+        joints: cand.joints.clone(),
+        params: cand.params.clone(),
+        train_rmse: f64::NAN,
+        heldout_improvement: v.rel,
+        significant: v.significant,
+        bic_decreased: false,
+        kept: false,
+        predicted: None,
+    });
+    let dt = engine.robot.mj.opt().timestep;
+    let params: Vec<String> = cand
+        .effect
+        .params()
+        .iter()
+        .zip(&cand.params)
+        .map(|(d, v)| format!("{} {}", d.name, num(*v)))
+        .collect();
+    let note = format!(
+        "{} on {} ({}) is within the model's time discretisation at dt = {} s, not reported as \
+         missing physics: replayed at dt / {k} it does not improve the held-out recordings \
+         beyond noise ({:+.1} %); a finer timestep would resolve it",
+        cand.effect.id(),
+        cand.joints.join(","),
+        params.join(", "),
+        num(dt),
+        100.0 * v.rel,
+    );
+    // One note per effect and joint group (a later round may fit it again).
+    let head = format!("{} on {} (", cand.effect.id(), cand.joints.join(","));
+    if !out.notes.iter().any(|n| n.starts_with(&head) && n.contains("time discretisation")) {
+        out.notes.push(note);
+    }
+    false
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fit::effects::{ActionDelay, Effect, ViscousDamping};
+    use crate::sim2real::commands::pseudo_sign;
+    use crate::sim2real::recording::JointTrace;
+
+    /// A servo too stiff for its model's 5 ms step (ω·dt ≈ 0.27), with `damping` on its joint.
+    fn servo(damping: f64) -> String {
+        format!(
+            r#"<mujoco><option gravity="0 0 0" timestep="0.005" integrator="implicitfast"/>
+  <worldbody><body><joint name="j" type="hinge" axis="0 1 0" damping="{damping}"/>
+<geom type="capsule" fromto="0 0 0 0.2 0 0" size="0.02" mass="0.5"/></body></worldbody>
+  <actuator><position joint="j" kp="20" kv="0.3"/></actuator></mujoco>"#
+        )
+    }
+
+    /// Four episodes of `real` stepped by hand at 5 ms / 16 (nearly continuous time), one row
+    /// at each 100 Hz tick with that tick's command (a new level every 0.2–0.3 s) and a small
+    /// reading noise.
+    fn record(real: &crate::model::Robot) -> Vec<Recording> {
+        let mut m = real.mj.clone();
+        m.opt_mut().timestep = 0.005 / 16.0;
+        (0..4)
+            .map(|e| {
+                let ticks = 300usize;
+                let cmd: Vec<f64> =
+                    (0..ticks).map(|k| 0.4 * ((k / (20 + 5 * e) + e) as f64 * 2.3).sin()).collect();
+                let mut d = mujoco_rs::prelude::MjData::new(&m);
+                let (mut q, mut qd) = (Vec::new(), Vec::new());
+                for (k, c) in cmd.iter().enumerate() {
+                    q.push(d.qpos()[0] + 2e-4 * pseudo_sign((e * 1000 + k) as u64));
+                    qd.push(d.qvel()[0]);
+                    d.ctrl_mut()[0] = *c;
+                    for _ in 0..32 {
+                        d.step();
+                    }
+                }
+                let mut j = JointTrace::new("j", q);
+                j.q_cmd = Some(cmd);
+                j.qd = Some(qd);
+                Recording {
+                    source: format!("ep{e}.csv").into(),
+                    meta: Default::default(),
+                    control_rate_hz: Some(100.0),
+                    control_t0_s: Some(0.0),
+                    t: (0..ticks).map(|k| k as f64 * 0.01).collect(),
+                    joints: vec![j],
+                    base: None,
+                }
+            })
+            .collect()
+    }
+
+    /// On recordings in continuous time, an action delay fitted at the model's 5 ms step passes
+    /// the held-out gate there (it stands in for the integrator's phase lag) but not at dt / 4:
+    /// it is a note, not physics. A missing joint damping passes at both.
+    #[test]
+    fn a_delay_standing_in_for_the_timestep_is_a_note_and_damping_is_physics() {
+        use crate::sim2real::replay::tests::robot_from_xml;
+        let (nominal, dir) = robot_from_xml("disc-gate", &servo(0.02));
+        let (clean, dir2) = robot_from_xml("disc-gate-clean", &servo(0.02));
+        let (damped, dir3) = robot_from_xml("disc-gate-damped", &servo(0.3));
+        let opts = super::super::FitOptions { estimate_start: false, ..Default::default() };
+        // `timing`: recordings of the same commands whose floors say whether the recordings
+        // move in finer time than the model (a large missing damping leaves a residual beyond
+        // what the timestep explains, and a damping fitted at dt absorbs part of the timestep's
+        // error: with either, the floor has no timestep part; the clean recordings have one).
+        let judge = |recs: &[Recording], timing: &[Recording], effect: &'static dyn Effect| {
+            let (train, heldout) = recs.split_at(3);
+            let engine = Engine::new(&nominal, recs, &opts);
+            let (p, _) = engine.fit_one(train, &[], effect, &["j".to_string()]);
+            let trial = vec![Applied { effect, joints: vec!["j".into()], params: p }];
+            let t = &timing[..3];
+            let floors = engine.floors(t, &[], &engine.errors(t, &[]).expect("replay"));
+            let gate = opts.policy.gate();
+            let before = engine.errors(heldout, &[]).expect("replay");
+            let after = engine.errors(heldout, &trial).expect("replay");
+            let at_dt = verdict(&before, &after, &trial[0].joints, gate).significant;
+            let mut out = FitOutcome::empty(String::new());
+            let j = Judged { base: &[], trial: &trial, gate, floors: &floors, round: 0 };
+            let beyond = beyond_discretisation(&engine, heldout, &j, &mut out);
+            (floors[0].discretisation, trial[0].params[0], at_dt, beyond, out)
+        };
+        let clean = record(&clean);
+        let (disc, delay, at_dt, beyond, out) = judge(&clean, &clean, &ActionDelay);
+        assert!(disc > 0.0, "no discretisation part");
+        assert!(delay > 0.0 && at_dt, "delay {delay} does not pass at dt: nothing to test");
+        assert!(!beyond, "delay {delay} kept");
+        assert_eq!(out.notes.len(), 1, "{:?}", out.notes);
+        assert!(out.notes[0].contains("within the model's time discretisation at dt = 0.005 s"));
+        assert!(out.tried.iter().any(|t| t.phase == Phase::Discretisation && !t.kept));
+        let (disc, damping, at_dt, beyond, out) = judge(&record(&damped), &clean, &ViscousDamping);
+        assert!(disc > 0.0 && at_dt, "damping {damping}: part {disc}, passes at dt {at_dt}");
+        assert!(beyond && out.notes.is_empty(), "damping {damping}: {:?}", out.notes);
+        for d in [dir, dir2, dir3] {
+            std::fs::remove_dir_all(&d).ok();
+        }
+    }
+}
