@@ -1,6 +1,6 @@
-//! Compiled-model cache and probe timings (issue 13 targets: an unchanged re-lint of a
-//! mesh-heavy model < 100 ms; cold ≤ 1.0× MuJoCo's own compile; all probes < 1 s per robot on
-//! 2 cores). Prints figures; asserts nothing. Runs the modellint binary as a pre-commit hook
+//! Lint cache and probe timings (targets: an unchanged re-lint of a mesh-heavy model, answered
+//! from the cache of lint results keyed by every input's hash, < 100 ms; cold ≤ 1.0× MuJoCo's
+//! own compile; all probes < 1 s per robot on 2 cores). Prints figures; asserts nothing. Runs the modellint binary as a pre-commit hook
 //! would (wall time of the whole process), with a fresh cache directory.
 //! Usage: cargo run --release --example cache_bench [-- MODEL ...]
 
