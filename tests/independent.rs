@@ -4,9 +4,12 @@
 //! of every control tick (`truth_commands/`), the hidden effects (`truth.json`) and its noise
 //! settings — never from modellint's replay. Skips visibly when ../shared is absent.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use common::indep::{fit_at, json};
 use modellint::sim2real::commands::{CommandTiming, Fill, Schedule, reconstruct};
 use modellint::sim2real::recording::read_csv;
 
@@ -23,10 +26,6 @@ fn arm2() -> Option<PathBuf> {
 
 fn bin() -> &'static str {
     env!("CARGO_BIN_EXE_modellint")
-}
-
-fn json(path: &Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(path).expect("read")).expect("json")
 }
 
 /// (tick, per-joint command) rows of a truth_commands file.
@@ -327,14 +326,7 @@ fn epoch_timestamps_replay_as_the_originals() {
 fn fit_matches_truth(ds: &str) {
     let Some(d) = arm2() else { return };
     let truth = json(&d.join(format!("{ds}/truth.json")));
-    let out = Command::new(bin())
-        .args(["fit", "--quiet", "--format", "json"])
-        .arg(d.join(format!("{ds}/nominal.xml")))
-        .arg(d.join(format!("{ds}/episodes")))
-        .output()
-        .expect("run");
-    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("json");
+    let v = fit_at(&d.join(format!("{ds}/nominal.xml")), &d.join(format!("{ds}/episodes")), &[]);
     let found = v["missing_physics"].as_array().unwrap();
     let mut want: Vec<String> = truth["effects"]
         .as_array()
@@ -439,16 +431,8 @@ fn fit_finds_friction_on_all_joints_as_one_group() {
 #[test]
 fn the_start_estimate_can_be_switched_on() {
     let Some(d) = arm2() else { return };
-    let run = |extra: &[&str]| -> serde_json::Value {
-        let out = Command::new(bin())
-            .args(["fit", "--quiet", "--format", "json"])
-            .args(extra)
-            .arg(d.join("arm2.none/nominal.xml"))
-            .arg(d.join("arm2.none/episodes"))
-            .output()
-            .expect("run");
-        assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
-        serde_json::from_slice(&out.stdout).expect("json")
+    let run = |extra: &[&str]| {
+        fit_at(&d.join("arm2.none/nominal.xml"), &d.join("arm2.none/episodes"), extra)
     };
     let (est, first) = (run(&["--start-estimate"]), run(&[]));
     let score = |v: &serde_json::Value| -> f64 {
@@ -479,18 +463,7 @@ fn a_told_fit_fits_exactly_the_named_effect() {
     let ds = d.join("arm2.elbow.viscous_damping");
     let truth = json(&ds.join("truth.json"));
     let damping = truth["params"]["damping"].as_f64().expect("truth damping");
-    let run = |extra: &[&str]| {
-        let out = Command::new(bin())
-            .arg("fit")
-            .arg(ds.join("nominal.xml"))
-            .arg(ds.join("episodes"))
-            .args(["--quiet", "--format", "json"])
-            .args(extra)
-            .output()
-            .expect("run");
-        assert!(out.status.code() == Some(0), "{}", String::from_utf8_lossy(&out.stderr));
-        serde_json::from_slice::<serde_json::Value>(&out.stdout).expect("json")
-    };
+    let run = |extra: &[&str]| fit_at(&ds.join("nominal.xml"), &ds.join("episodes"), extra);
     let told = run(&["--told", "viscous_damping@elbow"]);
     let mp = told["missing_physics"].as_array().expect("missing_physics");
     assert_eq!(mp.len(), 1, "{mp:#?}");

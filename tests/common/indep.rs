@@ -24,10 +24,15 @@ pub fn truth(name: &str) -> serde_json::Value {
 /// appended; the run must exit 0.
 pub fn fit(name: &str, extra: &[&str]) -> serde_json::Value {
     let d = case(name);
+    fit_at(&d.join("nominal.xml"), &d.join("episodes"), extra)
+}
+
+/// `modellint fit --format json --quiet MODEL EPISODES`, `extra` appended; the run must exit 0.
+pub fn fit_at(model: &Path, episodes: &Path, extra: &[&str]) -> serde_json::Value {
     let o = Command::new(env!("CARGO_BIN_EXE_modellint"))
         .arg("fit")
-        .arg(d.join("nominal.xml"))
-        .arg(d.join("episodes"))
+        .arg(model)
+        .arg(episodes)
         .args(["--format", "json", "--quiet"])
         .args(extra)
         .output()

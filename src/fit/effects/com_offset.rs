@@ -43,5 +43,10 @@ impl Effect for ComOffset {
             inertial::shift(m, b.body, d);
         }
     }
+    /// Both directions: on an upright trunk a shift `along` changes only gravity's stiffness
+    /// while one `across` tilts the load, on a hanging shank the reverse dominates.
+    fn screened(&self) -> usize {
+        2
+    }
     inertial::body_effect_methods!(tau);
 }

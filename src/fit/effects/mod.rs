@@ -389,6 +389,15 @@ pub trait Effect: Declared + Sync {
         let step = 0.05 * (hi - lo);
         vec![if start + step <= hi { start + step } else { start - step }]
     }
+    /// How many of the fitted parameters (the first ones) the diagnosis's linearised re-ranking
+    /// probes, each giving a sensitivity column of its own: the candidate is scored by the best
+    /// linear combination of its columns ([`crate::fit::select`]'s screen), so an effect whose
+    /// parameters are directions of equal standing (a centre of mass moved along or across a
+    /// link) is not ranked by whichever direction happens to come first. The first parameter
+    /// is probed at [`Effect::probes`], the others by a step of 5 % of their range. Default: 1.
+    fn screened(&self) -> usize {
+        1
+    }
     fn write_back(&self, p: &[f64]) -> WriteBack;
     /// One `(attribute, value)` of [`WriteBack::Actuator`] as MJCF attributes (name, text) on the
     /// actuator element `act`, or why it cannot be written there. Default: the attribute as is.
@@ -453,6 +462,15 @@ pub fn named(params: &BTreeMap<String, f64>, name: &str) -> f64 {
 
 pub fn by_id(id: &str) -> Option<&'static dyn Effect> {
     all().into_iter().find(|e| e.id() == id)
+}
+
+/// Whether `effect` may share one parameter vector over the joints of `group` (a mirror pair,
+/// every leg, a merge of two kept groups): each joint a target and [`Effect::alike`] for each
+/// two of them — a body effect needs alike links, a joint effect groups any joints.
+pub fn alike_over(robot: &Robot, effect: &dyn Effect, group: &[String]) -> bool {
+    let t: Vec<JointTarget> = group.iter().filter_map(|j| JointTarget::of(robot, j)).collect();
+    t.len() == group.len()
+        && t.iter().enumerate().all(|(i, a)| t[i + 1..].iter().all(|b| effect.alike(a, b)))
 }
 
 /// Pairs of effects that mimic each other alone but not together: a servo gain error and a

@@ -276,3 +276,42 @@ fn body_effects_group_alike_links_only() {
     }
     assert!(by_id("armature").unwrap().alike(&fl, &thigh));
 }
+
+/// A mirror pair shares one body effect only over alike links: the quadruped's front shanks
+/// (`FL_knee` ↔ `FR_knee`, as `mirror_name` pairs them) are alike; with a 0.3 kg box bolted to
+/// the right shank alone they are not, and neither is any group holding both (every leg), while
+/// a joint effect still groups them.
+#[test]
+fn mirror_pairs_share_a_body_effect_only_over_alike_links() {
+    use super::{alike_over, by_id};
+    let src = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("bench/independent_py/models/quad12.xml");
+    let xml = std::fs::read_to_string(&src).unwrap();
+    let load = |xml: &str, name: &str| {
+        let dir = std::env::temp_dir().join(format!("modellint-mirror-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join(name);
+        std::fs::write(&path, xml).unwrap();
+        let mut map = crate::model::source::SourceMap::default();
+        crate::model::load(&mut map, &path, None).expect("load quad12")
+    };
+    let mark = r#"<geom name="FR_foot""#;
+    assert!(xml.contains(mark));
+    let battery = r#"<geom name="FR_battery" type="box" pos="0.03 0 -0.08" size="0.02 0.02 0.03" mass="0.3"/>"#;
+    let uneven = xml.replacen(mark, &format!("{battery}\n{mark}"), 1);
+    let (even, uneven) = (load(&xml, "even.xml"), load(&uneven, "uneven.xml"));
+    let pair = ["FL_knee".to_string(), "FR_knee".to_string()];
+    assert_eq!(crate::model::mirror::mirror_name(&pair[0]).as_deref(), Some("FR_knee"));
+    let legs: Vec<String> =
+        ["FL_knee", "FR_knee", "RL_knee", "RR_knee"].iter().map(|s| s.to_string()).collect();
+    for id in ["link_mass", "com_offset", "link_inertia"] {
+        let e = by_id(id).unwrap();
+        assert!(alike_over(&even, e, &pair), "{id}: the even front shanks");
+        assert!(alike_over(&even, e, &legs), "{id}: the even four shanks");
+        assert!(!alike_over(&uneven, e, &pair), "{id}: a battery on the right shank alone");
+        assert!(!alike_over(&uneven, e, &legs), "{id}: every leg, one with a battery");
+        assert!(alike_over(&uneven, e, &pair[..1]), "{id}: one joint");
+    }
+    assert!(alike_over(&uneven, by_id("armature").unwrap(), &pair));
+    assert!(!alike_over(&even, by_id("armature").unwrap(), &["no_such_joint".to_string()]));
+}

@@ -87,6 +87,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
             .filter(|p| {
                 engine.joints.contains(p)
                     && !covered(c.effect, p)
+                    && effects::alike_over(robot, e, &[c.joint.clone(), p.clone()])
                     && diag
                         .iter()
                         .take(opts.policy.rank_window())
@@ -394,6 +395,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
                 && engine.joints.contains(&p)
                 && !covered(e.id(), &p)
                 && let g = sorted_pair(j, p)
+                && effects::alike_over(robot, e, &g)
                 && !has_group(&cands, e.id(), &g)
             {
                 let mut ev2 = ev.clone();

@@ -104,12 +104,14 @@ fn dot_r(a: &[f64], r: &[Option<f64>]) -> f64 {
     a.iter().zip(r).map(|(x, y)| x * y.unwrap_or(0.0)).sum()
 }
 
-/// One effect's linear model: per joint, the column's dot product with the residual (`b`) and
-/// with the effect's other columns (`g`), per unit of the effect's first parameter.
+/// One effect's linear model: per joint and screened parameter ([`Effect::screened`]) a
+/// column, its dot product with the residual (`b[joint][param]`) and with every other column of
+/// the effect (`g`, indexed `joint × k + param`), per unit of the parameter.
 #[derive(Debug, Clone, Default)]
 struct EffectModel {
     joints: Vec<String>,
-    b: Vec<f64>,
+    k: usize,
+    b: Vec<Vec<f64>>,
     g: Vec<Vec<f64>>,
 }
 
@@ -129,7 +131,8 @@ pub(super) struct Screen {
     train_n: usize,
 }
 
-/// One probe of a candidate: the probe value, its step from the start, the training column.
+/// One probe of a candidate's parameter: the probe value, its step from the start, the
+/// training column (per unit of the parameter).
 struct Probe {
     v: f64,
     step: f64,
@@ -137,11 +140,61 @@ struct Probe {
     explained: f64,
 }
 
+/// The least-squares combination of columns with Gram matrix `g` and residual products `b`:
+/// the residual sum of squares it explains, `bᵀ G⁺ b`, and the coefficients. A column that
+/// adds nothing the earlier ones do not span (its pivot below 1e-9 of its own square) is left
+/// out at 0.
+pub(super) fn combine(b: &[f64], g: &[Vec<f64>]) -> (f64, Vec<f64>) {
+    let k = b.len();
+    // Cholesky G = L Lᵀ with the dependent columns skipped.
+    let mut l = vec![vec![0.0; k]; k];
+    let mut used = vec![false; k];
+    for i in 0..k {
+        let d = g[i][i] - (0..i).map(|p| l[i][p] * l[i][p]).sum::<f64>();
+        if !(d > 1e-9 * g[i][i]) || g[i][i] <= 1e-300 {
+            continue;
+        }
+        used[i] = true;
+        l[i][i] = d.sqrt();
+        for j in i + 1..k {
+            l[j][i] = (g[j][i] - (0..i).map(|p| l[j][p] * l[i][p]).sum::<f64>()) / l[i][i];
+        }
+    }
+    // Forward: L y = b; explained = |y|²; back: Lᵀ x = y.
+    let mut y = vec![0.0; k];
+    for i in (0..k).filter(|&i| used[i]) {
+        y[i] = (b[i] - (0..i).filter(|&p| used[p]).map(|p| l[i][p] * y[p]).sum::<f64>()) / l[i][i];
+    }
+    let mut x = vec![0.0; k];
+    for i in (0..k).rev().filter(|&i| used[i]) {
+        x[i] =
+            (y[i] - (i + 1..k).filter(|&j| used[j]).map(|j| l[j][i] * x[j]).sum::<f64>()) / l[i][i];
+    }
+    (y.iter().map(|v| v * v).sum(), x)
+}
+
+/// The explained sum of squares a `k`-column fit is worth next to a one-column fit, by the
+/// information criterion counted over `m` independent pieces ([`bic_pieces`]): of `left` =
+/// `ss − explained`, the extra `k − 1` parameters are charged `(k − 1) ln m` of `m ln(left)`,
+/// i.e. `left` grows by the factor `m^((k − 1)/m)`.
+///
+/// [`bic_pieces`]: crate::fit::stats::bic_pieces
+pub(super) fn charged(ss: f64, explained: f64, k: usize, m: usize) -> f64 {
+    if k <= 1 || m <= 1 {
+        return explained;
+    }
+    let mf = m as f64;
+    let left = (ss - explained).max(0.0) * ((k - 1) as f64 * mf.ln() / mf).exp();
+    (ss - left).max(0.0)
+}
+
 impl Screen {
     /// Probes every uncovered candidate of `diag` on `train` (the screen's data; `tr_err` its
-    /// residual with `base`), one effect at a time, its joints in parallel, keeping the best of
-    /// the effect's probe values; sets each candidate's `explained_rms` to the linear explained
-    /// RMS.
+    /// residual with `base`), one effect at a time, its joints in parallel, keeping for each
+    /// screened parameter the best of its probe values; sets each candidate's `explained_rms`
+    /// to the linear explained RMS of the best combination of its columns, a combination of
+    /// more than one charged by the information criterion over the residual's windows
+    /// ([`charged`]).
     pub(super) fn build(
         engine: &Engine,
         train: &[Recording],
@@ -153,6 +206,7 @@ impl Screen {
         let r = aligned(engine, train, tr_err);
         let train_ss: f64 = r.iter().flatten().map(|x| x * x).sum();
         let train_n = r.iter().flatten().count();
+        let pieces = tr_err.windows.len();
         let mut models: BTreeMap<&'static str, EffectModel> = BTreeMap::new();
         let mut ids: Vec<&'static str> = diag.iter().map(|c| c.effect).collect();
         ids.sort_unstable();
@@ -160,60 +214,88 @@ impl Screen {
         let m0 = model_with(engine.robot, base);
         for id in ids {
             let Some(effect) = effects::by_id(id) else { continue };
+            let k = effect.screened().clamp(1, effect.fitted().max(1));
             let idx: Vec<usize> = (0..diag.len())
                 .filter(|&i| diag[i].effect == id && !covered(id, &diag[i].joint))
                 .collect();
-            let probes: Vec<Option<Probe>> = idx
+            let probes: Vec<Vec<Option<Probe>>> = idx
                 .par_iter()
                 .map(|&i| {
                     let c = &diag[i];
-                    let t = JointTarget::of(engine.robot, &c.joint)?;
+                    let Some(t) = JointTarget::of(engine.robot, &c.joint) else {
+                        return vec![];
+                    };
                     let p0 = effect.initial(&m0, &t);
                     let (lo, hi) = effect.bounds(&m0, &t);
-                    let with = |v: f64, recs: &[Recording]| {
+                    let with = |j: usize, v: f64, recs: &[Recording]| {
                         let mut p = p0.clone();
-                        p[0] = v;
+                        p[j] = v;
                         let mut a = base.to_vec();
                         a.push(Applied { effect, joints: vec![c.joint.clone()], params: p });
                         engine.errors(recs, &a)
                     };
-                    let mut best: Option<Probe> = None;
-                    for v in effect.probes(p0[0], lo[0], hi[0], &c.evidence) {
-                        let step = v - p0[0];
-                        if step == 0.0 {
-                            continue;
-                        }
-                        let Some(e) = with(v, train) else { continue };
-                        let mut column = change(engine, train, tr_err, &e, &r);
-                        let ss = dot(&column, &column);
-                        if ss <= 1e-300 {
-                            continue;
-                        }
-                        let rs = dot_r(&column, &r);
-                        let explained = rs * rs / ss;
-                        if best.as_ref().is_none_or(|b| explained > b.explained) {
-                            column.iter_mut().for_each(|x| *x /= step);
-                            best = Some(Probe { v, step, column, explained });
-                        }
-                    }
-                    best
+                    (0..k.min(p0.len()))
+                        .map(|j| {
+                            let values = if j == 0 {
+                                effect.probes(p0[0], lo[0], hi[0], &c.evidence)
+                            } else {
+                                let step = 0.05 * (hi[j] - lo[j]);
+                                vec![if p0[j] + step <= hi[j] {
+                                    p0[j] + step
+                                } else {
+                                    p0[j] - step
+                                }]
+                            };
+                            let mut best: Option<Probe> = None;
+                            for v in values {
+                                let step = v - p0[j];
+                                if step == 0.0 {
+                                    continue;
+                                }
+                                let Some(e) = with(j, v, train) else { continue };
+                                let mut column = change(engine, train, tr_err, &e, &r);
+                                let ss = dot(&column, &column);
+                                if ss <= 1e-300 {
+                                    continue;
+                                }
+                                let rs = dot_r(&column, &r);
+                                let explained = rs * rs / ss;
+                                if best.as_ref().is_none_or(|b| explained > b.explained) {
+                                    column.iter_mut().for_each(|x| *x /= step);
+                                    best = Some(Probe { v, step, column, explained });
+                                }
+                            }
+                            best
+                        })
+                        .collect()
                 })
                 .collect();
-            let mut m = EffectModel::default();
+            let mut m = EffectModel { k, ..Default::default() };
+            let zero = vec![0.0; r.len()];
             let mut cols: Vec<&Vec<f64>> = Vec::new();
-            for (&i, p) in idx.iter().zip(&probes) {
+            for (&i, ps) in idx.iter().zip(&probes) {
                 let c = &mut diag[i];
-                let Some(p) = p else { continue };
+                // A joint whose first parameter has no column is not modelled (as before the
+                // other parameters were screened).
+                let Some(Some(p)) = ps.first() else { continue };
+                let own: Vec<&Vec<f64>> = (0..k)
+                    .map(|j| ps.get(j).and_then(|p| p.as_ref()).map_or(&zero, |p| &p.column))
+                    .collect();
+                let b: Vec<f64> = own.iter().map(|col| dot_r(col, &r)).collect();
                 if train_n > 0 {
+                    let g: Vec<Vec<f64>> =
+                        own.iter().map(|x| own.iter().map(|y| dot(x, y)).collect()).collect();
+                    let single = ps.iter().flatten().map(|p| p.explained).fold(0.0, f64::max);
+                    let all = charged(train_ss, combine(&b, &g).0, k, pieces);
                     c.evidence.insert("feature_explained_rms".into(), c.explained_rms);
                     let coef = dot_r(&p.column, &r) / dot(&p.column, &p.column) / p.step;
                     c.evidence.insert("sensitivity_coef".into(), coef);
                     c.evidence.insert("probe".into(), p.v);
-                    c.explained_rms = (p.explained / train_n as f64).sqrt();
+                    c.explained_rms = (single.max(all) / train_n as f64).sqrt();
                 }
                 m.joints.push(c.joint.clone());
-                m.b.push(dot_r(&p.column, &r));
-                cols.push(&p.column);
+                m.b.push(b);
+                cols.extend(own);
             }
             let n = cols.len();
             m.g = vec![vec![0.0; n]; n];
@@ -224,28 +306,80 @@ impl Screen {
                     m.g[b][a] = g;
                 }
             }
-            if n > 0 {
+            if !m.joints.is_empty() {
                 models.insert(id, m);
             }
         }
         Screen { models, train_ss, train_n }
     }
 
-    /// The linear prediction for `effect` on `group` (one parameter shared by the group); `None`
-    /// when a joint of the group has no column.
+    /// The linear prediction for `effect` on `group` (one parameter vector shared by the
+    /// group: each parameter's column the sum of the group's columns; the least-squares step of
+    /// all screened parameters, uncharged — the fit that follows fits them all); `None` when a
+    /// joint of the group has no column.
     pub(super) fn predict(&self, effect: &str, group: &[String]) -> Option<Prediction> {
         let m = self.models.get(effect)?;
         let ix: Vec<usize> = group
             .iter()
             .map(|j| m.joints.iter().position(|x| x == j))
             .collect::<Option<Vec<_>>>()?;
-        let b: f64 = ix.iter().map(|&i| m.b[i]).sum();
-        let g: f64 =
-            ix.iter().flat_map(|&i| ix.iter().map(move |&j| (i, j))).map(|(i, j)| m.g[i][j]).sum();
-        if g <= 1e-300 || self.train_n == 0 {
+        let k = m.k;
+        let b: Vec<f64> = (0..k).map(|p| ix.iter().map(|&i| m.b[i][p]).sum()).collect();
+        let g: Vec<Vec<f64>> = (0..k)
+            .map(|p| {
+                (0..k)
+                    .map(|q| {
+                        ix.iter()
+                            .flat_map(|&i| ix.iter().map(move |&j| (i, j)))
+                            .map(|(i, j)| m.g[i * k + p][j * k + q])
+                            .sum()
+                    })
+                    .collect()
+            })
+            .collect();
+        if g[0][0] <= 1e-300 || self.train_n == 0 {
             return None;
         }
-        let train_left = (self.train_ss - b * b / g).max(0.0);
-        Some(Prediction { train_rmse: (train_left / self.train_n as f64).sqrt(), step: b / g })
+        let (explained, x) = combine(&b, &g);
+        let train_left = (self.train_ss - explained).max(0.0);
+        Some(Prediction { train_rmse: (train_left / self.train_n as f64).sqrt(), step: x[0] })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{charged, combine};
+
+    /// Two columns: the residual r = 2 a + 3 c is explained whole by the pair, by neither alone.
+    #[test]
+    fn the_best_combination_of_columns_explains_what_each_alone_does_not() {
+        let a = [1.0, 0.0, 1.0, 0.5];
+        let c = [0.0, 1.0, 1.0, -0.5];
+        let r: Vec<f64> = a.iter().zip(&c).map(|(x, y)| 2.0 * x + 3.0 * y).collect();
+        let d = |x: &[f64], y: &[f64]| x.iter().zip(y).map(|(p, q)| p * q).sum::<f64>();
+        let b = [d(&a, &r), d(&c, &r)];
+        let g = vec![vec![d(&a, &a), d(&a, &c)], vec![d(&c, &a), d(&c, &c)]];
+        let (e, x) = combine(&b, &g);
+        let ss = d(&r, &r);
+        assert!((e - ss).abs() < 1e-12 * ss, "{e} of {ss}");
+        assert!((x[0] - 2.0).abs() < 1e-12 && (x[1] - 3.0).abs() < 1e-12, "{x:?}");
+        assert!(b[0] * b[0] / g[0][0] < 0.9 * ss && b[1] * b[1] / g[1][1] < 0.9 * ss);
+        // A repeated column adds nothing and is left at 0.
+        let (e2, x2) = combine(&[b[0], b[0]], &[vec![g[0][0]; 2], vec![g[0][0]; 2]]);
+        assert!((e2 - b[0] * b[0] / g[0][0]).abs() < 1e-12 * ss && x2[1] == 0.0, "{x2:?}");
+        // A zero column (a parameter without a probe) too.
+        let (e3, _) = combine(&[b[0], 0.0], &[vec![g[0][0], 0.0], vec![0.0, 0.0]]);
+        assert!((e3 - b[0] * b[0] / g[0][0]).abs() < 1e-12 * ss);
+    }
+
+    /// The charge: nothing for one column; for a second, what is left grows by m^(1/m).
+    #[test]
+    fn a_second_column_is_charged_by_the_information_criterion() {
+        assert_eq!(charged(10.0, 4.0, 1, 100), 4.0);
+        let m = 100.0_f64;
+        let want = 10.0 - 6.0 * m.powf(1.0 / m);
+        assert!((charged(10.0, 4.0, 2, 100) - want).abs() < 1e-12);
+        assert!(charged(10.0, 4.0, 2, 100) < 4.0 && charged(10.0, 4.0, 3, 100) < want);
+        assert_eq!(charged(10.0, 0.0, 2, 100), 0.0);
     }
 }

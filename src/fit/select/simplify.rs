@@ -3,7 +3,7 @@
 
 use std::collections::BTreeMap;
 
-use crate::fit::effects::{Applied, JointTarget, model_with};
+use crate::fit::effects::{self, Applied, JointTarget, model_with};
 use crate::fit::stats::bic;
 use crate::model::Robot;
 
@@ -76,6 +76,10 @@ fn merge_pass(s: &Search, round: usize, out: &mut FitOutcome) -> bool {
             .filter(|n| a.joints.contains(n) || b.joints.contains(n))
             .cloned()
             .collect();
+        // One parameter vector only over alike targets (a body effect: alike links).
+        if !effects::alike_over(engine.robot, effect, &joints) {
+            continue;
+        }
         let mut others = out.applied.clone();
         others.remove(j);
         others.remove(i);
