@@ -32,15 +32,14 @@ fn the_own_physics_leg_without_a_payload_gives_nothing() {
     assert_nothing(&fit("KR0_leg_none", &[]));
 }
 
-/// The trunk's centre of mass 4 cm forward and 3 cm down, on a leg standing on its foot: the
-/// legs carry the trunk, so the shift loads every joint and is found on the trunk's joint.
-#[test]
-fn a_trunk_centre_of_mass_moved_is_found_when_the_leg_carries_the_trunk() {
-    let truth = truth("KSR1_trunk_com_shift");
+/// `case`'s trunk centre-of-mass shift comes out as one `com_offset` on the hip (the trunk is
+/// its child body), both components within 10 % of the shift, nothing left unexplained.
+fn assert_trunk_shift_found(case: &str) {
+    let truth = truth(case);
     own_physics(&truth);
     let trunk = TruthBody::of(&truth, "trunk");
     let (along, across) = trunk.com_shift();
-    let v = fit("KSR1_trunk_com_shift", &[]);
+    let v = fit(case, &[]);
     assert_eq!(found(&v), [("com_offset".into(), r#"["hip_pitch"]"#.into())], "{:?}", found(&v));
     let p = &v["missing_physics"][0]["params"];
     let (a, c) = (p["along"].as_f64().unwrap(), p["across"].as_f64().unwrap());
@@ -50,6 +49,23 @@ fn a_trunk_centre_of_mass_moved_is_found_when_the_leg_carries_the_trunk() {
         "({a}, {c}) for ({along}, {across})"
     );
     assert_eq!(v["unexplained"].as_array().map(Vec::len), Some(0), "{}", v["unexplained"]);
+}
+
+/// The trunk's centre of mass 4 cm forward and 3 cm down, on a leg standing on its foot: the
+/// legs carry the trunk, so the shift loads every joint and is found on the trunk's joint.
+#[test]
+fn a_trunk_centre_of_mass_moved_is_found_when_the_leg_carries_the_trunk() {
+    assert_trunk_shift_found("KSR1_trunk_com_shift");
+}
+
+/// The same shift on the longer stance log (6 × 5 s), found blind. On an upright trunk a shift
+/// along the link changes only gravity's stiffness and one across it tilts the load: ranked by
+/// its `along` column alone the hip's com_offset came fifth in the screen, out of the round's
+/// four candidates, and the search explained the trunk with a gain error on all three joints
+/// and a com_offset on the knee. Ranked by the best combination of its two columns it is first.
+#[test]
+fn a_trunk_centre_of_mass_moved_is_found_blind_on_the_longer_stance() {
+    assert_trunk_shift_found("KS1_trunk_com_shift");
 }
 
 #[test]
