@@ -94,7 +94,7 @@ impl Rule for KeyframeMotorCtrl {
             };
             let key_name = if name.is_empty() { format!("#{k}") } else { format!("`{name}`") };
             let msg = format!(
-                "keyframe {key_name} gives its {} motor (torque) actuators its own joint angles as controls: {}{more}",
+                "keyframe {key_name} sets the controls of all {} motor (torque) actuators to their joints' angles in the same keyframe: {}{more}",
                 motors.len(),
                 shown.join(", ")
             );
