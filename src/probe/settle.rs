@@ -189,16 +189,7 @@ pub fn run(robot: &Robot) -> Option<Settle> {
     let x0: Vec<f64> = d.xmat().as_flattened().to_vec();
     let start = super::stance::start(robot);
     let base_z0 = start.base_z0;
-    let mut out = Settle {
-        stance: super::stance::Figures {
-            floor: start.floor,
-            free_base: start.free_base,
-            weight: start.weight,
-            base_height: base_z0.unwrap_or(0.0),
-            ..Default::default()
-        },
-        ..Default::default()
-    };
+    let mut out = Settle { stance: start.figures(), ..Default::default() };
     let mut support_sum = 0.0;
     let mut load_sum: BTreeMap<usize, f64> = BTreeMap::new();
     let mut prev: BTreeSet<(usize, usize)> = BTreeSet::new();

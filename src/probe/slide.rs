@@ -102,16 +102,7 @@ pub fn run(robot: &Robot) -> Option<Slide> {
         robot.joints.iter().filter(|j| j.jtype == JointType::Free).collect();
     let start = super::stance::start(robot);
     let base_z0 = start.base_z0;
-    let mut out = Slide {
-        stance: super::stance::Figures {
-            floor: start.floor,
-            free_base: start.free_base,
-            weight: start.weight,
-            base_height: base_z0.unwrap_or(0.0),
-            ..Default::default()
-        },
-        ..Default::default()
-    };
+    let mut out = Slide { stance: start.figures(), ..Default::default() };
     // Each free body is pushed with a share of its subtree's weight.
     let subtree = |root: usize| -> f64 {
         robot

@@ -37,6 +37,20 @@ pub struct Start {
     pub base_z0: Option<f64>,
 }
 
+impl Start {
+    /// The run's figures before it runs: floor, base, weight and keyframe height known, the
+    /// measured ones zero.
+    pub fn figures(&self) -> Figures {
+        Figures {
+            floor: self.floor,
+            free_base: self.free_base,
+            weight: self.weight,
+            base_height: self.base_z0.unwrap_or(0.0),
+            ..Default::default()
+        }
+    }
+}
+
 pub fn start(robot: &Robot) -> Start {
     let g = robot.opt.gravity;
     let gmag = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
