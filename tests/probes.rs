@@ -67,7 +67,7 @@ fn settle_probe_confirms_the_low_toe() {
     assert_eq!(p.status, ProbeStatus::Confirmed, "{}", p.note);
     // The raw measurement: some foot geom carries almost nothing after settling.
     let s = settle::run(&l.robot).unwrap();
-    assert!(!s.diverged);
+    assert!(!s.stance.diverged);
     assert!(s.geom_load.values().any(|&f| f > 0.1));
 }
 
@@ -75,7 +75,7 @@ fn settle_probe_confirms_the_low_toe() {
 fn settle_probe_loads_every_geom_of_a_flat_foot() {
     let l = loaded("fixtures/rules/toe-tilt/valid.xml");
     let s = settle::run(&l.robot).unwrap();
-    assert!(!s.diverged);
+    assert!(!s.stance.diverged);
     let feet: Vec<_> = l.robot.geoms.iter().filter(|g| g.collides() && g.body != 0).collect();
     let total: f64 = feet.iter().map(|g| s.geom_load.get(&g.id).copied().unwrap_or(0.0)).sum();
     assert!(total > 0.1, "the robot stands on its feet");

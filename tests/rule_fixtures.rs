@@ -418,3 +418,60 @@ fn spec_notice_lists_exactly_the_rules_that_did_not_run() {
     }
     assert!(checked > 20, "only {checked} spec-less fixtures");
 }
+
+/// The findings of rule `id` on one of its fixtures (only that rule run).
+fn of(id: &str, fixture: &str) -> Vec<modellint::finding::Finding> {
+    let path = Path::new("fixtures/rules").join(id).join(fixture);
+    lint_one(&path, id).0.into_iter().filter(|f| f.rule == id).collect()
+}
+
+#[test]
+fn servo_stall_band_is_frictionloss_over_kp_times_gear_squared() {
+    // Knee kp 1 / frictionloss 1 → 1 rad; ankle kp 1 / 0.1 → 0.1 rad; the hip (kp 60 / 0.3 →
+    // 5 mrad) is stiff enough.
+    let f = of("servo-stall-band", "invalid.xml");
+    let bands: Vec<f64> = f.iter().map(|f| f.measured.as_ref().unwrap().value).collect();
+    assert_eq!(bands.len(), 2, "{f:?}");
+    assert!((bands[0] - 1.0).abs() < 1e-9 && (bands[1] - 0.1).abs() < 1e-9, "{bands:?}");
+    // 20 N of friction against 400 N/m on a slide: 5 cm.
+    let f = of("servo-stall-band", "invalid_slide.xml");
+    assert!((f[0].measured.as_ref().unwrap().value - 0.05).abs() < 1e-9);
+    // A force limit below the friction: never moves.
+    assert_eq!(of("servo-stall-band", "invalid_forcerange.xml").len(), 1);
+    // kp 2 at gear 10 is 200 N·m/rad at the joint: 5 mrad, not 0.5 rad.
+    assert!(of("servo-stall-band", "valid_geared.xml").is_empty());
+    assert!(of("servo-stall-band", "valid.xml").is_empty());
+    assert!(of("servo-stall-band", "valid_torque_motor.xml").is_empty());
+}
+
+#[test]
+fn isotropic_base_inertia_needs_an_elongated_floating_base() {
+    assert_eq!(of("isotropic-base-inertia", "invalid.xml").len(), 1);
+    // The evidence can be the child bodies' attachment points alone.
+    assert_eq!(of("isotropic-base-inertia", "invalid_mesh_trunk.xml").len(), 1);
+    for v in ["valid.xml", "valid_round_body.xml", "valid_fixed_base.xml"] {
+        assert!(of("isotropic-base-inertia", v).is_empty(), "{v}");
+    }
+}
+
+#[test]
+fn keyframe_motor_ctrl_only_when_torque_motors_get_the_pose() {
+    let f = of("keyframe-motor-ctrl", "invalid.xml");
+    assert_eq!(f.len(), 1);
+    assert_eq!(f[0].data.get("motors"), Some(&2.0), "the two non-zero angles");
+    for v in ["valid_position_servos.xml", "valid_feedforward.xml", "valid_no_ctrl.xml"] {
+        assert!(of("keyframe-motor-ctrl", v).is_empty(), "{v}");
+    }
+}
+
+#[test]
+fn mirror_pairs_leg_side_prefixes_and_reports_an_inherited_ctrlrange_once() {
+    let f = of("mirror-asymmetry", "invalid_leg_side_prefixes.xml");
+    assert_eq!(f.len(), 1, "{f:?}");
+    assert!(f[0].message.contains("`LR_KFE`") && f[0].message.contains("`LL_KFE`"));
+    assert!(of("mirror-asymmetry", "valid_leg_side_prefixes.xml").is_empty());
+    // The joints' range differs; the actuators inherit it: one finding, on the joint.
+    let f = of("mirror-asymmetry", "invalid_inherited_ctrlrange.xml");
+    assert_eq!(f.len(), 1, "{f:?}");
+    assert!(f[0].message.starts_with("joint `right_knee` range"), "{}", f[0].message);
+}

@@ -112,6 +112,37 @@ pub fn side_of(name: &str, spec: Option<&Spec>) -> Option<Side> {
     mirror(name, spec).map(|(s, _)| s)
 }
 
+/// Leg-side prefixes of two-legged robots: `LL_` (leg left) ↔ `LR_` (leg right), as on the
+/// Berkeley Humanoid. The same letters name a quadruped's left-rear leg (`LF_` `LR_` `RF_`
+/// `RR_`), so they are used only by [`mirror_in`], where the partner must exist.
+const LEG_SIDE_PREFIXES: [(&str, &str); 2] = [("LL_", "LR_"), ("ll_", "lr_")];
+
+/// [`mirror`] within a model whose names `exists` knows: the built-in and spec markers first,
+/// then the leg-side prefixes `LL_`/`LR_` when the partner name exists (a quadruped's `LR_knee`
+/// has no `LL_knee` and stays unpaired).
+pub fn mirror_in(
+    name: &str,
+    spec: Option<&Spec>,
+    exists: impl Fn(&str) -> bool,
+) -> Option<(Side, String)> {
+    if let Some(m) = mirror(name, spec) {
+        return Some(m);
+    }
+    for (l, r) in LEG_SIDE_PREFIXES {
+        for (from, to, side) in [(l, r, Side::Left), (r, l, Side::Right)] {
+            if let Some(rest) = name.strip_prefix(from)
+                && !rest.is_empty()
+            {
+                let other = format!("{to}{rest}");
+                if exists(&other) {
+                    return Some((side, other));
+                }
+            }
+        }
+    }
+    None
+}
+
 /// The mirror of a name by the built-in markers alone (no spec): `None` when the name carries no
 /// side marker.
 pub fn mirror_name(name: &str) -> Option<String> {
@@ -138,6 +169,22 @@ mod tests {
         assert_eq!(mirror("hr_uleg", None), Some((Side::Right, "hl_uleg".into())));
         assert_eq!(mirror("HL_hip", None), Some((Side::Left, "HR_hip".into())));
         assert_eq!(mirror("LL_HR", None), None);
+    }
+
+    #[test]
+    fn leg_side_prefixes_pair_only_with_their_partner() {
+        let humanoid = |n: &str| ["LL_HFE", "LR_HFE", "ll_kfe", "lr_kfe"].contains(&n);
+        assert_eq!(mirror_in("LL_HFE", None, humanoid), Some((Side::Left, "LR_HFE".into())));
+        assert_eq!(mirror_in("LR_HFE", None, humanoid), Some((Side::Right, "LL_HFE".into())));
+        assert_eq!(mirror_in("lr_kfe", None, humanoid), Some((Side::Right, "ll_kfe".into())));
+        // A quadruped's left-rear leg: no `LL_` partner, no pairing.
+        let quadruped = |n: &str| ["LF_KFE", "LR_KFE", "RF_KFE", "RR_KFE"].contains(&n);
+        assert_eq!(mirror_in("LR_KFE", None, quadruped), None);
+        // Built-in markers still come first.
+        assert_eq!(
+            mirror_in("left_knee", None, |_| false),
+            Some((Side::Left, "right_knee".into()))
+        );
     }
 
     #[test]

@@ -274,7 +274,8 @@ pub fn mirror_sign(
     joint: usize,
 ) -> Option<f64> {
     let j = robot.joints.get(joint)?;
-    let (side, other) = crate::model::mirror::mirror(&j.name, None)?;
+    let (side, other) =
+        crate::model::mirror::mirror_in(&j.name, None, |n| robot.joint(n).is_some())?;
     if side != crate::model::mirror::Side::Right {
         return None;
     }

@@ -85,18 +85,8 @@ pub struct FootView {
 impl Settle {
     /// The stance preconditions of this run, in order (see the module docs).
     pub fn preconditions(&self) -> super::Preconditions {
-        let figures = super::stance::Figures {
-            floor: self.floor,
-            diverged: self.diverged,
-            free_base: self.free_base,
-            weight: self.weight,
-            support_load: self.support_load,
-            base_tilt_deg: self.base_tilt_deg,
-            base_drop: self.base_drop,
-            base_height: self.base_height,
-        };
         super::stance::preconditions(
-            &figures,
+            &self.stance,
             &super::stance::Words {
                 finite: "the standing simulation stayed finite",
                 diverged: DIVERGED,
@@ -109,16 +99,16 @@ impl Settle {
 
     /// The largest drop of the base that still counts as upright, m.
     pub fn max_drop(&self) -> f64 {
-        super::stance::max_drop(self.base_height)
+        super::stance::max_drop(self.stance.base_height)
     }
 
     /// The whole-robot figures every stance verdict reports.
     pub fn stance_measured(&self) -> BTreeMap<String, f64> {
         BTreeMap::from([
-            ("support_load_n".to_string(), self.support_load),
-            ("weight_n".to_string(), self.weight),
-            ("base_drop_m".to_string(), self.base_drop),
-            ("base_tilt_deg".to_string(), self.base_tilt_deg),
+            ("support_load_n".to_string(), self.stance.support_load),
+            ("weight_n".to_string(), self.stance.weight),
+            ("base_drop_m".to_string(), self.stance.base_drop),
+            ("base_tilt_deg".to_string(), self.stance.base_tilt_deg),
         ])
     }
 
@@ -164,7 +154,7 @@ impl Settle {
         m.insert("chatter_per_s".into(), chatter_per_s);
         m.insert("penetration_m".into(), penetration);
         m.insert("tilt_deg".into(), tilt_deg);
-        m.insert("base_drop_m".into(), self.base_drop);
+        m.insert("base_drop_m".into(), self.stance.base_drop);
         FootView { geoms, load, chatter_per_s, penetration, tilt_deg, measured: m }
     }
 }
@@ -172,7 +162,9 @@ impl Settle {
 #[derive(Debug, Clone, Default)]
 pub struct Settle {
     pub steps: usize,
-    pub diverged: bool,
+    /// Floor, weight and base figures (support load over the last 0.3 s, the base's final tilt
+    /// and drop).
+    pub stance: super::stance::Figures,
     /// Mean normal force per geom id over the last 0.3 s, N.
     pub geom_load: BTreeMap<usize, f64>,
     /// Contact set changes per second over the last 0.5 s, per body id of the robot-side geom.
@@ -183,20 +175,6 @@ pub struct Settle {
     pub body_tilt_deg: BTreeMap<usize, f64>,
     /// Final qpos per joint id minus keyframe.
     pub joint_deflection: BTreeMap<usize, f64>,
-    /// Keyframe base height minus final, m (positive: the base fell).
-    pub base_drop: f64,
-    /// Keyframe height of the base, m.
-    pub base_height: f64,
-    /// Final tilt of the base body from its keyframe orientation, degrees.
-    pub base_tilt_deg: f64,
-    /// The world body has a colliding plane, height field or box.
-    pub floor: bool,
-    /// The robot has a free joint.
-    pub free_base: bool,
-    /// The robot's weight, N.
-    pub weight: f64,
-    /// Mean total normal force of the robot's contacts with world geoms over the last 0.3 s, N.
-    pub support_load: f64,
 }
 
 pub fn run(robot: &Robot) -> Option<Settle> {
@@ -211,13 +189,7 @@ pub fn run(robot: &Robot) -> Option<Settle> {
     let x0: Vec<f64> = d.xmat().as_flattened().to_vec();
     let start = super::stance::start(robot);
     let base_z0 = start.base_z0;
-    let mut out = Settle {
-        floor: start.floor,
-        weight: start.weight,
-        free_base: start.free_base,
-        base_height: base_z0.unwrap_or(0.0),
-        ..Default::default()
-    };
+    let mut out = Settle { stance: start.figures(), ..Default::default() };
     let mut support_sum = 0.0;
     let mut load_sum: BTreeMap<usize, f64> = BTreeMap::new();
     let mut prev: BTreeSet<(usize, usize)> = BTreeSet::new();
@@ -227,7 +199,7 @@ pub fn run(robot: &Robot) -> Option<Settle> {
         b.step(&mut d);
         out.steps += 1;
         if super::bench::warnings(&d) > warn0 {
-            out.diverged = true;
+            out.stance.diverged = true;
             return Some(out);
         }
         let cons = d.contact();
@@ -270,7 +242,7 @@ pub fn run(robot: &Robot) -> Option<Settle> {
         prev = now;
     }
     let nload = (n - load_from) as f64;
-    out.support_load = support_sum / nload;
+    out.stance.support_load = support_sum / nload;
     out.geom_load = load_sum.into_iter().map(|(g, s)| (g, s / nload)).collect();
     let window = (n - chatter_from) as f64 * dt;
     out.chatter_per_s = changes.into_iter().map(|(b, c)| (b, c as f64 / window)).collect();
@@ -292,8 +264,8 @@ pub fn run(robot: &Robot) -> Option<Settle> {
     if let (Some(z0), Some(fj)) =
         (base_z0, robot.joints.iter().find(|j| j.jtype == crate::model::JointType::Free))
     {
-        out.base_drop = z0 - q[fj.qposadr + 2];
-        out.base_tilt_deg = out.body_tilt_deg.get(&fj.body).copied().unwrap_or(0.0);
+        out.stance.base_drop = z0 - q[fj.qposadr + 2];
+        out.stance.base_tilt_deg = out.body_tilt_deg.get(&fj.body).copied().unwrap_or(0.0);
     }
     Some(out)
 }

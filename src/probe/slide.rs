@@ -62,17 +62,9 @@ pub struct Built {
 #[derive(Debug, Clone, Default)]
 pub struct Slide {
     pub steps: usize,
-    pub diverged: bool,
-    pub floor: bool,
-    pub free_base: bool,
-    /// Weight of the robot, N.
-    pub weight: f64,
-    /// Mean normal force on the ground over the last 0.2 s before the push, N.
-    pub support_load: f64,
-    /// Base tilt (degrees) and drop (m) after the push; keyframe height of the base (m).
-    pub base_tilt_deg: f64,
-    pub base_drop: f64,
-    pub base_height: f64,
+    /// Floor, weight and base figures (support load over the last 0.2 s before the push, the
+    /// base's tilt and drop after it).
+    pub stance: super::stance::Figures,
     /// Robot geom id → the ground contacts MuJoCo built for it during the push.
     pub built: BTreeMap<usize, Built>,
     /// Body id → horizontal travel during the push, m.
@@ -82,18 +74,8 @@ pub struct Slide {
 impl Slide {
     /// The whole-run preconditions (floor, finite, free base, loaded, upright).
     pub fn preconditions(&self) -> super::Preconditions {
-        let figures = super::stance::Figures {
-            floor: self.floor,
-            diverged: self.diverged,
-            free_base: self.free_base,
-            weight: self.weight,
-            support_load: self.support_load,
-            base_tilt_deg: self.base_tilt_deg,
-            base_drop: self.base_drop,
-            base_height: self.base_height,
-        };
         super::stance::preconditions(
-            &figures,
+            &self.stance,
             &super::stance::Words {
                 finite: "the run stayed finite",
                 diverged: "the push simulation diverged",
@@ -120,13 +102,7 @@ pub fn run(robot: &Robot) -> Option<Slide> {
         robot.joints.iter().filter(|j| j.jtype == JointType::Free).collect();
     let start = super::stance::start(robot);
     let base_z0 = start.base_z0;
-    let mut out = Slide {
-        floor: start.floor,
-        free_base: start.free_base,
-        weight: start.weight,
-        base_height: base_z0.unwrap_or(0.0),
-        ..Default::default()
-    };
+    let mut out = Slide { stance: start.figures(), ..Default::default() };
     // Each free body is pushed with a share of its subtree's weight.
     let subtree = |root: usize| -> f64 {
         robot
@@ -165,7 +141,7 @@ pub fn run(robot: &Robot) -> Option<Slide> {
         b.step(&mut d);
         out.steps += 1;
         if super::bench::warnings(&d) > warn0 {
-            out.diverged = true;
+            out.stance.diverged = true;
             return Some(out);
         }
         for (ci, c) in d.contact().iter().enumerate() {
@@ -199,7 +175,7 @@ pub fn run(robot: &Robot) -> Option<Slide> {
             }
         }
     }
-    out.support_load = support_sum / (n_settle - load_from).max(1) as f64;
+    out.stance.support_load = support_sum / (n_settle - load_from).max(1) as f64;
     let x1 = d.xpos().as_flattened();
     for bi in 1..nbody {
         let (dx, dy) = (x1[3 * bi] - x_start[3 * bi], x1[3 * bi + 1] - x_start[3 * bi + 1]);
@@ -207,7 +183,7 @@ pub fn run(robot: &Robot) -> Option<Slide> {
     }
     if let (Some(z0), Some(fj)) = (base_z0, free.first()) {
         let q = d.qpos();
-        out.base_drop = z0 - q[fj.qposadr + 2];
+        out.stance.base_drop = z0 - q[fj.qposadr + 2];
         // Tilt of the base's z axis from vertical-at-keyframe.
         let x = d.xmat().as_flattened();
         let bi = fj.body;
@@ -215,7 +191,7 @@ pub fn run(robot: &Robot) -> Option<Slide> {
         let k = &robot.key.qpos[fj.qposadr + 3..fj.qposadr + 7];
         // Keyframe z-axis z component from the quaternion (w, x, y, z).
         let z0z = (1.0 - 2.0 * (k[1] * k[1] + k[2] * k[2])).clamp(-1.0, 1.0);
-        out.base_tilt_deg = (zz.acos().to_degrees() - z0z.acos().to_degrees()).abs();
+        out.stance.base_tilt_deg = (zz.acos().to_degrees() - z0z.acos().to_degrees()).abs();
     }
     Some(out)
 }

@@ -37,6 +37,20 @@ pub struct Start {
     pub base_z0: Option<f64>,
 }
 
+impl Start {
+    /// The run's figures before it runs: floor, base, weight and keyframe height known, the
+    /// measured ones zero.
+    pub fn figures(&self) -> Figures {
+        Figures {
+            floor: self.floor,
+            free_base: self.free_base,
+            weight: self.weight,
+            base_height: self.base_z0.unwrap_or(0.0),
+            ..Default::default()
+        }
+    }
+}
+
 pub fn start(robot: &Robot) -> Start {
     let g = robot.opt.gravity;
     let gmag = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
@@ -54,16 +68,25 @@ pub fn max_drop(base_height: f64) -> f64 {
     (MAX_DROP * base_height).max(MIN_DROP_ALLOWED)
 }
 
-/// The figures of one run that the stance preconditions judge.
-#[derive(Debug, Clone, Copy)]
+/// The figures of one run that the stance preconditions judge, held by every stance probe's
+/// output (`Settle::stance`, `Slide::stance`).
+#[derive(Debug, Clone, Copy, Default)]
 pub struct Figures {
+    /// The world body has a colliding plane, height field or box.
     pub floor: bool,
+    /// The run did not stay finite.
     pub diverged: bool,
+    /// The robot has a free joint.
     pub free_base: bool,
+    /// The robot's weight, N.
     pub weight: f64,
+    /// Mean total normal force of the robot's contacts with world geoms while loaded, N.
     pub support_load: f64,
+    /// Tilt of the base from its keyframe orientation when judged, degrees.
     pub base_tilt_deg: f64,
+    /// Keyframe base height minus the judged one, m (positive: the base fell).
     pub base_drop: f64,
+    /// Keyframe height of the base, m.
     pub base_height: f64,
 }
 

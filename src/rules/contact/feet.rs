@@ -125,7 +125,10 @@ pub fn feet(robot: &Robot, spec: Option<&Spec>) -> Vec<Foot> {
         .collect();
     let mut out: Vec<Foot> = Vec::new();
     for &root in &roots {
-        let side = side_of(robot.body_name(root), spec);
+        let side = crate::model::mirror::mirror_in(robot.body_name(root), spec, |n| {
+            robot.bodies.iter().any(|b| b.name == n)
+        })
+        .map(|(s, _)| s);
         let toes: Vec<usize> = (1..n).filter(|&b| is_ancestor(robot, root, b)).collect();
         // A second root on the same side (a separately matched toe) joins the first.
         if let Some(f) = out.iter_mut().find(|f| side.is_some() && f.side == side) {

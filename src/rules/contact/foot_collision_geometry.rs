@@ -562,8 +562,8 @@ impl Measure for ContactAsBuilt {
         let mut m = std::collections::BTreeMap::from([
             ("push_share".to_string(), PUSH_SHARE),
             ("slide_m".to_string(), travel),
-            ("support_load_n".to_string(), s.support_load),
-            ("weight_n".to_string(), s.weight),
+            ("support_load_n".to_string(), s.stance.support_load),
+            ("weight_n".to_string(), s.stance.weight),
         ]);
         let Some(&(g0, b0)) = built.first() else {
             return Measurement::new(&pre, m, "no ground contact to measure".to_string());

@@ -119,7 +119,7 @@ impl StanceClaim for ContactGeomUnloaded {
             .collect();
         let mut m = s.stance_measured();
         m.extend(foot.measured);
-        let share = if s.weight > 0.0 { total / s.weight } else { 0.0 };
+        let share = if s.stance.weight > 0.0 { total / s.stance.weight } else { 0.0 };
         let pre = pre.clone().check(
             "foot_loaded",
             share >= FOOT_MIN_SHARE,

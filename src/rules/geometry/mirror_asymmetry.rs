@@ -1,6 +1,6 @@
 use crate::declare_rule;
 use crate::finding::{Finding, Severity, Subject};
-use crate::model::mirror::{Side, mirror};
+use crate::model::mirror::{Side, mirror_in};
 use crate::model::mjcf::ElemKind;
 use crate::model::{ActuatorKind, Robot};
 use crate::rules::{Context, Rule, RuleMeta, opt};
@@ -16,7 +16,12 @@ declare_rule! {
     /// kp/kv and gear, actuator force and control ranges (equal or mirrored), body masses, and
     /// the types and sizes of each body pair's collision geoms (which covers the feet).
     /// Quadruped legs pair by their `FL_`/`FR_`, `RL_`/`RR_` or `HL_`/`HR_` (Spot-style hind
-    /// legs; and ANYmal-style `LF_`/`RF_`, `LH_`/`RH_`) prefixes, in either case. Scalars are compared with relative `tolerance`, ranges with
+    /// legs; and ANYmal-style `LF_`/`RF_`, `LH_`/`RH_`) prefixes, in either case; a biped's
+    /// `LL_`/`LR_` (leg left, leg right) prefixes pair when the partner name exists (the same
+    /// letters name a quadruped's left-rear leg, which has no `LL_` partner). Two actuators that
+    /// both take their ctrlrange from mirror-paired joints through the same `inheritrange` are
+    /// not compared on ctrlrange: a difference there is the joints' range difference, reported
+    /// once on the joints. Scalars are compared with relative `tolerance`, ranges with
     /// absolute `range_tolerance`. Collision geoms are matched one to one by type, and sizes
     /// agree within `geom_tolerance` (relative) or 0.5 mm: enough for the 0.1–0.2 mm export noise
     /// of mesh-derived sizes (meshes are compared by their own compiled size), while a box 28 %
@@ -99,6 +104,25 @@ impl Pair<'_> {
     }
 }
 
+/// Both actuators take their ctrlrange from their joints' ranges (`inheritrange`, the same
+/// factor, no `ctrlrange`) and the joints are a mirror pair: a ctrlrange difference is then the
+/// joints' range difference, reported on the joints.
+fn inherited_from_mirror_joints(cx: &Context, a: usize, b: usize) -> bool {
+    let robot = cx.robot;
+    let inherit = |i: usize| {
+        let act = &robot.actuators[i];
+        let e = robot.elem(ElemKind::Actuator, i, &act.name)?;
+        if e.attrs.contains_key("ctrlrange") {
+            return None;
+        }
+        let factor = e.attrs.get("inheritrange")?.value.trim().parse::<f64>().ok()?;
+        let j = robot.joints.get(usize::try_from(act.target).ok()?)?;
+        Some((factor, j.name.as_str()))
+    };
+    let (Some((fa, ja)), Some((fb, jb))) = (inherit(a), inherit(b)) else { return false };
+    fa == fb && mirror_in(ja, cx.spec, |n| robot.joint(n).is_some()).is_some_and(|(_, m)| m == jb)
+}
+
 /// (left id, right id) pairs among `names`.
 fn pairs(names: &[String], cx: &Context) -> Vec<(usize, usize)> {
     let mut v = Vec::new();
@@ -106,7 +130,7 @@ fn pairs(names: &[String], cx: &Context) -> Vec<(usize, usize)> {
         if n.is_empty() {
             continue;
         }
-        if let Some((Side::Left, m)) = mirror(n, cx.spec)
+        if let Some((Side::Left, m)) = mirror_in(n, cx.spec, |x| names.iter().any(|y| y == x))
             && let Some(j) = names.iter().position(|x| *x == m)
             && j != i
         {
@@ -271,6 +295,7 @@ impl Rule for MirrorAsymmetry {
                 ));
             }
             if (a.ctrllimited || b.ctrllimited)
+                && !inherited_from_mirror_joints(cx, a.id, b.id)
                 && !range_matches(
                     a.ctrlrange,
                     b.ctrlrange,
