@@ -5,6 +5,7 @@ pub mod cache;
 mod checks;
 pub mod contact;
 mod extract;
+mod limbs;
 pub mod mirror;
 pub mod mj;
 pub mod mjcf;

@@ -1,0 +1,108 @@
+//! Limbs: the parts of a robot that move independently of each other but for where they join.
+//!
+//! A joint's limb is the unbranched chain of jointed bodies it sits on: walking from its body
+//! towards the world, the limb ends below the first body where the tree forks (two or more
+//! child subtrees with joints), below a floating base's body (the free joint), or below the
+//! static world. On a humanoid: the head, each arm, the waist, each leg. Two joints of
+//! different limbs interact only through the bodies where the limbs join (not at all across
+//! MuJoCo's separate kinematic trees): through the held base, or a servo-held waist.
+
+use super::{JointType, Robot};
+
+impl Robot {
+    /// The id of the body that starts `joint`'s limb (see the module doc); `None` for an unknown
+    /// joint or a free joint.
+    pub fn limb_of(&self, joint: &str) -> Option<usize> {
+        let j = self.joint(joint)?;
+        if j.jtype == JointType::Free {
+            return None;
+        }
+        let n = self.bodies.len();
+        let parent = |b: usize| self.bodies.get(b).map_or(0, |x| x.parent);
+        let hinged =
+            |b: usize| self.joints.iter().any(|x| x.body == b && x.jtype != JointType::Free);
+        let floating =
+            |b: usize| self.joints.iter().any(|x| x.body == b && x.jtype == JointType::Free);
+        // Whether a body's subtree holds a joint other than a free joint.
+        let mut jointed = vec![false; n];
+        for x in &self.joints {
+            if x.jtype == JointType::Free {
+                continue;
+            }
+            let mut b = x.body;
+            while b != 0 && b < n && !jointed[b] {
+                jointed[b] = true;
+                b = parent(b);
+            }
+        }
+        let fork = |b: usize| (1..n).filter(|&c| parent(c) == b && jointed[c]).count() >= 2;
+        // A body that no joint moves: the world and what is welded to it.
+        let fixed = |mut b: usize| loop {
+            if b == 0 {
+                return true;
+            }
+            if hinged(b) || floating(b) {
+                return false;
+            }
+            b = parent(b);
+        };
+        let mut b = j.body;
+        loop {
+            let p = parent(b);
+            if b == 0 || p == b || fixed(p) || floating(p) || fork(p) {
+                return Some(b);
+            }
+            b = p;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::model::load;
+    use crate::model::source::SourceMap;
+
+    fn model(xml: &str) -> crate::model::Robot {
+        let dir = std::env::temp_dir().join(format!("modellint_limbs_{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        let p = dir.join(format!("m{}.xml", xml.len()));
+        std::fs::write(&p, xml).expect("write");
+        load(&mut SourceMap::default(), &p, None).expect("loads")
+    }
+
+    #[test]
+    fn legs_of_a_floating_trunk_are_separate_limbs_and_a_leg_is_one() {
+        let r = model(
+            r#"<mujoco><worldbody><body name="trunk"><freejoint/><geom size=".1"/>
+            <body name="pelvis"><joint name="waist" axis="0 0 1"/><geom size=".1"/>
+            <body name="lthigh"><joint name="lhip" axis="0 1 0"/><geom size=".05"/>
+              <body name="lshank"><joint name="lknee" axis="0 1 0"/><geom size=".05"/></body></body>
+            <body name="rthigh"><joint name="rhip" axis="0 1 0"/><geom size=".05"/>
+              <body name="rshank"><joint name="rknee" axis="0 1 0"/><geom size=".05"/></body></body>
+            </body></body></worldbody></mujoco>"#,
+        );
+        let l = r.limb_of("lknee").expect("limb");
+        // The waist is a limb of its own; each leg below it another.
+        assert_ne!(r.limb_of("waist"), Some(l));
+        assert_ne!(r.limb_of("waist"), r.limb_of("rknee"));
+        assert_eq!(r.limb_of("lhip"), Some(l));
+        assert_ne!(r.limb_of("rknee"), Some(l));
+        assert_eq!(r.limb_of("rhip"), r.limb_of("rknee"));
+    }
+
+    #[test]
+    fn a_serial_arm_on_a_static_base_is_one_limb() {
+        let r = model(
+            r#"<mujoco><worldbody><body name="base"><geom size=".1"/>
+            <body name="a"><joint name="j1"/><geom size=".05"/>
+              <body name="b"><joint name="j2"/><geom size=".05"/>
+                <body name="c"><joint name="j3"/><geom size=".05"/></body></body></body>
+            </body></worldbody></mujoco>"#,
+        );
+        let l = r.limb_of("j3");
+        assert!(l.is_some());
+        assert_eq!(r.limb_of("j1"), l);
+        assert_eq!(r.limb_of("j2"), l);
+        assert_eq!(r.limb_of("nope"), None);
+    }
+}
