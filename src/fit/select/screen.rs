@@ -254,7 +254,8 @@ fn probe_batch(
 ) -> Vec<(usize, Vec<Option<Probe>>)> {
     let Sims { engine, train, base, tr_err, r, limbs } = *sims;
     // (candidate, start values, bounds) of the members with a target.
-    let members: Vec<(usize, Vec<f64>, (Vec<f64>, Vec<f64>))> = batch
+    type Member = (usize, Vec<f64>, (Vec<f64>, Vec<f64>));
+    let members: Vec<Member> = batch
         .iter()
         .filter_map(|&i| {
             let t = JointTarget::of(engine.robot, &diag[i].joint)?;
