@@ -15,8 +15,10 @@
 //! armature of 0.06 on all joints, recorded in near-continuous time: the group fitted 0.0612 at
 //! 1 ms; at 0.25 ms hip and knee came 20 % closer to the recordings and the ankle 38 % farther,
 //! and the hip's remaining integrator lag was kept as a 0.47 ms action delay). On recordings
-//! made at the model's own step an effect that is physics still passes there: the finer replay
-//! moves both sides alike.
+//! made at the model's own step a smooth effect that is physics still passes there: the finer
+//! replay moves both sides alike. A non-smooth one (a torque limit, load-dependent friction)
+//! changes its events with the step, and takes the test only when the floor shows a timestep
+//! part (on synthetic recordings at the model's step both failed it).
 //!
 //! [`Engine::discretisation_floor`]: super::engine::Engine::discretisation_floor
 //! [`SearchPolicy::discretisation_refine`]: super::policy::SearchPolicy::discretisation_refine
@@ -27,21 +29,25 @@ use crate::sim2real::recording::Recording;
 use super::engine::Engine;
 use super::policy::Phase;
 use super::verdict::{Gate, verdict};
-use super::{FitOutcome, Tried};
+use super::{FitOutcome, Floor, Tried};
 
 /// What [`beyond_discretisation`] judges: the round's base set, the base with the candidate
-/// (its last entry) and the gate the candidate passed.
+/// (its last entry), the gate the candidate passed and the round's floors.
 pub(super) struct Judged<'a> {
     pub(super) base: &'a [Applied],
     pub(super) trial: &'a [Applied],
     pub(super) gate: Gate,
+    pub(super) floors: &'a [Floor],
     pub(super) round: usize,
 }
 
 /// `true` when the candidate (the last effect of `j.trial`), which passed the held-out gate at
 /// the model's timestep, is physics beyond the model's time discretisation: it also passes
-/// `j.gate` (and `min_rel_improvement`) with both sides replayed on `heldout` at `dt / r²`.
-/// Otherwise the attempt is logged (phase `discretisation`) and a note says so.
+/// `j.gate` (and `min_rel_improvement`) with both sides replayed on `heldout` at `dt / r²`, or
+/// it is not smooth ([`Effect::smooth`]: a limit, a stick, a dead band) and the floors show no
+/// timestep part. Otherwise the attempt is logged (phase `discretisation`) and a note says so.
+///
+/// [`Effect::smooth`]: crate::fit::effects::Effect::smooth
 pub(super) fn beyond_discretisation(
     engine: &Engine,
     heldout: &[Recording],
@@ -49,6 +55,9 @@ pub(super) fn beyond_discretisation(
     out: &mut FitOutcome,
 ) -> bool {
     let Some(cand) = j.trial.last() else { return true };
+    if !cand.effect.smooth() && !j.floors.iter().any(|f| f.discretisation > 0.0) {
+        return true;
+    }
     let r = engine.opts.policy.discretisation_refine.max(2);
     let k = (r * r) as u32;
     let (Some(before), Some(after)) =
@@ -180,7 +189,7 @@ mod tests {
             let after = engine.errors(heldout, &trial).expect("replay");
             let at_dt = verdict(&before, &after, &trial[0].joints, gate).significant;
             let mut out = FitOutcome::empty(String::new());
-            let j = Judged { base: &[], trial: &trial, gate, round: 0 };
+            let j = Judged { base: &[], trial: &trial, gate, floors: &floors, round: 0 };
             let beyond = beyond_discretisation(&engine, heldout, &j, &mut out);
             (floors[0].discretisation, trial[0].params[0], at_dt, beyond, out)
         };

@@ -364,7 +364,13 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         let v = verdict(&ho_err, &ho_a, &group, opts.policy.gate_z(z));
         let keep =
             v.significant && v.rel >= opts.policy.min_rel_improvement && bic_after < bic_before;
-        let judged = Judged { base: &applied, trial: &trial, gate: opts.policy.gate_z(z), round };
+        let judged = Judged {
+            base: &applied,
+            trial: &trial,
+            gate: opts.policy.gate_z(z),
+            floors: &floors,
+            round,
+        };
         let keep = keep && beyond_discretisation(engine, heldout, &judged, out);
         let logged = out.log(Tried {
             round,

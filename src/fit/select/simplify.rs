@@ -417,7 +417,9 @@ fn replace(
         merge && r.agree,
     );
     out.tried.push(tested(round, r.phase, &new, (&h1, &t1, h_cur), (ok, worse, bic_ok)));
-    if !ok && !(merge && merged_at_finer_step(s, round, out, &r, k_set)) {
+    // (At dt / r² when it fails at dt: [`merged_at_finer_step`].)
+    let ok = ok || (merge && merged_at_finer_step(s, round, out, &r, k_set));
+    if !ok {
         return false;
     }
     out.notes.push(format!(
@@ -442,8 +444,9 @@ fn replace(
 /// A merge that failed its test at the model's timestep, tested again with both sets replayed
 /// at `dt / r²` ([`SearchPolicy::discretisation_refine`]): two values of one effect that differ
 /// only because the model's integrator needs a little more on one joint than on another are
-/// one value in continuous time. (Not only when the discretisation floor shows a part: values
-/// fitted at `dt` absorb it unevenly and the floor reads zero, see `discretisation`.) A leg whose three motors all reflect 0.06 kg·m² of armature,
+/// one value in continuous time. (For a smooth effect not only when the discretisation floor
+/// shows a part: values fitted at `dt` absorb it unevenly and the floor reads zero, see
+/// `discretisation`.) A leg whose three motors all reflect 0.06 kg·m² of armature,
 /// recorded in near-continuous time and replayed at 1 ms, fitted 0.0629 on the hip and 0.0612
 /// on knee and ankle: one value was 15 % worse on held-out at 1 ms, 0.5 % at 0.25 ms. `true`
 /// when the merge passes the same test there (logged, phase `discretisation`).
@@ -457,6 +460,10 @@ fn merged_at_finer_step(
     k_set: usize,
 ) -> bool {
     let Search { engine, train, heldout, .. } = *s;
+    let effect = r.set.last().expect("a replacement set ends with its new effect").effect;
+    if !effect.smooth() && !out.floors.iter().any(|f| f.discretisation > 0.0) {
+        return false;
+    }
     let refine = engine.opts.policy.discretisation_refine.max(2);
     let k = (refine * refine) as u32;
     let (Some(h1), Some(t1), Some(h_cur), Some(t_cur)) = (
