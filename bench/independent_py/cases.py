@@ -171,6 +171,9 @@ CHAIN_R = dict(CHAIN_L, episodes=4, seconds=4.0, heldout=[3])
 CASES["KR0_leg_none"] = dict(CHAIN_R, seed=90, effects={})
 CASES["KR1_shank_payload"] = dict(CHAIN_R, seed=91, effects={"bodies": {"shank": {
     "joint": "knee", "payload": {"mass": 0.6, "pos": [0.0, 0.0, -0.25]}}}})
+# Armature on every joint (one value, 0.06, where the model says 0.04 / 0.03 / 0.012): one group.
+CASES["KR8_all_armature"] = dict(CHAIN_R, seed=98,
+    effects={"joints": {j: {"armature": 0.06} for j in ALL3}})
 # ---- the trunk's centre of mass (issue 48): observable only where the legs carry the trunk.
 # On a test stand (the trunk welded to the world: leg3's `stand` body) a battery moving the
 # trunk's centre of mass acts on no recorded joint — the fit must report nothing. Standing on a

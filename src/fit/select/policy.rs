@@ -325,7 +325,8 @@ pub enum Phase {
     /// Not fitted in full: its coarse fit could not come near a kept white-residual candidate.
     FloorScreen,
     /// Passed the held-out gate at the model's timestep but not at a finer one: the model's
-    /// own time discretisation, not physics (a note).
+    /// own time discretisation, not physics (a note). Also a merge that failed at the model's
+    /// timestep, tested again at the finer one (`kept` = merged there).
     Discretisation,
     /// Two effects fitted together (the pair look-ahead).
     Pair,

@@ -286,9 +286,19 @@ impl Engine<'_> {
         effect.absorb(simple, &zero, &delta)
     }
 
+    /// `true` when `effect` finds the targets of every joint of `group` alike
+    /// ([`Effect::alike`]: a body effect needs alike links), so that one parameter vector means
+    /// the same thing on all of them. The model may give them different values of it (each
+    /// joint's own armature): the group then asks whether one value fits them all.
+    pub fn shareable(&self, effect: &'static dyn Effect, group: &[String]) -> bool {
+        let targets: Vec<JointTarget> =
+            group.iter().filter_map(|j| JointTarget::of(self.robot, j)).collect();
+        targets.len() == group.len() && targets.windows(2).all(|w| effect.alike(&w[0], &w[1]))
+    }
+
     /// `true` when `effect` starts from the same parameter values on every joint of `group`
-    /// (within 1e-9, relative) and finds their targets alike ([`Effect::alike`]: a body effect
-    /// needs alike links), so that the group can share one parameter vector.
+    /// (within 1e-9, relative) and the group is [`Engine::shareable`]: the group at its start
+    /// is the model as it is.
     pub fn shared_start(
         &self,
         effect: &'static dyn Effect,
@@ -299,8 +309,7 @@ impl Engine<'_> {
         let targets: Vec<JointTarget> =
             group.iter().filter_map(|j| JointTarget::of(self.robot, j)).collect();
         let starts: Vec<Vec<f64>> = targets.iter().map(|t| effect.initial(&m0, t)).collect();
-        starts.len() == group.len()
-            && targets.windows(2).all(|w| effect.alike(&w[0], &w[1]))
+        self.shareable(effect, group)
             && starts.windows(2).all(|w| {
                 w[0].len() == w[1].len()
                     && w[0]
