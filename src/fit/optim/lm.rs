@@ -119,12 +119,6 @@ pub fn levenberg_marquardt(
     // along it descends, the difference is widened (×10, up to `H_MAX` of the box) before
     // the point is called a minimum.
     const H_MAX: f64 = 0.05;
-    // Near a minimum the forward difference is narrowed to the length of the last accepted
-    // step (not below this share of `h0`): a difference much wider than the distance left
-    // measures a secant, not the slope, and on a strongly curved residual (a lightly damped
-    // servo's resonance moved by its inertia) the Gauss–Newton step then covers a fixed
-    // fraction of that distance per iteration instead of converging.
-    const H_MIN_SHARE: f64 = 1e-2;
     let mut h = h0;
     let tol = if o.tol.is_finite() && o.tol >= 0.0 { o.tol } else { 1e-8 };
 
@@ -232,9 +226,6 @@ pub fn levenberg_marquardt(
                 cost = cn;
                 jac = None;
                 lambda = (lambda / 3.0).max(1e-12);
-                if h <= h0 {
-                    h = du.clamp(h0 * H_MIN_SHARE, h0);
-                }
                 if cost == 0.0 || rel_drop <= tol || du <= tol || tiny {
                     converged = true;
                 }
