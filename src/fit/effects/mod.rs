@@ -279,6 +279,16 @@ pub enum IsaacLab {
     Comment(String),
 }
 
+/// The linearised re-ranking's probe step [fraction of a parameter's range].
+pub const PROBE_STEP: f64 = 0.05;
+
+/// A parameter's default probe value: `start` moved by [`PROBE_STEP`] of `[lo, hi]`, up, or
+/// down when up would leave the bounds.
+pub fn probe_step(start: f64, lo: f64, hi: f64) -> f64 {
+    let step = PROBE_STEP * (hi - lo);
+    if start + step <= hi { start + step } else { start - step }
+}
+
 pub trait Effect: Declared + Sync {
     fn id(&self) -> &'static str {
         self.meta().id
@@ -386,15 +396,14 @@ pub trait Effect: Declared + Sync {
     /// (down when up would leave the bounds).
     fn probes(&self, start: f64, lo: f64, hi: f64, evidence: &BTreeMap<String, f64>) -> Vec<f64> {
         let _ = evidence;
-        let step = 0.05 * (hi - lo);
-        vec![if start + step <= hi { start + step } else { start - step }]
+        vec![probe_step(start, lo, hi)]
     }
     /// How many of the fitted parameters (the first ones) the diagnosis's linearised re-ranking
     /// probes, each giving a sensitivity column of its own: the candidate is scored by the best
     /// linear combination of its columns ([`crate::fit::select`]'s screen), so an effect whose
     /// parameters are directions of equal standing (a centre of mass moved along or across a
     /// link) is not ranked by whichever direction happens to come first. The first parameter
-    /// is probed at [`Effect::probes`], the others by a step of 5 % of their range. Default: 1.
+    /// is probed at [`Effect::probes`], the others at [`probe_step`]. Default: 1.
     fn screened(&self) -> usize {
         1
     }

@@ -274,8 +274,7 @@ fn probe_batch(
                 if j == 0 {
                     effect.probes(p0[0], lo[0], hi[0], &diag[*i].evidence)
                 } else {
-                    let step = 0.05 * (hi[j] - lo[j]);
-                    vec![if p0[j] + step <= hi[j] { p0[j] + step } else { p0[j] - step }]
+                    vec![effects::probe_step(p0[j], lo[j], hi[j])]
                 }
             })
             .collect();
