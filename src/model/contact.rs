@@ -3,9 +3,62 @@
 //! geom's condim, friction, solref and solimp are used; with equal priority, condim and each
 //! friction coefficient are the larger of the two, solimp (and a standard, positive solref) is
 //! the `solmix`-weighted mean, and a direct (non-positive) solref the elementwise minimum.
-//! Explicit `<contact><pair>` elements override all of this and are not modelled here.
+//!
+//! An explicit `<contact><pair>` (compiled `pair_*`) overrides all of this for its two geoms
+//! (`mj_collision` in the same file): MuJoCo checks the pair whatever the geoms'
+//! contype/conaffinity and any `<exclude>`, with the pair's own condim, friction, solref, solimp,
+//! margin and gap, and drops the dynamic contact of the same two geoms. Dynamic contacts need
+//! the masks to allow them and no `<exclude>` of the two bodies ([`contact`]).
+
+use mujoco_rs::prelude::MjModel;
 
 use super::{Geom, Robot};
+
+/// An explicit `<contact><pair>` as compiled.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Pair {
+    pub id: usize,
+    pub name: String,
+    pub geom1: usize,
+    pub geom2: usize,
+    pub condim: i32,
+    /// Tangential 1 and 2, torsional, rolling 1 and 2.
+    pub friction: [f64; 5],
+    pub solref: [f64; 2],
+    pub solimp: [f64; 5],
+    pub margin: f64,
+    pub gap: f64,
+}
+
+/// The compiled pairs and the excluded body pairs (lower id first).
+pub(super) fn read_pairs(m: &MjModel) -> (Vec<Pair>, Vec<(usize, usize)>) {
+    let (g1, g2, dim) = (m.pair_geom1(), m.pair_geom2(), m.pair_dim());
+    let (fr, sr, si) = (m.pair_friction(), m.pair_solref(), m.pair_solimp());
+    let (mg, gp) = (m.pair_margin(), m.pair_gap());
+    let pairs = (0..g1.len())
+        .map(|i| Pair {
+            id: i,
+            name: super::mj::name_at(m, m.name_pairadr(), i),
+            geom1: g1[i].max(0) as usize,
+            geom2: g2[i].max(0) as usize,
+            condim: dim[i],
+            friction: fr[i],
+            solref: sr[i],
+            solimp: si[i],
+            margin: mg[i],
+            gap: gp[i],
+        })
+        .collect();
+    let excludes = m
+        .exclude_signature()
+        .iter()
+        .map(|&s| {
+            let (a, b) = (((s >> 16) & 0xFFFF) as usize, (s & 0xFFFF) as usize);
+            (a.min(b), a.max(b))
+        })
+        .collect();
+    (pairs, excludes)
+}
 
 /// MuJoCo's `mjMINVAL`.
 const MINVAL: f64 = 1e-15;
@@ -20,6 +73,8 @@ pub struct Combined {
     pub solimp: [f64; 5],
     /// The geom whose parameters won on priority, if the priorities differ.
     pub by_priority: Option<usize>,
+    /// The explicit `<pair>` whose parameters MuJoCo uses instead of the geoms'.
+    pub pair: Option<usize>,
 }
 
 /// The parameters MuJoCo uses for a contact between `a` and `b`.
@@ -32,6 +87,7 @@ pub fn combine(a: &Geom, b: &Geom) -> Combined {
             solref: w.solref,
             solimp: w.solimp,
             by_priority: Some(w.id),
+            pair: None,
         };
     }
     let mix = match (a.solmix >= MINVAL, b.solmix >= MINVAL) {
@@ -51,7 +107,43 @@ pub fn combine(a: &Geom, b: &Geom) -> Combined {
         solref,
         solimp: [0, 1, 2, 3, 4].map(|i| mix * a.solimp[i] + (1.0 - mix) * b.solimp[i]),
         by_priority: None,
+        pair: None,
     }
+}
+
+/// The explicit pair of geoms `a` and `b`, if the model declares one.
+pub fn pair_of(robot: &Robot, a: usize, b: usize) -> Option<&Pair> {
+    robot.pairs.iter().find(|p| (p.geom1, p.geom2) == (a, b) || (p.geom1, p.geom2) == (b, a))
+}
+
+/// An `<exclude>` removes the dynamic contacts between the two bodies.
+pub fn excluded(robot: &Robot, a: usize, b: usize) -> bool {
+    robot.excludes.contains(&(a.min(b), a.max(b)))
+}
+
+/// The parameters of the contacts MuJoCo makes between geoms `a` and `b`: an explicit pair's, or
+/// the geoms' combined ([`combine`]) when their masks allow a dynamic contact and no `<exclude>`
+/// removes it; `None` when the two never touch (geoms of one body never do).
+pub fn contact(robot: &Robot, a: usize, b: usize) -> Option<Combined> {
+    if let Some(p) = pair_of(robot, a, b) {
+        return Some(Combined {
+            condim: p.condim,
+            friction: [p.friction[0], p.friction[2], p.friction[3]],
+            solref: p.solref,
+            solimp: p.solimp,
+            by_priority: None,
+            pair: Some(p.id),
+        });
+    }
+    let (ga, gb) = (robot.geoms.get(a)?, robot.geoms.get(b)?);
+    (ga.body != gb.body && may_collide(ga, gb) && !excluded(robot, ga.body, gb.body))
+        .then(|| combine(ga, gb))
+}
+
+/// The geom can touch anything: its masks allow contacts, or an explicit pair names it.
+pub fn takes_part(robot: &Robot, g: usize) -> bool {
+    robot.geoms.get(g).is_some_and(|x| x.collides())
+        || robot.pairs.iter().any(|p| p.geom1 == g || p.geom2 == g)
 }
 
 /// Masks allow a contact between the two geoms.
@@ -59,22 +151,20 @@ pub fn may_collide(a: &Geom, b: &Geom) -> bool {
     (a.contype & b.conaffinity) != 0 || (b.contype & a.conaffinity) != 0
 }
 
-/// The world body's colliding planes, height fields and boxes that `geom` may touch (the
-/// floor, terrain): what a foot actually stands on.
-pub fn ground_partners(robot: &Robot, geom: usize) -> Vec<usize> {
+/// The world body's planes, height fields and boxes that `geom` touches (the floor, terrain:
+/// what a foot actually stands on), each with the contact's parameters ([`contact`]: through an
+/// explicit pair, or by the masks and combination).
+pub fn ground_partners(robot: &Robot, geom: usize) -> Vec<(usize, Combined)> {
     use super::GeomType;
-    let g = &robot.geoms[geom];
     robot
         .geoms
         .iter()
         .filter(|o| {
             o.body == 0
                 && o.id != geom
-                && o.collides()
                 && matches!(o.gtype, GeomType::Plane | GeomType::Hfield | GeomType::Box)
-                && may_collide(g, o)
         })
-        .map(|o| o.id)
+        .filter_map(|o| Some((o.id, contact(robot, geom, o.id)?)))
         .collect()
 }
 

@@ -209,6 +209,7 @@ pub(super) fn extract(
             obj2: e2[i],
         })
         .collect();
+    let (pairs, excludes) = super::contact::read_pairs(&mj);
     let opt =
         Options { timestep: r.opt.timestep, integrator: r.opt.integrator, gravity: r.opt.gravity };
     static NEXT_UID: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
@@ -229,6 +230,8 @@ pub(super) fn extract(
         meshes,
         tendons,
         equalities,
+        pairs,
+        excludes,
     }
 }
 

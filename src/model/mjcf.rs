@@ -17,6 +17,8 @@ pub enum ElemKind {
     Equality,
     Key,
     Mesh,
+    /// `<contact><pair>` (compiled in signature order: matched by its geom names).
+    Pair,
 }
 
 /// Where an effective attribute value came from.
@@ -346,6 +348,11 @@ pub fn index_mjcf(root: &XNode) -> SourceIndex {
     for sec in root.children_tagged("equality") {
         for e in &sec.children {
             b.push(ElemKind::Equality, e, None, &[], false);
+        }
+    }
+    for sec in root.children_tagged("contact") {
+        for p in sec.children_tagged("pair") {
+            b.push(ElemKind::Pair, p, None, &[], false);
         }
     }
     for sec in root.children_tagged("keyframe") {

@@ -260,6 +260,11 @@ pub struct Robot {
     pub meshes: Vec<String>,
     pub tendons: Vec<String>,
     pub equalities: Vec<Equality>,
+    /// Explicit `<contact><pair>` elements (compiled `pair_*`).
+    pub pairs: Vec<contact::Pair>,
+    /// Body pairs whose contacts `<contact><exclude>` removes (compiled `exclude_signature`),
+    /// lower body id first.
+    pub excludes: Vec<(usize, usize)>,
 }
 
 #[derive(Debug, Clone)]
@@ -323,6 +328,19 @@ impl Robot {
             return Some(e);
         }
         let list = self.src.list(kind);
+        if kind == ElemKind::Pair {
+            // Pairs compile in signature order; each names its two geoms.
+            let p = self.pairs.get(id)?;
+            let (a, b) = (self.geoms.get(p.geom1)?.name.as_str(), self.geoms.get(p.geom2)?.name.as_str());
+            if a.is_empty() || b.is_empty() {
+                return None;
+            }
+            return list.iter().find(|e| {
+                let v = |k: &str| e.attrs.get(k).map(|o| o.value.as_str()).unwrap_or("");
+                let (g1, g2) = (v("geom1"), v("geom2"));
+                (g1 == a && g2 == b) || (g1 == b && g2 == a)
+            });
+        }
         let body_of: Vec<usize> = match kind {
             ElemKind::Joint => self.joints.iter().map(|j| j.body).collect(),
             ElemKind::Geom => self.geoms.iter().map(|g| g.body).collect(),

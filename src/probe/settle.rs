@@ -129,7 +129,7 @@ impl Settle {
         let geoms: Vec<usize> = robot
             .geoms
             .iter()
-            .filter(|g| g.collides() && foot.contains(&g.body))
+            .filter(|g| foot.contains(&g.body) && crate::model::contact::takes_part(robot, g.id))
             .map(|g| g.id)
             .collect();
         let load: f64 = geoms.iter().map(|g| self.load(*g)).sum();

@@ -15,12 +15,13 @@ pub const MAX_DROP: f64 = 0.5;
 /// The drop any robot may show while settling, m.
 pub const MIN_DROP_ALLOWED: f64 = 0.1;
 
-/// A geom the robot can stand on: a colliding plane, height field or box on the world body.
+/// A geom the robot can stand on: a plane, height field or box on the world body that takes
+/// part in contacts (by its masks, or named by an explicit `<contact><pair>`).
 pub fn is_ground(robot: &Robot, g: usize) -> bool {
-    robot.geoms.get(g).is_some_and(|g| {
-        g.body == 0
-            && g.collides()
-            && matches!(g.gtype, GeomType::Plane | GeomType::Hfield | GeomType::Box)
+    robot.geoms.get(g).is_some_and(|x| {
+        x.body == 0
+            && crate::model::contact::takes_part(robot, g)
+            && matches!(x.gtype, GeomType::Plane | GeomType::Hfield | GeomType::Box)
     })
 }
 

@@ -146,6 +146,7 @@ pub fn kind_word(kind: ElemKind) -> &'static str {
         ElemKind::Equality => "equality",
         ElemKind::Key => "key",
         ElemKind::Mesh => "mesh",
+        ElemKind::Pair => "contact pair",
     }
 }
 

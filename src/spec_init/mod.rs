@@ -134,9 +134,16 @@ fn bare(s: &str) -> String {
     k.trim_matches('_').to_string()
 }
 
+/// A joint's side and its mirror partner's name, paired as lint pairs them
+/// (`mirror::mirror_in`: `LL_`/`LR_` are a biped's legs only when the partner exists, not a
+/// quadruped's left-rear leg).
+fn mirror_of(robot: &Robot, name: &str) -> Option<(mirror::Side, String)> {
+    mirror::mirror_in(name, None, |n| robot.joint(n).is_some())
+}
+
 /// A joint name without its side marker, split into lower-case words.
-fn words(name: &str) -> Vec<String> {
-    let stem = match mirror::mirror(name, None) {
+fn words(robot: &Robot, name: &str) -> Vec<String> {
+    let stem = match mirror_of(robot, name) {
         Some((_, other)) => {
             let (p, s) = common_ends(name, &other);
             format!("{}{}", &name[..p], &name[name.len() - s..])
@@ -163,7 +170,7 @@ fn name_families(robot: &Robot, fams: &mut [Family]) {
         };
         let by_words = {
             let lists: Vec<Vec<String>> =
-                f.joints.iter().map(|&j| words(&robot.joints[j].name)).collect();
+                f.joints.iter().map(|&j| words(robot, &robot.joints[j].name)).collect();
             if lists.windows(2).all(|w| w[0] == w[1]) {
                 // One joint kind (a left/right pair): its whole name.
                 lists.first().map(|l| bare(&l.join("_")))
@@ -301,7 +308,7 @@ fn pair_up<'a>(robot: &'a Robot, joints: &[usize]) -> Vec<Vec<&'a str>> {
         }
         used[i] = true;
         let name = robot.joints[joints[i]].name.as_str();
-        let partner = mirror::mirror(name, None).and_then(|(side, other)| {
+        let partner = mirror_of(robot, name).and_then(|(side, other)| {
             let k =
                 (0..joints.len()).find(|&k| !used[k] && robot.joints[joints[k]].name == other)?;
             Some((side, k))
@@ -326,7 +333,7 @@ fn pair_up<'a>(robot: &'a Robot, joints: &[usize]) -> Vec<Vec<&'a str>> {
 fn side_markers(robot: &Robot) -> Option<(String, String)> {
     let names: Vec<&str> = robot.joints.iter().map(|j| j.name.as_str()).collect();
     for j in &robot.joints {
-        if let Some((side, other)) = mirror::mirror(&j.name, None)
+        if let Some((side, other)) = mirror_of(robot, &j.name)
             && names.contains(&other.as_str())
         {
             let (l, r) = match side {

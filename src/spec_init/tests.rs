@@ -28,3 +28,41 @@ fn toml_values_parse() {
     let v: toml::Value = toml::from_str(&format!("x = {}", quote("a\"b\\c"))).unwrap();
     assert_eq!(v["x"].as_str(), Some("a\"b\\c"));
 }
+
+/// A model of hinge legs named `names`, each driven by a position actuator of the same gains.
+fn legs(names: &[&str], tag: &str) -> Robot {
+    let bodies: String = names
+        .iter()
+        .map(|n| {
+            format!(
+                r#"<body name="b_{n}" pos="0 0 -0.1"><joint name="{n}" axis="0 1 0" range="-1 1"/><geom type="capsule" fromto="0 0 0 0 0 -0.2" size="0.02" mass="0.5"/></body>"#
+            )
+        })
+        .collect();
+    let acts: String = names
+        .iter()
+        .map(|n| format!(r#"<position joint="{n}" kp="40" kv="1" forcerange="-20 20"/>"#))
+        .collect();
+    let xml = format!(
+        r#"<mujoco><worldbody><body name="base"><freejoint/><geom type="box" size="0.1 0.1 0.05" mass="3"/>{bodies}</body></worldbody><actuator>{acts}</actuator></mujoco>"#
+    );
+    let dir = std::env::temp_dir().join(format!("modellint-spec-init-{}-{tag}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let path = dir.join("legs.xml");
+    std::fs::write(&path, xml).expect("write the test model");
+    let mut map = crate::model::source::SourceMap::default();
+    crate::model::load(&mut map, &path, None).expect("load the test model")
+}
+
+#[test]
+fn sides_pair_as_lint_pairs_them() {
+    // A biped's leg-side prefixes: `LL_` ↔ `LR_`, one group per joint pair.
+    let biped = legs(&["LL_HFE", "LR_HFE", "LL_KFE", "LR_KFE"], "biped");
+    let groups = pair_up(&biped, &[0, 1, 2, 3]);
+    assert_eq!(groups, vec![vec!["LL_HFE", "LR_HFE"], vec!["LL_KFE", "LR_KFE"]]);
+    assert_eq!(words(&biped, "LR_KFE"), words(&biped, "LL_KFE"));
+    // A quadruped's left-rear leg `LR_` is not a biped's right leg (there is no `LL_`).
+    let quad = legs(&["LF_KFE", "LR_KFE", "RF_KFE", "RR_KFE"], "quad");
+    let groups = pair_up(&quad, &[0, 1, 2, 3]);
+    assert_eq!(groups, vec![vec!["LF_KFE", "RF_KFE"], vec!["LR_KFE"], vec!["RR_KFE"]]);
+}

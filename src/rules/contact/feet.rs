@@ -77,7 +77,9 @@ fn contact_geoms(robot: &Robot, body: usize) -> impl Iterator<Item = usize> + '_
         .geoms
         .iter()
         .filter(move |g| {
-            g.body == body && g.collides() && !matches!(g.gtype, GeomType::Plane | GeomType::Hfield)
+            g.body == body
+                && crate::model::contact::takes_part(robot, g.id)
+                && !matches!(g.gtype, GeomType::Plane | GeomType::Hfield)
         })
         .map(|g| g.id)
 }

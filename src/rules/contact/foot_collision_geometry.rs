@@ -2,6 +2,7 @@ use crate::declare_rule;
 use crate::finding::{Finding, Severity, Subject};
 use crate::lint::Loaded;
 use crate::model::mjcf::ElemKind;
+use crate::model::contact::{contact, ground_partners, pair_of};
 use crate::model::{GeomType, Robot};
 use crate::probe::settle::{Settle, StanceClaim};
 use crate::probe::slide::{FootSlide, PUSH_S, PUSH_SHARE, Slide};
@@ -23,12 +24,17 @@ declare_rule! {
     /// ground contact points whose support polygon reaches both the heel and the toe third of the
     /// foot; and left and right feet with the same number and sizes of geoms (sizes within 2 % or
     /// 0.5 mm, so mesh export noise does not count). Problems are reported once per foot, listing
-    /// the geoms, at the first offending geom's attribute.
+    /// the geoms, at the first offending geom's attribute. The support polygon counts a box's
+    /// bottom face and a lying capsule's two ends whole when they are within 15° of the ground at
+    /// the keyframe: the foot settles onto its sole, and the tilt is `toe-tilt`'s finding.
     ///
     /// condim and friction are judged as MuJoCo combines them for each foot geom with the ground
     /// geoms it may touch (world-body geoms whose contype/conaffinity allow the pair): the larger
     /// condim and friction of the two, or the higher-`priority` geom's (`model::contact`). A
-    /// condim-1 foot on a condim-3 floor has condim-3 contacts and is not reported. With no
+    /// condim-1 foot on a condim-3 floor has condim-3 contacts and is not reported. An explicit
+    /// `<contact><pair>` of a foot geom and a ground geom sets the contact's condim and friction
+    /// whatever the geoms' own values and masks (a foot that touches the floor only through pairs
+    /// is judged by them, at the pair's attribute; an `<exclude>` removes the dynamic contact). With no
     /// ground geom in the file (a robot file without its scene), the geom's own values are
     /// judged and the message says so.
     ///
@@ -121,10 +127,42 @@ fn type_word(t: GeomType) -> &'static str {
     }
 }
 
-/// Masks allow a contact between two geoms.
-fn may_collide(robot: &Robot, a: usize, b: usize) -> bool {
-    crate::model::contact::may_collide(&robot.geoms[a], &robot.geoms[b])
+/// The contact of foot geom `g` with ground geom `o` is an explicit pair's.
+fn pair_at(robot: &Robot, g: usize, o: Option<usize>) -> bool {
+    o.is_some_and(|o| pair_of(robot, g, o).is_some())
 }
+
+/// A condim or friction finding at the attribute that sets the value: the explicit pair's, or
+/// the foot geom's own.
+fn at_value(cx: &Context, g: usize, o: Option<usize>, attr: &str, msg: String) -> Finding {
+    let robot = cx.robot;
+    match o.and_then(|o| pair_of(robot, g, o)) {
+        Some(p) => cx.at_attr(ElemKind::Pair, p.id, &p.name, attr, msg),
+        None => cx.at_attr(ElemKind::Geom, g, &robot.geoms[g].name, attr, msg),
+    }
+}
+
+/// Labels the other side of a condim or friction finding: the foot geom whose own value the
+/// explicit pair overrides, or the ground geom the value is combined with.
+fn ground_label(robot: &Robot, f: Finding, g: usize, o: Option<usize>, attr: &str) -> Finding {
+    let Some(o) = o else { return f };
+    let val = |x: &crate::model::Geom| {
+        if attr == "condim" { x.condim.to_string() } else { fmt_num(x.friction[0], 3) }
+    };
+    if pair_of(robot, g, o).is_some() {
+        let gloc = robot.elem_loc(ElemKind::Geom, g, &robot.geoms[g].name);
+        return f.secondary(
+            gloc,
+            format!("foot geom, own {attr} {} (overridden by the pair)", val(&robot.geoms[g])),
+        );
+    }
+    let oloc = robot.elem_loc(ElemKind::Geom, o, &robot.geoms[o].name);
+    f.secondary(oloc, format!("ground geom, {attr} {}", val(&robot.geoms[o])))
+}
+
+/// Largest tilt of a box face or lying capsule at the keyframe that still counts as a sole
+/// the foot settles onto (rad): 15°, well past a modelling slip, well short of a foot on its toe.
+const SOLE_TILT: f64 = 15.0 * std::f64::consts::PI / 180.0;
 
 /// Left/right feet match when every geom has a partner of the same type whose sizes agree within
 /// 2 % or 0.5 mm: mesh-derived sizes differ by export noise (0.1–0.2 mm), a real edit by more.
@@ -212,9 +250,8 @@ impl FootCollisionGeometry {
                     .iter()
                     .filter(|o| {
                         o.gtype == GeomType::Mesh
-                            && o.collides()
                             && !foot.geoms.contains(&o.id)
-                            && meshes.iter().any(|&m| may_collide(robot, m, o.id))
+                            && meshes.iter().any(|&m| contact(robot, m, o.id).is_some())
                     })
                     .map(|o| o.id)
                     .collect();
@@ -287,23 +324,28 @@ impl FootCollisionGeometry {
                         .expected(0.5 * (rmin + rmax), "m"),
                 );
             }
-            // condim and friction as MuJoCo combines them with the ground the foot touches
-            // (model::contact): a condim-1 foot on a condim-3 floor has condim-3 contacts.
+            // condim and friction as MuJoCo builds them against the ground the foot touches
+            // (model::contact): an explicit <pair>'s own values, else the combination — a
+            // condim-1 foot on a condim-3 floor has condim-3 contacts.
             let eff = |g: usize| -> Vec<(Option<usize>, i32, f64)> {
-                let ground = crate::model::contact::ground_partners(robot, g);
+                let ground = ground_partners(robot, g);
                 let own = &robot.geoms[g];
                 if ground.is_empty() {
                     return vec![(None, own.condim, own.friction[0])];
                 }
-                ground
-                    .iter()
-                    .map(|&o| {
-                        let c = crate::model::contact::combine(own, &robot.geoms[o]);
-                        (Some(o), c.condim, c.friction[0])
-                    })
-                    .collect()
+                ground.iter().map(|(o, c)| (Some(*o), c.condim, c.friction[0])).collect()
             };
-            let with = |g: usize, o: Option<usize>, what: &str| match o {
+            let with = |g: usize, o: Option<usize>, what: &str| {
+                if let Some(o) = o
+                    && let Some(p) = pair_of(robot, g, o)
+                {
+                    return format!(
+                        "an explicit <contact><pair> with ground geom {} sets it, the geoms' own values do not count: {what} {}",
+                        gname(robot, o),
+                        if what == "condim" { p.condim.to_string() } else { fmt_num(p.friction[0], 3) }
+                    );
+                }
+                match o {
                 Some(o) => {
                     let (mine, theirs) = (&robot.geoms[g], &robot.geoms[o]);
                     let val = |x: &crate::model::Geom| {
@@ -328,6 +370,7 @@ impl FootCollisionGeometry {
                 None => format!(
                     "the geom's own {what}: no ground geom in this file, MuJoCo combines it with the floor's by maximum or priority",
                 ),
+            }
             };
             let bad_c: Vec<(usize, Option<usize>, i32)> = foot
                 .geoms
@@ -345,10 +388,10 @@ impl FootCollisionGeometry {
                     }
                 };
                 let geoms: Vec<usize> = bad_c.iter().map(|b| b.0).collect();
-                let mut f = cx.at_attr(
-                    ElemKind::Geom,
+                let mut f = at_value(
+                    cx,
                     g0,
-                    &robot.geoms[g0].name,
+                    o0,
                     "condim",
                     format!(
                         "{label} contacts use condim {c} (expected 3; {}): {}",
@@ -359,12 +402,9 @@ impl FootCollisionGeometry {
                 if c != 1 && !stated && cx.level == cx.meta.default_level {
                     f.severity = Severity::Info;
                 }
-                if let Some(o) = o0 {
-                    let oloc = robot.elem_loc(ElemKind::Geom, o, &robot.geoms[o].name);
-                    f = f.secondary(oloc, format!("ground geom, condim {}", robot.geoms[o].condim));
-                }
+                f = ground_label(robot, f, g0, o0, "condim");
                 out.push(
-                    f.label(format!("condim {}", robot.geoms[g0].condim))
+                    f.label(format!("condim {}", if pair_at(robot, g0, o0) { c } else { robot.geoms[g0].condim }))
                         .note(format!(
                             "{why}; MuJoCo uses the larger condim of the two contacting geoms, or the higher-priority geom's"
                         ))
@@ -390,10 +430,10 @@ impl FootCollisionGeometry {
                 .collect();
             if let Some(&(g0, o0, v)) = bad_f.first() {
                 let geoms: Vec<usize> = bad_f.iter().map(|b| b.0).collect();
-                let mut f = cx.at_attr(
-                    ElemKind::Geom,
+                let mut f = at_value(
+                    cx,
                     g0,
-                    &robot.geoms[g0].name,
+                    o0,
                     "friction",
                     format!(
                         "{label} contacts have sliding friction {} (expected {} ± {}{}; {}): {}",
@@ -412,9 +452,10 @@ impl FootCollisionGeometry {
                 if !stated && cx.level == cx.meta.default_level {
                     f.severity = Severity::Info;
                 }
+                f = ground_label(robot, f, g0, o0, "friction");
                 out.push(
                     f
-                        .label(format!("friction {}", fmt_num(robot.geoms[g0].friction[0], 3)))
+                        .label(format!("friction {}", fmt_num(if pair_at(robot, g0, o0) { v } else { robot.geoms[g0].friction[0] }, 3)))
                         .note("foot friction decides when the foot slips; a policy trained on grippier feet than the hardware's learns pushes that slip on the real floor")
                         .help(format!("set friction=\"{} …\" on the foot and toe geoms; MuJoCo combines friction by the maximum of the two geoms (or takes the higher-priority geom's), so the floor's friction must not exceed it", fmt_num(mu, 3)))
                         .subject(subj)
@@ -435,6 +476,9 @@ impl FootCollisionGeometry {
                 if p.lowest()[2] <= zmin + window {
                     pts.extend(p.ground_points(zmin + window - p.lowest()[2]));
                     pts.push(p.lowest());
+                    // A box sole or lying capsule a few degrees off the ground at the keyframe
+                    // settles onto its whole flat feature (the tilt is toe-tilt's finding).
+                    pts.extend(p.sole_points(SOLE_TILT));
                 }
             }
             let xs: Vec<f64> = placed

@@ -162,6 +162,41 @@ impl Placed {
         let zmin = self.lowest()[2];
         cands.into_iter().filter(|p| p[2] <= zmin + window).collect()
     }
+
+    /// The points of the shape's flat contact feature when it faces the ground within
+    /// `max_tilt` radians ([`tilt`]): a box's four corners of the face closest to facing down,
+    /// a lying capsule's or cylinder's two ends. The sole the shape stands on once it settles
+    /// flat, whatever the small tilt of the pose (which `toe-tilt` reports); empty otherwise.
+    pub fn sole_points(&self, max_tilt: f64) -> Vec<V3> {
+        if tilt(self.gtype, &self.mat).is_none_or(|t| t > max_tilt) {
+            return Vec::new();
+        }
+        let (c, m, s) = (self.pos, &self.mat, self.size);
+        match self.gtype {
+            GeomType::Box => {
+                let k = (0..3)
+                    .max_by(|&a, &b| col(m, a)[2].abs().total_cmp(&col(m, b)[2].abs()))
+                    .unwrap_or(2);
+                let down = if col(m, k)[2] > 0.0 { -1.0 } else { 1.0 };
+                let (u, v) = ((k + 1) % 3, (k + 2) % 3);
+                let mut out = Vec::new();
+                for i in [-1.0, 1.0] {
+                    for j in [-1.0, 1.0] {
+                        let mut l = [0.0; 3];
+                        l[k] = down * s[k];
+                        l[u] = i * s[u];
+                        l[v] = j * s[v];
+                        out.push(to_world(c, m, l));
+                    }
+                }
+                out
+            }
+            GeomType::Capsule | GeomType::Cylinder if col(m, 2)[2].abs() < 0.5_f64.sqrt() => {
+                self.ground_points(f64::INFINITY)
+            }
+            _ => Vec::new(),
+        }
+    }
 }
 
 /// World vertices of compiled mesh `mesh` placed at `pos`/`mat` (MuJoCo stores vertices in the
