@@ -277,6 +277,40 @@ fn condim1_feet_on_a_condim3_floor_get_dim3_contacts_in_mujoco() {
     }
 }
 
+/// Feet that touch the floor only through explicit `<contact><pair>`s (their own masks are 0):
+/// the stance runs see the floor and the loaded feet, and the slide reads the pair's condim 1
+/// (the geoms say 3), so the foot slides as if frictionless.
+#[test]
+fn pair_only_feet_are_stood_on_and_measured_with_the_pairs_values() {
+    for f in slide_findings("fixtures/rules/foot-collision-geometry/invalid_pair_only_condim1.xml")
+    {
+        let p = outcome(&f);
+        assert_eq!(p.status, ProbeStatus::Measured, "{}", p.note);
+        assert!(p.preconditions.iter().all(|c| c.met), "{:?}", p.preconditions);
+        assert_eq!(p.measured["contact_dim"], 1.0);
+        let free_slide = 0.5 * 0.05 * 9.81 * 0.5 * 0.5;
+        let s = p.measured["slide_m"];
+        assert!((s - free_slide).abs() < 0.1 * free_slide, "slid {s} m, free {free_slide} m");
+    }
+}
+
+/// A pair that sets condim 3 on condim-1 feet over a condim-1 floor: the static rule leaves the
+/// feet alone, and MuJoCo indeed builds dim-3 contacts at the pair's friction.
+#[test]
+fn a_pair_that_fixes_condim1_feet_gets_dim3_contacts_in_mujoco() {
+    let l = loaded("fixtures/rules/foot-collision-geometry/valid_pair_fixes_condim1.xml");
+    assert_eq!(l.robot.pairs.len(), 6);
+    let s = modellint::probe::slide::run(&l.robot).unwrap();
+    let feet: Vec<usize> =
+        l.robot.geoms.iter().filter(|g| g.body != 0 && g.condim == 1).map(|g| g.id).collect();
+    assert_eq!(feet.len(), 6);
+    for g in feet {
+        let b = s.built.get(&g).unwrap_or_else(|| panic!("geom {g} never touched the floor"));
+        assert_eq!((b.dim, b.dim_min), (3, 3), "geom {g}");
+        assert!((b.friction - 0.6).abs() < 1e-12);
+    }
+}
+
 /// Both sides of a mirror-symmetric model get the mirror-image experiment, so the same
 /// numbers and the same verdict (the right joint steps as the mirror of the left: opposite sign
 /// for the roll axes, which a mirror reverses; the same sign for the pitch axes).

@@ -331,7 +331,8 @@ impl Robot {
         if kind == ElemKind::Pair {
             // Pairs compile in signature order; each names its two geoms.
             let p = self.pairs.get(id)?;
-            let (a, b) = (self.geoms.get(p.geom1)?.name.as_str(), self.geoms.get(p.geom2)?.name.as_str());
+            let (a, b) =
+                (self.geoms.get(p.geom1)?.name.as_str(), self.geoms.get(p.geom2)?.name.as_str());
             if a.is_empty() || b.is_empty() {
                 return None;
             }

@@ -46,7 +46,8 @@ fn legs(names: &[&str], tag: &str) -> Robot {
     let xml = format!(
         r#"<mujoco><worldbody><body name="base"><freejoint/><geom type="box" size="0.1 0.1 0.05" mass="3"/>{bodies}</body></worldbody><actuator>{acts}</actuator></mujoco>"#
     );
-    let dir = std::env::temp_dir().join(format!("modellint-spec-init-{}-{tag}", std::process::id()));
+    let dir =
+        std::env::temp_dir().join(format!("modellint-spec-init-{}-{tag}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
     let path = dir.join("legs.xml");
     std::fs::write(&path, xml).expect("write the test model");

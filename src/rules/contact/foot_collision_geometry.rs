@@ -1,8 +1,8 @@
 use crate::declare_rule;
 use crate::finding::{Finding, Severity, Subject};
 use crate::lint::Loaded;
-use crate::model::mjcf::ElemKind;
 use crate::model::contact::{contact, ground_partners, pair_of};
+use crate::model::mjcf::ElemKind;
 use crate::model::{GeomType, Robot};
 use crate::probe::settle::{Settle, StanceClaim};
 use crate::probe::slide::{FootSlide, PUSH_S, PUSH_SHARE, Slide};
@@ -34,7 +34,8 @@ declare_rule! {
     /// condim-1 foot on a condim-3 floor has condim-3 contacts and is not reported. An explicit
     /// `<contact><pair>` of a foot geom and a ground geom sets the contact's condim and friction
     /// whatever the geoms' own values and masks (a foot that touches the floor only through pairs
-    /// is judged by them, at the pair's attribute; an `<exclude>` removes the dynamic contact). With no
+    /// is judged by them, at the pair's attribute; a geom whose contact with the floor the masks
+    /// or an `<exclude>` remove makes no ground contact and is not judged). With no
     /// ground geom in the file (a robot file without its scene), the geom's own values are
     /// judged and the message says so.
     ///
@@ -234,6 +235,7 @@ impl FootCollisionGeometry {
                 f
             })
             .collect();
+        let has_floor = (0..robot.geoms.len()).any(|g| crate::probe::stance::is_ground(robot, g));
         for foot in &all_feet {
             let label = foot.label(robot);
             let subj = Subject::Foot(foot.root);
@@ -331,7 +333,13 @@ impl FootCollisionGeometry {
                 let ground = ground_partners(robot, g);
                 let own = &robot.geoms[g];
                 if ground.is_empty() {
-                    return vec![(None, own.condim, own.friction[0])];
+                    // A geom that never touches the model's floor (masks, <exclude>) makes no
+                    // ground contact to judge; without a floor, its own values are judged.
+                    return if has_floor {
+                        vec![]
+                    } else {
+                        vec![(None, own.condim, own.friction[0])]
+                    };
                 }
                 ground.iter().map(|(o, c)| (Some(*o), c.condim, c.friction[0])).collect()
             };
@@ -342,35 +350,39 @@ impl FootCollisionGeometry {
                     return format!(
                         "an explicit <contact><pair> with ground geom {} sets it, the geoms' own values do not count: {what} {}",
                         gname(robot, o),
-                        if what == "condim" { p.condim.to_string() } else { fmt_num(p.friction[0], 3) }
+                        if what == "condim" {
+                            p.condim.to_string()
+                        } else {
+                            fmt_num(p.friction[0], 3)
+                        }
                     );
                 }
                 match o {
-                Some(o) => {
-                    let (mine, theirs) = (&robot.geoms[g], &robot.geoms[o]);
-                    let val = |x: &crate::model::Geom| {
-                        if what == "condim" {
-                            x.condim.to_string()
-                        } else {
-                            fmt_num(x.friction[0], 3)
-                        }
-                    };
-                    let rule = match crate::model::contact::combine(mine, theirs).by_priority {
-                        Some(w) if w == o => "the higher-priority ground geom's",
-                        Some(_) => "the higher-priority foot geom's",
-                        None => "the larger of the two",
-                    };
-                    format!(
-                        "{rule}: {what} {} on the foot, {} on ground geom {}",
-                        val(mine),
-                        val(theirs),
-                        gname(robot, o)
-                    )
+                    Some(o) => {
+                        let (mine, theirs) = (&robot.geoms[g], &robot.geoms[o]);
+                        let val = |x: &crate::model::Geom| {
+                            if what == "condim" {
+                                x.condim.to_string()
+                            } else {
+                                fmt_num(x.friction[0], 3)
+                            }
+                        };
+                        let rule = match crate::model::contact::combine(mine, theirs).by_priority {
+                            Some(w) if w == o => "the higher-priority ground geom's",
+                            Some(_) => "the higher-priority foot geom's",
+                            None => "the larger of the two",
+                        };
+                        format!(
+                            "{rule}: {what} {} on the foot, {} on ground geom {}",
+                            val(mine),
+                            val(theirs),
+                            gname(robot, o)
+                        )
+                    }
+                    None => format!(
+                        "the geom's own {what}: no ground geom in this file, MuJoCo combines it with the floor's by maximum or priority",
+                    ),
                 }
-                None => format!(
-                    "the geom's own {what}: no ground geom in this file, MuJoCo combines it with the floor's by maximum or priority",
-                ),
-            }
             };
             let bad_c: Vec<(usize, Option<usize>, i32)> = foot
                 .geoms
@@ -406,11 +418,13 @@ impl FootCollisionGeometry {
                 out.push(
                     f.label(format!("condim {}", if pair_at(robot, g0, o0) { c } else { robot.geoms[g0].condim }))
                         .note(format!(
-                            "{why}; MuJoCo uses the larger condim of the two contacting geoms, or the higher-priority geom's"
+                            "{why}; MuJoCo uses the larger condim of the two contacting geoms, or the higher-priority geom's, and an explicit <pair>'s own condim instead of either"
                         ))
-                        .help(
-                            "set condim=\"3\" on foot and toe geoms (and not higher on the floor)",
-                        )
+                        .help(if pair_at(robot, g0, o0) {
+                            "set condim=\"3\" on the <pair> elements of the foot geoms: a pair's values replace the geoms'"
+                        } else {
+                            "set condim=\"3\" on foot and toe geoms (and not higher on the floor)"
+                        })
                         .subject(subj)
                         .measure(ContactAsBuilt { geoms: geoms.clone(), body: foot.root })
                         .measured(c as f64, "")

@@ -20,6 +20,13 @@ declare_rule! {
     /// standing keyframe (MuJoCo includes every armature in it: joint, actuator·gear², tendon). Reports joints with ζ below `min_damping_ratio`. The
     /// armature-only bound kd / (2·√(kp·armature)) is reported alongside.
     ///
+    /// The threshold's meaning is the step overshoot it accepts: a second-order loop overshoots
+    /// a step by exp(−πζ/√(1−ζ²)), 4.6 % at ζ 0.7 (the usual "well-damped" servo). The level
+    /// follows how much more a joint overshoots than the threshold accepts: at most 1.25 times
+    /// (ζ 0.67–0.7 against 0.7: an overshoot no engineer or policy tells apart from the
+    /// threshold's) is info, at the threshold; up to twice (ζ down to about 0.6) a warning; more
+    /// the rule's level (error). A level set in the config applies to every finding.
+    ///
     /// ## Why is this bad?
     /// A policy trained on an underdamped simulated joint learns to behave like an underdamped
     /// controller: its corrections overshoot, and on hardware each overshoot triggers a larger
@@ -41,6 +48,19 @@ declare_rule! {
         probe: ImpulseResponse,
         options: [opt("min_damping_ratio", 0.7, "", "smallest acceptable closed-loop damping ratio ζ")],
     }
+}
+
+/// Largest ratio of a joint's step overshoot to the threshold's that is still "at the
+/// threshold" (info).
+const AT_THRESHOLD: f64 = 1.25;
+
+/// Step overshoot of a second-order loop with damping ratio `z`, as a fraction (0 when ζ ≥ 1).
+pub fn overshoot(z: f64) -> f64 {
+    if !(z < 1.0) {
+        return 0.0;
+    }
+    let z = z.max(0.0);
+    (-std::f64::consts::PI * z / (1.0 - z * z).sqrt()).exp()
 }
 
 /// What the `impulse-response` probe checks: a step of the joint's target rings with a measured
@@ -202,6 +222,7 @@ impl Rule for UnderdampedPdGains {
                 fmt_num(w, 4),
                 fmt_num(zmin, 3)
             );
+            let ratio = overshoot(z) / overshoot(zmin).max(1e-12);
             let mut f = match p.source {
                 GainSource::Actuator(aid) => {
                     let a = &cx.robot.actuators[aid];
@@ -276,6 +297,19 @@ impl Rule for UnderdampedPdGains {
             if let Some(za) = z_arm {
                 f = f.with("zeta_armature_only", za);
             }
+            f = f.with("overshoot_ratio", ratio);
+            if cx.level == cx.meta.default_level {
+                if ratio <= AT_THRESHOLD {
+                    f.severity = Severity::Info;
+                    f.message.push_str(&format!(
+                        " (at the threshold: step overshoot {} % against the {} % it accepts)",
+                        fmt_num(100.0 * overshoot(z), 2),
+                        fmt_num(100.0 * overshoot(zmin), 2)
+                    ));
+                } else if ratio <= 2.0 {
+                    f.severity = Severity::Warning;
+                }
+            }
             out.push(f);
         }
     }
@@ -284,6 +318,19 @@ impl Rule for UnderdampedPdGains {
 #[cfg(test)]
 mod tests {
     use super::*;
+    #[test]
+    fn overshoot_of_a_second_order_loop() {
+        // Textbook values: ζ 0.7 → 4.6 %, ζ 0.5 → 16.3 %, ζ 0 → 100 %, ζ ≥ 1 → none.
+        assert!((overshoot(0.7) - 0.0460).abs() < 1e-4);
+        assert!((overshoot(0.5) - 0.1630).abs() < 1e-4);
+        assert_eq!(overshoot(0.0), 1.0);
+        assert_eq!(overshoot(1.2), 0.0);
+        // The level bands against ζ_min 0.7: 0.695 at the threshold, 0.65 past it, 0.5 far past.
+        let r = |z: f64| overshoot(z) / overshoot(0.7);
+        assert!(r(0.695) <= AT_THRESHOLD && r(0.65) > AT_THRESHOLD && r(0.65) <= 2.0);
+        assert!(r(0.5) > 2.0);
+    }
+
     #[test]
     fn damping_ratio_known_values() {
         // Seed 001: kp 65, kd 5 on the hip armature 0.095625 alone.
