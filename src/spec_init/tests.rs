@@ -59,11 +59,11 @@ fn legs(names: &[&str], tag: &str) -> Robot {
 fn sides_pair_as_lint_pairs_them() {
     // A biped's leg-side prefixes: `LL_` ↔ `LR_`, one group per joint pair.
     let biped = legs(&["LL_HFE", "LR_HFE", "LL_KFE", "LR_KFE"], "biped");
-    let groups = pair_up(&biped, &[0, 1, 2, 3]);
+    let groups = pair_up(&biped, &[1, 2, 3, 4]); // joint 0 is the free joint
     assert_eq!(groups, vec![vec!["LL_HFE", "LR_HFE"], vec!["LL_KFE", "LR_KFE"]]);
     assert_eq!(words(&biped, "LR_KFE"), words(&biped, "LL_KFE"));
     // A quadruped's left-rear leg `LR_` is not a biped's right leg (there is no `LL_`).
     let quad = legs(&["LF_KFE", "LR_KFE", "RF_KFE", "RR_KFE"], "quad");
-    let groups = pair_up(&quad, &[0, 1, 2, 3]);
+    let groups = pair_up(&quad, &[1, 2, 3, 4]);
     assert_eq!(groups, vec![vec!["LF_KFE", "RF_KFE"], vec!["LR_KFE"], vec!["RR_KFE"]]);
 }

@@ -24,7 +24,8 @@ type Cand = (&'static dyn Effect, Vec<String>, BTreeMap<String, f64>);
 /// A joint's left/right partner among the fitted joints, paired as lint pairs them
 /// (`model::mirror::mirror_in`: `LL_`/`LR_` are a biped's legs only when both exist).
 fn partner(joint: &str, joints: &[String]) -> Option<String> {
-    mirror_in(joint, None, |n| joints.iter().any(|j| j == n)).map(|(_, m)| m)
+    let has = |n: &str| joints.iter().any(|j| j == n);
+    mirror_in(joint, None, has).map(|(_, m)| m).filter(|m| has(m))
 }
 
 /// One greedy round: diagnose, fit the candidates, keep the best that passes the held-out gate.
