@@ -360,10 +360,11 @@ impl Play {
         if self.side == 0.0 {
             let qmd = self.qmd + dt * on_rotor(self.qm, self.qmd) / j;
             let qm = self.qm + dt * qmd;
-            let d = qm - q;
-            if d.abs() >= h && (qmd - qd) * d > 0.0 {
+            let vl = qd + dt * acc;
+            let d = qm - (q + dt * vl);
+            if d.abs() >= h && (qmd - vl) * d > 0.0 {
                 self.side = d.signum();
-                tau = j * (qmd - qd) / dt;
+                tau = j * (qmd - vl) / dt;
                 // The next step's acceleration estimate leaves the impact's jump out.
                 self.qd_prev = qd + tau * dt / inertia.max(j);
             } else {

@@ -91,14 +91,17 @@ impl Effect for Backlash {
             let tm = servo_on(u, qm, qmd, io);
             let qmd = qmd + dt * tm / j;
             let qm = qm + dt * qmd;
-            let d = qm - q;
-            if d.abs() >= h && (qmd - qd) * d > 0.0 {
+            // Against where the link will be, moving on at its last acceleration: a rotor just
+            // left on a flank by a link that runs ahead of it does not hit it again.
+            let vl = qd + dt * acc;
+            let d = qm - (q + dt * vl);
+            if d.abs() >= h && (qmd - vl) * d > 0.0 {
                 // Reaches a flank: an inelastic impact passes the rotor's momentum on.
                 side = d.signum();
-                io.tau += j * (qmd - qd) / dt;
+                io.tau += j * (qmd - vl) / dt;
                 // The next step's acceleration estimate leaves the impact's jump out.
                 if io.inertia > 0.0 {
-                    st.s[3] = qd + j * (qmd - qd) / io.inertia;
+                    st.s[3] = qd + j * (qmd - vl) / io.inertia;
                 }
             } else {
                 st.s[0] = qm;
