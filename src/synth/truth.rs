@@ -12,7 +12,7 @@
 //! | gain_error | kp_scale, kd_scale | the joint's position actuators: `gainprm[0]`, `biasprm[1]` × kp_scale, `biasprm[2]` × kd_scale |
 //! | torque_limit | effort_limit, saturation_effort, velocity_limit | effort only: `forcerange` ±effort; with a torque–speed line: per-step clip of the servo torque via `qfrc_applied` |
 //! | action_delay | delay_s [s] | the servo sees the command signal delayed by delay_s (exact, sub-step: mean over each physics step) |
-//! | backlash | backlash_rad (total play) | the set-point the servo sees is q + deadzone(u − q, ±play/2) |
+//! | backlash | backlash_rad (total play) | a rotor (the joint's armature) behind the play, driven by the servo: on a flank the servo acts on the link with its set-point moved by play/2; inside the play no servo force on the link; an inelastic impact at the flank ([`Play`]) |
 //! | position_offset | offset_rad | sensor only: recorded q = true q + offset (the servo acts on the true angle) |
 //! | stribeck_friction | static, dynamic [N·m], v_stribeck [rad/s] | `qfrc_applied` −tanh(q̇/0.02)·(Fd + (Fs − Fd)·exp(−(q̇/vs)²)) |
 //! | load_dependent_friction | frictionloss [N·m], load_coeff | `qfrc_applied` −tanh(q̇/0.02)·(f0 + k·|τ_servo|) |
