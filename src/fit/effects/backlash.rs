@@ -53,11 +53,14 @@ impl Effect for Backlash {
     fn torque(&self, cx: HookCtx<'_>) {
         let HookCtx { st, q, qd, io, dt, p, .. } = cx;
         let h = 0.5 * p[0].max(0.0);
+        if h <= 0.0 {
+            return; // no play: no effect, to the last bit
+        }
         let u = io.ctrl;
         // The set-point that makes the joint's servo apply no force: kp(ctrl − q) − kd·q̇ = 0.
         let free = if io.kp > 0.0 { q + io.kd * qd / io.kp } else { q };
         let j = io.armature;
-        if j <= 0.0 || dt <= 0.0 || h <= 0.0 {
+        if j <= 0.0 || dt <= 0.0 {
             let e = u - q;
             io.ctrl = if e.abs() > h { u - h * e.signum() } else { free };
             return;
