@@ -171,6 +171,8 @@ CHAIN_R = dict(CHAIN_L, episodes=4, seconds=4.0, heldout=[3])
 CASES["KR0_leg_none"] = dict(CHAIN_R, seed=90, effects={})
 CASES["KR1_shank_payload"] = dict(CHAIN_R, seed=91, effects={"bodies": {"shank": {
     "joint": "knee", "payload": {"mass": 0.6, "pos": [0.0, 0.0, -0.25]}}}})
+# Backlash 0.04 (total play) on the knee: a motor behind a gear play.
+CASES["KR6_knee_backlash"] = dict(CHAIN_R, seed=96, effects={"joints": {"knee": {"backlash": 0.04}}})
 # Armature on every joint (one value, 0.06, where the model says 0.04 / 0.03 / 0.012): one group.
 CASES["KR8_all_armature"] = dict(CHAIN_R, seed=98,
     effects={"joints": {j: {"armature": 0.06} for j in ALL3}})

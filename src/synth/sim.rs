@@ -4,7 +4,8 @@
 //!    a floating base is pinned at the keyframe pose raised by `suspend_m` (a test stand).
 //! 2. Settle for `settle_s` at the first command (not recorded).
 //! 3. Run the control ticks; before every physics step each recorded joint's servo gets the mean
-//!    over that step of the (delayed) zero-order-hold command, through the backlash play, and
+//!    over that step of the (delayed) zero-order-hold command, through the backlash play (a
+//!    rotor behind it, `truth::Play`), and
 //!    the per-step torques of the hidden effects go to `qfrc_applied`.
 //! 4. The state at every sample time is the linear interpolation of the two physics steps that
 //!    bracket it.
@@ -12,7 +13,7 @@
 use mujoco_rs::prelude::*;
 
 use super::clock::{Commands, US};
-use super::truth::{JointPhysics, RealRobot, step_torque, through_play};
+use super::truth::{JointPhysics, Play, RealRobot, step_torque};
 use crate::model::{Robot, mj};
 
 /// The floating base on a test stand: qpos address, dof address and the pinned pose.
@@ -100,16 +101,20 @@ pub fn run(
         next += 1;
     }
     let mut tau = vec![0.0; nj];
+    let mut impact = vec![0.0; nj];
+    let mut play = vec![Play::default(); nj];
     let mut acting = Vec::new();
     while next < samples_us.len() {
         let t = n as f64 * dt;
         {
-            let ctrl = d.ctrl_mut();
             for (j, jp) in real.joints.iter().enumerate() {
                 let mut u = cmds.mean(t - jp.delay_s, t + dt - jp.delay_s, j);
                 if jp.half_play > 0.0 {
-                    u = through_play(u, q0[j], jp.half_play);
+                    let dinv = d.q_ldiag_inv().get(jp.dof).copied().unwrap_or(0.0);
+                    let inertia = if dinv > 0.0 { 1.0 / dinv } else { 0.0 };
+                    (u, impact[j]) = play[j].step(m, jp, (u, q0[j], qd0[j]), inertia);
                 }
+                let ctrl = d.ctrl_mut();
                 for s in &jp.servos {
                     ctrl[s.id] = u;
                 }
@@ -121,8 +126,8 @@ pub fn run(
                 }
             }
             let qfrc = d.qfrc_applied_mut();
-            for (jp, &t) in real.joints.iter().zip(&tau) {
-                qfrc[jp.dof] = t;
+            for (j, jp) in real.joints.iter().enumerate() {
+                qfrc[jp.dof] = tau[j] + impact[j];
             }
         }
         pin(&mut d);

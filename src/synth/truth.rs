@@ -12,7 +12,7 @@
 //! | gain_error | kp_scale, kd_scale | the joint's position actuators: `gainprm[0]`, `biasprm[1]` × kp_scale, `biasprm[2]` × kd_scale |
 //! | torque_limit | effort_limit, saturation_effort, velocity_limit | effort only: `forcerange` ±effort; with a torque–speed line: per-step clip of the servo torque via `qfrc_applied` |
 //! | action_delay | delay_s [s] | the servo sees the command signal delayed by delay_s (exact, sub-step: mean over each physics step) |
-//! | backlash | backlash_rad (total play) | the set-point the servo sees is q + deadzone(u − q, ±play/2) |
+//! | backlash | backlash_rad (total play) | a rotor (the joint's armature) behind the play, driven by the servo: on a flank the servo acts on the link with its set-point moved by play/2; inside the play no servo force on the link; an inelastic impact at the flank ([`Play`]) |
 //! | position_offset | offset_rad | sensor only: recorded q = true q + offset (the servo acts on the true angle) |
 //! | stribeck_friction | static, dynamic [N·m], v_stribeck [rad/s] | `qfrc_applied` −tanh(q̇/0.02)·(Fd + (Fs − Fd)·exp(−(q̇/vs)²)) |
 //! | load_dependent_friction | frictionloss [N·m], load_coeff | `qfrc_applied` −tanh(q̇/0.02)·(f0 + k·|τ_servo|) |
@@ -293,10 +293,86 @@ pub fn servo_torque(m: &MjModel, jp: &JointPhysics, ctrl: &[f64], q: f64, qd: f6
     tau
 }
 
-/// Backlash: the set-point the servo sees for command `u` at position `q`.
-pub fn through_play(u: f64, q: f64, half_play: f64) -> f64 {
-    let e = u - q;
-    if e.abs() <= half_play { q } else { u - half_play * e.signum() }
+/// Backlash: a rotor (inertia: the joint's armature) that the servo drives and that pushes the
+/// link through a play of ±`half_play`. On a flank rotor and link move as one and the servo
+/// acts on the link with its set-point moved by the half play; inside the play the servo acts
+/// on the rotor alone (no force on the link) and the rotor's momentum passes to the link
+/// inelastically when it reaches a flank. Without an armature the rotor sits at the command.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Play {
+    /// Rotor angle and velocity while it is inside the play.
+    qm: f64,
+    qmd: f64,
+    /// The flank the rotor rests on: −1, +1, or 0 inside the play.
+    side: f64,
+    /// The joint velocity of the previous step (its acceleration, for the flank's force).
+    qd_prev: f64,
+    started: bool,
+}
+
+impl Play {
+    /// One physics step of joint `jp` at (q, qd) for command `u`, with `inertia` the inertia the
+    /// joint presents to its own torque (armature included): the control its servos get and the
+    /// joint torque the rotor's impact adds.
+    pub fn step(
+        &mut self,
+        m: &MjModel,
+        jp: &JointPhysics,
+        (u, q, qd): (f64, f64, f64),
+        inertia: f64,
+    ) -> (f64, f64) {
+        let h = jp.half_play;
+        let dt = m.opt().timestep;
+        let j = m.dof_armature().get(jp.dof).copied().unwrap_or(0.0);
+        let (g, b) = (m.actuator_gainprm().as_flattened(), m.actuator_biasprm().as_flattened());
+        // The control that makes the servos apply no force at (q, qd).
+        let (mut num, mut den) = (0.0, 0.0);
+        for s in &jp.servos {
+            let i = s.id;
+            num -= s.gear * (b[10 * i] + b[10 * i + 1] * s.gear * q + b[10 * i + 2] * s.gear * qd);
+            den += s.gear * g[10 * i];
+        }
+        let free = if den != 0.0 { num / den } else { q };
+        if j <= 0.0 || dt <= 0.0 {
+            let e = u - q;
+            return (if e.abs() <= h { free } else { u - h * e.signum() }, 0.0);
+        }
+        let on_rotor = |qm: f64, qmd: f64| {
+            let c = vec![u; jp.servos.len()];
+            servo_torque(m, jp, &c, qm, qmd)
+        };
+        if !self.started {
+            let e = u - q;
+            *self = Play { qm: q + e.clamp(-h, h), qmd: qd, side: 0.0, qd_prev: qd, started: true };
+            if e.abs() > h {
+                self.side = e.signum();
+            }
+        }
+        let acc = (qd - self.qd_prev) / dt;
+        self.qd_prev = qd;
+        if self.side != 0.0 {
+            let c = vec![u - self.side * h; jp.servos.len()];
+            if self.side * (servo_torque(m, jp, &c, q, qd) - j * acc) < 0.0 {
+                (self.qm, self.qmd, self.side) = (q + self.side * h, qd, 0.0);
+            }
+        }
+        let mut tau = 0.0;
+        if self.side == 0.0 {
+            let qmd = self.qmd + dt * on_rotor(self.qm, self.qmd) / j;
+            let qm = self.qm + dt * qmd;
+            let vl = qd + dt * acc;
+            let d = qm - (q + dt * vl);
+            if d.abs() >= h && (qmd - vl) * d > 0.0 {
+                self.side = d.signum();
+                tau = j * (qmd - vl) / dt;
+                // The next step's acceleration estimate leaves the impact's jump out.
+                self.qd_prev = qd + tau * dt / inertia.max(j);
+            } else {
+                (self.qm, self.qmd) = (qm, qmd);
+            }
+        }
+        if self.side != 0.0 { (u - self.side * h, tau) } else { (free, tau) }
+    }
 }
 
 /// The joint torque added this step (qfrc_applied) by the per-step effects, when servo k acts
@@ -359,11 +435,40 @@ mod tests {
         }
     }
 
+    /// Inside the play the servos get the control at which they apply no force (kp and kv terms
+    /// both); beyond it the command moved by the half play, and the rotor, once it has crossed
+    /// the play, hits the flank with an impulse.
     #[test]
-    fn play_dead_band() {
-        assert_eq!(through_play(0.01, 0.0, 0.02), 0.0);
-        assert!((through_play(0.05, 0.0, 0.02) - 0.03).abs() < 1e-15);
-        assert!((through_play(-0.05, 0.0, 0.02) + 0.03).abs() < 1e-15);
-        assert_eq!(through_play(0.3, 0.3, 0.0), 0.3);
+    fn play_has_no_servo_force_inside_and_a_rotor_that_crosses_it() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        let mut map = crate::model::source::SourceMap::default();
+        let robot =
+            crate::model::load(&mut map, &root.join("fixtures/gap/arm3.xml"), None).unwrap();
+        let hidden =
+            [Hidden { effect: "backlash", joint: "elbow_pitch".into(), params: vec![0.04] }];
+        let real = real_robot(&robot, &["elbow_pitch".to_string()], &hidden).unwrap();
+        let (m, jp) = (&real.model, &real.joints[0]);
+        let servo = |c: f64, q: f64, qd: f64| servo_torque(m, jp, &vec![c; jp.servos.len()], q, qd);
+        // Inside the play (error 0.01 < 0.02), the link moving: no servo force.
+        let mut p = Play::default();
+        let (c, imp) = p.step(m, jp, (0.31, 0.3, 0.5), 0.05);
+        assert!(servo(c, 0.3, 0.5).abs() < 1e-9 && imp == 0.0, "{c} {imp}");
+        // Far beyond the flank: the command moved by the half play.
+        let mut p = Play::default();
+        let (c, imp) = p.step(m, jp, (0.5, 0.3, 0.0), 0.05);
+        assert!((c - 0.48).abs() < 1e-12 && imp == 0.0, "{c} {imp}");
+        // A command step of 0.1 from inside the play: the rotor crosses the gap, then hits.
+        let mut p = Play::default();
+        p.step(m, jp, (0.0, 0.0, 0.0), 0.05);
+        let mut hit = None;
+        for k in 0..200 {
+            let (_, imp) = p.step(m, jp, (0.1, 0.0, 0.0), 0.05);
+            if imp != 0.0 {
+                hit = Some((k, imp));
+                break;
+            }
+        }
+        let (k, imp) = hit.expect("the rotor reaches the flank");
+        assert!(k > 0 && imp > 0.0, "step {k}, impulse {imp}");
     }
 }

@@ -315,3 +315,68 @@ fn mirror_pairs_share_a_body_effect_only_over_alike_links() {
     assert!(alike_over(&uneven, by_id("armature").unwrap(), &pair));
     assert!(!alike_over(&even, by_id("armature").unwrap(), &["no_such_joint".to_string()]));
 }
+
+/// Inside the play the servo applies no force at all (neither its `kp` nor its `kd` term), with
+/// or without a rotor inertia; on a flank it acts on the link with its set-point moved by half
+/// the play. Torques from [`super::servo_torque`], the actuator law `kp (ctrl − q) − kd q̇`.
+#[test]
+fn backlash_applies_no_servo_force_inside_the_play() {
+    use super::{Backlash, Effect, EffectState, HookCtx, servo_torque};
+    use crate::sim2real::replay::StepIo;
+    for armature in [0.0, 0.01] {
+        let io0 = StepIo {
+            kp: 50.0,
+            kd: 2.0,
+            enabled: true,
+            armature,
+            inertia: 0.02,
+            ..Default::default()
+        };
+        let run = |u: f64, q: f64, qd: f64| {
+            let (mut st, mut io) = (EffectState::default(), StepIo { ctrl: u, ..io0 });
+            let p = [0.1];
+            Backlash.torque(HookCtx {
+                st: &mut st,
+                q,
+                qd,
+                q_target: u,
+                io: &mut io,
+                dt: 0.001,
+                p: &p,
+            });
+            (servo_torque(q, qd, &io), io.tau)
+        };
+        // 0.03 rad of error, within the ±0.05 play, the link moving at 0.8 rad/s.
+        let (tau, extra) = run(0.33, 0.3, 0.8);
+        assert!(tau.abs() < 1e-9 && extra == 0.0, "armature {armature}: {tau} + {extra}");
+        // 0.2 rad of error: 0.15 beyond the flank, kp·0.15 − kd·0.8 = 5.9.
+        let (tau, extra) = run(0.5, 0.3, 0.8);
+        assert!((tau - 5.9).abs() < 1e-9 && extra == 0.0, "armature {armature}: {tau} + {extra}");
+    }
+}
+
+/// A link set moving at 0.5 rad/s with its command at its start, no gravity and no damping:
+/// inside the play (±0.05 rad) nothing brakes it, so it coasts at 0.5 rad/s until it meets the
+/// rotor (held near the command by its servo) about 0.05 rad on, and is then pulled back. With
+/// the servo's damping left on inside the play (kv 2 on ≈ 0.017 kg·m²: a 9 ms time constant)
+/// it would stop within ≈ 5 mrad.
+#[test]
+fn backlash_lets_the_link_coast_through_the_play() {
+    use super::{Applied, Backlash, hinge_recording, hinge_robot, simulate};
+    use crate::sim2real::replay::ReplayOptions;
+    let dir = std::env::temp_dir().join(format!("modellint-play-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let robot = hinge_robot(&dir, "play.xml", "", r#"armature="0.01""#, r#"kp="50" kv="2""#);
+    let t: Vec<f64> = (0..40).map(|i| i as f64 * 0.005).collect();
+    let mut rec = hinge_recording(t.clone(), vec![0.0; t.len()]);
+    rec.joints[0].qd.as_mut().unwrap()[0] = 0.5;
+    let applied = [Applied { effect: &Backlash, joints: vec!["j".into()], params: vec![0.1] }];
+    let ep = simulate(&robot, &[rec], &applied, &ReplayOptions::default()).remove(0).unwrap();
+    let q = &ep.q_sim[0];
+    // At 60 ms: 0.5 × 0.06 = 0.030 rad coasted.
+    let i = t.iter().position(|&x| x >= 0.06 - 1e-9).unwrap();
+    assert!((q[i] - 0.030).abs() < 0.003, "q(60 ms) = {}", q[i]);
+    let peak = q.iter().cloned().fold(f64::MIN, f64::max);
+    assert!(peak > 0.045 && peak < 0.07, "the link is caught near the flank: peak {peak}");
+    std::fs::remove_dir_all(&dir).ok();
+}

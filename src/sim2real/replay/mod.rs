@@ -122,6 +122,9 @@ pub struct StepIo {
     /// Inertia the DoF presents to its own torque, 1 / diag(D) of MuJoCo's L'DL factorisation
     /// of the mass matrix (armature included; exact for a single DoF) [kg·m² or kg].
     pub inertia: f64,
+    /// The DoF's armature in the model copy (`dof_armature`, a rotor's reflected inertia)
+    /// [kg·m² or kg].
+    pub armature: f64,
 }
 
 impl StepIo {

@@ -260,6 +260,7 @@ impl Replayer<'_> {
                 }
             }
             let (bias, passive, dinv) = (d.qfrc_bias(), d.qfrc_passive(), d.q_ldiag_inv());
+            let armature = d.model().dof_armature();
             for i in 0..nj {
                 let dof = self.joints[jm[i]].dofadr;
                 // A delayed position actuator acts on its history (filled with the first command
@@ -282,6 +283,7 @@ impl Replayer<'_> {
                     bias: bias[dof],
                     passive: passive[dof],
                     inertia: if dinv[dof] > 0.0 { 1.0 / dinv[dof] } else { 0.0 },
+                    armature: armature.get(dof).copied().unwrap_or(0.0),
                 };
             }
             for i in 0..nj {
