@@ -130,8 +130,8 @@ CASES["R1_shank_payload"] = dict(model="leg3", seed=61, episodes=4, seconds=4.0,
     effects={"bodies": {"shank": {"payload": {"mass": 0.6, "pos": [0.0, 0.0, -0.25]}}}})
 CASES["R0_none"] = dict(model="leg3", seed=60, episodes=4, seconds=4.0, heldout=[3], effects={})
 # The shank's inertia about its principal x and y axes (y: the knee's axis) doubled, mass and
-# centre of mass kept; `link_inertia` is tried only when named, so the fit is told the effects
-# it may use (fit_args).
+# centre of mass kept; the fit is given a short list of effects (fit_args). K11/KR11 (chainsim)
+# are the blind inertia cases.
 CASES["L15_shank_inertia"] = dict(model="leg3", seed=31,
     effects={"bodies": {"shank": {"inertia_scale": [2.0, 2.0, 1.0]}}},
     fit_args=["--effects", "link_inertia,armature,link_mass,com_offset,viscous_damping,gain_error"])
@@ -217,13 +217,17 @@ CASES["QR6_shanks_payload"] = dict(CASES["Q6_shanks_payload"], seed=66, episodes
 # y joints standing on two legs (models/biped2.xml), both legs commanded alike; the ground is
 # floatsim's own penalty contact (spring-damper + regularised Coulomb friction), not MuJoCo's:
 # the contact models differ, as they do between any simulator and a floor. The trunk's three
-# base joints are recorded as positions only (passive).
+# base joints are recorded as positions only (passive). `amp`: the squat's, the hip swing's and
+# the trunk pitch's command signals (floatsim.run_episode); the key leans the trunk 0.05 rad
+# forward, over the middle of the soles.
 B2 = ["root_x", "root_z", "root_pitch"] + [f"{s}_{j}" for s in ("left", "right") for j in ALL3]
 MODELS["biped2_float"] = dict(xml="biped2.xml", chain="biped2", joints=B2, robot="biped2_floor",
-                              key=[-0.4, 0.8, -0.4], amp=[0.1, 0.15, 0.1], t0_ctrl=0.0047, **STD)
+                              key=[-0.4, 0.8, -0.45], amp=[0.15, 0.02, 0.015], t0_ctrl=0.0047, **STD)
 CHAIN_F = dict(sim="float", model="biped2_float")
 CASES["KF0_biped_none"] = dict(CHAIN_F, seed=86, effects={})
 CASES["KF1_trunk_battery"] = dict(CHAIN_F, seed=87, effects={"bodies": {"trunk": {
     "joint": "root_pitch", "com_shift": [0.04, 0.0, -0.03]}}})
 CHAIN_FR = dict(CHAIN_F, episodes=4, seconds=4.0, heldout=[3])
 CASES["KFR0_biped_none"] = dict(CHAIN_FR, seed=96, effects={})
+CASES["KFR1_trunk_battery"] = dict(CHAIN_FR, seed=97, effects={"bodies": {"trunk": {
+    "joint": "root_pitch", "com_shift": [0.04, 0.0, -0.03]}}})

@@ -22,8 +22,9 @@ same command generator and recorder, reclog.py). What it models:
   constraint: the contact models differ, as a real floor differs from any simulator's;
 - rotor armature on M's diagonal, position servos tau = kp (u − q) − kv q̇ clipped to their
   force range, RK4 at 4 kHz split at every command switch; both legs get the same commands
-  (a squat-and-sway motion; a planar robot whose legs differed would fight itself through the
-  ground), the trunk is unactuated;
+  (a planar robot whose legs differed would fight itself through the ground): a squat, a hip
+  swing and an ankle that keeps the soles flat under a trunk pitching by a third, small signal
+  (run_episode); the trunk is unactuated;
 - concealed body effects on a link as in chainsim.py (a payload sphere, a centre-of-mass shift,
   an inertia scale).
 The log records the six leg joints (q, q̇, command) and the trunk's three base joints (q, q̇,
@@ -266,7 +267,12 @@ def run_episode(robot, cfg, rng, seconds, ep_idx, split, out_csv, t0_ctrl, joint
     kmin = math.floor((-SETTLE_S - 0.1 - t0_ctrl) * ctrl_hz)
     kmax = math.ceil((seconds + 0.1 - t0_ctrl) * ctrl_hz)
     tick_t = t0_ctrl + np.arange(kmin, kmax + 1) / ctrl_hz
-    cmd3, segs = make_commands(rng, tick_t, key, cfg["amp"], seconds, ctrl_hz)
+    # three signals: a squat (the knee bent by s0, hip and ankle by −s0/2 each: the hip stays
+    # over the ankle), a hip swing s1 and the trunk's pitch s2; the ankle takes the rest, so that
+    # the soles stay flat under a trunk that pitches only by s2
+    s3, segs = make_commands(rng, tick_t, [0.0, 0.0, 0.0], cfg["amp"], seconds, ctrl_hz)
+    sq, sw, pt = s3[:, 0], s3[:, 1], s3[:, 2]
+    cmd3 = np.asarray(key) + np.stack([-sq / 2 + sw, sq, -sq / 2 - sw - pt], axis=1)
     cmd = np.concatenate([cmd3, cmd3], axis=1)  # both legs alike
 
     def issued_index(t):

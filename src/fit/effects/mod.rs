@@ -448,6 +448,13 @@ pub trait Effect: Declared + Sync {
     fn by_default(&self) -> bool {
         true
     }
+    /// Whether the diagnosis ranks this effect on target `t` at all: `false` where it would be
+    /// indistinguishable from an effect that is always a candidate there (a link's inertia
+    /// about the axis of the only joint that moves it is that joint's armature). Default: `true`.
+    fn acts_on(&self, t: &JointTarget) -> bool {
+        let _ = t;
+        true
+    }
     /// Whether one parameter vector means the same thing on targets `a` and `b`, so that the
     /// two may share it in a group (mirror links, every leg). Default: `true`; the body effects
     /// need alike bodies ([`inertial::BodyAxes::alike`]).
