@@ -448,11 +448,9 @@ pub trait Effect: Declared + Sync {
     fn by_default(&self) -> bool {
         true
     }
-    /// Whether the diagnosis ranks this effect on target `t` at all: `false` where it would be
-    /// indistinguishable from an effect that is always a candidate there (a link's inertia
-    /// about the axis of the only joint that moves it is that joint's armature). Default: `true`.
-    fn acts_on(&self, t: &JointTarget) -> bool {
-        let _ = t;
+    /// Whether this effect is a candidate on `t` at all: `false` where another candidate is the
+    /// same change (a link only its own joint moves: its inertia is that joint's armature).
+    fn acts_on(&self, _t: &JointTarget) -> bool {
         true
     }
     /// Whether one parameter vector means the same thing on targets `a` and `b`, so that the
