@@ -445,7 +445,7 @@ def selftest():
         mujoco.mj_resetDataKeyframe(m, d, 0)
         mujoco.mj_forward(m, d)
         feet = [m.jnt_bodyid[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, j)] for j in ("left_ankle", "right_ankle")]
-        o, th, _, _ = Tree(links).frames(np.r_[0.0, 0.0, 0.0, key, key], np.zeros(n))
+        o, th, _, _ = Tree(links).frames(np.array(d.qpos), np.zeros(n))  # the same joint order
         for k, b in enumerate(feet):
             i = 5 if k == 0 else 8
             check(f"ankle {k} place vs MuJoCo", np.allclose(o[i], d.xpos[b][[0, 2]], atol=1e-9),
