@@ -7,6 +7,8 @@
 //! `com_offset` on the hip's child body, the trunk, both components within 10 % of the shift;
 //! one armature behind every motor of the leg must come out as one group on all three joints;
 //! a gear play behind the knee's motor must come out as backlash on the knee (ignored: slow);
+//! the shank's moment of inertia doubled must come out as a `link_inertia` on the knee within
+//! 10 %;
 //! the same robots with nothing concealed must give nothing. Every expected value is read from the simulator's `truth.json`.
 
 mod common;
@@ -108,6 +110,30 @@ fn a_trunk_centre_of_mass_moved_is_found_when_the_leg_carries_the_trunk() {
 #[test]
 fn a_trunk_centre_of_mass_moved_is_found_blind_on_the_longer_stance() {
     assert_trunk_shift_found("KS1_trunk_com_shift");
+}
+
+/// The shank's moment of inertia about the knee's axis through its centre of mass doubled
+/// (mass and centre of mass kept), found blind: `link_inertia` on the knee within 10 % of the
+/// truth's scale, and no armature (on the knee alone it would add only the knee's diagonal
+/// entry of the mass matrix; the shank's moment also loads the hip). The only other effect the
+/// fit may keep is a sub-millisecond action delay on all three joints, the discretisation
+/// stand-in of the other chainsim cases.
+#[test]
+fn a_doubled_shank_inertia_is_found_blind_on_the_knee() {
+    let truth = truth("KR11_shank_inertia");
+    own_physics(&truth);
+    let scale = truth["resolved"]["_bodies"]["shank"]["inertia_scale"][1].as_f64().unwrap();
+    let v = fit("KR11_shank_inertia", &[]);
+    let listed = v["missing_physics"].as_array().unwrap();
+    let inertia: Vec<_> = listed.iter().filter(|m| m["effect"] == "link_inertia").collect();
+    assert_eq!(inertia.len(), 1, "{:?}", found(&v));
+    assert_eq!(inertia[0]["joints"].to_string(), r#"["knee"]"#);
+    let s = inertia[0]["params"]["inertia_scale"].as_f64().unwrap();
+    assert!((s - scale).abs() <= 0.1 * scale, "inertia scale {s} for {scale}");
+    for m in listed.iter().filter(|m| m["effect"] != "link_inertia") {
+        let d = m["params"]["delay_s"].as_f64();
+        assert!(m["effect"] == "action_delay" && d.is_some_and(|d| d < 1e-3), "{:?}", found(&v));
+    }
 }
 
 #[test]

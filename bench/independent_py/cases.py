@@ -130,8 +130,8 @@ CASES["R1_shank_payload"] = dict(model="leg3", seed=61, episodes=4, seconds=4.0,
     effects={"bodies": {"shank": {"payload": {"mass": 0.6, "pos": [0.0, 0.0, -0.25]}}}})
 CASES["R0_none"] = dict(model="leg3", seed=60, episodes=4, seconds=4.0, heldout=[3], effects={})
 # The shank's inertia about its principal x and y axes (y: the knee's axis) doubled, mass and
-# centre of mass kept; `link_inertia` is tried only when named, so the fit is told the effects
-# it may use (fit_args).
+# centre of mass kept; the fit is given a short list of effects (fit_args). K11/KR11 (chainsim)
+# are the blind inertia cases.
 CASES["L15_shank_inertia"] = dict(model="leg3", seed=31,
     effects={"bodies": {"shank": {"inertia_scale": [2.0, 2.0, 1.0]}}},
     fit_args=["--effects", "link_inertia,armature,link_mass,com_offset,viscous_damping,gain_error"])
@@ -165,6 +165,10 @@ CASES.update({
     "K10_shank_com_shift": dict(CHAIN_L, seed=81, effects={"bodies": {"shank": {
         "joint": "knee", "com_shift": [0.03, 0.0, -0.04]}}}),
 })
+# The shank's moment of inertia about the knee's axis through its centre of mass doubled (mass and
+# centre of mass kept): a link heavier at its ends than its CAD (a battery pack split in two).
+CASES["K11_shank_inertia"] = dict(CHAIN_L, seed=85, effects={"bodies": {"shank": {
+    "joint": "knee", "inertia_scale": 2.0}}})
 # Reduced chainsim cases for `make test` (tests/independent_chain.rs; recordings committed in
 # fixtures/independent_py/): 4 episodes × 4 s, the last held out.
 CHAIN_R = dict(CHAIN_L, episodes=4, seconds=4.0, heldout=[3])
@@ -173,6 +177,8 @@ CASES["KR1_shank_payload"] = dict(CHAIN_R, seed=91, effects={"bodies": {"shank":
     "joint": "knee", "payload": {"mass": 0.6, "pos": [0.0, 0.0, -0.25]}}}})
 # Backlash 0.04 (total play) on the knee: a motor behind a gear play.
 CASES["KR6_knee_backlash"] = dict(CHAIN_R, seed=96, effects={"joints": {"knee": {"backlash": 0.04}}})
+CASES["KR11_shank_inertia"] = dict(CHAIN_R, seed=95, effects={"bodies": {"shank": {
+    "joint": "knee", "inertia_scale": 2.0}}})
 # Armature on every joint (one value, 0.06, where the model says 0.04 / 0.03 / 0.012): one group.
 CASES["KR8_all_armature"] = dict(CHAIN_R, seed=98,
     effects={"joints": {j: {"armature": 0.06} for j in ALL3}})
@@ -209,3 +215,21 @@ CASES["Q6_shanks_payload"] = dict(QUAD_EP, seed=46, effects={"bodies": {
     f"{l}_shank": QUAD_PAYLOAD for l in ("FL", "FR", "RL", "RR")}})
 CASES["QR6_shanks_payload"] = dict(CASES["Q6_shanks_payload"], seed=66, episodes=3, seconds=4.0,
                                    heldout=[2])
+# ---- a free base (issue 48; floatsim.py, `sim: float`): the trunk on slide x / slide z / hinge
+# y joints standing on two legs (models/biped2.xml), both legs commanded alike; the ground is
+# floatsim's own penalty contact (spring-damper + regularised Coulomb friction), not MuJoCo's:
+# the contact models differ, as they do between any simulator and a floor. The trunk's three
+# base joints are recorded as positions only (passive). `amp`: the squat's, the hip swing's and
+# the trunk pitch's command signals (floatsim.run_episode); the key leans the trunk 0.05 rad
+# forward, over the middle of the soles.
+B2 = ["root_x", "root_z", "root_pitch"] + [f"{s}_{j}" for s in ("left", "right") for j in ALL3]
+MODELS["biped2_float"] = dict(xml="biped2.xml", chain="biped2", joints=B2, robot="biped2_floor",
+                              key=[-0.4, 0.8, -0.45], amp=[0.15, 0.02, 0.015], t0_ctrl=0.0047, **STD)
+CHAIN_F = dict(sim="float", model="biped2_float")
+CASES["KF0_biped_none"] = dict(CHAIN_F, seed=86, effects={})
+CASES["KF1_trunk_battery"] = dict(CHAIN_F, seed=87, effects={"bodies": {"trunk": {
+    "joint": "root_pitch", "com_shift": [0.04, 0.0, -0.03]}}})
+CHAIN_FR = dict(CHAIN_F, episodes=4, seconds=4.0, heldout=[3])
+CASES["KFR0_biped_none"] = dict(CHAIN_FR, seed=96, effects={})
+CASES["KFR1_trunk_battery"] = dict(CHAIN_FR, seed=97, effects={"bodies": {"trunk": {
+    "joint": "root_pitch", "com_shift": [0.04, 0.0, -0.03]}}})

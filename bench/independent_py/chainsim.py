@@ -20,8 +20,10 @@ same command generator and recorder, reclog.py). What it models:
   = the joint's armature, which pushes the link through a dead band of total width b with a stiff
   spring and damper outside it; the servo's feedback is the motor's angle, the log the link's);
   Stribeck friction -(Fc + (Fs - Fc) exp(-(v/vs)^2)) tanh(v/0.005), Coulomb friction the same with
-  Fs = Fc; armature; a payload (a solid sphere added to a link) and a centre-of-mass shift (every
-  part of the link moved).
+  Fs = Fc; armature; a payload (a solid sphere added to a link), a centre-of-mass shift (every
+  part of the link moved) and an inertia scale (the link's moment about y through its centre of
+  mass × s, mass and centre of mass kept: a massless part at the centre of mass holding the
+  difference).
 It does not model: contacts or joint limits (the recorded motion stays inside the nominal ranges,
 checked), out-of-plane motion, a floating base, motor electrics.
 """
@@ -81,6 +83,14 @@ CHAINS = {
              armature=0.0, kp=2.0, kv=0.0335, force=None, range=(-2.0, 2.0)),
     ],
 }
+
+
+def link_inertia(parts):
+    """A link's mass, centre of mass (x, z) and moment about y through it, from its parts."""
+    m = sum(p[0] for p in parts)
+    c = tuple(sum(p[0] * p[1][k] for p in parts) / m for k in range(2))
+    i = sum(iy + pm * ((pc[0] - c[0]) ** 2 + (pc[1] - c[1]) ** 2) for pm, pc, iy in parts)
+    return m, c, i
 
 
 class Chain:
@@ -165,6 +175,9 @@ class Robot:
             if "com_shift" in b:
                 d = b["com_shift"]
                 l["parts"] = [(m, (c[0] + d[0], c[1] + d[2]), iy) for m, c, iy in l["parts"]]
+            if "inertia_scale" in b:  # the moment about y through the link's centre of mass
+                m0, c0, i0 = link_inertia(l["parts"])  # × s, mass and centre of mass kept
+                l["parts"].append((0.0, c0, (b["inertia_scale"] - 1.0) * i0))
         self.chain = Chain(links, gravity)
         n = self.n = len(links)
         je = [eff.get("joints", {}).get(l["joint"], {}) for l in links]
@@ -302,6 +315,10 @@ def body_truth(links, eff):
             r["payload"] = {"mass": b["payload"]["mass"], "pos": list(b["payload"]["pos"])}
         if "com_shift" in b:
             r["com_shift"] = list(b["com_shift"])
+        if "inertia_scale" in b:  # about y (the joint axis) only: the in-plane moment
+            i0 = link_inertia(l["parts"])[2]
+            r.update(nominal_inertia=[i0, i0, i0], nominal_iquat=[1.0, 0.0, 0.0, 0.0],
+                     inertia_scale=[1.0, b["inertia_scale"], 1.0])
         out[bname] = r
     return out
 

@@ -72,9 +72,10 @@ def make_commands(rng, tick_t, centre, amp, seconds, ctrl_hz=CTRL_HZ):
 
 
 def record(rng, cfg, T, Q, QD, cmd, issued_index, offset, seconds, out_csv, ep_idx, split,
-           joints, t0_ctrl, ctrl_hz, note="recorded by an independent tryout simulator"):
+           joints, t0_ctrl, ctrl_hz, note="recorded by an independent tryout simulator", passive=0):
     """Sample the trajectory (T, Q, QD: the robot's states at its integration times) with the
-    asynchronous recorder and write the CSV. Returns (rows written, rows dropped)."""
+    asynchronous recorder and write the CSV. Returns (rows written, rows dropped). The first
+    `passive` joints (a free base's) are written without a command column."""
     nj = len(joints)
     # asynchronous recorder
     ts = [0.0]
@@ -95,8 +96,8 @@ def record(rng, cfg, T, Q, QD, cmd, issued_index, offset, seconds, out_csv, ep_i
         q = np.array([np.interp(t, T, Q[:, i]) for i in range(nj)])
         qd = np.array([np.interp(t, T, QD[:, i]) for i in range(nj)])
         qm = q + np.array(offset) + rng.normal(0, cfg["q_noise"], nj)
-        if quantum:
-            qm = np.round(qm / quantum) * quantum
+        if quantum:  # the joints' encoders (a free base's pose comes from an estimator)
+            qm[passive:] = np.round(qm[passive:] / quantum) * quantum
         qdm = qd + rng.normal(0, cfg["qd_noise"], nj)
         qc = cmd[issued_index(t)]
         rows.append((t, qm, qdm, qc))
@@ -115,7 +116,9 @@ def record(rng, cfg, T, Q, QD, cmd, issued_index, offset, seconds, out_csv, ep_i
         if cfg.get("declare_t0", True):
             f.write(f"# control_t0_s: {t0_ctrl}\n")
         f.write(f"# note: {note}\n")
-        f.write("t," + ",".join(f"{j}.q,{j}.qd,{j}.q_cmd" for j in joints) + "\n")
+        f.write("t," + ",".join(f"{j}.q,{j}.qd" + (",{j}.q_cmd".format(j=j) if i >= passive else "")
+                                for i, j in enumerate(joints)) + "\n")
         for t, qm, qdm, qc in rows:
-            f.write(f"{t:.6f}," + ",".join(f"{qm[i]:.7f},{qdm[i]:.6f},{qc[i]:.7f}" for i in range(nj)) + "\n")
+            f.write(f"{t:.6f}," + ",".join(f"{qm[i]:.7f},{qdm[i]:.6f}" + (f",{qc[i]:.7f}" if i >= passive else "")
+                                          for i in range(nj)) + "\n")
     return len(rows), int(drops.sum())

@@ -6,8 +6,9 @@
 # settle), `modellint fit` sees only the nominal model and the CSVs, and score.py compares its
 # JSON with the truth the simulator wrote into its MjModel. Cases with `sim: "chain"` (K*) are
 # recorded instead by chainsim.py, a numpy planar-chain simulator with its own physics (backlash
-# behind a motor, Stribeck friction, body effects composed by hand); `chainsim.py --selftest`
-# checks its physics.
+# behind a motor, Stribeck friction, body effects composed by hand); `sim: "float"` cases (KF*)
+# by floatsim.py, a planar biped on a free base with its own penalty ground contact;
+# `chainsim.py --selftest` and `floatsim.py --selftest` check their physics.
 #
 # usage: bench/independent_py/run.sh [CASE...]      (default: every case; ~15–30 min on 2 cores)
 # Needs python3 with venv and PyPI (mujoco==3.17.0, numpy) — skips with a message otherwise.
@@ -34,8 +35,9 @@ if [ $# -eq 0 ]; then
 fi
 export INDEP_OUT="$out"
 for c in "$@"; do
-  # `sim: chain` cases are recorded by chainsim.py (own numpy physics), the others by realsim.py
-  sim=$("$venv/bin/python" -c "import sys; sys.path.insert(0, '$here'); from cases import CASES; print('chainsim' if CASES.get('$c', {}).get('sim') == 'chain' else 'realsim')")
+  # `sim: chain` cases are recorded by chainsim.py (own numpy physics), `sim: float` by
+  # floatsim.py (own free-base physics and ground contact), the others by realsim.py
+  sim=$("$venv/bin/python" -c "import sys; sys.path.insert(0, '$here'); from cases import CASES; print({'chain': 'chainsim', 'float': 'floatsim'}.get(CASES.get('$c', {}).get('sim'), 'realsim'))")
   "$venv/bin/python" "$here/$sim.py" "$c" >/dev/null || { echo "$c: recording failed"; continue; }
   extra=$("$venv/bin/python" -c "import sys; sys.path.insert(0, '$here'); from cases import CASES; print(' '.join(CASES['$c'].get('fit_args', [])))")
   s=$(date +%s.%N)

@@ -13,7 +13,7 @@ use std::collections::BTreeMap;
 
 use serde::Serialize;
 
-use crate::fit::effects;
+use crate::fit::effects::{self, JointTarget};
 use crate::model::{ActuatorKind, Robot};
 use crate::sim2real::metrics::{gap_mask, pearson, zoh_at};
 use crate::sim2real::recording::{Recording, derivative};
@@ -193,8 +193,9 @@ pub fn diagnose(
         let res_rms = rms(&s.r);
         s.qd_rms = rms(&s.qd).max(1e-6);
         s.u_rms = rms(&s.u).max(1e-9);
+        let target = JointTarget::of(robot, name);
         for effect in effects::all() {
-            if !ok(effect.id()) {
+            if !ok(effect.id()) || target.as_ref().is_some_and(|t| !effect.acts_on(t)) {
                 continue;
             }
             let sig = effect.signature(&s);

@@ -33,6 +33,10 @@ pub struct BodyAxes {
     /// The link's length scale [m]: the largest of twice the centre of mass's distance, the
     /// distance to a child body, and 5 cm.
     pub length: f64,
+    /// Whether a joint other than its own moves the body (a joint of an ancestor body, or a
+    /// second joint of its own). When none does, the body's inertia about the joint axis adds
+    /// to the mass matrix exactly what the joint's armature adds (one diagonal entry).
+    pub carried: bool,
 }
 
 fn v3(a: [f64; 3]) -> Vector3<f64> {
@@ -73,6 +77,18 @@ impl BodyAxes {
         let length = (2.0 * v3(com).norm()).max(child_len).max(0.05);
         let axis = if axis.norm() > 1e-9 { axis.normalize() } else { perpendicular(along) };
         let finite = |x: f64| if x.is_finite() { x } else { 0.0 };
+        let (jntnum, parent) = (m.body_jntnum(), m.body_parentid());
+        let mut carried = jntnum.get(b).is_some_and(|&n| n > 1);
+        let mut p = parent.get(b).and_then(|&p| usize::try_from(p).ok());
+        for _ in 0..jntnum.len() {
+            match p {
+                Some(a) if a > 0 && !carried => {
+                    carried = jntnum.get(a).is_some_and(|&n| n > 0);
+                    p = parent.get(a).and_then(|&q| usize::try_from(q).ok());
+                }
+                _ => break,
+            }
+        }
         Some(BodyAxes {
             body: b,
             mass: finite(*m.body_mass().get(b)?),
@@ -82,6 +98,7 @@ impl BodyAxes {
             across: across.into(),
             axis: axis.into(),
             length: finite(length),
+            carried,
         })
     }
 

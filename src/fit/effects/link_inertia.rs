@@ -10,8 +10,10 @@ declare_effect! {
     /// real body has positive semi-definite): the inertia about the axis through the centre of
     /// mass becomes `inertia_scale` × the modelled one, and every value is a rigid body that
     /// exists (the triangle inequality holds by construction). Mass and centre of mass are
-    /// unchanged. Tried only when named (`--effects link_inertia`): on a single joint it
-    /// mimics armature.
+    /// unchanged. A candidate only on a link that another joint also moves (the shank under
+    /// the hip, a thigh under a free base): on a link only its own joint moves (the first link
+    /// of a fixed-base chain, a pendulum) the moment about the axis adds exactly what armature
+    /// adds, and the two could not be told apart (it is still fitted there when told).
     ///
     /// ## Simulation
     /// the child body's `body_inertia`, `body_iquat` (second moments scaled in the joint's plane)
@@ -39,7 +41,7 @@ impl Effect for LinkInertia {
         }
     }
     inertial::body_effect_methods!(qdd);
-    fn by_default(&self) -> bool {
-        false
+    fn acts_on(&self, t: &JointTarget) -> bool {
+        t.body.is_some_and(|b| b.carried)
     }
 }

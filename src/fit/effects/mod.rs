@@ -448,6 +448,11 @@ pub trait Effect: Declared + Sync {
     fn by_default(&self) -> bool {
         true
     }
+    /// Whether this effect is a candidate on `t` at all: `false` where another candidate is the
+    /// same change (a link only its own joint moves: its inertia is that joint's armature).
+    fn acts_on(&self, _t: &JointTarget) -> bool {
+        true
+    }
     /// Whether one parameter vector means the same thing on targets `a` and `b`, so that the
     /// two may share it in a group (mirror links, every leg). Default: `true`; the body effects
     /// need alike bodies ([`inertial::BodyAxes::alike`]).

@@ -380,3 +380,48 @@ fn backlash_lets_the_link_coast_through_the_play() {
     assert!(peak > 0.045 && peak < 0.07, "the link is caught near the flank: peak {peak}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// On a link that only its own joint moves (the leg's thigh under a welded stand) a change of
+/// its moment about the joint axis changes the mass matrix exactly as the joint's armature
+/// does (one diagonal entry): link_inertia is no candidate there. On the shank (carried by the
+/// hip) it also changes the hip's row, which armature never does: a candidate. The mass
+/// matrices are MuJoCo's (`mj_fullM`) at the keyframe.
+#[test]
+fn link_inertia_is_a_candidate_only_where_armature_cannot_stand_in_for_it() {
+    use super::{Applied, JointTarget, by_id, model_with};
+    use mujoco_rs::prelude::MjData;
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("bench/independent_py/models/leg3.xml");
+    let mut map = crate::model::source::SourceMap::default();
+    let robot = crate::model::load(&mut map, &path, None).expect("load leg3");
+    let e = by_id("link_inertia").unwrap();
+    let t = |j: &str| JointTarget::of(&robot, j).unwrap();
+    assert!(!e.acts_on(&t("hip_pitch")), "the thigh: only the hip moves it");
+    assert!(e.acts_on(&t("knee")) && e.acts_on(&t("ankle")), "shank and foot are carried");
+    let mass = |applied: &[Applied]| {
+        let m = model_with(&robot, applied);
+        let mut d = MjData::new(&m);
+        let _ = d.reset_keyframe(0);
+        d.forward();
+        crate::model::mj::full_mass_matrix(&d)
+    };
+    let m0 = mass(&[]);
+    let on = |j: &str, id: &str, p: f64| Applied {
+        effect: by_id(id).unwrap(),
+        joints: vec![j.into()],
+        params: vec![p],
+    };
+    for (joint, dof) in [("hip_pitch", 0), ("knee", 1)] {
+        let m1 = mass(&[on(joint, "link_inertia", 2.0)]);
+        let changed: Vec<usize> = (0..9).filter(|&k| (m1[k] - m0[k]).abs() > 1e-12).collect();
+        if joint == "hip_pitch" {
+            assert_eq!(changed, [0], "{m0:?} → {m1:?}");
+            // the same as armature raised by the change
+            let base = robot.mj.dof_armature()[dof];
+            let m2 = mass(&[on(joint, "armature", base + m1[0] - m0[0])]);
+            assert!(m2.iter().zip(&m1).all(|(a, b)| (a - b).abs() < 1e-12), "{m2:?} vs {m1:?}");
+        } else {
+            assert_eq!(changed, [0, 1, 3, 4], "the hip's row too: {m0:?} → {m1:?}");
+        }
+    }
+}

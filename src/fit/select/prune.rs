@@ -204,14 +204,18 @@ pub(super) fn swap_pass(s: &Search, round: usize, out: &mut FitOutcome) -> bool 
                 continue;
             }
             // On the joints of `cur` that `e` does not already act on (gain error on every
-            // joint next to a damping on the elbow can become a damping on the other joints).
+            // joint next to a damping on the elbow can become a damping on the other joints),
+            // and only if `e` is a candidate on all of them (`Effect::acts_on`).
+            let acts = |j: &String| {
+                effects::JointTarget::of(engine.robot, j).is_none_or(|t| e.acts_on(&t))
+            };
             let targets: Vec<String> = cur
                 .joints
                 .iter()
                 .filter(|j| !others.iter().any(|a| a.effect.id() == e.id() && a.joints.contains(j)))
                 .cloned()
                 .collect();
-            if targets.is_empty() {
+            if targets.is_empty() || !cur.joints.iter().all(acts) {
                 continue;
             }
             // Screen: a coarse fit (10 evaluations) of the simpler effect that leaves the
