@@ -79,6 +79,15 @@ pub struct SearchPolicy {
     /// this share of the best training improvement of the round so far (coarse or full)
     /// [fraction]. Default 0.5.
     pub screen_share: f64,
+    /// A smooth one-parameter candidate's coarse fit is its linear step ([`Screen`]'s
+    /// prediction from the probe column) simulated once, when that step achieves between this
+    /// fraction and its inverse of the predicted relative improvement (the linear model held
+    /// as far as the step; both below `min_rel_improvement` also agree): no coarse fit is run.
+    /// Otherwise the coarse fit runs as usual [ratio]. Default 0.75 (a "very successful" step
+    /// of a trust-region method).
+    ///
+    /// [`Screen`]: super::screen::Screen
+    pub linear_trust: f64,
     /// Once a kept candidate leaves a white training residual (or when a swap is screened), a
     /// candidate whose coarse fit leaves more than this times that training RMSE is not fitted
     /// [ratio of RMSE]. Default 1.5.
@@ -140,6 +149,7 @@ impl Default for SearchPolicy {
             z_growth: 0.5,
             window_change: 0.02,
             screen_share: 0.5,
+            linear_trust: 0.75,
             floor_screen_ratio: 1.5,
             minor_effect_share: 0.1,
             simpler_within: 1.05,
@@ -247,6 +257,11 @@ pub const FIELDS: &[(&str, &str, &str)] = &[
         "screen_share",
         "fraction",
         "a candidate is fitted fully only when its coarse fit, or its linearised step, reaches this share of the round's best training improvement so far (coarse or full)",
+    ),
+    (
+        "linear_trust",
+        "ratio",
+        "a smooth one-parameter candidate takes its linear step, simulated once, as its coarse fit when the step achieves between this and its inverse times the predicted relative improvement (both below min_rel_improvement also agree); otherwise its coarse fit runs",
     ),
     (
         "floor_screen_ratio",
