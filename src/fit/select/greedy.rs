@@ -317,6 +317,22 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
                 cands[range.start + k] = c;
                 coarse[range.start + k] = Some(f);
             }
+            // Once both sizes are screened, the candidates not yet fitted are taken best coarse
+            // fit first, whatever their size: a two-parameter candidate that explains nearly
+            // everything is fitted before the one-parameter ones that explain half, which the
+            // floor screen then leaves out when it reached the floor.
+            if range.start > ci {
+                let mut rest: Vec<(Cand, Option<(Vec<f64>, f64)>)> =
+                    cands[ci..n0].iter().cloned().zip(coarse[ci..n0].iter().cloned()).collect();
+                rest.sort_by(|a, b| {
+                    let f = |x: &Option<(Vec<f64>, f64)>| x.as_ref().map_or(f64::INFINITY, |c| c.1);
+                    f(&a.1).total_cmp(&f(&b.1))
+                });
+                for (k, (c, f)) in rest.into_iter().enumerate() {
+                    cands[ci + k] = c;
+                    coarse[ci + k] = f;
+                }
+            }
         }
         let (e, group, ev) = cands[ci].clone();
         engine.report(
