@@ -79,14 +79,12 @@ pub struct SearchPolicy {
     /// this share of the best training improvement of the round so far (coarse or full)
     /// [fraction]. Default 0.5.
     pub screen_share: f64,
-    /// A smooth one-parameter candidate's coarse fit is its linear step ([`Screen`]'s
-    /// prediction from the probe column) simulated once, when that step achieves between this
-    /// fraction and its inverse of the predicted relative improvement (the linear model held
-    /// as far as the step; both below `min_rel_improvement` also agree): no coarse fit is run.
-    /// Otherwise the coarse fit runs as usual [ratio]. Default 0.75 (a "very successful" step
+    /// A smooth one-parameter candidate's coarse fit is a few secant Gauss–Newton steps started
+    /// from the screen's linear step (one replay each); it stops at the first step that achieves
+    /// between this fraction and its inverse of the relative improvement its linear model
+    /// predicted (the model held as far as the step; both below `min_rel_improvement` also
+    /// agree), or after `screen_evals` replays [ratio]. Default 0.75 (a "very successful" step
     /// of a trust-region method).
-    ///
-    /// [`Screen`]: super::screen::Screen
     pub linear_trust: f64,
     /// Once a kept candidate leaves a white training residual (or when a swap is screened), a
     /// candidate whose coarse fit leaves more than this times that training RMSE is not fitted
@@ -261,7 +259,7 @@ pub const FIELDS: &[(&str, &str, &str)] = &[
     (
         "linear_trust",
         "ratio",
-        "a smooth one-parameter candidate takes its linear step, simulated once, as its coarse fit when the step achieves between this and its inverse times the predicted relative improvement (both below min_rel_improvement also agree); otherwise its coarse fit runs",
+        "a smooth one-parameter candidate's coarse fit is secant Gauss-Newton steps from the screen's linear step (one replay each), stopping at the first step that achieves between this and its inverse times the relative improvement its linear model predicted (both below min_rel_improvement also agree), or after screen_evals replays",
     ),
     (
         "floor_screen_ratio",
