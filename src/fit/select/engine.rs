@@ -53,7 +53,7 @@ pub struct Engine<'a> {
     /// The discretisation floor ([`Engine::discretisation_floor`]) by [`set_key`], and by
     /// dataset alone (the latest measured).
     disc: std::sync::Mutex<Vec<(String, Vec<f64>)>>,
-    /// The reconstruction floor ([`Engine::reconstruction_floor`]) by [`shape_key`].
+    /// The reconstruction floor ([`Engine::reconstruction_floor`]) by [`set_key`].
     recon: std::sync::Mutex<Vec<(String, Vec<f64>)>>,
     /// Where the search last reported it was ([`Engine::report`]).
     place: std::sync::Mutex<Option<ProgressInfo>>,

@@ -8,7 +8,7 @@ use rayon::prelude::*;
 use crate::fit::diagnose::{Candidate, diagnose};
 use crate::fit::effects::{self, Applied, Effect};
 use crate::fit::stats::{bic, bic_pieces};
-use crate::model::mirror::{leg_joint, mirror_name};
+use crate::model::mirror::{leg_joint, mirror_in};
 use crate::sim2real::recording::Recording;
 
 use super::discretisation::{Judged, beyond_discretisation};
@@ -22,6 +22,16 @@ use super::{Errors, FitOutcome, Search, Selected, Tried, set_uncertainty};
 
 /// A candidate: effect, joint group, evidence.
 type Cand = (&'static dyn Effect, Vec<String>, BTreeMap<String, f64>);
+
+/// A candidate's coarse fit: its parameters and training RMSE on the screen's data.
+type Coarse = Option<(Vec<f64>, f64)>;
+
+/// A joint's left/right partner among the fitted joints, paired as lint pairs them
+/// (`model::mirror::mirror_in`: `LL_`/`LR_` are a biped's legs only when both exist).
+fn partner(joint: &str, joints: &[String]) -> Option<String> {
+    let has = |n: &str| joints.iter().any(|j| j == n);
+    mirror_in(joint, None, has).map(|(_, m)| m).filter(|m| has(m))
+}
 
 /// One greedy round: diagnose, fit the candidates, keep the best that passes the held-out gate.
 /// Returns `true` when an effect was added.
@@ -94,10 +104,9 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         // The joint and its left/right partner as one more group when the partner also ranks
         // high: both compete (one knee with a delay must not be smeared over both, and an
         // effect both sides have is fitted once).
-        let pair: Option<Vec<String>> = mirror_name(&c.joint)
+        let pair: Option<Vec<String>> = partner(&c.joint, &engine.joints)
             .filter(|p| {
-                engine.joints.contains(p)
-                    && !covered(c.effect, p)
+                !covered(c.effect, p)
                     && effects::alike_over(robot, e, &[c.joint.clone(), p.clone()])
                     && diag
                         .iter()
@@ -140,7 +149,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
                 .collect(),
             None => vec![],
         };
-        let mirror = mirror_name(&c.joint);
+        let mirror = partner(&c.joint, &engine.joints);
         let legs_new = legs.len() >= opts.policy.min_group
             && legs != fam
             && !has_group(cands, e.id(), &legs)
@@ -261,7 +270,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     let (base_train, base_short) = (tr_err.rmse(), sh_err.rmse());
     let gain = |f: f64| rel(f, base_short);
     let mut best_gain = 0.0f64;
-    let mut coarse: Vec<Option<(Vec<f64>, f64)>> = vec![None; cands.len()];
+    let mut coarse: Vec<Coarse> = vec![None; cands.len()];
     // The one-parameter candidates are `cands[..n1]`, the others `cands[n1..n0]`; mirror
     // completions come after `n0`.
     let n0 = cands.len();
@@ -322,10 +331,10 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
             // everything is fitted before the one-parameter ones that explain half, which the
             // floor screen then leaves out when it reached the floor.
             if range.start > ci {
-                let mut rest: Vec<(Cand, Option<(Vec<f64>, f64)>)> =
+                let mut rest: Vec<(Cand, Coarse)> =
                     cands[ci..n0].iter().cloned().zip(coarse[ci..n0].iter().cloned()).collect();
                 rest.sort_by(|a, b| {
-                    let f = |x: &Option<(Vec<f64>, f64)>| x.as_ref().map_or(f64::INFINITY, |c| c.1);
+                    let f = |x: &Coarse| x.as_ref().map_or(f64::INFINITY, |c| c.1);
                     f(&a.1).total_cmp(&f(&b.1))
                 });
                 for (k, (c, f)) in rest.into_iter().enumerate() {
@@ -434,8 +443,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
             // pair, which then competes with it on held-out (the diagnosis ranks the two sides
             // separately and can miss the partner of an effect both sides have).
             if let [j] = group.as_slice()
-                && let Some(p) = mirror_name(j)
-                && engine.joints.contains(&p)
+                && let Some(p) = partner(j, &engine.joints)
                 && !covered(e.id(), &p)
                 && let g = sorted_pair(j, p)
                 && effects::alike_over(robot, e, &g)
@@ -640,13 +648,19 @@ mod tests {
     }
 
     #[test]
-    fn mirror_names() {
-        assert_eq!(mirror_name("left_knee").as_deref(), Some("right_knee"));
-        assert_eq!(mirror_name("r_hip_pitch").as_deref(), Some("l_hip_pitch"));
-        assert_eq!(mirror_name("hip_L").as_deref(), Some("hip_R"));
-        assert_eq!(mirror_name("elbow_pitch"), None);
-        // Booster T1 and Unitree H1 spellings (the fit pairs their legs).
-        assert_eq!(mirror_name("Left_Knee_Pitch").as_deref(), Some("Right_Knee_Pitch"));
-        assert_eq!(mirror_name("right_knee_joint").as_deref(), Some("left_knee_joint"));
+    fn mirror_partners() {
+        let js = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+        let h = js(&["left_knee", "right_knee", "LL_HFE", "LR_HFE", "elbow_pitch"]);
+        assert_eq!(partner("left_knee", &h).as_deref(), Some("right_knee"));
+        assert_eq!(partner("LR_HFE", &h).as_deref(), Some("LL_HFE"));
+        assert_eq!(partner("elbow_pitch", &h), None);
+        // A quadruped's left-rear leg (`LF_` `LR_` `RF_` `RR_`) pairs with `RR_`, never `LL_`.
+        let q = js(&["LF_KFE", "LR_KFE", "RF_KFE", "RR_KFE"]);
+        assert_eq!(partner("LR_KFE", &q), None);
+        assert_eq!(partner("LF_KFE", &q).as_deref(), Some("RF_KFE"));
+        // Booster T1 and Unitree H1 spellings; a partner outside the fit is no partner.
+        let t = js(&["Left_Knee_Pitch", "Right_Knee_Pitch", "right_knee_joint"]);
+        assert_eq!(partner("Left_Knee_Pitch", &t).as_deref(), Some("Right_Knee_Pitch"));
+        assert_eq!(partner("right_knee_joint", &t), None);
     }
 }

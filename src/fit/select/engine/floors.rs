@@ -10,7 +10,7 @@ use crate::sim2real::recording::Recording;
 use crate::sim2real::replay::{Episode, ReplayOptions};
 
 use super::super::{Errors, FitOptions, Floor};
-use super::{Engine, shape_key};
+use super::{Engine, set_key};
 
 /// The discretisation decision counts a joint only when its residual mean square is within
 /// this factor of its noise floor plus the two replays' difference [ratio of mean squares].
@@ -117,10 +117,10 @@ impl Engine<'_> {
     /// Per fitted joint: (name, mean square, floors) of the residual of `recs` simulated with
     /// `applied` as `errs`. The floor is the white floor ([`white_floor`], over the runs of
     /// samples between gaps) plus the command-reconstruction and start-state floor
-    /// ([`Engine::reconstruction_floor`], of this model: one more simulation). The
-    /// reconstruction and discretisation parts are measured once per structure of the set (its
-    /// effects and their joints, [`shape_key`]): a re-fit of the values does not measure them
-    /// again (the white part and the residual are always those of `errs`).
+    /// ([`Engine::reconstruction_floor`], of this model: one more simulation), both
+    /// remembered per set of effects with their values. (Not per structure alone: whether the
+    /// recordings count as finer than the model depends on how well the set fits them, and a
+    /// re-fit of the values can change that decision.)
     pub fn floors(&self, recs: &[Recording], applied: &[Applied], errs: &Errors) -> Vec<Floor> {
         // Runs of the residual between gaps, per scored joint: of the position, and of the
         // velocity where the recording has one.
@@ -151,7 +151,7 @@ impl Engine<'_> {
                 (w.1.sqrt(), has_qd.then(|| white_floor(&v).1.sqrt()))
             })
             .collect();
-        let key = shape_key(recs, applied) + &self.start_tag();
+        let key = set_key(recs, applied) + &self.start_tag();
         let known = {
             let m = self.recon.lock().unwrap_or_else(|e| e.into_inner());
             m.iter().find(|(k, _)| *k == key).map(|(_, r)| r.clone())
@@ -193,7 +193,7 @@ impl Engine<'_> {
     /// every joint's part is `ms(coarse − fine)`, a property of the model and the motion that an
     /// effect fitted to absorb some of the discretisation does not shrink; else zero.
     /// Recordings simulated at the model's own step (every synth) are farther from the fine
-    /// replay: zero. Once per structure of the set of effects ([`shape_key`]); a set that cannot be measured (actuators with a
+    /// replay: zero. Once per set of effects; a set that cannot be measured (actuators with a
     /// `delay`: their history is sized for the timestep) takes the dataset's latest
     /// measurement, or zero.
     ///
@@ -209,7 +209,7 @@ impl Engine<'_> {
         base: &[f64],
     ) -> Vec<f64> {
         // The dataset's latest measurement, for a set that cannot be measured.
-        let (latest, key) = (shape_key(recs, &[]) + "#latest", shape_key(recs, applied));
+        let (latest, key) = (set_key(recs, &[]) + "#latest", set_key(recs, applied));
         let memo = |k: &str| -> Option<Vec<f64>> {
             let m = self.disc.lock().unwrap_or_else(|e| e.into_inner());
             m.iter().find(|(x, _)| x == k).map(|(_, d)| d.clone())
