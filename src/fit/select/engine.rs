@@ -53,6 +53,8 @@ pub struct Engine<'a> {
     /// The discretisation floor ([`Engine::discretisation_floor`]) by [`set_key`], and by
     /// dataset alone (the latest measured).
     disc: std::sync::Mutex<Vec<(String, Vec<f64>)>>,
+    /// The reconstruction floor ([`Engine::reconstruction_floor`]) by [`set_key`].
+    recon: std::sync::Mutex<Vec<(String, Vec<f64>)>>,
     /// Where the search last reported it was ([`Engine::report`]).
     place: std::sync::Mutex<Option<ProgressInfo>>,
     /// The screen's data sets by the training set and effects they were chosen for
@@ -79,6 +81,16 @@ pub(in crate::fit::select) fn set_key(recs: &[Recording], applied: &[Applied]) -
         for v in &a.params {
             let _ = write!(k, "{:x},", v.to_bits());
         }
+    }
+    k
+}
+
+/// The structure of a simulation, without the values: the dataset (by address) and the
+/// effects with their joints. The floors' measured parts are remembered by it.
+pub(in crate::fit::select) fn shape_key(recs: &[Recording], applied: &[Applied]) -> String {
+    let mut k = format!("{:p}/{}", recs.as_ptr(), recs.len());
+    for a in applied {
+        k += &format!("|{}@{}", a.effect.id(), a.joints.join(","));
     }
     k
 }
@@ -119,6 +131,7 @@ impl<'a> Engine<'a> {
             starts: Default::default(),
             start_model: Default::default(),
             disc: Default::default(),
+            recon: Default::default(),
             place: Default::default(),
             by_phase: Default::default(),
             screens: Default::default(),

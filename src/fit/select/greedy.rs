@@ -12,14 +12,19 @@ use crate::model::mirror::{leg_joint, mirror_in};
 use crate::sim2real::recording::Recording;
 
 use super::discretisation::{Judged, beyond_discretisation};
+use super::engine::shape_key;
 use super::pairs::{joint_pairs, pair_lookahead};
 use super::policy::Phase;
 use super::screen::{Screen, screen_data};
 use super::verdict::{at_bound, verdict};
+use super::winner::{refine, rival_notes};
 use super::{Errors, FitOutcome, Search, Selected, Tried, set_uncertainty};
 
 /// A candidate: effect, joint group, evidence.
 type Cand = (&'static dyn Effect, Vec<String>, BTreeMap<String, f64>);
+
+/// A candidate's coarse fit: its parameters and training RMSE on the screen's data.
+type Coarse = Option<(Vec<f64>, f64)>;
 
 /// A joint's left/right partner among the fitted joints, paired as lint pairs them
 /// (`model::mirror::mirror_in`: `LL_`/`LR_` are a biped's legs only when both exist).
@@ -43,6 +48,15 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         out.warnings.push("the held-out replay diverged with the current model; stopping".into());
         return false;
     };
+    // The last round's winner was judged at the floor with these effects, and the set's
+    // training error is no higher now: nothing is left to explain.
+    if let Some((kept, rmse)) = out.at_floor.take()
+        && kept == shape_key(&[], &applied)
+        && tr_err.rmse() <= rmse
+    {
+        out.stopped_at_floor = true;
+        return false;
+    }
     // The screen's data (the stretch of every training episode where the residual is
     // largest): the training set itself when that is short.
     let short_set = engine.screen_set(train, &applied, || screen_data(engine, train, &tr_err));
@@ -256,7 +270,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     let (base_train, base_short) = (tr_err.rmse(), sh_err.rmse());
     let gain = |f: f64| rel(f, base_short);
     let mut best_gain = 0.0f64;
-    let mut coarse: Vec<Option<(Vec<f64>, f64)>> = vec![None; cands.len()];
+    let mut coarse: Vec<Coarse> = vec![None; cands.len()];
     // The one-parameter candidates are `cands[..n1]`, the others `cands[n1..n0]`; mirror
     // completions come after `n0`.
     let n0 = cands.len();
@@ -266,6 +280,8 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     let mut floor_k: Option<usize> = None;
     // The lowest training RMSE of those, relative to the round's start.
     let mut floor_train: Option<f64> = None;
+    // The log indices of the kept candidates that left a white training residual.
+    let mut floored: Vec<usize> = Vec::new();
     let mut ci = 0;
     while ci < cands.len() {
         // The coarse fits of a size's candidates, which are then taken best first: the
@@ -289,7 +305,15 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
             let fits: Vec<(Vec<f64>, f64)> = cands[range.clone()]
                 .par_iter()
                 .map(|(e, g, _)| {
-                    engine.fit_budget(short, &applied, *e, g, opts.policy.screen_evals)
+                    // A smooth one-parameter candidate goes on from the screen's linear step by
+                    // secant steps (one replay each) instead of a fresh coarse fit.
+                    let linear = screen.predict(e.id(), g).and_then(|p| {
+                        let gain = 1.0 - p.train_rmse / screen.base_rmse();
+                        engine.fit_secant(short, &applied, (*e, g), (p.step, gain))
+                    });
+                    linear.unwrap_or_else(|| {
+                        engine.fit_budget(short, &applied, *e, g, opts.policy.screen_evals)
+                    })
                 })
                 .collect();
             for f in &fits {
@@ -301,6 +325,22 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
             for (k, (c, f)) in both.into_iter().enumerate() {
                 cands[range.start + k] = c;
                 coarse[range.start + k] = Some(f);
+            }
+            // Once both sizes are screened, the candidates not yet fitted are taken best coarse
+            // fit first, whatever their size: a two-parameter candidate that explains nearly
+            // everything is fitted before the one-parameter ones that explain half, which the
+            // floor screen then leaves out when it reached the floor.
+            if range.start > ci {
+                let mut rest: Vec<(Cand, Coarse)> =
+                    cands[ci..n0].iter().cloned().zip(coarse[ci..n0].iter().cloned()).collect();
+                rest.sort_by(|a, b| {
+                    let f = |x: &Coarse| x.as_ref().map_or(f64::INFINITY, |c| c.1);
+                    f(&a.1).total_cmp(&f(&b.1))
+                });
+                for (k, (c, f)) in rest.into_iter().enumerate() {
+                    cands[ci + k] = c;
+                    coarse[ci + k] = f;
+                }
             }
         }
         let (e, group, ev) = cands[ci].clone();
@@ -393,6 +433,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
             predicted,
         });
         if keep && engine.at_floor(train, &trial, &tr_a) {
+            floored.push(logged);
             floor_k = Some(floor_k.map_or(e.fitted(), |k| k.min(e.fitted())));
             let r = tr_a.rmse() / base_train;
             floor_train = Some(floor_train.map_or(r, |t: f64| t.min(r)));
@@ -505,94 +546,20 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     out.notes.extend(rivals);
     let e = effects::by_id(&w.effect).expect("known");
     out.applied.push(Applied { effect: e, joints: w.joints.clone(), params: w.values.clone() });
+    // The winner left a white residual: the next round stops there without measuring the
+    // floors again (the re-fit on the whole training set only lowered its error).
+    out.at_floor = floored
+        .contains(&logged)
+        .then(|| (shape_key(&[], &out.applied), out.tried[logged].train_rmse));
     set_uncertainty(engine, train, &mut w, &out.applied, &mut out.warnings);
     out.selected.push(w);
     true
-}
-
-/// The round's winner `w`, fitted on the screen's data, fitted again on the whole training set
-/// from those values; the refit replaces it when it lowers the training error (its held-out
-/// figures are measured again).
-fn refine(
-    s: &Search,
-    applied: &[Applied],
-    w: Selected,
-    (tr, ho): (&Errors, &Errors),
-    z: f64,
-) -> Selected {
-    let engine = s.engine;
-    let Some(e) = effects::by_id(&w.effect) else { return w };
-    let (p, f) = engine.fit_from(s.train, applied, (e, &w.joints), Some(&w.values));
-    let mut trial = applied.to_vec();
-    trial.push(Applied { effect: e, joints: w.joints.clone(), params: p });
-    let (Some(tr_a), Some(ho_a)) =
-        (engine.errors(s.train, &trial), engine.errors(s.heldout, &trial))
-    else {
-        return w;
-    };
-    let mut old = applied.to_vec();
-    old.push(Applied { effect: e, joints: w.joints.clone(), params: w.values.clone() });
-    if !f.is_finite() || engine.errors(s.train, &old).is_none_or(|t| tr_a.rmse() >= t.rmse()) {
-        return w;
-    }
-    let k_before: usize = applied.iter().map(|a| a.effect.fitted()).sum();
-    let v = verdict(ho, &ho_a, &w.joints, engine.opts.policy.gate_z(z));
-    let bics = (bic(tr.n, tr.sse, k_before), bic(tr_a.n, tr_a.sse, k_before + e.fitted()));
-    let a = trial.last().expect("pushed");
-    Selected::new(a, w.evidence, &v, ho.rmse(), ho_a.rmse(), bics)
 }
 
 /// Whether `a` holds the same recordings as `b` (a screen set that came back whole).
 fn same_data(a: &[Recording], b: &[Recording]) -> bool {
     a.len() == b.len()
         && a.iter().zip(b).all(|(x, y)| x.t.len() == y.t.len() && x.t.first() == y.t.first())
-}
-
-/// Notes naming the rivals of the round's winner `accepted[win]`: other effects on any of its
-/// joints that explain the data as well (`same[i]`: within Occam's equivalence, see above). The
-/// simpler one is kept, but the data do not rule the rival out — on a stiff servo a static
-/// friction and a dead band both hold a joint near its command. The same effect on another
-/// joint group is not a rival (the merge and the group search decide that).
-fn rival_notes(accepted: &[Selected], win: usize, same: &[bool]) -> Vec<String> {
-    let w = &accepted[win];
-    let show = |s: &Selected| {
-        let p: Vec<String> =
-            s.params.iter().map(|(k, v)| format!("{k} {}", effects::num(*v))).collect();
-        format!("{} on {} ({})", s.effect, s.joints.join(","), p.join(", "))
-    };
-    accepted
-        .iter()
-        .enumerate()
-        .filter(|&(i, s)| {
-            i != win
-                && same.get(i) == Some(&true)
-                && s.effect != w.effect
-                && s.joints.iter().any(|j| w.joints.contains(j))
-                && !nested(&s.effect, &w.effect)
-                && !nested(&w.effect, &s.effect)
-        })
-        .map(|(_, s)| {
-            format!(
-                "{} explains these recordings as well as the kept {} (held-out RMSE {:.3e} vs \
-                 {:.3e} rad, no difference beyond noise; kept as the simpler or better one): the \
-                 data do not tell them apart",
-                show(s),
-                show(w),
-                s.heldout_rmse_after,
-                w.heldout_rmse_after
-            )
-        })
-        .collect()
-}
-
-/// Whether effect `outer` contains effect `inner` as a special case ([`Effect::absorb`]):
-/// Stribeck friction that fits as well as the kept Coulomb friction is no rival of it.
-fn nested(outer: &str, inner: &str) -> bool {
-    let (Some(o), Some(i)) = (effects::by_id(outer), effects::by_id(inner)) else {
-        return false;
-    };
-    let mine: Vec<f64> = o.params().iter().map(|p| p.default).collect();
-    o.absorb(i, &mine, &vec![0.0; i.params().len()]).is_some()
 }
 
 /// Whether `effect` on exactly `group` is already a candidate. Only an identical group is a

@@ -38,6 +38,7 @@ mod solve;
 mod start;
 mod told;
 mod verdict;
+mod winner;
 
 use std::collections::BTreeMap;
 
@@ -267,6 +268,10 @@ pub struct FitOutcome {
     pub floors: Vec<Floor>,
     /// The search ended because the residual reached the white floor on every joint.
     pub stopped_at_floor: bool,
+    /// The structure ([`engine::shape_key`]: effects and joints) of the set whose last added effect was judged at the floor
+    /// when it was kept, with its training RMSE then: the next round stops without measuring
+    /// the floors again.
+    pub(crate) at_floor: Option<(String, f64)>,
     /// Diagnosis of the first round (the model as given).
     pub diagnosis: Vec<Candidate>,
     pub selected: Vec<Selected>,
@@ -317,6 +322,7 @@ impl FitOutcome {
             split_note,
             floors: vec![],
             stopped_at_floor: false,
+            at_floor: None,
             diagnosis: vec![],
             selected: vec![],
             applied: vec![],

@@ -79,6 +79,13 @@ pub struct SearchPolicy {
     /// this share of the best training improvement of the round so far (coarse or full)
     /// [fraction]. Default 0.5.
     pub screen_share: f64,
+    /// A smooth one-parameter candidate's coarse fit is a few secant Gauss–Newton steps started
+    /// from the screen's linear step (one replay each); it stops at the first step that achieves
+    /// between this fraction and its inverse of the relative improvement its linear model
+    /// predicted (the model held as far as the step; both below `min_rel_improvement` also
+    /// agree), or after `screen_evals` replays [ratio]. Default 0.75 (a "very successful" step
+    /// of a trust-region method).
+    pub linear_trust: f64,
     /// Once a kept candidate leaves a white training residual (or when a swap is screened), a
     /// candidate whose coarse fit leaves more than this times that training RMSE is not fitted
     /// [ratio of RMSE]. Default 1.5.
@@ -140,6 +147,7 @@ impl Default for SearchPolicy {
             z_growth: 0.5,
             window_change: 0.02,
             screen_share: 0.5,
+            linear_trust: 0.75,
             floor_screen_ratio: 1.5,
             minor_effect_share: 0.1,
             simpler_within: 1.05,
@@ -247,6 +255,11 @@ pub const FIELDS: &[(&str, &str, &str)] = &[
         "screen_share",
         "fraction",
         "a candidate is fitted fully only when its coarse fit, or its linearised step, reaches this share of the round's best training improvement so far (coarse or full)",
+    ),
+    (
+        "linear_trust",
+        "ratio",
+        "a smooth one-parameter candidate's coarse fit is secant Gauss-Newton steps from the screen's linear step (one replay each), stopping at the first step that achieves between this and its inverse times the relative improvement its linear model predicted (both below min_rel_improvement also agree), or after screen_evals replays",
     ),
     (
         "floor_screen_ratio",

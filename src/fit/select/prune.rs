@@ -188,10 +188,14 @@ pub(super) fn swap_pass(s: &Search, round: usize, out: &mut FitOutcome) -> bool 
         let k_all: usize = out.applied.iter().map(|a| a.effect.fitted()).sum();
         let t_cur = engine.errors(train, &out.applied);
         let train_cur = t_cur.as_ref().map_or(f64::INFINITY, |e| e.rmse());
-        // The screen's data for the current set (the coarse fits below are made there).
-        let short_set = engine.screen_set(train, &out.applied, || match &t_cur {
-            Some(e) => super::screen::screen_data(engine, train, e),
-            None => train.to_vec(),
+        // The screen's data for the set without `cur` (the coarse fits below are made there, on
+        // the stretches `cur` had to explain; for the set a greedy round started from, they are
+        // the round's own, and so are its coarse fits), and the current set's error there.
+        let short_set = engine.screen_set(train, &others, || {
+            match engine.errors(train, &others).or_else(|| t_cur.clone()) {
+                Some(e) => super::screen::screen_data(engine, train, &e),
+                None => train.to_vec(),
+            }
         });
         let short = &short_set[..];
         let short_cur = engine.score(short, &out.applied);

@@ -434,6 +434,11 @@ impl Screen {
         Screen { models, train_ss, train_n }
     }
 
+    /// The RMSE of the screen's residual before any step [rad].
+    pub(super) fn base_rmse(&self) -> f64 {
+        if self.train_n == 0 { f64::NAN } else { (self.train_ss / self.train_n as f64).sqrt() }
+    }
+
     /// The linear prediction for `effect` on `group` (one parameter vector shared by the
     /// group: each parameter's column the sum of the group's columns; the least-squares step of
     /// all screened parameters, uncharged — the fit that follows fits them all); `None` when a

@@ -113,6 +113,112 @@ impl Engine<'_> {
         self.fit_memo(train, base, (effect, group), max_evals, None)
     }
 
+    /// The coarse fit of a smooth one-parameter `effect` on `group`, started from the screen's
+    /// linear model: secant Gauss–Newton steps on the rollout residuals, one replay each. The
+    /// first step is the screen's predicted `step` from the effect's start (its probe column is
+    /// the first Jacobian); each later column is the secant through the last two points. The
+    /// fit stops at the first step whose simulated relative improvement agrees with the one
+    /// its linear model predicted ([`SearchPolicy::linear_trust`]: the model held as far as the
+    /// step, so the point is as good as a screen needs), at a step of less than a thousandth
+    /// of the range, or after `screen_evals` replays, and answers its best point — remembered as
+    /// the candidate's coarse fit. `None` (the caller runs the usual coarse fit) when the effect
+    /// is not smooth, has more than one parameter, or the group's joints start from different
+    /// values.
+    ///
+    /// A Levenberg–Marquardt coarse fit differentiates anew at every iteration (k + 1 replays);
+    /// here the screen already holds the first derivative and the replays of the steps give
+    /// the next ones.
+    ///
+    /// [`SearchPolicy::linear_trust`]: super::super::policy::SearchPolicy::linear_trust
+    pub(in crate::fit::select) fn fit_secant(
+        &self,
+        train: &[Recording],
+        base: &[Applied],
+        (effect, group): (&'static dyn Effect, &[String]),
+        (step, gain): (f64, f64),
+    ) -> Option<(Vec<f64>, f64)> {
+        if !effect.smooth() || effect.fitted() != 1 || !step.is_finite() || !gain.is_finite() {
+            return None;
+        }
+        let m0 = model_with(self.robot, base);
+        let starts: Vec<Vec<f64>> = group
+            .iter()
+            .map(|j| JointTarget::of(self.robot, j).map(|t| effect.initial(&m0, &t)))
+            .collect::<Option<_>>()?;
+        let full0 = starts.first()?.clone();
+        if full0.is_empty() || starts.iter().any(|s| s.first() != full0.first()) {
+            return None;
+        }
+        let t = JointTarget::of(self.robot, &group[0])?;
+        let (lo, hi) = effect.bounds(&m0, &t);
+        let (lo, hi) = (lo[0], hi[0]);
+        let pol = &self.opts.policy;
+        let make = |x: f64| {
+            let mut p = full0.clone();
+            p[0] = x;
+            let mut set = base.to_vec();
+            set.push(Applied { effect, joints: group.to_vec(), params: p });
+            set
+        };
+        let resid = |set: &[Applied]| self.residuals(train, set, &self.joints, usize::MAX);
+        let (mut x, mut f) =
+            (full0[0].clamp(lo, hi), self.score(train, &make(full0[0].clamp(lo, hi))));
+        let mut r = resid(&make(x))?;
+        if !f.is_finite() || !(f > 0.0) {
+            return None;
+        }
+        let (mut best_x, mut best_f) = (x, f);
+        // The step and the relative improvement its linear model predicts.
+        let (mut dx, mut predicted) = (step, gain);
+        let agree = |got: f64, want: f64| {
+            let small = pol.min_rel_improvement;
+            (want.abs() < small && got.abs() < small)
+                || (want > 0.0 && got >= pol.linear_trust * want && got * pol.linear_trust <= want)
+        };
+        for _ in 0..pol.screen_evals.max(1) {
+            let x1 = (x + dx).clamp(lo, hi);
+            if (x1 - x).abs() <= 1e-3 * (hi - lo) && x1 != full0[0] {
+                break;
+            }
+            let set = make(x1);
+            let f1 = self.score(train, &set);
+            if !f1.is_finite() {
+                break;
+            }
+            let got = 1.0 - f1 / f;
+            if f1 < best_f {
+                (best_x, best_f) = (x1, f1);
+            }
+            if agree(got, predicted) {
+                break;
+            }
+            // The secant column through the last two points, and its Gauss–Newton step.
+            let Some(r1) = resid(&set) else { break };
+            if r1.len() != r.len() || x1 == x {
+                break;
+            }
+            let h = x1 - x;
+            let col: Vec<f64> = r1.iter().zip(&r).map(|(b, a)| (b - a) / h).collect();
+            let (cc, cr): (f64, f64) =
+                col.iter().zip(&r1).fold((0.0, 0.0), |(cc, cr), (c, v)| (cc + c * c, cr + c * v));
+            if !(cc > 0.0) {
+                break;
+            }
+            let ss: f64 = r1.iter().map(|v| v * v).sum();
+            dx = -cr / cc;
+            predicted =
+                if ss > 0.0 { 1.0 - ((ss - cr * cr / cc).max(0.0) / ss).sqrt() } else { 0.0 };
+            (x, f, r) = (x1, f1, r1);
+        }
+        let mut p = full0.clone();
+        p[0] = best_x;
+        let key = fit_key(train, base, effect, group, pol.screen_evals) + &self.start_tag();
+        if let Ok(mut m) = self.fits.lock() {
+            m.insert(key, (p.clone(), best_f));
+        }
+        Some((p, best_f))
+    }
+
     /// A fit with `max_evals` from `start` (see [`Engine::fit_from`]), remembered by
     /// [`fit_key`]: the first fit of a candidate on a base answers every later request.
     fn fit_memo(

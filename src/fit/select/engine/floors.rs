@@ -117,7 +117,10 @@ impl Engine<'_> {
     /// Per fitted joint: (name, mean square, floors) of the residual of `recs` simulated with
     /// `applied` as `errs`. The floor is the white floor ([`white_floor`], over the runs of
     /// samples between gaps) plus the command-reconstruction and start-state floor
-    /// ([`Engine::reconstruction_floor`], of this model: one more simulation).
+    /// ([`Engine::reconstruction_floor`], of this model: one more simulation), both
+    /// remembered per set of effects with their values. (Not per structure alone: whether the
+    /// recordings count as finer than the model depends on how well the set fits them, and a
+    /// re-fit of the values can change that decision.)
     pub fn floors(&self, recs: &[Recording], applied: &[Applied], errs: &Errors) -> Vec<Floor> {
         // Runs of the residual between gaps, per scored joint: of the position, and of the
         // velocity where the recording has one.
@@ -148,7 +151,19 @@ impl Engine<'_> {
                 (w.1.sqrt(), has_qd.then(|| white_floor(&v).1.sqrt()))
             })
             .collect();
-        let recon = self.reconstruction_floor(recs, applied, errs, &start);
+        let key = set_key(recs, applied) + &self.start_tag();
+        let known = {
+            let m = self.recon.lock().unwrap_or_else(|e| e.into_inner());
+            m.iter().find(|(k, _)| *k == key).map(|(_, r)| r.clone())
+        };
+        let recon = match known {
+            Some(r) => r,
+            None => {
+                let r = self.reconstruction_floor(recs, applied, errs, &start);
+                self.recon.lock().unwrap_or_else(|e| e.into_inner()).push((key, r.clone()));
+                r
+            }
+        };
         let base: Vec<f64> = white.iter().zip(&recon).map(|(w, r)| w.1 + r).collect();
         let disc = self.discretisation_floor(recs, applied, &base);
         self.joints
@@ -240,16 +255,27 @@ impl Engine<'_> {
         if !(dt > 0.0) || recs.is_empty() || m.actuator_history().iter().any(|h| h[0] > 0) {
             return None;
         }
-        // One batch: the model's own timestep, dt / r and dt / r².
-        let sets = [
-            SetSpec::of(applied),
+        // One batch: dt / r and dt / r², and the model's own timestep unless the search has
+        // that replay already (without a start estimate, it is the replay of `errors`).
+        let known = if self.estimates_start() { None } else { self.errors(recs, applied) };
+        let mut sets = vec![
             SetSpec { applied, refine: r as u32 },
             SetSpec { applied, refine: (r * r) as u32 },
         ];
+        if known.is_none() {
+            sets.insert(0, SetSpec::of(applied));
+        }
         let mut all = self.rollouts().run(&sets, recs, &self.opts.replay).into_iter();
         let mut whole = || -> Option<Vec<Episode>> { all.next()?.into_iter().collect() };
-        let (coarse, half, fine) = (whole()?, whole()?, whole()?);
-        self.sims.fetch_add(1 + r + r * r, std::sync::atomic::Ordering::Relaxed);
+        let coarse = match known {
+            Some(e) => e.eps,
+            None => whole()?,
+        };
+        let (half, fine) = (whole()?, whole()?);
+        self.sims.fetch_add(
+            sets.len().saturating_sub(2) + r + r * r,
+            std::sync::atomic::Ordering::Relaxed,
+        );
         // The scored samples of a joint: (recording index, joint index, sample index).
         let samples = |name: &String| -> Vec<(usize, usize, usize)> {
             let mut v = Vec::new();

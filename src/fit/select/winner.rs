@@ -1,0 +1,86 @@
+//! The round's winner: its re-fit on the whole training set, and the notes naming its rivals.
+
+use crate::fit::effects::{self, Applied};
+use crate::fit::stats::bic;
+
+use super::verdict::verdict;
+use super::{Errors, Search, Selected};
+
+/// The round's winner `w`, fitted on the screen's data, fitted again on the whole training set
+/// from those values; the refit replaces it when it lowers the training error (its held-out
+/// figures are measured again).
+pub(super) fn refine(
+    s: &Search,
+    applied: &[Applied],
+    w: Selected,
+    (tr, ho): (&Errors, &Errors),
+    z: f64,
+) -> Selected {
+    let engine = s.engine;
+    let Some(e) = effects::by_id(&w.effect) else { return w };
+    let (p, f) = engine.fit_from(s.train, applied, (e, &w.joints), Some(&w.values));
+    let mut trial = applied.to_vec();
+    trial.push(Applied { effect: e, joints: w.joints.clone(), params: p });
+    let (Some(tr_a), Some(ho_a)) =
+        (engine.errors(s.train, &trial), engine.errors(s.heldout, &trial))
+    else {
+        return w;
+    };
+    let mut old = applied.to_vec();
+    old.push(Applied { effect: e, joints: w.joints.clone(), params: w.values.clone() });
+    if !f.is_finite() || engine.errors(s.train, &old).is_none_or(|t| tr_a.rmse() >= t.rmse()) {
+        return w;
+    }
+    let k_before: usize = applied.iter().map(|a| a.effect.fitted()).sum();
+    let v = verdict(ho, &ho_a, &w.joints, engine.opts.policy.gate_z(z));
+    let bics = (bic(tr.n, tr.sse, k_before), bic(tr_a.n, tr_a.sse, k_before + e.fitted()));
+    let a = trial.last().expect("pushed");
+    Selected::new(a, w.evidence, &v, ho.rmse(), ho_a.rmse(), bics)
+}
+
+/// Notes naming the rivals of the round's winner `accepted[win]`: other effects on any of its
+/// joints that explain the data as well (`same[i]`: within Occam's equivalence, see above). The
+/// simpler one is kept, but the data do not rule the rival out — on a stiff servo a static
+/// friction and a dead band both hold a joint near its command. The same effect on another
+/// joint group is not a rival (the merge and the group search decide that).
+pub(super) fn rival_notes(accepted: &[Selected], win: usize, same: &[bool]) -> Vec<String> {
+    let w = &accepted[win];
+    let show = |s: &Selected| {
+        let p: Vec<String> =
+            s.params.iter().map(|(k, v)| format!("{k} {}", effects::num(*v))).collect();
+        format!("{} on {} ({})", s.effect, s.joints.join(","), p.join(", "))
+    };
+    accepted
+        .iter()
+        .enumerate()
+        .filter(|&(i, s)| {
+            i != win
+                && same.get(i) == Some(&true)
+                && s.effect != w.effect
+                && s.joints.iter().any(|j| w.joints.contains(j))
+                && !nested(&s.effect, &w.effect)
+                && !nested(&w.effect, &s.effect)
+        })
+        .map(|(_, s)| {
+            format!(
+                "{} explains these recordings as well as the kept {} (held-out RMSE {:.3e} vs \
+                 {:.3e} rad, no difference beyond noise; kept as the simpler or better one): the \
+                 data do not tell them apart",
+                show(s),
+                show(w),
+                s.heldout_rmse_after,
+                w.heldout_rmse_after
+            )
+        })
+        .collect()
+}
+
+/// Whether effect `outer` contains effect `inner` as a special case ([`Effect::absorb`]):
+/// Stribeck friction that fits as well as the kept Coulomb friction is no rival of it.
+fn nested(outer: &str, inner: &str) -> bool {
+    let (Some(o), Some(i)) = (effects::by_id(outer), effects::by_id(inner)) else {
+        return false;
+    };
+    let mine: Vec<f64> = o.params().iter().map(|p| p.default).collect();
+    o.absorb(i, &mine, &vec![0.0; i.params().len()]).is_some()
+}
