@@ -8,12 +8,13 @@ use crate::fit::effects::{self, Applied};
 use crate::fit::stats::bic;
 use crate::sim2real::recording::Recording;
 
+use super::discretisation::{Judged, beyond_discretisation};
 use super::engine::Engine;
 use super::policy::Phase;
 use super::polish::{fit_jointly, polish_budget, polish_set};
 use super::screen::screen_data;
 use super::verdict::{Verdict, at_bound, verdict};
-use super::{Errors, FitOutcome, Search, Selected, Tried, set_uncertainty, sync_selected};
+use super::{Errors, FitOutcome, Floor, Search, Selected, Tried, set_uncertainty, sync_selected};
 
 /// Look-ahead for two effects that only make sense together (extra inertia *and* damping: each
 /// alone is mimicked by a delay or a gain error). The top four kept candidates of the round are
@@ -442,15 +443,18 @@ fn apply_restart(
 /// other alone but not together ([`effects::mimicking_pairs`]) whose members were
 /// both fitted on the same joint group this round, jointly from their single fits, and keep the
 /// best pair that passes the gate as a whole (beyond noise against the model without it, BIC
-/// down) with each member needed (removing either is worse beyond noise).
+/// down) with each member needed (removing either is worse beyond noise), and the pair physics
+/// beyond the model's time discretisation ([`beyond_discretisation`], the test a single smooth
+/// candidate takes: a gain error and a delay fitted together can stand in for the integrator's
+/// phase lag).
 #[allow(clippy::too_many_arguments)]
 pub(super) fn joint_pairs(
     engine: &Engine,
     train: &[Recording],
     heldout: &[Recording],
-    applied: &[Applied],
-    fitted: &[Applied],
+    (applied, fitted): (&[Applied], &[Applied]),
     (tr_err, ho_err): (&Errors, &Errors),
+    floors: &[Floor],
     z: f64,
     round: usize,
     out: &mut FitOutcome,
@@ -486,10 +490,18 @@ pub(super) fn joint_pairs(
                     vw.significant && vw.rel >= opts.policy.min_rel_improvement
                 })
             });
+            let judged = |set| Judged {
+                base: applied,
+                trial: set,
+                gate: opts.policy.gate_z(z),
+                floors,
+                round,
+            };
             let ok = v.significant
                 && v.rel >= opts.policy.min_rel_improvement
                 && bic_after < bic_before
-                && needed;
+                && needed
+                && beyond_discretisation(engine, heldout, &judged(&set), out);
             let logged = out.log(Tried {
                 round,
                 phase: Phase::JointPair,

@@ -13,6 +13,10 @@ use super::{Engine, fit_key};
 const FD_STEP: f64 = 1e-3;
 /// A fit ends on a bound within this distance of it [fraction of the range].
 const ON_BOUND: f64 = 1e-3;
+/// A secant coarse fit has converged when its step is shorter than this [fraction of the
+/// parameter's range]: a convergence tolerance at the resolution of [`FD_STEP`], not a
+/// decision threshold.
+const SECANT_XTOL: f64 = 1e-3;
 /// Where a restart grid puts its points for two parameters, and for more [fractions of the
 /// range, on a log scale when the lower bound is positive].
 const GRID_FINE: [f64; 5] = [0.1, 0.3, 0.5, 0.7, 0.9];
@@ -177,7 +181,7 @@ impl Engine<'_> {
         };
         for _ in 0..pol.screen_evals.max(1) {
             let x1 = (x + dx).clamp(lo, hi);
-            if (x1 - x).abs() <= 1e-3 * (hi - lo) && x1 != full0[0] {
+            if (x1 - x).abs() <= SECANT_XTOL * (hi - lo) && x1 != full0[0] {
                 break;
             }
             let set = make(x1);
