@@ -11,7 +11,7 @@ use crate::sim2real::recording::Recording;
 use super::discretisation::{Judged, beyond_discretisation};
 use super::engine::Engine;
 use super::policy::Phase;
-use super::polish::{fit_jointly, polish_budget, polish_set};
+use super::polish::{fit_jointly, fit_jointly_iters, polish_budget, polish_set};
 use super::screen::screen_data;
 use super::verdict::{Verdict, at_bound, verdict};
 use super::{Errors, FitOutcome, Floor, Search, Selected, Tried, set_uncertainty, sync_selected};
@@ -156,11 +156,15 @@ pub(super) fn pair_lookahead(
             }
         }
     }
-    // Each pair is first polished coarsely (a third of the budget) on the round's screen data
-    // (the stretch of each training episode where the residual is largest); only those within
-    // `pair_full_fit_within` of the best coarse RMSE there are polished fully on the whole
-    // training set (on arm2's delay + Coulomb dataset the right pair, a delay on both joints,
-    // reaches 0.69 mrad where the twelve others stay at 4–12 mrad).
+    // Each pair is first fitted coarsely (two thirds of a single fit's budget) on the round's
+    // screen data (the stretch of each training episode where the residual is largest); only
+    // those within `pair_full_fit_within` of the best coarse RMSE there are fitted fully on the
+    // whole training set. A pair of smooth effects is a least-squares problem in its own
+    // parameters (Levenberg–Marquardt from the two single fits, the kept set held; k + 1
+    // replays an iteration, stopping at the recordings' resolution); a pair with a non-smooth
+    // member is polished with every kept parameter by the simplex.
+    let n = applied.len();
+    let smooth = |set: &[Applied]| set[n..].iter().all(|a| a.effect.smooth());
     let short = engine.screen_set(train, applied, || screen_data(engine, train, &t_base));
     let coarse: Vec<(Vec<Applied>, f64)> = sets
         .iter()
@@ -168,14 +172,20 @@ pub(super) fn pair_lookahead(
             let mut set = applied.to_vec();
             set.push(a.clone());
             set.push(b.clone());
-            let set = polish_budget(
-                engine,
-                &short,
-                heldout,
-                set,
-                opts.policy.coarse_polish_step,
-                opts.policy.max_evals * 2 / 3,
-            );
+            let set = if smooth(&set) {
+                let k: usize = set[n..].iter().map(|a| a.effect.fitted()).sum();
+                let iters = (opts.policy.max_evals * 2 / 3 / (k + 2)).clamp(2, 12);
+                fit_jointly_iters(engine, &short, set, n, iters)
+            } else {
+                polish_budget(
+                    engine,
+                    &short,
+                    heldout,
+                    set,
+                    opts.policy.coarse_polish_step,
+                    opts.policy.max_evals * 2 / 3,
+                )
+            };
             let f = engine.errors(&short, &set).map_or(f64::INFINITY, |e| e.rmse());
             (set, f)
         })
@@ -184,7 +194,11 @@ pub(super) fn pair_lookahead(
     let mut restarts: Vec<Vec<Applied>> = Vec::new();
     for ((a, b), (set, f)) in sets.into_iter().zip(coarse) {
         let set = if f <= opts.policy.pair_full_fit_within * best_coarse {
-            polish_set(engine, train, heldout, set, opts.policy.polish_step)
+            if smooth(&set) {
+                fit_jointly(engine, train, set, n)
+            } else {
+                polish_set(engine, train, heldout, set, opts.policy.polish_step)
+            }
         } else {
             set
         };
@@ -249,7 +263,6 @@ pub(super) fn pair_lookahead(
     // A restart competes with the best pair by the same rule as two pairs: a single effect
     // that a failed pair re-fitted (a servo gain at 1.0 beside a 15 ms delay on Asimov's knee)
     // must not lose to a mimicking pair (damping + armature) it beats on held-out.
-    let n = applied.len();
     let restart = best_restart(s, applied, single, (&h_base, &h_single), restarts, round, out);
     if let Some((rset, rh, rt, logged)) = restart {
         let kr = rset[n].effect.fitted();

@@ -101,6 +101,19 @@ pub(super) fn fit_jointly(
     set: Vec<Applied>,
     first: usize,
 ) -> Vec<Applied> {
+    fit_jointly_iters(engine, train, set, first, 12)
+}
+
+/// [`fit_jointly`] with at most `lm_iters` Levenberg–Marquardt iterations (k + 1 replays of
+/// `train` each; it stops earlier when its step or its improvement is below the recordings'
+/// resolution). The simplex for non-smooth effects keeps its budget.
+pub(super) fn fit_jointly_iters(
+    engine: &Engine,
+    train: &[Recording],
+    set: Vec<Applied>,
+    first: usize,
+    lm_iters: usize,
+) -> Vec<Applied> {
     let Some(slots) = param_slots(engine, &set, first, |_| first) else { return set };
     let make = |x: &[f64]| with_params(&set, &slots, x);
     let x0: Vec<f64> =
@@ -114,7 +127,7 @@ pub(super) fn fit_jointly(
     };
     let problem = Problem { objective: &obj, residuals: Some(&res), bounds: b };
     let method = if set[first..].iter().all(|a| a.effect.smooth()) {
-        Method::LeastSquares { max_iters: 12 }
+        Method::LeastSquares { max_iters: lm_iters }
     } else {
         Method::Simplex { max_evals: engine.opts.policy.max_evals * 3, xtol: 1e-4, step: 0.1 }
     };

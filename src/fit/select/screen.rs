@@ -117,6 +117,8 @@ fn dot_r(a: &[f64], r: &[Option<f64>]) -> f64 {
 #[derive(Debug, Clone, Default)]
 struct EffectModel {
     joints: Vec<String>,
+    /// Per joint, how far the first parameter may step from its start: (lo − p0, hi − p0).
+    room: Vec<(f64, f64)>,
     k: usize,
     b: Vec<Vec<f64>>,
     g: Vec<Vec<f64>>,
@@ -414,7 +416,18 @@ impl Screen {
                     c.evidence.insert("probe".into(), p.v);
                     c.explained_rms = (single.max(all) / train_n as f64).sqrt();
                 }
+                let room = JointTarget::of(engine.robot, &c.joint).map_or(
+                    (f64::NEG_INFINITY, f64::INFINITY),
+                    |t| {
+                        let (p0, (lo, hi)) = (effect.initial(&m0, &t), effect.bounds(&m0, &t));
+                        match (p0.first(), lo.first(), hi.first()) {
+                            (Some(p), Some(l), Some(h)) => (l - p, h - p),
+                            _ => (f64::NEG_INFINITY, f64::INFINITY),
+                        }
+                    },
+                );
                 m.joints.push(c.joint.clone());
+                m.room.push(room);
                 m.b.push(b);
                 cols.extend(own);
             }
@@ -466,7 +479,19 @@ impl Screen {
         if g[0][0] <= 1e-300 || self.train_n == 0 {
             return None;
         }
-        let (explained, x) = combine(&b, &g);
+        let (mut explained, mut x) = combine(&b, &g);
+        // One parameter: the step stays inside the parameter's bounds (the group's shared
+        // value inside every member's), and explains 2 s b − s² g there. A residual that asks
+        // for negative friction is not explained by friction.
+        if k == 1 {
+            let lo = ix.iter().map(|&i| m.room[i].0).fold(f64::NEG_INFINITY, f64::max);
+            let hi = ix.iter().map(|&i| m.room[i].1).fold(f64::INFINITY, f64::min);
+            if lo <= hi && !(lo..=hi).contains(&x[0]) {
+                let s = x[0].clamp(lo, hi);
+                explained = (2.0 * s * b[0] - s * s * g[0][0]).max(0.0);
+                x[0] = s;
+            }
+        }
         let train_left = (self.train_ss - explained).max(0.0);
         Some(Prediction { train_rmse: (train_left / self.train_n as f64).sqrt(), step: x[0] })
     }
@@ -474,7 +499,7 @@ impl Screen {
 
 #[cfg(test)]
 mod tests {
-    use super::{charged, combine};
+    use super::{EffectModel, Screen, charged, combine};
 
     /// Two columns: the residual r = 2 a + 3 c is explained whole by the pair, by neither alone.
     #[test]
@@ -507,5 +532,43 @@ mod tests {
         assert!((charged(10.0, 4.0, 2, 100) - want).abs() < 1e-12);
         assert!(charged(10.0, 4.0, 2, 100) < 4.0 && charged(10.0, 4.0, 3, 100) < want);
         assert_eq!(charged(10.0, 0.0, 2, 100), 0.0);
+    }
+
+    /// A one-parameter prediction stays inside the parameter's bounds: a residual that asks for
+    /// a step below the lower bound (negative friction) is explained only as far as the bound
+    /// allows; a group's shared value keeps inside every member's bounds.
+    #[test]
+    fn a_one_parameter_prediction_respects_the_bounds() {
+        let c = [1.0, -0.5, 0.25, 2.0];
+        let d = |x: &[f64], y: &[f64]| x.iter().zip(y).map(|(p, q)| p * q).sum::<f64>();
+        let screen = |step: f64, room: (f64, f64)| {
+            let r: Vec<f64> = c.iter().map(|x| step * x).collect();
+            let m = EffectModel {
+                joints: vec!["a".into(), "b".into()],
+                room: vec![room, (room.0, room.1 * 0.5)],
+                k: 1,
+                b: vec![vec![d(&c, &r)], vec![0.0]],
+                g: vec![vec![d(&c, &c), 0.0], vec![0.0, d(&c, &c)]],
+            };
+            let ss = d(&r, &r);
+            (Screen { models: [("e", m)].into(), train_ss: ss, train_n: r.len() }, ss)
+        };
+        let rmse = |ss: f64| (ss / c.len() as f64).sqrt();
+        // Inside the bounds: the residual explained whole, the step the one asked for.
+        let (s, _) = screen(2.0, (-1.0, 10.0));
+        let p = s.predict("e", &["a".into()]).expect("modelled");
+        assert!(p.train_rmse < 1e-9 && (p.step - 2.0).abs() < 1e-12, "{p:?}");
+        // Asking for −2 where the parameter cannot go below its start: nothing explained.
+        let (s, ss) = screen(-2.0, (0.0, 10.0));
+        let p = s.predict("e", &["a".into()]).expect("modelled");
+        assert!((p.train_rmse - rmse(ss)).abs() < 1e-12 && p.step == 0.0, "{p:?}");
+        // Half-way room: the step stops at the bound and explains 2 s b − s² g = 3/4 of it.
+        let (s, ss) = screen(-2.0, (-1.0, 10.0));
+        let p = s.predict("e", &["a".into()]).expect("modelled");
+        assert!((p.train_rmse - rmse(0.25 * ss)).abs() < 1e-12 && p.step == -1.0, "{p:?}");
+        // A group: the shared step keeps inside the narrower member's room (b's upper bound 1).
+        let (s, _) = screen(4.0, (-1.0, 2.0));
+        let p = s.predict("e", &["a".into(), "b".into()]).expect("modelled");
+        assert!(p.step == 1.0, "{p:?}");
     }
 }
