@@ -400,7 +400,9 @@ fn step_response_zeta_matches_a_hand_built_joint_of_known_zeta() {
             let l = hand_built_servo(&format!("known_zeta_{k}_{}", friction > 0.0), zeta, friction);
             let j = l.robot.joint("hinge").unwrap().id;
             let r = impulse::step_response(&l.robot, j, None).unwrap();
-            let z = r.zeta.unwrap_or_else(|| panic!("ζ {zeta}, friction {friction}: no overshoot: {r:?}"));
+            let z = r
+                .zeta
+                .unwrap_or_else(|| panic!("ζ {zeta}, friction {friction}: no overshoot: {r:?}"));
             assert!(
                 (z - zeta).abs() < 0.02,
                 "ζ {zeta}, frictionloss {friction}: measured ζ {z} (decrement {:?}, overshoot {} of the settled level)",

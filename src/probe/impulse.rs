@@ -255,9 +255,30 @@ pub fn step_response(
         });
     }
     // Dry friction's band, as a share of the step: while the joint moves one way, friction is a
-    // constant torque that shifts the loop's equilibrium by frictionloss / kp.
-    let band = j.frictionloss / (kp * size).max(1e-12);
-    let mut r = analyse(&y, dt, kp, kd, steps, band);
+    // constant torque that shifts the loop's equilibrium by frictionloss over the loop's static
+    // stiffness, kp plus the load's (gravity, springs: −d(qfrc_passive − qfrc_bias)/dq by a
+    // central difference at the settled pose). The frictionless equilibrium of the step is
+    // kp / (kp + k_load) of it.
+    let k_load = {
+        let mut d2 = b.data(robot);
+        let eps = 1e-4;
+        let mut g = [0.0; 2];
+        for (k, s) in [-1.0, 1.0].iter().enumerate() {
+            d2.qpos_mut().copy_from_slice(d.qpos());
+            d2.qvel_mut().iter_mut().for_each(|v| *v = 0.0);
+            d2.qpos_mut()[j.qposadr] = q_eq + s * eps;
+            d2.forward();
+            g[k] = d2.qfrc_passive()[j.dofadr] - d2.qfrc_bias()[j.dofadr];
+        }
+        -(g[1] - g[0]) / (2.0 * eps)
+    };
+    let stiffness = kp + if k_load.is_finite() { k_load } else { 0.0 };
+    let (level, band) = if stiffness > 0.0 {
+        (kp / stiffness, j.frictionloss / (stiffness * size))
+    } else {
+        (1.0, 0.0)
+    };
+    let mut r = analyse(&y, dt, kp, kd, steps, band, level);
     r.step = size;
     r.frictionloss = j.frictionloss;
     r.touched_limit = j.limited
@@ -326,16 +347,25 @@ pub fn mirror_sign(
 }
 
 /// Second-order identification from a normalised step response (1 = the commanded step).
-/// `band` is the joint's dry friction as a share of the step (frictionloss / (kp·step)).
+/// `band` is the joint's dry friction as a share of the step (frictionloss over the loop's
+/// static stiffness and the step), `level` the frictionless equilibrium as a share of the step.
 ///
 /// ζ comes from the end of the first swing: until the joint first stops, it moves one way, so dry friction
 /// is a constant torque and the motion is exactly a linear second-order step response towards
-/// the equilibrium shifted by the band, 1 − `band`; where it stops overshoots that equilibrium by
+/// the equilibrium shifted by the band, `level` − `band`; where it stops overshoots that equilibrium by
 /// exp(−πζ/√(1−ζ²)). Without dry friction the equilibrium is the settled level. (Measured against
 /// the settled level, a joint that sticks anywhere within the band shows a smaller overshoot,
 /// and the decrement between the first two peaks, which dry friction shrinks by a fixed amount
 /// each swing, says a different ζ again.)
-pub fn analyse(y: &[f64], dt: f64, kp: f64, kd: f64, steps: usize, band: f64) -> StepResponse {
+pub fn analyse(
+    y: &[f64],
+    dt: f64,
+    kp: f64,
+    kd: f64,
+    steps: usize,
+    band: f64,
+    level: f64,
+) -> StepResponse {
     let n = y.len();
     let tail = &y[n - n / 10..];
     let yf = tail.iter().sum::<f64>() / tail.len().max(1) as f64;
@@ -361,7 +391,7 @@ pub fn analyse(y: &[f64], dt: f64, kp: f64, kd: f64, steps: usize, band: f64) ->
     let first_peak = (0..n.saturating_sub(1))
         .find(|&i| y[i] > 0.5 && y[i + 1] - y[i] <= 0.002 * vmax)
         .map(|i| y[i]);
-    let equilibrium = if band > 0.0 { 1.0 - band } else { yf };
+    let equilibrium = if band > 0.0 { level - band } else { yf };
     let loop_overshoot = match first_peak {
         Some(p) if equilibrium > 0.0 => (p / equilibrium - 1.0).max(0.0),
         _ => 0.0,
@@ -469,7 +499,7 @@ mod tests {
     fn identifies_zeta_and_omega_from_a_clean_response() {
         for &(z, w) in &[(0.1, 10.0), (0.3, 20.0), (0.6, 8.0)] {
             let y = second_order(z, w, 0.001, 4000);
-            let r = analyse(&y, 0.001, 65.0, 1.0, 4000, 0.0);
+            let r = analyse(&y, 0.001, 65.0, 1.0, 4000, 0.0, 1.0);
             assert!((r.zeta.unwrap() - z).abs() < 0.03 * z, "zeta {z}: {:?}", r.zeta);
             assert!((r.omega_n.unwrap() - w).abs() < 0.02 * w, "omega {w}: {:?}", r.omega_n);
         }
@@ -486,7 +516,7 @@ mod tests {
                 1.0 + a * (20.0 * t).sin()
             })
             .collect();
-        let r = analyse(&y, dt, 1.0, 0.1, 4000, 0.0);
+        let r = analyse(&y, dt, 1.0, 0.1, 4000, 0.0, 1.0);
         assert!(r.zeta_decrement.is_some_and(|z| z < 0.0), "{:?}", r.zeta_decrement);
         let pre = r.preconditions();
         let p = pre.list().iter().find(|p| p.name == "decaying").unwrap();
@@ -497,6 +527,6 @@ mod tests {
     fn overdamped_has_no_zeta() {
         let dt = 0.001;
         let y: Vec<f64> = (1..4000).map(|k| 1.0 - (-(k as f64) * dt * 5.0).exp()).collect();
-        assert!(analyse(&y, dt, 1.0, 1.0, 4000, 0.0).zeta.is_none());
+        assert!(analyse(&y, dt, 1.0, 1.0, 4000, 0.0, 1.0).zeta.is_none());
     }
 }

@@ -185,7 +185,10 @@ impl Rule for VisualMeshCollision {
         let g0 = meshes[0];
         let mut f = cx.at_elem(ElemKind::Geom, g0.id, &g0.name, what).label(label);
         for g in meshes.iter().skip(1).take(3) {
-            f = f.secondary(robot.elem_loc(ElemKind::Geom, g.id, &g.name), "also drawn and colliding");
+            f = f.secondary(
+                robot.elem_loc(ElemKind::Geom, g.id, &g.name),
+                "also drawn and colliding",
+            );
         }
         let f = f
             .note(format!(
