@@ -49,8 +49,8 @@ pub struct StepResponse {
     pub diverged: bool,
     /// Largest swing past the settled level, as a fraction of it.
     pub overshoot: f64,
-    /// The first peak's overshoot of the loop's own equilibrium (the settled level; with dry
-    /// friction, the commanded step less the friction band): the overshoot of the loop's
+    /// The first swing's overshoot of the loop's own equilibrium (from the statics: kp over kp
+    /// plus the load's stiffness, less the dry-friction band): the overshoot of the loop's
     /// viscous dynamics, which the threshold is about (see [`analyse`]).
     pub loop_overshoot: f64,
     /// Damping ratio of the second-order loop with that overshoot, OS = exp(−πζ/√(1−ζ²)); None
@@ -353,7 +353,8 @@ pub fn mirror_sign(
 /// ζ comes from the end of the first swing: until the joint first stops, it moves one way, so dry friction
 /// is a constant torque and the motion is exactly a linear second-order step response towards
 /// the equilibrium shifted by the band, `level` − `band`; where it stops overshoots that equilibrium by
-/// exp(−πζ/√(1−ζ²)). Without dry friction the equilibrium is the settled level. (Measured against
+/// exp(−πζ/√(1−ζ²)); the equilibrium comes from the statics, not from where the response ends (a
+/// lightly damped joint still rings at the end of the run). (Measured against
 /// the settled level, a joint that sticks anywhere within the band shows a smaller overshoot,
 /// and the decrement between the first two peaks, which dry friction shrinks by a fixed amount
 /// each swing, says a different ζ again.)
@@ -391,7 +392,7 @@ pub fn analyse(
     let first_peak = (0..n.saturating_sub(1))
         .find(|&i| y[i] > 0.5 && y[i + 1] - y[i] <= 0.002 * vmax)
         .map(|i| y[i]);
-    let equilibrium = if band > 0.0 { level - band } else { yf };
+    let equilibrium = level - band;
     let loop_overshoot = match first_peak {
         Some(p) if equilibrium > 0.0 => (p / equilibrium - 1.0).max(0.0),
         _ => 0.0,
