@@ -94,6 +94,9 @@ pub struct ProbeOutcome {
     pub steps: usize,
     /// One sentence: "confirmed by …: measured ζ = 0.31 (predicted 0.29)".
     pub note: String,
+    /// The level the measurement sets (applied to the finding by `probe::confirm`, then cleared).
+    #[serde(skip)]
+    pub level: Option<crate::probe::MeasuredLevel>,
 }
 
 #[derive(Debug, Clone)]

@@ -356,3 +356,96 @@ fn dry_friction_makes_the_step_response_inconclusive_not_a_refutation() {
     assert!(p.preconditions.iter().all(|c| c.met), "{:?}", p.preconditions);
     assert!(p.preconditions.iter().any(|c| c.name == "friction_small"));
 }
+
+/// One link of inertia `i` on a vertical hinge (gravity exerts no torque), position servo kp,
+/// kv chosen for damping ratio `zeta` (kv = 2ζ√(kp·I)), dry friction `friction` N·m: written
+/// here, not by the code under test, so ζ is known in closed form.
+fn hand_built_servo(name: &str, zeta: f64, friction: f64) -> Loaded {
+    let (kp, i) = (100.0f64, 0.1f64);
+    let kv = 2.0 * zeta * (kp * i).sqrt();
+    let xml = format!(
+        r#"<mujoco model="{name}">
+  <option timestep="0.0002" integrator="implicitfast"/>
+  <worldbody>
+    <body name="link">
+      <joint name="hinge" axis="0 0 1" frictionloss="{friction}"/>
+      <inertial pos="0 0 0" mass="1" diaginertia="{i} {i} {i}"/>
+    </body>
+  </worldbody>
+  <actuator><position name="hinge" joint="hinge" kp="{kp}" kv="{kv}"/></actuator>
+</mujoco>
+"#
+    );
+    let dir = std::env::temp_dir().join(format!("modellint-probes-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(format!("{name}.xml"));
+    std::fs::write(&path, xml).unwrap();
+    loaded(path.to_str().unwrap())
+}
+
+/// Step overshoot of a second-order loop, closed form.
+fn closed_form_overshoot(z: f64) -> f64 {
+    (-std::f64::consts::PI * z / (1.0 - z * z).sqrt()).exp()
+}
+
+/// The step response's ζ is the loop's: on a hand-built joint of known ζ it matches the closed
+/// form, and so does the overshoot it is read from; with dry friction (6 % of the step's servo
+/// torque, which stops the joint short of the target and takes a fixed amount off every swing)
+/// the first swing still gives the viscous ζ within 0.01, where the overshoot of the settled
+/// level (0.7 % at ζ 0.65: ζ ≈ 0.85) and the decrement (no second peak) do not.
+#[test]
+fn step_response_zeta_matches_a_hand_built_joint_of_known_zeta() {
+    for (k, &zeta) in [0.3, 0.5, 0.6, 0.65].iter().enumerate() {
+        for friction in [0.0, 0.3] {
+            let l = hand_built_servo(&format!("known_zeta_{k}_{}", friction > 0.0), zeta, friction);
+            let j = l.robot.joint("hinge").unwrap().id;
+            let r = impulse::step_response(&l.robot, j, None).unwrap();
+            let z = r
+                .zeta
+                .unwrap_or_else(|| panic!("ζ {zeta}, friction {friction}: no overshoot: {r:?}"));
+            assert!(
+                (z - zeta).abs() < 0.02,
+                "ζ {zeta}, frictionloss {friction}: measured ζ {z} (decrement {:?}, overshoot {} of the settled level)",
+                r.zeta_decrement,
+                r.overshoot
+            );
+            let os = closed_form_overshoot(zeta);
+            // MuJoCo's dry friction is a soft constraint: a little under frictionloss while the
+            // joint moves, so the band is a little narrower than assumed.
+            let tol = if friction > 0.0 { 0.15 } else { 0.05 };
+            assert!(
+                (r.loop_overshoot - os).abs() < tol * os,
+                "ζ {zeta}, frictionloss {friction}: loop overshoot {} vs closed form {os}",
+                r.loop_overshoot
+            );
+            if friction > 0.0 && zeta >= 0.5 {
+                // The settled level's overshoot is far from the loop's: not a ζ measurement.
+                assert!(r.overshoot < 0.6 * os, "settled-level overshoot {} vs {os}", r.overshoot);
+            }
+        }
+    }
+}
+
+/// A confirmed step sets the level from the overshoot it measured: the upright link's computed
+/// ζ 0.6 (9.5 % overshoot, past twice the 4.6 % ζ_min 0.7 accepts: error) measures under twice
+/// (gravity takes m·g·l off the servo's stiffness): warning. An inconclusive run keeps the
+/// computed level (the dry-friction test above).
+#[test]
+fn a_measured_step_sets_the_underdamped_level() {
+    let path = "fixtures/rules/underdamped-pd-gains/invalid_measured_level.xml";
+    let l = loaded(path);
+    let static_level = run_rules(&l)
+        .into_iter()
+        .find(|f| f.rule == "underdamped-pd-gains")
+        .map(|f| f.severity)
+        .unwrap();
+    assert_eq!(static_level, modellint::finding::Severity::Error);
+    let fs = probed(path, "underdamped-pd-gains");
+    let p = outcome(&fs[0]);
+    assert_eq!(p.status, ProbeStatus::Confirmed, "{}", p.note);
+    let os = p.measured["loop_overshoot"];
+    let accepted = closed_form_overshoot(0.7);
+    assert!(os > 1.25 * accepted && os <= 2.0 * accepted, "measured overshoot {os}");
+    assert_eq!(fs[0].severity, modellint::finding::Severity::Warning, "{}", fs[0].message);
+    assert!(fs[0].message.contains("measured step overshoot"), "{}", fs[0].message);
+}

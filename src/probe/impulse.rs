@@ -3,7 +3,9 @@
 //! * Drives: the joint's own actuator (a position servo, or the spec's PD gains applied through
 //!   a motor), target stepped by δ after a 1 s settle; every other DoF frozen (the probed joint
 //!   sees its own row of MuJoCo's mass matrix, armature included), contacts off, gravity on.
-//! * Measures: overshoot, logarithmic decrement between successive peaks → damping ratio ζ,
+//! * Measures: overshoot; the first peak's overshoot of the loop's equilibrium (dry friction's
+//!   band taken off) → damping ratio ζ; the logarithmic decrement between the first two peaks
+//!   (recorded; it tells growing peaks),
 //!   damped period → natural frequency ω_n, and the effective inertia kp/ω_n² it implies.
 //! * Confirms: underdamped gains when measured ζ is below the threshold; an armature mismatch
 //!   when the measured inertia differs from the hardware's by more than the tolerance;
@@ -45,10 +47,20 @@ pub fn spec_gains(l: &Loaded, joint: usize) -> Option<(f64, f64)> {
 pub struct StepResponse {
     pub steps: usize,
     pub diverged: bool,
+    /// Largest swing past the settled level, as a fraction of it.
     pub overshoot: f64,
-    /// Damping ratio (log decrement when two peaks exist, else from overshoot); None when the
-    /// response does not overshoot (ζ ≳ 1).
+    /// The first swing's overshoot of the loop's own equilibrium (from the statics: kp over kp
+    /// plus the load's stiffness, less the dry-friction band): the overshoot of the loop's
+    /// viscous dynamics, which the threshold is about (see [`analyse`]).
+    pub loop_overshoot: f64,
+    /// Damping ratio of the second-order loop with that overshoot, OS = exp(−πζ/√(1−ζ²)); None
+    /// when the response does not overshoot (ζ ≳ 1).
     pub zeta: Option<f64>,
+    /// ζ from the logarithmic decrement between the first two overshoot peaks, when both stand
+    /// above the noise floor. Equal to `zeta` on a linear second-order loop; dry friction takes a
+    /// fixed amount off every swing, which the small second peak feels most, so it is recorded
+    /// (and used to tell growing peaks) but not taken as the loop's ζ.
+    pub zeta_decrement: Option<f64>,
     pub omega_n: Option<f64>,
     pub inertia: Option<f64>,
     pub kp: f64,
@@ -119,8 +131,8 @@ impl StepResponse {
             )
             .check(
                 "decaying",
-                self.zeta.is_none_or(|z| z >= 0.0),
-                match self.zeta {
+                self.zeta_decrement.is_none_or(|z| z >= 0.0),
+                match self.zeta_decrement {
                     Some(z) if z < 0.0 => format!(
                         "the response's peaks grow (ζ from their decay {}): not a damped second-order response",
                         n(z, 3)
@@ -229,7 +241,9 @@ pub fn step_response(
             steps,
             diverged,
             overshoot: f64::NAN,
+            loop_overshoot: f64::NAN,
             zeta: None,
+            zeta_decrement: None,
             omega_n: None,
             inertia: None,
             kp,
@@ -240,7 +254,31 @@ pub fn step_response(
             frictionloss: j.frictionloss,
         });
     }
-    let mut r = analyse(&y, dt, kp, kd, steps);
+    // Dry friction's band, as a share of the step: while the joint moves one way, friction is a
+    // constant torque that shifts the loop's equilibrium by frictionloss over the loop's static
+    // stiffness, kp plus the load's (gravity, springs: −d(qfrc_passive − qfrc_bias)/dq by a
+    // central difference at the settled pose). The frictionless equilibrium of the step is
+    // kp / (kp + k_load) of it.
+    let k_load = {
+        let mut d2 = b.data(robot);
+        let eps = 1e-4;
+        let mut g = [0.0; 2];
+        for (k, s) in [-1.0, 1.0].iter().enumerate() {
+            d2.qpos_mut().copy_from_slice(d.qpos());
+            d2.qvel_mut().iter_mut().for_each(|v| *v = 0.0);
+            d2.qpos_mut()[j.qposadr] = q_eq + s * eps;
+            d2.forward();
+            g[k] = d2.qfrc_passive()[j.dofadr] - d2.qfrc_bias()[j.dofadr];
+        }
+        -(g[1] - g[0]) / (2.0 * eps)
+    };
+    let stiffness = kp + if k_load.is_finite() { k_load } else { 0.0 };
+    let (level, band) = if stiffness > 0.0 {
+        (kp / stiffness, j.frictionloss / (stiffness * size))
+    } else {
+        (1.0, 0.0)
+    };
+    let mut r = analyse(&y, dt, kp, kd, steps, band, level);
     r.step = size;
     r.frictionloss = j.frictionloss;
     r.touched_limit = j.limited
@@ -308,8 +346,27 @@ pub fn mirror_sign(
     Some(step_sign(ql, size, lo, hi) * c.signum())
 }
 
-/// Second-order identification from a normalised step response.
-pub fn analyse(y: &[f64], dt: f64, kp: f64, kd: f64, steps: usize) -> StepResponse {
+/// Second-order identification from a normalised step response (1 = the commanded step).
+/// `band` is the joint's dry friction as a share of the step (frictionloss over the loop's
+/// static stiffness and the step), `level` the frictionless equilibrium as a share of the step.
+///
+/// ζ comes from the end of the first swing: until the joint first stops, it moves one way, so dry friction
+/// is a constant torque and the motion is exactly a linear second-order step response towards
+/// the equilibrium shifted by the band, `level` − `band`; where it stops overshoots that equilibrium by
+/// exp(−πζ/√(1−ζ²)); the equilibrium comes from the statics, not from where the response ends (a
+/// lightly damped joint still rings at the end of the run). (Measured against
+/// the settled level, a joint that sticks anywhere within the band shows a smaller overshoot,
+/// and the decrement between the first two peaks, which dry friction shrinks by a fixed amount
+/// each swing, says a different ζ again.)
+pub fn analyse(
+    y: &[f64],
+    dt: f64,
+    kp: f64,
+    kd: f64,
+    steps: usize,
+    band: f64,
+    level: f64,
+) -> StepResponse {
     let n = y.len();
     let tail = &y[n - n / 10..];
     let yf = tail.iter().sum::<f64>() / tail.len().max(1) as f64;
@@ -325,16 +382,36 @@ pub fn analyse(y: &[f64], dt: f64, kp: f64, kd: f64, steps: usize) -> StepRespon
         }
     }
     let mut zeta = None;
+    let mut zeta_decrement = None;
     let mut omega_n = None;
+    // The end of the first swing: past half the step, the first sample where the joint has
+    // (all but) stopped — its speed under 0.2 % of the swing's fastest. A swing that reverses
+    // stops at its peak; one that dry friction halts short of the target stops there and then
+    // only creeps (MuJoCo's friction is a soft constraint).
+    let vmax = y.windows(2).map(|w| w[1] - w[0]).fold(0.0, f64::max);
+    let first_peak = (0..n.saturating_sub(1))
+        .find(|&i| y[i] > 0.5 && y[i + 1] - y[i] <= 0.002 * vmax)
+        .map(|i| y[i]);
+    let equilibrium = level - band;
+    let loop_overshoot = match first_peak {
+        Some(p) if equilibrium > 0.0 => (p / equilibrium - 1.0).max(0.0),
+        _ => 0.0,
+    };
+    let zeta_of = |os: f64| {
+        let l = os.ln();
+        -l / (std::f64::consts::PI.powi(2) + l * l).sqrt()
+    };
+    if loop_overshoot > floor {
+        zeta = Some(zeta_of(loop_overshoot));
+    }
     if overshoot > floor {
-        let z_os = {
-            let l = overshoot.ln();
-            -l / (std::f64::consts::PI.powi(2) + l * l).sqrt()
-        };
-        let mut z = z_os;
+        // ζ for the damped period: the loop's, else (a response too distorted for a first
+        // swing) the settled level's overshoot.
+        let z = zeta.unwrap_or_else(|| zeta_of(overshoot));
         if peaks.len() >= 2 && peaks[1].1 > floor * 2.0 {
             let dl = (peaks[0].1 / peaks[1].1).ln();
-            z = dl / (4.0 * std::f64::consts::PI.powi(2) + dl * dl).sqrt();
+            zeta_decrement = Some(dl / (4.0 * std::f64::consts::PI.powi(2) + dl * dl).sqrt());
+            // The damped period between the two peaks.
             let td = (peaks[1].0 - peaks[0].0) as f64 * dt;
             let wd = 2.0 * std::f64::consts::PI / td;
             omega_n = Some(wd / (1.0 - z * z).max(1e-9).sqrt());
@@ -343,14 +420,15 @@ pub fn analyse(y: &[f64], dt: f64, kp: f64, kd: f64, steps: usize) -> StepRespon
             let wd = std::f64::consts::PI / (i as f64 * dt);
             omega_n = Some(wd / (1.0 - z * z).max(1e-9).sqrt());
         }
-        zeta = Some(z);
     }
     let inertia = omega_n.map(|w| kp / (w * w));
     StepResponse {
         steps,
         diverged: false,
         overshoot,
+        loop_overshoot,
         zeta,
+        zeta_decrement,
         omega_n,
         inertia,
         kp,
@@ -379,8 +457,14 @@ pub fn measured_map(r: &StepResponse) -> BTreeMap<String, f64> {
         m.insert("diverged".into(), 1.0);
     }
     m.insert("overshoot".into(), r.overshoot);
+    if r.loop_overshoot.is_finite() {
+        m.insert("loop_overshoot".into(), r.loop_overshoot);
+    }
     if let Some(z) = r.zeta {
         m.insert("zeta".into(), z);
+    }
+    if let Some(z) = r.zeta_decrement {
+        m.insert("zeta_decrement".into(), z);
     }
     if let Some(w) = r.omega_n {
         m.insert("omega_n".into(), w);
@@ -416,7 +500,7 @@ mod tests {
     fn identifies_zeta_and_omega_from_a_clean_response() {
         for &(z, w) in &[(0.1, 10.0), (0.3, 20.0), (0.6, 8.0)] {
             let y = second_order(z, w, 0.001, 4000);
-            let r = analyse(&y, 0.001, 65.0, 1.0, 4000);
+            let r = analyse(&y, 0.001, 65.0, 1.0, 4000, 0.0, 1.0);
             assert!((r.zeta.unwrap() - z).abs() < 0.03 * z, "zeta {z}: {:?}", r.zeta);
             assert!((r.omega_n.unwrap() - w).abs() < 0.02 * w, "omega {w}: {:?}", r.omega_n);
         }
@@ -433,8 +517,8 @@ mod tests {
                 1.0 + a * (20.0 * t).sin()
             })
             .collect();
-        let r = analyse(&y, dt, 1.0, 0.1, 4000);
-        assert!(r.zeta.is_some_and(|z| z < 0.0), "{:?}", r.zeta);
+        let r = analyse(&y, dt, 1.0, 0.1, 4000, 0.0, 1.0);
+        assert!(r.zeta_decrement.is_some_and(|z| z < 0.0), "{:?}", r.zeta_decrement);
         let pre = r.preconditions();
         let p = pre.list().iter().find(|p| p.name == "decaying").unwrap();
         assert!(!p.met && p.detail.contains("peaks grow"), "{}", p.detail);
@@ -444,6 +528,6 @@ mod tests {
     fn overdamped_has_no_zeta() {
         let dt = 0.001;
         let y: Vec<f64> = (1..4000).map(|k| 1.0 - (-(k as f64) * dt * 5.0).exp()).collect();
-        assert!(analyse(&y, dt, 1.0, 1.0, 4000).zeta.is_none());
+        assert!(analyse(&y, dt, 1.0, 1.0, 4000, 0.0, 1.0).zeta.is_none());
     }
 }

@@ -125,9 +125,29 @@ pub struct Verdict {
     pub measured: BTreeMap<String, f64>,
     /// One sentence for the human output ("measured ζ = 0.31 (predicted 0.29)").
     pub note: String,
+    /// The level the measurement gives the finding, and its message with the reason, when the
+    /// rule grades the finding by how far the measured consequence is past its threshold. Only a
+    /// confirmed verdict carries one ([`Verdict::with_level`]).
+    pub level: Option<MeasuredLevel>,
+}
+
+/// A finding's level set from what the probe measured (see [`Verdict::level`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct MeasuredLevel {
+    pub severity: crate::finding::Severity,
+    /// The finding's message, rewritten to say why it has this level.
+    pub message: String,
 }
 
 impl Verdict {
+    /// Gives a confirmed verdict the level its measurement sets; any other verdict is left as it
+    /// is (an inconclusive run measured nothing to grade, a refuted one drops to info anyway).
+    pub fn with_level(mut self, severity: crate::finding::Severity, message: String) -> Self {
+        if self.status == Status::Confirmed {
+            self.level = Some(MeasuredLevel { severity, message });
+        }
+        self
+    }
     /// Confirmed: only when every recorded precondition was met; otherwise inconclusive with
     /// the unmet one's detail (a run that could not test the claim confirms nothing either).
     pub fn confirmed(
@@ -143,6 +163,7 @@ impl Verdict {
             preconditions: pre.0.clone(),
             measured,
             note: note.into(),
+            level: None,
         }
     }
     pub fn measured(
@@ -155,6 +176,7 @@ impl Verdict {
             preconditions: pre.0.clone(),
             measured,
             note: note.into(),
+            level: None,
         }
     }
     /// The experiment could not test the claim: `reason` is the note.
@@ -169,12 +191,19 @@ impl Verdict {
             preconditions: pre.0.clone(),
             measured,
             note: reason,
+            level: None,
         }
     }
     /// Refuted: needs the proof that every precondition was met.
     pub fn refuted(met: Met, measured: BTreeMap<String, f64>, note: impl Into<String>) -> Self {
         let preconditions = met.0.clone();
-        Verdict { status: Status::Refuted(met), preconditions, measured, note: note.into() }
+        Verdict {
+            status: Status::Refuted(met),
+            preconditions,
+            measured,
+            note: note.into(),
+            level: None,
+        }
     }
     /// Refuted when every precondition was met, else inconclusive with the unmet one's detail.
     pub fn refuted_or_inconclusive(
@@ -239,6 +268,7 @@ impl Measurement {
             preconditions: self.preconditions,
             measured: self.measured,
             note: self.note,
+            level: None,
         }
     }
 }
@@ -281,6 +311,7 @@ fn not_run(name: &str, why: &str) -> ProbeOutcome {
         measured: BTreeMap::new(),
         steps: 0,
         note: why.into(),
+        level: None,
     }
 }
 
@@ -296,6 +327,7 @@ fn outcome_of(name: &str, v: Verdict, steps: usize) -> ProbeOutcome {
         measured: v.measured,
         steps,
         note: v.note,
+        level: v.level,
     }
 }
 
@@ -441,6 +473,10 @@ pub fn confirm(findings: &mut [Finding], mut plan: Plan<'_>) -> Runs {
             // Unreachable through `Finding::measure` (a `Measurement` has no refuted variant);
             // kept so that no path downgrades a fact of the file.
             p.status = ProbeStatus::Measured;
+        }
+        if let Some(lv) = p.level.take().filter(|_| p.status == ProbeStatus::Confirmed) {
+            f.severity = lv.severity;
+            f.message = lv.message;
         }
         if p.status == ProbeStatus::Refuted && f.severity > Severity::Info {
             f.severity = Severity::Info;

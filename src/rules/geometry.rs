@@ -3,3 +3,4 @@ pub mod collision_visual_mismatch;
 pub mod mirror_asymmetry;
 pub mod self_collision_at_keyframe;
 pub mod shapes;
+pub mod visual_mesh_collision;

@@ -224,6 +224,7 @@ pub fn registry() -> Vec<&'static dyn Rule> {
         &control::keyframe_motor_ctrl::KeyframeMotorCtrl,
         &geometry::self_collision_at_keyframe::SelfCollisionAtKeyframe,
         &geometry::collision_visual_mismatch::CollisionVisualMismatch,
+        &geometry::visual_mesh_collision::VisualMeshCollision,
         &mapping::urdf_mjcf_drift::UrdfMjcfDrift,
         &limits::ctrlrange_in_degrees::CtrlrangeInDegrees,
     ]

@@ -25,7 +25,10 @@ declare_rule! {
     /// follows how much more a joint overshoots than the threshold accepts: at most 1.25 times
     /// (ζ 0.67–0.7 against 0.7: an overshoot no engineer or policy tells apart from the
     /// threshold's) is info, at the threshold; up to twice (ζ down to about 0.6) a warning; more
-    /// the rule's level (error). A level set in the config applies to every finding.
+    /// the rule's level (error). When the probe measured the step (its preconditions met, the
+    /// finding confirmed), the level comes from the overshoot it measured against the one the
+    /// threshold accepts, in the same bands; when the run is inconclusive, from the computed ζ.
+    /// A level set in the config applies to every finding.
     ///
     /// ## Why is this bad?
     /// A policy trained on an underdamped simulated joint learns to behave like an underdamped
@@ -34,9 +37,10 @@ declare_rule! {
     /// controllers were fine; the simulated data domain was wrong.
     ///
     /// ## How it is confirmed
-    /// Probe `impulse-response`: the joint is kicked at the keyframe with the base fixed and the
-    /// damping ratio is fitted from the decay of the oscillation, then compared with the
-    /// predicted ζ.
+    /// Probe `impulse-response`: the joint's target is stepped at the keyframe with the base
+    /// fixed; the measured ζ is that of the second-order loop with the step's overshoot (what
+    /// the threshold is about), compared with the threshold, and the measured overshoot sets the
+    /// level.
     ///
     /// ## How to fix
     /// Raise kd (actuator `kv` or joint `damping`) to at least 2·ζ_min·√(kp·I), or lower kp.
@@ -71,6 +75,28 @@ pub struct Underdamped {
     /// The analytic ζ of the finding.
     pub predicted: f64,
     pub threshold: f64,
+    /// The finding's message without its level's reason, when the rule grades the level (the
+    /// config sets none): a measured step then sets the level from its own overshoot.
+    pub graded: Option<String>,
+}
+
+/// The level of a finding whose step overshoots `ratio` times what the threshold accepts, and
+/// the reason appended to its message (for a computed ζ past the threshold, none).
+fn graded_level(ratio: f64, os: f64, os_min: f64, measured: bool) -> (Severity, String) {
+    let what = if measured { "measured step overshoot" } else { "step overshoot" };
+    let (o, m) = (fmt_num(100.0 * os, 2), fmt_num(100.0 * os_min, 2));
+    if ratio <= AT_THRESHOLD {
+        (Severity::Info, format!(" (at the threshold: {what} {o} % against the {m} % it accepts)"))
+    } else {
+        let sev = if ratio <= 2.0 { Severity::Warning } else { Severity::Error };
+        // A computed level past the threshold needs no reason beyond the ζ in the message.
+        let why = if measured {
+            format!(" ({what} {o} % against the {m} % the threshold accepts)")
+        } else {
+            String::new()
+        };
+        (sev, why)
+    }
 }
 
 impl Claim for Underdamped {
@@ -87,14 +113,35 @@ impl Claim for Underdamped {
         let zs = r.zeta_text();
         let pred = format!(" (predicted {})", fmt_num(self.predicted, 3));
         match r.zeta {
-            Some(z) if z < self.threshold => Verdict::confirmed(
-                &pre,
-                m,
-                format!(
-                    "measured ζ = {zs}{pred}, overshoot {:.1} % on a 0.05 rad step",
-                    100.0 * r.overshoot
-                ),
-            ),
+            Some(z) if z < self.threshold => {
+                let v = Verdict::confirmed(
+                    &pre,
+                    m,
+                    format!(
+                        "measured ζ = {zs}{pred}, overshoot {:.1} % on a {} rad step{}",
+                        100.0 * r.loop_overshoot,
+                        fmt_num(r.step, 3),
+                        if r.frictionloss > 0.0 {
+                            format!(
+                                " (of the equilibrium dry friction shifts it to; {:.1} % past where it stopped)",
+                                100.0 * r.overshoot
+                            )
+                        } else {
+                            String::new()
+                        }
+                    ),
+                );
+                match &self.graded {
+                    // The level from the overshoot the step showed, against the threshold's.
+                    Some(base) => {
+                        let os_min = overshoot(self.threshold);
+                        let ratio = r.loop_overshoot / os_min.max(1e-12);
+                        let (sev, why) = graded_level(ratio, r.loop_overshoot, os_min, true);
+                        v.with_level(sev, format!("{base}{why}"))
+                    }
+                    None => v,
+                }
+            }
             _ => Verdict::refuted_or_inconclusive(
                 &pre,
                 m,
@@ -282,11 +329,12 @@ impl Rule for UnderdampedPdGains {
                     fmt_num((p.kd / (2.0 * zmin)).powi(2) / p.inertia, 4)
                 ),
             };
+            let graded = (cx.level == cx.meta.default_level).then(|| f.message.clone());
             f = f
                 .help(help)
                 .label(format!("ζ = {}", fmt_num(z, 3)))
                 .subject(Subject::Joint(j.id))
-                .claim(Underdamped { joint: j.id, predicted: z, threshold: zmin })
+                .claim(Underdamped { joint: j.id, predicted: z, threshold: zmin, graded })
                 .measured(z, "")
                 .expected(zmin, "")
                 .with("zeta", z)
@@ -299,16 +347,9 @@ impl Rule for UnderdampedPdGains {
             }
             f = f.with("overshoot_ratio", ratio);
             if cx.level == cx.meta.default_level {
-                if ratio <= AT_THRESHOLD {
-                    f.severity = Severity::Info;
-                    f.message.push_str(&format!(
-                        " (at the threshold: step overshoot {} % against the {} % it accepts)",
-                        fmt_num(100.0 * overshoot(z), 2),
-                        fmt_num(100.0 * overshoot(zmin), 2)
-                    ));
-                } else if ratio <= 2.0 {
-                    f.severity = Severity::Warning;
-                }
+                let (sev, why) = graded_level(ratio, overshoot(z), overshoot(zmin), false);
+                f.severity = sev;
+                f.message.push_str(&why);
             }
             out.push(f);
         }

@@ -49,6 +49,7 @@ pub fn finding(l: &Loaded, level: Severity, run: &Sanity) -> Option<Finding> {
         measured: BTreeMap::from([("max_speed".to_string(), run.max_speed)]),
         steps: run.steps,
         note: msg,
+        level: None,
     });
     Some(f)
 }

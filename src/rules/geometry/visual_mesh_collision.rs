@@ -1,0 +1,206 @@
+use crate::declare_rule;
+use crate::finding::{Finding, Severity, Subject};
+use crate::model::mjcf::ElemKind;
+use crate::model::{Geom, GeomType, Robot};
+use crate::rules::{Context, Rule, RuleMeta};
+
+declare_rule! {
+    /// ## What it does
+    /// Finds robot meshes that are drawn and collide: a mesh geom of a robot body (not the
+    /// world body) with `contype` or `conaffinity` non-zero, in a geom group the viewer shows by
+    /// default (0–2). It is reported when the compiled model shows that the mesh is a visual one
+    /// left colliding:
+    ///
+    /// - **beside collision geoms**: other robot geoms collide in a hidden group (3 or higher),
+    ///   the model's own collision set, and this mesh is not in it; or
+    /// - **in a visual group**: its group holds robot geoms with `contype = conaffinity = 0`,
+    ///   the model's visual-only geoms, and its body has no such geom of its own (so the mesh is
+    ///   what draws the body); or
+    /// - **no collision set at all**: the model has neither visual-only geoms nor a hidden
+    ///   collision group, and the body collides through this mesh alone (no primitive of its own
+    ///   collides).
+    ///
+    /// Everything is read from the compiled model (geom type, group, contype/conaffinity); class
+    /// names are not evidence. Not reported: collision primitives beside visual meshes with
+    /// `contype = conaffinity = 0`; collision meshes (a convex decomposition) kept in their own
+    /// group beside separate visual geoms; a body whose drawn meshes collide beside colliding
+    /// primitives of the same group when the model has no visual/collision split (nothing shows
+    /// which of them is cosmetic).
+    ///
+    /// ## Why is this bad?
+    /// MuJoCo collides a mesh as its convex hull. A visual mesh is a shell of the part's outer
+    /// surface, cable guides and covers included; its hull fills every concavity, so links that
+    /// clear each other on the real robot touch in simulation (self-collision through cosmetic
+    /// shells, most at bent joints), and a hull the size of a housing meets the floor where the
+    /// real part does not. Mesh–mesh and mesh–primitive pairs go through the general convex
+    /// collider (GJK/EPA or MPR on every hull vertex's support) rather than a closed-form
+    /// primitive test: slower per step, and one contact point per pair unless `multiccd` is on,
+    /// so a flat face resting on another rocks and the contact set chatters. A policy trained on
+    /// that learns to avoid or exploit contacts the hardware never makes. MuJoCo documentation,
+    /// Modeling › Collision detection (convex hulls of meshes; `contype`/`conaffinity`
+    /// filtering; `<option><flag multiccd>`).
+    ///
+    /// ## How it is confirmed
+    /// Static: compiled geom types, groups and contact masks. The finding counts the geom pairs
+    /// with one of these meshes on non-adjacent bodies whose masks let them collide (MuJoCo's
+    /// parent filter excludes a body and its parent); no simulation is needed to show that the
+    /// pairs exist.
+    ///
+    /// ## How to fix
+    /// Give the visual geoms `contype="0" conaffinity="0"` (usually in their `<default class>`)
+    /// and a visual group (2), and add collision geoms in their own group (3): primitives
+    /// (capsules, boxes, spheres) fitted to each link, or a convex decomposition of the mesh
+    /// when the shape matters.
+    pub VisualMeshCollision {
+        id: "visual-mesh-collision",
+        group: "geometry",
+        level: Severity::Warning,
+        probe: None,
+        options: [],
+    }
+}
+
+fn is_robot_collider(g: &Geom) -> bool {
+    g.body != 0 && g.collides() && !matches!(g.gtype, GeomType::Plane | GeomType::Hfield)
+}
+
+/// Why a drawn, colliding mesh counts as a visual one.
+#[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+enum Case {
+    /// Other robot geoms collide in a hidden group (the collision set).
+    BesideCollisionGroup(i32),
+    /// Its own group holds visual-only robot geoms.
+    InVisualGroup,
+    /// No visual/collision split at all; the body collides only through its drawn meshes.
+    NoCollisionSet,
+}
+
+fn adjacent(robot: &Robot, a: usize, b: usize) -> bool {
+    let pa = robot.bodies.get(a).map(|x| x.parent);
+    let pb = robot.bodies.get(b).map(|x| x.parent);
+    (pa == Some(b) && b != 0) || (pb == Some(a) && a != 0)
+}
+
+impl Rule for VisualMeshCollision {
+    fn meta(&self) -> &'static RuleMeta {
+        &Self::META
+    }
+    fn check(&self, cx: &Context, out: &mut Vec<Finding>) {
+        let robot = cx.robot;
+        let robot_geoms = || robot.geoms.iter().filter(|g| g.body != 0);
+        let visual_only: Vec<&Geom> = robot_geoms()
+            .filter(|g| !g.collides() && !matches!(g.gtype, GeomType::Plane | GeomType::Hfield))
+            .collect();
+        // The lowest hidden group that holds colliding robot geoms: the collision set.
+        let hidden_collision =
+            robot_geoms().filter(|g| is_robot_collider(g) && g.group >= 3).map(|g| g.group).min();
+        let body_has_visual =
+            |b: usize| robot_geoms().any(|g| g.body == b && !g.collides() && g.group <= 2);
+        let body_has_prim = |b: usize, group: i32| {
+            robot_geoms().any(|g| {
+                g.body == b && is_robot_collider(g) && g.gtype != GeomType::Mesh && g.group == group
+            })
+        };
+        let mut hits: Vec<(Case, &Geom)> = Vec::new();
+        for g in robot_geoms() {
+            if g.gtype != GeomType::Mesh || !is_robot_collider(g) || !(0..=2).contains(&g.group) {
+                continue;
+            }
+            let case = if let Some(h) = hidden_collision {
+                Case::BesideCollisionGroup(h)
+            } else if body_has_visual(g.body) {
+                continue; // a drawn collision mesh beside the body's own visual: no evidence
+            } else if visual_only.iter().any(|v| v.group == g.group) {
+                Case::InVisualGroup
+            } else if visual_only.is_empty() && !body_has_prim(g.body, g.group) {
+                Case::NoCollisionSet
+            } else {
+                continue;
+            };
+            hits.push((case, g));
+        }
+        if hits.is_empty() {
+            return;
+        }
+        let case = hits.iter().map(|h| h.0).min().unwrap_or(Case::NoCollisionSet);
+        let meshes: Vec<&Geom> = hits.iter().filter(|h| h.0 == case).map(|h| h.1).collect();
+        // Pairs MuJoCo would test with one of these meshes: robot colliders on non-adjacent
+        // bodies (the parent filter excludes a body and its parent), compatible masks.
+        let colliders: Vec<&Geom> = robot_geoms().filter(|g| is_robot_collider(g)).collect();
+        let mut pairs = 0usize;
+        for (i, a) in colliders.iter().enumerate() {
+            for b in &colliders[i + 1..] {
+                let hit = |g: &Geom| meshes.iter().any(|m| m.id == g.id);
+                if (hit(a) || hit(b))
+                    && a.body != b.body
+                    && !adjacent(robot, a.body, b.body)
+                    && (a.contype & b.conaffinity != 0 || b.contype & a.conaffinity != 0)
+                {
+                    pairs += 1;
+                }
+            }
+        }
+        let verts: i64 = {
+            let vn = robot.mj.mesh_vertnum();
+            meshes
+                .iter()
+                .filter_map(|g| usize::try_from(g.mesh).ok().and_then(|m| vn.get(m)))
+                .map(|&n| n as i64)
+                .sum()
+        };
+        let mut bodies: Vec<usize> = meshes.iter().map(|g| g.body).collect();
+        bodies.dedup();
+        let names: Vec<String> = bodies.iter().map(|&b| robot.body_name(b).to_string()).collect();
+        let shown = if names.len() > 6 {
+            format!("{}, … ({} bodies)", names[..6].join(", "), names.len())
+        } else {
+            names.join(", ")
+        };
+        let n = meshes.len();
+        let (what, label) = match case {
+            Case::BesideCollisionGroup(h) => (
+                format!(
+                    "{n} drawn mesh geom{} collide beside the collision geoms of group {h}: {shown}",
+                    if n == 1 { "" } else { "s" }
+                ),
+                format!("drawn mesh (group {}) with contact masks set", meshes[0].group),
+            ),
+            Case::InVisualGroup => (
+                format!(
+                    "{n} mesh geom{} in the visual group {} collide{} while the group's other geoms have contype = conaffinity = 0: {shown}",
+                    if n == 1 { "" } else { "s" },
+                    meshes[0].group,
+                    if n == 1 { "s" } else { "" }
+                ),
+                "visual mesh with contact masks set".to_string(),
+            ),
+            Case::NoCollisionSet => (
+                format!(
+                    "the robot collides only through its visual meshes ({n} drawn mesh geom{}, no collision geoms of their own): {shown}",
+                    if n == 1 { "" } else { "s" }
+                ),
+                "drawn mesh, the body's only collision geometry".to_string(),
+            ),
+        };
+        let g0 = meshes[0];
+        let mut f = cx.at_elem(ElemKind::Geom, g0.id, &g0.name, what).label(label);
+        for g in meshes.iter().skip(1).take(3) {
+            f = f.secondary(
+                robot.elem_loc(ElemKind::Geom, g.id, &g.name),
+                "also drawn and colliding",
+            );
+        }
+        let f = f
+            .note(format!(
+                "MuJoCo collides a mesh as its convex hull, with the general convex collider (one contact per pair without multiccd): cosmetic shells fill in, {pairs} geom pair{} with one of these meshes on non-adjacent bodies can touch, and the hulls of {verts} mesh vertices enter every such test — slower steps, chattering contacts and self-collisions the hardware does not have",
+                if pairs == 1 { "" } else { "s" }
+            ))
+            .help("set contype=\"0\" conaffinity=\"0\" group=\"2\" on the visual geoms (in their default class) and add collision geoms in group 3: primitives fitted to each link, or a convex decomposition where the shape matters")
+            .subject(Subject::Model)
+            .measured(n as f64, "geoms")
+            .expected(0.0, "geoms")
+            .with("mesh_pairs", pairs as f64)
+            .with("hull_vertices", verts as f64);
+        out.push(f);
+    }
+}
