@@ -279,13 +279,14 @@ def main(case, cases, models):
     eff = c.get("effects", {})
     links = BODIES[mcfg["chain"]]
     eff_run = dict(eff, bodies_by_joint={b["joint"]: b for b in eff.get("bodies", {}).values()})
-    robot = Robot(links, eff_run)
+    ground = dict(GROUND, **c.get("ground", {}))  # a case may lay its own floor
+    robot = Robot(links, eff_run, ground=ground)
     rng = np.random.default_rng(c["seed"])
     eps = [run_episode(robot, cfg, rng, secs, e, split, csv, cfg["t0_ctrl"], mcfg["joints"], mcfg["key"])
            for e, split, secs, csv in episode_plan(c, out)]
     truth = {"case": case, "simulator": "floatsim.py", "model": mcfg["xml"], "joints": mcfg["joints"],
              "effects": eff, "resolved": {"_bodies": body_truth(links, eff)} if eff.get("bodies") else {},
-             "ground": GROUND,
+             "ground": ground,
              "logging": {k: cfg[k] for k in ("rec_hz", "jitter", "drop", "q_noise", "qd_noise", "bits",
                                              "t0_ctrl", "amp") if k in cfg},
              "settle_s": SETTLE_S, "control_rate_hz": float(cfg.get("ctrl_hz", CTRL_HZ)),
