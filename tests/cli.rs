@@ -202,7 +202,7 @@ fn fit_help_lists_the_effects() {
     let (code, out, err) = modellint(&["fit", "--help"]);
     assert_eq!(code, 0, "{err}");
     let effects = modellint::fit::effects::all();
-    assert_eq!(effects.len(), 17);
+    assert_eq!(effects.len(), 18);
     for e in &effects {
         let summary = modellint::fit::effects::docs::summary(e.meta());
         assert!(out.contains(&format!("  {:<24} {summary}", e.id())), "{} missing:\n{out}", e.id());

@@ -328,3 +328,69 @@ fn gain_error_on_a_torque_motor_is_not_written() {
     assert_eq!(warnings, vec!["gain_error on j: actuator is not a position servo; not written"; 2]);
     let _ = std::fs::remove_dir_all(&work);
 }
+
+/// One contact: (geoms, solref, sliding friction, condim, solimp's first value).
+type Contact = ([i32; 2], [f64; 2], f64, i32, f64);
+
+/// The contacts MuJoCo makes in `m` at its first keyframe, as MuJoCo's own collision code
+/// combines them.
+fn contacts_of(m: &mut mujoco_rs::prelude::MjModel) -> Vec<Contact> {
+    use mujoco_rs::prelude::*;
+    let mut d = MjData::new(m);
+    d.forward();
+    // solimp to 9 decimals: the written text holds the mixed value's shortest form.
+    let r9 = |x: f64| (x * 1e9).round() / 1e9;
+    d.contact().iter().map(|c| (c.geom, c.solref, c.friction[0], c.dim, r9(c.solimp[0]))).collect()
+}
+
+/// `ground_contact` on a foot pressed into a floor: in the model copy and in the written MJCF
+/// (compiled again by MuJoCo), the foot–floor contact has the fitted time constant and damping
+/// ratio, while its friction (the floor's larger 1.0, not the foot's 0.5), condim and solimp
+/// stay what they were; a body off the ground is no candidate.
+#[test]
+fn ground_contact_is_written_on_the_foot_and_keeps_the_rest_of_the_contact() {
+    use modellint::fit::effects::{self, Applied, JointTarget};
+    let work = tmp("ground_contact");
+    let path = work.join("foot.xml");
+    let xml = r#"<mujoco>
+  <worldbody>
+    <geom name="floor" type="plane" size="1 1 0.1" friction="1.0 0.005 0.0001" solimp="0.8 0.95 0.001"/>
+    <body name="foot" pos="0 0 0.019">
+      <joint name="z" type="slide" axis="0 0 1"/>
+      <geom name="sole" type="box" size="0.1 0.04 0.02" mass="1" friction="0.5 0.005 0.0001"/>
+      <body name="arm" pos="0 0 0.3">
+        <joint name="lift" type="hinge" axis="0 1 0"/>
+        <geom type="capsule" fromto="0 0 0 0.2 0 0" size="0.02" mass="0.2"/>
+      </body>
+    </body>
+  </worldbody>
+  <keyframe><key qpos="0 0"/></keyframe>
+</mujoco>
+"#;
+    std::fs::write(&path, xml).unwrap();
+    let robot = load(&path);
+    let e = effects::by_id("ground_contact").expect("registered");
+    let foot = JointTarget::of(&robot, "z").unwrap();
+    assert!(e.acts_on(&foot) && foot.ground.len() == 1, "{:?}", foot.ground);
+    assert!(!e.acts_on(&JointTarget::of(&robot, "lift").unwrap()), "the arm touches no ground");
+    assert_eq!(e.initial(&robot.mj, &foot), vec![0.02, 1.0]);
+    let nominal = contacts_of(&mut robot.mj.clone());
+    assert!(!nominal.is_empty(), "the sole does not touch the floor");
+    for c in &nominal {
+        assert_eq!((c.1, c.2, c.3), ([0.02, 1.0], 1.0, 3), "{c:?}");
+    }
+    let applied = [Applied { effect: e, joints: vec!["z".into()], params: vec![0.011, 0.7] }];
+    let fitted = contacts_of(&mut effects::model_with(&robot, &applied));
+    let want: Vec<_> = nominal.iter().map(|c| (c.0, [0.011, 0.7], c.2, c.3, c.4)).collect();
+    assert_eq!(fitted, want);
+    let sel = vec![kept("ground_contact", "z", &[("timeconst", 0.011), ("dampratio", 0.7)])];
+    let (out, warnings) = modellint::fit::writeback::edit_mjcf(xml, &robot, &sel).unwrap();
+    assert!(warnings.is_empty(), "{warnings:?}");
+    let written = work.join("written.xml");
+    std::fs::write(&written, &out).unwrap();
+    let mut m = load(&written).mj.clone();
+    assert_eq!(contacts_of(&mut m), want, "{out}");
+    let sole = out.lines().find(|l| l.contains("name=\"sole\"")).unwrap();
+    assert!(sole.contains("solref=\"0.011 0.7\"") && sole.contains("priority=\"1\""), "{sole}");
+    let _ = std::fs::remove_dir_all(&work);
+}

@@ -233,3 +233,10 @@ CHAIN_FR = dict(CHAIN_F, episodes=4, seconds=4.0, heldout=[3])
 CASES["KFR0_biped_none"] = dict(CHAIN_FR, seed=96, effects={})
 CASES["KFR1_trunk_battery"] = dict(CHAIN_FR, seed=97, effects={"bodies": {"trunk": {
     "joint": "root_pitch", "com_shift": [0.04, 0.0, -0.03]}}})
+# The clean control over other floors (`ground`: floatsim's k, c): ten times stiffer and five
+# times softer than KFR0's, the same commands (seed) for two episodes: how much of KFR0's gap is
+# the floor, and whether MuJoCo's contact settings (solref, solimp) can be either floor.
+CASES["KFR0s_biped_stiff_floor"] = dict(CHAIN_FR, seed=96, episodes=2, heldout=[1], effects={},
+                                        ground=dict(k=1e6, c=3000.0))
+CASES["KFR0w_biped_soft_floor"] = dict(CHAIN_FR, seed=96, episodes=2, heldout=[1], effects={},
+                                       ground=dict(k=2e4, c=450.0))

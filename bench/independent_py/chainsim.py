@@ -6,10 +6,11 @@ usage: chainsim.py CASE...      record cases of cases.py whose `sim` is "chain"
        chainsim.py --selftest   physics checks (energy, small-oscillation frequency, dead band)
 
 Writes $INDEP_OUT/data/CASE/{nominal.xml, episodes/ep_0N.csv, truth.json} like realsim.py (the
-same command generator and recorder, reclog.py). What it models:
+same command generator and recorder, reclog.py; the case plan, the links' mass properties, the
+body effects and the stepping between command switches shared in simcommon.py). What it models:
 - rigid links in the x–z plane, each a list of parts (mass, centre of mass (x, z) in the link's
   frame, moment of inertia about y through that centre), the parts' inertias worked out by hand
-  below from the nominal MJCF's geoms (capsule: cylinder + two hemispheres; box);
+  (simcommon.py) from the nominal MJCF's geoms (capsule: cylinder + two hemispheres; box);
 - mass matrix M_jk = sum over parts of links i >= max(j, k) of m (p - o_j)·(p - o_k) + I_yy, and
   bias forces (gravity, centripetal/Coriolis) by projecting each part's velocity-product and
   gravity acceleration on the joints (a planar recursive Newton–Euler with qdd = 0);
@@ -30,7 +31,6 @@ checked), out-of-plane motion, a floating base, motor electrics.
 import json
 import math
 import os
-import shutil
 import sys
 
 import numpy as np
@@ -38,25 +38,12 @@ import numpy as np
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 from reclog import CTRL_HZ, SETTLE_S, make_commands, record  # noqa: E402
+from simcommon import (Rk4, body_truth, box_iyy, capsule_iyy, case_setup, check_ranges,  # noqa: E402
+                       episode_file, episode_plan, run_commands, ticks,
+                       with_body_effects)
 
 G = 9.81
 STRIBECK_EPS = 0.005  # rad/s: the friction's smoothing velocity (sharper than a replay's)
-
-
-def capsule_iyy(m, r, length):
-    """Moment about an axis across a capsule through its centre: a cylinder of `length` and two
-    hemispheres of radius r, one density; a hemisphere's own moment 83/320 m r^2 about its
-    centre of mass, 3r/8 from its flat face."""
-    vc, vh = math.pi * r * r * length, 2.0 / 3.0 * math.pi * r ** 3
-    mc, mh = m * vc / (vc + 2 * vh), m * vh / (vc + 2 * vh)
-    cyl = mc * (r * r / 4 + length * length / 12)
-    hemi = mh * (83.0 / 320.0 * r * r + (length / 2 + 3 * r / 8) ** 2)
-    return cyl + 2 * hemi
-
-
-def box_iyy(m, hx, hz):
-    """Moment about y through the centre of a box of half sizes hx (x) and hz (z)."""
-    return m * ((2 * hx) ** 2 + (2 * hz) ** 2) / 12.0
 
 
 # Link descriptions matching the nominal MJCF (read off the XML by hand): `pos` is the joint's
@@ -83,14 +70,6 @@ CHAINS = {
              armature=0.0, kp=2.0, kv=0.0335, force=None, range=(-2.0, 2.0)),
     ],
 }
-
-
-def link_inertia(parts):
-    """A link's mass, centre of mass (x, z) and moment about y through it, from its parts."""
-    m = sum(p[0] for p in parts)
-    c = tuple(sum(p[0] * p[1][k] for p in parts) / m for k in range(2))
-    i = sum(iy + pm * ((pc[0] - c[0]) ** 2 + (pc[1] - c[1]) ** 2) for pm, pc, iy in parts)
-    return m, c, i
 
 
 class Chain:
@@ -158,26 +137,11 @@ class Chain:
         return 0.5 * qd @ M @ qd + pot
 
 
-class Robot:
+class Robot(Rk4):
     """The chain with its drives: servos, armature, damping, friction, backlash."""
 
     def __init__(self, links, eff, gravity=G):
-        links = [dict(l, parts=list(l["parts"])) for l in links]
-        self.resolved = {}
-        for l in links:  # body effects: own composition of the link's parts
-            b = eff.get("bodies_by_joint", {}).get(l["joint"])
-            if not b:
-                continue
-            if "payload" in b:
-                pl = b["payload"]
-                r = pl.get("radius", 0.03)
-                l["parts"].append((pl["mass"], (pl["pos"][0], pl["pos"][2]), 0.4 * pl["mass"] * r * r))
-            if "com_shift" in b:
-                d = b["com_shift"]
-                l["parts"] = [(m, (c[0] + d[0], c[1] + d[2]), iy) for m, c, iy in l["parts"]]
-            if "inertia_scale" in b:  # the moment about y through the link's centre of mass
-                m0, c0, i0 = link_inertia(l["parts"])  # × s, mass and centre of mass kept
-                l["parts"].append((0.0, c0, (b["inertia_scale"] - 1.0) * i0))
+        links = with_body_effects(links, eff)
         self.chain = Chain(links, gravity)
         n = self.n = len(links)
         je = [eff.get("joints", {}).get(l["joint"], {}) for l in links]
@@ -243,14 +207,6 @@ class Robot:
         qdd = np.linalg.solve(M, np.array(tau_link) - bias)
         return np.concatenate([x[n:2 * n], qdd, x[2 * n + nb:], qmdd]), tau_s
 
-    def rk4(self, x, h):
-        k1, tau = self.deriv(x)
-        k2, _ = self.deriv(x + 0.5 * h * k1)
-        k3, _ = self.deriv(x + 0.5 * h * k2)
-        k4, _ = self.deriv(x + h * k3)
-        self.peak = np.maximum(self.peak, np.abs(np.asarray(tau)))
-        return x + h / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
-
     def start(self, q0):
         """At rest at q0, the motors behind a play resting on the flank gravity loads."""
         _, bias = self.chain.mass_bias(q0, np.zeros(self.n))
@@ -262,77 +218,24 @@ def run_episode(robot, links, cfg, rng, seconds, ep_idx, split, out_csv, t0_ctrl
     joints = [l["joint"] for l in links]
     nj = len(joints)
     centre = [l["key"] for l in links]
-    ctrl_hz = float(cfg.get("ctrl_hz", CTRL_HZ))
-    kmin = math.floor((-SETTLE_S - 0.1 - t0_ctrl) * ctrl_hz)
-    kmax = math.ceil((seconds + 0.1 - t0_ctrl) * ctrl_hz)
-    tick_t = t0_ctrl + np.arange(kmin, kmax + 1) / ctrl_hz
+    ctrl_hz, tick_t, issued_index = ticks(cfg, seconds, t0_ctrl)
     cmd, segs = make_commands(rng, tick_t, centre, cfg["amp"], seconds, ctrl_hz)
-
-    def issued_index(t):
-        return int(math.floor((t - t0_ctrl) * ctrl_hz + 1e-9)) - kmin
-
     h_max = 1.0 / (5000.0 if robot.back else 4000.0)
-    t_end = seconds + 0.05
     x = robot.start(np.array(cmd[0], float))
     robot.peak[:] = 0.0
-    T, Q, QD = [-SETTLE_S], [x[:nj].copy()], [x[nj:2 * nj].copy()]
-    t = -SETTLE_S
-    edges = [tt for tt in tick_t if -SETTLE_S < tt < t_end] + [t_end]
-    qmin, qmax = x[:nj].copy(), x[:nj].copy()
-    for edge in edges:
-        robot.u = [float(v) for v in cmd[max(issued_index(t + 1e-9), 0)]]
-        steps = max(1, math.ceil((edge - t) / h_max - 1e-9))
-        h = (edge - t) / steps
-        for _ in range(steps):
-            x = robot.rk4(x, h)
-            t += h
-            T.append(t); Q.append(x[:nj].copy()); QD.append(x[nj:2 * nj].copy())
-            qmin, qmax = np.minimum(qmin, x[:nj]), np.maximum(qmax, x[:nj])
-        t = edge
-    for i, l in enumerate(links):
-        assert l["range"][0] <= qmin[i] and qmax[i] <= l["range"][1], \
-            f"{l['joint']} left its range: [{qmin[i]:.3f}, {qmax[i]:.3f}] (chainsim has no limits)"
-    T, Q, QD = np.asarray(T), np.asarray(Q), np.asarray(QD)
+    T, Q, QD, qmin, qmax = run_commands(robot, x, nj, tick_t, cmd, issued_index, seconds, h_max)
+    check_ranges(links, qmin, qmax, " (chainsim has no limits)")
     n_rows, n_drop = record(rng, cfg, T, Q, QD, cmd, issued_index, [0.0] * nj, seconds, out_csv,
                             ep_idx, split, joints, t0_ctrl, ctrl_hz,
                             note="recorded by chainsim.py (own planar-chain physics, no MuJoCo)")
-    return {"file": os.path.relpath(out_csv, os.path.dirname(os.path.dirname(out_csv))),
+    return {"file": episode_file(out_csv),
             "split": split, "seconds": seconds, "samples": n_rows, "dropped": n_drop,
             "segments": segs, "peak_abs_tau": [round(float(v), 3) for v in robot.peak],
             "q_range": [[round(float(a), 4), round(float(b), 4)] for a, b in zip(qmin, qmax)]}
 
 
-def body_truth(links, eff):
-    """truth.json `_bodies` in the schema score.py reads (3-vectors, y = 0)."""
-    out = {}
-    for bname, b in eff.get("bodies", {}).items():
-        l = next(l for l in links if l["joint"] == b["joint"])
-        m0 = sum(m for m, _, _ in l["parts"])
-        c0 = [sum(m * c[k] for m, c, _ in l["parts"]) / m0 for k in range(2)]
-        r = {"nominal_mass": m0, "nominal_com": [c0[0], 0.0, c0[1]], "joint_axis": [0.0, 1.0, 0.0],
-             "joint": b["joint"]}
-        if "payload" in b:
-            r["payload"] = {"mass": b["payload"]["mass"], "pos": list(b["payload"]["pos"])}
-        if "com_shift" in b:
-            r["com_shift"] = list(b["com_shift"])
-        if "inertia_scale" in b:  # about y (the joint axis) only: the in-plane moment
-            i0 = link_inertia(l["parts"])[2]
-            r.update(nominal_inertia=[i0, i0, i0], nominal_iquat=[1.0, 0.0, 0.0, 0.0],
-                     inertia_scale=[1.0, b["inertia_scale"], 1.0])
-        out[bname] = r
-    return out
-
-
 def main(case, cases, models):
-    c = cases[case]
-    mcfg = models[c["model"]]
-    cfg = dict(mcfg)
-    cfg.update(c.get("logging", {}))
-    out = os.path.join(os.environ.get("INDEP_OUT", os.path.join(HERE, "out")), "data", case)
-    if os.path.exists(out):
-        shutil.rmtree(out)
-    os.makedirs(os.path.join(out, "episodes"))
-    shutil.copy(os.path.join(HERE, "models", mcfg["xml"]), os.path.join(out, "nominal.xml"))
+    c, mcfg, cfg, out = case_setup(case, cases, models, HERE)
     eff = c.get("effects", {})
     links = [dict(l, key=k) for l, k in zip(CHAINS[mcfg["chain"]], mcfg["key"])]
     eff_run = dict(eff, bodies_by_joint={b["joint"]: b for b in eff.get("bodies", {}).values()})
@@ -353,14 +256,8 @@ def main(case, cases, models):
     if eff.get("bodies"):
         resolved["_bodies"] = body_truth(links, eff)
     rng = np.random.default_rng(c["seed"])
-    n = c.get("episodes", 6)
-    secs = c.get("seconds", 5.0)
-    heldout = set(c.get("heldout", [n - 1]))
-    eps = []
-    for e in range(n):
-        split = "heldout" if e in heldout else "train"
-        eps.append(run_episode(robot, links, cfg, rng, secs, e, split,
-                               os.path.join(out, "episodes", f"ep_{e:02d}.csv"), cfg["t0_ctrl"]))
+    eps = [run_episode(robot, links, cfg, rng, secs, e, split, csv, cfg["t0_ctrl"])
+           for e, split, secs, csv in episode_plan(c, out)]
     truth = {"case": case, "simulator": "chainsim.py", "model": mcfg["xml"],
              "joints": [l["joint"] for l in links], "effects": eff, "resolved": resolved,
              "logging": {k: cfg[k] for k in ("rec_hz", "jitter", "drop", "q_noise", "qd_noise", "bits",

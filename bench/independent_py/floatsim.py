@@ -25,8 +25,8 @@ same command generator and recorder, reclog.py). What it models:
   (a planar robot whose legs differed would fight itself through the ground): a squat, a hip
   swing and an ankle that keeps the soles flat under a trunk pitching by a third, small signal
   (run_episode); the trunk is unactuated;
-- concealed body effects on a link as in chainsim.py (a payload sphere, a centre-of-mass shift,
-  an inertia scale).
+- concealed body effects on a link as in chainsim.py (simcommon.py: a payload sphere, a
+  centre-of-mass shift, an inertia scale).
 The log records the six leg joints (q, q̇, command) and the trunk's three base joints (q, q̇,
 no command: passive). It does not model: out-of-plane motion, joint limits (checked), rolling
 of the sole's edge (two points), motor electrics.
@@ -34,15 +34,15 @@ of the sole's edge (two points), motor electrics.
 import json
 import math
 import os
-import shutil
 import sys
 
 import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
-from chainsim import box_iyy, capsule_iyy, link_inertia  # noqa: E402
 from reclog import CTRL_HZ, SETTLE_S, make_commands, record  # noqa: E402
+from simcommon import (Rk4, body_truth, box_iyy, capsule_iyy, case_setup, check_ranges,  # noqa: E402
+                       episode_file, episode_plan, run_commands, ticks, with_body_effects)
 
 G = 9.81
 GROUND = dict(k=1e5, c=1000.0, mu=0.9, v_eps=0.01)
@@ -173,23 +173,9 @@ class Tree:
         return 0.5 * qd @ M @ qd + pot
 
 
-class Robot:
+class Robot(Rk4):
     def __init__(self, links, eff, gravity=G, ground=GROUND):
-        links = [dict(l, parts=list(l["parts"])) for l in links]
-        for l in links:  # body effects, composed by hand as in chainsim.py
-            b = eff.get("bodies_by_joint", {}).get(l["joint"])
-            if not b:
-                continue
-            if "payload" in b:
-                pl = b["payload"]
-                r = pl.get("radius", 0.03)
-                l["parts"].append((pl["mass"], (pl["pos"][0], pl["pos"][2]), 0.4 * pl["mass"] * r * r))
-            if "com_shift" in b:
-                d = b["com_shift"]
-                l["parts"] = [(m, (c[0] + d[0], c[1] + d[2]), iy) for m, c, iy in l["parts"]]
-            if "inertia_scale" in b:
-                _, c0, i0 = link_inertia(l["parts"])
-                l["parts"].append((0.0, c0, (b["inertia_scale"] - 1.0) * i0))
+        links = with_body_effects(links, eff)
         self.tree = Tree(links, gravity)
         self.links = links
         n = self.n = len(links)
@@ -239,14 +225,6 @@ class Robot:
         qdd = np.linalg.solve(M, tau + tc - bias)
         return np.concatenate([qd, qdd]), ts
 
-    def rk4(self, x, h):
-        k1, tau = self.deriv(x)
-        k2, _ = self.deriv(x + 0.5 * h * k1)
-        k3, _ = self.deriv(x + 0.5 * h * k2)
-        k4, _ = self.deriv(x + h * k3)
-        self.peak = np.maximum(self.peak, np.abs(np.asarray(tau)))
-        return x + h / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
-
     def standing(self, legq):
         """q with the leg joints at `legq` (per leg, both alike), the trunk level and its height
         such that the soles are at the ground's static depth (weight / (k × contact points))."""
@@ -263,10 +241,7 @@ class Robot:
 
 def run_episode(robot, cfg, rng, seconds, ep_idx, split, out_csv, t0_ctrl, joints, key):
     n = robot.n
-    ctrl_hz = float(cfg.get("ctrl_hz", CTRL_HZ))
-    kmin = math.floor((-SETTLE_S - 0.1 - t0_ctrl) * ctrl_hz)
-    kmax = math.ceil((seconds + 0.1 - t0_ctrl) * ctrl_hz)
-    tick_t = t0_ctrl + np.arange(kmin, kmax + 1) / ctrl_hz
+    ctrl_hz, tick_t, issued_index = ticks(cfg, seconds, t0_ctrl)
     # three signals: a squat (the knee bent by s0, hip and ankle by −s0/2 each: the hip stays
     # over the ankle), a hip swing s1 and the trunk's pitch s2; the ankle takes the rest, so that
     # the soles stay flat under a trunk that pitches only by s2
@@ -274,96 +249,44 @@ def run_episode(robot, cfg, rng, seconds, ep_idx, split, out_csv, t0_ctrl, joint
     sq, sw, pt = s3[:, 0], s3[:, 1], s3[:, 2]
     cmd3 = np.asarray(key) + np.stack([-sq / 2 + sw, sq, -sq / 2 - sw - pt], axis=1)
     cmd = np.concatenate([cmd3, cmd3], axis=1)  # both legs alike
-
-    def issued_index(t):
-        return int(math.floor((t - t0_ctrl) * ctrl_hz + 1e-9)) - kmin
-
-    h_max = 1.0 / 4000.0
-    t_end = seconds + 0.05
     x = np.concatenate([robot.standing(key), np.zeros(n)])
     robot.peak[:] = 0.0
-    T, Q, QD = [-SETTLE_S], [x[:n].copy()], [x[n:].copy()]
-    t = -SETTLE_S
-    edges = [tt for tt in tick_t if -SETTLE_S < tt < t_end] + [t_end]
-    qmin, qmax = x[:n].copy(), x[:n].copy()
     nmin = [math.inf, math.inf]
-    for edge in edges:
-        robot.u = [float(v) for v in cmd[max(issued_index(t + 1e-9), 0)]]
-        steps = max(1, math.ceil((edge - t) / h_max - 1e-9))
-        h = (edge - t) / steps
-        for _ in range(steps):
-            x = robot.rk4(x, h)
-            t += h
-            T.append(t); Q.append(x[:n].copy()); QD.append(x[n:].copy())
-            qmin, qmax = np.minimum(qmin, x[:n]), np.maximum(qmax, x[:n])
-        if t > 0:  # the heel's and the toe's least load while recorded: the feet stay flat
+
+    def loads(t, x):  # the heel's and the toe's least load while recorded: the feet stay flat
+        if t > 0:
             _, pts = robot.contact_forces(x[:n], x[n:])
-            nmin = [min(nmin[0], pts[0][2] + pts[2][2]), min(nmin[1], pts[1][2] + pts[3][2])]
-        t = edge
-    for i, l in enumerate(robot.links):
-        if "range" in l:
-            assert l["range"][0] <= qmin[i] and qmax[i] <= l["range"][1], \
-                f"{l['joint']} left its range: [{qmin[i]:.3f}, {qmax[i]:.3f}]"
+            nmin[:] = [min(nmin[0], pts[0][2] + pts[2][2]), min(nmin[1], pts[1][2] + pts[3][2])]
+    T, Q, QD, qmin, qmax = run_commands(robot, x, n, tick_t, cmd, issued_index, seconds,
+                                        1.0 / 4000.0, loads)
+    check_ranges(robot.links, qmin, qmax)
     assert abs(qmax[2]) < 0.6 and abs(qmin[2]) < 0.6, "the trunk fell"
-    T, Q, QD = np.asarray(T), np.asarray(Q), np.asarray(QD)
     order = [robot.links.index(next(l for l in robot.links if l["joint"] == j)) for j in joints]
     full_cmd = np.concatenate([np.zeros((len(cmd), 3)), cmd], axis=1)  # the base: no command
     n_rows, n_drop = record(rng, cfg, T, Q[:, order], QD[:, order], full_cmd[:, order], issued_index,
                             [0.0] * len(joints), seconds, out_csv, ep_idx, split, joints, t0_ctrl,
                             ctrl_hz, note="recorded by floatsim.py (own planar free-base physics, "
                             "penalty ground contact, no MuJoCo)", passive=3)
-    return {"file": os.path.relpath(out_csv, os.path.dirname(os.path.dirname(out_csv))),
+    return {"file": episode_file(out_csv),
             "split": split, "seconds": seconds, "samples": n_rows, "dropped": n_drop,
             "segments": segs, "peak_abs_tau": [round(float(v), 3) for v in robot.peak],
             "least_heel_toe_load_n": [round(v, 1) for v in nmin],
             "q_range": [[round(float(a), 4), round(float(b), 4)] for a, b in zip(qmin, qmax)]}
 
 
-def body_truth(links, eff):
-    out = {}
-    for bname, b in eff.get("bodies", {}).items():
-        l = next(l for l in links if l["joint"] == b["joint"])
-        m0, c, i0 = link_inertia(l["parts"])
-        r = {"nominal_mass": m0, "nominal_com": [c[0], 0.0, c[1]], "joint_axis": [0.0, 1.0, 0.0],
-             "joint": b["joint"]}
-        if "payload" in b:
-            r["payload"] = {"mass": b["payload"]["mass"], "pos": list(b["payload"]["pos"])}
-        if "com_shift" in b:
-            r["com_shift"] = list(b["com_shift"])
-        if "inertia_scale" in b:
-            r.update(nominal_inertia=[i0, i0, i0], nominal_iquat=[1.0, 0.0, 0.0, 0.0],
-                     inertia_scale=[1.0, b["inertia_scale"], 1.0])
-        out[bname] = r
-    return out
-
-
 def main(case, cases, models):
-    c = cases[case]
-    mcfg = models[c["model"]]
-    cfg = dict(mcfg)
-    cfg.update(c.get("logging", {}))
-    out = os.path.join(os.environ.get("INDEP_OUT", os.path.join(HERE, "out")), "data", case)
-    if os.path.exists(out):
-        shutil.rmtree(out)
-    os.makedirs(os.path.join(out, "episodes"))
-    shutil.copy(os.path.join(HERE, "models", mcfg["xml"]), os.path.join(out, "nominal.xml"))
+    c, mcfg, cfg, out = case_setup(case, cases, models, HERE)
     eff = c.get("effects", {})
     links = BODIES[mcfg["chain"]]
     eff_run = dict(eff, bodies_by_joint={b["joint"]: b for b in eff.get("bodies", {}).values()})
-    robot = Robot(links, eff_run)
+    ground = dict(GROUND, **c.get("ground", {}))  # a case may lay its own floor
+    robot = Robot(links, eff_run, ground=ground)
     rng = np.random.default_rng(c["seed"])
-    n = c.get("episodes", 6)
-    secs = c.get("seconds", 5.0)
-    heldout = set(c.get("heldout", [n - 1]))
-    eps = []
-    for e in range(n):
-        split = "heldout" if e in heldout else "train"
-        eps.append(run_episode(robot, cfg, rng, secs, e, split,
-                               os.path.join(out, "episodes", f"ep_{e:02d}.csv"), cfg["t0_ctrl"],
-                               mcfg["joints"], mcfg["key"]))
+    eps = [run_episode(robot, cfg, rng, secs, e, split, csv, cfg["t0_ctrl"], mcfg["joints"], mcfg["key"])
+           for e, split, secs, csv in episode_plan(c, out)]
     truth = {"case": case, "simulator": "floatsim.py", "model": mcfg["xml"], "joints": mcfg["joints"],
              "effects": eff, "resolved": {"_bodies": body_truth(links, eff)} if eff.get("bodies") else {},
-             "ground": GROUND,
+             "ground": ground,
              "logging": {k: cfg[k] for k in ("rec_hz", "jitter", "drop", "q_noise", "qd_noise", "bits",
                                              "t0_ctrl", "amp") if k in cfg},
              "settle_s": SETTLE_S, "control_rate_hz": float(cfg.get("ctrl_hz", CTRL_HZ)),

@@ -16,7 +16,7 @@ every geom of the body (the whole mass distribution translated).
 Logging: 100 Hz controller (or the model's `ctrl_hz`) with phase control_t0_s, async recorder ~rate_hz with jitter,
 q = quantise(q_true + offset + N(0, q_noise)), qd + N(0, qd_noise), drops, 2 s settle.
 """
-import json, math, os, shutil, sys
+import json, math, os, sys
 import numpy as np
 import mujoco
 
@@ -24,6 +24,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 from cases import CASES, MODELS  # noqa: E402
 from reclog import CTRL_HZ, SETTLE_S, make_commands, record  # noqa: E402
+from simcommon import case_setup, episode_file, episode_plan, ticks  # noqa: E402
 
 
 def conceal(m, eff, key_qpos):
@@ -142,19 +143,12 @@ def run_episode(m, joints, cfg, eff, rng, seconds, ep_idx, split, out_csv, t0_ct
     key = m.key_qpos[0]
     centre = [float(key[a]) for a in qadr]
     amp = cfg["amp"]
-    ctrl_hz = float(cfg.get("ctrl_hz", CTRL_HZ))
     delay = [eff.get("joints", {}).get(j, {}).get("delay", eff.get("delay", 0.0)) for j in joints]
     offset = [eff.get("joints", {}).get(j, {}).get("offset", 0.0) for j in joints]
 
     # controller ticks in recording time: t0_ctrl + k/ctrl_hz, k from the settle start to the end
-    kmin = math.floor((-SETTLE_S - 0.1 - t0_ctrl) * ctrl_hz)
-    kmax = math.ceil((seconds + 0.1 - t0_ctrl) * ctrl_hz)
-    ks = np.arange(kmin, kmax + 1)
-    tick_t = t0_ctrl + ks / ctrl_hz
+    ctrl_hz, tick_t, issued_index = ticks(cfg, seconds, t0_ctrl)
     cmd, segs = make_commands(rng, tick_t, centre, amp, seconds, ctrl_hz)
-
-    def issued_index(t):  # index of tick in force (issued) at recording time t
-        return int(math.floor((t - t0_ctrl) * ctrl_hz + 1e-9)) - kmin
 
     # initial state: at the first command, at rest; settle SETTLE_S s unrecorded
     for i, a in enumerate(qadr):
@@ -196,23 +190,15 @@ def run_episode(m, joints, cfg, eff, rng, seconds, ep_idx, split, out_csv, t0_ct
     T = np.asarray(T); Q = np.asarray(Q); QD = np.asarray(QD)
     n_rows, n_drop = record(rng, cfg, T, Q, QD, cmd, issued_index, offset, seconds, out_csv,
                             ep_idx, split, joints, t0_ctrl, ctrl_hz)
-    return {"file": os.path.relpath(out_csv, os.path.dirname(os.path.dirname(out_csv))),
+    return {"file": episode_file(out_csv),
             "split": split, "seconds": seconds, "samples": n_rows, "dropped": n_drop,
             "segments": segs, "peak_abs_tau": [round(float(x), 3) for x in peak_tau],
             "saturated_steps": sat.tolist()}
 
 
 def main(case):
-    c = CASES[case]
-    mcfg = MODELS[c["model"]]
-    cfg = dict(mcfg)
-    cfg.update(c.get("logging", {}))
-    out = os.path.join(os.environ.get("INDEP_OUT", os.path.join(HERE, "out")), "data", case)
-    if os.path.exists(out):
-        shutil.rmtree(out)
-    os.makedirs(os.path.join(out, "episodes"))
+    c, mcfg, cfg, out = case_setup(case, CASES, MODELS, HERE)
     src = os.path.join(HERE, "models", mcfg["xml"])
-    shutil.copy(src, os.path.join(out, "nominal.xml"))
     eff = c.get("effects", {})
     m, body_truth = real_model(src, eff)
     resolved = conceal(m, eff, m.key_qpos[0].copy())
@@ -221,13 +207,8 @@ def main(case):
     if "delay" in eff:
         resolved["_all_delay_s"] = eff["delay"]
     rng = np.random.default_rng(c["seed"])
-    eps = []
-    n = c.get("episodes", 6); secs = c.get("seconds", 5.0)
-    heldout = set(c.get("heldout", [n - 1]))
-    for e in range(n):
-        split = "heldout" if e in heldout else "train"
-        eps.append(run_episode(m, mcfg["joints"], cfg, eff, rng, secs, e, split,
-                               os.path.join(out, "episodes", f"ep_{e:02d}.csv"), cfg["t0_ctrl"]))
+    eps = [run_episode(m, mcfg["joints"], cfg, eff, rng, secs, e, split, csv, cfg["t0_ctrl"])
+           for e, split, secs, csv in episode_plan(c, out)]
     truth = {"case": case, "model": mcfg["xml"], "joints": mcfg["joints"], "effects": eff,
              "resolved": resolved,
              "logging": {k: cfg[k] for k in ("rec_hz", "jitter", "drop", "q_noise", "qd_noise", "bits", "t0_ctrl", "amp", "rec_start", "declare_t0", "ctrl_hz", "declared_hz", "physics_div") if k in cfg},

@@ -32,7 +32,7 @@ pub fn unwritten(
     for (i, s) in selected.iter().enumerate() {
         let Some(e) = effects::by_id(&s.effect) else { continue };
         match e.write_back(&s.values) {
-            WriteBack::Joint(_) | WriteBack::Inertial => {
+            WriteBack::Joint(_) | WriteBack::Inertial | WriteBack::Geoms => {
                 for j in s.joints.iter().filter(|j| !found.contains(&(i, (*j).clone()))) {
                     warnings.push(format!(
                         "{}: <joint name=\"{j}\"> not found {where_}; not written",
@@ -171,6 +171,29 @@ pub fn edit_file(
                     element_edits.push(inertial_edit(xml, body, text));
                 }
             }
+            WriteBack::Geoms => {
+                for j in &s.joints {
+                    let Some(node) = joint_node(j) else { continue };
+                    found.insert((i, j.clone()));
+                    let body = node.parent_element().filter(|b| b.has_tag_name("body"));
+                    let (Some(body), Some(t)) = (body, effects::JointTarget::of(robot, j)) else {
+                        continue;
+                    };
+                    let m = with_all.get_or_insert_with(|| model_with_selected(robot, selected));
+                    match ground_geom_attrs(m, body, &t) {
+                        Ok(list) => {
+                            for (el, attrs) in list {
+                                for (a, v) in attrs {
+                                    add(el, a, v);
+                                }
+                            }
+                        }
+                        Err(why) => {
+                            warnings.push(format!("{} on {j}: {why}; not written", s.effect))
+                        }
+                    }
+                }
+            }
             WriteBack::TomlOnly => {}
         }
     }
@@ -204,6 +227,44 @@ pub fn edit_file(
         out.replace_range(s..e, &r);
     }
     Ok((out, warnings))
+}
+
+/// The attributes of `t`'s ground-touching geoms as the model `m` holds them, each with its
+/// `<geom>` element: the body's own `<geom>` children, in the compiled order.
+type GeomAttrs<'a, 'i> = Vec<(roxmltree::Node<'a, 'i>, Vec<(&'static str, String)>)>;
+fn ground_geom_attrs<'a, 'i>(
+    m: &mujoco_rs::prelude::MjModel,
+    body: roxmltree::Node<'a, 'i>,
+    t: &effects::JointTarget,
+) -> Result<GeomAttrs<'a, 'i>, String> {
+    let b = usize::try_from(*m.jnt_bodyid().get(t.jnt).ok_or("no such joint")?)
+        .map_err(|_| "no body")?;
+    let adr = usize::try_from(m.body_geomadr()[b]).unwrap_or(0);
+    let n = usize::try_from(m.body_geomnum()[b]).unwrap_or(0);
+    let elems: Vec<roxmltree::Node> = body.children().filter(|c| c.has_tag_name("geom")).collect();
+    if elems.len() != n {
+        return Err(format!(
+            "the body's {} <geom> children are not its {n} compiled geoms (a frame, include or \
+             replicate adds some)",
+            elems.len()
+        ));
+    }
+    let join = |v: &[f64]| v.iter().map(|x| sig(*x)).collect::<Vec<_>>().join(" ");
+    let mut out = Vec::new();
+    for g in &t.ground {
+        let el = *elems.get(g.geom.wrapping_sub(adr)).ok_or("a geom outside its body")?;
+        out.push((
+            el,
+            vec![
+                ("solref", join(&m.geom_solref()[g.geom])),
+                ("priority", m.geom_priority()[g.geom].to_string()),
+                ("solimp", join(&m.geom_solimp()[g.geom])),
+                ("friction", join(&m.geom_friction()[g.geom])),
+                ("condim", m.geom_condim()[g.geom].to_string()),
+            ],
+        ));
+    }
+    Ok(out)
 }
 
 /// `true` when the document's `<compiler>` computes every body's inertia from its geoms.

@@ -1,0 +1,171 @@
+use super::*;
+use crate::declare_effect;
+
+declare_effect! {
+    /// The ground contact under a foot softer, stiffer or more damped than modelled (a real floor and sole against MuJoCo's soft contact).
+    ///
+    /// MuJoCo-native: the contact between the joint's child body (a foot) and the ground it
+    /// stands on (a plane, height field or box of the world body, `model::contact`) gets the
+    /// solver reference `timeconst` (the contact's time constant [s]) and `dampratio` (its damping
+    /// ratio) of MuJoCo's `solref`. The foot's geoms take the ground's priority + 1, so that
+    /// their own parameters are the contact's; their `solimp`, friction and `condim` are set to
+    /// the values the contact had, so only the time constant and damping ratio change (the foot's
+    /// contacts with other geoms then also use its values). A candidate only on a joint whose
+    /// child body touches the ground through its geoms (not through an explicit `<pair>`, nor
+    /// where the ground's priority decides, nor with a direct, negative `solref`). Fitted as the
+    /// foot's contact, not as a joint's physics: it acts on every joint through the ground.
+    /// Tried only when named (`--effects`, `--told`): MuJoCo's soft contact has no setting that
+    /// is a stiff penalty floor, and on the free-base biped of the independent benchmark
+    /// (floatsim) its best time constant and damping ratio leave more of the gap than a moved
+    /// trunk centre of mass does (docs/fitting.md, Validation).
+    ///
+    /// ## Simulation
+    /// the foot's `geom_solref` (and `geom_priority`, `geom_solimp`, `geom_friction`, `geom_condim` to keep the rest of the contact)
+    ///
+    /// ## Signature
+    /// servo torque `τ` (ranked by the simulated sensitivity)
+    ///
+    /// ## Write-back
+    /// the foot's ground-touching `<geom>`s: `solref`, `priority`, `solimp`, `friction`, `condim`
+    ///
+    /// ## Isaac Lab / mjlab
+    /// comment with the parameters (the contact's stiffness and damping are the simulator's own)
+    pub GroundContact {
+        id: "ground_contact",
+        entry: Model,
+        params: [
+            ParamDef { name: "timeconst", unit: "s", lo: 0.002, hi: 0.1, default: 0.02 },
+            ParamDef { name: "dampratio", unit: "", lo: 0.2, hi: 4.0, default: 1.0 },
+        ],
+    }
+}
+
+impl Effect for GroundContact {
+    /// The contact's solref as the model gives it (the first ground-touching geom's).
+    fn initial(&self, _m: &MjModel, t: &JointTarget) -> Vec<f64> {
+        match t.ground.first() {
+            Some(g) => g.contact.solref.to_vec(),
+            None => self.params().iter().map(|p| p.default).collect(),
+        }
+    }
+    /// Time constant from twice the timestep (MuJoCo's own floor for it) to 0.1 s, damping
+    /// ratio 0.2–4.
+    fn bounds(&self, m: &MjModel, _t: &JointTarget) -> (Vec<f64>, Vec<f64>) {
+        let ps = self.params();
+        let lo = (2.0 * m.opt().timestep).max(ps[0].lo);
+        (vec![lo, ps[1].lo], vec![ps[0].hi.max(lo), ps[1].hi])
+    }
+    fn apply_model(&self, m: &mut MjModel, t: &JointTarget, p: &[f64]) {
+        for g in &t.ground {
+            set_contact(m, g, [p[0], p[1]]);
+        }
+    }
+    fn smooth(&self) -> bool {
+        true
+    }
+    fn signature(&self, s: &Samples) -> Signature {
+        Signature::centred(s.tau.clone())
+    }
+    fn screened(&self) -> usize {
+        2
+    }
+    fn write_back(&self, _p: &[f64]) -> WriteBack {
+        WriteBack::Geoms
+    }
+    fn by_default(&self) -> bool {
+        false
+    }
+    fn acts_on(&self, t: &JointTarget) -> bool {
+        !t.ground.is_empty()
+    }
+    /// A group only of feet: a joint whose body touches no ground has no contact to share.
+    fn alike(&self, a: &JointTarget, b: &JointTarget) -> bool {
+        self.acts_on(a) && self.acts_on(b)
+    }
+}
+
+/// Gives geom `g.geom` the contact `g.contact` with `solref`, by priority over its ground.
+fn set_contact(m: &mut MjModel, g: &GroundGeom, solref: [f64; 2]) {
+    let i = g.geom;
+    let c = &g.contact;
+    if let Some(x) = m.geom_priority_mut().get_mut(i) {
+        *x = (*x).max(g.ground_priority.saturating_add(1));
+    }
+    if let Some(x) = m.geom_solref_mut().get_mut(i) {
+        *x = solref;
+    }
+    if let Some(x) = m.geom_solimp_mut().get_mut(i) {
+        *x = c.solimp;
+    }
+    if let Some(x) = m.geom_friction_mut().get_mut(i) {
+        *x = c.friction;
+    }
+    // SAFETY: condim is read by the collision code only, as any other geom parameter; no
+    // derived array depends on it.
+    if let Some(x) = unsafe { m.geom_condim_mut() }.get_mut(i) {
+        *x = c.condim;
+    }
+}
+
+/// A geom of a joint's child body that touches the ground, with the contact's parameters as the
+/// model gives them.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GroundGeom {
+    pub geom: usize,
+    pub contact: crate::model::contact::Combined,
+    /// The priority of the ground geom it touches.
+    pub ground_priority: i32,
+}
+
+/// How close to a ground plane a geom's lowest point must be at the keyframe to stand on it [m].
+const STANDING: f64 = 0.005;
+
+/// The geoms of body `body` that stand on the world's ground at the keyframe (their lowest
+/// point within [`STANDING`] of a ground plane) through their own parameters (none through an
+/// explicit pair, where the ground wins on priority, or with a direct solref).
+pub fn ground_geoms(robot: &Robot, body: usize) -> Vec<GroundGeom> {
+    robot
+        .geoms
+        .iter()
+        .filter(|g| g.body == body && body > 0)
+        .filter_map(|g| {
+            let (ground, contact) = crate::model::contact::ground_partners(robot, g.id)
+                .into_iter()
+                .find(|(p, _)| height_above(robot, g.id, *p).is_some_and(|h| h <= STANDING))?;
+            let gp = robot.geoms.get(ground)?.priority;
+            let own = contact.pair.is_none()
+                && contact.by_priority.is_none_or(|w| w == g.id)
+                && contact.solref[0] > 0.0;
+            own.then_some(GroundGeom { geom: g.id, contact, ground_priority: gp })
+        })
+        .collect()
+}
+
+/// The height of geom `g`'s lowest point above the plane geom `plane` at the keyframe (negative:
+/// below it); `None` when `plane` is not a plane. Exact for spheres, capsules, cylinders, boxes
+/// and ellipsoids, the bounding sphere for the other shapes.
+fn height_above(robot: &Robot, g: usize, plane: usize) -> Option<f64> {
+    use crate::model::GeomType;
+    let (p, x) = (robot.geoms.get(plane)?, robot.geoms.get(g)?);
+    if p.gtype != GeomType::Plane {
+        return None;
+    }
+    let k = &robot.key;
+    let (pm, pp, xm, xp) =
+        (k.geom_xmat.get(plane)?, k.geom_xpos.get(plane)?, k.geom_xmat.get(g)?, k.geom_xpos.get(g)?);
+    let n = [pm[2], pm[5], pm[8]];
+    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    // The geom's local axes' components along the plane's normal.
+    let a = [0, 1, 2].map(|i| dot([xm[i], xm[3 + i], xm[6 + i]], n).abs());
+    let s = x.size;
+    let reach = match x.gtype {
+        GeomType::Sphere => s[0],
+        GeomType::Capsule => s[0] + s[1] * a[2],
+        GeomType::Cylinder => s[0] * (1.0 - a[2] * a[2]).max(0.0).sqrt() + s[1] * a[2],
+        GeomType::Box => s[0] * a[0] + s[1] * a[1] + s[2] * a[2],
+        GeomType::Ellipsoid => ((s[0] * a[0]).powi(2) + (s[1] * a[1]).powi(2) + (s[2] * a[2]).powi(2)).sqrt(),
+        _ => x.rbound,
+    };
+    let centre = dot([xp[0] - pp[0], xp[1] - pp[1], xp[2] - pp[2]], n);
+    Some(centre - reach)
+}
