@@ -282,25 +282,8 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     let mut floor_train: Option<f64> = None;
     // The log indices of the kept candidates that left a white training residual.
     let mut floored: Vec<usize> = Vec::new();
-    // Candidates the screen left out though they explain `min_rel_improvement` of its data
-    // (coarse or linear): when none of the round passes the held-out gate, they are fitted in
-    // full after all, from `second` on — a training share is no test of what generalises (the
-    // XL330's torque limit gains 0.2 % on the training gains, 40 % on the held-out one).
-    let (mut deferred, mut second): (Vec<usize>, Option<usize>) = (Vec::new(), None);
     let mut ci = 0;
-    loop {
-        if ci >= cands.len() {
-            if second.is_some() || !accepted.is_empty() || deferred.is_empty() {
-                break;
-            }
-            coarse.resize(cands.len(), None);
-            second = Some(cands.len());
-            for &i in &deferred {
-                cands.push(cands[i].clone());
-                coarse.push(coarse[i].clone());
-            }
-            continue;
-        }
+    while ci < cands.len() {
         // The coarse fits of a size's candidates, which are then taken best first: the
         // one-parameter ones at the start; the others once the best of those was judged and
         // left more to explain than noise (or at once when there are none).
@@ -388,11 +371,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         // misses what is far from linear (a resonance moved by damping).
         let reaches = |g: f64| g > 0.0 && g >= opts.policy.screen_share * best_gain;
         let linear_gain = predicted.map_or(f64::NEG_INFINITY, |p| gain(p.train_rmse));
-        let passed = second.is_some_and(|s| ci > s) || reaches(gain(cf)) || reaches(linear_gain);
-        if cp.is_empty() || !passed {
-            if !cp.is_empty() && gain(cf).max(linear_gain) >= opts.policy.min_rel_improvement {
-                deferred.push(ci - 1);
-            }
+        if cp.is_empty() || !(reaches(gain(cf)) || reaches(linear_gain)) {
             out.tried.push(not_tested(Phase::Screen, cp.clone(), cf));
             // Its coarse fit still starts a joint pair fit (gain error + delay: neither alone
             // explains much) — when it explains something: at least `min_rel_improvement` of
@@ -412,18 +391,12 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         // The full fit runs on the screen's data too (its cost does not grow with the log's
         // length); the held-out gate and the training BIC below use all data, and the round's
         // winner is refined on the whole training set ([`refine`]).
-        // A deferred candidate is fitted on the whole training set: the screen's data barely
-        // showed it.
         let start = (cf < base_short).then_some(cp.as_slice());
-        let data = if second.is_some_and(|s| ci > s) { train } else { short };
-        let (p, fit_rmse) = engine.fit_from(data, &applied, (e, &group), start);
+        let (p, fit_rmse) = engine.fit_from(short, &applied, (e, &group), start);
         if p.is_empty() || !fit_rmse.is_finite() {
             continue;
         }
-        if std::ptr::eq(data, short) {
-            best_gain = best_gain.max(gain(fit_rmse));
-        }
-        fitted.retain(|f| !(f.effect.id() == e.id() && f.joints == group));
+        best_gain = best_gain.max(gain(fit_rmse));
         fitted.push(Applied { effect: e, joints: group.clone(), params: p.clone() });
         let mut trial = applied.clone();
         trial.push(Applied { effect: e, joints: group.clone(), params: p.clone() });
