@@ -7,8 +7,14 @@
 //! An explicit `<contact><pair>` (compiled `pair_*`) overrides all of this for its two geoms
 //! (`mj_collision` in the same file): MuJoCo checks the pair whatever the geoms'
 //! contype/conaffinity and any `<exclude>`, with the pair's own condim, friction, solref, solimp,
-//! margin and gap, and drops the dynamic contact of the same two geoms. Dynamic contacts need
-//! the masks to allow them and no `<exclude>` of the two bodies ([`contact`]).
+//! margin and gap, and drops the dynamic contact of the same two geoms. Dynamic contacts are
+//! filtered as `mj_collision` filters them ([`filtered`]): never within one weld body (geoms of
+//! one body, or of bodies welded together with no joint between them), never between a body's
+//! weld body and its parent's unless `<flag filterparent="disable"/>` (neither side the
+//! world's), never between the bodies of an `<exclude>`, and only when the contype/conaffinity
+//! masks allow it. `<flag contact="disable"/>` or `<flag constraint="disable"/>` removes every
+//! contact, explicit pairs included ([`contacts_disabled`]). (MuJoCo 2's `<option collision>`
+//! no longer exists: MuJoCo 3 rejects the attribute when it compiles the model.)
 
 use mujoco_rs::prelude::MjModel;
 
@@ -122,9 +128,12 @@ pub fn excluded(robot: &Robot, a: usize, b: usize) -> bool {
 }
 
 /// The parameters of the contacts MuJoCo makes between geoms `a` and `b`: an explicit pair's, or
-/// the geoms' combined ([`combine`]) when their masks allow a dynamic contact and no `<exclude>`
-/// removes it; `None` when the two never touch (geoms of one body never do).
+/// the geoms' combined ([`combine`]) when no filter removes their dynamic contact ([`filtered`]);
+/// `None` when the two never touch.
 pub fn contact(robot: &Robot, a: usize, b: usize) -> Option<Combined> {
+    if contacts_disabled(robot) {
+        return None;
+    }
     if let Some(p) = pair_of(robot, a, b) {
         return Some(Combined {
             condim: p.condim,
@@ -136,14 +145,69 @@ pub fn contact(robot: &Robot, a: usize, b: usize) -> Option<Combined> {
         });
     }
     let (ga, gb) = (robot.geoms.get(a)?, robot.geoms.get(b)?);
-    (ga.body != gb.body && may_collide(ga, gb) && !excluded(robot, ga.body, gb.body))
-        .then(|| combine(ga, gb))
+    filtered(robot, a, b).is_none().then(|| combine(ga, gb))
 }
 
-/// The geom can touch anything: its masks allow contacts, or an explicit pair names it.
+/// `mjDSBL_CONSTRAINT` and `mjDSBL_CONTACT`: either makes `mj_collision` return at once.
+const DSBL_CONSTRAINT: i32 = 1;
+const DSBL_CONTACT: i32 = 1 << 4;
+/// `mjDSBL_FILTERPARENT`.
+const DSBL_FILTERPARENT: i32 = 1 << 10;
+
+/// The model makes no contact at all: `<flag contact="disable"/>` or `constraint="disable"`.
+pub fn contacts_disabled(robot: &Robot) -> bool {
+    robot.opt.disableflags & (DSBL_CONTACT | DSBL_CONSTRAINT) != 0
+}
+
+/// Why MuJoCo never makes a dynamic (contype/conaffinity) contact between two geoms.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Filter {
+    /// `<flag contact="disable"/>` or `constraint="disable"`.
+    Disabled,
+    /// Same weld body: one body, or bodies welded together (no joint between them).
+    Welded,
+    /// One weld body is the other's parent's weld body (`filterparent`, on by default).
+    Parent,
+    /// An `<exclude>` of the two bodies.
+    Excluded,
+    /// Neither contype matches the other's conaffinity.
+    Masks,
+}
+
+/// The filter that removes the dynamic contact of geoms `a` and `b` (`mj_collision`'s order),
+/// `None` when MuJoCo tests the pair. An unknown geom is `Masks`.
+pub fn filtered(robot: &Robot, a: usize, b: usize) -> Option<Filter> {
+    if contacts_disabled(robot) {
+        return Some(Filter::Disabled);
+    }
+    let (Some(ga), Some(gb)) = (robot.geoms.get(a), robot.geoms.get(b)) else {
+        return Some(Filter::Masks);
+    };
+    let weld = |body: usize| robot.bodies.get(body).map_or(body, |x| x.weld);
+    let (w1, w2) = (weld(ga.body), weld(gb.body));
+    if w1 == w2 {
+        return Some(Filter::Welded);
+    }
+    let wparent = |w: usize| weld(robot.bodies.get(w).map_or(0, |x| x.parent));
+    if robot.opt.disableflags & DSBL_FILTERPARENT == 0
+        && w1 != 0
+        && w2 != 0
+        && (w1 == wparent(w2) || w2 == wparent(w1))
+    {
+        return Some(Filter::Parent);
+    }
+    if excluded(robot, ga.body, gb.body) {
+        return Some(Filter::Excluded);
+    }
+    (!may_collide(ga, gb)).then_some(Filter::Masks)
+}
+
+/// The geom can touch anything: contacts are enabled and its masks allow contacts, or an
+/// explicit pair names it.
 pub fn takes_part(robot: &Robot, g: usize) -> bool {
-    robot.geoms.get(g).is_some_and(|x| x.collides())
-        || robot.pairs.iter().any(|p| p.geom1 == g || p.geom2 == g)
+    !contacts_disabled(robot)
+        && (robot.geoms.get(g).is_some_and(|x| x.collides())
+            || robot.pairs.iter().any(|p| p.geom1 == g || p.geom2 == g))
 }
 
 /// Masks allow a contact between the two geoms.
@@ -191,6 +255,91 @@ mod tests {
             solmix,
             solref: [0.02, 1.0],
             solimp: [0.9, 0.95, 0.001, 0.5, 2.0],
+        }
+    }
+
+    fn load_xml(tag: &str, xml: &str) -> crate::model::Robot {
+        let dir = std::env::temp_dir().join(format!("modellint_contact_{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        let p = dir.join(format!("{tag}.xml"));
+        std::fs::write(&p, xml).expect("write");
+        crate::model::load(&mut crate::model::source::SourceMap::default(), &p, None)
+            .expect("loads")
+    }
+
+    /// A static base on the world, a hinged link `a` with a child `a_fixed` welded to it (no
+    /// joint), then hinged `b` and `c`; `<exclude>` of `a` and `c`; a mask-less geom on `c`.
+    fn chain(flags: &str) -> String {
+        format!(
+            r#"<mujoco><option>{flags}</option><worldbody>
+            <geom name="floor" type="plane" size="1 1 .1"/>
+            <body name="base"><geom name="base" size=".05"/>
+              <body name="a" pos="0 0 .2"><joint axis="0 1 0"/><geom name="a" size=".05"/>
+                <body name="a_fixed" pos=".1 0 0"><geom name="a_fixed" size=".05"/>
+                  <body name="b" pos=".1 0 0"><joint axis="0 1 0"/><geom name="b" size=".05"/>
+                    <body name="c" pos=".1 0 0"><joint axis="0 1 0"/><geom name="c" size=".05"/>
+                      <geom name="ghost" size=".05" contype="0" conaffinity="0"/>
+            </body></body></body></body></body></worldbody>
+            <contact><exclude body1="a" body2="c"/></contact></mujoco>"#
+        )
+    }
+
+    #[test]
+    fn dynamic_contacts_are_filtered_as_mujoco_filters_them() {
+        let r = load_xml("filters", &chain(""));
+        let g = |n: &str| r.geoms.iter().find(|x| x.name == n).expect("geom").id;
+        // The static base is welded to the world: it never touches the floor.
+        assert_eq!(filtered(&r, g("base"), g("floor")), Some(Filter::Welded));
+        // A body and the child welded to it are one rigid part.
+        assert_eq!(filtered(&r, g("a"), g("a_fixed")), Some(Filter::Welded));
+        // `b`'s parent is `a_fixed`, whose weld body is `a`: parent filtering.
+        assert_eq!(filtered(&r, g("a_fixed"), g("b")), Some(Filter::Parent));
+        assert_eq!(filtered(&r, g("a"), g("b")), Some(Filter::Parent));
+        // The parent filter never applies to a world-welded parent: `a` touches the base.
+        assert_eq!(filtered(&r, g("a"), g("base")), None);
+        assert_eq!(filtered(&r, g("a"), g("c")), Some(Filter::Excluded));
+        assert_eq!(filtered(&r, g("a_fixed"), g("c")), None);
+        assert_eq!(filtered(&r, g("b"), g("ghost")), Some(Filter::Parent));
+        assert_eq!(filtered(&r, g("a_fixed"), g("ghost")), Some(Filter::Masks));
+        assert!(contact(&r, g("c"), g("floor")).is_some());
+        assert!(takes_part(&r, g("c")));
+    }
+
+    #[test]
+    fn filterparent_and_contact_flags_are_read() {
+        let r = load_xml("noparent", &chain(r#"<flag filterparent="disable"/>"#));
+        let g = |n: &str| r.geoms.iter().find(|x| x.name == n).expect("geom").id;
+        assert_eq!(filtered(&r, g("a_fixed"), g("b")), None);
+        // Welded bodies stay filtered whatever the flag.
+        assert_eq!(filtered(&r, g("a"), g("a_fixed")), Some(Filter::Welded));
+        let r = load_xml("nocontact", &chain(r#"<flag contact="disable"/>"#));
+        let g = |n: &str| r.geoms.iter().find(|x| x.name == n).expect("geom").id;
+        assert_eq!(filtered(&r, g("c"), g("floor")), Some(Filter::Disabled));
+        assert!(contact(&r, g("c"), g("floor")).is_none());
+        assert!(!takes_part(&r, g("c")));
+    }
+
+    /// MuJoCo itself decides: every geom overlaps every other at the origin, so the pairs
+    /// `mj_collision` reports are exactly the ones its filters leave in.
+    #[test]
+    fn filters_agree_with_the_contacts_mujoco_makes() {
+        for flags in ["", r#"<flag filterparent="disable"/>"#] {
+            let xml = chain(flags).replace(r#"pos="0 0 .2""#, "").replace(r#"pos=".1 0 0""#, "");
+            let r = load_xml(if flags.is_empty() { "overlap" } else { "overlap_np" }, &xml);
+            let mut d = mujoco_rs::prelude::MjData::new(&r.mj);
+            d.forward();
+            let made: std::collections::BTreeSet<(usize, usize)> = d
+                .contact()
+                .iter()
+                .map(|c| (c.geom1.min(c.geom2) as usize, c.geom1.max(c.geom2) as usize))
+                .collect();
+            let n = r.geoms.len();
+            let ours: std::collections::BTreeSet<(usize, usize)> = (0..n)
+                .flat_map(|a| (a + 1..n).map(move |b| (a, b)))
+                .filter(|&(a, b)| filtered(&r, a, b).is_none())
+                .collect();
+            assert!(!made.is_empty());
+            assert_eq!(made, ours, "flags {flags:?}");
         }
     }
 

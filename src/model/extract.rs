@@ -149,12 +149,14 @@ pub(super) fn extract(
     add_transmission_parts(&mj, &mut joints, &actuators);
     let bp_ = mj.body_parentid();
     let bm = mj.body_mass();
+    let bw = mj.body_weldid();
     let bodies = (0..nbody)
         .map(|i| Body {
             id: i,
             name: mj::name_at(&mj, mj.name_bodyadr(), i),
             parent: bp_[i].max(0) as usize,
             mass: bm[i],
+            weld: bw.get(i).map_or(i, |&w| w.max(0) as usize),
         })
         .collect();
     let gtp: Vec<i32> = mj.geom_type().iter().map(|&t| t as i32).collect();
@@ -210,8 +212,12 @@ pub(super) fn extract(
         })
         .collect();
     let (pairs, excludes) = super::contact::read_pairs(&mj);
-    let opt =
-        Options { timestep: r.opt.timestep, integrator: r.opt.integrator, gravity: r.opt.gravity };
+    let opt = Options {
+        timestep: r.opt.timestep,
+        integrator: r.opt.integrator,
+        gravity: r.opt.gravity,
+        disableflags: r.opt.disableflags,
+    };
     static NEXT_UID: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
     Robot {
         uid: NEXT_UID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
@@ -356,5 +362,7 @@ pub fn key_state(m: &MjModel, key: Option<usize>, keys: &[String]) -> KeyState {
         geom_xpos: d.geom_xpos().to_vec(),
         geom_xmat: d.geom_xmat().to_vec(),
         body_xpos: d.xpos().to_vec(),
+        joint_xanchor: d.xanchor().to_vec(),
+        joint_xaxis: d.xaxis().to_vec(),
     }
 }

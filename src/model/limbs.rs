@@ -7,7 +7,7 @@
 //! different limbs interact only through the bodies where the limbs join (not at all across
 //! MuJoCo's separate kinematic trees): through the held base, or a servo-held waist.
 
-use super::{JointType, Robot};
+use super::{GeomType, JointType, Robot};
 
 impl Robot {
     /// The id of the body that starts `joint`'s limb (see the module doc); `None` for an unknown
@@ -54,6 +54,54 @@ impl Robot {
             }
             b = p;
         }
+    }
+}
+
+impl Robot {
+    /// Whether `joint` turns a wheel: an unlimited hinge whose body carries a colliding round
+    /// geom (sphere, or a cylinder, capsule or ellipsoid whose symmetry axis is the hinge axis)
+    /// centred on the axis at the keyframe. Wheels turn without end by design: they need no
+    /// range and are not feet.
+    pub fn is_wheel(&self, joint: usize) -> bool {
+        let Some(j) = self.joints.get(joint) else { return false };
+        if j.jtype != JointType::Hinge || j.limited {
+            return false;
+        }
+        let (Some(a), Some(u)) =
+            (self.key.joint_xanchor.get(joint), self.key.joint_xaxis.get(joint))
+        else {
+            return false;
+        };
+        let nu = (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]).sqrt().max(1e-12);
+        let u = [u[0] / nu, u[1] / nu, u[2] / nu];
+        self.geoms
+            .iter()
+            .filter(|g| g.body == j.body && crate::model::contact::takes_part(self, g.id))
+            .any(|g| {
+                let (Some(p), Some(m)) =
+                    (self.key.geom_xpos.get(g.id), self.key.geom_xmat.get(g.id))
+                else {
+                    return false;
+                };
+                let d = [p[0] - a[0], p[1] - a[1], p[2] - a[2]];
+                let along = d[0] * u[0] + d[1] * u[1] + d[2] * u[2];
+                let off = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2] - along * along).max(0.0).sqrt();
+                let radius = g.size[0];
+                if radius <= 0.0 || off > 0.1 * radius {
+                    return false;
+                }
+                // The geom's own z axis (column 2 of the row-major frame).
+                let z = [m[2], m[5], m[8]];
+                let aligned = (z[0] * u[0] + z[1] * u[1] + z[2] * u[2]).abs() > 0.97;
+                match g.gtype {
+                    GeomType::Sphere => true,
+                    GeomType::Cylinder | GeomType::Capsule => aligned,
+                    GeomType::Ellipsoid => {
+                        aligned && (g.size[0] - g.size[1]).abs() <= 0.05 * g.size[0]
+                    }
+                    _ => false,
+                }
+            })
     }
 }
 

@@ -172,6 +172,9 @@ pub struct Body {
     pub name: String,
     pub parent: usize,
     pub mass: f64,
+    /// MuJoCo's `body_weldid`: the body's top ancestor with no joint in between (bodies with
+    /// the same weld body move as one and never collide with each other; 0 for the world's).
+    pub weld: usize,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
@@ -231,14 +234,19 @@ pub struct KeyState {
     /// Row-major 3×3 rotation per geom.
     pub geom_xmat: Vec<[f64; 9]>,
     pub body_xpos: Vec<[f64; 3]>,
+    /// World position of each joint's anchor and its unit world axis (hinge, slide) at the key.
+    pub joint_xanchor: Vec<[f64; 3]>,
+    pub joint_xaxis: Vec<[f64; 3]>,
 }
 
-/// Gravity, timestep, integrator.
+/// Gravity, timestep, integrator, disabled features.
 #[derive(Debug, Clone)]
 pub struct Options {
     pub timestep: f64,
     pub integrator: i32,
     pub gravity: [f64; 3],
+    /// `mjOption.disableflags` (`<option><flag ... = "disable"/>`).
+    pub disableflags: i32,
 }
 
 /// A loaded robot model.

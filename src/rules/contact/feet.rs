@@ -12,8 +12,13 @@
 //! geoms whose lowest point at the keyframe is within [`GROUND_WINDOW`] of the foot's lowest):
 //! a **point foot** touches down through spheres whose lowest points lie within
 //! [`POINT_SPREAD`] of each other (the quadruped's foot sphere; flat-foot rules do not apply); a
-//! **wheel** touches down through a sphere, cylinder or ellipsoid on a body turned by an
-//! unlimited hinge (no foot rules apply); anything else is a **flat foot**.
+//! **wheel** touches down through a geom of a body that an unlimited hinge turns about the
+//! geom's own round axis ([`Robot::is_wheel`]: sphere, or cylinder, capsule or ellipsoid on its
+//! axle; no foot rules apply); anything else is a **flat foot**. A body welded to the floating
+//! base (no joint between them, e.g. a ROS `base_footprint`) is trunk, never a foot. A flat foot whose
+//! ground contact is a line or a point is a design, not a thin sole, when no joint at the foot
+//! can turn it about that contact ([`ankle_turning`], from the joints' world axes at the
+//! keyframe).
 
 pub use crate::model::mirror::{Side, side_of};
 use crate::model::{GeomType, Robot};
@@ -100,6 +105,21 @@ pub fn feet(robot: &Robot, spec: Option<&Spec>) -> Vec<Foot> {
             })
             .collect()
     };
+    // A body welded to the floating base (no joint between them: the trunk, a ROS
+    // `base_footprint` frame) is part of the trunk, not a foot, unless the spec names it. The
+    // floating body itself may be a foot (a foot dropped alone on a floor, a test rig).
+    let free_bodies: Vec<usize> = robot
+        .joints
+        .iter()
+        .filter(|j| j.jtype == crate::model::JointType::Free)
+        .map(|j| j.body)
+        .collect();
+    let on_limb = |b: usize| {
+        from_spec
+            || free_bodies.contains(&b)
+            || !free_bodies.iter().any(|&f| robot.bodies[f].weld == robot.bodies[b].weld)
+    };
+    matched.retain(|&b| on_limb(b));
     // Only a floating-base robot (a legged one) has feet to guess at: a fixed-base arm or a
     // test rig does not.
     let floating = robot.joints.iter().any(|j| j.jtype == crate::model::JointType::Free);
@@ -116,7 +136,9 @@ pub fn feet(robot: &Robot, spec: Option<&Spec>) -> Vec<Foot> {
         let zmin = (1..n).map(lowest).fold(f64::INFINITY, f64::min);
         matched = (1..n)
             .filter(|&b| {
-                !robot.bodies.iter().any(|c| c.id != 0 && c.parent == b) && lowest(b) <= zmin + 0.03
+                !robot.bodies.iter().any(|c| c.id != 0 && c.parent == b)
+                    && lowest(b) <= zmin + 0.03
+                    && on_limb(b)
             })
             .collect();
     }
@@ -167,10 +189,7 @@ pub fn feet(robot: &Robot, spec: Option<&Spec>) -> Vec<Foot> {
             .fold(0.0, f64::max);
         let wheel = ground.iter().any(|&(g, _)| {
             let geom = &robot.geoms[g];
-            matches!(geom.gtype, GeomType::Sphere | GeomType::Cylinder | GeomType::Ellipsoid)
-                && robot.joints.iter().any(|j| {
-                    j.body == geom.body && j.jtype == crate::model::JointType::Hinge && !j.limited
-                })
+            robot.joints.iter().any(|j| j.body == geom.body && robot.is_wheel(j.id))
         });
         let spheres = !ground.is_empty()
             && ground.iter().all(|&(g, _)| robot.geoms[g].gtype == GeomType::Sphere);
@@ -185,4 +204,82 @@ pub fn feet(robot: &Robot, spec: Option<&Spec>) -> Vec<Foot> {
     out.retain(|f| !f.geoms.is_empty());
     out.sort_by_key(|f| (f.side.map(|s| s as u8).unwrap_or(2), f.root));
     out
+}
+
+/// Largest angle between a joint axis and a contact line for the joint to roll the foot about
+/// the line (rad): 30°.
+const ROLL_ALIGN: f64 = 30.0 * std::f64::consts::PI / 180.0;
+/// A joint is at the foot (an ankle) when its axis passes closer to the contact than this share
+/// of the distance from the contact to the leg's first joint: an ankle a few cm above the sole
+/// is, a hip roll at the top of the leg (which balances a line foot by moving the whole leg) is
+/// not.
+const ANKLE_SHARE: f64 = 1.0 / 3.0;
+
+/// The joint at the foot that can turn the foot about its degenerate contact — a line through
+/// `pts` (ground contact points at the keyframe) or, when they lie within [`POINT_SPREAD`], a
+/// point — or `None` when no joint can: then the line or point foot is the design (an
+/// underactuated biped's blade foot whose ankle only pitches, like Cassie's; a stilt), not a
+/// sole modelled too thin. A joint counts when it sits on the foot's body or an ancestor below
+/// the floating base, its world axis at the keyframe is within 30° of the line (for a point:
+/// more than 60° from vertical, any tilt) — a ball joint turns about every axis — and the axis
+/// passes within a third of the leg's length of the contact.
+pub fn ankle_turning(robot: &Robot, root: usize, pts: &[[f64; 3]]) -> Option<usize> {
+    use crate::model::JointType;
+    if pts.is_empty() {
+        return None;
+    }
+    let k = pts.len() as f64;
+    let c = [0, 1, 2].map(|i| pts.iter().map(|p| p[i]).sum::<f64>() / k);
+    // The contact's direction: its two farthest points (horizontal); none for a point.
+    let mut far = (0.0, [0.0; 3]);
+    for a in pts {
+        for b in pts {
+            let d = [b[0] - a[0], b[1] - a[1], 0.0];
+            let n = d[0].hypot(d[1]);
+            if n > far.0 {
+                far = (n, [d[0] / n, d[1] / n, 0.0]);
+            }
+        }
+    }
+    let line = (far.0 > POINT_SPREAD).then_some(far.1);
+    // The leg's joints, foot first, up to the floating base.
+    let mut chain: Vec<usize> = Vec::new();
+    let mut b = root;
+    while b != 0 {
+        let js: Vec<&crate::model::Joint> = robot.joints.iter().filter(|j| j.body == b).collect();
+        if js.iter().any(|j| j.jtype == JointType::Free) {
+            break;
+        }
+        chain.extend(js.iter().map(|j| j.id));
+        b = robot.bodies[b].parent;
+    }
+    let anchor = |j: usize| robot.key.joint_xanchor.get(j).copied().unwrap_or(c);
+    let axis = |j: usize| robot.key.joint_xaxis.get(j).copied().unwrap_or([0.0, 0.0, 1.0]);
+    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    let norm = |a: [f64; 3]| (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+    let cross = |a: [f64; 3], b: [f64; 3]| {
+        [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    };
+    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    let leg = chain.last().map_or(0.0, |&j| norm(sub(anchor(j), c)));
+    chain.into_iter().find(|&j| {
+        let jt = robot.joints[j].jtype;
+        if !matches!(jt, JointType::Hinge | JointType::Ball) {
+            return false;
+        }
+        let u = axis(j);
+        let nu = norm(u).max(1e-12);
+        let u = [u[0] / nu, u[1] / nu, u[2] / nu];
+        let dist = if jt == JointType::Ball {
+            norm(sub(anchor(j), c))
+        } else {
+            norm(cross(sub(c, anchor(j)), u))
+        };
+        let turns = jt == JointType::Ball
+            || match line {
+                Some(v) => dot(u, v).abs() >= ROLL_ALIGN.cos(),
+                None => u[2].abs() <= (std::f64::consts::FRAC_PI_2 - ROLL_ALIGN).cos(),
+            };
+        turns && dist < ANKLE_SHARE * leg
+    })
 }

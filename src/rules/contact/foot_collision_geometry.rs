@@ -7,7 +7,7 @@ use crate::model::{GeomType, Robot};
 use crate::probe::settle::{Settle, StanceClaim};
 use crate::probe::slide::{FootSlide, PUSH_S, PUSH_SHARE, Slide};
 use crate::probe::{Measure, Measurement, Preconditions, StanceSettle, Verdict};
-use crate::rules::contact::feet::{Foot, FootKind, feet};
+use crate::rules::contact::feet::{Foot, FootKind, ankle_turning, feet};
 use crate::rules::geometry::shapes::{Placed, hull_area};
 use crate::rules::{Context, Rule, RuleMeta, claim_each, opt};
 use crate::util::fmt_num;
@@ -52,7 +52,13 @@ declare_rule! {
     /// families: a wheel (a sphere, cylinder or ellipsoid on an unlimited hinge) is not a foot;
     /// a point foot (spheres touching down within 2 cm of each other, as on quadrupeds) is judged
     /// by its ground geoms only — a shank geom above the foot sphere is not a foot — and gets no
-    /// support-polygon finding. On a flat foot, geom types and radii are judged on the ground
+    /// support-polygon finding. A foot that touches down along a line or at one point is
+    /// reported only when a joint at the foot could turn it about that contact (an ankle roll
+    /// within 30° of the line, any tilting joint for a point, a ball joint; its axis at the
+    /// keyframe passing within a third of the leg's length of the contact): then the foot is
+    /// meant to stand on a sole that was modelled too thin. Without such a joint the line or
+    /// point is the design — an underactuated biped's blade foot whose ankle only pitches and
+    /// that the hip roll balances (Cassie), a stilt — and is not reported. On a flat foot, geom types and radii are judged on the ground
     /// geoms too (within 10 mm of the foot's lowest point at the keyframe: an ankle housing above
     /// the sole is not a foot contact); meshes on any of the foot's geoms.
     ///
@@ -508,6 +514,12 @@ impl FootCollisionGeometry {
             let toe = pts.iter().any(|p| p[0] >= x1 - third);
             let area = hull_area(&pts.iter().map(|p| [p[0], p[1]]).collect::<Vec<_>>());
             let degenerate = area < 1e-6;
+            // A line or point contact that no ankle joint can turn is the design (a blade foot
+            // balanced by the hip, a stilt): no sole to widen.
+            let ankle = if degenerate { ankle_turning(robot, foot.root, &pts) } else { None };
+            if degenerate && ankle.is_none() {
+                continue;
+            }
             if degenerate || !heel || !toe {
                 let g0 = placed
                     .iter()
@@ -516,8 +528,9 @@ impl FootCollisionGeometry {
                     .unwrap_or(foot.geoms[0]);
                 let what = if degenerate {
                     format!(
-                        "{label} touches the ground along a line or at a point (support polygon {} cm²)",
-                        fmt_num(area * 1e4, 3)
+                        "{label} touches the ground along a line or at a point (support polygon {} cm²) although joint `{}` at the foot can turn it about that contact",
+                        fmt_num(area * 1e4, 3),
+                        ankle.map_or("", |j| robot.joints[j].name.as_str())
                     )
                 } else {
                     format!(

@@ -1,7 +1,7 @@
 use crate::declare_rule;
 use crate::finding::{Finding, Severity, Subject};
 use crate::model::mjcf::ElemKind;
-use crate::model::{Geom, GeomType, Robot};
+use crate::model::{Geom, GeomType};
 use crate::rules::{Context, Rule, RuleMeta};
 
 declare_rule! {
@@ -17,8 +17,8 @@ declare_rule! {
     ///   the model's visual-only geoms, and its body has no such geom of its own (so the mesh is
     ///   what draws the body); or
     /// - **no collision set at all**: the model has neither visual-only geoms nor a hidden
-    ///   collision group, and the body collides through this mesh alone (no primitive of its own
-    ///   collides).
+    ///   collision group, and the body collides through this mesh alone (no primitive collides
+    ///   on the body or on a body welded to it with no joint between: one rigid part).
     ///
     /// Everything is read from the compiled model (geom type, group, contype/conaffinity); class
     /// names are not evidence. Not reported: collision primitives beside visual meshes with
@@ -42,9 +42,10 @@ declare_rule! {
     ///
     /// ## How it is confirmed
     /// Static: compiled geom types, groups and contact masks. The finding counts the geom pairs
-    /// with one of these meshes on non-adjacent bodies whose masks let them collide (MuJoCo's
-    /// parent filter excludes a body and its parent); no simulation is needed to show that the
-    /// pairs exist.
+    /// with one of these meshes that MuJoCo's collision filters leave in (`model::contact`: not
+    /// one weld body, not a weld body and its parent's unless `filterparent` is disabled, no
+    /// `<exclude>`, masks that match; none with `<flag contact="disable"/>`); no simulation is
+    /// needed to show that the pairs exist.
     ///
     /// ## How to fix
     /// Give the visual geoms `contype="0" conaffinity="0"` (usually in their `<default class>`)
@@ -75,12 +76,6 @@ enum Case {
     NoCollisionSet,
 }
 
-fn adjacent(robot: &Robot, a: usize, b: usize) -> bool {
-    let pa = robot.bodies.get(a).map(|x| x.parent);
-    let pb = robot.bodies.get(b).map(|x| x.parent);
-    (pa == Some(b) && b != 0) || (pb == Some(a) && a != 0)
-}
-
 impl Rule for VisualMeshCollision {
     fn meta(&self) -> &'static RuleMeta {
         &Self::META
@@ -96,9 +91,15 @@ impl Rule for VisualMeshCollision {
             robot_geoms().filter(|g| is_robot_collider(g) && g.group >= 3).map(|g| g.group).min();
         let body_has_visual =
             |b: usize| robot_geoms().any(|g| g.body == b && !g.collides() && g.group <= 2);
+        // Primitive collision geoms on the same rigid part: the body or a body welded to it
+        // (MuJoCo's weld body; e.g. a chassis box on a child body with no joint).
+        let weld = |b: usize| robot.bodies.get(b).map_or(b, |x| x.weld);
         let body_has_prim = |b: usize, group: i32| {
             robot_geoms().any(|g| {
-                g.body == b && is_robot_collider(g) && g.gtype != GeomType::Mesh && g.group == group
+                weld(g.body) == weld(b)
+                    && is_robot_collider(g)
+                    && g.gtype != GeomType::Mesh
+                    && g.group == group
             })
         };
         let mut hits: Vec<(Case, &Geom)> = Vec::new();
@@ -124,17 +125,15 @@ impl Rule for VisualMeshCollision {
         }
         let case = hits.iter().map(|h| h.0).min().unwrap_or(Case::NoCollisionSet);
         let meshes: Vec<&Geom> = hits.iter().filter(|h| h.0 == case).map(|h| h.1).collect();
-        // Pairs MuJoCo would test with one of these meshes: robot colliders on non-adjacent
-        // bodies (the parent filter excludes a body and its parent), compatible masks.
+        // Pairs MuJoCo would test with one of these meshes: robot colliders that no filter
+        // separates (weld body, parent, <exclude>, masks: `model::contact::filtered`).
         let colliders: Vec<&Geom> = robot_geoms().filter(|g| is_robot_collider(g)).collect();
         let mut pairs = 0usize;
         for (i, a) in colliders.iter().enumerate() {
             for b in &colliders[i + 1..] {
                 let hit = |g: &Geom| meshes.iter().any(|m| m.id == g.id);
                 if (hit(a) || hit(b))
-                    && a.body != b.body
-                    && !adjacent(robot, a.body, b.body)
-                    && (a.contype & b.conaffinity != 0 || b.contype & a.conaffinity != 0)
+                    && crate::model::contact::filtered(robot, a.id, b.id).is_none()
                 {
                     pairs += 1;
                 }
@@ -192,7 +191,7 @@ impl Rule for VisualMeshCollision {
         }
         let f = f
             .note(format!(
-                "MuJoCo collides a mesh as its convex hull, with the general convex collider (one contact per pair without multiccd): cosmetic shells fill in, {pairs} geom pair{} with one of these meshes on non-adjacent bodies can touch, and the hulls of {verts} mesh vertices enter every such test — slower steps, chattering contacts and self-collisions the hardware does not have",
+                "MuJoCo collides a mesh as its convex hull, with the general convex collider (one contact per pair without multiccd): cosmetic shells fill in, {pairs} geom pair{} with one of these meshes can touch, and the hulls of {verts} mesh vertices enter every such test — slower steps, chattering contacts and self-collisions the hardware does not have",
                 if pairs == 1 { "" } else { "s" }
             ))
             .help("set contype=\"0\" conaffinity=\"0\" group=\"2\" on the visual geoms (in their default class) and add collision geoms in group 3: primitives fitted to each link, or a convex decomposition where the shape matters")

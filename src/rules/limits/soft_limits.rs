@@ -16,8 +16,11 @@ declare_rule! {
     /// `ctrlrange` should be the spec's `robot.soft_limit_factor` (default 0.9) × the joint's
     /// hardware `range`, centred on it. Without a spec it still reports a ctrlrange that covers
     /// the whole joint range (or is unlimited), which lets the policy command the hard stops. It
-    /// also reports an actuated hinge/slide joint with no range at all. Actuators that share the
-    /// problem through one `<default class>` are reported once.
+    /// also reports an actuated hinge/slide joint with no range at all — unless the joint turns
+    /// without end by design: a wheel (an unlimited hinge turning a round geom about its own
+    /// axle), or a joint whose position actuators have no `ctrlrange` either while the model
+    /// gives its other actuated joints ranges (an arm's continuous axes). Actuators that share
+    /// the problem through one `<default class>` are reported once.
     ///
     /// ## Why is this bad?
     /// Training is meant to use soft limits, typically 0.9 of the hardware range (Asimov system identification §8):
@@ -203,6 +206,23 @@ impl Measure for Stop {
     }
 }
 
+/// A joint with no range that turns without end by design: a wheel ([`Robot::is_wheel`]), or a
+/// joint whose position actuators leave their targets unbounded too (no `ctrlrange`) in a model
+/// that gives other actuated joints their ranges — the continuous axes of an arm such as the
+/// Kinova Gen3's joints 1, 3, 5 and 7. Nothing in the file bounds the joint, on purpose.
+fn continuous(robot: &crate::model::Robot, joint: usize, acts: &[&crate::model::Actuator]) -> bool {
+    if robot.is_wheel(joint) {
+        return true;
+    }
+    let unbounded_servos =
+        acts.iter().all(|a| matches!(a.kind, ActuatorKind::Position { .. }) && !a.ctrllimited);
+    let others_ranged = robot
+        .joints
+        .iter()
+        .any(|o| o.id != joint && o.limited && !robot.actuators_on_joint(o.id).is_empty());
+    unbounded_servos && others_ranged
+}
+
 impl Rule for SoftLimits {
     fn meta(&self) -> &'static RuleMeta {
         &Self::META
@@ -228,6 +248,9 @@ impl SoftLimits {
                 continue;
             }
             let u = unit(j.jtype);
+            if !j.limited && continuous(cx.robot, j.id, &acts) {
+                continue;
+            }
             if !j.limited {
                 let a = acts[0];
                 let f = cx
