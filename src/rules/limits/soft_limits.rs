@@ -18,9 +18,9 @@ declare_rule! {
     /// the whole joint range (or is unlimited), which lets the policy command the hard stops. It
     /// also reports an actuated hinge/slide joint with no range at all — unless the joint turns
     /// without end by design: a wheel (an unlimited hinge turning a round geom about its own
-    /// axle), or a joint whose position actuators have no `ctrlrange` either while the model
-    /// gives its other actuated joints ranges (an arm's continuous axes). Actuators that share
-    /// the problem through one `<default class>` are reported once.
+    /// axle), or on a fixed-base robot a joint whose position actuators have no `ctrlrange`
+    /// either while the model gives its other actuated joints ranges (an arm's continuous
+    /// axes). Actuators that share the problem through one `<default class>` are reported once.
     ///
     /// ## Why is this bad?
     /// Training is meant to use soft limits, typically 0.9 of the hardware range (Asimov system identification §8):
@@ -206,10 +206,11 @@ impl Measure for Stop {
     }
 }
 
-/// A joint with no range that turns without end by design: a wheel ([`Robot::is_wheel`]), or a
-/// joint whose position actuators leave their targets unbounded too (no `ctrlrange`) in a model
-/// that gives other actuated joints their ranges — the continuous axes of an arm such as the
-/// Kinova Gen3's joints 1, 3, 5 and 7. Nothing in the file bounds the joint, on purpose.
+/// A joint with no range that turns without end by design: a wheel ([`Robot::is_wheel`]), or,
+/// on a fixed-base robot, a joint whose position actuators leave their targets unbounded too
+/// (no `ctrlrange`) in a model that gives other actuated joints their ranges — the continuous
+/// axes of an arm such as the Kinova Gen3's joints 1, 3, 5 and 7. Nothing in the file bounds
+/// the joint, on purpose. On a floating-base (legged) robot the same omission is reported.
 fn continuous(robot: &crate::model::Robot, joint: usize, acts: &[&crate::model::Actuator]) -> bool {
     if robot.is_wheel(joint) {
         return true;
@@ -220,7 +221,8 @@ fn continuous(robot: &crate::model::Robot, joint: usize, acts: &[&crate::model::
         .joints
         .iter()
         .any(|o| o.id != joint && o.limited && !robot.actuators_on_joint(o.id).is_empty());
-    unbounded_servos && others_ranged
+    let fixed_base = !robot.joints.iter().any(|j| j.jtype == JointType::Free);
+    fixed_base && unbounded_servos && others_ranged
 }
 
 impl Rule for SoftLimits {
