@@ -14,7 +14,8 @@ declare_rule! {
     /// ## What it does
     /// For every joint the spec marks `passive = true` (e.g. spring toes), checks that the model
     /// gives it a spring (`stiffness` > 0), `damping` > 0, a `range`, and collision geometry on
-    /// the body it moves.
+    /// the body it moves (a geom that takes part in contacts: masks that allow them, or an
+    /// explicit `<pair>`; none when `<flag contact="disable"/>`).
     ///
     /// Without a spec (and for joints the spec does not mention) it reports what the file alone
     /// shows: an unactuated spring joint (`stiffness` > 0) with no damping of any kind (joint,
@@ -245,7 +246,11 @@ impl PassiveJointSpring {
                     .help("set the joint's hardware range=\"lo hi\"");
                 out.push(warn(spec_label(f)).subject(Subject::Joint(j.id)));
             }
-            if !robot.geoms.iter().any(|g| g.body == j.body && g.collides()) {
+            if !robot
+                .geoms
+                .iter()
+                .any(|g| g.body == j.body && crate::model::contact::takes_part(robot, g.id))
+            {
                 let b = &robot.bodies[j.body];
                 let f = cx
                     .at_elem(ElemKind::Body, b.id, &b.name, format!("passive joint `{}` moves body `{}`, which has no collision geometry", j.name, b.name))
