@@ -40,3 +40,23 @@ fn a_trunk_battery_told_on_the_free_base_is_found_across_the_trunk() {
     let gain = m["heldout_improvement"].as_f64().unwrap();
     assert!(gain > 0.5, "held-out improvement {gain}");
 }
+
+/// Nothing concealed, over a floor ten times stiffer than `KFR0_biped_none`'s (k 1e6 N/m,
+/// c 3000 N·s/m at heel and toe), searched with the body and contact effects both allowed
+/// (`--effects com_offset,ground_contact`; `ground_contact` is tried only when named): where
+/// MuJoCo's contact can be the floor the fit names the contact — one `ground_contact` group on
+/// both ankles — and moves no centre of mass (about 50 s in release on 2 cores under load).
+#[test]
+fn over_a_stiff_floor_the_contact_is_named_and_no_centre_of_mass_moved() {
+    let name = "KFR0s_biped_stiff_floor";
+    let truth = truth(name);
+    own_free_base_physics(&truth);
+    assert!(truth["effects"].as_object().is_some_and(|e| e.is_empty()), "{}", truth["effects"]);
+    let v = fit(name, &["--effects", "com_offset,ground_contact"]);
+    assert_eq!(
+        found(&v),
+        [("ground_contact".into(), r#"["left_ankle","right_ankle"]"#.into())],
+        "{:?}",
+        found(&v)
+    );
+}
