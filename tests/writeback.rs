@@ -344,9 +344,10 @@ fn contacts_of(m: &mut mujoco_rs::prelude::MjModel) -> Vec<Contact> {
 }
 
 /// `ground_contact` on a foot pressed into a floor: in the model copy and in the written MJCF
-/// (compiled again by MuJoCo), the foot–floor contact has the fitted time constant and damping
-/// ratio, while its friction (the floor's larger 1.0, not the foot's 0.5), condim and solimp
-/// stay what they were; a body off the ground is no candidate.
+/// (compiled again by MuJoCo), the foot–floor contact has the fitted time constant, damping
+/// ratio and impedance (solimp's dmin and width), while its friction (the floor's larger 1.0,
+/// not the foot's 0.5), condim and the rest of its solimp stay what they were; the fit starts
+/// from the contact as MuJoCo mixes it; a body off the ground is no candidate.
 #[test]
 fn ground_contact_is_written_on_the_foot_and_keeps_the_rest_of_the_contact() {
     use modellint::fit::effects::{self, Applied, JointTarget};
@@ -373,17 +374,24 @@ fn ground_contact_is_written_on_the_foot_and_keeps_the_rest_of_the_contact() {
     let foot = JointTarget::of(&robot, "z").unwrap();
     assert!(e.acts_on(&foot) && foot.ground.len() == 1, "{:?}", foot.ground);
     assert!(!e.acts_on(&JointTarget::of(&robot, "lift").unwrap()), "the arm touches no ground");
-    assert_eq!(e.initial(&robot.mj, &foot), vec![0.02, 1.0]);
     let nominal = contacts_of(&mut robot.mj.clone());
     assert!(!nominal.is_empty(), "the sole does not touch the floor");
     for c in &nominal {
         assert_eq!((c.1, c.2, c.3), ([0.02, 1.0], 1.0, 3), "{c:?}");
     }
-    let applied = [Applied { effect: e, joints: vec!["z".into()], params: vec![0.011, 0.7] }];
+    // Equal priority: MuJoCo mixes the two geoms' solimp (0.9 and 0.8 at first touch).
+    let dmin = nominal[0].4;
+    assert!(dmin > 0.8 && dmin < 0.9, "{dmin}");
+    let start = e.initial(&robot.mj, &foot);
+    assert_eq!(start[..2], [0.02, 1.0]);
+    assert!((start[2] - dmin).abs() < 1e-9 && start[3] == 0.001, "{start:?}");
+    let p = [0.011, 0.7, 0.5, 0.005];
+    let applied = [Applied { effect: e, joints: vec!["z".into()], params: p.to_vec() }];
     let fitted = contacts_of(&mut effects::model_with(&robot, &applied));
-    let want: Vec<_> = nominal.iter().map(|c| (c.0, [0.011, 0.7], c.2, c.3, c.4)).collect();
+    let want: Vec<_> = nominal.iter().map(|c| (c.0, [0.011, 0.7], c.2, c.3, 0.5)).collect();
     assert_eq!(fitted, want);
-    let sel = vec![kept("ground_contact", "z", &[("timeconst", 0.011), ("dampratio", 0.7)])];
+    let named = [("timeconst", p[0]), ("dampratio", p[1]), ("dmin", p[2]), ("width", p[3])];
+    let sel = vec![kept("ground_contact", "z", &named)];
     let (out, warnings) = modellint::fit::writeback::edit_mjcf(xml, &robot, &sel).unwrap();
     assert!(warnings.is_empty(), "{warnings:?}");
     let written = work.join("written.xml");
@@ -392,5 +400,6 @@ fn ground_contact_is_written_on_the_foot_and_keeps_the_rest_of_the_contact() {
     assert_eq!(contacts_of(&mut m), want, "{out}");
     let sole = out.lines().find(|l| l.contains("name=\"sole\"")).unwrap();
     assert!(sole.contains("solref=\"0.011 0.7\"") && sole.contains("priority=\"1\""), "{sole}");
+    assert!(sole.contains("solimp=\"0.5 0.95 0.005 "), "{sole}");
     let _ = std::fs::remove_dir_all(&work);
 }

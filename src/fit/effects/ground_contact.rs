@@ -7,20 +7,21 @@ declare_effect! {
     /// MuJoCo-native: the contact between the joint's child body (a foot) and the ground it
     /// stands on (a plane, height field or box of the world body, `model::contact`) gets the
     /// solver reference `timeconst` (the contact's time constant [s]) and `dampratio` (its damping
-    /// ratio) of MuJoCo's `solref`. The foot's geoms take the ground's priority + 1, so that
-    /// their own parameters are the contact's; their `solimp`, friction and `condim` are set to
-    /// the values the contact had, so only the time constant and damping ratio change (the foot's
-    /// contacts with other geoms then also use its values). A candidate only on a joint whose
-    /// child body touches the ground through its geoms (not through an explicit `<pair>`, nor
-    /// where the ground's priority decides, nor with a direct, negative `solref`). Fitted as the
-    /// foot's contact, not as a joint's physics: it acts on every joint through the ground.
-    /// Tried only when named (`--effects`, `--told`): MuJoCo's soft contact has no setting that
-    /// is a stiff penalty floor, and on the free-base biped of the independent benchmark
-    /// (floatsim) its best time constant and damping ratio leave more of the gap than a moved
-    /// trunk centre of mass does (docs/fitting.md, Validation).
+    /// ratio) of MuJoCo's `solref`, and the impedance `dmin` at first touch and `width` (the
+    /// penetration over which the impedance rises to the contact's `dmax` [m]) of its `solimp`.
+    /// A wide impedance ramp makes the contact's force grow with each point's own penetration —
+    /// a rocking sole then sinks at the toe and lifts at the heel as on a compliant floor — where
+    /// a narrow one acts on the foot's whole motion through its effective mass (MuJoCo
+    /// documentation, *Computation: soft constraints*). The foot's geoms take the ground's
+    /// priority + 1, so that their own parameters are the contact's; the rest of their `solimp`,
+    /// their friction and `condim` are set to the values the contact had. A candidate only on a
+    /// joint whose child body touches the ground through its geoms (not through an explicit
+    /// `<pair>`, nor where the ground's priority decides, nor with a direct, negative `solref`).
+    /// Fitted as the foot's contact, not as a joint's physics: it acts on every joint through
+    /// the ground. Tried only when named (`--effects`, `--told`).
     ///
     /// ## Simulation
-    /// the foot's `geom_solref` (and `geom_priority`, `geom_solimp`, `geom_friction`, `geom_condim` to keep the rest of the contact)
+    /// the foot's `geom_solref` and `geom_solimp` (dmin, width; and `geom_priority`, `geom_friction`, `geom_condim` to keep the rest of the contact)
     ///
     /// ## Signature
     /// servo torque `τ` (ranked by the simulated sensitivity)
@@ -36,32 +37,59 @@ declare_effect! {
         params: [
             ParamDef { name: "timeconst", unit: "s", lo: 0.002, hi: 0.1, default: 0.02 },
             ParamDef { name: "dampratio", unit: "", lo: 0.2, hi: 4.0, default: 1.0 },
+            ParamDef { name: "dmin", unit: "", lo: 0.05, hi: 0.99, default: 0.9 },
+            ParamDef { name: "width", unit: "m", lo: 0.0001, hi: 0.02, default: 0.001 },
         ],
     }
 }
 
 impl Effect for GroundContact {
-    /// The contact's solref as the model gives it (the first ground-touching geom's).
+    /// The contact's solref, solimp dmin and width as the model gives them (the first
+    /// ground-touching geom's).
     fn initial(&self, _m: &MjModel, t: &JointTarget) -> Vec<f64> {
         match t.ground.first() {
-            Some(g) => g.contact.solref.to_vec(),
+            Some(g) => {
+                let (r, i) = (g.contact.solref, g.contact.solimp);
+                vec![r[0], r[1], i[0], i[2]]
+            }
             None => self.params().iter().map(|p| p.default).collect(),
         }
     }
     /// Time constant from twice the timestep (MuJoCo's own floor for it) to 0.1 s, damping
-    /// ratio 0.2–4.
-    fn bounds(&self, m: &MjModel, _t: &JointTarget) -> (Vec<f64>, Vec<f64>) {
+    /// ratio 0.2–4, dmin 0.05–0.99, width 0.1 mm – 2 cm (each widened to hold the model's own
+    /// value).
+    fn bounds(&self, m: &MjModel, t: &JointTarget) -> (Vec<f64>, Vec<f64>) {
         let ps = self.params();
-        let lo = (2.0 * m.opt().timestep).max(ps[0].lo);
-        (vec![lo, ps[1].lo], vec![ps[0].hi.max(lo), ps[1].hi])
+        let start = self.initial(m, t);
+        let mut lo: Vec<f64> = ps.iter().map(|p| p.lo).collect();
+        let mut hi: Vec<f64> = ps.iter().map(|p| p.hi).collect();
+        lo[0] = (2.0 * m.opt().timestep).max(lo[0]);
+        for k in 0..ps.len() {
+            if let Some(&s) = start.get(k).filter(|s| s.is_finite()) {
+                if k > 0 {
+                    lo[k] = lo[k].min(s);
+                }
+                hi[k] = hi[k].max(s);
+            }
+        }
+        hi[0] = hi[0].max(lo[0]);
+        (lo, hi)
     }
     fn apply_model(&self, m: &mut MjModel, t: &JointTarget, p: &[f64]) {
         for g in &t.ground {
-            set_contact(m, g, [p[0], p[1]]);
+            let mut imp = g.contact.solimp;
+            if let (Some(&dmin), Some(&width)) = (p.get(2), p.get(3)) {
+                imp[0] = dmin;
+                imp[2] = width;
+            }
+            set_contact(m, g, [p[0], p[1]], imp);
         }
     }
+    /// Not smooth: the impedance ramp makes the error surface one of several basins (which
+    /// penetration the feet settle at inside the ramp), where a least-squares step from the
+    /// model's contact stops in the nearest; fitted by the derivative-free search.
     fn smooth(&self) -> bool {
-        true
+        false
     }
     fn signature(&self, s: &Samples) -> Signature {
         Signature::centred(s.tau.clone())
@@ -84,8 +112,9 @@ impl Effect for GroundContact {
     }
 }
 
-/// Gives geom `g.geom` the contact `g.contact` with `solref`, by priority over its ground.
-fn set_contact(m: &mut MjModel, g: &GroundGeom, solref: [f64; 2]) {
+/// Gives geom `g.geom` the contact `g.contact` with `solref` and `solimp`, by priority over its
+/// ground.
+fn set_contact(m: &mut MjModel, g: &GroundGeom, solref: [f64; 2], solimp: [f64; 5]) {
     let i = g.geom;
     let c = &g.contact;
     if let Some(x) = m.geom_priority_mut().get_mut(i) {
@@ -95,7 +124,7 @@ fn set_contact(m: &mut MjModel, g: &GroundGeom, solref: [f64; 2]) {
         *x = solref;
     }
     if let Some(x) = m.geom_solimp_mut().get_mut(i) {
-        *x = c.solimp;
+        *x = solimp;
     }
     if let Some(x) = m.geom_friction_mut().get_mut(i) {
         *x = c.friction;
