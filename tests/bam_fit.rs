@@ -108,21 +108,18 @@ fn synthetic_external_load_friction_is_recovered_on_a_held_out_gain() {
     assert!((v - mu).abs() < 0.05 * mu, "mu_ext {v} vs {mu}");
 }
 
-/// The fold that holds out firmware gain kp = 400 (4 logs) of the leave-one-gain-out run whose
-/// average over all 16 logs (2.94°) README and docs/examples/bam-xl330.md report (the old
-/// servo-specific mode gave 3.09°; BAM's own M3 model 3.96°, fitted on all logs, not held out).
-/// One fold keeps the test at ~4 min CPU; `bench/bam.sh` runs the whole rotation.
-const FOLD_KP: &str = "400";
-/// That fold's held-out whole-log position MAE, mean over its 4 logs: nominal → fitted [°].
-const FOLD_BEFORE_DEG: f64 = 11.49;
-const FOLD_AFTER_DEG: f64 = 2.55;
-
-#[test]
-fn bam_logs_one_gain_held_out_from_the_cli() {
+/// One fold of the leave-one-gain-out run whose average over all 16 logs README and
+/// docs/examples/bam-xl330.md report: the firmware gain `kp` held out (4 logs), the other 12
+/// fitted by the ordinary `fit` from the CLI. Checks that the fold keeps friction that grows
+/// with the gravity load (BAM's M2/M3 finding) and its held-out whole-log position MAE, mean
+/// over the 4 logs: nominal `before` [°] (a fact of the data) and fitted at most 5 % above
+/// `after` [°]. One fold keeps a test at 1–4 min CPU; `bench/bam.sh` runs the whole rotation.
+fn bam_fold(kp: &str, before_deg: f64, after_deg: f64) {
+    let name = format!("bam_fold_kp{kp}");
     let Some(dir) = shared_bam() else {
         eprintln!(
-            "SKIPPED bam_logs_one_gain_held_out_from_the_cli: ../shared/data/recordings/bam_xl330 \
-             is absent (set MODELLINT_SHARED_DATA)"
+            "SKIPPED {name}: ../shared/data/recordings/bam_xl330 is absent (set \
+             MODELLINT_SHARED_DATA)"
         );
         return;
     };
@@ -131,7 +128,7 @@ fn bam_logs_one_gain_held_out_from_the_cli() {
         .arg("fit")
         .arg(root().join("fixtures/bam_xl330/rig.xml"))
         .arg(&dir)
-        .args(["--holdout-by", &format!("kp={FOLD_KP}"), "--format", "json", "--quiet"])
+        .args(["--holdout-by", &format!("kp={kp}"), "--format", "json", "--quiet"])
         .output()
         .expect("runs");
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
@@ -153,11 +150,23 @@ fn bam_logs_one_gain_held_out_from_the_cli() {
         .map(|m| m["effect"].as_str().expect("id"))
         .collect();
     eprintln!(
-        "kp {FOLD_KP} held out: {before:.2}° → {after:.2}° with {kept:?} in {:.0} s",
+        "kp {kp} held out: {before:.2}° → {after:.2}° with {kept:?} in {:.0} s",
         t0.elapsed().as_secs_f64()
     );
-    // Friction that grows with the gravity load is what these logs need (BAM's M2/M3 finding).
     assert!(kept.contains(&"external_load_friction"), "kept {kept:?}");
-    assert!((before - FOLD_BEFORE_DEG).abs() < 0.2, "nominal {before:.2}°");
-    assert!(after <= FOLD_AFTER_DEG * 1.05, "held-out {after:.2}° vs {FOLD_AFTER_DEG}°");
+    assert!((before - before_deg).abs() < 0.2, "nominal {before:.2}°");
+    assert!(after <= after_deg * 1.05, "held-out {after:.2}° vs {after_deg}°");
+}
+
+#[test]
+fn bam_logs_one_gain_held_out_from_the_cli() {
+    bam_fold("400", 11.49, 2.55);
+}
+
+/// The fold whose screen stretch misleads: fitted on the stretch of largest residual alone,
+/// the load friction runs to its bound and leaves the whole training set worse than without
+/// it; its coarse fit on the whole training set starts the fold's answer (0.51).
+#[test]
+fn bam_logs_gain_200_held_out_keeps_the_load_friction() {
+    bam_fold("200", 9.78, 2.64);
 }
