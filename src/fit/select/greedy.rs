@@ -283,7 +283,8 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         .map(|(e, g, _)| screen.predict(e.id(), g).map(|p| p.train_rmse))
         .collect();
     let n_lead = match lead::lead(&predicted_rmse) {
-        Some(i) if opts.policy.lead_first && n1 >= 2 => {
+        // Only when the lead at the floor would leave some candidate unscreened.
+        Some(i) if opts.policy.lead_first && cands[..n1].iter().any(|c| c.1 != cands[i].1) => {
             cands[..=i].rotate_right(1);
             1
         }

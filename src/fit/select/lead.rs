@@ -1,6 +1,7 @@
 //! The order of a round's one-parameter candidates when the linear model's favourite goes first
-//! ([`SearchPolicy::lead_first`]): the candidate whose linearised step leaves the least of the
-//! screen's residual is coarse-fitted, fitted in full and judged before any other candidate is
+//! ([`SearchPolicy::lead_first`]), when they lie on more than one joint group (else the lead
+//! could leave nothing unscreened, and its full fit would be an extra one): the candidate whose
+//! linearised step leaves the least of the screen's residual is coarse-fitted, fitted in full and judged before any other candidate is
 //! coarse-fitted. When it is kept and leaves a white training residual on every fitted joint
 //! (the floor), nothing is left that a candidate of as many parameters could explain beyond
 //! noise: only its aliases — other effects on exactly its joints, which the data may not tell
