@@ -13,6 +13,7 @@ use crate::sim2real::recording::Recording;
 
 use super::discretisation::{Judged, beyond_discretisation};
 use super::engine::shape_key;
+use super::lead;
 use super::pairs::{joint_pairs, pair_lookahead};
 use super::policy::Phase;
 use super::screen::{Screen, screen_data};
@@ -276,6 +277,23 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     let n0 = cands.len();
     let n1 = cands.iter().take_while(|(e, ..)| e.fitted() < 2).count();
     let (mut ones_screened, mut more_screened) = (n1 == 0, n1 == n0);
+    // The linear model's favourite first, alone ([`lead`]): `cands[..n_lead]`.
+    let predicted_rmse: Vec<Option<f64>> = cands[..n1]
+        .iter()
+        .map(|(e, g, _)| screen.predict(e.id(), g).map(|p| p.train_rmse))
+        .collect();
+    let n_lead = match lead::lead(&predicted_rmse) {
+        // Only when the lead at the floor would leave some candidate unscreened.
+        Some(i) if opts.policy.lead_first && cands[..n1].iter().any(|c| c.1 != cands[i].1) => {
+            cands[..=i].rotate_right(1);
+            1
+        }
+        _ => 0,
+    };
+    let mut lead_screened = n_lead == 0;
+    // The groups of the kept candidates that left a white training residual: once there is
+    // one, a candidate not yet screened is screened only on one of those groups (an alias).
+    let mut floored_groups: Vec<Vec<String>> = Vec::new();
     // Fewest parameters of a kept candidate whose training residual is white on every joint.
     let mut floor_k: Option<usize> = None;
     // The lowest training RMSE of those, relative to the round's start.
@@ -287,9 +305,19 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         // The coarse fits of a size's candidates, which are then taken best first: the
         // one-parameter ones at the start; the others once the best of those was judged and
         // left more to explain than noise (or at once when there are none).
-        let block = if !ones_screened {
+        let block = if !lead_screened {
+            lead_screened = true;
+            Some(0..n_lead)
+        } else if !ones_screened {
             ones_screened = true;
-            Some(0..n1)
+            // After a lead at the floor only its aliases are screened (the others: "floor").
+            let n = match floor_k {
+                Some(_) => {
+                    lead::keep_first(&mut cands[n_lead..n1], |(_, g, _)| floored_groups.contains(g))
+                }
+                None => n1 - n_lead,
+            };
+            Some(n_lead..n_lead + n)
         } else if !more_screened && floor_k.is_none() && (ci >= 1 || n1 == 0) {
             more_screened = true;
             Some(n1..n0)
@@ -357,7 +385,10 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         };
         // A kept candidate already left a white training residual: one with more parameters
         // cannot explain more, and Occam's choice would not take it (`tried`: phase "floor").
-        if floor_k.is_some_and(|k| e.fitted() > k) {
+        let unscreened = coarse.get(ci - 1).is_none_or(|c| c.is_none());
+        if floor_k.is_some_and(|k| {
+            e.fitted() > k || (unscreened && n_lead > 0 && !floored_groups.contains(&group))
+        }) {
             out.tried.push(not_tested(Phase::Floor, vec![], f64::NAN));
             continue;
         }
@@ -448,6 +479,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         });
         if keep && engine.at_floor(train, &trial, &tr_a) {
             floored.push(logged);
+            floored_groups.push(group.clone());
             floor_k = Some(floor_k.map_or(e.fitted(), |k| k.min(e.fitted())));
             let r = tr_a.rmse() / base_train;
             floor_train = Some(floor_train.map_or(r, |t: f64| t.min(r)));

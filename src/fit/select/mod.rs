@@ -27,6 +27,7 @@
 mod discretisation;
 mod engine;
 mod greedy;
+mod lead;
 mod pairs;
 mod policy;
 mod polish;

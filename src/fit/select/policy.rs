@@ -42,6 +42,12 @@ pub struct SearchPolicy {
     /// Run the simplification passes (drop, merge, fold, swap) after the greedy rounds.
     /// Default on.
     pub simplify: bool,
+    /// When the one-parameter candidates lie on more than one joint group, the one whose
+    /// linearised step leaves the least of the screen's residual is coarse-fitted, fitted in
+    /// full and judged before the others are coarse-fitted; when it is kept and leaves a white residual on every fitted joint, only
+    /// other effects on exactly its joints (its aliases) are still screened: nothing is left
+    /// that a candidate of as many parameters could explain beyond noise. Default on.
+    pub lead_first: bool,
 
     // ---- when to stop ----
     /// Every fitted joint's training residual mean square within this factor of its floor
@@ -139,6 +145,7 @@ impl Default for SearchPolicy {
             min_group: 3,
             every_effect: true,
             simplify: true,
+            lead_first: true,
             white_ratio: 1.5,
             discretisation_refine: 2,
             min_rel_improvement: 0.02,
@@ -220,6 +227,11 @@ pub const FIELDS: &[(&str, &str, &str)] = &[
         "also fit the best group of every other effect, and every effect on the top-ranked joint",
     ),
     ("simplify", "on/off", "run drop, merge, fold and swap after the greedy rounds"),
+    (
+        "lead_first",
+        "on/off",
+        "when the one-parameter candidates lie on more than one joint group, the one with the best linear prediction is fitted and judged first; when it leaves a white residual on every joint, only other effects on its joints are screened",
+    ),
     (
         "white_ratio",
         "ratio of mean squares",

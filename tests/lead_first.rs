@@ -1,0 +1,75 @@
+//! `SearchPolicy::lead_first`: the one-parameter candidate the linearised screen predicts best
+//! is fitted and judged before the others are coarse-fitted; when it leaves a white residual on
+//! every joint, only other effects on exactly its joints are still screened. Recordings from the
+//! independent synth (`src/synth/`) of the three-joint arm with a viscous damping of 0.4 N·m·s
+//! hidden on the elbow; the model without it is fitted blind (every effect), with the policy on
+//! and off.
+
+mod common;
+
+use common::{hidden, load, root, synth_recordings};
+use modellint::fit::effects;
+use modellint::fit::select::{FitOptions, FitOutcome, Phase, SearchPolicy, fit};
+use modellint::synth::Settings;
+
+const JOINTS: [&str; 3] = ["shoulder_pitch", "elbow_pitch", "wrist_pitch"];
+
+fn run(lead_first: bool) -> FitOutcome {
+    let robot = load(&root().join("fixtures/gap/arm3.xml"));
+    let joints: Vec<String> = JOINTS.iter().map(|s| s.to_string()).collect();
+    let s =
+        Settings { episodes: 8, duration_s: 4.0, amplitude: 0.5, seed: 7, ..Settings::default() };
+    let recs = synth_recordings(
+        "lead_first_damping",
+        &robot,
+        &joints,
+        &[hidden("viscous_damping", "elbow_pitch", &[0.4])],
+        &s,
+    );
+    let opts = FitOptions {
+        policy: SearchPolicy { max_rounds: 1, lead_first, ..Default::default() },
+        ..Default::default()
+    };
+    fit(&robot, &recs, &opts)
+}
+
+/// The truth is found either way; with the policy on, no one-parameter candidate on another
+/// joint group is coarse-fitted after the lead left a white residual (they are logged as
+/// "floor", without parameters), while with it off such candidates are screened.
+#[test]
+fn a_lead_at_the_floor_leaves_only_its_aliases_to_screen() {
+    for on in [true, false] {
+        let out = run(on);
+        for t in &out.tried {
+            eprintln!(
+                "  lead_first {on}: {:?} {} {:?} {:?}",
+                t.phase, t.effect, t.joints, t.params
+            );
+        }
+        let first = out.selected.first().expect("something selected");
+        assert_eq!(
+            (first.effect.as_str(), &first.joints[..]),
+            ("viscous_damping", &["elbow_pitch".to_string()][..])
+        );
+        assert!((first.values[0] / 0.4 - 1.0).abs() < 0.05, "damping {:?}", first.values);
+        let round0: Vec<_> = out.tried.iter().filter(|t| t.round == 0).collect();
+        let one_param = |e: &str| effects::by_id(e).is_some_and(|e| e.fitted() == 1);
+        // One-parameter candidates on another group than the winner's that got a fit (coarse
+        // or full) in round 0.
+        let elsewhere_fitted = round0
+            .iter()
+            .filter(|t| one_param(&t.effect) && t.joints != first.joints && !t.params.is_empty())
+            .count();
+        let elsewhere_floor = round0
+            .iter()
+            .filter(|t| one_param(&t.effect) && t.joints != first.joints && t.phase == Phase::Floor)
+            .count();
+        if on {
+            assert_eq!(round0.first().map(|t| (t.kept, t.phase)), Some((true, Phase::Add)));
+            assert_eq!(elsewhere_fitted, 0, "screened away from the lead's joints");
+            assert!(elsewhere_floor > 0, "nothing left at the floor");
+        } else {
+            assert!(elsewhere_fitted > 0, "the policy off screens every candidate");
+        }
+    }
+}
