@@ -18,7 +18,7 @@ use super::pairs::{joint_pairs, pair_lookahead};
 use super::policy::Phase;
 use super::screen::{Screen, screen_data};
 use super::verdict::{at_bound, verdict};
-use super::winner::{refine, rival_notes};
+use super::winner::{on_whole_set, refine, rival_notes};
 use super::{Errors, FitOutcome, Search, Selected, Tried, set_uncertainty};
 
 /// A candidate: effect, joint group, evidence.
@@ -423,32 +423,17 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         // length); the held-out gate and the training BIC below use all data, and the round's
         // winner is refined on the whole training set ([`refine`]).
         let start = (cf < base_short).then_some(cp.as_slice());
-        let (mut p, fit_rmse) = engine.fit_from(short, &applied, (e, &group), start);
+        let (p, fit_rmse) = engine.fit_from(short, &applied, (e, &group), start);
         if p.is_empty() || !fit_rmse.is_finite() {
             continue;
         }
         best_gain = best_gain.max(gain(fit_rmse));
-        let with = |p: &[f64]| {
-            let mut trial = applied.clone();
-            trial.push(Applied { effect: e, joints: group.clone(), params: p.to_vec() });
-            trial
+        let Some((p, tr_a)) = on_whole_set(s, &applied, (e, &group), p, base_train) else {
+            continue;
         };
-        let Some(mut tr_a) = engine.errors(train, &with(&p)) else { continue };
-        // A fit on the screen's stretch that leaves the whole training set worse than without
-        // the candidate was led by that stretch alone (a real servo's load friction run to its
-        // bound on the stretches of largest residual): the candidate gets a coarse fit
-        // (`screen_evals`) on the whole training set instead, and goes on from it when that
-        // improves the set (the round's winner is re-fitted there in full); else it explains
-        // nothing.
-        if tr_a.rmse() >= base_train {
-            let (q, _) = engine.fit_budget(train, &applied, e, &group, opts.policy.screen_evals);
-            match engine.errors(train, &with(&q)) {
-                Some(t) if !q.is_empty() && t.rmse() < base_train => (p, tr_a) = (q, t),
-                _ => continue,
-            }
-        }
         fitted.push(Applied { effect: e, joints: group.clone(), params: p.clone() });
-        let trial = with(&p);
+        let mut trial = applied.clone();
+        trial.push(Applied { effect: e, joints: group.clone(), params: p.clone() });
         let Some(ho_a) = engine.errors(heldout, &trial) else { continue };
         let train_rmse = tr_a.rmse();
         let bic_after = bic(tr_a.n, tr_a.sse, k_before + e.fitted());

@@ -1,10 +1,38 @@
 //! The round's winner: its re-fit on the whole training set, and the notes naming its rivals.
 
-use crate::fit::effects::{self, Applied};
+use crate::fit::effects::{self, Applied, Effect};
 use crate::fit::stats::bic;
 
 use super::verdict::verdict;
 use super::{Errors, Search, Selected};
+
+/// A candidate's fit `p` on the screen's stretch, with its errors on the whole training set,
+/// or `None` when it explains nothing there. A fit that leaves the whole training set worse
+/// than without the candidate (`base_train`, its RMSE) was led by the stretch alone (a real
+/// servo's load friction run to its bound on the stretches of largest residual): the
+/// candidate gets a coarse fit (`screen_evals`) on the whole training set instead, and goes on
+/// from it when that improves the set (the round's winner is re-fitted there in full, [`refine`]).
+pub(super) fn on_whole_set(
+    s: &Search,
+    applied: &[Applied],
+    (e, group): (&'static dyn Effect, &[String]),
+    p: Vec<f64>,
+    base_train: f64,
+) -> Option<(Vec<f64>, Errors)> {
+    let with = |p: &[f64]| {
+        let mut trial = applied.to_vec();
+        trial.push(Applied { effect: e, joints: group.to_vec(), params: p.to_vec() });
+        trial
+    };
+    let tr = s.engine.errors(s.train, &with(&p))?;
+    if tr.rmse() < base_train {
+        return Some((p, tr));
+    }
+    let evals = s.engine.opts.policy.screen_evals;
+    let (q, _) = s.engine.fit_budget(s.train, applied, e, group, evals);
+    let t = s.engine.errors(s.train, &with(&q))?;
+    (!q.is_empty() && t.rmse() < base_train).then_some((q, t))
+}
 
 /// The round's winner `w`, fitted on the screen's data, fitted again on the whole training set
 /// from those values; the refit replaces it when it lowers the training error (its held-out
