@@ -260,7 +260,8 @@ class GapResult:
 @dataclass(frozen=True)
 class Effect:
     """A missing physical effect the fit kept: its parameters (SI, `fit --help` lists the
-    units) with their standard errors (None: not determined by the data), and the held-out
+    units) with their standard errors (None: not determined by the data), the parameters the
+    data do not determine (`unidentified`: their values are not answers), and the held-out
     position RMSE [rad] before and after it was added."""
 
     effect: str
@@ -268,6 +269,7 @@ class Effect:
     params: Dict[str, float]
     stderr: Dict[str, Optional[float]]
     identifiable: bool
+    unidentified: Tuple[str, ...]
     evidence: Dict[str, float]
     heldout_improvement: float
     heldout_rmse_before: float
@@ -282,6 +284,7 @@ class Effect:
             params=dict(d["params"]),
             stderr=dict(d["stderr"]),
             identifiable=d["identifiable"],
+            unidentified=tuple(d.get("unidentified", ())),
             evidence=dict(d["evidence"]),
             heldout_improvement=d["heldout_improvement"],
             heldout_rmse_before=d["heldout_rmse_before"],

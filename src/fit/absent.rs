@@ -64,6 +64,7 @@ mod tests {
             params: BTreeMap::new(),
             stderr: BTreeMap::new(),
             identifiable: true,
+            unidentified: vec![],
             evidence: BTreeMap::new(),
             heldout_improvement: 0.1,
             heldout_rmse_before: 1.0,

@@ -456,7 +456,7 @@ pub fn fit_json(r: &FitRun) -> serde_json::Value {
             json!({
                 "effect": s.effect, "joints": s.joints, "params": s.params,
                 "stderr": s.stderr.iter().map(|(k, v)| (k.clone(), if v.is_finite() { json!(v) } else { serde_json::Value::Null })).collect::<serde_json::Map<_, _>>(),
-                "identifiable": s.identifiable, "evidence": s.evidence, "heldout_improvement": s.heldout_improvement,
+                "identifiable": s.identifiable, "unidentified": s.unidentified, "evidence": s.evidence, "heldout_improvement": s.heldout_improvement,
                 "heldout_rmse_before": s.heldout_rmse_before, "heldout_rmse_after": s.heldout_rmse_after,
             })
         })
@@ -476,6 +476,22 @@ pub fn fit_json(r: &FitRun) -> serde_json::Value {
         "notes": notes,
     });
     v
+}
+
+/// One fitted parameter as the text output gives it: `name = value ± stderr unit` (an angle
+/// also in degrees, as `gap` prints angles), or, when the data do not determine it
+/// (`unidentified`), `name not identified (± stderr unit)` — no value.
+fn param_text(k: &str, v: f64, se: f64, unit: &str, unidentified: bool) -> String {
+    let pm = if se.is_finite() { format!(" ± {se:.2e}") } else { " ± ?".into() };
+    if unidentified {
+        let u = if unit.is_empty() { String::new() } else { format!(" {unit}") };
+        return format!("{k} not identified ({}{u})", pm.trim_start());
+    }
+    match unit {
+        "rad" => format!("{k} = {v:.6}{pm} rad ({:.4}°)", v.to_degrees()),
+        "" => format!("{k} = {v:.4}{pm}"),
+        _ => format!("{k} = {v:.4}{pm} {unit}"),
+    }
 }
 
 /// The human output: angles in degrees (as `gap`), SI in JSON; one before → after figure.
@@ -501,14 +517,7 @@ fn fit_text(r: &FitRun) -> String {
                 let unit =
                     e.and_then(|e| e.params().iter().find(|p| p.name == k)).map_or("", |p| p.unit);
                 let se = x.stderr.get(k).copied().unwrap_or(f64::INFINITY);
-                let pm = if se.is_finite() { format!(" ± {se:.2e}") } else { " ± ?".into() };
-                match unit {
-                    // The value in the parameter's own unit (its name says rad), then
-                    // in degrees, as `gap` prints angles.
-                    "rad" => format!("{k} = {v:.6}{pm} rad ({:.4}°)", deg(*v)),
-                    "" => format!("{k} = {v:.4}{pm}"),
-                    _ => format!("{k} = {v:.4}{pm} {unit}"),
-                }
+                param_text(k, *v, se, unit, x.unidentified.contains(k))
             })
             .collect();
         s.push_str(&format!("  {:<24} {:<28} {}\n", x.effect, x.joints.join(","), ps.join(", ")));
@@ -577,4 +586,22 @@ fn fit_text(r: &FitRun) -> String {
         s.push_str(&format!("  ({})\n", out.split_note));
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::param_text;
+
+    /// A parameter the data determine is given with its value; one they do not, with its
+    /// standard error only.
+    #[test]
+    fn an_unidentified_parameter_is_not_given_a_value() {
+        assert_eq!(param_text("width", 0.0123, 0.371, "m", false), "width = 0.0123 ± 3.71e-1 m");
+        assert_eq!(
+            param_text("width", 0.0123, 0.371, "m", true),
+            "width not identified (± 3.71e-1 m)"
+        );
+        assert_eq!(param_text("dmin", 0.66, f64::INFINITY, "", true), "dmin not identified (± ?)");
+        assert!(param_text("offset", 0.01, 1e-3, "rad", false).contains("rad (0.5730°)"));
+    }
 }

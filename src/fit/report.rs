@@ -83,7 +83,9 @@ fn missing_physics(sel: &[Selected]) -> String {
                 let se = s.stderr.get(k).copied().unwrap_or(f64::INFINITY);
                 let se =
                     if se.is_finite() { format!(" ± {}", sig_n(se, 2)) } else { " ± ?".into() };
-                (k.clone(), format!("{}{se} {unit}", sig(*v)))
+                let value =
+                    if s.unidentified.contains(k) { "not identified".to_string() } else { sig(*v) };
+                (k.clone(), format!("{value}{se} {unit}"))
             })
             .collect();
         let n = rows.len().max(1);

@@ -77,6 +77,7 @@ pub fn kept(effect: &str, joint: &str, params: &[(&str, f64)]) -> Selected {
         params: params.iter().map(|(k, v)| (k.to_string(), *v)).collect(),
         stderr: Default::default(),
         identifiable: true,
+        unidentified: vec![],
         evidence: Default::default(),
         heldout_improvement: 0.5,
         heldout_rmse_before: 0.0,

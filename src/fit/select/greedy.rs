@@ -621,6 +621,7 @@ mod tests {
             params: p.iter().map(|(k, v)| (k.to_string(), *v)).collect(),
             stderr: BTreeMap::new(),
             identifiable: true,
+            unidentified: vec![],
             evidence: BTreeMap::new(),
             heldout_improvement: 0.9,
             heldout_rmse_before: 0.014,

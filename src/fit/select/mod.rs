@@ -46,7 +46,7 @@ use std::collections::BTreeMap;
 use serde::Serialize;
 
 use crate::fit::diagnose::Candidate;
-use crate::fit::effects::{self, Applied};
+use crate::fit::effects::{self, Applied, Effect};
 use crate::fit::rollout::RolloutStats;
 use crate::fit::split::{Split, split, split_by_key, windows};
 use crate::model::Robot;
@@ -165,6 +165,9 @@ pub struct Selected {
     pub stderr: BTreeMap<String, f64>,
     /// `false` when some fitted parameter is not determined by the data.
     pub identifiable: bool,
+    /// The fitted parameters the data do not determine (standard error above half the
+    /// parameter's range, or no Jacobian): reported as not identified, not as a value.
+    pub unidentified: Vec<String>,
     pub evidence: BTreeMap<String, f64>,
     /// Relative held-out position-RMSE reduction (0.3 = 30 % lower).
     pub heldout_improvement: f64,
@@ -504,17 +507,30 @@ fn final_uncertainty(engine: &Engine, train: &[Recording], out: &mut FitOutcome)
     let all = engine.uncertainty_all(train, &out.applied);
     out.warnings.retain(|w| !w.contains(UNIDENT));
     for ((s, a), (se, ident)) in out.selected.iter_mut().zip(&out.applied).zip(all) {
-        s.stderr =
-            a.effect.params().iter().zip(&se).map(|(d, v)| (d.name.to_string(), *v)).collect();
-        s.identifiable = ident;
-        if !ident {
+        set_stderr(s, a.effect, &se, &ident);
+        if !s.identifiable {
             out.warnings.push(format!(
-                "{} on {}: {UNIDENT} (excite the joint more)",
+                "{} on {}: {UNIDENT}: {} (excite the joint more)",
                 s.effect,
-                s.joints.join(",")
+                s.joints.join(","),
+                s.unidentified.join(", ")
             ));
         }
     }
+}
+
+/// `s`'s standard errors and which of its parameters the data determine (`ident`, per fitted
+/// parameter of `effect`).
+fn set_stderr(s: &mut Selected, effect: &dyn Effect, se: &[f64], ident: &[bool]) {
+    s.stderr = effect.params().iter().zip(se).map(|(d, v)| (d.name.to_string(), *v)).collect();
+    s.unidentified = effect
+        .params()
+        .iter()
+        .zip(ident)
+        .filter(|(_, ok)| !**ok)
+        .map(|(d, _)| d.name.to_string())
+        .collect();
+    s.identifiable = s.unidentified.is_empty();
 }
 
 /// What every step of the search works on: the engine, the training and held-out recordings,
@@ -537,13 +553,13 @@ fn set_uncertainty(
 ) {
     let e = applied.last().expect("non-empty").effect;
     let (se, ident) = engine.uncertainty(train, applied);
-    s.stderr = e.params().iter().zip(&se).map(|(d, v)| (d.name.to_string(), *v)).collect();
-    s.identifiable = ident;
-    if !ident {
+    set_stderr(s, e, &se, &ident);
+    if !s.identifiable {
         warnings.push(format!(
-            "{} on {}: parameters not identifiable from this data (excite the joint more)",
+            "{} on {}: parameters not identifiable from this data: {} (excite the joint more)",
             s.effect,
-            s.joints.join(",")
+            s.joints.join(","),
+            s.unidentified.join(", ")
         ));
     }
 }
@@ -577,6 +593,7 @@ impl Selected {
             params: named_params(a),
             stderr: BTreeMap::new(),
             identifiable: true,
+            unidentified: vec![],
             evidence,
             heldout_improvement: v.rel,
             heldout_rmse_before: before,

@@ -9,6 +9,7 @@ fn selected(effect: &str, joint: &str, values: &[f64]) -> Selected {
         params: e.params().iter().zip(values).map(|(d, v)| (d.name.to_string(), *v)).collect(),
         stderr: BTreeMap::new(),
         identifiable: true,
+        unidentified: vec![],
         evidence: BTreeMap::new(),
         heldout_improvement: 0.5,
         heldout_rmse_before: 1.0,

@@ -436,7 +436,7 @@ impl Engine<'_> {
         &self,
         train: &[Recording],
         applied: &[Applied],
-    ) -> (Vec<f64>, bool) {
+    ) -> (Vec<f64>, Vec<bool>) {
         let last = applied.len() - 1;
         self.uncertainty_of(train, applied, &[last]).pop().expect("one effect")
     }
@@ -448,7 +448,7 @@ impl Engine<'_> {
         &self,
         train: &[Recording],
         applied: &[Applied],
-    ) -> Vec<(Vec<f64>, bool)> {
+    ) -> Vec<(Vec<f64>, Vec<bool>)> {
         let all: Vec<usize> = (0..applied.len()).collect();
         self.uncertainty_of(train, applied, &all)
     }
@@ -462,7 +462,7 @@ impl Engine<'_> {
         train: &[Recording],
         applied: &[Applied],
         which: &[usize],
-    ) -> Vec<(Vec<f64>, bool)> {
+    ) -> Vec<(Vec<f64>, Vec<bool>)> {
         // (effect index, parameter index, bound range) of every column.
         let mut slots: Vec<(usize, usize, f64, f64)> = Vec::new();
         let mut joints: Vec<String> = Vec::new();
@@ -485,7 +485,8 @@ impl Engine<'_> {
                 .iter()
                 .map(|&ai| {
                     let a = &applied[ai];
-                    (vec![f64::INFINITY; a.effect.fitted().min(a.params.len())], false)
+                    let k = a.effect.fitted().min(a.params.len());
+                    (vec![f64::INFINITY; k], vec![false; k])
                 })
                 .collect()
         };
@@ -527,7 +528,10 @@ impl Engine<'_> {
             .iter()
             .map(|&ai| {
                 let idx: Vec<usize> = (0..k).filter(|&s| slots[s].0 == ai).collect();
-                (idx.iter().map(|&s| u.stderr[s]).collect(), idx.iter().all(|&s| u.identifiable[s]))
+                (
+                    idx.iter().map(|&s| u.stderr[s]).collect(),
+                    idx.iter().map(|&s| u.identifiable[s]).collect(),
+                )
             })
             .collect()
     }
