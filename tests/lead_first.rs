@@ -1,9 +1,10 @@
 //! `SearchPolicy::lead_first`: the one-parameter candidate the linearised screen predicts best
 //! is fitted and judged before the others are coarse-fitted; when it leaves a white residual on
-//! every joint, only other effects on exactly its joints are still screened. Recordings from the
-//! independent synth (`src/synth/`) of the three-joint arm with a viscous damping of 0.4 N·m·s
-//! hidden on the elbow; the model without it is fitted blind (every effect), with the policy on
-//! and off.
+//! every joint, only other effects on exactly its joints are still screened. Recordings from
+//! modellint's own recording loop (`src/synth/`: its MuJoCo loop, controller and recorder) of the
+//! three-joint arm with a viscous damping of 0.4 N·m·s hidden on the elbow; the model without it
+//! is fitted blind (every effect), with the policy on and off. The test checks the search's
+//! bookkeeping (which candidates get a fit), not a physics claim.
 
 mod common;
 
