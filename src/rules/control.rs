@@ -3,5 +3,6 @@ pub mod gains_unstable_for_timestep;
 pub mod keyframe_motor_ctrl;
 pub mod missing_action_delay;
 pub mod servo_stall_band;
+pub mod solref_below_timestep;
 pub mod underdamped_pd_gains;
 pub mod unstable_simulation;

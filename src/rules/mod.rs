@@ -219,6 +219,7 @@ pub fn registry() -> Vec<&'static dyn Rule> {
         &limits::effort_limit_mismatch::EffortLimitMismatch,
         &mapping::passive_joint_spring::PassiveJointSpring,
         &control::gains_unstable_for_timestep::GainsUnstableForTimestep,
+        &control::solref_below_timestep::SolrefBelowTimestep,
         &geometry::mirror_asymmetry::MirrorAsymmetry,
         &control::missing_action_delay::MissingActionDelay,
         &control::keyframe_motor_ctrl::KeyframeMotorCtrl,
