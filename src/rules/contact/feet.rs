@@ -18,7 +18,8 @@
 //! base (no joint between them, e.g. a ROS `base_footprint`) is trunk, never a foot. A flat foot whose
 //! ground contact is a line or a point is a design, not a thin sole, when no joint at the foot
 //! can turn it about that contact ([`ankle_turning`], from the joints' world axes at the
-//! keyframe).
+//! keyframe) — unless the robot is a humanoid ([`is_humanoid`]: two feet and arms), which
+//! stands on soles.
 
 pub use crate::model::mirror::{Side, side_of};
 use crate::model::{GeomType, Robot};
@@ -282,4 +283,46 @@ pub fn ankle_turning(robot: &Robot, root: usize, pts: &[[f64; 3]]) -> Option<usi
             };
         turns && dist < ANKLE_SHARE * leg
     })
+}
+
+/// Fewest hinge or ball joints a limb off the legs needs to count as an arm (a shoulder and an
+/// elbow; a head's pan and tilt count too, a single waist or tail joint does not).
+pub const ARM_JOINTS: usize = 2;
+
+/// Whether the robot is a humanoid: a left and a right foot, and at least two limbs off the
+/// legs ([`Robot::limb_of`]) with [`ARM_JOINTS`] or more hinge or ball joints each — arms (and a
+/// head). A humanoid stands on soles; an underactuated biped with no upper body (Cassie's blade
+/// feet) or a quadruped is another family.
+pub fn is_humanoid(robot: &Robot, feet: &[Foot]) -> bool {
+    use crate::model::JointType;
+    let sides = |s: Side| feet.iter().any(|f| f.side == Some(s));
+    if !(sides(Side::Left) && sides(Side::Right)) {
+        return false;
+    }
+    // The legs: every foot body and its ancestors.
+    let mut leg = vec![false; robot.bodies.len()];
+    for f in feet {
+        leg[f.root] = true;
+        for &t in &f.toes {
+            leg[t] = true;
+        }
+        let mut b = f.root;
+        while b != 0 {
+            leg[b] = true;
+            b = robot.bodies[b].parent;
+        }
+    }
+    let mut per_limb: std::collections::BTreeMap<usize, usize> = Default::default();
+    for j in &robot.joints {
+        if !matches!(j.jtype, JointType::Hinge | JointType::Ball)
+            || j.name.is_empty()
+            || leg[j.body]
+        {
+            continue;
+        }
+        if let Some(limb) = robot.limb_of(&j.name) {
+            *per_limb.entry(limb).or_default() += 1;
+        }
+    }
+    per_limb.values().filter(|&&n| n >= ARM_JOINTS).count() >= 2
 }

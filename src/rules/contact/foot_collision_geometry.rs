@@ -7,7 +7,7 @@ use crate::model::{GeomType, Robot};
 use crate::probe::settle::{Settle, StanceClaim};
 use crate::probe::slide::{FootSlide, PUSH_S, PUSH_SHARE, Slide};
 use crate::probe::{Measure, Measurement, Preconditions, StanceSettle, Verdict};
-use crate::rules::contact::feet::{Foot, FootKind, ankle_turning, feet};
+use crate::rules::contact::feet::{Foot, FootKind, ankle_turning, feet, is_humanoid};
 use crate::rules::geometry::shapes::{Placed, hull_area};
 use crate::rules::{Context, Rule, RuleMeta, claim_each, opt};
 use crate::util::fmt_num;
@@ -58,7 +58,10 @@ declare_rule! {
     /// keyframe passing within a third of the leg's length of the contact): then the foot is
     /// meant to stand on a sole that was modelled too thin. Without such a joint the line or
     /// point is the design — an underactuated biped's blade foot whose ankle only pitches and
-    /// that the hip roll balances (Cassie), a stilt — and is not reported. On a flat foot, geom types and radii are judged on the ground
+    /// that the hip roll balances (Cassie), a stilt, a quadruped's foot bar — and is not
+    /// reported, except on a humanoid (a left and a right foot and at least two limbs off the
+    /// legs with two or more joints: arms), which stands on soles: an ankle-pitch-only humanoid
+    /// (H1 style) whose sole is modelled as a line is reported. On a flat foot, geom types and radii are judged on the ground
     /// geoms too (within 10 mm of the foot's lowest point at the keyframe: an ankle housing above
     /// the sole is not a foot contact); meshes on any of the foot's geoms.
     ///
@@ -242,6 +245,7 @@ impl FootCollisionGeometry {
             })
             .collect();
         let has_floor = (0..robot.geoms.len()).any(|g| crate::probe::stance::is_ground(robot, g));
+        let humanoid = is_humanoid(robot, &all_feet);
         for foot in &all_feet {
             let label = foot.label(robot);
             let subj = Subject::Foot(foot.root);
@@ -515,9 +519,9 @@ impl FootCollisionGeometry {
             let area = hull_area(&pts.iter().map(|p| [p[0], p[1]]).collect::<Vec<_>>());
             let degenerate = area < 1e-6;
             // A line or point contact that no ankle joint can turn is the design (a blade foot
-            // balanced by the hip, a stilt): no sole to widen.
+            // balanced by the hip, a stilt) — except on a humanoid, which stands on soles.
             let ankle = if degenerate { ankle_turning(robot, foot.root, &pts) } else { None };
-            if degenerate && ankle.is_none() {
+            if degenerate && ankle.is_none() && !humanoid {
                 continue;
             }
             if degenerate || !heel || !toe {
@@ -526,7 +530,12 @@ impl FootCollisionGeometry {
                     .find(|(_, p)| p.lowest()[2] <= zmin + window)
                     .map(|x| x.0)
                     .unwrap_or(foot.geoms[0]);
-                let what = if degenerate {
+                let what = if degenerate && ankle.is_none() {
+                    format!(
+                        "{label} touches the ground along a line or at a point (support polygon {} cm²): a humanoid (two feet, arms) stands on soles, and with no joint at the foot to turn it about that contact the model can only balance on the line",
+                        fmt_num(area * 1e4, 3)
+                    )
+                } else if degenerate {
                     format!(
                         "{label} touches the ground along a line or at a point (support polygon {} cm²) although joint `{}` at the foot can turn it about that contact",
                         fmt_num(area * 1e4, 3),

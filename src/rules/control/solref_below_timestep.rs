@@ -226,6 +226,11 @@ impl Rule for SolrefBelowTimestep {
         // Each contact is reported once, on the first of its two geoms (the world's, e.g. a
         // floor, come first).
         let mut seen: std::collections::BTreeSet<(usize, usize)> = Default::default();
+        // (geom, the partner named, the contact's time constant, how many partners), grouped
+        // by the attribute that sets the geom's solref: geoms that inherit it from one
+        // `<default>` are one finding there, where the fix is.
+        let mut groups: std::collections::BTreeMap<Loc, Vec<(usize, usize, f64, usize)>> =
+            Default::default();
         for g in &robot.geoms {
             if raised(g.solref, b.floor).is_none() {
                 continue;
@@ -250,16 +255,40 @@ impl Rule for SolrefBelowTimestep {
                 continue;
             };
             seen.extend(partners.iter().map(|&(p, _)| (g.id.min(p), g.id.max(p))));
-            let gname = display_name(&g.name, g.id);
+            let (loc, _) = robot.attr_loc(ElemKind::Geom, g.id, &g.name, "solref");
+            groups.entry(loc).or_default().push((g.id, o, tc, partners.len()));
+        }
+        for entries in groups.values() {
+            let &(g, o, _, n) = &entries[0];
+            let tc = entries.iter().map(|e| e.2).fold(f64::INFINITY, f64::min);
+            let geom = &robot.geoms[g];
+            let gname = display_name(&geom.name, g);
             let oname = display_name(&robot.geoms[o].name, o);
-            let mut what = format!("geom `{gname}`'s contact with `{oname}`");
-            if partners.len() > 1 {
-                what.push_str(&format!(" (and {} more geoms)", partners.len() - 1));
-            }
+            let what = if entries.len() == 1 {
+                let more =
+                    if n > 1 { format!(" (and {} more geoms)", n - 1) } else { String::new() };
+                format!("geom `{gname}`'s contact with `{oname}`{more}")
+            } else {
+                let names: Vec<String> = entries
+                    .iter()
+                    .take(4)
+                    .map(|e| format!("`{}`", display_name(&robot.geoms[e.0].name, e.0)))
+                    .collect();
+                let more = if entries.len() > 4 {
+                    format!(" and {} more", entries.len() - 4)
+                } else {
+                    String::new()
+                };
+                format!(
+                    "the contacts of {} geoms that take this solref ({}{more})",
+                    entries.len(),
+                    names.join(", ")
+                )
+            };
             let msg = b.sentence(&what, "combined solref", tc);
-            let mut f = cx.at_attr(ElemKind::Geom, g.id, &g.name, "solref", msg);
+            let mut f = cx.at_attr(ElemKind::Geom, g, &geom.name, "solref", msg);
             let other = &robot.geoms[o];
-            if raised(other.solref, b.floor).is_some() {
+            if entries.len() == 1 && raised(other.solref, b.floor).is_some() {
                 let (loc, _) = robot.attr_loc(ElemKind::Geom, o, &other.name, "solref");
                 f = f.secondary(
                     loc,
@@ -268,9 +297,10 @@ impl Rule for SolrefBelowTimestep {
             }
             let before = format!(
                 "the geom's own solref time constant is {} s; a contact's is the higher-priority geom's, else the solmix-weighted mean of the two; ",
-                fmt_num(g.solref[0], 4)
+                fmt_num(geom.solref[0], 4)
             );
-            out.push(b.finish_noted(f, tc, &before).subject(Subject::Geom(g.id)));
+            let f = b.finish_noted(f, tc, &before).subject(Subject::Geom(g));
+            out.push(f.with("geoms", entries.len() as f64));
         }
     }
 }

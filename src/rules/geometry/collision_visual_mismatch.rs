@@ -6,7 +6,7 @@ use crate::declare_rule;
 use crate::finding::{Finding, Severity, Subject};
 use crate::model::mjcf::ElemKind;
 use crate::model::{Geom, GeomType, Robot};
-use crate::rules::contact::feet::feet;
+use crate::rules::contact::feet::{FootKind, feet};
 use crate::rules::geometry::shapes::{Placed, V3, add, hull_area, norm, scale, sub, to_local_dir};
 use crate::rules::{Context, Rule, RuleMeta, opt};
 use crate::util::fmt_num;
@@ -22,7 +22,8 @@ declare_rule! {
     /// centimetre or two outside a curved link (a hip cylinder 12–16 mm out) is a deliberate
     /// coarse approximation and is reported as info, while misplaced collision geometry on real
     /// models sticks out by 50 mm or more.
-    /// For foot bodies it also compares the support polygon of
+    /// For flat feet (not wheels, not point feet: a wheel rolls on a line and a foot sphere
+    /// touches at a point by design) it also compares the support polygon of
     /// the collision geoms (the xy hull of their ground points) with the xy hull of the visual
     /// sole (visual vertices within 5 mm of its bottom); coverage below `min_sole_coverage` is
     /// reported. Bodies without a visual mesh are skipped, and a collision mesh that is the
@@ -156,7 +157,11 @@ impl Rule for CollisionVisualMismatch {
         let misplaced = cx.opt("misplaced");
         let min_cov = cx.opt("min_sole_coverage");
         let dirs = directions();
-        let foot_bodies: Vec<usize> = feet(robot, cx.spec).iter().map(|f| f.root).collect();
+        let foot_bodies: Vec<usize> = feet(robot, cx.spec)
+            .iter()
+            .filter(|f| f.kind == FootKind::Flat)
+            .map(|f| f.root)
+            .collect();
         for body in 1..robot.bodies.len() {
             let visuals: Vec<&Geom> =
                 robot.geoms.iter().filter(|g| g.body == body && is_visual_mesh(g)).collect();
