@@ -14,7 +14,9 @@ declare_rule! {
     /// actuators apply: the actuator's `forcerange` (× gear), the joint's `actuatorfrcrange`, for
     /// a `<motor>` its `ctrlrange` × gain × gear, or for a voltage-driven `<dcmotor>` (MuJoCo
     /// 3.17) its stall torque K/R × V_max × gear — the tightest that applies. Reports joints
-    /// with no force limit at all (error), a `<motor>` whose torque `ctrlrange` (× gain × gear)
+    /// with no force limit at all (error; a joint that several actuators drive, each of them
+    /// bounded — a differential drive's two tendons on each wheel — is limited by their sum and
+    /// not reported), a `<motor>` whose torque `ctrlrange` (× gain × gear)
     /// contradicts the same joint's `actuatorfrcrange` by more than `tolerance` (no spec needed:
     /// e.g. ±139 N·m of command on a joint clamped at ±60), and limits that differ from the spec's motor
     /// `peak_torque` by more than `tolerance`. When the spec gives a motor family's
@@ -66,32 +68,49 @@ pub fn joint_torque_limit(robot: &Robot, j: usize) -> Option<(f64, LimitSource)>
     let acts = robot.actuators_on_joint(j);
     // Several actuators add up; only a single one gives a per-actuator bound here.
     if acts.len() == 1 {
-        let a = acts[0];
-        let g = a.gear.abs();
-        if a.forcelimited {
-            take(
-                g * a.forcerange[0].abs().max(a.forcerange[1].abs()),
-                LimitSource::ActuatorForce(a.id),
-            );
-        }
-        if a.kind == ActuatorKind::Motor && a.ctrllimited {
-            take(
-                g * a.gainprm[0].abs() * a.ctrlrange[0].abs().max(a.ctrlrange[1].abs()),
-                LimitSource::MotorCtrl(a.id),
-            );
-        }
-        // A voltage-driven `<dcmotor>` stalls at K/R × V_max (× gear).
-        if let ActuatorKind::DcMotor { resistance, k, voltage: true } = a.kind
-            && a.ctrllimited
-            && resistance > 0.0
-        {
-            take(
-                g * (k / resistance).abs() * a.ctrlrange[0].abs().max(a.ctrlrange[1].abs()),
-                LimitSource::MotorCtrl(a.id),
-            );
+        for (x, s) in actuator_bounds(acts[0]) {
+            take(x, s);
         }
     }
     best
+}
+
+/// The force bounds one actuator puts on what it transmits (× gear): its `forcerange`, a
+/// `<motor>`'s ctrlrange × gain, a voltage-driven `<dcmotor>`'s stall torque.
+fn actuator_bounds(a: &crate::model::Actuator) -> Vec<(f64, LimitSource)> {
+    let g = a.gear.abs();
+    let mut v = Vec::new();
+    if a.forcelimited {
+        v.push((
+            g * a.forcerange[0].abs().max(a.forcerange[1].abs()),
+            LimitSource::ActuatorForce(a.id),
+        ));
+    }
+    if a.kind == ActuatorKind::Motor && a.ctrllimited {
+        v.push((
+            g * a.gainprm[0].abs() * a.ctrlrange[0].abs().max(a.ctrlrange[1].abs()),
+            LimitSource::MotorCtrl(a.id),
+        ));
+    }
+    if let ActuatorKind::DcMotor { resistance, k, voltage: true } = a.kind
+        && a.ctrllimited
+        && resistance > 0.0
+    {
+        v.push((
+            g * (k / resistance).abs() * a.ctrlrange[0].abs().max(a.ctrlrange[1].abs()),
+            LimitSource::MotorCtrl(a.id),
+        ));
+    }
+    v.retain(|x| x.0.is_finite());
+    v
+}
+
+/// Every actuator on joint `j` bounds its force: the joint's torque is bounded (by their sum
+/// through the transmissions, e.g. a differential drive's two tendons on each wheel) even when
+/// no single bound applies to it.
+fn every_actuator_bounded(robot: &Robot, j: usize) -> bool {
+    let acts = robot.actuators_on_joint(j);
+    !acts.is_empty() && acts.iter().all(|a| !actuator_bounds(a).is_empty())
 }
 
 impl Rule for EffortLimitMismatch {
@@ -121,7 +140,9 @@ impl Rule for EffortLimitMismatch {
                 out.push(f);
             }
             let Some((lim, src)) = joint_torque_limit(robot, j.id) else {
-                missing.push(j.id);
+                if !every_actuator_bounded(robot, j.id) {
+                    missing.push(j.id);
+                }
                 continue;
             };
             let Some(fam) = facts.as_ref().and_then(|f| f.motor.clone()) else { continue };
