@@ -12,8 +12,14 @@
 //! 2. From a checkout: the absolute `.mujoco/lib` the binary was linked against (`make build`,
 //!    `cargo install --path .`), then `$ORIGIN`-relative fallbacks for binaries that stay in
 //!    target/release/ (and its deps/ and examples/) of a moved checkout.
+///
+/// It also sets `MODELLINT_SOURCE_HASH`, a hash of every file under `src/`, which the lint cache
+/// puts in its keys (`model::cache`): a build whose rules differ never answers from an entry
+/// another build wrote, even at the same package version.
 fn main() {
     println!("cargo::rerun-if-env-changed=MUJOCO_DYNAMIC_LINK_DIR");
+    println!("cargo::rerun-if-changed=src");
+    println!("cargo::rustc-env=MODELLINT_SOURCE_HASH={:016x}", source_hash());
     let mut paths = Vec::new();
     for minor in 10..=14 {
         for dir in ["site-packages", "dist-packages"] {
@@ -26,4 +32,34 @@ fn main() {
     paths.push("$ORIGIN/../../.mujoco/lib".into());
     paths.push("$ORIGIN/../../../.mujoco/lib".into());
     println!("cargo::rustc-link-arg=-Wl,-rpath,{}", paths.join(":"));
+}
+
+/// FNV-1a over the relative path and bytes of every file under `src/`, in sorted order.
+fn source_hash() -> u64 {
+    fn walk(dir: &std::path::Path, out: &mut Vec<std::path::PathBuf>) {
+        let Ok(rd) = std::fs::read_dir(dir) else { return };
+        for e in rd.flatten() {
+            let p = e.path();
+            if p.is_dir() {
+                walk(&p, out);
+            } else {
+                out.push(p);
+            }
+        }
+    }
+    let mut files = Vec::new();
+    walk(std::path::Path::new("src"), &mut files);
+    files.sort();
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    let mut eat = |bytes: &[u8]| {
+        for &b in bytes {
+            h ^= u64::from(b);
+            h = h.wrapping_mul(0x0100_0000_01b3);
+        }
+    };
+    for f in files {
+        eat(f.to_string_lossy().as_bytes());
+        eat(&std::fs::read(&f).unwrap_or_default());
+    }
+    h
 }

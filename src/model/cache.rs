@@ -1,7 +1,8 @@
 //! The lint cache directory: one small entry per lint run (what it printed and its exit code,
 //! `src/lint_cache.rs`), keyed by a hash of every file the run reads (the model XML and its
-//! includes, mesh/texture/height-field files, the spec, the config), the modellint and MuJoCo
-//! versions and the options. An unchanged re-lint (a pre-commit hook on the same meshes) is
+//! includes, mesh/texture/height-field files, the spec, the config), the modellint version and
+//! a hash of its sources (a rebuilt binary never reads another build's entries), MuJoCo's version
+//! and the options. An unchanged re-lint (a pre-commit hook on the same meshes) is
 //! answered from its entry without compiling the model; any edited input is a new key.
 //!
 //! Directory: `--cache-dir`, else `$MODELLINT_CACHE_DIR`, else `$XDG_CACHE_HOME/modellint`, else
@@ -105,13 +106,15 @@ impl Hash {
     }
 }
 
-/// Builds a cache key: the tool and MuJoCo versions, then fields and files in order.
+/// Builds a cache key: the tool's version and source hash (build.rs), MuJoCo's version, then
+/// fields and files in order.
 pub struct KeyBuilder(Hash);
 
 impl Default for KeyBuilder {
     fn default() -> Self {
         let mut h = Hash::new();
         h.field(env!("CARGO_PKG_VERSION").as_bytes());
+        h.field(env!("MODELLINT_SOURCE_HASH").as_bytes());
         h.field(mujoco_rs::mujoco_c::mjVERSION_HEADER.to_string().as_bytes());
         KeyBuilder(h)
     }
