@@ -226,11 +226,11 @@ impl Rule for SolrefBelowTimestep {
         // Each contact is reported once, on the first of its two geoms (the world's, e.g. a
         // floor, come first).
         let mut seen: std::collections::BTreeSet<(usize, usize)> = Default::default();
-        // (geom, the partner named, the contact's time constant, how many partners), grouped
-        // by the attribute that sets the geom's solref: geoms that inherit it from one
-        // `<default>` are one finding there, where the fix is.
-        let mut groups: std::collections::BTreeMap<Loc, Vec<(usize, usize, f64, usize)>> =
-            Default::default();
+        // (geom, the partner named, the contact's time constant, every partner), grouped by
+        // the attribute that sets the geom's solref: geoms that inherit it from one `<default>`
+        // are one finding there, where the fix is.
+        type Entry = (usize, usize, f64, Vec<usize>);
+        let mut groups: std::collections::BTreeMap<Loc, Vec<Entry>> = Default::default();
         for g in &robot.geoms {
             if raised(g.solref, b.floor).is_none() {
                 continue;
@@ -256,10 +256,20 @@ impl Rule for SolrefBelowTimestep {
             };
             seen.extend(partners.iter().map(|&(p, _)| (g.id.min(p), g.id.max(p))));
             let (loc, _) = robot.attr_loc(ElemKind::Geom, g.id, &g.name, "solref");
-            groups.entry(loc).or_default().push((g.id, o, tc, partners.len()));
+            let ids = partners.iter().map(|p| p.0).collect();
+            groups.entry(loc).or_default().push((g.id, o, tc, ids));
         }
-        for entries in groups.values() {
-            let &(g, o, _, n) = &entries[0];
+        for (loc, entries) in &groups {
+            let (g, o, n) = (entries[0].0, entries[0].1, entries[0].3.len());
+            // Every geom of the group's contacts that takes its solref from this attribute.
+            let mut involved: std::collections::BTreeSet<usize> = Default::default();
+            for e in entries {
+                involved.insert(e.0);
+                involved.extend(e.3.iter().copied().filter(|&p| {
+                    let q = &robot.geoms[p];
+                    robot.attr_loc(ElemKind::Geom, p, &q.name, "solref").0 == *loc
+                }));
+            }
             let tc = entries.iter().map(|e| e.2).fold(f64::INFINITY, f64::min);
             let geom = &robot.geoms[g];
             let gname = display_name(&geom.name, g);
@@ -269,19 +279,19 @@ impl Rule for SolrefBelowTimestep {
                     if n > 1 { format!(" (and {} more geoms)", n - 1) } else { String::new() };
                 format!("geom `{gname}`'s contact with `{oname}`{more}")
             } else {
-                let names: Vec<String> = entries
+                let names: Vec<String> = involved
                     .iter()
                     .take(4)
-                    .map(|e| format!("`{}`", display_name(&robot.geoms[e.0].name, e.0)))
+                    .map(|&i| format!("`{}`", display_name(&robot.geoms[i].name, i)))
                     .collect();
-                let more = if entries.len() > 4 {
-                    format!(" and {} more", entries.len() - 4)
+                let more = if involved.len() > 4 {
+                    format!(" and {} more", involved.len() - 4)
                 } else {
                     String::new()
                 };
                 format!(
                     "the contacts of {} geoms that take this solref ({}{more})",
-                    entries.len(),
+                    involved.len(),
                     names.join(", ")
                 )
             };
@@ -300,7 +310,7 @@ impl Rule for SolrefBelowTimestep {
                 fmt_num(geom.solref[0], 4)
             );
             let f = b.finish_noted(f, tc, &before).subject(Subject::Geom(g));
-            out.push(f.with("geoms", entries.len() as f64));
+            out.push(f.with("geoms", involved.len().max(1) as f64));
         }
     }
 }
