@@ -147,7 +147,8 @@ struct EffectModel {
 /// What the linear model predicts for one candidate (effect, joint group).
 #[derive(Debug, Clone, Copy, Serialize)]
 pub struct Prediction {
-    /// Residual RMSE on the screen's data after the linear step [rad].
+    /// Residual RMSE on the screen's data after the linear step: the screen's RMSE scaled by
+    /// the relative change the step makes on the probes' data [rad].
     pub train_rmse: f64,
     /// The step of the effect's first parameter that the training residual asks for.
     pub step: f64,
@@ -156,8 +157,11 @@ pub struct Prediction {
 /// The linear model of every (effect, joint) the round's diagnosis lists.
 pub(super) struct Screen {
     models: BTreeMap<&'static str, EffectModel>,
+    /// The probes' residual: sum of squares and scored samples.
     train_ss: f64,
     train_n: usize,
+    /// The screen's data's residual RMSE [rad], to which the probes' shares are scaled.
+    screen_rmse: f64,
 }
 
 /// One probe of a candidate's parameter: the probe value, its step from the start, the
@@ -396,6 +400,11 @@ impl Screen {
             None => (screen, sc_err),
         };
         let r = aligned(engine, train, tr_err);
+        let screen_rmse = {
+            let rs = aligned(engine, screen, sc_err);
+            let n = rs.iter().flatten().count();
+            (rs.iter().flatten().map(|x| x * x).sum::<f64>() / n as f64).sqrt()
+        };
         let limbs = entry_limbs(engine, train);
         let train_ss: f64 = r.iter().flatten().map(|x| x * x).sum();
         let train_n = r.iter().flatten().count();
@@ -448,7 +457,9 @@ impl Screen {
                     let coef = dot_r(&p.column, &r) / dot(&p.column, &p.column) / p.step;
                     c.evidence.insert("sensitivity_coef".into(), coef);
                     c.evidence.insert("probe".into(), p.v);
-                    c.explained_rms = (single.max(all) / train_n as f64).sqrt();
+                    // On the screen's data's scale: its RMSE times the share of the probes'.
+                    c.explained_rms =
+                        screen_rmse * (single.max(all) / train_ss.max(f64::MIN_POSITIVE)).sqrt();
                 }
                 let room = JointTarget::of(engine.robot, &c.joint).map_or(
                     (f64::NEG_INFINITY, f64::INFINITY),
@@ -478,12 +489,12 @@ impl Screen {
                 models.insert(id, m);
             }
         }
-        Screen { models, train_ss, train_n }
+        Screen { models, train_ss, train_n, screen_rmse }
     }
 
     /// The RMSE of the screen's residual before any step [rad].
     pub(super) fn base_rmse(&self) -> f64 {
-        if self.train_n == 0 { f64::NAN } else { (self.train_ss / self.train_n as f64).sqrt() }
+        if self.train_n == 0 { f64::NAN } else { self.screen_rmse }
     }
 
     /// The linear prediction for `effect` on `group` (one parameter vector shared by the
@@ -527,7 +538,9 @@ impl Screen {
             }
         }
         let train_left = (self.train_ss - explained).max(0.0);
-        Some(Prediction { train_rmse: (train_left / self.train_n as f64).sqrt(), step: x[0] })
+        let train_rmse =
+            self.screen_rmse * (train_left / self.train_ss.max(f64::MIN_POSITIVE)).sqrt();
+        Some(Prediction { train_rmse, step: x[0] })
     }
 }
 
@@ -585,7 +598,8 @@ mod tests {
                 g: vec![vec![d(&c, &c), 0.0], vec![0.0, d(&c, &c)]],
             };
             let ss = d(&r, &r);
-            (Screen { models: [("e", m)].into(), train_ss: ss, train_n: r.len() }, ss)
+            let screen_rmse = (ss / r.len() as f64).sqrt();
+            (Screen { models: [("e", m)].into(), train_ss: ss, train_n: r.len(), screen_rmse }, ss)
         };
         let rmse = |ss: f64| (ss / c.len() as f64).sqrt();
         // Inside the bounds: the residual explained whole, the step the one asked for.
@@ -604,5 +618,12 @@ mod tests {
         let (s, _) = screen(4.0, (-1.0, 2.0));
         let p = s.predict("e", &["a".into(), "b".into()]).expect("modelled");
         assert!(p.step == 1.0, "{p:?}");
+        // Probes on stretches whose residual is twice the screen's: the prediction is the
+        // screen's RMSE scaled by the relative change on the probes' data.
+        let (mut s, ss) = screen(-2.0, (-1.0, 10.0));
+        s.screen_rmse = 0.5 * rmse(ss);
+        assert_eq!(s.base_rmse(), 0.5 * rmse(ss));
+        let p = s.predict("e", &["a".into()]).expect("modelled");
+        assert!((p.train_rmse - 0.5 * rmse(0.25 * ss)).abs() < 1e-12, "{p:?}");
     }
 }
