@@ -253,7 +253,32 @@ impl<'a> Engine<'a> {
         applied: &[Applied],
         make: impl FnOnce() -> Vec<Recording>,
     ) -> std::sync::Arc<Vec<Recording>> {
-        let key = set_key(train, applied) + &self.start_tag();
+        self.held_set("", train, applied, make)
+    }
+
+    /// The probes' data ([`SearchPolicy::probe_seconds`]) for the screen's data `screen`
+    /// simulated with `applied`, held like [`Engine::screen_set`].
+    ///
+    /// [`SearchPolicy::probe_seconds`]: super::policy::SearchPolicy::probe_seconds
+    pub(in crate::fit::select) fn probe_set(
+        &self,
+        screen: &[Recording],
+        applied: &[Applied],
+        make: impl FnOnce() -> Vec<Recording>,
+    ) -> std::sync::Arc<Vec<Recording>> {
+        self.held_set("probe:", screen, applied, make)
+    }
+
+    /// A data set derived from `train` for `applied`, made on first use and held for the whole
+    /// search (the memo keys a dataset by its address); `kind` tells the derivations apart.
+    fn held_set(
+        &self,
+        kind: &str,
+        train: &[Recording],
+        applied: &[Applied],
+        make: impl FnOnce() -> Vec<Recording>,
+    ) -> std::sync::Arc<Vec<Recording>> {
+        let key = kind.to_string() + &set_key(train, applied) + &self.start_tag();
         if let Some(s) = self.screens.lock().ok().and_then(|m| m.get(&key).cloned()) {
             return s;
         }

@@ -30,6 +30,12 @@ pub struct SearchPolicy {
     /// re-fitted on the whole training set, and every held-out test uses all the data [s].
     /// Default 10.
     pub screen_seconds: f64,
+    /// Seconds of recording each probe of the linearised screen replays: from the screen's
+    /// data, the stretch of `probe_seconds / n` of each of its n episodes where the residual is
+    /// largest (all of it when not longer). A probe gives one sensitivity column, which only
+    /// ranks candidates and starts a coarse fit; the coarse and full fits run on the screen's
+    /// data [s]. Default 2.
+    pub probe_seconds: f64,
     /// A partner joint "ranks high" when it is among the top `rank_depth ×
     /// candidates_per_round` entries of the ranking [multiple]. Default 4.
     pub rank_depth: usize,
@@ -141,6 +147,7 @@ impl Default for SearchPolicy {
             max_evals: 60,
             screen_evals: 6,
             screen_seconds: 10.0,
+            probe_seconds: 2.0,
             rank_depth: 4,
             min_group: 3,
             every_effect: true,
@@ -214,6 +221,11 @@ pub const FIELDS: &[(&str, &str, &str)] = &[
         "screen_seconds",
         "s",
         "recording the screen simulates per evaluation: from each of the n training episodes the stretch of screen_seconds / n with the largest residual (the whole set when not longer); coarse and full candidate fits and the pair look-ahead's coarse polish run there, the round's winner is re-fitted on the whole training set, held-out tests use all data",
+    ),
+    (
+        "probe_seconds",
+        "s",
+        "recording each probe of the linearised screen replays: from each of the screen's n episodes the stretch of probe_seconds / n with the largest residual (all of it when not longer); the probes' columns rank candidates and start coarse fits, which run on the screen's data",
     ),
     (
         "rank_depth",

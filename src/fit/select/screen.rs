@@ -1,6 +1,6 @@
 //! The linearised screen: probe simulations give the residual's sensitivity to each (effect,
-//! joint) (a finite-difference Jacobian column, on the screen's data: the stretch of every
-//! training episode where the residual is largest); every candidate group of one effect — a
+//! joint) (a finite-difference Jacobian column, on the probes' data: the stretches of every
+//! training episode where the residual is largest, see below); every candidate group of one effect — a
 //! joint, a mirror pair, a motor family, every leg, every joint — is the sum of its joints'
 //! columns (one shared parameter moved on all of them, to first order). On that linear model
 //! each candidate gets, without a fit of its own, the residual it would leave.
@@ -12,8 +12,16 @@
 //! arm, a pendulum) is probed one joint at a time, exactly. On a 23-joint humanoid that is 6
 //! simulations per effect instead of 23.
 //!
+//! The probes replay only part of the screen's data: from each of its episodes the stretch where
+//! the round's residual is largest, [`SearchPolicy::probe_seconds`] in all (2 s of the screen's
+//! 10 s by default). A column only ranks candidates and gives the coarse fit its first step;
+//! every fit runs on the screen's data. On Asimov's legs that is 105 probe replays of 2 s
+//! instead of 10 s.
+//!
 //! Only sums over the samples are kept (each column's dot product with the residual and with the
 //! effect's other columns), so memory does not grow with the recordings' length.
+//!
+//! [`SearchPolicy::probe_seconds`]: super::policy::SearchPolicy::probe_seconds
 
 use std::collections::BTreeMap;
 
@@ -80,6 +88,12 @@ fn change(
 /// where the residual of `e` (summed over the fitted joints' scored samples) is largest — the
 /// missing physics shows most where the model is most wrong ([`segments`]).
 pub(super) fn screen_data(engine: &Engine, recs: &[Recording], e: &Errors) -> Vec<Recording> {
+    stretches(engine, recs, e, engine.opts.policy.screen_seconds)
+}
+
+/// About `seconds` of `recs` in all: from each episode the stretch where the residual of `e`
+/// (summed over the fitted joints' scored samples) is largest ([`segments`]).
+fn stretches(engine: &Engine, recs: &[Recording], e: &Errors, seconds: f64) -> Vec<Recording> {
     let weight: Vec<Vec<f64>> = recs
         .iter()
         .zip(&e.eps)
@@ -100,7 +114,13 @@ pub(super) fn screen_data(engine: &Engine, recs: &[Recording], e: &Errors) -> Ve
             w
         })
         .collect();
-    segments(recs, &weight, engine.opts.policy.screen_seconds)
+    segments(recs, &weight, seconds)
+}
+
+/// Whether `a` holds the same stretches as `b` (a [`segments`] copy of the whole set).
+fn same_data(a: &[Recording], b: &[Recording]) -> bool {
+    a.len() == b.len()
+        && a.iter().zip(b).all(|(x, y)| x.t.len() == y.t.len() && x.t.first() == y.t.first())
 }
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {
@@ -127,7 +147,8 @@ struct EffectModel {
 /// What the linear model predicts for one candidate (effect, joint group).
 #[derive(Debug, Clone, Copy, Serialize)]
 pub struct Prediction {
-    /// Residual RMSE on the screen's data after the linear step [rad].
+    /// Residual RMSE on the screen's data after the linear step: the screen's RMSE scaled by
+    /// the relative change the step makes on the probes' data [rad].
     pub train_rmse: f64,
     /// The step of the effect's first parameter that the training residual asks for.
     pub step: f64,
@@ -136,8 +157,11 @@ pub struct Prediction {
 /// The linear model of every (effect, joint) the round's diagnosis lists.
 pub(super) struct Screen {
     models: BTreeMap<&'static str, EffectModel>,
+    /// The probes' residual: sum of squares and scored samples.
     train_ss: f64,
     train_n: usize,
+    /// The screen's data's residual RMSE [rad], to which the probes' shares are scaled.
+    screen_rmse: f64,
 }
 
 /// One probe of a candidate's parameter: the probe value, its step from the start, the
@@ -347,21 +371,40 @@ fn probe_batch(
 }
 
 impl Screen {
-    /// Probes every uncovered candidate of `diag` on `train` (the screen's data; `tr_err` its
-    /// residual with `base`), one effect at a time, its joints in parallel, keeping for each
+    /// Probes every uncovered candidate of `diag` on the probes' data — from the screen's data
+    /// `screen` (`sc_err` its residual with `base`) the stretches of largest residual,
+    /// [`SearchPolicy::probe_seconds`] in all — one effect at a time, its joints in parallel, keeping for each
     /// screened parameter the best of its probe values; sets each candidate's `explained_rms`
     /// to the linear explained RMS of the best combination of its columns, a combination of
     /// more than one charged by the information criterion over the residual's windows
-    /// ([`charged`]).
+    /// ([`charged`]). The linear model's residual, its RMSE and the predictions are those of
+    /// the probes' data.
+    ///
+    /// [`SearchPolicy::probe_seconds`]: super::policy::SearchPolicy::probe_seconds
     pub(super) fn build(
         engine: &Engine,
-        train: &[Recording],
+        screen: &[Recording],
         base: &[Applied],
-        tr_err: &Errors,
+        sc_err: &Errors,
         diag: &mut [Candidate],
         covered: &(dyn Fn(&str, &str) -> bool + Sync),
     ) -> Screen {
+        // The probes replay the stretches of the screen's data where its residual is largest
+        // (`probe_seconds` in all): the screen's data itself when not longer, or when the base
+        // replay of the stretches fails.
+        let seconds = engine.opts.policy.probe_seconds;
+        let held = engine.probe_set(screen, base, || stretches(engine, screen, sc_err, seconds));
+        let own_err = if same_data(&held, screen) { None } else { engine.errors(&held, base) };
+        let (train, tr_err): (&[Recording], &Errors) = match &own_err {
+            Some(e) => (&held, e),
+            None => (screen, sc_err),
+        };
         let r = aligned(engine, train, tr_err);
+        let screen_rmse = {
+            let rs = aligned(engine, screen, sc_err);
+            let n = rs.iter().flatten().count();
+            (rs.iter().flatten().map(|x| x * x).sum::<f64>() / n as f64).sqrt()
+        };
         let limbs = entry_limbs(engine, train);
         let train_ss: f64 = r.iter().flatten().map(|x| x * x).sum();
         let train_n = r.iter().flatten().count();
@@ -414,7 +457,9 @@ impl Screen {
                     let coef = dot_r(&p.column, &r) / dot(&p.column, &p.column) / p.step;
                     c.evidence.insert("sensitivity_coef".into(), coef);
                     c.evidence.insert("probe".into(), p.v);
-                    c.explained_rms = (single.max(all) / train_n as f64).sqrt();
+                    // On the screen's data's scale: its RMSE times the share of the probes'.
+                    c.explained_rms =
+                        screen_rmse * (single.max(all) / train_ss.max(f64::MIN_POSITIVE)).sqrt();
                 }
                 let room = JointTarget::of(engine.robot, &c.joint).map_or(
                     (f64::NEG_INFINITY, f64::INFINITY),
@@ -444,12 +489,12 @@ impl Screen {
                 models.insert(id, m);
             }
         }
-        Screen { models, train_ss, train_n }
+        Screen { models, train_ss, train_n, screen_rmse }
     }
 
     /// The RMSE of the screen's residual before any step [rad].
     pub(super) fn base_rmse(&self) -> f64 {
-        if self.train_n == 0 { f64::NAN } else { (self.train_ss / self.train_n as f64).sqrt() }
+        if self.train_n == 0 { f64::NAN } else { self.screen_rmse }
     }
 
     /// The linear prediction for `effect` on `group` (one parameter vector shared by the
@@ -493,7 +538,9 @@ impl Screen {
             }
         }
         let train_left = (self.train_ss - explained).max(0.0);
-        Some(Prediction { train_rmse: (train_left / self.train_n as f64).sqrt(), step: x[0] })
+        let train_rmse =
+            self.screen_rmse * (train_left / self.train_ss.max(f64::MIN_POSITIVE)).sqrt();
+        Some(Prediction { train_rmse, step: x[0] })
     }
 }
 
@@ -551,7 +598,8 @@ mod tests {
                 g: vec![vec![d(&c, &c), 0.0], vec![0.0, d(&c, &c)]],
             };
             let ss = d(&r, &r);
-            (Screen { models: [("e", m)].into(), train_ss: ss, train_n: r.len() }, ss)
+            let screen_rmse = (ss / r.len() as f64).sqrt();
+            (Screen { models: [("e", m)].into(), train_ss: ss, train_n: r.len(), screen_rmse }, ss)
         };
         let rmse = |ss: f64| (ss / c.len() as f64).sqrt();
         // Inside the bounds: the residual explained whole, the step the one asked for.
@@ -570,5 +618,12 @@ mod tests {
         let (s, _) = screen(4.0, (-1.0, 2.0));
         let p = s.predict("e", &["a".into(), "b".into()]).expect("modelled");
         assert!(p.step == 1.0, "{p:?}");
+        // Probes on stretches whose residual is twice the screen's: the prediction is the
+        // screen's RMSE scaled by the relative change on the probes' data.
+        let (mut s, ss) = screen(-2.0, (-1.0, 10.0));
+        s.screen_rmse = 0.5 * rmse(ss);
+        assert_eq!(s.base_rmse(), 0.5 * rmse(ss));
+        let p = s.predict("e", &["a".into()]).expect("modelled");
+        assert!((p.train_rmse - 0.5 * rmse(0.25 * ss)).abs() < 1e-12, "{p:?}");
     }
 }
