@@ -347,6 +347,21 @@ pub(super) fn pair_lookahead(
     Some(res)
 }
 
+/// The training RMSE of `applied` + `winner` re-fitted as [`with_kept_refitted`] does, when that
+/// leaves a white residual on every fitted joint ([`Engine::at_floor`]); `None` otherwise or when
+/// no kept effect shares a joint with the winner. The same re-fit in the look-ahead is answered
+/// by the rollout memo when the winner's values did not move.
+pub(super) fn refitted_at_floor(
+    s: &Search,
+    short: &[Recording],
+    applied: &[Applied],
+    winner: &Applied,
+) -> Option<f64> {
+    let set = with_kept_refitted(s, short, applied, winner.clone())?;
+    let t = s.engine.errors(s.train, &set)?;
+    s.engine.at_floor(s.train, &set, &t).then(|| t.rmse())
+}
+
 /// `applied` + `winner` with the winner and the kept effects that share a joint with it fitted
 /// together on `short` (the round's screen data), from their values, with a pair's coarse budget
 /// (Levenberg–Marquardt when all of them are smooth, else the simplex); the kept effects on
