@@ -23,7 +23,9 @@ use super::{Errors, FitOutcome, Floor, Search, Selected, Tried, set_uncertainty,
 /// jointly from the two single fits (coarsely first; fully when within 25 % of the best pair's
 /// training RMSE), and the best pair replaces the single winner when it is
 /// ≥ 10 % better on held-out (and beyond noise), and each member is needed in it (removing
-/// either is worse beyond noise). The pair with fewer parameters wins within 1 %.
+/// either is worse beyond noise). The pair with fewer parameters wins within 1 %. The winner
+/// with the effects kept in earlier rounds on its joints re-fitted beside it
+/// ([`with_kept_refitted`]) competes as a restart of the winner.
 pub(super) fn pair_lookahead(
     s: &Search,
     applied: &[Applied],
