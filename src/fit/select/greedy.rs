@@ -1,38 +1,26 @@
 //! One greedy round of the selection: diagnose the residual, build the candidate (effect, joint
 //! group) list, fit and gate each candidate, and keep the winner.
 
-use std::collections::BTreeMap;
-
 use rayon::prelude::*;
 
 use crate::fit::diagnose::{Candidate, diagnose};
-use crate::fit::effects::{self, Applied, Effect};
+use crate::fit::effects::{self, Applied};
 use crate::fit::stats::{bic, bic_pieces};
-use crate::model::mirror::{leg_joint, mirror_in};
-use crate::sim2real::recording::Recording;
+use crate::model::mirror::leg_joint;
 
 use super::discretisation::{Judged, beyond_discretisation};
 use super::engine::shape_key;
+use super::groups::{Cand, has_group, partner, same_data, sorted_pair};
 use super::lead;
-use super::pairs::{joint_pairs, pair_lookahead};
+use super::pairs::{joint_pairs, pair_lookahead, refitted_at_floor};
 use super::policy::Phase;
 use super::screen::{Screen, screen_data};
 use super::verdict::{at_bound, verdict};
 use super::winner::{on_whole_set, refine, rival_notes};
 use super::{Errors, FitOutcome, Search, Selected, Tried, set_uncertainty};
 
-/// A candidate: effect, joint group, evidence.
-type Cand = (&'static dyn Effect, Vec<String>, BTreeMap<String, f64>);
-
 /// A candidate's coarse fit: its parameters and training RMSE on the screen's data.
 type Coarse = Option<(Vec<f64>, f64)>;
-
-/// A joint's left/right partner among the fitted joints, paired as lint pairs them
-/// (`model::mirror::mirror_in`: `LL_`/`LR_` are a biped's legs only when both exist).
-fn partner(joint: &str, joints: &[String]) -> Option<String> {
-    let has = |n: &str| joints.iter().any(|j| j == n);
-    mirror_in(joint, None, has).map(|(_, m)| m).filter(|m| has(m))
-}
 
 /// One greedy round: diagnose, fit the candidates, keep the best that passes the held-out gate.
 /// Returns `true` when an effect was added.
@@ -462,11 +450,20 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
             kept: false,
             predicted,
         });
-        if keep && engine.at_floor(train, &trial, &tr_a) {
-            floored.push(logged);
+        // The lead beside effects kept in earlier rounds on its joints, each fitted without it,
+        // is judged at the floor with them re-fitted together ([`refitted_at_floor`]); the
+        // next round measures the floor again unless the round keeps that set.
+        let white = keep && engine.at_floor(train, &trial, &tr_a);
+        let refitted = (keep && !white && n_lead == 1 && ci == 1)
+            .then(|| refitted_at_floor(s, short, &applied, &trial[applied.len()]))
+            .flatten();
+        if white || refitted.is_some() {
+            if white {
+                floored.push(logged);
+            }
             floored_groups.push(group.clone());
             floor_k = Some(floor_k.map_or(e.fitted(), |k| k.min(e.fitted())));
-            let r = tr_a.rmse() / base_train;
+            let r = refitted.unwrap_or(tr_a.rmse()) / base_train;
             floor_train = Some(floor_train.map_or(r, |t: f64| t.min(r)));
         }
         if keep {
@@ -587,28 +584,10 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     true
 }
 
-/// Whether `a` holds the same recordings as `b` (a screen set that came back whole).
-fn same_data(a: &[Recording], b: &[Recording]) -> bool {
-    a.len() == b.len()
-        && a.iter().zip(b).all(|(x, y)| x.t.len() == y.t.len() && x.t.first() == y.t.first())
-}
-
-/// Whether `effect` on exactly `group` is already a candidate. Only an identical group is a
-/// duplicate: a joint inside a family or all-joints group of the same effect still gets its own
-/// candidate.
-fn has_group(cands: &[Cand], effect: &str, group: &[String]) -> bool {
-    cands.iter().any(|(e, g, _)| e.id() == effect && g == group)
-}
-
-/// A joint and its left/right partner, in name order (the order groups are compared in).
-fn sorted_pair(j: &str, p: String) -> Vec<String> {
-    let mut g = vec![j.to_string(), p];
-    g.sort();
-    g
-}
-
 #[cfg(test)]
 mod tests {
+    use std::collections::BTreeMap;
+
     use super::*;
     use crate::fit::effects::{
         Armature, Backlash, CoulombFriction, Effect, StribeckFriction, ViscousDamping,
@@ -677,22 +656,5 @@ mod tests {
         assert_eq!(rival_notes(&nest, 1, &[true, true, false]), Vec::<String>::new());
         // Nothing equivalent: no note.
         assert!(rival_notes(&acc, 1, &[false, true, false, false, false, false]).is_empty());
-    }
-
-    #[test]
-    fn mirror_partners() {
-        let js = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
-        let h = js(&["left_knee", "right_knee", "LL_HFE", "LR_HFE", "elbow_pitch"]);
-        assert_eq!(partner("left_knee", &h).as_deref(), Some("right_knee"));
-        assert_eq!(partner("LR_HFE", &h).as_deref(), Some("LL_HFE"));
-        assert_eq!(partner("elbow_pitch", &h), None);
-        // A quadruped's left-rear leg (`LF_` `LR_` `RF_` `RR_`) pairs with `RR_`, never `LL_`.
-        let q = js(&["LF_KFE", "LR_KFE", "RF_KFE", "RR_KFE"]);
-        assert_eq!(partner("LR_KFE", &q), None);
-        assert_eq!(partner("LF_KFE", &q).as_deref(), Some("RF_KFE"));
-        // Booster T1 and Unitree H1 spellings; a partner outside the fit is no partner.
-        let t = js(&["Left_Knee_Pitch", "Right_Knee_Pitch", "right_knee_joint"]);
-        assert_eq!(partner("Left_Knee_Pitch", &t).as_deref(), Some("Right_Knee_Pitch"));
-        assert_eq!(partner("right_knee_joint", &t), None);
     }
 }

@@ -27,6 +27,7 @@
 mod discretisation;
 mod engine;
 mod greedy;
+mod groups;
 mod lead;
 mod pairs;
 mod policy;

@@ -11,7 +11,7 @@ use crate::sim2real::recording::Recording;
 use super::discretisation::{Judged, beyond_discretisation};
 use super::engine::Engine;
 use super::policy::Phase;
-use super::polish::{fit_jointly, fit_jointly_iters, polish_budget, polish_set};
+use super::polish::{fit_jointly, fit_jointly_iters, polish_budget, polish_from, polish_set};
 use super::screen::screen_data;
 use super::verdict::{Verdict, at_bound, verdict};
 use super::{Errors, FitOutcome, Floor, Search, Selected, Tried, set_uncertainty, sync_selected};
@@ -23,7 +23,9 @@ use super::{Errors, FitOutcome, Floor, Search, Selected, Tried, set_uncertainty,
 /// jointly from the two single fits (coarsely first; fully when within 25 % of the best pair's
 /// training RMSE), and the best pair replaces the single winner when it is
 /// ≥ 10 % better on held-out (and beyond noise), and each member is needed in it (removing
-/// either is worse beyond noise). The pair with fewer parameters wins within 1 %.
+/// either is worse beyond noise). The pair with fewer parameters wins within 1 %. The winner
+/// with the effects kept in earlier rounds on its joints re-fitted beside it
+/// ([`with_kept_refitted`]) competes as a restart of the winner.
 pub(super) fn pair_lookahead(
     s: &Search,
     applied: &[Applied],
@@ -166,9 +168,16 @@ pub(super) fn pair_lookahead(
     let n = applied.len();
     let smooth = |set: &[Applied]| set[n..].iter().all(|a| a.effect.smooth());
     let short = engine.screen_set(train, applied, || screen_data(engine, train, &t_base));
+    let n_sets = sets.len();
     let coarse: Vec<(Vec<Applied>, f64)> = sets
         .iter()
-        .map(|(a, b)| {
+        .enumerate()
+        .map(|(i, (a, b))| {
+            engine.report(
+                round,
+                Phase::Pair,
+                Some((i + 1, n_sets, format!("coarse {} + {}", a.effect.id(), b.effect.id()))),
+            );
             let mut set = applied.to_vec();
             set.push(a.clone());
             set.push(b.clone());
@@ -192,7 +201,12 @@ pub(super) fn pair_lookahead(
         .collect();
     let best_coarse = coarse.iter().map(|c| c.1).fold(f64::INFINITY, f64::min);
     let mut restarts: Vec<Vec<Applied>> = Vec::new();
-    for ((a, b), (set, f)) in sets.into_iter().zip(coarse) {
+    for (i, ((a, b), (set, f))) in sets.into_iter().zip(coarse).enumerate() {
+        engine.report(
+            round,
+            Phase::Pair,
+            Some((i + 1, n_sets, format!("{} + {}", a.effect.id(), b.effect.id()))),
+        );
         let set = if f <= opts.policy.pair_full_fit_within * best_coarse {
             if smooth(&set) {
                 fit_jointly(engine, train, set, n)
@@ -260,6 +274,13 @@ pub(super) fn pair_lookahead(
             best = Some((set, h.rmse(), k, logged));
         }
     }
+    // The winner beside the effects kept in earlier rounds, each fitted without it: one on the
+    // winner's joints may hold part of its signature (Coulomb friction fitted alone takes up
+    // part of a delay's lag), which the winner's own fit cannot give back. Those effects are
+    // re-fitted with the winner, coarsely on the screen's data; the set is a restart of the
+    // winner (the same model at other values) and replaces it when better on both training
+    // and held-out data. Otherwise the next round would hunt for what the biased value leaves.
+    restarts.extend(with_kept_refitted(s, &short, applied, as_applied(single)));
     // A restart competes with the best pair by the same rule as two pairs: a single effect
     // that a failed pair re-fitted (a servo gain at 1.0 beside a 15 ms delay on Asimov's knee)
     // must not lose to a mimicking pair (damping + armature) it beats on held-out.
@@ -326,6 +347,61 @@ pub(super) fn pair_lookahead(
     out.applied[..n].clone_from_slice(&set[..n]);
     sync_selected(out);
     Some(res)
+}
+
+/// The training RMSE of `applied` + `winner` re-fitted as [`with_kept_refitted`] does, when that
+/// leaves a white residual on every fitted joint ([`Engine::at_floor`]); `None` otherwise or when
+/// no kept effect shares a joint with the winner. The same re-fit in the look-ahead is answered
+/// by the rollout memo when the winner's values did not move.
+pub(super) fn refitted_at_floor(
+    s: &Search,
+    short: &[Recording],
+    applied: &[Applied],
+    winner: &Applied,
+) -> Option<f64> {
+    let set = with_kept_refitted(s, short, applied, winner.clone())?;
+    let t = s.engine.errors(s.train, &set)?;
+    s.engine.at_floor(s.train, &set, &t).then(|| t.rmse())
+}
+
+/// `applied` + `winner` with the winner and the kept effects that share a joint with it fitted
+/// together on `short` (the round's screen data), from their values, with a pair's coarse budget
+/// (Levenberg–Marquardt when all of them are smooth, else the simplex); the kept effects on
+/// other joints stay as they are. `None` when no kept effect shares a joint with the winner.
+fn with_kept_refitted(
+    s: &Search,
+    short: &[Recording],
+    applied: &[Applied],
+    winner: Applied,
+) -> Option<Vec<Applied>> {
+    let (engine, policy) = (s.engine, &s.engine.opts.policy);
+    let n = applied.len();
+    let shares = |a: &Applied| a.joints.iter().any(|j| winner.joints.contains(j));
+    let (free, fixed): (Vec<usize>, Vec<usize>) = (0..n).partition(|&i| shares(&applied[i]));
+    if free.is_empty() {
+        return None;
+    }
+    // The fixed effects first, then the freed ones and the winner (fitted from `first`).
+    let order: Vec<usize> = fixed.iter().chain(&free).copied().collect();
+    let mut set: Vec<Applied> = order.iter().map(|&i| applied[i].clone()).collect();
+    set.push(winner);
+    let first = fixed.len();
+    let set = if set[first..].iter().all(|a| a.effect.smooth()) {
+        let k: usize = set[first..].iter().map(|a| a.effect.fitted()).sum();
+        let iters = (policy.max_evals * 2 / 3 / (k + 2)).clamp(2, 12);
+        fit_jointly_iters(engine, short, set, first, iters)
+    } else {
+        let budget = (policy.coarse_polish_step, policy.max_evals * 2 / 3);
+        polish_from(engine, (short, s.heldout), set, first, budget)
+    };
+    // Back in the kept order, the winner last.
+    let mut back: Vec<Option<Applied>> = vec![None; n];
+    for (k, &i) in order.iter().enumerate() {
+        back[i] = Some(set[k].clone());
+    }
+    let mut out: Vec<Applied> = back.into_iter().collect::<Option<_>>()?;
+    out.push(set[n].clone());
+    Some(out)
 }
 
 /// The best restart that passes, as (set, held-out errors, training errors); `tried` gets phase
@@ -429,9 +505,15 @@ fn apply_restart(
     let a = set[n].clone();
     let label = a.effect.id();
     out.tried[logged].kept = true;
+    // Re-fitted beside the effects kept before it (their values moved), or in a pair whose
+    // partner was not needed.
+    let how = if set[..n].iter().zip(applied).any(|(x, y)| x.params != y.params) {
+        "with the effects kept before it"
+    } else {
+        "in a pair whose partner was not needed"
+    };
     out.notes.push(format!(
-        "{} on {} re-fitted in a pair whose partner was not needed: held-out RMSE {:.3e} rad, \
-         vs {:.3e} with {} alone",
+        "{} on {} re-fitted {how}: held-out RMSE {:.3e} rad, vs {:.3e} with {} alone",
         label,
         a.joints.join(","),
         h.rmse(),

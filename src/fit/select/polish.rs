@@ -37,7 +37,21 @@ pub(super) fn polish_budget(
     step: f64,
     max_evals: usize,
 ) -> Vec<Applied> {
-    let Some(slots) = param_slots(engine, &applied, 0, |ai| ai) else { return applied };
+    polish_from(engine, (train, heldout), applied, 0, (step, max_evals))
+}
+
+/// [`polish_budget`] of the parameters of `applied[first..]` only (the effects before stay as
+/// they are): Nelder–Mead with initial step `step` (fraction of each range) and a budget of
+/// `max_evals` evaluations of `train`; kept only when neither the training nor the held-out
+/// RMSE gets worse.
+pub(super) fn polish_from(
+    engine: &Engine,
+    (train, heldout): (&[Recording], &[Recording]),
+    applied: Vec<Applied>,
+    first: usize,
+    (step, max_evals): (f64, usize),
+) -> Vec<Applied> {
+    let Some(slots) = param_slots(engine, &applied, first, |ai| ai) else { return applied };
     let make = |x: &[f64]| with_params(&applied, &slots, x);
     let x0: Vec<f64> = slots.iter().map(|&(ai, k, ..)| applied[ai].params[k]).collect();
     let b =
