@@ -449,3 +449,86 @@ fn a_measured_step_sets_the_underdamped_level() {
     assert_eq!(fs[0].severity, modellint::finding::Severity::Warning, "{}", fs[0].message);
     assert!(fs[0].message.contains("measured step overshoot"), "{}", fs[0].message);
 }
+
+/// Runs the CLI on `model` (its spec beside it, if any) and returns its JSON output.
+fn cli_json(model: &Path, extra: &[&str]) -> serde_json::Value {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_modellint"))
+        .arg(model)
+        .args(["--format", "json"])
+        .args(extra)
+        .env_remove("GITHUB_ACTIONS")
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    serde_json::from_str(&text).unwrap_or_else(|e| {
+        panic!(
+            "{}: not JSON ({e}): {text}\n{}",
+            model.display(),
+            String::from_utf8_lossy(&out.stderr)
+        )
+    })
+}
+
+/// The probe outcomes of `rule`'s findings in a CLI JSON output.
+fn cli_probes(v: &serde_json::Value, rule: &str) -> Vec<serde_json::Value> {
+    let fs: Vec<_> = v["findings"]
+        .as_array()
+        .expect("findings")
+        .iter()
+        .filter(|f| f["rule"] == rule)
+        .map(|f| {
+            assert_ne!(f["severity"], "info", "{}", f["message"]);
+            f["probe"].clone()
+        })
+        .collect();
+    assert!(!fs.is_empty(), "no {rule} finding in {v}");
+    fs
+}
+
+/// A copy of a fixture (and its spec) with `from` replaced by `to`, in a scratch directory.
+fn edited_copy(path: &str, from: &str, to: &str, tag: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("modellint_probes_{tag}_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let src = Path::new(path);
+    let text = std::fs::read_to_string(src).unwrap();
+    assert!(text.contains(from), "{path} has no {from:?}");
+    let dst = dir.join(src.file_name().unwrap());
+    std::fs::write(&dst, text.replace(from, to)).unwrap();
+    let toml = src.with_extension("toml");
+    if toml.exists() {
+        std::fs::copy(&toml, dst.with_extension("toml")).unwrap();
+    }
+    dst
+}
+
+/// A flipped gear on a joint an equality locks: the command cannot move the target, so the
+/// direction probe cannot see the sign. Inconclusive with the reason, never confirmed (before
+/// the fix it was confirmed as "a positive command moved no joint"); the same model unlocked is
+/// confirmed.
+#[test]
+fn a_direction_probe_whose_target_cannot_move_is_inconclusive() {
+    let path = "fixtures/probes/locked_flipped_gear.xml";
+    let v = cli_json(Path::new(path), &[]);
+    for p in cli_probes(&v, "actuator-mapping") {
+        assert_eq!(p["name"], "actuator-direction", "{p}");
+        assert_eq!(p["status"], "inconclusive", "{p}");
+        let reason = p["reason"].as_str().unwrap_or("");
+        assert!(reason.contains("did not move the targeted joint `hinge`"), "{reason}");
+        assert!(reason.contains("held by equality `lock`"), "{reason}");
+        let pre = p["preconditions"].as_array().unwrap();
+        let moved = pre.iter().find(|c| c["name"] == "target_moved").expect("recorded");
+        assert_eq!(moved["met"], false, "{p}");
+    }
+    let free = edited_copy(
+        path,
+        "<joint name=\"lock\"",
+        "<joint name=\"lock\" active=\"false\"",
+        "unlocked",
+    );
+    let v = cli_json(&free, &[]);
+    for p in cli_probes(&v, "actuator-mapping") {
+        assert_eq!(p["status"], "confirmed", "{p}");
+        let pre = p["preconditions"].as_array().unwrap();
+        assert!(pre.iter().any(|c| c["name"] == "target_moved" && c["met"] == true), "{p}");
+    }
+}

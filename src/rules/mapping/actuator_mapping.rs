@@ -64,17 +64,49 @@ impl Claim for MisdirectedActuator {
             m.insert(format!("dq.{}", robot.joints[*j].name), *dq);
         }
         let none = Preconditions::new();
-        if d.moved.is_empty() {
-            return Verdict::confirmed(&none, m, "a positive command moved no joint");
-        }
         let act = &robot.actuators[self.actuator];
         let target = (act.target >= 0).then_some(act.target as usize);
-        let on_target =
-            target.and_then(|t| d.moved.iter().find(|(j, _)| *j == t)).map(|(_, dq)| *dq);
+        m.insert("actuator_force".into(), d.actuator_force);
+        let Some(t) = target else {
+            // No target: that nothing moves is the claim itself.
+            return if d.moved.is_empty() {
+                Verdict::confirmed(&none, m, "a positive command moved no joint")
+            } else {
+                let names: Vec<String> = d
+                    .moved
+                    .iter()
+                    .map(|(j, dq)| format!("{} {:+.4}", robot.joints[*j].name, dq))
+                    .collect();
+                Verdict::confirmed(
+                    &none,
+                    m,
+                    format!("a positive command moved: {}", names.join(", ")),
+                )
+            };
+        };
+        // Every claim about an actuator with a target (sign, moves nothing, moves another joint
+        // more) needs the target to have moved: a held joint shows no direction.
+        let on_target = d.moved.iter().find(|(j, _)| *j == t).map(|(_, dq)| *dq);
+        let target_name = &robot.joints[t].name;
+        let unit =
+            if robot.joints[t].jtype == crate::model::JointType::Slide { "m" } else { "rad" };
+        let moved_detail = match on_target {
+            Some(dq) => format!(
+                "a positive command moved the targeted joint `{target_name}` by {} {unit}",
+                fmt_num(dq, 3)
+            ),
+            None => format!(
+                "a positive command did not move the targeted joint `{target_name}` (less than {} {unit} in 0.3 s): {}",
+                fmt_num(crate::probe::direction::MOVED, 3),
+                why_held(d)
+            ),
+        };
+        let pre =
+            Preconditions::new().check("target_moved", on_target.is_some(), moved_detail.clone());
         if let Some(expected) = self.expected {
             return match on_target {
                 Some(dq) if dq.signum() != f64::from(expected).signum() => Verdict::confirmed(
-                    &none,
+                    &pre,
                     m,
                     format!(
                         "a positive command moved the joint by {} rad: opposite to the spec's direction {expected:+}",
@@ -82,37 +114,47 @@ impl Claim for MisdirectedActuator {
                     ),
                 ),
                 Some(dq) => Verdict::refuted_or_inconclusive(
-                    &Preconditions::new().check(
-                        "target_moved",
-                        true,
-                        "a positive command moved the targeted joint",
-                    ),
+                    &pre,
                     m,
                     format!(
                         "a positive command moved the joint by {} rad, as the spec says",
                         fmt_num(dq, 3)
                     ),
                 ),
-                None => Verdict::inconclusive(
-                    &Preconditions::new().check(
-                        "target_moved",
-                        false,
-                        "the targeted joint did not move",
-                    ),
-                    m,
-                    "the targeted joint did not move",
-                ),
+                None => Verdict::inconclusive(&pre, m, moved_detail),
             };
+        }
+        if on_target.is_none() {
+            return Verdict::inconclusive(&pre, m, moved_detail);
         }
         let biggest = d.moved.iter().max_by(|a, b| a.1.abs().total_cmp(&b.1.abs())).map(|x| x.0);
         let names: Vec<String> =
             d.moved.iter().map(|(j, dq)| format!("{} {:+.4}", robot.joints[*j].name, dq)).collect();
         let note = format!("a positive command moved: {}", names.join(", "));
         if biggest != target {
-            Verdict::confirmed(&none, m, note)
+            Verdict::confirmed(&pre, m, note)
         } else {
-            Verdict::inconclusive(&none, m, note)
+            Verdict::inconclusive(&pre, m, note)
         }
+    }
+}
+
+/// Why a commanded target did not move, from what the probe saw at the end of its run.
+fn why_held(d: &Direction) -> String {
+    if !d.actuator_force.is_finite() || d.actuator_force.abs() <= 1e-9 {
+        "the actuator applied no force (zero gain, or its command clamped to where it was)"
+            .to_string()
+    } else if d.holding.is_empty() {
+        format!(
+            "the actuator's force {} did not overcome the joint's load",
+            fmt_num(d.actuator_force, 3)
+        )
+    } else {
+        format!(
+            "the actuator's force {} is held by {}",
+            fmt_num(d.actuator_force, 3),
+            d.holding.join(", ")
+        )
     }
 }
 
