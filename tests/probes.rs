@@ -532,3 +532,36 @@ fn a_direction_probe_whose_target_cannot_move_is_inconclusive() {
         assert!(pre.iter().any(|c| c["name"] == "target_moved" && c["met"] == true), "{p}");
     }
 }
+
+/// Coincident boxes: MuJoCo's contact list has them 100 mm deep (the rule fires), but
+/// mj_geomDistance, which the probe tracks the pair's separation with, finds no overlap. The
+/// probe's `overlap_at_keyframe` fails: inconclusive with the reason, naming both measures. The
+/// same fingers moved 20 mm apart overlap in both: confirmed with the precondition met.
+#[test]
+fn a_penetration_probe_that_sees_no_overlap_is_inconclusive() {
+    let path = "fixtures/probes/coincident_boxes.xml";
+    let only = ["--select", "self-collision-at-keyframe"];
+    let v = cli_json(Path::new(path), &only);
+    for p in cli_probes(&v, "self-collision-at-keyframe") {
+        assert_eq!(p["name"], "keyframe-penetration", "{p}");
+        assert_eq!(p["status"], "inconclusive", "{p}");
+        let reason = p["reason"].as_str().unwrap_or("");
+        assert!(reason.contains("mj_geomDistance finds no overlap"), "{reason}");
+        assert!(reason.contains("contact list has them 0.1 m deep"), "{reason}");
+        let pre = p["preconditions"].as_array().unwrap();
+        let overlap = pre.iter().find(|c| c["name"] == "overlap_at_keyframe").expect("recorded");
+        assert_eq!(overlap["met"], false, "{p}");
+    }
+    let apart = edited_copy(
+        path,
+        "<body name=\"finger_b\" pos=\"0 0 -0.08\">",
+        "<body name=\"finger_b\" pos=\"0.02 0 -0.08\">",
+        "apart",
+    );
+    let v = cli_json(&apart, &only);
+    for p in cli_probes(&v, "self-collision-at-keyframe") {
+        assert_eq!(p["status"], "confirmed", "{p}");
+        let pre = p["preconditions"].as_array().unwrap();
+        assert!(pre.iter().any(|c| c["name"] == "overlap_at_keyframe" && c["met"] == true), "{p}");
+    }
+}

@@ -36,6 +36,9 @@ pub const JOLT_SPEED: f64 = 0.01;
 pub struct Penetration {
     /// Signed distance at the keyframe [m] (negative: overlap).
     pub depth0: f64,
+    /// Deepest penetration of the pair in MuJoCo's contact list at the keyframe [m] (what the
+    /// rule reports; NaN when the list has no contact of the pair).
+    pub contact_depth: f64,
     /// Sum of MuJoCo's normal contact forces between the two geoms at the keyframe [N].
     pub contact_force: f64,
     /// Largest rate at which the signed distance grew [m/s].
@@ -57,6 +60,15 @@ pub fn run(robot: &Robot, a: usize, b: usize) -> Option<Penetration> {
     // Active contacts only (efc_address ≥ 0): those the constraint solver applies force through.
     let cons: Vec<(i32, i32, bool)> =
         d.contact().iter().map(|c| (c.geom1, c.geom2, c.efc_address >= 0)).collect();
+    let contact_depth = d
+        .contact()
+        .iter()
+        .filter(|c| {
+            let (g1, g2) = (c.geom1 as usize, c.geom2 as usize);
+            (g1, g2) == (a, b) || (g1, g2) == (b, a)
+        })
+        .map(|c| -c.dist)
+        .fold(f64::NAN, f64::max);
     let contact_force: f64 = cons
         .iter()
         .enumerate()
@@ -88,5 +100,13 @@ pub fn run(robot: &Robot, a: usize, b: usize) -> Option<Penetration> {
         }
         prev = dist;
     }
-    Some(Penetration { depth0, contact_force, separation_speed, dist_end: prev, clear_time, steps })
+    Some(Penetration {
+        depth0,
+        contact_depth,
+        contact_force,
+        separation_speed,
+        dist_end: prev,
+        clear_time,
+        steps,
+    })
 }

@@ -105,14 +105,27 @@ impl Claim for PushedApart {
             m.insert("clear_time_s".into(), t);
         }
         let pushes = p.contact_force > 0.0; // NaN: no force
-        let pre = Preconditions::new().check(
-            "overlap_at_keyframe",
-            p.depth0 < 0.0,
+        if p.contact_depth.is_finite() {
+            m.insert("contact_depth_m".into(), p.contact_depth);
+        }
+        let overlap = p.depth0 < 0.0;
+        let detail = if overlap {
             format!(
-                "the pair's compiled geometry overlaps by {} m at the keyframe",
+                "mj_geomDistance finds the pair's compiled geometry overlapping by {} m at the keyframe",
                 fmt_num(-p.depth0, 3)
-            ),
-        );
+            )
+        } else {
+            let listed = if p.contact_depth.is_finite() {
+                format!("MuJoCo's contact list has them {} m deep", fmt_num(p.contact_depth, 3))
+            } else {
+                "MuJoCo's contact list has no contact of the pair".to_string()
+            };
+            format!(
+                "mj_geomDistance finds no overlap of the pair at the keyframe (distance {} m) while {listed}: the two disagree (coincident or degenerate convex shapes), so the probe cannot measure how the pair separates",
+                fmt_num(p.depth0.max(0.0), 3)
+            )
+        };
+        let pre = Preconditions::new().check("overlap_at_keyframe", overlap, detail);
         if !pushes {
             return Verdict::refuted_or_inconclusive(
                 &pre,
