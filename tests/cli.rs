@@ -38,6 +38,12 @@ fn broken_inputs_exit_2_with_location() {
             "neither MJCF",
         ),
         (&["fixtures/broken/does_not_exist.xml"], "does_not_exist.xml", "file not found"),
+        // MuJoCo's message is cut before its line number: the element it names.
+        (
+            &["fixtures/broken/massless_body.xml"],
+            "fixtures/broken/massless_body.xml:7:19:",
+            "Element name 'forearm'",
+        ),
         (
             &["fixtures/broken/mujoco_rejects.xml"],
             "fixtures/broken/mujoco_rejects.xml",
