@@ -565,3 +565,24 @@ fn a_penetration_probe_that_sees_no_overlap_is_inconclusive() {
         assert!(pre.iter().any(|c| c["name"] == "overlap_at_keyframe" && c["met"] == true), "{p}");
     }
 }
+
+/// A probe result belongs only to the claim it measures (issue 45 item 2). The direction run
+/// drives the actuator and sees which way its joint moves: that tests a sign against the spec,
+/// not a ctrlrange that reaches outside the joint's range nor an actuator on a joint the spec
+/// marks passive. Those findings carry no probe result (before the fix they were "inconclusive:
+/// probe `actuator-direction` … moved: knee +0.0488"); the flipped gear is still driven.
+#[test]
+fn direction_probe_results_attach_only_to_the_sign_claim() {
+    for path in [
+        "fixtures/rules/actuator-mapping/invalid_ctrlrange.xml",
+        "fixtures/rules/actuator-mapping/invalid_far_outside.xml",
+        "fixtures/rules/actuator-mapping/invalid_passive.xml",
+    ] {
+        for f in probed(path, "actuator-mapping") {
+            assert!(f.probe.is_none(), "{path}: {} carries {:?}", f.message, f.probe);
+            assert!(f.claim.is_none(), "{path}: {} carries a claim", f.message);
+        }
+    }
+    let fs = probed("fixtures/probes/locked_flipped_gear.xml", "actuator-mapping");
+    assert!(fs.iter().all(|f| f.probe.as_ref().is_some_and(|p| p.name == "actuator-direction")));
+}

@@ -7,7 +7,7 @@ use crate::model::mjcf::ElemKind;
 use crate::model::{ActuatorKind, Transmission};
 use crate::probe::direction::Direction;
 use crate::probe::{ActuatorDirection, Claim, Preconditions, Verdict};
-use crate::rules::{Context, Rule, RuleMeta, claim_each};
+use crate::rules::{Context, Rule, RuleMeta};
 use crate::util::fmt_num;
 
 declare_rule! {
@@ -28,7 +28,10 @@ declare_rule! {
     ///
     /// ## How it is confirmed
     /// Probe `actuator-direction` for sign findings: the actuator is driven and the direction of
-    /// the joint's motion compared with the spec. The other checks are static.
+    /// the joint's motion compared with the spec; for an actuator with no target, that a command
+    /// moves nothing. The other checks (ctrlrange outside the joint range, an actuator on a
+    /// passive joint, extra or force-unlimited actuators, joint counts) are static: no motion
+    /// measures them, so they carry no probe result.
     ///
     /// ## How to fix
     /// Add, remove or retarget actuators so each motor of the real robot has exactly one, flip
@@ -42,14 +45,24 @@ declare_rule! {
     }
 }
 
-/// What the `actuator-direction` probe checks about an actuator: with a spec direction, that a
-/// positive command moves its joint against it; without, that it moves nothing, or moves another
-/// joint more than its own target.
+/// What the `actuator-direction` probe checks about an actuator: that a positive command moves
+/// nothing (an actuator with no transmission target), or that it moves its target joint against
+/// the spec's `direction`. These are the only findings of the rule a direction run measures: a
+/// ctrlrange outside the joint's range, an actuator on a joint the spec marks passive, an extra or
+/// force-unlimited actuator are facts of the file no motion shows, and carry no probe result.
 #[derive(Debug)]
 pub struct MisdirectedActuator {
     pub actuator: usize,
-    /// The spec's `direction` of the target joint (+1 / -1), when the finding is about it.
-    pub expected: Option<i32>,
+    pub claim: ActuatorMotion,
+}
+
+/// The motion a finding of `actuator-mapping` predicts for a positive command.
+#[derive(Debug, Clone, Copy)]
+pub enum ActuatorMotion {
+    /// The actuator has no target: nothing moves.
+    Nothing,
+    /// The target joint moves against the spec's `direction` (+1 / -1).
+    AgainstDirection(i32),
 }
 
 impl Claim for MisdirectedActuator {
@@ -67,25 +80,30 @@ impl Claim for MisdirectedActuator {
         let act = &robot.actuators[self.actuator];
         let target = (act.target >= 0).then_some(act.target as usize);
         m.insert("actuator_force".into(), d.actuator_force);
-        let Some(t) = target else {
-            // No target: that nothing moves is the claim itself.
-            return if d.moved.is_empty() {
-                Verdict::confirmed(&none, m, "a positive command moved no joint")
-            } else {
-                let names: Vec<String> = d
-                    .moved
-                    .iter()
-                    .map(|(j, dq)| format!("{} {:+.4}", robot.joints[*j].name, dq))
-                    .collect();
-                Verdict::confirmed(
-                    &none,
-                    m,
-                    format!("a positive command moved: {}", names.join(", ")),
-                )
-            };
+        let moved = || {
+            let names: Vec<String> = d
+                .moved
+                .iter()
+                .map(|(j, dq)| format!("{} {:+.4}", robot.joints[*j].name, dq))
+                .collect();
+            format!("a positive command moved: {}", names.join(", "))
         };
-        // Every claim about an actuator with a target (sign, moves nothing, moves another joint
-        // more) needs the target to have moved: a held joint shows no direction.
+        let (t, expected) = match (self.claim, target) {
+            (ActuatorMotion::Nothing, _) => {
+                // That nothing moves is the claim itself; motion it cannot attribute to an
+                // actuator with no target says nothing about the claim.
+                return if d.moved.is_empty() {
+                    Verdict::confirmed(&none, m, "a positive command moved no joint")
+                } else {
+                    Verdict::inconclusive(&none, m, moved())
+                };
+            }
+            (ActuatorMotion::AgainstDirection(e), Some(t)) => (t, e),
+            (ActuatorMotion::AgainstDirection(_), None) => {
+                return Verdict::inconclusive(&none, m, "the actuator has no target joint");
+            }
+        };
+        // The sign claim needs the target to have moved: a held joint shows no direction.
         let on_target = d.moved.iter().find(|(j, _)| *j == t).map(|(_, dq)| *dq);
         let target_name = &robot.joints[t].name;
         let unit =
@@ -103,38 +121,24 @@ impl Claim for MisdirectedActuator {
         };
         let pre =
             Preconditions::new().check("target_moved", on_target.is_some(), moved_detail.clone());
-        if let Some(expected) = self.expected {
-            return match on_target {
-                Some(dq) if dq.signum() != f64::from(expected).signum() => Verdict::confirmed(
-                    &pre,
-                    m,
-                    format!(
-                        "a positive command moved the joint by {} rad: opposite to the spec's direction {expected:+}",
-                        fmt_num(dq, 3)
-                    ),
+        match on_target {
+            Some(dq) if dq.signum() != f64::from(expected).signum() => Verdict::confirmed(
+                &pre,
+                m,
+                format!(
+                    "a positive command moved the joint by {} rad: opposite to the spec's direction {expected:+}",
+                    fmt_num(dq, 3)
                 ),
-                Some(dq) => Verdict::refuted_or_inconclusive(
-                    &pre,
-                    m,
-                    format!(
-                        "a positive command moved the joint by {} rad, as the spec says",
-                        fmt_num(dq, 3)
-                    ),
+            ),
+            Some(dq) => Verdict::refuted_or_inconclusive(
+                &pre,
+                m,
+                format!(
+                    "a positive command moved the joint by {} rad, as the spec says",
+                    fmt_num(dq, 3)
                 ),
-                None => Verdict::inconclusive(&pre, m, moved_detail),
-            };
-        }
-        if on_target.is_none() {
-            return Verdict::inconclusive(&pre, m, moved_detail);
-        }
-        let biggest = d.moved.iter().max_by(|a, b| a.1.abs().total_cmp(&b.1.abs())).map(|x| x.0);
-        let names: Vec<String> =
-            d.moved.iter().map(|(j, dq)| format!("{} {:+.4}", robot.joints[*j].name, dq)).collect();
-        let note = format!("a positive command moved: {}", names.join(", "));
-        if biggest != target {
-            Verdict::confirmed(&pre, m, note)
-        } else {
-            Verdict::inconclusive(&pre, m, note)
+            ),
+            None => Verdict::inconclusive(&pre, m, moved_detail),
         }
     }
 }
@@ -163,15 +167,7 @@ impl Rule for ActuatorMapping {
         &Self::META
     }
     fn check(&self, cx: &Context, out: &mut Vec<Finding>) {
-        let first = out.len();
         self.check_mapping(cx, out);
-        // Every finding about one actuator can be driven on the bench.
-        claim_each(&mut out[first..], |f| match (f.subject, &f.claim) {
-            (Subject::Actuator(actuator), None) => {
-                Some(MisdirectedActuator { actuator, expected: None })
-            }
-            _ => None,
-        });
     }
 }
 
@@ -192,7 +188,8 @@ impl ActuatorMapping {
                     .label("no target")
                     .note("an actuator that drives nothing is a mapping error: the policy's action for it has no effect")
                     .help("point the actuator at the joint (or tendon) of its motor, or remove it")
-                    .subject(Subject::Actuator(a.id));
+                    .subject(Subject::Actuator(a.id))
+                    .claim(MisdirectedActuator { actuator: a.id, claim: ActuatorMotion::Nothing });
                 out.push(f);
             }
         }
@@ -336,7 +333,10 @@ impl ActuatorMapping {
                         .note("a flipped actuator sign makes every command move the joint the wrong way relative to the hardware's convention; the deployed policy drives the real joint backwards")
                         .help(format!("set gear=\"{}\" (or fix the spec's direction)", fmt_num(-a.gear, 4)))
                         .subject(Subject::Actuator(a.id))
-                        .claim(MisdirectedActuator { actuator: a.id, expected: Some(d) })
+                        .claim(MisdirectedActuator {
+                            actuator: a.id,
+                            claim: ActuatorMotion::AgainstDirection(d),
+                        })
                         .with("gear", a.gear)
                         .with("direction", d as f64);
                     out.push(spec_label(f));
