@@ -211,6 +211,7 @@ pub fn registry() -> Vec<&'static dyn Rule> {
         &inertia::parallel_ankle_armature::ParallelAnkleArmature,
         &inertia::zero_armature::ZeroArmature,
         &inertia::isotropic_base_inertia::IsotropicBaseInertia,
+        &inertia::copied_inertial::CopiedInertial,
         &contact::toe_tilt::ToeTilt,
         &contact::foot_collision_geometry::FootCollisionGeometry,
         &limits::soft_limits::SoftLimits,

@@ -3,6 +3,7 @@ use crate::finding::{Finding, Severity, Subject};
 use crate::model::mirror::{Side, mirror_in};
 use crate::model::mjcf::ElemKind;
 use crate::model::{ActuatorKind, Robot};
+use crate::rules::inertia::isotropic_base_inertia::inertia_loc;
 use crate::rules::{Context, Rule, RuleMeta, opt};
 use crate::util::fmt_num;
 
@@ -13,8 +14,12 @@ declare_rule! {
     /// `l_`/`r_` prefixes and `_l`/`_r` suffixes, and `Left`/`Right` anywhere) and reports
     /// differences: joint armature, damping, stiffness and frictionloss, joint range (accepted
     /// when equal or mirrored, `[a, b]` ↔ `[−b, −a]`, as for roll and yaw joints), actuator
-    /// kp/kv and gear, actuator force and control ranges (equal or mirrored), body masses, and
-    /// the types and sizes of each body pair's collision geoms (which covers the feet).
+    /// kp/kv and gear, actuator force and control ranges (equal or mirrored), body masses, body
+    /// principal moments of inertia (sorted, so independent of the frames the two sides'
+    /// inertials are written in; compared with `inertia_tolerance`, for bodies whose masses
+    /// agree and whose `<inertial>` the file states — moments MuJoCo computes from the geoms
+    /// follow the collision geometry, compared on its own), and the types and sizes of
+    /// each body pair's collision geoms (which covers the feet).
     /// Quadruped legs pair by their `FL_`/`FR_`, `RL_`/`RR_` or `HL_`/`HR_` (Spot-style hind
     /// legs; and ANYmal-style `LF_`/`RF_`, `LH_`/`RH_`) prefixes, in either case; a biped's
     /// `LL_`/`LR_` (leg left, leg right) prefixes pair when the partner name exists (the same
@@ -48,6 +53,7 @@ declare_rule! {
             opt("tolerance", 0.01, "ratio", "relative difference tolerated between mirrored scalars"),
             opt("range_tolerance", 0.005, "rad or m", "absolute difference tolerated between mirrored range ends (0.005 rad ≈ 0.3°: calibrated hardware limits differ by a few mrad)"),
             opt("geom_tolerance", 0.02, "ratio", "relative size difference tolerated between mirrored collision geoms (or 0.5 mm)"),
+            opt("inertia_tolerance", 0.05, "ratio", "relative difference tolerated between mirrored bodies' principal moments of inertia (CAD exports of the two halves of a mirrored part differ by 1–2 %)"),
         ],
     }
 }
@@ -102,6 +108,47 @@ impl Pair<'_> {
             .help("use the same value on both sides, ideally from one shared <default class>")
             .subject(subject)
     }
+}
+
+/// The mirrored bodies' principal moments (sorted), when one of them differs by more than `tol`
+/// relative: a finding at the right body's inertial.
+fn inertia_differs(cx: &Context, p: &Pair, tol: f64) -> Option<Finding> {
+    let inertia = cx.robot.mj.body_inertia();
+    let sorted = |b: usize| {
+        let mut v = *inertia.get(b)?;
+        v.sort_by(f64::total_cmp);
+        Some(v)
+    };
+    let robot = cx.robot;
+    // Only inertials the file states: moments MuJoCo computes from the geoms follow from the
+    // collision geometry, compared (and reported) on its own.
+    let loc = inertia_loc(robot, p.right.1)?;
+    let lsrc = inertia_loc(robot, p.left.1)?;
+    let (a, b) = (sorted(p.left.0)?, sorted(p.right.0)?);
+    let worst = (0..3).filter(|&k| differs(a[k], b[k], tol)).max_by(|&x, &y| {
+        let r = |k: usize| (a[k] - b[k]).abs() / a[k].abs().max(b[k].abs());
+        r(x).total_cmp(&r(y))
+    })?;
+    let m = |v: [f64; 3]| format!("{} {} {}", fmt_num(v[0], 4), fmt_num(v[1], 4), fmt_num(v[2], 4));
+    let msg = format!(
+        "body `{}` principal moments of inertia [{}] kg·m² differ from its mirror `{}`'s ([{}] kg·m²)",
+        p.right.1,
+        m(b),
+        p.left.1,
+        m(a)
+    );
+    let rloc = robot.elem_loc(ElemKind::Body, p.right.0, p.right.1);
+    Some(
+        cx.finding(msg, loc)
+            .element(format!("body {}", p.right.1), rloc)
+            .label(format!("moments [{}] kg·m²", m(b)))
+            .secondary(lsrc, format!("mirror `{}` has [{}] kg·m²", p.left.1, m(a)))
+            .note("the principal moments of a part and its mirror image are equal whatever frame each inertial is written in; a difference beyond CAD export noise is a different or wrongly copied part, and the policy learns a heavier-swinging side")
+            .help("use the mirror part's inertial (principal moments equal, centre of mass mirrored) on both sides")
+            .subject(Subject::Body(p.right.0))
+            .measured(b[worst], "kg·m²")
+            .expected(a[worst], "kg·m²"),
+    )
 }
 
 /// Both actuators take their ctrlrange from their joints' ranges (`inheritrange`, the same
@@ -324,6 +371,11 @@ impl Rule for MirrorAsymmetry {
                         .expected(a.mass, "kg")
                         .with("mass_ratio", b.mass / a.mass.max(1e-12)),
                 );
+            }
+            // Moments follow the mass: a body already reported for its mass is not reported
+            // again for its moments.
+            else if let Some(f) = inertia_differs(cx, &p, cx.opt("inertia_tolerance")) {
+                out.push(f);
             }
             let (sa, sb) = (geom_signature(robot, l), geom_signature(robot, rr));
             if !same_geoms(robot, &colliders(robot, l), &colliders(robot, rr), gtol, 0.0005) {

@@ -94,7 +94,7 @@ pub fn body_extents(robot: &Robot, b: usize) -> Option<[f64; 3]> {
 
 /// Where the body's inertia is written: the `diaginertia`/`fullinertia` of its `<inertial>`
 /// (MJCF) or the `<inertia>` of its link's `<inertial>` (URDF).
-fn inertia_loc(robot: &Robot, name: &str) -> Option<Loc> {
+pub(crate) fn inertia_loc(robot: &Robot, name: &str) -> Option<Loc> {
     let mut found = None;
     robot.tree.walk(&mut |n: &XNode| {
         if found.is_some() || !(n.tag == "body" || n.tag == "link") || n.name() != Some(name) {
