@@ -6,7 +6,7 @@ use crate::declare_rule;
 use crate::finding::{Finding, Severity, Subject};
 use crate::lint::Loaded;
 use crate::model::mjcf::ElemKind;
-use crate::model::{GeomType, Robot};
+use crate::model::{GeomType, Robot, contact};
 use crate::probe::penetration::{self, Penetration};
 use crate::probe::{Claim, KeyframePenetration, Preconditions, Verdict};
 use crate::rules::{Context, Rule, RuleMeta, opt};
@@ -19,7 +19,13 @@ declare_rule! {
     /// after `mj_forward` at the keyframe, so every filter MuJoCo applies is honoured: same body,
     /// parent/child bodies (unless `filterparent` is disabled), welded bodies,
     /// contype/conaffinity masks and `<exclude>` pairs. Contacts with the world body (the floor
-    /// plane, terrain) are ignored: ground contact in stance is expected.
+    /// plane, terrain) are ignored: ground contact in stance is expected. One case the contact
+    /// list misses is added: two geoms MuJoCo tests that are the same shape (type, size, mesh)
+    /// at exactly the same world pose. Two coincident convex meshes are a degenerate case of
+    /// MuJoCo's convex collision (GJK/EPA) and get no contact at the keyframe, while coincident
+    /// boxes do (box-box collision is analytic, 100 mm deep for 100 mm cubes); a millimetre of
+    /// motion gives the meshes the same depth. Such a pair is reported with the shape's
+    /// smallest extent as its depth.
     ///
     /// ## Why is this bad?
     /// Geoms that overlap in the initial pose produce large repulsive forces on the first step:
@@ -47,8 +53,20 @@ declare_rule! {
     }
 }
 
+/// How deep a pair of geoms overlaps at the keyframe, and whether it is a pair of identical
+/// shapes at one pose that MuJoCo's contact list leaves out.
+#[derive(Debug, Clone, Copy)]
+pub struct Overlap {
+    pub depth: f64,
+    /// The same convex shape (type, size, mesh) at the same world pose: the convex collision of
+    /// two coincident shapes is degenerate (the support points of the Minkowski difference are
+    /// symmetric about the origin) and MuJoCo's convex-convex path (mesh geoms) returns no
+    /// contact, while any motion of either geom puts them this deep.
+    pub coincident: bool,
+}
+
 /// Deepest penetration per geom pair (geom ids ascending) at the keyframe, floor/world excluded.
-pub fn keyframe_penetrations(robot: &Robot) -> BTreeMap<(usize, usize), f64> {
+pub fn keyframe_penetrations(robot: &Robot) -> BTreeMap<(usize, usize), Overlap> {
     let m = &robot.mj;
     let mut d = MjData::new(m);
     if let Some(k) = robot.key.key {
@@ -56,7 +74,10 @@ pub fn keyframe_penetrations(robot: &Robot) -> BTreeMap<(usize, usize), f64> {
     }
     d.forward();
     let cons = d.contact();
-    let mut out: BTreeMap<(usize, usize), f64> = BTreeMap::new();
+    let mut out: BTreeMap<(usize, usize), Overlap> = BTreeMap::new();
+    let ground = |g: &crate::model::Geom| {
+        g.body == 0 || matches!(g.gtype, GeomType::Plane | GeomType::Hfield)
+    };
     for c in cons {
         let (a, b) = (c.geom1, c.geom2);
         if a < 0 || b < 0 {
@@ -64,15 +85,44 @@ pub fn keyframe_penetrations(robot: &Robot) -> BTreeMap<(usize, usize), f64> {
         }
         let (a, b) = (a.min(b) as usize, a.max(b) as usize);
         let (ga, gb) = (&robot.geoms[a], &robot.geoms[b]);
-        let ground = |g: &crate::model::Geom| {
-            g.body == 0 || matches!(g.gtype, GeomType::Plane | GeomType::Hfield)
-        };
         if ground(ga) || ground(gb) {
             continue;
         }
         let depth = -c.dist;
-        let e = out.entry((a, b)).or_insert(f64::NEG_INFINITY);
-        *e = e.max(depth);
+        let e =
+            out.entry((a, b)).or_insert(Overlap { depth: f64::NEG_INFINITY, coincident: false });
+        e.depth = e.depth.max(depth);
+    }
+    // Identical shapes at one pose that MuJoCo tests but lists no contact for.
+    let (xpos, xmat, aabb) = (d.geom_xpos(), d.geom_xmat(), m.geom_aabb());
+    let same = |x: &[f64], y: &[f64]| x.iter().zip(y).all(|(p, q)| p == q);
+    for (i, ga) in robot.geoms.iter().enumerate() {
+        for gb in &robot.geoms[i + 1..] {
+            let (a, b) = (ga.id, gb.id);
+            if out.contains_key(&(a, b))
+                || ground(ga)
+                || ground(gb)
+                || ga.gtype != gb.gtype
+                || ga.size != gb.size
+                || (ga.gtype == GeomType::Mesh && ga.mesh != gb.mesh)
+                || (contact::filtered(robot, a, b).is_some()
+                    && contact::pair_of(robot, a, b).is_none())
+            {
+                continue;
+            }
+            let (Some(pa), Some(pb), Some(ra), Some(rb), Some(bx)) =
+                (xpos.get(a), xpos.get(b), xmat.get(a), xmat.get(b), aabb.get(a))
+            else {
+                continue;
+            };
+            if !same(pa, pb) || !same(ra, rb) {
+                continue;
+            }
+            let depth = 2.0 * bx[3].min(bx[4]).min(bx[5]);
+            if depth.is_finite() && depth > 0.0 {
+                out.insert((a, b), Overlap { depth, coincident: true });
+            }
+        }
     }
     out
 }
@@ -115,15 +165,17 @@ impl Claim for PushedApart {
                 fmt_num(-p.depth0, 3)
             )
         } else {
-            let listed = if p.contact_depth.is_finite() {
-                format!("MuJoCo's contact list has them {} m deep", fmt_num(p.contact_depth, 3))
+            let dist = fmt_num(p.depth0.max(0.0), 3);
+            if p.contact_depth.is_finite() {
+                format!(
+                    "mj_geomDistance finds no overlap of the pair at the keyframe (distance {dist} m) while MuJoCo's contact list has them {} m deep: the two disagree (coincident or degenerate convex shapes), so the probe cannot measure how the pair separates",
+                    fmt_num(p.contact_depth, 3)
+                )
             } else {
-                "MuJoCo's contact list has no contact of the pair".to_string()
-            };
-            format!(
-                "mj_geomDistance finds no overlap of the pair at the keyframe (distance {} m) while {listed}: the two disagree (coincident or degenerate convex shapes), so the probe cannot measure how the pair separates",
-                fmt_num(p.depth0.max(0.0), 3)
-            )
+                format!(
+                    "mj_geomDistance finds no overlap of the pair at the keyframe (distance {dist} m) and MuJoCo's contact list has no contact of the pair either (coincident convex shapes, a degenerate case of the convex collision), so the probe cannot measure how the pair separates"
+                )
+            }
         };
         let pre = Preconditions::new().check("overlap_at_keyframe", overlap, detail);
         if !pushes {
@@ -169,22 +221,37 @@ impl Rule for SelfCollisionAtKeyframe {
             Some(_) => "the keyframe".to_string(),
             None => "qpos0".to_string(),
         };
-        for ((a, b), depth) in keyframe_penetrations(robot) {
+        for ((a, b), o) in keyframe_penetrations(robot) {
+            let depth = o.depth;
             if depth < min_depth {
                 continue;
             }
             let gb = &robot.geoms[b];
-            let msg = format!(
-                "collision geoms {} and {} penetrate by {} mm at {pose}",
-                gdesc(robot, a),
-                gdesc(robot, b),
-                fmt_num(depth * 1000.0, 3)
-            );
+            let msg = if o.coincident {
+                format!(
+                    "collision geoms {} and {} are the same shape at the same pose at {pose}: MuJoCo lists no contact between coincident convex shapes, but any motion of either puts them {} mm deep",
+                    gdesc(robot, a),
+                    gdesc(robot, b),
+                    fmt_num(depth * 1000.0, 3)
+                )
+            } else {
+                format!(
+                    "collision geoms {} and {} penetrate by {} mm at {pose}",
+                    gdesc(robot, a),
+                    gdesc(robot, b),
+                    fmt_num(depth * 1000.0, 3)
+                )
+            };
+            let note = if o.coincident {
+                "two identical convex shapes at one pose are a degenerate case of MuJoCo's convex collision (GJK/EPA on the Minkowski difference): at the keyframe it reports no contact, and the first millimetre of motion turns it into a contact as deep as the shape, which pushes the links apart with large forces"
+            } else {
+                "overlapping geoms in the initial pose push apart with large contact forces on the first step, so every episode starts with a jolt the hardware never experiences"
+            };
             out.push(
                 cx.at_elem(ElemKind::Geom, a, &robot.geoms[a].name, msg)
                     .label(format!("penetrates {} by {} mm", gdesc(robot, b), fmt_num(depth * 1000.0, 3)))
                     .secondary(robot.elem_loc(ElemKind::Geom, b, &gb.name), "the other geom")
-                    .note("overlapping geoms in the initial pose push apart with large contact forces on the first step, so every episode starts with a jolt the hardware never experiences")
+                    .note(note)
                     .help("shrink or move the geoms so they clear each other in this pose, or filter the pair with <contact><exclude body1=.. body2=../></contact> or contype/conaffinity if the links cannot touch on the hardware")
                     .subject(Subject::Geom(a))
                     .claim(PushedApart { geoms: (a, b) })
