@@ -13,15 +13,17 @@ declare_rule! {
     /// ## What it does
     /// Reports a body whose compiled inertial — mass, centre of mass, principal axes and
     /// principal moments — is bit for bit that of another body although the two bodies share no
-    /// geometry: no mesh asset in common and no primitive geom of the same type and size. Bodies
+    /// geometry: no mesh of the same shape and no primitive geom of the same type and size. Bodies
     /// that are the same part (the legs of a quadruped built from one thigh mesh, or one
     /// module repeated) share a mesh or a primitive and are not reported; neither are bodies
     /// without any geom (camera and sensor frames), whose part cannot be told. Left and right
     /// halves of a part (paired by name as in `mirror-asymmetry`, which compares them) are not
     /// reported either: a mirrored part whose centre of mass lies on the plane of symmetry has
     /// the same inertial on both sides. Needs no spec and no
-    /// threshold: ten numbers agreeing to the last digit across two different parts are a copy,
-    /// not a coincidence.
+    /// threshold on the inertial: ten numbers agreeing to the last digit across two different
+    /// parts are a copy, not a coincidence. Meshes are compared by content, not by asset: two
+    /// files of one part (vertex count and extents in the mesh's principal frame agreeing to
+    /// float noise, 1e-6 m) are one part.
     ///
     /// ## Why is this bad?
     /// An `<inertial>` block pasted from the body above (a common URDF/MJCF export or hand-edit
@@ -59,11 +61,43 @@ fn key(robot: &Robot, b: usize) -> Option<[u64; 11]> {
     Some(v.map(|x| (x + 0.0).to_bits()))
 }
 
-/// What identifies a body's part: its mesh assets and its primitive geoms (type and size).
-#[derive(PartialEq)]
+/// Two compiled meshes whose vertex extents agree to this many metres on every axis (and that have
+/// as many vertices) are one part exported twice: float noise only. MuJoCo stores a mesh's
+/// vertices in its own principal frame, so the same part from two files compiles to the same
+/// numbers.
+const SAME_MESH_M: f64 = 1e-6;
+
+/// What identifies a body's part: its meshes (vertex count and extents in the mesh's principal
+/// frame) and its primitive geoms (type and size).
 enum Part {
-    Mesh(i32),
+    Mesh(usize, [f64; 3]),
     Primitive(GeomType, [u64; 3]),
+}
+
+impl PartialEq for Part {
+    fn eq(&self, o: &Part) -> bool {
+        match (self, o) {
+            (Part::Mesh(n, e), Part::Mesh(m, f)) => {
+                n == m && (0..3).all(|k| (e[k] - f[k]).abs() <= SAME_MESH_M)
+            }
+            (Part::Primitive(t, s), Part::Primitive(u, r)) => t == u && s == r,
+            _ => false,
+        }
+    }
+}
+
+fn mesh_part(robot: &Robot, mesh: usize) -> Option<Part> {
+    let m = &robot.mj;
+    let (a, n) = (*m.mesh_vertadr().get(mesh)?, *m.mesh_vertnum().get(mesh)?);
+    let (a, n) = (usize::try_from(a).ok()?, usize::try_from(n).ok()?);
+    let vert = m.mesh_vert().get(a..a + n)?;
+    let mut e = [0.0; 3];
+    for (k, ek) in e.iter_mut().enumerate() {
+        let lo = vert.iter().map(|v| f64::from(v[k])).fold(f64::INFINITY, f64::min);
+        let hi = vert.iter().map(|v| f64::from(v[k])).fold(f64::NEG_INFINITY, f64::max);
+        *ek = hi - lo;
+    }
+    Some(Part::Mesh(n, e))
 }
 
 fn parts(robot: &Robot, b: usize) -> Vec<Part> {
@@ -71,12 +105,9 @@ fn parts(robot: &Robot, b: usize) -> Vec<Part> {
         .geoms
         .iter()
         .filter(|g| g.body == b)
-        .map(|g| {
-            if g.gtype == GeomType::Mesh && g.mesh >= 0 {
-                Part::Mesh(g.mesh)
-            } else {
-                Part::Primitive(g.gtype, g.size.map(|x| (x + 0.0).to_bits()))
-            }
+        .filter_map(|g| match usize::try_from(g.mesh) {
+            Ok(mesh) if g.gtype == GeomType::Mesh => mesh_part(robot, mesh),
+            _ => Some(Part::Primitive(g.gtype, g.size.map(|x| (x + 0.0).to_bits()))),
         })
         .collect()
 }
