@@ -199,8 +199,8 @@ CHAIN_S = dict(sim="chain", model="stance3_chain")
 CASES["KS0_stance_none"] = dict(CHAIN_S, seed=82, effects={})
 CASES["KS1_trunk_com_shift"] = dict(CHAIN_S, seed=83, effects={"bodies": {"trunk": {
     "joint": "hip_pitch", "com_shift": [0.04, 0.0, -0.03]}}})
-# KS2's battery sits off the trunk's axis (8 cm behind it): the composite body is a mass on the
-# axis and a centre of mass moved across it, which no single body effect is.
+# KS2's battery sits off the trunk's axis (8 cm behind it and 12 cm above its centre): one point
+# mass placed in the joint's plane (link_mass: mass, along, across).
 CASES["KS2_trunk_battery"] = dict(CHAIN_S, seed=84, effects={"bodies": {"trunk": {
     "joint": "hip_pitch", "payload": {"mass": 1.5, "pos": [-0.08, 0.0, 0.32]}}}})
 # Reduced for `make test` (tests/independent_chain.rs): 4 episodes × 4 s, the last held out.
@@ -208,6 +208,8 @@ CHAIN_SR = dict(CHAIN_S, episodes=4, seconds=4.0, heldout=[3])
 CASES["KSR0_stance_none"] = dict(CHAIN_SR, seed=92, effects={})
 CASES["KSR1_trunk_com_shift"] = dict(CHAIN_SR, seed=93, effects={"bodies": {"trunk": {
     "joint": "hip_pitch", "com_shift": [0.04, 0.0, -0.03]}}})
+CASES["KSR2_trunk_battery"] = dict(CHAIN_SR, seed=94, effects={"bodies": {"trunk": {
+    "joint": "hip_pitch", "payload": {"mass": 1.5, "pos": [-0.08, 0.0, 0.32]}}}})
 # ---- every leg (issue 48): the same 0.25 kg sensor at the foot end of all four shanks of the
 # quadruped on its stand; one body effect on the four knees' child bodies, one group.
 QUAD_PAYLOAD = {"payload": {"mass": 0.25, "pos": [0.0, 0.0, -0.2]}}

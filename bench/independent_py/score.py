@@ -8,12 +8,13 @@ effect ids: damping → viscous_damping, armature → armature, frictionloss →
 stiffness → joint_stiffness, kp_scale / kd_scale → gain_error, offset → position_offset,
 delay → action_delay, backlash (total play) → backlash, stribeck → stribeck_friction (static,
 dynamic, v_stribeck); a body's payload → link_mass (added_mass; offset = the payload's distance
-from the modelled centre of mass along the link, the direction from the joint to that centre), a
+from the modelled centre of mass along the link, the direction from the joint to that centre;
+across = its distance across the link, joint axis × along), a
 body's centre-of-mass shift → com_offset (along that direction; across = joint axis × it), both on
 the joint whose child the body is; a body that is no joint's child (a trunk welded to its stand)
 acts on no recorded joint, and nothing may be reported for it. A case passes when every concealed (effect, joint) is reported, nothing
 else is, and every fitted value is within 10 % of the truth (a delay within 1.5 ms, issue 12's target; a
-payload's offset within 10 % of the link length 2·|com|, a centre-of-mass shift's components
+payload's offset and across within 10 % of the link length 2·|com|, a centre-of-mass shift's components
 within 10 % of the shift's length).
 Prints one Markdown row per case and a summary line; exit 1 when a case fails.
 """
@@ -61,8 +62,10 @@ def body_pairs(resolved):
         if "payload" in r:
             p = r["payload"]
             length = 2 * sum(x * x for x in com) ** 0.5
-            off = dot([p["pos"][k] - com[k] for k in range(3)], u)
-            out[("link_mass", j)] = {"added_mass": (p["mass"], None), "offset": (off, 0.1 * length)}
+            d = [p["pos"][k] - com[k] for k in range(3)]
+            w = unit([a[1] * u[2] - a[2] * u[1], a[2] * u[0] - a[0] * u[2], a[0] * u[1] - a[1] * u[0]])
+            out[("link_mass", j)] = {"added_mass": (p["mass"], None), "offset": (dot(d, u), 0.1 * length),
+                                     "across": (dot(d, w), 0.1 * length)}
         if "inertia_scale" in r:
             # The moment about the joint axis through the centre of mass, real over nominal.
             q = r["nominal_iquat"]

@@ -295,6 +295,9 @@ pub struct FitRun {
     pub after: GapReport,
     /// Joints the final model leaves above the search's white ratio of their floor.
     pub unexplained: Vec<crate::fit::unexplained::Unexplained>,
+    /// Feet whose orientation the final model leaves above their joints' floors
+    /// ([`crate::fit::contact`]).
+    pub feet: Vec<crate::fit::contact::FootResidual>,
     /// Everything said through the sink, also in the JSON.
     pub notes: Vec<String>,
     pub warnings: Vec<String>,
@@ -360,10 +363,25 @@ pub fn fit_once(
     };
     let (before, heldout, eps_b) = run(&[])?;
     let (after, _, eps_a) = run(&out.applied)?;
+    let feet = crate::fit::contact::unexplained_feet(
+        robot,
+        (&heldout, &eps_b, &eps_a),
+        &out.applied,
+        opts.policy.white_ratio,
+    );
+    for f in &feet {
+        sink.warning(&f.message());
+    }
     // Everything said on stderr also goes into the JSON `notes` / `warnings`.
     let mut notes: Vec<String> =
         p.notes.iter().chain(&out.notes).chain([&cost_note]).cloned().collect();
-    let warnings: Vec<String> = p.warnings.iter().chain(&out.warnings).cloned().collect();
+    let warnings: Vec<String> = p
+        .warnings
+        .iter()
+        .chain(&out.warnings)
+        .cloned()
+        .chain(feet.iter().map(|f| f.message()))
+        .collect();
     if let Some(dir) = &a.report {
         let page = crate::fit::report::FitReport {
             model: &a.model,
@@ -390,7 +408,7 @@ pub fn fit_once(
         sink.said(&msg);
         notes.push(msg);
     }
-    Ok(FitRun { out, before, after, unexplained, notes, warnings })
+    Ok(FitRun { out, before, after, unexplained, feet, notes, warnings })
 }
 
 /// `--write-model`: the model with the MuJoCo-expressible fitted values; returns the notes it
@@ -471,6 +489,7 @@ pub fn fit_json(r: &FitRun) -> serde_json::Value {
         "floor": out.floors.iter().map(|f| json!({"joint": f.joint, "residual_rms": f.ms.sqrt(), "white_floor_rms": f.white.sqrt(), "reconstruction_floor_rms": f.reconstruction.sqrt(), "discretisation_floor_rms": f.discretisation.sqrt()})).collect::<Vec<_>>(),
         "stopped_at_floor": out.stopped_at_floor,
         "unexplained": r.unexplained.iter().map(|u| json!({"joint": u.joint, "residual_rms": u.residual_rms, "floor_rms": u.floor_rms})).collect::<Vec<_>>(),
+        "unexplained_contact": r.feet.iter().map(|f| json!({"foot": f.foot, "joint": f.joint, "joints": f.joints, "residual_rms": f.residual_rms, "before_rms": f.before_rms, "floor_rms": f.floor_rms, "kept": f.kept})).collect::<Vec<_>>(),
         "search": out.cost,
         "warnings": warnings,
         "notes": notes,

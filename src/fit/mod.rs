@@ -2,6 +2,7 @@
 pub mod absent;
 pub mod cmd;
 pub mod cmd_rotate;
+pub mod contact;
 pub mod diagnose;
 pub mod effects;
 pub mod optim;

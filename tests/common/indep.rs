@@ -74,9 +74,16 @@ impl<'a> TruthBody<'a> {
 
     /// The payload's mass and its distance from the modelled centre of mass along the link.
     pub fn payload(&self) -> (f64, f64) {
+        let (m, along, _) = self.payload_place();
+        (m, along)
+    }
+
+    /// The payload's mass and its place from the modelled centre of mass, along the link and
+    /// across it (joint axis × along).
+    pub fn payload_place(&self) -> (f64, f64, f64) {
         let p = v3(&self.b["payload"]["pos"]);
         let d = [p[0] - self.com[0], p[1] - self.com[1], p[2] - self.com[2]];
-        (self.b["payload"]["mass"].as_f64().unwrap(), dot(d, self.u))
+        (self.b["payload"]["mass"].as_f64().unwrap(), dot(d, self.u), dot(d, self.w))
     }
 
     /// The centre-of-mass shift along and across the link.
@@ -97,20 +104,22 @@ pub fn found(v: &serde_json::Value) -> Vec<(String, String)> {
 }
 
 /// The fit lists exactly one `link_mass` on `joint`, with the truth's payload mass within 10 %
-/// and its place within 10 % of the link's length; returns the listed effect.
+/// and its place, along the link and across it, within 10 % of the link's length; returns the
+/// listed effect.
 pub fn assert_payload_found<'v>(
     v: &'v serde_json::Value,
     truth: &TruthBody,
     joint: &str,
 ) -> &'v serde_json::Value {
     assert_eq!(found(v), [("link_mass".into(), format!(r#"["{joint}"]"#))], "{:?}", found(v));
-    let (mass, along) = truth.payload();
+    let (mass, along, across) = truth.payload_place();
     let p = &v["missing_physics"][0]["params"];
     let (dm, off) = (p["added_mass"].as_f64().unwrap(), p["offset"].as_f64().unwrap());
+    let c = p["across"].as_f64().unwrap();
     assert!((dm - mass).abs() <= 0.1 * mass, "added mass {dm} for {mass}");
     assert!(
-        (off - along).abs() <= 0.1 * truth.len,
-        "offset {off} for {along} (link {} m)",
+        (off - along).abs() <= 0.1 * truth.len && (c - across).abs() <= 0.1 * truth.len,
+        "place ({off}, {c}) for ({along}, {across}) (link {} m)",
         truth.len
     );
     &v["missing_physics"][0]

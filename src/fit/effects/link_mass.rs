@@ -5,12 +5,17 @@ declare_effect! {
     /// A link heavier than modelled: a point mass on the joint's child body (a payload, a battery, cables).
     ///
     /// MuJoCo-native: the child body's mass properties in the model copy. The point mass
-    /// `added_mass` ≥ 0 sits on the link's axis (from the joint to the body's modelled centre of
-    /// mass, or to its first child body), `offset` from the modelled centre of mass; the body's
-    /// new mass, centre of mass and inertia follow by the parallel-axis theorem
-    /// ([`super::inertial`]), so every value is a rigid body that exists. The search sees it as
-    /// any other effect: gravity makes it a pose-dependent load on the joint and every joint
-    /// above it, which a joint stiffness (spring to one pose) or an offset does not have.
+    /// `added_mass` ≥ 0 sits in the joint's plane of motion, `offset` from the modelled centre of
+    /// mass along the link's axis (from the joint to that centre, or to its first child body)
+    /// and `across` it (joint axis × link axis); the body's new mass, centre of mass and inertia
+    /// follow by the parallel-axis theorem ([`super::inertial`]), so every value is a rigid body
+    /// that exists. Gravity sees the composite body's mass and first moment — the mass and both
+    /// in-plane components of the point's place, three numbers — wherever another joint carries
+    /// the link; a place along the joint's own axis moves no torque about it and is not fitted.
+    /// The place of a mass that comes out as nothing is not determined and is reported as not
+    /// identified. The search sees it as any other effect: gravity makes it a pose-dependent
+    /// load on the joint and every joint above it, which a joint stiffness (spring to one pose)
+    /// or an offset does not have.
     ///
     /// ## Simulation
     /// the child body's `body_mass`, `body_ipos`, `body_inertia`, `body_iquat`: body + point mass (parallel-axis theorem)
@@ -29,22 +34,25 @@ declare_effect! {
         params: [
             ParamDef { name: "added_mass", unit: "kg", lo: 0.0, hi: 5.0, default: 0.0 },
             ParamDef { name: "offset", unit: "m", lo: -0.5, hi: 0.5, default: 0.0 },
+            ParamDef { name: "across", unit: "m", lo: -0.5, hi: 0.5, default: 0.0 },
         ],
     }
 }
 
 impl Effect for LinkMass {
     /// Added mass up to twice the body's subtree mass (at least 1 kg); the point within one
-    /// link length of the modelled centre of mass.
+    /// link length of the modelled centre of mass, along the link and across it.
     fn bounds(&self, _m: &MjModel, t: &JointTarget) -> (Vec<f64>, Vec<f64>) {
         let Some(b) = t.body else {
-            return (vec![0.0, 0.0], vec![0.0, 0.0]);
+            return (vec![0.0; 3], vec![0.0; 3]);
         };
-        (vec![0.0, -b.length], vec![(2.0 * b.subtree_mass).max(1.0), b.length])
+        let hi = (2.0 * b.subtree_mass).max(1.0);
+        (vec![0.0, -b.length, -b.length], vec![hi, b.length, b.length])
     }
     fn apply_model(&self, m: &mut MjModel, t: &JointTarget, p: &[f64]) {
         if let Some(b) = t.body {
-            inertial::add_point_mass(m, b.body, p[0], b.point(p[1], 0.0));
+            let across = p.get(2).copied().unwrap_or(0.0);
+            inertial::add_point_mass(m, b.body, p[0], b.point(p[1], across));
         }
     }
     inertial::body_effect_methods!(tau);

@@ -192,7 +192,8 @@ fn replay_gap(a: &crate::model::Robot, ea: &[super::Applied], b: &crate::model::
 }
 
 /// `link_mass` on the elbow moves the arm as MuJoCo's own compiler composes a forearm carrying
-/// a 0.3 kg sphere (0.5 mm: a point) as a child body 0.07 m beyond its centre of mass (along the link) — the
+/// a 0.3 kg sphere (0.5 mm: a point) as a child body 0.07 m beyond its centre of mass (along the link),
+/// and 0.03 m across the link beside that — the
 /// parallel-axis algebra of `inertial.rs` against MuJoCo's; `com_offset` (along 0.02, across
 /// −0.015) as the forearm's capsule moved by (0.015, 0, −0.02) (across = joint axis y × link
 /// axis −z = −x). Without the effects the replays differ by centimetres.
@@ -216,6 +217,18 @@ fn body_effects_move_the_arm_as_mujoco_composes_the_body() {
     assert!(replay_gap(&nominal, &[], &payload) > 5e-3);
     let d = replay_gap(&nominal, std::slice::from_ref(&link_mass), &payload);
     assert!(d < 1e-6, "link_mass vs the composed payload: {d}");
+    // Off the link's axis: 0.03 m across it (joint axis y × link axis −z = −x).
+    let aside = arm_with(
+        &dir,
+        "aside.xml",
+        r#"<body pos="-0.03 0 -0.195"><geom type="sphere" size="0.0005" mass="0.3"/></body>"#,
+        r#"fromto="0 0 0 0 0 -0.25""#,
+    );
+    let on_axis = replay_gap(&nominal, std::slice::from_ref(&link_mass), &aside);
+    assert!(on_axis > 1e-3, "the place across the link moves the arm ({on_axis})");
+    let across = Applied { params: vec![0.3, 0.07, 0.03], ..link_mass.clone() };
+    let d = replay_gap(&nominal, &[across], &aside);
+    assert!(d < 1e-6, "link_mass across the link vs the composed payload: {d}");
     let shifted = arm_with(&dir, "shifted.xml", "", r#"fromto="0.015 0 -0.02 0.015 0 -0.27""#);
     let com = Applied {
         effect: by_id("com_offset").unwrap(),

@@ -8,7 +8,7 @@ use crate::fit::effects::{self, Applied};
 use crate::fit::stats::bic;
 use crate::sim2real::recording::Recording;
 
-use super::discretisation::{Judged, beyond_discretisation};
+use super::discretisation::{Judged, beyond_discretisation, pair_beyond_discretisation};
 use super::engine::Engine;
 use super::policy::Phase;
 use super::polish::{fit_jointly, fit_jointly_iters, polish_budget, polish_from, polish_set};
@@ -23,7 +23,9 @@ use super::{Errors, FitOutcome, Floor, Search, Selected, Tried, set_uncertainty,
 /// jointly from the two single fits (coarsely first; fully when within 25 % of the best pair's
 /// training RMSE), and the best pair replaces the single winner when it is
 /// ≥ 10 % better on held-out (and beyond noise), and each member is needed in it (removing
-/// either is worse beyond noise). The pair with fewer parameters wins within 1 %. The winner
+/// either is worse beyond noise), and the pair still beats the winner alone with both replayed
+/// at a finer timestep ([`pair_beyond_discretisation`]: a partner that only takes up the
+/// model's own step beside the winner is a note). The pair with fewer parameters wins within 1 %. The winner
 /// with the effects kept in earlier rounds on its joints re-fitted beside it
 /// ([`with_kept_refitted`]) competes as a restart of the winner.
 pub(super) fn pair_lookahead(
@@ -63,6 +65,8 @@ pub(super) fn pair_lookahead(
     let h_base = engine.errors(heldout, applied)?;
     let t_base = engine.errors(train, applied)?;
     let k_before: usize = applied.iter().map(|a| a.effect.fitted()).sum();
+    // The round's floors (remembered per set: the greedy round measured them).
+    let floors = engine.floors(train, applied, &t_base);
     let mut best: Option<(Vec<Applied>, f64, usize, usize)> = None;
     engine.report(round, Phase::Pair, None);
     // The pairs of the top four, and any two kept candidates that mimic each other alone
@@ -249,8 +253,20 @@ pub(super) fn pair_lookahead(
                 restarts.push(wo);
             }
         }
-        let ok =
-            h.rmse() < opts.policy.pair_gain * h_single.rmse() && v.significant && bic_ok && needed;
+        // A partner that only takes up the model's time discretisation beside the winner
+        // does not improve on it at a finer step: the test a single candidate takes.
+        let judged = Judged {
+            base: applied,
+            trial: &set,
+            gate: opts.policy.gate_z(z),
+            floors: &floors,
+            round,
+        };
+        let ok = h.rmse() < opts.policy.pair_gain * h_single.rmse()
+            && v.significant
+            && bic_ok
+            && needed
+            && pair_beyond_discretisation(engine, heldout, &with_single[n], &judged, out);
         let logged = out.log(Tried {
             round,
             phase: Phase::Pair,
