@@ -10,6 +10,7 @@ use crate::model::mirror::leg_joint;
 
 use super::discretisation::{Judged, beyond_discretisation};
 use super::engine::shape_key;
+use super::extension;
 use super::groups::{Cand, has_group, partner, same_data, sorted_pair};
 use super::lead;
 use super::pairs::{joint_pairs, pair_lookahead, refitted_at_floor};
@@ -390,7 +391,12 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         // misses what is far from linear (a resonance moved by damping).
         let reaches = |g: f64| g > 0.0 && g >= opts.policy.screen_share * best_gain;
         let linear_gain = predicted.map_or(f64::NEG_INFINITY, |p| gain(p.train_rmse));
-        if cp.is_empty() || !(reaches(gain(cf)) || reaches(linear_gain)) {
+        // A richer model of a loss is fitted only where its plain variant's fit leaves its
+        // signature ([`extension`]).
+        if cp.is_empty()
+            || !(reaches(gain(cf)) || reaches(linear_gain))
+            || extension::adds_nothing(s, short, &applied, (e, &group))
+        {
             out.tried.push(not_tested(Phase::Screen, cp.clone(), cf));
             // Its coarse fit still starts a joint pair fit (gain error + delay: neither alone
             // explains much) — when it explains something: at least `min_rel_improvement` of
