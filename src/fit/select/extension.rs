@@ -26,7 +26,7 @@ use super::Search;
 use super::screen::combine;
 
 /// `true` when `effect` on `group` elaborates a plain variant that the search may fit, holds it
-/// as a special case, and on `short` (the round's screen data, with `applied` kept) nothing
+/// as a special case (checked before anything is fitted), and on `short` (the round's screen data, with `applied` kept) nothing
 /// near the plain variant's full fit taken over pays for the extra parameters (see the module
 /// docs). `false` — fit it in full — otherwise, and whenever the test cannot be made.
 pub(super) fn adds_nothing(
@@ -38,6 +38,10 @@ pub(super) fn adds_nothing(
     let engine = s.engine;
     let Some(plain) = effect.plain_variant() else { return false };
     if !s.allowed.iter().any(|id| id == plain.id()) || group.is_empty() {
+        return false;
+    }
+    let zero: Vec<f64> = effect.params().iter().map(|d| d.default).collect();
+    if effect.absorb(plain, &zero, &vec![0.0; plain.params().len()]).is_none() {
         return false;
     }
     let Some(t) = JointTarget::of(engine.robot, &group[0]) else { return false };
@@ -58,7 +62,6 @@ pub(super) fn adds_nothing(
     let Some(e_plain) = engine.errors(short, &plain_set) else { return false };
     // The plain fit taken over by the richer model, from its parameters' defaults.
     let delta: Vec<f64> = pp.iter().zip(plain.initial(&m0, &t)).map(|(a, b)| a - b).collect();
-    let zero: Vec<f64> = effect.params().iter().map(|d| d.default).collect();
     let Some(x0) = effect.absorb(plain, &zero, &delta) else { return false };
     let (lo, hi) = effect.bounds(&m0, &t);
     let k = effect.fitted().min(x0.len()).min(lo.len());
