@@ -391,12 +391,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         // misses what is far from linear (a resonance moved by damping).
         let reaches = |g: f64| g > 0.0 && g >= opts.policy.screen_share * best_gain;
         let linear_gain = predicted.map_or(f64::NEG_INFINITY, |p| gain(p.train_rmse));
-        // A richer model of a loss is fitted only where its plain variant's fit leaves its
-        // signature ([`extension`]).
-        if cp.is_empty()
-            || !(reaches(gain(cf)) || reaches(linear_gain))
-            || extension::adds_nothing(s, short, &applied, (e, &group))
-        {
+        if cp.is_empty() || !(reaches(gain(cf)) || reaches(linear_gain)) {
             out.tried.push(not_tested(Phase::Screen, cp.clone(), cf));
             // Its coarse fit still starts a joint pair fit (gain error + delay: neither alone
             // explains much) — when it explains something: at least `min_rel_improvement` of
@@ -411,6 +406,15 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         // times its training error cannot (`tried`: phase "floor_screen").
         if floor_train.is_some_and(|ft| cf / base_short > opts.policy.floor_screen_ratio * ft) {
             out.tried.push(not_tested(Phase::FloorScreen, cp, cf));
+            continue;
+        }
+        // A richer model of a loss is fitted only where its plain variant's fit leaves its
+        // signature ([`extension`]); its coarse fit still starts a joint pair.
+        if extension::adds_nothing(s, short, &applied, (e, &group)) {
+            if gain(cf) >= opts.policy.min_rel_improvement {
+                fitted.push(Applied { effect: e, joints: group.clone(), params: cp.clone() });
+            }
+            out.tried.push(not_tested(Phase::Screen, cp, cf));
             continue;
         }
         // The full fit runs on the screen's data too (its cost does not grow with the log's
