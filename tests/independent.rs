@@ -425,15 +425,16 @@ fn fit_finds_friction_on_all_joints_as_one_group() {
 }
 
 /// Delay 12 ms and Coulomb friction 0.25 on both joints (truth.json). Each effect alone is
-/// mimicked in part by the other: the first round keeps one of them at a biased value (Coulomb
-/// friction alone takes up part of the delay's lag), and the second round's winner is fitted
-/// beside it. The structure of the search: when a round's winner joins effects kept before it
-/// on the same joints, they are re-fitted together, so the two effects found take two rounds
-/// that fit candidates, and the third stops at the noise floor. (Without the re-fit the third
-/// and fourth rounds hunted for what the biased friction left: a gain error kept in a pair
-/// and dropped again by the simplification, at twice the search's cost.)
+/// mimicked in part by the other: Coulomb friction alone takes up part of the delay's lag. The
+/// structure of the search: the first round's pair look-ahead, whose linear prediction from the
+/// members' single fits ranks the true pair first, fits the two together; or, when the pair is
+/// not among the look-ahead's, the second round's winner joins the effect kept before it on the
+/// same joints and they are re-fitted together. Either way the two effects found take at most
+/// two rounds that fit candidates, and the next stops at the noise floor. (Without the re-fit
+/// the third and fourth rounds hunted for what the biased friction left: a gain error kept in
+/// a pair and dropped again by the simplification, at twice the search's cost.)
 #[test]
-fn fit_finds_the_delay_and_friction_pair_in_two_rounds() {
+fn fit_finds_the_delay_and_friction_pair_in_at_most_two_rounds() {
     let Some(v) = fit_matches_truth("arm2.all.action_delay+coulomb_friction") else { return };
     let found = v["missing_physics"].as_array().unwrap().len();
     let greedy = [
@@ -454,7 +455,27 @@ fn fit_finds_the_delay_and_friction_pair_in_two_rounds() {
         .map(|t| t["round"].as_u64().unwrap())
         .collect();
     rounds.dedup();
-    assert_eq!(rounds, (0..found as u64).collect::<Vec<_>>(), "{:#?}", v["tried"]);
+    let n = rounds.len() as u64;
+    assert!(
+        (1..=found as u64).contains(&n) && rounds == (0..n).collect::<Vec<_>>(),
+        "{:#?}",
+        v["tried"]
+    );
+    // What the search fits in full. The richer friction models hold Coulomb friction as a
+    // special case, and its fit leaves neither a breakaway nor a load-shaped residual: they are
+    // judged from that fit, not fitted (the build before fitted both in full, 3,700 of its
+    // 18,800 replayed seconds). The look-ahead's linear prediction from the members' single
+    // fits leaves out the pairs that cannot come near the best (the build before fitted ten
+    // pairs of the round's candidates, none of them this one).
+    let tried = v["tried"].as_array().unwrap();
+    for t in tried {
+        let id = t["effect"].as_str().unwrap();
+        if ["stribeck_friction", "load_dependent_friction"].contains(&id) {
+            assert_ne!(t["phase"], "add", "{t:#?}");
+        }
+    }
+    let pairs = tried.iter().filter(|t| t["phase"] == "pair").count();
+    assert!(pairs <= found, "{pairs} pairs fitted: {:#?}", v["tried"]);
 }
 
 /// `--start-estimate` estimates each episode's start; without it the replay starts at the first

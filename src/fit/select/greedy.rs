@@ -10,6 +10,7 @@ use crate::model::mirror::leg_joint;
 
 use super::discretisation::{Judged, beyond_discretisation};
 use super::engine::shape_key;
+use super::extension;
 use super::groups::{Cand, has_group, partner, same_data, sorted_pair};
 use super::lead;
 use super::pairs::{joint_pairs, pair_lookahead, refitted_at_floor};
@@ -405,6 +406,15 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         // times its training error cannot (`tried`: phase "floor_screen").
         if floor_train.is_some_and(|ft| cf / base_short > opts.policy.floor_screen_ratio * ft) {
             out.tried.push(not_tested(Phase::FloorScreen, cp, cf));
+            continue;
+        }
+        // A richer model of a loss is fitted only where its plain variant's fit leaves its
+        // signature ([`extension`]); its coarse fit still starts a joint pair.
+        if extension::adds_nothing(s, short, &applied, (e, &group)) {
+            if gain(cf) >= opts.policy.min_rel_improvement {
+                fitted.push(Applied { effect: e, joints: group.clone(), params: cp.clone() });
+            }
+            out.tried.push(not_tested(Phase::Screen, cp, cf));
             continue;
         }
         // The full fit runs on the screen's data too (its cost does not grow with the log's

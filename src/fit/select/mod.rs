@@ -26,9 +26,11 @@
 
 mod discretisation;
 mod engine;
+mod extension;
 mod greedy;
 mod groups;
 mod lead;
+mod pair_screen;
 mod pairs;
 mod policy;
 mod polish;

@@ -10,6 +10,7 @@ use crate::sim2real::recording::Recording;
 
 use super::discretisation::{Judged, beyond_discretisation, pair_beyond_discretisation};
 use super::engine::Engine;
+use super::pair_screen;
 use super::policy::Phase;
 use super::polish::{fit_jointly, fit_jointly_iters, polish_budget, polish_from, polish_set};
 use super::screen::screen_data;
@@ -173,39 +174,47 @@ pub(super) fn pair_lookahead(
     let smooth = |set: &[Applied]| set[n..].iter().all(|a| a.effect.smooth());
     let short = engine.screen_set(train, applied, || screen_data(engine, train, &t_base));
     let n_sets = sets.len();
-    let coarse: Vec<(Vec<Applied>, f64)> = sets
-        .iter()
-        .enumerate()
-        .map(|(i, (a, b))| {
-            engine.report(
-                round,
-                Phase::Pair,
-                Some((i + 1, n_sets, format!("coarse {} + {}", a.effect.id(), b.effect.id()))),
-            );
-            let mut set = applied.to_vec();
-            set.push(a.clone());
-            set.push(b.clone());
-            let set = if smooth(&set) {
-                let k: usize = set[n..].iter().map(|a| a.effect.fitted()).sum();
-                let iters = (opts.policy.max_evals * 2 / 3 / (k + 2)).clamp(2, 12);
-                fit_jointly_iters(engine, &short, set, n, iters)
-            } else {
-                polish_budget(
-                    engine,
-                    &short,
-                    heldout,
-                    set,
-                    opts.policy.coarse_polish_step,
-                    opts.policy.max_evals * 2 / 3,
-                )
-            };
-            let f = engine.errors(&short, &set).map_or(f64::INFINITY, |e| e.rmse());
-            (set, f)
-        })
-        .collect();
-    let best_coarse = coarse.iter().map(|c| c.1).fold(f64::INFINITY, f64::min);
+    // Best predicted first ([`pair_screen`]); a pair whose prediction cannot come within
+    // `pair_full_fit_within` of the best coarse fit so far is not fitted.
+    let predicted = pair_screen::predicted(engine, &short, applied, &sets);
+    let mut order: Vec<usize> = (0..n_sets).collect();
+    order.sort_by(|&i, &j| predicted[i].unwrap_or(0.0).total_cmp(&predicted[j].unwrap_or(0.0)));
+    let mut coarse: Vec<Option<(Vec<Applied>, f64)>> = vec![None; n_sets];
+    let mut best_coarse = f64::INFINITY;
+    for i in order {
+        if predicted[i].is_some_and(|p| p > opts.policy.pair_full_fit_within * best_coarse) {
+            continue;
+        }
+        let (a, b) = &sets[i];
+        engine.report(
+            round,
+            Phase::Pair,
+            Some((i + 1, n_sets, format!("coarse {} + {}", a.effect.id(), b.effect.id()))),
+        );
+        let mut set = applied.to_vec();
+        set.push(a.clone());
+        set.push(b.clone());
+        let set = if smooth(&set) {
+            let k: usize = set[n..].iter().map(|a| a.effect.fitted()).sum();
+            let iters = (opts.policy.max_evals * 2 / 3 / (k + 2)).clamp(2, 12);
+            fit_jointly_iters(engine, &short, set, n, iters)
+        } else {
+            polish_budget(
+                engine,
+                &short,
+                heldout,
+                set,
+                opts.policy.coarse_polish_step,
+                opts.policy.max_evals * 2 / 3,
+            )
+        };
+        let f = engine.errors(&short, &set).map_or(f64::INFINITY, |e| e.rmse());
+        best_coarse = best_coarse.min(f);
+        coarse[i] = Some((set, f));
+    }
     let mut restarts: Vec<Vec<Applied>> = Vec::new();
-    for (i, ((a, b), (set, f))) in sets.into_iter().zip(coarse).enumerate() {
+    for (i, ((a, b), c)) in sets.into_iter().zip(coarse).enumerate() {
+        let Some((set, f)) = c else { continue };
         engine.report(
             round,
             Phase::Pair,

@@ -118,8 +118,9 @@ pub struct SearchPolicy {
     /// A single effect whose held-out improvement is at least this needs no partner
     /// [fraction]. Default 0.95.
     pub pair_needless_improvement: f64,
-    /// Pairs whose coarse joint fit is within this factor of the best pair's are fitted fully
-    /// [ratio of training RMSE]. Default 1.25.
+    /// Pairs whose coarse joint fit is within this factor of the best pair's are fitted fully;
+    /// a pair whose linear prediction from its members' single fits exceeds this factor of the
+    /// best coarse fit so far is not fitted at all [ratio of training RMSE]. Default 1.25.
     pub pair_full_fit_within: f64,
     /// A pair replaces the single winner only below this factor of its held-out RMSE
     /// [ratio of RMSE]. Default 0.9.
@@ -128,7 +129,7 @@ pub struct SearchPolicy {
     /// its held-out RMSE [ratio of RMSE]. Default 0.95.
     pub restart_gain: f64,
 
-    // ---- joint polish (Nelder–Mead over every kept parameter) ----
+    // ---- joint polish (every kept parameter; Nelder–Mead when one effect is not smooth) ----
     /// Initial simplex step of a full polish [fraction of each parameter's range].
     /// Default 0.02.
     pub polish_step: f64,
@@ -313,7 +314,7 @@ pub const FIELDS: &[(&str, &str, &str)] = &[
     (
         "pair_full_fit_within",
         "ratio of RMSE",
-        "pairs whose coarse joint fit is within this factor of the best pair's are fitted fully",
+        "pairs whose coarse joint fit is within this factor of the best pair's are fitted fully; a pair whose linear prediction from its members' single fits exceeds this factor of the best coarse fit so far is not fitted",
     ),
     (
         "pair_gain",

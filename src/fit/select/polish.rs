@@ -9,8 +9,9 @@ use super::engine::Engine;
 use super::solve::{Method, Problem, Solution, solve};
 use super::{FitOutcome, Search, sync_selected};
 
-/// Joint re-fit of every kept effect's fitted parameters (Nelder–Mead from the greedy values);
-/// kept only when both the training and the held-out RMSE do not get worse.
+/// Joint re-fit of every kept effect's fitted parameters from the greedy values
+/// ([`polish_from`]: least squares when all are smooth, else Nelder–Mead); kept only when
+/// both the training and the held-out RMSE do not get worse.
 pub(super) fn polish(s: &Search, out: &mut FitOutcome) {
     let applied = std::mem::take(&mut out.applied);
     out.applied =
@@ -41,9 +42,14 @@ pub(super) fn polish_budget(
 }
 
 /// [`polish_budget`] of the parameters of `applied[first..]` only (the effects before stay as
-/// they are): Nelder–Mead with initial step `step` (fraction of each range) and a budget of
-/// `max_evals` evaluations of `train`; kept only when neither the training nor the held-out
-/// RMSE gets worse.
+/// they are), with a budget of `max_evals` evaluations of `train`: Levenberg–Marquardt on the
+/// rollout residuals when every polished effect is smooth ([`Effect::smooth`]: k + 1 replays
+/// an iteration, at most `max_evals / (k + 2)` iterations, stopping at the first step shorter
+/// than the parameters' standard errors resolve — from values already fitted together that is
+/// one Jacobian and one step), else Nelder–Mead with initial step `step` (fraction of each
+/// range); kept only when neither the training nor the held-out RMSE gets worse.
+///
+/// [`Effect::smooth`]: crate::fit::effects::Effect::smooth
 pub(super) fn polish_from(
     engine: &Engine,
     (train, heldout): (&[Recording], &[Recording]),
@@ -58,8 +64,17 @@ pub(super) fn polish_from(
         Bounds { lo: slots.iter().map(|s| s.2).collect(), hi: slots.iter().map(|s| s.3).collect() };
     let obj = |x: &[f64]| engine.errors(train, &make(x)).map_or(f64::INFINITY, |e| e.rmse());
     let f0 = obj(&x0);
-    let problem = Problem { objective: &obj, residuals: None, bounds: b };
-    let r = solve(&problem, &x0, Method::Simplex { max_evals, xtol: 1e-4, step });
+    let res = |x: &[f64]| {
+        engine.residuals(train, &make(x), &engine.joints, usize::MAX).unwrap_or_default()
+    };
+    let smooth = !slots.is_empty() && applied[first..].iter().all(|a| a.effect.smooth());
+    let method = if smooth {
+        Method::LeastSquares { max_iters: (max_evals / (slots.len() + 2)).clamp(2, 12) }
+    } else {
+        Method::Simplex { max_evals, xtol: 1e-4, step }
+    };
+    let problem = Problem { objective: &obj, residuals: smooth.then_some(&res), bounds: b };
+    let r = solve(&problem, &x0, method);
     if r.f.is_nan() || r.f >= f0 {
         return applied;
     }

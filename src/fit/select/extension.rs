@@ -1,0 +1,139 @@
+//! A richer model of a loss fitted only when the plain model's fit leaves its signature.
+//!
+//! A friction model that elaborates a plain one ([`Effect::plain_variant`]: Stribeck or
+//! load-dependent friction around Coulomb friction) and holds it as a special case
+//! ([`Effect::absorb`]) is, at the plain model's fit taken over, the plain fit itself. Its extra
+//! parameters can only win where the residual that fit leaves has their shape. So before its
+//! full fit (a simplex of 2 (k − 1) × `max_evals` replays) the extension is judged from there:
+//! one replay per fitted parameter gives its finite-difference columns at the plain fit, the
+//! least-squares (Gauss–Newton) step on them is predicted and simulated, and the model's own
+//! further starts ([`Effect::nested_alternatives`]) are replayed. When none of these lowers the
+//! information criterion counted per window ([`bic_pieces`]) below the plain fit's — its extra
+//! parameters buy nothing there — the full fit is left out (`tried`: phase "screen").
+//!
+//! [`Effect::plain_variant`]: crate::fit::effects::Effect::plain_variant
+//! [`Effect::absorb`]: crate::fit::effects::Effect::absorb
+//! [`Effect::nested_alternatives`]: crate::fit::effects::Effect::nested_alternatives
+//! [`bic_pieces`]: crate::fit::stats::bic_pieces
+
+use rayon::prelude::*;
+
+use crate::fit::effects::{self, Applied, Effect, JointTarget, model_with};
+use crate::fit::stats::bic_pieces;
+use crate::sim2real::recording::Recording;
+
+use super::Search;
+use super::screen::combine;
+
+/// `true` when `effect` on `group` elaborates a plain variant that the search may fit, holds it
+/// as a special case (checked before anything is fitted), and on `short` (the round's screen data, with `applied` kept) nothing
+/// near the plain variant's full fit taken over pays for the extra parameters (see the module
+/// docs). `false` — fit it in full — otherwise, and whenever the test cannot be made.
+pub(super) fn adds_nothing(
+    s: &Search,
+    short: &[Recording],
+    applied: &[Applied],
+    (effect, group): (&'static dyn Effect, &[String]),
+) -> bool {
+    let engine = s.engine;
+    let Some(plain) = effect.plain_variant() else { return false };
+    if !s.allowed.iter().any(|id| id == plain.id()) || group.is_empty() {
+        return false;
+    }
+    let zero: Vec<f64> = effect.params().iter().map(|d| d.default).collect();
+    if effect.absorb(plain, &zero, &vec![0.0; plain.params().len()]).is_none() {
+        return false;
+    }
+    let Some(t) = JointTarget::of(engine.robot, &group[0]) else { return false };
+    let m0 = model_with(engine.robot, applied);
+    // The plain variant's full fit on the same data and joints (the memo's answer when the
+    // round already fitted it, as it does before the richer model in rank order).
+    let (pp, _) = engine.fit_one(short, applied, plain, group);
+    if pp.is_empty() {
+        return false;
+    }
+    let with = |p: &[f64]| {
+        let mut set = applied.to_vec();
+        set.push(Applied { effect, joints: group.to_vec(), params: p.to_vec() });
+        set
+    };
+    let mut plain_set = applied.to_vec();
+    plain_set.push(Applied { effect: plain, joints: group.to_vec(), params: pp.clone() });
+    let Some(e_plain) = engine.errors(short, &plain_set) else { return false };
+    // The plain fit taken over by the richer model, from its parameters' defaults.
+    let delta: Vec<f64> = pp.iter().zip(plain.initial(&m0, &t)).map(|(a, b)| a - b).collect();
+    let Some(x0) = effect.absorb(plain, &zero, &delta) else { return false };
+    let (lo, hi) = effect.bounds(&m0, &t);
+    let k = effect.fitted().min(x0.len()).min(lo.len());
+    if k == 0 {
+        return false;
+    }
+    let x0: Vec<f64> = x0
+        .iter()
+        .enumerate()
+        .map(|(i, v)| if i < k { v.clamp(lo[i], hi[i]) } else { *v })
+        .collect();
+    let k_base: usize = applied.iter().map(|a| a.effect.fitted()).sum();
+    let m = e_plain.windows.len();
+    let criterion = |sse: f64, kk: usize| bic_pieces(m, e_plain.n, sse, k_base + kk);
+    let to_beat = criterion(e_plain.sse, plain.fitted());
+    if !to_beat.is_finite() {
+        return false;
+    }
+    let beats = |sse: f64| sse.is_finite() && criterion(sse, effect.fitted()) < to_beat;
+    let resid = |p: &[f64]| engine.residuals(short, &with(p), &engine.joints, usize::MAX);
+    let Some(r0) = resid(&x0) else { return false };
+    let sse0: f64 = r0.iter().map(|v| v * v).sum();
+    if beats(sse0) {
+        return false;
+    }
+    // The model's own further starts, then the columns of its fitted parameters at x0.
+    let alternatives = effect.nested_alternatives(&x0);
+    let alt_sse: Vec<f64> = alternatives
+        .par_iter()
+        .filter(|a| a.len() >= k)
+        .map(|a| {
+            let a: Vec<f64> = a
+                .iter()
+                .enumerate()
+                .map(|(i, v)| if i < k { v.clamp(lo[i], hi[i]) } else { *v })
+                .collect();
+            engine.errors(short, &with(&a)).map_or(f64::INFINITY, |e| e.sse)
+        })
+        .collect();
+    if alt_sse.iter().any(|&f| beats(f)) {
+        return false;
+    }
+    let cols: Vec<Option<Vec<f64>>> = (0..k)
+        .into_par_iter()
+        .map(|i| {
+            let v = effects::probe_step(x0[i], lo[i], hi[i]);
+            let h = v - x0[i];
+            if h == 0.0 {
+                return None;
+            }
+            let mut x = x0.clone();
+            x[i] = v;
+            let r1 = resid(&x)?;
+            // Residuals are real − sim: the column of the simulation is −Δr / h.
+            (r1.len() == r0.len()).then(|| r1.iter().zip(&r0).map(|(b, a)| (a - b) / h).collect())
+        })
+        .collect();
+    let Some(cols) = cols.into_iter().collect::<Option<Vec<Vec<f64>>>>() else { return false };
+    let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+    let b: Vec<f64> = cols.iter().map(|c| dot(c, &r0)).collect();
+    let g: Vec<Vec<f64>> = cols.iter().map(|x| cols.iter().map(|y| dot(x, y)).collect()).collect();
+    let (explained, step) = combine(&b, &g);
+    if beats(sse0 - explained) {
+        return false;
+    }
+    // The linear model does not ask for it; its step is simulated all the same (a kink's
+    // column can under-state what the step does).
+    let x1: Vec<f64> = x0
+        .iter()
+        .enumerate()
+        .map(|(i, v)| if i < k { (v + step[i]).clamp(lo[i], hi[i]) } else { *v })
+        .collect();
+    let sse1 = engine.errors(short, &with(&x1)).map_or(f64::INFINITY, |e| e.sse);
+    !beats(sse1)
+}
