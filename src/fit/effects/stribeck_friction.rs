@@ -1,15 +1,20 @@
+use super::external_load_friction::implicit_friction;
 use super::*;
 use crate::declare_effect;
 
 declare_effect! {
     /// Breakaway (static) friction above the sliding level at low speed.
     ///
-    /// Static friction above the sliding (Coulomb) level at low speed,
-    /// −sign(q̇)·(Fd + (Fs − Fd)·exp(−(q̇/vs)²)), with tanh(q̇/ε) for the sign near zero
-    /// (ε = 0.02 rad/s).
+    /// Static friction above the sliding (Coulomb) level at low speed: a dry-friction budget
+    /// F(q̇) = Fd + (Fs − Fd)·exp(−(q̇/vs)²) against the motion, applied implicitly with exact
+    /// stiction as external-load friction applies its own: the torque that would stop the joint
+    /// within the (semi-implicit Euler) step, from the DoF's inertia and every other torque of
+    /// the step, clamped to ±F(q̇). A sliding joint gets −F(q̇)·sign(q̇), a joint whose driving
+    /// torques stay below Fs is held, and friction never reverses the motion within a step —
+    /// stable at any step, inertia and friction level, with no smoothing velocity to choose.
     ///
     /// ## Simulation
-    /// hook: `−tanh(q̇/0.02)·(Fd + (Fs−Fd)·exp(−(q̇/vs)²))`
+    /// hook: budget `Fd + (Fs−Fd)·exp(−(q̇/vs)²)`, applied implicitly (stage 2, after every other torque)
     ///
     /// ## Signature
     /// `sign(q̇)·exp(−(q̇/v_s)²)`, v_s = 0.2·rms q̇ (sticking at reversals)
@@ -30,9 +35,6 @@ declare_effect! {
     }
 }
 
-/// Smoothing velocity of the sign [rad/s].
-pub const EPS: f64 = 0.02;
-
 impl Effect for StribeckFriction {
     fn friction(&self) -> bool {
         true
@@ -47,10 +49,16 @@ impl Effect for StribeckFriction {
     fn bounds(&self, _m: &MjModel, t: &JointTarget) -> (Vec<f64>, Vec<f64>) {
         super::bounds_for_drive(self, t, &[0, 1])
     }
+    /// After every other torque of the step: the friction is applied implicitly
+    /// ([`super::external_load_friction`]), so it needs them all.
+    fn stage(&self) -> u8 {
+        2
+    }
     fn torque(&self, cx: HookCtx<'_>) {
-        let HookCtx { qd, io, p, .. } = cx;
+        let HookCtx { q, qd, io, dt, p, .. } = cx;
         let (fs, fd, vs) = (p[0].max(0.0), p[1].max(0.0), p[2].max(1e-4));
-        io.tau -= smooth_sign(qd, EPS) * (fd + (fs - fd) * (-(qd / vs).powi(2)).exp());
+        let budget = fd + (fs - fd) * (-(qd / vs).powi(2)).exp();
+        io.tau += implicit_friction(q, qd, io, dt, budget);
     }
     /// Coulomb friction adds its extra frictionloss to both levels.
     fn absorb(&self, other: &dyn Effect, mine: &[f64], delta: &[f64]) -> Option<Vec<f64>> {
