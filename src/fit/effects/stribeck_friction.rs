@@ -88,3 +88,33 @@ impl Effect for StribeckFriction {
         WriteBack::TomlOnly
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// One 1 ms step of the Stribeck hook (static 0.06, sliding 0.03 N·m, v_s 0.2 rad/s) on a
+    /// DoF of inertia 0.005 kg·m² (the pendulum servo) with `drive` N·m of other torque.
+    fn step(qd: f64, drive: f64) -> f64 {
+        let mut st = EffectState::default();
+        let mut io = StepIo { enabled: false, tau: drive, inertia: 0.005, ..Default::default() };
+        let p = [0.06, 0.03, 0.2];
+        let cx = HookCtx { st: &mut st, q: 0.0, qd, q_target: 0.0, io: &mut io, dt: 0.001, p: &p };
+        StribeckFriction.torque(cx);
+        io.tau - drive
+    }
+
+    #[test]
+    fn sticks_below_the_static_level_and_slides_at_the_curve() {
+        // At rest under 0.05 N·m (below static 0.06): held exactly, no creep.
+        assert!((step(0.0, 0.05) + 0.05).abs() < 1e-12);
+        // At rest under 0.07 N·m: breaks away against the static level.
+        assert!((step(0.0, 0.07) + 0.06).abs() < 1e-12);
+        // Sliding at 0.2 rad/s (= v_s): the curve's value, against the motion.
+        let want = 0.03 + 0.03 * (-1.0f64).exp();
+        assert!((step(0.2, 0.0) + want).abs() < 1e-12, "{}", step(0.2, 0.0));
+        // Slowly moving with no drive: stopped within the step, never pushed backwards.
+        let f = step(1e-3, 0.0);
+        assert!((1e-3 + f * 0.001 / 0.005).abs() < 1e-12, "{f}");
+    }
+}
