@@ -178,3 +178,23 @@ fn the_standing_leg_without_a_shift_gives_nothing() {
     own_physics(&truth("KSR0_stance_none"));
     assert_nothing(&fit("KSR0_stance_none", &[]));
 }
+
+/// Stribeck friction on the light pendulum servo (static 0.06, sliding 0.03 N·m, v_s 0.2 rad/s;
+/// the simulator's sign is tanh(q̇/0.005), RK4 at 4 kHz) comes out blind as Stribeck friction
+/// on the servo alone, its static and sliding levels within 10 %. Fails with a replay friction
+/// smoothed by a fixed tanh(q̇/0.02) (static +13 %, v_s −31 %); with exact stiction static and
+/// sliding are +4 % and +3 %. v_s is not asserted: it still comes out ~20 % low (0.158,
+/// standard error 0.028) — docs/fitting.md, "Known limits".
+#[test]
+fn a_stribeck_curve_on_a_light_servo_is_found_with_its_levels() {
+    let truth = truth("KR2_pend_stribeck");
+    own_physics(&truth);
+    let s = &truth["effects"]["joints"]["servo"]["stribeck"];
+    let v = fit("KR2_pend_stribeck", &[]);
+    assert_eq!(found(&v), [("stribeck_friction".into(), r#"["servo"]"#.into())], "{:?}", found(&v));
+    let p = &v["missing_physics"][0]["params"];
+    for key in ["static", "dynamic"] {
+        let (got, want) = (p[key].as_f64().unwrap(), s[key].as_f64().unwrap());
+        assert!((got - want).abs() <= 0.1 * want, "{key} {got} for {want}");
+    }
+}

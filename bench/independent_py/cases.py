@@ -182,6 +182,12 @@ CASES["KR11_shank_inertia"] = dict(CHAIN_R, seed=95, effects={"bodies": {"shank"
 # Armature on every joint (one value, 0.06, where the model says 0.04 / 0.03 / 0.012): one group.
 CASES["KR8_all_armature"] = dict(CHAIN_R, seed=98,
     effects={"joints": {j: {"armature": 0.06} for j in ALL3}})
+# Stribeck friction on the light pendulum servo (K2's curve), reduced, and Coulomb friction at its
+# sliding level on the same commands (seed): the first must come out blind as Stribeck friction
+# (v_s within 10 %), the second as Coulomb friction.
+CHAIN_PR = dict(CHAIN_P, episodes=4, seconds=4.0, heldout=[3])
+CASES["KR2_pend_stribeck"] = dict(CHAIN_PR, seed=99, effects={"joints": {"servo": {"stribeck": STRIBECK}}})
+CASES["KR3_pend_coulomb"] = dict(CHAIN_PR, seed=99, effects={"joints": {"servo": {"frictionloss": 0.03}}})
 # ---- the trunk's centre of mass (issue 48): observable only where the legs carry the trunk.
 # On a test stand (the trunk welded to the world: leg3's `stand` body) a battery moving the
 # trunk's centre of mass acts on no recorded joint — the fit must report nothing. Standing on a

@@ -13,7 +13,7 @@
 use mujoco_rs::prelude::*;
 
 use super::clock::{Commands, US};
-use super::truth::{JointPhysics, Play, RealRobot, step_torque};
+use super::truth::{JointPhysics, Play, RealRobot, StepLoad, step_torque};
 use crate::model::{Robot, mj};
 
 /// The floating base on a test stand: qpos address, dof address and the pinned pose.
@@ -122,7 +122,14 @@ pub fn run(
             for (j, jp) in real.joints.iter().enumerate() {
                 if jp.has_torque_hook() {
                     acting_ctrl(m, &d, jp, &mut acting);
-                    tau[j] = step_torque(m, jp, &acting, q0[j], qd0[j]);
+                    let dinv = d.q_ldiag_inv().get(jp.dof).copied().unwrap_or(0.0);
+                    let load = StepLoad {
+                        bias: d.qfrc_bias().get(jp.dof).copied().unwrap_or(0.0),
+                        passive: d.qfrc_passive().get(jp.dof).copied().unwrap_or(0.0),
+                        inertia: if dinv > 0.0 { 1.0 / dinv } else { 0.0 },
+                        dt,
+                    };
+                    tau[j] = step_torque(m, jp, &acting, (q0[j], qd0[j]), &load);
                 }
             }
             let qfrc = d.qfrc_applied_mut();

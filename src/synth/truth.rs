@@ -14,7 +14,7 @@
 //! | action_delay | delay_s [s] | the servo sees the command signal delayed by delay_s (exact, sub-step: mean over each physics step) |
 //! | backlash | backlash_rad (total play) | a rotor (the joint's armature) behind the play, driven by the servo: on a flank the servo acts on the link with its set-point moved by play/2; inside the play no servo force on the link; an inelastic impact at the flank ([`Play`]) |
 //! | position_offset | offset_rad | sensor only: recorded q = true q + offset (the servo acts on the true angle) |
-//! | stribeck_friction | static, dynamic [N·m], v_stribeck [rad/s] | `qfrc_applied` −tanh(q̇/0.02)·(Fd + (Fs − Fd)·exp(−(q̇/vs)²)) |
+//! | stribeck_friction | static, dynamic [N·m], v_stribeck [rad/s] | `qfrc_applied`: dry friction with exact stiction, budget Fd + (Fs − Fd)·exp(−(q̇/vs)²): the torque that stops the joint within the step ([`StepLoad`]) clamped to ± the budget |
 //! | load_dependent_friction | frictionloss [N·m], load_coeff | `qfrc_applied` −tanh(q̇/0.02)·(f0 + k·|τ_servo|) |
 //!
 //! τ_servo is the torque the servo applies in the step (with a MuJoCo actuator `delay`, from the
@@ -24,7 +24,8 @@ use mujoco_rs::prelude::*;
 
 use crate::model::{ActuatorKind, Robot, mj};
 
-/// Smoothing velocity of the friction sign [rad/s] (the same ε the fit's effects document).
+/// Smoothing velocity of the load-dependent friction's sign [rad/s] (the same ε the fit's
+/// effect documents).
 pub const FRICTION_EPS: f64 = 0.02;
 
 /// One hidden effect on one joint.
@@ -375,9 +376,28 @@ impl Play {
     }
 }
 
+/// What the joint's dry friction needs of the step, from MuJoCo's last forward pass: the DoF's
+/// `qfrc_bias` and `qfrc_passive` [N·m], the inertia it presents to its own torque (1 / diag(D)
+/// of the factorised mass matrix) [kg·m²] and the time step [s].
+#[derive(Debug, Clone, Copy, Default)]
+pub struct StepLoad {
+    pub bias: f64,
+    pub passive: f64,
+    pub inertia: f64,
+    pub dt: f64,
+}
+
 /// The joint torque added this step (qfrc_applied) by the per-step effects, when servo k acts
-/// on control `ctrl[k]` (see [`servo_torque`]).
-pub fn step_torque(m: &MjModel, jp: &JointPhysics, ctrl: &[f64], q: f64, qd: f64) -> f64 {
+/// on control `ctrl[k]` (see [`servo_torque`]). Stribeck friction is dry friction with exact
+/// stiction: the torque that would bring the joint to rest at the end of this semi-implicit
+/// Euler step (every other torque of the step counted), clamped to ± its budget.
+pub fn step_torque(
+    m: &MjModel,
+    jp: &JointPhysics,
+    ctrl: &[f64],
+    (q, qd): (f64, f64),
+    load: &StepLoad,
+) -> f64 {
     if !jp.has_torque_hook() {
         return 0.0;
     }
@@ -390,7 +410,10 @@ pub fn step_torque(m: &MjModel, jp: &JointPhysics, ctrl: &[f64], q: f64, qd: f64
         tau += servo.clamp(lo, hi) - servo;
     }
     if let Some([fs, fd, vs]) = jp.stribeck {
-        tau -= sign * (fd + (fs - fd) * (-(qd / vs).powi(2)).exp());
+        let budget = fd + (fs - fd) * (-(qd / vs).powi(2)).exp();
+        let driving = servo + tau + load.passive - load.bias;
+        let stop = -load.inertia * qd / load.dt.max(1e-9) - driving;
+        tau += stop.clamp(-budget, budget);
     }
     if let Some([f0, k]) = jp.load_friction {
         tau -= sign * (f0 + k * servo.abs());

@@ -28,6 +28,9 @@ declare_effect! {
     }
 }
 
+/// Smoothing velocity of the sign [rad/s] (the synth's `FRICTION_EPS`).
+pub const EPS: f64 = 0.02;
+
 impl Effect for LoadDependentFriction {
     fn friction(&self) -> bool {
         true
@@ -45,7 +48,7 @@ impl Effect for LoadDependentFriction {
     fn torque(&self, cx: HookCtx<'_>) {
         let HookCtx { q, qd, io, p, .. } = cx;
         let budget = p[0].max(0.0) + p[1].max(0.0) * servo_torque(q, qd, io).abs();
-        io.tau -= smooth_sign(qd, super::stribeck_friction::EPS) * budget;
+        io.tau -= smooth_sign(qd, EPS) * budget;
     }
     /// Coulomb friction adds its extra frictionloss to the base.
     fn absorb(&self, other: &dyn Effect, mine: &[f64], delta: &[f64]) -> Option<Vec<f64>> {

@@ -1,15 +1,20 @@
+use super::external_load_friction::implicit_friction;
 use super::*;
 use crate::declare_effect;
 
 declare_effect! {
     /// Breakaway (static) friction above the sliding level at low speed.
     ///
-    /// Static friction above the sliding (Coulomb) level at low speed,
-    /// −sign(q̇)·(Fd + (Fs − Fd)·exp(−(q̇/vs)²)), with tanh(q̇/ε) for the sign near zero
-    /// (ε = 0.02 rad/s).
+    /// Static friction above the sliding (Coulomb) level at low speed: a dry-friction budget
+    /// F(q̇) = Fd + (Fs − Fd)·exp(−(q̇/vs)²) against the motion, applied implicitly with exact
+    /// stiction as external-load friction applies its own: the torque that would stop the joint
+    /// within the (semi-implicit Euler) step, from the DoF's inertia and every other torque of
+    /// the step, clamped to ±F(q̇). A sliding joint gets −F(q̇)·sign(q̇), a joint whose driving
+    /// torques stay below Fs is held, and friction never reverses the motion within a step —
+    /// stable at any step, inertia and friction level, with no smoothing velocity to choose.
     ///
     /// ## Simulation
-    /// hook: `−tanh(q̇/0.02)·(Fd + (Fs−Fd)·exp(−(q̇/vs)²))`
+    /// hook: budget `Fd + (Fs−Fd)·exp(−(q̇/vs)²)`, applied implicitly (stage 2, after every other torque)
     ///
     /// ## Signature
     /// `sign(q̇)·exp(−(q̇/v_s)²)`, v_s = 0.2·rms q̇ (sticking at reversals)
@@ -30,9 +35,6 @@ declare_effect! {
     }
 }
 
-/// Smoothing velocity of the sign [rad/s].
-pub const EPS: f64 = 0.02;
-
 impl Effect for StribeckFriction {
     fn friction(&self) -> bool {
         true
@@ -47,10 +49,16 @@ impl Effect for StribeckFriction {
     fn bounds(&self, _m: &MjModel, t: &JointTarget) -> (Vec<f64>, Vec<f64>) {
         super::bounds_for_drive(self, t, &[0, 1])
     }
+    /// After every other torque of the step: the friction is applied implicitly
+    /// ([`super::external_load_friction`]), so it needs them all.
+    fn stage(&self) -> u8 {
+        2
+    }
     fn torque(&self, cx: HookCtx<'_>) {
-        let HookCtx { qd, io, p, .. } = cx;
+        let HookCtx { q, qd, io, dt, p, .. } = cx;
         let (fs, fd, vs) = (p[0].max(0.0), p[1].max(0.0), p[2].max(1e-4));
-        io.tau -= smooth_sign(qd, EPS) * (fd + (fs - fd) * (-(qd / vs).powi(2)).exp());
+        let budget = fd + (fs - fd) * (-(qd / vs).powi(2)).exp();
+        io.tau += implicit_friction(q, qd, io, dt, budget);
     }
     /// Coulomb friction adds its extra frictionloss to both levels.
     fn absorb(&self, other: &dyn Effect, mine: &[f64], delta: &[f64]) -> Option<Vec<f64>> {
@@ -78,5 +86,35 @@ impl Effect for StribeckFriction {
     }
     fn write_back(&self, _p: &[f64]) -> WriteBack {
         WriteBack::TomlOnly
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// One 1 ms step of the Stribeck hook (static 0.06, sliding 0.03 N·m, v_s 0.2 rad/s) on a
+    /// DoF of inertia 0.005 kg·m² (the pendulum servo) with `drive` N·m of other torque.
+    fn step(qd: f64, drive: f64) -> f64 {
+        let mut st = EffectState::default();
+        let mut io = StepIo { enabled: false, tau: drive, inertia: 0.005, ..Default::default() };
+        let p = [0.06, 0.03, 0.2];
+        let cx = HookCtx { st: &mut st, q: 0.0, qd, q_target: 0.0, io: &mut io, dt: 0.001, p: &p };
+        StribeckFriction.torque(cx);
+        io.tau - drive
+    }
+
+    #[test]
+    fn sticks_below_the_static_level_and_slides_at_the_curve() {
+        // At rest under 0.05 N·m (below static 0.06): held exactly, no creep.
+        assert!((step(0.0, 0.05) + 0.05).abs() < 1e-12);
+        // At rest under 0.07 N·m: breaks away against the static level.
+        assert!((step(0.0, 0.07) + 0.06).abs() < 1e-12);
+        // Sliding at 0.2 rad/s (= v_s): the curve's value, against the motion.
+        let want = 0.03 + 0.03 * (-1.0f64).exp();
+        assert!((step(0.2, 0.0) + want).abs() < 1e-12, "{}", step(0.2, 0.0));
+        // Slowly moving with no drive: stopped within the step, never pushed backwards.
+        let f = step(1e-3, 0.0);
+        assert!((1e-3 + f * 0.001 / 0.005).abs() < 1e-12, "{f}");
     }
 }
