@@ -2,12 +2,17 @@
 //!
 //! A friction model that elaborates a plain one ([`Effect::plain_variant`]: Stribeck or
 //! load-dependent friction around Coulomb friction) and holds it as a special case
-//! ([`Effect::absorb`]) is, at the plain model's fit taken over, the plain fit itself. Its extra
+//! ([`Effect::absorb`]) is, at the plain model's fit taken over, the plain fit itself (up to
+//! how each is applied: Coulomb friction is MuJoCo's soft `frictionloss`, Stribeck friction
+//! exact stiction — on KR2 the first leaves 27 % less squared error at the same level). Its extra
 //! parameters can only win where the residual that fit leaves has their shape. So before its
 //! full fit (a simplex of 2 (k − 1) × `max_evals` replays) the extension is judged from there:
-//! one replay per fitted parameter gives its finite-difference columns at the plain fit, the
+//! one replay per fitted parameter gives its finite-difference columns, the
 //! least-squares (Gauss–Newton) step on them is predicted and simulated, and the model's own
-//! further starts ([`Effect::nested_alternatives`]) are replayed. When none of these lowers the
+//! further starts ([`Effect::nested_alternatives`]) are replayed; the columns and the step are
+//! taken at the best of these starts (the plain fit taken over or a further start), since
+//! extra parameters that act only where the plain fit rarely goes (a breakaway felt only at
+//! rest) have nearly flat columns at the plain fit. When none of these lowers the
 //! information criterion counted per window ([`bic_pieces`]) below the plain fit's — its extra
 //! parameters buy nothing there — the full fit is left out (`tried`: phase "screen").
 //!
@@ -68,11 +73,10 @@ pub(super) fn adds_nothing(
     if k == 0 {
         return false;
     }
-    let x0: Vec<f64> = x0
-        .iter()
-        .enumerate()
-        .map(|(i, v)| if i < k { v.clamp(lo[i], hi[i]) } else { *v })
-        .collect();
+    let clamp = |a: &[f64]| -> Vec<f64> {
+        a.iter().enumerate().map(|(i, v)| if i < k { v.clamp(lo[i], hi[i]) } else { *v }).collect()
+    };
+    let x0 = clamp(&x0);
     let k_base: usize = applied.iter().map(|a| a.effect.fitted()).sum();
     let m = e_plain.windows.len();
     let criterion = |sse: f64, kk: usize| bic_pieces(m, e_plain.n, sse, k_base + kk);
@@ -82,54 +86,52 @@ pub(super) fn adds_nothing(
     }
     let beats = |sse: f64| sse.is_finite() && criterion(sse, effect.fitted()) < to_beat;
     let resid = |p: &[f64]| engine.residuals(short, &with(p), &engine.joints, usize::MAX);
-    let Some(r0) = resid(&x0) else { return false };
-    let sse0: f64 = r0.iter().map(|v| v * v).sum();
-    if beats(sse0) {
-        return false;
-    }
-    // The model's own further starts, then the columns of its fitted parameters at x0.
-    let alternatives = effect.nested_alternatives(&x0);
-    let alt_sse: Vec<f64> = alternatives
+    // The plain fit taken over, then the model's own further starts from it.
+    let mut starts = vec![x0.clone()];
+    starts
+        .extend(effect.nested_alternatives(&x0).iter().filter(|a| a.len() >= k).map(|a| clamp(a)));
+    let sse: Vec<f64> = starts
         .par_iter()
-        .filter(|a| a.len() >= k)
-        .map(|a| {
-            let a: Vec<f64> = a
-                .iter()
-                .enumerate()
-                .map(|(i, v)| if i < k { v.clamp(lo[i], hi[i]) } else { *v })
-                .collect();
-            engine.errors(short, &with(&a)).map_or(f64::INFINITY, |e| e.sse)
-        })
+        .map(|a| engine.errors(short, &with(a)).map_or(f64::INFINITY, |e| e.sse))
         .collect();
-    if alt_sse.iter().any(|&f| beats(f)) {
+    if sse.iter().any(|&f| beats(f)) {
         return false;
     }
+    // The columns of its fitted parameters at the best of the starts. Where the extra
+    // parameters act only in a regime the plain fit barely enters (exact stiction's static
+    // excess acts only at rest), their columns at the plain fit are nearly flat and the step
+    // stays near it; from the best start the step reaches the level. KR2 (Stribeck truth):
+    // from (c, c, 0.1) the step explains 5 % of that start's residual, predicted SSE 9.4e-3
+    // against the 5.4e-3 that beats the plain fit's BIC; from (2c, c, 0.05) 24 %, 4.5e-3.
+    let best = (0..starts.len()).fold(0, |b, i| if sse[i] < sse[b] { i } else { b });
+    let (xb, sse_b) = (&starts[best], sse[best]);
+    let Some(rb) = resid(xb) else { return false };
     let cols: Vec<Option<Vec<f64>>> = (0..k)
         .into_par_iter()
         .map(|i| {
-            let v = effects::probe_step(x0[i], lo[i], hi[i]);
-            let h = v - x0[i];
+            let v = effects::probe_step(xb[i], lo[i], hi[i]);
+            let h = v - xb[i];
             if h == 0.0 {
                 return None;
             }
-            let mut x = x0.clone();
+            let mut x = xb.clone();
             x[i] = v;
             let r1 = resid(&x)?;
             // Residuals are real − sim: the column of the simulation is −Δr / h.
-            (r1.len() == r0.len()).then(|| r1.iter().zip(&r0).map(|(b, a)| (a - b) / h).collect())
+            (r1.len() == rb.len()).then(|| r1.iter().zip(&rb).map(|(b, a)| (a - b) / h).collect())
         })
         .collect();
     let Some(cols) = cols.into_iter().collect::<Option<Vec<Vec<f64>>>>() else { return false };
     let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
-    let b: Vec<f64> = cols.iter().map(|c| dot(c, &r0)).collect();
+    let b: Vec<f64> = cols.iter().map(|c| dot(c, &rb)).collect();
     let g: Vec<Vec<f64>> = cols.iter().map(|x| cols.iter().map(|y| dot(x, y)).collect()).collect();
     let (explained, step) = combine(&b, &g);
-    if beats(sse0 - explained) {
+    if beats(sse_b - explained) {
         return false;
     }
     // The linear model does not ask for it; its step is simulated all the same (a kink's
     // column can under-state what the step does).
-    let x1: Vec<f64> = x0
+    let x1: Vec<f64> = xb
         .iter()
         .enumerate()
         .map(|(i, v)| if i < k { (v + step[i]).clamp(lo[i], hi[i]) } else { *v })
