@@ -183,8 +183,8 @@ fn the_standing_leg_without_a_shift_gives_nothing() {
 /// the simulator's sign is tanh(q̇/0.005), RK4 at 4 kHz) comes out blind as Stribeck friction
 /// on the servo alone, its static and sliding levels within 10 %. Fails with a replay friction
 /// smoothed by a fixed tanh(q̇/0.02) (static +13 %, v_s −31 %); with exact stiction static and
-/// sliding are +4 % and +3 %. v_s is not asserted: it still comes out ~20 % low (0.158,
-/// standard error 0.028) — docs/fitting.md, "Known limits".
+/// sliding are +4 % and +3 %. v_s is not asserted here: at the model's 1 ms step it comes out
+/// 21 % low (0.158, standard error 0.028), the step's own (see the next test).
 #[test]
 fn a_stribeck_curve_on_a_light_servo_is_found_with_its_levels() {
     let truth = truth("KR2_pend_stribeck");
@@ -196,5 +196,33 @@ fn a_stribeck_curve_on_a_light_servo_is_found_with_its_levels() {
     for key in ["static", "dynamic"] {
         let (got, want) = (p[key].as_f64().unwrap(), s[key].as_f64().unwrap());
         assert!((got - want).abs() <= 0.1 * want, "{key} {got} for {want}");
+    }
+}
+
+/// The Stribeck curve's velocity scale comes out low because of the model's 1 ms step, not the
+/// friction model: MuJoCo's semi-implicit Euler leads continuous time by half a step. Told on
+/// KR2 with the nominal model's timestep set to 0.25 ms, v_s is within 10 % of the truth (0.188;
+/// 0.176 at 0.5 ms, 0.158 at 1 ms: linear in the step, 0.200 extrapolated) and the static and
+/// sliding levels within 2 %. Fails if the exact-stiction hook's curve is wrong, or if the bias
+/// has another cause that a finer step does not remove.
+#[test]
+fn the_stribeck_velocity_comes_out_right_at_a_finer_model_step() {
+    let truth = truth("KR2_pend_stribeck");
+    own_physics(&truth);
+    let s = &truth["effects"]["joints"]["servo"]["stribeck"];
+    let d = common::indep::case("KR2_pend_stribeck");
+    let xml = std::fs::read_to_string(d.join("nominal.xml")).unwrap();
+    let fine = xml.replace("timestep=\"0.001\"", "timestep=\"0.00025\"");
+    assert_ne!(fine, xml, "the nominal model states its 1 ms timestep");
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("kr2_fine_step");
+    std::fs::create_dir_all(&dir).unwrap();
+    let model = dir.join("nominal.xml");
+    std::fs::write(&model, fine).unwrap();
+    let v =
+        common::indep::fit_at(&model, &d.join("episodes"), &["--told", "stribeck_friction@servo"]);
+    let p = &v["missing_physics"][0]["params"];
+    for (key, tol) in [("static", 0.02), ("dynamic", 0.02), ("v_stribeck", 0.1)] {
+        let (got, want) = (p[key].as_f64().unwrap(), s[key].as_f64().unwrap());
+        assert!((got - want).abs() <= tol * want, "{key} {got} for {want}");
     }
 }
