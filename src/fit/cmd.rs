@@ -8,7 +8,7 @@ use std::path::PathBuf;
 use serde_json::json;
 
 use crate::error::CmdError;
-use crate::fit::effects::{self, Applied, simulate};
+use crate::fit::effects::{self, simulate};
 use crate::fit::select::{FitOptions, FitOutcome, Progress, ProgressInfo, fit};
 use crate::lint::Loaded;
 use crate::sim2real::gap::{self, GapOptions, GapReport};
@@ -298,9 +298,6 @@ pub struct FitRun {
     /// Feet whose orientation the final model leaves above their joints' floors
     /// ([`crate::fit::contact`]).
     pub feet: Vec<crate::fit::contact::FootResidual>,
-    /// Kept body effects not listed as missing physics: they leave the larger part of their
-    /// feet's residual ([`crate::fit::contact::stand_ins`]).
-    pub stand_ins: Vec<crate::fit::contact::StandIn>,
     /// Everything said through the sink, also in the JSON.
     pub notes: Vec<String>,
     pub warnings: Vec<String>,
@@ -327,6 +324,9 @@ pub fn fit_once(
     // Kept effects at the model's own value within their uncertainty are not missing physics.
     let within = crate::fit::absent::split_off(robot, &mut out.selected);
     out.notes.extend(within);
+    // Nor a body effect whose value is the bound of its search.
+    let bounded = crate::fit::absent::split_off_at_bound(robot, &mut out.selected);
+    out.warnings.extend(bounded);
     let unexplained = crate::fit::unexplained::unexplained(&out.floors, opts.policy.white_ratio);
     out.warnings.extend(unexplained.iter().map(|u| u.message()));
     for w in &out.warnings {
@@ -355,7 +355,7 @@ pub fn fit_once(
     }
     let spec = p.loaded.spec.as_ref();
     let region = |name: &str| gap::joint_region(spec, name);
-    let run = |applied: &[Applied]| -> Result<(GapReport, Vec<Recording>, Vec<Episode>), String> {
+    let run = |applied| -> Result<(GapReport, Vec<Recording>, Vec<Episode>), String> {
         let eps: Result<Vec<Episode>, _> =
             simulate(robot, &out.heldout, applied, replay).into_iter().collect();
         let eps = eps.map_err(|e| e.to_string())?;
@@ -375,15 +375,6 @@ pub fn fit_once(
     for f in &feet {
         sink.warning(&f.message());
     }
-    // A kept body effect that leaves most of its feet's signature is not missing physics.
-    let without = |ap: &[Applied]| run(ap).ok().map(|(_, _, e)| e);
-    let stand_ins =
-        crate::fit::contact::stand_ins(robot, (&heldout, &eps_a), &feet, &out.applied, &without);
-    out.selected
-        .retain(|s| !stand_ins.iter().any(|x| x.effect == s.effect && x.joints == s.joints));
-    for x in &stand_ins {
-        sink.warning(&x.message());
-    }
     // Everything said on stderr also goes into the JSON `notes` / `warnings`.
     let mut notes: Vec<String> =
         p.notes.iter().chain(&out.notes).chain([&cost_note]).cloned().collect();
@@ -393,7 +384,6 @@ pub fn fit_once(
         .chain(&out.warnings)
         .cloned()
         .chain(feet.iter().map(|f| f.message()))
-        .chain(stand_ins.iter().map(|x| x.message()))
         .collect();
     if let Some(dir) = &a.report {
         let page = crate::fit::report::FitReport {
@@ -421,7 +411,7 @@ pub fn fit_once(
         sink.said(&msg);
         notes.push(msg);
     }
-    Ok(FitRun { out, before, after, unexplained, feet, stand_ins, notes, warnings })
+    Ok(FitRun { out, before, after, unexplained, feet, notes, warnings })
 }
 
 /// `--write-model`: the model with the MuJoCo-expressible fitted values; returns the notes it
@@ -503,7 +493,6 @@ pub fn fit_json(r: &FitRun) -> serde_json::Value {
         "stopped_at_floor": out.stopped_at_floor,
         "unexplained": r.unexplained.iter().map(|u| json!({"joint": u.joint, "residual_rms": u.residual_rms, "floor_rms": u.floor_rms})).collect::<Vec<_>>(),
         "unexplained_contact": r.feet.iter().map(|f| json!({"foot": f.foot, "joint": f.joint, "joints": f.joints, "residual_rms": f.residual_rms, "before_rms": f.before_rms, "floor_rms": f.floor_rms, "kept": f.kept})).collect::<Vec<_>>(),
-        "standing_in": r.stand_ins.iter().map(|x| json!({"effect": x.effect, "joints": x.joints, "params": x.params.iter().map(|(k, v)| (k.clone(), json!(v))).collect::<serde_json::Map<_, _>>(), "feet": x.feet, "removed_ms": x.removed_ms, "left_ms": x.left_ms})).collect::<Vec<_>>(),
         "search": out.cost,
         "warnings": warnings,
         "notes": notes,
@@ -533,12 +522,10 @@ fn fit_text(r: &FitRun) -> String {
     let deg = |rad: f64| rad.to_degrees();
     let mut s = String::from("missing physics\n");
     if out.selected.is_empty() {
-        s.push_str(if !r.stand_ins.is_empty() {
-            "  nothing shown: what was kept leaves most of the feet's residual and may be the floor's compliance standing in (see the warnings)\n"
-        } else if out.stopped_at_floor {
+        s.push_str(if out.stopped_at_floor {
             "  nothing: the training residual is at its noise floor on every joint (nothing left to explain)\n"
         } else if !out.applied.is_empty() {
-            "  nothing beyond its uncertainty: every kept effect is the model's own value within two standard errors (see the notes)\n"
+            "  nothing beyond its uncertainty: every kept effect is the model's own value within two standard errors, or a body at the bound of its search (see the notes and warnings)\n"
         } else {
             "  nothing: no candidate effect improved the held-out error beyond noise\n"
         });

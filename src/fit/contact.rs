@@ -153,26 +153,6 @@ fn foot_floor(runs: &[Vec<Vec<f64>>; 3]) -> (f64, f64) {
     runs.iter().map(|r| white_floor(r)).fold((0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1))
 }
 
-/// Every foot whose orientation the recorded joints fix: its body, the recorded joint whose
-/// child it is, and the recorded hinges from the world to it (in the recorded joints' order).
-fn feet(robot: &Robot, recorded: &[&str]) -> Vec<(usize, String, Vec<(usize, String)>)> {
-    let mut out = Vec::new();
-    for name in recorded {
-        let Some(t) = JointTarget::of(robot, name).filter(|t| !t.ground.is_empty()) else {
-            continue;
-        };
-        let Some(foot) = t.body.map(|b| b.body) else { continue };
-        let Some(path) = foot_path(robot, foot, recorded) else { continue };
-        out.push((foot, name.to_string(), path));
-    }
-    out
-}
-
-/// The recorded joints' names (the first recording's columns).
-fn recorded(recs: &[Recording]) -> Vec<&str> {
-    recs.first().map_or_else(Vec::new, |r| r.joints.iter().map(|j| j.name.as_str()).collect())
-}
-
 /// The feet whose held-out orientation residual with `applied` (`after`; `before` with the
 /// model as given) has a mean square above `ratio` × its white part (noise and quantisation
 /// of the recorded joints, [`white_floor`]), in the recorded joints' order.
@@ -182,7 +162,8 @@ pub fn unexplained_feet(
     applied: &[Applied],
     ratio: f64,
 ) -> Vec<FootResidual> {
-    let recorded = recorded(recs);
+    let Some(first) = recs.first() else { return vec![] };
+    let recorded: Vec<&str> = first.joints.iter().map(|j| j.name.as_str()).collect();
     let kept: Vec<String> = applied
         .iter()
         .filter(|a| a.effect.write_back(&a.params) != WriteBack::Geoms)
@@ -190,7 +171,12 @@ pub fn unexplained_feet(
         .collect();
     let mut d = MjData::new(&robot.mj);
     let mut out = Vec::new();
-    for (foot, name, path) in feet(robot, &recorded) {
+    for name in &recorded {
+        let Some(t) = JointTarget::of(robot, name).filter(|t| !t.ground.is_empty()) else {
+            continue;
+        };
+        let Some(foot) = t.body.map(|b| b.body) else { continue };
+        let Some(path) = foot_path(robot, foot, &recorded) else { continue };
         let (ms, white) = foot_floor(&residual_runs(robot, &mut d, foot, &path, (recs, after)));
         let (ms0, _) = foot_floor(&residual_runs(robot, &mut d, foot, &path, (recs, before)));
         if !(ms > ratio * white) {
@@ -198,120 +184,12 @@ pub fn unexplained_feet(
         }
         out.push(FootResidual {
             foot: robot.bodies.get(foot).map_or_else(|| format!("body {foot}"), |b| b.name.clone()),
-            joint: name,
+            joint: name.to_string(),
             joints: path.into_iter().map(|(_, j)| j).collect(),
             residual_rms: ms.sqrt(),
             before_rms: ms0.sqrt(),
             floor_rms: white.sqrt(),
             kept: kept.clone(),
-        });
-    }
-    out
-}
-
-/// A kept body effect that leaves the larger part of its feet's signature unexplained
-/// ([`stand_ins`]): not listed as missing physics.
-#[derive(Debug, Clone, PartialEq)]
-pub struct StandIn {
-    pub effect: String,
-    pub joints: Vec<String>,
-    /// Its fitted parameters (name, value), as kept in the fitted replay.
-    pub params: Vec<(String, f64)>,
-    /// The feet below the effect's joints (their paths from the world hold one of them).
-    pub feet: Vec<String>,
-    /// Over those feet, the held-out orientation residual's mean square the effect removes
-    /// (the replay with every other kept effect, minus the one with all) [rad²].
-    pub removed_ms: f64,
-    /// Over those feet, the mean square above the white part left with every kept effect [rad²].
-    pub left_ms: f64,
-}
-
-impl StandIn {
-    /// The warning line: what is not listed, and the feet's figures that say why.
-    pub fn message(&self) -> String {
-        let total = (self.removed_ms.max(0.0) + self.left_ms).max(1e-300);
-        format!(
-            "{} on {} ({}) is not listed as missing physics: it removes {:.0} % of the orientation residual of {} above their joints' noise on the held-out episodes and leaves {:.0} % — a body on these joints that the model lacked would have moved the feet as it moves the joints, so what it fits may be the floor's compliance standing in (it stays in the fitted replay)",
-            self.effect,
-            self.joints.join("+"),
-            self.params.iter().map(|(k, v)| format!("{k} = {v:.4}")).collect::<Vec<_>>().join(", "),
-            100.0 * self.removed_ms.max(0.0) / total,
-            self.feet.join(", "),
-            100.0 * self.left_ms / total,
-        )
-    }
-}
-
-/// Whether an effect that takes `removed_ms` of its feet's orientation residual and leaves
-/// `left_ms` above their noise explains their signature: it must take the larger part (no
-/// constant: what it explains against what it leaves).
-pub fn explains_its_feet(removed_ms: f64, left_ms: f64) -> bool {
-    removed_ms > left_ms
-}
-
-/// The kept body effects ([`WriteBack::Inertial`]) whose feet — those below any of their
-/// joints — include one named in `named` (an unexplained residual at its ground contact) and
-/// which do not explain the larger part of those feet's residual above their noise
-/// ([`explains_its_feet`]). A body the model lacks changes the loads on the whole tree and the
-/// recorded feet turn with the recorded joints: fitted, it moves the replayed feet as much as
-/// the joints (floatsim's `KFR1`, a real trunk battery: three quarters of the feet's residual
-/// above noise). A body effect standing in for the floor's compliance moves the joints by
-/// gravity and leaves the soles' tilt (`KFR0`, no battery: one seventh). `without(ap)` replays
-/// the held-out episodes with the effects `ap` (`None` when it fails: no verdict).
-pub fn stand_ins(
-    robot: &Robot,
-    (recs, after): (&[Recording], &[Episode]),
-    named: &[FootResidual],
-    applied: &[Applied],
-    without: &dyn Fn(&[Applied]) -> Option<Vec<Episode>>,
-) -> Vec<StandIn> {
-    let recorded = recorded(recs);
-    let all = feet(robot, &recorded);
-    let mut d = MjData::new(&robot.mj);
-    let mut out = Vec::new();
-    for (i, a) in applied.iter().enumerate() {
-        if a.effect.write_back(&a.params) != WriteBack::Inertial {
-            continue;
-        }
-        let below: Vec<&(usize, String, Vec<(usize, String)>)> = all
-            .iter()
-            .filter(|(_, _, path)| path.iter().any(|(_, j)| a.joints.contains(j)))
-            .collect();
-        if !below.iter().any(|(_, j, _)| named.iter().any(|f| &f.joint == j)) {
-            continue;
-        }
-        let rest: Vec<Applied> =
-            applied.iter().enumerate().filter(|(k, _)| *k != i).map(|(_, x)| x.clone()).collect();
-        let Some(eps) = without(&rest) else { continue };
-        let (mut removed, mut left) = (0.0, 0.0);
-        for (foot, _, path) in &below {
-            let (ms, white) = foot_floor(&residual_runs(robot, &mut d, *foot, path, (recs, after)));
-            let (ms0, _) = foot_floor(&residual_runs(robot, &mut d, *foot, path, (recs, &eps)));
-            removed += ms0 - ms;
-            left += (ms - white).max(0.0);
-        }
-        if !(removed.is_finite() && left.is_finite()) || explains_its_feet(removed, left) {
-            continue;
-        }
-        out.push(StandIn {
-            effect: a.effect.id().to_string(),
-            joints: a.joints.clone(),
-            params: a
-                .effect
-                .params()
-                .iter()
-                .zip(a.full_params().iter())
-                .take(a.effect.fitted())
-                .map(|(p, v)| (p.name.to_string(), *v))
-                .collect(),
-            feet: below
-                .iter()
-                .map(|(f, _, _)| {
-                    robot.bodies.get(*f).map_or_else(|| format!("body {f}"), |b| b.name.clone())
-                })
-                .collect(),
-            removed_ms: removed,
-            left_ms: left,
         });
     }
     out
