@@ -250,5 +250,8 @@ CASES["KFR3_trunk_battery_off_axis"] = dict(CHAIN_FR, seed=99, effects={"bodies"
 # the floor, and whether MuJoCo's contact settings (solref, solimp) can be either floor.
 CASES["KFR0s_biped_stiff_floor"] = dict(CHAIN_FR, seed=96, episodes=2, heldout=[1], effects={},
                                         ground=dict(k=1e6, c=3000.0))
+# KFR1's battery over KFR0s's stiff floor (the same commands, seed 97): whether the shift along
+# the trunk is hidden by the floor or by the excitation (docs/fitting.md). Recorded by run.sh.
+CASES["KFR1s_trunk_battery_stiff_floor"] = dict(CASES["KFR1_trunk_battery"], ground=dict(k=1e6, c=3000.0))
 CASES["KFR0w_biped_soft_floor"] = dict(CHAIN_FR, seed=96, episodes=2, heldout=[1], effects={},
                                        ground=dict(k=2e4, c=450.0))
