@@ -72,7 +72,8 @@ fn over_a_stiff_floor_the_contact_is_named_and_no_centre_of_mass_moved() {
 /// changes that. The output says so: both feet are named with an unexplained residual at their
 /// ground contact (their orientation from the recorded joints, above what the joints' noise
 /// explains), the com_offset named as what may stand in for the floor. (Blind, the search keeps
-/// a body effect on the trunk here: docs/fitting.md, "A free base standing on a floor".)
+/// a point mass at the bound of its place and does not list it: the next test; docs/fitting.md,
+/// "A free base standing on a floor".)
 #[test]
 fn the_floors_compliance_is_named_at_the_feet_not_presented_as_a_moved_centre() {
     let name = "KFR0_biped_none";
@@ -91,4 +92,44 @@ fn the_floors_compliance_is_named_at_the_feet_not_presented_as_a_moved_centre() 
     let w = v["warnings"].to_string();
     assert!(w.contains("unexplained residual at the ground contact of left_foot"), "{w}");
     assert!(w.contains("com_offset on root_pitch fits may be the floor's compliance"), "{w}");
+}
+
+/// Nothing concealed (`KFR0_biped_none`), told a point mass on the trunk: the floor's compliance
+/// pushes it to the top of the place it may have (0.375 ± 0.021 m along the trunk, its bound
+/// one link length, 0.4 m, within two standard errors). That is where the search stopped, not a
+/// body the data determined: it is not listed as missing physics, a warning says so, and the
+/// feet are named. (Blind, the search keeps the same stand-in at 0.3985 m: docs/fitting.md.)
+#[test]
+fn a_point_mass_pushed_to_the_bound_of_its_place_is_not_listed() {
+    let name = "KFR0_biped_none";
+    let truth = truth(name);
+    own_free_base_physics(&truth);
+    assert!(truth["effects"].as_object().is_some_and(|e| e.is_empty()), "{}", truth["effects"]);
+    let v = fit(name, &["--told", "link_mass@root_pitch"]);
+    assert!(found(&v).is_empty(), "listed as missing physics: {:?}", found(&v));
+    let w = v["warnings"].to_string();
+    assert!(w.contains("link_mass on root_pitch: offset = "), "{w}");
+    assert!(w.contains("is at the bound of its search"), "{w}");
+    let feet = v["unexplained_contact"].as_array().expect("unexplained_contact");
+    assert_eq!(feet.len(), 2, "{feet:?}");
+}
+
+/// A real 1.5 kg battery off the trunk's axis (8 cm behind it, 12 cm above its centre), told as
+/// a point mass on the trunk: it is listed — its place is inside its bounds — with the mass
+/// within 10 % and its place across the trunk within 10 % of the link's length. Its place along
+/// the trunk is not asserted: it carries the floor's bias (0.298 m for 0.12 m: the same first
+/// moment the control's stand-in puts up the trunk, docs/fitting.md).
+#[test]
+fn a_battery_off_the_trunks_axis_is_listed_with_its_mass() {
+    let name = "KFR3_trunk_battery_off_axis";
+    let truth = truth(name);
+    own_free_base_physics(&truth);
+    let body = TruthBody::of(&truth, "trunk");
+    let (mass, _along, across) = body.payload_place();
+    let v = fit(name, &["--told", "link_mass@root_pitch"]);
+    assert_eq!(found(&v), [("link_mass".into(), r#"["root_pitch"]"#.into())], "{:?}", found(&v));
+    let p = &v["missing_physics"][0]["params"];
+    let (dm, c) = (p["added_mass"].as_f64().unwrap(), p["across"].as_f64().unwrap());
+    assert!((dm - mass).abs() <= 0.1 * mass, "added mass {dm} for {mass}");
+    assert!((c - across).abs() <= 0.1 * body.len, "across {c} for {across} (link {} m)", body.len);
 }

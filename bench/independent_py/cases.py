@@ -241,10 +241,23 @@ CHAIN_FR = dict(CHAIN_F, episodes=4, seconds=4.0, heldout=[3])
 CASES["KFR0_biped_none"] = dict(CHAIN_FR, seed=96, effects={})
 CASES["KFR1_trunk_battery"] = dict(CHAIN_FR, seed=97, effects={"bodies": {"trunk": {
     "joint": "root_pitch", "com_shift": [0.04, 0.0, -0.03]}}})
+# Real body effects other than a moved centre on the same floor (the stand-in test of
+# docs/fitting.md, "A free base standing on a floor"): a 0.6 kg sensor at the foot end of both
+# shanks (one body effect on the two knees' child bodies), and KS2's 1.5 kg battery off the
+# trunk's axis (8 cm behind it, 12 cm above its centre; committed in fixtures/independent_py,
+# tests/independent_free.rs). KFR2 is recorded by run.sh, not committed.
+CASES["KFR2_shanks_payload"] = dict(CHAIN_FR, seed=98, effects={"bodies": {
+    f"{s}_shank": {"joint": f"{s}_knee", "payload": {"mass": 0.6, "pos": [0.0, 0.0, -0.25]}}
+    for s in ("left", "right")}})
+CASES["KFR3_trunk_battery_off_axis"] = dict(CHAIN_FR, seed=99, effects={"bodies": {"trunk": {
+    "joint": "root_pitch", "payload": {"mass": 1.5, "pos": [-0.08, 0.0, 0.32]}}}})
 # The clean control over other floors (`ground`: floatsim's k, c): ten times stiffer and five
 # times softer than KFR0's, the same commands (seed) for two episodes: how much of KFR0's gap is
 # the floor, and whether MuJoCo's contact settings (solref, solimp) can be either floor.
 CASES["KFR0s_biped_stiff_floor"] = dict(CHAIN_FR, seed=96, episodes=2, heldout=[1], effects={},
                                         ground=dict(k=1e6, c=3000.0))
+# KFR1's battery over KFR0s's stiff floor (the same commands, seed 97): whether the shift along
+# the trunk is hidden by the floor or by the excitation (docs/fitting.md). Recorded by run.sh.
+CASES["KFR1s_trunk_battery_stiff_floor"] = dict(CASES["KFR1_trunk_battery"], ground=dict(k=1e6, c=3000.0))
 CASES["KFR0w_biped_soft_floor"] = dict(CHAIN_FR, seed=96, episodes=2, heldout=[1], effects={},
                                        ground=dict(k=2e4, c=450.0))

@@ -324,6 +324,9 @@ pub fn fit_once(
     // Kept effects at the model's own value within their uncertainty are not missing physics.
     let within = crate::fit::absent::split_off(robot, &mut out.selected);
     out.notes.extend(within);
+    // Nor a body effect whose value is the bound of its search.
+    let bounded = crate::fit::absent::split_off_at_bound(robot, &mut out.selected);
+    out.warnings.extend(bounded);
     let unexplained = crate::fit::unexplained::unexplained(&out.floors, opts.policy.white_ratio);
     out.warnings.extend(unexplained.iter().map(|u| u.message()));
     for w in &out.warnings {
@@ -522,7 +525,7 @@ fn fit_text(r: &FitRun) -> String {
         s.push_str(if out.stopped_at_floor {
             "  nothing: the training residual is at its noise floor on every joint (nothing left to explain)\n"
         } else if !out.applied.is_empty() {
-            "  nothing beyond its uncertainty: every kept effect is the model's own value within two standard errors (see the notes)\n"
+            "  nothing beyond its uncertainty: every kept effect is the model's own value within two standard errors, or a body at the bound of its search (see the notes and warnings)\n"
         } else {
             "  nothing: no candidate effect improved the held-out error beyond noise\n"
         });

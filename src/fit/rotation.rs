@@ -49,7 +49,8 @@ pub fn mean_mae<'a>(eps: impl Iterator<Item = &'a EpisodeMae>) -> (f64, f64) {
 /// The fold holding out the episodes whose metadata `key` equals `value`: the selection with
 /// `opts` (its `holdout_by` replaced) and the held-out MAE before → after, on every recorded
 /// joint but `unscored` (`--no-command`: replayed, not scored). A kept effect within its
-/// uncertainty of the model as given moves from `selected` to a note ([`crate::fit::absent`]).
+/// uncertainty of the model as given moves from `selected` to a note, a body effect at the bound
+/// of its search to a warning ([`crate::fit::absent`]).
 /// Errors: no held-out episode,
 /// or a held-out replay that fails.
 pub fn fold(
@@ -67,6 +68,7 @@ pub fn fold(
     // missing physics (a note; it stays in the fitted replay).
     let within = crate::fit::absent::split_off(robot, &mut out.selected);
     out.notes.extend(within);
+    out.warnings.extend(crate::fit::absent::split_off_at_bound(robot, &mut out.selected));
     if out.heldout.is_empty() {
         return Err(format!("{key} = {value}: no held-out episode"));
     }
