@@ -147,6 +147,7 @@ pub fn kind_word(kind: ElemKind) -> &'static str {
         ElemKind::Key => "key",
         ElemKind::Mesh => "mesh",
         ElemKind::Pair => "contact pair",
+        ElemKind::Sensor => "sensor",
     }
 }
 
@@ -229,6 +230,7 @@ pub fn registry() -> Vec<&'static dyn Rule> {
         &geometry::visual_mesh_collision::VisualMeshCollision,
         &mapping::urdf_mjcf_drift::UrdfMjcfDrift,
         &limits::ctrlrange_in_degrees::CtrlrangeInDegrees,
+        &mapping::sensor_quantity::SensorQuantity,
     ]
 }
 
