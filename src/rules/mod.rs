@@ -215,6 +215,7 @@ pub fn registry() -> Vec<&'static dyn Rule> {
         &inertia::copied_inertial::CopiedInertial,
         &contact::toe_tilt::ToeTilt,
         &contact::foot_collision_geometry::FootCollisionGeometry,
+        &contact::torsional_friction::TorsionalFriction,
         &limits::soft_limits::SoftLimits,
         &control::underdamped_pd_gains::UnderdampedPdGains,
         &control::servo_stall_band::ServoStallBand,
