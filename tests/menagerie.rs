@@ -85,3 +85,54 @@ fn both_scenes_load() {
         assert!(l.robot.key.key.is_some(), "{m} has a keyframe");
     }
 }
+
+/// Issue 45, "a pre-commit run on two Menagerie robot folders prints each finding once, one line
+/// each": every model file of both folders (each scene and the robot file it includes, as
+/// pre-commit passes the staged files) through the hook's command. Each robot file is skipped as
+/// included by its scene, every stdout line is one `file:line:col: level rule message`, and no
+/// line appears twice.
+#[test]
+fn hook_on_two_robot_folders_prints_each_finding_once() {
+    let Some(data) = shared() else {
+        eprintln!("skipping: ../shared/data is absent");
+        return;
+    };
+    let mut files: Vec<PathBuf> = Vec::new();
+    for dir in ["booster_t1", "unitree_h1"] {
+        let mut xml: Vec<PathBuf> = std::fs::read_dir(data.join("models").join(dir))
+            .unwrap()
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| p.extension().is_some_and(|e| e == "xml"))
+            .collect();
+        xml.sort();
+        assert!(xml.len() >= 2, "{dir}: a scene and its robot file");
+        files.extend(xml);
+    }
+    let hooks = std::fs::read_to_string(".pre-commit-hooks.yaml").unwrap();
+    let entry = hooks.lines().find_map(|l| l.trim().strip_prefix("entry: modellint ")).unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_modellint"))
+        .args(&files)
+        .args(entry.split_whitespace())
+        .arg("--no-cache")
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8(out.stdout).unwrap();
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert_eq!(stderr.matches("included by").count(), 2, "{stderr}");
+    let lines: Vec<&str> = stdout.lines().collect();
+    assert!(!lines.is_empty(), "{stderr}");
+    for l in &lines {
+        let mut it = l.splitn(4, ':');
+        let (file, line, col) =
+            (it.next().unwrap(), it.next().unwrap_or(""), it.next().unwrap_or(""));
+        let rest = it.next().unwrap_or("");
+        assert!(file.ends_with(".xml") || file.ends_with(".toml"), "{l}");
+        assert!(line.parse::<usize>().is_ok() && col.parse::<usize>().is_ok(), "{l}");
+        let level = rest.split_whitespace().next().unwrap_or("");
+        assert!(["error", "warning", "info"].contains(&level), "{l}");
+    }
+    let mut uniq = lines.clone();
+    uniq.sort();
+    uniq.dedup();
+    assert_eq!(uniq.len(), lines.len(), "a finding printed twice:\n{stdout}");
+}

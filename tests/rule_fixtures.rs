@@ -475,3 +475,22 @@ fn mirror_pairs_leg_side_prefixes_and_reports_an_inherited_ctrlrange_once() {
     assert_eq!(f.len(), 1, "{f:?}");
     assert!(f[0].message.starts_with("joint `right_knee` range"), "{}", f[0].message);
 }
+
+/// A joint whose damping takes its whole force limit below the spec's `velocity_limit` is
+/// reported (damping × velocity limit > force limit); the same arm with the motor's viscous
+/// friction as joint damping and the servo's damping in `kv` is not. The valid model lives in
+/// `pairs/` because every spec with a `velocity_limit` also gets the rule's per-family info.
+#[test]
+fn damping_that_caps_speed_below_the_velocity_limit() {
+    let caps = |path: &str| {
+        let (fs, _) = lint_one(Path::new(path), "effort-limit-mismatch");
+        let n = fs.iter().filter(|f| f.message.contains("cannot reach")).count();
+        let infos = fs.iter().filter(|f| f.message.contains("speed–torque limit")).count();
+        (n, infos)
+    };
+    let (n, infos) = caps("fixtures/rules/effort-limit-mismatch/invalid_damping_caps_speed.xml");
+    assert_eq!((n, infos), (2, 2));
+    let (n, infos) =
+        caps("fixtures/rules/effort-limit-mismatch/pairs/valid_damping_within_speed.xml");
+    assert_eq!((n, infos), (0, 2), "the spec's velocity_limit was read, no damping finding");
+}

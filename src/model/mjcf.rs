@@ -19,6 +19,8 @@ pub enum ElemKind {
     Mesh,
     /// `<contact><pair>` (compiled in signature order: matched by its geom names).
     Pair,
+    /// A child of `<sensor>` (its tag is the sensor type).
+    Sensor,
 }
 
 /// Where an effective attribute value came from.
@@ -363,6 +365,11 @@ pub fn index_mjcf(root: &XNode) -> SourceIndex {
     for sec in root.children_tagged("asset") {
         for m in sec.children_tagged("mesh") {
             b.push(ElemKind::Mesh, m, None, &[], false);
+        }
+    }
+    for sec in root.children_tagged("sensor") {
+        for e in &sec.children {
+            b.push(ElemKind::Sensor, e, None, &[], false);
         }
     }
     b.idx

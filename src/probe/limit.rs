@@ -2,7 +2,10 @@
 //! record where the joint goes and whether it meets a hard stop.
 //!
 //! * Drives: the joint's actuator to each end of its ctrlrange (the joint's range × gear when the
-//!   actuator has no ctrlrange) for 1 s, other DoFs frozen, contacts off, gravity on.
+//!   actuator has no ctrlrange) for [`APPROACH_S`], other DoFs frozen, contacts off, gravity on;
+//!   longer when the joint's own damping caps its speed (force limit / damping, the speed at
+//!   which damping takes the whole force limit): twice the time to cover the distance at that
+//!   speed, at most [`MAX_APPROACH_S`].
 //! * Measures, per end: the commanded target referred to the joint, the joint position the run
 //!   ends at, the smallest and largest position reached, whether MuJoCo's joint-limit
 //!   constraint became active with force, and the joint velocity at its first activation
@@ -12,11 +15,26 @@
 //!   not drive the command there, and the run says nothing about the stop).
 //! * The soft-limit findings are facts of the file: the probe measures their consequence (the
 //!   stop engaged, at what speed) and never refutes them.
-//! * Budget: 2 × 1 s at the model's timestep.
+//! * Budget: 2 × 1 s at the model's timestep (2 × 10 s at most for a damping-capped joint).
 
 use super::bench::{self, Bench, Setup};
 use crate::lint::Loaded;
 use crate::model::{Robot, mj};
+
+/// How long each end's run lasts, s.
+pub const APPROACH_S: f64 = 1.0;
+/// Longest run of one end, s, for a joint whose damping caps its speed.
+pub const MAX_APPROACH_S: f64 = 10.0;
+
+/// Seconds to give one end's run over `distance` (rad or m): [`APPROACH_S`], or twice the time
+/// at the joint's damping-capped speed `force_limit / damping`, up to [`MAX_APPROACH_S`].
+pub fn approach_seconds(distance: f64, force_limit: Option<f64>, damping: f64) -> f64 {
+    let capped = match force_limit {
+        Some(f) if f > 0.0 && damping > 0.0 => 2.0 * distance.abs() * damping / f,
+        _ => 0.0,
+    };
+    if capped.is_finite() { capped.clamp(APPROACH_S, MAX_APPROACH_S) } else { APPROACH_S }
+}
 
 /// The probe: one actuator commanded to its ctrlrange extremes (key: the actuator's id).
 pub struct LimitApproach;
@@ -114,11 +132,14 @@ pub fn run(robot: &Robot, act: usize) -> Option<LimitHit> {
         range: j.range,
         ..Default::default()
     };
+    let force_limit =
+        crate::rules::limits::effort_limit_mismatch::joint_torque_limit(robot, j.id).map(|x| x.0);
     for (k, ctrl) in [lo, hi].into_iter().enumerate() {
         let mut d = b.data(robot);
-        let n = (1.0 / b.dt()).ceil() as usize;
-        let mut first = true;
         let q0 = bench::qpos(&d, j.qposadr);
+        let secs = approach_seconds(ctrl / g - q0, force_limit, j.damping);
+        let n = (secs / b.dt()).ceil() as usize;
+        let mut first = true;
         let mut end = EndRun { target: ctrl / g, q_lo: q0, q_hi: q0, ..Default::default() };
         for _ in 0..n {
             bench::set_ctrl(&mut d, act, ctrl);
@@ -155,4 +176,21 @@ pub fn run(robot: &Robot, act: usize) -> Option<LimitHit> {
         }
     }
     Some(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_damping_capped_joint_gets_the_time_to_cross() {
+        // 150 N·m against 200 N·m·s/rad: 0.75 rad/s; 4.7 rad twice over takes 12.5 s: capped.
+        assert_eq!(approach_seconds(4.7, Some(150.0), 200.0), MAX_APPROACH_S);
+        // 28 N·m against 15 N·m·s/rad: 1.87 rad/s; 3 rad twice over: 3.2 s.
+        assert!((approach_seconds(-3.0, Some(28.0), 15.0) - 2.0 * 3.0 * 15.0 / 28.0).abs() < 1e-12);
+        // Fast joints, no damping or no force limit: the default second.
+        assert_eq!(approach_seconds(1.0, Some(40.0), 1.0), APPROACH_S);
+        assert_eq!(approach_seconds(3.0, None, 200.0), APPROACH_S);
+        assert_eq!(approach_seconds(3.0, Some(150.0), 0.0), APPROACH_S);
+    }
 }

@@ -2,3 +2,4 @@
 pub mod feet;
 pub mod foot_collision_geometry;
 pub mod toe_tilt;
+pub mod torsional_friction;

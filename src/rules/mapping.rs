@@ -2,4 +2,5 @@
 pub mod actuator_mapping;
 pub mod missing_actuators;
 pub mod passive_joint_spring;
+pub mod sensor_quantity;
 pub mod urdf_mjcf_drift;

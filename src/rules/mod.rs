@@ -147,6 +147,7 @@ pub fn kind_word(kind: ElemKind) -> &'static str {
         ElemKind::Key => "key",
         ElemKind::Mesh => "mesh",
         ElemKind::Pair => "contact pair",
+        ElemKind::Sensor => "sensor",
     }
 }
 
@@ -214,6 +215,7 @@ pub fn registry() -> Vec<&'static dyn Rule> {
         &inertia::copied_inertial::CopiedInertial,
         &contact::toe_tilt::ToeTilt,
         &contact::foot_collision_geometry::FootCollisionGeometry,
+        &contact::torsional_friction::TorsionalFriction,
         &limits::soft_limits::SoftLimits,
         &control::underdamped_pd_gains::UnderdampedPdGains,
         &control::servo_stall_band::ServoStallBand,
@@ -229,6 +231,7 @@ pub fn registry() -> Vec<&'static dyn Rule> {
         &geometry::visual_mesh_collision::VisualMeshCollision,
         &mapping::urdf_mjcf_drift::UrdfMjcfDrift,
         &limits::ctrlrange_in_degrees::CtrlrangeInDegrees,
+        &mapping::sensor_quantity::SensorQuantity,
     ]
 }
 

@@ -5,7 +5,9 @@
 //! containing `foot`, `ankle_roll`, `toe` or `sole`; failing that, the leaf bodies whose
 //! collision geoms reach within 3 cm of the robot's lowest collision point at the keyframe.
 //! Each matched body that has no matched ancestor is a foot root; its descendants (and any
-//! other matched body on the same side, e.g. a separately matched toe) are its toe bodies.
+//! other matched body on the same side, e.g. a separately matched toe) are its toe bodies. A
+//! root with no contact geom of its own whose foot's contacts all hang below one descendant (an
+//! ankle roll link above the pitch link that holds the sole) hands the foot to that descendant.
 //!
 //! Only a floating-base robot has feet (unless the spec names them): a fixed-base arm or a
 //! test rig gets no foot rules. Each foot is classified by its ground geoms (the collision
@@ -76,6 +78,15 @@ fn is_ancestor(robot: &Robot, anc: usize, mut b: usize) -> bool {
         }
     }
     false
+}
+
+/// The deepest body that is `bodies`' own or an ancestor of each of them (0: the world).
+fn common_ancestor(robot: &Robot, bodies: &[usize]) -> usize {
+    let mut c = bodies.first().copied().unwrap_or(0);
+    while c != 0 && !bodies.iter().all(|&b| b == c || is_ancestor(robot, c, b)) {
+        c = robot.bodies[c].parent;
+    }
+    c
 }
 
 fn contact_geoms(robot: &Robot, body: usize) -> impl Iterator<Item = usize> + '_ {
@@ -178,6 +189,17 @@ pub fn feet(robot: &Robot, spec: Option<&Spec>) -> Vec<Foot> {
         bodies.extend(f.toes.iter().copied());
         f.geoms = bodies.iter().flat_map(|&b| contact_geoms(robot, b)).collect();
         f.geoms.sort();
+        // The foot is the body that carries its contacts: a matched body with no contact geom
+        // of its own whose contacts all hang below one descendant (an ankle roll link above the
+        // pitch link that holds the sole) hands the foot to that descendant.
+        if !f.geoms.is_empty() && !f.geoms.iter().any(|&g| robot.geoms[g].body == f.root) {
+            let carriers: Vec<usize> = f.geoms.iter().map(|&g| robot.geoms[g].body).collect();
+            let c = common_ancestor(robot, &carriers);
+            if c != f.root && is_ancestor(robot, f.root, c) {
+                f.toes.retain(|&b| b != c && !is_ancestor(robot, b, c));
+                f.root = c;
+            }
+        }
         let low: Vec<(usize, [f64; 3])> =
             f.geoms.iter().map(|&g| (g, Placed::of(robot, g).lowest())).collect();
         let zmin = low.iter().map(|x| x.1[2]).fold(f64::INFINITY, f64::min);

@@ -21,7 +21,10 @@ declare_rule! {
     /// e.g. ±139 N·m of command on a joint clamped at ±60), and limits that differ from the spec's motor
     /// `peak_torque` by more than `tolerance`. When the spec gives a motor family's
     /// `velocity_limit` or `saturation_torque`, reports once per family (info) that MuJoCo cannot
-    /// express the speed–torque curve, so the training stack must apply it.
+    /// express the speed–torque curve, so the training stack must apply it; and a joint whose
+    /// damping takes its whole force limit below that `velocity_limit` (damping × velocity
+    /// limit > force limit: at full torque the simulated joint stops accelerating at force
+    /// limit / damping, so it can never reach the motor's rated speed).
     ///
     /// ## Why is this bad?
     /// Effort limits are part of the identified actuator model (Asimov system identification §4). A joint without a
@@ -147,6 +150,11 @@ impl Rule for EffortLimitMismatch {
             };
             let Some(fam) = facts.as_ref().and_then(|f| f.motor.clone()) else { continue };
             let Some(m) = cx.spec.and_then(|s| s.motor(&fam)) else { continue };
+            if let Some(vmax) = v(&m.velocity_limit)
+                && j.damping * vmax > lim
+            {
+                out.push(damping_caps_speed(cx, j, lim, vmax, &fam, m));
+            }
             let Some(peak) = v(&m.peak_torque) else { continue };
             let rel = (lim - peak) / peak;
             if rel.abs() <= tol {
@@ -295,6 +303,57 @@ impl Rule for EffortLimitMismatch {
             out.push(f);
         }
     }
+}
+
+/// Joint `j`'s linear damping takes its whole force limit `lim` below the motor family's
+/// `velocity_limit`: at full torque the simulated joint stops accelerating at `lim / damping`.
+fn damping_caps_speed(
+    cx: &Context,
+    j: &crate::model::Joint,
+    lim: f64,
+    vmax: f64,
+    fam: &str,
+    m: &crate::spec::Motor,
+) -> Finding {
+    let slide = j.jtype == crate::model::JointType::Slide;
+    let (unit, vel, dunit) =
+        if slide { ("N", "m/s", "N·s/m") } else { ("N·m", "rad/s", "N·m·s/rad") };
+    let d = j.damping;
+    let terminal = lim / d;
+    let msg = format!(
+        "joint `{}` damping {} {dunit} takes its whole force limit {} {unit} at {} {vel}: it cannot reach the `{fam}` motor's velocity limit {} {vel}",
+        j.name,
+        fmt_num(d, 4),
+        fmt_num(lim, 4),
+        fmt_num(terminal, 3),
+        fmt_num(vmax, 4)
+    );
+    let mut f = cx
+        .at_attr(ElemKind::Joint, j.id, &j.name, "damping", msg)
+        .label(format!(
+            "{} × {} {vel} = {} {unit} of damping at the velocity limit",
+            fmt_num(d, 4),
+            fmt_num(vmax, 4),
+            fmt_num(d * vmax, 4)
+        ))
+        .note("joint damping is passive: it opposes every motion with damping × speed, so with full torque the simulated joint stops accelerating at force limit / damping; the policy learns a robot slower than the hardware, and a servo that relies on this damping for its stability gets none of it from the real joint")
+        .help(format!(
+            "lower the joint's damping below {} {dunit} (force limit / velocity limit: the motor's viscous friction, if identified) and give the servo its damping through the actuator's kv",
+            fmt_num(lim / vmax, 3)
+        ))
+        .subject(Subject::Joint(j.id))
+        .measured(terminal, vel)
+        .expected(vmax, vel)
+        .with("damping", d)
+        .with("force_limit", lim)
+        .with("terminal_speed", terminal)
+        .with("velocity_limit", vmax);
+    if let Some(s) = cx.spec
+        && let Some(vl) = &m.velocity_limit
+    {
+        f = f.secondary(s.loc(vl.span()), format!("spec velocity_limit of `{fam}`"));
+    }
+    f
 }
 
 /// A `<motor>`'s torque command range that disagrees with the joint's `actuatorfrcrange`.

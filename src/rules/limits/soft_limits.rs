@@ -15,7 +15,9 @@ declare_rule! {
     /// Checks the training range of every position actuator on a hinge or slide joint: its
     /// `ctrlrange` should be the spec's `robot.soft_limit_factor` (default 0.9) × the joint's
     /// hardware `range`, centred on it. Without a spec it still reports a ctrlrange that covers
-    /// the whole joint range (or is unlimited), which lets the policy command the hard stops. It
+    /// the whole joint range — its ends beyond the range's, or within `tolerance` of them (a
+    /// margin of a rounding error is no soft limit) — or is unlimited, which lets the policy
+    /// command the hard stops. It
     /// also reports an actuated hinge/slide joint with no range at all — unless the joint turns
     /// without end by design: a wheel (an unlimited hinge turning a round geom about its own
     /// axle), or on a fixed-base robot a joint whose position actuators have no `ctrlrange`
@@ -44,7 +46,7 @@ declare_rule! {
         group: "limits",
         level: Severity::Warning,
         probe: LimitApproach,
-        options: [opt("tolerance", 0.02, "fraction of joint range", "allowed deviation of each ctrlrange end from the soft range")],
+        options: [opt("tolerance", 0.02, "fraction of joint range", "allowed deviation of each ctrlrange end from the soft range; ctrlrange ends this close to the hard ends cover the whole range")],
     }
 }
 
@@ -286,7 +288,10 @@ impl SoftLimits {
                 let span = r[1] - r[0];
                 let eps = 1e-9 * span.max(1.0);
                 let mid = 0.5 * (r[0] + r[1]);
-                let covers = c[0] <= r[0] + eps && c[1] >= r[1] - eps;
+                // Ends within `tolerance` of the hard ends are the hard ends: a margin of a
+                // rounding error (±6.2831 of ±6.28319) is no soft limit.
+                let near = tol * span;
+                let covers = c[0] <= r[0] + near && c[1] >= r[1] - near;
                 let exp = factor.map(|fct| [mid - 0.5 * fct * span, mid + 0.5 * fct * span]);
                 let dev = exp.map(|e| ((c[0] - e[0]).abs()).max((c[1] - e[1]).abs()) / span);
                 let within_spec = dev.is_some_and(|d| d <= tol);
@@ -302,13 +307,25 @@ impl SoftLimits {
                     )
                 } else if covers && !within_spec {
                     let wider = c[0] < r[0] - eps || c[1] > r[1] + eps;
+                    let margin = (c[0] - r[0]).max(r[1] - c[1]);
+                    let how = if wider {
+                        "is wider than".to_string()
+                    } else if margin <= eps {
+                        "equals".to_string()
+                    } else {
+                        format!(
+                            "stops within {} {u} ({} % of the range, tolerance {} %) of",
+                            fmt_num(margin, 3),
+                            fmt_num(100.0 * margin / span, 2),
+                            fmt_num(100.0 * tol, 3)
+                        )
+                    };
                     (
                         1,
                         format!(
-                            "position actuator `{}` ctrlrange {} {} joint `{}`'s hardware range {}",
+                            "position actuator `{}` ctrlrange {} {how} joint `{}`'s hardware range {}",
                             a.name,
                             rng(c, u),
-                            if wider { "is wider than" } else { "equals" },
                             j.name,
                             rng(r, u)
                         ),
