@@ -29,11 +29,11 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     let opts = engine.opts;
     let robot = engine.robot;
     let applied = out.applied.clone();
-    let Some(tr_err) = engine.errors(train, &applied) else {
+    let Some(tr_err) = engine.errors_held(train, &applied) else {
         out.warnings.push("the training replay diverged with the current model; stopping".into());
         return false;
     };
-    let Some(ho_err) = engine.errors(heldout, &applied) else {
+    let Some(ho_err) = engine.errors_held(heldout, &applied) else {
         out.warnings.push("the held-out replay diverged with the current model; stopping".into());
         return false;
     };
@@ -52,7 +52,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     // (When the training set is not longer than the screen's, it is the training set itself,
     // so that coarse and full fits share the memo.)
     let short = if same_data(&short_set, train) { train } else { &short_set[..] };
-    let Some(sh_err) = engine.errors(short, &applied) else {
+    let Some(sh_err) = engine.errors_held(short, &applied) else {
         out.warnings.push("the training replay diverged with the current model; stopping".into());
         return false;
     };
