@@ -263,21 +263,21 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     // The one-parameter candidates are `cands[..n1]`, the others `cands[n1..n0]`; mirror
     // completions come after `n0`.
     let n0 = cands.len();
-    let n1 = cands.iter().take_while(|(e, ..)| e.fitted() < 2).count();
-    let (mut ones_screened, mut more_screened) = (n1 == 0, n1 == n0);
-    // The linear model's favourite first, alone ([`lead`]): `cands[..n_lead]`.
-    let predicted_rmse: Vec<Option<f64>> = cands[..n1]
-        .iter()
-        .map(|(e, g, _)| screen.predict(e.id(), g).map(|p| p.train_rmse))
-        .collect();
+    let mut n1 = cands.iter().take_while(|(e, ..)| e.fitted() < 2).count();
+    // The linear model's favourite first, alone ([`lead`]), whatever its size: `cands[..n_lead]`
+    // (a lead of more parameters joins the one-parameter block at its front).
+    let predicted_rmse: Vec<Option<f64>> =
+        cands.iter().map(|(e, g, _)| screen.lead_rmse(e.id(), g, e.fitted())).collect();
     let n_lead = match lead::lead(&predicted_rmse) {
         // Only when the lead at the floor would leave some candidate unscreened.
-        Some(i) if opts.policy.lead_first && cands[..n1].iter().any(|c| c.1 != cands[i].1) => {
+        Some(i) if opts.policy.lead_first && cands.iter().any(|c| c.1 != cands[i].1) => {
+            n1 += usize::from(i >= n1);
             cands[..=i].rotate_right(1);
             1
         }
         _ => 0,
     };
+    let (mut ones_screened, mut more_screened) = (n1 == 0, n1 == n0);
     let mut lead_screened = n_lead == 0;
     // The groups of the kept candidates that left a white training residual: once there is
     // one, a candidate not yet screened is screened only on one of those groups (an alias).
