@@ -288,6 +288,8 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     let mut floor_train: Option<f64> = None;
     // The log indices of the kept candidates that left a white training residual.
     let mut floored: Vec<usize> = Vec::new();
+    // The log index of the lead's fit on the whole training set.
+    let mut lead_logged: Option<usize> = None;
     let mut ci = 0;
     while ci < cands.len() {
         // The coarse fits of a size's candidates, which are then taken best first: the
@@ -410,12 +412,17 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         // The full fit runs on the screen's data too (its cost does not grow with the log's
         // length); the held-out gate and the training BIC below use all data, and the round's
         // winner is refined on the whole training set ([`refine`]).
+        // The lead, the likeliest winner, is fitted on the whole training set at once from its
+        // coarse fit: the round's winner is fitted there anyway ([`refine`]).
+        let whole = n_lead == 1 && ci == 1;
         let start = (cf < base_short).then_some(cp.as_slice());
-        let (p, fit_rmse) = engine.fit_from(short, &applied, (e, &group), start);
+        let data = if whole { train } else { short };
+        let (p, fit_rmse) = engine.fit_from(data, &applied, (e, &group), start);
         if p.is_empty() || !fit_rmse.is_finite() {
             continue;
         }
-        best_gain = best_gain.max(gain(fit_rmse));
+        best_gain = best_gain.max(if whole { rel(fit_rmse, base_train) } else { gain(fit_rmse) });
+        let full = whole.then(|| p.clone());
         let Some((p, tr_a)) = on_whole_set(s, &applied, (e, &group), p, base_train) else {
             continue;
         };
@@ -450,6 +457,9 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
             kept: false,
             predicted,
         });
+        if full.as_ref() == Some(&p) {
+            lead_logged = Some(logged);
+        }
         // The lead beside effects kept in earlier rounds on its joints, each fitted without it,
         // is judged at the floor with them re-fitted together ([`refitted_at_floor`]); the
         // next round measures the floor again unless the round keeps that set.
@@ -559,7 +569,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     let mut accepted: Vec<Selected> = accepted.into_iter().map(|(s, ..)| s).collect();
     let rivals = rival_notes(&accepted, win, &same);
     let mut w = accepted.swap_remove(win);
-    if !std::ptr::eq(short, train) {
+    if !std::ptr::eq(short, train) && lead_logged != Some(logged) {
         w = refine(s, &applied, w, (&tr_err, &ho_err), z);
     }
     if let Some(pair) = pair_lookahead(s, &applied, &kept_all, &w, z, round, out) {
