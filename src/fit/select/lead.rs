@@ -1,17 +1,21 @@
-//! The order of a round's one-parameter candidates when the linear model's favourite goes first
+//! The order of a round's candidates when the linear model's favourite goes first
 //! ([`SearchPolicy::lead_first`]), when they lie on more than one joint group (else the lead
 //! could leave nothing unscreened, and its full fit would be an extra one): the candidate whose
-//! linearised step leaves the least of the screen's residual is coarse-fitted, fitted in full and judged before any other candidate is
-//! coarse-fitted. When it is kept and leaves a white training residual on every fitted joint
-//! (the floor), nothing is left that a candidate of as many parameters could explain beyond
-//! noise: only its aliases — other effects on exactly its joints, which the data may not tell
-//! apart from it — are still screened (Occam's choice, nesting and the rival notes compare
-//! them); every other candidate is left without a fit (`tried`: phase "floor").
+//! linearised step leaves the least of the screen's residual — of any size, charged for its
+//! parameters by the information criterion over the screen's windows
+//! ([`super::screen::Screen::lead_rmse`]) — is coarse-fitted, fitted in full (on the whole
+//! training set at once, from its coarse fit: the likeliest winner, and a round's winner is
+//! fitted there anyway) and judged before any other candidate is coarse-fitted. When it is kept
+//! and leaves a white training residual on every fitted joint (the floor), nothing is left that
+//! a candidate of as many parameters could explain beyond noise: only its aliases — other
+//! effects on exactly its joints, which the data may not tell apart from it — are still
+//! screened (Occam's choice, nesting and the rival notes compare them); every other candidate
+//! is left without a fit (`tried`: phase "floor").
 //!
 //! [`SearchPolicy::lead_first`]: super::policy::SearchPolicy::lead_first
 
-/// Index of the lead among `predicted` (each candidate's predicted training RMSE, `None` when
-/// the screen does not model it): the lowest prediction, the first in rank order on a tie;
+/// Index of the lead among `predicted` (each candidate's predicted training RMSE, charged for
+/// its parameters; `None` when the screen does not model it): the lowest prediction, the first in rank order on a tie;
 /// `None` when no candidate is predicted.
 pub(super) fn lead(predicted: &[Option<f64>]) -> Option<usize> {
     predicted
