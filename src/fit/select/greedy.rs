@@ -278,8 +278,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         }
         _ => 0,
     };
-    let (mut ones_screened, mut more_screened) = (n1 == 0, n1 == n0);
-    let mut lead_screened = n_lead == 0;
+    let mut blocks = lead::Blocks::new(n_lead, n1, n0);
     // The groups of the kept candidates that left a white training residual: once there is
     // one, a candidate not yet screened is screened only on one of those groups (an alias).
     let mut floored_groups: Vec<Vec<String>> = Vec::new();
@@ -293,28 +292,11 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     let mut lead_logged: Option<usize> = None;
     let mut ci = 0;
     while ci < cands.len() {
-        // The coarse fits of a size's candidates, which are then taken best first: the
-        // one-parameter ones at the start; the others once the best of those was judged and
-        // left more to explain than noise (or at once when there are none).
-        let block = if !lead_screened {
-            lead_screened = true;
-            Some(0..n_lead)
-        } else if !ones_screened {
-            ones_screened = true;
-            // After a lead at the floor only its aliases are screened (the others: "floor").
-            let n = match floor_k {
-                Some(_) => {
-                    lead::keep_first(&mut cands[n_lead..n1], |(_, g, _)| floored_groups.contains(g))
-                }
-                None => n1 - n_lead,
-            };
-            Some(n_lead..n_lead + n)
-        } else if !more_screened && floor_k.is_none() && (ci >= 1 || n1 == 0) {
-            more_screened = true;
-            Some(n1..n0)
-        } else {
-            None
-        };
+        // The coarse fits of a size's candidates, which are then taken best first
+        // ([`lead::Blocks`]); after a lead at the floor only its aliases are screened.
+        let block = blocks.next(ci, floor_k.is_some(), || {
+            lead::keep_first(&mut cands[n_lead..n1], |(_, g, _)| floored_groups.contains(g))
+        });
         if let Some(range) = block {
             engine.report(
                 round,
