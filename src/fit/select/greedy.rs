@@ -413,7 +413,17 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         if p.is_empty() || !fit_rmse.is_finite() {
             continue;
         }
-        best_gain = best_gain.max(if whole { rel(fit_rmse, base_train) } else { gain(fit_rmse) });
+        // Gains compare on the screen's data: the lead's, fitted on the whole training set, is
+        // measured there by one replay (the stretches of largest residual gain more than the
+        // whole set does, and a lower bar lets more candidates into a full fit).
+        let short_rmse = if whole && !std::ptr::eq(short, train) {
+            let mut t = applied.clone();
+            t.push(Applied { effect: e, joints: group.clone(), params: p.clone() });
+            engine.errors(short, &t).map_or(f64::NAN, |x| x.rmse())
+        } else {
+            fit_rmse
+        };
+        best_gain = best_gain.max(gain(short_rmse));
         let full = whole.then(|| p.clone());
         let Some((p, tr_a)) = on_whole_set(s, &applied, (e, &group), p, base_train) else {
             continue;
