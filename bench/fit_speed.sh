@@ -6,9 +6,10 @@
 # mujoco.sysid does when given the parameters). Prints per case the blind wall and CPU seconds,
 # the told wall seconds, their ratio (target <= 3), the same ratio in recording seconds
 # replayed (JSON search.simulated_s: the load-independent cost), the rollouts of the blind
-# search, what was fitted, and the medians against the targets: single-joint <= 5 s, three-joint arm <= 10 s,
-# 12-joint legs (4 x 6 s) <= 90 s, the same with 4 x 25 s of 200 Hz logs <= 3 min, the 23-joint
-# Booster T1 (4 x 10 s) <= 5 min. With ../shared/data the seven independent arm2 datasets and T1.
+# search and its recording seconds replayed (sim s), what was fitted, and the medians against
+# the targets: single-joint <= 5 s, three-joint arm <= 10 s, 12-joint legs (4 x 6 s) <= 90 s,
+# the same with 4 x 25 s of 200 Hz logs <= 3 min, the 23-joint Booster T1 (4 x 10 s) <= 5 min.
+# With ../shared/data the seven independent arm2 datasets and T1.
 # Figures only (no pass/fail): the machine is shared; quote ratios from one run.
 #   bench/fit_speed.sh            # all groups
 #   bench/fit_speed.sh --quick    # single-joint and arm2 only
@@ -73,7 +74,7 @@ PYEOF
       sratios="$sratios $sratio"
     fi
   fi
-  printf '%-8s %-34s %8s %8s %8s %6s %6s %9s  %s\n' "$group" "$name" "$wall" "$cpu" "$twall" "$ratio" "$sratio" "$rollouts" "$fitted"
+  printf '%-8s %-34s %8s %8s %8s %6s %6s %9s %9s  %s\n' "$group" "$name" "$wall" "$cpu" "$twall" "$ratio" "$sratio" "$rollouts" "$sim" "$fitted"
   times[$group]="${times[$group]:-} $wall"
 }
 n_case=0
@@ -84,7 +85,7 @@ synth() { # model effects extra... → sets $eps to the episodes directory
   eps="$work/c$n_case/episodes"
 }
 
-printf '%-8s %-34s %8s %8s %8s %6s %6s %9s  %s\n' group case "wall s" "cpu s" "told s" ratio "sim r" rollouts fitted
+printf '%-8s %-34s %8s %8s %8s %6s %6s %9s %9s  %s\n' group case "wall s" "cpu s" "told s" ratio "sim r" rollouts "sim s" fitted
 pend=fixtures/synth/pendulum_servo.xml
 for c in "none" "viscous_damping=0.03" "action_delay=0.015" "armature=0.003" "coulomb_friction=0.03" "gain_error=0.7,1.3"; do
   synth "$pend" "$c" --amplitude 0.8 --seed 5

@@ -38,6 +38,10 @@ pub struct Engine<'a> {
     /// The last [`RECENT`] simulations by [`set_key`]: the search scores the set a fit ended on
     /// right after the fit, and the same base set for each candidate.
     recent: std::sync::Mutex<std::collections::VecDeque<(String, Option<Errors>)>>,
+    /// Simulations held for the whole search ([`Engine::errors_held`]): each round's base
+    /// replays, which the simplify pass asks for again (dropping the only kept effect is the
+    /// first round's base) long after [`RECENT`] others.
+    held: std::sync::Mutex<std::collections::HashMap<String, Option<Errors>>>,
     /// The training RMSE of every simulation a fit's objective asked for, by [`set_key`]: the
     /// screen's coarse fit and the full fit that follows it start alike (the same grid, the same
     /// first simplex), so the full fit re-uses the coarse one's rollouts.
@@ -127,6 +131,7 @@ impl<'a> Engine<'a> {
             sims: std::sync::atomic::AtomicUsize::new(0),
             fits: Default::default(),
             recent: Default::default(),
+            held: Default::default(),
             scores: Default::default(),
             starts: Default::default(),
             start_model: Default::default(),
@@ -294,6 +299,16 @@ impl<'a> Engine<'a> {
         self.errors_at(recs, applied, 1)
     }
 
+    /// [`Engine::errors`], held for the whole search (a round's base replays).
+    pub fn errors_held(&self, recs: &[Recording], applied: &[Applied]) -> Option<Errors> {
+        let e = self.errors(recs, applied);
+        let key = set_key(recs, applied) + &self.start_tag();
+        if let Ok(mut h) = self.held.lock() {
+            h.insert(key, e.clone());
+        }
+        e
+    }
+
     /// [`Engine::errors`] with the model's timestep divided by `refine`.
     pub fn errors_at(
         &self,
@@ -304,6 +319,9 @@ impl<'a> Engine<'a> {
         let mut key = set_key(recs, applied) + &self.start_tag();
         if refine > 1 {
             key += &format!("#dt/{refine}");
+        }
+        if let Some(e) = self.held.lock().ok().and_then(|h| h.get(&key).cloned()) {
+            return e;
         }
         if let Some(e) = self
             .recent

@@ -30,11 +30,11 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     let opts = engine.opts;
     let robot = engine.robot;
     let applied = out.applied.clone();
-    let Some(tr_err) = engine.errors(train, &applied) else {
+    let Some(tr_err) = engine.errors_held(train, &applied) else {
         out.warnings.push("the training replay diverged with the current model; stopping".into());
         return false;
     };
-    let Some(ho_err) = engine.errors(heldout, &applied) else {
+    let Some(ho_err) = engine.errors_held(heldout, &applied) else {
         out.warnings.push("the held-out replay diverged with the current model; stopping".into());
         return false;
     };
@@ -53,7 +53,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     // (When the training set is not longer than the screen's, it is the training set itself,
     // so that coarse and full fits share the memo.)
     let short = if same_data(&short_set, train) { train } else { &short_set[..] };
-    let Some(sh_err) = engine.errors(short, &applied) else {
+    let Some(sh_err) = engine.errors_held(short, &applied) else {
         out.warnings.push("the training replay diverged with the current model; stopping".into());
         return false;
     };
@@ -264,22 +264,21 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     // The one-parameter candidates are `cands[..n1]`, the others `cands[n1..n0]`; mirror
     // completions come after `n0`.
     let n0 = cands.len();
-    let n1 = cands.iter().take_while(|(e, ..)| e.fitted() < 2).count();
-    let (mut ones_screened, mut more_screened) = (n1 == 0, n1 == n0);
-    // The linear model's favourite first, alone ([`lead`]): `cands[..n_lead]`.
-    let predicted_rmse: Vec<Option<f64>> = cands[..n1]
-        .iter()
-        .map(|(e, g, _)| screen.predict(e.id(), g).map(|p| p.train_rmse))
-        .collect();
+    let mut n1 = cands.iter().take_while(|(e, ..)| e.fitted() < 2).count();
+    // The linear model's favourite first, alone ([`lead`]), whatever its size: `cands[..n_lead]`
+    // (a lead of more parameters joins the one-parameter block at its front).
+    let predicted_rmse: Vec<Option<f64>> =
+        cands.iter().map(|(e, g, _)| screen.lead_rmse(e.id(), g, e.fitted())).collect();
     let n_lead = match lead::lead(&predicted_rmse) {
         // Only when the lead at the floor would leave some candidate unscreened.
-        Some(i) if opts.policy.lead_first && cands[..n1].iter().any(|c| c.1 != cands[i].1) => {
+        Some(i) if opts.policy.lead_first && cands.iter().any(|c| c.1 != cands[i].1) => {
+            n1 += usize::from(i >= n1);
             cands[..=i].rotate_right(1);
             1
         }
         _ => 0,
     };
-    let mut lead_screened = n_lead == 0;
+    let mut blocks = lead::Blocks::new(n_lead, n1, n0);
     // The groups of the kept candidates that left a white training residual: once there is
     // one, a candidate not yet screened is screened only on one of those groups (an alias).
     let mut floored_groups: Vec<Vec<String>> = Vec::new();
@@ -289,30 +288,15 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     let mut floor_train: Option<f64> = None;
     // The log indices of the kept candidates that left a white training residual.
     let mut floored: Vec<usize> = Vec::new();
+    // The log index of the lead's fit on the whole training set.
+    let mut lead_logged: Option<usize> = None;
     let mut ci = 0;
     while ci < cands.len() {
-        // The coarse fits of a size's candidates, which are then taken best first: the
-        // one-parameter ones at the start; the others once the best of those was judged and
-        // left more to explain than noise (or at once when there are none).
-        let block = if !lead_screened {
-            lead_screened = true;
-            Some(0..n_lead)
-        } else if !ones_screened {
-            ones_screened = true;
-            // After a lead at the floor only its aliases are screened (the others: "floor").
-            let n = match floor_k {
-                Some(_) => {
-                    lead::keep_first(&mut cands[n_lead..n1], |(_, g, _)| floored_groups.contains(g))
-                }
-                None => n1 - n_lead,
-            };
-            Some(n_lead..n_lead + n)
-        } else if !more_screened && floor_k.is_none() && (ci >= 1 || n1 == 0) {
-            more_screened = true;
-            Some(n1..n0)
-        } else {
-            None
-        };
+        // The coarse fits of a size's candidates, which are then taken best first
+        // ([`lead::Blocks`]); after a lead at the floor only its aliases are screened.
+        let block = blocks.next(ci, floor_k.is_some(), || {
+            lead::keep_first(&mut cands[n_lead..n1], |(_, g, _)| floored_groups.contains(g))
+        });
         if let Some(range) = block {
             engine.report(
                 round,
@@ -420,12 +404,27 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         // The full fit runs on the screen's data too (its cost does not grow with the log's
         // length); the held-out gate and the training BIC below use all data, and the round's
         // winner is refined on the whole training set ([`refine`]).
+        // The lead, the likeliest winner, is fitted on the whole training set at once from its
+        // coarse fit: the round's winner is fitted there anyway ([`refine`]).
+        let whole = n_lead == 1 && ci == 1;
         let start = (cf < base_short).then_some(cp.as_slice());
-        let (p, fit_rmse) = engine.fit_from(short, &applied, (e, &group), start);
+        let data = if whole { train } else { short };
+        let (p, fit_rmse) = engine.fit_from(data, &applied, (e, &group), start);
         if p.is_empty() || !fit_rmse.is_finite() {
             continue;
         }
-        best_gain = best_gain.max(gain(fit_rmse));
+        // Gains compare on the screen's data: the lead's, fitted on the whole training set, is
+        // measured there by one replay (the stretches of largest residual gain more than the
+        // whole set does, and a lower bar lets more candidates into a full fit).
+        let short_rmse = if whole && !std::ptr::eq(short, train) {
+            let mut t = applied.clone();
+            t.push(Applied { effect: e, joints: group.clone(), params: p.clone() });
+            engine.errors(short, &t).map_or(f64::NAN, |x| x.rmse())
+        } else {
+            fit_rmse
+        };
+        best_gain = best_gain.max(gain(short_rmse));
+        let full = whole.then(|| p.clone());
         let Some((p, tr_a)) = on_whole_set(s, &applied, (e, &group), p, base_train) else {
             continue;
         };
@@ -460,6 +459,9 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
             kept: false,
             predicted,
         });
+        if full.as_ref() == Some(&p) {
+            lead_logged = Some(logged);
+        }
         // The lead beside effects kept in earlier rounds on its joints, each fitted without it,
         // is judged at the floor with them re-fitted together ([`refitted_at_floor`]); the
         // next round measures the floor again unless the round keeps that set.
@@ -569,7 +571,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     let mut accepted: Vec<Selected> = accepted.into_iter().map(|(s, ..)| s).collect();
     let rivals = rival_notes(&accepted, win, &same);
     let mut w = accepted.swap_remove(win);
-    if !std::ptr::eq(short, train) {
+    if !std::ptr::eq(short, train) && lead_logged != Some(logged) {
         w = refine(s, &applied, w, (&tr_err, &ho_err), z);
     }
     if let Some(pair) = pair_lookahead(s, &applied, &kept_all, &w, z, round, out) {

@@ -48,11 +48,14 @@ pub struct SearchPolicy {
     /// Run the simplification passes (drop, merge, fold, swap) after the greedy rounds.
     /// Default on.
     pub simplify: bool,
-    /// When the one-parameter candidates lie on more than one joint group, the one whose
-    /// linearised step leaves the least of the screen's residual is coarse-fitted, fitted in
-    /// full and judged before the others are coarse-fitted; when it is kept and leaves a white residual on every fitted joint, only
-    /// other effects on exactly its joints (its aliases) are still screened: nothing is left
-    /// that a candidate of as many parameters could explain beyond noise. Default on.
+    /// When the candidates lie on more than one joint group, the one whose linearised step
+    /// leaves the least of the screen's residual, charged for its parameters by the information
+    /// criterion over the screen's windows (any size: a two-parameter servo gain error can
+    /// lead), is coarse-fitted, fitted in full on the whole training set and judged before the
+    /// others are coarse-fitted; when it is kept and leaves a white residual on every fitted
+    /// joint, only other effects on exactly its joints (its aliases) are still screened:
+    /// nothing is left that a candidate of as many parameters could explain beyond noise.
+    /// Default on.
     pub lead_first: bool,
 
     // ---- when to stop ----
@@ -243,7 +246,7 @@ pub const FIELDS: &[(&str, &str, &str)] = &[
     (
         "lead_first",
         "on/off",
-        "when the one-parameter candidates lie on more than one joint group, the one with the best linear prediction is fitted and judged first; when it leaves a white residual on every joint, only other effects on its joints are screened",
+        "when the candidates lie on more than one joint group, the one with the best linear prediction (any size, charged for its parameters) is fitted on the whole training set and judged first; when it leaves a white residual on every joint, only other effects on its joints are screened",
     ),
     (
         "white_ratio",

@@ -162,6 +162,9 @@ pub(super) struct Screen {
     train_n: usize,
     /// The screen's data's residual RMSE [rad], to which the probes' shares are scaled.
     screen_rmse: f64,
+    /// The screen's data's residual windows: the independent pieces over which the information
+    /// criterion charges a prediction on that data ([`Screen::lead_rmse`]).
+    pieces: usize,
 }
 
 /// One probe of a candidate's parameter: the probe value, its step from the start, the
@@ -489,7 +492,22 @@ impl Screen {
                 models.insert(id, m);
             }
         }
-        Screen { models, train_ss, train_n, screen_rmse }
+        Screen { models, train_ss, train_n, screen_rmse, pieces: sc_err.windows.len() }
+    }
+
+    /// The training RMSE [`Screen::predict`] gives `effect` on `group` (on the screen's data's
+    /// scale), charged for its `k` fitted parameters by the information criterion over the
+    /// screen's data's m windows ([`charged`]: what is left grows by m^((k − 1)/m)), so that
+    /// candidates of different sizes compare: the lead's measure ([`super::lead`]).
+    pub(super) fn lead_rmse(&self, effect: &str, group: &[String], k: usize) -> Option<f64> {
+        let p = self.predict(effect, group)?;
+        let ss = self.train_ss;
+        if !(ss > 0.0) || !(self.screen_rmse > 0.0) {
+            return Some(p.train_rmse);
+        }
+        let left = ss * (p.train_rmse / self.screen_rmse).powi(2);
+        let explained = charged(ss, (ss - left).max(0.0), k, self.pieces);
+        Some(self.screen_rmse * ((ss - explained).max(0.0) / ss).sqrt())
     }
 
     /// The RMSE of the screen's residual before any step [rad].
@@ -599,7 +617,16 @@ mod tests {
             };
             let ss = d(&r, &r);
             let screen_rmse = (ss / r.len() as f64).sqrt();
-            (Screen { models: [("e", m)].into(), train_ss: ss, train_n: r.len(), screen_rmse }, ss)
+            (
+                Screen {
+                    models: [("e", m)].into(),
+                    train_ss: ss,
+                    train_n: r.len(),
+                    screen_rmse,
+                    pieces: 1,
+                },
+                ss,
+            )
         };
         let rmse = |ss: f64| (ss / c.len() as f64).sqrt();
         // Inside the bounds: the residual explained whole, the step the one asked for.

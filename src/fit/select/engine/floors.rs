@@ -12,6 +12,9 @@ use crate::sim2real::replay::{Episode, ReplayOptions};
 use super::super::{Errors, FitOptions, Floor};
 use super::{Engine, set_key};
 
+/// The start state's spread per fitted joint: position, and velocity where recorded.
+type StartSpread = Vec<(f64, Option<f64>)>;
+
 /// The discretisation decision counts a joint only when its residual mean square is within
 /// this factor of its noise floor plus the two replays' difference [ratio of mean squares].
 const EXPLAINABLE: f64 = 4.0;
@@ -114,14 +117,10 @@ impl Engine<'_> {
             .collect()
     }
 
-    /// Per fitted joint: (name, mean square, floors) of the residual of `recs` simulated with
-    /// `applied` as `errs`. The floor is the white floor ([`white_floor`], over the runs of
-    /// samples between gaps) plus the command-reconstruction and start-state floor
-    /// ([`Engine::reconstruction_floor`], of this model: one more simulation), both
-    /// remembered per set of effects with their values. (Not per structure alone: whether the
-    /// recordings count as finer than the model depends on how well the set fits them, and a
-    /// re-fit of the values can change that decision.)
-    pub fn floors(&self, recs: &[Recording], applied: &[Applied], errs: &Errors) -> Vec<Floor> {
+    /// Per fitted joint, the residual's mean square and its white floor ([`white_floor`], over
+    /// the runs of samples between gaps), and the start state's spread (position, and velocity
+    /// where recorded): what [`Engine::floors`] takes from the residual without a simulation.
+    fn white_parts(&self, recs: &[Recording], errs: &Errors) -> (Vec<(f64, f64)>, StartSpread) {
         // Runs of the residual between gaps, per scored joint: of the position, and of the
         // velocity where the recording has one.
         let runs = |name: &String, vel: bool| -> Vec<Vec<f64>> {
@@ -151,6 +150,18 @@ impl Engine<'_> {
                 (w.1.sqrt(), has_qd.then(|| white_floor(&v).1.sqrt()))
             })
             .collect();
+        (white, start)
+    }
+
+    /// Per fitted joint: (name, mean square, floors) of the residual of `recs` simulated with
+    /// `applied` as `errs`. The floor is the white floor ([`white_floor`], over the runs of
+    /// samples between gaps) plus the command-reconstruction and start-state floor
+    /// ([`Engine::reconstruction_floor`], of this model: one more simulation), both
+    /// remembered per set of effects with their values. (Not per structure alone: whether the
+    /// recordings count as finer than the model depends on how well the set fits them, and a
+    /// re-fit of the values can change that decision.)
+    pub fn floors(&self, recs: &[Recording], applied: &[Applied], errs: &Errors) -> Vec<Floor> {
+        let (white, start) = self.white_parts(recs, errs);
         let key = set_key(recs, applied) + &self.start_tag();
         let known = {
             let m = self.recon.lock().unwrap_or_else(|e| e.into_inner());
@@ -327,8 +338,18 @@ impl Engine<'_> {
 
     /// `true` when every fitted joint's residual of `recs` simulated with `applied` as `errs` is within
     /// `white_ratio` of its floor ([`Engine::floors`]): what is left is noise and timing.
+    ///
+    /// The measured parts of a floor (reconstruction, discretisation) are never negative, so a
+    /// residual within `white_ratio` of its white floor alone on every joint is at the floor
+    /// whatever they are: then they are not measured (three replays of `recs` saved; the same
+    /// answer).
     pub fn at_floor(&self, recs: &[Recording], applied: &[Applied], errs: &Errors) -> bool {
-        self.floors(recs, applied, errs).iter().all(|f| f.reached(self.opts.policy.white_ratio))
+        let ratio = self.opts.policy.white_ratio;
+        let (white, _) = self.white_parts(recs, errs);
+        if white.iter().all(|&(ms, w)| ms <= ratio * w) {
+            return true;
+        }
+        self.floors(recs, applied, errs).iter().all(|f| f.reached(ratio))
     }
 }
 

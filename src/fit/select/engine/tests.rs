@@ -249,3 +249,40 @@ fn the_floor_counts_the_start_state_noise() {
     assert!(a > 2e-5, "{a}");
     assert!((b / a - 2.0).abs() < 0.3, "{a} {b}");
 }
+
+/// [`Engine::at_floor`] on the exact model of a noisy recording (0.5 mrad position noise, a
+/// 12-bit encoder): the residual is the noise, within `white_ratio` of its white floor, so the
+/// answer (at the floor, as the full floors say) comes without a replay; the full floors need
+/// their three (reconstruction, dt / 2, dt / 4).
+#[test]
+fn a_white_residual_is_at_the_floor_without_a_replay() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let path = root.join("fixtures/synth/pendulum_servo.xml");
+    let robot = crate::model::load(&mut SourceMap::default(), &path, None).expect("pendulum");
+    let joints = vec!["servo".to_string()];
+    let s = Settings {
+        episodes: 2,
+        duration_s: 3.0,
+        log_at_ticks: true,
+        noise: 5e-4,
+        quant_bits: 12,
+        drop: 0.0,
+        seed: 5,
+        ..Settings::default()
+    };
+    let ds = synth::generate(&robot, &joints, &[], &s, &|_, _| {}).expect("synth");
+    let dir = std::env::temp_dir().join(format!("modellint_white_floor_{}", std::process::id()));
+    let files = synth::write::write(&ds, &dir).expect("write");
+    let recs: Vec<Recording> = files.iter().map(|f| read_csv(f).expect("read")).collect();
+    let _ = std::fs::remove_dir_all(&dir);
+    let opts = FitOptions { estimate_start: false, ..FitOptions::default() };
+    let engine = Engine::new(&robot, &recs, &opts);
+    let errs = engine.errors(&recs, &[]).expect("replay");
+    let before = engine.rollout_stats().rollouts;
+    assert!(engine.at_floor(&recs, &[], &errs));
+    assert_eq!(engine.rollout_stats().rollouts, before, "at_floor replayed");
+    let ratio = opts.policy.white_ratio;
+    let full = engine.floors(&recs, &[], &errs);
+    assert!(full.iter().all(|f| f.ms <= ratio * f.white && f.reached(ratio)), "{full:?}");
+    assert!(engine.rollout_stats().rollouts > before, "the full floors replay");
+}
