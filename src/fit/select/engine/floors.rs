@@ -18,9 +18,6 @@ type StartSpread = Vec<(f64, Option<f64>)>;
 /// The discretisation decision counts a joint only when its residual mean square is within
 /// this factor of its noise floor plus the two replays' difference [ratio of mean squares].
 const EXPLAINABLE: f64 = 4.0;
-/// A joint votes for continuous time when the finer replay comes closer by at least this share
-/// of the two replays' mean square difference [fraction].
-const CLOSER: f64 = 0.5;
 
 impl Engine<'_> {
     /// Per scored joint: the mean square of the error that command reconstruction and the
@@ -196,11 +193,16 @@ impl Engine<'_> {
     /// Each dataset is replayed with `applied` at the model's timestep ("coarse") and, by
     /// extrapolation from two finer replays, in continuous time ("fine",
     /// [`Engine::measure_discretisation`]). The recordings count as finer than the model when
-    /// on more than half of the joints the fine replay comes closer to them by at least half of
-    /// the two replays' own mean square difference (`ms(coarse) − ms(fine) ≥ ½ ms(coarse −
-    /// fine)`), counting only joints whose residual noise plus that difference can explain
-    /// (`ms(coarse) ≤ 4 (base + ms(coarse − fine))`, `base`: the joint's white and
-    /// reconstruction floor): a large missing effect makes either replay closer by chance. Then
+    /// on more than half of the joints the fine replay comes closer to them at all
+    /// (`ms(coarse) − ms(fine) > 0`), counting only joints whose residual noise plus the two
+    /// replays' difference can explain (`ms(coarse) ≤ 4 (base + ms(coarse − fine))`, `base`:
+    /// the joint's white and reconstruction floor): a large missing effect makes either replay
+    /// closer by chance. No share of the difference is asked of a joint: recordings made at the
+    /// model's own step are farther from the fine replay on every joint (the sign alone
+    /// separates them), and an effect fitted to the recordings absorbs part of the timestep's
+    /// error and takes the same part off how much closer the fine replay comes, so a share
+    /// would vote the part out by how well the effects fit rather than by which time the
+    /// recordings move in; the majority of joints is what guards against chance. Then
     /// every joint's part is `ms(coarse − fine)`, a property of the model and the motion that an
     /// effect fitted to absorb some of the discretisation does not shrink; else zero.
     /// Recordings simulated at the model's own step (every synth) are farther from the fine
@@ -360,7 +362,7 @@ pub(super) fn discretisation_part(sums: &[[f64; 3]], base: &[f64]) -> Vec<f64> {
     let votes = sums
         .iter()
         .zip(base)
-        .filter(|([c, f, d], b)| *d > 0.0 && *c <= EXPLAINABLE * (*b + d) && c - f >= CLOSER * d)
+        .filter(|([c, f, d], b)| *d > 0.0 && *c <= EXPLAINABLE * (*b + d) && c > f)
         .count();
     if moved > 0 && 2 * votes > moved {
         sums.iter().map(|s| s[2]).collect()
