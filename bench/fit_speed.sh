@@ -57,7 +57,9 @@ try:
 except Exception:
     print("- - (fit failed)"); sys.exit()
 m = d.get("missing_physics", [])
-print(d.get("search", {}).get("rollouts", "-"), d.get("search", {}).get("simulated_s", "-"),
+s = d.get("search", {})
+sim = s.get("simulated_s")
+print(s.get("rollouts", "-"), "-" if sim is None else f"{sim:.0f}",
       "; ".join(f"{x['effect']}@{'+'.join(x['joints'])}" for x in m) or "(nothing)")
 PYEOF
 )
