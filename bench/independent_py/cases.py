@@ -179,6 +179,9 @@ CASES["KR1_shank_payload"] = dict(CHAIN_R, seed=91, effects={"bodies": {"shank":
 CASES["KR6_knee_backlash"] = dict(CHAIN_R, seed=96, effects={"joints": {"knee": {"backlash": 0.04}}})
 CASES["KR11_shank_inertia"] = dict(CHAIN_R, seed=95, effects={"bodies": {"shank": {
     "joint": "knee", "inertia_scale": 2.0}}})
+# Backlash 0.03 (total play) behind every motor of the leg (K7's truth, reduced): one group on
+# all three joints (issue 46's all-joint backlash). Recorded by run.sh, not committed.
+CASES["KR7_all_backlash"] = dict(CHAIN_R, seed=97, effects={"joints": {j: {"backlash": 0.03} for j in ALL3}})
 # Armature on every joint (one value, 0.06, where the model says 0.04 / 0.03 / 0.012): one group.
 CASES["KR8_all_armature"] = dict(CHAIN_R, seed=98,
     effects={"joints": {j: {"armature": 0.06} for j in ALL3}})
