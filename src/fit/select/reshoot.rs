@@ -6,8 +6,8 @@
 //! load-dependent friction (0.5, 0.1) behind a 12-bit encoder: (0.488, 0.088) by single
 //! shooting, the load coefficient 12 % low; `fit --window 1.0` reaches it within 2 %.) After the
 //! search, each kept friction effect is fitted again on short windows of the training episodes,
-//! each started from its own recorded state, the other effects held (a least-squares fit goes on
-//! from the search's values; a derivative-free one searches its range); the re-fit replaces the
+//! each started from its own recorded state, the other effects held (a least-squares fit or a
+//! simplex goes on from the search's values; a line search searches its range); the re-fit replaces the
 //! search's values when the full replay of the held-out episodes is closer to the recording,
 //! beyond noise on the effect's joints.
 
@@ -59,8 +59,8 @@ pub(super) fn reshoot_friction(
             .collect();
         // From the search's values: the windows move the optimum only a little, and a
         // least-squares fit from there converges in a step or two instead of walking from
-        // the effect's start.
-        let (p, f) = s.engine.fit_from(&win, &base, (a.effect, &a.joints), Some(&a.params));
+        // the effect's start; a simplex from there needs no second start.
+        let (p, f) = s.engine.refit_from(&win, &base, (a.effect, &a.joints), &a.params);
         if p.is_empty() || !f.is_finite() {
             continue;
         }

@@ -90,6 +90,50 @@ impl Engine<'_> {
         self.fit_memo(train, base, (effect, group), self.opts.policy.max_evals, start)
     }
 
+    /// A re-fit of an answer on other data (the multiple-shooting windows of
+    /// [`super::super::reshoot`]): [`Engine::fit_from`] `start` for a smooth or one-parameter
+    /// effect; a simplex from `start` for a non-smooth one of two or three parameters, with the
+    /// budget of a full fit but neither the nested start nor the alternatives' second simplex —
+    /// `start` is already the better of those on the whole episodes, and the windows move the
+    /// optimum only a little. Not memoised (the windows are fitted once).
+    pub(in crate::fit::select) fn refit_from(
+        &self,
+        train: &[Recording],
+        base: &[Applied],
+        (effect, group): (&'static dyn Effect, &[String]),
+        start: &[f64],
+    ) -> (Vec<f64>, f64) {
+        let k = effect.fitted().min(start.len());
+        let Some(t) = JointTarget::of(self.robot, &group[0]) else {
+            return (vec![], f64::INFINITY);
+        };
+        if effect.smooth() || !(2..=3).contains(&k) {
+            return self.fit_from(train, base, (effect, group), Some(start));
+        }
+        let m0 = model_with(self.robot, base);
+        let (lo, hi) = effect.bounds(&m0, &t);
+        let make = |x: &[f64]| {
+            let mut p = start.to_vec();
+            p[..k].copy_from_slice(&x[..k]);
+            let mut a = base.to_vec();
+            a.push(Applied { effect, joints: group.to_vec(), params: p });
+            a
+        };
+        let obj = |x: &[f64]| self.score(train, &make(x));
+        let x0: Vec<f64> = (0..k).map(|i| start[i].clamp(lo[i], hi[i])).collect();
+        let problem = Problem {
+            objective: &obj,
+            residuals: None,
+            bounds: Bounds { lo: lo[..k].to_vec(), hi: hi[..k].to_vec() },
+        };
+        // The same simplex as a full fit's (`fit_fresh`), from the answer.
+        let max_evals = self.opts.policy.max_evals * 2 * (k - 1);
+        let r = solve(&problem, &x0, Method::Simplex { max_evals, xtol: 1e-3, step: 0.1 });
+        let mut p = start.to_vec();
+        p[..k].copy_from_slice(&r.x[..k]);
+        (p, r.f)
+    }
+
     /// The result of [`Engine::fit_one`] with these arguments if it was already computed.
     pub fn fit_known(
         &self,
