@@ -133,3 +133,29 @@ fn a_battery_off_the_trunks_axis_is_listed_with_its_mass() {
     assert!((dm - mass).abs() <= 0.1 * mass, "added mass {dm} for {mass}");
     assert!((c - across).abs() <= 0.1 * body.len, "across {c} for {across} (link {} m)", body.len);
 }
+
+/// The same control and told centre under `--holdout-by episode` (four folds, each holding one
+/// episode out): every fold reports the feet's unexplained contact residual on its own held-out
+/// episode as the single fit does — in its JSON `unexplained_contact`, above the joints' noise,
+/// the fold's com_offset named as what may stand in — and in its warnings.
+#[test]
+fn every_fold_of_a_rotation_names_the_feet_the_floor_leaves() {
+    let name = "KFR0_biped_none";
+    let truth = truth(name);
+    own_free_base_physics(&truth);
+    assert!(truth["effects"].as_object().is_some_and(|e| e.is_empty()), "{}", truth["effects"]);
+    let v = fit(name, &["--holdout-by", "episode", "--told", "com_offset@root_pitch"]);
+    let folds = v["folds"].as_array().expect("folds");
+    assert_eq!(folds.len(), 4, "{v}");
+    for f in folds {
+        let feet = f["unexplained_contact"].as_array().expect("a fold's unexplained_contact");
+        assert!(!feet.is_empty(), "fold {}: no foot named", f["value"]);
+        for x in feet {
+            let (r, w) = (x["residual_rms"].as_f64().unwrap(), x["floor_rms"].as_f64().unwrap());
+            assert!(r > w, "{x}");
+            assert_eq!(x["kept"].to_string(), r#"["com_offset on root_pitch"]"#, "{x}");
+        }
+        let w = f["warnings"].to_string();
+        assert!(w.contains("unexplained residual at the ground contact of"), "{w}");
+    }
+}

@@ -492,7 +492,7 @@ pub fn fit_json(r: &FitRun) -> serde_json::Value {
         "floor": out.floors.iter().map(|f| json!({"joint": f.joint, "residual_rms": f.ms.sqrt(), "white_floor_rms": f.white.sqrt(), "reconstruction_floor_rms": f.reconstruction.sqrt(), "discretisation_floor_rms": f.discretisation.sqrt()})).collect::<Vec<_>>(),
         "stopped_at_floor": out.stopped_at_floor,
         "unexplained": r.unexplained.iter().map(|u| json!({"joint": u.joint, "residual_rms": u.residual_rms, "floor_rms": u.floor_rms})).collect::<Vec<_>>(),
-        "unexplained_contact": r.feet.iter().map(|f| json!({"foot": f.foot, "joint": f.joint, "joints": f.joints, "residual_rms": f.residual_rms, "before_rms": f.before_rms, "floor_rms": f.floor_rms, "kept": f.kept})).collect::<Vec<_>>(),
+        "unexplained_contact": r.feet.iter().map(|x| x.json()).collect::<Vec<_>>(),
         "search": out.cost,
         "warnings": warnings,
         "notes": notes,
