@@ -327,6 +327,9 @@ pub fn fit_once(
     // Nor a body effect whose value is the bound of its search.
     let bounded = crate::fit::absent::split_off_at_bound(robot, &mut out.selected);
     out.warnings.extend(bounded);
+    // Nor a body effect the floor's contact explains as well.
+    let rivals = crate::fit::floor_rival::split_off(robot, &p.recs, &opts, &mut out, &p.unscored);
+    out.warnings.extend(rivals);
     let unexplained = crate::fit::unexplained::unexplained(&out.floors, opts.policy.white_ratio);
     out.warnings.extend(unexplained.iter().map(|u| u.message()));
     for w in &out.warnings {

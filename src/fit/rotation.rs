@@ -74,6 +74,8 @@ pub fn fold(
     let within = crate::fit::absent::split_off(robot, &mut out.selected);
     out.notes.extend(within);
     out.warnings.extend(crate::fit::absent::split_off_at_bound(robot, &mut out.selected));
+    let rivals = crate::fit::floor_rival::split_off(robot, recs, &o, &mut out, unscored);
+    out.warnings.extend(rivals);
     if out.heldout.is_empty() {
         return Err(format!("{key} = {value}: no held-out episode"));
     }
