@@ -7,13 +7,14 @@
 //! "A free base standing on a floor"). The two hypotheses are tested against each other on the
 //! held-out episodes: the fit is run again told every other kept effect and a `ground_contact`
 //! on the feet in the body effect's place (one floor: one group of every recorded joint whose
-//! child body touches the ground). When that replays the held-out episodes at least as close as
-//! the kept set, the recordings do not separate the body from the floor's compliance: the body
-//! effect is not listed as missing physics (a warning with both figures and the `--told` that
-//! reproduces the rival; it stays in the fitted replay). A real body's own signature is not a
-//! floor's — a battery across the trunk, a mass the feet carry — and the rival leaves it
-//! (`KFR1`, `KFR3`: the held-out error several times the body effect's). No threshold: the
-//! comparison is of two held-out errors.
+//! child body touches the ground). When the kept set does not replay the held-out episodes
+//! closer than that rival beyond noise — the gate the search puts between two fitted sets
+//! ([`crate::fit::select::beats_beyond_noise`]) — the recordings do not separate the body from
+//! the floor's compliance: the body effect is not listed as missing physics (a warning with
+//! both held-out RMSEs and the `--told` that reproduces the rival; it stays in the fitted
+//! replay). A real body's own signature is not a floor's — a battery across the trunk, a mass
+//! the feet carry — and the rival leaves it (`KFR1`, `KFR3`: the held-out error several times
+//! the body effect's). No new threshold: the search's own gate judges the two held-out errors.
 
 use crate::fit::effects::{self, Applied, JointTarget, WriteBack, simulate};
 use crate::fit::select::{Engine, FitOptions, FitOutcome, beats_beyond_noise, fit};
