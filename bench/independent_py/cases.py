@@ -247,8 +247,8 @@ CASES["KFR1_trunk_battery"] = dict(CHAIN_FR, seed=97, effects={"bodies": {"trunk
 # Real body effects other than a moved centre on the same floor (the stand-in test of
 # docs/fitting.md, "A free base standing on a floor"): a 0.6 kg sensor at the foot end of both
 # shanks (one body effect on the two knees' child bodies), and KS2's 1.5 kg battery off the
-# trunk's axis (8 cm behind it, 12 cm above its centre; committed in fixtures/independent_py,
-# tests/independent_free.rs). KFR2 is recorded by run.sh, not committed.
+# trunk's axis (8 cm behind it, 12 cm above its centre); both committed in
+# fixtures/independent_py, tests/independent_free.rs.
 CASES["KFR2_shanks_payload"] = dict(CHAIN_FR, seed=98, effects={"bodies": {
     f"{s}_shank": {"joint": f"{s}_knee", "payload": {"mass": 0.6, "pos": [0.0, 0.0, -0.25]}}
     for s in ("left", "right")}})

@@ -327,6 +327,9 @@ pub fn fit_once(
     // Nor a body effect whose value is the bound of its search.
     let bounded = crate::fit::absent::split_off_at_bound(robot, &mut out.selected);
     out.warnings.extend(bounded);
+    // Nor a body effect the floor's contact explains as well.
+    let rivals = crate::fit::floor_rival::split_off(robot, &p.recs, &opts, &mut out, &p.unscored);
+    out.warnings.extend(rivals);
     let unexplained = crate::fit::unexplained::unexplained(&out.floors, opts.policy.white_ratio);
     out.warnings.extend(unexplained.iter().map(|u| u.message()));
     for w in &out.warnings {
@@ -492,7 +495,7 @@ pub fn fit_json(r: &FitRun) -> serde_json::Value {
         "floor": out.floors.iter().map(|f| json!({"joint": f.joint, "residual_rms": f.ms.sqrt(), "white_floor_rms": f.white.sqrt(), "reconstruction_floor_rms": f.reconstruction.sqrt(), "discretisation_floor_rms": f.discretisation.sqrt()})).collect::<Vec<_>>(),
         "stopped_at_floor": out.stopped_at_floor,
         "unexplained": r.unexplained.iter().map(|u| json!({"joint": u.joint, "residual_rms": u.residual_rms, "floor_rms": u.floor_rms})).collect::<Vec<_>>(),
-        "unexplained_contact": r.feet.iter().map(|f| json!({"foot": f.foot, "joint": f.joint, "joints": f.joints, "residual_rms": f.residual_rms, "before_rms": f.before_rms, "floor_rms": f.floor_rms, "kept": f.kept})).collect::<Vec<_>>(),
+        "unexplained_contact": r.feet.iter().map(|x| x.json()).collect::<Vec<_>>(),
         "search": out.cost,
         "warnings": warnings,
         "notes": notes,

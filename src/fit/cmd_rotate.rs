@@ -90,6 +90,7 @@ pub fn rotation_json(r: &Rotation) -> serde_json::Value {
                 "position_mae_after": a,
                 "seconds": f.seconds,
                 "tried": out.tried,
+                "unexplained_contact": f.feet.iter().map(|x| x.json()).collect::<Vec<_>>(),
                 "warnings": out.warnings,
                 "notes": out.notes,
             })

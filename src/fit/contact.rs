@@ -40,6 +40,11 @@ pub struct FootResidual {
 }
 
 impl FootResidual {
+    /// One entry of the JSON `unexplained_contact` (a fit's and each `--holdout-by` fold's).
+    pub fn json(&self) -> serde_json::Value {
+        serde_json::json!({"foot": self.foot, "joint": self.joint, "joints": self.joints, "residual_rms": self.residual_rms, "before_rms": self.before_rms, "floor_rms": self.floor_rms, "kept": self.kept})
+    }
+
     /// The warning line: where, how large, against what, and what may stand in for it.
     pub fn message(&self) -> String {
         let mut s = format!(

@@ -5,6 +5,7 @@ pub mod cmd_rotate;
 pub mod contact;
 pub mod diagnose;
 pub mod effects;
+pub mod floor_rival;
 pub mod optim;
 pub mod report;
 pub mod rollout;

@@ -25,6 +25,9 @@ pub struct Fold {
     pub value: String,
     pub outcome: FitOutcome,
     pub heldout: Vec<EpisodeMae>,
+    /// Feet whose orientation this fold's kept effects leave above their joints' floors on its
+    /// held-out episodes ([`crate::fit::contact`]), as in a single fit.
+    pub feet: Vec<crate::fit::contact::FootResidual>,
     pub seconds: f64,
 }
 
@@ -50,7 +53,9 @@ pub fn mean_mae<'a>(eps: impl Iterator<Item = &'a EpisodeMae>) -> (f64, f64) {
 /// `opts` (its `holdout_by` replaced) and the held-out MAE before → after, on every recorded
 /// joint but `unscored` (`--no-command`: replayed, not scored). A kept effect within its
 /// uncertainty of the model as given moves from `selected` to a note, a body effect at the bound
-/// of its search to a warning ([`crate::fit::absent`]).
+/// of its search to a warning ([`crate::fit::absent`]); a foot whose held-out orientation the
+/// kept effects leave above its joints' floors is named in a warning and in `feet`
+/// ([`crate::fit::contact`]), on the scored joints as a single fit does.
 /// Errors: no held-out episode,
 /// or a held-out replay that fails.
 pub fn fold(
@@ -69,17 +74,37 @@ pub fn fold(
     let within = crate::fit::absent::split_off(robot, &mut out.selected);
     out.notes.extend(within);
     out.warnings.extend(crate::fit::absent::split_off_at_bound(robot, &mut out.selected));
+    let rivals = crate::fit::floor_rival::split_off(robot, recs, &o, &mut out, unscored);
+    out.warnings.extend(rivals);
     if out.heldout.is_empty() {
         return Err(format!("{key} = {value}: no held-out episode"));
     }
-    let mae = |applied: &[Applied]| -> Result<Vec<f64>, String> {
+    let sim = |applied: &[Applied]| -> Result<Vec<Episode>, String> {
         simulate(robot, &out.heldout, applied, &o.replay)
             .into_iter()
-            .zip(&out.heldout)
-            .map(|(e, r)| e.map(|e| episode_mae(r, &e, unscored)).map_err(|e| e.to_string()))
+            .map(|e| e.map_err(|e| e.to_string()))
             .collect()
     };
-    let (before, after) = (mae(&[])?, mae(&out.applied)?);
+    let (eps_b, eps_a) = (sim(&[])?, sim(&out.applied)?);
+    let mae = |eps: &[Episode]| -> Vec<f64> {
+        out.heldout.iter().zip(eps).map(|(r, e)| episode_mae(r, e, unscored)).collect()
+    };
+    let (before, after) = (mae(&eps_b), mae(&eps_a));
+    // The feet's contact residual on the held-out episodes as scored (without the joints left
+    // out by --no-command), as `fit` without a rotation reports it.
+    let feet = match (
+        crate::sim2real::input::scored_view(&out.heldout, &eps_b, unscored),
+        crate::sim2real::input::scored_view(&out.heldout, &eps_a, unscored),
+    ) {
+        (Some((recs, b)), Some((_, a))) => crate::fit::contact::unexplained_feet(
+            robot,
+            (&recs, &b, &a),
+            &out.applied,
+            o.policy.white_ratio,
+        ),
+        _ => vec![],
+    };
+    out.warnings.extend(feet.iter().map(|f| f.message()));
     let heldout = out
         .heldout
         .iter()
@@ -97,6 +122,7 @@ pub fn fold(
         value: value.to_string(),
         outcome: out,
         heldout,
+        feet,
         seconds: ts.elapsed().as_secs_f64(),
     })
 }

@@ -58,6 +58,7 @@ use crate::sim2real::replay::{Episode, ReplayOptions};
 
 pub use engine::Engine;
 pub use policy::{Phase, SearchPolicy};
+pub use verdict::beats_beyond_noise;
 
 use greedy::greedy_round;
 use polish::polish;

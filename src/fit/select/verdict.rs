@@ -116,6 +116,25 @@ pub(super) fn at_bound(engine: &Engine, base: &[Applied], a: &Applied) -> bool {
     })
 }
 
+/// Whether `applied` replays the held-out `heldout` closer than `rival` beyond noise: the gate
+/// between two fitted sets ([`SearchPolicy::gate`]) on every recorded joint's windows, as an
+/// effect must pass against the set without it. `None` when either replay fails.
+pub fn beats_beyond_noise(
+    engine: &Engine,
+    heldout: &[crate::sim2real::recording::Recording],
+    rival: &[Applied],
+    applied: &[Applied],
+) -> Option<bool> {
+    let (b, a) = (engine.errors(heldout, rival)?, engine.errors(heldout, applied)?);
+    let mut joints: Vec<String> = Vec::new();
+    for j in heldout.iter().flat_map(|r| &r.joints) {
+        if !joints.contains(&j.name) {
+            joints.push(j.name.clone());
+        }
+    }
+    Some(verdict(&b, &a, &joints, engine.opts.policy.gate()).significant)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
