@@ -41,9 +41,11 @@ declare_rule! {
     ///
     /// Friction and condim are matters of intent: MuJoCo's default friction 1 and condim 6
     /// (rolling friction, common on quadruped feet) are deliberate choices in many public models.
-    /// Unless the intended values are stated — `friction` / `friction_tolerance` set under
-    /// `[rules.foot-collision-geometry]` in modellint.toml — they are reported as info, not as
-    /// warnings. condim 1 (frictionless feet) stays a warning.
+    /// Sliding friction is judged only against an intended value the user states — `friction` /
+    /// `friction_tolerance` under `[rules.foot-collision-geometry]` in modellint.toml: one
+    /// robot's identified friction (the Asimov 0.6) is no expectation for another robot's feet
+    /// on another floor. Unless stated, condim 4/6 is reported as info, not as a warning; condim
+    /// 1 (frictionless feet) stays a warning.
     ///
     /// Foot bodies come from the spec's `robot.foot_bodies` globs; without them, from body names
     /// containing `foot`, `ankle_roll`, `toe` or `sole`; failing that, the leaf bodies whose
@@ -71,7 +73,7 @@ declare_rule! {
     /// artifacts of the mesh; mesh-vs-mesh contact is worse. A foot with fewer than three
     /// non-collinear contact points, or none at heel or toe, has a degenerate support polygon.
     /// condim ≠ 3 changes the friction model (1: frictionless, 4/6: torsional and rolling
-    /// friction), and friction far from the identified ≈0.6 changes slip. Mismatched left and
+    /// friction), and friction other than the real feet's on the real floor changes slip. Mismatched left and
     /// right feet make the gait asymmetric.
     ///
     /// ## How it is confirmed
@@ -100,7 +102,7 @@ declare_rule! {
             opt("allow_boxes", 1.0, "bool", "1: box feet are acceptable primitives; 0: only capsules and spheres"),
             opt("min_radius", 0.0005, "m", "smallest capsule/sphere radius"),
             opt("max_radius", 0.05, "m", "largest capsule/sphere radius"),
-            opt("friction", 0.6, "", "expected sliding friction of foot geoms"),
+            opt("friction", 0.6, "", "intended sliding friction of foot geoms; judged only when this or `friction_tolerance` is set"),
             opt("friction_tolerance", 0.2, "", "allowed deviation from `friction`"),
             opt("contact_window", 0.005, "m", "geom points within this of the foot's lowest point count as ground contacts"),
         ],
@@ -441,10 +443,12 @@ impl FootCollisionGeometry {
                         .expected(3.0, ""),
                 );
             }
-            // Friction.
+            // Friction, against the value the user states: without one there is no expectation
+            // (one robot's identified friction says nothing of another's feet and floor).
             let bad_f: Vec<(usize, Option<usize>, f64)> = foot
                 .geoms
                 .iter()
+                .filter(|_| stated)
                 .filter_map(|&g| {
                     eff(g)
                         .into_iter()
@@ -460,22 +464,14 @@ impl FootCollisionGeometry {
                     o0,
                     "friction",
                     format!(
-                        "{label} contacts have sliding friction {} (expected {} ± {}{}; {}): {}",
+                        "{label} contacts have sliding friction {} (stated {} ± {}; {}): {}",
                         fmt_num(v, 3),
                         fmt_num(mu, 3),
                         fmt_num(mu_tol, 3),
-                        if stated {
-                            ""
-                        } else {
-                            ", the Asimov identified value; no intended value stated"
-                        },
                         with(g0, o0, "friction"),
                         list(robot, &geoms)
                     ),
                 );
-                if !stated && cx.level == cx.meta.default_level {
-                    f.severity = Severity::Info;
-                }
                 f = ground_label(robot, f, g0, o0, "friction");
                 out.push(
                     f
