@@ -119,7 +119,7 @@ impl Robot {
             return false;
         }
         let Some(body) = self.bodies.get(j.body) else { return false };
-        if !self.bodies.get(body.parent).is_some_and(|p| p.weld == 0) {
+        if self.bodies.get(body.parent).is_none_or(|p| p.weld != 0) {
             return false;
         }
         let on_body: Vec<JointType> =
