@@ -88,11 +88,16 @@ fn settle_probe_loads_every_geom_of_a_flat_foot() {
 /// Lints one fixture with its probes (the spec beside it, if any) and returns the findings of
 /// `rule`.
 fn probed(path: &str, rule: &str) -> Vec<modellint::finding::Finding> {
+    probed_with(path, rule, None)
+}
+
+/// `probed` with a modellint.toml (the user's stated intent for the rules' options).
+fn probed_with(path: &str, rule: &str, config: Option<&str>) -> Vec<modellint::finding::Finding> {
     let toml = Path::new(path).with_extension("toml");
     let input = LintInput {
         model: Path::new(path).to_path_buf(),
         spec: toml.exists().then_some(toml),
-        config: None,
+        config: config.map(std::path::PathBuf::from),
         select: vec![],
         ignore: vec![],
     };
@@ -211,7 +216,11 @@ fn a_toe_tilt_refutation_records_its_met_preconditions() {
 
 /// The condim/friction findings of `foot-collision-geometry` whose probe is `foot-slide`.
 fn slide_findings(path: &str) -> Vec<modellint::finding::Finding> {
-    let fs = probed(path, "foot-collision-geometry");
+    slide_findings_with(path, None)
+}
+
+fn slide_findings_with(path: &str, config: Option<&str>) -> Vec<modellint::finding::Finding> {
+    let fs = probed_with(path, "foot-collision-geometry", config);
     let out: Vec<_> = fs
         .into_iter()
         .filter(|f| f.probe.as_ref().is_some_and(|p| p.name == "foot-slide"))
@@ -250,8 +259,14 @@ fn slide_reads_the_contact_mujoco_built_and_frictionless_feet_slide() {
         );
         assert!(p.preconditions.iter().all(|c| c.met), "{:?}", p.preconditions);
     }
-    // condim 6, friction 1 on a condim-3 floor: dim-6 contacts at μ 1 hold the push.
-    for f in slide_findings("fixtures/rules/foot-collision-geometry/invalid_default_friction.xml") {
+    // condim 6, friction 1 on a condim-3 floor, condim 3 stated: dim-6 contacts at μ 1 hold the
+    // push.
+    let fs = slide_findings_with(
+        "fixtures/rules/foot-collision-geometry/valid_default_friction.xml",
+        Some("fixtures/config/foot_condim_stated.toml"),
+    );
+    assert_eq!(fs.len(), 2, "one condim finding per foot");
+    for f in fs {
         let p = outcome(&f);
         assert_eq!(p.status, ProbeStatus::Measured, "{}", p.note);
         assert_eq!(p.measured["contact_dim"], 6.0);

@@ -105,6 +105,31 @@ impl Robot {
     }
 }
 
+impl Robot {
+    /// Whether `joint` is a coordinate of a mobile base over the world, written in place of a
+    /// free joint (a planar base: slides along x and y and a hinge about the vertical): it sits
+    /// on a body whose parent is fixed to the world, and that body has two or more joints, all
+    /// slides or hinges, at least one a slide. Such joints are where the base is on the floor,
+    /// not motor joints: nothing stops them and they have no rotor of their own. A base whose
+    /// coordinates are split over nested bodies (one joint each) is not recognised.
+    pub fn is_base_coordinate(&self, joint: usize) -> bool {
+        let Some(j) = self.joints.get(joint) else { return false };
+        let scalar = |t: JointType| matches!(t, JointType::Hinge | JointType::Slide);
+        if !scalar(j.jtype) || j.body == 0 {
+            return false;
+        }
+        let Some(body) = self.bodies.get(j.body) else { return false };
+        if self.bodies.get(body.parent).is_none_or(|p| p.weld != 0) {
+            return false;
+        }
+        let on_body: Vec<JointType> =
+            self.joints.iter().filter(|x| x.body == j.body).map(|x| x.jtype).collect();
+        on_body.len() >= 2
+            && on_body.iter().all(|t| scalar(*t))
+            && on_body.contains(&JointType::Slide)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use crate::model::load;

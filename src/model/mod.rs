@@ -4,6 +4,7 @@
 pub mod cache;
 mod checks;
 pub mod contact;
+mod errloc;
 mod extract;
 mod limbs;
 pub mod mirror;
@@ -18,6 +19,7 @@ use mujoco_rs::prelude::*;
 
 use crate::error::LoadError;
 use checks::{check_assets, check_numbers};
+use errloc::{missing_file_location, mujoco_element_location, mujoco_error_location};
 use extract::extract;
 pub use extract::key_state;
 use mjcf::{ElemKind, ElemSrc, SourceIndex};
@@ -489,126 +491,6 @@ pub fn load(map: &mut SourceMap, path: &Path, keyframe: Option<&str>) -> Result<
     Ok(robot)
 }
 
-/// "Error opening file 'X'": the attribute that names X (by its file name), at its file:line.
-fn missing_file_location(map: &SourceMap, first_file: usize, msg: &str) -> Option<LoadError> {
-    let i = msg.find("Error opening file '")? + "Error opening file '".len();
-    let name = msg[i..].split('\'').next()?;
-    let base = name.rsplit(['/', '\\']).next().filter(|b| !b.is_empty())?;
-    for f in first_file..map.files.len() {
-        let text = &map.file(f).text;
-        for pat in ["filename=\"", "file=\""] {
-            let mut from = 0;
-            while let Some(k) = text[from..].find(pat) {
-                let vs = from + k + pat.len();
-                let ve = text[vs..].find('"').map_or(text.len(), |e| vs + e);
-                if text[vs..ve].ends_with(base) {
-                    return Some(LoadError::at(
-                        map,
-                        Loc { file: f, start: vs, end: ve },
-                        format!("{msg} (file not found)"),
-                    ));
-                }
-                from = ve;
-            }
-        }
-    }
-    None
-}
-
-/// MuJoCo reports XML problems as "... line N, column M" or with a file name; map them back.
-fn mujoco_error_location(map: &SourceMap, first_file: usize, msg: &str) -> Option<LoadError> {
-    let lower = msg.to_lowercase();
-    let li = lower.find("line ")?;
-    let rest = &msg[li + 5..];
-    let line: usize = rest.split(|c: char| !c.is_ascii_digit()).next()?.parse().ok()?;
-    if line == 0 {
-        // MuJoCo's "line 0": the element has no recorded line; `mujoco_element_location` finds it.
-        return None;
-    }
-    let col = lower
-        .find("column ")
-        .and_then(|ci| msg[ci + 7..].split(|c: char| !c.is_ascii_digit()).next()?.parse().ok());
-    // Prefer the file MuJoCo names, else the top-level model.
-    let file = (first_file..map.files.len())
-        .find(|&i| {
-            map.file(i).path.file_name().and_then(|f| f.to_str()).is_some_and(|f| msg.contains(f))
-        })
-        .unwrap_or(first_file);
-    Some(LoadError::at_line(map, file, line, col.unwrap_or(1), msg.to_string()))
-}
-
-/// MuJoCo's "Element name 'X', id N" with no usable line (its message cut at the error buffer's
-/// end, or "line 0"): the element of the kind the message names (body, geom, joint, mesh, site)
-/// whose `name` is X, else any element named X; for an unnamed body of a one-file MJCF model
-/// (no include, replicate or attach), the N-th `<body>` in document order, which is MuJoCo's
-/// body id N (the world is 0).
-fn mujoco_element_location(
-    map: &SourceMap,
-    first_file: usize,
-    format: Format,
-    msg: &str,
-) -> Option<LoadError> {
-    let i = msg.find("Element name '")? + "Element name '".len();
-    let name = &msg[i..i + msg[i..].find('\'')?];
-    let after = &msg[i + name.len()..];
-    let id: Option<usize> = after
-        .find("id ")
-        .and_then(|k| after[k + 3..].split(|c: char| !c.is_ascii_digit()).next()?.parse().ok());
-    let lower = msg.to_lowercase();
-    let kinds: &[&str] = if lower.contains("bod") {
-        &["body", "link"]
-    } else if lower.contains("geom") {
-        &["geom", "collision"]
-    } else if lower.contains("joint") {
-        &["joint"]
-    } else if lower.contains("mesh") {
-        &["mesh"]
-    } else if lower.contains("site") {
-        &["site"]
-    } else {
-        &[]
-    };
-    let tag_before = |text: &str, at: usize| -> String {
-        let open = text[..at].rfind('<').map_or(0, |o| o + 1);
-        text[open..at].split(|c: char| c.is_whitespace()).next().unwrap_or("").to_string()
-    };
-    if !name.is_empty() {
-        let mut any = None;
-        for f in first_file..map.files.len() {
-            let text = &map.file(f).text;
-            for q in ['"', '\''] {
-                let pat = format!("name={q}{name}{q}");
-                let mut from = 0;
-                while let Some(k) = text[from..].find(&pat) {
-                    let at = from + k;
-                    from = at + pat.len();
-                    if !text[..at].ends_with(char::is_whitespace) {
-                        continue;
-                    }
-                    let loc = Loc { file: f, start: at + 6, end: at + 6 + name.len() };
-                    if kinds.contains(&tag_before(text, at).as_str()) {
-                        return Some(LoadError::at(map, loc, msg.to_string()));
-                    }
-                    any.get_or_insert(loc);
-                }
-            }
-        }
-        return any.map(|loc| LoadError::at(map, loc, msg.to_string()));
-    }
-    let text = &map.file(first_file).text;
-    let one_file = map.files.len() == first_file + 1
-        && !["<include", "<replicate", "<attach"].iter().any(|t| text.contains(t));
-    if format != Format::Mjcf || !one_file || kinds.first() != Some(&"body") {
-        return None;
-    }
-    let n = id.filter(|&n| n >= 1)?;
-    let starts = text.match_indices("<body").filter(|(k, t)| {
-        text[k + t.len()..].starts_with(|c: char| c.is_whitespace() || c == '>' || c == '/')
-    });
-    let (k, _) = starts.clone().nth(n - 1)?;
-    Some(LoadError::at(map, Loc { file: first_file, start: k + 1, end: k + 5 }, msg.to_string()))
-}
-
 fn choose_key(keys: &[String], want: Option<&str>) -> Option<usize> {
     if let Some(w) = want {
         return keys.iter().position(|k| k == w);
@@ -668,29 +550,4 @@ pub fn describe_parts(robot: &Robot, parts: &[Part], what: &str) -> String {
         })
         .collect();
     if v.len() == 1 && parts[0].source == PartSource::Joint { v[0].clone() } else { v.join(" + ") }
-}
-
-#[cfg(test)]
-mod element_location_tests {
-    use super::*;
-
-    /// MuJoCo's "line 0" and its cut messages point at the element they name, not at 0:1.
-    #[test]
-    fn line_zero_names_the_element() {
-        let text = std::fs::read_to_string("fixtures/broken/massless_unnamed_body.xml").unwrap();
-        let body_line = text.lines().position(|l| l.contains("<body pos")).unwrap() + 1;
-        let mut map = SourceMap::default();
-        let f = map.add(PathBuf::from("m.xml"), text);
-        let unnamed = "Error: mass and inertia of moving bodies must be larger than mjMINVAL\nElement name '', id 2, line 0";
-        assert!(mujoco_error_location(&map, f, unnamed).is_none());
-        let e = mujoco_element_location(&map, f, Format::Mjcf, unnamed).expect("located");
-        assert_eq!(e.line, Some(body_line), "{}", e.location());
-        let named = "Error: mass and inertia of moving bodies must be larger than mjMINVAL\nElement name 'upper', id 1,";
-        let e = mujoco_element_location(&map, f, Format::Mjcf, named).expect("located");
-        assert_eq!(e.line, Some(4), "{}", e.location());
-        // No such body, or a kind it cannot count in a URDF: no location is guessed.
-        let far = "Error: mass and inertia of moving bodies\nElement name '', id 9, line 0";
-        assert!(mujoco_element_location(&map, f, Format::Mjcf, far).is_none());
-        assert!(mujoco_element_location(&map, f, Format::Urdf, unnamed).is_none());
-    }
 }

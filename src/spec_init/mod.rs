@@ -19,6 +19,9 @@ use crate::rules::limits::effort_limit_mismatch::joint_torque_limit;
 use crate::util::fmt_num;
 
 mod count;
+mod naming;
+
+use naming::{GENERIC_WORDS, class_stem, region};
 
 /// One motor family of the template.
 #[derive(Debug, Clone)]
@@ -156,18 +159,18 @@ fn words(robot: &Robot, name: &str) -> Vec<String> {
         .collect()
 }
 
-/// Names each family: the one `<default class>` its actuators share and no other family uses,
-/// else the first word its joints' names share (side markers removed), else its effort limit.
+/// Names each family: the `<default class>` its actuators share and no other family uses (or
+/// the leading words of its classes, e.g. `size3` and `size3_limited`), else the first word its
+/// joints' names share (side markers and generic words such as `joint` left out), else its
+/// effort limit.
 fn name_families(robot: &Robot, fams: &mut [Family]) {
     let class_use =
         |c: &str, fams: &[Family]| fams.iter().filter(|f| f.classes.iter().any(|x| x == c)).count();
     let mut names: Vec<String> = Vec::new();
     for i in 0..fams.len() {
         let f = &fams[i];
-        let by_class = match f.classes.as_slice() {
-            [c] if class_use(c, fams) == 1 && !bare(c).is_empty() => Some(bare(c)),
-            _ => None,
-        };
+        let own = !f.classes.is_empty() && f.classes.iter().all(|c| class_use(c, fams) == 1);
+        let by_class = Some(bare(&class_stem(&f.classes))).filter(|c| own && !c.is_empty());
         let by_words = {
             let lists: Vec<Vec<String>> =
                 f.joints.iter().map(|&j| words(robot, &robot.joints[j].name)).collect();
@@ -176,7 +179,11 @@ fn name_families(robot: &Robot, fams: &mut [Family]) {
                 lists.first().map(|l| bare(&l.join("_")))
             } else {
                 lists.first().and_then(|first| {
-                    first.iter().find(|w| lists.iter().all(|l| l.contains(w))).map(|w| bare(w))
+                    first
+                        .iter()
+                        .filter(|w| !GENERIC_WORDS.contains(&w.as_str()))
+                        .find(|w| lists.iter().all(|l| l.contains(w)))
+                        .map(|w| bare(w))
                 })
             }
         };
@@ -277,25 +284,6 @@ fn quote(s: &str) -> String {
 fn num(x: f64) -> String {
     let s = fmt_num(x, 6);
     if s.contains(['.', 'e', 'E']) { s } else { format!("{s}.0") }
-}
-
-/// The region a joint name suggests.
-fn region(name: &str) -> Option<&'static str> {
-    let l = name.to_ascii_lowercase();
-    let has = |ks: &[&str]| ks.iter().any(|k| l.contains(k));
-    if has(&["head", "neck"]) {
-        Some("head")
-    } else if has(&["shoulder", "elbow", "wrist", "arm", "hand", "finger", "gripper"]) {
-        Some("arms")
-    } else if has(&[
-        "hip", "knee", "ankle", "toe", "leg", "thigh", "calf", "foot", "haa", "hfe", "kfe",
-    ]) {
-        Some("legs")
-    } else if has(&["waist", "torso", "spine", "trunk", "pelvis", "chest"]) {
-        Some("torso")
-    } else {
-        None
-    }
 }
 
 /// Joints grouped into left/right pairs (left first) and singles, in model order of the first.

@@ -67,3 +67,30 @@ fn sides_pair_as_lint_pairs_them() {
     let groups = pair_up(&quad, &[1, 2, 3, 4]);
     assert_eq!(groups, vec![vec!["LF_KFE", "RF_KFE"], vec!["LR_KFE"], vec!["RR_KFE"]]);
 }
+
+#[test]
+fn families_take_their_classes_leading_words_not_generic_joint_words() {
+    let c = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+    // A class and its variant (Menagerie UR5e's size3 and size3_limited) name one family.
+    assert_eq!(class_stem(&c(&["size3", "size3_limited"])), "size3");
+    assert_eq!(class_stem(&c(&["hip"])), "hip");
+    assert_eq!(class_stem(&c(&["arm", "leg"])), "");
+    // Joints that share only the word `joint` are named by what else they share, or their
+    // effort limit: never "joint".
+    let arm = legs(&["shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint"], "arm");
+    let fam = |joints: Vec<usize>| Family {
+        name: String::new(),
+        effort: Some(20.0),
+        armature: 0.0,
+        joints,
+        classes: vec![],
+        servo: None,
+        torque_driven: false,
+    };
+    let mut fams = vec![fam(vec![1, 2, 3])];
+    name_families(&arm, &mut fams);
+    assert_eq!(fams[0].name, "effort_20");
+    let mut fams = vec![fam(vec![1, 2])];
+    name_families(&arm, &mut fams);
+    assert_eq!(fams[0].name, "shoulder");
+}

@@ -19,7 +19,8 @@ declare_rule! {
     /// sphere and cylinder radii of the geoms that touch the ground within [`min_radius`,
     /// `max_radius`] (0.5–50 mm by default: a sanity range against unit and scale errors, not
     /// one robot's design — the Asimov feet use about 12 mm, common reference feet 5 mm corner
-    /// spheres, Menagerie's Unitree G1 1 mm corner points); `condim` 3; sliding friction within `friction_tolerance` of
+    /// spheres, Menagerie's Unitree G1 1 mm corner points); no frictionless (condim 1) ground
+    /// contact, and the stated `condim`; sliding friction within `friction_tolerance` of the stated
     /// `friction`; at least three non-collinear
     /// ground contact points whose support polygon reaches both the heel and the toe third of the
     /// foot; and left and right feet with the same number and sizes of geoms (sizes within 2 % or
@@ -39,11 +40,15 @@ declare_rule! {
     /// ground geom in the file (a robot file without its scene), the geom's own values are
     /// judged and the message says so.
     ///
-    /// Friction and condim are matters of intent: MuJoCo's default friction 1 and condim 6
+    /// Friction and condim are matters of intent: MuJoCo's default friction 1, and condim 6
     /// (rolling friction, common on quadruped feet) are deliberate choices in many public models.
-    /// Unless the intended values are stated — `friction` / `friction_tolerance` set under
-    /// `[rules.foot-collision-geometry]` in modellint.toml — they are reported as info, not as
-    /// warnings. condim 1 (frictionless feet) stays a warning.
+    /// Sliding friction is judged only against an intended value the user states — `friction` /
+    /// `friction_tolerance` under `[rules.foot-collision-geometry]` in modellint.toml: one
+    /// robot's identified friction (the Asimov 0.6) is no expectation for another robot's feet
+    /// on another floor. Likewise condim: torsional and rolling friction (condim 4/6, a point-foot
+    /// quadruped's usual choice) are judged only against a `condim` the user states; condim 1
+    /// (frictionless feet: the foot slides under any sideways force) is a warning whatever the
+    /// intent.
     ///
     /// Foot bodies come from the spec's `robot.foot_bodies` globs; without them, from body names
     /// containing `foot`, `ankle_roll`, `toe` or `sole`; failing that, the leaf bodies whose
@@ -71,7 +76,7 @@ declare_rule! {
     /// artifacts of the mesh; mesh-vs-mesh contact is worse. A foot with fewer than three
     /// non-collinear contact points, or none at heel or toe, has a degenerate support polygon.
     /// condim ≠ 3 changes the friction model (1: frictionless, 4/6: torsional and rolling
-    /// friction), and friction far from the identified ≈0.6 changes slip. Mismatched left and
+    /// friction), and friction other than the real feet's on the real floor changes slip. Mismatched left and
     /// right feet make the gait asymmetric.
     ///
     /// ## How it is confirmed
@@ -100,8 +105,9 @@ declare_rule! {
             opt("allow_boxes", 1.0, "bool", "1: box feet are acceptable primitives; 0: only capsules and spheres"),
             opt("min_radius", 0.0005, "m", "smallest capsule/sphere radius"),
             opt("max_radius", 0.05, "m", "largest capsule/sphere radius"),
-            opt("friction", 0.6, "", "expected sliding friction of foot geoms"),
+            opt("friction", 0.6, "", "intended sliding friction of foot geoms; judged only when this or `friction_tolerance` is set"),
             opt("friction_tolerance", 0.2, "", "allowed deviation from `friction`"),
+            opt("condim", 3.0, "", "intended contact dimension of the feet's ground contacts; other than 1 (frictionless, always reported) judged only when set"),
             opt("contact_window", 0.005, "m", "geom points within this of the foot's lowest point count as ground contacts"),
         ],
     }
@@ -232,6 +238,10 @@ impl FootCollisionGeometry {
         // Intended friction/condim stated by the user (config), not just this rule's default.
         let stated =
             cx.options.contains_key("friction") || cx.options.contains_key("friction_tolerance");
+        // Intended contact dimension: without a stated one only frictionless contact (condim 1)
+        // is a defect; torsional/rolling friction (4/6) is a design choice, not an error.
+        let condim_stated = cx.options.contains_key("condim");
+        let want_c = cx.opt("condim").round() as i32;
         // A wheel is not a foot; a point foot is judged by the geoms that touch the ground only
         // (a shank cylinder above the foot sphere is not a foot).
         let all_feet: Vec<Foot> = feet(robot, cx.spec)
@@ -397,17 +407,22 @@ impl FootCollisionGeometry {
             let bad_c: Vec<(usize, Option<usize>, i32)> = foot
                 .geoms
                 .iter()
-                .filter_map(|&g| eff(g).into_iter().find(|e| e.1 != 3).map(|(o, c, _)| (g, o, c)))
+                .filter_map(|&g| {
+                    eff(g)
+                        .into_iter()
+                        .find(|e| e.1 != want_c && (e.1 == 1 || condim_stated))
+                        .map(|(o, c, _)| (g, o, c))
+                })
                 .collect();
             if let Some(&(g0, o0, c)) = bad_c.first() {
                 let why = match c {
-                    1 => "condim 1 is frictionless contact: the foot slides freely",
-                    4 | 6 => {
-                        "condim 4/6 adds torsional/rolling friction that the identified contact model did not have"
-                    }
-                    _ => {
-                        "only condim 3 (normal force plus 2-D sliding friction) matches the identified contact model"
-                    }
+                    1 => "condim 1 is frictionless contact: the foot slides freely".to_string(),
+                    _ if c > want_c => format!(
+                        "condim {c} adds torsional/rolling friction that the stated contact model (condim {want_c}) does not have"
+                    ),
+                    _ => format!(
+                        "condim {c} lacks the torsional/rolling friction of the stated contact model (condim {want_c})"
+                    ),
                 };
                 let geoms: Vec<usize> = bad_c.iter().map(|b| b.0).collect();
                 let mut f = at_value(
@@ -416,14 +431,11 @@ impl FootCollisionGeometry {
                     o0,
                     "condim",
                     format!(
-                        "{label} contacts use condim {c} (expected 3; {}): {}",
+                        "{label} contacts use condim {c} (expected {want_c}; {}): {}",
                         with(g0, o0, "condim"),
                         list(robot, &geoms)
                     ),
                 );
-                if c != 1 && !stated && cx.level == cx.meta.default_level {
-                    f.severity = Severity::Info;
-                }
                 f = ground_label(robot, f, g0, o0, "condim");
                 out.push(
                     f.label(format!("condim {}", if pair_at(robot, g0, o0) { c } else { robot.geoms[g0].condim }))
@@ -431,20 +443,22 @@ impl FootCollisionGeometry {
                             "{why}; MuJoCo uses the larger condim of the two contacting geoms, or the higher-priority geom's, and an explicit <pair>'s own condim instead of either"
                         ))
                         .help(if pair_at(robot, g0, o0) {
-                            "set condim=\"3\" on the <pair> elements of the foot geoms: a pair's values replace the geoms'"
+                            format!("set condim=\"{want_c}\" on the <pair> elements of the foot geoms: a pair's values replace the geoms'")
                         } else {
-                            "set condim=\"3\" on foot and toe geoms (and not higher on the floor)"
+                            format!("set condim=\"{want_c}\" on foot and toe geoms (and not higher on the floor)")
                         })
                         .subject(subj)
                         .measure(ContactAsBuilt { geoms: geoms.clone(), body: foot.root })
                         .measured(c as f64, "")
-                        .expected(3.0, ""),
+                        .expected(want_c as f64, ""),
                 );
             }
-            // Friction.
+            // Friction, against the value the user states: without one there is no expectation
+            // (one robot's identified friction says nothing of another's feet and floor).
             let bad_f: Vec<(usize, Option<usize>, f64)> = foot
                 .geoms
                 .iter()
+                .filter(|_| stated)
                 .filter_map(|&g| {
                     eff(g)
                         .into_iter()
@@ -460,22 +474,14 @@ impl FootCollisionGeometry {
                     o0,
                     "friction",
                     format!(
-                        "{label} contacts have sliding friction {} (expected {} ± {}{}; {}): {}",
+                        "{label} contacts have sliding friction {} (stated {} ± {}; {}): {}",
                         fmt_num(v, 3),
                         fmt_num(mu, 3),
                         fmt_num(mu_tol, 3),
-                        if stated {
-                            ""
-                        } else {
-                            ", the Asimov identified value; no intended value stated"
-                        },
                         with(g0, o0, "friction"),
                         list(robot, &geoms)
                     ),
                 );
-                if !stated && cx.level == cx.meta.default_level {
-                    f.severity = Severity::Info;
-                }
                 f = ground_label(robot, f, g0, o0, "friction");
                 out.push(
                     f

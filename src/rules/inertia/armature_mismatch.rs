@@ -17,8 +17,12 @@ declare_rule! {
     /// zero armature (error) and values off by more than `tolerance` (joints that share the value
     /// through one `<default class>` and family are reported together). Also reports, once, an
     /// armature that is identical on every actuated joint while the spec's families expect
-    /// different values — the sign of one number copy-pasted everywhere. Joints driven by several
-    /// motors (count > 1) are left to `parallel-ankle-armature`.
+    /// different values — the sign of one number copy-pasted everywhere. Without a spec, one
+    /// armature on every actuated hinge is reported when their force limits span `effort_spread`
+    /// × or more; between √(1 + `tolerance`) × and that, as info: peak torque scales with the
+    /// gear and reflected inertia with its square, so a gear stage of r× needs armatures r²×
+    /// apart, while a software derating of one motor keeps one value right. Joints driven by
+    /// several motors (count > 1) are left to `parallel-ankle-armature`.
     ///
     /// ## Why is this bad?
     /// Armature here is the reflected inertia of motor and gearbox seen at the joint (Asimov system identification
@@ -40,7 +44,7 @@ declare_rule! {
         probe: None,
         options: [
             opt("tolerance", 0.05, "fraction", "allowed relative difference from the expected reflected inertia"),
-            opt("effort_spread", 5.0, "ratio", "without a spec: largest / smallest force limit above which one shared armature value is reported"),
+            opt("effort_spread", 5.0, "ratio", "without a spec: largest / smallest force limit from which one shared armature value is a warning (above √(1 + tolerance) it is info)"),
         ],
     }
 }
@@ -194,8 +198,10 @@ impl Rule for ArmatureMismatch {
 }
 
 /// The copy-paste sign without a spec: one armature on every actuated hinge while their torque
-/// limits span `effort_spread` × or more. Slide joints (armature in kg, force limits in N, e.g.
-/// a gripper's fingers) are not compared with hinges.
+/// limits span `effort_spread` × or more (warning), or more than √(1 + `tolerance`) × but less
+/// than `effort_spread` × (info: a gear stage would need armatures spread² apart, a derating of
+/// one motor would not). Slide joints (armature in kg, force limits in N, e.g. a gripper's
+/// fingers) are not compared with hinges.
 fn uniform_without_spec(cx: &Context, out: &mut Vec<Finding>) {
     let robot = cx.robot;
     let spread_min = cx.opt("effort_spread");
@@ -226,9 +232,15 @@ fn uniform_without_spec(cx: &Context, out: &mut Vec<Finding>) {
     let (lo, hi) =
         limits.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), (_, l)| (lo.min(*l), hi.max(*l)));
     let spread = hi / lo;
-    if !(spread >= spread_min) {
+    // Torque ∝ gear and reflected inertia ∝ gear²: were the spread a gear stage of one motor,
+    // the armatures would differ by spread², more than `tolerance` once spread > √(1+tolerance).
+    // Below `effort_spread` it may also be a software derating of one motor, which keeps one
+    // armature right: then the finding says both and is info.
+    let geared_min = (1.0 + cx.opt("tolerance")).sqrt();
+    if !(spread > geared_min) {
         return;
     }
+    let derating_possible = spread < spread_min;
     let name = |l: f64| {
         limits
             .iter()
@@ -237,7 +249,19 @@ fn uniform_without_spec(cx: &Context, out: &mut Vec<Finding>) {
             .unwrap_or("")
     };
     let j = joints[0];
-    let f = crate::rules::inertia::at_armature(
+    let why = if derating_possible {
+        format!(
+            "reflected inertia is rotor_inertia × gear², peak torque ∝ gear: if the {}× is a gear stage, the joints' reflected inertias differ {}×; one value fits only if it is a software derating of one motor",
+            fmt_num(spread, 3),
+            fmt_num(spread * spread, 3)
+        )
+    } else {
+        format!(
+            "reflected inertia is rotor_inertia × gear², peak torque ∝ gear: motors {}× apart in torque cannot share one reflected inertia, so one number everywhere is a copy-pasted placeholder (Asimov system identification §1–2: leg joints use actuator families with different reflected inertia)",
+            fmt_num(spread, 3)
+        )
+    };
+    let mut f = crate::rules::inertia::at_armature(
             cx,
             j,
             format!(
@@ -253,15 +277,17 @@ fn uniform_without_spec(cx: &Context, out: &mut Vec<Finding>) {
         )
         .label("one value for every motor")
         .note(format!(
-            "reflected inertia is rotor_inertia × gear², peak torque ∝ gear: motors {}× apart in torque cannot share one reflected inertia, so one number everywhere is a copy-pasted placeholder (Asimov system identification §1–2: leg joints use actuator families with different reflected inertia){}",
-            fmt_num(spread, 3),
+            "{why}{}",
             if j.armature_elsewhere() { format!("; effective armature = {}", describe_parts(robot, &j.armature_parts, "armature")) } else { String::new() }
         ))
         .help("give each motor family its own default class with armature = rotor_inertia × gear_ratio² × count; a spec with the families lets this rule check each value")
         .subject(Subject::Model)
         .measured(spread, "ratio")
-        .expected(spread_min, "ratio")
+        .expected(if derating_possible { geared_min } else { spread_min }, "ratio")
         .with("armature", a0)
         .with("effort_spread", spread);
+    if derating_possible && cx.level == cx.meta.default_level {
+        f.severity = Severity::Info;
+    }
     out.push(f);
 }

@@ -8,9 +8,11 @@ declare_rule! {
     /// Reports actuated hinge and slide joints whose *effective* armature is zero: nothing on the
     /// joint (`armature`), nothing on its actuators (`armature` × gear², MuJoCo ≥ 3.17) and
     /// nothing on a fixed tendon that reaches it. Needs no spec. Joints the spec marks passive
-    /// are skipped, and joints whose spec motor family gives a rotor inertia and gear ratio are
-    /// left to `armature-mismatch`, which can name the expected value. All such joints are
-    /// reported in one finding.
+    /// are skipped, and so are a mobile base's coordinates over the floor (a body fixed to the
+    /// world but for two or more joints of its own, at least one a slide: x, y and yaw written
+    /// in place of a free joint — no rotor turns with them). Joints whose spec motor family
+    /// gives a rotor inertia and gear ratio are left to `armature-mismatch`, which can name the
+    /// expected value. All such joints are reported in one finding.
     ///
     /// ## Why is this bad?
     /// A geared motor's rotor spins gear-ratio times faster than the joint, so its inertia appears
@@ -58,7 +60,9 @@ impl Rule for ZeroArmature {
                 continue;
             }
             n_act += 1;
-            if j.armature > 0.0 {
+            // A mobile base's x, y and yaw over the floor are no motor joints: no rotor turns
+            // with them (the wheels' motors, if modelled, are joints of their own).
+            if j.armature > 0.0 || (robot.is_base_coordinate(j.id) && !spec_motor) {
                 continue;
             }
             // A spec family with a known reflected inertia: armature-mismatch reports it with

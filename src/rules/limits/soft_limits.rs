@@ -20,7 +20,9 @@ declare_rule! {
     /// command the hard stops. It
     /// also reports an actuated hinge/slide joint with no range at all — unless the joint turns
     /// without end by design: a wheel (an unlimited hinge turning a round geom about its own
-    /// axle), or on a fixed-base robot a joint whose position actuators have no `ctrlrange`
+    /// axle), a mobile base's coordinates over the floor (a body fixed to the world but for two
+    /// or more joints of its own, at least one a slide: x, y and yaw written in place of a free
+    /// joint), or on a fixed-base robot a joint whose position actuators have no `ctrlrange`
     /// either while the model gives its other actuated joints ranges (an arm's continuous
     /// axes). Actuators that share the problem through one `<default class>` are reported once.
     ///
@@ -213,8 +215,10 @@ impl Measure for Stop {
 /// (no `ctrlrange`) in a model that gives other actuated joints their ranges — the continuous
 /// axes of an arm such as the Kinova Gen3's joints 1, 3, 5 and 7. Nothing in the file bounds
 /// the joint, on purpose. On a floating-base (legged) robot the same omission is reported.
+/// A mobile base's coordinates over the floor ([`Robot::is_base_coordinate`]) have no stops
+/// either.
 fn continuous(robot: &crate::model::Robot, joint: usize, acts: &[&crate::model::Actuator]) -> bool {
-    if robot.is_wheel(joint) {
+    if robot.is_wheel(joint) || robot.is_base_coordinate(joint) {
         return true;
     }
     let unbounded_servos =
