@@ -482,15 +482,13 @@ fn fit_finds_the_delay_and_friction_pair_in_at_most_two_rounds() {
     }
     let pairs = tried.iter().filter(|t| t["phase"] == "pair").count();
     assert!(pairs <= found, "{pairs} pairs fitted: {:#?}", v["tried"]);
-    // The linear model predicts 27-38 % training gains for these (the bar is half the round's
-    // best, ~25 %) where their coarse fits reach 0-11 %: only the linear step as replayed
-    // admits a candidate, and these steps reach at most 9 % (the build before fitted all six
-    // in full, ~1,000 of its 7,578 replayed seconds).
+    // The linear model predicts 27-38 % training gains for these smooth effects (the bar is
+    // half the round's best, ~25 %) where their coarse fits reach 9-11 %: only the linear step
+    // as replayed admits a smooth candidate, and these steps reach at most 9 % (the build
+    // before fitted all four in full).
     for t in tried.iter().filter(|t| t["round"] == 0) {
         let id = t["effect"].as_str().unwrap();
-        if ["armature", "link_inertia", "com_offset", "link_mass", "torque_limit", "backlash"]
-            .contains(&id)
-        {
+        if ["armature", "link_inertia", "com_offset", "link_mass"].contains(&id) {
             assert_ne!(t["phase"], "add", "{t:#?}");
         }
     }

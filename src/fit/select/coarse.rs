@@ -84,7 +84,9 @@ pub(super) fn plain_fitted(
 
 /// The screen's linear step of `e` on `g` replayed on `short` (one replay; none when the
 /// candidate's coarse fit began there): its parameters and RMSE. Where only the linear model
-/// would admit a candidate to a full fit, the step as simulated stands in for the prediction.
+/// would admit a smooth candidate to a full fit, the step as simulated stands in for the
+/// prediction. (Not a non-smooth one: a torque limit's column is that of a kink, and its step
+/// can miss a narrow basin that the full fit finds — a heavy knee's 60 N·m limit.)
 pub(super) fn replayed_step(
     engine: &Engine,
     screen: &Screen,

@@ -375,11 +375,11 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         };
         // Either the coarse fit or the linearised step must reach the share: a coarse grid can
         // miss a narrow basin (a torque limit) that the linear step sees, and the linear step
-        // misses what is far from linear (a resonance moved by damping). The step counts as
-        // replayed ([`coarse::replayed_step`]); a coarse fit past it goes on from it.
+        // misses what is far from linear (a resonance moved by damping). A smooth effect's step
+        // counts as replayed ([`coarse::replayed_step`]); a coarse fit past it goes on from it.
         let reaches = |g: f64| g > 0.0 && g >= opts.policy.screen_share * best_gain;
         let mut linear_gain = predicted.map_or(f64::NEG_INFINITY, |p| gain(p.train_rmse));
-        if !reaches(gain(cf)) && reaches(linear_gain) {
+        if e.smooth() && !reaches(gain(cf)) && reaches(linear_gain) {
             let step = coarse::replayed_step(engine, &screen, (short, &applied), (e, &group));
             if let Some((sp, sf)) = step {
                 linear_gain = gain(sf);
