@@ -8,6 +8,7 @@ use crate::fit::effects::{self, Applied};
 use crate::fit::stats::{bic, bic_pieces};
 use crate::model::mirror::leg_joint;
 
+use super::coarse::{self, Coarse};
 use super::discretisation::{Judged, beyond_discretisation};
 use super::engine::shape_key;
 use super::extension;
@@ -19,9 +20,6 @@ use super::screen::{Screen, screen_data};
 use super::verdict::{at_bound, verdict};
 use super::winner::{on_whole_set, refine, rival_notes};
 use super::{Errors, FitOutcome, Search, Selected, Tried, set_uncertainty};
-
-/// A candidate's coarse fit: its parameters and training RMSE on the screen's data.
-type Coarse = Option<(Vec<f64>, f64)>;
 
 /// One greedy round: diagnose, fit the candidates, keep the best that passes the held-out gate.
 /// Returns `true` when an effect was added.
@@ -306,18 +304,11 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
             let fits: Vec<(Vec<f64>, f64)> = cands[range.clone()]
                 .par_iter()
                 .map(|(e, g, _)| {
-                    // A smooth one-parameter candidate goes on from the screen's linear step by
-                    // secant steps (one replay each) instead of a fresh coarse fit.
-                    let linear = screen.predict(e.id(), g).and_then(|p| {
-                        let gain = 1.0 - p.train_rmse / screen.base_rmse();
-                        engine.fit_secant(short, &applied, (*e, g), (p.step, gain))
-                    });
-                    linear.unwrap_or_else(|| {
-                        engine.fit_budget(short, &applied, *e, g, opts.policy.screen_evals)
-                    })
+                    coarse::deferred(s, (*e, g), &cands, &coarse)
+                        .unwrap_or_else(|| coarse::fit(engine, &screen, (short, &applied), (*e, g)))
                 })
                 .collect();
-            for f in &fits {
+            for f in fits.iter().filter(|f| !coarse::is_deferred(f)) {
                 best_gain = best_gain.max(gain(f.1));
             }
             let mut both: Vec<(Cand, (Vec<f64>, f64))> =
@@ -359,22 +350,44 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         // A kept candidate already left a white training residual: one with more parameters
         // cannot explain more, and Occam's choice would not take it (`tried`: phase "floor").
         let unscreened = coarse.get(ci - 1).is_none_or(|c| c.is_none());
+        let deferred =
+            coarse.get(ci - 1).cloned().flatten().is_some_and(|c| coarse::is_deferred(&c));
         if floor_k.is_some_and(|k| {
             e.fitted() > k || (unscreened && n_lead > 0 && !floored_groups.contains(&group))
-        }) {
+        }) && !(deferred && coarse::plain_fitted(s, (short, &applied), (e, &group)))
+        {
             out.tried.push(not_tested(Phase::Floor, vec![], f64::NAN));
             continue;
         }
-        let (cp, cf) = match coarse.get(ci - 1).cloned().flatten() {
+        let (mut cp, mut cf) = match coarse.get(ci - 1).cloned().flatten() {
+            Some(c) if coarse::is_deferred(&c) => {
+                match coarse::when_taken(s, &screen, (short, &applied), (e, &group)) {
+                    Some(c) => c,
+                    None => {
+                        out.tried.push(not_tested(Phase::Screen, vec![], f64::NAN));
+                        continue;
+                    }
+                }
+            }
             Some(c) => c,
             // A candidate added during the round (a mirror completion).
             None => engine.fit_budget(short, &applied, e, &group, opts.policy.screen_evals),
         };
         // Either the coarse fit or the linearised step must reach the share: a coarse grid can
         // miss a narrow basin (a torque limit) that the linear step sees, and the linear step
-        // misses what is far from linear (a resonance moved by damping).
+        // misses what is far from linear (a resonance moved by damping). A smooth effect's step
+        // counts as replayed ([`coarse::replayed_step`]); a coarse fit past it goes on from it.
         let reaches = |g: f64| g > 0.0 && g >= opts.policy.screen_share * best_gain;
-        let linear_gain = predicted.map_or(f64::NEG_INFINITY, |p| gain(p.train_rmse));
+        let mut linear_gain = predicted.map_or(f64::NEG_INFINITY, |p| gain(p.train_rmse));
+        if e.smooth() && !reaches(gain(cf)) && reaches(linear_gain) {
+            let step = coarse::replayed_step(engine, &screen, (short, &applied), (e, &group));
+            if let Some((sp, sf)) = step {
+                linear_gain = gain(sf);
+                if sf < cf {
+                    (cp, cf) = (sp, sf);
+                }
+            }
+        }
         if cp.is_empty() || !(reaches(gain(cf)) || reaches(linear_gain)) {
             out.tried.push(not_tested(Phase::Screen, cp.clone(), cf));
             // Its coarse fit still starts a joint pair fit (gain error + delay: neither alone

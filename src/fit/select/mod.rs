@@ -24,6 +24,7 @@
 //! [`improvement_beyond_noise`]: crate::fit::stats::improvement_beyond_noise
 //! [`uncertainty_from_jacobian`]: crate::fit::stats::uncertainty_from_jacobian
 
+mod coarse;
 mod discretisation;
 mod engine;
 mod extension;

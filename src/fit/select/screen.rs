@@ -520,6 +520,17 @@ impl Screen {
     /// all screened parameters, uncharged — the fit that follows fits them all); `None` when a
     /// joint of the group has no column.
     pub(super) fn predict(&self, effect: &str, group: &[String]) -> Option<Prediction> {
+        self.linear(effect, group).map(|(p, _)| p)
+    }
+
+    /// The linear step of every screened parameter of `effect` on `group` (from the effect's
+    /// start; [`Screen::predict`]'s step is the first).
+    pub(super) fn steps(&self, effect: &str, group: &[String]) -> Option<Vec<f64>> {
+        self.linear(effect, group).map(|(_, x)| x)
+    }
+
+    /// [`Screen::predict`] with the steps of all screened parameters.
+    fn linear(&self, effect: &str, group: &[String]) -> Option<(Prediction, Vec<f64>)> {
         let m = self.models.get(effect)?;
         let ix: Vec<usize> = group
             .iter()
@@ -558,7 +569,7 @@ impl Screen {
         let train_left = (self.train_ss - explained).max(0.0);
         let train_rmse =
             self.screen_rmse * (train_left / self.train_ss.max(f64::MIN_POSITIVE)).sqrt();
-        Some(Prediction { train_rmse, step: x[0] })
+        Some((Prediction { train_rmse, step: x[0] }, x))
     }
 }
 

@@ -267,6 +267,36 @@ impl Engine<'_> {
         Some((p, best_f))
     }
 
+    /// The candidate `effect` on `group` at the screen's linear step `steps` (of its first
+    /// parameters, from the effect's start on the group's first joint, held inside the bounds),
+    /// replayed once on `train`: its parameters and RMSE. `None` when the step moves nothing or
+    /// the replay fails.
+    pub(in crate::fit::select) fn at_linear_step(
+        &self,
+        train: &[Recording],
+        base: &[Applied],
+        (effect, group): (&'static dyn Effect, &[String]),
+        steps: &[f64],
+    ) -> Option<(Vec<f64>, f64)> {
+        let t = JointTarget::of(self.robot, group.first()?)?;
+        let m0 = model_with(self.robot, base);
+        let p0 = effect.initial(&m0, &t);
+        let (lo, hi) = effect.bounds(&m0, &t);
+        let mut p = p0.clone();
+        for (i, s) in steps.iter().enumerate().take(p.len().min(lo.len()).min(hi.len())) {
+            if s.is_finite() && lo[i] <= hi[i] {
+                p[i] = (p0[i] + s).clamp(lo[i], hi[i]);
+            }
+        }
+        if p == p0 {
+            return None;
+        }
+        let mut set = base.to_vec();
+        set.push(Applied { effect, joints: group.to_vec(), params: p.clone() });
+        let f = self.score(train, &set);
+        f.is_finite().then_some((p, f))
+    }
+
     /// A fit with `max_evals` from `start` (see [`Engine::fit_from`]), remembered by
     /// [`fit_key`]: the first fit of a candidate on a base answers every later request.
     fn fit_memo(
