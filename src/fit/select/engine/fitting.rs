@@ -127,8 +127,7 @@ impl Engine<'_> {
             bounds: Bounds { lo: lo[..k].to_vec(), hi: hi[..k].to_vec() },
         };
         // The same simplex as a full fit's (`fit_fresh`), from the answer.
-        let max_evals = self.opts.policy.max_evals * 2 * (k - 1);
-        let r = solve(&problem, &x0, Method::Simplex { max_evals, xtol: 1e-3, step: 0.1 });
+        let r = solve(&problem, &x0, full_fit_simplex(self.opts.policy.max_evals, k));
         let mut p = start.to_vec();
         p[..k].copy_from_slice(&r.x[..k]);
         (p, r.f)
@@ -427,8 +426,7 @@ impl Engine<'_> {
                 // The simplex needs more steps per added dimension: with 2× the budget a
                 // 3-parameter Stribeck fit stopped short in its valley (v_s 0.129 for 0.2 on the
                 // pendulum benchmark; 4× reaches 0.202 from any start tried).
-                let method =
-                    Method::Simplex { max_evals: max_evals * 2 * (k - 1), xtol: 1e-3, step: 0.1 };
+                let method = full_fit_simplex(max_evals, k);
                 let r = solve(&problem, &x0, method);
                 match alt {
                     Some((a, _)) => {
@@ -651,4 +649,11 @@ pub(super) fn grid_best(obj: &dyn Fn(&[f64]) -> f64, b: &Bounds) -> Option<Vec<f
         }
     }
     best.map(|(_, p)| p)
+}
+
+/// The simplex of a full fit of a non-smooth effect of `k` (2 or 3) parameters: `max_evals` × 2
+/// per dimension beyond the first, an initial simplex of a tenth of each range, stopping when
+/// it has shrunk to 1e-3 of the ranges.
+fn full_fit_simplex(max_evals: usize, k: usize) -> Method {
+    Method::Simplex { max_evals: max_evals * 2 * k.saturating_sub(1).max(1), xtol: 1e-3, step: 0.1 }
 }
