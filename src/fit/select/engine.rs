@@ -28,6 +28,16 @@ pub struct Engine<'a> {
     /// Every rollout of the search goes through this service (shared with the floor's
     /// alternative replay): it runs them in parallel and counts them.
     rollouts: std::sync::Arc<Rollouts<'a>>,
+    /// Replays of a simulation already counted run here, on a service whose counts nobody
+    /// reads: see [`Engine::first_time`].
+    reruns: Rollouts<'a>,
+    /// Every simulation counted so far, by its memo key ([`Engine::first_time`]).
+    counted: std::sync::Mutex<std::collections::HashSet<String>>,
+    /// Counts nothing: a sibling re-measuring what its parent counted before.
+    quiet: bool,
+    /// The start-state measurements counted so far, by [`start::key`] and start model (shared
+    /// with the floor's alternative replay, like the memo of [`Engine::starts`]).
+    starts_counted: std::sync::Arc<std::sync::Mutex<std::collections::HashSet<String>>>,
     /// Dataset simulations the search asked for (each replays every episode of a set once;
     /// the memo answers some without a rollout).
     sims: std::sync::atomic::AtomicUsize,
@@ -128,6 +138,10 @@ impl<'a> Engine<'a> {
             opts,
             joints,
             rollouts: std::sync::Arc::new(Rollouts::new(robot).with_cancel(opts.cancel.clone())),
+            reruns: Rollouts::new(robot).with_cancel(opts.cancel.clone()),
+            counted: Default::default(),
+            quiet: false,
+            starts_counted: Default::default(),
             sims: std::sync::atomic::AtomicUsize::new(0),
             fits: Default::default(),
             recent: Default::default(),
@@ -236,17 +250,13 @@ impl<'a> Engine<'a> {
         self.rollouts.stats()
     }
 
-    /// The rollout service (shared by every engine of this search).
-    pub(in crate::fit::select) fn rollouts(&self) -> &Rollouts<'a> {
-        &self.rollouts
-    }
-
     /// An engine on other recordings or replay options that shares this one's rollout
     /// service and start-state memo (the floor's alternative replay).
     pub(in crate::fit::select) fn sibling(&self, recs: &[Recording], opts: &'a FitOptions) -> Self {
         let mut e = Engine::new(self.robot, recs, opts);
         e.rollouts = self.rollouts.clone();
         e.starts = self.starts.clone();
+        e.starts_counted = self.starts_counted.clone();
         e
     }
 
@@ -288,10 +298,12 @@ impl<'a> Engine<'a> {
             return s;
         }
         let s = std::sync::Arc::new(make());
-        if let Ok(mut m) = self.screens.lock() {
-            m.insert(key, s.clone());
+        // Two threads may make the set at once: the first one kept is everyone's (one address
+        // for the memo's keys), the other is dropped unused by anyone after this call.
+        match self.screens.lock() {
+            Ok(mut m) => m.entry(key).or_insert(s).clone(),
+            Err(_) => s,
         }
-        s
     }
 
     /// Simulates `recs` with `applied`; `None` when an episode diverged or failed.
@@ -331,7 +343,8 @@ impl<'a> Engine<'a> {
         {
             return e;
         }
-        let e = self.simulate(recs, applied, refine);
+        let first = self.first_time(&key);
+        let e = self.simulate(recs, applied, refine, first);
         if let Ok(mut r) = self.recent.lock() {
             if r.len() >= RECENT {
                 r.pop_front();
@@ -339,6 +352,23 @@ impl<'a> Engine<'a> {
             r.push_back((key, e.clone()));
         }
         e
+    }
+
+    /// Whether the simulation of memo key `key` is asked for the first time in this search
+    /// (and marks it asked). Only a first simulation is counted (rollouts, recording seconds,
+    /// simulations): a memo misses a simulation it saw before when two candidates fitted in
+    /// parallel reach it together, or when [`RECENT`] others evicted it, and both depend on the
+    /// threads' timing. Counting distinct simulations makes the counts a function of the
+    /// recordings and the search alone, the same on every run (a re-replay's cost is left out).
+    fn first_time(&self, key: &str) -> bool {
+        !self.quiet
+            && self.counted.lock().unwrap_or_else(|e| e.into_inner()).insert(key.to_string())
+    }
+
+    /// The rollout service that runs (and counts) a simulation asked for the first time
+    /// (`first`), or runs uncounted a replay of one counted before.
+    pub(in crate::fit::select) fn service(&self, first: bool) -> &Rollouts<'a> {
+        if first { &self.rollouts } else { &self.reruns }
     }
 
     /// The RMSE of `recs` simulated with `applied` (infinite when it diverged), remembered for
@@ -355,10 +385,18 @@ impl<'a> Engine<'a> {
         f
     }
 
-    fn simulate(&self, recs: &[Recording], applied: &[Applied], refine: u32) -> Option<Errors> {
-        self.sims.fetch_add(refine.max(1) as usize, std::sync::atomic::Ordering::Relaxed);
+    fn simulate(
+        &self,
+        recs: &[Recording],
+        applied: &[Applied],
+        refine: u32,
+        first: bool,
+    ) -> Option<Errors> {
+        if first {
+            self.sims.fetch_add(refine.max(1) as usize, std::sync::atomic::Ordering::Relaxed);
+        }
         let set = SetSpec { applied, refine: refine.max(1) };
-        let eps = self.rollouts.run_one(set, recs, &self.opts.replay);
+        let eps = self.service(first).run_one(set, recs, &self.opts.replay);
         self.heartbeat();
         let mut eps: Vec<Episode> = eps?;
         if self.estimates_start() {
@@ -438,18 +476,22 @@ impl<'a> Engine<'a> {
         let model = self.start_model.lock().unwrap_or_else(|e| e.into_inner()).clone();
         let tag = self.tag_of(&model);
         let keys: Vec<String> = recs.iter().map(|r| start::key(r) + &tag).collect();
-        let missing: Vec<usize> = {
+        // Each missing one, and whether its measurement is the first (counted; another thread
+        // may be measuring it too).
+        let missing: Vec<(usize, bool)> = {
             let memo = self.starts.lock().unwrap_or_else(|e| e.into_inner());
+            let mut counted = self.starts_counted.lock().unwrap_or_else(|e| e.into_inner());
             let mut seen = std::collections::HashSet::new();
             (0..recs.len())
                 .filter(|&i| !memo.contains_key(&keys[i]) && seen.insert(&keys[i]))
+                .map(|i| (i, !self.quiet && counted.insert(keys[i].clone())))
                 .collect()
         };
         let measured: Vec<Option<std::sync::Arc<StartSens>>> = missing
             .par_iter()
-            .map(|&i| {
+            .map(|&(i, first)| {
                 StartSens::measure(
-                    &self.rollouts,
+                    self.service(first),
                     &recs[i],
                     &self.opts.replay,
                     self.opts.gap_mask_s,
@@ -460,7 +502,7 @@ impl<'a> Engine<'a> {
             })
             .collect();
         let mut memo = self.starts.lock().unwrap_or_else(|e| e.into_inner());
-        for (i, s) in missing.into_iter().zip(measured) {
+        for ((i, _), s) in missing.into_iter().zip(measured) {
             memo.insert(keys[i].clone(), s);
         }
         (keys.iter().map(|k| memo.get(k).cloned().flatten()).collect(), model)

@@ -88,12 +88,17 @@ impl Engine<'_> {
                 r
             })
             .collect();
-        let alt = self.sibling(&moved, &alt);
+        // Counted once per set (two threads may measure one together; `moved` is new each time).
+        let first = self.first_time(&(set_key(recs, applied) + &self.start_tag() + "#recon"));
+        let mut alt = self.sibling(&moved, &alt);
+        alt.quiet = !first;
         alt.set_start_model(&self.start_model.lock().unwrap_or_else(|e| e.into_inner()));
         let Some(b) = alt.errors(&moved, applied) else {
             return vec![0.0; self.joints.len()];
         };
-        self.sims.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        if first {
+            self.sims.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        }
         self.joints
             .iter()
             .map(|name| {
@@ -278,17 +283,21 @@ impl Engine<'_> {
         if known.is_none() {
             sets.insert(0, SetSpec::of(applied));
         }
-        let mut all = self.rollouts().run(&sets, recs, &self.opts.replay).into_iter();
+        // Counted once per set measured (two threads may measure one together).
+        let first = self.first_time(&(set_key(recs, applied) + &self.start_tag() + "#disc"));
+        let mut all = self.service(first).run(&sets, recs, &self.opts.replay).into_iter();
         let mut whole = || -> Option<Vec<Episode>> { all.next()?.into_iter().collect() };
         let coarse = match known {
             Some(e) => e.eps,
             None => whole()?,
         };
         let (half, fine) = (whole()?, whole()?);
-        self.sims.fetch_add(
-            sets.len().saturating_sub(2) + r + r * r,
-            std::sync::atomic::Ordering::Relaxed,
-        );
+        if first {
+            self.sims.fetch_add(
+                sets.len().saturating_sub(2) + r + r * r,
+                std::sync::atomic::Ordering::Relaxed,
+            );
+        }
         // The scored samples of a joint: (recording index, joint index, sample index).
         let samples = |name: &String| -> Vec<(usize, usize, usize)> {
             let mut v = Vec::new();

@@ -342,3 +342,36 @@ fn a_refit_of_a_non_smooth_answer_starts_from_it() {
     );
     assert!(2 * refit <= full, "re-fit {refit} rollouts against the full fit's {full}");
 }
+
+#[test]
+fn a_simulation_is_counted_once_whatever_the_memo_and_threads_did() {
+    let (robot, recs) = pendulum_at_ticks(0.0);
+    let opts = FitOptions { estimate_start: false, ..FitOptions::default() };
+    let engine = Engine::new(&robot, &recs, &opts);
+    let damping: &'static dyn Effect = &ViscousDamping;
+    let set =
+        |d: f64| vec![Applied { effect: damping, joints: vec!["servo".into()], params: vec![d] }];
+    let first = engine.errors(&recs, &set(0.0)).expect("replay");
+    // More distinct simulations than the recent memo holds: the first is evicted.
+    for i in 1..=RECENT + 1 {
+        engine.errors(&recs, &set(0.01 * i as f64)).expect("replay");
+    }
+    let n = recs.len();
+    let before = engine.rollout_stats();
+    assert_eq!(before.rollouts, (RECENT + 2) * n);
+    assert_eq!(engine.simulations(), RECENT + 2);
+    // Asked again: replayed (same answer), not counted.
+    let again = engine.errors(&recs, &set(0.0)).expect("replay");
+    assert_eq!(again.sse.to_bits(), first.sse.to_bits());
+    assert_eq!(engine.rollout_stats().rollouts, before.rollouts);
+    assert_eq!(engine.rollout_stats().simulated_s, before.simulated_s);
+    assert_eq!(engine.simulations(), RECENT + 2);
+    // Many threads asking for one new simulation together: counted once.
+    let sse: Vec<u64> = (0..8)
+        .into_par_iter()
+        .map(|_| engine.errors(&recs, &set(0.5)).expect("replay").sse.to_bits())
+        .collect();
+    assert!(sse.iter().all(|&s| s == sse[0]));
+    assert_eq!(engine.rollout_stats().rollouts, before.rollouts + n);
+    assert_eq!(engine.simulations(), RECENT + 3);
+}
