@@ -167,6 +167,17 @@ pub fn load(map: &mut SourceMap, path: &Path) -> Result<Config, LoadError> {
             };
             let x = val.as_float().or_else(|| val.as_integer().map(|i| i as f64));
             match x {
+                Some(x) if x.is_finite() && !o.allowed.is_empty() && !o.allowed.contains(&x) => {
+                    let one_of: Vec<String> = o.allowed.iter().map(|a| a.to_string()).collect();
+                    return Err(at(
+                        map,
+                        span,
+                        format!(
+                            "[rules.{id}] {key} must be one of {}, got {val}",
+                            one_of.join(", ")
+                        ),
+                    ));
+                }
                 Some(x) if x.is_finite() => {
                     rs.options.insert(o.name.to_string(), x);
                 }

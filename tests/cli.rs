@@ -329,6 +329,15 @@ fn config_thresholds_and_errors() {
     let (code, _, err) = modellint(&[m, "--config", "fixtures/config/bad_rule.toml"]);
     assert_eq!(code, 2);
     assert!(err.contains("bad_rule.toml:2:") && err.contains("no-such-rule"), "{err}");
+    // An option that takes one of a few values (a contact dimension) names them.
+    let (code, _, err) = modellint(&[m, "--config", "fixtures/config/bad_condim.toml"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("bad_condim.toml:2:")
+            && err.contains("must be one of")
+            && err.contains("got 2"),
+        "{err}"
+    );
 }
 
 /// Recording metadata that cannot be right: exit 2 from `gap` and `fit` with file:line.

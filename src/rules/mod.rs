@@ -24,6 +24,9 @@ pub struct RuleOption {
     pub default: f64,
     pub unit: &'static str,
     pub help: &'static str,
+    /// The only values the option takes when not empty (a contact dimension, a 0/1 switch);
+    /// a config stating another is rejected at its line.
+    pub allowed: &'static [f64],
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -200,7 +203,18 @@ pub const fn opt(
     unit: &'static str,
     help: &'static str,
 ) -> RuleOption {
-    RuleOption { name, default, unit, help }
+    RuleOption { name, default, unit, help, allowed: &[] }
+}
+
+/// Shorthand for a rule option that takes one of a few values (`allowed`).
+pub const fn opt_one_of(
+    name: &'static str,
+    default: f64,
+    unit: &'static str,
+    help: &'static str,
+    allowed: &'static [f64],
+) -> RuleOption {
+    RuleOption { name, default, unit, help, allowed }
 }
 
 /// Every rule, in documentation order. Registering a rule is one line here.

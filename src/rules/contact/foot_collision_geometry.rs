@@ -9,7 +9,7 @@ use crate::probe::slide::{FootSlide, PUSH_S, PUSH_SHARE, Slide};
 use crate::probe::{Measure, Measurement, Preconditions, StanceSettle, Verdict};
 use crate::rules::contact::feet::{Foot, FootKind, ankle_turning, feet, is_humanoid};
 use crate::rules::geometry::shapes::{Placed, hull_area};
-use crate::rules::{Context, Rule, RuleMeta, claim_each, opt};
+use crate::rules::{Context, Rule, RuleMeta, claim_each, opt, opt_one_of};
 use crate::util::fmt_num;
 
 declare_rule! {
@@ -102,12 +102,12 @@ declare_rule! {
         probe: StanceSettle,
         also: [FootSlide],
         options: [
-            opt("allow_boxes", 1.0, "bool", "1: box feet are acceptable primitives; 0: only capsules and spheres"),
+            opt_one_of("allow_boxes", 1.0, "bool", "1: box feet are acceptable primitives; 0: only capsules and spheres", &[0.0, 1.0]),
             opt("min_radius", 0.0005, "m", "smallest capsule/sphere radius"),
             opt("max_radius", 0.05, "m", "largest capsule/sphere radius"),
             opt("friction", 0.6, "", "intended sliding friction of foot geoms; judged only when this or `friction_tolerance` is set"),
             opt("friction_tolerance", 0.2, "", "allowed deviation from `friction`"),
-            opt("condim", 3.0, "", "intended contact dimension of the feet's ground contacts; other than 1 (frictionless, always reported) judged only when set"),
+            opt_one_of("condim", 3.0, "", "intended contact dimension of the feet's ground contacts; other than 1 (frictionless, always reported) judged only when set", &[1.0, 3.0, 4.0, 6.0]),
             opt("contact_window", 0.005, "m", "geom points within this of the foot's lowest point count as ground contacts"),
         ],
     }
