@@ -284,6 +284,16 @@ impl<'a> Engine<'a> {
         self.held_set("probe:", screen, applied, make)
     }
 
+    /// The probes' data of [`Engine::probe_set`] when a screen made it already; `None` else.
+    pub(in crate::fit::select) fn probe_set_held(
+        &self,
+        screen: &[Recording],
+        applied: &[Applied],
+    ) -> Option<std::sync::Arc<Vec<Recording>>> {
+        let key = "probe:".to_string() + &set_key(screen, applied) + &self.start_tag();
+        self.screens.lock().ok().and_then(|m| m.get(&key).cloned())
+    }
+
     /// A data set derived from `train` for `applied`, made on first use and held for the whole
     /// search (the memo keys a dataset by its address); `kind` tells the derivations apart.
     fn held_set(

@@ -16,6 +16,7 @@ use super::groups::{Cand, has_group, partner, same_data, sorted_pair};
 use super::lead;
 use super::pairs::{joint_pairs, pair_lookahead, refitted_at_floor};
 use super::policy::Phase;
+use super::reach::Reach;
 use super::screen::{Screen, screen_data};
 use super::verdict::{at_bound, verdict};
 use super::winner::{on_whole_set, refine, rival_notes};
@@ -288,6 +289,8 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     let mut floored: Vec<usize> = Vec::new();
     // The log index of the lead's fit on the whole training set.
     let mut lead_logged: Option<usize> = None;
+    // The first model at the floor's reach on the probes' data ([`Reach`]).
+    let mut reach: Option<Reach> = None;
     let mut ci = 0;
     while ci < cands.len() {
         // The coarse fits of a size's candidates, which are then taken best first
@@ -304,7 +307,9 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
             let fits: Vec<(Vec<f64>, f64)> = cands[range.clone()]
                 .par_iter()
                 .map(|(e, g, _)| {
+                    let far = || reach.as_ref()?.out_of_reach(engine, Some(&screen), (*e, g));
                     coarse::deferred(s, (*e, g), &cands, &coarse)
+                        .or_else(|| far().map(|(p, _)| (p, f64::INFINITY))) // judged below
                         .unwrap_or_else(|| coarse::fit(engine, &screen, (short, &applied), (*e, g)))
                 })
                 .collect();
@@ -357,6 +362,14 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         }) && !(deferred && coarse::plain_fitted(s, (short, &applied), (e, &group)))
         {
             out.tried.push(not_tested(Phase::Floor, vec![], f64::NAN));
+            continue;
+        }
+        // Not coarse-fitted on the screen's data: first judged on the probes' data ([`Reach`]).
+        let judged = coarse.get(ci - 1).cloned().flatten().is_some_and(|c| c.1.is_finite())
+            && (!deferred || coarse::plain_fitted(s, (short, &applied), (e, &group)));
+        let far = reach.as_ref().filter(|_| !judged);
+        if let Some((p, f)) = far.and_then(|r| r.out_of_reach(engine, Some(&screen), (e, &group))) {
+            out.tried.push(not_tested(Phase::FloorScreen, p, f));
             continue;
         }
         let (mut cp, mut cf) = match coarse.get(ci - 1).cloned().flatten() {
@@ -487,6 +500,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
                 floored.push(logged);
             }
             floored_groups.push(group.clone());
+            reach = reach.or_else(|| Reach::new(engine, short, &applied, &trial));
             floor_k = Some(floor_k.map_or(e.fitted(), |k| k.min(e.fitted())));
             let r = refitted.unwrap_or(tr_a.rmse()) / base_train;
             floor_train = Some(floor_train.map_or(r, |t: f64| t.min(r)));

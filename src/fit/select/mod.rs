@@ -36,6 +36,7 @@ mod pairs;
 mod policy;
 mod polish;
 mod prune;
+mod reach;
 mod reshoot;
 mod screen;
 mod simplify;

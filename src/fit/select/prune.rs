@@ -8,6 +8,7 @@ use crate::fit::stats::{bic, bic_pieces};
 
 use super::policy::{Phase, SearchPolicy};
 use super::polish::{fit_jointly, polish_set};
+use super::reach::Reach;
 use super::verdict::verdict;
 use super::{Errors, FitOutcome, Search, Selected, Tried, set_uncertainty, sync_selected};
 
@@ -199,6 +200,14 @@ pub(super) fn swap_pass(s: &Search, round: usize, out: &mut FitOutcome) -> bool 
         });
         let short = &short_set[..];
         let short_cur = engine.score(short, &out.applied);
+        // At the floor, a simpler effect is first judged on the probes' data ([`Reach`]).
+        let (cell, floored, current) =
+            (std::cell::OnceCell::new(), out.stopped_at_floor, &out.applied);
+        let current = current.clone();
+        let reach = || {
+            cell.get_or_init(|| floored.then(|| Reach::new(engine, short, &others, &current))?)
+                .as_ref()
+        };
         let mut best: Option<(Vec<Applied>, f64, usize, usize)> = None;
         for e in effects::all() {
             if !allowed.iter().any(|a| a == e.id())
@@ -230,7 +239,13 @@ pub(super) fn swap_pass(s: &Search, round: usize, out: &mut FitOutcome) -> bool 
             // (A full fit already made on this base, e.g. in round 1 when `others` is empty,
             // screens better than a coarse one and costs nothing.) Each error is compared with
             // the current set's on the same data.
-            let (pc, fc, on) = match engine.fit_known(train, &others, e, &targets) {
+            let known = engine.fit_known(train, &others, e, &targets);
+            let far = (!partial && known.is_none()).then(reach).flatten();
+            if let Some((p, f)) = far.and_then(|r| r.out_of_reach(engine, None, (e, &targets))) {
+                out.tried.push(Tried::not_tested(round, Phase::SwapScreen, e.id(), &targets, p, f));
+                continue;
+            }
+            let (pc, fc, on) = match known {
                 Some((p, f)) => (p, f, train_cur),
                 None => {
                     let (p, f) =
