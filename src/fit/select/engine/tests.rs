@@ -375,3 +375,42 @@ fn a_simulation_is_counted_once_whatever_the_memo_and_threads_did() {
     assert_eq!(engine.rollout_stats().rollouts, before.rollouts + n);
     assert_eq!(engine.simulations(), RECENT + 3);
 }
+
+/// [`Reach`]: on the pendulum with a damping of 0.03 hidden (no noise), the model at the
+/// floor is the damping fitted and taken 10 % low (what is left stands for the noise). A
+/// candidate is judged on the probes' data only (no replay of anything else), and only once a
+/// screen made them; the damping itself (as good as the floor model or better) is within
+/// reach, a position offset (which cannot mimic a damping) is not.
+///
+/// [`Reach`]: super::super::reach::Reach
+#[test]
+fn an_alias_is_judged_within_reach_of_the_floor_on_the_probes_data_alone() {
+    use super::super::reach::Reach;
+    use crate::fit::effects::PositionOffset;
+    let hidden = [crate::synth::truth::Hidden {
+        effect: ViscousDamping.id(),
+        joint: "servo".into(),
+        params: vec![0.03],
+    }];
+    let (robot, recs) = pendulum_with(&hidden, 0.0);
+    let opts = FitOptions::default();
+    let engine = Engine::new(&robot, &recs, &opts);
+    let g = vec!["servo".to_string()];
+    let (p, _) = engine.fit_one(&recs, &[], &ViscousDamping, &g);
+    let p = vec![0.9 * p[0]];
+    let floor = [Applied { effect: &ViscousDamping, joints: g.clone(), params: p }];
+    // No screen made the probes' data on this base yet.
+    assert!(Reach::new(&engine, &recs, &[], &floor).is_none());
+    let probes = engine.probe_set(&recs, &[], || vec![recs[0].clone()]);
+    let probe_s = probes[0].t.last().unwrap() - probes[0].t[0];
+    let reach = Reach::new(&engine, &recs, &[], &floor).expect("probes held");
+    let before = engine.rollout_stats();
+    assert!(reach.out_of_reach(&engine, None, (&ViscousDamping, &g)).is_none());
+    let far = reach.out_of_reach(&engine, None, (&PositionOffset, &g));
+    let (_, f) = far.expect("a position offset cannot come near a damping");
+    let floor_rmse = engine.errors(&probes, &floor).expect("replay").rmse();
+    assert!(f > opts.policy.floor_screen_ratio * floor_rmse, "{f} vs {floor_rmse}");
+    let after = engine.rollout_stats();
+    let budget = 2 * (opts.policy.screen_evals + 1);
+    assert!(after.simulated_s - before.simulated_s <= budget as f64 * probe_s + 1e-9);
+}
