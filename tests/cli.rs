@@ -300,6 +300,27 @@ fn inline_suppressions_need_a_reason_and_unused_ones_are_reported() {
     assert!(out.contains("\"underdamped-pd-gains\""));
 }
 
+/// A suppression written inside `<default>`, where the gains are set, works like one on the
+/// element: it removes the finding that points at the class's attribute, and an unused or
+/// misspelled one there is reported (it was silently ignored).
+#[test]
+fn suppressions_inside_default_classes_are_applied_and_checked() {
+    let (_, out, _) =
+        modellint(&["fixtures/suppress/in_default.xml", "--no-probe", "--format", "json"]);
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let found: Vec<(String, String)> = v["findings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| (f["rule"].as_str().unwrap().to_string(), f["message"].to_string()))
+        .collect();
+    let has = |rule: &str, text: &str| found.iter().any(|(r, m)| r == rule && m.contains(text));
+    assert!(!has("underdamped-pd-gains", "`hinge` "), "suppressed in class servo: {found:?}");
+    assert!(has("underdamped-pd-gains", "`hinge2`"), "not suppressed (misspelled): {found:?}");
+    assert!(has("invalid-suppression", "underdamped-pd-gain`"), "{found:?}");
+    assert!(has("unused-suppression", "soft-limits"), "{found:?}");
+}
+
 #[test]
 fn config_thresholds_and_errors() {
     let m = "fixtures/probes/servo_underdamped.xml";
