@@ -271,6 +271,8 @@ pub fn prepare(a: &FitArgs, sink: &dyn Sink) -> Result<Prepared, CmdError> {
     if let Some(by) = &a.holdout_by {
         match by.split_once('=') {
             Some((k, v)) if !k.is_empty() && !v.is_empty() => {
+                // A key or value no recording has is the user's error, said before any work.
+                crate::fit::split::split_by_key(&recs, k, v)?;
                 opts.holdout_by = Some((k.to_string(), v.to_string()))
             }
             Some(_) => return Err(format!("--holdout-by {by}: expected KEY or KEY=VALUE").into()),
