@@ -62,7 +62,7 @@ pub struct CheckArgs {
     #[arg(long)]
     pub statistics: bool,
     /// Lowest severity that makes the exit code 1.
-    #[arg(long, value_parser = ["error", "warning", "info"])]
+    #[arg(long, value_parser = ["error", "warning", "warn", "info"])]
     pub fail_on: Option<String>,
     /// Run only these rules or groups (comma-separated or repeated).
     #[arg(long, value_delimiter = ',')]

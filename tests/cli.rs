@@ -223,6 +223,26 @@ fn fit_help_lists_the_effects() {
     );
 }
 
+/// `modellint docs TOPIC` serves every page of docs/ (python.md was missing), and `--fail-on`
+/// takes `warn` as the config's `level` does.
+#[test]
+fn docs_topics_and_fail_on_spellings() {
+    let mut pages: Vec<String> = std::fs::read_dir("docs")
+        .unwrap()
+        .filter_map(|e| e.ok()?.file_name().into_string().ok())
+        .filter_map(|n| n.strip_suffix(".md").map(str::to_string))
+        .collect();
+    pages.sort();
+    for p in &pages {
+        let (code, out, err) = modellint(&["docs", p]);
+        assert_eq!(code, 0, "docs {p}: {err}");
+        assert_eq!(out, std::fs::read_to_string(format!("docs/{p}.md")).unwrap(), "docs {p}");
+    }
+    let (w, _, _) = modellint(&["models/asimov.xml", "--no-probe", "--fail-on", "warning"]);
+    let (w2, _, err) = modellint(&["models/asimov.xml", "--no-probe", "--fail-on", "warn"]);
+    assert_eq!((w, w2), (1, 1), "{err}");
+}
+
 #[test]
 fn fit_window_must_be_a_positive_length() {
     // `--window 0` used to turn windowing (and the friction re-fit) off without a word.
