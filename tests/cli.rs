@@ -38,6 +38,7 @@ fn broken_inputs_exit_2_with_location() {
             "neither MJCF",
         ),
         (&["fixtures/broken/does_not_exist.xml"], "does_not_exist.xml", "file not found"),
+        (&["models/asimov.toml"], "models/asimov.toml:1:1", "hardware spec (--spec"),
         // MuJoCo's message is cut before its line number: the element it names.
         (
             &["fixtures/broken/massless_body.xml"],

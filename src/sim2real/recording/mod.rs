@@ -293,7 +293,13 @@ pub(crate) fn unknown_joints<'a>(
         }
     }
     let col = first_col?;
-    Some((col, format!("{} not in the model: {}", problems.len(), problems.join("; "))))
+    let n = problems.len();
+    let head = if n == 1 {
+        "a joint not in the model".to_string()
+    } else {
+        format!("{n} joints not in the model")
+    };
+    Some((col, format!("{head}: {}", problems.join("; "))))
 }
 
 impl Recording {
