@@ -8,6 +8,7 @@
 #   B. the clean model and a ROS package.xml   → the hook passes (needs `modellint a.xml b.xml`,
 #      which skips non-model XML; skipped visibly when the installed modellint has no multi-file
 #      support yet)
+#   B2. package.xml alone (a commit touching only it) → the hook passes (--skip-non-models)
 #   C. an underdamped model                    → the hook fails and prints the finding
 # The hook's cargo build shares target/ (CARGO_TARGET_DIR) so only the modellint crate compiles.
 # Skips visibly (exit 0, "skipping: ...") without python3/venv/git or when pre-commit cannot be
@@ -120,6 +121,14 @@ else
   out="$("$precommit" run --all-files --color never 2>&1)"
   code=$?
   if [ "$code" = 0 ]; then ok "B: clean model + package.xml passes"; else bad "B: clean model + package.xml: pre-commit exited $code: $out"; fi
+fi
+# B2. A commit that touches only the package manifest: the hook gets that one file and passes.
+if [ -n "$installed" ] && "$installed" --help 2>&1 | grep -q -- "--skip-non-models"; then
+  out="$("$precommit" run --files robots/package.xml --color never 2>&1)"
+  code=$?
+  if [ "$code" = 0 ]; then ok "B2: a commit of package.xml alone passes"; else bad "B2: package.xml alone: pre-commit exited $code: $out"; fi
+else
+  echo "test-precommit: skipping B2: the installed modellint has no --skip-non-models" >&2
 fi
 git rm -q --cached robots/package.xml && rm robots/package.xml
 

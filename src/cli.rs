@@ -62,7 +62,7 @@ pub struct CheckArgs {
     #[arg(long)]
     pub statistics: bool,
     /// Lowest severity that makes the exit code 1.
-    #[arg(long, value_parser = ["error", "warning", "info"])]
+    #[arg(long, value_parser = ["error", "warning", "warn", "info"])]
     pub fail_on: Option<String>,
     /// Run only these rules or groups (comma-separated or repeated).
     #[arg(long, value_delimiter = ',')]
@@ -73,6 +73,12 @@ pub struct CheckArgs {
     /// Static pass only: skip the MuJoCo probe simulations (for pre-commit hooks).
     #[arg(long)]
     pub no_probe: bool,
+    /// Skip an XML file that is not a robot model (ROS package.xml, launch files) with a note
+    /// even when it is the only file given (the pre-commit hook passes only the staged files);
+    /// without it a lone non-model is an error (exit 2). With several files they are always
+    /// skipped.
+    #[arg(long)]
+    pub skip_non_models: bool,
     /// Directory of the lint cache. Default: $MODELLINT_CACHE_DIR, else
     /// $XDG_CACHE_HOME/modellint, else ~/.cache/modellint.
     #[arg(long)]
@@ -531,14 +537,15 @@ fn check(a: CheckArgs) -> i32 {
     };
     // Everything else that shapes what is printed joins the key of the lint cache.
     let opts = vec![format!(
-        "{format:?} {color} {err_color} {} {} {:?} {:?} {:?} {} {:?}",
+        "{format:?} {color} {err_color} {} {} {:?} {:?} {:?} {} {:?} {}",
         crate::output::color_on_stderr(),
         a.statistics,
         a.fail_on,
         a.select,
         a.ignore,
         a.no_probe,
-        a.package
+        a.package,
+        a.skip_non_models
     )];
     let key = cache_dir
         .as_ref()
@@ -599,7 +606,9 @@ fn check_models(
             skipped.push(output::NotLinted::skipped(model, why));
             continue;
         }
-        if multi && let Some(why) = crate::lint::not_a_model(model) {
+        if (multi || a.skip_non_models)
+            && let Some(why) = crate::lint::not_a_model(model)
+        {
             err.push_str(&format!("modellint: skipping {}: {why}\n", model.display()));
             skipped.push(output::NotLinted::skipped(model, why));
             continue;

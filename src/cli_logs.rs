@@ -65,6 +65,7 @@ pub const DOCS: &[(&str, &str)] = &[
     ("fitting", include_str!("../docs/fitting.md")),
     ("gap", include_str!("../docs/gap.md")),
     ("probes", include_str!("../docs/probes.md")),
+    ("python", include_str!("../docs/python.md")),
     ("recording-format", include_str!("../docs/recording-format.md")),
     ("spec", include_str!("../docs/spec.md")),
     ("synth", include_str!("../docs/synth.md")),

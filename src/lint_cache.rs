@@ -63,7 +63,12 @@ pub fn key(
         for f in crate::model::inputs(model)? {
             k.file(&f)?;
         }
-        let spec = spec.clone().or_else(|| crate::spec_use::discover(model).path);
+        let found = crate::spec_use::discover(model);
+        // A file passed over (a fit's effects file) is named in the output: its presence counts.
+        for p in found.searched.iter().filter(|p| found.path.is_none() && p.is_file()) {
+            k.field(p.as_os_str().as_encoded_bytes());
+        }
+        let spec = spec.clone().or(found.path);
         let config = config.clone().or_else(|| crate::config::discover(model));
         for (what, p) in [("spec", spec), ("config", config)] {
             k.field(what.as_bytes());

@@ -58,8 +58,20 @@ pub fn discover(model: &Path) -> SpecSearch {
             searched.push(p);
         }
     }
-    let path = searched.iter().find(|p| p.is_file()).cloned();
+    let path = searched.iter().find(|p| p.is_file() && !is_fit_effects(p)).cloned();
     SpecSearch { path, searched }
+}
+
+/// Whether `p` is the effects file `modellint fit --write-actuators` writes (top-level
+/// `[[effect]]` tables), not a hardware spec: written beside a fitted model of the same stem, it
+/// would otherwise be picked up as that model's spec and rejected.
+pub fn is_fit_effects(p: &Path) -> bool {
+    let Ok(text) = std::fs::read_to_string(p) else { return false };
+    if text.starts_with("# Written by `modellint fit`: effects") {
+        return true;
+    }
+    let Ok(v) = text.parse::<toml::Table>() else { return false };
+    v.get("effect").is_some_and(|e| e.is_array()) && !v.contains_key("robot")
 }
 
 /// Every file `model` includes (directly or through other includes), as MuJoCo resolves them.
@@ -92,7 +104,17 @@ fn included_files(file: &Path, base: &Path, seen: &mut Vec<PathBuf>, depth: usiz
 
 /// The one-paragraph note for a run without a spec.
 pub fn missing_note(model: &Path, s: &SpecSearch, enabled: &dyn Fn(&str) -> bool) -> String {
-    let looked: Vec<String> = s.searched.iter().map(|p| p.display().to_string()).collect();
+    let looked: Vec<String> = s
+        .searched
+        .iter()
+        .map(|p| {
+            if p.is_file() && is_fit_effects(p) {
+                format!("{} (a `modellint fit` effects file, not a spec)", p.display())
+            } else {
+                p.display().to_string()
+            }
+        })
+        .collect();
     let skipped: Vec<&str> = SKIPPED.iter().map(|r| r.0).filter(|id| enabled(id)).collect();
     let weakened: Vec<&str> = WEAKENED.iter().map(|r| r.0).filter(|id| enabled(id)).collect();
     let mut out = format!(
@@ -208,5 +230,28 @@ mod tests {
         for (id, _) in SKIPPED.iter().chain(WEAKENED) {
             assert!(crate::rules::find_meta(id).is_some(), "unknown rule `{id}` in spec_use");
         }
+    }
+
+    /// `fit --write-actuators fitted.toml` beside `--write-model fitted.xml` is not that model's
+    /// spec: discovery passes over it (and the note says why) instead of rejecting it as a bad spec.
+    #[test]
+    fn a_fit_effects_file_beside_the_model_is_not_its_spec() {
+        let dir = std::env::temp_dir().join(format!("modellint-specuse-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let model = dir.join("fitted.xml");
+        std::fs::write(&model, "<mujoco/>").unwrap();
+        let toml = dir.join("fitted.toml");
+        for text in [
+            crate::fit::writeback::actuators_toml(&[]),
+            "[[effect]]\nid = \"gain_error\"\njoints = [\"elbow\"]\n".to_string(),
+        ] {
+            std::fs::write(&toml, text).unwrap();
+            let s = discover(&model);
+            assert_eq!(s.path, None, "an effects file is not a spec");
+            assert!(missing_note(&model, &s, &|_| true).contains("effects file, not a spec"));
+        }
+        std::fs::write(&toml, "[robot]\ncontrol_hz = 50\n").unwrap();
+        assert_eq!(discover(&model).path.as_deref(), Some(toml.as_path()), "a spec is");
+        std::fs::remove_dir_all(&dir).ok();
     }
 }

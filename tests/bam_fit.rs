@@ -170,3 +170,24 @@ fn bam_logs_one_gain_held_out_from_the_cli() {
 fn bam_logs_gain_200_held_out_keeps_the_load_friction() {
     bam_fold("200", 9.78, 2.64);
 }
+
+/// A `--holdout-by` value no log has is the user's error, said before any work: an error (not a
+/// warning followed by a search report), exit 2, listing the values there are.
+#[test]
+fn a_holdout_value_no_log_has_is_an_error() {
+    let Some(dir) = shared_bam() else {
+        eprintln!("SKIPPED a_holdout_value_no_log_has_is_an_error: bam_xl330 is absent");
+        return;
+    };
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_modellint"))
+        .arg("fit")
+        .arg(root().join("fixtures/bam_xl330/rig.xml"))
+        .arg(&dir)
+        .args(["--holdout-by", "kp=300"])
+        .output()
+        .expect("runs");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("no recording has kp = 300") && err.contains("400"), "{err}");
+    assert!(!err.contains("warning") && !err.contains("search cost"), "{err}");
+}

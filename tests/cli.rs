@@ -38,6 +38,7 @@ fn broken_inputs_exit_2_with_location() {
             "neither MJCF",
         ),
         (&["fixtures/broken/does_not_exist.xml"], "does_not_exist.xml", "file not found"),
+        (&["models/asimov.toml"], "models/asimov.toml:1:1", "hardware spec (--spec"),
         // MuJoCo's message is cut before its line number: the element it names.
         (
             &["fixtures/broken/massless_body.xml"],
@@ -223,6 +224,26 @@ fn fit_help_lists_the_effects() {
     );
 }
 
+/// `modellint docs TOPIC` serves every page of docs/ (python.md was missing), and `--fail-on`
+/// takes `warn` as the config's `level` does.
+#[test]
+fn docs_topics_and_fail_on_spellings() {
+    let mut pages: Vec<String> = std::fs::read_dir("docs")
+        .unwrap()
+        .filter_map(|e| e.ok()?.file_name().into_string().ok())
+        .filter_map(|n| n.strip_suffix(".md").map(str::to_string))
+        .collect();
+    pages.sort();
+    for p in &pages {
+        let (code, out, err) = modellint(&["docs", p]);
+        assert_eq!(code, 0, "docs {p}: {err}");
+        assert_eq!(out, std::fs::read_to_string(format!("docs/{p}.md")).unwrap(), "docs {p}");
+    }
+    let (w, _, _) = modellint(&["models/asimov.xml", "--no-probe", "--fail-on", "warning"]);
+    let (w2, _, err) = modellint(&["models/asimov.xml", "--no-probe", "--fail-on", "warn"]);
+    assert_eq!((w, w2), (1, 1), "{err}");
+}
+
 #[test]
 fn fit_window_must_be_a_positive_length() {
     // `--window 0` used to turn windowing (and the friction re-fit) off without a word.
@@ -298,6 +319,27 @@ fn inline_suppressions_need_a_reason_and_unused_ones_are_reported() {
     std::fs::write(&p, without).unwrap();
     let (_, out, _) = modellint(&[p.to_str().unwrap(), "--no-probe", "--format", "json"]);
     assert!(out.contains("\"underdamped-pd-gains\""));
+}
+
+/// A suppression written inside `<default>`, where the gains are set, works like one on the
+/// element: it removes the finding that points at the class's attribute, and an unused or
+/// misspelled one there is reported (it was silently ignored).
+#[test]
+fn suppressions_inside_default_classes_are_applied_and_checked() {
+    let (_, out, _) =
+        modellint(&["fixtures/suppress/in_default.xml", "--no-probe", "--format", "json"]);
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let found: Vec<(String, String)> = v["findings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| (f["rule"].as_str().unwrap().to_string(), f["message"].to_string()))
+        .collect();
+    let has = |rule: &str, text: &str| found.iter().any(|(r, m)| r == rule && m.contains(text));
+    assert!(!has("underdamped-pd-gains", "`hinge` "), "suppressed in class servo: {found:?}");
+    assert!(has("underdamped-pd-gains", "`hinge2`"), "not suppressed (misspelled): {found:?}");
+    assert!(has("invalid-suppression", "underdamped-pd-gain`"), "{found:?}");
+    assert!(has("unused-suppression", "soft-limits"), "{found:?}");
 }
 
 #[test]

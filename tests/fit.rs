@@ -219,6 +219,14 @@ fn cli_json_write_model_and_actuators() {
     assert!(c == Some(2) && e.contains("unknown effect `magic`") && e.contains("armature"), "{e}");
     let (c, e) = bad(&["--joints", "knee*"]);
     assert!(c == Some(2) && e.contains("matches no recorded joint"), "{e}");
+    // A misspelt joint or effect in --told gets the nearest names.
+    let (c, e) = bad(&["--told", "armature@wrist_pich"]);
+    assert!(
+        c == Some(2) && e.contains("`wrist_pich` is not recorded; did you mean wrist_pitch"),
+        "{e}"
+    );
+    let (c, e) = bad(&["--told", "armatur@wrist_pitch"]);
+    assert!(c == Some(2) && e.contains("did you mean armature"), "{e}");
     // Text output and HTML reports.
     let rep = work.join("report");
     let o = std::process::Command::new(env!("CARGO_BIN_EXE_modellint"))

@@ -275,6 +275,13 @@ fn several_models_per_call() {
     let (code, _, err) = modellint(&[pkg, "--no-probe"]);
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("neither MJCF"), "{err}");
+    // ... unless skipping is asked for (the pre-commit hook passes the one staged file).
+    let (code, _, err) = modellint(&[pkg, "--no-probe", "--skip-non-models"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("skipping") && err.contains("<package>"), "{err}");
+    // (the lint cache keys on the option: the same path without it is an error again)
+    let (code, _, _) = modellint(&[pkg, "--no-probe"]);
+    assert_eq!(code, 2);
 }
 
 #[test]

@@ -227,6 +227,7 @@ fn actuator_snippet_parses_as_python() {
         kept("torque_limit", "wrist_pitch", &[("effort_limit", 3.5)]),
         kept("action_delay", "shoulder_pitch", &[("delay_s", 0.02)]),
         kept("backlash", "shoulder_pitch", &[("width", 0.01)]),
+        kept("gain_error", "elbow_pitch", &[("kp_scale", 0.8), ("kd_scale", 1.2)]),
     ];
     let work = tmp("snippet");
     let files =
@@ -241,6 +242,16 @@ fn actuator_snippet_parses_as_python() {
     // arm3: timestep 0.001 s → a 0.02 s delay is 20 physics steps.
     assert!(text.contains("min_delay=20, max_delay=20"), "{text}");
     assert!(text.contains("armature=0.001489,"), "{text}");
+    // `stiffness` and `damping` are required fields: every joint's entry has its servo's gains,
+    // the fitted gain error's scaled ones where one was kept (arm3: kp 50, kv 1.5).
+    let entry = |j: &str| {
+        let at = text.find(&format!("\"{j}\": ImplicitActuatorCfg(")).expect(j);
+        text[at..at + text[at..].find("    ),").unwrap()].to_string()
+    };
+    let elbow = entry("elbow_pitch");
+    assert!(elbow.contains("stiffness=40,") && elbow.contains("damping=1.8,"), "{elbow}");
+    let wrist = entry("wrist_pitch");
+    assert!(wrist.contains("stiffness=50,") && wrist.contains("damping=1.5,"), "{wrist}");
     assert!(
         toml::from_str::<toml::Value>(&std::fs::read_to_string(work.join("act.toml")).unwrap())
             .is_ok()

@@ -141,8 +141,13 @@ fn parse_told(
                 .split_once('@')
                 .ok_or_else(|| format!("--told {t}: expected EFFECT@JOINTS, e.g. viscous_damping@left_knee+right_knee or armature@*"))?;
             if effects::by_id(id).is_none() {
-                let ids: Vec<&str> = effects::all().iter().map(|e| e.id()).collect();
-                return Err(format!("--told {t}: unknown effect `{id}`; known: {}", ids.join(", ")));
+                let ids: Vec<String> = effects::all().iter().map(|e| e.id().to_string()).collect();
+                let near = crate::util::near_matches(id, &ids);
+                return Err(if near.is_empty() {
+                    format!("--told {t}: unknown effect `{id}`; known: {}", ids.join(", "))
+                } else {
+                    format!("--told {t}: unknown effect `{id}`; did you mean {}?", near.join(", "))
+                });
             }
             let joints: Vec<String> = if js == "*" {
                 all.clone()
@@ -150,10 +155,12 @@ fn parse_told(
                 js.split('+').map(str::to_string).collect()
             };
             if let Some(j) = joints.iter().find(|j| !recorded.contains(j)) {
-                return Err(format!(
-                    "--told {t}: joint `{j}` is not recorded; recorded: {}",
-                    recorded.join(", ")
-                ));
+                let near = crate::util::near_matches(j, &recorded);
+                return Err(if near.is_empty() {
+                    format!("--told {t}: joint `{j}` is not recorded; recorded: {}", recorded.join(", "))
+                } else {
+                    format!("--told {t}: joint `{j}` is not recorded; did you mean {}?", near.join(", "))
+                });
             }
             Ok((id.to_string(), joints))
         })
@@ -271,6 +278,8 @@ pub fn prepare(a: &FitArgs, sink: &dyn Sink) -> Result<Prepared, CmdError> {
     if let Some(by) = &a.holdout_by {
         match by.split_once('=') {
             Some((k, v)) if !k.is_empty() && !v.is_empty() => {
+                // A key or value no recording has is the user's error, said before any work.
+                crate::fit::split::split_by_key(&recs, k, v)?;
                 opts.holdout_by = Some((k.to_string(), v.to_string()))
             }
             Some(_) => return Err(format!("--holdout-by {by}: expected KEY or KEY=VALUE").into()),

@@ -418,6 +418,42 @@ pub fn isaaclab_snippet(robot: &Robot, selected: &[Selected]) -> String {
             }
         }
     }
+    // `stiffness` and `damping` are required fields: the joint's position servo's kp / kv, as
+    // the fitted effects write them back (a servo gain error scales them), else as modelled.
+    for (j, (fields, _)) in per_joint.iter_mut() {
+        let Some(act) =
+            robot.joint(j).and_then(|jj| robot.actuators_on_joint(jj.id).first().copied())
+        else {
+            continue;
+        };
+        let crate::model::ActuatorKind::Position { kp, kv } = act.kind else { continue };
+        if act.gear != 1.0 {
+            continue;
+        }
+        let site = ActuatorSite {
+            tag: "position",
+            kind: Some(act.kind),
+            timestep: robot.opt.timestep,
+            gear: act.gear,
+            forcerange: act.forcelimited.then_some(act.forcerange),
+        };
+        let (mut stiffness, mut damping) = (num(kp), num(kv));
+        for x in selected.iter().filter(|x| x.joints.contains(j)) {
+            let Some(e) = effects::by_id(&x.effect) else { continue };
+            let WriteBack::Actuator(attrs) = e.write_back(&x.values) else { continue };
+            for (a, v) in &attrs {
+                for (name, text) in e.actuator_attr(a, *v, &site).unwrap_or_default() {
+                    match name {
+                        "kp" => stiffness = text,
+                        "kv" => damping = text,
+                        _ => {}
+                    }
+                }
+            }
+        }
+        fields.insert(0, format!("damping={damping},"));
+        fields.insert(0, format!("stiffness={stiffness},"));
+    }
     let mut s = String::from(
         "# Written by `modellint fit`: fitted actuator parameters for Isaac Lab (mjlab has the same fields).\n\
          # Values MuJoCo can hold are also in the model written by --write-model.\n\

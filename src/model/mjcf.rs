@@ -21,6 +21,9 @@ pub enum ElemKind {
     Pair,
     /// A child of `<sensor>` (its tag is the sensor type).
     Sensor,
+    /// An attribute setter inside `<default>` (`<joint>`, `<position>`, ...): indexed so that a
+    /// suppression comment on it covers the findings that point at its attributes.
+    Default,
 }
 
 /// Where an effective attribute value came from.
@@ -372,7 +375,37 @@ pub fn index_mjcf(root: &XNode) -> SourceIndex {
             b.push(ElemKind::Sensor, e, None, &[], false);
         }
     }
+    for d in root.children_tagged("default") {
+        default_setters(d, &root_sup, &mut b);
+    }
     b.idx
+}
+
+/// Indexes the setters of a `<default>` tree with their suppression comments (a comment on a
+/// `<default class=...>` covers every setter inside it), so that a finding pointing at a class's
+/// attribute can be suppressed where it is written — and an unused or invalid suppression there
+/// is reported like any other.
+fn default_setters(d: &XNode, inherited: &[usize], b: &mut Builder) {
+    let mut sup = inherited.to_vec();
+    sup.extend(b.suppressions_of(d));
+    for c in &d.children {
+        if c.tag == "default" {
+            default_setters(c, &sup, b);
+        } else {
+            let mut s = sup.clone();
+            s.extend(b.suppressions_of(c));
+            b.idx.elems.entry(ElemKind::Default).or_default().push(ElemSrc {
+                tag: c.tag.clone(),
+                name: None,
+                loc: c.loc,
+                full: c.full,
+                attrs: BTreeMap::new(),
+                class: d.get("class").map(str::to_string),
+                suppressions: s,
+                body: None,
+            });
+        }
+    }
 }
 
 /// Builds a (smaller) source index of a URDF tree: links as bodies, joints with their limits.

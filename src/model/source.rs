@@ -206,12 +206,28 @@ fn parse_file(
             }
             None => {
                 let pos = e.pos();
+                // A file that does not even start as XML is not a model at all (a spec, a log).
+                let msg = if text.trim_start().starts_with('<') || text.trim().is_empty() {
+                    format!("malformed XML: {e}")
+                } else {
+                    let ext = path.extension().and_then(|x| x.to_str()).unwrap_or("");
+                    let hint = match ext {
+                        "toml" => {
+                            "; a .toml beside a model is its hardware spec (--spec FILE.toml)"
+                        }
+                        "csv" | "json" | "npz" | "parquet" | "mcap" | "pt" => {
+                            "; recordings go to `modellint gap MODEL LOGS` or `modellint fit MODEL LOGS`"
+                        }
+                        _ => "",
+                    };
+                    format!("not XML, so not a robot model (MJCF .xml or URDF .urdf){hint}")
+                };
                 return Err(LoadError::at_line(
                     map,
                     file_id,
                     pos.row as usize,
                     pos.col as usize,
-                    format!("malformed XML: {e}"),
+                    msg,
                 ));
             }
         },

@@ -151,6 +151,7 @@ pub fn kind_word(kind: ElemKind) -> &'static str {
         ElemKind::Mesh => "mesh",
         ElemKind::Pair => "contact pair",
         ElemKind::Sensor => "sensor",
+        ElemKind::Default => "default",
     }
 }
 
