@@ -21,7 +21,9 @@ declare_rule! {
     /// armature on every actuated hinge is reported when their force limits span `effort_spread`
     /// × or more; between √(1 + `tolerance`) × and that, as info: peak torque scales with the
     /// gear and reflected inertia with its square, so a gear stage of r× needs armatures r²×
-    /// apart, while a software derating of one motor keeps one value right. Joints driven by
+    /// apart, while a software derating of one motor keeps one value right. A model that
+    /// drives any actuated hinge through a tendon (a tendon-driven hand: the motors sit in the
+    /// forearm, not at the joints) is not judged without a spec. Joints driven by
     /// several motors (count > 1) are left to `parallel-ankle-armature`.
     ///
     /// ## Why is this bad?
@@ -201,7 +203,8 @@ impl Rule for ArmatureMismatch {
 /// limits span `effort_spread` × or more (warning), or more than √(1 + `tolerance`) × but less
 /// than `effort_spread` × (info: a gear stage would need armatures spread² apart, a derating of
 /// one motor would not). Slide joints (armature in kg, force limits in N, e.g. a gripper's
-/// fingers) are not compared with hinges.
+/// fingers) are not compared with hinges. A model that drives any of its actuated hinges through
+/// a tendon (a tendon-driven hand) is not judged: its motors are not at the joints.
 fn uniform_without_spec(cx: &Context, out: &mut Vec<Finding>) {
     let robot = cx.robot;
     let spread_min = cx.opt("effort_spread");
@@ -215,6 +218,15 @@ fn uniform_without_spec(cx: &Context, out: &mut Vec<Finding>) {
         })
         .collect();
     if joints.len() < 3 {
+        return;
+    }
+    // A hinge moved through a tendon (a tendon-driven hand's fingers) has no motor at the joint:
+    // the motor sits elsewhere, so neither the joint's armature nor the actuators' force limits
+    // follow one gear stage per joint, and the comparison below has nothing to stand on.
+    let through_tendon = |j: &crate::model::Joint| {
+        robot.actuators_on_joint(j.id).iter().any(|a| a.trn == crate::model::Transmission::Tendon)
+    };
+    if joints.iter().any(|j| through_tendon(j)) {
         return;
     }
     let a0 = joints[0].armature;
