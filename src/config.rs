@@ -178,6 +178,21 @@ pub fn load(map: &mut SourceMap, path: &Path) -> Result<Config, LoadError> {
                         ),
                     ));
                 }
+                Some(x) if x.is_finite() && !o.domain.contains(x) => {
+                    return Err(at(
+                        map,
+                        span,
+                        format!(
+                            "[rules.{id}] {key} must be {}{}, got {val}",
+                            o.domain.describe(),
+                            if o.unit.is_empty() {
+                                String::new()
+                            } else {
+                                format!(" ({})", o.unit)
+                            }
+                        ),
+                    ));
+                }
                 Some(x) if x.is_finite() => {
                     rs.options.insert(o.name.to_string(), x);
                 }

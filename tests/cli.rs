@@ -338,6 +338,25 @@ fn config_thresholds_and_errors() {
             && err.contains("got 2"),
         "{err}"
     );
+    // Every numeric option has a domain: a value outside it is rejected at its line, with the
+    // domain named (a negative radius, a tolerance of the whole range).
+    // (the message may wrap: compare it with its words joined, the frame's `│` dropped)
+    let flat = |e: &str| e.split_whitespace().filter(|w| *w != "│").collect::<Vec<_>>().join(" ");
+    let (code, _, err) = modellint(&[m, "--config", "fixtures/config/bad_min_radius.toml"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("bad_min_radius.toml:2:")
+            && flat(&err).contains("min_radius must be ≥ 0 (m), got -0.001"),
+        "{err}"
+    );
+    let (code, _, err) = modellint(&[m, "--config", "fixtures/config/bad_fraction.toml"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("bad_fraction.toml:2:")
+            && flat(&err)
+                .contains("tolerance must be ≥ 0 and < 1 (fraction of joint range), got 1.0"),
+        "{err}"
+    );
 }
 
 /// Recording metadata that cannot be right: exit 2 from `gap` and `fit` with file:line.

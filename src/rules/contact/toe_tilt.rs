@@ -7,7 +7,7 @@ use crate::probe::settle::{Settle, StanceClaim};
 use crate::probe::{Preconditions, StanceSettle, Verdict};
 use crate::rules::contact::feet::{Foot, FootKind, feet};
 use crate::rules::geometry::shapes::{Placed, tilt};
-use crate::rules::{Context, Rule, RuleMeta, claim_each, opt};
+use crate::rules::{Context, Domain, Rule, RuleMeta, claim_each, opt};
 use crate::util::fmt_num;
 
 declare_rule! {
@@ -53,9 +53,9 @@ declare_rule! {
         level: Severity::Warning,
         probe: StanceSettle,
         options: [
-            opt("max_height_spread", 0.001, "m", "largest height difference of a sole geom's lowest point from the sole height"),
-            opt("max_tilt", 0.5, "deg", "largest angle between a flat contact feature and the ground"),
-            opt("contact_window", 0.01, "m", "geoms whose lowest point is within this of the foot's lowest point count as sole geoms"),
+            opt("max_height_spread", 0.001, "m", Domain::NON_NEGATIVE, "largest height difference of a sole geom's lowest point from the sole height"),
+            opt("max_tilt", 0.5, "deg", Domain::ANGLE_DEG, "largest angle between a flat contact feature and the ground"),
+            opt("contact_window", 0.01, "m", Domain::POSITIVE, "geoms whose lowest point is within this of the foot's lowest point count as sole geoms"),
         ],
     }
 }

@@ -4,7 +4,7 @@ use crate::model::mirror::{Side, mirror_in};
 use crate::model::mjcf::ElemKind;
 use crate::model::{ActuatorKind, Robot};
 use crate::rules::inertia::isotropic_base_inertia::inertia_loc;
-use crate::rules::{Context, Rule, RuleMeta, opt};
+use crate::rules::{Context, Domain, Rule, RuleMeta, opt};
 use crate::util::fmt_num;
 
 declare_rule! {
@@ -50,10 +50,10 @@ declare_rule! {
         level: Severity::Warning,
         probe: None,
         options: [
-            opt("tolerance", 0.01, "ratio", "relative difference tolerated between mirrored scalars"),
-            opt("range_tolerance", 0.005, "rad or m", "absolute difference tolerated between mirrored range ends (0.005 rad ≈ 0.3°: calibrated hardware limits differ by a few mrad)"),
-            opt("geom_tolerance", 0.02, "ratio", "relative size difference tolerated between mirrored collision geoms (or 0.5 mm)"),
-            opt("inertia_tolerance", 0.05, "ratio", "relative difference tolerated between mirrored bodies' principal moments of inertia (CAD exports of the two halves of a mirrored part differ by 1–2 %)"),
+            opt("tolerance", 0.01, "ratio", Domain::NON_NEGATIVE, "relative difference tolerated between mirrored scalars"),
+            opt("range_tolerance", 0.005, "rad or m", Domain::NON_NEGATIVE, "absolute difference tolerated between mirrored range ends (0.005 rad ≈ 0.3°: calibrated hardware limits differ by a few mrad)"),
+            opt("geom_tolerance", 0.02, "ratio", Domain::NON_NEGATIVE, "relative size difference tolerated between mirrored collision geoms (or 0.5 mm)"),
+            opt("inertia_tolerance", 0.05, "ratio", Domain::NON_NEGATIVE, "relative difference tolerated between mirrored bodies' principal moments of inertia (CAD exports of the two halves of a mirrored part differ by 1–2 %)"),
         ],
     }
 }

@@ -9,7 +9,7 @@ use crate::model::mjcf::ElemKind;
 use crate::model::{GeomType, Robot, contact};
 use crate::probe::penetration::{self, Penetration};
 use crate::probe::{Claim, KeyframePenetration, Preconditions, Verdict};
-use crate::rules::{Context, Rule, RuleMeta, opt};
+use crate::rules::{Context, Domain, Rule, RuleMeta, opt};
 use crate::util::fmt_num;
 
 declare_rule! {
@@ -49,7 +49,7 @@ declare_rule! {
         group: "geometry",
         level: Severity::Warning,
         probe: KeyframePenetration,
-        options: [opt("min_depth", 0.001, "m", "smallest penetration depth reported")],
+        options: [opt("min_depth", 0.001, "m", Domain::NON_NEGATIVE, "smallest penetration depth reported")],
     }
 }
 

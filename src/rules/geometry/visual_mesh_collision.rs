@@ -7,7 +7,8 @@ use crate::rules::{Context, Rule, RuleMeta};
 declare_rule! {
     /// ## What it does
     /// Finds robot meshes that are drawn and collide: a mesh geom of a robot body (not the
-    /// world body) with `contype` or `conaffinity` non-zero, in a geom group the viewer shows by
+    /// world body) with `contype` or `conaffinity` non-zero, not fully transparent (alpha 0:
+    /// not drawn), in a geom group the viewer shows by
     /// default (0–2). It is reported when the compiled model shows that the mesh is a visual one
     /// left colliding:
     ///
@@ -102,9 +103,26 @@ impl Rule for VisualMeshCollision {
                     && g.group == group
             })
         };
+        // A geom whose colour is fully transparent is not drawn, whatever its group: a mesh
+        // made invisible (alpha 0) on purpose is a collision geom (MuJoCo draws a geom with its
+        // own rgba when that differs from the default, else with its material's).
+        let (rgba, matid, mat_rgba) =
+            (robot.mj.geom_rgba(), robot.mj.geom_matid(), robot.mj.mat_rgba());
+        let drawn = |g: &Geom| {
+            let own = rgba.get(g.id).copied().unwrap_or([0.5, 0.5, 0.5, 1.0]);
+            let alpha = match matid.get(g.id).and_then(|&m| usize::try_from(m).ok()) {
+                Some(m) if own == [0.5, 0.5, 0.5, 1.0] => mat_rgba.get(m).map_or(1.0, |c| c[3]),
+                _ => own[3],
+            };
+            alpha > 0.0
+        };
         let mut hits: Vec<(Case, &Geom)> = Vec::new();
         for g in robot_geoms() {
-            if g.gtype != GeomType::Mesh || !is_robot_collider(g) || !(0..=2).contains(&g.group) {
+            if g.gtype != GeomType::Mesh
+                || !is_robot_collider(g)
+                || !(0..=2).contains(&g.group)
+                || !drawn(g)
+            {
                 continue;
             }
             let case = if let Some(h) = hidden_collision {

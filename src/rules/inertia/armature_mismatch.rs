@@ -6,7 +6,7 @@ use crate::model::describe_parts;
 use crate::model::mjcf::ElemKind;
 use crate::rules::inertia::parallel_ankle_armature::parallel_issue;
 use crate::rules::limits::effort_limit_mismatch::joint_torque_limit;
-use crate::rules::{Context, Rule, RuleMeta, opt};
+use crate::rules::{Context, Domain, Rule, RuleMeta, opt};
 use crate::spec::v;
 use crate::util::fmt_num;
 
@@ -45,8 +45,8 @@ declare_rule! {
         level: Severity::Warning,
         probe: None,
         options: [
-            opt("tolerance", 0.05, "fraction", "allowed relative difference from the expected reflected inertia"),
-            opt("effort_spread", 5.0, "ratio", "without a spec: largest / smallest force limit from which one shared armature value is a warning (above √(1 + tolerance) it is info)"),
+            opt("tolerance", 0.05, "fraction", Domain::NON_NEGATIVE, "allowed relative difference from the expected reflected inertia"),
+            opt("effort_spread", 5.0, "ratio", Domain::AT_LEAST_ONE, "without a spec: largest / smallest force limit from which one shared armature value is a warning (above √(1 + tolerance) it is info)"),
         ],
     }
 }
