@@ -15,8 +15,8 @@ declare_rule! {
     /// of the body's geoms from its compiled centre of mass — each geom's bounding sphere
     /// (`geom_rbound`, drawn and colliding geoms alike, meshes included), so R is never
     /// smaller than the part. Bodies without geoms (other than planes), bodies fixed to the
-    /// world, and bodies welded to another body (whose geoms might carry the mass) are not
-    /// judged.
+    /// world, and bodies welded to another body with geoms (whose geoms might carry the mass)
+    /// are not judged.
     ///
     /// ## Why is this bad?
     /// A moment larger than the part's geometry allows is a placeholder or a unit slip (a
@@ -52,10 +52,15 @@ impl Rule for InertiaExceedsGeometry {
         let m = &robot.mj;
         let (inertia, ipos, gpos) = (m.body_inertia(), m.body_ipos(), m.geom_pos());
         for b in robot.bodies.iter().filter(|b| b.id != 0 && b.weld != 0 && b.mass > 0.0) {
-            if robot.bodies.iter().any(|o| o.id != b.id && o.weld == b.weld && o.id != b.weld) {
-                continue; // welded to another body: its geoms may carry this body's mass
-            }
             if b.weld != b.id {
+                continue; // welded to its parent: the parent's geoms may carry its mass
+            }
+            // A body welded to this one that has geoms may carry this body's mass (frames
+            // without geoms, such as a camera's or a tool site's, carry none).
+            let welded_shape = robot.bodies.iter().any(|o| {
+                o.id != b.id && o.weld == b.id && robot.geoms.iter().any(|g| g.body == o.id)
+            });
+            if welded_shape {
                 continue;
             }
             let (Some(i), Some(c)) = (inertia.get(b.id), ipos.get(b.id)) else { continue };
