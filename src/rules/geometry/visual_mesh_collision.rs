@@ -1,7 +1,7 @@
 use crate::declare_rule;
 use crate::finding::{Finding, Severity, Subject};
 use crate::model::mjcf::ElemKind;
-use crate::model::{Geom, GeomType};
+use crate::model::{Format, Geom, GeomType};
 use crate::rules::{Context, Rule, RuleMeta};
 
 declare_rule! {
@@ -22,7 +22,10 @@ declare_rule! {
     ///   on the body or on a body welded to it with no joint between: one rigid part).
     ///
     /// Everything is read from the compiled model (geom type, group, contype/conaffinity); class
-    /// names are not evidence. Not reported: collision primitives beside visual meshes with
+    /// names are not evidence. A URDF is not judged: it declares its collision geometry, and
+    /// MuJoCo's importer compiles each `<collision>` as a colliding geom and each kept
+    /// `<visual>` with `contype = conaffinity = 0`, so a colliding mesh there is a collision
+    /// mesh by declaration. Not reported: collision primitives beside visual meshes with
     /// `contype = conaffinity = 0`; collision meshes (a convex decomposition) kept in their own
     /// group beside separate visual geoms; a body whose drawn meshes collide beside colliding
     /// primitives of the same group when the model has no visual/collision split (nothing shows
@@ -83,6 +86,9 @@ impl Rule for VisualMeshCollision {
     }
     fn check(&self, cx: &Context, out: &mut Vec<Finding>) {
         let robot = cx.robot;
+        if robot.format == Format::Urdf {
+            return; // every colliding geom is a declared <collision> (see the rule's docs)
+        }
         let robot_geoms = || robot.geoms.iter().filter(|g| g.body != 0);
         let visual_only: Vec<&Geom> = robot_geoms()
             .filter(|g| !g.collides() && !matches!(g.gtype, GeomType::Plane | GeomType::Hfield))
