@@ -139,9 +139,7 @@ impl Context<'_> {
     ) -> Finding {
         let (loc, class) = self.robot.attr_loc(kind, id, name, attr);
         let eloc = self.robot.elem_loc(kind, id, name);
-        let mut f = self
-            .finding(message, loc)
-            .element(format!("{} {}", kind_word(kind), display_name(name, id)), eloc);
+        let mut f = self.finding(message, loc).element(self.element_label(kind, id, name), eloc);
         if let Some(c) = class {
             f = f.secondary(
                 eloc,
@@ -149,6 +147,15 @@ impl Context<'_> {
             );
         }
         f
+    }
+    /// "joint `knee`"-style label of a finding's element; an unnamed geom by its number in its
+    /// body, not by its id (which the geoms a scene file adds shift).
+    fn element_label(&self, kind: ElemKind, id: usize, name: &str) -> String {
+        if kind == ElemKind::Geom && name.is_empty() {
+            format!("geom {}", self.robot.unnamed_geom(id))
+        } else {
+            format!("{} {}", kind_word(kind), display_name(name, id))
+        }
     }
     pub fn at_elem(
         &self,
@@ -158,8 +165,7 @@ impl Context<'_> {
         message: impl Into<String>,
     ) -> Finding {
         let eloc = self.robot.elem_loc(kind, id, name);
-        self.finding(message, eloc)
-            .element(format!("{} {}", kind_word(kind), display_name(name, id)), eloc)
+        self.finding(message, eloc).element(self.element_label(kind, id, name), eloc)
     }
     /// Spec facts for a joint, if a spec is present and mentions it.
     pub fn facts(&self, joint: &str) -> Option<crate::spec::JointFacts> {

@@ -116,12 +116,8 @@ declare_rule! {
 
 fn gname(robot: &Robot, g: usize) -> String {
     let n = &robot.geoms[g].name;
-    // Unnamed: MuJoCo's geom id and the body it belongs to (an id alone is hard to find).
-    if n.is_empty() {
-        format!("geom #{g} of body `{}`", robot.body_name(robot.geoms[g].body))
-    } else {
-        format!("`{n}`")
-    }
+    // Unnamed: its number in its body, which a scene file around the robot does not change.
+    if n.is_empty() { format!("geom {}", robot.unnamed_geom(g)) } else { format!("`{n}`") }
 }
 
 fn list(robot: &Robot, gs: &[usize]) -> String {

@@ -115,7 +115,10 @@ impl StanceClaim for ContactGeomUnloaded {
             .geoms
             .iter()
             .filter(|g| s.load(**g) < 0.02 * total)
-            .map(|g| crate::rules::display_name(&l.robot.geoms[*g].name, *g))
+            .map(|&g| match l.robot.geoms[g].name.as_str() {
+                "" => l.robot.unnamed_geom(g),
+                n => n.to_string(),
+            })
             .collect();
         let mut m = s.stance_measured();
         m.extend(foot.measured);

@@ -144,7 +144,8 @@ impl Bounds {
 
 fn gname(robot: &Robot, g: usize) -> String {
     let n = &robot.geoms[g].name;
-    if n.is_empty() { format!("#{g}") } else { format!("`{n}`") }
+    // Unnamed: its number in its body (the message names the body), not the scene-dependent id.
+    if n.is_empty() { format!("no. {}", robot.geom_no(g)) } else { format!("`{n}`") }
 }
 
 impl Rule for CollisionVisualMismatch {

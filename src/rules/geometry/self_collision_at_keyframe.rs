@@ -129,8 +129,10 @@ pub fn keyframe_penetrations(robot: &Robot) -> BTreeMap<(usize, usize), Overlap>
 
 fn gdesc(robot: &Robot, g: usize) -> String {
     let geom = &robot.geoms[g];
-    let name = if geom.name.is_empty() { format!("#{g}") } else { format!("`{}`", geom.name) };
-    format!("{name} (body {})", robot.body_name(geom.body))
+    if geom.name.is_empty() {
+        return robot.unnamed_geom(g);
+    }
+    format!("`{}` (body {})", geom.name, robot.body_name(geom.body))
 }
 
 /// What the `keyframe-penetration` probe checks: MuJoCo pushes the overlapping pair apart at the
