@@ -20,6 +20,9 @@ use crate::finding::Severity;
 use crate::model::source::{Loc, SourceMap};
 use crate::rules::{RuleMeta, all_meta};
 
+/// A TOML table whose keys and values keep their spans.
+type SpannedTable = BTreeMap<Spanned<String>, Spanned<toml::Value>>;
+
 #[derive(Debug, Clone, Deserialize, Default)]
 #[serde(deny_unknown_fields)]
 struct RawConfig {
@@ -29,7 +32,7 @@ struct RawConfig {
     #[serde(default)]
     /// Each rule's settings with the spans of their keys and values: an error points at the
     /// bad key's line, not at the `[rules.x]` header.
-    rules: BTreeMap<String, Spanned<BTreeMap<Spanned<String>, Spanned<toml::Value>>>>,
+    rules: BTreeMap<String, Spanned<SpannedTable>>,
 }
 
 #[derive(Debug, Clone, Default)]
