@@ -20,6 +20,9 @@ use crate::finding::Severity;
 use crate::model::source::{Loc, SourceMap};
 use crate::rules::{RuleMeta, all_meta};
 
+/// A TOML table whose keys and values keep their spans.
+type SpannedTable = BTreeMap<Spanned<String>, Spanned<toml::Value>>;
+
 #[derive(Debug, Clone, Deserialize, Default)]
 #[serde(deny_unknown_fields)]
 struct RawConfig {
@@ -27,7 +30,9 @@ struct RawConfig {
     ignore: Option<Vec<Spanned<String>>>,
     fail_on: Option<Spanned<String>>,
     #[serde(default)]
-    rules: BTreeMap<String, Spanned<toml::Table>>,
+    /// Each rule's settings with the spans of their keys and values: an error points at the
+    /// bad key's line, not at the `[rules.x]` header.
+    rules: BTreeMap<String, Spanned<SpannedTable>>,
 }
 
 #[derive(Debug, Clone, Default)]
@@ -141,8 +146,10 @@ pub fn load(map: &mut SourceMap, path: &Path) -> Result<Config, LoadError> {
             ));
         };
         let mut rs = RuleSettings::default();
-        for (key, val) in table.get_ref() {
-            let span = table.span();
+        for (skey, sval) in table.get_ref() {
+            let (key, val) = (skey.get_ref().as_str(), sval.get_ref());
+            // `key = value`: the key and its value.
+            let span = skey.span().start..sval.span().end.max(skey.span().end);
             if key == "level" {
                 let s = val.as_str().unwrap_or("");
                 rs.level = Some(Severity::parse(s).ok_or_else(|| {
@@ -178,17 +185,40 @@ pub fn load(map: &mut SourceMap, path: &Path) -> Result<Config, LoadError> {
                         ),
                     ));
                 }
-                Some(x) if x.is_finite() => {
-                    rs.options.insert(o.name.to_string(), x);
-                }
-                _ => {
+                Some(x) if x.is_finite() && !o.domain.contains(x) => {
                     return Err(at(
                         map,
                         span,
                         format!(
-                            "[rules.{id}] {key} must be a finite number ({}), got {val}",
-                            o.unit
+                            "[rules.{id}] {key} must be {}{}, got {val}",
+                            o.domain.describe(),
+                            if o.unit.is_empty() {
+                                String::new()
+                            } else {
+                                format!(" ({})", o.unit)
+                            }
                         ),
+                    ));
+                }
+                Some(x) if x.is_finite() => {
+                    rs.options.insert(o.name.to_string(), x);
+                }
+                _ => {
+                    let unit =
+                        if o.unit.is_empty() { String::new() } else { format!(" ({})", o.unit) };
+                    let how = if val.is_str() {
+                        " (a string: write the number without quotes)"
+                    } else {
+                        ""
+                    };
+                    let what = match o.domain.describe() {
+                        d if d == "any finite number" => d,
+                        d => format!("a number {d}"),
+                    };
+                    return Err(at(
+                        map,
+                        span,
+                        format!("[rules.{id}] {key} must be {what}{unit}; got {val}{how}"),
                     ));
                 }
             }

@@ -367,7 +367,19 @@ fn config_thresholds_and_errors() {
     );
     let (code, _, err) = modellint(&[m, "--config", "fixtures/config/bad_option.toml"]);
     assert_eq!(code, 2);
-    assert!(err.contains("bad_option.toml:1:") && err.contains("min_damping"), "{err}");
+    // The error points at the bad key's line (2), not at the `[rules.x]` header (1).
+    assert!(err.contains("bad_option.toml:2:") && err.contains("min_damping"), "{err}");
+    // A number written as a string: the message says what is expected (no empty "()").
+    let (code, _, err) = modellint(&[m, "--config", "fixtures/config/quoted_number.toml"]);
+    assert_eq!(code, 2, "{err}");
+    let flat_q = err.split_whitespace().filter(|w| *w != "│").collect::<Vec<_>>().join(" ");
+    assert!(
+        err.contains("quoted_number.toml:3:")
+            && flat_q.contains("min_damping_ratio must be a number > 0; got \"0.3\"")
+            && flat_q.contains("without quotes")
+            && !err.contains("()"),
+        "{err}"
+    );
     let (code, _, err) = modellint(&[m, "--config", "fixtures/config/bad_rule.toml"]);
     assert_eq!(code, 2);
     assert!(err.contains("bad_rule.toml:2:") && err.contains("no-such-rule"), "{err}");
@@ -375,9 +387,28 @@ fn config_thresholds_and_errors() {
     let (code, _, err) = modellint(&[m, "--config", "fixtures/config/bad_condim.toml"]);
     assert_eq!(code, 2, "{err}");
     assert!(
-        err.contains("bad_condim.toml:2:")
+        err.contains("bad_condim.toml:3:")
             && err.contains("must be one of")
             && err.contains("got 2"),
+        "{err}"
+    );
+    // Every numeric option has a domain: a value outside it is rejected at its line, with the
+    // domain named (a negative radius, a tolerance of the whole range), at the key's line.
+    // (the message may wrap: compare it with its words joined, the frame's `│` dropped)
+    let flat = |e: &str| e.split_whitespace().filter(|w| *w != "│").collect::<Vec<_>>().join(" ");
+    let (code, _, err) = modellint(&[m, "--config", "fixtures/config/bad_min_radius.toml"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("bad_min_radius.toml:3:")
+            && flat(&err).contains("min_radius must be ≥ 0 (m), got -0.001"),
+        "{err}"
+    );
+    let (code, _, err) = modellint(&[m, "--config", "fixtures/config/bad_fraction.toml"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("bad_fraction.toml:3:")
+            && flat(&err)
+                .contains("tolerance must be ≥ 0 and < 1 (fraction of joint range), got 1.0"),
         "{err}"
     );
 }

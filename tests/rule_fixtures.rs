@@ -521,6 +521,38 @@ fn mirror_pairs_leg_side_prefixes_and_reports_an_inherited_ctrlrange_once() {
     assert!(f[0].message.starts_with("joint `right_knee` range"), "{}", f[0].message);
 }
 
+/// A pair differing in mass and in principal moments reports both: the moments in the mass
+/// finding (before, the mass finding hid them until `tolerance` was raised past the mass).
+#[test]
+fn mirror_reports_moments_beside_a_mass_difference() {
+    let f = of("mirror-asymmetry", "invalid_mass_and_inertia.xml");
+    assert_eq!(f.len(), 1, "{f:?}");
+    assert!(f[0].message.starts_with("body `right_hand` mass 0.83 kg"), "{}", f[0].message);
+    let note = f[0].note.as_deref().unwrap_or("");
+    assert!(note.contains("principal moments of inertia differ too"), "{note}");
+    let ratio = f[0].data.get("inertia_ratio").copied().unwrap_or(0.0);
+    assert!((ratio - 0.0050 / 0.0042).abs() < 1e-3, "{ratio}");
+}
+
+/// A URDF link's `<collision>` geoms are indexed under the link: a finding on one points at it.
+/// A collision-only mesh is declared collision geometry, not a visual mesh left colliding.
+#[test]
+fn urdf_collision_geoms_are_located_and_not_visual() {
+    let p = Path::new("fixtures/rules/visual-mesh-collision/valid_urdf_collision_mesh.urdf");
+    let input = LintInput {
+        model: p.to_path_buf(),
+        spec: None,
+        config: None,
+        select: vec![],
+        ignore: vec![],
+    };
+    let l = load(&input).expect("loads");
+    let g = l.robot.geoms.iter().find(|g| g.body != 0).expect("the foot's geom").id;
+    let e = l.robot.elem(modellint::model::mjcf::ElemKind::Geom, g, "").expect("indexed");
+    assert_eq!(e.tag, "collision");
+    assert!(run_rules(&l).iter().all(|f| f.rule != "visual-mesh-collision"));
+}
+
 /// A joint whose damping takes its whole force limit below the spec's `velocity_limit` is
 /// reported (damping × velocity limit > force limit); the same arm with the motor's viscous
 /// friction as joint damping and the servo's damping in `kv` is not. The valid model lives in

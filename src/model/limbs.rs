@@ -60,11 +60,28 @@ impl Robot {
 impl Robot {
     /// Whether `joint` turns a wheel: an unlimited hinge whose body carries a colliding round
     /// geom (sphere, or a cylinder, capsule or ellipsoid whose symmetry axis is the hinge axis)
-    /// centred on the axis at the keyframe. Wheels turn without end by design: they need no
-    /// range and are not feet.
+    /// centred on the axis at the keyframe, and that carries no jointed body further out (a
+    /// wheel ends its chain: a round actuator housing on a thigh, concentric with the hip, is
+    /// not a wheel). Wheels turn without end by design: they need no range and are not feet.
     pub fn is_wheel(&self, joint: usize) -> bool {
         let Some(j) = self.joints.get(joint) else { return false };
         if j.jtype != JointType::Hinge || j.limited {
+            return false;
+        }
+        let beyond = |mut b: usize| {
+            for _ in 0..self.bodies.len() {
+                let p = self.bodies.get(b).map_or(0, |x| x.parent);
+                if p == j.body {
+                    return true;
+                }
+                if p == b || p == 0 {
+                    return false;
+                }
+                b = p;
+            }
+            false
+        };
+        if self.joints.iter().any(|o| o.body != j.body && beyond(o.body)) {
             return false;
         }
         let (Some(a), Some(u)) =
@@ -111,7 +128,8 @@ impl Robot {
     /// on a body whose parent is fixed to the world, and that body has two or more joints, all
     /// slides or hinges, at least one a slide. Such joints are where the base is on the floor,
     /// not motor joints: nothing stops them and they have no rotor of their own. A base whose
-    /// coordinates are split over nested bodies (one joint each) is not recognised.
+    /// coordinates are split over nested bodies (one joint each) is recognised by
+    /// [`Robot::in_nested_planar_base`].
     pub fn is_base_coordinate(&self, joint: usize) -> bool {
         let Some(j) = self.joints.get(joint) else { return false };
         let scalar = |t: JointType| matches!(t, JointType::Hinge | JointType::Slide);
@@ -120,13 +138,68 @@ impl Robot {
         }
         let Some(body) = self.bodies.get(j.body) else { return false };
         if self.bodies.get(body.parent).is_none_or(|p| p.weld != 0) {
-            return false;
+            return self.in_nested_planar_base(joint);
         }
         let on_body: Vec<JointType> =
             self.joints.iter().filter(|x| x.body == j.body).map(|x| x.jtype).collect();
-        on_body.len() >= 2
+        (on_body.len() >= 2
             && on_body.iter().all(|t| scalar(*t))
-            && on_body.contains(&JointType::Slide)
+            && on_body.contains(&JointType::Slide))
+            || self.in_nested_planar_base(joint)
+    }
+
+    /// Whether `joint` is one of the first joints below the world of a planar base written over
+    /// nested bodies: walking down from the first moving body under a world-fixed parent, the
+    /// leading joints are slides along the floor (world axis with no vertical part) and at
+    /// most one hinge about the vertical, at most two slides, down to the first body with a
+    /// geom (the chassis); the base is planar when two of those slides have different axes (x
+    /// and y). `joint` counts when it is in that leading run. An arm on one linear rail (one
+    /// slide) is not a planar base.
+    fn in_nested_planar_base(&self, joint: usize) -> bool {
+        let Some(j) = self.joints.get(joint) else { return false };
+        // Bodies from the top moving body down to the joint's body.
+        let mut path = vec![j.body];
+        for _ in 0..self.bodies.len() {
+            let b = *path.last().unwrap_or(&0);
+            let Some(p) = self.bodies.get(b).map(|x| x.parent) else { return false };
+            if p == b || self.bodies.get(p).is_none_or(|x| x.weld == 0) {
+                break;
+            }
+            path.push(p);
+        }
+        path.reverse();
+        // Below the joint's body the run may go on (the joint may be the base's first
+        // coordinate): follow the only child body while there is exactly one.
+        for _ in 0..self.bodies.len() {
+            let b = *path.last().unwrap_or(&0);
+            let mut kids = self.bodies.iter().filter(|x| x.parent == b && x.id != b);
+            match (kids.next(), kids.next()) {
+                (Some(k), None) => path.push(k.id),
+                _ => break,
+            }
+        }
+        let (mut slides, mut hinge, mut run) = (Vec::<[f64; 3]>::new(), false, Vec::new());
+        'walk: for b in path {
+            for x in self.joints.iter().filter(|x| x.body == b) {
+                let Some(a) = self.key.joint_xaxis.get(x.id) else { break 'walk };
+                let along_floor = a[2] == 0.0 && (a[0] != 0.0 || a[1] != 0.0);
+                let vertical = a[0] == 0.0 && a[1] == 0.0 && a[2] != 0.0;
+                match x.jtype {
+                    JointType::Slide if along_floor && slides.len() < 2 => slides.push(*a),
+                    JointType::Hinge if vertical && !hinge => hinge = true,
+                    _ => break 'walk,
+                }
+                run.push(x.id);
+            }
+            // The base's coordinates end with the first body that has a shape (the chassis):
+            // a vertical hinge further down is the arm's, not the base's yaw.
+            if self.geoms.iter().any(|g| g.body == b) {
+                break;
+            }
+        }
+        let distinct = slides.len() == 2
+            && (slides[0][0] * slides[1][1] - slides[0][1] * slides[1][0]).abs() > 0.0;
+        distinct && run.contains(&joint)
     }
 }
 

@@ -415,8 +415,22 @@ pub fn index_urdf(root: &XNode) -> SourceIndex {
         idx: SourceIndex { root: Some(root.loc), ..Default::default() },
         cur_body: None,
     };
+    // MuJoCo's URDF importer keeps `<visual>` geoms only with `discardvisual="false"` (in the
+    // file's `<mujoco><compiler>`; the default for URDF is true). A link's geoms compile in
+    // document order: `<collision>` ones (contype = conaffinity = 1), kept `<visual>` ones
+    // (contype = conaffinity = 0, group 1).
+    let keep_visual = root
+        .children_tagged("mujoco")
+        .any(|m| m.children_tagged("compiler").any(|c| c.get("discardvisual") == Some("false")));
     for l in root.children_tagged("link") {
         b.push(ElemKind::Body, l, None, &[], false);
+        b.cur_body = Some(b.idx.list(ElemKind::Body).len() - 1);
+        for g in &l.children {
+            if g.tag == "collision" || (keep_visual && g.tag == "visual") {
+                b.push(ElemKind::Geom, g, None, &[], false);
+            }
+        }
+        b.cur_body = None;
     }
     for j in root.children_tagged("joint") {
         b.push(ElemKind::Joint, j, None, &[], false);

@@ -300,6 +300,25 @@ impl Robot {
     pub fn joint(&self, name: &str) -> Option<&Joint> {
         self.joints.iter().find(|j| j.name == name)
     }
+    /// Where an unnamed geom is: its number among its body's geoms (from 1, in compiled order,
+    /// which is the body's order in the file). Unlike MuJoCo's geom id it does not depend on
+    /// what a scene file adds around the robot (a floor compiled first shifts every id).
+    pub fn geom_no(&self, g: usize) -> usize {
+        let Some(body) = self.geoms.get(g).map(|x| x.body) else { return g + 1 };
+        self.geoms[..g].iter().filter(|x| x.body == body).count() + 1
+    }
+    /// An unnamed geom as findings name it: "no. 2 of body `foot`" ([`Self::geom_no`]).
+    pub fn unnamed_geom(&self, g: usize) -> String {
+        let body = self.geoms.get(g).map_or(0, |x| x.body);
+        format!("no. {} of body `{}`", self.geom_no(g), self.body_name(body))
+    }
+    /// A geom as a message names it: "`name`", else "no. 2 of body `foot`".
+    pub fn geom_ref(&self, g: usize) -> String {
+        match self.geoms.get(g).map(|x| x.name.as_str()) {
+            Some(n) if !n.is_empty() => format!("`{n}`"),
+            _ => self.unnamed_geom(g),
+        }
+    }
     pub fn body_name(&self, id: usize) -> &str {
         self.bodies.get(id).map(|b| b.name.as_str()).unwrap_or("")
     }

@@ -1,6 +1,7 @@
 //! Rules of the `inertia` group.
 pub mod armature_mismatch;
 pub mod copied_inertial;
+pub mod inertia_exceeds_geometry;
 pub mod isotropic_base_inertia;
 pub mod parallel_ankle_armature;
 pub mod zero_armature;

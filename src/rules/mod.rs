@@ -27,6 +27,65 @@ pub struct RuleOption {
     /// The only values the option takes when not empty (a contact dimension, a 0/1 switch);
     /// a config stating another is rejected at its line.
     pub allowed: &'static [f64],
+    /// The values that mean something for the option (a length is not negative, a fraction
+    /// lies in 0..1); a config stating a value outside it is rejected at its line.
+    pub domain: Domain,
+}
+
+/// The interval a numeric rule option must lie in: `lo` to `hi`, each end included or not.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Domain {
+    pub lo: f64,
+    pub lo_included: bool,
+    pub hi: f64,
+    pub hi_included: bool,
+}
+
+impl Domain {
+    /// Any finite number.
+    pub const ANY: Domain =
+        Domain { lo: f64::NEG_INFINITY, lo_included: false, hi: f64::INFINITY, hi_included: false };
+    /// x ≥ 0: a tolerance, a length or depth that may be zero.
+    pub const NON_NEGATIVE: Domain =
+        Domain { lo: 0.0, lo_included: true, hi: f64::INFINITY, hi_included: false };
+    /// x > 0: a length, a window, a ratio threshold that zero would make meaningless.
+    pub const POSITIVE: Domain =
+        Domain { lo: 0.0, lo_included: false, hi: f64::INFINITY, hi_included: false };
+    /// 0 ≤ x ≤ 1: a share of something.
+    pub const FRACTION: Domain = Domain { lo: 0.0, lo_included: true, hi: 1.0, hi_included: true };
+    /// 0 < x ≤ 1: a share that zero would make meaningless.
+    pub const POSITIVE_FRACTION: Domain =
+        Domain { lo: 0.0, lo_included: false, hi: 1.0, hi_included: true };
+    /// 0 ≤ x < 1: a relative tolerance that must leave something of the whole.
+    pub const FRACTION_BELOW_ONE: Domain =
+        Domain { lo: 0.0, lo_included: true, hi: 1.0, hi_included: false };
+    /// x ≥ 1: a ratio of the larger to the smaller of two values.
+    pub const AT_LEAST_ONE: Domain =
+        Domain { lo: 1.0, lo_included: true, hi: f64::INFINITY, hi_included: false };
+    /// 0 ≤ x < 90: an angle from the horizontal or vertical, in degrees.
+    pub const ANGLE_DEG: Domain =
+        Domain { lo: 0.0, lo_included: true, hi: 90.0, hi_included: false };
+
+    pub fn contains(&self, x: f64) -> bool {
+        let above = if self.lo_included { x >= self.lo } else { x > self.lo };
+        let below = if self.hi_included { x <= self.hi } else { x < self.hi };
+        x.is_finite() && above && below
+    }
+
+    /// The interval as text, e.g. `≥ 0`, `> 0`, `0 … 1`, `≥ 0 and < 1`.
+    pub fn describe(&self) -> String {
+        let lo = |x: f64| if x == 0.0 { "0".to_string() } else { x.to_string() };
+        let lower = (self.lo > f64::NEG_INFINITY)
+            .then(|| format!("{} {}", if self.lo_included { "≥" } else { ">" }, lo(self.lo)));
+        let upper = (self.hi < f64::INFINITY)
+            .then(|| format!("{} {}", if self.hi_included { "≤" } else { "<" }, lo(self.hi)));
+        match (lower, upper) {
+            (Some(l), Some(u)) => format!("{l} and {u}"),
+            (Some(l), None) => l,
+            (None, Some(u)) => u,
+            (None, None) => "any finite number".into(),
+        }
+    }
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -80,9 +139,7 @@ impl Context<'_> {
     ) -> Finding {
         let (loc, class) = self.robot.attr_loc(kind, id, name, attr);
         let eloc = self.robot.elem_loc(kind, id, name);
-        let mut f = self
-            .finding(message, loc)
-            .element(format!("{} {}", kind_word(kind), display_name(name, id)), eloc);
+        let mut f = self.finding(message, loc).element(self.element_label(kind, id, name), eloc);
         if let Some(c) = class {
             f = f.secondary(
                 eloc,
@@ -90,6 +147,15 @@ impl Context<'_> {
             );
         }
         f
+    }
+    /// "joint `knee`"-style label of a finding's element; an unnamed geom by its number in its
+    /// body, not by its id (which the geoms a scene file adds shift).
+    fn element_label(&self, kind: ElemKind, id: usize, name: &str) -> String {
+        if kind == ElemKind::Geom && name.is_empty() {
+            format!("geom {}", self.robot.unnamed_geom(id))
+        } else {
+            format!("{} {}", kind_word(kind), display_name(name, id))
+        }
     }
     pub fn at_elem(
         &self,
@@ -99,8 +165,7 @@ impl Context<'_> {
         message: impl Into<String>,
     ) -> Finding {
         let eloc = self.robot.elem_loc(kind, id, name);
-        self.finding(message, eloc)
-            .element(format!("{} {}", kind_word(kind), display_name(name, id)), eloc)
+        self.finding(message, eloc).element(self.element_label(kind, id, name), eloc)
     }
     /// Spec facts for a joint, if a spec is present and mentions it.
     pub fn facts(&self, joint: &str) -> Option<crate::spec::JointFacts> {
@@ -197,14 +262,15 @@ macro_rules! declare_rule {
     };
 }
 
-/// Shorthand for a rule option.
+/// Shorthand for a rule option whose values lie in `domain`.
 pub const fn opt(
     name: &'static str,
     default: f64,
     unit: &'static str,
+    domain: Domain,
     help: &'static str,
 ) -> RuleOption {
-    RuleOption { name, default, unit, help, allowed: &[] }
+    RuleOption { name, default, unit, help, allowed: &[], domain }
 }
 
 /// Shorthand for a rule option that takes one of a few values (`allowed`).
@@ -215,7 +281,7 @@ pub const fn opt_one_of(
     help: &'static str,
     allowed: &'static [f64],
 ) -> RuleOption {
-    RuleOption { name, default, unit, help, allowed }
+    RuleOption { name, default, unit, help, allowed, domain: Domain::ANY }
 }
 
 /// Every rule, in documentation order. Registering a rule is one line here.
@@ -228,6 +294,7 @@ pub fn registry() -> Vec<&'static dyn Rule> {
         &inertia::zero_armature::ZeroArmature,
         &inertia::isotropic_base_inertia::IsotropicBaseInertia,
         &inertia::copied_inertial::CopiedInertial,
+        &inertia::inertia_exceeds_geometry::InertiaExceedsGeometry,
         &contact::toe_tilt::ToeTilt,
         &contact::foot_collision_geometry::FootCollisionGeometry,
         &contact::torsional_friction::TorsionalFriction,
@@ -241,6 +308,7 @@ pub fn registry() -> Vec<&'static dyn Rule> {
         &geometry::mirror_asymmetry::MirrorAsymmetry,
         &control::missing_action_delay::MissingActionDelay,
         &control::keyframe_motor_ctrl::KeyframeMotorCtrl,
+        &control::keyframe_servo_ctrl::KeyframeServoCtrl,
         &geometry::self_collision_at_keyframe::SelfCollisionAtKeyframe,
         &geometry::collision_visual_mismatch::CollisionVisualMismatch,
         &geometry::visual_mesh_collision::VisualMeshCollision,
@@ -330,10 +398,60 @@ pub fn doc_page(m: &RuleMeta) -> String {
     if !m.options.is_empty() {
         s.push_str("\n## Options\n\nSet in `modellint.toml` under `[rules.");
         s.push_str(m.id);
-        s.push_str("]`.\n\n| option | default | unit | meaning |\n|---|---|---|---|\n");
+        s.push_str(
+            "]`.\n\n| option | default | unit | values | meaning |\n|---|---|---|---|---|\n",
+        );
         for o in m.options {
-            s.push_str(&format!("| `{}` | {} | {} | {} |\n", o.name, o.default, o.unit, o.help));
+            let values = if o.allowed.is_empty() {
+                o.domain.describe()
+            } else {
+                let v: Vec<String> = o.allowed.iter().map(|a| a.to_string()).collect();
+                format!("one of {}", v.join(", "))
+            };
+            s.push_str(&format!(
+                "| `{}` | {} | {} | {} | {} |\n",
+                o.name, o.default, o.unit, values, o.help
+            ));
         }
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every option's default lies in its domain (or its allowed values): a default the config
+    /// check would reject would be a rule configured against its own meaning.
+    #[test]
+    fn option_defaults_lie_in_their_domains() {
+        for m in all_meta() {
+            for o in m.options {
+                let ok = if o.allowed.is_empty() {
+                    o.domain.contains(o.default)
+                } else {
+                    o.allowed.contains(&o.default)
+                };
+                assert!(
+                    ok,
+                    "rule {} option {} default {} outside {}",
+                    m.id,
+                    o.name,
+                    o.default,
+                    o.domain.describe()
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn domains_include_and_exclude_their_ends() {
+        assert!(Domain::NON_NEGATIVE.contains(0.0) && !Domain::NON_NEGATIVE.contains(-1e-9));
+        assert!(!Domain::POSITIVE.contains(0.0) && Domain::POSITIVE.contains(1e-9));
+        assert!(Domain::FRACTION.contains(1.0) && !Domain::FRACTION_BELOW_ONE.contains(1.0));
+        assert!(!Domain::AT_LEAST_ONE.contains(0.99) && Domain::AT_LEAST_ONE.contains(1.0));
+        assert!(!Domain::ANY.contains(f64::NAN) && !Domain::POSITIVE.contains(f64::INFINITY));
+        assert_eq!(Domain::FRACTION_BELOW_ONE.describe(), "≥ 0 and < 1");
+        assert_eq!(Domain::POSITIVE.describe(), "> 0");
+    }
 }

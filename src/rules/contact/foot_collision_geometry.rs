@@ -9,7 +9,7 @@ use crate::probe::slide::{FootSlide, PUSH_S, PUSH_SHARE, Slide};
 use crate::probe::{Measure, Measurement, Preconditions, StanceSettle, Verdict};
 use crate::rules::contact::feet::{Foot, FootKind, ankle_turning, feet, is_humanoid};
 use crate::rules::geometry::shapes::{Placed, hull_area};
-use crate::rules::{Context, Rule, RuleMeta, claim_each, opt, opt_one_of};
+use crate::rules::{Context, Domain, Rule, RuleMeta, claim_each, opt, opt_one_of};
 use crate::util::fmt_num;
 
 declare_rule! {
@@ -40,8 +40,9 @@ declare_rule! {
     /// ground geom in the file (a robot file without its scene), the geom's own values are
     /// judged and the message says so.
     ///
-    /// Friction and condim are matters of intent: MuJoCo's default friction 1, and condim 6
-    /// (rolling friction, common on quadruped feet) are deliberate choices in many public models.
+    /// Friction and condim are matters of intent: MuJoCo's default sliding friction 1 (its
+    /// default condim is 3), and condim 6 (rolling friction, common on quadruped feet), are
+    /// deliberate choices in many public models.
     /// Sliding friction is judged only against an intended value the user states — `friction` /
     /// `friction_tolerance` under `[rules.foot-collision-geometry]` in modellint.toml: one
     /// robot's identified friction (the Asimov 0.6) is no expectation for another robot's feet
@@ -103,24 +104,20 @@ declare_rule! {
         also: [FootSlide],
         options: [
             opt_one_of("allow_boxes", 1.0, "bool", "1: box feet are acceptable primitives; 0: only capsules and spheres", &[0.0, 1.0]),
-            opt("min_radius", 0.0005, "m", "smallest capsule/sphere radius"),
-            opt("max_radius", 0.05, "m", "largest capsule/sphere radius"),
-            opt("friction", 0.6, "", "intended sliding friction of foot geoms; judged only when this or `friction_tolerance` is set"),
-            opt("friction_tolerance", 0.2, "", "allowed deviation from `friction`"),
+            opt("min_radius", 0.0005, "m", Domain::NON_NEGATIVE, "smallest capsule/sphere radius"),
+            opt("max_radius", 0.05, "m", Domain::POSITIVE, "largest capsule/sphere radius"),
+            opt("friction", 0.6, "", Domain::NON_NEGATIVE, "intended sliding friction of foot geoms; judged only when this or `friction_tolerance` is set"),
+            opt("friction_tolerance", 0.2, "", Domain::NON_NEGATIVE, "allowed deviation from `friction`"),
             opt_one_of("condim", 3.0, "", "intended contact dimension of the feet's ground contacts; other than 1 (frictionless, always reported) judged only when set", &[1.0, 3.0, 4.0, 6.0]),
-            opt("contact_window", 0.005, "m", "geom points within this of the foot's lowest point count as ground contacts"),
+            opt("contact_window", 0.005, "m", Domain::POSITIVE, "geom points within this of the foot's lowest point count as ground contacts"),
         ],
     }
 }
 
 fn gname(robot: &Robot, g: usize) -> String {
     let n = &robot.geoms[g].name;
-    // Unnamed: MuJoCo's geom id and the body it belongs to (an id alone is hard to find).
-    if n.is_empty() {
-        format!("geom #{g} of body `{}`", robot.body_name(robot.geoms[g].body))
-    } else {
-        format!("`{n}`")
-    }
+    // Unnamed: its number in its body, which a scene file around the robot does not change.
+    if n.is_empty() { format!("geom {}", robot.unnamed_geom(g)) } else { format!("`{n}`") }
 }
 
 fn list(robot: &Robot, gs: &[usize]) -> String {

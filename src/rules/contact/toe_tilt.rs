@@ -7,7 +7,7 @@ use crate::probe::settle::{Settle, StanceClaim};
 use crate::probe::{Preconditions, StanceSettle, Verdict};
 use crate::rules::contact::feet::{Foot, FootKind, feet};
 use crate::rules::geometry::shapes::{Placed, tilt};
-use crate::rules::{Context, Rule, RuleMeta, claim_each, opt};
+use crate::rules::{Context, Domain, Rule, RuleMeta, claim_each, opt};
 use crate::util::fmt_num;
 
 declare_rule! {
@@ -53,9 +53,9 @@ declare_rule! {
         level: Severity::Warning,
         probe: StanceSettle,
         options: [
-            opt("max_height_spread", 0.001, "m", "largest height difference of a sole geom's lowest point from the sole height"),
-            opt("max_tilt", 0.5, "deg", "largest angle between a flat contact feature and the ground"),
-            opt("contact_window", 0.01, "m", "geoms whose lowest point is within this of the foot's lowest point count as sole geoms"),
+            opt("max_height_spread", 0.001, "m", Domain::NON_NEGATIVE, "largest height difference of a sole geom's lowest point from the sole height"),
+            opt("max_tilt", 0.5, "deg", Domain::ANGLE_DEG, "largest angle between a flat contact feature and the ground"),
+            opt("contact_window", 0.01, "m", Domain::POSITIVE, "geoms whose lowest point is within this of the foot's lowest point count as sole geoms"),
         ],
     }
 }
@@ -115,7 +115,10 @@ impl StanceClaim for ContactGeomUnloaded {
             .geoms
             .iter()
             .filter(|g| s.load(**g) < 0.02 * total)
-            .map(|g| crate::rules::display_name(&l.robot.geoms[*g].name, *g))
+            .map(|&g| match l.robot.geoms[g].name.as_str() {
+                "" => l.robot.unnamed_geom(g),
+                n => n.to_string(),
+            })
             .collect();
         let mut m = s.stance_measured();
         m.extend(foot.measured);

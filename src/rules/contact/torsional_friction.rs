@@ -95,7 +95,7 @@ impl Rule for TorsionalFriction {
                 let Some((o, c, _)) = worst else { continue };
                 let (mu_s, mu_t) = (c.friction[0], c.friction[1]);
                 let msg = format!(
-                    "foot geom `{}` has torsional friction {} m with condim {}: more than sliding friction {} × its contact radius {} mm = {} m can carry",
+                    "foot geom {} has torsional friction {} m with condim {}: more than sliding friction {} × its contact radius {} mm = {} m can carry",
                     gname(robot, g),
                     fmt_num(mu_t, 3),
                     c.condim,
@@ -151,5 +151,5 @@ impl Rule for TorsionalFriction {
 
 fn gname(robot: &crate::model::Robot, g: usize) -> String {
     let n = &robot.geoms[g].name;
-    if n.is_empty() { format!("#{g}") } else { n.clone() }
+    if n.is_empty() { robot.unnamed_geom(g) } else { format!("`{n}`") }
 }

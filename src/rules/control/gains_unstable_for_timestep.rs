@@ -5,7 +5,7 @@ use crate::model::mjcf::ElemKind;
 use crate::probe::impulse::{DIVERGED, StepResponse, measured_map};
 use crate::probe::{Claim, ImpulseResponse, Preconditions, Verdict};
 use crate::rules::control::underdamped_pd_gains::{GainSource, pd_joints};
-use crate::rules::{Context, Rule, RuleMeta, opt};
+use crate::rules::{Context, Domain, Rule, RuleMeta, opt};
 use crate::util::fmt_num;
 
 declare_rule! {
@@ -42,8 +42,8 @@ declare_rule! {
         level: Severity::Error,
         probe: ImpulseResponse,
         options: [
-            opt("max_omega_dt", 2.0, "", "stability bound on ω_n·dt of an undamped joint under semi-implicit Euler; the damped and RK4 bounds scale with it"),
-            opt("accuracy_fraction", 0.5, "", "warn above this fraction of the bound (loss of accuracy)"),
+            opt("max_omega_dt", 2.0, "", Domain::POSITIVE, "stability bound on ω_n·dt of an undamped joint under semi-implicit Euler; the damped and RK4 bounds scale with it"),
+            opt("accuracy_fraction", 0.5, "", Domain::POSITIVE_FRACTION, "warn above this fraction of the bound (loss of accuracy)"),
         ],
     }
 }

@@ -3,7 +3,7 @@ use crate::finding::{Finding, Severity, Subject};
 use crate::model::mj;
 use crate::model::mjcf::ElemKind;
 use crate::model::{ActuatorKind, Transmission};
-use crate::rules::{Context, Rule, RuleMeta, opt};
+use crate::rules::{Context, Domain, Rule, RuleMeta, opt};
 use crate::util::fmt_num;
 
 declare_rule! {
@@ -35,7 +35,7 @@ declare_rule! {
         group: "control",
         level: Severity::Warning,
         probe: None,
-        options: [opt("tolerance", 1e-6, "joint units", "how close a motor's keyframe control must be to its joint's keyframe position to count as the angle")],
+        options: [opt("tolerance", 1e-6, "joint units", Domain::NON_NEGATIVE, "how close a motor's keyframe control must be to its joint's keyframe position to count as the angle")],
     }
 }
 

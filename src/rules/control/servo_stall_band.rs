@@ -2,7 +2,7 @@ use crate::declare_rule;
 use crate::finding::{Finding, Severity, Subject};
 use crate::model::mjcf::ElemKind;
 use crate::model::{ActuatorKind, JointType, Transmission};
-use crate::rules::{Context, Rule, RuleMeta, opt};
+use crate::rules::{Context, Domain, Rule, RuleMeta, opt};
 use crate::util::fmt_num;
 
 declare_rule! {
@@ -39,9 +39,9 @@ declare_rule! {
         level: Severity::Warning,
         probe: None,
         options: [
-            opt("max_band_rad", 0.05, "rad", "widest acceptable stall band of a hinge servo"),
-            opt("max_band_m", 0.005, "m", "widest acceptable stall band of a slide servo"),
-            opt("max_band_fraction", 0.05, "fraction", "widest acceptable stall band as a fraction of the joint's range"),
+            opt("max_band_rad", 0.05, "rad", Domain::POSITIVE, "widest acceptable stall band of a hinge servo"),
+            opt("max_band_m", 0.005, "m", Domain::POSITIVE, "widest acceptable stall band of a slide servo"),
+            opt("max_band_fraction", 0.05, "fraction", Domain::POSITIVE_FRACTION, "widest acceptable stall band as a fraction of the joint's range"),
         ],
     }
 }

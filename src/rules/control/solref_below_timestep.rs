@@ -272,18 +272,15 @@ impl Rule for SolrefBelowTimestep {
             }
             let tc = entries.iter().map(|e| e.2).fold(f64::INFINITY, f64::min);
             let geom = &robot.geoms[g];
-            let gname = display_name(&geom.name, g);
-            let oname = display_name(&robot.geoms[o].name, o);
+            let gname = robot.geom_ref(g);
+            let oname = robot.geom_ref(o);
             let what = if entries.len() == 1 {
                 let more =
                     if n > 1 { format!(" (and {} more geoms)", n - 1) } else { String::new() };
-                format!("geom `{gname}`'s contact with `{oname}`{more}")
+                format!("geom {gname}'s contact with {oname}{more}")
             } else {
-                let names: Vec<String> = involved
-                    .iter()
-                    .take(4)
-                    .map(|&i| format!("`{}`", display_name(&robot.geoms[i].name, i)))
-                    .collect();
+                let names: Vec<String> =
+                    involved.iter().take(4).map(|&i| robot.geom_ref(i)).collect();
                 let more = if involved.len() > 4 {
                     format!(" and {} more", involved.len() - 4)
                 } else {
@@ -302,7 +299,7 @@ impl Rule for SolrefBelowTimestep {
                 let (loc, _) = robot.attr_loc(ElemKind::Geom, o, &other.name, "solref");
                 f = f.secondary(
                     loc,
-                    format!("`{oname}`'s own time constant {} s", fmt_num(other.solref[0], 4)),
+                    format!("{oname}'s own time constant {} s", fmt_num(other.solref[0], 4)),
                 );
             }
             let before = format!(

@@ -5,7 +5,7 @@ use crate::model::mjcf::ElemKind;
 use crate::model::{ActuatorKind, Robot, Transmission};
 use crate::probe::impulse::{DIVERGED, StepResponse, measured_map};
 use crate::probe::{Claim, ImpulseResponse, Preconditions, Verdict};
-use crate::rules::{Context, Rule, RuleMeta, opt};
+use crate::rules::{Context, Domain, Rule, RuleMeta, opt};
 use crate::spec::v;
 use crate::util::fmt_num;
 
@@ -50,7 +50,7 @@ declare_rule! {
         group: "control",
         level: Severity::Error,
         probe: ImpulseResponse,
-        options: [opt("min_damping_ratio", 0.7, "", "smallest acceptable closed-loop damping ratio ζ")],
+        options: [opt("min_damping_ratio", 0.7, "", Domain::POSITIVE, "smallest acceptable closed-loop damping ratio ζ")],
     }
 }
 

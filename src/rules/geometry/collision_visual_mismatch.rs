@@ -8,7 +8,7 @@ use crate::model::mjcf::ElemKind;
 use crate::model::{Geom, GeomType, Robot};
 use crate::rules::contact::feet::{FootKind, feet};
 use crate::rules::geometry::shapes::{Placed, V3, add, hull_area, norm, scale, sub, to_local_dir};
-use crate::rules::{Context, Rule, RuleMeta, opt};
+use crate::rules::{Context, Domain, Rule, RuleMeta, opt};
 use crate::util::fmt_num;
 
 declare_rule! {
@@ -49,9 +49,9 @@ declare_rule! {
         level: Severity::Warning,
         probe: None,
         options: [
-            opt("tolerance", 0.01, "m", "how far a collision geom may extend outside the visual mesh's hull before it is reported (as info)"),
-            opt("misplaced", 0.05, "m", "from this far outside the visual mesh a collision geom is a warning (misplaced or grossly oversized)"),
-            opt("min_sole_coverage", 0.6, "ratio", "smallest fraction of the visual sole's area the foot's support polygon must cover"),
+            opt("tolerance", 0.01, "m", Domain::NON_NEGATIVE, "how far a collision geom may extend outside the visual mesh's hull before it is reported (as info)"),
+            opt("misplaced", 0.05, "m", Domain::POSITIVE, "from this far outside the visual mesh a collision geom is a warning (misplaced or grossly oversized)"),
+            opt("min_sole_coverage", 0.6, "ratio", Domain::FRACTION, "smallest fraction of the visual sole's area the foot's support polygon must cover"),
         ],
     }
 }
@@ -144,7 +144,8 @@ impl Bounds {
 
 fn gname(robot: &Robot, g: usize) -> String {
     let n = &robot.geoms[g].name;
-    if n.is_empty() { format!("#{g}") } else { format!("`{n}`") }
+    // Unnamed: its number in its body (the message names the body), not the scene-dependent id.
+    if n.is_empty() { format!("no. {}", robot.geom_no(g)) } else { format!("`{n}`") }
 }
 
 impl Rule for CollisionVisualMismatch {

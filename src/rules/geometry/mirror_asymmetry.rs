@@ -2,9 +2,10 @@ use crate::declare_rule;
 use crate::finding::{Finding, Severity, Subject};
 use crate::model::mirror::{Side, mirror_in};
 use crate::model::mjcf::ElemKind;
+use crate::model::source::Loc;
 use crate::model::{ActuatorKind, Robot};
 use crate::rules::inertia::isotropic_base_inertia::inertia_loc;
-use crate::rules::{Context, Rule, RuleMeta, opt};
+use crate::rules::{Context, Domain, Rule, RuleMeta, opt};
 use crate::util::fmt_num;
 
 declare_rule! {
@@ -18,7 +19,9 @@ declare_rule! {
     /// principal moments of inertia (sorted, so independent of the frames the two sides'
     /// inertials are written in; compared with `inertia_tolerance`, for bodies whose masses
     /// agree and whose `<inertial>` the file states — moments MuJoCo computes from the geoms
-    /// follow the collision geometry, compared on its own), and the types and sizes of
+    /// follow the collision geometry, compared on its own; when the masses differ too, the
+    /// moments are in the mass finding's note, so every differing quantity of a pair is
+    /// reported whatever the tolerances), and the types and sizes of
     /// each body pair's collision geoms (which covers the feet).
     /// Quadruped legs pair by their `FL_`/`FR_`, `RL_`/`RR_` or `HL_`/`HR_` (Spot-style hind
     /// legs; and ANYmal-style `LF_`/`RF_`, `LH_`/`RH_`) prefixes, in either case; a biped's
@@ -50,10 +53,10 @@ declare_rule! {
         level: Severity::Warning,
         probe: None,
         options: [
-            opt("tolerance", 0.01, "ratio", "relative difference tolerated between mirrored scalars"),
-            opt("range_tolerance", 0.005, "rad or m", "absolute difference tolerated between mirrored range ends (0.005 rad ≈ 0.3°: calibrated hardware limits differ by a few mrad)"),
-            opt("geom_tolerance", 0.02, "ratio", "relative size difference tolerated between mirrored collision geoms (or 0.5 mm)"),
-            opt("inertia_tolerance", 0.05, "ratio", "relative difference tolerated between mirrored bodies' principal moments of inertia (CAD exports of the two halves of a mirrored part differ by 1–2 %)"),
+            opt("tolerance", 0.01, "ratio", Domain::NON_NEGATIVE, "relative difference tolerated between mirrored scalars"),
+            opt("range_tolerance", 0.005, "rad or m", Domain::NON_NEGATIVE, "absolute difference tolerated between mirrored range ends (0.005 rad ≈ 0.3°: calibrated hardware limits differ by a few mrad)"),
+            opt("geom_tolerance", 0.02, "ratio", Domain::NON_NEGATIVE, "relative size difference tolerated between mirrored collision geoms (or 0.5 mm)"),
+            opt("inertia_tolerance", 0.05, "ratio", Domain::NON_NEGATIVE, "relative difference tolerated between mirrored bodies' principal moments of inertia (CAD exports of the two halves of a mirrored part differ by 1–2 %)"),
         ],
     }
 }
@@ -110,9 +113,12 @@ impl Pair<'_> {
     }
 }
 
-/// The mirrored bodies' principal moments (sorted), when one of them differs by more than `tol`
-/// relative: a finding at the right body's inertial.
-fn inertia_differs(cx: &Context, p: &Pair, tol: f64) -> Option<Finding> {
+/// The mirrored bodies' principal moments (sorted, left then right), the index of the most
+/// different one and the two `<inertial>` locations (right, left), when one of them differs by
+/// more than `tol` relative.
+type Moments = ([f64; 3], [f64; 3], usize, Loc, Loc);
+
+fn moments_differ(cx: &Context, p: &Pair, tol: f64) -> Option<Moments> {
     let inertia = cx.robot.mj.body_inertia();
     let sorted = |b: usize| {
         let mut v = *inertia.get(b)?;
@@ -129,7 +135,18 @@ fn inertia_differs(cx: &Context, p: &Pair, tol: f64) -> Option<Finding> {
         let r = |k: usize| (a[k] - b[k]).abs() / a[k].abs().max(b[k].abs());
         r(x).total_cmp(&r(y))
     })?;
-    let m = |v: [f64; 3]| format!("{} {} {}", fmt_num(v[0], 4), fmt_num(v[1], 4), fmt_num(v[2], 4));
+    Some((a, b, worst, loc, lsrc))
+}
+
+fn fmt_moments(v: [f64; 3]) -> String {
+    format!("{} {} {}", fmt_num(v[0], 4), fmt_num(v[1], 4), fmt_num(v[2], 4))
+}
+
+/// A finding at the right body's inertial for moments that differ ([`moments_differ`]).
+fn inertia_differs(cx: &Context, p: &Pair, tol: f64) -> Option<Finding> {
+    let robot = cx.robot;
+    let (a, b, worst, loc, lsrc) = moments_differ(cx, p, tol)?;
+    let m = fmt_moments;
     let msg = format!(
         "body `{}` principal moments of inertia [{}] kg·m² differ from its mirror `{}`'s ([{}] kg·m²)",
         p.right.1,
@@ -364,17 +381,32 @@ impl Rule for MirrorAsymmetry {
         for (l, rr) in pairs(&bn, cx) {
             let (a, b) = (&robot.bodies[l], &robot.bodies[rr]);
             let p = Pair { kind: ElemKind::Body, left: (l, &a.name), right: (rr, &b.name) };
+            // Moments follow the mass: a body reported for its mass has differing moments in the
+            // same finding, as a note (a tolerance raised past the mass difference must not be
+            // what reveals them).
+            let itol = cx.opt("inertia_tolerance");
             if differs(a.mass, b.mass, tol) {
-                out.push(
-                    p.finding(cx, "mass", "mass", n4(a.mass), n4(b.mass), " kg")
-                        .measured(b.mass, "kg")
-                        .expected(a.mass, "kg")
-                        .with("mass_ratio", b.mass / a.mass.max(1e-12)),
-                );
-            }
-            // Moments follow the mass: a body already reported for its mass is not reported
-            // again for its moments.
-            else if let Some(f) = inertia_differs(cx, &p, cx.opt("inertia_tolerance")) {
+                let mut f = p
+                    .finding(cx, "mass", "mass", n4(a.mass), n4(b.mass), " kg")
+                    .measured(b.mass, "kg")
+                    .expected(a.mass, "kg")
+                    .with("mass_ratio", b.mass / a.mass.max(1e-12));
+                if let Some((ma, mb, k, iloc, _)) = moments_differ(cx, &p, itol) {
+                    let rel = (ma[k] - mb[k]).abs() / ma[k].abs().max(mb[k].abs());
+                    let why = f.note.take().unwrap_or_default();
+                    f = f
+                        .secondary(iloc, format!("moments [{}] kg·m²", fmt_moments(mb)))
+                        .note(format!(
+                            "{why}; the principal moments of inertia differ too: [{}] kg·m² against the mirror's [{}] kg·m² ({} % apart, beyond inertia_tolerance {} %)",
+                            fmt_moments(mb),
+                            fmt_moments(ma),
+                            fmt_num(rel * 100.0, 2),
+                            fmt_num(itol * 100.0, 3)
+                        ))
+                        .with("inertia_ratio", mb[k] / ma[k].max(1e-12));
+                }
+                out.push(f);
+            } else if let Some(f) = inertia_differs(cx, &p, itol) {
                 out.push(f);
             }
             let (sa, sb) = (geom_signature(robot, l), geom_signature(robot, rr));

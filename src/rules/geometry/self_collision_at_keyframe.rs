@@ -9,7 +9,7 @@ use crate::model::mjcf::ElemKind;
 use crate::model::{GeomType, Robot, contact};
 use crate::probe::penetration::{self, Penetration};
 use crate::probe::{Claim, KeyframePenetration, Preconditions, Verdict};
-use crate::rules::{Context, Rule, RuleMeta, opt};
+use crate::rules::{Context, Domain, Rule, RuleMeta, opt};
 use crate::util::fmt_num;
 
 declare_rule! {
@@ -49,7 +49,7 @@ declare_rule! {
         group: "geometry",
         level: Severity::Warning,
         probe: KeyframePenetration,
-        options: [opt("min_depth", 0.001, "m", "smallest penetration depth reported")],
+        options: [opt("min_depth", 0.001, "m", Domain::NON_NEGATIVE, "smallest penetration depth reported")],
     }
 }
 
@@ -129,8 +129,10 @@ pub fn keyframe_penetrations(robot: &Robot) -> BTreeMap<(usize, usize), Overlap>
 
 fn gdesc(robot: &Robot, g: usize) -> String {
     let geom = &robot.geoms[g];
-    let name = if geom.name.is_empty() { format!("#{g}") } else { format!("`{}`", geom.name) };
-    format!("{name} (body {})", robot.body_name(geom.body))
+    if geom.name.is_empty() {
+        return robot.unnamed_geom(g);
+    }
+    format!("`{}` (body {})", geom.name, robot.body_name(geom.body))
 }
 
 /// What the `keyframe-penetration` probe checks: MuJoCo pushes the overlapping pair apart at the

@@ -1,13 +1,14 @@
 use crate::declare_rule;
 use crate::finding::{Finding, Severity, Subject};
 use crate::model::mjcf::ElemKind;
-use crate::model::{Geom, GeomType};
+use crate::model::{Format, Geom, GeomType};
 use crate::rules::{Context, Rule, RuleMeta};
 
 declare_rule! {
     /// ## What it does
     /// Finds robot meshes that are drawn and collide: a mesh geom of a robot body (not the
-    /// world body) with `contype` or `conaffinity` non-zero, in a geom group the viewer shows by
+    /// world body) with `contype` or `conaffinity` non-zero, not fully transparent (alpha 0:
+    /// not drawn), in a geom group the viewer shows by
     /// default (0–2). It is reported when the compiled model shows that the mesh is a visual one
     /// left colliding:
     ///
@@ -21,7 +22,10 @@ declare_rule! {
     ///   on the body or on a body welded to it with no joint between: one rigid part).
     ///
     /// Everything is read from the compiled model (geom type, group, contype/conaffinity); class
-    /// names are not evidence. Not reported: collision primitives beside visual meshes with
+    /// names are not evidence. A URDF is not judged: it declares its collision geometry, and
+    /// MuJoCo's importer compiles each `<collision>` as a colliding geom and each kept
+    /// `<visual>` with `contype = conaffinity = 0`, so a colliding mesh there is a collision
+    /// mesh by declaration. Not reported: collision primitives beside visual meshes with
     /// `contype = conaffinity = 0`; collision meshes (a convex decomposition) kept in their own
     /// group beside separate visual geoms; a body whose drawn meshes collide beside colliding
     /// primitives of the same group when the model has no visual/collision split (nothing shows
@@ -82,6 +86,9 @@ impl Rule for VisualMeshCollision {
     }
     fn check(&self, cx: &Context, out: &mut Vec<Finding>) {
         let robot = cx.robot;
+        if robot.format == Format::Urdf {
+            return; // every colliding geom is a declared <collision> (see the rule's docs)
+        }
         let robot_geoms = || robot.geoms.iter().filter(|g| g.body != 0);
         let visual_only: Vec<&Geom> = robot_geoms()
             .filter(|g| !g.collides() && !matches!(g.gtype, GeomType::Plane | GeomType::Hfield))
@@ -102,9 +109,26 @@ impl Rule for VisualMeshCollision {
                     && g.group == group
             })
         };
+        // A geom whose colour is fully transparent is not drawn, whatever its group: a mesh
+        // made invisible (alpha 0) on purpose is a collision geom (MuJoCo draws a geom with its
+        // own rgba when that differs from the default, else with its material's).
+        let (rgba, matid, mat_rgba) =
+            (robot.mj.geom_rgba(), robot.mj.geom_matid(), robot.mj.mat_rgba());
+        let drawn = |g: &Geom| {
+            let own = rgba.get(g.id).copied().unwrap_or([0.5, 0.5, 0.5, 1.0]);
+            let alpha = match matid.get(g.id).and_then(|&m| usize::try_from(m).ok()) {
+                Some(m) if own == [0.5, 0.5, 0.5, 1.0] => mat_rgba.get(m).map_or(1.0, |c| c[3]),
+                _ => own[3],
+            };
+            alpha > 0.0
+        };
         let mut hits: Vec<(Case, &Geom)> = Vec::new();
         for g in robot_geoms() {
-            if g.gtype != GeomType::Mesh || !is_robot_collider(g) || !(0..=2).contains(&g.group) {
+            if g.gtype != GeomType::Mesh
+                || !is_robot_collider(g)
+                || !(0..=2).contains(&g.group)
+                || !drawn(g)
+            {
                 continue;
             }
             let case = if let Some(h) = hidden_collision {

@@ -6,7 +6,7 @@ use crate::model::describe_parts;
 use crate::model::mjcf::ElemKind;
 use crate::rules::inertia::parallel_ankle_armature::parallel_issue;
 use crate::rules::limits::effort_limit_mismatch::joint_torque_limit;
-use crate::rules::{Context, Rule, RuleMeta, opt};
+use crate::rules::{Context, Domain, Rule, RuleMeta, opt};
 use crate::spec::v;
 use crate::util::fmt_num;
 
@@ -21,7 +21,9 @@ declare_rule! {
     /// armature on every actuated hinge is reported when their force limits span `effort_spread`
     /// × or more; between √(1 + `tolerance`) × and that, as info: peak torque scales with the
     /// gear and reflected inertia with its square, so a gear stage of r× needs armatures r²×
-    /// apart, while a software derating of one motor keeps one value right. Joints driven by
+    /// apart, while a software derating of one motor keeps one value right. A model that
+    /// drives any actuated hinge through a tendon (a tendon-driven hand: the motors sit in the
+    /// forearm, not at the joints) is not judged without a spec. Joints driven by
     /// several motors (count > 1) are left to `parallel-ankle-armature`.
     ///
     /// ## Why is this bad?
@@ -43,8 +45,8 @@ declare_rule! {
         level: Severity::Warning,
         probe: None,
         options: [
-            opt("tolerance", 0.05, "fraction", "allowed relative difference from the expected reflected inertia"),
-            opt("effort_spread", 5.0, "ratio", "without a spec: largest / smallest force limit from which one shared armature value is a warning (above √(1 + tolerance) it is info)"),
+            opt("tolerance", 0.05, "fraction", Domain::NON_NEGATIVE, "allowed relative difference from the expected reflected inertia"),
+            opt("effort_spread", 5.0, "ratio", Domain::AT_LEAST_ONE, "without a spec: largest / smallest force limit from which one shared armature value is a warning (above √(1 + tolerance) it is info)"),
         ],
     }
 }
@@ -201,7 +203,8 @@ impl Rule for ArmatureMismatch {
 /// limits span `effort_spread` × or more (warning), or more than √(1 + `tolerance`) × but less
 /// than `effort_spread` × (info: a gear stage would need armatures spread² apart, a derating of
 /// one motor would not). Slide joints (armature in kg, force limits in N, e.g. a gripper's
-/// fingers) are not compared with hinges.
+/// fingers) are not compared with hinges. A model that drives any of its actuated hinges through
+/// a tendon (a tendon-driven hand) is not judged: its motors are not at the joints.
 fn uniform_without_spec(cx: &Context, out: &mut Vec<Finding>) {
     let robot = cx.robot;
     let spread_min = cx.opt("effort_spread");
@@ -215,6 +218,15 @@ fn uniform_without_spec(cx: &Context, out: &mut Vec<Finding>) {
         })
         .collect();
     if joints.len() < 3 {
+        return;
+    }
+    // A hinge moved through a tendon (a tendon-driven hand's fingers) has no motor at the joint:
+    // the motor sits elsewhere, so neither the joint's armature nor the actuators' force limits
+    // follow one gear stage per joint, and the comparison below has nothing to stand on.
+    let through_tendon = |j: &crate::model::Joint| {
+        robot.actuators_on_joint(j.id).iter().any(|a| a.trn == crate::model::Transmission::Tendon)
+    };
+    if joints.iter().any(|j| through_tendon(j)) {
         return;
     }
     let a0 = joints[0].armature;

@@ -3,7 +3,7 @@ use crate::finding::{Finding, Severity, Subject};
 use crate::model::mjcf::ElemKind;
 use crate::model::source::{Loc, XNode};
 use crate::model::{GeomType, JointType, Robot};
-use crate::rules::{Context, Rule, RuleMeta, opt};
+use crate::rules::{Context, Domain, Rule, RuleMeta, opt};
 use crate::util::fmt_num;
 
 declare_rule! {
@@ -40,8 +40,8 @@ declare_rule! {
         level: Severity::Warning,
         probe: None,
         options: [
-            opt("isotropy_tolerance", 0.001, "fraction", "relative spread of the three moments below which an inertia counts as isotropic"),
-            opt("min_ratio", 3.0, "ratio", "largest / smallest moment of a uniform solid of the body's extents from which the body counts as not round"),
+            opt("isotropy_tolerance", 0.001, "fraction", Domain::NON_NEGATIVE, "relative spread of the three moments below which an inertia counts as isotropic"),
+            opt("min_ratio", 3.0, "ratio", Domain::AT_LEAST_ONE, "largest / smallest moment of a uniform solid of the body's extents from which the body counts as not round"),
         ],
     }
 }

@@ -2,7 +2,7 @@ use crate::declare_rule;
 use crate::finding::{Finding, Severity, Subject};
 use crate::model::mjcf::ElemKind;
 use crate::model::{Joint, Robot, Transmission};
-use crate::rules::{Context, Rule, RuleMeta, opt};
+use crate::rules::{Context, Domain, Rule, RuleMeta, opt};
 use crate::spec::{JointFacts, Spec, v};
 use crate::util::fmt_num;
 
@@ -42,8 +42,8 @@ declare_rule! {
         level: Severity::Error,
         probe: None,
         options: [
-            opt("tolerance", 0.05, "fraction", "relative tolerance when comparing armature values"),
-            opt("exact_tolerance", 1e-4, "fraction", "without a spec: relative tolerance of an exact doubling (a copied value)"),
+            opt("tolerance", 0.05, "fraction", Domain::NON_NEGATIVE, "relative tolerance when comparing armature values"),
+            opt("exact_tolerance", 1e-4, "fraction", Domain::NON_NEGATIVE, "without a spec: relative tolerance of an exact doubling (a copied value)"),
         ],
     }
 }

@@ -5,7 +5,7 @@ use crate::model::source::XNode;
 use crate::model::{Actuator, ActuatorKind, JointType, Robot, Transmission};
 use crate::probe::LimitApproach;
 use crate::rules::limits::soft_limits::HardStopExposure;
-use crate::rules::{Context, Rule, RuleMeta, opt};
+use crate::rules::{Context, Domain, Rule, RuleMeta, opt};
 use crate::util::fmt_num;
 
 declare_rule! {
@@ -35,7 +35,7 @@ declare_rule! {
         group: "limits",
         level: Severity::Error,
         probe: LimitApproach,
-        options: [opt("ratio_tolerance", 0.05, "fraction", "how close ctrlrange/range must be to 180/π to count as degrees")],
+        options: [opt("ratio_tolerance", 0.05, "fraction", Domain::FRACTION_BELOW_ONE, "how close ctrlrange/range must be to 180/π to count as degrees")],
     }
 }
 

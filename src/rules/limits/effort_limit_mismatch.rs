@@ -4,7 +4,7 @@ use crate::declare_rule;
 use crate::finding::{Finding, Severity, Subject};
 use crate::model::mjcf::ElemKind;
 use crate::model::{ActuatorKind, Robot};
-use crate::rules::{Context, Rule, RuleMeta, opt};
+use crate::rules::{Context, Domain, Rule, RuleMeta, opt};
 use crate::spec::v;
 use crate::util::fmt_num;
 
@@ -43,7 +43,7 @@ declare_rule! {
         group: "limits",
         level: Severity::Warning,
         probe: None,
-        options: [opt("tolerance", 0.05, "fraction", "allowed relative difference between model force limit and spec peak_torque")],
+        options: [opt("tolerance", 0.05, "fraction", Domain::NON_NEGATIVE, "allowed relative difference between model force limit and spec peak_torque")],
     }
 }
 

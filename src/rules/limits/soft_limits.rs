@@ -7,7 +7,7 @@ use crate::model::mjcf::ElemKind;
 use crate::model::{ActuatorKind, JointType, Transmission};
 use crate::probe::limit::LimitHit;
 use crate::probe::{LimitApproach, Measure, Measurement, Preconditions};
-use crate::rules::{Context, Rule, RuleMeta, measure_each, opt};
+use crate::rules::{Context, Domain, Rule, RuleMeta, measure_each, opt};
 use crate::util::fmt_num;
 
 declare_rule! {
@@ -48,7 +48,7 @@ declare_rule! {
         group: "limits",
         level: Severity::Warning,
         probe: LimitApproach,
-        options: [opt("tolerance", 0.02, "fraction of joint range", "allowed deviation of each ctrlrange end from the soft range; ctrlrange ends this close to the hard ends cover the whole range")],
+        options: [opt("tolerance", 0.02, "fraction of joint range", Domain::FRACTION_BELOW_ONE, "allowed deviation of each ctrlrange end from the soft range; ctrlrange ends this close to the hard ends cover the whole range")],
     }
 }
 

@@ -18,8 +18,9 @@ declare_rule! {
     /// that already has a limited one; the numbers of actuated and passive joints match
     /// `robot.actuated` / `robot.passive`; the gear sign agrees with the spec `direction`.
     /// Without a spec it still checks that actuator targets exist and that a position
-    /// actuator's ctrlrange does not reach outside its joint's range (a ctrlrange covering the
-    /// whole range is `soft-limits`' finding). Missing force limits are `effort-limit-mismatch`'s.
+    /// actuator's ctrlrange does not reach outside its joint's range, or, on a fixed tendon, the
+    /// lengths its joints' ranges allow it (Σ coef × range; a ctrlrange covering the whole range
+    /// is `soft-limits`' finding). Missing force limits are `effort-limit-mismatch`'s.
     ///
     /// ## Why is this bad?
     /// Hardware mapping comes first (Asimov system identification §1): a joint driven in simulation but passive on
@@ -206,27 +207,37 @@ impl ActuatorMapping {
             if flipped(a) {
                 continue;
             }
-            if !matches!(a.kind, ActuatorKind::Position { .. })
-                || !matches!(a.trn, Transmission::Joint | Transmission::JointInParent)
-                || !a.ctrllimited
-                || a.target < 0
-            {
+            if !matches!(a.kind, ActuatorKind::Position { .. }) || !a.ctrllimited || a.target < 0 {
                 continue;
             }
-            let j = &robot.joints[a.target as usize];
-            if !j.is_scalar() || !j.limited {
-                continue;
-            }
+            // The target's range: a limited scalar joint's, or what a fixed tendon's joints
+            // allow it (its own length limits too, when it has them).
+            let (r, u, what) = match a.trn {
+                Transmission::Joint | Transmission::JointInParent => {
+                    let j = &robot.joints[a.target as usize];
+                    if !j.is_scalar() || !j.limited {
+                        continue;
+                    }
+                    let u = if j.jtype == crate::model::JointType::Slide { "m" } else { "rad" };
+                    (j.range, u, format!("joint `{}`'s range", j.name))
+                }
+                Transmission::Tendon => {
+                    let Some((r, u)) = fixed_tendon_range(robot, a.target as usize) else {
+                        continue;
+                    };
+                    let name = robot.tendons.get(a.target as usize).cloned().unwrap_or_default();
+                    (r, u, format!("fixed tendon `{name}`'s reachable length (its joints' ranges)"))
+                }
+                _ => continue,
+            };
             let g = if a.gear != 0.0 { a.gear } else { 1.0 };
             let (x, y) = (a.ctrlrange[0] / g, a.ctrlrange[1] / g);
             let c = [x.min(y), x.max(y)];
-            let r = j.range;
             let eps = 1e-9 * (r[1] - r[0]).abs().max(1.0);
             let below = c[0] < r[0] - eps;
             let above = c[1] > r[1] + eps;
             let covers = c[0] <= r[0] + eps && c[1] >= r[1] - eps;
             if (below || above) && !covers {
-                let u = if j.jtype == crate::model::JointType::Slide { "m" } else { "rad" };
                 let f = cx
                     .at_attr(
                         ElemKind::Actuator,
@@ -234,11 +245,10 @@ impl ActuatorMapping {
                         &a.name,
                         "ctrlrange",
                         format!(
-                            "position actuator `{}` ctrlrange [{}, {}] {u} reaches outside joint `{}`'s range [{}, {}] {u}",
+                            "position actuator `{}` ctrlrange [{}, {}] {u} reaches outside {what} [{}, {}] {u}",
                             a.name,
                             fmt_num(c[0], 4),
                             fmt_num(c[1], 4),
-                            j.name,
                             fmt_num(r[0], 4),
                             fmt_num(r[1], 4)
                         ),
@@ -361,4 +371,45 @@ impl ActuatorMapping {
             out.push(f);
         }
     }
+}
+
+/// The lengths a fixed tendon can take: Σ coef × its joints' ranges (interval sums; every joint
+/// scalar and limited), narrowed by the tendon's own length limits when it has them; with the
+/// unit of its joints (m for slides, rad for hinges, "joint units" when mixed). `None` for a
+/// spatial tendon or an unlimited joint.
+fn fixed_tendon_range(robot: &crate::model::Robot, t: usize) -> Option<([f64; 2], &'static str)> {
+    let m = &robot.mj;
+    let adr = usize::try_from(*m.tendon_adr().get(t)?).ok()?;
+    let num = usize::try_from(*m.tendon_num().get(t)?).ok()?;
+    let (wt, wo, wp) = (m.wrap_type(), m.wrap_objid(), m.wrap_prm());
+    let (mut lo, mut hi) = (0.0, 0.0);
+    let (mut slides, mut hinges) = (0, 0);
+    for w in adr..adr + num {
+        if *wt.get(w)? as i32 != 1 {
+            return None; // not a joint wrap: a spatial tendon
+        }
+        let j = robot.joints.get(usize::try_from(*wo.get(w)?).ok()?)?;
+        if !j.is_scalar() || !j.limited {
+            return None;
+        }
+        let c = *wp.get(w)?;
+        let (a, b) = (c * j.range[0], c * j.range[1]);
+        lo += a.min(b);
+        hi += a.max(b);
+        if j.jtype == crate::model::JointType::Slide { slides += 1 } else { hinges += 1 }
+    }
+    if num == 0 {
+        return None;
+    }
+    if m.tendon_limited().get(t).is_some_and(|&l| l) {
+        let r = m.tendon_range().get(t)?;
+        lo = lo.max(r[0]);
+        hi = hi.min(r[1]);
+    }
+    let u = match (slides, hinges) {
+        (_, 0) => "m",
+        (0, _) => "rad",
+        _ => "joint units",
+    };
+    (lo <= hi).then_some(([lo, hi], u))
 }

@@ -4,7 +4,7 @@ use crate::declare_rule;
 use crate::finding::{Finding, Severity, Subject};
 use crate::model::mjcf::ElemKind;
 use crate::model::{ActuatorKind, Robot};
-use crate::rules::{Context, Rule, RuleMeta, opt};
+use crate::rules::{Context, Domain, Rule, RuleMeta, opt};
 use crate::spec::Spec;
 use crate::util::fmt_num;
 
@@ -38,9 +38,9 @@ declare_rule! {
         level: Severity::Warning,
         probe: None,
         options: [
-            opt("range_tolerance", 0.001, "rad or m", "largest difference of a range end"),
-            opt("tolerance", 0.01, "ratio", "relative difference tolerated for effort, velocity and mass"),
-            opt("axis_tolerance", 0.01, "", "largest difference between normalised axis vectors"),
+            opt("range_tolerance", 0.001, "rad or m", Domain::NON_NEGATIVE, "largest difference of a range end"),
+            opt("tolerance", 0.01, "ratio", Domain::NON_NEGATIVE, "relative difference tolerated for effort, velocity and mass"),
+            opt("axis_tolerance", 0.01, "", Domain::NON_NEGATIVE, "largest difference between normalised axis vectors"),
         ],
     }
 }

@@ -1,0 +1,113 @@
+use crate::declare_rule;
+use crate::finding::{Finding, Severity, Subject};
+use crate::model::GeomType;
+use crate::model::mjcf::ElemKind;
+use crate::rules::inertia::isotropic_base_inertia::inertia_loc;
+use crate::rules::{Context, Rule, RuleMeta};
+use crate::util::fmt_num;
+
+declare_rule! {
+    /// ## What it does
+    /// Finds a moving body whose largest principal moment of inertia is more than its mass
+    /// could give it inside its own geometry: no rigid body of mass m whose mass lies within R
+    /// of its centre of mass has a moment above m·R² about any axis through that centre (the
+    /// bound is reached only with all the mass on a ring of radius R). R is the farthest reach
+    /// of the body's geoms from its compiled centre of mass — each geom's bounding sphere
+    /// (`geom_rbound`, drawn and colliding geoms alike, meshes included), so R is never
+    /// smaller than the part. Bodies without geoms (other than planes), bodies fixed to the
+    /// world, and bodies welded to another body with geoms (whose geoms might carry the mass)
+    /// are not judged.
+    ///
+    /// ## Why is this bad?
+    /// A moment larger than the part's geometry allows is a placeholder or a unit slip (a
+    /// `diaginertia="0.001 0.001 0.001"` on a 26 g finger is a 190 mm radius of gyration on a
+    /// part a few centimetres long). The joints that move the part then accelerate far slower
+    /// in simulation than on the hardware — a finger or wrist that feels many times heavier
+    /// — so gains, gripper timing and contact forces learned on it do not transfer. MuJoCo XML
+    /// reference, `body/inertial`.
+    ///
+    /// ## How it is confirmed
+    /// Static: compiled `body_mass`, `body_inertia`, `body_ipos` and the body's geoms'
+    /// positions and bounding radii. The bound is geometry, not a prediction a simulation could
+    /// refute.
+    ///
+    /// ## How to fix
+    /// Use the part's inertia from CAD or the manufacturer's URDF, or remove `<inertial>` so
+    /// MuJoCo computes mass and inertia from the body's geoms.
+    pub InertiaExceedsGeometry {
+        id: "inertia-exceeds-geometry",
+        group: "inertia",
+        level: Severity::Warning,
+        probe: None,
+        options: [],
+    }
+}
+
+impl Rule for InertiaExceedsGeometry {
+    fn meta(&self) -> &'static RuleMeta {
+        &Self::META
+    }
+    fn check(&self, cx: &Context, out: &mut Vec<Finding>) {
+        let robot = cx.robot;
+        let m = &robot.mj;
+        let (inertia, ipos, gpos) = (m.body_inertia(), m.body_ipos(), m.geom_pos());
+        for b in robot.bodies.iter().filter(|b| b.id != 0 && b.weld != 0 && b.mass > 0.0) {
+            if b.weld != b.id {
+                continue; // welded to its parent: the parent's geoms may carry its mass
+            }
+            // A body welded to this one that has geoms may carry this body's mass (frames
+            // without geoms, such as a camera's or a tool site's, carry none).
+            let welded_shape = robot.bodies.iter().any(|o| {
+                o.id != b.id && o.weld == b.id && robot.geoms.iter().any(|g| g.body == o.id)
+            });
+            if welded_shape {
+                continue;
+            }
+            let (Some(i), Some(c)) = (inertia.get(b.id), ipos.get(b.id)) else { continue };
+            let reach = robot
+                .geoms
+                .iter()
+                .filter(|g| {
+                    g.body == b.id && !matches!(g.gtype, GeomType::Plane | GeomType::Hfield)
+                })
+                .filter_map(|g| {
+                    let p = gpos.get(g.id)?;
+                    let d = ((p[0] - c[0]).powi(2) + (p[1] - c[1]).powi(2) + (p[2] - c[2]).powi(2))
+                        .sqrt();
+                    (g.rbound > 0.0).then_some(d + g.rbound)
+                })
+                .fold(None, |acc: Option<f64>, r| Some(acc.map_or(r, |a| a.max(r))));
+            let Some(r) = reach else { continue };
+            let top = i[0].max(i[1]).max(i[2]);
+            let bound = b.mass * r * r;
+            if !(top > bound) || !bound.is_finite() {
+                continue;
+            }
+            let name = robot.body_name(b.id);
+            let msg = format!(
+                "body `{name}` has a principal moment of inertia {} kg·m², but its mass {} kg within {} m of its centre of mass (its geoms' reach) allows at most {} kg·m² (m·R²): {}× too large",
+                fmt_num(top, 4),
+                fmt_num(b.mass, 4),
+                fmt_num(r, 3),
+                fmt_num(bound, 3),
+                fmt_num(top / bound, 3)
+            );
+            let eloc = robot.elem_loc(ElemKind::Body, b.id, name);
+            let loc = inertia_loc(robot, name).unwrap_or(eloc);
+            let f = cx
+                .finding(msg, loc)
+                .element(format!("body {name}"), eloc)
+                .label("more than the part's geometry allows")
+                .note(format!(
+                    "radius of gyration √(I/m) = {} m on a part that reaches {} m from its centre of mass: a placeholder or a unit slip",
+                    fmt_num((top / b.mass).sqrt(), 3),
+                    fmt_num(r, 3)
+                ))
+                .help("use the part's inertia from CAD or the manufacturer's URDF, or drop <inertial> so MuJoCo computes it from the body's geoms")
+                .subject(Subject::Body(b.id))
+                .measured(top, "kg·m²")
+                .expected(bound, "kg·m²");
+            out.push(f);
+        }
+    }
+}
