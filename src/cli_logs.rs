@@ -60,6 +60,7 @@ impl LogArgs {
 /// The documentation pages shipped inside the binary: `modellint docs TOPIC`.
 pub const DOCS: &[(&str, &str)] = &[
     ("architecture", include_str!("../docs/architecture.md")),
+    ("audit", include_str!("../docs/audit.md")),
     ("ci", include_str!("../docs/ci.md")),
     ("conceal-benchmark", include_str!("../docs/conceal-benchmark.md")),
     ("fitting", include_str!("../docs/fitting.md")),

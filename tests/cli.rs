@@ -670,7 +670,10 @@ fn a_scene_and_its_robot_file_are_linted_once() {
     assert_eq!(twice, alone);
     // The pre-commit hook uses the concise form.
     let hooks = std::fs::read_to_string(".pre-commit-hooks.yaml").unwrap();
-    assert!(hooks.contains("entry: modellint --no-probe --output-format concise"), "{hooks}");
+    assert!(
+        hooks.contains("entry: modellint --no-probe --skip-non-models --output-format concise"),
+        "{hooks}"
+    );
 }
 
 /// The lint cache stays under its cap (least recently used out) and `cache clean`
