@@ -15,6 +15,15 @@
 //! replay). A real body's own signature is not a floor's — a battery across the trunk, a mass
 //! the feet carry — and the rival leaves it (`KFR1`, `KFR3`: the held-out error several times
 //! the body effect's). No new threshold: the search's own gate judges the two held-out errors.
+//!
+//! A real body effect may still carry the floor's bias in one component: a place along the
+//! trunk changes gravity's pitch stiffness over the feet as a softer floor does (`KFR1`: the
+//! shift along comes out +2.4 mm for −30 mm; `KFR3`: the battery 0.298 m along for 0.12). Each
+//! component the effect declares ([`Effect::held_components`]) is held at the model's value
+//! beside the contact, the rest of the effect fitted; when that rival replays as close, the
+//! component is reported as not identified (no value), the others keep theirs.
+//!
+//! [`Effect::held_components`]: crate::fit::effects::Effect::held_components
 
 use crate::fit::effects::{self, Applied, JointTarget, WriteBack};
 use crate::fit::select::{Engine, FitOptions, FitOutcome, beats_beyond_noise, fit};
