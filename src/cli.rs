@@ -236,7 +236,9 @@ pub struct FitCmd {
     /// Told fit: no search — fit exactly EFFECT on JOINTS (`+`-separated, `*` for every fitted
     /// joint as one group), repeatable; several are fitted jointly. For when the physics is
     /// known and only its value is wanted, and as the reference a blind search is timed
-    /// against. E.g. `--told viscous_damping@left_knee+right_knee`.
+    /// against. E.g. `--told viscous_damping@left_knee+right_knee`. A body effect with one
+    /// place component held at the model's value is `EFFECT~PARAMETER` (`com_offset~along`,
+    /// `link_mass~offset`, ...): the floor's rival that tests that component.
     #[arg(long, value_name = "EFFECT@JOINTS")]
     pub told: Vec<String>,
     /// Hold out one episode in N, spread over the sorted list; episodes whose header says

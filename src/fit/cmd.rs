@@ -186,8 +186,9 @@ pub struct Prepared {
 pub fn prepare(a: &FitArgs, sink: &dyn Sink) -> Result<Prepared, CmdError> {
     let loaded = crate::lint::load_for_api(&a.model, a.spec.clone()).map_err(CmdError::Load)?;
     let robot = &loaded.robot;
+    // A candidate is a registered effect (a held component, `EFFECT~PARAMETER`, is told only).
     for e in &a.effects {
-        if effects::by_id(e).is_none() {
+        if !effects::all().iter().any(|x| x.id() == e) {
             let ids: Vec<String> = effects::all().iter().map(|e| e.id().to_string()).collect();
             return Err(format!("unknown effect `{e}`; known: {}", ids.join(", ")).into());
         }

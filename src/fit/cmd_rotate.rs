@@ -84,12 +84,13 @@ pub fn rotation_json(r: &Rotation) -> serde_json::Value {
             json!({
                 "value": f.value,
                 "train": out.train.len(),
-                "selected": out.selected.iter().map(|s| json!({"effect": s.effect, "joints": s.joints, "params": s.params})).collect::<Vec<_>>(),
+                "selected": out.selected.iter().map(|s| json!({"effect": s.effect, "joints": s.joints, "params": s.params, "unidentified": s.unidentified})).collect::<Vec<_>>(),
                 "heldout": f.heldout.iter().map(|e| json!({"source": e.name, "position_mae_before": e.before, "position_mae_after": e.after})).collect::<Vec<_>>(),
                 "position_mae_before": b,
                 "position_mae_after": a,
                 "seconds": f.seconds,
                 "tried": out.tried,
+                "unexplained": f.unexplained.iter().map(|u| json!({"joint": u.joint, "residual_rms": u.residual_rms, "floor_rms": u.floor_rms})).collect::<Vec<_>>(),
                 "unexplained_contact": f.feet.iter().map(|x| x.json()).collect::<Vec<_>>(),
                 "warnings": out.warnings,
                 "notes": out.notes,
@@ -152,8 +153,18 @@ pub fn rotate(p: &Prepared, key: &str, a: &FitArgs) -> i32 {
                 s.push_str("  missing physics: nothing kept\n");
             }
             for x in &out.selected {
-                let ps: Vec<String> =
-                    x.params.iter().map(|(k, v)| format!("{k} = {v:.4}")).collect();
+                // A parameter the fold's data do not determine is said so, not given a value.
+                let ps: Vec<String> = x
+                    .params
+                    .iter()
+                    .map(|(k, v)| {
+                        if x.unidentified.contains(k) {
+                            format!("{k} not identified")
+                        } else {
+                            format!("{k} = {v:.4}")
+                        }
+                    })
+                    .collect();
                 s.push_str(&format!(
                     "  {:<24} {:<12} {}\n",
                     x.effect,

@@ -28,6 +28,9 @@ pub struct Fold {
     /// Feet whose orientation this fold's kept effects leave above their joints' floors on its
     /// held-out episodes ([`crate::fit::contact`]), as in a single fit.
     pub feet: Vec<crate::fit::contact::FootResidual>,
+    /// Joints whose training residual this fold's kept effects leave above their floors
+    /// ([`crate::fit::unexplained`]), as in a single fit.
+    pub unexplained: Vec<crate::fit::unexplained::Unexplained>,
     pub seconds: f64,
 }
 
@@ -55,7 +58,8 @@ pub fn mean_mae<'a>(eps: impl Iterator<Item = &'a EpisodeMae>) -> (f64, f64) {
 /// uncertainty of the model as given moves from `selected` to a note, a body effect at the bound
 /// of its search to a warning ([`crate::fit::absent`]); a foot whose held-out orientation the
 /// kept effects leave above its joints' floors is named in a warning and in `feet`
-/// ([`crate::fit::contact`]), on the scored joints as a single fit does.
+/// ([`crate::fit::contact`]), on the scored joints as a single fit does; so is a joint whose
+/// training residual is left above its floor (`unexplained`, [`crate::fit::unexplained`]).
 /// Errors: no held-out episode,
 /// or a held-out replay that fails.
 pub fn fold(
@@ -105,6 +109,8 @@ pub fn fold(
         _ => vec![],
     };
     out.warnings.extend(feet.iter().map(|f| f.message()));
+    let unexplained = crate::fit::unexplained::unexplained(&out.floors, o.policy.white_ratio);
+    out.warnings.extend(unexplained.iter().map(|u| u.message()));
     let heldout = out
         .heldout
         .iter()
@@ -123,6 +129,7 @@ pub fn fold(
         outcome: out,
         heldout,
         feet,
+        unexplained,
         seconds: ts.elapsed().as_secs_f64(),
     })
 }

@@ -48,5 +48,13 @@ impl Effect for ComOffset {
     fn screened(&self) -> usize {
         2
     }
+    /// Each direction of the shift: on a trunk standing on the feet a centre moved along it
+    /// changes gravity's pitch stiffness over them, as a softer floor does.
+    fn held_components(&self) -> Vec<(usize, &'static dyn Effect)> {
+        vec![(0, &ALONG_HELD), (1, &ACROSS_HELD)]
+    }
     inertial::body_effect_methods!(tau);
 }
+
+crate::held_variant!(ALONG_HELD, ComOffset, "com_offset~along", 0, [1]);
+crate::held_variant!(ACROSS_HELD, ComOffset, "com_offset~across", 1, [0]);

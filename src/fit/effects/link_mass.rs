@@ -55,5 +55,13 @@ impl Effect for LinkMass {
             inertial::add_point_mass(m, b.body, p[0], b.point(p[1], across));
         }
     }
+    /// The point's place along the link and across it (its mass is no place: held at 0 the
+    /// effect is absent, which the whole rival tests).
+    fn held_components(&self) -> Vec<(usize, &'static dyn Effect)> {
+        vec![(1, &OFFSET_HELD), (2, &ACROSS_HELD)]
+    }
     inertial::body_effect_methods!(tau);
 }
+
+crate::held_variant!(OFFSET_HELD, LinkMass, "link_mass~offset", 1, [0, 2]);
+crate::held_variant!(ACROSS_HELD, LinkMass, "link_mass~across", 2, [0, 1]);

@@ -25,6 +25,7 @@ use crate::sim2real::replay::{
 };
 
 pub mod docs;
+pub mod held;
 pub mod inertial;
 mod target;
 pub use target::{JointTarget, bounds_for_drive};
@@ -383,6 +384,15 @@ pub trait Effect: Declared + Sync {
         let _ = (a, b);
         true
     }
+    /// The components a change of the ground contact may stand in for, each as (its parameter's
+    /// index, this effect with that parameter held at its nominal value: [`held::Held`]) — a
+    /// body's place along and across its link moves gravity's moment, as a softer floor does
+    /// under the feet. The floor's rival ([`crate::fit::floor_rival`]) fits each variant beside
+    /// a ground contact to ask whether the component is identified apart from the floor.
+    /// Default: none.
+    fn held_components(&self) -> Vec<(usize, &'static dyn Effect)> {
+        vec![]
+    }
 }
 
 /// A value as MJCF / TOML / Python text: 6 decimals, trailing zeros trimmed, no `-0`.
@@ -397,8 +407,16 @@ pub fn named(params: &BTreeMap<String, f64>, name: &str) -> f64 {
     params.get(name).copied().unwrap_or(f64::NAN)
 }
 
+/// The effect `id`: a registered one, or one's [`Effect::held_components`] variant
+/// (`EFFECT~PARAMETER`).
 pub fn by_id(id: &str) -> Option<&'static dyn Effect> {
-    all().into_iter().find(|e| e.id() == id)
+    let all = all();
+    if let Some(e) = all.iter().find(|e| e.id() == id) {
+        return Some(*e);
+    }
+    let (base, _) = id.split_once('~')?;
+    let e = all.into_iter().find(|e| e.id() == base)?;
+    e.held_components().into_iter().map(|(_, h)| h).find(|h| h.id() == id)
 }
 
 /// Whether `effect` may share one parameter vector over the joints of `group` (a mirror pair,

@@ -241,6 +241,65 @@ fn body_effects_move_the_arm_as_mujoco_composes_the_body() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// A body effect with one component held (`EFFECT~PARAMETER`, what the floor's rival fits) is
+/// the full effect with that parameter at its nominal value: the same replay, one parameter
+/// fewer in its list, its bounds and its start; a parameter that is no declared component names
+/// nothing.
+#[test]
+fn a_held_component_is_the_effect_with_it_at_its_nominal_value() {
+    use super::{Applied, JointTarget, by_id};
+    let dir = std::env::temp_dir().join(format!("modellint-held-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let arm = arm_with(&dir, "nominal.xml", "", r#"fromto="0 0 0 0 0 -0.25""#);
+    let t = JointTarget::of(&arm, "elbow").unwrap();
+    let on = |id: &str, params: Vec<f64>| Applied {
+        effect: by_id(id).unwrap(),
+        joints: vec!["elbow".into()],
+        params,
+    };
+    let replay = |a: &Applied| {
+        let rec = arm_recording();
+        let o = crate::sim2real::replay::ReplayOptions::default();
+        super::simulate(&arm, std::slice::from_ref(&rec), std::slice::from_ref(a), &o)
+            .remove(0)
+            .unwrap()
+            .q_sim
+    };
+    let cases = [
+        ("com_offset~along", vec![-0.015], vec![0.0, -0.015]),
+        ("com_offset~across", vec![0.02], vec![0.02, 0.0]),
+        ("link_mass~offset", vec![0.3, 0.03], vec![0.3, 0.0, 0.03]),
+        ("link_mass~across", vec![0.3, 0.07], vec![0.3, 0.07, 0.0]),
+    ];
+    for (id, held, full) in cases {
+        let h = by_id(id).unwrap_or_else(|| panic!("{id}"));
+        let (base, name) = id.split_once('~').unwrap();
+        let e = by_id(base).unwrap();
+        assert_eq!(h.id(), id);
+        assert_eq!(h.params().len() + 1, e.params().len(), "{id}");
+        assert!(h.params().iter().all(|p| p.name != name), "{id}");
+        assert_eq!(h.fitted(), e.fitted() - 1, "{id}");
+        let (lo, hi) = h.bounds(&arm.mj, &t);
+        assert_eq!(
+            (lo.len(), hi.len(), h.initial(&arm.mj, &t).len()),
+            (held.len(), held.len(), held.len())
+        );
+        assert!(!h.by_default(), "{id} is no candidate of the search");
+        let k = e.held_components().iter().find(|(_, v)| v.id() == id).map(|(k, _)| *k).unwrap();
+        assert_eq!(e.params()[k].name, name);
+        let (x, y) = (replay(&on(id, held.clone())), replay(&on(base, full.clone())));
+        assert_eq!(x, y, "{id}: {held:?} replays as {base} {full:?}");
+        // And not as the effect with that component moved.
+        let mut other = full.clone();
+        other[k] += 0.05;
+        assert_ne!(x, replay(&on(base, other)), "{id}");
+    }
+    assert!(by_id("link_mass~added_mass").is_none());
+    assert!(by_id("com_offset~nothing").is_none());
+    assert!(by_id("armature~armature").is_none());
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// `link_inertia` scales the forearm's inertia about the elbow axis through its centre of mass
 /// by `inertia_scale` and leaves its mass and centre of mass; every scale in the bounds is a
 /// valid body (principal moments obey the triangle inequality) — a capsule squashed to a
