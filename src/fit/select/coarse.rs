@@ -9,8 +9,11 @@ use super::groups::Cand;
 use super::screen::Screen;
 use super::{Search, extension};
 
+/// A point of a candidate's parameters and its training RMSE on the screen's data.
+pub(super) type Point = (Vec<f64>, f64);
+
 /// A candidate's coarse fit: its parameters and training RMSE on the screen's data.
-pub(super) type Coarse = Option<(Vec<f64>, f64)>;
+pub(super) type Coarse = Option<Point>;
 
 /// The coarse fit of `e` on `g` on `short` (`screen_evals` replays): a smooth one-parameter
 /// candidate goes on from the screen's linear step by secant steps (one replay each).
@@ -79,7 +82,7 @@ pub(super) fn when_taken(
     (e, g): (&'static dyn Effect, &[String]),
     (cands, coarse): (&[Cand], &[Coarse]),
     reaches: &dyn Fn(f64) -> bool,
-) -> Option<((Vec<f64>, f64), Option<(Vec<f64>, f64)>)> {
+) -> Option<(Point, Option<Point>)> {
     let mut stepped = None;
     if plain_fitted(s, (short, applied), (e, g)) {
         if extension::adds_nothing(s, short, applied, (e, g)) {
