@@ -442,6 +442,7 @@ fn fit_finds_the_delay_and_friction_pair_in_at_most_two_rounds() {
         "screen",
         "floor",
         "floor_screen",
+        "heldout_screen",
         "discretisation",
         "pair",
         "pair_restart",

@@ -8,7 +8,7 @@
 //! a battery off the trunk's axis must come out as one `link_mass` on the hip, its mass and
 //! its place along and across the trunk within 10 %;
 //! one armature behind every motor of the leg must come out as one group on all three joints;
-//! a gear play behind the knee's motor must come out as backlash on the knee (ignored: slow);
+//! a gear play behind the knee's motor must come out as backlash on the knee;
 //! the shank's moment of inertia doubled must come out as a `link_inertia` on the knee within
 //! 10 %;
 //! the same robots with nothing concealed must give nothing. Every expected value is read from the simulator's `truth.json`.
@@ -50,14 +50,41 @@ fn one_armature_on_every_joint_is_found_as_one_group() {
     );
     let a = v["missing_physics"][0]["params"]["armature"].as_f64().unwrap();
     assert!((a - value).abs() <= 0.1 * value, "armature {a} for {value}");
+    // Stribeck and load-dependent friction hold Coulomb friction as a special case: where
+    // Coulomb friction's coarse fit on the same joints did not reach the round's bar for a full
+    // fit (logged `screen`), the richer model is judged from that fit taken over (a few replays)
+    // instead of a coarse fit of its own, and on this leg nothing there reaches the bar: it is
+    // logged `screen` without parameters.
+    let tried = v["tried"].as_array().unwrap();
+    let mut judged = 0;
+    for t in tried {
+        let effect = t["effect"].as_str().unwrap();
+        if !["stribeck_friction", "load_dependent_friction"].contains(&effect) {
+            continue;
+        }
+        let plain_screened = tried.iter().any(|p| {
+            p["effect"] == "coulomb_friction"
+                && p["round"] == t["round"]
+                && p["joints"] == t["joints"]
+                && p["phase"] == "screen"
+        });
+        if plain_screened {
+            judged += 1;
+            assert!(
+                t["phase"] == "screen" && t["params"].as_array().is_some_and(|p| p.is_empty()),
+                "{effect} on {} fitted although Coulomb friction was screened out: {t}",
+                t["joints"]
+            );
+        }
+    }
+    assert!(judged > 0, "no friction extension beside a screened Coulomb friction");
 }
 
 /// A gear play of 0.04 rad (total) behind the knee's motor — in the simulator the servo drives
 /// a rotor (the knee's armature) that pushes the link through the play — comes out as backlash
-/// on the knee alone, within 10 % of the truth's play. Ignored in `make test`: 70–100 s blind on
-/// 2 cores under load (run it with `-- --ignored`).
+/// on the knee alone, within 10 % of the truth's play (8 s of CPU blind, 5,886 recording seconds
+/// replayed: 24 s wall at load 10–14 on 2 cores).
 #[test]
-#[ignore = "70-100 s blind on 2 cores: run with --ignored"]
 fn a_gear_play_behind_the_knee_motor_is_found_as_backlash_on_the_knee() {
     let truth = truth("KR6_knee_backlash");
     own_physics(&truth);

@@ -9,8 +9,11 @@ use super::groups::Cand;
 use super::screen::Screen;
 use super::{Search, extension};
 
+/// A point of a candidate's parameters and its training RMSE on the screen's data.
+pub(super) type Point = (Vec<f64>, f64);
+
 /// A candidate's coarse fit: its parameters and training RMSE on the screen's data.
-pub(super) type Coarse = Option<(Vec<f64>, f64)>;
+pub(super) type Coarse = Option<Point>;
 
 /// The coarse fit of `e` on `g` on `short` (`screen_evals` replays): a smooth one-parameter
 /// candidate goes on from the screen's linear step by secant steps (one replay each).
@@ -39,13 +42,24 @@ pub(super) fn deferred(
     cands: &[Cand],
     coarse: &[Coarse],
 ) -> Option<(Vec<f64>, f64)> {
+    let f = plain_coarse(s, (e, g), cands, coarse)?.1;
+    f.is_finite().then(|| (vec![], f))
+}
+
+/// The coarse fit of the plain variant of `e` (one the search may fit) on `g`, when that is a
+/// candidate in `cands` and was coarse-fitted.
+fn plain_coarse(
+    s: &Search,
+    (e, g): (&'static dyn Effect, &[String]),
+    cands: &[Cand],
+    coarse: &[Coarse],
+) -> Option<(Vec<f64>, f64)> {
     let plain = e.plain_variant()?;
     if !s.allowed.iter().any(|id| id == plain.id()) {
         return None;
     }
     let i = cands.iter().position(|(p, pg, _)| p.id() == plain.id() && pg.as_slice() == g)?;
-    let f = coarse.get(i)?.as_ref()?.1;
-    f.is_finite().then(|| (vec![], f))
+    coarse.get(i)?.clone().filter(|c| !is_deferred(c))
 }
 
 /// Whether a coarse fit is [`deferred`]'s stand-in (a fit that failed has an infinite RMSE).
@@ -53,21 +67,35 @@ pub(super) fn is_deferred(c: &(Vec<f64>, f64)) -> bool {
     c.0.is_empty() && c.1.is_finite()
 }
 
-/// A deferred candidate when it is taken: `None` when the plain variant was fitted in full on
-/// the screen's data and its fit leaves nothing the extension's extra parameters pay for
-/// (logged without a fit); else its coarse fit, as any other candidate's.
+/// A deferred candidate when it is taken: `None` (logged without a fit) when the plain variant
+/// was fitted in full on the screen's data and its fit leaves nothing the extension's extra
+/// parameters pay for ([`extension::adds_nothing`]), or when it was not and nothing near its
+/// coarse fit taken over reaches the round's bar for a full fit (`reaches`, of an SSE on the
+/// screen's data; [`extension::could_reach`]: its coarse fit could not admit it either, unless
+/// the extra parameters explain what the plain fit leaves); else its coarse fit, as any
+/// other candidate's, and in the second case the best point that judgement simulated, which
+/// stands in for its linear step (the step of its columns there, replayed).
 pub(super) fn when_taken(
     s: &Search,
     screen: &Screen,
     (short, applied): (&[Recording], &[Applied]),
     (e, g): (&'static dyn Effect, &[String]),
-) -> Option<(Vec<f64>, f64)> {
-    if plain_fitted(s, (short, applied), (e, g))
-        && extension::adds_nothing(s, short, applied, (e, g))
-    {
-        return None;
+    (cands, coarse): (&[Cand], &[Coarse]),
+    reaches: &dyn Fn(f64) -> bool,
+) -> Option<(Point, Option<Point>)> {
+    let mut stepped = None;
+    if plain_fitted(s, (short, applied), (e, g)) {
+        if extension::adds_nothing(s, short, applied, (e, g)) {
+            return None;
+        }
+    } else if let Some((pp, _)) = plain_coarse(s, (e, g), cands, coarse) {
+        let (could, least) = extension::could_reach(s, (short, applied), (e, g), &pp, reaches);
+        if !could {
+            return None;
+        }
+        stepped = least;
     }
-    Some(fit(s.engine, screen, (short, applied), (e, g)))
+    Some((fit(s.engine, screen, (short, applied), (e, g)), stepped))
 }
 
 /// Whether the plain variant of `e` was fitted in full on `g` on the screen's data this round.

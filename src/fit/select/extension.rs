@@ -41,42 +41,16 @@ pub(super) fn adds_nothing(
     (effect, group): (&'static dyn Effect, &[String]),
 ) -> bool {
     let engine = s.engine;
-    let Some(plain) = effect.plain_variant() else { return false };
-    if !s.allowed.iter().any(|id| id == plain.id()) || group.is_empty() {
-        return false;
-    }
-    let zero: Vec<f64> = effect.params().iter().map(|d| d.default).collect();
-    if effect.absorb(plain, &zero, &vec![0.0; plain.params().len()]).is_none() {
-        return false;
-    }
-    let Some(t) = JointTarget::of(engine.robot, &group[0]) else { return false };
-    let m0 = model_with(engine.robot, applied);
+    let Some(plain) = nested_plain(s, effect, group) else { return false };
     // The plain variant's full fit on the same data and joints (the memo's answer when the
     // round already fitted it, as it does before the richer model in rank order).
     let (pp, _) = engine.fit_one(short, applied, plain, group);
     if pp.is_empty() {
         return false;
     }
-    let with = |p: &[f64]| {
-        let mut set = applied.to_vec();
-        set.push(Applied { effect, joints: group.to_vec(), params: p.to_vec() });
-        set
-    };
     let mut plain_set = applied.to_vec();
     plain_set.push(Applied { effect: plain, joints: group.to_vec(), params: pp.clone() });
     let Some(e_plain) = engine.errors(short, &plain_set) else { return false };
-    // The plain fit taken over by the richer model, from its parameters' defaults.
-    let delta: Vec<f64> = pp.iter().zip(plain.initial(&m0, &t)).map(|(a, b)| a - b).collect();
-    let Some(x0) = effect.absorb(plain, &zero, &delta) else { return false };
-    let (lo, hi) = effect.bounds(&m0, &t);
-    let k = effect.fitted().min(x0.len()).min(lo.len());
-    if k == 0 {
-        return false;
-    }
-    let clamp = |a: &[f64]| -> Vec<f64> {
-        a.iter().enumerate().map(|(i, v)| if i < k { v.clamp(lo[i], hi[i]) } else { *v }).collect()
-    };
-    let x0 = clamp(&x0);
     let k_base: usize = applied.iter().map(|a| a.effect.fitted()).sum();
     let m = e_plain.windows.len();
     let criterion = |sse: f64, kk: usize| bic_pieces(m, e_plain.n, sse, k_base + kk);
@@ -85,17 +59,103 @@ pub(super) fn adds_nothing(
         return false;
     }
     let beats = |sse: f64| sse.is_finite() && criterion(sse, effect.fitted()) < to_beat;
+    !improves_on(s, (short, applied), (effect, group), (plain, &pp), &beats).0
+}
+
+/// `false` when `effect` on `group` elaborates a plain variant that the search may fit and
+/// holds it as a special case, and no point the module's judgement replays or predicts from
+/// the plain variant's coarse fit `pp` taken over (that start, the effect's further starts, the
+/// Gauss–Newton step on its columns, simulated and predicted) leaves an SSE on `short` for which
+/// `reaches` holds. `true` — coarse-fit it — otherwise, and whenever the test cannot be made;
+/// with the simulated point of least error (its parameters and RMSE on `short`), which stands
+/// in for the candidate's linear step.
+///
+/// A deferred candidate ([`super::coarse::deferred`]) whose plain variant's coarse fit did not
+/// reach the round's bar for a full fit is judged so before its own coarse fit: its extra
+/// parameters could only lift it over the bar where the residual the plain fit leaves has
+/// their shape.
+pub(super) fn could_reach(
+    s: &Search,
+    (short, applied): (&[Recording], &[Applied]),
+    (effect, group): (&'static dyn Effect, &[String]),
+    pp: &[f64],
+    reaches: &dyn Fn(f64) -> bool,
+) -> (bool, Option<(Vec<f64>, f64)>) {
+    let Some(plain) = nested_plain(s, effect, group) else { return (true, None) };
+    if pp.len() != plain.params().len() {
+        return (true, None);
+    }
+    improves_on(s, (short, applied), (effect, group), (plain, pp), reaches)
+}
+
+/// The plain variant of `effect` when the search may fit it on `group` and `effect` holds it as
+/// a special case ([`Effect::absorb`]).
+fn nested_plain(
+    s: &Search,
+    effect: &'static dyn Effect,
+    group: &[String],
+) -> Option<&'static dyn Effect> {
+    let plain = effect.plain_variant()?;
+    if !s.allowed.iter().any(|id| id == plain.id()) || group.is_empty() {
+        return None;
+    }
+    let zero: Vec<f64> = effect.params().iter().map(|d| d.default).collect();
+    effect.absorb(plain, &zero, &vec![0.0; plain.params().len()])?;
+    Some(plain)
+}
+
+/// Whether some point near the plain variant's fit `pp` taken over by `effect` leaves an SSE
+/// on `short` for which `beats` holds: that start and the effect's further starts replayed,
+/// the Gauss–Newton step on the columns at the best of them predicted and simulated (see the
+/// module docs), and the simulated point of least SSE (its parameters and RMSE on `short`).
+/// `true` whenever the test cannot be made.
+fn improves_on(
+    s: &Search,
+    (short, applied): (&[Recording], &[Applied]),
+    (effect, group): (&'static dyn Effect, &[String]),
+    (plain, pp): (&'static dyn Effect, &[f64]),
+    beats: &dyn Fn(f64) -> bool,
+) -> (bool, Option<(Vec<f64>, f64)>) {
+    const UNTESTED: (bool, Option<(Vec<f64>, f64)>) = (true, None);
+    let engine = s.engine;
+    let zero: Vec<f64> = effect.params().iter().map(|d| d.default).collect();
+    let Some(t) = JointTarget::of(engine.robot, &group[0]) else { return UNTESTED };
+    let m0 = model_with(engine.robot, applied);
+    let with = |p: &[f64]| {
+        let mut set = applied.to_vec();
+        set.push(Applied { effect, joints: group.to_vec(), params: p.to_vec() });
+        set
+    };
+    // The plain fit taken over by the richer model, from its parameters' defaults.
+    let delta: Vec<f64> = pp.iter().zip(plain.initial(&m0, &t)).map(|(a, b)| a - b).collect();
+    let Some(x0) = effect.absorb(plain, &zero, &delta) else { return UNTESTED };
+    let (lo, hi) = effect.bounds(&m0, &t);
+    let k = effect.fitted().min(x0.len()).min(lo.len());
+    if k == 0 {
+        return UNTESTED;
+    }
+    let clamp = |a: &[f64]| -> Vec<f64> {
+        a.iter().enumerate().map(|(i, v)| if i < k { v.clamp(lo[i], hi[i]) } else { *v }).collect()
+    };
+    let x0 = clamp(&x0);
     let resid = |p: &[f64]| engine.residuals(short, &with(p), &engine.joints, usize::MAX);
     // The plain fit taken over, then the model's own further starts from it.
     let mut starts = vec![x0.clone()];
     starts
         .extend(effect.nested_alternatives(&x0).iter().filter(|a| a.len() >= k).map(|a| clamp(a)));
-    let sse: Vec<f64> = starts
+    let errs: Vec<(f64, f64)> = starts
         .par_iter()
-        .map(|a| engine.errors(short, &with(a)).map_or(f64::INFINITY, |e| e.sse))
+        .map(|a| {
+            engine
+                .errors(short, &with(a))
+                .map_or((f64::INFINITY, f64::INFINITY), |e| (e.sse, e.rmse()))
+        })
         .collect();
+    let sse: Vec<f64> = errs.iter().map(|e| e.0).collect();
+    let best = (0..starts.len()).fold(0, |b, i| if sse[i] < sse[b] { i } else { b });
+    let mut least = Some((starts[best].clone(), errs[best].1)).filter(|p| p.1.is_finite());
     if sse.iter().any(|&f| beats(f)) {
-        return false;
+        return (true, least);
     }
     // The columns of its fitted parameters at the best of the starts. Where the extra
     // parameters act only in a regime the plain fit barely enters (exact stiction's static
@@ -103,9 +163,8 @@ pub(super) fn adds_nothing(
     // stays near it; from the best start the step reaches the level. KR2 (Stribeck truth):
     // from (c, c, 0.1) the step explains 5 % of that start's residual, predicted SSE 9.4e-3
     // against the 5.4e-3 that beats the plain fit's BIC; from (2c, c, 0.05) 24 %, 4.5e-3.
-    let best = (0..starts.len()).fold(0, |b, i| if sse[i] < sse[b] { i } else { b });
     let (xb, sse_b) = (&starts[best], sse[best]);
-    let Some(rb) = resid(xb) else { return false };
+    let Some(rb) = resid(xb) else { return UNTESTED };
     let cols: Vec<Option<Vec<f64>>> = (0..k)
         .into_par_iter()
         .map(|i| {
@@ -121,13 +180,13 @@ pub(super) fn adds_nothing(
             (r1.len() == rb.len()).then(|| r1.iter().zip(&rb).map(|(b, a)| (a - b) / h).collect())
         })
         .collect();
-    let Some(cols) = cols.into_iter().collect::<Option<Vec<Vec<f64>>>>() else { return false };
+    let Some(cols) = cols.into_iter().collect::<Option<Vec<Vec<f64>>>>() else { return UNTESTED };
     let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
     let b: Vec<f64> = cols.iter().map(|c| dot(c, &rb)).collect();
     let g: Vec<Vec<f64>> = cols.iter().map(|x| cols.iter().map(|y| dot(x, y)).collect()).collect();
     let (explained, step) = combine(&b, &g);
     if beats(sse_b - explained) {
-        return false;
+        return (true, least);
     }
     // The linear model does not ask for it; its step is simulated all the same (a kink's
     // column can under-state what the step does).
@@ -136,6 +195,11 @@ pub(super) fn adds_nothing(
         .enumerate()
         .map(|(i, v)| if i < k { (v + step[i]).clamp(lo[i], hi[i]) } else { *v })
         .collect();
-    let sse1 = engine.errors(short, &with(&x1)).map_or(f64::INFINITY, |e| e.sse);
-    !beats(sse1)
+    let (sse1, rmse1) = engine
+        .errors(short, &with(&x1))
+        .map_or((f64::INFINITY, f64::INFINITY), |e| (e.sse, e.rmse()));
+    if sse1 < sse_b && rmse1.is_finite() {
+        least = Some((x1, rmse1));
+    }
+    (beats(sse1), least)
 }

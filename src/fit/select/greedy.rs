@@ -372,10 +372,25 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
             out.tried.push(not_tested(Phase::FloorScreen, p, f));
             continue;
         }
+        // Either the coarse fit or the linearised step must reach the share: a coarse grid can
+        // miss a narrow basin (a torque limit) that the linear step sees, and the linear step
+        // misses what is far from linear (a resonance moved by damping). A smooth effect's step
+        // counts as replayed ([`coarse::replayed_step`]); a coarse fit past it goes on from it.
+        let reaches = |g: f64| g > 0.0 && g >= opts.policy.screen_share * best_gain;
+        // A deferred candidate judged from its plain variant's coarse fit: the best point that
+        // judgement simulated stands in for its linear step ([`coarse::when_taken`]).
+        let mut stepped = None;
         let (mut cp, mut cf) = match coarse.get(ci - 1).cloned().flatten() {
             Some(c) if coarse::is_deferred(&c) => {
-                match coarse::when_taken(s, &screen, (short, &applied), (e, &group)) {
-                    Some(c) => c,
+                // (An SSE on the screen's data whose RMSE would reach the bar.)
+                let n = sh_err.n.max(1) as f64;
+                let bar = |sse: f64| reaches(gain((sse / n).sqrt()));
+                let taken = (short, &applied[..]);
+                match coarse::when_taken(s, &screen, taken, (e, &group), (&cands, &coarse), &bar) {
+                    Some((c, step)) => {
+                        stepped = step;
+                        c
+                    }
                     None => {
                         out.tried.push(not_tested(Phase::Screen, vec![], f64::NAN));
                         continue;
@@ -386,13 +401,13 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
             // A candidate added during the round (a mirror completion).
             None => engine.fit_budget(short, &applied, e, &group, opts.policy.screen_evals),
         };
-        // Either the coarse fit or the linearised step must reach the share: a coarse grid can
-        // miss a narrow basin (a torque limit) that the linear step sees, and the linear step
-        // misses what is far from linear (a resonance moved by damping). A smooth effect's step
-        // counts as replayed ([`coarse::replayed_step`]); a coarse fit past it goes on from it.
-        let reaches = |g: f64| g > 0.0 && g >= opts.policy.screen_share * best_gain;
         let mut linear_gain = predicted.map_or(f64::NEG_INFINITY, |p| gain(p.train_rmse));
-        if e.smooth() && !reaches(gain(cf)) && reaches(linear_gain) {
+        if let Some((sp, sf)) = stepped {
+            linear_gain = gain(sf);
+            if sf < cf {
+                (cp, cf) = (sp, sf);
+            }
+        } else if e.smooth() && !reaches(gain(cf)) && reaches(linear_gain) {
             let step = coarse::replayed_step(engine, &screen, (short, &applied), (e, &group));
             if let Some((sp, sf)) = step {
                 linear_gain = gain(sf);
@@ -427,12 +442,32 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
             out.tried.push(not_tested(Phase::Screen, cp, cf));
             continue;
         }
+        // A full fit goes on from the coarse fit on the same training data: when the coarse
+        // fit, which reached the bar by its own training gain, does not lower the held-out
+        // error at all (one held-out replay), the descent explains what the held-out
+        // recordings do not share, and no full fit along it is made (`tried`: phase
+        // "heldout_screen"). Not the lead (fitted at once, the likeliest winner), nor a
+        // candidate that only its linear step admits (a coarse fit can miss the narrow basin
+        // that the full fit finds).
+        let whole = n_lead == 1 && ci == 1;
+        if !whole && reaches(gain(cf)) && !cp.is_empty() {
+            let mut t = applied.clone();
+            t.push(Applied { effect: e, joints: group.clone(), params: cp.clone() });
+            let ho_c = engine.errors(heldout, &t);
+            if ho_c.is_none_or(|h| verdict(&ho_err, &h, &group, opts.policy.gate_z(z)).rel <= 0.0) {
+                // (Its coarse fit still starts a joint pair fit, as a screened one's does.)
+                if gain(cf) >= opts.policy.min_rel_improvement {
+                    fitted.push(Applied { effect: e, joints: group.clone(), params: cp.clone() });
+                }
+                out.tried.push(not_tested(Phase::HeldoutScreen, cp, cf));
+                continue;
+            }
+        }
         // The full fit runs on the screen's data too (its cost does not grow with the log's
         // length); the held-out gate and the training BIC below use all data, and the round's
         // winner is refined on the whole training set ([`refine`]).
         // The lead, the likeliest winner, is fitted on the whole training set at once from its
         // coarse fit: the round's winner is fitted there anyway ([`refine`]).
-        let whole = n_lead == 1 && ci == 1;
         let start = (cf < base_short).then_some(cp.as_slice());
         let data = if whole { train } else { short };
         let (p, fit_rmse) = engine.fit_from(data, &applied, (e, &group), start);
@@ -621,79 +656,4 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     set_uncertainty(engine, train, &mut w, &out.applied, &mut out.warnings);
     out.selected.push(w);
     true
-}
-
-#[cfg(test)]
-mod tests {
-    use std::collections::BTreeMap;
-
-    use super::*;
-    use crate::fit::effects::{
-        Armature, Backlash, CoulombFriction, Effect, StribeckFriction, ViscousDamping,
-    };
-
-    fn sel(effect: &str, joints: &[&str], p: &[(&str, f64)], heldout: f64) -> Selected {
-        Selected {
-            effect: effect.into(),
-            joints: joints.iter().map(|j| j.to_string()).collect(),
-            params: p.iter().map(|(k, v)| (k.to_string(), *v)).collect(),
-            stderr: BTreeMap::new(),
-            identifiable: true,
-            unidentified: vec![],
-            evidence: BTreeMap::new(),
-            heldout_improvement: 0.9,
-            heldout_rmse_before: 0.014,
-            heldout_rmse_after: heldout,
-            window_improvement: 0.0,
-            window_improvement_se: 0.0,
-            bic_before: 0.0,
-            bic_after: 0.0,
-            values: vec![],
-        }
-    }
-
-    #[test]
-    fn an_equally_good_rival_on_the_winners_joint_is_named() {
-        let acc = vec![
-            sel(
-                StribeckFriction.id(),
-                &["left_knee"],
-                &[("static", 2.0), ("dynamic", 1.0)],
-                7.0e-4,
-            ),
-            sel(Backlash.id(), &["left_knee"], &[(Backlash.id(), 0.0369)], 7.3e-4),
-            // Equivalent but on another joint: not a rival of the knee's friction.
-            sel(Armature.id(), &["right_knee"], &[(Armature.id(), 0.02)], 7.2e-4),
-            // On the knee, but worse beyond noise (not in Occam's set).
-            sel(ViscousDamping.id(), &["left_knee"], &[("damping", 3.0)], 9.0e-4),
-            // The same effect on a group with the knee: a group question, not a rival.
-            sel(Backlash.id(), &["left_knee", "right_knee"], &[(Backlash.id(), 0.03)], 7.1e-4),
-            // Another effect on a group that contains the knee: a rival.
-            sel(
-                CoulombFriction.id(),
-                &["left_knee", "right_knee"],
-                &[("frictionloss", 1.5)],
-                7.1e-4,
-            ),
-        ];
-        let same = [true, true, true, false, true, true];
-        let n = rival_notes(&acc, 1, &same);
-        assert_eq!(n.len(), 2, "{n:#?}");
-        assert!(n[0].starts_with("stribeck_friction on left_knee (dynamic 1, static 2) explains"));
-        assert!(n[0].contains("the kept backlash on left_knee (backlash 0.0369)"), "{}", n[0]);
-        assert!(n[0].contains("7.000e-4 vs 7.300e-4 rad"), "{}", n[0]);
-        assert!(n[1].starts_with("coulomb_friction on left_knee,right_knee (frictionloss 1.5)"));
-        // Stribeck friction as good as the kept Coulomb friction contains it: no rival.
-        let nest = vec![
-            sel(CoulombFriction.id(), &["left_knee"], &[("frictionloss", 1.5)], 7.0e-4),
-            sel(StribeckFriction.id(), &["left_knee"], &[("static", 1.5)], 6.9e-4),
-            sel(Backlash.id(), &["left_knee"], &[(Backlash.id(), 0.03)], 7.1e-4),
-        ];
-        let n = rival_notes(&nest, 0, &[true, true, true]);
-        assert_eq!(n.len(), 1, "{n:#?}");
-        assert!(n[0].starts_with("backlash on left_knee"), "{}", n[0]);
-        assert_eq!(rival_notes(&nest, 1, &[true, true, false]), Vec::<String>::new());
-        // Nothing equivalent: no note.
-        assert!(rival_notes(&acc, 1, &[false, true, false, false, false, false]).is_empty());
-    }
 }

@@ -493,7 +493,11 @@ fn search_cost(engine: &Engine, out: &FitOutcome) -> SearchCost {
             .filter(|t| {
                 matches!(
                     t.phase,
-                    Phase::Screen | Phase::Floor | Phase::FloorScreen | Phase::SwapScreen
+                    Phase::Screen
+                        | Phase::Floor
+                        | Phase::FloorScreen
+                        | Phase::HeldoutScreen
+                        | Phase::SwapScreen
                 )
             })
             .count(),

@@ -365,6 +365,9 @@ pub enum Phase {
     Floor,
     /// Not fitted in full: its coarse fit could not come near a kept white-residual candidate.
     FloorScreen,
+    /// Not fitted in full: its coarse fit, replayed on the held-out set, does not lower the
+    /// held-out error at all.
+    HeldoutScreen,
     /// Passed the held-out gate at the model's timestep but not at a finer one: the model's
     /// own time discretisation, not physics (a note). Also a merge that failed at the model's
     /// timestep, tested again at the finer one (`kept` = merged there).
@@ -412,6 +415,7 @@ impl Phase {
             Phase::Screen => "screen",
             Phase::Floor => "floor",
             Phase::FloorScreen => "floor_screen",
+            Phase::HeldoutScreen => "heldout_screen",
             Phase::Discretisation => "discretisation",
             Phase::Pair => "pair",
             Phase::PairRestart => "pair_restart",

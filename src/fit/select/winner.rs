@@ -112,3 +112,78 @@ fn nested(outer: &str, inner: &str) -> bool {
     let mine: Vec<f64> = o.params().iter().map(|p| p.default).collect();
     o.absorb(i, &mine, &vec![0.0; i.params().len()]).is_some()
 }
+
+#[cfg(test)]
+mod tests {
+    use std::collections::BTreeMap;
+
+    use super::*;
+    use crate::fit::effects::{
+        Armature, Backlash, CoulombFriction, StribeckFriction, ViscousDamping,
+    };
+
+    fn sel(effect: &str, joints: &[&str], p: &[(&str, f64)], heldout: f64) -> Selected {
+        Selected {
+            effect: effect.into(),
+            joints: joints.iter().map(|j| j.to_string()).collect(),
+            params: p.iter().map(|(k, v)| (k.to_string(), *v)).collect(),
+            stderr: BTreeMap::new(),
+            identifiable: true,
+            unidentified: vec![],
+            evidence: BTreeMap::new(),
+            heldout_improvement: 0.9,
+            heldout_rmse_before: 0.014,
+            heldout_rmse_after: heldout,
+            window_improvement: 0.0,
+            window_improvement_se: 0.0,
+            bic_before: 0.0,
+            bic_after: 0.0,
+            values: vec![],
+        }
+    }
+
+    #[test]
+    fn an_equally_good_rival_on_the_winners_joint_is_named() {
+        let acc = vec![
+            sel(
+                StribeckFriction.id(),
+                &["left_knee"],
+                &[("static", 2.0), ("dynamic", 1.0)],
+                7.0e-4,
+            ),
+            sel(Backlash.id(), &["left_knee"], &[(Backlash.id(), 0.0369)], 7.3e-4),
+            // Equivalent but on another joint: not a rival of the knee's friction.
+            sel(Armature.id(), &["right_knee"], &[(Armature.id(), 0.02)], 7.2e-4),
+            // On the knee, but worse beyond noise (not in Occam's set).
+            sel(ViscousDamping.id(), &["left_knee"], &[("damping", 3.0)], 9.0e-4),
+            // The same effect on a group with the knee: a group question, not a rival.
+            sel(Backlash.id(), &["left_knee", "right_knee"], &[(Backlash.id(), 0.03)], 7.1e-4),
+            // Another effect on a group that contains the knee: a rival.
+            sel(
+                CoulombFriction.id(),
+                &["left_knee", "right_knee"],
+                &[("frictionloss", 1.5)],
+                7.1e-4,
+            ),
+        ];
+        let same = [true, true, true, false, true, true];
+        let n = rival_notes(&acc, 1, &same);
+        assert_eq!(n.len(), 2, "{n:#?}");
+        assert!(n[0].starts_with("stribeck_friction on left_knee (dynamic 1, static 2) explains"));
+        assert!(n[0].contains("the kept backlash on left_knee (backlash 0.0369)"), "{}", n[0]);
+        assert!(n[0].contains("7.000e-4 vs 7.300e-4 rad"), "{}", n[0]);
+        assert!(n[1].starts_with("coulomb_friction on left_knee,right_knee (frictionloss 1.5)"));
+        // Stribeck friction as good as the kept Coulomb friction contains it: no rival.
+        let nest = vec![
+            sel(CoulombFriction.id(), &["left_knee"], &[("frictionloss", 1.5)], 7.0e-4),
+            sel(StribeckFriction.id(), &["left_knee"], &[("static", 1.5)], 6.9e-4),
+            sel(Backlash.id(), &["left_knee"], &[(Backlash.id(), 0.03)], 7.1e-4),
+        ];
+        let n = rival_notes(&nest, 0, &[true, true, true]);
+        assert_eq!(n.len(), 1, "{n:#?}");
+        assert!(n[0].starts_with("backlash on left_knee"), "{}", n[0]);
+        assert_eq!(rival_notes(&nest, 1, &[true, true, false]), Vec::<String>::new());
+        // Nothing equivalent: no note.
+        assert!(rival_notes(&acc, 1, &[false, true, false, false, false, false]).is_empty());
+    }
+}
