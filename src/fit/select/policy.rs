@@ -91,8 +91,8 @@ pub struct SearchPolicy {
 
     // ---- screens (candidates not fitted in full) ----
     /// A candidate is fitted in full only when its coarse fit, or its linearised step, reaches
-    /// this share of the best training improvement of the round so far (coarse or full)
-    /// [fraction]. Default 0.5.
+    /// this share of the best training improvement of the round so far (coarse or full); a
+    /// smooth effect's step counts as replayed on the screen's data [fraction]. Default 0.5.
     pub screen_share: f64,
     /// A smooth one-parameter candidate's coarse fit is a few secant Gauss–Newton steps started
     /// from the screen's linear step (one replay each); it stops at the first step that achieves
@@ -102,8 +102,9 @@ pub struct SearchPolicy {
     /// of a trust-region method).
     pub linear_trust: f64,
     /// Once a kept candidate leaves a white training residual (or when a swap is screened), a
-    /// candidate whose coarse fit leaves more than this times that training RMSE is not fitted
-    /// [ratio of RMSE]. Default 1.5.
+    /// candidate whose coarse fit leaves more than this times that training RMSE is not fitted;
+    /// judged first on the probes' data against the model at the floor replayed there
+    /// (`reach.rs`) [ratio of RMSE]. Default 1.5.
     pub floor_screen_ratio: f64,
     /// The extra effects of `every_effect` are left out when their best joint explains less
     /// than this share of the top candidate's explained RMS [fraction]. Default 0.1.
@@ -282,7 +283,7 @@ pub const FIELDS: &[(&str, &str, &str)] = &[
     (
         "screen_share",
         "fraction",
-        "a candidate is fitted fully only when its coarse fit, or its linearised step, reaches this share of the round's best training improvement so far (coarse or full)",
+        "a candidate is fitted fully only when its coarse fit, or its linearised step (replayed once on the screen's data for a smooth effect), reaches this share of the round's best training improvement so far (coarse or full)",
     ),
     (
         "linear_trust",
@@ -292,7 +293,7 @@ pub const FIELDS: &[(&str, &str, &str)] = &[
     (
         "floor_screen_ratio",
         "ratio of RMSE",
-        "after a white-residual winner (or for a swap), a coarse fit above this × its training RMSE is not fitted fully",
+        "after a white-residual winner (or for a swap), a coarse fit above this × its training RMSE is not fitted fully; first judged on the probes' data against the model at the floor replayed there (reach.rs)",
     ),
     (
         "minor_effect_share",
