@@ -130,9 +130,6 @@ pub fn read_for_replay(
     // Unknown joints and driven joints without a command are reported at the header line,
     // before any value is checked.
     let parse = ParseOptions {
-        unlimited_joints: Some(
-            robot.joints.iter().filter(|j| !j.limited).map(|j| j.name.clone()).collect(),
-        ),
         model_joints: Some(model_joints.clone()),
         actuated_joints: Some(actuated.clone()),
         ..parse.clone()

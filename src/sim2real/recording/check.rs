@@ -133,9 +133,8 @@ impl Recording {
                     format!("column '{col}' has {} samples, time has {n}", e.len()),
                 ));
             }
-            let continuous = opts.unlimited_joints.as_ref().is_some_and(|u| u.contains(&j.name));
             for (suffix, v) in [("q", Some(&j.q)), ("q_cmd", j.q_cmd.as_ref())] {
-                let Some(v) = v.filter(|_| !continuous) else { continue };
+                let Some(v) = v else { continue };
                 if let Some(i) = v.iter().position(|x| x.abs() > opts.max_abs_rad) {
                     let col = format!("{}.{suffix}", j.name);
                     return Err(err(
@@ -143,7 +142,7 @@ impl Recording {
                         Some(&col),
                         format!(
                             "column '{col}': |{}| > {} rad at t = {}: looks like degrees (positions must be in radians; \
-                         only a joint the model leaves without a range may turn further)",
+                         for continuous joints raise max_abs_rad)",
                             v[i], opts.max_abs_rad, self.t[i]
                         ),
                     ));

@@ -178,13 +178,10 @@ impl std::error::Error for RecordingError {}
 pub struct ParseOptions {
     /// Any joint position (`.q` or `.q_cmd`) with |value| above this is rejected as "looks like
     /// degrees". Default 10.0 rad: above 1.5 turns (3π ≈ 9.42), which no revolute joint of a
-    /// legged robot reaches, while 10° already exceeds it. Joints the model leaves without a
-    /// range ([`ParseOptions::unlimited_joints`]: wheels, turntables accumulate angle) are not
-    /// checked.
+    /// legged robot reaches, while 10° already exceeds it. The CSV format does not say which
+    /// joints are continuous (wheels, turntables accumulate angle): for such recordings raise
+    /// this, e.g. to `f64::INFINITY`.
     pub max_abs_rad: f64,
-    /// The model's joints without a range (continuous), when known: their positions may exceed
-    /// `max_abs_rad`.
-    pub unlimited_joints: Option<Vec<String>>,
     /// Columns to skip (glob patterns on the header name, e.g. `imu.*`, `*.temperature`): a
     /// log's extra signals. Any other column that is not `t`, `base.*` or `<joint>.<suffix>`
     /// is an error (a misspelt `q_cmd` must not be dropped silently).
@@ -210,7 +207,6 @@ impl Default for ParseOptions {
     fn default() -> Self {
         ParseOptions {
             max_abs_rad: 10.0,
-            unlimited_joints: None,
             ignore_columns: Vec::new(),
             model_joints: None,
             actuated_joints: None,

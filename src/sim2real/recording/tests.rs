@@ -153,12 +153,6 @@ fn degrees_are_rejected_with_adjustable_threshold() {
     assert!(ok.is_ok());
     let e = parse_err("t,knee.q,knee.q_cmd\n0,0,0\n0.01,0,-30\n");
     assert_eq!(e.column.as_deref(), Some("knee.q_cmd"));
-    // A joint the model leaves without a range (a wheel) turns as far as it likes; the others
-    // are still checked.
-    let wheel = ParseOptions { unlimited_joints: Some(vec!["wheel".into()]), ..Default::default() };
-    assert!(parse_csv_with(p(), "t,wheel.q\n0,0\n0.01,40\n0.02,80\n", &wheel).is_ok());
-    let e = parse_csv_with(p(), "t,wheel.q,knee.q\n0,0,0\n0.01,40,45\n", &wheel).unwrap_err();
-    assert_eq!(e.column.as_deref(), Some("knee.q"));
 }
 
 #[test]
