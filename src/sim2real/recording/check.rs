@@ -141,8 +141,9 @@ impl Recording {
                         i,
                         Some(&col),
                         format!(
-                            "column '{col}': |{}| > {} rad at t = {}: looks like degrees (positions must be in radians; \
-                         for continuous joints raise max_abs_rad)",
+                            "column '{col}': |{}| > {} rad at t = {}: looks like degrees (positions must be in radians: \
+                         a CSV declares `# units: deg`, other logs take --log-units deg; a continuous joint's angle \
+                         past 10 rad cannot be read yet: leave its columns out with --ignore-columns)",
                             v[i], opts.max_abs_rad, self.t[i]
                         ),
                     ));
