@@ -105,7 +105,7 @@ pub enum CacheCmd {
     Clean {
         /// Cache directory. Default: $MODELLINT_CACHE_DIR, else $XDG_CACHE_HOME/modellint,
         /// else ~/.cache/modellint.
-        #[arg(long)]
+        #[arg(long, visible_alias = "cache-dir")]
         dir: Option<PathBuf>,
     },
 }

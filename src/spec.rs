@@ -228,12 +228,8 @@ pub fn load(map: &mut SourceMap, path: &Path, joint_names: &[String]) -> Result<
         }
     }
     if let Some(f) = &r.control_hz {
-        let x = *f.get_ref();
-        if !(x.is_finite() && x > 0.0) {
-            return Err(bad(
-                f.span(),
-                format!("robot.control_hz must be a positive number, got {x}"),
-            ));
+        if let Err(e) = control_hz_domain(*f.get_ref()) {
+            return Err(bad(f.span(), format!("robot.control_hz {e}")));
         }
     }
     for (key, val) in [("action_delay_steps", &r.action_delay_steps), ("mass_kg", &r.mass_kg)] {
@@ -307,4 +303,27 @@ pub fn load(map: &mut SourceMap, path: &Path, joint_names: &[String]) -> Result<
 pub fn beside(model: &Path) -> Option<std::path::PathBuf> {
     let p = model.with_extension("toml");
     p.is_file().then_some(p)
+}
+
+/// The slowest controller rate accepted [Hz]. A policy or servo loop of a legged robot or an
+/// arm runs at tens to thousands of hertz; a value under one hertz is a period written where a
+/// rate belongs (0.02 for a 50 Hz controller) and would make every command last longer than
+/// most recordings.
+pub const CONTROL_HZ_MIN: f64 = 1.0;
+
+/// `Err(reason)` when `hz` is not a controller rate: not finite, not positive, or below
+/// [`CONTROL_HZ_MIN`] (then the reason names the rate the value would be as a period).
+pub fn control_hz_domain(hz: f64) -> Result<(), String> {
+    if !(hz.is_finite() && hz > 0.0) {
+        return Err(format!("must be a positive rate in Hz, got {hz}"));
+    }
+    if hz < CONTROL_HZ_MIN {
+        return Err(format!(
+            "is a rate in Hz, got {hz} (one command every {} s): if {hz} s is the control \
+             period, the rate is {} Hz",
+            (1e3 / hz).round() / 1e3,
+            (1e3 / hz).round() / 1e3
+        ));
+    }
+    Ok(())
 }

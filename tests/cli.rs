@@ -65,6 +65,11 @@ fn broken_inputs_exit_2_with_location() {
             "bad_value.toml:2:",
             "positive",
         ),
+        (
+            &["fixtures/broken/ok.xml", "--spec", "fixtures/broken/control_period.toml"],
+            "control_period.toml:3:",
+            "the rate is 50 Hz",
+        ),
         (&["fixtures/broken/ok.xml", "--select", "no-such-rule"], "command line", "unknown rule"),
     ];
     for (args, loc, msg) in cases {
@@ -252,6 +257,13 @@ fn fit_window_must_be_a_positive_length() {
         let (code, _, err) = modellint(&["fit", "fixtures/gap/arm3.xml", "fixtures/gap", &w]);
         assert_eq!(code, 2, "--window {bad}: {err}");
         assert!(err.contains("positive number of seconds"), "--window {bad}: {err}");
+    }
+    // A control period written where the rate belongs is refused before any work.
+    for cmd in ["fit", "gap"] {
+        let (code, _, err) =
+            modellint(&[cmd, "fixtures/gap/arm3.xml", "fixtures/gap", "--control-hz", "0.01"]);
+        assert_eq!(code, 2, "{cmd}: {err}");
+        assert!(err.contains("the rate is 100 Hz"), "{cmd}: {err}");
     }
 }
 
@@ -726,5 +738,9 @@ fn cache_is_capped_and_cleaned() {
     assert_eq!(code, 0, "{out}");
     assert!(out.contains("removed 1 cache entry"), "{out}");
     assert_eq!(count(), 0);
+    // The lint's own flag is accepted as well.
+    let (code, out, err) = modellint(&["cache", "clean", "--cache-dir", d]);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(out.contains("removed 0 cache entries"), "{out}");
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -196,6 +196,11 @@ pub fn prepare(a: &FitArgs, sink: &dyn Sink) -> Result<Prepared, CmdError> {
     if a.holdout < 2 {
         return Err("--holdout must be at least 2".to_string().into());
     }
+    if let Some(hz) = a.replay.control_hz
+        && let Err(e) = crate::spec::control_hz_domain(hz)
+    {
+        return Err(format!("--control-hz {e}").into());
+    }
     if let Some(w) = a.window
         && !(w.is_finite() && w > 0.0)
     {

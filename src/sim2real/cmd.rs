@@ -66,9 +66,9 @@ pub fn report_error(e: &CmdError) -> i32 {
 pub fn gap(a: &GapArgs, sink: &dyn Sink) -> Result<GapReport, CmdError> {
     let loaded = crate::lint::load_for_api(&a.model, a.spec.clone()).map_err(CmdError::Load)?;
     if let Some(hz) = a.replay.control_hz
-        && !(hz.is_finite() && hz > 0.0)
+        && let Err(e) = crate::spec::control_hz_domain(hz)
     {
-        return Err(format!("--control-hz must be positive, got {hz}").into());
+        return Err(format!("--control-hz {e}").into());
     }
     let files = expand_inputs(&a.recordings).map_err(|e| e.to_string())?;
     let robot = &loaded.robot;
