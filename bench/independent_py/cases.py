@@ -226,6 +226,14 @@ CASES["Q6_shanks_payload"] = dict(QUAD_EP, seed=46, effects={"bodies": {
     f"{l}_shank": QUAD_PAYLOAD for l in ("FL", "FR", "RL", "RR")}})
 CASES["QR6_shanks_payload"] = dict(CASES["Q6_shanks_payload"], seed=66, episodes=3, seconds=4.0,
                                    heldout=[2])
+# ---- a floating-base robot recorded on a stand: the simulated quadruped's torso is welded to
+# the world (quad12.xml); `fit`/`gap` get its robot file with a free joint (quad12_float.xml),
+# whose base the replay must hold with the stand's inertia, the legs loaded by gravity.
+MODELS["quad12f"] = dict(MODELS["quad12"], nominal="quad12_float.xml")
+CASES["QR0f_stand_float_none"] = dict(QUAD_EP, model="quad12f", seed=67, episodes=3,
+                                      seconds=4.0, heldout=[2], effects={})
+CASES["QR7f_stand_float_knee_damping"] = dict(CASES["QR0f_stand_float_none"], seed=68,
+    effects={"joints": {f"{l}_knee": {"damping": 0.3} for l in ("FL", "FR", "RL", "RR")}})
 # ---- a free base (issue 48; floatsim.py, `sim: float`): the trunk on slide x / slide z / hinge
 # y joints standing on two legs (models/biped2.xml), both legs commanded alike; the ground is
 # floatsim's own penalty contact (spring-damper + regularised Coulomb friction), not MuJoCo's:

@@ -25,7 +25,10 @@ def case_setup(case, cases, models, here):
     if os.path.exists(out):
         shutil.rmtree(out)
     os.makedirs(os.path.join(out, "episodes"))
-    shutil.copy(os.path.join(here, "models", mcfg["xml"]), os.path.join(out, "nominal.xml"))
+    # The model `fit` is given: the simulated robot's own file unless the case gives the robot
+    # file a user would have (`nominal`: a floating base the recordings hold on a stand).
+    shutil.copy(os.path.join(here, "models", mcfg.get("nominal", mcfg["xml"])),
+                os.path.join(out, "nominal.xml"))
     return c, mcfg, cfg, out
 
 

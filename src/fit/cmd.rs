@@ -184,7 +184,9 @@ pub struct Prepared {
 /// Everything before the search: loads the model, checks the options, reads the recordings
 /// (their warnings and notes go to `sink` at once, before minutes of fitting).
 pub fn prepare(a: &FitArgs, sink: &dyn Sink) -> Result<Prepared, CmdError> {
-    let loaded = crate::lint::load_for_api(&a.model, a.spec.clone()).map_err(CmdError::Load)?;
+    let mut loaded =
+        crate::lint::load_for_api(&a.model, a.spec.clone()).map_err(CmdError::Load)?;
+    crate::sim2real::replay::hold_base(&mut loaded.robot, a.replay.base);
     let robot = &loaded.robot;
     // A candidate is a registered effect (a held component, `EFFECT~PARAMETER`, is told only).
     for e in &a.effects {

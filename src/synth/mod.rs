@@ -331,7 +331,7 @@ pub fn generate(
 ) -> Result<Dataset, String> {
     s.validate()?;
     crate::model::mj::silence_warnings();
-    let real = truth::real_robot(robot, joints, hidden)?;
+    let mut real = truth::real_robot(robot, joints, hidden)?;
     let bands: Vec<Band> = joints
         .iter()
         .map(|n| {
@@ -369,6 +369,17 @@ pub fn generate(
     } else {
         None
     };
+    if let Some(st) = &stand {
+        // The stand holds the base with unbounded inertia: pinning its pose between physics
+        // steps alone would let the robot fall freely within each step, its legs unloaded.
+        let m = &mut real.model;
+        let a = 1e6 * m.body_mass().iter().sum::<f64>().max(1e-9);
+        for k in st.dofadr..st.dofadr + 6 {
+            let old = m.dof_armature()[k];
+            m.dof_armature_mut()[k] = a;
+            m.dof_m0_mut()[k] += a - old;
+        }
+    }
     let clock = ControlClock { rate_hz: s.control_hz, t0_us: to_us(s.control_phase_s) };
     let dur_us = to_us(s.duration_s);
     let offsets: Vec<f64> = real.joints.iter().map(|j| j.offset).collect();

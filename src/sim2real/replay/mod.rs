@@ -44,6 +44,33 @@ pub enum BaseMode {
     Free,
 }
 
+/// Armature given to each of a held floating base's six DoFs [kg on the translations, kg·m² on
+/// the rotations], per kilogram of the robot. A test stand is a body of unbounded inertia: with
+/// a million times the robot's mass on the base's DoFs, the forces of the robot's own joints and
+/// gravity (which acts on mass, not on armature) move the base by at most a millionth of what
+/// they would move it free, so the limbs swing under gravity as on a stand (a robot within a few
+/// metres has composite rotational inertia well under its mass × 10 m²).
+pub const HELD_BASE_ARMATURE_PER_KG: f64 = 1e6;
+
+/// Gives the first floating base of `robot` the inertia of a test stand when the replay holds
+/// (`Fixed`) or drives (`Recorded`) it: resetting the base's pose and velocity around each
+/// physics step alone leaves the base free *during* the step, where the whole robot then falls
+/// and its joints carry no gravity load (a robot on a stand replayed as if in orbit). The
+/// replay applies a driven base's recorded acceleration as a force on that armature. Nothing is
+/// changed for `Free` or a fixed-base model.
+pub fn hold_base(robot: &mut Robot, base: BaseMode) {
+    if base == BaseMode::Free {
+        return;
+    }
+    let Some(f) = robot.joints.iter().find(|j| j.jtype == JointType::Free) else { return };
+    let dof = f.dofadr;
+    let mass: f64 = robot.mj.body_mass().iter().sum();
+    let a = HELD_BASE_ARMATURE_PER_KG * mass.max(1e-9);
+    for k in 0..6 {
+        mj::set_armature(&mut robot.mj, dof + k, a);
+    }
+}
+
 #[derive(Debug, Clone)]
 pub struct ReplayOptions {
     /// Control rate override [Hz]; else the recording's `control_rate_hz`; else none (each goal

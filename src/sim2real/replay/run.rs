@@ -115,13 +115,29 @@ impl Replayer<'_> {
                     let b = rec.base.as_ref().expect("checked");
                     let p0 = base_pose(&rec.t, b, t);
                     let p1 = base_pose(&rec.t, b, t + dt);
+                    let p2 = base_pose(&rec.t, b, t + 2.0 * dt);
+                    let vel = |a: &[f64; 7], b: &[f64; 7]| -> [f64; 6] {
+                        let w = quat_ang_vel(&a[3..7], &b[3..7], dt);
+                        [
+                            (b[0] - a[0]) / dt,
+                            (b[1] - a[1]) / dt,
+                            (b[2] - a[2]) / dt,
+                            w[0],
+                            w[1],
+                            w[2],
+                        ]
+                    };
+                    let (v0, v1) = (vel(&p0, &p1), vel(&p1, &p2));
                     d.qpos_mut()[qa..qa + 7].copy_from_slice(&p0);
-                    let qvel = d.qvel_mut();
-                    for k in 0..3 {
-                        qvel[va + k] = (p1[k] - p0[k]) / dt;
+                    d.qvel_mut()[va..va + 6].copy_from_slice(&v0);
+                    // The recorded acceleration as a force on the base's armature (a held base,
+                    // `hold_base`): the base then moves as recorded within the step too, and the
+                    // limbs feel its acceleration and gravity. Without armature this adds nothing.
+                    let arm: [f64; 6] = std::array::from_fn(|k| d.model().dof_armature()[va + k]);
+                    let qfrc = d.qfrc_applied_mut();
+                    for k in 0..6 {
+                        qfrc[va + k] = arm[k] * (v1[k] - v0[k]) / dt;
                     }
-                    let w = quat_ang_vel(&p0[3..7], &p1[3..7], dt);
-                    qvel[va + 3..va + 6].copy_from_slice(&w);
                 }
                 BaseMode::Free => {}
             }
