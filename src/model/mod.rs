@@ -252,6 +252,7 @@ pub struct Options {
 }
 
 /// A loaded robot model.
+#[derive(Clone)]
 pub struct Robot {
     /// Unique per loaded model in this process (probe benches key their scratch copies on it).
     pub uid: u64,

@@ -385,6 +385,9 @@ impl std::fmt::Debug for Progress {
 
 /// Runs the whole selection on `recs`.
 pub fn fit(robot: &Robot, recs: &[Recording], opts: &FitOptions) -> FitOutcome {
+    // A floating base the replay holds (a robot on a stand) gets the stand's inertia.
+    let held = crate::sim2real::replay::held(robot, opts.replay.base);
+    let robot = held.as_ref().unwrap_or(robot);
     let engine = Engine::new(robot, recs, opts);
     let by_key = opts.holdout_by.as_ref().map(|(k, v)| split_by_key(recs, k, v));
     let Split { train: train0, heldout, by_time, note } = match by_key {

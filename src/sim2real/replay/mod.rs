@@ -59,16 +59,32 @@ pub const HELD_BASE_ARMATURE_PER_KG: f64 = 1e6;
 /// replay applies a driven base's recorded acceleration as a force on that armature. Nothing is
 /// changed for `Free` or a fixed-base model.
 pub fn hold_base(robot: &mut Robot, base: BaseMode) {
-    if base == BaseMode::Free {
-        return;
-    }
-    let Some(f) = robot.joints.iter().find(|j| j.jtype == JointType::Free) else { return };
-    let dof = f.dofadr;
-    let mass: f64 = robot.mj.body_mass().iter().sum();
-    let a = HELD_BASE_ARMATURE_PER_KG * mass.max(1e-9);
+    let Some((dof, a)) = base_hold(robot, base) else { return };
     for k in 0..6 {
         mj::set_armature(&mut robot.mj, dof + k, a);
     }
+}
+
+/// A copy of `robot` with its base held ([`hold_base`]) when the replay holds or drives a
+/// floating base that is not held yet; `None` when nothing is to change.
+pub fn held(robot: &Robot, base: BaseMode) -> Option<Robot> {
+    base_hold(robot, base)?;
+    let mut r = robot.clone();
+    hold_base(&mut r, base);
+    Some(r)
+}
+
+/// (first DoF of the floating base, the stand's armature) when `base` holds or drives it and its
+/// DoFs do not have that armature yet.
+fn base_hold(robot: &Robot, base: BaseMode) -> Option<(usize, f64)> {
+    if base == BaseMode::Free {
+        return None;
+    }
+    let dof = robot.joints.iter().find(|j| j.jtype == JointType::Free)?.dofadr;
+    let mass: f64 = robot.mj.body_mass().iter().sum();
+    let a = HELD_BASE_ARMATURE_PER_KG * mass.max(1e-9);
+    let arm = robot.mj.dof_armature();
+    (0..6).any(|k| arm.get(dof + k).is_some_and(|&x| x < a)).then_some((dof, a))
 }
 
 #[derive(Debug, Clone)]
