@@ -227,10 +227,10 @@ pub fn load(map: &mut SourceMap, path: &Path, joint_names: &[String]) -> Result<
             ));
         }
     }
-    if let Some(f) = &r.control_hz {
-        if let Err(e) = control_hz_domain(*f.get_ref()) {
-            return Err(bad(f.span(), format!("robot.control_hz {e}")));
-        }
+    if let Some(f) = &r.control_hz
+        && let Err(e) = control_hz_domain(*f.get_ref())
+    {
+        return Err(bad(f.span(), format!("robot.control_hz {e}")));
     }
     for (key, val) in [("action_delay_steps", &r.action_delay_steps), ("mass_kg", &r.mass_kg)] {
         if let Some(s) = val {

@@ -11,6 +11,7 @@ use std::path::{Path, PathBuf};
 pub const SKIPPED: &[(&str, &str)] = &[
     ("missing-action-delay", "control rate and measured action delay"),
     ("urdf-mjcf-drift", "the companion URDF to compare with"),
+    ("mass-budget", "the weighed robot's mass"),
 ];
 
 /// Rules that run without a spec but check less, and what they fall back to.
@@ -151,6 +152,9 @@ pub fn waiting(spec: &crate::spec::Spec, robot: &crate::model::Robot) -> (Waitin
     }
     if !keys.is_empty() && !robot.actuators.is_empty() {
         skipped.push(("missing-action-delay", keys.join(", ")));
+    }
+    if r.mass_kg.is_none() {
+        skipped.push(("mass-budget", "robot.mass_kg".to_string()));
     }
     // Only when there is a URDF to compare with: `<model>.urdf` beside the model.
     if r.companion_urdf.is_none()

@@ -379,3 +379,37 @@ fn cli_convert_bam() {
     // timestamp (docs/recording-format.md).
     assert_eq!(rec.control_rate_hz, None);
 }
+
+/// A driven joint the recordings have no column for is held at the keyframe's command in the
+/// replay: said, naming the recorded joints of its chain (it was silent; the replay of those
+/// joints then carries whatever the absent joint did on the robot). The three-joint leg with
+/// only its hip recorded: knee and ankle hang below it.
+#[test]
+fn cli_a_driven_joint_without_a_column_is_said() {
+    let mut text = String::from("# control_rate_hz: 100\nt,hip_pitch.q,hip_pitch.q_cmd\n");
+    for k in 0..50 {
+        let t = k as f64 * 0.01;
+        let c = if k < 10 { -0.4 } else { -0.3 };
+        text.push_str(&format!("{t},{c},{c}\n"));
+    }
+    let p = tmp("hip_only.csv", &text);
+    let leg = root().join("fixtures/independent_py/R0_none/nominal.xml");
+    let o = bin().arg("gap").arg(&leg).arg(&p).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(0), "stderr: {err}");
+    assert!(err.contains("no column in any recording"), "stderr: {err}");
+    assert!(err.contains("knee → hip_pitch") && err.contains("ankle → hip_pitch"), "stderr: {err}");
+    // Joints beside the recorded one, not below or above it, are not named: arm3's three
+    // pendulums hang from one base each on its own.
+    let mut text =
+        String::from("# control_rate_hz: 100\nt,shoulder_pitch.q,shoulder_pitch.q_cmd\n");
+    for k in 0..50 {
+        let c = if k < 10 { 0.0 } else { 0.1 };
+        text.push_str(&format!("{},{c},{c}\n", k as f64 * 0.01));
+    }
+    let p = tmp("one_pendulum.csv", &text);
+    let o = bin().args(["gap", &arm()]).arg(&p).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(0), "stderr: {err}");
+    assert!(!err.contains("no column in any recording"), "stderr: {err}");
+}

@@ -287,3 +287,17 @@ fn parallel_ankle_count_follows_the_tendon_actuators() {
     let text = std::fs::read_to_string(&spec).unwrap();
     assert!(text.contains("2 if two motors in the shank drive this ankle"), "{text}");
 }
+
+/// A model with no actuator at all (a URDF: the training framework adds the drives) says
+/// nothing of which joints a motor drives: the template marks none passive and leaves the
+/// counts to the hardware, so it adds no finding (marked passive, every joint got "passive
+/// joint has no spring" errors).
+#[test]
+fn a_model_without_actuators_gets_no_passive_joints() {
+    let model = Path::new("fixtures/rules/urdf-mjcf-drift/urdf/valid.urdf");
+    let spec = write_template(model, "urdf-no-actuators");
+    let text = std::fs::read_to_string(&spec).unwrap();
+    assert!(!text.contains("passive = true"), "{text}");
+    assert!(text.contains("# actuated = ..."), "{text}");
+    loads_and_adds_nothing(model, &spec);
+}

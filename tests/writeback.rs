@@ -216,6 +216,37 @@ fn write_model_refuses_urdf() {
     let _ = std::fs::remove_dir_all(&work);
 }
 
+/// A fit whose every kept effect has no MJCF form (a load-dependent or Stribeck friction) writes
+/// the input model unchanged but for its paths, and says so: not "fitted model written".
+#[test]
+fn write_model_says_when_nothing_of_the_fit_has_an_mjcf_form() {
+    let model = root().join("fixtures/gap/arm3.xml");
+    let robot = load(&model);
+    let work = tmp("no-mjcf-form");
+    let sel = vec![kept(
+        "stribeck_friction",
+        "elbow_pitch",
+        &[("static", 0.2), ("dynamic", 0.1), ("v_stribeck", 0.1)],
+    )];
+    let w =
+        modellint::fit::writemodel::write_model(&model, &robot, &sel, &work.join("o.xml")).unwrap();
+    assert!(!w.changed);
+    assert!(
+        w.notes.iter().any(|n| n.contains("nothing of the fit has an MJCF form")
+            && n.contains("stribeck_friction on elbow_pitch")),
+        "{:?}",
+        w.notes
+    );
+    let written = load(&work.join("o.xml"));
+    assert_eq!(written.mj.dof_frictionloss(), robot.mj.dof_frictionloss());
+    // A damping beside it is written: the model changed.
+    let sel2 = [sel, vec![kept("viscous_damping", "elbow_pitch", &[("damping", 0.02)])]].concat();
+    let w = modellint::fit::writemodel::write_model(&model, &robot, &sel2, &work.join("o2.xml"))
+        .unwrap();
+    assert!(w.changed, "{:?}", w.notes);
+    let _ = std::fs::remove_dir_all(&work);
+}
+
 /// The Isaac Lab snippet of `--write-actuators` is valid Python for every effect it mentions.
 #[test]
 fn actuator_snippet_parses_as_python() {

@@ -184,8 +184,7 @@ pub struct Prepared {
 /// Everything before the search: loads the model, checks the options, reads the recordings
 /// (their warnings and notes go to `sink` at once, before minutes of fitting).
 pub fn prepare(a: &FitArgs, sink: &dyn Sink) -> Result<Prepared, CmdError> {
-    let mut loaded =
-        crate::lint::load_for_api(&a.model, a.spec.clone()).map_err(CmdError::Load)?;
+    let mut loaded = crate::lint::load_for_api(&a.model, a.spec.clone()).map_err(CmdError::Load)?;
     crate::sim2real::replay::hold_base(&mut loaded.robot, a.replay.base);
     let robot = &loaded.robot;
     // A candidate is a registered effect (a held component, `EFFECT~PARAMETER`, is told only).
@@ -450,7 +449,11 @@ pub fn write_model(
         notes.push(n);
     }
     let list: Vec<String> = w.files.iter().map(|p| p.display().to_string()).collect();
-    let msg = format!("fitted model written to {}", list.join(", "));
+    let msg = if w.changed {
+        format!("fitted model written to {}", list.join(", "))
+    } else {
+        format!("model written to {} (no fitted value in it: see the note above)", list.join(", "))
+    };
     sink.said(&msg);
     notes.push(msg);
     Ok(notes)

@@ -100,6 +100,17 @@ pub fn edit_file(
                     for (a, v) in &attrs {
                         add(node, a, num(*v));
                     }
+                    // A fitted stiffness pulls towards the pose it was fitted about (the
+                    // keyframe's): MuJoCo's spring pulls towards `springref`, 0 unless set.
+                    if attrs.iter().any(|(a, _)| *a == "stiffness")
+                        && let Some(jt) = robot.joint(j)
+                    {
+                        let q = robot.key.qpos.get(jt.qposadr).copied().unwrap_or(0.0);
+                        let hinge = jt.jtype == crate::model::JointType::Hinge;
+                        let deg =
+                            hinge && crate::rules::limits::ctrlrange_in_degrees::degree_mode(robot);
+                        add(node, "springref", num(if deg { q.to_degrees() } else { q }));
+                    }
                 }
             }
             WriteBack::Actuator(attrs) => {

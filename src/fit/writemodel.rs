@@ -26,6 +26,8 @@ use crate::model::Robot;
 pub struct Written {
     pub files: Vec<PathBuf>,
     pub notes: Vec<String>,
+    /// Whether any fitted value was written into the model (else it is the input, re-pathed).
+    pub changed: bool,
 }
 
 struct Src {
@@ -187,9 +189,19 @@ pub fn write_model(
         return Err(format!("--write-model {}: {}", out.display(), hard.join("; ")));
     }
     notes.extend(soft);
+    let changed = edited.iter().any(Option::is_some);
     if selected.is_empty() {
         notes.push(format!(
             "no missing physics was selected: {} is the input model, unchanged but for its paths",
+            out.display()
+        ));
+    } else if !changed {
+        let effects: Vec<String> =
+            selected.iter().map(|s| format!("{} on {}", s.effect, s.joints.join(","))).collect();
+        notes.push(format!(
+            "nothing of the fit has an MJCF form ({}): {} is the input model, unchanged but for \
+             its paths; the fitted values are in --write-actuators",
+            effects.join("; "),
             out.display()
         ));
     }
@@ -316,7 +328,7 @@ pub fn write_model(
     crate::model::load(&mut map, out, None).map_err(|e| {
         format!("--write-model {}: the written model does not load: {e}", out.display())
     })?;
-    Ok(Written { files: written, notes })
+    Ok(Written { files: written, notes, changed })
 }
 
 #[cfg(test)]

@@ -41,21 +41,33 @@ pub fn concise(map: &SourceMap, findings: &[Finding]) -> String {
     out
 }
 
-/// `--statistics`: findings per rule, most first (ties by rule id), then the total.
+/// `--statistics`: findings per rule, most first (ties by rule id), each with its findings'
+/// levels (a rule's findings can differ: a probe's verdict or a weaker case lowers one), then
+/// the total.
 pub fn statistics(findings: &[&Finding]) -> String {
-    let mut by: std::collections::BTreeMap<&str, (usize, crate::finding::Severity)> =
-        std::collections::BTreeMap::new();
+    use crate::finding::Severity;
+    let mut by: std::collections::BTreeMap<&str, Vec<Severity>> = std::collections::BTreeMap::new();
     for f in findings {
-        let e = by.entry(f.rule).or_insert((0, f.severity));
-        e.0 += 1;
-        e.1 = e.1.max(f.severity);
+        by.entry(f.rule).or_default().push(f.severity);
     }
-    let mut rows: Vec<(&str, usize, crate::finding::Severity)> =
-        by.into_iter().map(|(r, (n, s))| (r, n, s)).collect();
-    rows.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(b.0)));
+    let mut rows: Vec<(&str, Vec<Severity>)> = by.into_iter().collect();
+    rows.sort_by(|a, b| b.1.len().cmp(&a.1.len()).then(a.0.cmp(b.0)));
     let mut out = String::new();
-    for (rule, n, sev) in &rows {
-        out.push_str(&format!("{n:>5}  {rule:<28} {}\n", sev.as_str()));
+    for (rule, sevs) in &rows {
+        let mut levels: Vec<Severity> = sevs.clone();
+        levels.sort();
+        levels.dedup();
+        levels.reverse();
+        let text = if levels.len() == 1 {
+            levels[0].as_str().to_string()
+        } else {
+            let parts: Vec<String> = levels
+                .iter()
+                .map(|l| format!("{} {}", sevs.iter().filter(|x| *x == l).count(), l.as_str()))
+                .collect();
+            parts.join(", ")
+        };
+        out.push_str(&format!("{:>5}  {rule:<28} {text}\n", sevs.len()));
     }
     out.push_str(&format!("{:>5}  total\n", findings.len()));
     out
@@ -229,5 +241,41 @@ pub fn render_many(
             }
             out
         }
+    }
+}
+
+#[cfg(test)]
+mod statistics_tests {
+    use super::*;
+    use crate::finding::Severity;
+    use crate::model::source::Loc;
+
+    /// A rule whose findings carry different levels is counted per level, not shown at its
+    /// strongest: three errors and one info are "3 error, 1 info".
+    #[test]
+    fn statistics_count_each_level_of_a_rule() {
+        let loc = Loc { file: 0, start: 0, end: 0 };
+        let f = |rule, s| Finding::new(rule, s, "m", loc);
+        let all = [
+            f("a-rule", Severity::Error),
+            f("a-rule", Severity::Info),
+            f("a-rule", Severity::Error),
+            f("a-rule", Severity::Error),
+            f("b-rule", Severity::Warning),
+        ];
+        let refs: Vec<&Finding> = all.iter().collect();
+        let s = statistics(&refs);
+        let rows: Vec<&str> = s.lines().collect();
+        assert_eq!(
+            rows[0].split_whitespace().collect::<Vec<_>>(),
+            ["4", "a-rule", "3", "error,", "1", "info"],
+            "{s}"
+        );
+        assert_eq!(
+            rows[1].split_whitespace().collect::<Vec<_>>(),
+            ["1", "b-rule", "warning"],
+            "{s}"
+        );
+        assert_eq!(rows[2].split_whitespace().collect::<Vec<_>>(), ["5", "total"], "{s}");
     }
 }

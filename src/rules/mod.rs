@@ -293,6 +293,7 @@ pub fn registry() -> Vec<&'static dyn Rule> {
         &inertia::parallel_ankle_armature::ParallelAnkleArmature,
         &inertia::zero_armature::ZeroArmature,
         &inertia::isotropic_base_inertia::IsotropicBaseInertia,
+        &inertia::mass_budget::MassBudget,
         &inertia::copied_inertial::CopiedInertial,
         &inertia::inertia_exceeds_geometry::InertiaExceedsGeometry,
         &contact::toe_tilt::ToeTilt,

@@ -64,8 +64,7 @@ pub fn report_error(e: &CmdError) -> i32 {
 /// measures the gap (and writes the HTML report when asked). What `--format json` prints is
 /// this report, serialised; the Python API returns the same.
 pub fn gap(a: &GapArgs, sink: &dyn Sink) -> Result<GapReport, CmdError> {
-    let mut loaded =
-        crate::lint::load_for_api(&a.model, a.spec.clone()).map_err(CmdError::Load)?;
+    let mut loaded = crate::lint::load_for_api(&a.model, a.spec.clone()).map_err(CmdError::Load)?;
     replay::hold_base(&mut loaded.robot, a.replay.base);
     if let Some(hz) = a.replay.control_hz
         && let Err(e) = crate::spec::control_hz_domain(hz)

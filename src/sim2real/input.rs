@@ -212,6 +212,9 @@ pub fn read_for_replay(
     if let Some(w) = coupling_warning(robot, &recs, &unscored, opts) {
         warnings.push(w);
     }
+    if let Some(w) = absent_joints_message(robot, &recs, &actuated, opts) {
+        warnings.push(w);
+    }
     Ok(ReplayInputs { recs, notes, warnings, unscored })
 }
 
@@ -293,6 +296,49 @@ fn same_chain(robot: &Robot, a: &str, b: &str) -> bool {
 /// A warning naming the scored joints that move with a joint left out by `--no-command` (one
 /// kinematic chain, or any joint on a free base): that joint is replayed to its own positions,
 /// so its servo moves it behind its recorded motion, and their scores and fits carry that.
+/// Driven joints of the model that no recording has a column for are held at the keyframe's
+/// command in every replay, whatever they did on the robot: said when one shares a kinematic
+/// chain with a recorded joint (every joint shares one when the base is free), whose replay
+/// then carries what the absent joint's motion did to it.
+fn absent_joints_message(
+    robot: &Robot,
+    recs: &[Recording],
+    actuated: &[String],
+    opts: &ReplayOptions,
+) -> Option<String> {
+    let recorded = |j: &str| recs.iter().any(|r| r.joints.iter().any(|x| x.name == j));
+    let free = opts.base == replay::BaseMode::Free;
+    let parts: Vec<String> = actuated
+        .iter()
+        .filter(|a| !recorded(a))
+        .filter_map(|a| {
+            let near: Vec<&str> = recs
+                .iter()
+                .flat_map(|r| r.joints.iter().map(|j| j.name.as_str()))
+                .filter(|s| free || same_chain(robot, a, s))
+                .fold(Vec::new(), |mut v, s| {
+                    if !v.contains(&s) {
+                        v.push(s);
+                    }
+                    v
+                });
+            (!near.is_empty()).then(|| format!("{a} → {}", near.join(", ")))
+        })
+        .collect();
+    if parts.is_empty() {
+        return None;
+    }
+    Some(format!(
+        "driven joint(s) with no column in any recording are held at the keyframe's command \
+         in every replay{}; the recorded joints in their kinematic chain feel whatever the \
+         held joint did differently on the robot, and their scores and any fit carry it ({}): \
+         record them (position and command; with positions alone, --no-command replays them \
+         along their recorded positions)",
+        if free { " (the base is free: every joint feels them)" } else { "" },
+        parts.join("; ")
+    ))
+}
+
 fn coupling_warning(
     robot: &Robot,
     recs: &[Recording],

@@ -349,7 +349,10 @@ pub fn template(robot: &Robot, model_display: &str) -> String {
     let mut o = String::new();
     let fams = families(robot);
     let act = actuated(robot);
-    let pas = passive(robot);
+    // A model with no actuator at all (a URDF; a file whose actuators the training framework
+    // adds) says nothing of which joints a motor drives: none is written as passive.
+    let no_actuators = robot.actuators.is_empty();
+    let pas = if no_actuators { Vec::new() } else { passive(robot) };
     let all: Vec<String> = robot.joints.iter().map(|j| j.name.clone()).collect();
     let w = &mut o;
     let _ = writeln!(
@@ -373,16 +376,27 @@ pub fn template(robot: &Robot, model_display: &str) -> String {
         robot.path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default()
     });
     let _ = writeln!(w, "name = {}", quote(&name));
-    let _ = writeln!(
-        w,
-        "actuated = {}                 # joints an actuator drives in the model",
-        act.len()
-    );
-    let _ = writeln!(
-        w,
-        "passive = {}                  # hinge/slide joints no actuator drives",
-        pas.len()
-    );
+    if no_actuators {
+        let _ = writeln!(
+            w,
+            "# actuated = ...              # the model has no actuator: how many joints the hardware drives"
+        );
+        let _ = writeln!(
+            w,
+            "# passive = ...               # and how many no motor drives (then mark each in its [joints] table)"
+        );
+    } else {
+        let _ = writeln!(
+            w,
+            "actuated = {}                 # joints an actuator drives in the model",
+            act.len()
+        );
+        let _ = writeln!(
+            w,
+            "passive = {}                  # hinge/slide joints no actuator drives",
+            pas.len()
+        );
+    }
     let _ = writeln!(
         w,
         "# soft_limit_factor = 0.9     # training ctrlrange = factor × hardware range, centred (0 < f ≤ 1); 0.9 when absent"

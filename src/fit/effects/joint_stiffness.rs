@@ -16,7 +16,7 @@ declare_effect! {
     /// `implied_stiffness` = −c·kp
     ///
     /// ## Write-back
-    /// joint `stiffness` (set `springref` to the keyframe yourself)
+    /// joint `stiffness`, and `springref` at the keyframe position
     ///
     /// ## Isaac Lab / mjlab
     /// comment with the parameters

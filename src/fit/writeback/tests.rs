@@ -87,3 +87,37 @@ fn body_effects_are_written_as_the_inertial_the_fit_simulated() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A fitted joint stiffness is written with `springref` at the keyframe position it was fitted
+/// about (MuJoCo's spring otherwise pulls towards 0), in the file's angle unit; compiled, the
+/// written model's `qpos_spring` is the keyframe's.
+#[test]
+fn a_fitted_stiffness_is_written_with_its_springref_at_the_keyframe() {
+    let dir = std::env::temp_dir().join(format!("modellint-wb-spring-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for compiler in [r#"<compiler angle="radian"/>"#, ""] {
+        let xml = ARM.replace("<mujoco>", &format!("<mujoco>{compiler}")).replace(
+            "</actuator>",
+            r#"</actuator><keyframe><key qpos="0.5 -1.2" ctrl="0.5 -1.2"/></keyframe>"#,
+        );
+        let path = dir.join("arm.xml");
+        std::fs::write(&path, &xml).unwrap();
+        let load = |p: &std::path::Path| {
+            let mut map = crate::model::source::SourceMap::default();
+            crate::model::load(&mut map, p, None).unwrap()
+        };
+        let robot = load(&path);
+        let sel = vec![selected("joint_stiffness", "elbow", &[3.0])];
+        let (text, warnings) = edit_mjcf(&xml, &robot, &sel).unwrap();
+        assert!(warnings.is_empty(), "{warnings:?}");
+        assert!(text.contains(r#"stiffness="3""#), "{text}");
+        let out = dir.join("out.xml");
+        std::fs::write(&out, &text).unwrap();
+        let written = load(&out);
+        let j = written.joint("elbow").unwrap();
+        let spring = written.mj.qpos_spring()[j.qposadr];
+        // keyframe qpos is in radians whatever the compiler's angle unit
+        assert!((spring - -1.2).abs() < 1e-6, "{compiler}: qpos_spring {spring}\n{text}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -104,7 +104,13 @@ impl Claim for Underdamped {
     fn key(&self, _: &Loaded) -> Result<usize, &'static str> {
         Ok(self.joint)
     }
-    fn judge(&self, _: &Loaded, r: &StepResponse) -> Verdict {
+    fn judge(&self, l: &Loaded, r: &StepResponse) -> Verdict {
+        let slide = l
+            .robot
+            .joints
+            .get(self.joint)
+            .is_some_and(|j| j.jtype == crate::model::JointType::Slide);
+        let unit = if slide { "m" } else { "rad" };
         let m = measured_map(r);
         let pre = r.preconditions();
         if r.diverged {
@@ -118,7 +124,7 @@ impl Claim for Underdamped {
                     &pre,
                     m,
                     format!(
-                        "measured ζ = {zs}{pred}, overshoot {:.1} % on a {} rad step{}",
+                        "measured ζ = {zs}{pred}, overshoot {:.1} % on a {} {unit} step{}",
                         100.0 * r.loop_overshoot,
                         fmt_num(r.step, 3),
                         if r.frictionloss > 0.0 {
@@ -259,8 +265,14 @@ impl Rule for UnderdampedPdGains {
             let kd_max =
                 p.family.as_deref().and_then(|f| cx.spec?.motor(f)).and_then(|m| v(&m.kd_max));
             let kd_need = 2.0 * zmin * (p.kp * p.inertia).sqrt();
+            // A slide's gains and inertia are linear: N/m, N·s/m, kg.
+            let (uk, ud, ui) = if j.jtype == crate::model::JointType::Slide {
+                ("N/m", "N·s/m", "kg")
+            } else {
+                ("N·m/rad", "N·m·s/rad", "kg·m²")
+            };
             let msg = format!(
-                "joint `{}` is underdamped under PD control: ζ = {} (kp {} N·m/rad, kd {} N·m·s/rad, I {} kg·m², ω_n {} rad/s), below {}",
+                "joint `{}` is underdamped under PD control: ζ = {} (kp {} {uk}, kd {} {ud}, I {} {ui}, ω_n {} rad/s), below {}",
                 j.name,
                 fmt_num(z, 3),
                 fmt_num(p.kp, 4),
@@ -290,7 +302,7 @@ impl Rule for UnderdampedPdGains {
             }
             let arm_note = match z_arm {
                 Some(za) => format!(
-                    " With the armature alone ({} kg·m²) ζ would be {}; the link inertia makes it worse.",
+                    " With the armature alone ({} {ui}) ζ would be {}; the link inertia makes it worse.",
                     fmt_num(p.armature, 4),
                     fmt_num(za, 3)
                 ),
@@ -317,14 +329,14 @@ impl Rule for UnderdampedPdGains {
             let help = match kd_max {
                 // The cap limits the controller's kd; joint damping adds to it.
                 Some(cap) if kd_need - j.damping > cap => format!(
-                    "reaching ζ = {} needs a controller kd ≥ {} N·m·s/rad, above the firmware cap kd_max = {} N·m·s/rad, so it is impossible at this kp; lower kp to {} N·m/rad (with kd = kd_max + joint damping)",
+                    "reaching ζ = {} needs a controller kd ≥ {} {ud}, above the firmware cap kd_max = {} {ud}, so it is impossible at this kp; lower kp to {} {uk} (with kd = kd_max + joint damping)",
                     fmt_num(zmin, 3),
                     fmt_num(kd_need - j.damping, 4),
                     fmt_num(cap, 4),
                     fmt_num(((cap + j.damping) / (2.0 * zmin)).powi(2) / p.inertia, 4)
                 ),
                 _ => format!(
-                    "raise kd to ≥ {} N·m·s/rad (actuator kv + joint damping), or lower kp to ≤ {} N·m/rad at the current kd",
+                    "raise kd to ≥ {} {ud} (actuator kv + joint damping), or lower kp to ≤ {} {uk} at the current kd",
                     fmt_num(kd_need, 4),
                     fmt_num((p.kd / (2.0 * zmin)).powi(2) / p.inertia, 4)
                 ),

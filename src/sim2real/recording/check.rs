@@ -50,9 +50,10 @@ impl Recording {
                     i,
                     Some("t"),
                     format!(
-                        "time not strictly increasing: t = {x} at {} is not after t = {} at {}",
+                        "time not strictly increasing: t = {} s at {} is not after t = {} s at {}",
+                        seconds_text(x),
                         at(i),
-                        self.t[i - 1],
+                        seconds_text(self.t[i - 1]),
                         at(i - 1)
                     ),
                 ));
@@ -169,4 +170,12 @@ impl Recording {
         }
         Ok(())
     }
+}
+
+/// A time in seconds as a message shows it: to the nanosecond, trailing zeros dropped, so a
+/// stamp converted from milliseconds reads as written (0.285, not 0.28500000000000003).
+fn seconds_text(x: f64) -> String {
+    let s = format!("{x:.9}");
+    let s = s.trim_end_matches('0');
+    s.strip_suffix('.').unwrap_or(s).to_string()
 }

@@ -203,6 +203,14 @@ struct Header<'a> {
     t_col: usize,
 }
 
+/// Header names (lower case) that are a time stamp under another name than `t`.
+const TIME_NAMES: &[&str] =
+    &["time", "timestamp", "time_s", "time_ms", "t_s", "t_ms", "stamp", "sec", "secs", "seconds"];
+
+/// Joint column suffixes (lower case) that are a servo target under another name than `q_cmd`.
+const COMMAND_NAMES: &[&str] =
+    &["q_des", "q_target", "q_ref", "target", "cmd", "command", "q_d", "pos_des", "goal", "q_goal"];
+
 fn parse_header<'a>(
     path: &Path,
     ln: usize,
@@ -235,11 +243,21 @@ fn parse_header<'a>(
             Field::Ignored
         } else {
             let Some((joint, suffix)) = name.rsplit_once('.') else {
+                // A time stamp under another name is the likeliest: say to rename it.
+                let lower = name.to_ascii_lowercase();
+                let hint = if TIME_NAMES.contains(&lower.as_str()) {
+                    format!(
+                        "if it is the time stamp, name it 't' (seconds; other units declared with \
+                         `# units: ms`); an extra signal is skipped with --ignore-columns '{name}'"
+                    )
+                } else {
+                    format!("an extra signal? skip it with --ignore-columns '{name}'")
+                };
                 return Err(err(
                     Some(name),
                     format!(
                         "header: column '{name}' is neither 't', 'base.<x|y|z|qw|qx|qy|qz>' nor '<joint>.<suffix>' \
-                         (an extra signal? skip it with --ignore-columns '{name}')"
+                         ({hint})"
                     ),
                 ));
             };
@@ -250,11 +268,20 @@ fn parse_header<'a>(
                 Field::Base(b)
             } else {
                 let Some(si) = JOINT_SUFFIXES.iter().position(|s| *s == suffix) else {
+                    // A servo target under another name: say to rename it to the command.
+                    let lower = suffix.to_ascii_lowercase();
+                    let hint = if COMMAND_NAMES.contains(&lower.as_str()) {
+                        format!(
+                            "if it is the servo's target, name it '{joint}.q_cmd'; an extra signal \
+                             is skipped with --ignore-columns '*.{suffix}'"
+                        )
+                    } else {
+                        format!("an extra signal? skip it with --ignore-columns '*.{suffix}'")
+                    };
                     return Err(err(
                         Some(name),
                         format!(
-                            "header: column '{name}' has unknown suffix '.{suffix}' (expected one of .{}; an \
-                             extra signal? skip it with --ignore-columns '*.{suffix}')",
+                            "header: column '{name}' has unknown suffix '.{suffix}' (expected one of .{}; {hint})",
                             JOINT_SUFFIXES.join(", .")
                         ),
                     ));

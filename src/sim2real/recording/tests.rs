@@ -69,6 +69,13 @@ fn structural_errors() {
         e.message.contains("unknown suffix '.vel'") && e.column.as_deref() == Some("a.vel"),
         "{e}"
     );
+    // A time stamp or a servo target under another name is told its name.
+    let e = parse_err("time,a.q\n0,1\n1,1\n");
+    assert!(e.message.contains("name it 't'"), "{e}");
+    let e = parse_err("t,a.q,a.q_des\n0,1,1\n1,1,1\n");
+    assert!(e.message.contains("name it 'a.q_cmd'"), "{e}");
+    let e = parse_err("t,a.q,a.current\n0,1,1\n1,1,1\n");
+    assert!(e.message.contains("an extra signal?") && !e.message.contains("q_cmd'"), "{e}");
     let e = parse_err("t,a.qd\n0,1\n1,1\n");
     assert!(e.message.contains("no 'a.q' column"), "{e}");
     let e = parse_err("t,a.q,base.x,base.y,base.z\n0,0,0,0,0\n1,0,0,0,0\n");
@@ -97,7 +104,7 @@ fn row_errors_name_the_line() {
     }
     let e = parse_err("t,a.q\n0,1\n0.2,1\n0.1,1\n");
     assert_eq!(e.line, Some(4));
-    assert!(e.message.contains("t = 0.1 at line 4 is not after t = 0.2 at line 3"), "{e}");
+    assert!(e.message.contains("t = 0.1 s at line 4 is not after t = 0.2 s at line 3"), "{e}");
     let e = parse_err("t,a.q\n0,1\n0,2\n");
     assert!(e.message.contains("not strictly increasing"), "{e}");
     // A row logged twice, character for character, is left out and counted; not when the
