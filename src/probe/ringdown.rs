@@ -50,8 +50,10 @@ pub struct Ring {
     pub stiffness: f64,
     /// Release displacement from the spring's rest position, rad or m.
     pub release: f64,
-    /// Largest |q − rest| over the run, rad or m (0: the joint did not move).
+    /// Largest |q − rest| over the run, rad or m.
     pub max_motion: f64,
+    /// Largest |q − release position| over the run, rad or m (0: the joint did not move).
+    pub moved: f64,
     /// Mean interval between successive maxima, s (NaN without two maxima).
     pub period: f64,
     /// Number of periods simulated.
@@ -220,6 +222,7 @@ pub fn run(robot: &Robot, joint: usize) -> Option<Ring> {
     }
     out.duration = x.len() as f64 * dt;
     out.max_motion = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    out.moved = x.iter().fold(0.0f64, |m, v| m.max((v - delta).abs()));
     let peaks: Vec<(usize, f64)> = (1..x.len().saturating_sub(1))
         .filter(|&i| x[i].abs() >= x[i - 1].abs() && x[i].abs() > x[i + 1].abs())
         .filter(|&i| x[i].signum() == delta.signum())
