@@ -8,8 +8,10 @@
 //! * Measures: the oscillation's period, the amplitude after up to 20 periods relative to the
 //!   release amplitude, the damping ratio that decay implies (logarithmic decrement), and the
 //!   time until the amplitude falls below 10 % of the release (or that it never did).
-//! * Preconditions it records: the released joint moved (a closed loop or an equality can hold
-//!   it still); the spring's period spans at least [`MIN_STEPS_PER_PERIOD`] timesteps (else
+//! * Preconditions it records: no active equality constraint acts on the joint on the stand
+//!   ([`equality_on`]: with the other DoFs frozen a closed loop is rigid, and the constraint's
+//!   softness, not the spring, decides the motion); the released joint moved (a closed loop or
+//!   an equality can hold it still); the spring's period spans at least [`MIN_STEPS_PER_PERIOD`] timesteps (else
 //!   the integrator, not the model's damping, decides the decay).
 //! * Used by `passive-joint-spring` to *measure* a spring joint with no damping (a fact of the
 //!   file): how long it rings. It never refutes that fact.
@@ -48,8 +50,10 @@ pub struct Ring {
     pub stiffness: f64,
     /// Release displacement from the spring's rest position, rad or m.
     pub release: f64,
-    /// Largest |q − rest| over the run, rad or m (0: the joint did not move).
+    /// Largest |q − rest| over the run, rad or m.
     pub max_motion: f64,
+    /// Largest |q − release position| over the run, rad or m (0: the joint did not move).
+    pub moved: f64,
     /// Mean interval between successive maxima, s (NaN without two maxima).
     pub period: f64,
     /// Number of periods simulated.
@@ -62,6 +66,101 @@ pub struct Ring {
     pub ring_time: Option<f64>,
     /// Simulated time, s.
     pub duration: f64,
+    /// An active equality constraint that acts on the joint on the stand (name, or `#id`):
+    /// with every other DoF frozen it holds a closed loop rigid, so the constraint's own
+    /// softness and damping, not the spring's, decide the motion.
+    pub held_by: Option<String>,
+}
+
+/// The first active equality constraint that acts on `joint` when every other DoF is frozen: a
+/// connect or weld between a body the joint moves (its body and that body's descendants) and
+/// one it does not, a joint equality naming it, or a tendon equality whose tendon passes the
+/// joint or joins sites on a moved and an unmoved body.
+pub fn equality_on(robot: &Robot, joint: usize) -> Option<String> {
+    let j = robot.joints.get(joint)?;
+    let m = &robot.mj;
+    let moved = |mut b: usize| {
+        for _ in 0..=robot.bodies.len() {
+            if b == j.body {
+                return true;
+            }
+            let p = robot.bodies.get(b).map_or(0, |x| x.parent);
+            if p == b || b == 0 {
+                return false;
+            }
+            b = p;
+        }
+        false
+    };
+    let site_body = |s: i32| usize::try_from(s).ok().and_then(|s| m.site_bodyid().get(s).copied());
+    // mjtObj: body 1, site 6.
+    let obj_body = |ty: i32, id: i32| match ty {
+        6 => site_body(id).and_then(|b| usize::try_from(b).ok()),
+        _ => usize::try_from(id).ok(),
+    };
+    let (types, active) = (m.eq_objtype(), m.eq_active0());
+    let (tadr, tnum, wtype, wobj) = (m.tendon_adr(), m.tendon_num(), m.wrap_type(), m.wrap_objid());
+    robot.equalities.iter().find_map(|e| {
+        if !active.get(e.id).is_some_and(|&a| a) {
+            return None;
+        }
+        let acts = match e.etype {
+            // connect, weld
+            0 | 1 => {
+                let ty = types.get(e.id).map_or(1, |&t| t as i32);
+                let b1 = obj_body(ty, e.obj1).map(moved);
+                // obj2 -1: the world.
+                let b2 = if e.obj2 < 0 { Some(false) } else { obj_body(ty, e.obj2).map(moved) };
+                matches!((b1, b2), (Some(x), Some(y)) if x != y)
+            }
+            // joint
+            2 => e.obj1 == joint as i32 || e.obj2 == joint as i32,
+            // tendon: its path passes the joint (mjWRAP_JOINT 1) or sites on both sides
+            3 => [e.obj1, e.obj2].iter().any(|&t| {
+                let Ok(t) = usize::try_from(t) else { return false };
+                let (Some(&a), Some(&n)) = (tadr.get(t), tnum.get(t)) else { return false };
+                let (a, n) = (a.max(0) as usize, n.max(0) as usize);
+                let mut sides = [false, false];
+                for w in a..a + n {
+                    let (Some(&ty), Some(&id)) = (wtype.get(w), wobj.get(w)) else { continue };
+                    match ty as i32 {
+                        1 if id == joint as i32 => return true,
+                        // mjWRAP_SITE 3
+                        3 => {
+                            if let Some(b) = site_body(id).and_then(|b| usize::try_from(b).ok()) {
+                                sides[usize::from(moved(b))] = true;
+                            }
+                        }
+                        _ => {}
+                    }
+                }
+                sides[0] && sides[1]
+            }),
+            _ => false,
+        };
+        acts.then(|| {
+            if !e.name.is_empty() {
+                return format!("`{}`", e.name);
+            }
+            let ty = types.get(e.id).map_or(1, |&t| t as i32);
+            let body = |o: i32| {
+                if o < 0 {
+                    "world".to_string()
+                } else {
+                    obj_body(ty, o).map_or_else(String::new, |b| robot.body_name(b).to_string())
+                }
+            };
+            match e.etype {
+                0 | 1 => format!(
+                    "{} `{}`–`{}`",
+                    if e.etype == 0 { "connect" } else { "weld" },
+                    body(e.obj1),
+                    body(e.obj2)
+                ),
+                _ => format!("#{}", e.id),
+            }
+        })
+    })
 }
 
 pub fn run(robot: &Robot, joint: usize) -> Option<Ring> {
@@ -103,7 +202,13 @@ pub fn run(robot: &Robot, joint: usize) -> Option<Ring> {
         v[j.dofadr] = 0.0;
     }
     d.forward();
-    let mut out = Ring { dt, stiffness: j.stiffness, release: delta.abs(), ..Default::default() };
+    let mut out = Ring {
+        dt,
+        stiffness: j.stiffness,
+        release: delta.abs(),
+        held_by: equality_on(robot, joint),
+        ..Default::default()
+    };
     out.undamped_period = if omega.is_finite() && omega > 0.0 { t_period } else { f64::NAN };
     let mut x = Vec::with_capacity(n);
     for _ in 0..n {
@@ -117,6 +222,7 @@ pub fn run(robot: &Robot, joint: usize) -> Option<Ring> {
     }
     out.duration = x.len() as f64 * dt;
     out.max_motion = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    out.moved = x.iter().fold(0.0f64, |m, v| m.max((v - delta).abs()));
     let peaks: Vec<(usize, f64)> = (1..x.len().saturating_sub(1))
         .filter(|&i| x[i].abs() >= x[i - 1].abs() && x[i].abs() > x[i + 1].abs())
         .filter(|&i| x[i].signum() == delta.signum())

@@ -1,6 +1,7 @@
 //! Rules of the `control` group.
 pub mod gains_unstable_for_timestep;
 pub mod keyframe_motor_ctrl;
+pub mod keyframe_scan;
 pub mod keyframe_servo_ctrl;
 pub mod missing_action_delay;
 pub mod servo_stall_band;

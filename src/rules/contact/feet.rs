@@ -313,32 +313,45 @@ pub const ARM_JOINTS: usize = 2;
 
 /// Whether the robot is a humanoid: a left and a right foot, and at least two limbs off the
 /// legs ([`Robot::limb_of`]) with [`ARM_JOINTS`] or more hinge or ball joints each — arms (and a
-/// head). A humanoid stands on soles; an underactuated biped with no upper body (Cassie's blade
-/// feet) or a quadruped is another family.
+/// head). A limb that branches off one leg (below the bodies the feet share) belongs to that
+/// leg's mechanism: Cassie's achilles rods, foot cranks and heel springs are no arms. A
+/// humanoid stands on soles; an underactuated biped with no upper body (Cassie's blade feet) or
+/// a quadruped is another family.
 pub fn is_humanoid(robot: &Robot, feet: &[Foot]) -> bool {
     use crate::model::JointType;
     let sides = |s: Side| feet.iter().any(|f| f.side == Some(s));
     if !(sides(Side::Left) && sides(Side::Right)) {
         return false;
     }
-    // The legs: every foot body and its ancestors.
-    let mut leg = vec![false; robot.bodies.len()];
+    // The legs: every foot body and its ancestors, with how many feet each body carries.
+    let mut leg = vec![0usize; robot.bodies.len()];
     for f in feet {
-        leg[f.root] = true;
         for &t in &f.toes {
-            leg[t] = true;
+            leg[t] += 1;
         }
         let mut b = f.root;
         while b != 0 {
-            leg[b] = true;
+            leg[b] += 1;
             b = robot.bodies[b].parent;
         }
     }
+    // A limb branching off a body that carries one foot only (a leg's push rod, crank or
+    // spring of a closed-loop linkage) is part of that leg, not an arm.
+    let off_one_leg = |mut b: usize| loop {
+        if b == 0 {
+            return false;
+        }
+        if leg[b] > 0 {
+            return leg[b] == 1;
+        }
+        b = robot.bodies[b].parent;
+    };
     let mut per_limb: std::collections::BTreeMap<usize, usize> = Default::default();
     for j in &robot.joints {
         if !matches!(j.jtype, JointType::Hinge | JointType::Ball)
             || j.name.is_empty()
-            || leg[j.body]
+            || leg[j.body] > 0
+            || off_one_leg(j.body)
         {
             continue;
         }
@@ -347,4 +360,32 @@ pub fn is_humanoid(robot: &Robot, feet: &[Foot]) -> bool {
         }
     }
     per_limb.values().filter(|&&n| n >= ARM_JOINTS).count() >= 2
+}
+
+/// Smallest support polygon a flat foot's ground points must span, m² (1 mm²): below it the
+/// contact is a line or a point.
+pub const MIN_SOLE_AREA: f64 = 1e-6;
+
+/// The foot's ground spheres below `rmin` when three or more of them span a support polygon of
+/// at least [`MIN_SOLE_AREA`] at the keyframe: corner points of a sole, whose radius does not
+/// matter; empty otherwise.
+pub fn corner_points(robot: &Robot, foot: &Foot, rmin: f64) -> Vec<usize> {
+    let small: Vec<usize> = foot
+        .ground
+        .iter()
+        .copied()
+        .filter(|&g| robot.geoms[g].gtype == GeomType::Sphere && robot.geoms[g].size[0] < rmin)
+        .collect();
+    let centres: Vec<[f64; 2]> = small
+        .iter()
+        .map(|&g| {
+            let p = Placed::of(robot, g).pos;
+            [p[0], p[1]]
+        })
+        .collect();
+    if small.len() >= 3 && crate::rules::geometry::shapes::hull_area(&centres) >= MIN_SOLE_AREA {
+        small
+    } else {
+        Vec::new()
+    }
 }

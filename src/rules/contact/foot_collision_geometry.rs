@@ -7,7 +7,9 @@ use crate::model::{GeomType, Robot};
 use crate::probe::settle::{Settle, StanceClaim};
 use crate::probe::slide::{FootSlide, PUSH_S, PUSH_SHARE, Slide};
 use crate::probe::{Measure, Measurement, Preconditions, StanceSettle, Verdict};
-use crate::rules::contact::feet::{Foot, FootKind, ankle_turning, feet, is_humanoid};
+use crate::rules::contact::feet::{
+    Foot, FootKind, MIN_SOLE_AREA, ankle_turning, corner_points, feet, is_humanoid,
+};
 use crate::rules::geometry::shapes::{Placed, hull_area};
 use crate::rules::{Context, Domain, Rule, RuleMeta, claim_each, opt, opt_one_of};
 use crate::util::fmt_num;
@@ -19,7 +21,10 @@ declare_rule! {
     /// sphere and cylinder radii of the geoms that touch the ground within [`min_radius`,
     /// `max_radius`] (0.5–50 mm by default: a sanity range against unit and scale errors, not
     /// one robot's design — the Asimov feet use about 12 mm, common reference feet 5 mm corner
-    /// spheres, Menagerie's Unitree G1 1 mm corner points); no frictionless (condim 1) ground
+    /// spheres, Menagerie's Unitree G1 1 mm corner points). Spheres below `min_radius` are a
+    /// sole's corner points, not a slip, when three or more of them span a support polygon of
+    /// at least 1 mm² (Atlas: eight 0.1 mm spheres over 26 × 13 cm): a sphere's radius only
+    /// lifts its point contact, and a foot scaled down by a unit error spans no polygon; no frictionless (condim 1) ground
     /// contact, and the stated `condim`; sliding friction within `friction_tolerance` of the stated
     /// `friction`; at least three non-collinear
     /// ground contact points whose support polygon reaches both the heel and the toe third of the
@@ -66,7 +71,8 @@ declare_rule! {
     /// point is the design — an underactuated biped's blade foot whose ankle only pitches and
     /// that the hip roll balances (Cassie), a stilt, a quadruped's foot bar — and is not
     /// reported, except on a humanoid (a left and a right foot and at least two limbs off the
-    /// legs with two or more joints: arms), which stands on soles: an ankle-pitch-only humanoid
+    /// legs with two or more joints: arms; a jointed branch off one leg, such as Cassie's push
+    /// rods, cranks and heel springs, is that leg's mechanism), which stands on soles: an ankle-pitch-only humanoid
     /// (H1 style) whose sole is modelled as a line is reported. On a flat foot, geom types and radii are judged on the ground
     /// geoms too (within 10 mm of the foot's lowest point at the keyframe: an ankle housing above
     /// the sole is not a foot contact); meshes on any of the foot's geoms.
@@ -314,7 +320,10 @@ impl FootCollisionGeometry {
                         .subject(subj),
                 );
             }
-            // Radius.
+            // Radius. Spheres below `min_radius` that together span a support polygon are the
+            // foot's corner points (a sphere's radius only lifts a point contact; a foot scaled
+            // down by a unit error spans no polygon either).
+            let corners = corner_points(robot, foot, rmin);
             let bad_r: Vec<usize> = foot
                 .ground
                 .iter()
@@ -327,7 +336,7 @@ impl FootCollisionGeometry {
                 })
                 .filter(|&g| {
                     let r = robot.geoms[g].size[0];
-                    r < rmin || r > rmax
+                    (r < rmin && !corners.contains(&g)) || r > rmax
                 })
                 .collect();
             if let Some(&g0) = bad_r.first() {
@@ -520,7 +529,7 @@ impl FootCollisionGeometry {
             let heel = pts.iter().any(|p| p[0] <= x0 + third);
             let toe = pts.iter().any(|p| p[0] >= x1 - third);
             let area = hull_area(&pts.iter().map(|p| [p[0], p[1]]).collect::<Vec<_>>());
-            let degenerate = area < 1e-6;
+            let degenerate = area < MIN_SOLE_AREA;
             // A line or point contact that no ankle joint can turn is the design (a blade foot
             // balanced by the hip, a stilt) — except on a humanoid, which stands on soles.
             let ankle = if degenerate { ankle_turning(robot, foot.root, &pts) } else { None };

@@ -1,8 +1,8 @@
 use crate::declare_rule;
 use crate::finding::{Finding, Severity, Subject};
-use crate::model::mj;
+use crate::model::ActuatorKind;
 use crate::model::mjcf::ElemKind;
-use crate::model::{ActuatorKind, Transmission};
+use crate::rules::control::keyframe_scan::{key_actuators, keyframes};
 use crate::rules::{Context, Domain, Rule, RuleMeta, opt};
 use crate::util::fmt_num;
 
@@ -45,43 +45,23 @@ impl Rule for KeyframeMotorCtrl {
     }
     fn check(&self, cx: &Context, out: &mut Vec<Finding>) {
         let robot = cx.robot;
-        let m = &robot.mj;
-        let r = mj::raw(m);
-        let (nq, nu, nkey) = (r.nq.max(0) as usize, r.nu.max(0) as usize, r.nkey.max(0) as usize);
-        let (kq, kc) = (m.key_qpos(), m.key_ctrl());
-        let (cadr, cnum) = (m.actuator_ctrladr(), m.actuator_ctrlnum());
         let tol = cx.opt("tolerance");
-        // (actuator, joint, control index) of every motor on a scalar joint.
-        let motors: Vec<(usize, usize, usize)> = robot
-            .actuators
-            .iter()
-            .filter(|a| {
-                a.kind == ActuatorKind::Motor
-                    && matches!(a.trn, Transmission::Joint | Transmission::JointInParent)
-            })
-            .filter_map(|a| {
-                let j = robot.joints.get(usize::try_from(a.target).ok()?)?;
-                let c = usize::try_from(*cadr.get(a.id)?).ok()?;
-                (j.is_scalar() && *cnum.get(a.id)? >= 1 && c < nu).then_some((a.id, j.id, c))
-            })
-            .collect();
+        let motors = key_actuators(robot, |k| *k == ActuatorKind::Motor);
         if motors.is_empty() {
             return;
         }
-        for k in 0..nkey {
-            let (Some(q), Some(u)) = (kq.get(k * nq..(k + 1) * nq), kc.get(k * nu..(k + 1) * nu))
-            else {
-                continue;
-            };
-            let pairs: Vec<(usize, usize, f64, f64)> =
-                motors.iter().map(|&(a, j, c)| (a, j, u[c], q[robot.joints[j].qposadr])).collect();
+        for key in keyframes(robot) {
+            let pairs: Vec<(usize, usize, f64, f64)> = motors
+                .iter()
+                .map(|m| (m.actuator, m.joint, key.ctrl[m.ctrl], key.joint_pos(robot, m.joint)))
+                .collect();
             let nonzero: Vec<&(usize, usize, f64, f64)> =
                 pairs.iter().filter(|p| p.2.abs() > tol).collect();
             let all_equal = pairs.iter().all(|p| (p.2 - p.3).abs() <= tol);
             if nonzero.is_empty() || !all_equal {
                 continue;
             }
-            let name = robot.keys.get(k).cloned().unwrap_or_default();
+            let (k, key_name) = (key.index, key.label());
             let shown: Vec<String> = nonzero
                 .iter()
                 .take(4)
@@ -92,7 +72,6 @@ impl Rule for KeyframeMotorCtrl {
             } else {
                 String::new()
             };
-            let key_name = if name.is_empty() { format!("#{k}") } else { format!("`{name}`") };
             let msg = format!(
                 "keyframe {key_name} sets the controls of all {} motor (torque) actuators to their joints' angles in the same keyframe: {}{more}",
                 motors.len(),
@@ -100,7 +79,7 @@ impl Rule for KeyframeMotorCtrl {
             );
             let first = nonzero[0];
             let f = cx
-                .at_attr(ElemKind::Key, k, &name, "ctrl", msg)
+                .at_attr(ElemKind::Key, k, &key.name, "ctrl", msg)
                 .label("ctrl = qpos of the motors' joints")
                 .note("a motor's control is a force (force = gear·ctrl): these controls are torques the size of the joint angles, applied at every reset to this keyframe")
                 .help("set the motors' keyframe controls to zero or to the torques that hold the pose (gravity compensation); use position actuators if the controls are meant as joint targets")

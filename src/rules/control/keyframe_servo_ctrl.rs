@@ -1,8 +1,8 @@
 use crate::declare_rule;
 use crate::finding::{Finding, Severity, Subject};
-use crate::model::mj;
 use crate::model::mjcf::ElemKind;
-use crate::model::{ActuatorKind, JointType, Transmission};
+use crate::model::{ActuatorKind, JointType};
+use crate::rules::control::keyframe_scan::{key_actuators, keyframes};
 use crate::rules::{Context, Domain, Rule, RuleMeta, opt};
 use crate::util::fmt_num;
 
@@ -45,49 +45,26 @@ impl Rule for KeyframeServoCtrl {
     }
     fn check(&self, cx: &Context, out: &mut Vec<Finding>) {
         let robot = cx.robot;
-        let m = &robot.mj;
-        let r = mj::raw(m);
-        let (nq, nu, nkey) = (r.nq.max(0) as usize, r.nu.max(0) as usize, r.nkey.max(0) as usize);
-        let (kq, kc) = (m.key_qpos(), m.key_ctrl());
-        let (cadr, cnum) = (m.actuator_ctrladr(), m.actuator_ctrlnum());
         let tol = cx.opt("tolerance");
-        // (actuator, joint, control index) of every position servo on a scalar joint.
-        let servos: Vec<(usize, usize, usize)> = robot
-            .actuators
-            .iter()
-            .filter(|a| {
-                matches!(a.kind, ActuatorKind::Position { .. })
-                    && matches!(a.trn, Transmission::Joint | Transmission::JointInParent)
-            })
-            .filter_map(|a| {
-                let j = robot.joints.get(usize::try_from(a.target).ok()?)?;
-                let c = usize::try_from(*cadr.get(a.id)?).ok()?;
-                (j.is_scalar() && *cnum.get(a.id)? >= 1 && c < nu).then_some((a.id, j.id, c))
-            })
-            .collect();
+        let servos = key_actuators(robot, |k| matches!(k, ActuatorKind::Position { .. }));
         if servos.is_empty() {
             return;
         }
-        for k in 0..nkey {
-            let (Some(q), Some(u)) = (kq.get(k * nq..(k + 1) * nq), kc.get(k * nu..(k + 1) * nu))
-            else {
-                continue;
-            };
-            if servos.iter().any(|&(_, _, c)| u[c] != 0.0) {
+        for key in keyframes(robot) {
+            if servos.iter().any(|s| key.ctrl[s.ctrl] != 0.0) {
                 continue;
             }
             // (actuator, joint, keyframe position) of the servos whose joints sit away from 0.
             let mut off: Vec<(usize, usize, f64)> = servos
                 .iter()
-                .map(|&(a, j, _)| (a, j, q[robot.joints[j].qposadr]))
+                .map(|s| (s.actuator, s.joint, key.joint_pos(robot, s.joint)))
                 .filter(|p| p.2.abs() > tol)
                 .collect();
             if off.is_empty() {
                 continue;
             }
             off.sort_by(|a, b| b.2.abs().total_cmp(&a.2.abs()).then(a.0.cmp(&b.0)));
-            let name = robot.keys.get(k).cloned().unwrap_or_default();
-            let key_name = if name.is_empty() { format!("#{k}") } else { format!("`{name}`") };
+            let (k, key_name) = (key.index, key.label());
             let unit =
                 |j: usize| if robot.joints[j].jtype == JointType::Slide { "m" } else { "rad" };
             let shown: Vec<String> = off
@@ -105,7 +82,7 @@ impl Rule for KeyframeServoCtrl {
                 shown.join(", ")
             );
             let f = cx
-                .at_attr(ElemKind::Key, k, &name, "ctrl", msg)
+                .at_attr(ElemKind::Key, k, &key.name, "ctrl", msg)
                 .label("servo targets 0, pose elsewhere")
                 .note("a position servo's control is its target: reset to this keyframe, every servo pulls its joint from the keyframe's pose towards 0 (force kp × the offset) from the first step")
                 .help("set the keyframe's ctrl to the servo targets that hold its pose (gear × the joint's keyframe position), in actuator order")

@@ -32,8 +32,10 @@ declare_rule! {
     /// Every finding of this rule is a fact of the file (a value that is zero or absent), so no
     /// simulation refutes it; probes measure the consequence. Missing damping: probe
     /// `ring-down` releases the joint from its spring's rest position on a fixed stand and
-    /// measures how long it rings (inconclusive when the joint cannot move, e.g. held by a
-    /// closed loop). Missing spring, range or collision geometry: probe `stance-settle`
+    /// measures how long it rings (inconclusive when an equality acts on the joint on the
+    /// stand — a closed loop, which with the other joints frozen is held rigid, so the
+    /// constraint's softness and not the spring would decide the motion — or when the joint
+    /// cannot move). Missing spring, range or collision geometry: probe `stance-settle`
     /// measures the joint's deflection under the standing load (inconclusive without a floor,
     /// with the feet unloaded or the robot fallen).
     ///
@@ -115,12 +117,19 @@ impl Measure for SpringRings {
         }
         let steps_per_period = r.undamped_period / r.dt;
         let pre = Preconditions::new().check(
-            "joint_moved",
-            r.max_motion >= 0.5 * r.release,
+            "loop_free",
+            r.held_by.is_none(),
             format!(
-                "released {} from its spring's rest position, the joint moved at most {} (a closed loop or an equality holds it)",
+                "equality {} acts on the joint: on the stand, with the other joints frozen, it holds the closed loop rigid, so the constraint's softness, not the spring, decides how the joint moves",
+                r.held_by.as_deref().unwrap_or("none")
+            ),
+        ).check(
+            "joint_moved",
+            r.moved >= 0.5 * r.release,
+            format!(
+                "released {} from its spring's rest position, the joint moved at most {} from there (at least half the release is needed; a closed loop or an equality can hold it)",
                 fmt_num(r.release, 3),
-                fmt_num(r.max_motion, 3)
+                fmt_num(r.moved, 3)
             ),
         ).check(
             "period_resolved",
