@@ -108,7 +108,7 @@ impl Reach {
         if same_data(&probes, short) {
             return None;
         }
-        let p_err = engine.errors(&probes, base)?;
+        let p_err = engine.errors(&probes, base).filter(|p| p.n > 0 && sh_err.n > 0)?;
         let bar = (sh_err.n as f64 * screen_bar * screen_bar / p_err.n.max(1) as f64).sqrt();
         (bar.is_finite() && bar < p_err.rmse()).then(|| Reach {
             probes,
@@ -146,6 +146,10 @@ impl Reach {
             Some(s) => coarse::fit(engine, s, data, (e, g)),
             None => engine.fit_budget(data.0, data.1, e, g, engine.opts.policy.screen_evals),
         };
-        (p.is_empty() || !f.is_finite() || f > self.bar).then_some((p, f))
+        // (Beside a lead, a fit that failed on the probes' data proves nothing: the screen
+        // judges the candidate.)
+        let failed = p.is_empty() || !f.is_finite();
+        let out = if self.at_floor() { failed || f > self.bar } else { !failed && f > self.bar };
+        out.then_some((p, f))
     }
 }
