@@ -30,9 +30,11 @@
 //! replay, started from its stretch's recorded state, leaves no more residual on its samples
 //! than the screen's replay leaves there after running from the start of its own, longer
 //! stretch (as a rule it leaves less: the drift is reset). It prunes only where the probes
-//! hold a large part of the screen's residual: on the leg with armature missing on every joint
-//! the probes hold 57 % of it on 20 % of the samples, and 27 of the 29 rivals of the kept
-//! armature group are out of reach; on the leg with backlash they hold 12–18 %, and none is.
+//! hold a large part of the screen's residual: on the chain leg whose three motors all lack
+//! rotor inertia the probes hold 57 % of it on 20 % of the samples, and 27 of the 29 rivals of
+//! the kept all-joint group are out of reach; on the leg with a gear play behind its motors
+//! they hold 12–18 % (the play's drift, which a replay from a recorded state resets), and none
+//! is.
 //! A candidate whose linear prediction reaches b is admitted by the screen on that
 //! prediction, and is never judged here.
 //!
