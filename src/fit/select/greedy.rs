@@ -368,8 +368,10 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         let judged = coarse.get(ci - 1).cloned().flatten().is_some_and(|c| c.1.is_finite())
             && (!deferred || coarse::plain_fitted(s, (short, &applied), (e, &group)));
         let far = reach.as_ref().filter(|_| !judged);
-        if let Some((p, f)) = far.and_then(|r| r.out_of_reach(engine, Some(&screen), (e, &group))) {
-            out.tried.push(not_tested(Phase::FloorScreen, p, f));
+        if let Some(r) = far
+            && let Some((p, f)) = r.out_of_reach(engine, Some(&screen), (e, &group))
+        {
+            out.tried.push(not_tested(r.phase, p, f));
             continue;
         }
         // Either the coarse fit or the linearised step must reach the share: a coarse grid can
@@ -535,10 +537,18 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
                 floored.push(logged);
             }
             floored_groups.push(group.clone());
-            reach = reach.or_else(|| Reach::new(engine, short, &applied, &trial));
+            if reach.as_ref().is_none_or(|r| !r.at_floor()) {
+                reach = Reach::new(engine, short, &applied, &trial).or(reach);
+            }
             floor_k = Some(floor_k.map_or(e.fitted(), |k| k.min(e.fitted())));
             let r = refitted.unwrap_or(tr_a.rmse()) / base_train;
             floor_train = Some(floor_train.map_or(r, |t: f64| t.min(r)));
+        }
+        // Beside a kept lead above the floor, a candidate not yet coarse-fitted is first
+        // judged on the probes' data against the screen's bar ([`Reach::beside_lead`]).
+        if keep && whole && reach.is_none() {
+            let bar = base_short * (1.0 - opts.policy.screen_share * best_gain);
+            reach = Reach::beside_lead(engine, (short, &sh_err), &applied, bar);
         }
         if keep {
             // Mirror completion: a kept one-joint candidate is also fitted on its left/right

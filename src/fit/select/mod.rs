@@ -499,6 +499,7 @@ fn search_cost(engine: &Engine, out: &FitOutcome) -> SearchCost {
                     Phase::Screen
                         | Phase::Floor
                         | Phase::FloorScreen
+                        | Phase::ReachScreen
                         | Phase::HeldoutScreen
                         | Phase::SwapScreen
                 )

@@ -366,6 +366,9 @@ pub enum Phase {
     Floor,
     /// Not fitted in full: its coarse fit could not come near a kept white-residual candidate.
     FloorScreen,
+    /// Not coarse-fitted on the screen's data: beside a kept lead, its coarse fit on the
+    /// probes' data leaves more than the screen's bar allows on the whole screen's data.
+    ReachScreen,
     /// Not fitted in full: its coarse fit, replayed on the held-out set, does not lower the
     /// held-out error at all.
     HeldoutScreen,
@@ -416,6 +419,7 @@ impl Phase {
             Phase::Screen => "screen",
             Phase::Floor => "floor",
             Phase::FloorScreen => "floor_screen",
+            Phase::ReachScreen => "reach_screen",
             Phase::HeldoutScreen => "heldout_screen",
             Phase::Discretisation => "discretisation",
             Phase::Pair => "pair",

@@ -1,20 +1,42 @@
-//! Whether a candidate can come near a model at the floor, judged on the probes' data.
+//! Whether a candidate can reach a bar, judged on the probes' data before any coarse fit on
+//! the screen's data.
 //!
-//! Once a kept candidate left a white training residual (the floor), another candidate on its
-//! joints (an alias, or a simpler effect the simplification would swap in) can at best tie it:
-//! Occam's choice takes it only within `simpler_within` of it on held-out, and the floor screen
-//! fits it in full only when its coarse fit comes within `floor_screen_ratio` of it. A
-//! candidate that comes that close on the whole data comes as close on the probes' data — the
-//! stretches where the round's base model is most wrong, [`SearchPolicy::probe_seconds`] in
-//! all, where what the model at the floor explains shows most — and a coarse fit made on those
-//! alone can only fit them better than one made on more data. So the candidate is first
-//! coarse-fitted there (its memo is shared by every later screen on the same base), and the
-//! model at the floor is replayed there once; a candidate whose coarse fit leaves more than
-//! `floor_screen_ratio` × the floor model's RMSE on the probes' data is out of reach (`tried`:
-//! phase "floor_screen", with that fit) and is not coarse-fitted on the screen's data; the
-//! others go on exactly as before. On a three-joint leg whose shank inertia is missing, the
-//! 9 aliases of the lead cost 30 replays of the screen's 10 s without it, and replays of 2 s
-//! with it.
+//! **At the floor.** Once a kept candidate left a white training residual (the floor), another
+//! candidate on its joints (an alias, or a simpler effect the simplification would swap in) can
+//! at best tie it: Occam's choice takes it only within `simpler_within` of it on held-out, and
+//! the floor screen fits it in full only when its coarse fit comes within `floor_screen_ratio`
+//! of it. A candidate that comes that close on the whole data comes as close on the probes'
+//! data — the stretches where the round's base model is most wrong,
+//! [`SearchPolicy::probe_seconds`] in all, where what the model at the floor explains shows
+//! most — and a coarse fit made on those alone can only fit them better than one made on more
+//! data. So the candidate is first coarse-fitted there (its memo is shared by every later
+//! screen on the same base), and the model at the floor is replayed there once; a candidate
+//! whose coarse fit leaves more than `floor_screen_ratio` × the floor model's RMSE on the
+//! probes' data is out of reach (`tried`: phase "floor_screen", with that fit) and is not
+//! coarse-fitted on the screen's data; the others go on exactly as before. On a three-joint
+//! leg whose shank inertia is missing, the 9 aliases of the lead cost 30 replays of the
+//! screen's 10 s without it, and replays of 2 s with it.
+//!
+//! **Beside a kept lead above the floor** ([`Reach::beside_lead`]). The screen fits a
+//! candidate in full only when its coarse fit on the screen's data leaves at most the bar
+//! b = RMSE₀ (1 − `screen_share` × the round's best gain), a squared residual of n_s b² on the
+//! screen's n_s samples; the kept lead's gain sets the bar before the others are screened, and
+//! the bar only falls as the round goes on. The probes' stretches lie inside the screen's
+//! data, so the same parameters leave at most n_s b² on the probes' n_p samples, and a coarse
+//! fit made on those alone leaves no more: a candidate whose coarse fit on the probes' data
+//! leaves more than n_s b² (an RMSE above b √(n_s / n_p) there) could not have reached the
+//! bar, and is logged `reach_screen` with that fit. This needs no constant and no assumption
+//! that gains carry over from one dataset to the other; what it assumes is that a probe's
+//! replay, started from its stretch's recorded state, leaves no more residual on its samples
+//! than the screen's replay leaves there after running from the start of its own, longer
+//! stretch (as a rule it leaves less: the drift is reset). It prunes only where the probes
+//! hold a large part of the screen's residual: on the chain leg whose three motors all lack
+//! rotor inertia the probes hold 57 % of it on 20 % of the samples, and 27 of the 29 rivals of
+//! the kept all-joint group are out of reach; on the leg with a gear play behind its motors
+//! they hold 12–18 % (the play's drift, which a replay from a recorded state resets), and none
+//! is.
+//! A candidate whose linear prediction reaches b is admitted by the screen on that
+//! prediction, and is never judged here.
 //!
 //! [`SearchPolicy::probe_seconds`]: super::policy::SearchPolicy::probe_seconds
 
@@ -23,17 +45,24 @@ use std::sync::Arc;
 use crate::fit::effects::{Applied, Effect};
 use crate::sim2real::recording::Recording;
 
+use super::Errors;
 use super::coarse;
 use super::engine::Engine;
 use super::groups::same_data;
+use super::policy::Phase;
 use super::screen::Screen;
 
 /// The probes' data of a base model and the bar a candidate's coarse fit there must reach.
 pub(super) struct Reach {
     probes: Arc<Vec<Recording>>,
     base: Vec<Applied>,
-    /// `floor_screen_ratio` × the floor model's RMSE on the probes' data [rad].
+    /// The RMSE on the probes' data above which a candidate is out of reach [rad].
     bar: f64,
+    /// Beside a kept lead: the screen's bar (an RMSE on the screen's data [rad]) that a
+    /// candidate's linear prediction may reach, which then admits it as the screen would.
+    screen_bar: Option<f64>,
+    /// How an out-of-reach candidate is logged.
+    pub(super) phase: Phase,
 }
 
 impl Reach {
@@ -53,24 +82,76 @@ impl Reach {
         }
         let rmse = engine.errors(&probes, at_floor)?.rmse();
         let bar = engine.opts.policy.floor_screen_ratio * rmse;
-        bar.is_finite().then(|| Reach { probes, base: base.to_vec(), bar })
+        bar.is_finite().then(|| Reach {
+            probes,
+            base: base.to_vec(),
+            bar,
+            screen_bar: None,
+            phase: Phase::FloorScreen,
+        })
+    }
+
+    /// The reach of the round's screen beside a kept lead that is not at the floor: a
+    /// candidate is fitted in full only when its coarse fit on the screen's data `short`
+    /// (whose base residual is `sh_err`) leaves at most `screen_bar` RMSE there, that is at
+    /// most n_s × `screen_bar`² of squared residual. The probes' data is part of the screen's
+    /// data, so the same parameters leave at most that much on the probes' samples alone, and
+    /// a coarse fit made on them alone leaves no more: a candidate whose coarse fit on the
+    /// probes' data leaves more squared residual than that cannot reach the bar. `None` as
+    /// [`Reach::new`], or when no candidate could be out of reach (the bar above the base's
+    /// own residual on the probes' data).
+    pub(super) fn beside_lead(
+        engine: &Engine,
+        (short, sh_err): (&[Recording], &Errors),
+        base: &[Applied],
+        screen_bar: f64,
+    ) -> Option<Reach> {
+        let probes = engine.probe_set_held(short, base)?;
+        if same_data(&probes, short) {
+            return None;
+        }
+        let p_err = engine.errors(&probes, base).filter(|p| p.n > 0 && sh_err.n > 0)?;
+        let bar = (sh_err.n as f64 * screen_bar * screen_bar / p_err.n.max(1) as f64).sqrt();
+        (bar.is_finite() && bar < p_err.rmse()).then(|| Reach {
+            probes,
+            base: base.to_vec(),
+            bar,
+            screen_bar: Some(screen_bar),
+            phase: Phase::ReachScreen,
+        })
+    }
+
+    /// Whether this reach was measured at the floor.
+    pub(super) fn at_floor(&self) -> bool {
+        self.screen_bar.is_none()
     }
 
     /// `Some` (the candidate's coarse fit on the probes' data: parameters and RMSE) when `e`
     /// on `g` is out of reach; `None` when it may come near. The coarse fit is the screen's
     /// ([`coarse::fit`]: from the linear step when `screen` models it, else a budget of
-    /// `screen_evals` replays), remembered by the engine.
+    /// `screen_evals` replays), remembered by the engine. Beside a lead, a candidate whose
+    /// linear prediction reaches the screen's bar is never out of reach (the screen admits it
+    /// on that prediction).
     pub(super) fn out_of_reach(
         &self,
         engine: &Engine,
         screen: Option<&Screen>,
         (e, g): (&'static dyn Effect, &[String]),
     ) -> Option<(Vec<f64>, f64)> {
+        if let Some(sb) = self.screen_bar
+            && screen.and_then(|s| s.predict(e.id(), g)).is_some_and(|p| p.train_rmse <= sb)
+        {
+            return None;
+        }
         let data = (&self.probes[..], &self.base[..]);
         let (p, f) = match screen {
             Some(s) => coarse::fit(engine, s, data, (e, g)),
             None => engine.fit_budget(data.0, data.1, e, g, engine.opts.policy.screen_evals),
         };
-        (p.is_empty() || !f.is_finite() || f > self.bar).then_some((p, f))
+        // (Beside a lead, a fit that failed on the probes' data proves nothing: the screen
+        // judges the candidate.)
+        let failed = p.is_empty() || !f.is_finite();
+        let out = if self.at_floor() { failed || f > self.bar } else { !failed && f > self.bar };
+        out.then_some((p, f))
     }
 }
