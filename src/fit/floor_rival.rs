@@ -5,10 +5,9 @@
 //! joints (floatsim's clean `KFR0`: a centre 3.2 cm higher; `KFR2`: twice the shanks' payload at
 //! their centres, where the true payload at its place removes almost nothing — docs/fitting.md,
 //! "A free base standing on a floor"). The two hypotheses are tested against each other on the
-//! held-out episodes: every other kept effect, from its fitted values, with a `ground_contact`
+//! held-out episodes: the fit is run again told every other kept effect and a `ground_contact`
 //! on the feet in the body effect's place (one floor: one group of every recorded joint whose
-//! child body touches the ground) fitted by its own search, then the others again beside it —
-//! what `--told` with those effects fits, started from the kept fit. When the kept set does not replay the held-out episodes
+//! child body touches the ground). When the kept set does not replay the held-out episodes
 //! closer than that rival beyond noise — the gate the search puts between two fitted sets
 //! ([`crate::fit::select::beats_beyond_noise`]) — the recordings do not separate the body from
 //! the floor's compliance: the body effect is not listed as missing physics (a warning with
@@ -21,15 +20,14 @@
 //! trunk changes gravity's pitch stiffness over the feet as a softer floor does (`KFR1`: the
 //! shift along comes out +2.4 mm for −30 mm; `KFR3`: the battery 0.298 m along for 0.12). Each
 //! component the effect declares ([`Effect::held_components`]) is held at the model's value
-//! beside the contact, the rest of the effect fitted again from its kept values; when that
-//! rival replays as close, the component is reported as not identified (no value), the others
-//! keep theirs (and `--write-model` writes it as the model has it:
-//! [`crate::fit::writeback::written_values`]).
+//! beside the contact, the rest of the effect fitted; when that rival replays as close, the
+//! component is reported as not identified (no value), the others keep theirs (and
+//! `--write-model` writes it as the model has it: [`crate::fit::writeback::written_values`]).
 //!
 //! [`Effect::held_components`]: crate::fit::effects::Effect::held_components
 
 use crate::fit::effects::{self, Applied, JointTarget, WriteBack};
-use crate::fit::select::{Engine, FitOptions, FitOutcome, beats_beyond_noise, fit_jointly};
+use crate::fit::select::{Engine, FitOptions, FitOutcome, beats_beyond_noise, fit};
 use crate::model::Robot;
 use crate::sim2real::recording::Recording;
 
@@ -75,36 +73,30 @@ fn feet(robot: &Robot, recs: &[Recording]) -> Vec<String> {
         .collect()
 }
 
-/// One rival: `set` — the kept effects it keeps, at their fitted values (a body effect with a
-/// component held, at the kept fit's values of the others) — with a ground contact on `feet`
-/// fitted beside it (the contact's own search from the model's contact: [`Engine::fit_one`]),
-/// then the effects of `set` fitted again jointly beside that contact, from their kept values
-/// (least squares for smooth effects: a Jacobian and a step or two from there). Its held-out
-/// mean square [rad²] when the contact was fitted and the kept set `kept` does not replay the
-/// held-out episodes closer beyond noise; `None` otherwise. Replayed by `engine` (counted
-/// there).
+/// One rival: the fit told `told` (the last a ground contact on the feet), its fitted set and
+/// held-out mean square [rad²] when the contact was fitted and the kept set `kept` does not
+/// replay the held-out episodes closer beyond noise; `None` otherwise. Its fit is added to
+/// `out.cost`.
 fn rival_as_close(
+    (robot, recs, opts): (&Robot, &[Recording], &FitOptions),
     engine: &Engine,
-    (train, heldout): (&[Recording], &[Recording]),
-    (set, feet): (Vec<Applied>, &[String]),
+    out: &mut FitOutcome,
+    told: &[(String, Vec<String>)],
     (kept, unscored): (&[Applied], &[String]),
 ) -> Option<f64> {
-    let floor = effects::by_id(FLOOR)?;
-    let (p, f) = engine.fit_one(train, &set, floor, feet);
-    if p.is_empty() || !f.is_finite() {
+    let o = FitOptions { told: told.to_vec(), progress: None, ..opts.clone() };
+    let rival = fit(robot, recs, &o);
+    add_cost(out, rival.cost.simulations, &rival.cost.rollouts);
+    if !rival.applied.iter().any(|b| b.effect.id() == FLOOR) {
         return None;
     }
-    let mut rival = vec![Applied { effect: floor, joints: feet.to_vec(), params: p }];
-    rival.extend(set);
-    let rival = if rival.len() > 1 { fit_jointly(engine, train, rival, 1) } else { rival };
-    if beats_beyond_noise(engine, heldout, &rival, kept) != Some(false) {
+    if beats_beyond_noise(engine, &out.heldout, &rival.applied, kept) != Some(false) {
         return None;
     }
-    heldout_ms(engine, heldout, &rival, unscored)
+    heldout_ms(engine, &out.heldout, &rival.applied, unscored)
 }
 
-/// `told` as the `--told` arguments that reproduce it (a told fit starts from the model's values,
-/// the rival from the kept fit's: the values may differ within the fit's resolution).
+/// `told` as the `--told` arguments that reproduce it.
 fn told_args(told: &[(String, Vec<String>)]) -> String {
     told.iter().map(|(e, j)| format!("--told {e}@{}", j.join("+"))).collect::<Vec<_>>().join(" ")
 }
@@ -138,14 +130,17 @@ pub fn split_off(
         return vec![];
     }
     let engine = Engine::new(robot, recs, opts);
-    let warnings = judge((&engine, &feet, &bodies), out, unscored);
+    let warnings = judge(robot, recs, opts, (&engine, &feet, &bodies), out, unscored);
     add_cost(out, engine.simulations(), &engine.rollout_stats());
     warnings
 }
 
-/// The tests of [`split_off`] with its `engine` (which counts the rivals' fits and the
-/// held-out replays), the feet and the listed body effects (indices in `out.applied`).
+/// The tests of [`split_off`] with its `engine` (which counts the held-out replays), the feet
+/// and the listed body effects (indices in `out.applied`).
 fn judge(
+    robot: &Robot,
+    recs: &[Recording],
+    opts: &FitOptions,
     (engine, feet, bodies): (&Engine, &[String], &[usize]),
     out: &mut FitOutcome,
     unscored: &[String],
@@ -154,12 +149,7 @@ fn judge(
     let Some(kept_ms) = heldout_ms(engine, &out.heldout, &applied, unscored) else {
         return vec![];
     };
-    let (train, heldout) = (out.train.clone(), out.heldout.clone());
-    let data = (train.as_slice(), heldout.as_slice());
-    let kept_without = |replaced: &[usize]| -> Vec<Applied> {
-        let keep = |(k, _): &(usize, &Applied)| !replaced.contains(k);
-        applied.iter().enumerate().filter(keep).map(|(_, b)| b.clone()).collect()
-    };
+    let ctx = (robot, recs, opts);
     let told_without = |replaced: &[usize]| -> Vec<(String, Vec<String>)> {
         applied
             .iter()
@@ -178,8 +168,7 @@ fn judge(
         }
         let mut told = told_without(&replaced);
         told.push((FLOOR.to_string(), feet.to_vec()));
-        let set = (kept_without(&replaced), feet);
-        let Some(rival_ms) = rival_as_close(engine, data, set, (&applied, unscored)) else {
+        let Some(rival_ms) = rival_as_close(ctx, engine, out, &told, (&applied, unscored)) else {
             continue;
         };
         let names: Vec<String> = replaced
@@ -215,13 +204,7 @@ fn judge(
             let mut told = told_without(&[i]);
             told.insert(i.min(told.len()), (held.id().to_string(), a.joints.clone()));
             told.push((FLOOR.to_string(), feet.to_vec()));
-            // The held variant starts at the kept fit's values of the other components.
-            let mut set = kept_without(&[i]);
-            let rest = a.params.iter().enumerate().filter(|(j, _)| *j != k).map(|(_, v)| *v);
-            let variant =
-                Applied { effect: held, joints: a.joints.clone(), params: rest.collect() };
-            set.insert(i.min(set.len()), variant);
-            let Some(rival_ms) = rival_as_close(engine, data, (set, feet), (&applied, unscored))
+            let Some(rival_ms) = rival_as_close(ctx, engine, out, &told, (&applied, unscored))
             else {
                 continue;
             };

@@ -60,7 +60,6 @@ use crate::sim2real::replay::{Episode, ReplayOptions};
 
 pub use engine::Engine;
 pub use policy::{Phase, SearchPolicy};
-pub use polish::fit_jointly;
 pub use verdict::beats_beyond_noise;
 
 use greedy::greedy_round;

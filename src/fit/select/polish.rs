@@ -124,7 +124,7 @@ pub(super) fn with_params(set: &[Applied], slots: &[Slot], x: &[f64]) -> Vec<App
 /// Fits the effects `set[first..]` jointly on `train` (the ones before stay fixed), starting from
 /// their current parameters: Levenberg–Marquardt when all are smooth, else Nelder–Mead. Returns
 /// the set unchanged when the joint fit does not lower the training error.
-pub fn fit_jointly(
+pub(super) fn fit_jointly(
     engine: &Engine,
     train: &[Recording],
     set: Vec<Applied>,
