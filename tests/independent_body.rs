@@ -69,6 +69,28 @@ fn a_payload_the_effects_allowed_cannot_name_is_an_unexplained_residual() {
     assert!(w.contains("unexplained residual on knee"), "{w}");
 }
 
+/// The same, every episode held out in turn (`--holdout-by episode`, four folds): every fold
+/// names the knee in its `unexplained` (JSON `folds[].unexplained`) far above its floor, and
+/// in its warnings, as the single fit does — no fold presents the joint effects as the answer.
+#[test]
+fn every_fold_of_a_rotation_names_the_residual_its_effects_leave() {
+    let v = fit(
+        "R1_shank_payload",
+        &["--effects", "armature,viscous_damping", "--holdout-by", "episode"],
+    );
+    let folds = v["folds"].as_array().expect("folds");
+    assert_eq!(folds.len(), 4, "{v}");
+    for f in folds {
+        let u = f["unexplained"].as_array().expect("a fold's unexplained");
+        let knee = u.iter().find(|x| x["joint"] == "knee");
+        let knee = knee.unwrap_or_else(|| panic!("fold {}: knee not named: {u:?}", f["value"]));
+        let (r, w) = (knee["residual_rms"].as_f64().unwrap(), knee["floor_rms"].as_f64().unwrap());
+        assert!(r > 3.0 * w, "fold {}: knee {r} rad against its floor {w}", f["value"]);
+        let warnings = f["warnings"].to_string();
+        assert!(warnings.contains("unexplained residual on knee"), "{warnings}");
+    }
+}
+
 /// `--holdout-by` rotates the held-out episodes; a told armature on the knee of the leg that
 /// has none comes out at the model's own value within its uncertainty in every fold, and is
 /// then a note, not a selected effect (as in a single fit).

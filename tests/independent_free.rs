@@ -9,7 +9,9 @@
 
 mod common;
 
-use common::indep::{TruthBody, fit, found, truth};
+use common::indep::{TruthBody, case, fit, found, truth};
+use common::load;
+use modellint::model::Robot;
 
 fn own_free_base_physics(truth: &serde_json::Value) {
     assert_eq!(truth["simulator"], "floatsim.py", "not the free-base simulator's recording");
@@ -27,15 +29,21 @@ fn own_free_base_physics(truth: &serde_json::Value) {
 /// comes out +2.4 mm for −30 mm, docs/fitting.md). The floor's rival holds `along` at the
 /// model's value beside a ground contact on the feet, replays the held-out episode as close,
 /// and the output marks `along` not identified (no value in the text) with a warning, while
-/// `across` keeps its value.
+/// `across` keeps its value. `--write-model` writes the trunk's centre of mass moved across as
+/// fitted and along as the model has it (not the fitted replay's +2.4 mm), and says so.
 #[test]
 fn a_trunk_battery_told_on_the_free_base_is_found_across_the_trunk() {
     let name = "KFR1_trunk_battery";
     let truth = truth(name);
     own_free_base_physics(&truth);
-    let (_along, across) = TruthBody::of(&truth, "trunk").com_shift();
+    let trunk = TruthBody::of(&truth, "trunk");
+    let (_along, across) = trunk.com_shift();
     assert!(across.abs() > 0.01, "the case moves the centre across the trunk ({across} m)");
-    let v = fit(name, &["--told", "com_offset@root_pitch"]);
+    let dir = std::env::temp_dir().join(format!("modellint_free_kfr1_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let written = dir.join("fitted.xml");
+    let out = written.to_str().unwrap();
+    let v = fit(name, &["--told", "com_offset@root_pitch", "--write-model", out]);
     assert_eq!(found(&v), [("com_offset".into(), r#"["root_pitch"]"#.into())], "{:?}", found(&v));
     let m = &v["missing_physics"][0];
     let c = m["params"]["across"].as_f64().unwrap();
@@ -50,6 +58,24 @@ fn a_trunk_battery_told_on_the_free_base_is_found_across_the_trunk() {
         "{w}"
     );
     assert!(w.contains("--told com_offset~along@root_pitch --told ground_contact@"), "{w}");
+    // The written trunk: its centre moved by the fitted `across` only.
+    let com = |r: &Robot| {
+        let j = r.joint("root_pitch").expect("root_pitch").id;
+        r.mj.body_ipos()[usize::try_from(r.mj.jnt_bodyid()[j]).unwrap()]
+    };
+    let (c0, c1) = (com(&load(&case(name).join("nominal.xml"))), com(&load(&written)));
+    let d = [c1[0] - c0[0], c1[1] - c0[1], c1[2] - c0[2]];
+    let on = |u: [f64; 3]| d[0] * u[0] + d[1] * u[1] + d[2] * u[2];
+    assert!(on(trunk.u).abs() < 1e-6, "written along {} m, the model has 0", on(trunk.u));
+    assert!((on(trunk.w) - c).abs() < 1e-6, "written across {} m, fitted {c}", on(trunk.w));
+    let notes = v["notes"].to_string();
+    assert!(
+        notes.contains(
+            "com_offset on root_pitch: not identified, written as the model has it: along = 0 m"
+        ),
+        "{notes}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
 }
 
 /// Nothing concealed, over a floor ten times stiffer than `KFR0_biped_none`'s (k 1e6 N/m,

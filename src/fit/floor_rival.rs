@@ -21,7 +21,8 @@
 //! shift along comes out +2.4 mm for −30 mm; `KFR3`: the battery 0.298 m along for 0.12). Each
 //! component the effect declares ([`Effect::held_components`]) is held at the model's value
 //! beside the contact, the rest of the effect fitted; when that rival replays as close, the
-//! component is reported as not identified (no value), the others keep theirs.
+//! component is reported as not identified (no value), the others keep theirs (and
+//! `--write-model` writes it as the model has it: [`crate::fit::writeback::written_values`]).
 //!
 //! [`Effect::held_components`]: crate::fit::effects::Effect::held_components
 

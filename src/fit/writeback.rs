@@ -176,9 +176,32 @@ pub fn edit_file(
                         continue;
                     }
                     let m = with_all.get_or_insert_with(|| model_with_selected(robot, selected));
-                    let Some(text) = robot.joint(j).and_then(|jj| inertial_text(m, jj.id)) else {
+                    let Some(mut text) = robot.joint(j).and_then(|jj| inertial_text(m, jj.id))
+                    else {
                         continue;
                     };
+                    // Every body effect on this body: those with a component written at its
+                    // nominal value say so, in a note and beside the element.
+                    let body_joints: Vec<&str> = body
+                        .children()
+                        .filter(|c| c.has_tag_name("joint"))
+                        .filter_map(|c| c.attribute("name"))
+                        .collect();
+                    let on_body = |x: &&Selected| {
+                        x.joints.iter().any(|k| k == j || body_joints.contains(&k.as_str()))
+                    };
+                    for x in selected.iter().filter(on_body) {
+                        let Some(ex) = effects::by_id(&x.effect) else { continue };
+                        let (_, nominal) = written_values(x, ex);
+                        if !nominal.is_empty() {
+                            let note = nominal_note(x, ex, &nominal);
+                            text.push_str(&format!(
+                                " <!-- modellint fit: {} -->",
+                                xml_comment(&note)
+                            ));
+                            warnings.push(note);
+                        }
+                    }
                     element_edits.push(inertial_edit(xml, body, text));
                 }
             }
@@ -284,19 +307,68 @@ fn inertia_from_geoms(doc: &roxmltree::Document) -> bool {
         .any(|n| n.has_tag_name("compiler") && n.attribute("inertiafromgeom") == Some("true"))
 }
 
-/// The model with every selected effect applied (what the body effects' write-back reads).
+/// The model with every selected effect applied (what the body effects' write-back reads), each
+/// at [`written_values`].
 fn model_with_selected(robot: &Robot, selected: &[Selected]) -> mujoco_rs::prelude::MjModel {
     let applied: Vec<effects::Applied> = selected
         .iter()
         .filter_map(|s| {
+            let effect = effects::by_id(&s.effect)?;
             Some(effects::Applied {
-                effect: effects::by_id(&s.effect)?,
+                effect,
                 joints: s.joints.clone(),
-                params: s.values.clone(),
+                params: written_values(s, effect).0,
             })
         })
         .collect();
     effects::model_with(robot, &applied)
+}
+
+/// The values written back for `s`: its fitted values, except that a body effect's (written as
+/// an `<inertial>`) parameter the output reports as not identified is written at its nominal
+/// value — [`effects::ParamDef::default`], the body as the model has it (no mass added, the
+/// centre of mass not moved along that direction, the inertia not scaled) — not at the value
+/// the fitted replay keeps; with the names of the parameters so written. (A joint effect's
+/// default is not always the model's own value — a contact's MuJoCo defaults — so its values
+/// are written as fitted.)
+pub fn written_values(s: &Selected, effect: &dyn effects::Effect) -> (Vec<f64>, Vec<String>) {
+    let mut v = s.values.clone();
+    let mut nominal = Vec::new();
+    if effect.write_back(&s.values) != WriteBack::Inertial {
+        return (v, nominal);
+    }
+    for (k, d) in effect.params().iter().enumerate() {
+        if s.unidentified.iter().any(|u| u == d.name)
+            && let Some(x) = v.get_mut(k)
+        {
+            *x = d.default;
+            nominal.push(d.name.to_string());
+        }
+    }
+    (v, nominal)
+}
+
+/// The note (and the comment beside the written `<inertial>`) for a body effect some of whose
+/// parameters `nominal` were written at their nominal values ([`written_values`]).
+fn nominal_note(s: &Selected, effect: &dyn effects::Effect, nominal: &[String]) -> String {
+    let parts: Vec<String> = nominal
+        .iter()
+        .filter_map(|n| {
+            let d = effect.params().iter().find(|d| d.name == n.as_str())?;
+            let unit = if d.unit.is_empty() { String::new() } else { format!(" {}", d.unit) };
+            let kept = s
+                .params
+                .get(n.as_str())
+                .map_or(String::new(), |v| format!(" (the fitted replay keeps {})", sig(*v)));
+            Some(format!("{n} = {}{unit}{kept}", num(d.default)))
+        })
+        .collect();
+    format!(
+        "{} on {}: not identified, written as the model has it: {}",
+        s.effect,
+        s.joints.join(","),
+        parts.join(", ")
+    )
 }
 
 /// A value with 9 significant digits, as the shortest text that reads back as it (an inertia
@@ -307,6 +379,11 @@ fn sig(v: f64) -> String {
     }
     let r: f64 = format!("{v:.8e}").parse().unwrap_or(v);
     format!("{r}")
+}
+
+/// `text` safe inside an XML comment (no `--`).
+fn xml_comment(text: &str) -> String {
+    text.replace("--", "- -")
 }
 
 /// `<inertial …/>` of joint `jnt`'s child body as the model `m` holds it (body frame).
@@ -363,6 +440,13 @@ pub fn actuators_toml(selected: &[Selected]) -> String {
             x.joints.iter().map(|j| format!("\"{j}\"")).collect::<Vec<_>>().join(", "),
             num(x.heldout_improvement)
         ));
+        if !x.unidentified.is_empty() {
+            let names: Vec<String> = x.unidentified.iter().map(|u| format!("\"{u}\"")).collect();
+            s.push_str(&format!(
+                "# not identified by the recordings (the value is the fitted replay's, not an estimate)\nunidentified = [{}]\n",
+                names.join(", ")
+            ));
+        }
         s.push_str("[effect.params]\n");
         for (k, v) in &x.params {
             s.push_str(&format!("{k} = {}\n", num(*v)));

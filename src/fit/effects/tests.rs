@@ -330,6 +330,50 @@ fn link_inertia_scales_the_moment_about_the_joint_axis_and_stays_a_body() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// A thin rod (a forearm whose inertia is a rod's along the link: `m L²/12` about the two axes
+/// across it, 1e-7 kg·m² about its own) scaled by `link_inertia` in the elbow's plane stays a
+/// rigid body at every scale of the bounds, and its moment about the elbow axis is scaled
+/// exactly. Scaling the moment about the axis alone, or the moments about the plane's two axes
+/// (the rod's own and the one across it), would not be a body at 4× — one moment would exceed
+/// the sum of the other two — and the validity check here fails on either.
+#[test]
+fn link_inertia_keeps_a_thin_rod_a_rigid_body() {
+    use super::{Applied, by_id, inertial, model_with};
+    let dir = std::env::temp_dir().join(format!("modellint-rod-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let rod = r#"<inertial pos="0 0 -0.125" mass="0.8" diaginertia="0.0041667 0.0041667 1e-7"/>"#;
+    let robot =
+        arm_with(&dir, "rod.xml", rod, r#"fromto="0 0 0 0 0 -0.25" contype="0" conaffinity="0""#);
+    let b = robot.mj.jnt_bodyid()[robot.joint("elbow").unwrap().id] as usize;
+    let d0 = robot.mj.body_inertia()[b];
+    assert!(d0.iter().any(|&x| x < 1e-6), "a thin rod: {d0:?}");
+    let (_, _, i0) = inertial::read(&robot.mj, b).unwrap();
+    let y: nalgebra::Vector3<f64> = nalgebra::Vector3::y();
+    for k in [0.25, 0.5, 2.0, 4.0] {
+        let a = Applied {
+            effect: by_id("link_inertia").unwrap(),
+            joints: vec!["elbow".into()],
+            params: vec![k],
+        };
+        let m = model_with(&robot, &[a]);
+        let (_, _, i1) = inertial::read(&m, b).unwrap();
+        assert!(inertial::valid(m.body_inertia()[b]), "{k}: {:?}", m.body_inertia()[b]);
+        let (about0, about1) = (y.dot(&(i0 * y)), y.dot(&(i1 * y)));
+        assert!(
+            (about1 - k * about0).abs() < 1e-12 * about0.max(1.0),
+            "{k}: {about1} vs {}",
+            k * about0
+        );
+    }
+    // The naive alternatives at 4×: the moment about the elbow axis alone, or the moments
+    // about the two axes of the elbow's plane (x and z) — neither is a body.
+    let (x, z) = (nalgebra::Vector3::x(), nalgebra::Vector3::z());
+    let (ix, iy, iz) = (x.dot(&(i0 * x)), y.dot(&(i0 * y)), z.dot(&(i0 * z)));
+    assert!(!inertial::valid([ix, 4.0 * iy, iz]), "the moment about y alone");
+    assert!(!inertial::valid([4.0 * ix, iy, 4.0 * iz]), "the moments about x and z");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// A body effect groups only alike links: the quadruped's four shanks (0.5 kg capsule and a
 /// 0.1 kg foot each) are alike, a shank and a thigh are not; a joint effect groups any joints.
 #[test]

@@ -119,5 +119,45 @@ fn a_fitted_stiffness_is_written_with_its_springref_at_the_keyframe() {
         // keyframe qpos is in radians whatever the compiler's angle unit
         assert!((spring - -1.2).abs() < 1e-6, "{compiler}: qpos_spring {spring}\n{text}");
     }
+
+/// A body effect's component the output reports as not identified is written as the model has
+/// it (its nominal value), not at the value the fitted replay keeps; the others as fitted; a
+/// note and a comment beside the `<inertial>` say so, and the actuator TOML lists it.
+#[test]
+fn an_unidentified_body_component_is_written_as_the_model_has_it() {
+    let dir = std::env::temp_dir().join(format!("modellint-wb-unid-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("arm.xml");
+    std::fs::write(&path, ARM).unwrap();
+    let load = |p: &std::path::Path| {
+        let mut map = crate::model::source::SourceMap::default();
+        crate::model::load(&mut map, p, None).unwrap()
+    };
+    let robot = load(&path);
+    let mut s = selected("com_offset", "elbow", &[0.02, -0.01]);
+    s.unidentified = vec!["along".into()];
+    s.identifiable = false;
+    let (text, warnings) = edit_mjcf(ARM, &robot, std::slice::from_ref(&s)).unwrap();
+    assert_eq!(warnings.len(), 1, "{warnings:?}");
+    assert!(warnings[0].contains("com_offset on elbow: not identified, written as the model has it: along = 0 m (the fitted replay keeps 0.02)"), "{warnings:?}");
+    assert!(text.contains("<!-- modellint fit: com_offset on elbow: not identified"), "{text}");
+    let out = dir.join("out.xml");
+    std::fs::write(&out, &text).unwrap();
+    let written = load(&out);
+    let at = |p: &[f64]| {
+        let a = [Applied {
+            effect: by_id("com_offset").unwrap(),
+            joints: s.joints.clone(),
+            params: p.to_vec(),
+        }];
+        inertial::read(&model_with(&robot, &a), 2).unwrap().1
+    };
+    let c = inertial::read(&written.mj, 2).unwrap().1;
+    let (nominal, fitted) = (at(&[0.0, -0.01]), at(&[0.02, -0.01]));
+    assert!((c - nominal).norm() < 1e-8, "written {c:?}, along at the model's {nominal:?}");
+    assert!((c - fitted).norm() > 0.019, "not the fitted replay's along {fitted:?}");
+    assert!((c - inertial::read(&robot.mj, 2).unwrap().1).norm() > 0.009, "across is written");
+    let toml = actuators_toml(std::slice::from_ref(&s));
+    assert!(toml.contains("unidentified = [\"along\"]"), "{toml}");
     std::fs::remove_dir_all(&dir).ok();
 }
