@@ -119,6 +119,8 @@ fn a_fitted_stiffness_is_written_with_its_springref_at_the_keyframe() {
         // keyframe qpos is in radians whatever the compiler's angle unit
         assert!((spring - -1.2).abs() < 1e-6, "{compiler}: qpos_spring {spring}\n{text}");
     }
+    std::fs::remove_dir_all(&dir).ok();
+}
 
 /// A body effect's component the output reports as not identified is written as the model has
 /// it (its nominal value), not at the value the fitted replay keeps; the others as fitted; a
