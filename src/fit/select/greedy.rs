@@ -356,15 +356,14 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
             let rivals = rivals((&cands[ci..], &coarse[ci..]), |f| gain(f) >= bar);
             let at = (short, &applied[..]);
             early_tried = Some(early_pair(s, at, lead_sel, &rivals, &ho_err, (z, round), out));
-            // A pair at the floor is judged as a kept candidate there is: only aliases on its
-            // joints (of at most its parameters) are still screened.
+            // The pair (at the floor) is judged as a kept candidate there is: only aliases on
+            // its joints (of at most its parameters) are still screened.
             if let Some(Some(p)) = &early_tried {
                 best_gain = best_gain.max(gain(p.short_rmse));
-                if let Some((k, group)) = p.at_floor(&engine.joints) {
-                    (floor_k, floor_train) = (Some(k), Some(p.train_rmse / base_train));
-                    floored_groups.push(group);
-                    reach = Reach::new(engine, short, &applied, &p.set);
-                }
+                let (k, group) = p.floored(&engine.joints);
+                (floor_k, floor_train) = (Some(k), Some(p.train_rmse / base_train));
+                floored_groups.push(group);
+                reach = Reach::new(engine, short, &applied, &p.set);
             }
         }
         let (e, group, ev) = cands[ci].clone();

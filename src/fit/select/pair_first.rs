@@ -7,15 +7,20 @@
 //! gives both, the held-out figure by the one replay the held-out screen makes before a full
 //! fit anyway. A pair that passes the look-ahead against the lead — the same tests as against
 //! a round's winner: held-out beyond noise and by `pair_gain`, each member needed, BIC down,
-//! beyond the model's discretisation — is the round's best so far, and its gain on the screen's
-//! data is the bar (`screen_share`) every candidate still to be taken must reach to be fitted in
-//! full. At the end of the round the pair stands unless a single candidate fitted after it
-//! leaves a held-out error the pair would not replace (below the pair's / `pair_gain`): then
-//! the round ends as it would have without the early look-ahead.
+//! beyond the model's discretisation — and leaves a white training residual on every fitted
+//! joint is the round's best so far: its gain on the screen's data is the bar (`screen_share`)
+//! every candidate still to be taken must reach to be fitted in full, and it is judged as a kept
+//! candidate at the floor is (only aliases on its joints, of at most its parameters, are still
+//! screened). At the end of the round the pair stands unless a single candidate fitted after it
+//! leaves a held-out error the pair would not replace (below the pair's / `pair_gain`): then the
+//! round ends as it would have without the early look-ahead. A pair short of the floor is not
+//! taken: another pair of the round's full fits may explain more (on the arm3 conceal case of
+//! armature + damping on the elbow, a delay + armature pair leaves a held-out error 3.4 × its
+//! floor where the round's full fits find the true pair).
 //!
 //! On arm2's delay + Coulomb pair the lead (the delay on both joints) leaves a training error
-//! 15 times the pair's: the singles' coarse fits all fall below the pair's bar and none of the
-//! nine rivals is fitted in full.
+//! 15 times the pair's, which is at the floor: the singles' coarse fits all fall below the
+//! pair's bar and none of the nine rivals is fitted in full.
 
 use std::collections::BTreeMap;
 
@@ -36,10 +41,9 @@ pub(super) struct EarlyPair {
     pub(super) members: Vec<(Selected, Applied)>,
     pub(super) heldout_rmse: f64,
     pub(super) short_rmse: f64,
-    /// Its training RMSE on the whole training set, and whether that residual is white on every
-    /// fitted joint ([`super::Engine::at_floor`]).
+    /// Its training RMSE on the whole training set (a white residual on every fitted joint:
+    /// [`super::Engine::at_floor`]).
     pub(super) train_rmse: f64,
-    pub(super) white: bool,
     /// The model with the pair.
     pub(super) set: Vec<Applied>,
     /// `out.applied` and `out.selected` as the look-ahead left them (earlier effects re-fitted).
@@ -124,29 +128,22 @@ pub(super) fn early_pair(
     set.extend(members.iter().map(|(_, a)| a.clone()));
     let short_rmse = engine.errors(short, &set)?.rmse();
     let t = engine.errors(s.train, &set)?;
-    let white = engine.at_floor(s.train, &set, &t);
+    // A pair short of the floor leaves room for another pair (or a single and a later round)
+    // that the round's full fits would find: the round goes on as without it.
+    if !engine.at_floor(s.train, &set, &t) {
+        return None;
+    }
     let heldout_rmse = members[0].0.heldout_rmse_after;
     let train_rmse = t.rmse();
-    Some(EarlyPair {
-        members,
-        heldout_rmse,
-        short_rmse,
-        train_rmse,
-        white,
-        set,
-        after,
-        notes,
-        kept_logs,
-    })
+    Some(EarlyPair { members, heldout_rmse, short_rmse, train_rmse, set, after, notes, kept_logs })
 }
 
 impl EarlyPair {
-    /// When the pair leaves a white residual: its parameters and its joints (in the order of
-    /// `joints`, as a candidate's group).
-    pub(super) fn at_floor(&self, joints: &[String]) -> Option<(usize, Vec<String>)> {
+    /// Its parameters and its joints (in the order of `joints`, as a candidate's group).
+    pub(super) fn floored(&self, joints: &[String]) -> (usize, Vec<String>) {
         let k = self.members.iter().map(|(_, a)| a.effect.fitted()).sum();
         let on = |j: &String| self.members.iter().any(|(_, a)| a.joints.contains(j));
-        self.white.then(|| (k, joints.iter().filter(|j| on(j)).cloned().collect()))
+        (k, joints.iter().filter(|j| on(j)).cloned().collect())
     }
 
     /// Takes the pair as the round's result: `out` as the look-ahead left it; the members to add.
