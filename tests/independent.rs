@@ -473,14 +473,21 @@ fn fit_finds_the_delay_and_friction_pair_in_at_most_two_rounds() {
         let id = t["effect"].as_str().unwrap();
         if ["stribeck_friction", "load_dependent_friction"].contains(&id) {
             assert_ne!(t["phase"], "add", "{t:#?}");
-            // On both joints, where Coulomb friction was fitted in full, they are judged from
-            // that fit before any fit of their own: not even coarse-fitted (the build before
-            // coarse-fitted both, ~360 replayed seconds).
+            // On both joints they are judged before any fit of their own on the screen's data:
+            // from Coulomb friction's fit, or on the probes' data against the pair at the floor
+            // (the build before coarse-fitted both, ~360 replayed seconds).
             if t["joints"].as_array().unwrap().len() == 2 {
-                assert!(t["params"].as_array().is_some_and(|p| p.is_empty()), "{t:#?}");
+                let judged = t["params"].as_array().is_some_and(|p| p.is_empty())
+                    || ["floor", "floor_screen"].contains(&t["phase"].as_str().unwrap());
+                assert!(judged, "{t:#?}");
             }
         }
     }
+    // The pair is judged right after the lead (the delay on both joints), with its rivals'
+    // coarse fits as partners: no rival is fitted in full (the build before fitted nine in
+    // full, ~2,900 replayed seconds, only to rank singles that all lose to the pair).
+    let full: Vec<_> = tried.iter().filter(|t| t["round"] == 0 && t["phase"] == "add").collect();
+    assert_eq!(full.len(), 1, "{full:#?}");
     let pairs = tried.iter().filter(|t| t["phase"] == "pair").count();
     assert!(pairs <= found, "{pairs} pairs fitted: {:#?}", v["tried"]);
     // The linear model predicts 27-38 % training gains for these smooth effects (the bar is

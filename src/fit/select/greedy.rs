@@ -14,6 +14,7 @@ use super::engine::shape_key;
 use super::extension;
 use super::groups::{Cand, has_group, partner, same_data, sorted_pair};
 use super::lead;
+use super::pair_first::{EarlyPair, early_pair, rivals};
 use super::pairs::{joint_pairs, pair_lookahead, refitted_at_floor};
 use super::policy::Phase;
 use super::reach::Reach;
@@ -291,6 +292,8 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     let mut lead_logged: Option<usize> = None;
     // The first model at the floor's reach on the probes' data ([`Reach`]).
     let mut reach: Option<Reach> = None;
+    // The lead's early pair look-ahead, once tried ([`pair_first`]).
+    let mut early_tried: Option<Option<EarlyPair>> = None;
     let mut ci = 0;
     while ci < cands.len() {
         // The coarse fits of a size's candidates, which are then taken best first
@@ -338,6 +341,29 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
                     cands[ci + k] = c;
                     coarse[ci + k] = f;
                 }
+            }
+        }
+        // The lead kept short of the floor: its pairs with the best coarse-fitted rivals are
+        // judged before any rival's full fit ([`pair_first`]); a pair kept raises the bar.
+        if early_tried.is_none()
+            && n_lead == 1
+            && ci == 1
+            && floor_k.is_none()
+            && let [(lead_sel, _, _, i, _)] = accepted.as_slice()
+            && Some(*i) == lead_logged
+        {
+            let bar = (opts.policy.screen_share * best_gain).max(opts.policy.min_rel_improvement);
+            let rivals = rivals((&cands[ci..], &coarse[ci..]), |f| gain(f) >= bar);
+            let at = (short, &applied[..]);
+            early_tried = Some(early_pair(s, at, lead_sel, &rivals, &ho_err, (z, round), out));
+            // The pair (at the floor) is judged as a kept candidate there is: only aliases on
+            // its joints (of at most its parameters) are still screened.
+            if let Some(Some(p)) = &early_tried {
+                best_gain = best_gain.max(gain(p.short_rmse));
+                let (k, group) = p.floored(&engine.joints);
+                (floor_k, floor_train) = (Some(k), Some(p.train_rmse / base_train));
+                floored_groups.push(group);
+                reach = Reach::new(engine, short, &applied, &p.set);
             }
         }
         let (e, group, ev) = cands[ci].clone();
@@ -577,6 +603,19 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
                 window_bic,
             ));
         }
+    }
+    // The early pair stands unless a single fitted after it is one it would not replace.
+    if let Some(Some(p)) = early_tried
+        && accepted
+            .iter()
+            .all(|(s, ..)| p.heldout_rmse < opts.policy.pair_gain * s.heldout_rmse_after)
+    {
+        for (mut p, a) in p.take(out) {
+            out.applied.push(a);
+            set_uncertainty(engine, train, &mut p, &out.applied, &mut out.warnings);
+            out.selected.push(p);
+        }
+        return true;
     }
     let kept_all: Vec<Selected> = accepted.iter().map(|(s, ..)| s.clone()).collect();
     // A candidate with a parameter on its bound only wins when no interior one is kept.

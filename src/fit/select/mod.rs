@@ -31,6 +31,7 @@ mod extension;
 mod greedy;
 mod groups;
 mod lead;
+mod pair_first;
 mod pair_screen;
 mod pairs;
 mod policy;
