@@ -40,28 +40,6 @@ pub(super) fn sorted_pair(j: &str, p: String) -> Vec<String> {
     g
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn mirror_partners() {
-        let js = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
-        let h = js(&["left_knee", "right_knee", "LL_HFE", "LR_HFE", "elbow_pitch"]);
-        assert_eq!(partner("left_knee", &h).as_deref(), Some("right_knee"));
-        assert_eq!(partner("LR_HFE", &h).as_deref(), Some("LL_HFE"));
-        assert_eq!(partner("elbow_pitch", &h), None);
-        // A quadruped's left-rear leg (`LF_` `LR_` `RF_` `RR_`) pairs with `RR_`, never `LL_`.
-        let q = js(&["LF_KFE", "LR_KFE", "RF_KFE", "RR_KFE"]);
-        assert_eq!(partner("LR_KFE", &q), None);
-        assert_eq!(partner("LF_KFE", &q).as_deref(), Some("RF_KFE"));
-        // Booster T1 and Unitree H1 spellings; a partner outside the fit is no partner.
-        let t = js(&["Left_Knee_Pitch", "Right_Knee_Pitch", "right_knee_joint"]);
-        assert_eq!(partner("Left_Knee_Pitch", &t).as_deref(), Some("Right_Knee_Pitch"));
-        assert_eq!(partner("right_knee_joint", &t), None);
-    }
-}
-
 /// The round's candidate (effect, joint group) list, best first: each diagnosed candidate on
 /// its joint, with its left/right partner, its motor family, the same joint on every leg and
 /// every recorded joint as further groups where they apply (`candidates_per_round` of the
@@ -143,7 +121,7 @@ pub(super) fn candidate_list(
                     && Some(&d.joint) != mirror.as_ref()
                     && legs.contains(&d.joint)
             })
-            && engine.shared_start(e, &applied, &legs);
+            && engine.shared_start(e, applied, &legs);
         // Every recorded joint as one group sharing the parameters (an effect the whole robot
         // has, such as a missing damping or friction, a delay or a servo gain error, or one
         // armature of identical motors) — when the parameters mean the same on those joints
@@ -229,4 +207,26 @@ pub(super) fn candidate_list(
         }
     }
     cands
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn mirror_partners() {
+        let js = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+        let h = js(&["left_knee", "right_knee", "LL_HFE", "LR_HFE", "elbow_pitch"]);
+        assert_eq!(partner("left_knee", &h).as_deref(), Some("right_knee"));
+        assert_eq!(partner("LR_HFE", &h).as_deref(), Some("LL_HFE"));
+        assert_eq!(partner("elbow_pitch", &h), None);
+        // A quadruped's left-rear leg (`LF_` `LR_` `RF_` `RR_`) pairs with `RR_`, never `LL_`.
+        let q = js(&["LF_KFE", "LR_KFE", "RF_KFE", "RR_KFE"]);
+        assert_eq!(partner("LR_KFE", &q), None);
+        assert_eq!(partner("LF_KFE", &q).as_deref(), Some("RF_KFE"));
+        // Booster T1 and Unitree H1 spellings; a partner outside the fit is no partner.
+        let t = js(&["Left_Knee_Pitch", "Right_Knee_Pitch", "right_knee_joint"]);
+        assert_eq!(partner("Left_Knee_Pitch", &t).as_deref(), Some("Right_Knee_Pitch"));
+        assert_eq!(partner("right_knee_joint", &t), None);
+    }
 }
