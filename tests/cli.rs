@@ -354,6 +354,26 @@ fn suppressions_inside_default_classes_are_applied_and_checked() {
     assert!(has("unused-suppression", "soft-limits"), "{found:?}");
 }
 
+/// A suppression comment on a body's `<inertial>` covers the body's mass-property findings and
+/// is checked like any other (it was neither applied nor reported).
+#[test]
+fn suppressions_on_an_inertial_are_applied_and_checked() {
+    let (_, out, _) =
+        modellint(&["fixtures/suppress/on_inertial.xml", "--no-probe", "--format", "json"]);
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let found: Vec<(String, String)> = v["findings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| (f["rule"].as_str().unwrap().to_string(), f["message"].to_string()))
+        .collect();
+    let has = |rule: &str, text: &str| found.iter().any(|(r, m)| r == rule && m.contains(text));
+    assert!(!has("isotropic-base-inertia", "`trunk` "), "suppressed on trunk: {found:?}");
+    assert!(has("isotropic-base-inertia", "`trunk2`"), "not suppressed (misspelled): {found:?}");
+    assert!(has("invalid-suppression", "isotropic-base-inertai`"), "{found:?}");
+    assert!(has("unused-suppression", "isotropic-base-inertia"), "{found:?}");
+}
+
 #[test]
 fn config_thresholds_and_errors() {
     let m = "fixtures/probes/servo_underdamped.xml";

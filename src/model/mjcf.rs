@@ -256,6 +256,14 @@ impl<'a> Builder<'a> {
         let saved = self.cur_body;
         let class_here = b.get("childclass").or(class).map(str::to_string);
         let sup = self.push(ElemKind::Body, b, class, sup, false);
+        // A comment on the body's `<inertial>` covers the body's own findings (its mass
+        // properties), not its children's.
+        for inertial in b.children.iter().filter(|c| c.tag == "inertial") {
+            let own = self.suppressions_of(inertial);
+            if let Some(e) = self.idx.elems.get_mut(&ElemKind::Body).and_then(|v| v.last_mut()) {
+                e.suppressions.extend(own);
+            }
+        }
         self.cur_body = Some(self.idx.list(ElemKind::Body).len() - 1);
         let mut items = Vec::new();
         let mut bodies = Vec::new();
