@@ -90,8 +90,8 @@ pub(super) fn early_pair(
     let policy = &engine.opts.policy;
     let mut kept = vec![lead.clone()];
     for (a, ev) in rivals {
-        // (Three partners: the look-ahead pairs the round's top four.)
-        if kept.len() >= 4 {
+        // (The lead and its partners: as many as the look-ahead pairs.)
+        if kept.len() >= policy.pair_candidates {
             break;
         }
         if !a.joints.iter().any(|j| lead.joints.contains(j)) {

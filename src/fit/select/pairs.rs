@@ -42,7 +42,7 @@ pub(super) fn pair_lookahead(
     let opts = engine.opts;
     let mut top: Vec<&Selected> = kept.iter().collect();
     top.sort_by(|a, b| a.heldout_rmse_after.total_cmp(&b.heldout_rmse_after));
-    top.truncate(4);
+    top.truncate(opts.policy.pair_candidates);
     // A single effect that leaves under 5 % of the error needs no partner.
     if single.heldout_improvement >= opts.policy.pair_needless_improvement {
         return None;

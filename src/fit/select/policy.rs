@@ -119,6 +119,10 @@ pub struct SearchPolicy {
     pub occam_within: f64,
 
     // ---- pairs (two effects fitted together) ----
+    /// The pair look-ahead combines the best this many single candidates of the round (the
+    /// early look-ahead: the lead and this many less one partners); its pair fits grow as
+    /// n (n − 1) / 2 [count]. Default 4.
+    pub pair_candidates: usize,
     /// A single effect whose held-out improvement is at least this needs no partner
     /// [fraction]. Default 0.95.
     pub pair_needless_improvement: f64,
@@ -171,6 +175,7 @@ impl Default for SearchPolicy {
             minor_effect_share: 0.1,
             simpler_within: 1.05,
             occam_within: 1.01,
+            pair_candidates: 4,
             pair_needless_improvement: 0.95,
             pair_full_fit_within: 1.25,
             pair_gain: 0.9,
@@ -309,6 +314,11 @@ pub const FIELDS: &[(&str, &str, &str)] = &[
         "occam_within",
         "ratio of RMSE",
         "fewer parameters win within this factor; more need to be lower by more",
+    ),
+    (
+        "pair_candidates",
+        "count",
+        "the pair look-ahead combines the round's best this many singles (the early one: the lead and this many less one partners); its pair fits grow as n (n − 1) / 2",
     ),
     (
         "pair_needless_improvement",
