@@ -427,8 +427,18 @@ impl Robot {
         self.src.root.unwrap_or(Loc { file: 0, start: 0, end: 0 })
     }
 
-    pub fn total_mass(&self) -> f64 {
-        self.bodies.iter().map(|b| b.mass).sum()
+    /// (the robot's mass, the static scenery's) [kg]: a body counts as the robot's when it moves
+    /// or carries one that moves (a fixed arm's base does, a table or a wall does not).
+    pub fn mass_split(&self) -> (f64, f64) {
+        let mut robot = vec![false; self.bodies.len()];
+        for b in self.bodies.iter().rev().filter(|b| b.id > 0) {
+            if b.weld != 0 || robot[b.id] {
+                robot[b.id] = true;
+                robot[b.parent] = true;
+            }
+        }
+        let sum = |own: bool| self.bodies.iter().filter(|b| robot[b.id] == own).map(|b| b.mass).sum();
+        (sum(true), sum(false))
     }
 }
 

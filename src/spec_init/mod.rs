@@ -420,8 +420,12 @@ pub fn template(robot: &Robot, model_display: &str) -> String {
     );
     let _ = writeln!(
         w,
-        "# mass_kg = [..., ...]         # kg, the real robot's mass budget; the model weighs {} kg",
-        fmt_num(robot.total_mass(), 4)
+        "# mass_kg = [..., ...]         # kg, the real robot's mass budget; the robot weighs {} kg{}",
+        fmt_num(robot.mass_split().0, 4),
+        match robot.mass_split().1 {
+            s if s > 0.0 => format!(" (static scenery's {} kg not counted)", fmt_num(s, 4)),
+            _ => String::new(),
+        }
     );
     if let Some(k) = &robot.key.key_name {
         let _ = writeln!(w, "keyframe = {}              # the standing keyframe", quote(k));

@@ -5,9 +5,10 @@ use crate::util::fmt_num;
 
 declare_rule! {
     /// ## What it does
-    /// Compares the model's total mass (every body's compiled mass) with the mass budget the
-    /// hardware spec states (`robot.mass_kg = [min, max]`, kg). Runs only with a spec that sets
-    /// it.
+    /// Compares the robot's mass (the compiled mass of every body that moves or carries one
+    /// that moves: a fixed arm's base counts, a scene's table or walls do not) with the mass
+    /// budget the hardware spec states (`robot.mass_kg = [min, max]`, kg). Runs only with a
+    /// spec that sets it.
     ///
     /// ## Why is this bad?
     /// A model lighter or heavier than the robot (a battery, cables, a payload left out; a CAD
@@ -38,7 +39,7 @@ impl Rule for MassBudget {
         let Some(spec) = cx.spec else { return };
         let Some(budget) = &spec.robot.mass_kg else { return };
         let [lo, hi] = *budget.get_ref();
-        let m = cx.robot.total_mass();
+        let (m, scenery) = cx.robot.mass_split();
         if (lo..=hi).contains(&m) {
             return;
         }
@@ -46,19 +47,31 @@ impl Rule for MassBudget {
         let f = cx
             .finding(
                 format!(
-                    "the model weighs {} kg, {side} the spec's mass budget [{}, {}] kg",
+                    "the robot weighs {} kg, {side} the spec's mass budget [{}, {}] kg",
                     fmt_num(m, 4),
                     fmt_num(lo, 4),
                     fmt_num(hi, 4)
                 ),
                 spec.loc(budget.span()),
             )
-            .label(format!("model: {} kg", fmt_num(m, 4)))
+            .label(format!("robot: {} kg", fmt_num(m, 4)))
             .element("model", cx.robot.root_loc())
-            .note("every joint's gravity load, the contact forces and the base's dynamics scale with the mass; a policy trained on the wrong mass pushes too hard or too little on hardware")
+            .note(format!("every joint's gravity load, the contact forces and the base's dynamics scale with the mass; a policy trained on the wrong mass pushes too hard or too little on hardware{}", scenery_note(scenery)))
             .help("correct the bodies' masses (or their geoms' density) to the weighed robot's, or the budget if the robot changed")
             .subject(Subject::Model)
             .with("mass_kg", m);
         out.push(f);
+    }
+}
+
+/// What the robot's mass leaves out, for the note ("" when the model has no static scenery).
+fn scenery_note(scenery: f64) -> String {
+    if scenery > 0.0 {
+        format!(
+            " (the robot: every body that moves or carries one that moves; the {} kg of static scenery is not counted)",
+            fmt_num(scenery, 4)
+        )
+    } else {
+        String::new()
     }
 }
