@@ -413,3 +413,30 @@ fn cli_a_driven_joint_without_a_column_is_said() {
     assert_eq!(o.status.code(), Some(0), "stderr: {err}");
     assert!(!err.contains("no column in any recording"), "stderr: {err}");
 }
+
+/// A command logged at 100 Hz, one new value a row: `--control-hz 50` replaces the rate the
+/// file declares (said), and two rows with different commands then share every tick (said: the
+/// replay keeps one of them and lags). Without the flag, or at the file's rate, neither.
+#[test]
+fn cli_a_control_rate_below_the_commands_is_said() {
+    let mut text =
+        String::from("# control_rate_hz: 100\nt,shoulder_pitch.q,shoulder_pitch.q_cmd\n");
+    for k in 0..200 {
+        let t = k as f64 * 0.01;
+        let c = 0.3 * (2.0 * std::f64::consts::PI * 0.7 * t).sin();
+        text.push_str(&format!("{t},{c},{c}\n"));
+    }
+    let p = tmp("chirp100.csv", &text);
+    let run = |extra: &[&str]| {
+        let o = bin().args(["gap", &arm()]).args(extra).arg(&p).output().unwrap();
+        assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+        String::from_utf8_lossy(&o.stderr).into_owned()
+    };
+    let err = run(&["--control-hz", "50"]);
+    assert!(err.contains("--control-hz 50 replaces the 100 Hz they declare"), "stderr: {err}");
+    assert!(err.contains("changes within the ticks of the 50 Hz"), "stderr: {err}");
+    for extra in [&[][..], &["--control-hz", "100"][..]] {
+        let err = run(extra);
+        assert!(!err.contains("replaces the") && !err.contains("changes within"), "stderr: {err}");
+    }
+}

@@ -437,7 +437,8 @@ impl Robot {
                 robot[b.parent] = true;
             }
         }
-        let sum = |own: bool| self.bodies.iter().filter(|b| robot[b.id] == own).map(|b| b.mass).sum();
+        let sum =
+            |own: bool| self.bodies.iter().filter(|b| robot[b.id] == own).map(|b| b.mass).sum();
         (sum(true), sum(false))
     }
 }

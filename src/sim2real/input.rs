@@ -5,6 +5,9 @@ use std::path::{Path, PathBuf};
 
 use crate::model::Robot;
 use crate::sim2real::bam;
+use crate::sim2real::input_rate::{
+    no_rate_warning, off_grid_warning, overridden_rate_warning, undeclared_rate,
+};
 use crate::sim2real::recording::{self, ParseOptions, Recording, RecordingError};
 use crate::sim2real::replay::{self, Episode, ReplayOptions};
 
@@ -125,6 +128,9 @@ pub fn read_for_replay(
     // Files with a command but no control rate, declared or given: (name, median interval
     // between command changes).
     let mut no_rate: Vec<(String, Option<f64>)> = Vec::new();
+    // Files whose declared rate --control-hz replaces, and whose command changes between ticks.
+    let mut overridden: Vec<(String, f64)> = Vec::new();
+    let mut off_grid: Vec<(String, replay::OffGrid)> = Vec::new();
     // joint → the files where it has no command (accepted by --no-command).
     let mut unscored: Vec<(String, Vec<String>)> = Vec::new();
     // Unknown joints and driven joints without a command are reported at the header line,
@@ -167,12 +173,23 @@ pub fn read_for_replay(
         if let Some(fix) = replay::resolve_rate(&mut r, opts) {
             rates.push((f.clone(), fix));
         }
+        let name = || f.file_name().unwrap_or_default().to_string_lossy().into_owned();
+        if let (Some(given), Some(declared)) = (opts.control_hz, r.control_rate_hz)
+            && (given - declared).abs() > 1e-9 * declared
+        {
+            overridden.push((name(), declared));
+        }
+        if let Some(o) = replay::off_grid(&r, opts) {
+            off_grid.push((name(), o));
+        }
         origins.push((f.clone(), replay::resolve_tick_origin(&mut r, opts)));
         recs.push(r);
     }
     let (mut notes, mut warnings) = replay::origin_messages(&origins);
     warnings.extend(replay::rate_messages(&rates));
     warnings.extend(no_rate_warning(&no_rate, recs.len()));
+    warnings.extend(overridden_rate_warning(&overridden, opts.control_hz, recs.len()));
+    warnings.extend(off_grid_warning(&off_grid, recs.len()));
     if !duplicates.is_empty() {
         notes.push(format!(
             "rows that repeat the row before them exactly were left out (a sample logged twice): {}",
@@ -216,61 +233,6 @@ pub fn read_for_replay(
         warnings.push(w);
     }
     Ok(ReplayInputs { recs, notes, warnings, unscored })
-}
-
-/// For a recording with a command and no control rate (none in the file, no `--control-hz`,
-/// not declared `control_rate_hz: none`, not a BAM servo log, whose servo takes each goal as
-/// it arrives): `Some(median interval between the rows where the command changes)`, the inner
-/// `None` when it changes fewer than 8 times.
-fn undeclared_rate(r: &Recording, opts: &ReplayOptions) -> Option<Option<f64>> {
-    let declared = |k: &str, v: &str| r.meta.get(k).is_some_and(|x| x == v);
-    if opts.control_hz.or(r.control_rate_hz).is_some()
-        || declared(recording::KEY_CONTROL_RATE, recording::RATE_NONE)
-        || declared("source_format", "bam")
-    {
-        return None;
-    }
-    let cmds: Vec<&[f64]> = r.joints.iter().filter_map(|j| j.q_cmd.as_deref()).collect();
-    if cmds.is_empty() {
-        return None;
-    }
-    let changes: Vec<f64> =
-        (1..r.t.len()).filter(|&i| cmds.iter().any(|c| c[i] != c[i - 1])).map(|i| r.t[i]).collect();
-    let mut dt: Vec<f64> = changes.windows(2).map(|w| w[1] - w[0]).collect();
-    if dt.len() < 8 {
-        return Some(None);
-    }
-    dt.sort_by(f64::total_cmp);
-    Some(Some(dt[dt.len() / 2]))
-}
-
-/// The warning for the recordings [`undeclared_rate`] found: what the replay assumed (each
-/// command held from its own row's time) and how to declare the rate.
-fn no_rate_warning(files: &[(String, Option<f64>)], total: usize) -> Option<String> {
-    if files.is_empty() {
-        return None;
-    }
-    let shown: Vec<String> = files
-        .iter()
-        .take(3)
-        .map(|(f, dt)| match dt {
-            Some(dt) => format!("{f} (its command changes every {:.1} ms, median)", dt * 1e3),
-            None => f.clone(),
-        })
-        .collect();
-    let more = if files.len() > 3 { ", …" } else { "" };
-    Some(format!(
-        "{} of {total} recordings have a command but no control rate: {}{more}. Each command was \
-         replayed as held from its own row's time, so a command that a controller set at a tick \
-         between two rows starts late by up to a row interval in the replay — a lag `fit` can \
-         take for armature, damping or a slower servo. Declare the controller's rate: \
-         `# control_rate_hz: 50` in a CSV header, `control_rate_hz = 50` in a --log-map file, a \
-         scalar `control_rate_hz` in an .npz/.pt dict, or --control-hz 50 (Python: \
-         control_hz=50); if each command really acts from its own time stamp (goals sent as \
-         events, no control loop), declare `# control_rate_hz: none`",
-        files.len(),
-        shown.join(", ")
-    ))
 }
 
 /// Whether joints `a` and `b` of `robot` are in one kinematic chain (one's body is the other's,

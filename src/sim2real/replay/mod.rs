@@ -480,8 +480,8 @@ mod origin;
 mod run;
 mod timestep;
 pub use origin::{
-    KEY_TIME_SCALE, RateFix, TickOrigin, origin_messages, rate_messages, resolve_rate,
-    resolve_tick_origin,
+    KEY_TIME_SCALE, OffGrid, RateFix, TickOrigin, off_grid, origin_messages, rate_messages,
+    resolve_rate, resolve_tick_origin,
 };
 pub use timestep::{JointTimestep, REFINE, TimestepCheck, timestep_check, timestep_note};
 #[cfg(test)]

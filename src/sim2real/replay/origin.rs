@@ -85,6 +85,43 @@ pub const KEY_TIME_SCALE: &str = "time_scale";
 /// stamps are off every decimal grid after it), scaled with them.
 pub const KEY_TIME_QUANTUM: &str = "time_quantum_s";
 
+/// A recording whose command changes within the ticks of the control rate in use: more than
+/// 1 − [`GRID_SHARE`] of the ticks that hold rows hold rows that disagree on the command
+/// (`TickStats::conflicting`; stamp jitter at a tick's edge makes a few). The replay keeps one
+/// command per tick, so the others are lost: the rate is wrong (a `--control-hz` below the
+/// controller's) or the column is not the command in force (a setpoint interpolated per row).
+#[derive(Debug, Clone, PartialEq)]
+pub struct OffGrid {
+    /// The control rate in use [Hz].
+    pub rate: f64,
+    /// Ticks that hold rows, and how many of them hold rows with different commands.
+    pub occupied: usize,
+    pub conflicting: usize,
+    /// The median interval between command changes [s].
+    pub median_change_s: f64,
+}
+
+/// [`OffGrid`] for `rec` under `opts`, `None` when its command is one per tick (or the rows
+/// disagree in fewer than [`MIN_CHANGES`] ticks).
+pub fn off_grid(rec: &Recording, opts: &ReplayOptions) -> Option<OffGrid> {
+    let (Some(rate), _, _) = timing_of(rec, opts) else { return None };
+    let st = super::schedule_of(rec, opts, opts.command_fill).ok()?.stats()?;
+    if st.conflicting < MIN_CHANGES
+        || (st.conflicting as f64) <= (1.0 - GRID_SHARE) * st.occupied as f64
+    {
+        return None;
+    }
+    let cmds: Vec<&[f64]> = rec.joints.iter().filter_map(|j| j.q_cmd.as_deref()).collect();
+    let at: Vec<f64> = (1..rec.t.len())
+        .filter(|&i| cmds.iter().any(|c| c[i] != c[i - 1]))
+        .map(|i| rec.t[i])
+        .collect();
+    let mut dt: Vec<f64> = at.windows(2).map(|w| w[1] - w[0]).collect();
+    dt.sort_by(f64::total_cmp);
+    let median_change_s = *dt.get(dt.len() / 2)?;
+    Some(OffGrid { rate, occupied: st.occupied, conflicting: st.conflicting, median_change_s })
+}
+
 /// When the recorded command changes miss every tick grid at the control rate in use (more than
 /// 2 % of them at its best phase), but fit one at a rate within ± 0.5 % of it (missing at most
 /// half as many) — a logger's clock that drifts against the controller's, or a controller off
