@@ -310,10 +310,13 @@ impl SoftLimits {
                         ),
                     )
                 } else if covers && !within_spec {
-                    let wider = c[0] < r[0] - eps || c[1] > r[1] + eps;
+                    // Past the range: by how much, so that a rounding (-0.22689280275926285
+                    // written for -0.226893) does not read "[-0.2269, 0.733] is wider than
+                    // [-0.2269, 0.733]".
+                    let over = (r[0] - c[0]).max(c[1] - r[1]);
                     let margin = (c[0] - r[0]).max(r[1] - c[1]);
-                    let how = if wider {
-                        "is wider than".to_string()
+                    let how = if over > eps {
+                        format!("reaches {} {u} past", fmt_num(over, 3))
                     } else if margin <= eps {
                         "equals".to_string()
                     } else {
