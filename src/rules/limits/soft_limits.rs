@@ -7,7 +7,7 @@ use crate::model::mjcf::ElemKind;
 use crate::model::{ActuatorKind, JointType, Transmission};
 use crate::probe::limit::LimitHit;
 use crate::probe::{LimitApproach, Measure, Measurement, Preconditions};
-use crate::rules::{Context, Domain, Rule, RuleMeta, measure_each, opt};
+use crate::rules::{Context, Domain, Rule, RuleMeta, display_name, measure_each, opt};
 use crate::util::fmt_num;
 
 declare_rule! {
@@ -304,7 +304,7 @@ impl SoftLimits {
                         0u8,
                         format!(
                             "position actuator `{}` has no ctrlrange: the policy can command any target on joint `{}` (range {})",
-                            a.name,
+                            display_name(&a.name, a.id),
                             j.name,
                             rng(r, u)
                         ),
@@ -331,7 +331,7 @@ impl SoftLimits {
                         1,
                         format!(
                             "position actuator `{}` ctrlrange {} {how} joint `{}`'s hardware range {}",
-                            a.name,
+                            display_name(&a.name, a.id),
                             rng(c, u),
                             j.name,
                             rng(r, u)
@@ -345,7 +345,7 @@ impl SoftLimits {
                         2,
                         format!(
                             "position actuator `{}` ctrlrange {} is not the soft range {} ({} × joint `{}` range {}, centred)",
-                            a.name,
+                            display_name(&a.name, a.id),
                             rng(c, u),
                             rng(e, u),
                             fmt_num(factor.unwrap_or(0.9), 3),
