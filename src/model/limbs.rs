@@ -59,8 +59,9 @@ impl Robot {
 
 impl Robot {
     /// Whether `joint` turns a wheel: an unlimited hinge whose body carries a colliding round
-    /// geom (sphere, or a cylinder, capsule or ellipsoid whose symmetry axis is the hinge axis)
-    /// centred on the axis at the keyframe, and that carries no jointed body further out (a
+    /// geom (sphere, or a cylinder, capsule or ellipsoid whose symmetry axis is the hinge axis,
+    /// or a mesh whose bounding box is round about the hinge: [`round_mesh`]) centred on the
+    /// axis at the keyframe, and that carries no jointed body further out (a
     /// wheel ends its chain: a round actuator housing on a thigh, concentric with the hip, is
     /// not a wheel). Wheels turn without end by design: they need no range and are not feet.
     pub fn is_wheel(&self, joint: usize) -> bool {
@@ -91,6 +92,7 @@ impl Robot {
         };
         let nu = (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]).sqrt().max(1e-12);
         let u = [u[0] / nu, u[1] / nu, u[2] / nu];
+        let aabb = self.mj.geom_aabb();
         self.geoms
             .iter()
             .filter(|g| g.body == j.body && crate::model::contact::takes_part(self, g.id))
@@ -100,6 +102,9 @@ impl Robot {
                 else {
                     return false;
                 };
+                if g.gtype == GeomType::Mesh {
+                    return aabb.get(g.id).is_some_and(|bb| round_mesh(bb, p, m, a, u));
+                }
                 let d = [p[0] - a[0], p[1] - a[1], p[2] - a[2]];
                 let along = d[0] * u[0] + d[1] * u[1] + d[2] * u[2];
                 let off = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2] - along * along).max(0.0).sqrt();
@@ -120,6 +125,31 @@ impl Robot {
                 }
             })
     }
+}
+
+/// Whether a mesh geom is round about a hinge (anchor `a`, unit axis `u`): one of the axes of
+/// its bounding box (`bb`: centre and half-sizes in the geom's frame, at `p` with row-major frame
+/// `m`) lies along the hinge, the two across it are equal within 5 % (the ellipsoid test's
+/// tolerance), and the box's centre is on the hinge within 10 % of that radius. A wheel or caster
+/// mesh passes; so does a box that is square about the axis, which the chain test (a wheel ends
+/// its chain) and the unlimited hinge keep from being a limb.
+fn round_mesh(bb: &[f64; 6], p: &[f64; 3], m: &[f64; 9], a: &[f64; 3], u: [f64; 3]) -> bool {
+    // Column i of the row-major frame: the geom's axis i in the world.
+    let col = |i: usize| [m[i], m[3 + i], m[6 + i]];
+    let dot = |x: [f64; 3], y: [f64; 3]| x[0] * y[0] + x[1] * y[1] + x[2] * y[2];
+    let Some(k) = (0..3).find(|&i| dot(col(i), u).abs() > 0.97) else { return false };
+    let across: Vec<f64> = (0..3).filter(|&i| i != k).map(|i| bb[3 + i]).collect();
+    let radius = across[0].max(across[1]);
+    if radius <= 0.0 || (across[0] - across[1]).abs() > 0.05 * radius {
+        return false;
+    }
+    let c: [f64; 3] = std::array::from_fn(|r| {
+        p[r] + m[3 * r] * bb[0] + m[3 * r + 1] * bb[1] + m[3 * r + 2] * bb[2]
+    });
+    let d = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+    let along = dot(d, u);
+    let off = (dot(d, d) - along * along).max(0.0).sqrt();
+    off <= 0.1 * radius
 }
 
 impl Robot {

@@ -7,7 +7,7 @@ use crate::model::mjcf::ElemKind;
 use crate::model::{ActuatorKind, JointType, Transmission};
 use crate::probe::limit::LimitHit;
 use crate::probe::{LimitApproach, Measure, Measurement, Preconditions};
-use crate::rules::{Context, Domain, Rule, RuleMeta, measure_each, opt};
+use crate::rules::{Context, Domain, Rule, RuleMeta, display_name, measure_each, opt};
 use crate::util::fmt_num;
 
 declare_rule! {
@@ -304,16 +304,19 @@ impl SoftLimits {
                         0u8,
                         format!(
                             "position actuator `{}` has no ctrlrange: the policy can command any target on joint `{}` (range {})",
-                            a.name,
+                            display_name(&a.name, a.id),
                             j.name,
                             rng(r, u)
                         ),
                     )
                 } else if covers && !within_spec {
-                    let wider = c[0] < r[0] - eps || c[1] > r[1] + eps;
+                    // Past the range: by how much, so that a rounding (-0.22689280275926285
+                    // written for -0.226893) does not read "[-0.2269, 0.733] is wider than
+                    // [-0.2269, 0.733]".
+                    let over = (r[0] - c[0]).max(c[1] - r[1]);
                     let margin = (c[0] - r[0]).max(r[1] - c[1]);
-                    let how = if wider {
-                        "is wider than".to_string()
+                    let how = if over > eps {
+                        format!("reaches {} {u} past", fmt_num(over, 3))
                     } else if margin <= eps {
                         "equals".to_string()
                     } else {
@@ -328,7 +331,7 @@ impl SoftLimits {
                         1,
                         format!(
                             "position actuator `{}` ctrlrange {} {how} joint `{}`'s hardware range {}",
-                            a.name,
+                            display_name(&a.name, a.id),
                             rng(c, u),
                             j.name,
                             rng(r, u)
@@ -342,7 +345,7 @@ impl SoftLimits {
                         2,
                         format!(
                             "position actuator `{}` ctrlrange {} is not the soft range {} ({} × joint `{}` range {}, centred)",
-                            a.name,
+                            display_name(&a.name, a.id),
                             rng(c, u),
                             rng(e, u),
                             fmt_num(factor.unwrap_or(0.9), 3),

@@ -7,7 +7,7 @@ use crate::model::mjcf::ElemKind;
 use crate::model::{ActuatorKind, Transmission};
 use crate::probe::direction::Direction;
 use crate::probe::{ActuatorDirection, Claim, Preconditions, Verdict};
-use crate::rules::{Context, Rule, RuleMeta};
+use crate::rules::{Context, Domain, Rule, RuleMeta, opt};
 use crate::util::fmt_num;
 
 declare_rule! {
@@ -42,7 +42,7 @@ declare_rule! {
         group: "mapping",
         level: Severity::Error,
         probe: ActuatorDirection,
-        options: [],
+        options: [opt("tolerance", 0.02, "fraction of joint range", Domain::FRACTION_BELOW_ONE, "a ctrlrange end this close to the joint's end is that end (the same number written to other precision, as in soft-limits): only ends further past the range reach outside it")],
     }
 }
 
@@ -195,14 +195,18 @@ impl ActuatorMapping {
             }
         }
         // Actuators whose gear sign contradicts the spec: their shifted ctrlrange is a consequence.
+        // Only a joint transmission's target is a joint id (a tendon's is a tendon id).
         let flipped = |a: &crate::model::Actuator| {
-            a.target >= 0
-                && cx
-                    .facts(&robot.joints[a.target as usize].name)
+            matches!(a.trn, Transmission::Joint | Transmission::JointInParent)
+                && usize::try_from(a.target)
+                    .ok()
+                    .and_then(|t| robot.joints.get(t))
+                    .and_then(|j| cx.facts(&j.name))
                     .and_then(|f| f.direction)
                     .is_some_and(|d| a.gear * f64::from(d) < 0.0)
         };
         // Position targets outside the joint range (partial overlap; full coverage is soft-limits').
+        let tol = cx.opt("tolerance");
         for a in &robot.actuators {
             if flipped(a) {
                 continue;
@@ -214,7 +218,7 @@ impl ActuatorMapping {
             // allow it (its own length limits too, when it has them).
             let (r, u, what) = match a.trn {
                 Transmission::Joint | Transmission::JointInParent => {
-                    let j = &robot.joints[a.target as usize];
+                    let Some(j) = robot.joints.get(a.target as usize) else { continue };
                     if !j.is_scalar() || !j.limited {
                         continue;
                     }
@@ -233,10 +237,13 @@ impl ActuatorMapping {
             let g = if a.gear != 0.0 { a.gear } else { 1.0 };
             let (x, y) = (a.ctrlrange[0] / g, a.ctrlrange[1] / g);
             let c = [x.min(y), x.max(y)];
-            let eps = 1e-9 * (r[1] - r[0]).abs().max(1.0);
-            let below = c[0] < r[0] - eps;
-            let above = c[1] > r[1] + eps;
-            let covers = c[0] <= r[0] + eps && c[1] >= r[1] - eps;
+            // Ends within `tolerance` of the joint's ends are those ends: a ctrlrange written to
+            // full precision (-0.22689280275926285) for a range rounded to six digits (-0.226893)
+            // reaches nowhere past the stop.
+            let near = tol * (r[1] - r[0]).abs();
+            let below = c[0] < r[0] - near;
+            let above = c[1] > r[1] + near;
+            let covers = c[0] <= r[0] + near && c[1] >= r[1] - near;
             if (below || above) && !covers {
                 let f = cx
                     .at_attr(

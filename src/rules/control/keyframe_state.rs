@@ -1,0 +1,245 @@
+use crate::declare_rule;
+use crate::finding::{Finding, Severity, Subject};
+use crate::model::mjcf::ElemKind;
+use crate::model::{JointType, Robot};
+use crate::rules::control::keyframe_scan::keyframes;
+use crate::rules::{Context, Domain, Rule, RuleMeta, opt};
+use crate::util::fmt_num;
+
+declare_rule! {
+    /// ## What it does
+    /// Finds initial states that MuJoCo does not start from as written. In every keyframe — or,
+    /// when the model has none, in the default pose `qpos0` that `mj_resetData` starts from:
+    /// - a free or ball joint whose quaternion is not of unit length (its length off 1 by more
+    ///   than `quat_tolerance`, e.g. `0 0 0 0`);
+    /// - a limited hinge or slide placed outside its range by more than `tolerance` × the
+    ///   range;
+    /// - an active joint equality (`<equality><joint>`, joint1 − qpos0 = polycoef(joint2 −
+    ///   qpos0)) that the positions miss by more than `tolerance` × joint1's range (× 1 in joint
+    ///   units when joint1 has no range).
+    ///
+    /// A settled pose rests a little inside a soft limit or equality: within `tolerance` it is
+    /// not reported.
+    ///
+    /// ## Why is this bad?
+    /// MuJoCo normalises a quaternion before using it, silently: a zero quaternion becomes the
+    /// identity, so the base starts in an orientation the file does not state. A joint past its
+    /// stop, or off the joint it is coupled to, is kicked back by the limit or equality
+    /// constraint at the first step: the robot starts with a jolt the real one never sees, and
+    /// every episode reset to that state begins with it. MuJoCo XML reference,
+    /// `keyframe/key/qpos` and `equality/joint`.
+    ///
+    /// ## How it is confirmed
+    /// Static: reads the compiled `key_qpos` (or `qpos0`), the joint ranges and the equality's
+    /// `eq_data`. A fact of the file, not a prediction a simulation could refute.
+    ///
+    /// ## How to fix
+    /// Write a unit quaternion (`1 0 0 0` for no rotation), positions inside the joint ranges,
+    /// and coupled joints that satisfy their equality; without a keyframe, give the model one
+    /// whose pose is legal (or joint ranges that contain 0).
+    pub KeyframeState {
+        id: "keyframe-state",
+        group: "control",
+        level: Severity::Warning,
+        probe: None,
+        options: [
+            opt("tolerance", 0.02, "fraction of joint range", Domain::FRACTION_BELOW_ONE, "how far past its range, or off its joint equality, a position must be to count"),
+            opt("quat_tolerance", 0.01, "", Domain::NON_NEGATIVE, "how far a free or ball joint's quaternion length may be from 1"),
+        ],
+    }
+}
+
+/// One state the rule reads: a keyframe, or the default pose.
+struct State<'a> {
+    /// Keyframe index, `None` for `qpos0`.
+    key: Option<usize>,
+    /// Keyframe name (empty when unnamed or `qpos0`).
+    name: String,
+    label: String,
+    qpos: &'a [f64],
+    /// The keyframe's `qpos` as the file writes it: MuJoCo's compiler normalises the
+    /// quaternions of `key_qpos`, so a zero quaternion is only visible in the text.
+    written: Option<Vec<f64>>,
+}
+
+/// The numbers of keyframe `k`'s `qpos` attribute as written, when they all parse.
+fn written_qpos(robot: &Robot, k: usize, name: &str) -> Option<Vec<f64>> {
+    let text = &robot.elem(ElemKind::Key, k, name)?.attrs.get("qpos")?.value;
+    text.split_whitespace().map(|x| x.parse::<f64>().ok()).collect()
+}
+
+impl Rule for KeyframeState {
+    fn meta(&self) -> &'static RuleMeta {
+        &Self::META
+    }
+    fn check(&self, cx: &Context, out: &mut Vec<Finding>) {
+        let robot = cx.robot;
+        let (tol, qtol) = (cx.opt("tolerance"), cx.opt("quat_tolerance"));
+        let qpos0 = robot.mj.qpos0();
+        let mut states: Vec<State> = keyframes(robot)
+            .into_iter()
+            .map(|k| State {
+                key: Some(k.index),
+                label: k.label(),
+                written: written_qpos(robot, k.index, &k.name),
+                name: k.name,
+                qpos: k.qpos,
+            })
+            .collect();
+        if states.is_empty() {
+            states.push(State {
+                key: None,
+                name: String::new(),
+                label: "the default pose qpos0 (no keyframe)".into(),
+                qpos: qpos0,
+                written: None,
+            });
+        }
+        for s in &states {
+            let at = |j: usize, msg: String| match s.key {
+                Some(k) => cx.at_attr(ElemKind::Key, k, &s.name, "qpos", msg),
+                None => cx.at_elem(ElemKind::Joint, j, &robot.joints[j].name, msg),
+            };
+            for j in &robot.joints {
+                let a = j.qposadr;
+                match j.jtype {
+                    JointType::Free | JointType::Ball => {
+                        let o = if j.jtype == JointType::Free { a + 3 } else { a };
+                        let q = s.written.as_deref().and_then(|w| w.get(o..o + 4));
+                        let Some(q) = q.or_else(|| s.qpos.get(o..o + 4)) else { continue };
+                        let len = q.iter().map(|x| x * x).sum::<f64>().sqrt();
+                        if (len - 1.0).abs() <= qtol {
+                            continue;
+                        }
+                        let msg = format!(
+                            "{} gives {} joint `{}` the quaternion ({}) of length {}: MuJoCo normalises it{}",
+                            s.label,
+                            if j.jtype == JointType::Free { "free" } else { "ball" },
+                            j.name,
+                            q.iter().map(|x| fmt_num(*x, 4)).collect::<Vec<_>>().join(", "),
+                            fmt_num(len, 3),
+                            if len < 1e-12 {
+                                " to the identity, an orientation the file does not state"
+                            } else {
+                                " to another orientation than the one written"
+                            }
+                        );
+                        out.push(
+                            at(j.id, msg)
+                                .label("not a unit quaternion")
+                                .note("a quaternion is normalised before use: the orientation that runs is not the one written, and a zero quaternion becomes the identity")
+                                .help("write a unit quaternion (w x y z; `1 0 0 0` for no rotation)")
+                                .subject(Subject::Joint(j.id))
+                                .measured(len, ""),
+                        );
+                    }
+                    JointType::Hinge | JointType::Slide if j.limited => {
+                        let Some(&x) = s.qpos.get(a) else { continue };
+                        let span = (j.range[1] - j.range[0]).abs();
+                        let past = (j.range[0] - x).max(x - j.range[1]);
+                        if past <= tol * span {
+                            continue;
+                        }
+                        let u = if j.jtype == JointType::Slide { "m" } else { "rad" };
+                        let msg = format!(
+                            "{} places joint `{}` at {} {u}, {} {u} outside its range [{}, {}] {u}",
+                            s.label,
+                            j.name,
+                            fmt_num(x, 4),
+                            fmt_num(past, 3),
+                            fmt_num(j.range[0], 4),
+                            fmt_num(j.range[1], 4)
+                        );
+                        out.push(
+                            at(j.id, msg)
+                                .label("outside the joint range")
+                                .note("the joint-limit constraint throws the joint back into its range at the first step: every reset to this state starts with a jolt")
+                                .help("place the joint inside its range (or, without a keyframe, add one whose pose is legal)")
+                                .subject(Subject::Joint(j.id))
+                                .measured(past, u),
+                        );
+                    }
+                    _ => {}
+                }
+            }
+            for (j1, j2, miss, scale) in equality_misses(robot, s.qpos, qpos0) {
+                if miss.abs() <= tol * scale {
+                    continue;
+                }
+                let (n1, u) = (&robot.joints[j1].name, unit(robot, j1));
+                let other = j2.map_or("its constant".to_string(), |j| {
+                    format!(
+                        "joint `{}` ({} {})",
+                        robot.joints[j].name,
+                        fmt_num(s.qpos[robot.joints[j].qposadr], 4),
+                        unit(robot, j)
+                    )
+                });
+                let msg = format!(
+                    "{} misses the joint equality coupling joint `{n1}` ({} {u}) to {other} by {} {u}",
+                    s.label,
+                    fmt_num(s.qpos[robot.joints[j1].qposadr], 4),
+                    fmt_num(miss.abs(), 3)
+                );
+                out.push(
+                    at(j1, msg)
+                        .label("off its joint equality")
+                        .note("the equality constraint snaps the coupled joints together at the first step: every reset to this state starts with a jolt")
+                        .help("give the coupled joints positions that satisfy the equality (joint1 − qpos0 = polycoef(joint2 − qpos0))")
+                        .subject(Subject::Joint(j1))
+                        .measured(miss.abs(), u),
+                );
+            }
+        }
+    }
+}
+
+fn unit(robot: &Robot, j: usize) -> &'static str {
+    if robot.joints[j].jtype == JointType::Slide { "m" } else { "rad" }
+}
+
+/// For every active joint equality between scalar joints: (joint1, joint2, how far `qpos`
+/// misses it in joint1's units, joint1's range span — or joint2's, or 1 when neither has a
+/// range). MuJoCo's constraint: q1 − q1₀ − (c₀ + c₁·d + c₂·d² + c₃·d³ + c₄·d⁴) = 0,
+/// d = q2 − q2₀ (d = 0 without joint2).
+fn equality_misses(
+    robot: &Robot,
+    qpos: &[f64],
+    qpos0: &[f64],
+) -> Vec<(usize, Option<usize>, f64, f64)> {
+    let m = &robot.mj;
+    let (active, data) = (m.eq_active0(), m.eq_data());
+    let scalar = |id: i32| {
+        usize::try_from(id)
+            .ok()
+            .and_then(|j| robot.joints.get(j))
+            .filter(|j| j.is_scalar())
+            .map(|j| j.id)
+    };
+    let span = |j: usize| {
+        let x = &robot.joints[j];
+        x.limited.then(|| (x.range[1] - x.range[0]).abs()).filter(|s| *s > 0.0)
+    };
+    robot
+        .equalities
+        .iter()
+        .filter(|e| e.etype == 2 && active.get(e.id).is_some_and(|&a| a))
+        .filter_map(|e| {
+            let j1 = scalar(e.obj1)?;
+            let j2 = if e.obj2 < 0 { None } else { Some(scalar(e.obj2)?) };
+            let c = data.get(e.id)?;
+            let a1 = robot.joints[j1].qposadr;
+            let d = match j2 {
+                Some(j) => {
+                    let a2 = robot.joints[j].qposadr;
+                    qpos.get(a2)? - qpos0.get(a2)?
+                }
+                None => 0.0,
+            };
+            let poly = c[0] + d * (c[1] + d * (c[2] + d * (c[3] + d * c[4])));
+            let miss = qpos.get(a1)? - qpos0.get(a1)? - poly;
+            let scale = span(j1).or_else(|| j2.and_then(span)).unwrap_or(1.0);
+            Some((j1, j2, miss, scale))
+        })
+        .collect()
+}
