@@ -259,9 +259,9 @@ pub struct FitCmd {
     pub window: Option<f64>,
     /// Estimate each episode's start state (first position and velocity of every joint) from
     /// the whole episode, with the first row's noisy reading as its prior, instead of starting
-    /// every replay exactly at the first row (`modellint docs fitting`, step 1). Helps a lightly damped
+    /// every replay exactly at the first row (`modellint docs fitting`, step 2). Helps a lightly damped
     /// servo. Opt-in: on every benchmark it gives the same answers as the first row
-    /// (`modellint docs fitting`, step 1).
+    /// (`modellint docs fitting`, step 2).
     #[arg(long)]
     pub start_estimate: bool,
     #[command(flatten)]

@@ -270,7 +270,7 @@ fn conceal_arm3_stribeck_friction_high_noise() {
 fn conceal_asimov_one_knee_is_not_smeared_over_both() {
     // Leg joints on a test stand; damping on the left knee only. The mirror completion tries
     // both knees as a group; held-out must keep the one-joint fit: nothing on the right knee.
-    // Until the rollout difference step was widened (docs/fitting.md, "Optimiser") the damping
+    // Until the rollout difference step was widened (docs/fitting.md, step 5, "Finite differences") the damping
     // fit stopped at 2.48 on the error's small-scale ripple and a servo gain error (kp × 0.95,
     // kd × 1.49) won instead; now: viscous damping on the left knee within 10 %.
     single(asimov_case(

@@ -95,7 +95,7 @@ pub struct FitOptions {
     /// Estimate each episode's start state (first position and velocity of every recorded
     /// joint) from the whole episode, with the first row as its prior, instead of starting the
     /// replay exactly at the first row's noisy reading ([`start`]). Off by default: re-run in
-    /// full with it on (docs/fitting.md, step 1), every benchmark gave the same answers. The
+    /// full with it on (docs/fitting.md, step 2), every benchmark gave the same answers. The
     /// response it corrects with is measured on the model with the kept effects that let a
     /// joint stick ([`Engine::set_start_model`]).
     ///
