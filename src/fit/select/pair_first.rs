@@ -29,7 +29,7 @@ use crate::sim2real::recording::Recording;
 
 use super::coarse::{self, Coarse};
 use super::groups::Cand;
-use super::pairs::pair_lookahead;
+use super::pairs::{needless, pair_lookahead};
 use super::verdict::verdict;
 use super::{Errors, FitOutcome, Search, Selected};
 
@@ -88,6 +88,10 @@ pub(super) fn early_pair(
 ) -> Option<EarlyPair> {
     let engine = s.engine;
     let policy = &engine.opts.policy;
+    // (A lead that needs no partner is not paired: no rival is replayed for it.)
+    if needless(engine.opts, lead) {
+        return None;
+    }
     let mut kept = vec![lead.clone()];
     for (a, ev) in rivals {
         // (The lead and its partners: as many as the look-ahead pairs.)
@@ -115,7 +119,7 @@ pub(super) fn early_pair(
     let (applied0, selected0, notes0) =
         (out.applied.clone(), out.selected.clone(), out.notes.len());
     let logged0 = out.tried.len();
-    let res = pair_lookahead(s, applied, &kept, lead, z, round, out);
+    let res = pair_lookahead(s, applied, &kept, lead, (z, round), true, out);
     let kept_logs: Vec<usize> = (logged0..out.tried.len()).filter(|&i| out.tried[i].kept).collect();
     kept_logs.iter().for_each(|&i| out.tried[i].kept = false);
     let notes = out.notes.split_off(notes0);
