@@ -16,7 +16,9 @@
 //! round ends as it would have without the early look-ahead. A pair short of the floor is not
 //! taken: another pair of the round's full fits may explain more (on the arm3 conceal case of
 //! armature + damping on the elbow, a delay + armature pair leaves a held-out error 3.4 × its
-//! floor where the round's full fits find the true pair).
+//! floor where the round's full fits find the true pair), so a pair whose coarse fit leaves
+//! more on the screen's data than the floor allows on the whole training set is not fitted in
+//! full ([`super::pair_reach`]: `tried` phase `pair_floor`).
 //!
 //! On arm2's delay + Coulomb pair the lead (the delay on both joints) leaves a training error
 //! 15 times the pair's, which is at the floor: the singles' coarse fits all fall below the
