@@ -364,7 +364,10 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         };
         best_gain = best_gain.max(gain(short_rmse));
         let full = whole.then(|| p.clone());
-        let Some((p, tr_a)) = on_whole_set(s, &applied, (e, &group), p, base_train) else {
+        // (One that leaves the whole training set worse explains nothing: logged without a
+        // held-out test.)
+        let Some((p, tr_a)) = on_whole_set(s, &applied, (e, &group), p.clone(), base_train) else {
+            out.tried.push(not_tested(Phase::Add, p, f64::NAN));
             continue;
         };
         fitted.push(Applied { effect: e, joints: group.clone(), params: p.clone() });
@@ -535,7 +538,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     if !std::ptr::eq(short, train) && lead_logged != Some(logged) {
         w = refine(s, &applied, w, (&tr_err, &ho_err), z);
     }
-    if let Some(pair) = pair_lookahead(s, &applied, &kept_all, &w, z, round, out) {
+    if let Some(pair) = pair_lookahead(s, &applied, &kept_all, &w, (z, round), false, out) {
         for (mut p, a) in pair {
             out.applied.push(a);
             set_uncertainty(engine, train, &mut p, &out.applied, &mut out.warnings);

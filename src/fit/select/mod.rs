@@ -32,6 +32,8 @@ mod greedy;
 mod groups;
 mod lead;
 mod pair_first;
+mod pair_reach;
+mod pair_restart;
 mod pair_screen;
 mod pairs;
 mod policy;

@@ -16,7 +16,9 @@
 //! round ends as it would have without the early look-ahead. A pair short of the floor is not
 //! taken: another pair of the round's full fits may explain more (on the arm3 conceal case of
 //! armature + damping on the elbow, a delay + armature pair leaves a held-out error 3.4 × its
-//! floor where the round's full fits find the true pair).
+//! floor where the round's full fits find the true pair), so a pair whose coarse fit leaves
+//! more on the screen's data than the floor allows on the whole training set is not fitted in
+//! full ([`super::pair_reach`]: `tried` phase `pair_floor`).
 //!
 //! On arm2's delay + Coulomb pair the lead (the delay on both joints) leaves a training error
 //! 15 times the pair's, which is at the floor: the singles' coarse fits all fall below the
@@ -29,7 +31,7 @@ use crate::sim2real::recording::Recording;
 
 use super::coarse::{self, Coarse};
 use super::groups::Cand;
-use super::pairs::pair_lookahead;
+use super::pairs::{needless, pair_lookahead};
 use super::verdict::verdict;
 use super::{Errors, FitOutcome, Search, Selected};
 
@@ -88,6 +90,10 @@ pub(super) fn early_pair(
 ) -> Option<EarlyPair> {
     let engine = s.engine;
     let policy = &engine.opts.policy;
+    // (A lead that needs no partner is not paired: no rival is replayed for it.)
+    if needless(engine.opts, lead) {
+        return None;
+    }
     let mut kept = vec![lead.clone()];
     for (a, ev) in rivals {
         // (The lead and its partners: as many as the look-ahead pairs.)
@@ -115,7 +121,7 @@ pub(super) fn early_pair(
     let (applied0, selected0, notes0) =
         (out.applied.clone(), out.selected.clone(), out.notes.len());
     let logged0 = out.tried.len();
-    let res = pair_lookahead(s, applied, &kept, lead, z, round, out);
+    let res = pair_lookahead(s, applied, &kept, lead, (z, round), true, out);
     let kept_logs: Vec<usize> = (logged0..out.tried.len()).filter(|&i| out.tried[i].kept).collect();
     kept_logs.iter().for_each(|&i| out.tried[i].kept = false);
     let notes = out.notes.split_off(notes0);

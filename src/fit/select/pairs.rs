@@ -10,12 +10,13 @@ use crate::sim2real::recording::Recording;
 
 use super::discretisation::{Judged, beyond_discretisation, pair_beyond_discretisation};
 use super::engine::Engine;
-use super::pair_screen;
+use super::pair_restart::{apply_restart, best_restart};
 use super::policy::Phase;
 use super::polish::{fit_jointly, fit_jointly_iters, polish_budget, polish_from, polish_set};
 use super::screen::screen_data;
-use super::verdict::{Verdict, at_bound, verdict};
+use super::verdict::{Verdict, verdict};
 use super::{Errors, FitOutcome, Floor, Search, Selected, Tried, set_uncertainty, sync_selected};
+use super::{pair_reach, pair_screen};
 
 /// Look-ahead for two effects that only make sense together (extra inertia *and* damping: each
 /// alone is mimicked by a delay or a gain error). The top four kept candidates of the round are
@@ -28,14 +29,17 @@ use super::{Errors, FitOutcome, Floor, Search, Selected, Tried, set_uncertainty,
 /// at a finer timestep ([`pair_beyond_discretisation`]: a partner that only takes up the
 /// model's own step beside the winner is a note). The pair with fewer parameters wins within 1 %. The winner
 /// with the effects kept in earlier rounds on its joints re-fitted beside it
-/// ([`with_kept_refitted`]) competes as a restart of the winner.
+/// ([`with_kept_refitted`]) competes as a restart of the winner. With `to_floor` (the early
+/// look-ahead, which keeps a pair only at the floor) a pair whose coarse fit cannot reach the
+/// floor is not fitted in full; in either, one whose coarse fit does not lower the held-out
+/// error below the winner's is not ([`pair_reach`]).
 pub(super) fn pair_lookahead(
     s: &Search,
     applied: &[Applied],
     kept: &[Selected],
     single: &Selected,
-    z: f64,
-    round: usize,
+    (z, round): (f64, usize),
+    to_floor: bool,
     out: &mut FitOutcome,
 ) -> Option<Vec<(Selected, Applied)>> {
     let Search { engine, train, heldout, allowed, .. } = *s;
@@ -43,8 +47,7 @@ pub(super) fn pair_lookahead(
     let mut top: Vec<&Selected> = kept.iter().collect();
     top.sort_by(|a, b| a.heldout_rmse_after.total_cmp(&b.heldout_rmse_after));
     top.truncate(opts.policy.pair_candidates);
-    // A single effect that leaves under 5 % of the error needs no partner.
-    if single.heldout_improvement >= opts.policy.pair_needless_improvement {
+    if needless(opts, single) {
         return None;
     }
     let as_applied = |s: &Selected| Applied {
@@ -212,6 +215,12 @@ pub(super) fn pair_lookahead(
         best_coarse = best_coarse.min(f);
         coarse[i] = Some((set, f));
     }
+    // What the floor allows on the whole training set ([`pair_reach`]), when the look-ahead
+    // keeps only a pair at the floor.
+    let allowance = to_floor.then(|| {
+        let f_single = engine.floors(train, &with_single, &t_single);
+        pair_reach::floor_allowance(engine, train, &[&floors, &f_single])
+    });
     let mut restarts: Vec<Vec<Applied>> = Vec::new();
     for (i, ((a, b), c)) in sets.into_iter().zip(coarse).enumerate() {
         let Some((set, f)) = c else { continue };
@@ -220,7 +229,18 @@ pub(super) fn pair_lookahead(
             Phase::Pair,
             Some((i + 1, n_sets, format!("{} + {}", a.effect.id(), b.effect.id()))),
         );
-        let set = if f <= opts.policy.pair_full_fit_within * best_coarse {
+        let group: Vec<String> = a.joints.iter().chain(&b.joints).cloned().collect();
+        let full = f <= opts.policy.pair_full_fit_within * best_coarse;
+        if full && let Some(phase) = screened(s, (&short, &set), &h_single, &group, z, allowance) {
+            let params = set[n..]
+                .iter()
+                .flat_map(|x| x.params.iter().take(x.effect.fitted()).copied())
+                .collect();
+            let id = format!("{}+{}", a.effect.id(), b.effect.id());
+            out.tried.push(Tried::not_tested(round, phase, &id, &group, params, f));
+            continue;
+        }
+        let set = if full {
             if smooth(&set) {
                 fit_jointly(engine, train, set, n)
             } else {
@@ -233,7 +253,6 @@ pub(super) fn pair_lookahead(
             continue;
         };
         let k = a.effect.fitted() + b.effect.fitted();
-        let group: Vec<String> = a.joints.iter().chain(&b.joints).cloned().collect();
         let v = verdict(&h_single, &h, &group, opts.policy.gate_z(z));
         let bic_ok = bic(t.n, t.sse, k_before + k) < bic(t_base.n, t_base.sse, k_before);
         // Each member needed: the pair beats the set without it beyond noise.
@@ -374,6 +393,36 @@ pub(super) fn pair_lookahead(
     Some(res)
 }
 
+/// A single effect that leaves under `pair_needless_improvement` of the held-out error needs
+/// no partner.
+pub(super) fn needless(opts: &super::FitOptions, single: &Selected) -> bool {
+    single.heldout_improvement >= opts.policy.pair_needless_improvement
+}
+
+/// The phase a pair's coarse fit `set` (its RMSE on the screen's data `short`) is logged with
+/// when it is not fitted in full ([`pair_reach`]): `pair_floor` when it leaves more there than
+/// `allowance` (the floor's squared residual on the whole training set; `None`: no floor
+/// asked), `heldout_screen` when, replayed on the held-out set, it does not lower the error
+/// below the single winner's (`h_single`) on the pair's joints `group`.
+fn screened(
+    s: &Search,
+    (short, set): (&[Recording], &[Applied]),
+    h_single: &Errors,
+    group: &[String],
+    z: f64,
+    allowance: Option<f64>,
+) -> Option<Phase> {
+    let engine = s.engine;
+    if let Some(a) = allowance
+        && engine.errors(short, set).is_none_or(|e| e.sse > a)
+    {
+        return Some(Phase::PairFloor);
+    }
+    let gate = engine.opts.policy.gate_z(z);
+    let h = engine.errors(s.heldout, set);
+    h.is_none_or(|h| verdict(h_single, &h, group, gate).rel <= 0.0).then_some(Phase::HeldoutScreen)
+}
+
 /// The training RMSE of `applied` + `winner` re-fitted as [`with_kept_refitted`] does, when that
 /// leaves a white residual on every fitted joint ([`Engine::at_floor`]); `None` otherwise or when
 /// no kept effect shares a joint with the winner. The same re-fit in the look-ahead is answered
@@ -427,136 +476,6 @@ fn with_kept_refitted(
     let mut out: Vec<Applied> = back.into_iter().collect::<Option<_>>()?;
     out.push(set[n].clone());
     Some(out)
-}
-
-/// The best restart that passes, as (set, held-out errors, training errors); `tried` gets phase
-/// "pair_restart" for each one evaluated.
-///
-/// A restart is a single effect that a failed pair re-fitted (its partner not needed): the
-/// look-ahead's joint polish restarts its single fit. It passes when its parameters are inside
-/// their bounds and it beats the round's winner beyond noise (paired test, z = 2), by ≥ 5 %
-/// held-out RMSE, with a lower training BIC. (Asimov's knee Stribeck friction, 12-bit: the
-/// single fit stops at v_s's lower bound, where Coulomb friction wins; the Stribeck + backlash
-/// pair reaches (1.95, 0.97, 0.203) for (2, 1, 0.2) with a 0.9 mrad backlash that is not
-/// needed.) The winner itself at the values a pair gave it is the same model and passes when
-/// it is better on both training and held-out data (Asimov's knee load-dependent friction,
-/// 12-bit: (0.567, 0.053) alone, (0.500, 0.097) beside a delay, for (0.5, 0.1)).
-fn best_restart(
-    s: &Search,
-    applied: &[Applied],
-    single: &Selected,
-    (h_base, h_single): (&Errors, &Errors),
-    restarts: Vec<Vec<Applied>>,
-    round: usize,
-    out: &mut FitOutcome,
-) -> Option<(Vec<Applied>, Errors, Errors, usize)> {
-    if restarts.is_empty() {
-        return None;
-    }
-    let engine = s.engine;
-    let opts = engine.opts;
-    let n = applied.len();
-    let k_before: usize = applied.iter().map(|a| a.effect.fitted()).sum();
-    let k_single = effects::by_id(&single.effect).map_or(0, |e| e.fitted());
-    let t_single = {
-        let mut w = applied.to_vec();
-        w.push(Applied {
-            effect: effects::by_id(&single.effect).expect("known"),
-            joints: single.joints.clone(),
-            params: single.values.clone(),
-        });
-        engine.errors(s.train, &w)?
-    };
-    let bic_single = bic(t_single.n, t_single.sse, k_before + k_single);
-    let mut best: Option<(Vec<Applied>, Errors, Errors, usize)> = None;
-    for set in restarts {
-        let a = &set[n];
-        if at_bound(engine, &set[..n], a) {
-            continue;
-        }
-        let (Some(h), Some(t)) = (engine.errors(s.heldout, &set), engine.errors(s.train, &set))
-        else {
-            continue;
-        };
-        let group: Vec<String> = a.joints.iter().chain(&single.joints).cloned().collect();
-        let vs = verdict(h_single, &h, &group, opts.policy.gate());
-        let bic_a = bic(t.n, t.sse, k_before + a.effect.fitted());
-        // The winner at other values is the same model: a better optimum on the training data
-        // that is also better on held-out replaces it. Another effect must beat it beyond noise.
-        let same = a.effect.id() == single.effect && a.joints == single.joints;
-        let ok = if same {
-            t.rmse() < t_single.rmse() && h.rmse() < h_single.rmse()
-        } else {
-            vs.significant
-                && h.rmse() <= opts.policy.restart_gain * h_single.rmse()
-                && bic_a < bic_single
-        };
-        let logged = out.log(Tried {
-            round,
-            phase: Phase::PairRestart,
-            effect: a.effect.id().into(),
-            joints: a.joints.clone(),
-            params: a.params.iter().take(a.effect.fitted()).copied().collect(),
-            train_rmse: t.rmse(),
-            heldout_improvement: (h_base.rmse() - h.rmse()) / h_base.rmse().max(1e-300),
-            significant: vs.significant,
-            bic_decreased: bic_a < bic_single,
-            kept: false,
-            predicted: None,
-        });
-        if ok && best.as_ref().is_none_or(|(_, hb, ..)| h.rmse() < hb.rmse()) {
-            best = Some((set, h, t, logged));
-        }
-    }
-    best
-}
-
-/// Keeps the restart `(set, h, t)` from [`best_restart`] in place of the round's winner (and of
-/// a pair that passed, when the restart beats it by the rule pairs compete by, [`SearchPolicy::beats`]).
-#[allow(clippy::too_many_arguments)]
-fn apply_restart(
-    s: &Search,
-    applied: &[Applied],
-    kept: &[Selected],
-    single: &Selected,
-    (h_base, h_single, t_base): (&Errors, &Errors, &Errors),
-    (set, h, t, logged): (Vec<Applied>, Errors, Errors, usize),
-    z: f64,
-    out: &mut FitOutcome,
-) -> Option<Vec<(Selected, Applied)>> {
-    let opts = s.engine.opts;
-    let n = applied.len();
-    let k_before: usize = applied.iter().map(|a| a.effect.fitted()).sum();
-    let a = set[n].clone();
-    let label = a.effect.id();
-    out.tried[logged].kept = true;
-    // Re-fitted beside the effects kept before it (their values moved), or in a pair whose
-    // partner was not needed.
-    let how = if set[..n].iter().zip(applied).any(|(x, y)| x.params != y.params) {
-        "with the effects kept before it"
-    } else {
-        "in a pair whose partner was not needed"
-    };
-    out.notes.push(format!(
-        "{} on {} re-fitted {how}: held-out RMSE {:.3e} rad, vs {:.3e} with {} alone",
-        label,
-        a.joints.join(","),
-        h.rmse(),
-        h_single.rmse(),
-        single.effect
-    ));
-    let v = verdict(h_base, &h, &a.joints, opts.policy.gate_z(z));
-    let evidence = kept
-        .iter()
-        .find(|k| k.effect == label && k.joints == a.joints)
-        .map(|k| k.evidence.clone())
-        .unwrap_or_else(|| single.evidence.clone());
-    let bics = (bic(t_base.n, t_base.sse, k_before), bic(t.n, t.sse, k_before + a.effect.fitted()));
-    let sel = Selected::new(&a, evidence, &v, h_base.rmse(), h.rmse(), bics);
-    // The polish may have moved the effects kept earlier: carry them over.
-    out.applied[..n].clone_from_slice(&set[..n]);
-    sync_selected(out);
-    Some(vec![(sel, a)])
 }
 
 /// When no single candidate passed the held-out gate: fit the pairs of effects that mimic each

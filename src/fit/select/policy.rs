@@ -388,6 +388,9 @@ pub enum Phase {
     Discretisation,
     /// Two effects fitted together (the pair look-ahead).
     Pair,
+    /// Not fitted in full: the early pair look-ahead's pair whose coarse fit leaves more on the
+    /// screen's data than the floor allows on the whole training set (`pair_reach.rs`).
+    PairFloor,
     /// A single effect re-fitted by a failed pair, competing with the round's winner.
     PairRestart,
     /// The same effect on two joints fitted jointly when no single one passed.
@@ -433,6 +436,7 @@ impl Phase {
             Phase::HeldoutScreen => "heldout_screen",
             Phase::Discretisation => "discretisation",
             Phase::Pair => "pair",
+            Phase::PairFloor => "pair_floor",
             Phase::PairRestart => "pair_restart",
             Phase::JointPair => "joint_pair",
             Phase::Polish => "polish",
