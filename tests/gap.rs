@@ -440,3 +440,22 @@ fn cli_a_control_rate_below_the_commands_is_said() {
         assert!(!err.contains("replaces the") && !err.contains("changes within"), "stderr: {err}");
     }
 }
+
+/// Wheels driven by velocity servos only, recorded by MuJoCo's Python bindings
+/// (fixtures/gap/wheels/make.py): their command column is the velocity target, and the replay of
+/// the model that recorded them lands on the recording (it replayed the wheels with ctrl 0:
+/// MAE 54°).
+#[test]
+fn cli_wheels_on_velocity_servos_follow_their_command() {
+    let dir = root().join("fixtures/gap/wheels");
+    let o = bin()
+        .args(["gap", "--format", "json"])
+        .arg(dir.join("base.xml"))
+        .arg(dir.join("ep0.csv"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let mae = v["position_mae"].as_f64().expect("position_mae");
+    assert!(mae < 1e-3, "position MAE {mae} rad: {v}");
+}

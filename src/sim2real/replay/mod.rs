@@ -213,6 +213,15 @@ struct JointInfo {
     acts: Vec<(usize, ActuatorKind)>,
 }
 
+impl JointInfo {
+    /// Driven by velocity actuators only (a wheel): its recorded command is a velocity target
+    /// [rad/s or m/s], applied as the actuators' ctrl.
+    fn velocity_driven(&self) -> bool {
+        !self.acts.is_empty()
+            && self.acts.iter().all(|(_, k)| matches!(k, ActuatorKind::Velocity { .. }))
+    }
+}
+
 /// Joint/actuator mapping of a model, built once and reused for any number of replays.
 #[derive(Clone)]
 pub struct Replayer<'m> {
@@ -320,8 +329,9 @@ impl<'m> Replayer<'m> {
                     )
                 {
                     return Err(setup(format!(
-                        "actuator {aid} on joint '{}' is not a position (or velocity) actuator; replaying torque \
-                         actuators needs an ActuatorHook that replaces it with a servo law",
+                        "actuator {aid} on joint '{}' is not a position or velocity servo on the joint \
+                         (a motor, a general actuator, or one acting through a tendon): the replay \
+                         drives recorded joints through position or velocity servos only",
                         rec.joints[i].name
                     )));
                 }

@@ -313,8 +313,11 @@ impl Replayer<'_> {
                     if replaced[i] {
                         continue;
                     }
+                    // A velocity actuator beside a position servo is its damper (ctrl 0); on a
+                    // joint driven by velocity actuators only (a wheel) the command is the
+                    // velocity target.
                     ctrl[a] = match kind {
-                        ActuatorKind::Velocity { .. } => 0.0,
+                        ActuatorKind::Velocity { .. } if !self.joints[ji].velocity_driven() => 0.0,
                         _ => io[i].ctrl,
                     };
                 }
