@@ -801,3 +801,24 @@ fn an_unnamed_world_geom_is_named_as_its_file_and_mujoco_number_it() {
         "{f}"
     );
 }
+
+/// `--package` is offered where a model is loaded (it resolves a URDF's `package://` meshes) and
+/// nowhere else: it was a global flag shown in every subcommand's --help, doing nothing there.
+#[test]
+fn package_is_an_option_only_where_a_model_is_loaded() {
+    let takes = |args: &[&str]| {
+        let (c, out, err) = modellint(args);
+        assert_eq!(c, 0, "{args:?}: {err}");
+        out.contains("--package <NAME=DIR>")
+    };
+    for sub in ["init-spec", "gap", "fit", "synth"] {
+        assert!(takes(&[sub, "--help"]), "{sub} --help lacks --package");
+    }
+    assert!(takes(&["--help"]), "the lint's --help lacks --package");
+    for sub in ["rules", "rule", "gen-docs", "convert", "docs"] {
+        assert!(!takes(&[sub, "--help"]), "{sub} --help offers --package");
+    }
+    assert!(!takes(&["cache", "clean", "--help"]), "cache clean --help offers --package");
+    let (c, _, err) = modellint(&["rules", "--package", "a=b"]);
+    assert!(c == 2 && err.contains("--package"), "{err}");
+}
