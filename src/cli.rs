@@ -90,10 +90,8 @@ pub struct CheckArgs {
     /// Default: $MODELLINT_CACHE_MAX_MB, else 300.
     #[arg(long, value_name = "MB", value_parser = parse_mb)]
     pub cache_max: Option<f64>,
-    /// URDF `package://NAME/...` meshes: the directory of package NAME (repeatable; before
-    /// ROS_PACKAGE_PATH). Every subcommand.
-    #[arg(long, global = true, value_name = "NAME=DIR", value_parser = crate::model::urdf_packages::parse_package_arg)]
-    pub package: Vec<(String, PathBuf)>,
+    #[command(flatten)]
+    pub packages: crate::cli_logs::PackageArgs,
     /// Colour in text output and messages: auto, always, never (every subcommand).
     #[arg(long, global = true, default_value = "auto", value_parser = ["auto", "always", "never"])]
     pub color: String,
@@ -147,6 +145,8 @@ pub enum Cmd {
         /// Replace an existing file.
         #[arg(long)]
         force: bool,
+        #[command(flatten)]
+        packages: crate::cli_logs::PackageArgs,
     },
     /// Replay real recordings in MuJoCo and measure the sim-to-real gap (the Booster T1 sim-to-real study's replay and metrics).
     Gap(GapCmd),
@@ -198,6 +198,8 @@ pub struct GapCmd {
     /// Write an HTML report (inline SVG) into this directory.
     #[arg(long)]
     pub report: Option<PathBuf>,
+    #[command(flatten)]
+    pub packages: crate::cli_logs::PackageArgs,
 }
 
 /// `--format` of `gap` and `fit` (the lint's `--format` is [`crate::output::Format`], which
@@ -282,6 +284,8 @@ pub struct FitCmd {
     /// Write one HTML report (DIR/index.html): held-out episodes before → after the fit.
     #[arg(long)]
     pub report: Option<PathBuf>,
+    #[command(flatten)]
+    pub packages: crate::cli_logs::PackageArgs,
 }
 
 impl GapCmd {
@@ -419,7 +423,15 @@ pub fn run() -> i32 {
     crate::model::mj::silence_warnings();
     let cli = Cli::parse();
     crate::output::set_color_choice(&cli.check.color);
-    crate::model::urdf_packages::set_packages(cli.check.package.clone());
+    let packages = match &cli.cmd {
+        None => &cli.check.packages,
+        Some(Cmd::InitSpec { packages, .. }) => packages,
+        Some(Cmd::Gap(g)) => &g.packages,
+        Some(Cmd::Fit(f)) => &f.packages,
+        Some(Cmd::Synth(s)) => &s.packages,
+        Some(_) => &crate::cli_logs::PackageArgs::default(),
+    };
+    crate::model::urdf_packages::set_packages(packages.package.clone());
     match cli.cmd {
         Some(Cmd::Rules) => {
             let mut out = String::new();
@@ -473,7 +485,7 @@ pub fn run() -> i32 {
                 }
             }
         }
-        Some(Cmd::InitSpec { model, output, force }) => {
+        Some(Cmd::InitSpec { model, output, force, .. }) => {
             crate::spec_init::run(&model, output.as_deref(), force)
         }
         Some(Cmd::Gap(g)) => crate::sim2real::cmd::run_gap(g.into_args()),
@@ -546,7 +558,7 @@ fn check(a: CheckArgs) -> i32 {
         a.select,
         a.ignore,
         a.no_probe,
-        a.package,
+        a.packages.package,
         a.skip_non_models
     )];
     let key = cache_dir

@@ -7,6 +7,16 @@ use clap::Args;
 
 use crate::sim2real::recording::LogMap;
 
+/// `--package NAME=DIR`, on the commands that load a model (the lint, `init-spec`, `gap`, `fit`,
+/// `synth`); the others do not take it.
+#[derive(Args, Debug, Clone, Default)]
+pub struct PackageArgs {
+    /// URDF `package://NAME/...` meshes: the directory of package NAME (repeatable; before
+    /// ROS_PACKAGE_PATH).
+    #[arg(long, value_name = "NAME=DIR", value_parser = crate::model::urdf_packages::parse_package_arg)]
+    pub package: Vec<(String, PathBuf)>,
+}
+
 /// How a log that is not modellint's CSV maps onto the model's joints. Each flag overrides the
 /// same key of the --log-map file. See `modellint docs recording-format`.
 #[derive(Args, Debug, Clone, Default)]

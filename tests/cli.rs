@@ -764,3 +764,61 @@ fn cache_is_capped_and_cleaned() {
     assert!(out.contains("removed 0 cache entries"), "{out}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// An unnamed world geom is named by its rank among the world geoms of its own file and by
+/// MuJoCo's geom id: the scene's floor and box come before the included robot file's world
+/// geoms, so the solref box (the robot file's 2nd world geom) is MuJoCo's geom 3 (checked with
+/// MuJoCo's Python bindings: `MjModel.from_xml_path(scene).geom_solref[3]` is 0.0005). It was
+/// "no. 4 of body `world`": neither file's order nor MuJoCo's id.
+#[test]
+fn an_unnamed_world_geom_is_named_as_its_file_and_mujoco_number_it() {
+    let (_, out, err) = modellint(&[
+        "fixtures/model/world_geoms/scene.xml",
+        "--no-cache",
+        "--select",
+        "solref-below-timestep",
+        "--format",
+        "json",
+    ]);
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap_or_else(|e| panic!("{e}: {err}"));
+    let findings = v["findings"].as_array().expect("findings");
+    let world: Vec<&str> = findings
+        .iter()
+        .filter_map(|f| f["message"].as_str())
+        .filter(|m| m.contains("world body"))
+        .collect();
+    assert_eq!(world.len(), 1, "{out}");
+    assert!(
+        world[0]
+            .starts_with("geom no. 2 of the world body in its file (MuJoCo geom id 3)'s contact"),
+        "{}",
+        world[0]
+    );
+    let f = findings.iter().find(|f| f["message"].as_str() == Some(world[0])).unwrap();
+    assert_eq!(
+        (f["file"].as_str(), f["line"].as_u64()),
+        (Some("fixtures/model/world_geoms/robot.xml"), Some(5)),
+        "{f}"
+    );
+}
+
+/// `--package` is offered where a model is loaded (it resolves a URDF's `package://` meshes) and
+/// nowhere else: it was a global flag shown in every subcommand's --help, doing nothing there.
+#[test]
+fn package_is_an_option_only_where_a_model_is_loaded() {
+    let takes = |args: &[&str]| {
+        let (c, out, err) = modellint(args);
+        assert_eq!(c, 0, "{args:?}: {err}");
+        out.contains("--package <NAME=DIR>")
+    };
+    for sub in ["init-spec", "gap", "fit", "synth"] {
+        assert!(takes(&[sub, "--help"]), "{sub} --help lacks --package");
+    }
+    assert!(takes(&["--help"]), "the lint's --help lacks --package");
+    for sub in ["rules", "rule", "gen-docs", "convert", "docs"] {
+        assert!(!takes(&[sub, "--help"]), "{sub} --help offers --package");
+    }
+    assert!(!takes(&["cache", "clean", "--help"]), "cache clean --help offers --package");
+    let (c, _, err) = modellint(&["rules", "--package", "a=b"]);
+    assert!(c == 2 && err.contains("--package"), "{err}");
+}

@@ -459,3 +459,32 @@ fn cli_wheels_on_velocity_servos_follow_their_command() {
     let mae = v["position_mae"].as_f64().expect("position_mae");
     assert!(mae < 1e-3, "position MAE {mae} rad: {v}");
 }
+/// Both joints of a two-joint arm act on every command 10 ms late (fixtures/gap/delay_arm2:
+/// recorded by its own MuJoCo script at a 0.5 ms step, sim.py): the gap names a lag on both.
+/// Over whole episodes the elbow's start (it falls 0.38 rad in 0.2 s from the recorded state,
+/// the same free response in the real and simulated arm, not delayed) outweighed its lag and it
+/// was "unexplained"; the control without delay names no lag.
+#[test]
+fn cli_a_delay_on_both_joints_is_named_on_both() {
+    let dir = root().join("fixtures/gap/delay_arm2");
+    let gap_of = |eps: &[&str]| -> serde_json::Value {
+        let mut c = bin();
+        c.arg("gap").arg(dir.join("arm.xml"));
+        for e in eps {
+            c.arg(dir.join(e));
+        }
+        let o = c.args(["--format", "json"]).output().unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        serde_json::from_slice(&o.stdout).unwrap()
+    };
+    let v = gap_of(&["ep0.csv", "ep1.csv"]);
+    for j in v["per_joint"].as_array().unwrap() {
+        let d = &j["decomposition"];
+        let lag = d["lag_s"].as_f64().unwrap();
+        assert!(d["dominant"] == "lag" && (0.005..0.015).contains(&lag), "{}: {d}", j["name"]);
+    }
+    let v = gap_of(&["none_ep0.csv"]);
+    for j in v["per_joint"].as_array().unwrap() {
+        assert_ne!(j["decomposition"]["dominant"], "lag", "{}", j["name"]);
+    }
+}

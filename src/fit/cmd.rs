@@ -346,6 +346,10 @@ pub fn fit_once(
     // Nor a body effect the floor's contact explains as well.
     let rivals = crate::fit::floor_rival::split_off(robot, &p.recs, &opts, &mut out, &p.unscored);
     out.warnings.extend(rivals);
+    // What the model's timestep puts into the kept values (told re-fits at two timesteps).
+    if let Some(s) = crate::fit::timestep_shift::measure(robot, &p.recs, &opts, &out) {
+        out.notes.push(crate::fit::timestep_shift::note(&s));
+    }
     let unexplained = crate::fit::unexplained::unexplained(&out.floors, opts.policy.white_ratio);
     out.warnings.extend(unexplained.iter().map(|u| u.message()));
     for w in &out.warnings {

@@ -13,6 +13,7 @@ pub mod rotation;
 pub mod select;
 pub mod split;
 pub mod stats;
+pub mod timestep_shift;
 pub mod unexplained;
 pub mod writeback;
 pub mod writemodel;

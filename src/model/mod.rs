@@ -308,10 +308,25 @@ impl Robot {
         let Some(body) = self.geoms.get(g).map(|x| x.body) else { return g + 1 };
         self.geoms[..g].iter().filter(|x| x.body == body).count() + 1
     }
-    /// An unnamed geom as findings name it: "no. 2 of body `foot`" ([`Self::geom_no`]).
+    /// An unnamed geom as findings name it: "no. 2 of body `foot`" ([`Self::geom_no`]). A world
+    /// geom is counted in its own file (a scene's floor and an included robot file's world geoms
+    /// are all the world body's, in an order neither file shows), with MuJoCo's geom id (from 0).
     pub fn unnamed_geom(&self, g: usize) -> String {
         let body = self.geoms.get(g).map_or(0, |x| x.body);
-        format!("no. {} of body `{}`", self.geom_no(g), self.body_name(body))
+        if body != 0 {
+            return format!("no. {} of body `{}`", self.geom_no(g), self.body_name(body));
+        }
+        let list = self.src.list(ElemKind::Geom);
+        let in_file = self.elem(ElemKind::Geom, g, "").and_then(|e| {
+            let at = list.iter().position(|x| std::ptr::eq(x, e))?;
+            Some(list[..at].iter().filter(|x| x.body.is_none() && x.loc.file == e.loc.file).count())
+        });
+        match in_file {
+            Some(k) => {
+                format!("no. {} of the world body in its file (MuJoCo geom id {g})", k + 1)
+            }
+            None => format!("of the world body with MuJoCo geom id {g}"),
+        }
     }
     /// A geom as a message names it: "`name`", else "no. 2 of body `foot`".
     pub fn geom_ref(&self, g: usize) -> String {

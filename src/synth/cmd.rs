@@ -40,6 +40,8 @@ per-joint noise + quantisation floor, dropped rows). See `modellint docs synth`.
 pub struct SynthCmd {
     /// Model (MJCF or URDF).
     pub model: PathBuf,
+    #[command(flatten)]
+    pub packages: crate::cli_logs::PackageArgs,
     /// Output directory (episodes/, truth_commands/, truth.json).
     #[arg(long)]
     pub out: PathBuf,

@@ -15,7 +15,7 @@
 //! * Localisation: joints and regions ranked by their share of the total squared position
 //!   error, the frequency band with the largest band-power mismatch, motion phases
 //!   (locate::phase_errors), and per joint the bias / lag / gain / residual decomposition
-//!   (locate::decompose) naming the dominant component.
+//!   (locate::decompose_segments, on the spectra's segments) naming the dominant component.
 //!
 //! Diverged episodes are excluded from every pooled number and listed in `diverged`.
 
@@ -392,19 +392,21 @@ pub fn compute(
                     ja.psd_w += w;
                 }
             }
-            let d = locate::decompose(1.0 / fs, &su, &ru, opts.max_lag_s);
-            let w = su.len().min(ru.len()) as f64;
-            if d.total_rms.is_finite() && w > 0.0 {
-                ja.dec_w += w;
-                ja.bias += d.bias * w;
-                ja.lag += d.lag_s * w;
-                ja.gain += d.gain * w;
-                ja.res_sq +=
-                    if d.residual_rms.is_finite() { d.residual_rms.powi(2) * w } else { 0.0 };
-                ja.tot_sq += d.total_rms.powi(2) * w;
-                match ja.votes.iter_mut().find(|v| v.0 == d.explained) {
-                    Some(v) => v.1 += d.total_rms.powi(2) * w,
-                    None => ja.votes.push((d.explained, d.total_rms.powi(2) * w)),
+            for (d, w) in
+                locate::decompose_segments(1.0 / fs, &su, &ru, opts.max_lag_s, opts.nperseg)
+            {
+                if d.total_rms.is_finite() && w > 0.0 {
+                    ja.dec_w += w;
+                    ja.bias += d.bias * w;
+                    ja.lag += d.lag_s * w;
+                    ja.gain += d.gain * w;
+                    ja.res_sq +=
+                        if d.residual_rms.is_finite() { d.residual_rms.powi(2) * w } else { 0.0 };
+                    ja.tot_sq += d.total_rms.powi(2) * w;
+                    match ja.votes.iter_mut().find(|v| v.0 == d.explained) {
+                        Some(v) => v.1 += d.total_rms.powi(2) * w,
+                        None => ja.votes.push((d.explained, d.total_rms.powi(2) * w)),
+                    }
                 }
             }
             let ph = locate::phase_errors(

@@ -172,9 +172,9 @@ impl Recording {
     }
 }
 
-/// A time in seconds as a message shows it: to the nanosecond, trailing zeros dropped, so a
+/// A time as a message shows it: to the nanosecond (of a second), trailing zeros dropped, so a
 /// stamp converted from milliseconds reads as written (0.285, not 0.28500000000000003).
-fn seconds_text(x: f64) -> String {
+pub(super) fn seconds_text(x: f64) -> String {
     let s = format!("{x:.9}");
     let s = s.trim_end_matches('0');
     s.strip_suffix('.').unwrap_or(s).to_string()

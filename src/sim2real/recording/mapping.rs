@@ -133,6 +133,9 @@ pub(crate) struct Columns {
     /// The key (array, column, topic) of each signal, for messages.
     pub measured_key: String,
     pub command_key: Option<String>,
+    pub velocity_key: Option<String>,
+    pub effort_key: Option<String>,
+    pub time_key: Option<String>,
     /// What the file offers as a command, when no command was found (for the message).
     pub keys: Vec<String>,
     pub q: Vec<Vec<f64>>,
@@ -220,6 +223,7 @@ pub(crate) fn assemble(
             )));
         }
     }
+    non_finite(&cols, &names, map).map_err(err)?;
     let pos = match map.units.as_deref() {
         None => 1.0,
         Some(u) => angle_factor(u).ok_or_else(|| {
@@ -297,6 +301,50 @@ pub(crate) fn assemble(
     .map_err(err)?;
     rec.check(opts)?;
     Ok(rec)
+}
+
+/// The first value that is not a finite number in the signals of the joints the log keeps: the
+/// array (column, topic) by its key, the 0-based row (the file's own index: a NumPy array's
+/// first axis, a parquet frame, an MCAP message) with its time stamp, the column and its joint.
+/// A command column that is NaN throughout is no command (an MCAP command topic that does not
+/// name the joint): it is left to [`assemble`].
+fn non_finite(cols: &Columns, names: &[String], map: &LogMap) -> Result<(), String> {
+    let unit = map.time_unit.as_deref().unwrap_or("s");
+    let stamp = |i: usize| match cols.t.get(i) {
+        Some(&t) => format!(", time {} {unit}", super::check::seconds_text(t)),
+        None => String::new(),
+    };
+    if let Some(i) = cols.t.iter().position(|x| !x.is_finite()) {
+        let key = cols.time_key.as_deref().unwrap_or("time");
+        return Err(format!("time '{key}' row {i} (0-based): non-finite value {}", cols.t[i]));
+    }
+    let signals = [
+        (Some(&cols.q), Some(cols.measured_key.as_str()), "positions"),
+        (cols.q_cmd.as_ref(), cols.command_key.as_deref(), "commands"),
+        (cols.qd.as_ref(), cols.velocity_key.as_deref(), "velocities"),
+        (cols.tau.as_ref(), cols.effort_key.as_deref(), "efforts"),
+    ];
+    for (m, key, what) in signals {
+        let Some(m) = m else { continue };
+        for (c, v) in m.iter().enumerate() {
+            let name = names.get(c).map_or("", String::as_str);
+            if map.skip.iter().any(|s| s == name) {
+                continue;
+            }
+            if what == "commands" && v.iter().all(|x| x.is_nan()) {
+                continue;
+            }
+            if let Some(i) = v.iter().position(|x| !x.is_finite()) {
+                let key = key.map_or(format!("the {what}"), |k| format!("'{k}'"));
+                return Err(format!(
+                    "{key} row {i} (0-based{}), column {c} (joint '{name}'): non-finite value {}",
+                    stamp(i),
+                    v[i]
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Columns (one per joint) of a row-major `n × k` matrix.

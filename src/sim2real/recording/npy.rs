@@ -286,7 +286,8 @@ pub(crate) fn arrays_columns(
     let command = pick(map.command.as_deref(), COMMAND, &keys, "array")?;
     let velocity = pick(map.velocity.as_deref(), VELOCITY, &keys, "array")?;
     let effort = pick(map.effort.as_deref(), EFFORT, &keys, "array")?;
-    let t = match pick(map.time.as_deref(), TIME, &keys, "array")? {
+    let time_key = pick(map.time.as_deref(), TIME, &keys, "array")?;
+    let t = match time_key.clone() {
         Some(tk) => {
             let (a, v) = num(&tk)?;
             if v.len() != n || a.shape.len() != 1 {
@@ -345,6 +346,9 @@ pub(crate) fn arrays_columns(
         names,
         measured_key: measured.clone(),
         command_key: command.clone(),
+        velocity_key: velocity.clone(),
+        effort_key: effort.clone(),
+        time_key,
         keys: keys.clone(),
         q: columns_of(qv, n, k),
         q_cmd,
@@ -375,6 +379,44 @@ mod tests {
         b.extend(h.as_bytes());
         b.extend(body);
         b
+    }
+
+    fn f8(shape: &str, v: &[f64]) -> NpyArray {
+        let body: Vec<u8> = v.iter().flat_map(|x| x.to_le_bytes()).collect();
+        parse_npy(&npy("<f8", false, shape, &body)).unwrap()
+    }
+
+    /// The error of the arrays `pos` (3 rows, joints a and b), `target` under `map`.
+    fn error_of(pos: &[f64], target: &[f64], map: &super::super::mapping::LogMap) -> String {
+        let arrays = vec![
+            ("time".to_string(), f8("(3,)", &[0.0, 0.01, 0.02])),
+            ("pos".to_string(), f8("(3, 2)", pos)),
+            ("target".to_string(), f8("(3, 2)", target)),
+        ];
+        let mut map = map.clone();
+        map.measured = Some("pos".into());
+        map.command = Some("target".into());
+        map.joints = Some(vec!["a".into(), "b".into()]);
+        let cols = arrays_columns(arrays, &map, "NumPy .npz").unwrap();
+        let path = std::path::Path::new("log.npz");
+        let opts = super::super::ParseOptions::default();
+        match super::super::mapping::assemble(path, cols, &map, &opts) {
+            Ok(_) => String::new(),
+            Err(e) => e.to_string(),
+        }
+    }
+
+    #[test]
+    fn a_non_finite_value_is_named_by_array_row_and_column() {
+        let map = super::super::mapping::LogMap::default();
+        let ok = [0.1, 0.2, 0.1, 0.2, 0.1, 0.2];
+        let e = error_of(&[0.1, 0.2, 0.1, 0.2, 0.1, f64::NAN], &ok, &map);
+        assert!(e.contains("'pos' row 2 (0-based, time 0.02 s), column 1 (joint 'b')"), "{e}");
+        let e = error_of(&ok, &[0.1, 0.2, f64::INFINITY, 0.2, 0.1, 0.2], &map);
+        assert!(e.contains("'target' row 1 (0-based, time 0.01 s), column 0 (joint 'a')"), "{e}");
+        // A skipped joint's values are not read.
+        let skip = super::super::mapping::LogMap { skip: vec!["b".into()], ..map.clone() };
+        assert_eq!(error_of(&[0.1, f64::NAN, 0.1, 0.2, 0.1, 0.2], &ok, &skip), "");
     }
 
     #[test]

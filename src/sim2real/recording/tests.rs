@@ -272,8 +272,14 @@ fn unit_declarations_convert_to_si() {
         r.meta.get("converted_from_units").map(String::as_str),
         Some("deg, deg/s, t=ms, hip.q=rad")
     );
-    // Round trip: the written CSV is in SI and reads back the same.
-    assert_eq!(parse_csv(p(), &write_csv(&r)).expect("re-parses").joints, r.joints);
+    // Round trip: the written CSV is in SI, says so above the declaration it was converted
+    // from (a reader took that `deg` for the unit of its radians), and reads back the same.
+    let written = write_csv(&r);
+    let said = "# values in SI units (rad, rad/s, s, N·m; m, m/s, N on a slide joint) - converted \
+                on reading from the units below\n# converted_from_units: deg";
+    assert!(written.contains(said), "{written}");
+    let back = parse_csv(p(), &written).expect("re-parses");
+    assert_eq!((&back.joints, &back.meta, &back.t), (&r.joints, &r.meta, &r.t));
     let si = parse_csv(p(), "# units: rad, rad/s\nt,a.q\n0,0.1\n1,0.2\n").unwrap();
     assert_eq!(si.meta.get("units").map(String::as_str), Some("rad, rad/s"));
     for (decl, want) in [

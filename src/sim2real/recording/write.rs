@@ -4,6 +4,12 @@ use super::{
     BASE_SUFFIXES, JOINT_SUFFIXES, KEY_CONTROL_RATE, KEY_CONTROL_T0, RATE_NONE, Recording,
 };
 
+/// The comment (no colon: not metadata) above a `converted_from_units` line: the key names the
+/// units the source was in, while every value of the file is in SI (a reader took `deg` for the
+/// unit of the radians below it).
+pub const VALUES_IN_SI: &str = "# values in SI units (rad, rad/s, s, N·m; m, m/s, N on a slide joint) - \
+                                 converted on reading from the units below\n";
+
 /// Serialises a recording; `parse_csv(write_csv(r))` gives back `r` exactly (except `source`)
 /// for any recording `parse_csv` would accept. Metadata keys must not contain ':' and neither
 /// keys nor values may contain line breaks (they are replaced by spaces) or begin/end with spaces.
@@ -22,6 +28,10 @@ pub fn write_csv(rec: &Recording) -> String {
         let declared_none = rec.control_rate_hz.is_none() && v == RATE_NONE;
         if (k == KEY_CONTROL_RATE && !declared_none) || k == KEY_CONTROL_T0 {
             continue;
+        }
+        if k == super::units::KEY_CONVERTED {
+            // The declaration the values were read in is kept; the values are no longer in it.
+            out.push_str(VALUES_IN_SI);
         }
         let _ = writeln!(out, "# {}: {}", clean(k), clean(v));
     }
