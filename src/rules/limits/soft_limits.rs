@@ -4,7 +4,7 @@ use crate::declare_rule;
 use crate::finding::{Finding, Severity, Subject};
 use crate::lint::Loaded;
 use crate::model::mjcf::ElemKind;
-use crate::model::{ActuatorKind, JointType, Transmission};
+use crate::model::{JointType, Transmission};
 use crate::probe::limit::LimitHit;
 use crate::probe::{LimitApproach, Measure, Measurement, Preconditions};
 use crate::rules::{Context, Domain, Rule, RuleMeta, measure_each, opt};
@@ -222,7 +222,7 @@ fn continuous(robot: &crate::model::Robot, joint: usize, acts: &[&crate::model::
         return true;
     }
     let unbounded_servos =
-        acts.iter().all(|a| matches!(a.kind, ActuatorKind::Position { .. }) && !a.ctrllimited);
+        acts.iter().all(|a| a.servo.is_some() && !a.ctrllimited);
     let others_ranged = robot
         .joints
         .iter()
@@ -271,8 +271,8 @@ impl SoftLimits {
                 continue;
             }
             for a in acts {
-                if !matches!(a.kind, ActuatorKind::Position { .. })
-                    || !matches!(a.trn, Transmission::Joint | Transmission::JointInParent)
+                let Some(servo) = a.servo else { continue };
+                if !matches!(a.trn, Transmission::Joint | Transmission::JointInParent)
                 {
                     continue;
                 }
@@ -280,13 +280,21 @@ impl SoftLimits {
                 if super::ctrlrange_in_degrees::looks_like_degrees(cx.robot, a, 0.05) {
                     continue;
                 }
-                let g = if a.gear != 0.0 { a.gear } else { 1.0 };
-                // Position target is in actuator length = gear·q; refer it to the joint.
-                let c = if a.ctrllimited {
-                    let (x, y) = (a.ctrlrange[0] / g, a.ctrlrange[1] / g);
-                    [x.min(y), x.max(y)]
-                } else {
-                    [f64::NEG_INFINITY, f64::INFINITY]
+                // A servo's setpoint is in actuator length = gear·q; refer it to the joint.
+                let c = a.setpoint_range().unwrap_or([f64::NEG_INFINITY, f64::INFINITY]);
+                // A scaled servo's ctrlrange is in its own units: name both.
+                let crng = |c: [f64; 2]| {
+                    if servo.is_unit() {
+                        rng(c, u)
+                    } else {
+                        format!(
+                            "[{}, {}] (setpoint {}: gain/kp {})",
+                            fmt_num(a.ctrlrange[0], 4),
+                            fmt_num(a.ctrlrange[1], 4),
+                            rng(c, u),
+                            fmt_num(servo.scale, 4)
+                        )
+                    }
                 };
                 let r = j.range;
                 let span = r[1] - r[0];
@@ -329,7 +337,7 @@ impl SoftLimits {
                         format!(
                             "position actuator `{}` ctrlrange {} {how} joint `{}`'s hardware range {}",
                             a.name,
-                            rng(c, u),
+                            crng(c),
                             j.name,
                             rng(r, u)
                         ),
@@ -343,7 +351,7 @@ impl SoftLimits {
                         format!(
                             "position actuator `{}` ctrlrange {} is not the soft range {} ({} × joint `{}` range {}, centred)",
                             a.name,
-                            rng(c, u),
+                            crng(c),
                             rng(e, u),
                             fmt_num(factor.unwrap_or(0.9), 3),
                             j.name,
@@ -367,8 +375,8 @@ impl SoftLimits {
                     .note("training should use soft limits inside the hardware range (typically 0.9 of it, Asimov system identification §8); commanding the hard stops trains hard-stop impacts and boundary exploitation that shock-load the real joints")
                     .help(format!(
                         "set ctrlrange=\"{} {}\" ({} × range, centred), or inheritrange=\"{}\"",
-                        fmt_num(soft[0] * g, 4),
-                        fmt_num(soft[1] * g, 4),
+                        fmt_num(a.ctrl_for_joint(soft[0]).min(a.ctrl_for_joint(soft[1])), 4),
+                        fmt_num(a.ctrl_for_joint(soft[0]).max(a.ctrl_for_joint(soft[1])), 4),
                         fmt_num(fct, 3),
                         fmt_num(fct, 3)
                     ))
