@@ -370,6 +370,29 @@ impl Robot {
     pub fn body_name(&self, id: usize) -> &str {
         self.bodies.get(id).map(|b| b.name.as_str()).unwrap_or("")
     }
+    /// The moment arm of actuator `a` at joint `j`: its gear on a joint transmission, gear ×
+    /// the joint's coefficient in a fixed tendon (summed if the joint appears more than once),
+    /// `None` when the transmission does not reach `j` that way.
+    pub fn moment_at_joint(&self, a: &Actuator, j: usize) -> Option<f64> {
+        match a.trn {
+            Transmission::Joint | Transmission::JointInParent => {
+                (a.target == j as i32).then_some(a.gear)
+            }
+            Transmission::Tendon if a.target >= 0 => {
+                let m = &self.mj;
+                let t = a.target as usize;
+                let (adr, num) = (*m.tendon_adr().get(t)?, *m.tendon_num().get(t)?);
+                let (wt, wo, wp) = (m.wrap_type(), m.wrap_objid(), m.wrap_prm());
+                let coef: f64 = (adr.max(0) as usize..(adr.max(0) + num.max(0)) as usize)
+                    .filter(|&w| wt.get(w).is_some_and(|&t| t as i32 == 1))
+                    .filter(|&w| wo.get(w) == Some(&(j as i32)))
+                    .filter_map(|w| wp.get(w).copied())
+                    .sum();
+                (coef != 0.0).then_some(a.gear * coef)
+            }
+            _ => None,
+        }
+    }
     /// Actuators whose transmission reaches joint `j` (directly, or through a fixed tendon).
     pub fn actuators_on_joint(&self, j: usize) -> Vec<&Actuator> {
         let m = &self.mj;
