@@ -179,11 +179,19 @@ fn apply_suppressions(l: &Loaded, findings: Vec<Finding>) -> Vec<Finding> {
         for r in &s.rules {
             if !known.contains(&r.as_str()) {
                 if l.config.enabled(invalid) {
+                    // The ids closest to the misspelling, as `--select` and `rule` offer them.
+                    let ids: Vec<String> = known.iter().map(|k| k.to_string()).collect();
+                    let near = crate::util::near_matches(r, &ids);
+                    let hint = if near.is_empty() {
+                        String::new()
+                    } else {
+                        format!(" (did you mean {}?)", near.join(", "))
+                    };
                     out.push(
                         Finding::new(
                             invalid.id,
                             l.config.level(invalid),
-                            format!("suppression names unknown rule `{r}`"),
+                            format!("suppression names unknown rule `{r}`{hint}"),
                             s.loc,
                         )
                         .help("use an id from `modellint rules`"),

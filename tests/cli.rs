@@ -351,6 +351,8 @@ fn suppressions_inside_default_classes_are_applied_and_checked() {
     assert!(!has("underdamped-pd-gains", "`hinge` "), "suppressed in class servo: {found:?}");
     assert!(has("underdamped-pd-gains", "`hinge2`"), "not suppressed (misspelled): {found:?}");
     assert!(has("invalid-suppression", "underdamped-pd-gain`"), "{found:?}");
+    // The closest rule ids, as `--select` offers them.
+    assert!(has("invalid-suppression", "(did you mean underdamped-pd-gains"), "{found:?}");
     assert!(has("unused-suppression", "soft-limits"), "{found:?}");
 }
 
@@ -371,6 +373,7 @@ fn suppressions_on_an_inertial_are_applied_and_checked() {
     assert!(!has("isotropic-base-inertia", "`trunk` "), "suppressed on trunk: {found:?}");
     assert!(has("isotropic-base-inertia", "`trunk2`"), "not suppressed (misspelled): {found:?}");
     assert!(has("invalid-suppression", "isotropic-base-inertai`"), "{found:?}");
+    assert!(has("invalid-suppression", "(did you mean isotropic-base-inertia"), "{found:?}");
     assert!(has("unused-suppression", "isotropic-base-inertia"), "{found:?}");
 }
 

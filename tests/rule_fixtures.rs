@@ -571,3 +571,51 @@ fn damping_that_caps_speed_below_the_velocity_limit() {
         caps("fixtures/rules/effort-limit-mismatch/pairs/valid_damping_within_speed.xml");
     assert_eq!((n, infos), (0, 2), "the spec's velocity_limit was read, no damping finding");
 }
+
+/// The first finding of rule `id` on fixture `path` (rules run alone, no probe).
+fn first(path: &str, id: &str) -> (modellint::finding::Finding, String) {
+    let (f, text) = lint_one(Path::new(path), id);
+    let f = f.into_iter().find(|f| f.rule == id).unwrap_or_else(|| panic!("{path}: no {id}"));
+    (f, text)
+}
+
+/// A `<general biastype="affine">` servo with gain g ≠ −biasprm[1] is a PD servo of stiffness
+/// −biasprm[1] and damping −biasprm[2] (hand-computed from the fixture: kp 10, kd 0.1 + joint
+/// damping 0.02), pointed at the `<general>`'s biasprm, not at a `<position>` default's kv.
+#[test]
+fn a_scaled_general_servo_is_a_pd_servo_on_its_setpoint() {
+    let dir = "fixtures/rules/underdamped-pd-gains";
+    let (f, text) = first(&format!("{dir}/invalid_scaled_general.xml"), "underdamped-pd-gains");
+    assert!((f.data["kp"] - 10.0).abs() < 1e-9, "{:?}", f.data);
+    assert!((f.data["kd"] - 0.12).abs() < 1e-9, "{:?}", f.data);
+    assert!(text.contains("invalid_scaled_general.xml:23:"), "{text}");
+    assert!(!text.contains("inherits `kv`"), "{text}");
+    // Its ctrlrange 0..255 counts commands setpoints 0..g·255/kp = 0.80001 rad, not 255 rad.
+    let (f, _) = first("fixtures/rules/soft-limits/invalid_scaled_servo.xml", "soft-limits");
+    assert!(f.data["ctrl_lo"].abs() < 1e-12, "{:?}", f.data);
+    assert!((f.data["ctrl_hi"] - 0.031373 * 255.0 / 10.0).abs() < 1e-12, "{:?}", f.data);
+}
+
+/// Under MJCF's default degrees, hinge ranges all within ±π are named as radians read as
+/// degrees; real degree ranges (soft-limits/invalid.xml: -90..45, 0..120) are not.
+#[test]
+fn radian_sized_ranges_under_default_degrees_are_named() {
+    let (f, _) = first(
+        "fixtures/rules/soft-limits/invalid_radian_ranges_read_as_degrees.xml",
+        "soft-limits",
+    );
+    assert!(f.message.contains("read as degrees"), "{}", f.message);
+    let (f, _) = first("fixtures/rules/soft-limits/invalid.xml", "soft-limits");
+    assert!(!f.message.contains("read as degrees"), "{}", f.message);
+}
+
+/// A 500 × 360 × 120 mm box read as metres: bounding radius √(250² + 180² + 60²) = 313.8 m, on a
+/// 12.5 kg body of largest moment 0.4 kg·m² (radius of gyration 0.179 m).
+#[test]
+fn a_millimetre_mesh_on_a_metre_body_is_named_with_its_file() {
+    let (f, _) = first("fixtures/rules/mesh-scale/invalid.xml", "mesh-scale");
+    let across = 2.0 * (250f64.powi(2) + 180f64.powi(2) + 60f64.powi(2)).sqrt();
+    assert!((f.measured.as_ref().unwrap().value - across).abs() < 1e-6 * across, "{f:?}");
+    assert!(f.message.contains("chassis_mm.stl"), "{}", f.message);
+    assert!(f.note.as_deref().is_some_and(|n| n.contains("millimetres")), "{f:?}");
+}

@@ -120,7 +120,14 @@ pub(super) fn extract(
             } else {
                 ActuatorKind::Other
             };
+            let servo = (gt[i] == 0 && bt[i] == 1 && g[0] > 0.0 && b[1] < 0.0).then(|| Servo {
+                kp: -b[1],
+                kv: -b[2],
+                scale: g[0] / -b[1],
+                offset: b[0] / -b[1],
+            });
             Actuator {
+                servo,
                 id: i,
                 name: mj::name_at(&mj, mj.name_actuatoradr(), i),
                 trn: match trn[i] {

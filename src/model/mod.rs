@@ -166,6 +166,53 @@ pub struct Actuator {
     pub armature: f64,
     /// The actuator's own `damping` (applied at its transmission as damping·gear²).
     pub damping: f64,
+    /// The PD servo this actuator is, whatever its gain scale (see [`Servo`]).
+    pub servo: Option<Servo>,
+}
+
+impl Actuator {
+    /// A servo's ctrlrange as the range of joint positions it commands (setpoints over gear,
+    /// ascending); `None` for a non-servo or an actuator without a ctrlrange.
+    pub fn setpoint_range(&self) -> Option<[f64; 2]> {
+        let s = self.servo.filter(|_| self.ctrllimited)?;
+        let g = if self.gear != 0.0 { self.gear } else { 1.0 };
+        let (x, y) = (s.setpoint(self.ctrlrange[0]) / g, s.setpoint(self.ctrlrange[1]) / g);
+        Some([x.min(y), x.max(y)])
+    }
+    /// The ctrl that holds joint position `q` (servos only; `q`·gear otherwise).
+    pub fn ctrl_for_joint(&self, q: f64) -> f64 {
+        let g = if self.gear != 0.0 { self.gear } else { 1.0 };
+        self.servo.map_or(q * g, |s| s.ctrl_for(q * g))
+    }
+}
+
+/// A fixed-gain, affine-bias actuator (`<position>`, or `<general biastype="affine">` with
+/// gain g > 0 and bias (b0, b1 < 0, b2)): force = g·ctrl + b0 + b1·L + b2·L̇ = kp·(setpoint − L)
+/// − kv·L̇ with kp = −b1, kv = −b2 and setpoint = scale·ctrl + offset, where scale = g/kp and
+/// offset = b0/kp (L the actuator length, gear·q on a joint). A `<position>` has scale 1 and
+/// offset 0; a scaled servo (the Menagerie 2F-85's gainprm 0.3137, biasprm 0 −100 −10) takes
+/// its ctrl in its own units, not in the joint's.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Servo {
+    pub kp: f64,
+    pub kv: f64,
+    pub scale: f64,
+    pub offset: f64,
+}
+
+impl Servo {
+    /// The length the servo holds for `ctrl` (rad or m of actuator length).
+    pub fn setpoint(&self, ctrl: f64) -> f64 {
+        self.scale * ctrl + self.offset
+    }
+    /// The ctrl that holds actuator length `length`.
+    pub fn ctrl_for(&self, length: f64) -> f64 {
+        (length - self.offset) / self.scale
+    }
+    /// A `<position>`-style servo: ctrl is the setpoint itself.
+    pub fn is_unit(&self) -> bool {
+        (self.scale - 1.0).abs() <= 1e-9 && self.offset == 0.0
+    }
 }
 
 #[derive(Debug, Clone)]
@@ -337,6 +384,29 @@ impl Robot {
     }
     pub fn body_name(&self, id: usize) -> &str {
         self.bodies.get(id).map(|b| b.name.as_str()).unwrap_or("")
+    }
+    /// The moment arm of actuator `a` at joint `j`: its gear on a joint transmission, gear ×
+    /// the joint's coefficient in a fixed tendon (summed if the joint appears more than once),
+    /// `None` when the transmission does not reach `j` that way.
+    pub fn moment_at_joint(&self, a: &Actuator, j: usize) -> Option<f64> {
+        match a.trn {
+            Transmission::Joint | Transmission::JointInParent => {
+                (a.target == j as i32).then_some(a.gear)
+            }
+            Transmission::Tendon if a.target >= 0 => {
+                let m = &self.mj;
+                let t = a.target as usize;
+                let (adr, num) = (*m.tendon_adr().get(t)?, *m.tendon_num().get(t)?);
+                let (wt, wo, wp) = (m.wrap_type(), m.wrap_objid(), m.wrap_prm());
+                let coef: f64 = (adr.max(0) as usize..(adr.max(0) + num.max(0)) as usize)
+                    .filter(|&w| wt.get(w).is_some_and(|&t| t as i32 == 1))
+                    .filter(|&w| wo.get(w) == Some(&(j as i32)))
+                    .filter_map(|w| wp.get(w).copied())
+                    .sum();
+                (coef != 0.0).then_some(a.gear * coef)
+            }
+            _ => None,
+        }
     }
     /// Actuators whose transmission reaches joint `j` (directly, or through a fixed tendon).
     pub fn actuators_on_joint(&self, j: usize) -> Vec<&Actuator> {

@@ -152,9 +152,9 @@ pub fn gains(
 ) -> Option<(usize, f64, f64, bool)> {
     let j = &robot.joints[joint];
     for a in robot.actuators_on_joint(joint) {
-        if let ActuatorKind::Position { kp, kv } = a.kind {
+        if let Some(s) = a.servo {
             let g2 = a.gear * a.gear;
-            return Some((a.id, kp * g2, kv * g2 + j.damping, true));
+            return Some((a.id, s.kp * g2, s.kv * g2 + j.damping, true));
         }
     }
     let (kp, kd) = spec_kp_kd?;
@@ -213,8 +213,10 @@ pub fn step_response(
         _ => own,
     };
     let delta = sign * size;
-    // A position actuator of gear g holds q = ctrl / g: a step of delta in q is g·delta in ctrl.
-    let new_target = if is_position { target + delta * gear } else { target + delta };
+    // A servo of gear g and setpoint scale s holds q = s·ctrl / g: a step of delta in q is
+    // g·delta/s in ctrl.
+    let scale = robot.actuators[act].servo.map_or(1.0, |s| s.scale);
+    let new_target = if is_position { target + delta * gear / scale } else { target + delta };
     let mut y = Vec::with_capacity(resp);
     let warn0 = bench::warnings(&d);
     let mut diverged = false;

@@ -122,9 +122,12 @@ pub fn run(robot: &Robot, act: usize) -> Option<LimitHit> {
     let (lo, hi) = if a.ctrllimited {
         (a.ctrlrange[0], a.ctrlrange[1])
     } else {
-        (j.range[0] * a.gear, j.range[1] * a.gear)
+        (a.ctrl_for_joint(j.range[0]), a.ctrl_for_joint(j.range[1]))
     };
     let g = if a.gear != 0.0 { a.gear } else { 1.0 };
+    // The joint position a ctrl commands: a servo's setpoint over gear (ctrl / gear for a
+    // `<position>`; a scaled servo's setpoint is gain/kp × ctrl).
+    let target_of = |ctrl: f64| a.servo.map_or(ctrl, |s| s.setpoint(ctrl)) / g;
     let mut out = LimitHit {
         q_min: f64::INFINITY,
         q_max: f64::NEG_INFINITY,
@@ -137,10 +140,10 @@ pub fn run(robot: &Robot, act: usize) -> Option<LimitHit> {
     for (k, ctrl) in [lo, hi].into_iter().enumerate() {
         let mut d = b.data(robot);
         let q0 = bench::qpos(&d, j.qposadr);
-        let secs = approach_seconds(ctrl / g - q0, force_limit, j.damping);
+        let secs = approach_seconds(target_of(ctrl) - q0, force_limit, j.damping);
         let n = (secs / b.dt()).ceil() as usize;
         let mut first = true;
-        let mut end = EndRun { target: ctrl / g, q_lo: q0, q_hi: q0, ..Default::default() };
+        let mut end = EndRun { target: target_of(ctrl), q_lo: q0, q_hi: q0, ..Default::default() };
         for _ in 0..n {
             bench::set_ctrl(&mut d, act, ctrl);
             b.step(&mut d);
@@ -170,7 +173,7 @@ pub fn run(robot: &Robot, act: usize) -> Option<LimitHit> {
         out.ends[k] = end;
     }
     // Position servos only: a motor's "ctrl / gear" is a torque, not a target.
-    if !matches!(a.kind, crate::model::ActuatorKind::Position { .. }) {
+    if a.servo.is_none() {
         for e in &mut out.ends {
             e.target = f64::NAN;
         }

@@ -1,5 +1,6 @@
 //! Rules of the `geometry` group.
 pub mod collision_visual_mismatch;
+pub mod mesh_scale;
 pub mod mirror_asymmetry;
 pub mod self_collision_at_keyframe;
 pub mod shapes;

@@ -315,6 +315,7 @@ pub fn registry() -> Vec<&'static dyn Rule> {
         &geometry::self_collision_at_keyframe::SelfCollisionAtKeyframe,
         &geometry::collision_visual_mismatch::CollisionVisualMismatch,
         &geometry::visual_mesh_collision::VisualMeshCollision,
+        &geometry::mesh_scale::MeshScale,
         &mapping::urdf_mjcf_drift::UrdfMjcfDrift,
         &limits::ctrlrange_in_degrees::CtrlrangeInDegrees,
         &mapping::sensor_quantity::SensorQuantity,

@@ -94,3 +94,31 @@ fn families_take_their_classes_leading_words_not_generic_joint_words() {
     name_families(&arm, &mut fams);
     assert_eq!(fams[0].name, "shoulder");
 }
+
+#[test]
+fn a_tendon_actuators_torque_limit_goes_through_its_coefficients() {
+    // A 2F-85-like split: forcerange ±5 N on a fixed tendon with coefficient 0.5 on each
+    // finger joint puts 5 × 0.5 = 2.5 N·m on each joint (hand-computed), not 5.
+    let finger = |n: &str, x: &str| {
+        format!(
+            r#"<body name="{n}" pos="{x} 0 -0.03"><joint name="{n}" axis="0 1 0" range="0 0.8"/><geom type="capsule" fromto="0 0 0 0 0 -0.05" size="0.01" mass="0.1"/></body>"#
+        )
+    };
+    let xml = format!(
+        r#"<mujoco><worldbody><body name="palm"><geom type="box" size="0.05 0.05 0.02" mass="0.5"/>{}{}</body></worldbody><tendon><fixed name="split"><joint joint="left" coef="0.5"/><joint joint="right" coef="0.5"/></fixed></tendon><actuator><general name="fingers" tendon="split" forcerange="-5 5" ctrlrange="0 255" gainprm="0.3137" biasprm="0 -100 -10" biastype="affine"/></actuator></mujoco>"#,
+        finger("left", "0.03"),
+        finger("right", "-0.03")
+    );
+    let dir =
+        std::env::temp_dir().join(format!("modellint-spec-init-{}-tendon", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let path = dir.join("split.xml");
+    std::fs::write(&path, xml).expect("write the test model");
+    let mut map = crate::model::source::SourceMap::default();
+    let robot = crate::model::load(&mut map, &path, None).expect("load the test model");
+    let fams = families(&robot);
+    assert!(!fams.is_empty());
+    for f in &fams {
+        assert_eq!(f.effort, Some(2.5), "{f:?}");
+    }
+}

@@ -191,6 +191,23 @@ impl PdJoint {
     }
 }
 
+/// The attribute of actuator `aid`'s element that sets its `biasprm[index]` (1: stiffness,
+/// 2: damping): `kp`/`kv` on a `<position>`, `biasprm` on a `<general>` (a `<position>`
+/// default's `kp`/`kv` does not act on a `<general>` that writes its own `biasprm`).
+pub fn servo_attr(robot: &Robot, aid: usize, index: usize) -> &'static str {
+    let a = &robot.actuators[aid];
+    match robot.elem(ElemKind::Actuator, aid, &a.name).map(|e| e.tag.as_str()) {
+        Some("position") | None => {
+            if index == 2 {
+                "kv"
+            } else {
+                "kp"
+            }
+        }
+        _ => "biasprm",
+    }
+}
+
 pub fn damping_ratio(kp: f64, kd: f64, inertia: f64) -> f64 {
     kd / (2.0 * (kp * inertia).sqrt())
 }
@@ -219,9 +236,11 @@ pub fn pd_joints(robot: &Robot, spec: Option<&crate::spec::Spec>) -> Vec<PdJoint
         let facts = spec.and_then(|s| s.joint(&j.name));
         let family = facts.as_ref().and_then(|f| f.motor.clone());
         let g2 = a.gear * a.gear;
-        let (source, kp, kd_ctrl) = match a.kind {
-            ActuatorKind::Position { kp, kv } => (GainSource::Actuator(a.id), kp * g2, kv * g2),
-            ActuatorKind::Motor => {
+        // A servo's stiffness and damping are −biasprm[1], −biasprm[2] whatever its gain
+        // scale: the gain only maps ctrl to the setpoint.
+        let (source, kp, kd_ctrl) = match (a.servo, a.kind) {
+            (Some(s), _) => (GainSource::Actuator(a.id), s.kp * g2, s.kv * g2),
+            (None, ActuatorKind::Motor) => {
                 let m = family.as_deref().and_then(|f| spec?.motor(f));
                 match m.and_then(|m| Some((v(&m.kp)?, v(&m.kd).unwrap_or(0.0)))) {
                     Some((kp, kd)) => (GainSource::SpecMotor(a.id), kp, kd),
@@ -285,13 +304,8 @@ impl Rule for UnderdampedPdGains {
             let mut f = match p.source {
                 GainSource::Actuator(aid) => {
                     let a = &cx.robot.actuators[aid];
-                    cx.at_attr(
-                        ElemKind::Actuator,
-                        aid,
-                        &a.name,
-                        if a.biasprm[2] != 0.0 { "kv" } else { "kp" },
-                        msg,
-                    )
+                    let attr = servo_attr(cx.robot, aid, if a.biasprm[2] != 0.0 { 2 } else { 1 });
+                    cx.at_attr(ElemKind::Actuator, aid, &a.name, attr, msg)
                 }
                 GainSource::SpecMotor(_) => cx.at_elem(ElemKind::Joint, j.id, &j.name, msg),
             };

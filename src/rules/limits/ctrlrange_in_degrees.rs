@@ -58,6 +58,21 @@ pub fn degree_mode(robot: &Robot) -> bool {
     deg
 }
 
+/// Largest hinge range magnitude, as written in the file, below which a range in degrees is
+/// implausible for a robot joint (±π° is ±0.055 rad) and plausible in radians: π.
+const RADIAN_LIKE_DEG: f64 = std::f64::consts::PI;
+
+/// MJCF's default `<compiler angle="degree">` reads every hinge range, yet each limited
+/// hinge's range as written is within ±π: the file's numbers were most likely meant as
+/// radians (a ±2 "hardware range" compiled to ±0.0349 rad).
+pub fn ranges_look_like_radians(robot: &Robot) -> bool {
+    let mut hinges =
+        robot.joints.iter().filter(|j| j.jtype == JointType::Hinge && j.limited).peekable();
+    degree_mode(robot)
+        && hinges.peek().is_some()
+        && hinges.all(|j| j.range.iter().all(|r| r.to_degrees().abs() <= RADIAN_LIKE_DEG))
+}
+
 /// The ctrlrange (in joint units) of a position actuator on a limited hinge looks like degrees.
 pub fn looks_like_degrees(robot: &Robot, a: &Actuator, ratio_tol: f64) -> bool {
     if !matches!(a.kind, ActuatorKind::Position { .. })

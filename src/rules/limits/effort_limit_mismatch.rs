@@ -71,17 +71,20 @@ pub fn joint_torque_limit(robot: &Robot, j: usize) -> Option<(f64, LimitSource)>
     let acts = robot.actuators_on_joint(j);
     // Several actuators add up; only a single one gives a per-actuator bound here.
     if acts.len() == 1 {
-        for (x, s) in actuator_bounds(acts[0]) {
+        // Through a fixed tendon the joint sees the actuator's force × gear × its coefficient.
+        let arm = robot.moment_at_joint(acts[0], j).unwrap_or(acts[0].gear);
+        for (x, s) in actuator_bounds(acts[0], arm) {
             take(x, s);
         }
     }
     best
 }
 
-/// The force bounds one actuator puts on what it transmits (× gear): its `forcerange`, a
-/// `<motor>`'s ctrlrange × gain, a voltage-driven `<dcmotor>`'s stall torque.
-fn actuator_bounds(a: &crate::model::Actuator) -> Vec<(f64, LimitSource)> {
-    let g = a.gear.abs();
+/// The force bounds one actuator puts on what it transmits (× its moment arm `arm`: gear, or
+/// gear × tendon coefficient at a joint): its `forcerange`, a `<motor>`'s ctrlrange × gain, a
+/// voltage-driven `<dcmotor>`'s stall torque.
+fn actuator_bounds(a: &crate::model::Actuator, arm: f64) -> Vec<(f64, LimitSource)> {
+    let g = arm.abs();
     let mut v = Vec::new();
     if a.forcelimited {
         v.push((
@@ -113,7 +116,7 @@ fn actuator_bounds(a: &crate::model::Actuator) -> Vec<(f64, LimitSource)> {
 /// no single bound applies to it.
 fn every_actuator_bounded(robot: &Robot, j: usize) -> bool {
     let acts = robot.actuators_on_joint(j);
-    !acts.is_empty() && acts.iter().all(|a| !actuator_bounds(a).is_empty())
+    !acts.is_empty() && acts.iter().all(|a| !actuator_bounds(a, a.gear).is_empty())
 }
 
 impl Rule for EffortLimitMismatch {

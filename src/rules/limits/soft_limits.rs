@@ -4,7 +4,7 @@ use crate::declare_rule;
 use crate::finding::{Finding, Severity, Subject};
 use crate::lint::Loaded;
 use crate::model::mjcf::ElemKind;
-use crate::model::{ActuatorKind, JointType, Transmission};
+use crate::model::{JointType, Transmission};
 use crate::probe::limit::LimitHit;
 use crate::probe::{LimitApproach, Measure, Measurement, Preconditions};
 use crate::rules::{Context, Domain, Rule, RuleMeta, display_name, measure_each, opt};
@@ -221,8 +221,7 @@ fn continuous(robot: &crate::model::Robot, joint: usize, acts: &[&crate::model::
     if robot.is_wheel(joint) || robot.is_base_coordinate(joint) {
         return true;
     }
-    let unbounded_servos =
-        acts.iter().all(|a| matches!(a.kind, ActuatorKind::Position { .. }) && !a.ctrllimited);
+    let unbounded_servos = acts.iter().all(|a| a.servo.is_some() && !a.ctrllimited);
     let others_ranged = robot
         .joints
         .iter()
@@ -271,22 +270,29 @@ impl SoftLimits {
                 continue;
             }
             for a in acts {
-                if !matches!(a.kind, ActuatorKind::Position { .. })
-                    || !matches!(a.trn, Transmission::Joint | Transmission::JointInParent)
-                {
+                let Some(servo) = a.servo else { continue };
+                if !matches!(a.trn, Transmission::Joint | Transmission::JointInParent) {
                     continue;
                 }
                 // A ctrlrange written in degrees is its own finding (ctrlrange-in-degrees).
                 if super::ctrlrange_in_degrees::looks_like_degrees(cx.robot, a, 0.05) {
                     continue;
                 }
-                let g = if a.gear != 0.0 { a.gear } else { 1.0 };
-                // Position target is in actuator length = gear·q; refer it to the joint.
-                let c = if a.ctrllimited {
-                    let (x, y) = (a.ctrlrange[0] / g, a.ctrlrange[1] / g);
-                    [x.min(y), x.max(y)]
-                } else {
-                    [f64::NEG_INFINITY, f64::INFINITY]
+                // A servo's setpoint is in actuator length = gear·q; refer it to the joint.
+                let c = a.setpoint_range().unwrap_or([f64::NEG_INFINITY, f64::INFINITY]);
+                // A scaled servo's ctrlrange is in its own units: name both.
+                let crng = |c: [f64; 2]| {
+                    if servo.is_unit() {
+                        rng(c, u)
+                    } else {
+                        format!(
+                            "[{}, {}] (setpoint {}: gain/kp {})",
+                            fmt_num(a.ctrlrange[0], 4),
+                            fmt_num(a.ctrlrange[1], 4),
+                            rng(c, u),
+                            fmt_num(servo.scale, 4)
+                        )
+                    }
                 };
                 let r = j.range;
                 let span = r[1] - r[0];
@@ -332,7 +338,7 @@ impl SoftLimits {
                         format!(
                             "position actuator `{}` ctrlrange {} {how} joint `{}`'s hardware range {}",
                             display_name(&a.name, a.id),
-                            rng(c, u),
+                            crng(c),
                             j.name,
                             rng(r, u)
                         ),
@@ -346,7 +352,7 @@ impl SoftLimits {
                         format!(
                             "position actuator `{}` ctrlrange {} is not the soft range {} ({} × joint `{}` range {}, centred)",
                             display_name(&a.name, a.id),
-                            rng(c, u),
+                            crng(c),
                             rng(e, u),
                             fmt_num(factor.unwrap_or(0.9), 3),
                             j.name,
@@ -363,19 +369,38 @@ impl SoftLimits {
                 } else {
                     "ctrlrange"
                 };
+                // Every hinge range in the file within ±π under MJCF's default degrees: the
+                // tiny range is a unit slip, not a hardware range to train inside.
+                let radian_slip = j.jtype == JointType::Hinge
+                    && super::ctrlrange_in_degrees::ranges_look_like_radians(cx.robot);
+                let msg = if radian_slip {
+                    format!(
+                        "{msg}; the file's range numbers [{}, {}] are read as degrees (MJCF's default <compiler angle=\"degree\">), and every hinge range in the file is within ±π: radians were likely meant",
+                        fmt_num(r[0].to_degrees(), 4),
+                        fmt_num(r[1].to_degrees(), 4)
+                    )
+                } else {
+                    msg
+                };
                 let fct = factor.unwrap_or(0.9);
                 let soft = exp.unwrap_or([mid - 0.5 * fct * span, mid + 0.5 * fct * span]);
                 let mut f = cx
                     .at_attr(ElemKind::Actuator, a.id, &a.name, attr, msg)
                     .note("training should use soft limits inside the hardware range (typically 0.9 of it, Asimov system identification §8); commanding the hard stops trains hard-stop impacts and boundary exploitation that shock-load the real joints")
                     .help(format!(
-                        "set ctrlrange=\"{} {}\" ({} × range, centred), or inheritrange=\"{}\"",
-                        fmt_num(soft[0] * g, 4),
-                        fmt_num(soft[1] * g, 4),
+                        "set ctrlrange=\"{} {}\" ({} × range, centred){}",
+                        fmt_num(a.ctrl_for_joint(soft[0]).min(a.ctrl_for_joint(soft[1])), 4),
+                        fmt_num(a.ctrl_for_joint(soft[0]).max(a.ctrl_for_joint(soft[1])), 4),
                         fmt_num(fct, 3),
-                        fmt_num(fct, 3)
+                        // inheritrange maps the joint range onto ctrl one to one: a
+                        // `<position>`'s, not a scaled servo's.
+                        if servo.is_unit() {
+                            format!(", or inheritrange=\"{}\"", fmt_num(fct, 3))
+                        } else {
+                            String::new()
+                        }
                     ))
-                    .label(if a.ctrllimited { format!("ctrlrange {}", rng(c, u)) } else { "unlimited".into() })
+                    .label(if a.ctrllimited { format!("ctrlrange {}", crng(c)) } else { "unlimited".into() })
                     .subject(Subject::Actuator(a.id))
                     .with("ctrl_lo", c[0])
                     .with("ctrl_hi", c[1])
@@ -383,6 +408,12 @@ impl SoftLimits {
                     .with("range_hi", r[1])
                     .with("soft_lo", soft[0])
                     .with("soft_hi", soft[1]);
+                if radian_slip {
+                    let (rloc, _) = cx.robot.attr_loc(ElemKind::Joint, j.id, &j.name, "range");
+                    f = f.secondary(rloc, "read as degrees").help(
+                        "if the ranges are radians, add <compiler angle=\"radian\"/> (MJCF reads angles in degrees by default); then set the ctrlrange inside the range",
+                    );
+                }
                 if let (2, Some(loc)) = (kind, factor_loc) {
                     f = f.secondary(loc, format!("spec soft_limit_factor = {}", fmt_num(fct, 3)));
                 }

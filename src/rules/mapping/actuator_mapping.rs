@@ -211,7 +211,7 @@ impl ActuatorMapping {
             if flipped(a) {
                 continue;
             }
-            if !matches!(a.kind, ActuatorKind::Position { .. }) || !a.ctrllimited || a.target < 0 {
+            if a.servo.is_none() || !a.ctrllimited || a.target < 0 {
                 continue;
             }
             // The target's range: a limited scalar joint's, or what a fixed tendon's joints
@@ -234,9 +234,7 @@ impl ActuatorMapping {
                 }
                 _ => continue,
             };
-            let g = if a.gear != 0.0 { a.gear } else { 1.0 };
-            let (x, y) = (a.ctrlrange[0] / g, a.ctrlrange[1] / g);
-            let c = [x.min(y), x.max(y)];
+            let Some(c) = a.setpoint_range() else { continue };
             // Ends within `tolerance` of the joint's ends are those ends: a ctrlrange written to
             // full precision (-0.22689280275926285) for a range rounded to six digits (-0.226893)
             // reaches nowhere past the stop.
@@ -252,8 +250,17 @@ impl ActuatorMapping {
                         &a.name,
                         "ctrlrange",
                         format!(
-                            "position actuator `{}` ctrlrange [{}, {}] {u} reaches outside {what} [{}, {}] {u}",
+                            "position actuator `{}` {} [{}, {}] {u} reaches outside {what} [{}, {}] {u}",
                             a.name,
+                            match a.servo {
+                                Some(s) if !s.is_unit() => format!(
+                                    "ctrlrange [{}, {}] commands setpoints (gain/kp {})",
+                                    fmt_num(a.ctrlrange[0], 4),
+                                    fmt_num(a.ctrlrange[1], 4),
+                                    fmt_num(s.scale, 4)
+                                ),
+                                _ => "ctrlrange".into(),
+                            },
                             fmt_num(c[0], 4),
                             fmt_num(c[1], 4),
                             fmt_num(r[0], 4),
