@@ -250,11 +250,10 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
             out.tried.push(not_tested(r.phase, p, f));
             continue;
         }
-        // Either the coarse fit or the screen's own figure must reach the share: a coarse grid
-        // can miss a narrow basin (a torque limit) that a probe's replay saw, and the linear
-        // step misses what is far from linear (a resonance moved by damping). A smooth effect's
-        // step counts as replayed ([`coarse::replayed_step`]), a coarse fit past it goes on from
-        // it; a non-smooth one counts at its probes ([`Screen::admits`]).
+        // Either the coarse fit or the linearised step must reach the share: a coarse grid can
+        // miss a narrow basin (a torque limit) that the linear step sees, and the linear step
+        // misses what is far from linear (a resonance moved by damping). A smooth effect's step
+        // counts as replayed ([`coarse::replayed_step`]); a coarse fit past it goes on from it.
         let reaches = |g: f64| g > 0.0 && g >= opts.policy.screen_share * best_gain;
         // A deferred candidate judged from its plain variant's coarse fit: the best point that
         // judgement simulated stands in for its linear step ([`coarse::when_taken`]).
@@ -280,7 +279,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
             // A candidate added during the round (a mirror completion).
             None => engine.fit_budget(short, &applied, e, &group, opts.policy.screen_evals),
         };
-        let mut linear_gain = screen.admits(e, &group).map_or(f64::NEG_INFINITY, gain);
+        let mut linear_gain = predicted.map_or(f64::NEG_INFINITY, |p| gain(p.train_rmse));
         if let Some((sp, sf)) = stepped {
             linear_gain = gain(sf);
             if sf < cf {

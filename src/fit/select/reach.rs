@@ -139,7 +139,7 @@ impl Reach {
         (e, g): (&'static dyn Effect, &[String]),
     ) -> Option<(Vec<f64>, f64)> {
         if let Some(sb) = self.screen_bar
-            && screen.and_then(|s| s.admits(e, g)).is_some_and(|f| f <= sb)
+            && screen.and_then(|s| s.predict(e.id(), g)).is_some_and(|p| p.train_rmse <= sb)
         {
             return None;
         }

@@ -29,7 +29,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::fit::diagnose::Candidate;
-use crate::fit::effects::{self, Applied, Effect, JointTarget, model_with};
+use crate::fit::effects::{self, Applied, JointTarget, model_with};
 use crate::fit::split::segments;
 use crate::sim2real::metrics::gap_mask;
 use crate::sim2real::recording::Recording;
@@ -142,12 +142,6 @@ struct EffectModel {
     k: usize,
     b: Vec<Vec<f64>>,
     g: Vec<Vec<f64>>,
-    /// Per joint and screened parameter, the probe's step that gave the column (0 without a
-    /// column): the probes' own points, where the columns are simulated changes, not slopes.
-    steps: Vec<Vec<f64>>,
-    /// Per joint, the most any of its probes' replays explained of the probes' residual (the
-    /// sum of squares, not extrapolated).
-    at_probe: Vec<f64>,
 }
 
 /// What the linear model predicts for one candidate (effect, joint group).
@@ -180,9 +174,6 @@ struct Probe {
     step: f64,
     column: Vec<f64>,
     explained: f64,
-    /// What the best of this parameter's probe replays explained as simulated, `2 r·c − c·c`
-    /// (not necessarily the probe whose column is kept).
-    at_probe: f64,
 }
 
 /// The least-squares combination of columns with Gram matrix `g` and residual products `b`:
@@ -372,13 +363,9 @@ fn probe_batch(
                 }
                 let rs = dot_r(&column, r);
                 let explained = rs * rs / ss;
-                let at = best[n][j].as_ref().map_or(0.0, |b| b.at_probe).max(2.0 * rs - ss);
-                if let Some(b) = best[n][j].as_mut() {
-                    b.at_probe = at;
-                }
                 if best[n][j].as_ref().is_none_or(|b| explained > b.explained) {
                     column.iter_mut().for_each(|x| *x /= step);
-                    best[n][j] = Some(Probe { v, step, column, explained, at_probe: at });
+                    best[n][j] = Some(Probe { v, step, column, explained });
                 }
             }
         }
@@ -490,12 +477,6 @@ impl Screen {
                 m.joints.push(c.joint.clone());
                 m.room.push(room);
                 m.b.push(b);
-                m.steps.push(
-                    (0..k)
-                        .map(|j| ps.get(j).and_then(|p| p.as_ref()).map_or(0.0, |p| p.step))
-                        .collect(),
-                );
-                m.at_probe.push(ps.iter().flatten().map(|p| p.at_probe).fold(0.0, f64::max));
                 cols.extend(own);
             }
             let n = cols.len();
@@ -548,48 +529,6 @@ impl Screen {
         self.linear(effect, group).map(|(_, x)| x)
     }
 
-    /// The training RMSE (on the screen's data's scale, as [`Screen::predict`]'s) at the probes'
-    /// own points: for one joint the best of its probe replays as simulated; for a group the
-    /// sum of its joints' changes at their probe steps, as the linear model sums columns — no
-    /// step scaled beyond a point that was simulated. At most the linear prediction. `None` as
-    /// [`Screen::predict`].
-    pub(super) fn at_probes(&self, effect: &str, group: &[String]) -> Option<f64> {
-        let m = self.models.get(effect)?;
-        let ix: Vec<usize> = group
-            .iter()
-            .map(|j| m.joints.iter().position(|x| x == j))
-            .collect::<Option<Vec<_>>>()?;
-        if self.train_n == 0 || !(self.train_ss > 0.0) {
-            return None;
-        }
-        let k = m.k;
-        let at = |i: usize, p: usize| (i * k + p, m.steps[i][p]);
-        let cols: Vec<(usize, f64)> =
-            ix.iter().flat_map(|&i| (0..k).map(move |p| at(i, p))).collect();
-        let sb: f64 = ix.iter().flat_map(|&i| (0..k).map(move |p| m.steps[i][p] * m.b[i][p])).sum();
-        let sgs: f64 =
-            cols.iter().flat_map(|a| cols.iter().map(move |b| a.1 * b.1 * m.g[a.0][b.0])).sum();
-        let mut explained = (2.0 * sb - sgs).max(0.0);
-        if let [i] = ix.as_slice() {
-            explained = explained.max(m.at_probe[*i]);
-        }
-        let left = (self.train_ss - explained).max(0.0);
-        Some(self.screen_rmse * (left / self.train_ss).sqrt())
-    }
-
-    /// The RMSE on which the screen may admit `effect` on `group` to a full fit without a fit
-    /// of its own: a smooth effect's linear prediction ([`Screen::predict`]; its step is
-    /// replayed before it counts); a non-smooth effect's probes as simulated
-    /// ([`Screen::at_probes`]) — its columns are a kink's or a dead band's changes, which do not
-    /// scale with the step, and the linear model's step beyond its probes is no prediction.
-    pub(super) fn admits(&self, effect: &dyn Effect, group: &[String]) -> Option<f64> {
-        if effect.smooth() {
-            self.predict(effect.id(), group).map(|p| p.train_rmse)
-        } else {
-            self.at_probes(effect.id(), group)
-        }
-    }
-
     /// [`Screen::predict`] with the steps of all screened parameters.
     fn linear(&self, effect: &str, group: &[String]) -> Option<(Prediction, Vec<f64>)> {
         let m = self.models.get(effect)?;
@@ -635,4 +574,94 @@ impl Screen {
 }
 
 #[cfg(test)]
-mod tests;
+mod tests {
+    use super::{EffectModel, Screen, charged, combine};
+
+    /// Two columns: the residual r = 2 a + 3 c is explained whole by the pair, by neither alone.
+    #[test]
+    fn the_best_combination_of_columns_explains_what_each_alone_does_not() {
+        let a = [1.0, 0.0, 1.0, 0.5];
+        let c = [0.0, 1.0, 1.0, -0.5];
+        let r: Vec<f64> = a.iter().zip(&c).map(|(x, y)| 2.0 * x + 3.0 * y).collect();
+        let d = |x: &[f64], y: &[f64]| x.iter().zip(y).map(|(p, q)| p * q).sum::<f64>();
+        let b = [d(&a, &r), d(&c, &r)];
+        let g = vec![vec![d(&a, &a), d(&a, &c)], vec![d(&c, &a), d(&c, &c)]];
+        let (e, x) = combine(&b, &g);
+        let ss = d(&r, &r);
+        assert!((e - ss).abs() < 1e-12 * ss, "{e} of {ss}");
+        assert!((x[0] - 2.0).abs() < 1e-12 && (x[1] - 3.0).abs() < 1e-12, "{x:?}");
+        assert!(b[0] * b[0] / g[0][0] < 0.9 * ss && b[1] * b[1] / g[1][1] < 0.9 * ss);
+        // A repeated column adds nothing and is left at 0.
+        let (e2, x2) = combine(&[b[0], b[0]], &[vec![g[0][0]; 2], vec![g[0][0]; 2]]);
+        assert!((e2 - b[0] * b[0] / g[0][0]).abs() < 1e-12 * ss && x2[1] == 0.0, "{x2:?}");
+        // A zero column (a parameter without a probe) too.
+        let (e3, _) = combine(&[b[0], 0.0], &[vec![g[0][0], 0.0], vec![0.0, 0.0]]);
+        assert!((e3 - b[0] * b[0] / g[0][0]).abs() < 1e-12 * ss);
+    }
+
+    /// The charge: nothing for one column; for a second, what is left grows by m^(1/m).
+    #[test]
+    fn a_second_column_is_charged_by_the_information_criterion() {
+        assert_eq!(charged(10.0, 4.0, 1, 100), 4.0);
+        let m = 100.0_f64;
+        let want = 10.0 - 6.0 * m.powf(1.0 / m);
+        assert!((charged(10.0, 4.0, 2, 100) - want).abs() < 1e-12);
+        assert!(charged(10.0, 4.0, 2, 100) < 4.0 && charged(10.0, 4.0, 3, 100) < want);
+        assert_eq!(charged(10.0, 0.0, 2, 100), 0.0);
+    }
+
+    /// A one-parameter prediction stays inside the parameter's bounds: a residual that asks for
+    /// a step below the lower bound (negative friction) is explained only as far as the bound
+    /// allows; a group's shared value keeps inside every member's bounds.
+    #[test]
+    fn a_one_parameter_prediction_respects_the_bounds() {
+        let c = [1.0, -0.5, 0.25, 2.0];
+        let d = |x: &[f64], y: &[f64]| x.iter().zip(y).map(|(p, q)| p * q).sum::<f64>();
+        let screen = |step: f64, room: (f64, f64)| {
+            let r: Vec<f64> = c.iter().map(|x| step * x).collect();
+            let m = EffectModel {
+                joints: vec!["a".into(), "b".into()],
+                room: vec![room, (room.0, room.1 * 0.5)],
+                k: 1,
+                b: vec![vec![d(&c, &r)], vec![0.0]],
+                g: vec![vec![d(&c, &c), 0.0], vec![0.0, d(&c, &c)]],
+            };
+            let ss = d(&r, &r);
+            let screen_rmse = (ss / r.len() as f64).sqrt();
+            (
+                Screen {
+                    models: [("e", m)].into(),
+                    train_ss: ss,
+                    train_n: r.len(),
+                    screen_rmse,
+                    pieces: 1,
+                },
+                ss,
+            )
+        };
+        let rmse = |ss: f64| (ss / c.len() as f64).sqrt();
+        // Inside the bounds: the residual explained whole, the step the one asked for.
+        let (s, _) = screen(2.0, (-1.0, 10.0));
+        let p = s.predict("e", &["a".into()]).expect("modelled");
+        assert!(p.train_rmse < 1e-9 && (p.step - 2.0).abs() < 1e-12, "{p:?}");
+        // Asking for −2 where the parameter cannot go below its start: nothing explained.
+        let (s, ss) = screen(-2.0, (0.0, 10.0));
+        let p = s.predict("e", &["a".into()]).expect("modelled");
+        assert!((p.train_rmse - rmse(ss)).abs() < 1e-12 && p.step == 0.0, "{p:?}");
+        // Half-way room: the step stops at the bound and explains 2 s b − s² g = 3/4 of it.
+        let (s, ss) = screen(-2.0, (-1.0, 10.0));
+        let p = s.predict("e", &["a".into()]).expect("modelled");
+        assert!((p.train_rmse - rmse(0.25 * ss)).abs() < 1e-12 && p.step == -1.0, "{p:?}");
+        // A group: the shared step keeps inside the narrower member's room (b's upper bound 1).
+        let (s, _) = screen(4.0, (-1.0, 2.0));
+        let p = s.predict("e", &["a".into(), "b".into()]).expect("modelled");
+        assert!(p.step == 1.0, "{p:?}");
+        // Probes on stretches whose residual is twice the screen's: the prediction is the
+        // screen's RMSE scaled by the relative change on the probes' data.
+        let (mut s, ss) = screen(-2.0, (-1.0, 10.0));
+        s.screen_rmse = 0.5 * rmse(ss);
+        assert_eq!(s.base_rmse(), 0.5 * rmse(ss));
+        let p = s.predict("e", &["a".into()]).expect("modelled");
+        assert!((p.train_rmse - 0.5 * rmse(0.25 * ss)).abs() < 1e-12, "{p:?}");
+    }
+}
