@@ -49,6 +49,10 @@ impl Effect for ActionDelay {
     fn smooth(&self) -> bool {
         true
     }
+    /// At its start no delay: the command of the step itself.
+    fn neutral_start(&self) -> bool {
+        true
+    }
     /// The lag L ∈ [0, 100 ms] (1 ms steps) whose q_sim(t − L) − q_sim(t) fits r best.
     fn signature(&self, s: &Samples) -> Signature {
         let mut best = (0.0, f64::INFINITY, Vec::new());

@@ -43,6 +43,10 @@ impl Effect for Armature {
     fn smooth(&self) -> bool {
         true
     }
+    /// At its start the model's own armature, written back.
+    fn neutral_start(&self) -> bool {
+        true
+    }
     fn signature(&self, s: &Samples) -> Signature {
         Signature { implied: Some(IMPLIED), ..Signature::centred(s.qdd.clone()) }
     }

@@ -32,6 +32,10 @@ declare_effect! {
 }
 
 impl Effect for ComOffset {
+    /// At its start no shift ([`super::inertial::shift`] leaves the body as it is).
+    fn neutral_start(&self) -> bool {
+        true
+    }
     /// Half a link length either way along and across.
     fn bounds(&self, _m: &MjModel, t: &JointTarget) -> (Vec<f64>, Vec<f64>) {
         let h = t.body.map_or(0.0, |b| 0.5 * b.length);

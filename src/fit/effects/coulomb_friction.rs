@@ -47,6 +47,10 @@ impl Effect for CoulombFriction {
     fn smooth(&self) -> bool {
         true
     }
+    /// At its start the model's own frictionloss, written back.
+    fn neutral_start(&self) -> bool {
+        true
+    }
     fn signature(&self, s: &Samples) -> Signature {
         let f = s.qd.iter().map(|v| (v / (0.02 * s.qd_rms)).tanh()).collect();
         Signature { implied: Some(IMPLIED), ..Signature::centred(f) }

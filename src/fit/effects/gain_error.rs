@@ -48,6 +48,10 @@ impl Effect for GainError {
     fn smooth(&self) -> bool {
         true
     }
+    /// At its start both gains scaled by one.
+    fn neutral_start(&self) -> bool {
+        true
+    }
     fn signature(&self, s: &Samples) -> Signature {
         Signature::centred(s.u.clone())
     }

@@ -34,6 +34,10 @@ declare_effect! {
 }
 
 impl Effect for LinkInertia {
+    /// At its start a scale of one ([`super::inertial::scale_extent`] leaves the body).
+    fn neutral_start(&self) -> bool {
+        true
+    }
     fn apply_model(&self, m: &mut MjModel, t: &JointTarget, p: &[f64]) {
         if let Some(b) = t.body {
             let s = 0.5 * p[0].max(1e-6).ln();

@@ -40,6 +40,10 @@ declare_effect! {
 }
 
 impl Effect for LinkMass {
+    /// At its start no added mass ([`super::inertial::add_point_mass`] adds nothing).
+    fn neutral_start(&self) -> bool {
+        true
+    }
     /// Added mass up to twice the body's subtree mass (at least 1 kg); the point within one
     /// link length of the modelled centre of mass, along the link and across it.
     fn bounds(&self, _m: &MjModel, t: &JointTarget) -> (Vec<f64>, Vec<f64>) {

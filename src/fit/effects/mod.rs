@@ -261,6 +261,15 @@ pub trait Effect: Declared + Sync {
     fn log_search(&self) -> bool {
         false
     }
+    /// `true` when the effect at its start ([`Effect::initial`]) changes nothing: the model
+    /// with it replays exactly (bit for bit) as the model without it — a MuJoCo-native
+    /// parameter written back at the model's own value, a zero delay, offset or added mass, a
+    /// gain scale of one. A fit's first point is then the base model's replay, which the search
+    /// holds already. `false` (the default) when the start acts (a play of zero width is still
+    /// a motor behind a gear spring; friction variants start at a guess).
+    fn neutral_start(&self) -> bool {
+        false
+    }
     /// `true` for the friction models (Coulomb, Stribeck, load-dependent): alternative
     /// descriptions of one loss, never a pair that only makes sense together.
     fn friction(&self) -> bool {

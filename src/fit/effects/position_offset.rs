@@ -39,6 +39,10 @@ impl Effect for PositionOffset {
     fn smooth(&self) -> bool {
         true
     }
+    /// At its start no offset.
+    fn neutral_start(&self) -> bool {
+        true
+    }
     fn signature(&self, s: &Samples) -> Signature {
         Signature {
             feature: vec![1.0; s.r.len()],

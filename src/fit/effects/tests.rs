@@ -541,3 +541,54 @@ fn link_inertia_is_a_candidate_only_where_armature_cannot_stand_in_for_it() {
         }
     }
 }
+
+/// An effect that declares its start neutral ([`super::Effect::neutral_start`]) replays, at its
+/// start on either joint, bit for bit as the model without it — on an arm whose joints carry
+/// armature, damping and friction of their own, so that a native parameter is written back at
+/// the model's value. Stribeck friction's start (a guess of 0.1 / 0.05 N·m) is no such start:
+/// it moves the arm, and the comparison tells.
+#[test]
+fn a_neutral_start_replays_exactly_as_the_model_without_the_effect() {
+    use super::{Applied, Effect, JointTarget, all, by_id, model_with, simulate};
+    use crate::sim2real::replay::ReplayOptions;
+    let dir = std::env::temp_dir().join(format!("modellint-neutral-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let xml = r#"<mujoco><option gravity="0 0 -9.81" timestep="0.002"/>
+  <default><joint armature="0.013" damping="0.31" frictionloss="0.07"/></default>
+  <worldbody><body name="upper"><joint name="shoulder" type="hinge" axis="0 1 0"/>
+    <geom type="capsule" fromto="0 0 0 0 0 -0.3" size="0.03" mass="1.2"/>
+    <body name="fore" pos="0 0 -0.3"><joint name="elbow" type="hinge" axis="0 1 0"/>
+      <geom type="capsule" fromto="0 0 0 0 0 -0.25" size="0.025" mass="0.8"/>
+    </body></body></worldbody>
+  <actuator><position joint="shoulder" kp="60" kv="2"/><position joint="elbow" kp="30" kv="1"/></actuator>
+</mujoco>"#;
+    let path = dir.join("arm.xml");
+    std::fs::write(&path, xml).unwrap();
+    let mut map = crate::model::source::SourceMap::default();
+    let robot = crate::model::load(&mut map, &path, None).expect("load the test model");
+    let rec = arm_recording();
+    let opts = ReplayOptions::default();
+    let run = |a: &[Applied]| {
+        simulate(&robot, std::slice::from_ref(&rec), a, &opts).remove(0).expect("replays").q_sim
+    };
+    let bits =
+        |q: Vec<Vec<f64>>| -> Vec<u64> { q.into_iter().flatten().map(f64::to_bits).collect() };
+    let base = bits(run(&[]));
+    let m0 = model_with(&robot, &[]);
+    let at_start = |e: &'static dyn Effect, j: &str| {
+        let t = JointTarget::of(&robot, j).expect("a joint");
+        Applied { effect: e, joints: vec![j.into()], params: e.initial(&m0, &t) }
+    };
+    let mut neutral = 0;
+    for e in all().into_iter().filter(|e| e.neutral_start()) {
+        for j in ["shoulder", "elbow"] {
+            assert!(bits(run(&[at_start(e, j)])) == base, "{} at its start on {j}", e.id());
+        }
+        neutral += 1;
+    }
+    assert!(neutral >= 5, "{neutral} effects declare a neutral start");
+    let stribeck = by_id("stribeck_friction").expect("known");
+    assert!(!stribeck.neutral_start());
+    assert!(bits(run(&[at_start(stribeck, "elbow")])) != base, "Stribeck's start acts");
+    std::fs::remove_dir_all(&dir).ok();
+}

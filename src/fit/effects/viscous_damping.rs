@@ -45,6 +45,10 @@ impl Effect for ViscousDamping {
     fn smooth(&self) -> bool {
         true
     }
+    /// At its start the model's own damping, written back.
+    fn neutral_start(&self) -> bool {
+        true
+    }
     fn signature(&self, s: &Samples) -> Signature {
         Signature { implied: Some(IMPLIED), ..Signature::centred(s.qd.clone()) }
     }

@@ -99,6 +99,40 @@ pub(in crate::fit::select) fn set_key(recs: &[Recording], applied: &[Applied]) -
     k
 }
 
+/// The parameters at which `effect` on `group` changes nothing on a model whose compiled form
+/// is `m0` (the base's): its start ([`Effect::initial`]) when that is the same on every joint
+/// of the group and the effect is neutral there ([`Effect::neutral_start`]).
+pub(in crate::fit::select) fn neutral_params(
+    robot: &Robot,
+    m0: &mujoco_rs::prelude::MjModel,
+    (effect, group): (&dyn Effect, &[String]),
+) -> Option<Vec<f64>> {
+    if !effect.neutral_start() {
+        return None;
+    }
+    let mut starts = group
+        .iter()
+        .map(|j| crate::fit::effects::JointTarget::of(robot, j).map(|t| effect.initial(m0, &t)));
+    let first = starts.next()??;
+    starts.all(|s| s.as_ref() == Some(&first)).then_some(first)
+}
+
+/// `base` with `effect` on `group` at `p` — or `base` itself when `p` is the candidate's
+/// [`neutral_params`]: the same replay, which the search holds already (a fit's first point
+/// costs no simulation).
+pub(in crate::fit::select) fn with_candidate(
+    base: &[Applied],
+    (effect, group): (&'static dyn Effect, &[String]),
+    p: Vec<f64>,
+    neutral: Option<&[f64]>,
+) -> Vec<Applied> {
+    let mut a = base.to_vec();
+    if neutral != Some(p.as_slice()) {
+        a.push(Applied { effect, joints: group.to_vec(), params: p });
+    }
+    a
+}
+
 /// The structure of a simulation, without the values: the dataset (by address) and the
 /// effects with their joints. The floors' measured parts are remembered by it.
 pub(in crate::fit::select) fn shape_key(recs: &[Recording], applied: &[Applied]) -> String {

@@ -7,7 +7,7 @@ use crate::sim2real::metrics::gap_mask;
 use crate::sim2real::recording::Recording;
 
 use super::super::solve::{Method, Problem, solve};
-use super::{Engine, fit_key};
+use super::{Engine, fit_key, neutral_params, with_candidate};
 
 /// Finite-difference step of the standard errors' Jacobian [fraction of the parameter's range].
 const FD_STEP: f64 = 1e-3;
@@ -200,12 +200,11 @@ impl Engine<'_> {
         let (lo, hi) = effect.bounds(&m0, &t);
         let (lo, hi) = (lo[0], hi[0]);
         let pol = &self.opts.policy;
+        let neutral = neutral_params(self.robot, &m0, (effect, group));
         let make = |x: f64| {
             let mut p = full0.clone();
             p[0] = x;
-            let mut set = base.to_vec();
-            set.push(Applied { effect, joints: group.to_vec(), params: p });
-            set
+            with_candidate(base, (effect, group), p, neutral.as_deref())
         };
         let resid = |set: &[Applied]| self.residuals(train, set, &self.joints, usize::MAX);
         let (mut x, mut f) =
@@ -333,12 +332,11 @@ impl Engine<'_> {
         let full0 = effect.initial(&m0, &t);
         let (lo, hi) = effect.bounds(&m0, &t);
         let k = effect.fitted().min(full0.len());
+        let neutral = neutral_params(self.robot, &m0, (effect, group));
         let make = |x: &[f64]| {
             let mut p = full0.clone();
             p[..k].copy_from_slice(&x[..k]);
-            let mut a = base.to_vec();
-            a.push(Applied { effect, joints: group.to_vec(), params: p });
-            a
+            with_candidate(base, (effect, group), p, neutral.as_deref())
         };
         let obj = |x: &[f64]| self.score(train, &make(x));
         let clamp = |p: &[f64]| -> Vec<f64> { (0..k).map(|i| p[i].clamp(lo[i], hi[i])).collect() };
