@@ -458,6 +458,26 @@ fn cli_wheels_on_velocity_servos_follow_their_command() {
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     let mae = v["position_mae"].as_f64().expect("position_mae");
     assert!(mae < 1e-3, "position MAE {mae} rad: {v}");
+    // A wheel's angle accumulates: 15.5 rad is no sign of degrees on a joint with no range
+    // (it was refused as "looks like degrees"); the pan joint, which has one, is still checked.
+    let o = bin().arg("gap").arg(dir.join("base.xml")).arg(dir.join("fast.csv")).output().unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(dir.join("fast.csv")).unwrap();
+    let in_degrees: Vec<String> = text
+        .lines()
+        .map(|l| {
+            let mut f: Vec<String> = l.split(',').map(str::to_string).collect();
+            if let Some(x) = f.get(3).and_then(|x| x.parse::<f64>().ok()) {
+                f[3] = format!("{:.4}", x.to_degrees());
+            }
+            f.join(",")
+        })
+        .collect();
+    let p = tmp("pan_in_degrees.csv", &(in_degrees.join("\n") + "\n"));
+    let o = bin().arg("gap").arg(dir.join("base.xml")).arg(&p).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "stderr: {err}");
+    assert!(err.contains("'pan.q'") && err.contains("looks like degrees"), "stderr: {err}");
 }
 /// Both joints of a two-joint arm act on every command 10 ms late (fixtures/gap/delay_arm2:
 /// recorded by its own MuJoCo script at a 0.5 ms step, sim.py): the gap names a lag on both.

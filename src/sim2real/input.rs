@@ -135,9 +135,16 @@ pub fn read_for_replay(
     let mut unscored: Vec<(String, Vec<String>)> = Vec::new();
     // Unknown joints and driven joints without a command are reported at the header line,
     // before any value is checked.
+    let unlimited = robot
+        .joints
+        .iter()
+        .filter(|j| j.jtype == crate::model::JointType::Hinge && !j.limited)
+        .map(|j| j.name.clone())
+        .collect();
     let parse = ParseOptions {
         model_joints: Some(model_joints.clone()),
         actuated_joints: Some(actuated.clone()),
+        unlimited_joints: Some(unlimited),
         ..parse.clone()
     };
     let read: Vec<(PathBuf, Recording)> = {

@@ -134,8 +134,10 @@ impl Recording {
                     format!("column '{col}' has {} samples, time has {n}", e.len()),
                 ));
             }
+            let accumulates =
+                opts.unlimited_joints.as_ref().is_some_and(|u| u.iter().any(|n| *n == j.name));
             for (suffix, v) in [("q", Some(&j.q)), ("q_cmd", j.q_cmd.as_ref())] {
-                let Some(v) = v else { continue };
+                let Some(v) = v.filter(|_| !accumulates) else { continue };
                 if let Some(i) = v.iter().position(|x| x.abs() > opts.max_abs_rad) {
                     let col = format!("{}.{suffix}", j.name);
                     return Err(err(
@@ -143,8 +145,8 @@ impl Recording {
                         Some(&col),
                         format!(
                             "column '{col}': |{}| > {} rad at t = {}: looks like degrees (positions must be in radians: \
-                         a CSV declares `# units: deg`, other logs take --log-units deg; a continuous joint's angle \
-                         past 10 rad cannot be read yet: leave its columns out with --ignore-columns)",
+                         a CSV declares `# units: deg`, other logs take --log-units deg; a joint with no range in the \
+                         model, a wheel, may turn past it)",
                             v[i], opts.max_abs_rad, self.t[i]
                         ),
                     ));
