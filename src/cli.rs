@@ -419,19 +419,26 @@ fn use_color(choice: &str) -> bool {
     }
 }
 
+impl Cli {
+    /// The `--package NAME=DIR` mappings of the command run (only a model's loaders take them).
+    pub fn packages(&self) -> Vec<(String, std::path::PathBuf)> {
+        let p = match &self.cmd {
+            None => &self.check.packages,
+            Some(Cmd::InitSpec { packages, .. }) => packages,
+            Some(Cmd::Gap(g)) => &g.packages,
+            Some(Cmd::Fit(f)) => &f.packages,
+            Some(Cmd::Synth(s)) => &s.packages,
+            Some(_) => return Vec::new(),
+        };
+        p.package.clone()
+    }
+}
+
 pub fn run() -> i32 {
     crate::model::mj::silence_warnings();
     let cli = Cli::parse();
     crate::output::set_color_choice(&cli.check.color);
-    let packages = match &cli.cmd {
-        None => &cli.check.packages,
-        Some(Cmd::InitSpec { packages, .. }) => packages,
-        Some(Cmd::Gap(g)) => &g.packages,
-        Some(Cmd::Fit(f)) => &f.packages,
-        Some(Cmd::Synth(s)) => &s.packages,
-        Some(_) => &crate::cli_logs::PackageArgs::default(),
-    };
-    crate::model::urdf_packages::set_packages(packages.package.clone());
+    crate::model::urdf_packages::set_packages(cli.packages());
     match cli.cmd {
         Some(Cmd::Rules) => {
             let mut out = String::new();

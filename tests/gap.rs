@@ -508,3 +508,32 @@ fn cli_a_delay_on_both_joints_is_named_on_both() {
         assert_ne!(j["decomposition"]["dominant"], "lag", "{}", j["name"]);
     }
 }
+
+/// A joint recorded with its sign reversed (an encoder mounted the other way): the wheels base's
+/// pan position and velocity negated, its command kept. Its error is said to move against the
+/// replay (it was "constant offset" or "amplitude", as if physics explained it); the others are
+/// not.
+#[test]
+fn cli_a_joint_recorded_with_its_sign_reversed_is_said() {
+    let dir = root().join("fixtures/gap/wheels");
+    let text = std::fs::read_to_string(dir.join("ep0.csv")).unwrap();
+    let flipped: Vec<String> = text
+        .lines()
+        .map(|l| {
+            let mut f: Vec<String> = l.split(',').map(str::to_string).collect();
+            for k in [3, 6] {
+                if let Some(x) = f.get(k).and_then(|x| x.parse::<f64>().ok()) {
+                    f[k] = format!("{:.6}", -x);
+                }
+            }
+            f.join(",")
+        })
+        .collect();
+    let p = tmp("pan_flipped.csv", &(flipped.join("\n") + "\n"));
+    let o = bin().arg("gap").arg(dir.join("base.xml")).arg(&p).output().unwrap();
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+    let line = |j: &str| out.lines().find(|l| l.trim_start().starts_with(j) && l.contains(':'));
+    assert!(line("pan").is_some_and(|l| l.contains("moves against the replay")), "stdout: {out}");
+    assert!(!out.contains("wheel_l                  moves against"), "stdout: {out}");
+}

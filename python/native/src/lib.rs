@@ -53,7 +53,7 @@ fn cmd_error(e: CmdError) -> PyErr {
 fn parse(argv: Vec<String>) -> PyResult<Cli> {
     let args = std::iter::once("modellint".to_string()).chain(argv);
     let cli = Cli::try_parse_from(args).map_err(|e| usage(e.render().to_string()))?;
-    modellint::model::urdf_packages::set_packages(cli.check.package.clone());
+    modellint::model::urdf_packages::set_packages(cli.packages());
     Ok(cli)
 }
 

@@ -19,6 +19,7 @@
 //!
 //! Diverged episodes are excluded from every pooled number and listed in `diverged`.
 
+pub mod cause;
 mod text;
 
 use serde::Serialize;
@@ -611,19 +612,7 @@ pub fn compute(
         .filter_map(|s| per_joint.iter().find(|j| j.name == s.name))
         .map(|j| {
             let d = &j.decomposition;
-            let summary = match d.dominant {
-                Explained::Offset => {
-                    format!("constant offset: real − sim = {:+.2}°", d.bias.to_degrees())
-                }
-                Explained::Lag => format!("time lag: real lags sim by {:.1} ms", d.lag_s * 1e3),
-                Explained::Amplitude => format!("amplitude: real/sim = {:.3}", d.gain),
-                Explained::Residual => format!(
-                    "unexplained residual ({:.2}° of {:.2}° RMS): not a simple offset, lag or gain",
-                    d.residual_rms.to_degrees(),
-                    d.total_rms.to_degrees()
-                ),
-                Explained::None => "no significant error".to_string(),
-            };
+            let summary = cause::summary(j);
             JointCause {
                 name: j.name.clone(),
                 dominant: d.dominant,
