@@ -134,8 +134,7 @@ impl Recording {
                     format!("column '{col}' has {} samples, time has {n}", e.len()),
                 ));
             }
-            let accumulates =
-                opts.unlimited_joints.as_ref().is_some_and(|u| u.iter().any(|n| *n == j.name));
+            let accumulates = opts.unlimited_joints.as_ref().is_some_and(|u| u.contains(&j.name));
             for (suffix, v) in [("q", Some(&j.q)), ("q_cmd", j.q_cmd.as_ref())] {
                 let Some(v) = v.filter(|_| !accumulates) else { continue };
                 if let Some(i) = v.iter().position(|x| x.abs() > opts.max_abs_rad) {
