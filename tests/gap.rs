@@ -530,6 +530,18 @@ fn cli_a_joint_recorded_with_its_sign_reversed_is_said() {
         })
         .collect();
     let p = tmp("pan_flipped.csv", &(flipped.join("\n") + "\n"));
+    // `fit` says it too, whatever it fitted there (a told damping on the pan: cheap).
+    let q = tmp("pan_flipped_copy.csv", &(flipped.join("\n") + "\n"));
+    let o = bin()
+        .arg("fit")
+        .arg(dir.join("base.xml"))
+        .args([&p, &q])
+        .args(["--told", "viscous_damping@pan"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(0), "stderr: {err}");
+    assert!(err.contains("pan (correlation -1.00) move(s) against the replay"), "stderr: {err}");
     let o = bin().arg("gap").arg(dir.join("base.xml")).arg(&p).output().unwrap();
     let out = String::from_utf8_lossy(&o.stdout);
     assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));

@@ -398,6 +398,10 @@ pub fn fit_once(
     for f in &feet {
         sink.warning(&f.message());
     }
+    let mirrored = mirrored_warning(&before);
+    if let Some(w) = &mirrored {
+        sink.warning(w);
+    }
     // Everything said on stderr also goes into the JSON `notes` / `warnings`.
     let mut notes: Vec<String> =
         p.notes.iter().chain(&out.notes).chain([&cost_note]).cloned().collect();
@@ -407,6 +411,7 @@ pub fn fit_once(
         .chain(&out.warnings)
         .cloned()
         .chain(feet.iter().map(|f| f.message()))
+        .chain(mirrored)
         .collect();
     if let Some(dir) = &a.report {
         let page = crate::fit::report::FitReport {
@@ -653,4 +658,27 @@ mod tests {
         assert_eq!(param_text("dmin", 0.66, f64::INFINITY, "", true), "dmin not identified (± ?)");
         assert!(param_text("offset", 0.01, 1e-3, "rad", false).contains("rad (0.5730°)"));
     }
+}
+
+/// The joints that move against their replay on the held-out episodes before the fit
+/// (correlation at most [`gap::cause::MIRRORED_CORRELATION`]): what is fitted on them stands in
+/// for a sign, not for physics.
+fn mirrored_warning(before: &GapReport) -> Option<String> {
+    let list: Vec<String> = before
+        .per_joint
+        .iter()
+        .filter_map(|j| {
+            let c = j.corr.filter(|&c| c <= gap::cause::MIRRORED_CORRELATION)?;
+            Some(format!("{} (correlation {c:.2})", j.name))
+        })
+        .collect();
+    (!list.is_empty()).then(|| {
+        format!(
+            "{} move(s) against the replay of the model as given: a reversed encoder or joint \
+             axis, or another joint's column — whatever was fitted there stands in for a sign, \
+             not for missing physics; correct the recording's sign or the model's axis and fit \
+             again",
+            list.join(", ")
+        )
+    })
 }
