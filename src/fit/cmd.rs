@@ -642,24 +642,6 @@ fn fit_text(r: &FitRun) -> String {
     s
 }
 
-#[cfg(test)]
-mod tests {
-    use super::param_text;
-
-    /// A parameter the data determine is given with its value; one they do not, with its
-    /// standard error only.
-    #[test]
-    fn an_unidentified_parameter_is_not_given_a_value() {
-        assert_eq!(param_text("width", 0.0123, 0.371, "m", false), "width = 0.0123 ± 3.71e-1 m");
-        assert_eq!(
-            param_text("width", 0.0123, 0.371, "m", true),
-            "width not identified (± 3.71e-1 m)"
-        );
-        assert_eq!(param_text("dmin", 0.66, f64::INFINITY, "", true), "dmin not identified (± ?)");
-        assert!(param_text("offset", 0.01, 1e-3, "rad", false).contains("rad (0.5730°)"));
-    }
-}
-
 /// The joints that move against their replay on the held-out episodes before the fit
 /// (correlation at most [`gap::cause::MIRRORED_CORRELATION`]): what is fitted on them stands in
 /// for a sign, not for physics.
@@ -681,4 +663,22 @@ fn mirrored_warning(before: &GapReport) -> Option<String> {
             list.join(", ")
         )
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::param_text;
+
+    /// A parameter the data determine is given with its value; one they do not, with its
+    /// standard error only.
+    #[test]
+    fn an_unidentified_parameter_is_not_given_a_value() {
+        assert_eq!(param_text("width", 0.0123, 0.371, "m", false), "width = 0.0123 ± 3.71e-1 m");
+        assert_eq!(
+            param_text("width", 0.0123, 0.371, "m", true),
+            "width not identified (± 3.71e-1 m)"
+        );
+        assert_eq!(param_text("dmin", 0.66, f64::INFINITY, "", true), "dmin not identified (± ?)");
+        assert!(param_text("offset", 0.01, 1e-3, "rad", false).contains("rad (0.5730°)"));
+    }
 }

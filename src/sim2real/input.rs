@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::model::Robot;
+use crate::model::{ActuatorKind, Robot};
 use crate::sim2real::bam;
 use crate::sim2real::input_rate::{
     no_rate_warning, off_grid_warning, overridden_rate_warning, undeclared_rate,
@@ -139,6 +139,13 @@ pub fn read_for_replay(
         .joints
         .iter()
         .filter(|j| j.jtype == crate::model::JointType::Hinge && !j.limited)
+        .filter(|j| {
+            // A position servo's joint does not turn on and on (its setpoint is an angle).
+            !robot
+                .actuators_on_joint(j.id)
+                .iter()
+                .any(|a| matches!(a.kind, ActuatorKind::Position { .. }))
+        })
         .map(|j| j.name.clone())
         .collect();
     let parse = ParseOptions {

@@ -194,8 +194,8 @@ pub struct ParseOptions {
     /// for its servo), unless [`ParseOptions::no_command`] names it. A joint no actuator
     /// drives (a passive joint) may be recorded as positions only.
     pub actuated_joints: Option<Vec<String>>,
-    /// The model's hinge joints with no range, when known (wheels, turntables): their angle
-    /// accumulates, and [`ParseOptions::max_abs_rad`] does not apply to them.
+    /// The model's hinge joints with no range and no position servo, when known (wheels,
+    /// turntables): their angle accumulates, and [`ParseOptions::max_abs_rad`] does not apply.
     pub unlimited_joints: Option<Vec<String>>,
     /// Glob patterns on joint names (`--no-command`): driven joints recorded without a command
     /// that are accepted; `gap` and `fit` leave them out of their scores and of the fit
