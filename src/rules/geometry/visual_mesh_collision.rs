@@ -21,6 +21,11 @@ declare_rule! {
     ///   collision group, and the body collides through this mesh alone (no primitive collides
     ///   on the body or on a body welded to it with no joint between: one rigid part).
     ///
+    /// A robot with no collision geometry at all — every geom of its bodies has `contype =
+    /// conaffinity = 0`, none is named by an explicit `<contact><pair>`, and the model keeps
+    /// contacts on (no `<flag contact="disable"/>`) — is reported once instead: it collides
+    /// through nothing.
+    ///
     /// Everything is read from the compiled model (geom type, group, contype/conaffinity); class
     /// names are not evidence. A URDF is not judged: it declares its collision geometry, and
     /// MuJoCo's importer compiles each `<collision>` as a colliding geom and each kept
@@ -90,6 +95,10 @@ impl Rule for VisualMeshCollision {
             return; // every colliding geom is a declared <collision> (see the rule's docs)
         }
         let robot_geoms = || robot.geoms.iter().filter(|g| g.body != 0);
+        if let Some(f) = no_collision_geometry(cx) {
+            out.push(f);
+            return;
+        }
         let visual_only: Vec<&Geom> = robot_geoms()
             .filter(|g| !g.collides() && !matches!(g.gtype, GeomType::Plane | GeomType::Hfield))
             .collect();
@@ -226,4 +235,48 @@ impl Rule for VisualMeshCollision {
             .with("hull_vertices", verts as f64);
         out.push(f);
     }
+}
+
+/// A robot none of whose geoms can collide (every one has `contype = conaffinity = 0`) while the
+/// model keeps contacts on: it passes through itself, the floor and every object.
+fn no_collision_geometry(cx: &Context) -> Option<Finding> {
+    let robot = cx.robot;
+    let geoms: Vec<&Geom> = robot
+        .geoms
+        .iter()
+        .filter(|g| g.body != 0 && !matches!(g.gtype, GeomType::Plane | GeomType::Hfield))
+        .collect();
+    let moves =
+        robot.joints.iter().any(|j| j.is_scalar() || j.jtype == crate::model::JointType::Free);
+    // An explicit `<contact><pair>` collides its geoms whatever their masks.
+    let in_pair = |g: &Geom| robot.pairs.iter().any(|p| p.geom1 == g.id || p.geom2 == g.id);
+    if geoms.is_empty()
+        || !moves
+        || geoms.iter().any(|g| g.collides() || in_pair(g))
+        || crate::model::contact::contacts_disabled(robot)
+    {
+        return None;
+    }
+    let g0 = geoms[0];
+    let mut bodies: Vec<usize> = geoms.iter().map(|g| g.body).collect();
+    bodies.sort_unstable();
+    bodies.dedup();
+    Some(
+        cx.at_elem(
+            ElemKind::Geom,
+            g0.id,
+            &g0.name,
+            format!(
+                "no geom of the robot collides: all {} geoms of its {} bodies have contype = conaffinity = 0",
+                geoms.len(),
+                bodies.len()
+            ),
+        )
+        .label("visual only, like every other robot geom")
+        .note("with contacts on and no collision geometry the simulated robot passes through itself, the floor and every object it should touch or avoid: self-collisions, grasps and impacts the hardware has never happen in training")
+        .help("add collision geoms in group 3 (primitives fitted to each link, or a convex decomposition where the shape matters); if the model is meant to make no contact, say so with <option><flag contact=\"disable\"/></option>")
+        .subject(Subject::Model)
+        .measured(0.0, "geoms")
+        .with("visual_geoms", geoms.len() as f64),
+    )
 }

@@ -23,7 +23,9 @@ declare_rule! {
     /// gear and reflected inertia with its square, so a gear stage of r× needs armatures r²×
     /// apart, while a software derating of one motor keeps one value right. A model that
     /// drives any actuated hinge through a tendon (a tendon-driven hand: the motors sit in the
-    /// forearm, not at the joints) is not judged without a spec. Joints driven by
+    /// forearm, not at the joints) is not judged without a spec; a joint that a joint equality
+    /// couples to others (a gripper's linked fingers) carries its linkage's armature and is left
+    /// out of the comparison. Joints driven by
     /// several motors (count > 1) are left to `parallel-ankle-armature`.
     ///
     /// ## Why is this bad?
@@ -208,6 +210,16 @@ impl Rule for ArmatureMismatch {
 fn uniform_without_spec(cx: &Context, out: &mut Vec<Finding>) {
     let robot = cx.robot;
     let spread_min = cx.opt("effort_spread");
+    // A joint that a joint equality couples to others drives (or follows) a linkage — a
+    // gripper's linked fingers —: its armature is the linkage's, not one gear stage's, so it
+    // takes no part in the comparison.
+    const JOINT_EQUALITY: i32 = 2;
+    let coupled = |j: usize| {
+        robot
+            .equalities
+            .iter()
+            .any(|e| e.etype == JOINT_EQUALITY && (e.obj1 == j as i32 || e.obj2 == j as i32))
+    };
     let joints: Vec<&crate::model::Joint> = robot
         .joints
         .iter()
@@ -215,6 +227,7 @@ fn uniform_without_spec(cx: &Context, out: &mut Vec<Finding>) {
             j.jtype == crate::model::JointType::Hinge
                 && !robot.actuators_on_joint(j.id).is_empty()
                 && !cx.facts(&j.name).is_some_and(|f| f.passive)
+                && !coupled(j.id)
         })
         .collect();
     if joints.len() < 3 {

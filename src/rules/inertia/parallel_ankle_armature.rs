@@ -23,7 +23,9 @@ declare_rule! {
     /// 0.0565056 = 2 × 0.0282528, the parallel ankle's value — and on single-motor joints that
     /// carry it while the model shows elsewhere which joints really are two-motor ones (two
     /// tendon actuators reach them, or they are ankle joints carrying the doubled value: the
-    /// parallel RSU ankle). Armature is the effective value (joint + actuator·gear² +
+    /// parallel RSU ankle). A passive joint that joint equalities tie to an actuated joint
+    /// carrying the same value (the linked fingers of a coupled gripper) carries its driver's
+    /// value and is not reported. Armature is the effective value (joint + actuator·gear² +
     /// tendon).
     ///
     /// ## Why is this bad?
@@ -212,6 +214,49 @@ impl Rule for ParallelAnkleArmature {
     }
 }
 
+/// Passive joint `j` is tied, through a chain of joint equalities (`<equality><joint>`), to an
+/// actuated joint whose armature is `value` too: the follower of a coupled mechanism (a gripper's
+/// or a hand's linked phalanges) that carries the value of the joint that drives it.
+fn follows_driver(
+    robot: &Robot,
+    j: usize,
+    value: f64,
+    passive: &dyn Fn(&Joint) -> bool,
+    same: &dyn Fn(f64, f64) -> bool,
+) -> bool {
+    const JOINT_EQUALITY: i32 = 2;
+    let links: Vec<(usize, usize)> = robot
+        .equalities
+        .iter()
+        .filter(|e| e.etype == JOINT_EQUALITY && e.obj1 >= 0 && e.obj2 >= 0)
+        .map(|e| (e.obj1 as usize, e.obj2 as usize))
+        .filter(|&(a, b)| a < robot.joints.len() && b < robot.joints.len())
+        .collect();
+    let mut seen = vec![j];
+    let mut next = vec![j];
+    while let Some(k) = next.pop() {
+        for &(a, b) in &links {
+            let o = if a == k {
+                b
+            } else if b == k {
+                a
+            } else {
+                continue;
+            };
+            if seen.contains(&o) {
+                continue;
+            }
+            let oj = &robot.joints[o];
+            if !passive(oj) && same(oj.armature, value) {
+                return true;
+            }
+            seen.push(o);
+            next.push(o);
+        }
+    }
+    false
+}
+
 /// Reuse of the model's own doubled values, for joints the spec gives no motor family (or one
 /// without rotor inertia and gear ratio).
 fn doubled_without_spec(cx: &Context, out: &mut Vec<Finding>) {
@@ -258,7 +303,11 @@ fn doubled_without_spec(cx: &Context, out: &mut Vec<Finding>) {
             }
         };
         if passive(j) {
-            entry.2.push(j.id);
+            // A follower a joint equality ties to an actuated joint of the same armature (a
+            // coupled gripper's or hand's passive joints) carries its driver's value, not a copy.
+            if !follows_driver(robot, j.id, j.armature, &passive, &same) {
+                entry.2.push(j.id);
+            }
         } else {
             entry.3.push(j.id);
         }

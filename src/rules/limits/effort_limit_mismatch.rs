@@ -18,7 +18,9 @@ declare_rule! {
     /// bounded — a differential drive's two tendons on each wheel — is limited by their sum and
     /// not reported), a `<motor>` whose torque `ctrlrange` (× gain × gear)
     /// contradicts the same joint's `actuatorfrcrange` by more than `tolerance` (no spec needed:
-    /// e.g. ±139 N·m of command on a joint clamped at ±60), and limits that differ from the spec's motor
+    /// e.g. ±139 N·m of command on a joint clamped at ±60), an actuator's `forcerange` (× gear)
+    /// that does (MuJoCo applies both, so one of them never acts: e.g. servos bounded at ±72 N·m
+    /// on joints clamped at ±10), and limits that differ from the spec's motor
     /// `peak_torque` by more than `tolerance`. When the spec gives a motor family's
     /// `velocity_limit` or `saturation_torque`, reports once per family (info) that MuJoCo cannot
     /// express the speed–torque curve, so the training stack must apply it; and a joint whose
@@ -143,6 +145,9 @@ impl Rule for EffortLimitMismatch {
             }
             let unit = if j.jtype == crate::model::JointType::Slide { "N" } else { "N·m" };
             if let Some(f) = ctrl_contradicts_joint_limit(cx, j, &acts, tol, unit) {
+                out.push(f);
+            }
+            if let Some(f) = force_contradicts_joint_limit(cx, j, &acts, tol, unit) {
                 out.push(f);
             }
             let Some((lim, src)) = joint_torque_limit(robot, j.id) else {
@@ -408,6 +413,61 @@ fn ctrl_contradicts_joint_limit(
             .measured(ml, unit)
             .expected(jl, unit)
             .with("ctrl_limit", ml)
+            .with("joint_limit", jl),
+    )
+}
+
+/// An actuator's `forcerange` (× gear) that disagrees with its joint's `actuatorfrcrange`: MuJoCo
+/// applies both, so the tighter one is the limit that acts and the other is not the motor's.
+fn force_contradicts_joint_limit(
+    cx: &Context,
+    j: &crate::model::Joint,
+    acts: &[&crate::model::Actuator],
+    tol: f64,
+    unit: &str,
+) -> Option<Finding> {
+    let robot = cx.robot;
+    if !robot.mj.jnt_actfrclimited().get(j.id).copied().unwrap_or(false) || acts.len() != 1 {
+        return None;
+    }
+    let a = acts[0];
+    if !a.forcelimited {
+        return None;
+    }
+    let rng = robot.mj.jnt_actfrcrange().as_flattened();
+    let jl = rng[2 * j.id].abs().max(rng[2 * j.id + 1].abs());
+    let arm = robot.moment_at_joint(a, j.id).unwrap_or(a.gear).abs();
+    let fl = arm * a.forcerange[0].abs().max(a.forcerange[1].abs());
+    if !(jl > 0.0 && fl > 0.0) || !jl.is_finite() || !fl.is_finite() {
+        return None;
+    }
+    if (fl - jl).abs() <= tol * jl.max(fl) {
+        return None;
+    }
+    let (act, joint) = (fl.min(jl), fl.max(jl));
+    let msg = format!(
+        "actuator `{}` forcerange gives joint `{}` up to ±{} {unit} (× gear), but the joint's actuatorfrcrange clamps it at ±{} {unit}: {}× apart",
+        a.name,
+        j.name,
+        fmt_num(fl, 4),
+        fmt_num(jl, 4),
+        fmt_num(joint / act, 3)
+    );
+    let (jloc, _) = robot.attr_loc(ElemKind::Joint, j.id, &j.name, "actuatorfrcrange");
+    Some(
+        cx.at_attr(ElemKind::Actuator, a.id, &a.name, "forcerange", msg)
+            .label(format!("±{} {unit}", fmt_num(fl, 4)))
+            .secondary(jloc, format!("actuatorfrcrange ±{} {unit}", fmt_num(jl, 4)))
+            .note(format!(
+                "MuJoCo applies both limits, so ±{} {unit} ({}) is the one that acts and the other never does; one of the two numbers is not the motor's peak torque",
+                fmt_num(act, 4),
+                if jl < fl { "the joint's actuatorfrcrange" } else { "the actuator's forcerange" }
+            ))
+            .help("make forcerange × gear and actuatorfrcrange the same motor peak torque, or keep only one of them (a spec with peak_torque says which one is right)")
+            .subject(Subject::Joint(j.id))
+            .measured(fl, unit)
+            .expected(jl, unit)
+            .with("actuator_limit", fl)
             .with("joint_limit", jl),
     )
 }

@@ -20,7 +20,10 @@ declare_rule! {
     /// Without a spec it still checks that actuator targets exist and that a position
     /// actuator's ctrlrange does not reach outside its joint's range, or, on a fixed tendon, the
     /// lengths its joints' ranges allow it (Σ coef × range; a ctrlrange covering the whole range
-    /// is `soft-limits`' finding). Missing force limits are `effort-limit-mismatch`'s.
+    /// is `soft-limits`' finding), and that no actuator drives a joint that moves nothing of the
+    /// robot: a body hung on the world body with no geometry and no child bodies (a placeholder
+    /// degree of freedom padded into the model). Missing force limits are
+    /// `effort-limit-mismatch`'s.
     ///
     /// ## Why is this bad?
     /// Hardware mapping comes first (Asimov system identification §1): a joint driven in simulation but passive on
@@ -193,6 +196,36 @@ impl ActuatorMapping {
                     .claim(MisdirectedActuator { actuator: a.id, claim: ActuatorMotion::Nothing });
                 out.push(f);
             }
+        }
+        // An actuated joint that moves nothing of the robot: its body hangs on the world body
+        // and has no geometry and no child bodies (a placeholder degree of freedom written in
+        // for a joint the robot does not have, e.g. to pad the action space).
+        for a in &robot.actuators {
+            if !matches!(a.trn, Transmission::Joint | Transmission::JointInParent) {
+                continue;
+            }
+            let Some(j) = usize::try_from(a.target).ok().and_then(|t| robot.joints.get(t)) else {
+                continue;
+            };
+            let b = j.body;
+            let hangs_on_world = robot.bodies.get(b).is_some_and(|x| x.parent == 0) && b != 0;
+            let has_geom = robot.geoms.iter().any(|g| g.body == b);
+            let has_child = robot.bodies.iter().any(|x| x.id != b && x.parent == b);
+            if !j.is_scalar() || !hangs_on_world || has_geom || has_child {
+                continue;
+            }
+            let f = cx
+                .at_elem(ElemKind::Actuator, a.id, &a.name, format!(
+                    "actuator `{}` drives joint `{}` of body `{}`, which hangs on the world body with no geometry and no child bodies ({} kg): the joint moves nothing of the robot",
+                    a.name, j.name, robot.body_name(b), fmt_num(robot.bodies[b].mass, 3)
+                ))
+                .label("drives a placeholder body")
+                .secondary(robot.elem_loc(ElemKind::Joint, j.id, &j.name), "joint of a body outside the robot")
+                .note("a degree of freedom the robot does not have, padded into the model: the policy gets an action and an observation with no physical counterpart, and the body's made-up mass and inertia are integrated every step")
+                .help("remove the body, its joint and the actuator, and pad the action or observation vector in the training code if its size must match")
+                .subject(Subject::Actuator(a.id))
+                .with("body_mass", robot.bodies[b].mass);
+            out.push(warn(f));
         }
         // Actuators whose gear sign contradicts the spec: their shifted ctrlrange is a consequence.
         // Only a joint transmission's target is a joint id (a tendon's is a tendon id).
