@@ -438,7 +438,7 @@ fn force_contradicts_joint_limit(
     let jl = rng[2 * j.id].abs().max(rng[2 * j.id + 1].abs());
     let arm = robot.moment_at_joint(a, j.id).unwrap_or(a.gear).abs();
     let fl = arm * a.forcerange[0].abs().max(a.forcerange[1].abs());
-    if !(jl > 0.0 && fl > 0.0) || !jl.is_finite() || !fl.is_finite() {
+    if !(jl > 0.0 && fl > 0.0 && jl.is_finite() && fl.is_finite()) {
         return None;
     }
     if (fl - jl).abs() <= tol * jl.max(fl) {

@@ -24,7 +24,10 @@ declare_rule! {
     /// or more joints of its own, at least one a slide: x, y and yaw written in place of a free
     /// joint), or on a fixed-base robot a joint whose position actuators have no `ctrlrange`
     /// either while the model gives its other actuated joints ranges (an arm's continuous
-    /// axes). Actuators that share the problem through one `<default class>` are reported once.
+    /// axes). It also reports a hinge whose range reaches more than a full turn (2π) beyond its
+    /// position actuator's ctrlrange at both ends: stops no command comes near bound nothing
+    /// (±31.415 written for ±3.1415). Actuators that share the problem through one `<default
+    /// class>` are reported once.
     ///
     /// ## Why is this bad?
     /// Training is meant to use soft limits, typically 0.9 of the hardware range (Asimov system identification §8):
@@ -51,6 +54,11 @@ declare_rule! {
         options: [opt("tolerance", 0.02, "fraction of joint range", Domain::FRACTION_BELOW_ONE, "allowed deviation of each ctrlrange end from the soft range; ctrlrange ends this close to the hard ends cover the whole range")],
     }
 }
+
+/// One turn of a hinge (rad). A revolute joint's hardware stops lie within a turn of where it
+/// works (a multi-turn axis such as a UR arm's ±2π still has its ctrlrange reach the stops): a
+/// position servo whose ctrlrange stays more than this inside both stops never comes near them.
+const FULL_TURN: f64 = std::f64::consts::TAU;
 
 fn unit(t: JointType) -> &'static str {
     if t == JointType::Slide { "m" } else { "rad" }
@@ -359,6 +367,22 @@ impl SoftLimits {
                             rng(r, u)
                         ),
                     )
+                } else if j.jtype == JointType::Hinge
+                    && a.ctrllimited
+                    && c[0] - r[0] > FULL_TURN
+                    && r[1] - c[1] > FULL_TURN
+                {
+                    (
+                        3,
+                        format!(
+                            "joint `{}` range {} spans {} turns, and position actuator `{}` ctrlrange {} stays more than a full turn inside both of its stops",
+                            j.name,
+                            rng(r, u),
+                            fmt_num(span / FULL_TURN, 3),
+                            display_name(&a.name, a.id),
+                            crng(c)
+                        ),
+                    )
                 } else {
                     continue;
                 };
@@ -414,6 +438,13 @@ impl SoftLimits {
                         "if the ranges are radians, add <compiler angle=\"radian\"/> (MJCF reads angles in degrees by default); then set the ctrlrange inside the range",
                     );
                 }
+                if kind == 3 {
+                    let (rloc, _) = cx.robot.attr_loc(ElemKind::Joint, j.id, &j.name, "range");
+                    f = f
+                        .secondary(rloc, format!("range {}", rng(r, u)))
+                        .note("a revolute joint's hardware stops lie within a turn of where it works; stops no command comes within a turn of bound nothing, so the simulated joint has in effect no range (a slipped decimal point, e.g. 31.415 for 3.1415, or a placeholder)")
+                        .help("give the joint its hardware range=\"lo hi\", then a ctrlrange inside it (e.g. inheritrange=\"0.9\")");
+                }
                 if let (2, Some(loc)) = (kind, factor_loc) {
                     f = f.secondary(loc, format!("spec soft_limit_factor = {}", fmt_num(fct, 3)));
                 }
@@ -435,17 +466,24 @@ impl SoftLimits {
             let names: Vec<String> =
                 fs.iter().map(|f| f.element.trim_start_matches("actuator ").to_string()).collect();
             let mut f = fs.remove(0);
+            let stops_out_of_reach = f.message.contains("more than a full turn inside");
             let what = match f.message.contains("no ctrlrange") {
                 true => "have no ctrlrange".to_string(),
                 false if f.message.contains("is not the soft range") => {
                     "are not at the spec's soft range".to_string()
                 }
+                false if stops_out_of_reach => {
+                    "stay more than a full turn inside both stops of their joints' ranges"
+                        .to_string()
+                }
                 false => "cover their joints' whole hardware range".to_string(),
             };
-            f.help = Some(format!(
-                "set each actuator's ctrlrange to the centred soft range, e.g. inheritrange=\"{}\" in the default class",
-                fmt_num(factor.unwrap_or(0.9), 3)
-            ));
+            if !stops_out_of_reach {
+                f.help = Some(format!(
+                    "set each actuator's ctrlrange to the centred soft range, e.g. inheritrange=\"{}\" in the default class",
+                    fmt_num(factor.unwrap_or(0.9), 3)
+                ));
+            }
             f.message = format!(
                 "{n} position actuators {what} through one default class: {} (first: {})",
                 names.join(", "),
