@@ -381,6 +381,12 @@ pub trait Effect: Declared + Sync {
     fn by_default(&self) -> bool {
         true
     }
+    /// What each parameter is measured from, where its name and unit do not say it (a body
+    /// effect's place: from the modelled centre of mass; its mass: added to the model's): (name,
+    /// meaning), shown beside the values in the text and the JSON. Default: none.
+    fn param_meaning(&self) -> &'static [(&'static str, &'static str)] {
+        &[]
+    }
     /// Whether this effect is a candidate on `t` at all: `false` where another candidate is the
     /// same change (a link only its own joint moves: its inertia is that joint's armature).
     fn acts_on(&self, _t: &JointTarget) -> bool {
