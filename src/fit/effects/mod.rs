@@ -393,11 +393,12 @@ pub trait Effect: Declared + Sync {
         true
     }
     /// Whether one parameter vector means the same thing on targets `a` and `b`, so that the
-    /// two may share it in a group (mirror links, every leg). Default: `true`; the body effects
-    /// need alike bodies ([`inertial::BodyAxes::alike`]).
+    /// two may share it in a group (mirror links, every leg). Default: the effect acts on both
+    /// ([`Effect::acts_on`]: a servo's gain error is not shared with the passive joint an
+    /// equality couples to it); the body effects need alike bodies
+    /// ([`inertial::BodyAxes::alike`]).
     fn alike(&self, a: &JointTarget, b: &JointTarget) -> bool {
-        let _ = (a, b);
-        true
+        self.acts_on(a) && self.acts_on(b)
     }
     /// The components a change of the ground contact may stand in for, each as (its parameter's
     /// index, this effect with that parameter held at its nominal value: [`held::Held`]) — a

@@ -630,6 +630,8 @@ fn actuator_effects_act_only_on_driven_joints() {
         assert!(!e.acts_on(&t("idle")), "{id} on a joint nothing drives");
         let on_motor = actuator.contains(id);
         assert_eq!(e.acts_on(&t("spread")), on_motor, "{id} on a motor's tendon joint");
+        // Nor is a group that holds the passive joint shared (a mirror pair, a merge).
+        assert!(!super::alike_over(&robot, e, &["driver".into(), "follower".into()]), "{id}");
     }
     for e in all().into_iter().filter(|e| !servo.contains(&e.id()) && !actuator.contains(&e.id())) {
         if ["viscous_damping", "coulomb_friction", "armature", "joint_stiffness"].contains(&e.id())

@@ -84,6 +84,9 @@ pub(super) fn remap(
         .zip([&map.measured, &map.command, &map.velocity, &map.effort])
         .filter_map(|((what, suffix), k)| k.as_ref().map(|k| (*what, *suffix, k)))
         .collect();
+    if let Some((what, ..)) = keyed.iter().find(|(_, _, k)| k.trim().is_empty()) {
+        return Err(map_err(format!("`{what}` is empty: name the signal's columns")));
+    }
     // The longest key first: `pos_des_0` is the command `pos_des`'s, not `pos`'s joint `des_0`.
     keyed.sort_by_key(|(_, _, k)| std::cmp::Reverse(k.len()));
     let mut taken = vec![false; cols.len()];
