@@ -354,7 +354,7 @@ fn csv_unit_declarations_are_honoured() {
     let deg = dir.join("deg.csv");
     std::fs::write(&deg, in_degrees(&std::fs::read_to_string(&rad).unwrap())).unwrap();
     same(&gap(&[&rad], &[]), &gap(&[&deg], &[]), 1e-9, "degrees");
-    // A --log-* flag on a CSV would be ignored: an error instead.
+    // --log-units on a CSV that declares its units: two declarations, an error.
     let o = run(&["gap", model().to_str().unwrap(), rad.to_str().unwrap(), "--log-units", "deg"]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.code() == Some(2) && err.contains("# units: deg, deg/s"), "{err}");

@@ -224,8 +224,11 @@ pub(super) fn remap(
     }
     let mut declare = |key: &str, value: String| {
         if meta_keys.contains(&key) {
+            let example =
+                if key == super::units::KEY_UNITS { " (`# units: deg, deg/s`)" } else { "" };
             return Err(map_err(format!(
-                "the file declares `# {key}:` already; give it in one place"
+                "the file declares `# {key}:` already{example}, and the mapping (or a --log-* \
+                 flag) declares it again: give it in one place"
             )));
         }
         meta.push(format!("# {key}: {value}"));
