@@ -23,7 +23,8 @@ pub struct PackageArgs {
 pub struct LogArgs {
     /// TOML file mapping a log's signals onto joints (keys: measured, command, velocity,
     /// effort, time, dt, time_unit, joints, command_joints, skip, units, control_rate_hz,
-    /// command_timing, episode, [rename]).
+    /// command_timing, episode, [rename]); a CSV of other column names too (`measured = "q"`
+    /// reads q_<joint> / <joint>_q columns, `pos` with `joints` reads pos_0, pos_1, …).
     #[arg(long, value_name = "FILE.toml")]
     pub log_map: Option<PathBuf>,
     /// Array / column / topic of the measured joint positions (default by format: dof_pos,

@@ -549,3 +549,129 @@ fn cli_a_joint_recorded_with_its_sign_reversed_is_said() {
     assert!(line("pan").is_some_and(|l| l.contains("moves against the replay")), "stdout: {out}");
     assert!(!out.contains("wheel_l                  moves against"), "stdout: {out}");
 }
+
+/// delay_arm2's recording with its columns rewritten by `f(column index, value)`, as text.
+fn arm2_edited(name: &str, f: impl Fn(usize, f64) -> f64) -> PathBuf {
+    let dir = root().join("fixtures/gap/delay_arm2");
+    let text = std::fs::read_to_string(dir.join("none_ep0.csv")).unwrap();
+    let rows: Vec<String> = text
+        .lines()
+        .map(|l| {
+            if l.starts_with('#') || l.starts_with('t') {
+                return l.to_string();
+            }
+            let v: Vec<String> = l
+                .split(',')
+                .enumerate()
+                .map(|(k, x)| x.parse::<f64>().map_or(x.to_string(), |x| format!("{:.6}", f(k, x))))
+                .collect();
+            v.join(",")
+        })
+        .collect();
+    tmp(name, &(rows.join("\n") + "\n"))
+}
+
+/// An elbow whose encoder is zeroed 2.5 rad away from the model's zero (positions and
+/// commands shifted alike: the arm tracks, but past the model's ±2.2 rad range): `gap` and
+/// `fit` warn, naming the joint, the file, the time and the value against the range; the
+/// recording as logged is not warned about.
+///
+/// delay_arm2's own model writes `range="-2 2"` without `<compiler angle>`: MuJoCo reads ±2°
+/// (MJCF's default unit), its recordings (made on that model by sim.py, through the soft limit)
+/// go past it by more than its span, and the warning names a unit: degrees, or a range written
+/// in radians. The test's copy
+/// declares `angle="radian"`.
+#[test]
+fn cli_a_recording_past_the_joint_range_is_said() {
+    let given = root().join("fixtures/gap/delay_arm2/arm.xml");
+    let text = std::fs::read_to_string(&given).unwrap();
+    let arm =
+        tmp("arm_radian.xml", &text.replace("<option", "<compiler angle=\"radian\"/>\n  <option"));
+    let o =
+        bin().arg("gap").arg(&given).arg(given.with_file_name("none_ep0.csv")).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("elbow in none_ep0.csv") && err.contains("a range written in radians"),
+        "{err}"
+    );
+    // Columns: t, shoulder.q, shoulder.qd, shoulder.q_cmd, elbow.q, elbow.qd, elbow.q_cmd.
+    let shifted =
+        arm2_edited("elbow_offset.csv", |k, x| if k == 4 || k == 6 { x + 2.5 } else { x });
+    let o = bin().arg("gap").arg(&arm).arg(&shifted).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.code() == Some(0) || o.status.code() == Some(1), "stderr: {err}");
+    let w = err.lines().find(|l| l.contains("outside the model's joint range")).unwrap_or("");
+    assert!(
+        w.contains("elbow in elbow_offset.csv at t = ")
+            && w.contains("against the range [-2.2, 2.2] rad"),
+        "stderr: {err}"
+    );
+    assert!(!w.contains("shoulder in"), "the shoulder is within its range: {w}");
+    assert!(!w.contains("a unit"), "no unit hint for an offset: {w}");
+    let o = bin()
+        .arg("fit")
+        .arg(&arm)
+        .arg(&shifted)
+        .args(["--told", "viscous_damping@elbow"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("outside the model's joint range"), "fit: {err}");
+    let plain = arm2_edited("elbow_plain.csv", |_, x| x);
+    let o = bin().arg("gap").arg(&arm).arg(&plain).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!err.contains("outside the model's joint range"), "stderr: {err}");
+}
+
+/// `--base free` / `--base recorded` on a model whose root is fixed to the world changes
+/// nothing: said, with what the option is for; `--base fixed` (the default) is not.
+#[test]
+fn cli_base_option_on_a_fixed_base_model_is_said() {
+    let arm = root().join("fixtures/gap/delay_arm2/arm.xml");
+    let ep = root().join("fixtures/gap/delay_arm2/none_ep0.csv");
+    for mode in ["free", "recorded"] {
+        let o = bin().arg("gap").arg(&arm).arg(&ep).args(["--base", mode]).output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            err.contains(&format!(
+                "--base {mode} changes nothing here: the model has no floating base"
+            )),
+            "{mode}: {err}"
+        );
+    }
+    let o = bin().arg("gap").arg(&arm).arg(&ep).args(["--base", "fixed"]).output().unwrap();
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("changes nothing"));
+}
+
+/// The gap report's position plots say which trace is the recording and which MuJoCo's replay,
+/// and in which unit (legends, axis titles, the section's caption).
+#[test]
+fn cli_gap_report_labels_say_recorded_and_replayed_with_units() {
+    let dir = root().join("fixtures/gap/delay_arm2");
+    let out = std::env::temp_dir().join(format!("modellint-gap-labels-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&out);
+    let o = bin()
+        .arg("gap")
+        .arg(dir.join("arm.xml"))
+        .arg(dir.join("none_ep0.csv"))
+        .arg("--report")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.code() == Some(0) || o.status.code() == Some(1));
+    let page = std::fs::read_to_string(out.join("index.html")).unwrap();
+    for label in [
+        ">recorded</text>",
+        ">replayed (MuJoCo)</text>",
+        ">position [deg]</text>",
+        ">time [s]</text>",
+        ">error [deg]</text>",
+        ">replayed − recorded</text>",
+        ">position PSD [rad²/Hz]</text>",
+        "Recorded vs replayed",
+    ] {
+        assert!(page.contains(label), "the report lacks {label}");
+    }
+    assert!(!page.contains(">sim</text>") && !page.contains(">real</text>"));
+    let _ = std::fs::remove_dir_all(&out);
+}

@@ -354,7 +354,7 @@ fn csv_unit_declarations_are_honoured() {
     let deg = dir.join("deg.csv");
     std::fs::write(&deg, in_degrees(&std::fs::read_to_string(&rad).unwrap())).unwrap();
     same(&gap(&[&rad], &[]), &gap(&[&deg], &[]), 1e-9, "degrees");
-    // A --log-* flag on a CSV would be ignored: an error instead.
+    // --log-units on a CSV that declares its units: two declarations, an error.
     let o = run(&["gap", model().to_str().unwrap(), rad.to_str().unwrap(), "--log-units", "deg"]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.code() == Some(2) && err.contains("# units: deg, deg/s"), "{err}");
@@ -454,5 +454,103 @@ fn a_log_without_control_rate_is_a_warning() {
     assert!(!warned(&gap(&[&bare], &["--control-hz", "100"])));
     assert!(!warned(&gap(&[&none], &[])));
     assert!(!warned(&gap(&[&src], &[])));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A CSV of other column names read through `--log-map` (the mapping the other formats take):
+/// delay_arm2's recording rewritten by text here with a time in milliseconds under `time`,
+/// `q_<joint>` / `<joint>_q` positions, `qd` velocities and `u` commands; then as numbered
+/// `pos_<i>` / `target_<i>` columns named by `joints`. Each gives the gap of the CSV it was
+/// rewritten from. A signal the file does not have is an error naming it, listing the file's
+/// columns, with the closest.
+#[test]
+fn csv_of_other_column_names_through_a_log_map() {
+    let dir = tmp("csvmap");
+    let fx = root().join("fixtures/gap/delay_arm2");
+    let arm = fx.join("arm.xml");
+    let text = std::fs::read_to_string(fx.join("none_ep0.csv")).unwrap();
+    let rows: Vec<Vec<&str>> = text
+        .lines()
+        .filter(|l| !l.starts_with('#') && !l.starts_with('t'))
+        .map(|l| l.split(',').collect())
+        .collect();
+    // Original columns: t, shoulder.q, shoulder.qd, shoulder.q_cmd, elbow.q, elbow.qd, elbow.q_cmd.
+    let write = |name: &str, header: &str, cols: &[usize], ms: bool| -> PathBuf {
+        let mut s = format!("{header}\n");
+        for r in &rows {
+            let t: f64 = r[0].parse().unwrap();
+            let mut f = vec![if ms { format!("{:.3}", t * 1000.0) } else { r[0].to_string() }];
+            f.extend(cols.iter().map(|&c| r[c].to_string()));
+            s.push_str(&(f.join(",") + "\n"));
+        }
+        let p = dir.join(name);
+        std::fs::write(&p, s).unwrap();
+        p
+    };
+    let map = |name: &str, body: &str| -> PathBuf {
+        let p = dir.join(name);
+        std::fs::write(&p, body).unwrap();
+        p
+    };
+    let gap_of = |csv: &Path, extra: &[&str]| -> Value {
+        let mut a = vec!["gap", arm.to_str().unwrap(), csv.to_str().unwrap(), "--format", "json"];
+        a.extend(extra);
+        json_of(&run(&a))
+    };
+    let reference = gap_of(&fx.join("none_ep0.csv"), &[]);
+    let named = write(
+        "named.csv",
+        "time,q_shoulder,qd_shoulder,u_shoulder,elbow_q,elbow_qd,elbow_u",
+        &[1, 2, 3, 4, 5, 6],
+        true,
+    );
+    let m1 = map(
+        "named.toml",
+        "measured = \"q\"\nvelocity = \"qd\"\ncommand = \"u\"\ntime = \"time\"\ntime_unit = \"ms\"\ncontrol_rate_hz = 100\n",
+    );
+    let g = gap_of(&named, &["--log-map", m1.to_str().unwrap()]);
+    same(&reference, &g, 1e-6, "named columns");
+    // Numbered columns without velocities: the CSV without its .qd columns.
+    let numbered = write("numbered.csv", "t,pos_0,pos_1,target_0,target_1", &[1, 4, 3, 6], false);
+    let plain =
+        write("plain.csv", "t,shoulder.q,elbow.q,shoulder.q_cmd,elbow.q_cmd", &[1, 4, 3, 6], false);
+    let m2 = map(
+        "numbered.toml",
+        "measured = \"pos\"\ncommand = \"target\"\njoints = [\"shoulder\", \"elbow\"]\ncontrol_rate_hz = 100\n",
+    );
+    let a = gap_of(&plain, &["--control-hz", "100"]);
+    let b = gap_of(&numbered, &["--log-map", m2.to_str().unwrap()]);
+    same(&a, &b, 1e-12, "numbered columns");
+    // The same by flags.
+    let c = gap_of(
+        &numbered,
+        &[
+            "--log-measured",
+            "pos",
+            "--log-command",
+            "target",
+            "--log-joints",
+            "shoulder,elbow",
+            "--control-hz",
+            "100",
+        ],
+    );
+    same(&a, &c, 1e-12, "numbered columns by flags");
+    // A misspelt signal: named, with the file's columns and the closest.
+    let o = run(&[
+        "gap",
+        arm.to_str().unwrap(),
+        numbered.to_str().unwrap(),
+        "--log-map",
+        m2.to_str().unwrap(),
+        "--log-command",
+        "targt",
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("numbered.csv:1"), "{err}");
+    assert!(err.contains("no command column(s) 'targt'"), "{err}");
+    assert!(err.contains("its columns: t, pos_0, pos_1, target_0, target_1"), "{err}");
+    assert!(err.contains("did you mean 'target_0'"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -154,8 +154,9 @@ fn fit_and_gap_reports_render_whole_at_1400_px() {
         "Missing physics",
         "viscous_damping",
         "±",
-        "sim before",
-        "sim after",
+        "replayed before",
+        "replayed after",
+        "recorded",
         "Error per joint: before → after",
         "Power spectral density before → after",
     ] {

@@ -511,6 +511,7 @@ pub fn fit_json(r: &FitRun) -> serde_json::Value {
                 "stderr": s.stderr.iter().map(|(k, v)| (k.clone(), if v.is_finite() { json!(v) } else { serde_json::Value::Null })).collect::<serde_json::Map<_, _>>(),
                 "identifiable": s.identifiable, "unidentified": s.unidentified, "evidence": s.evidence, "heldout_improvement": s.heldout_improvement,
                 "heldout_rmse_before": s.heldout_rmse_before, "heldout_rmse_after": s.heldout_rmse_after,
+                "params_meaning": effects::by_id(&s.effect).map_or(&[][..], |e| e.param_meaning()).iter().copied().collect::<std::collections::BTreeMap<_, _>>(),
             })
         })
         .collect();
@@ -535,19 +536,6 @@ pub fn fit_json(r: &FitRun) -> serde_json::Value {
 /// One fitted parameter as the text output gives it: `name = value ± stderr unit` (an angle
 /// also in degrees, as `gap` prints angles), or, when the data do not determine it
 /// (`unidentified`), `name not identified (± stderr unit)` — no value.
-fn param_text(k: &str, v: f64, se: f64, unit: &str, unidentified: bool) -> String {
-    let pm = if se.is_finite() { format!(" ± {se:.2e}") } else { " ± ?".into() };
-    if unidentified {
-        let u = if unit.is_empty() { String::new() } else { format!(" {unit}") };
-        return format!("{k} not identified ({}{u})", pm.trim_start());
-    }
-    match unit {
-        "rad" => format!("{k} = {v:.6}{pm} rad ({:.4}°)", v.to_degrees()),
-        "" => format!("{k} = {v:.4}{pm}"),
-        _ => format!("{k} = {v:.4}{pm} {unit}"),
-    }
-}
-
 /// The human output: angles in degrees (as `gap`), SI in JSON; one before → after figure.
 fn fit_text(r: &FitRun) -> String {
     let (out, before, after) = (&r.out, &r.before, &r.after);
@@ -571,10 +559,13 @@ fn fit_text(r: &FitRun) -> String {
                 let unit =
                     e.and_then(|e| e.params().iter().find(|p| p.name == k)).map_or("", |p| p.unit);
                 let se = x.stderr.get(k).copied().unwrap_or(f64::INFINITY);
-                param_text(k, *v, se, unit, x.unidentified.contains(k))
+                super::report::param_text(k, *v, se, unit, x.unidentified.contains(k))
             })
             .collect();
         s.push_str(&format!("  {:<24} {:<28} {}\n", x.effect, x.joints.join(","), ps.join(", ")));
+        for (k, m) in e.map_or(&[][..], |e| e.param_meaning()) {
+            s.push_str(&format!("      {k}: {m}\n"));
+        }
         let shown = e.map_or(&[][..], |e| e.shown_evidence());
         // `implied_*`: the diagnosis's linearised first guess, before any fit; named so that
         // it is not read as the answer.
@@ -667,7 +658,7 @@ fn mirrored_warning(before: &GapReport) -> Option<String> {
 
 #[cfg(test)]
 mod tests {
-    use super::param_text;
+    use crate::fit::report::param_text;
 
     /// A parameter the data determine is given with its value; one they do not, with its
     /// standard error only.

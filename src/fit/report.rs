@@ -62,6 +62,21 @@ fn sig_n(v: f64, n: i32) -> String {
     }
 }
 
+/// A fitted parameter as text: value ± standard error and unit (an angle also in degrees), or
+/// "not identified".
+pub(crate) fn param_text(k: &str, v: f64, se: f64, unit: &str, unidentified: bool) -> String {
+    let pm = if se.is_finite() { format!(" ± {se:.2e}") } else { " ± ?".into() };
+    if unidentified {
+        let u = if unit.is_empty() { String::new() } else { format!(" {unit}") };
+        return format!("{k} not identified ({}{u})", pm.trim_start());
+    }
+    match unit {
+        "rad" => format!("{k} = {v:.6}{pm} rad ({:.4}°)", v.to_degrees()),
+        "" => format!("{k} = {v:.4}{pm}"),
+        _ => format!("{k} = {v:.4}{pm} {unit}"),
+    }
+}
+
 fn missing_physics(sel: &[Selected]) -> String {
     let mut h = String::from("<h2>Missing physics</h2>");
     if sel.is_empty() {
@@ -99,7 +114,10 @@ fn missing_physics(sel: &[Selected]) -> String {
                     esc(&s.joints.join(", "))
                 );
             }
-            let _ = write!(h, "<td class=\"l\">{}</td><td>{}</td>", esc(k), esc(v));
+            let meaning = e
+                .and_then(|e| e.param_meaning().iter().find(|(n, _)| n == k))
+                .map_or(String::new(), |(_, m)| format!("<br><small>{}</small>", esc(m)));
+            let _ = write!(h, "<td class=\"l\">{}{meaning}</td><td>{}</td>", esc(k), esc(v));
             if i == 0 {
                 let _ = write!(
                     h,
@@ -201,7 +219,7 @@ fn joints_to_plot(r: &FitReport) -> Vec<String> {
 
 fn overlays(r: &FitReport, joints: &[String]) -> String {
     let mut h = String::from(
-        "<h2>Real vs simulated, before and after the fit (held-out episode with the largest error before)</h2><div class=\"grid\">",
+        "<h2>Recorded vs replayed, before and after the fit (held-out episode with the largest error before)</h2><p>recorded: the joint position in the recording; replayed before / after: MuJoCo's simulation of the model as given / of the fitted model, driven by the recorded commands. Angles in degrees.</p><div class=\"grid\">",
     );
     for jn in joints {
         let worst = r
@@ -230,13 +248,13 @@ fn overlays(r: &FitReport, joints: &[String]) -> String {
         let file =
             rec.source.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default();
         h.push_str(&line_plot(
-            &format!("{jn}: {file}"),
+            &format!("{jn}: position, {file}"),
             "time [s]",
             "position [deg]",
             &[
-                Series::degrees(&t, &jt.q, REAL, "real", ""),
-                Series::degrees(&t, &eb.q_sim[kb], BEFORE, "sim before", "5 3"),
-                Series::degrees(&t, &ea.q_sim[ka], AFTER, "sim after", ""),
+                Series::degrees(&t, &jt.q, REAL, "recorded", ""),
+                Series::degrees(&t, &eb.q_sim[kb], BEFORE, "replayed before", "5 3"),
+                Series::degrees(&t, &ea.q_sim[ka], AFTER, "replayed after", ""),
             ],
             false,
         ));
@@ -245,9 +263,9 @@ fn overlays(r: &FitReport, joints: &[String]) -> String {
             sim.iter().zip(&jt.q).map(|(s, q)| (s - q).to_degrees()).collect()
         };
         h.push_str(&line_plot(
-            &format!("{jn}: error sim − real, {file}"),
+            &format!("{jn}: error replayed − recorded, {file}"),
             "time [s]",
-            "error [deg]",
+            "position error [deg]",
             &[
                 Series::new(&t, err(&ea.q_sim[ka]), AFTER, "after", ""),
                 Series::new(&t, err(&eb.q_sim[kb]), BEFORE, "before", "5 3"),
@@ -277,11 +295,11 @@ fn spectra(r: &FitReport, joints: &[String]) -> String {
                 r.before.per_joint[ib].spectral_kl, r.after.per_joint[ia].spectral_kl
             ),
             "frequency [Hz]",
-            "PSD [rad²/Hz]",
+            "position PSD [rad²/Hz]",
             &[
-                Series::new(&pb.freqs, pb.real.clone(), REAL, "real", ""),
-                Series::new(&pb.freqs, pb.sim.clone(), BEFORE, "sim before", "5 3"),
-                Series::new(&pa.freqs, pa.sim.clone(), AFTER, "sim after", ""),
+                Series::new(&pb.freqs, pb.real.clone(), REAL, "recorded", ""),
+                Series::new(&pb.freqs, pb.sim.clone(), BEFORE, "replayed before", "5 3"),
+                Series::new(&pa.freqs, pa.sim.clone(), AFTER, "replayed after", ""),
             ],
             true,
         ));

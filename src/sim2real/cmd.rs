@@ -118,7 +118,13 @@ pub fn gap(a: &GapArgs, sink: &dyn Sink) -> Result<GapReport, CmdError> {
         report.notes.push(n);
     }
     if let Some(dir) = &a.report {
-        match crate::sim2real::report::write(dir, &report, &srecs, &seps) {
+        let slides: Vec<String> = robot
+            .joints
+            .iter()
+            .filter(|j| j.jtype == crate::model::JointType::Slide)
+            .map(|j| j.name.clone())
+            .collect();
+        match crate::sim2real::report::write(dir, &report, &srecs, &seps, &slides) {
             Ok(p) => sink.said(&format!("report written to {}", p.display())),
             Err(e) => {
                 return Err(format!("cannot write report in {}: {e}", dir.display()).into());

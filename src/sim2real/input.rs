@@ -246,6 +246,8 @@ pub fn read_for_replay(
     if let Some(w) = absent_joints_message(robot, &recs, &actuated, opts) {
         warnings.push(w);
     }
+    warnings.extend(super::input_checks::base_option_warning(robot, opts.base, &recs));
+    warnings.extend(super::input_checks::out_of_range_warning(robot, &recs));
     Ok(ReplayInputs { recs, notes, warnings, unscored })
 }
 

@@ -6,6 +6,7 @@ pub mod cmd;
 pub mod commands;
 pub mod gap;
 pub mod input;
+mod input_checks;
 mod input_rate;
 pub mod locate;
 pub mod metrics;

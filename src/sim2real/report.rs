@@ -1,5 +1,6 @@
 //! `gap --report DIR`: one self-contained `index.html` with inline SVG (no scripts, no network;
-//! charts in `svg.rs`): real-vs-sim overlays of the worst 4 joints, per-joint MAE bars coloured by
+//! charts in `svg.rs`): recorded-vs-replayed position overlays (legend and axis units say which
+//! trace is which: a hinge in degrees, a slide joint in millimetres) of the worst 4 joints, per-joint MAE bars coloured by
 //! region (two joints or more), PSD comparison (log scale) of the worst joints, a correlation heat
 //! map (joints × episodes) with its colour scale, and the episodes by path relative to their
 //! common directory.
@@ -88,7 +89,7 @@ fn heat_map(r: &GapReport, names: &[String]) -> String {
     format!(
         "<h2>Correlation heat map</h2>{}",
         svg::heat_map(
-            "Correlation real vs sim (rows: joints, columns: episodes)",
+            "Position correlation, recorded vs replayed (rows: joints, columns: episodes)",
             &joints,
             names,
             &cell
@@ -102,6 +103,7 @@ pub fn write(
     r: &GapReport,
     recs: &[Recording],
     eps: &[Episode],
+    slides: &[String],
 ) -> std::io::Result<PathBuf> {
     std::fs::create_dir_all(dir)?;
     let mut html = String::from(
@@ -112,7 +114,12 @@ pub fn write(
     );
     let _ = write!(html, "<h1>Sim-to-real gap</h1><pre>{}</pre>", esc(&r.to_text("gap")));
     let worst: Vec<&str> = r.localisation.joints.iter().take(4).map(|s| s.name.as_str()).collect();
-    html.push_str("<h2>Real vs simulated, worst joints (episode with the largest error)</h2><div class=\"grid\">");
+    html.push_str(
+        "<h2>Recorded vs replayed, worst joints (episode with the largest error)</h2><p>recorded: \
+         the joint position in the recording; replayed: MuJoCo's simulation of the model driven by \
+         the recorded commands from the recorded start state. Angles in degrees (a slide joint's \
+         positions in mm).</p><div class=\"grid\">",
+    );
     for jn in &worst {
         let best = r
             .per_episode
@@ -128,27 +135,33 @@ pub fn write(
             continue;
         };
         let t: Vec<f64> = rec.t.iter().map(|x| x - rec.t[0]).collect();
+        // A hinge in degrees, a slide joint in millimetres.
+        let (unit, factor) = if slides.iter().any(|s| s == jn) {
+            ("mm", 1000.0)
+        } else {
+            ("deg", 180.0 / std::f64::consts::PI)
+        };
+        let scaled = |v: &[f64]| -> Vec<f64> { v.iter().map(|x| x * factor).collect() };
         let title = format!(
-            "{jn}: {}",
+            "{jn}: position, {}",
             rec.source.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default()
         );
         html.push_str(&line_plot(
             &title,
             "time [s]",
-            "position [deg]",
+            &format!("position [{unit}]"),
             &[
-                Series::degrees(&t, &jt.q, REAL, "real", ""),
-                Series::degrees(&t, &ep.q_sim[k], SIM, "sim", ""),
+                Series::new(&t, scaled(&jt.q), REAL, "recorded", ""),
+                Series::new(&t, scaled(&ep.q_sim[k]), SIM, "replayed (MuJoCo)", ""),
             ],
             false,
         ));
-        let err: Vec<f64> =
-            ep.q_sim[k].iter().zip(&jt.q).map(|(s, q)| (s - q).to_degrees()).collect();
+        let err: Vec<f64> = ep.q_sim[k].iter().zip(&jt.q).map(|(s, q)| (s - q) * factor).collect();
         html.push_str(&line_plot(
-            &format!("{jn}: error sim − real"),
+            &format!("{jn}: position error, replayed − recorded"),
             "time [s]",
-            "error [deg]",
-            &[Series::new(&t, err, SIM, "sim − real", "")],
+            &format!("error [{unit}]"),
+            &[Series::new(&t, err, SIM, "replayed − recorded", "")],
             false,
         ));
     }
@@ -161,12 +174,12 @@ pub fn write(
         let Some(i) = r.per_joint.iter().position(|j| j.name == *jn) else { continue };
         let p = &r.psd[i];
         html.push_str(&line_plot(
-            &format!("{jn}: KL {:.3}", r.per_joint[i].spectral_kl),
+            &format!("{jn}: position spectrum, KL {:.3}", r.per_joint[i].spectral_kl),
             "frequency [Hz]",
-            "PSD [rad²/Hz]",
+            "position PSD [rad²/Hz]",
             &[
-                Series::new(&p.freqs, p.real.clone(), REAL, "real", ""),
-                Series::new(&p.freqs, p.sim.clone(), SIM, "sim", ""),
+                Series::new(&p.freqs, p.real.clone(), REAL, "recorded", ""),
+                Series::new(&p.freqs, p.sim.clone(), SIM, "replayed (MuJoCo)", ""),
             ],
             true,
         ));

@@ -33,6 +33,11 @@ declare_effect! {
 const LAG: &str = "lag_s";
 
 impl Effect for ActionDelay {
+    /// An actuator's command is what is delayed: a joint no actuator drives (a passive joint,
+    /// coupled to a driven one by an equality or a tendon) has none.
+    fn acts_on(&self, t: &JointTarget) -> bool {
+        t.driven()
+    }
     fn torque(&self, cx: HookCtx<'_>) {
         let HookCtx { st, io, dt, p, .. } = cx;
         let d = (p[0].max(0.0) / dt).min(1e5);

@@ -47,6 +47,10 @@ fn servo_on(u: f64, qm: f64, qmd: f64, io: &StepIo) -> f64 {
 }
 
 impl Effect for Backlash {
+    /// The play between the servo and its link: none on a joint no position servo drives.
+    fn acts_on(&self, t: &JointTarget) -> bool {
+        t.servoed()
+    }
     fn holds_start(&self) -> bool {
         true
     }

@@ -32,6 +32,16 @@ declare_effect! {
 }
 
 impl Effect for ComOffset {
+    fn param_meaning(&self) -> &'static [(&'static str, &'static str)] {
+        &[
+            (
+                "along",
+                "m the centre of mass moves from where the model has it, along the link (from the \
+                 joint towards that centre); mass unchanged",
+            ),
+            ("across", "m it moves across the link (joint axis × link axis)"),
+        ]
+    }
     /// At its start no shift ([`super::inertial::shift`] leaves the body as it is).
     fn neutral_start(&self) -> bool {
         true

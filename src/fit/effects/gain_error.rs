@@ -32,6 +32,12 @@ declare_effect! {
 }
 
 impl Effect for GainError {
+    /// A position servo's gains are what is scaled: none on a joint no position servo drives (a
+    /// passive joint coupled to the driven one by an equality or a tendon moves with it, but its
+    /// gains are the driven joint's).
+    fn acts_on(&self, t: &JointTarget) -> bool {
+        t.servoed()
+    }
     /// Scales the gains of the joint's position servos (gain `kp`, bias `−kp`, `−kv`). Until
     /// session 28 a hook added `(s_p−1)·kp·(ctrl−q) − (s_d−1)·kd·q̇` as an explicit torque:
     /// under `implicitfast` the servo's own kv is integrated implicitly and the hook's share

@@ -34,6 +34,13 @@ declare_effect! {
 }
 
 impl Effect for LinkInertia {
+    fn param_meaning(&self) -> &'static [(&'static str, &'static str)] {
+        &[(
+            "inertia_scale",
+            "× the child body's modelled moment of inertia about the axis through its centre of \
+             mass parallel to the joint axis (1 = as modelled); mass and centre of mass unchanged",
+        )]
+    }
     /// At its start a scale of one ([`super::inertial::scale_extent`] leaves the body).
     fn neutral_start(&self) -> bool {
         true

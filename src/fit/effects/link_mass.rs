@@ -65,6 +65,21 @@ impl Effect for LinkMass {
         vec![(1, &OFFSET_HELD), (2, &ACROSS_HELD)]
     }
     inertial::body_effect_methods!(tau);
+    fn param_meaning(&self) -> &'static [(&'static str, &'static str)] {
+        &[
+            (
+                "added_mass",
+                "kg added to the child body's modelled mass (a point mass; the body's mass \
+                 becomes its modelled mass + added_mass)",
+            ),
+            (
+                "offset",
+                "m from the body's modelled centre of mass to the added point, along the link \
+                 (from the joint towards that centre)",
+            ),
+            ("across", "m from the modelled centre of mass, across the link (joint axis × link axis)"),
+        ]
+    }
 }
 
 crate::held_variant!(OFFSET_HELD, LinkMass, "link_mass~offset", 1, [0, 2]);

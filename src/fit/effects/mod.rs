@@ -381,17 +381,24 @@ pub trait Effect: Declared + Sync {
     fn by_default(&self) -> bool {
         true
     }
+    /// What each parameter is measured from, where its name and unit do not say it (a body
+    /// effect's place: from the modelled centre of mass; its mass: added to the model's): (name,
+    /// meaning), shown beside the values in the text and the JSON. Default: none.
+    fn param_meaning(&self) -> &'static [(&'static str, &'static str)] {
+        &[]
+    }
     /// Whether this effect is a candidate on `t` at all: `false` where another candidate is the
     /// same change (a link only its own joint moves: its inertia is that joint's armature).
     fn acts_on(&self, _t: &JointTarget) -> bool {
         true
     }
     /// Whether one parameter vector means the same thing on targets `a` and `b`, so that the
-    /// two may share it in a group (mirror links, every leg). Default: `true`; the body effects
-    /// need alike bodies ([`inertial::BodyAxes::alike`]).
+    /// two may share it in a group (mirror links, every leg). Default: the effect acts on both
+    /// ([`Effect::acts_on`]: a servo's gain error is not shared with the passive joint an
+    /// equality couples to it); the body effects need alike bodies
+    /// ([`inertial::BodyAxes::alike`]).
     fn alike(&self, a: &JointTarget, b: &JointTarget) -> bool {
-        let _ = (a, b);
-        true
+        self.acts_on(a) && self.acts_on(b)
     }
     /// The components a change of the ground contact may stand in for, each as (its parameter's
     /// index, this effect with that parameter held at its nominal value: [`held::Held`]) — a

@@ -48,6 +48,10 @@ pub fn stall_torque(meta: &BTreeMap<String, String>) -> f64 {
 }
 
 impl Effect for MotorConstants {
+    /// The servo law of the joint's position servo: none without one.
+    fn acts_on(&self, t: &JointTarget) -> bool {
+        t.servoed()
+    }
     fn signature(&self, s: &Samples) -> Signature {
         Signature::centred(s.u.clone())
     }

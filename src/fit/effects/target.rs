@@ -39,6 +39,18 @@ pub struct JointTarget {
 const REFERENCE_DRIVE: f64 = 100.0;
 
 impl JointTarget {
+    /// Whether an actuator of the model reaches the joint (directly or through a tendon): the
+    /// actuator's effects (a delay, a torque limit) exist only there.
+    pub fn driven(&self) -> bool {
+        !self.acts.is_empty()
+    }
+
+    /// Whether a position servo of the model reaches the joint: the servo's effects (its gains,
+    /// its motor law, its play) exist only there.
+    pub fn servoed(&self) -> bool {
+        !self.servos.is_empty()
+    }
+
     pub fn of(robot: &Robot, name: &str) -> Option<JointTarget> {
         let j = robot.joint(name)?;
         let acts = robot.actuators_on_joint(j.id);

@@ -592,3 +592,52 @@ fn a_neutral_start_replays_exactly_as_the_model_without_the_effect() {
     assert!(bits(run(&[at_start(stribeck, "elbow")])) != base, "Stribeck's start acts");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A gripper's fingers: one position servo on `driver`, `follower` coupled to it by an
+/// equality, `spread` driven by a motor through a tendon, `idle` free. An effect of the actuator
+/// (its gains, its delay, its torque limit, its play) is a candidate only on the joints an
+/// actuator reaches; a passive joint keeps the joint effects (friction, damping, armature).
+#[test]
+fn actuator_effects_act_only_on_driven_joints() {
+    use super::{JointTarget, all, by_id};
+    let dir = std::env::temp_dir().join(format!("modellint-driven-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("grip.xml");
+    std::fs::write(
+        &path,
+        r#"<mujoco><worldbody><body name="a"><joint name="driver" axis="0 1 0"/>
+<geom type="capsule" fromto="0 0 0 0.1 0 0" size="0.01"/>
+<body name="b" pos="0.1 0 0"><joint name="follower" axis="0 1 0"/>
+<geom type="capsule" fromto="0 0 0 0.1 0 0" size="0.01"/></body>
+<body name="c" pos="0 0.05 0"><joint name="spread" axis="0 0 1"/>
+<geom type="capsule" fromto="0 0 0 0.1 0 0" size="0.01"/></body>
+<body name="d" pos="0 -0.05 0"><joint name="idle" axis="0 0 1"/>
+<geom type="capsule" fromto="0 0 0 0.1 0 0" size="0.01"/></body></body></worldbody>
+<tendon><fixed name="t"><joint joint="spread" coef="1"/></fixed></tendon>
+<equality><joint joint1="driver" joint2="follower"/></equality>
+<actuator><position joint="driver" kp="5" kv="0.1"/><motor tendon="t"/></actuator></mujoco>"#,
+    )
+    .unwrap();
+    let mut map = crate::model::source::SourceMap::default();
+    let robot = crate::model::load(&mut map, &path, None).expect("load the gripper");
+    let t = |j: &str| JointTarget::of(&robot, j).unwrap();
+    let servo = ["gain_error", "motor_constants", "torque_off_braking", "backlash"];
+    let actuator = ["action_delay", "torque_limit"];
+    for id in servo.iter().chain(&actuator) {
+        let e = by_id(id).unwrap();
+        assert!(e.acts_on(&t("driver")), "{id} on the servo's joint");
+        assert!(!e.acts_on(&t("follower")), "{id} on a joint only an equality moves");
+        assert!(!e.acts_on(&t("idle")), "{id} on a joint nothing drives");
+        let on_motor = actuator.contains(id);
+        assert_eq!(e.acts_on(&t("spread")), on_motor, "{id} on a motor's tendon joint");
+        // Nor is a group that holds the passive joint shared (a mirror pair, a merge).
+        assert!(!super::alike_over(&robot, e, &["driver".into(), "follower".into()]), "{id}");
+    }
+    for e in all().into_iter().filter(|e| !servo.contains(&e.id()) && !actuator.contains(&e.id())) {
+        if ["viscous_damping", "coulomb_friction", "armature", "joint_stiffness"].contains(&e.id())
+        {
+            assert!(e.acts_on(&t("follower")), "{} is the joint's own", e.id());
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

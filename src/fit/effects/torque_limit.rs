@@ -50,6 +50,10 @@ const TAU_P99: &str = "tau_p99";
 const LEVELS: [f64; 7] = [0.8, 0.9, 0.95, 0.98, 0.99, 0.995, 0.998];
 
 impl Effect for TorqueLimit {
+    /// An actuator's torque is what saturates: none on a joint no actuator drives.
+    fn acts_on(&self, t: &JointTarget) -> bool {
+        t.driven()
+    }
     fn fitted(&self) -> usize {
         1
     }

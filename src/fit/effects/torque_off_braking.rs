@@ -29,6 +29,10 @@ declare_effect! {
 }
 
 impl Effect for TorqueOffBraking {
+    /// Brakes with the servo's `kd`: nothing on a joint no position servo drives.
+    fn acts_on(&self, t: &JointTarget) -> bool {
+        t.servoed()
+    }
     fn signature(&self, s: &Samples) -> Signature {
         // No feature of its own: the sign of the velocity (a velocity-opposing torque); the greedy
         // round re-ranks every candidate by its simulated sensitivity.

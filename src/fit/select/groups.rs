@@ -33,6 +33,12 @@ pub(super) fn has_group(cands: &[Cand], effect: &str, group: &[String]) -> bool 
     cands.iter().any(|(e, g, _)| e.id() == effect && g == group)
 }
 
+/// Whether `effect` acts on `joint` ([`Effect::acts_on`]; a joint the model does not have is
+/// left to the callers' own checks).
+pub(super) fn acts_on(robot: &crate::model::Robot, effect: &dyn Effect, joint: &str) -> bool {
+    effects::JointTarget::of(robot, joint).is_none_or(|t| effect.acts_on(&t))
+}
+
 /// A joint and its left/right partner, in name order (the order groups are compared in).
 pub(super) fn sorted_pair(j: &str, p: String) -> Vec<String> {
     let mut g = vec![j.to_string(), p];
@@ -63,12 +69,16 @@ pub(super) fn candidate_list(
         }
         let Some(e) = effects::by_id(c.effect) else { return };
         let group = vec![c.joint.clone()];
+        // A group names only joints the effect acts on ([`Effect::acts_on`]): an actuator's
+        // effect is not shared with the passive joints an equality or a tendon couples to it.
+        let acts = |j: &String| acts_on(robot, e, j);
         // The joint and its left/right partner as one more group when the partner also ranks
         // high: both compete (one knee with a delay must not be smeared over both, and an
         // effect both sides have is fitted once).
         let pair: Option<Vec<String>> = partner(&c.joint, &engine.joints)
             .filter(|p| {
                 !covered(c.effect, p)
+                    && acts(p)
                     && effects::alike_over(robot, e, &[c.joint.clone(), p.clone()])
                     && diag
                         .iter()
@@ -92,7 +102,7 @@ pub(super) fn candidate_list(
             Some(f) => engine
                 .joints
                 .iter()
-                .filter(|j| opts.families.get(*j) == Some(f) && !covered(c.effect, j))
+                .filter(|j| opts.families.get(*j) == Some(f) && !covered(c.effect, j) && acts(j))
                 .cloned()
                 .collect(),
             None => vec![],
@@ -106,7 +116,7 @@ pub(super) fn candidate_list(
             Some(part) => engine
                 .joints
                 .iter()
-                .filter(|j| leg_joint(j) == Some(part) && !covered(c.effect, j))
+                .filter(|j| leg_joint(j) == Some(part) && !covered(c.effect, j) && acts(j))
                 .cloned()
                 .collect(),
             None => vec![],
@@ -129,7 +139,7 @@ pub(super) fn candidate_list(
         // a leg modelled with armature 0.04 / 0.03 / 0.012 whose three motors all reflect 0.06
         // came back as two groups when the one-value group was never a candidate.
         let all: Vec<String> =
-            engine.joints.iter().filter(|j| !covered(c.effect, j)).cloned().collect();
+            engine.joints.iter().filter(|j| !covered(c.effect, j) && acts(j)).cloned().collect();
         let all_new = all.len() >= 2
             && all.len() > pair.as_ref().map_or(1, |p| p.len())
             && all != fam

@@ -37,7 +37,32 @@ pub fn parse_csv_with(
         .enumerate()
         .map(|(i, l)| (i + 1, l.strip_suffix('\r').unwrap_or(l)))
         .collect();
-    let (meta, idx) = parse_metadata(path, &lines)?;
+    // A CSV of other column names under a --log-map: read as its rewritten text.
+    if !opts.log_map.is_empty() {
+        let (_, idx) = parse_metadata(path, &lines)?;
+        if idx < lines.len() {
+            let map = opts.log_map.resolve()?;
+            let (mapped, skipped) =
+                super::csv_map::remap(path, &lines, idx, &map, &opts.ignore_columns)?;
+            let mut opts = opts.clone();
+            opts.log_map = Default::default();
+            if skipped {
+                opts.ignore_columns.push(format!("*.{}", super::csv_map::SKIPPED));
+            }
+            let lines: Vec<(usize, &str)> = mapped.iter().map(|(n, l)| (*n, l.as_str())).collect();
+            return parse_lines(path, &lines, &opts);
+        }
+    }
+    parse_lines(path, &lines, opts)
+}
+
+/// [`parse_csv_with`] on the file's lines (1-based number, text without its line end).
+fn parse_lines(
+    path: &Path,
+    lines: &[(usize, &str)],
+    opts: &ParseOptions,
+) -> Result<Recording, RecordingError> {
+    let (meta, idx) = parse_metadata(path, lines)?;
     let Some(&(header_ln, header)) = lines.get(idx) else {
         let last = lines.iter().rev().find(|(_, l)| !l.trim().is_empty()).map_or(1, |(n, _)| *n);
         return Err(err(path, last, None, "no header row (only metadata/comment lines)".into()));
@@ -251,7 +276,11 @@ fn parse_header<'a>(
                          `# units: ms`); an extra signal is skipped with --ignore-columns '{name}'"
                     )
                 } else {
-                    format!("an extra signal? skip it with --ignore-columns '{name}'")
+                    format!(
+                        "an extra signal? skip it with --ignore-columns '{name}'; a log with \
+                         other column names is read with --log-map FILE.toml (`modellint docs \
+                         recording-format`)"
+                    )
                 };
                 return Err(err(
                     Some(name),

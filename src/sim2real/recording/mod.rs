@@ -23,6 +23,7 @@
 
 mod check;
 mod csv;
+mod csv_map;
 mod lerobot;
 pub mod logs;
 pub mod mapping;

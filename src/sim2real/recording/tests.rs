@@ -340,3 +340,46 @@ fn kinds_by_magic_bytes() {
     }
     assert!(read_log(Path::new("x.csv"), b"t,a.q\n", &opts).is_none());
 }
+
+/// A CSV of other column names through a mapping: the longest key first (`pos_des_0` is the
+/// command's, not joint `des_0`'s position), numbered columns named by `joints`, a skipped
+/// joint's columns left out, `[rename]`, a rate from the mapping; errors at the header line.
+#[test]
+fn csv_columns_through_a_log_map() {
+    let map = LogMap {
+        measured: Some("pos".into()),
+        command: Some("pos_des".into()),
+        joints: Some(vec!["a".into(), "b".into(), "c".into()]),
+        skip: vec!["c".into()],
+        rename: [("b".to_string(), "bb".to_string())].into(),
+        control_rate_hz: Some(50.0),
+        ..Default::default()
+    };
+    let opts = ParseOptions { log_map: map.clone(), ..Default::default() };
+    let text = "# robot: x\nt,pos_0,pos_1,pos_2,pos_des_0,pos_des_1,pos_des_2\n0,0.1,0.2,9,0.1,0.2,9\n0.02,0.1,0.2,9,0.1,0.2,9\n";
+    let r = parse_csv_with(Path::new("m.csv"), text, &opts).unwrap();
+    let names: Vec<&str> = r.joints.iter().map(|j| j.name.as_str()).collect();
+    assert_eq!(names, ["a", "bb"]);
+    assert_eq!(r.joints[1].q, vec![0.2, 0.2]);
+    assert_eq!(r.joints[1].q_cmd, Some(vec![0.2, 0.2]));
+    assert_eq!(r.control_rate_hz, Some(50.0));
+    // The file declares the rate too: one place only (an error at the header line).
+    let e = parse_csv_with(Path::new("m.csv"), &format!("# control_rate_hz: 50\n{text}"), &opts)
+        .unwrap_err();
+    assert!(e.line == Some(3) && e.message.contains("already"), "{e}");
+    // A time under another name, with the mapping's unit.
+    let opts = ParseOptions {
+        log_map: LogMap {
+            measured: Some("q".into()),
+            time: Some("stamp_ms".into()),
+            time_unit: Some("ms".into()),
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let r = parse_csv_with(Path::new("m.csv"), "stamp_ms,q_a,b_q\n0,1,2\n20,1,2\n", &opts).unwrap();
+    assert_eq!(r.t, vec![0.0, 0.02]);
+    assert_eq!(r.joints.iter().map(|j| j.name.as_str()).collect::<Vec<_>>(), ["a", "b"]);
+    let e = parse_csv_with(Path::new("m.csv"), "stamp,q_a\n0,1\n20,1\n", &opts).unwrap_err();
+    assert!(e.line == Some(1) && e.message.contains("did you mean 'stamp'"), "{e}");
+}
