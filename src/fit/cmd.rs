@@ -349,6 +349,8 @@ pub fn fit_once(
     // What the model's timestep puts into the kept values (told re-fits at two timesteps).
     if let Some(s) = crate::fit::timestep_shift::measure(robot, &p.recs, &opts, &out) {
         out.notes.push(crate::fit::timestep_shift::note(&s));
+        let only = crate::fit::timestep_shift::split_off(&s, &mut out.selected);
+        out.notes.extend(only);
     }
     let unexplained = crate::fit::unexplained::unexplained(&out.floors, opts.policy.white_ratio);
     out.warnings.extend(unexplained.iter().map(|u| u.message()));

@@ -7,12 +7,22 @@
 //! 0.5 ms came out 11 % high with a ± that excluded the truth.
 //!
 //! When the search counts the timestep as floor (the recordings are closer to the finer replay,
-//! [`crate::fit::select::Floor::discretisation`]), the kept effects are re-fitted, told, at the
-//! timestep check's finer step ([`crate::sim2real::replay::REFINE`] times finer), and the
-//! change of every parameter from the reported value is given as a systematic error beside the
-//! ±. No threshold: every kept parameter is listed with its shift in units of its s.e.
+//! [`crate::fit::select::Floor::discretisation`]), or a kept effect fitted a time shorter than
+//! the model's step (a delay below one step is the size of the integrator's own lag behind
+//! continuous time, which no floor sees once the delay has taken it up), the kept effects are
+//! re-fitted, told, at the timestep check's finer step ([`crate::sim2real::replay::REFINE`]
+//! times finer), and the change of every parameter from the reported value is given as a
+//! systematic error beside the ±. No threshold: every kept parameter is listed with its shift
+//! in units of its s.e. The re-fit costs a told fit at the finer step (several times the
+//! search's own replays on a pendulum), which is why it does not run on every fit.
+//!
+//! An effect whose re-fit at the finer step is within [`Z_ABSENT`](crate::fit::absent::Z_ABSENT) standard errors of the model
+//! as given ([`within_uncertainty`], the rule for any kept effect) was the timestep, not missing
+//! physics: [`split_off`] moves it to a note (a 0.9 ms delay on a leg whose 2 ms model lags its
+//! 0.5 ms recording by 0.9 ms: 0.0 ms at 0.5 ms).
 
-use crate::fit::select::{FitOptions, FitOutcome, fit};
+use crate::fit::absent::within_uncertainty;
+use crate::fit::select::{FitOptions, FitOutcome, Selected, fit};
 use crate::model::Robot;
 use crate::sim2real::recording::Recording;
 
@@ -38,11 +48,16 @@ pub struct TimestepShift {
     pub shifts: Vec<Shift>,
     /// Recording seconds the told re-fit replayed.
     pub simulated_s: f64,
+    /// The kept effects (effect, joints) whose re-fit at the finer step is the model as given
+    /// within [`Z_ABSENT`](crate::fit::absent::Z_ABSENT) standard errors, with their values at
+    /// the finer step.
+    pub timestep_only: Vec<(String, Vec<String>, String)>,
 }
 
 /// The shifts of `out`'s kept parameters between the model's timestep and a finer one; `None`
-/// when nothing is kept, the search did not count the timestep as floor, or the model's
-/// actuators have a MuJoCo `delay` (its history buffer is sized for the model's timestep).
+/// when nothing is kept, neither the floors nor a fitted time shorter than the step point at
+/// the timestep, or the model's actuators have a MuJoCo `delay` (its history buffer is sized
+/// for the model's timestep).
 pub fn measure(
     robot: &Robot,
     recs: &[Recording],
@@ -51,11 +66,8 @@ pub fn measure(
 ) -> Option<TimestepShift> {
     let dt = robot.opt.timestep;
     let delayed = robot.mj.actuator_history().iter().any(|h| h[0] > 0);
-    if out.selected.is_empty()
-        || !out.floors.iter().any(|f| f.discretisation > 0.0)
-        || !(dt > 0.0)
-        || delayed
-    {
+    let in_floor = out.floors.iter().any(|f| f.discretisation > 0.0);
+    if out.selected.is_empty() || !(dt > 0.0) || delayed || !(in_floor || shorter_than(out, dt)) {
         return None;
     }
     let fine_dt = dt / crate::sim2real::replay::REFINE;
@@ -63,14 +75,20 @@ pub fn measure(
     fine.mj.opt_mut().timestep = fine_dt;
     fine.opt.timestep = fine_dt;
     let told = out.selected.iter().map(|s| (s.effect.clone(), s.joints.clone())).collect();
-    let o = FitOptions { told, progress: None, ..opts.clone() };
+    // Each re-fit starts at its answer at the model's step: the finer step moves it a little.
+    let told_start = out.selected.iter().map(|s| s.values.clone()).collect();
+    let o = FitOptions { told, told_start, progress: None, ..opts.clone() };
     let b = fit(&fine, recs, &o);
     let mut shifts = Vec::new();
+    let mut timestep_only = Vec::new();
     for x in &out.selected {
         let Some(y) = b.selected.iter().find(|y| y.effect == x.effect && y.joints == x.joints)
         else {
             continue;
         };
+        if within_uncertainty(&fine, y).is_some() {
+            timestep_only.push((x.effect.clone(), x.joints.clone(), values(y)));
+        }
         for (k, v) in &x.params {
             if let Some(w) = y.params.get(k) {
                 shifts.push(Shift {
@@ -88,7 +106,56 @@ pub fn measure(
         return None;
     }
     let simulated_s = b.cost.rollouts.simulated_s;
-    Some(TimestepShift { timestep: dt, fine_timestep: fine_dt, shifts, simulated_s })
+    Some(TimestepShift { timestep: dt, fine_timestep: fine_dt, shifts, simulated_s, timestep_only })
+}
+
+/// Some kept effect has a fitted time (a parameter in seconds) shorter than `dt`.
+fn shorter_than(out: &FitOutcome, dt: f64) -> bool {
+    out.selected.iter().any(|s| {
+        crate::fit::effects::by_id(&s.effect).is_some_and(|e| {
+            e.params()
+                .iter()
+                .take(e.fitted())
+                .any(|d| d.unit == "s" && s.params.get(d.name).is_some_and(|v| v.abs() < dt))
+        })
+    })
+}
+
+/// Moves the kept effects that re-fit at the finer step to the model as given
+/// ([`TimestepShift::timestep_only`]) out of `selected`; returns their notes (in order).
+pub fn split_off(s: &TimestepShift, selected: &mut Vec<Selected>) -> Vec<String> {
+    let mut notes = Vec::new();
+    selected.retain(|x| {
+        let Some((_, _, at_fine)) =
+            s.timestep_only.iter().find(|(e, j, _)| *e == x.effect && *j == x.joints)
+        else {
+            return true;
+        };
+        notes.push(format!(
+            "{} on {}: {} at the model's {:.3} ms step, {at_fine} re-fitted at {:.3} ms — within {} standard errors of the model as given there, so it is the timestep, not missing physics (it stays in the fitted replay)",
+            x.effect,
+            x.joints.join(","),
+            values(x),
+            1e3 * s.timestep,
+            1e3 * s.fine_timestep,
+            crate::fit::absent::Z_ABSENT
+        ));
+        false
+    });
+    notes
+}
+
+/// `name = value ± se, …` of a fit's parameters.
+fn values(x: &Selected) -> String {
+    let shown: Vec<String> = x
+        .params
+        .iter()
+        .map(|(k, v)| match x.stderr.get(k) {
+            Some(se) if se.is_finite() => format!("{k} = {v:.4} ± {se:.2e}"),
+            _ => format!("{k} = {v:.4}"),
+        })
+        .collect();
+    shown.join(", ")
 }
 
 /// The note: each parameter's value at both timesteps, the change in % and in its s.e.
@@ -151,6 +218,7 @@ mod tests {
                 stderr: 0.01,
             }],
             simulated_s: 515.0,
+            timestep_only: Vec::new(),
         };
         let n = note(&s);
         assert!(
@@ -158,5 +226,51 @@ mod tests {
             "{n}"
         );
         assert!(n.contains("515 s of recording replayed"), "{n}");
+    }
+
+    fn kept(effect: &str, delay: f64) -> Selected {
+        Selected {
+            effect: effect.into(),
+            joints: vec!["knee".into()],
+            params: [("delay_s".to_string(), delay)].into(),
+            stderr: [("delay_s".to_string(), 2e-5)].into(),
+            identifiable: true,
+            unidentified: vec![],
+            evidence: Default::default(),
+            heldout_improvement: 0.1,
+            heldout_rmse_before: 1.0,
+            heldout_rmse_after: 0.9,
+            window_improvement: 0.0,
+            window_improvement_se: 0.0,
+            bic_before: 0.0,
+            bic_after: 0.0,
+            values: vec![delay],
+        }
+    }
+
+    #[test]
+    fn an_effect_that_is_the_model_as_given_at_the_finer_step_leaves_the_list_with_a_note() {
+        let s = TimestepShift {
+            timestep: 0.002,
+            fine_timestep: 0.0005,
+            shifts: vec![],
+            simulated_s: 100.0,
+            timestep_only: vec![(
+                "action_delay".into(),
+                vec!["knee".into()],
+                "delay_s = 0.0000 ± 5.93e-6".into(),
+            )],
+        };
+        let mut selected = vec![kept("action_delay", 0.00088), kept("other", 0.01)];
+        let notes = split_off(&s, &mut selected);
+        assert_eq!(selected.len(), 1);
+        assert_eq!(selected[0].effect, "other");
+        assert_eq!(notes.len(), 1);
+        assert!(
+            notes[0].contains("delay_s = 0.0009 ± 2.00e-5 at the model's 2.000 ms step, delay_s = 0.0000 ± 5.93e-6 re-fitted at 0.500 ms"),
+            "{}",
+            notes[0]
+        );
+        assert!(notes[0].contains("it is the timestep, not missing physics"), "{}", notes[0]);
     }
 }

@@ -108,6 +108,9 @@ pub struct FitOptions {
     /// Told fit: no search, fit exactly these (effect id, joint group) on the training set,
     /// jointly when there are several, and report their held-out improvement (`fit --told`).
     pub told: Vec<(String, Vec<String>)>,
+    /// Where each told fit starts (by index of `told`; none or empty: the effect's initial
+    /// values) — a re-fit of an answer on other settings starts at that answer.
+    pub told_start: Vec<Vec<f64>>,
     /// Called at each step of the search (none: silent).
     pub progress: Option<Progress>,
     /// Set from outside (the Python API on Ctrl-C) to stop the search: every replay after it
@@ -159,6 +162,7 @@ impl Default for FitOptions {
             estimate_start: false,
             policy: SearchPolicy::default(),
             told: vec![],
+            told_start: vec![],
             progress: None,
             cancel: None,
         }

@@ -27,7 +27,8 @@ pub(super) fn fit_told(s: &Search, told: &[(String, Vec<String>)], out: &mut Fit
             out.warnings.push(format!("--told: unknown effect `{id}`"));
             continue;
         };
-        let (p, f) = engine.fit_one(train, &out.applied, effect, joints);
+        let start = engine.opts.told_start.get(i).filter(|x| !x.is_empty());
+        let (p, f) = engine.fit_from(train, &out.applied, (effect, joints), start.map(|x| &x[..]));
         if p.is_empty() || !f.is_finite() {
             out.warnings.push(format!("--told {id}@{}: the fit failed", joints.join(",")));
             continue;
