@@ -79,8 +79,8 @@ fn held(robot: &Robot, j: usize) -> bool {
     let (wt, wo) = (m.wrap_type(), m.wrap_objid());
     let site_body = m.site_bodyid();
     let geom_body = m.geom_bodyid();
-    for w in 0..wt.len() {
-        let (t, o) = (wt[w] as i32, wo.get(w).copied().unwrap_or(-1));
+    for (w, &t) in wt.iter().enumerate() {
+        let (t, o) = (t as i32, wo.get(w).copied().unwrap_or(-1));
         let Ok(o) = usize::try_from(o) else { continue };
         let beyond = |b: Option<&i32>| {
             b.and_then(|&b| usize::try_from(b).ok())
