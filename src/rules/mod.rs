@@ -167,6 +167,22 @@ impl Context<'_> {
         let eloc = self.robot.elem_loc(kind, id, name);
         self.finding(message, eloc).element(self.element_label(kind, id, name), eloc)
     }
+    /// How a message names actuator `id`: `` `name` ``, or for an unnamed one its index and
+    /// where the file writes it (`#3 (robot.xml:42)`).
+    pub fn actuator_label(&self, id: usize) -> String {
+        let name = self.robot.actuators.get(id).map(|a| a.name.as_str()).unwrap_or("");
+        if !name.is_empty() {
+            return format!("`{name}`");
+        }
+        let loc = self.robot.elem_loc(ElemKind::Actuator, id, "");
+        match self.sources.files.get(loc.file) {
+            Some(f) => {
+                let file = f.path.file_name().map(|n| n.to_string_lossy()).unwrap_or_default();
+                format!("#{id} ({file}:{})", f.line_col(loc.start).0)
+            }
+            None => format!("#{id}"),
+        }
+    }
     /// Spec facts for a joint, if a spec is present and mentions it.
     pub fn facts(&self, joint: &str) -> Option<crate::spec::JointFacts> {
         self.spec.and_then(|s| s.joint(joint))
@@ -304,6 +320,7 @@ pub fn registry() -> Vec<&'static dyn Rule> {
         &control::servo_stall_band::ServoStallBand,
         &limits::effort_limit_mismatch::EffortLimitMismatch,
         &mapping::passive_joint_spring::PassiveJointSpring,
+        &mapping::free_passive_joint::FreePassiveJoint,
         &control::gains_unstable_for_timestep::GainsUnstableForTimestep,
         &control::solref_below_timestep::SolrefBelowTimestep,
         &control::solimp_out_of_range::SolimpOutOfRange,

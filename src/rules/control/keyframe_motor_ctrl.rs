@@ -46,7 +46,7 @@ impl Rule for KeyframeMotorCtrl {
     fn check(&self, cx: &Context, out: &mut Vec<Finding>) {
         let robot = cx.robot;
         let tol = cx.opt("tolerance");
-        let motors = key_actuators(robot, |k| *k == ActuatorKind::Motor);
+        let motors = key_actuators(robot, |a| a.kind == ActuatorKind::Motor);
         if motors.is_empty() {
             return;
         }
@@ -65,7 +65,7 @@ impl Rule for KeyframeMotorCtrl {
             let shown: Vec<String> = nonzero
                 .iter()
                 .take(4)
-                .map(|p| format!("`{}` {}", robot.actuators[p.0].name, fmt_num(p.2, 4)))
+                .map(|p| format!("{} {}", cx.actuator_label(p.0), fmt_num(p.2, 4)))
                 .collect();
             let more = if nonzero.len() > 4 {
                 format!(", … ({} in all)", nonzero.len())

@@ -2,7 +2,7 @@
 //! of one kind on scalar joints, and each keyframe's positions and controls.
 
 use crate::model::mj;
-use crate::model::{ActuatorKind, Robot, Transmission};
+use crate::model::{Actuator, Robot, Transmission};
 
 /// An actuator on a hinge or slide joint through a joint transmission.
 #[derive(Clone, Copy)]
@@ -40,16 +40,14 @@ impl Keyframe<'_> {
 }
 
 /// The actuators of a kind `keep` accepts that drive a scalar joint directly, with a control.
-pub fn key_actuators(robot: &Robot, keep: impl Fn(&ActuatorKind) -> bool) -> Vec<KeyActuator> {
+pub fn key_actuators(robot: &Robot, keep: impl Fn(&Actuator) -> bool) -> Vec<KeyActuator> {
     let m = &robot.mj;
     let nu = mj::raw(m).nu.max(0) as usize;
     let (cadr, cnum) = (m.actuator_ctrladr(), m.actuator_ctrlnum());
     robot
         .actuators
         .iter()
-        .filter(|a| {
-            keep(&a.kind) && matches!(a.trn, Transmission::Joint | Transmission::JointInParent)
-        })
+        .filter(|a| keep(a) && matches!(a.trn, Transmission::Joint | Transmission::JointInParent))
         .filter_map(|a| {
             let j = robot.joints.get(usize::try_from(a.target).ok()?)?;
             let c = usize::try_from(*cadr.get(a.id)?).ok()?;

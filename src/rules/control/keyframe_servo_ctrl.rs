@@ -1,17 +1,19 @@
 use crate::declare_rule;
 use crate::finding::{Finding, Severity, Subject};
+use crate::model::JointType;
 use crate::model::mjcf::ElemKind;
-use crate::model::{ActuatorKind, JointType};
 use crate::rules::control::keyframe_scan::{key_actuators, keyframes};
 use crate::rules::{Context, Domain, Rule, RuleMeta, opt};
 use crate::util::fmt_num;
 
 declare_rule! {
     /// ## What it does
-    /// Finds keyframes that give position servos no targets: every position actuator on a
-    /// hinge or slide joint has control 0 in the keyframe (its `ctrl` is omitted or all zero)
-    /// while the keyframe places at least one of their joints away from 0 (by more than
-    /// `tolerance`). Keyframes whose servo controls are not all zero are not judged (a target
+    /// Finds keyframes that give position servos no targets: every position servo on a
+    /// hinge or slide joint (a `<position>`, or a `<general biastype="affine">` servo whatever
+    /// its gain scale and offset) has control 0 in the keyframe (its `ctrl` is omitted or all
+    /// zero) while the keyframe places at least one of their joints away from the setpoint
+    /// control 0 commands (0 for a `<position>`, the offset biasprm[0]/kp ÷ gear for an affine
+    /// servo; by more than `tolerance`). Keyframes whose servo controls are not all zero are not judged (a target
     /// other than the pose may be meant, e.g. a gripper commanded shut), nor keyframes whose
     /// servo joints all sit at 0.
     ///
@@ -46,7 +48,7 @@ impl Rule for KeyframeServoCtrl {
     fn check(&self, cx: &Context, out: &mut Vec<Finding>) {
         let robot = cx.robot;
         let tol = cx.opt("tolerance");
-        let servos = key_actuators(robot, |k| matches!(k, ActuatorKind::Position { .. }));
+        let servos = key_actuators(robot, |a| a.servo.is_some());
         if servos.is_empty() {
             return;
         }
@@ -54,11 +56,18 @@ impl Rule for KeyframeServoCtrl {
             if servos.iter().any(|s| key.ctrl[s.ctrl] != 0.0) {
                 continue;
             }
-            // (actuator, joint, keyframe position) of the servos whose joints sit away from 0.
+            // (actuator, joint, keyframe position) of the servos whose joints sit away from the
+            // setpoint ctrl 0 commands (0 for a `<position>`; offset / gear for a scaled
+            // `<general biastype="affine">` servo).
+            let zero_setpoint = |a: usize| {
+                let a = &robot.actuators[a];
+                let g = if a.gear != 0.0 { a.gear } else { 1.0 };
+                a.servo.map_or(0.0, |s| s.setpoint(0.0) / g)
+            };
             let mut off: Vec<(usize, usize, f64)> = servos
                 .iter()
                 .map(|s| (s.actuator, s.joint, key.joint_pos(robot, s.joint)))
-                .filter(|p| p.2.abs() > tol)
+                .filter(|p| (p.2 - zero_setpoint(p.0)).abs() > tol)
                 .collect();
             if off.is_empty() {
                 continue;
@@ -85,7 +94,7 @@ impl Rule for KeyframeServoCtrl {
                 .at_attr(ElemKind::Key, k, &key.name, "ctrl", msg)
                 .label("servo targets 0, pose elsewhere")
                 .note("a position servo's control is its target: reset to this keyframe, every servo pulls its joint from the keyframe's pose towards 0 (force kp × the offset) from the first step")
-                .help("set the keyframe's ctrl to the servo targets that hold its pose (gear × the joint's keyframe position), in actuator order")
+                .help("set the keyframe's ctrl to the servo targets that hold its pose (gear × the joint's keyframe position for a <position>; for a scaled servo the ctrl whose setpoint it is), in actuator order")
                 .subject(Subject::Actuator(first.0))
                 .measured(first.2, unit(first.1))
                 .with("servos_off_target", off.len() as f64);

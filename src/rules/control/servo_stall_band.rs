@@ -86,8 +86,8 @@ impl Rule for ServoStallBand {
             }
             let msg = if stuck {
                 format!(
-                    "position actuator `{}` can push at most {} on joint `{}`, not more than its frictionloss {}: no command ever moves the joint",
-                    a.name,
+                    "position actuator {} can push at most {} on joint `{}`, not more than its frictionloss {}: no command ever moves the joint",
+                    cx.actuator_label(a.id),
                     fmt_num(max_push, 3),
                     j.name,
                     fmt_num(j.frictionloss, 3)
@@ -99,8 +99,8 @@ impl Rule for ServoStallBand {
                     String::new()
                 };
                 format!(
-                    "position actuator `{}` (kp {}) cannot overcome joint `{}`'s frictionloss {} within {} {unit} of its target (stall band frictionloss / kp{of_range})",
-                    a.name,
+                    "position actuator {} (kp {}) cannot overcome joint `{}`'s frictionloss {} within {} {unit} of its target (stall band frictionloss / kp{of_range})",
+                    cx.actuator_label(a.id),
                     fmt_num(stiffness, 3),
                     j.name,
                     fmt_num(j.frictionloss, 3),

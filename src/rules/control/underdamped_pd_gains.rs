@@ -18,7 +18,11 @@ declare_rule! {
     /// damping, MuJoCo ≥ 3.17; a voltage-driven `<dcmotor>`'s back-EMF adds K²/R × gear², as in
     /// MuJoCo's DC motor model note) and I is the joint's diagonal entry of the mass matrix at the
     /// standing keyframe (MuJoCo includes every armature in it: joint, actuator·gear², tendon). Reports joints with ζ below `min_damping_ratio`. The
-    /// armature-only bound kd / (2·√(kp·armature)) is reported alongside.
+    /// armature-only bound kd / (2·√(kp·armature)) is reported alongside. A joint with several
+    /// actuators (the position, velocity and torque modes of one motor) is judged when exactly
+    /// one of them is a servo and the others are `<velocity>` actuators or `<motor>`s: at ctrl 0
+    /// a velocity actuator is a damper −kv·q̇ that acts while the servo holds the joint, so its
+    /// kv·gear² is part of kd, and a motor adds nothing.
     ///
     /// The threshold's meaning is the step overshoot it accepts: a second-order loop overshoots
     /// a step by exp(−πζ/√(1−ζ²)), 4.6 % at ζ 0.7 (the usual "well-damped" servo). The level
@@ -180,6 +184,9 @@ pub struct PdJoint {
     pub inertia: f64,
     pub armature: f64,
     pub family: Option<String>,
+    /// Velocity actuators on the same joint (id, kv at the joint): with ctrl 0 each is a
+    /// damper −kv·q̇ that acts while the servo holds the joint; part of `kd_ctrl`.
+    pub velocity: Vec<(usize, f64)>,
 }
 
 impl PdJoint {
@@ -225,10 +232,30 @@ pub fn pd_joints(robot: &Robot, spec: Option<&crate::spec::Spec>) -> Vec<PdJoint
             .into_iter()
             .filter(|a| matches!(a.trn, Transmission::Joint | Transmission::JointInParent))
             .collect();
-        if acts.len() != 1 {
+        // One servo (or motor with spec gains) and, beside it, velocity actuators (dampers at
+        // ctrl 0) and motors (no force at ctrl 0): the servo's loop sees their damping.
+        let velocity: Vec<(usize, f64)> = acts
+            .iter()
+            .filter_map(|a| match a.kind {
+                ActuatorKind::Velocity { kv } if a.servo.is_none() => {
+                    Some((a.id, kv * a.gear * a.gear))
+                }
+                _ => None,
+            })
+            .collect();
+        let mains: Vec<_> = if acts.len() == 1 {
+            acts.clone()
+        } else {
+            acts.iter().copied().filter(|a| a.servo.is_some()).collect()
+        };
+        let others_known = acts.iter().all(|a| {
+            a.servo.is_some()
+                || matches!(a.kind, ActuatorKind::Velocity { .. } | ActuatorKind::Motor)
+        });
+        if mains.len() != 1 || !others_known {
             continue;
         }
-        let a = acts[0];
+        let a = mains[0];
         let inertia = robot.key.m_diag.get(j.dofadr).copied().unwrap_or(f64::NAN);
         if !(inertia > 0.0) {
             continue;
@@ -252,6 +279,7 @@ pub fn pd_joints(robot: &Robot, spec: Option<&crate::spec::Spec>) -> Vec<PdJoint
         if !(kp > 0.0) {
             continue;
         }
+        let kd_ctrl = kd_ctrl + velocity.iter().map(|v| v.1).sum::<f64>();
         out.push(PdJoint {
             joint: j.id,
             source,
@@ -261,6 +289,7 @@ pub fn pd_joints(robot: &Robot, spec: Option<&crate::spec::Spec>) -> Vec<PdJoint
             inertia,
             armature: j.armature,
             family,
+            velocity,
         });
     }
     out
@@ -337,8 +366,23 @@ impl Rule for UnderdampedPdGains {
             } else {
                 String::new()
             };
+            let velocity_note = if p.velocity.is_empty() {
+                String::new()
+            } else {
+                let v: Vec<String> = p
+                    .velocity
+                    .iter()
+                    .map(|(a, kv)| {
+                        format!("{} (kv {} {ud})", cx.actuator_label(*a), fmt_num(*kv, 4))
+                    })
+                    .collect();
+                format!(
+                    " kd includes the velocity actuators on the same joint, dampers −kv·q̇ while their ctrl is 0: {}.",
+                    v.join(", ")
+                )
+            };
             f = f.note(format!(
-                "An underdamped simulated joint teaches the policy to behave like an underdamped controller; on hardware its corrections overshoot and it oscillates (Asimov system identification §3).{arm_note}{parts_note}"
+                "An underdamped simulated joint teaches the policy to behave like an underdamped controller; on hardware its corrections overshoot and it oscillates (Asimov system identification §3).{arm_note}{parts_note}{velocity_note}"
             ));
             let help = match kd_max {
                 // The cap limits the controller's kd; joint damping adds to it.

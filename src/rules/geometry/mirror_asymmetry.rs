@@ -15,7 +15,13 @@ declare_rule! {
     /// `l_`/`r_` prefixes and `_l`/`_r` suffixes, and `Left`/`Right` anywhere) and reports
     /// differences: joint armature, damping, stiffness and frictionloss, joint range (accepted
     /// when equal or mirrored, `[a, b]` ↔ `[−b, −a]`, as for roll and yaw joints), actuator
-    /// kp/kv and gear, actuator force and control ranges (equal or mirrored), body masses, body
+    /// kp/kv and gear, actuator force and control ranges (equal or mirrored), centres of mass
+    /// that the file states (at the reference pose qpos0 the right one, reflected across the
+    /// plane halfway between the two body origins, lies farther than `com_tolerance` and
+    /// `com_fraction` of their offsets from the origins from the left one; not reported when it
+    /// fits one part turned into the other's frame — a gripper mounted turned 180° — unless the
+    /// geoms say the part is mirrored: one side's mesh scaled negatively, or the geoms at
+    /// mirrored places and not at turned ones), body masses, body
     /// principal moments of inertia (sorted, so independent of the frames the two sides'
     /// inertials are written in; compared with `inertia_tolerance`, for bodies whose masses
     /// agree and whose `<inertial>` the file states — moments MuJoCo computes from the geoms
@@ -56,6 +62,8 @@ declare_rule! {
             opt("tolerance", 0.01, "ratio", Domain::NON_NEGATIVE, "relative difference tolerated between mirrored scalars"),
             opt("range_tolerance", 0.005, "rad or m", Domain::NON_NEGATIVE, "absolute difference tolerated between mirrored range ends (0.005 rad ≈ 0.3°: calibrated hardware limits differ by a few mrad)"),
             opt("geom_tolerance", 0.02, "ratio", Domain::NON_NEGATIVE, "relative size difference tolerated between mirrored collision geoms (or 0.5 mm)"),
+            opt("com_tolerance", 0.01, "m", Domain::NON_NEGATIVE, "distance tolerated between a body's centre of mass and its mirror's reflected across the plane halfway between the two bodies' origins at the reference pose (CAD exports of the two halves of a mirrored part and asymmetric wiring place them within millimetres)"),
+            opt("com_fraction", 0.25, "fraction", Domain::NON_NEGATIVE, "the same distance as a share of the centres of mass' offsets from their body origins: a centre of mass 0.1 m off its joint is also tolerated 25 mm"),
             opt("inertia_tolerance", 0.05, "ratio", Domain::NON_NEGATIVE, "relative difference tolerated between mirrored bodies' principal moments of inertia (CAD exports of the two halves of a mirrored part differ by 1–2 %)"),
         ],
     }
@@ -378,7 +386,9 @@ impl Rule for MirrorAsymmetry {
         }
         // Bodies: mass and collision geometry.
         let bn: Vec<String> = robot.bodies.iter().map(|b| b.name.clone()).collect();
-        for (l, rr) in pairs(&bn, cx) {
+        let body_pairs = pairs(&bn, cx);
+        let pose = if body_pairs.is_empty() { None } else { Some(reference_pose(robot)) };
+        for (l, rr) in body_pairs {
             let (a, b) = (&robot.bodies[l], &robot.bodies[rr]);
             let p = Pair { kind: ElemKind::Body, left: (l, &a.name), right: (rr, &b.name) };
             // Moments follow the mass: a body reported for its mass has differing moments in the
@@ -409,6 +419,9 @@ impl Rule for MirrorAsymmetry {
             } else if let Some(f) = inertia_differs(cx, &p, itol) {
                 out.push(f);
             }
+            if let Some(f) = com_differs(cx, &p, &pose) {
+                out.push(f);
+            }
             let (sa, sb) = (geom_signature(robot, l), geom_signature(robot, rr));
             if !same_geoms(robot, &colliders(robot, l), &colliders(robot, rr), gtol, 0.0005) {
                 out.push(
@@ -419,4 +432,160 @@ impl Rule for MirrorAsymmetry {
             }
         }
     }
+}
+
+/// Body origins and centres of mass in the world at the reference pose (qpos0), where a
+/// mirror-symmetric model is posed symmetrically.
+struct Pose {
+    xpos: Vec<[f64; 3]>,
+    xipos: Vec<[f64; 3]>,
+    /// Row-major body orientation.
+    xmat: Vec<[f64; 9]>,
+    geom_xpos: Vec<[f64; 3]>,
+}
+
+fn reference_pose(robot: &Robot) -> Pose {
+    let mut d = mujoco_rs::prelude::MjData::new(&robot.mj);
+    d.forward();
+    Pose {
+        xpos: d.xpos().to_vec(),
+        xipos: d.xipos().to_vec(),
+        xmat: d.xmat().to_vec(),
+        geom_xpos: d.geom_xpos().to_vec(),
+    }
+}
+
+/// Whether body `b` draws or collides through a mirrored mesh (a `scale` with an odd number of
+/// negative factors): the file says the part is the mirror image of another.
+fn mirrored_mesh(robot: &Robot, b: usize) -> bool {
+    let scale = robot.mj.mesh_scale();
+    robot.geoms.iter().filter(|g| g.body == b && g.mesh >= 0).any(|g| {
+        scale.get(g.mesh as usize).is_some_and(|s| s.iter().filter(|x| **x < 0.0).count() % 2 == 1)
+    })
+}
+
+/// Where the file writes body `name`'s `<inertial pos>` (the centre of mass).
+fn com_loc(robot: &Robot, name: &str) -> Option<Loc> {
+    let mut found = None;
+    robot.tree.walk(&mut |n: &crate::model::source::XNode| {
+        if found.is_none()
+            && (n.tag == "body" || n.tag == "link")
+            && n.name() == Some(name)
+            && let Some(i) = n.children_tagged("inertial").next()
+        {
+            found = Some(
+                i.attr("pos")
+                    .or(i.children_tagged("origin").next().and_then(|o| o.attr("xyz")))
+                    .map_or(i.loc, |a| a.loc),
+            );
+        }
+    });
+    found
+}
+
+/// A mirror pair whose stated centres of mass are not mirror images: the right body's centre of
+/// mass reflected across the plane halfway between the two body origins lies farther from the
+/// left's than `com_tolerance`, and than `com_fraction` of their offsets from the origins.
+fn com_differs(cx: &Context, p: &Pair, pose: &Option<Pose>) -> Option<Finding> {
+    let robot = cx.robot;
+    let pose = pose.as_ref()?;
+    // Stated inertials only: a centre of mass MuJoCo computes from the geoms follows the
+    // collision geometry, compared on its own.
+    let loc = com_loc(robot, p.right.1)?;
+    let lloc = com_loc(robot, p.left.1)?;
+    let (ol, or) = (*pose.xpos.get(p.left.0)?, *pose.xpos.get(p.right.0)?);
+    let (cl, cr) = (*pose.xipos.get(p.left.0)?, *pose.xipos.get(p.right.0)?);
+    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    let norm = |a: [f64; 3]| dot(a, a).sqrt();
+    let gap = sub(ol, or);
+    // Origins that coincide define no mirror plane.
+    if !(norm(gap) > 1e-6) {
+        return None;
+    }
+    let n = gap.map(|x| x / norm(gap));
+    let mid = [(ol[0] + or[0]) / 2.0, (ol[1] + or[1]) / 2.0, (ol[2] + or[2]) / 2.0];
+    let h = dot(sub(cr, mid), n);
+    let reflected = [cr[0] - 2.0 * h * n[0], cr[1] - 2.0 * h * n[1], cr[2] - 2.0 * h * n[2]];
+    let miss = norm(sub(reflected, cl));
+    let reach = (norm(sub(cl, ol)) + norm(sub(cr, or))) / 2.0;
+    let allowed = cx.opt("com_tolerance").max(cx.opt("com_fraction") * reach);
+    if !(miss > allowed) {
+        return None;
+    }
+    // One part mounted on both sides (a gripper turned 180°) is no mirror image: its centre of
+    // mass follows the rotation between the two body frames. Unless one side's mesh is the
+    // mirrored copy of the other's, a centre of mass that fits that rotation is not reported.
+    let (ml, mr) = (*pose.xmat.get(p.left.0)?, *pose.xmat.get(p.right.0)?);
+    let local_l = [0, 1, 2].map(|k| (0..3).map(|i| ml[3 * i + k] * (cl[i] - ol[i])).sum::<f64>());
+    let rotated =
+        [0, 1, 2].map(|i| or[i] + (0..3).map(|k| mr[3 * i + k] * local_l[k]).sum::<f64>());
+    let miss_rotated = norm(sub(rotated, cr));
+    // The geoms say which: each right geom's centre at the reflection of a left geom's centre
+    // (a mirrored part), or at its image under the frames' rotation (the same part).
+    let geoms = |b: usize| -> Vec<[f64; 3]> {
+        robot
+            .geoms
+            .iter()
+            .filter(|g| g.body == b)
+            .filter_map(|g| pose.geom_xpos.get(g.id).copied())
+            .collect()
+    };
+    let (gl, gr) = (geoms(p.left.0), geoms(p.right.0));
+    let fits = |map: &dyn Fn([f64; 3]) -> [f64; 3]| {
+        !gl.is_empty()
+            && gl.len() == gr.len()
+            && gr.iter().all(|&g| gl.iter().any(|&h| norm(sub(map(g), h)) <= allowed))
+    };
+    let reflect = |g: [f64; 3]| {
+        let h = dot(sub(g, mid), n);
+        [g[0] - 2.0 * h * n[0], g[1] - 2.0 * h * n[1], g[2] - 2.0 * h * n[2]]
+    };
+    // Right world point → left world point under the rotation between the two body frames.
+    let unrotate = |g: [f64; 3]| {
+        let local = [0, 1, 2].map(|k| (0..3).map(|i| mr[3 * i + k] * (g[i] - or[i])).sum::<f64>());
+        [0, 1, 2].map(|i| ol[i] + (0..3).map(|k| ml[3 * i + k] * local[k]).sum::<f64>())
+    };
+    let mirrored = mirrored_mesh(robot, p.left.0) != mirrored_mesh(robot, p.right.0)
+        || (fits(&reflect) && !fits(&unrotate));
+    if !mirrored && !(miss_rotated > allowed) {
+        return None;
+    }
+    let mm = |x: f64| fmt_num(1000.0 * x, 3);
+    let local =
+        |b: usize| {
+            robot.mj.body_ipos().get(b).map(|v| {
+                format!("({}, {}, {})", fmt_num(v[0], 4), fmt_num(v[1], 4), fmt_num(v[2], 4))
+            })
+        };
+    let (lr, ll) = (local(p.right.0)?, local(p.left.0)?);
+    let msg = format!(
+        "body `{}`'s centre of mass {lr} m is not the mirror image of `{}`'s ({ll} m): reflected across the plane between the two bodies, it lies {} mm from it",
+        p.right.1,
+        p.left.1,
+        mm(miss)
+    );
+    let rloc = robot.elem_loc(ElemKind::Body, p.right.0, p.right.1);
+    Some(
+        cx.finding(msg, loc)
+            .element(format!("body {}", p.right.1), rloc)
+            .label(format!("centre of mass {lr} m"))
+            .secondary(lloc, format!("mirror `{}` has {ll} m", p.left.1))
+            .note(format!(
+                "at the reference pose (qpos0) the two bodies' origins are mirror images; their centres of mass are {} mm apart once mirrored, beyond {} mm (com_tolerance, or com_fraction of their {} mm offset from the origins); {}: one side's inertial was copied from the other without flipping the lateral coordinate, so one limb swings and loads differently and the policy learns the asymmetry",
+                mm(miss),
+                mm(allowed),
+                mm(reach),
+                if mirrored {
+                    "the two parts' geoms are mirror images (a mirrored mesh, or geoms at mirrored places), so the centre of mass must be mirrored too".to_string()
+                } else {
+                    format!("as one part turned into the other's frame they are {} mm apart too", mm(miss_rotated))
+                }
+            ))
+            .help("mirror the centre of mass of the copied side (negate its lateral coordinate in the body's frame), or take both inertials from the CAD of each part")
+            .subject(Subject::Body(p.right.0))
+            .measured(miss, "m")
+            .expected(allowed, "m")
+            .with("com_mismatch", miss),
+    )
 }

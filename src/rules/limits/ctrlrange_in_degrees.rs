@@ -2,7 +2,7 @@ use crate::declare_rule;
 use crate::finding::{Finding, Severity, Subject};
 use crate::model::mjcf::ElemKind;
 use crate::model::source::XNode;
-use crate::model::{Actuator, ActuatorKind, JointType, Robot, Transmission};
+use crate::model::{Actuator, JointType, Robot, Transmission};
 use crate::probe::LimitApproach;
 use crate::rules::limits::soft_limits::HardStopExposure;
 use crate::rules::{Context, Domain, Rule, RuleMeta, opt};
@@ -10,7 +10,9 @@ use crate::util::fmt_num;
 
 declare_rule! {
     /// ## What it does
-    /// Finds position actuators on hinge joints whose `ctrlrange` was written in degrees. MuJoCo
+    /// Finds position servos on hinge joints (a `<position>`, or a `<general biastype="affine">`
+    /// servo, judged by the setpoints its ctrlrange commands) whose `ctrlrange` was written in
+    /// degrees. MuJoCo
     /// converts joint `range` (and other angles) from degrees when `<compiler angle="degree">` is
     /// in force — the MJCF default — but never converts `ctrlrange`. A ctrlrange that equals the
     /// joint range × 180/π, or whose ends lie beyond ±2π while the joint range does not, is
@@ -75,7 +77,7 @@ pub fn ranges_look_like_radians(robot: &Robot) -> bool {
 
 /// The ctrlrange (in joint units) of a position actuator on a limited hinge looks like degrees.
 pub fn looks_like_degrees(robot: &Robot, a: &Actuator, ratio_tol: f64) -> bool {
-    if !matches!(a.kind, ActuatorKind::Position { .. })
+    if a.servo.is_none()
         || !matches!(a.trn, Transmission::Joint | Transmission::JointInParent)
         || !a.ctrllimited
     {
@@ -87,8 +89,9 @@ pub fn looks_like_degrees(robot: &Robot, a: &Actuator, ratio_tol: f64) -> bool {
     if j.jtype != JointType::Hinge || !j.limited || !degree_mode(robot) {
         return false;
     }
-    let g = if a.gear != 0.0 { a.gear.abs() } else { 1.0 };
-    let (c0, c1) = (a.ctrlrange[0] / g, a.ctrlrange[1] / g);
+    // The joint positions the servo commands (a scaled `<general biastype="affine">` servo's
+    // setpoints, not its ctrl).
+    let Some([c0, c1]) = a.setpoint_range() else { return false };
     let k = 180.0 / std::f64::consts::PI;
     let span_ratio = (c1 - c0) / (j.range[1] - j.range[0]).max(1e-12);
     let beyond = c0.abs().max(c1.abs()) > 2.0 * std::f64::consts::PI
@@ -115,10 +118,10 @@ impl Rule for CtrlrangeInDegrees {
                     &a.name,
                     "ctrlrange",
                     format!(
-                        "ctrlrange [{}, {}] of actuator `{}` is in degrees, but MuJoCo reads it as radians (joint `{}` range is [{}, {}] rad)",
+                        "ctrlrange [{}, {}] of actuator {} is in degrees, but MuJoCo reads it as radians (joint `{}` range is [{}, {}] rad)",
                         fmt_num(a.ctrlrange[0], 4),
                         fmt_num(a.ctrlrange[1], 4),
-                        a.name,
+                        cx.actuator_label(a.id),
                         j.name,
                         fmt_num(j.range[0], 4),
                         fmt_num(j.range[1], 4)

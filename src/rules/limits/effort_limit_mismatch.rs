@@ -20,7 +20,10 @@ declare_rule! {
     /// contradicts the same joint's `actuatorfrcrange` by more than `tolerance` (no spec needed:
     /// e.g. ±139 N·m of command on a joint clamped at ±60), an actuator's `forcerange` (× gear)
     /// that does (MuJoCo applies both, so one of them never acts: e.g. servos bounded at ±72 N·m
-    /// on joints clamped at ±10), and limits that differ from the spec's motor
+    /// on joints clamped at ±10), two or more actuators on one joint (a position, a velocity and
+    /// a torque mode of one motor) whose force bounds at the joint differ by more than
+    /// `tolerance` while no `actuatorfrcrange` bounds their sum (no spec needed: they cannot all
+    /// be the motor's peak), and limits that differ from the spec's motor
     /// `peak_torque` by more than `tolerance`. When the spec gives a motor family's
     /// `velocity_limit` or `saturation_torque`, reports once per family (info) that MuJoCo cannot
     /// express the speed–torque curve, so the training stack must apply it; and a joint whose
@@ -45,7 +48,7 @@ declare_rule! {
         group: "limits",
         level: Severity::Warning,
         probe: None,
-        options: [opt("tolerance", 0.05, "fraction", Domain::NON_NEGATIVE, "allowed relative difference between model force limit and spec peak_torque")],
+        options: [opt("tolerance", 0.05, "fraction", Domain::NON_NEGATIVE, "allowed relative difference between two statements of one motor's force limit: the model's and the spec's peak_torque, or two actuators of one joint")],
     }
 }
 
@@ -148,6 +151,9 @@ impl Rule for EffortLimitMismatch {
                 out.push(f);
             }
             if let Some(f) = force_contradicts_joint_limit(cx, j, &acts, tol, unit) {
+                out.push(f);
+            }
+            if let Some(f) = actuators_disagree(cx, j, &acts, tol, unit) {
                 out.push(f);
             }
             let Some((lim, src)) = joint_torque_limit(robot, j.id) else {
@@ -388,8 +394,8 @@ fn ctrl_contradicts_joint_limit(
     }
     let above = ml > jl;
     let msg = format!(
-        "motor `{}` commands up to ±{} {unit} (ctrlrange × gear), but joint `{}` clamps actuator force at ±{} {unit} (actuatorfrcrange)",
-        a.name,
+        "motor {} commands up to ±{} {unit} (ctrlrange × gear), but joint `{}` clamps actuator force at ±{} {unit} (actuatorfrcrange)",
+        cx.actuator_label(a.id),
         fmt_num(ml, 4),
         j.name,
         fmt_num(jl, 4)
@@ -414,6 +420,81 @@ fn ctrl_contradicts_joint_limit(
             .expected(jl, unit)
             .with("ctrl_limit", ml)
             .with("joint_limit", jl),
+    )
+}
+
+/// Two or more actuators of one joint, each with a force bound, that state different motors:
+/// the largest bound at the joint exceeds the smallest by more than `tol` (relative), and no
+/// `actuatorfrcrange` on the joint says which the motor is.
+fn actuators_disagree(
+    cx: &Context,
+    j: &crate::model::Joint,
+    acts: &[&crate::model::Actuator],
+    tol: f64,
+    unit: &str,
+) -> Option<Finding> {
+    let robot = cx.robot;
+    // Only actuators on the joint itself: tendon actuators (a differential drive's) are
+    // virtual motors whose bounds combine, not statements of the joint's one motor.
+    let direct = |a: &&&crate::model::Actuator| {
+        matches!(
+            a.trn,
+            crate::model::Transmission::Joint | crate::model::Transmission::JointInParent
+        )
+    };
+    if acts.iter().filter(direct).count() < 2
+        || acts.len() != acts.iter().filter(direct).count()
+        || robot.mj.jnt_actfrclimited().get(j.id).copied().unwrap_or(false)
+    {
+        return None;
+    }
+    let mut bounds = Vec::new();
+    for a in acts {
+        let b = actuator_bounds(a, a.gear);
+        let (x, src) = b.into_iter().min_by(|p, q| p.0.total_cmp(&q.0))?;
+        if !(x > 0.0) {
+            return None;
+        }
+        bounds.push((x, src, a.id));
+    }
+    let lo = bounds.iter().min_by(|p, q| p.0.total_cmp(&q.0))?;
+    let hi = bounds.iter().max_by(|p, q| p.0.total_cmp(&q.0))?;
+    if hi.0 - lo.0 <= tol * hi.0 {
+        return None;
+    }
+    let attr = |s: LimitSource| match s {
+        LimitSource::MotorCtrl(_) => "ctrlrange",
+        _ => "forcerange",
+    };
+    let list: Vec<String> = bounds
+        .iter()
+        .map(|(x, _, a)| format!("{} ±{} {unit}", cx.actuator_label(*a), fmt_num(*x, 4)))
+        .collect();
+    let msg = format!(
+        "joint `{}`'s {} actuators bound its force differently ({}): they cannot all be its motor's peak",
+        j.name,
+        bounds.len(),
+        list.join(", ")
+    );
+    let (lo_loc, _) =
+        robot.attr_loc(ElemKind::Actuator, lo.2, &robot.actuators[lo.2].name, attr(lo.1));
+    let ha = &robot.actuators[hi.2];
+    Some(
+        cx.at_attr(ElemKind::Actuator, ha.id, &ha.name, attr(hi.1), msg)
+            .label(format!("±{} {unit}", fmt_num(hi.0, 4)))
+            .secondary(lo_loc, format!("±{} {unit}", fmt_num(lo.0, 4)))
+            .note(format!(
+                "each actuator is clamped to its own bound, so the joint gets up to ±{} {unit} in one control mode and ±{} {unit} in another: the policy trained through the stronger one asks the motor for {}× what the weaker one says it has",
+                fmt_num(hi.0, 4),
+                fmt_num(lo.0, 4),
+                fmt_num(hi.0 / lo.0, 3)
+            ))
+            .help("give every actuator of the joint the motor's peak torque, or bound the sum once with actuatorfrcrange on the joint")
+            .subject(Subject::Joint(j.id))
+            .measured(hi.0, unit)
+            .expected(lo.0, unit)
+            .with("largest_bound", hi.0)
+            .with("smallest_bound", lo.0),
     )
 }
 
@@ -446,8 +527,8 @@ fn force_contradicts_joint_limit(
     }
     let (act, joint) = (fl.min(jl), fl.max(jl));
     let msg = format!(
-        "actuator `{}` forcerange gives joint `{}` up to ±{} {unit} (× gear), but the joint's actuatorfrcrange clamps it at ±{} {unit}: {}× apart",
-        a.name,
+        "actuator {} forcerange gives joint `{}` up to ±{} {unit} (× gear), but the joint's actuatorfrcrange clamps it at ±{} {unit}: {}× apart",
+        cx.actuator_label(a.id),
         j.name,
         fmt_num(fl, 4),
         fmt_num(jl, 4),

@@ -188,7 +188,7 @@ impl ActuatorMapping {
         for a in &robot.actuators {
             if a.target < 0 {
                 let f = cx
-                    .at_elem(ElemKind::Actuator, a.id, &a.name, format!("actuator `{}` has no transmission target", a.name))
+                    .at_elem(ElemKind::Actuator, a.id, &a.name, format!("actuator {} has no transmission target", cx.actuator_label(a.id)))
                     .label("no target")
                     .note("an actuator that drives nothing is a mapping error: the policy's action for it has no effect")
                     .help("point the actuator at the joint (or tendon) of its motor, or remove it")
@@ -283,8 +283,8 @@ impl ActuatorMapping {
                         &a.name,
                         "ctrlrange",
                         format!(
-                            "position actuator `{}` {} [{}, {}] {u} reaches outside {what} [{}, {}] {u}",
-                            a.name,
+                            "position actuator {} {} [{}, {}] {u} reaches outside {what} [{}, {}] {u}",
+                            cx.actuator_label(a.id),
                             match a.servo {
                                 Some(s) if !s.is_unit() => format!(
                                     "ctrlrange [{}, {}] commands setpoints (gain/kp {})",
