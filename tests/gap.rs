@@ -653,3 +653,57 @@ fn cli_fit_finds_a_planted_damping_on_motor_pd_recordings() {
     let d = kept[0]["params"]["damping"].as_f64().unwrap();
     assert!((d - 0.35).abs() < 0.02 * 0.35, "damping {d}, truth 0.35");
 }
+
+/// A joint that does not move records its sensor's noise: its correlation with any replay is
+/// the noise's. Two joints, one following a 0.8 Hz motion that the "replay" matches exactly, one
+/// idle (noise σ = 0.5 mrad against a replay drifting by 10 µrad): the plain mean of the two
+/// correlations was ~0.5 for a perfect model; weighted by motion share it is the moving joint's.
+#[test]
+fn a_joint_at_its_noise_floor_does_not_weigh_on_the_shape_scores() {
+    let n = 1500;
+    let t: Vec<f64> = (0..n).map(|i| i as f64 * 0.01).collect();
+    let mut s: u64 = 7;
+    let mut noise = || {
+        let mut u = 0.0;
+        for _ in 0..12 {
+            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            u += (s >> 11) as f64 / (1u64 << 53) as f64;
+        }
+        5e-4 * (u - 6.0)
+    };
+    let motion: Vec<f64> =
+        t.iter().map(|&x| 0.4 * (2.0 * std::f64::consts::PI * 0.8 * x).sin()).collect();
+    let moving: Vec<f64> = motion.iter().map(|m| m + noise()).collect();
+    let idle: Vec<f64> = (0..n).map(|_| 0.2 + noise()).collect();
+    let drift: Vec<f64> = t.iter().map(|&x| 0.2 + 1e-5 * (0.3 * x).sin()).collect();
+    let joints = [("elbow", &moving), ("knee", &idle)]
+        .into_iter()
+        .map(|(name, q)| {
+            let mut j = JointTrace::new(name, q.clone());
+            j.q_cmd = Some(q.clone());
+            j
+        })
+        .collect();
+    let rec = Recording {
+        source: PathBuf::from("idle.csv"),
+        meta: Default::default(),
+        control_rate_hz: None,
+        control_t0_s: None,
+        t: t.clone(),
+        joints,
+        base: None,
+    };
+    let ep = replay::Episode {
+        t,
+        joints: vec!["elbow".into(), "knee".into()],
+        q_sim: vec![motion.clone(), drift],
+        qd_sim: vec![vec![0.0; n], vec![0.0; n]],
+        diverged: None,
+    };
+    let r = gap::compute(&[rec], &[ep], &gap::region_from_name, &GapOptions::default());
+    let share = |name: &str| r.per_joint.iter().find(|j| j.name == name).unwrap().motion_share;
+    assert!(share("elbow") > 0.99 && share("knee") < 0.1, "{} {}", share("elbow"), share("knee"));
+    let knee = r.per_joint.iter().find(|j| j.name == "knee").unwrap().corr.unwrap();
+    assert!(knee.abs() < 0.2, "the idle joint's correlation is the noise's: {knee}");
+    assert!(r.correlation_mean > 0.95, "correlation_mean {}", r.correlation_mean);
+}
