@@ -675,3 +675,161 @@ fn cli_gap_report_labels_say_recorded_and_replayed_with_units() {
     assert!(!page.contains(">sim</text>") && !page.contains(">real</text>"));
     let _ = std::fs::remove_dir_all(&out);
 }
+
+/// Strips the `.kp`/`.kd` columns of a CSV recording (keeping its `#` header lines).
+fn without_gains(csv: &Path) -> String {
+    let text = std::fs::read_to_string(csv).unwrap();
+    let (head, body): (Vec<&str>, Vec<&str>) = text.lines().partition(|l| l.starts_with('#'));
+    let cols: Vec<&str> = body[0].split(',').collect();
+    let keep: Vec<usize> = (0..cols.len())
+        .filter(|&i| !cols[i].ends_with(".kp") && !cols[i].ends_with(".kd"))
+        .collect();
+    let rows = body.iter().map(|r| {
+        let f: Vec<&str> = r.split(',').collect();
+        keep.iter().map(|&i| f[i]).collect::<Vec<_>>().join(",")
+    });
+    head.into_iter().map(str::to_string).chain(rows).collect::<Vec<_>>().join("\n") + "\n"
+}
+
+/// Torque actuators with the PD in the policy's code (legged_gym, Isaac Lab): a `<motor>` and a
+/// `<general>` without bias, recorded by MuJoCo's Python bindings with the PD computed in the
+/// script at every 1 ms step (fixtures/gap/motor_pd/make.py, noise σ = 0.5 mrad). The replay
+/// runs the same PD from the log's kp/kd columns and lands at the noise (MAE of N(0, σ) is
+/// 0.4 mrad); it refused the model ("not a position or velocity servo"). Without the columns the
+/// error says how to give the gains, and the spec's motor families give them.
+#[test]
+fn cli_motors_replay_as_the_policys_pd_from_the_recorded_gains() {
+    let dir = root().join("fixtures/gap/motor_pd");
+    let o = bin()
+        .args(["gap", "--format", "json"])
+        .arg(dir.join("arm.xml"))
+        .arg(dir.join("ep0.csv"))
+        .arg(dir.join("ep1.csv"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["schema"], "modellint/gap", "{v}");
+    assert!(v["version"].as_u64().is_some() && v["tool"]["name"] == "modellint", "{v}");
+    for j in v["per_joint"].as_array().unwrap() {
+        let mae = j["mae"].as_f64().unwrap();
+        assert!(mae < 5.5e-4, "{}: MAE {mae} rad", j["name"]);
+    }
+    let bare = tmp("motor_pd_no_gains.csv", &without_gains(&dir.join("ep0.csv")));
+    let o = bin().arg("gap").arg(dir.join("arm.xml")).arg(&bare).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "stderr: {err}");
+    assert!(
+        err.contains("`shoulder.kp`")
+            && err.contains("[motors.FAMILY] kp")
+            && err.contains("--spec"),
+        "stderr: {err}"
+    );
+    let spec = tmp(
+        "motor_pd.toml",
+        "[motors.big]\nkp = 30.0\nkd = 1.0\n[motors.small]\nkp = 15.0\nkd = 0.5\n\
+         [joints.\"shoulder\"]\nmotor = \"big\"\n[joints.\"elbow\"]\nmotor = \"small\"\n",
+    );
+    let o = bin()
+        .args(["gap", "--format", "json"])
+        .arg(dir.join("arm.xml"))
+        .arg(&bare)
+        .arg("--spec")
+        .arg(&spec)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let mae = v["position_mae"].as_f64().unwrap();
+    assert!(mae < 5.5e-4, "MAE {mae} rad with the spec's gains");
+    // An actuator the replay cannot drive is named with what it is, and what can be driven.
+    let xml = std::fs::read_to_string(dir.join("arm.xml")).unwrap().replace(
+        r#"<general name="elbow" joint="elbow" gainprm="2" ctrlrange="-2 2"/>"#,
+        r#"<general name="elbow" joint="elbow" gainprm="2" biastype="affine" biasprm="0 -5 0"/>"#,
+    );
+    let odd = tmp("odd_general.xml", &xml);
+    let o = bin().arg("gap").arg(&odd).arg(dir.join("ep0.csv")).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "stderr: {err}");
+    assert!(
+        err.contains("actuator 'elbow' on joint 'elbow' is an actuator whose gain/bias law")
+            && err.contains("<general> without bias"),
+        "stderr: {err}"
+    );
+}
+
+/// `fit` on motor + policy-PD recordings (make.py `damp 0.3 3`: elbow damping 0.05 + 0.3, at the
+/// model's own step) finds the planted damping on the elbow and nothing else.
+#[test]
+fn cli_fit_finds_a_planted_damping_on_motor_pd_recordings() {
+    let dir = root().join("fixtures/gap/motor_pd");
+    let mut c = bin();
+    c.arg("fit").arg(dir.join("arm.xml"));
+    for e in 0..3 {
+        c.arg(dir.join(format!("damp_ep{e}.csv")));
+    }
+    let o = c.args(["--format", "json"]).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["schema"], "modellint/fit", "{v}");
+    let kept = v["missing_physics"].as_array().unwrap();
+    assert_eq!(kept.len(), 1, "{v}");
+    assert_eq!(kept[0]["effect"], "viscous_damping", "{v}");
+    assert_eq!(kept[0]["joints"], serde_json::json!(["elbow"]), "{v}");
+    let d = kept[0]["params"]["damping"].as_f64().unwrap();
+    assert!((d - 0.35).abs() < 0.02 * 0.35, "damping {d}, truth 0.35");
+}
+
+/// A joint that does not move records its sensor's noise: its correlation with any replay is
+/// the noise's. Two joints, one following a 0.8 Hz motion that the "replay" matches exactly, one
+/// idle (noise σ = 0.5 mrad against a replay drifting by 10 µrad): the plain mean of the two
+/// correlations was ~0.5 for a perfect model; weighted by motion share it is the moving joint's.
+#[test]
+fn a_joint_at_its_noise_floor_does_not_weigh_on_the_shape_scores() {
+    let n = 1500;
+    let t: Vec<f64> = (0..n).map(|i| i as f64 * 0.01).collect();
+    let mut s: u64 = 7;
+    let mut noise = || {
+        let mut u = 0.0;
+        for _ in 0..12 {
+            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            u += (s >> 11) as f64 / (1u64 << 53) as f64;
+        }
+        5e-4 * (u - 6.0)
+    };
+    let motion: Vec<f64> =
+        t.iter().map(|&x| 0.4 * (2.0 * std::f64::consts::PI * 0.8 * x).sin()).collect();
+    let moving: Vec<f64> = motion.iter().map(|m| m + noise()).collect();
+    let idle: Vec<f64> = (0..n).map(|_| 0.2 + noise()).collect();
+    let drift: Vec<f64> = t.iter().map(|&x| 0.2 + 1e-5 * (0.3 * x).sin()).collect();
+    let joints = [("elbow", &moving), ("knee", &idle)]
+        .into_iter()
+        .map(|(name, q)| {
+            let mut j = JointTrace::new(name, q.clone());
+            j.q_cmd = Some(q.clone());
+            j
+        })
+        .collect();
+    let rec = Recording {
+        source: PathBuf::from("idle.csv"),
+        meta: Default::default(),
+        control_rate_hz: None,
+        control_t0_s: None,
+        t: t.clone(),
+        joints,
+        base: None,
+    };
+    let ep = replay::Episode {
+        t,
+        joints: vec!["elbow".into(), "knee".into()],
+        q_sim: vec![motion.clone(), drift],
+        qd_sim: vec![vec![0.0; n], vec![0.0; n]],
+        diverged: None,
+    };
+    let r = gap::compute(&[rec], &[ep], &gap::region_from_name, &GapOptions::default());
+    let share = |name: &str| r.per_joint.iter().find(|j| j.name == name).unwrap().motion_share;
+    assert!(share("elbow") > 0.99 && share("knee") < 0.1, "{} {}", share("elbow"), share("knee"));
+    let knee = r.per_joint.iter().find(|j| j.name == "knee").unwrap().corr.unwrap();
+    assert!(knee.abs() < 0.2, "the idle joint's correlation is the noise's: {knee}");
+    assert!(r.correlation_mean > 0.95, "correlation_mean {}", r.correlation_mean);
+}

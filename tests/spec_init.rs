@@ -299,5 +299,8 @@ fn a_model_without_actuators_gets_no_passive_joints() {
     let text = std::fs::read_to_string(&spec).unwrap();
     assert!(!text.contains("passive = true"), "{text}");
     assert!(text.contains("# actuated = ..."), "{text}");
+    // The robot is named as the URDF names it (`<robot name="leg">`), not after the file
+    // (`valid.urdf`), as an MJCF's `<mujoco model=…>` names it.
+    assert!(text.contains("[robot]\nname = \"leg\"\n"), "{text}");
     loads_and_adds_nothing(model, &spec);
 }

@@ -187,6 +187,8 @@ pub fn prepare(a: &FitArgs, sink: &dyn Sink) -> Result<Prepared, CmdError> {
     let mut loaded = crate::lint::load_for_api(&a.model, a.spec.clone()).map_err(CmdError::Load)?;
     crate::sim2real::replay::hold_base(&mut loaded.robot, a.replay.base);
     let robot = &loaded.robot;
+    let mut replay = a.replay.clone();
+    replay.pd_gains = crate::sim2real::replay::spec_pd_gains(loaded.spec.as_ref(), robot);
     // A candidate is a registered effect (a held component, `EFFECT~PARAMETER`, is told only).
     for e in &a.effects {
         if !effects::all().iter().any(|x| x.id() == e) {
@@ -213,12 +215,12 @@ pub fn prepare(a: &FitArgs, sink: &dyn Sink) -> Result<Prepared, CmdError> {
     let files = crate::sim2real::input::expand_inputs(&a.recordings).map_err(|e| e.to_string())?;
     let names: Vec<String> = robot.joints.iter().map(|j| j.name.clone()).collect();
     let mut inputs =
-        crate::sim2real::input::read_for_replay(&files.files, robot, &a.replay, &a.parse)?;
+        crate::sim2real::input::read_for_replay(&files.files, robot, &replay, &a.parse)?;
     if let Some(n) = files.skipped_note() {
         inputs.notes.insert(0, n);
     }
     // The nominal model's own discretisation error beside its gap to the recordings.
-    if let Some(w) = crate::sim2real::replay::timestep_check(robot, &inputs.recs, &a.replay, None)
+    if let Some(w) = crate::sim2real::replay::timestep_check(robot, &inputs.recs, &replay, None)
         .as_ref()
         .and_then(crate::sim2real::replay::timestep_note)
     {
@@ -274,7 +276,7 @@ pub fn prepare(a: &FitArgs, sink: &dyn Sink) -> Result<Prepared, CmdError> {
         holdout: a.holdout,
         effects: a.effects.clone(),
         joints,
-        replay: a.replay.clone(),
+        replay,
         shooting_s: a.window,
         families,
         estimate_start: a.start_estimate,
@@ -517,7 +519,7 @@ pub fn fit_json(r: &FitRun) -> serde_json::Value {
             })
         })
         .collect();
-    let v = json!({
+    let mut v = json!({
         "missing_physics": mp,
         "before": before,
         "after": after,
@@ -532,6 +534,7 @@ pub fn fit_json(r: &FitRun) -> serde_json::Value {
         "warnings": warnings,
         "notes": notes,
     });
+    crate::output::json::stamp(&mut v, "fit");
     v
 }
 

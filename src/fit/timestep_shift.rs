@@ -32,6 +32,8 @@ pub struct Shift {
     pub effect: String,
     pub joints: Vec<String>,
     pub param: String,
+    /// The parameter's unit (`Param::unit`; empty for a dimensionless one).
+    pub unit: String,
     /// The reported value (the search's, at the model's timestep).
     pub coarse: f64,
     /// Told fit at the finer timestep.
@@ -95,6 +97,9 @@ pub fn measure(
                     effect: x.effect.clone(),
                     joints: x.joints.clone(),
                     param: k.clone(),
+                    unit: crate::fit::effects::by_id(&x.effect)
+                        .and_then(|e| e.params().iter().find(|p| p.name == k))
+                        .map_or(String::new(), |p| p.unit.to_string()),
                     coarse: *v,
                     fine: *w,
                     stderr: x.stderr.get(k).copied().unwrap_or(f64::NAN),
@@ -158,32 +163,31 @@ fn values(x: &Selected) -> String {
     shown.join(", ")
 }
 
-/// The note: each parameter's value at both timesteps, the change in % and in its s.e.
+/// The note: each parameter's value at both timesteps and the shift between them, in the
+/// parameter's own unit and in its s.e. (not as a % of the finer value, which is meaningless
+/// when that value is near zero).
 pub fn note(s: &TimestepShift) -> String {
     let list: Vec<String> = s
         .shifts
         .iter()
         .map(|x| {
             let d = x.coarse - x.fine;
-            let rel = if x.fine != 0.0 {
-                format!("{:+.1} % of the finer value, ", 100.0 * d / x.fine.abs())
-            } else {
-                String::new()
-            };
+            let u = if x.unit.is_empty() { String::new() } else { format!(" {}", x.unit) };
             let se = if x.stderr.is_finite() && x.stderr > 0.0 {
-                format!("{:.1}× its s.e. {:.2e}", d.abs() / x.stderr, x.stderr)
+                format!("{:.1}× its s.e. {:.2e}{u}", d.abs() / x.stderr, x.stderr)
             } else {
                 "s.e. unknown".to_string()
             };
             format!(
-                "{} {} on {}: {:.4} at {:.3} ms, {:.4} at {:.3} ms ({rel}{se})",
+                "{} {} on {}: {:.4} at {:.3} ms, {:.4} at {:.3} ms (shift {:+.2e}{u}, {se})",
                 x.effect,
                 x.param,
                 x.joints.join(","),
                 x.coarse,
                 1e3 * s.timestep,
                 x.fine,
-                1e3 * s.fine_timestep
+                1e3 * s.fine_timestep,
+                d
             )
         })
         .collect();
@@ -213,6 +217,7 @@ mod tests {
                 effect: "e".into(),
                 joints: vec!["elbow".into()],
                 param: "p".into(),
+                unit: "kg".into(),
                 coarse: 0.44,
                 fine: 0.40,
                 stderr: 0.01,
@@ -222,7 +227,7 @@ mod tests {
         };
         let n = note(&s);
         assert!(
-            n.contains("e p on elbow: 0.4400 at 2.000 ms, 0.4000 at 0.500 ms (+10.0 % of the finer value, 4.0× its s.e. 1.00e-2)"),
+            n.contains("e p on elbow: 0.4400 at 2.000 ms, 0.4000 at 0.500 ms (shift +4.00e-2 kg, 4.0× its s.e. 1.00e-2 kg)"),
             "{n}"
         );
         assert!(n.contains("515 s of recording replayed"), "{n}");

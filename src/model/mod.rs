@@ -10,6 +10,7 @@ mod limbs;
 pub mod mirror;
 pub mod mj;
 pub mod mjcf;
+pub mod region;
 pub mod source;
 pub mod urdf_packages;
 

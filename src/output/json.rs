@@ -8,6 +8,21 @@ use crate::model::source::SourceMap;
 
 pub const SCHEMA_VERSION: u32 = 1;
 pub const SET_SCHEMA_VERSION: u32 = 1;
+/// Version of the `modellint/gap` and `modellint/fit` JSON (`gap`/`fit --format json`).
+pub const RESULT_SCHEMA_VERSION: u32 = 1;
+
+/// Adds the keys every JSON result of modellint starts with, as lint's: `schema`
+/// (`modellint/<what>`), `version` (of that schema) and `tool` {name, version}.
+pub fn stamp(v: &mut Value, what: &str) {
+    if let Some(o) = v.as_object_mut() {
+        o.insert("schema".into(), json!(format!("modellint/{what}")));
+        o.insert("version".into(), json!(RESULT_SCHEMA_VERSION));
+        o.insert(
+            "tool".into(),
+            json!({ "name": "modellint", "version": env!("CARGO_PKG_VERSION") }),
+        );
+    }
+}
 
 pub fn finding_value(map: &SourceMap, f: &Finding) -> Value {
     let p = position(map, f.primary);

@@ -31,7 +31,11 @@ pub fn run_gap(a: GapArgs) -> i32 {
         Err(e) => return report_error(&e),
     };
     let out = if a.json {
-        match serde_json::to_string_pretty(&report) {
+        let v = serde_json::to_value(&report).map(|mut v| {
+            crate::output::json::stamp(&mut v, "gap");
+            v
+        });
+        match v.and_then(|v| serde_json::to_string_pretty(&v)) {
             Ok(s) => s + "\n",
             Err(e) => {
                 eprintln!("modellint: cannot serialise report: {e}");
@@ -85,7 +89,8 @@ pub fn gap(a: &GapArgs, sink: &dyn Sink) -> Result<GapReport, CmdError> {
     }
     let (recs, notes, warnings, unscored) =
         (inputs.recs, inputs.notes, inputs.warnings, inputs.unscored);
-    let opts = a.replay.clone();
+    let mut opts = a.replay.clone();
+    opts.pd_gains = replay::spec_pd_gains(loaded.spec.as_ref(), robot);
     let replayer = Replayer::new(robot);
     let total = recs.len();
     let progress = move |k: usize| sink.replayed(k, total);

@@ -372,9 +372,12 @@ pub fn template(robot: &Robot, model_display: &str) -> String {
     let _ = writeln!(w, "# for one. Every key: docs/spec.md.");
     let _ = writeln!(w);
     let _ = writeln!(w, "[robot]");
-    let name = robot.tree.get("model").map(str::to_string).unwrap_or_else(|| {
-        robot.path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default()
-    });
+    // MJCF `<mujoco model=…>`, URDF `<robot name=…>`; else the file's name.
+    let attr = if robot.format == crate::model::Format::Urdf { "name" } else { "model" };
+    let name =
+        robot.tree.get(attr).filter(|n| !n.is_empty()).map(str::to_string).unwrap_or_else(|| {
+            robot.path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default()
+        });
     let _ = writeln!(w, "name = {}", quote(&name));
     if no_actuators {
         let _ = writeln!(

@@ -19,21 +19,7 @@ pub(super) fn class_stem(classes: &[String]) -> String {
 /// Words of joint names that name no motor: every joint is a joint.
 pub(super) const GENERIC_WORDS: [&str; 3] = ["joint", "jnt", "link"];
 
-/// The region a joint name suggests.
+/// The region a joint name suggests (the classifier `gap` uses too).
 pub(super) fn region(name: &str) -> Option<&'static str> {
-    let l = name.to_ascii_lowercase();
-    let has = |ks: &[&str]| ks.iter().any(|k| l.contains(k));
-    if has(&["head", "neck"]) {
-        Some("head")
-    } else if has(&["shoulder", "elbow", "wrist", "arm", "hand", "finger", "gripper"]) {
-        Some("arms")
-    } else if has(&[
-        "hip", "knee", "ankle", "toe", "leg", "thigh", "calf", "foot", "haa", "hfe", "kfe",
-    ]) {
-        Some("legs")
-    } else if has(&["waist", "torso", "spine", "trunk", "pelvis", "chest"]) {
-        Some("torso")
-    } else {
-        None
-    }
+    crate::model::region::from_name(name)
 }

@@ -112,9 +112,48 @@ impl Pair<'_> {
             ElemKind::Body => Subject::Body(self.right.0),
             _ => Subject::Model,
         };
-        cx.at_attr(self.kind, self.right.0, self.right.1, attr, msg)
-            .label(format!("{what} {rv}{unit}"))
-            .secondary(if lattr == cx.robot.root_loc() { lloc } else { lattr }, format!("mirror `{}` has {lv}{unit}", self.left.1))
+        let (rattr, rclass) = cx.robot.attr_loc(self.kind, self.right.0, self.right.1, attr);
+        let lclass = cx.robot.attr_loc(self.kind, self.left.0, self.left.1, attr).1;
+        // The `class=` written on an element: where it picks the default that gives the value.
+        let own_class = |(id, name): (usize, &str)| {
+            let e = cx.robot.elem(self.kind, id, name)?;
+            e.attrs.get("class").filter(|o| o.class.is_none()).map(|o| o.loc)
+        };
+        let f = match (rclass, lclass, own_class(self.right)) {
+            // The sides take the value from different default classes, picked by the elements'
+            // `class=` (a class swapped between two actuators): the choice is the finding, the
+            // shared default's line only where the value is written.
+            (Some(rc), Some(lc), Some(rcloc)) if rc != lc => {
+                let eloc = cx.robot.elem_loc(self.kind, self.right.0, self.right.1);
+                let mut f = cx
+                    .finding(msg, rcloc)
+                    .element(
+                        format!("{kw} {}", crate::rules::display_name(self.right.1, self.right.0)),
+                        eloc,
+                    )
+                    .label(format!("class=\"{rc}\" gives {what} {rv}{unit}"))
+                    .secondary(rattr, format!("{what} {rv}{unit} in <default class=\"{rc}\">"));
+                if let Some(lcloc) = own_class(self.left) {
+                    f = f
+                        .secondary(lcloc, format!("mirror `{}` takes class=\"{lc}\"", self.left.1));
+                }
+                f.secondary(
+                    lattr,
+                    format!(
+                        "mirror `{}` has {lv}{unit} from <default class=\"{lc}\">",
+                        self.left.1
+                    ),
+                )
+            }
+            _ => cx
+                .at_attr(self.kind, self.right.0, self.right.1, attr, msg)
+                .label(format!("{what} {rv}{unit}"))
+                .secondary(
+                    if lattr == cx.robot.root_loc() { lloc } else { lattr },
+                    format!("mirror `{}` has {lv}{unit}", self.left.1),
+                ),
+        };
+        f
             .note("mirror-symmetric hardware should have a mirror-symmetric model; a policy exploits the stronger, stiffer or lighter side and limps on the real robot")
             .help("use the same value on both sides, ideally from one shared <default class>")
             .subject(subject)

@@ -109,18 +109,31 @@ impl Measure for HardStopExposure {
     fn key(&self, _: &Loaded) -> Result<usize, &'static str> {
         Ok(self.actuator)
     }
-    fn measure(&self, _: &Loaded, h: &LimitHit) -> Measurement {
+    fn measure(&self, l: &Loaded, h: &LimitHit) -> Measurement {
         let span = (h.range[1] - h.range[0]).abs().max(1e-9);
         let short = h.shortfall();
-        let mut pre = Preconditions::new().check(
-            "stop_exists",
-            h.stop_exists,
-            if h.stop_exists {
-                "the joint has a hard range"
-            } else {
-                "the joint has no hard range"
-            },
-        );
+        // Without a ctrlrange the run commands the joint's own range ends, where a servo settles
+        // onto its stop whatever the training range: it measures nothing about one.
+        let ctrlrange = l.robot.actuators.get(self.actuator).is_some_and(|a| a.ctrllimited);
+        let mut pre = Preconditions::new()
+            .check(
+                "stop_exists",
+                h.stop_exists,
+                if h.stop_exists {
+                    "the joint has a hard range"
+                } else {
+                    "the joint has no hard range"
+                },
+            )
+            .check(
+                "ctrlrange_exists",
+                ctrlrange,
+                if ctrlrange {
+                    "the actuator has a ctrlrange to command"
+                } else {
+                    "the actuator has no ctrlrange: the run could only command the joint's own range ends, which says nothing of a training range"
+                },
+            );
         for (k, e) in ["lower", "upper"].iter().zip(&h.ends) {
             if !e.target.is_finite() {
                 continue;
@@ -138,7 +151,14 @@ impl Measure for HardStopExposure {
                 ),
             );
         }
-        let note = if h.hit {
+        let note = if !ctrlrange {
+            format!(
+                "no ctrlrange: commanding the joint's range ends {} moved it over [{}, {}] rad",
+                rng(h.range, "rad"),
+                fmt_num(h.q_min, 4),
+                fmt_num(h.q_max, 4)
+            )
+        } else if h.hit {
             format!(
                 "commanding the ctrlrange ends drove the joint into its hard stop at {} rad/s (limit force up to {} N·m)",
                 fmt_num(h.impact_velocity, 3),

@@ -21,8 +21,13 @@ declare_rule! {
     /// Static: the compiled model's actuator count.
     ///
     /// ## How to fix
-    /// Add an `<actuator>` block with one `<position>` (or `<motor>`) per driven joint, with the
-    /// motor's gains, `forcerange`/`actuatorfrcrange` and a soft `ctrlrange`.
+    /// MJCF: add an `<actuator>` block with one `<position>` (or `<motor>`) per driven joint, with
+    /// the motor's gains, `forcerange`/`actuatorfrcrange` and a soft `ctrlrange`. URDF (which has
+    /// no MuJoCo actuators: its `<transmission>`s are ignored, and its `<mujoco>` extension element
+    /// takes compiler options only): write a small MJCF wrapper that loads the URDF as a model
+    /// asset and attaches it (`<asset><model name="robot" file="robot.urdf"/></asset>`,
+    /// `<worldbody><attach model="robot" prefix=""/></worldbody>`; `<include>` takes MJCF only)
+    /// and adds the `<actuator>` block, then lint and simulate the wrapper.
     pub MissingActuators {
         id: "missing-actuators",
         group: "mapping",
@@ -67,7 +72,11 @@ impl Rule for MissingActuators {
             .label("no <actuator> block")
             .element("model", robot.root_loc())
             .note("with no actuator MuJoCo has no controls: a policy's actions drive nothing, the robot collapses under gravity, and no actuator check (gains, force limits, training ranges) can run")
-            .help("add an <actuator> block with one <position> or <motor> per driven joint, with the motor's gains, force limit and a soft ctrlrange")
+            .help(if robot.format == crate::model::Format::Urdf {
+                "a URDF has no MuJoCo actuators (MuJoCo ignores its <transmission>s, and its <mujoco> extension takes compiler options only): write an MJCF wrapper that attaches the URDF and adds the actuators — <mujoco><asset><model name=\"robot\" file=\"robot.urdf\"/></asset><worldbody><attach model=\"robot\" prefix=\"\"/></worldbody><actuator>…</actuator></mujoco> (<include> takes MJCF only), one <position> or <motor> per driven joint with the motor's gains, force limit and a soft ctrlrange — and lint and simulate the wrapper"
+            } else {
+                "add an <actuator> block with one <position> or <motor> per driven joint, with the motor's gains, force limit and a soft ctrlrange"
+            })
             .subject(Subject::Model)
             .with("joints", joints.len() as f64);
         if let Some(s) = cx.spec {

@@ -20,6 +20,7 @@
 //! Diverged episodes are excluded from every pooled number and listed in `diverged`.
 
 pub mod cause;
+pub mod motion;
 mod text;
 
 use serde::Serialize;
@@ -92,6 +93,9 @@ pub struct JointGap {
     pub vel_mae: f64,
     pub vel_rmse: f64,
     pub spectral_kl: f64,
+    /// Share of the recorded variance that is motion, not noise ([`motion::share`]): the joint's
+    /// weight in `correlation_mean`, `spectral_kl` and its region's `corr`.
+    pub motion_share: f64,
     pub dominant_hz_real: f64,
     pub dominant_hz_sim: f64,
     pub band_power: BandPowers,
@@ -236,22 +240,10 @@ pub fn joint_region(spec: Option<&crate::spec::Spec>, name: &str) -> String {
         .unwrap_or_else(|| region_from_name(name))
 }
 
-/// Body region of a joint from its name: legs, arms, head, torso, else "other".
+/// Body region of a joint from its name ([`crate::model::region::from_name`], the classifier
+/// `init-spec` uses too), else "other".
 pub fn region_from_name(name: &str) -> String {
-    let n = name.to_lowercase();
-    let has = |ws: &[&str]| ws.iter().any(|w| n.contains(w));
-    if has(&["hip", "knee", "ankle", "toe", "foot", "leg"]) {
-        "legs"
-    } else if has(&["shoulder", "elbow", "wrist", "hand", "arm", "finger", "gripper"]) {
-        "arms"
-    } else if has(&["head", "neck"]) {
-        "head"
-    } else if has(&["waist", "torso", "trunk", "pelvis", "spine", "chest"]) {
-        "torso"
-    } else {
-        "other"
-    }
-    .to_string()
+    crate::model::region::from_name(name).unwrap_or("other").to_string()
 }
 
 #[derive(Default)]
@@ -260,6 +252,8 @@ struct JointAcc {
     pos: Accum,
     vel: Accum,
     corrs: Vec<f64>,
+    /// Noise and spread sums of squares of the recorded positions ([`motion`]).
+    motion: (f64, f64),
     psd_w: f64,
     psd: JointPsd,
     dec_w: f64,
@@ -287,6 +281,19 @@ fn stats_to_accum(s: &ErrorStats) -> Accum {
 
 fn mean(v: &[f64]) -> Option<f64> {
     (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
+}
+
+/// (value, motion share) of the joints with a finite value of `f`.
+fn shape_of<'a>(
+    js: impl Iterator<Item = &'a JointGap>,
+    f: impl Fn(&JointGap) -> Option<f64>,
+) -> Vec<(f64, f64)> {
+    js.filter_map(|j| f(j).filter(|x| x.is_finite()).map(|x| (x, j.motion_share))).collect()
+}
+
+/// The joints' spectral KL weighted by their motion shares (NaN when none has one).
+fn members_kl<'a>(js: impl Iterator<Item = &'a JointGap>) -> f64 {
+    motion::weighted_mean(&shape_of(js, |j| Some(j.spectral_kl))).unwrap_or(f64::NAN)
 }
 
 /// Computes the report for episodes replayed from `recs` (paired by index). `region` maps a
@@ -341,11 +348,12 @@ pub fn compute(
             };
             let st = metrics::error_stats(qs, &jt.q);
             let corr = metrics::pearson(qs, &jt.q);
+            let (nz, sp) = motion::noise_and_spread(&jt.q);
             ep_joints.push(EpisodeJoint { name: name.clone(), mae: st.mae, rmse: st.rmse, corr });
             ep_pos.add(qs, &jt.q);
             ep_vel.add(qds, qd_real);
             if let Some(r) = corr {
-                ep_corr.push(r);
+                ep_corr.push((r, motion::share(nz, sp)));
             }
             if !is_ok {
                 continue;
@@ -359,6 +367,7 @@ pub fn compute(
                 }
             };
             let ja = &mut joints[ji];
+            ja.motion = (ja.motion.0 + nz, ja.motion.1 + sp);
             ja.pos.add(qs, &jt.q);
             ja.vel.add(qds, qd_real);
             if let Some(r) = corr {
@@ -428,7 +437,7 @@ pub fn compute(
         }
         let ps = ep_pos.finish();
         let vs = ep_vel.finish();
-        let cm = mean(&ep_corr);
+        let cm = motion::weighted_mean(&ep_corr);
         let g = metrics::gap_scores(ps.rmse, vs.rmse, cm.unwrap_or(0.0), c);
         per_episode.push(EpisodeGap {
             source: src,
@@ -475,6 +484,7 @@ pub fn compute(
             vel_mae: v.mae,
             vel_rmse: v.rmse,
             spectral_kl: spectral::symmetric_kl(&pr, &pss),
+            motion_share: motion::share(ja.motion.0, ja.motion.1),
             dominant_hz_real: spectral::dominant_frequency(f, &pr),
             dominant_hz_sim: spectral::dominant_frequency(f, &pss),
             band_power: BandPowers {
@@ -517,9 +527,7 @@ pub fn compute(
             va.merge(&joints[i].vel);
         }
         let (p, v) = (pa.finish(), va.finish());
-        let corrs: Vec<f64> = members.iter().filter_map(|&i| per_joint[i].corr).collect();
-        let kls: Vec<f64> =
-            members.iter().map(|&i| per_joint[i].spectral_kl).filter(|x| x.is_finite()).collect();
+        let corrs = shape_of(members.iter().map(|&i| &per_joint[i]), |j| j.corr);
         region_sq.push((r.clone(), pa.sum_sq, pa.n));
         per_region.push(RegionGap {
             region: r.clone(),
@@ -527,19 +535,18 @@ pub fn compute(
             mae: p.mae,
             rmse: p.rmse,
             max: p.max,
-            corr: mean(&corrs),
+            corr: motion::weighted_mean(&corrs),
             vel_mae: v.mae,
             vel_rmse: v.rmse,
-            spectral_kl: mean(&kls).unwrap_or(f64::NAN),
+            spectral_kl: members_kl(members.iter().map(|&i| &per_joint[i])),
         });
     }
 
     let pos = all_pos.finish();
     let vel = all_vel.finish();
-    let corrs: Vec<f64> = per_joint.iter().filter_map(|j| j.corr).collect();
-    let corr_mean = mean(&corrs).unwrap_or(f64::NAN);
+    let corr_mean =
+        motion::weighted_mean(&shape_of(per_joint.iter(), |j| j.corr)).unwrap_or(f64::NAN);
     let g = metrics::gap_scores(pos.rmse, vel.rmse, corr_mean, c);
-    let kls: Vec<f64> = per_joint.iter().map(|j| j.spectral_kl).filter(|x| x.is_finite()).collect();
 
     // Localisation.
     let total_sq = all_pos.sum_sq.max(1e-300);
@@ -635,7 +642,7 @@ pub fn compute(
         gap_dynamic: g.dynamic,
         gap_control: g.control,
         gap_overall: g.overall,
-        spectral_kl: mean(&kls).unwrap_or(f64::NAN),
+        spectral_kl: members_kl(per_joint.iter()),
         episodes: ok.len(),
         samples,
         duration_s: duration,
@@ -675,6 +682,8 @@ mod tests {
             ("Head_pitch", "head"),
             ("Waist", "torso"),
             ("servo", "other"),
+            ("FL_thigh_joint", "legs"),
+            ("FL_calf_joint", "legs"),
         ] {
             assert_eq!(region_from_name(n), r, "{n}");
         }

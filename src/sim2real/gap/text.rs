@@ -34,14 +34,27 @@ impl GapReport {
             num(self.gap_control, 3),
             num(self.gap_overall, 3)
         ));
+        o.push_str(
+            "  (correlation and KL weigh each joint by its motion share: 1 − its noise / its \
+             recorded variance, `motion`; a joint at its noise floor weighs ~0)\n",
+        );
         o.push_str(&format!(
-            "\n  {:<24} {:<6} {:>8} {:>8} {:>8} {:>6} {:>9} {:>7} {:>13}\n",
-            "joint", "region", "MAE", "RMSE", "max", "corr", "vel [°/s]", "KL", "dom Hz r/s"
+            "\n  {:<24} {:<6} {:>8} {:>8} {:>8} {:>6} {:>9} {:>7} {:>13} {:>6}\n",
+            "joint",
+            "region",
+            "MAE",
+            "RMSE",
+            "max",
+            "corr",
+            "vel [°/s]",
+            "KL",
+            "dom Hz r/s",
+            "motion"
         ));
         for s in &self.localisation.joints {
             let Some(j) = self.per_joint.iter().find(|j| j.name == s.name) else { continue };
             o.push_str(&format!(
-                "  {:<24} {:<6} {:>8} {:>8} {:>8} {:>6} {:>9} {:>7} {:>6}/{:<6}\n",
+                "  {:<24} {:<6} {:>8} {:>8} {:>8} {:>6} {:>9} {:>7} {:>6}/{:<6} {:>6.2}\n",
                 j.name,
                 j.region,
                 deg(j.mae),
@@ -51,7 +64,8 @@ impl GapReport {
                 num(j.vel_rmse.to_degrees(), 3),
                 num(j.spectral_kl, 3),
                 num(j.dominant_hz_real, 1),
-                num(j.dominant_hz_sim, 1)
+                num(j.dominant_hz_sim, 1),
+                j.motion_share
             ));
         }
         if self.per_region.len() > 1 {

@@ -15,6 +15,8 @@
 //!    columns (N·m/rad, N·m·s/rad) set the actuator's `gainprm[0] = kp`, `biasprm[1] = −kp`,
 //!    `biasprm[2] = −kd` at the same ticks; `enabled = false` zeroes the actuator's gain and bias
 //!    (torque off, e.g. free fall). Model joints without recording hold their keyframe `ctrl`.
+//!    A joint driven by torque actuators only (`<motor>`, `<general>` without bias) runs the
+//!    policy's PD at every physics step from the kp/kd columns or the spec (`pd` module).
 //! 3. Physics steps at the model's timestep; an [`ActuatorHook`] may rewrite each recorded
 //!    joint's `ctrl` and add a joint torque (`qfrc_applied`) before every step.
 //! 4. Samples: the simulated `q`, `q̇` at each recording timestamp are linearly interpolated
@@ -102,6 +104,9 @@ pub struct ReplayOptions {
     /// held across steps; without a control rate, dropped rows' commands are interpolated,
     /// [`crate::sim2real::metrics::fill_dropped_rows`]).
     pub command_fill: Fill,
+    /// PD gains (kp N·m/rad, kd N·m·s/rad) per joint name for joints driven by torque whose
+    /// recording has no `kp`/`kd` column ([`spec_pd_gains`]: the spec's motor families).
+    pub pd_gains: std::collections::BTreeMap<String, (f64, f64)>,
 }
 
 impl Default for ReplayOptions {
@@ -112,6 +117,7 @@ impl Default for ReplayOptions {
             base: BaseMode::Fixed,
             hold_unlisted_at_key: true,
             command_fill: Fill::Ramps,
+            pd_gains: Default::default(),
         }
     }
 }
@@ -211,6 +217,8 @@ struct JointInfo {
     dofadr: usize,
     /// (actuator id, kind) of the actuators that reach this joint.
     acts: Vec<(usize, ActuatorKind)>,
+    /// Every actuator of the joint is a torque actuator on the joint itself (`pd` module).
+    torque: bool,
 }
 
 impl JointInfo {
@@ -232,6 +240,8 @@ pub struct Replayer<'m> {
     key_ctrl: Vec<f64>,
     /// (qposadr, dofadr) of the first free joint.
     free: Option<(usize, usize)>,
+    /// Actuator names by id (for errors).
+    act_names: Vec<String>,
 }
 
 /// |q| beyond this [rad or m] counts as a blow-up.
@@ -254,6 +264,7 @@ impl<'m> Replayer<'m> {
                 qposadr: j.qposadr,
                 dofadr: j.dofadr,
                 acts: robot.actuators_on_joint(j.id).iter().map(|a| (a.id, a.kind)).collect(),
+                torque: pd::torque_actuators(robot, j.id).is_some(),
             })
             .collect();
         let free =
@@ -265,6 +276,15 @@ impl<'m> Replayer<'m> {
             key_qpos: robot.key.qpos.clone(),
             key_ctrl: robot.key.ctrl.clone(),
             free,
+            act_names: {
+                let mut v = vec![String::new(); robot.actuators.len()];
+                for a in &robot.actuators {
+                    if let Some(x) = v.get_mut(a.id) {
+                        *x = if a.name.is_empty() { format!("#{}", a.id) } else { a.name.clone() };
+                    }
+                }
+                v
+            },
         }
     }
 
@@ -320,19 +340,46 @@ impl<'m> Replayer<'m> {
         }
         let replaced: Vec<bool> =
             (0..nj).map(|i| hook.as_deref().is_some_and(|h| h.replaces_actuator(i))).collect();
+        let mut pd_joints: Vec<Option<pd::PdJoint>> = vec![None; nj];
         for (i, &ji) in jm.iter().enumerate() {
-            for &(aid, kind) in &self.joints[ji].acts {
-                if !replaced[i]
-                    && !matches!(
-                        kind,
-                        ActuatorKind::Position { .. } | ActuatorKind::Velocity { .. }
-                    )
-                {
+            let (info, jt) = (&self.joints[ji], &rec.joints[i]);
+            if replaced[i] {
+                continue;
+            }
+            let act_names = || -> String {
+                let n: Vec<String> = info
+                    .acts
+                    .iter()
+                    .map(|&(a, _)| format!("actuator '{}'", self.act_names[a]))
+                    .collect();
+                n.join(", ")
+            };
+            if info.torque {
+                let spec = opts.pd_gains.get(&jt.name);
+                let (has_kp, has_kd) =
+                    (jt.kp.is_some() || spec.is_some(), jt.kd.is_some() || spec.is_some());
+                if !(has_kp && has_kd) {
+                    return Err(setup(pd::missing_gains(&jt.name, &act_names(), has_kp, has_kd)));
+                }
+                let (gear, gp) = (self.model.actuator_gear(), self.model.actuator_gainprm());
+                pd_joints[i] = Some(pd::PdJoint {
+                    acts: info.acts.iter().map(|&(a, _)| (a, gp[a][0] * gear[a][0])).collect(),
+                    kp: spec.map_or(0.0, |g| g.0),
+                    kd: spec.map_or(0.0, |g| g.1),
+                });
+                continue;
+            }
+            let beside_servo = info.acts.iter().any(|(_, k)| {
+                matches!(k, ActuatorKind::Position { .. } | ActuatorKind::Velocity { .. })
+            });
+            for &(aid, kind) in &info.acts {
+                if !matches!(kind, ActuatorKind::Position { .. } | ActuatorKind::Velocity { .. }) {
                     return Err(setup(format!(
-                        "actuator {aid} on joint '{}' is not a position or velocity servo on the joint \
-                         (a motor, a general actuator, or one acting through a tendon): the replay \
-                         drives recorded joints through position or velocity servos only",
-                        rec.joints[i].name
+                        "actuator '{}' on joint '{}' is {}: {}",
+                        self.act_names[aid],
+                        jt.name,
+                        pd::unsupported(kind, beside_servo),
+                        pd::SUPPORTED
                     )));
                 }
             }
@@ -394,6 +441,7 @@ impl<'m> Replayer<'m> {
             nominal: &nominal,
             gain_scale: &gain_scale,
             replaced: &replaced,
+            pd: &pd_joints,
             rate,
             tick0,
             schedule: &schedule,
@@ -487,12 +535,14 @@ pub fn replay_all(
 }
 
 mod origin;
+mod pd;
 mod run;
 mod timestep;
 pub use origin::{
     KEY_TIME_SCALE, OffGrid, RateFix, TickOrigin, off_grid, origin_messages, rate_messages,
     resolve_rate, resolve_tick_origin,
 };
+pub use pd::spec_pd_gains;
 pub use timestep::{JointTimestep, REFINE, TimestepCheck, timestep_check, timestep_note};
 #[cfg(test)]
 pub(crate) mod tests;

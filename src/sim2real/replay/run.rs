@@ -31,6 +31,8 @@ pub(super) struct Run<'a> {
     pub gain_scale: &'a [(f64, f64)],
     /// Recorded joints whose actuators an [`ActuatorHook`] replaces.
     pub replaced: &'a [bool],
+    /// Recorded joints driven by torque, replayed as the policy's PD ([`super::pd`]).
+    pub pd: &'a [Option<super::pd::PdJoint>],
     pub rate: Option<f64>,
     pub tick0: f64,
     pub schedule: &'a Schedule,
@@ -47,8 +49,20 @@ impl Replayer<'_> {
         mut hook: Option<&mut dyn ActuatorHook>,
         set_gains: Option<GainSetter<M>>,
     ) -> Result<Episode, ReplayError> {
-        let Run { rec, opts, jm, qd0, nominal, gain_scale, replaced, rate, tick0, schedule, dt } =
-            *c;
+        let Run {
+            rec,
+            opts,
+            jm,
+            qd0,
+            nominal,
+            gain_scale,
+            replaced,
+            pd,
+            rate,
+            tick0,
+            schedule,
+            dt,
+        } = *c;
         let (n, nj) = (rec.t.len(), rec.joints.len());
         let t0 = rec.t[0];
         // With a control rate the physics steps sit on the ticks' grid (tick0 + j·dt), so a
@@ -203,7 +217,11 @@ impl Replayer<'_> {
             let (fl, fr, gear) =
                 (m.actuator_forcelimited(), m.actuator_forcerange(), m.actuator_gear());
             jm.iter()
-                .map(|&ji| {
+                .zip(pd)
+                .map(|(&ji, pd)| {
+                    if let Some(p) = pd {
+                        return p.torque_range(m);
+                    }
                     self.joints[ji].acts.iter().find_map(|&(a, kind)| {
                         if !matches!(kind, ActuatorKind::Position { .. }) {
                             return None;
@@ -241,7 +259,10 @@ impl Replayer<'_> {
             if tick != Some(ti) {
                 tick = Some(ti);
                 for (i, jt) in rec.joints.iter().enumerate() {
-                    let nom = nominal[i].first().map(|&(_, g, b1, b2)| (g, -b1, -b2));
+                    let nom = match &pd[i] {
+                        Some(p) => Some((p.kp, 0.0, p.kd)),
+                        None => nominal[i].first().map(|&(_, g, b1, b2)| (g, -b1, -b2)),
+                    };
                     let (sp, sd) = gain_scale.get(i).copied().unwrap_or((1.0, 1.0));
                     kp[i] = jt
                         .kp
@@ -309,6 +330,14 @@ impl Replayer<'_> {
             }
             let ctrl = d.ctrl_mut();
             for (i, &ji) in jm.iter().enumerate() {
+                if let (Some(p), false) = (&pd[i], replaced[i]) {
+                    // The policy's PD on this step's state; MuJoCo clamps the motors' ctrl and force.
+                    let tau = io[i].kp * (io[i].ctrl - cur_q[i]) - io[i].kd * cur_qd[i];
+                    for (a, u) in p.ctrl(tau) {
+                        ctrl[a] = u;
+                    }
+                    continue;
+                }
                 for &(a, kind) in &self.joints[ji].acts {
                     if replaced[i] {
                         continue;
