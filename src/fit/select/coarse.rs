@@ -1,11 +1,18 @@
 //! A candidate's coarse fit on the screen's data: what it is, when it can wait, and the
 //! screen's linear step replayed where it alone would admit a candidate to a full fit.
+//!
+//! What a coarse fit costs: a smooth candidate goes on from the screen's linear step, which one
+//! replay confirms or not (secant steps for one parameter, [`confirmed_step`] for more); a
+//! non-smooth one (a grid, a simplex) is fitted on the probes' data, a fifth of the screen's,
+//! and replayed once on the screen's ([`on_probes`]). Only where that check fails is the
+//! coarse fit of `screen_evals` replays of the screen's data made.
 
-use crate::fit::effects::{Applied, Effect};
+use crate::fit::effects::{Applied, Effect, model_with};
 use crate::sim2real::recording::Recording;
 
-use super::engine::Engine;
-use super::groups::Cand;
+use super::engine::{Engine, neutral_params, with_candidate};
+use super::groups::{Cand, same_data};
+use super::policy::SearchPolicy;
 use super::screen::Screen;
 use super::{Search, extension};
 
@@ -16,7 +23,8 @@ pub(super) type Point = (Vec<f64>, f64);
 pub(super) type Coarse = Option<Point>;
 
 /// The coarse fit of `e` on `g` on `short` (`screen_evals` replays): a smooth one-parameter
-/// candidate goes on from the screen's linear step by secant steps (one replay each).
+/// candidate goes on from the screen's linear step by secant steps (one replay each); any other
+/// is fitted on the probes' data of `short` ([`on_probes`]) when the screen holds them.
 pub(super) fn fit(
     engine: &Engine,
     screen: &Screen,
@@ -27,8 +35,91 @@ pub(super) fn fit(
         let gain = 1.0 - p.train_rmse / screen.base_rmse();
         engine.fit_secant(short, applied, (e, g), (p.step, gain))
     });
+    let cheap = || {
+        if e.smooth() {
+            confirmed_step(engine, screen, (short, applied), (e, g))
+        } else {
+            on_probes(engine, (short, applied), (e, g))
+        }
+    };
     linear
+        .or_else(cheap)
         .unwrap_or_else(|| engine.fit_budget(short, applied, e, g, engine.opts.policy.screen_evals))
+}
+
+/// The screen's linear step of a smooth candidate the secant steps do not take (more than one
+/// parameter, every one screened: [`Effect::screened`]; or a group whose members start apart),
+/// replayed once on `short` ([`replayed_step`]): its parameters and RMSE when the gain it
+/// achieves confirms the one its linear model predicted ([`agrees`]) — the linearisation error
+/// measured where the fit would start; `None` (a coarse fit of `screen_evals` replays follows)
+/// when it does not, or the step is zero.
+fn confirmed_step(
+    engine: &Engine,
+    screen: &Screen,
+    (short, applied): (&[Recording], &[Applied]),
+    (e, g): (&'static dyn Effect, &[String]),
+) -> Option<(Vec<f64>, f64)> {
+    // (Only where the linear model steps every fitted parameter: a gain error's is its kp's
+    // alone, which can explain nothing that kp and kd together explain.)
+    if e.screened() < e.fitted() {
+        return None;
+    }
+    let want = 1.0 - screen.predict(e.id(), g)?.train_rmse / screen.base_rmse();
+    let (p, f) = replayed_step(engine, screen, (short, applied), (e, g))?;
+    let base = engine.score(short, applied);
+    agrees(1.0 - f / base, want, &engine.opts.policy).then_some((p, f))
+}
+
+/// The coarse fit of `e` on `g` made on the probes' data of `short` (the stretches of largest
+/// residual inside it, [`SearchPolicy::probe_seconds`] in all, held when the round's screen
+/// was built on `applied`) and replayed once on `short`: its parameters and RMSE on `short`.
+/// A coarse fit admits a candidate to a full fit (by its gain on `short`, which is what every
+/// gain of the round is measured on) and starts that fit; the shape of the residual it needs is
+/// where the residual is largest, the data the probes' columns rank on. The fit stands when its
+/// gain on `short` agrees with its gain on the probes' data ([`agrees`]: the probes' fit is the
+/// model, `short` the check, as for the secant step) — both below `min_rel_improvement` included,
+/// a fit that finds nothing where the model is most wrong. Otherwise (a descent along what only
+/// the probes' stretches show, or one that explains more of the rest) the coarse fit on `short`
+/// is made as before and the better of the two kept. The fit's `screen_evals` replays cost the
+/// probes' seconds instead of the screen's (2 s for 10 s by default), and the replay on `short`
+/// none when the fit stays at a start that changes nothing ([`Effect::neutral_start`]). `None`
+/// when the probes' data is not held or is `short` itself, or a fit there fails.
+///
+/// [`SearchPolicy::probe_seconds`]: super::policy::SearchPolicy::probe_seconds
+fn on_probes(
+    engine: &Engine,
+    (short, applied): (&[Recording], &[Applied]),
+    (e, g): (&'static dyn Effect, &[String]),
+) -> Option<(Vec<f64>, f64)> {
+    let probes = engine.probe_set_held(short, applied)?;
+    if same_data(&probes, short) {
+        return None;
+    }
+    let pol = &engine.opts.policy;
+    let (p, fp) = engine.fit_budget(&probes, applied, e, g, pol.screen_evals);
+    let (base_p, base_s) = (engine.score(&probes, applied), engine.score(short, applied));
+    if p.is_empty() || !fp.is_finite() || !(base_p > 0.0) || !(base_s > 0.0) {
+        return None;
+    }
+    let m0 = model_with(engine.robot, applied);
+    let neutral = neutral_params(engine.robot, &m0, (e, g));
+    let fs = engine.score(short, &with_candidate(applied, (e, g), p.clone(), neutral.as_deref()));
+    if fs.is_finite() && agrees(1.0 - fs / base_s, 1.0 - fp / base_p, pol) {
+        return Some((p, fs));
+    }
+    let (q, fq) = engine.fit_budget(short, applied, e, g, pol.screen_evals);
+    Some(if fs < fq || q.is_empty() { (p, fs) } else { (q, fq) })
+}
+
+/// Whether a relative improvement `got` confirms the `want` a model of it predicted: between
+/// `linear_trust` and its inverse times it, or both below `min_rel_improvement` (the secant
+/// coarse fit's test, [`Engine::fit_secant`]).
+///
+/// [`Engine::fit_secant`]: super::engine::Engine
+fn agrees(got: f64, want: f64, pol: &SearchPolicy) -> bool {
+    let small = pol.min_rel_improvement;
+    (want.abs() < small && got.abs() < small)
+        || (want > 0.0 && got >= pol.linear_trust * want && got * pol.linear_trust <= want)
 }
 
 /// A richer model of a loss whose plain variant ([`Effect::plain_variant`]) is a candidate on
@@ -123,4 +214,76 @@ pub(super) fn replayed_step(
 ) -> Option<(Vec<f64>, f64)> {
     let x = screen.steps(e.id(), g)?;
     engine.at_linear_step(short, applied, (e, g), &x)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{agrees, on_probes};
+    use crate::fit::effects::{Backlash, Effect};
+    use crate::fit::select::{Engine, FitOptions, SearchPolicy};
+    use crate::sim2real::recording::{Recording, read_csv};
+
+    /// The pendulum servo with a gear play of 0.04 rad, recorded by the synth (3 × 3 s).
+    fn pendulum_with_play() -> (crate::model::Robot, Vec<Recording>) {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        let path = root.join("fixtures/synth/pendulum_servo.xml");
+        let mut sources = crate::model::source::SourceMap::default();
+        let robot = crate::model::load(&mut sources, &path, None).expect("pendulum");
+        let hidden = [crate::synth::truth::Hidden {
+            effect: Backlash.id(),
+            joint: "servo".into(),
+            params: vec![0.04],
+        }];
+        let s = crate::synth::Settings {
+            episodes: 3,
+            duration_s: 3.0,
+            seed: 7,
+            ..crate::synth::Settings::default()
+        };
+        let joints = vec!["servo".to_string()];
+        let ds = crate::synth::generate(&robot, &joints, &hidden, &s, &|_, _| {}).expect("synth");
+        let dir = std::env::temp_dir().join(format!("modellint_coarse_{}", std::process::id()));
+        let files = crate::synth::write::write(&ds, &dir).expect("write");
+        let recs = files.iter().map(|f| read_csv(f).expect("read")).collect();
+        let _ = std::fs::remove_dir_all(&dir);
+        (robot, recs)
+    }
+
+    /// A non-smooth candidate's coarse fit runs on the probes' data and is replayed once on the
+    /// screen's: the play is found as the grid on the screen's data finds it, for the probes'
+    /// seconds per replay instead of the screen's.
+    #[test]
+    fn a_non_smooth_coarse_fit_runs_on_the_probes_data() {
+        let (robot, recs) = pendulum_with_play();
+        let opts = FitOptions::default();
+        let engine = Engine::new(&robot, &recs, &opts);
+        let g = vec!["servo".to_string()];
+        let secs = |r: &[Recording]| r.iter().map(|x| x.t.last().unwrap() - x.t[0]).sum::<f64>();
+        // Not held: no screen made the probes' data on this base.
+        assert!(on_probes(&engine, (&recs, &[]), (&Backlash, &g)).is_none());
+        let probes = engine.probe_set(&recs, &[], || vec![recs[1].clone()]);
+        let base = engine.errors_held(&recs, &[]).expect("replay").rmse();
+        let _ = engine.errors_held(&probes, &[]).expect("replay");
+        let before = engine.rollout_stats().simulated_s;
+        let (p, f) = on_probes(&engine, (&recs, &[]), (&Backlash, &g)).expect("fitted");
+        let cost = engine.rollout_stats().simulated_s - before;
+        // The play explains most of the residual, at the grid's point of the truth.
+        assert!((p[0] - 0.04).abs() < 1e-9 && f < 0.5 * base, "{p:?}: {f} of {base}");
+        let budget = opts.policy.screen_evals as f64 * secs(&probes) + secs(&recs);
+        assert!(cost <= budget + 1e-9, "{cost} s replayed for {budget}");
+        // The coarse fit on the screen's data finds the same, for more.
+        let before = engine.rollout_stats().simulated_s;
+        let (q, fq) = engine.fit_budget(&recs, &[], &Backlash, &g, opts.policy.screen_evals);
+        assert_eq!((q, fq), (p, f));
+        assert!(engine.rollout_stats().simulated_s - before > cost);
+    }
+
+    #[test]
+    fn a_gain_agrees_within_the_linear_trust_or_when_both_are_small() {
+        let pol = SearchPolicy::default();
+        assert!(agrees(0.3, 0.35, &pol) && agrees(0.35, 0.3, &pol));
+        assert!(!agrees(0.2, 0.35, &pol) && !agrees(0.5, 0.35, &pol));
+        assert!(agrees(0.01, -0.01, &pol) && !agrees(-0.1, -0.1, &pol));
+        assert!(!agrees(0.05, 0.01, &pol));
+    }
 }

@@ -98,8 +98,12 @@ pub struct SearchPolicy {
     /// from the screen's linear step (one replay each); it stops at the first step that achieves
     /// between this fraction and its inverse of the relative improvement its linear model
     /// predicted (the model held as far as the step; both below `min_rel_improvement` also
-    /// agree), or after `screen_evals` replays [ratio]. Default 0.75 (a "very successful" step
-    /// of a trust-region method).
+    /// agree), or after `screen_evals` replays [ratio]. The same test confirms the linear step
+    /// of a smooth candidate of several (all screened) parameters, replayed once, as its coarse
+    /// fit, and a non-smooth candidate's coarse fit made on the probes' data by its gain on the
+    /// screen's data against its gain there; else the coarse fit of `screen_evals` replays of
+    /// the screen's data follows. Default 0.75 (a "very successful" step of a trust-region
+    /// method).
     pub linear_trust: f64,
     /// Once a kept candidate leaves a white training residual (or when a swap is screened), a
     /// candidate whose coarse fit leaves more than this times that training RMSE is not fitted;
@@ -293,7 +297,7 @@ pub const FIELDS: &[(&str, &str, &str)] = &[
     (
         "linear_trust",
         "ratio",
-        "a smooth one-parameter candidate's coarse fit is secant Gauss-Newton steps from the screen's linear step (one replay each), stopping at the first step that achieves between this and its inverse times the relative improvement its linear model predicted (both below min_rel_improvement also agree), or after screen_evals replays",
+        "a smooth one-parameter candidate's coarse fit is secant Gauss-Newton steps from the screen's linear step (one replay each), stopping at the first step that achieves between this and its inverse times the relative improvement its linear model predicted (both below min_rel_improvement also agree), or after screen_evals replays; the same test confirms a several-parameter smooth candidate's linear step (one replay) and a non-smooth candidate's coarse fit on the probes' data (its gain on the screen's data against its gain there) as the coarse fit, else screen_evals replays of the screen's data follow",
     ),
     (
         "floor_screen_ratio",
