@@ -19,7 +19,7 @@ use super::policy::Phase;
 use super::reach::Reach;
 use super::screen::{Screen, screen_data};
 use super::verdict::{at_bound, verdict};
-use super::winner::{on_whole_set, refine, rival_notes};
+use super::winner::{beaten_at_coarse, on_whole_set, refine, rival_notes};
 use super::{Errors, FitOutcome, Search, Selected, Tried, set_uncertainty};
 
 /// One greedy round: diagnose, fit the candidates, keep the best that passes the held-out gate.
@@ -326,13 +326,17 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         // recordings do not share, and no full fit along it is made (`tried`: phase
         // "heldout_screen"). Not the lead (fitted at once, the likeliest winner), nor a
         // candidate that only its linear step admits (a coarse fit can miss the narrow basin
-        // that the full fit finds).
+        // that the full fit finds). One that a kept candidate of the round beats decisively on
+        // held-out there is judged at its coarse fit, not fitted in full ([`beaten_at_coarse`];
+        // `tried`: phase "add_coarse").
         let whole = n_lead == 1 && ci == 1;
+        let mut at_coarse = false;
         if !whole && reaches(gain(cf)) && !cp.is_empty() {
             let mut t = applied.clone();
             t.push(Applied { effect: e, joints: group.clone(), params: cp.clone() });
             let ho_c = engine.errors(heldout, &t);
-            if ho_c.is_none_or(|h| verdict(&ho_err, &h, &group, opts.policy.gate_z(z)).rel <= 0.0) {
+            let gate = opts.policy.gate_z(z);
+            if ho_c.as_ref().is_none_or(|h| verdict(&ho_err, h, &group, gate).rel <= 0.0) {
                 // (Its coarse fit still starts a joint pair fit, as a screened one's does.)
                 if gain(cf) >= opts.policy.min_rel_improvement {
                     fitted.push(Applied { effect: e, joints: group.clone(), params: cp.clone() });
@@ -340,6 +344,13 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
                 out.tried.push(not_tested(Phase::HeldoutScreen, cp, cf));
                 continue;
             }
+            let best = accepted
+                .iter()
+                .filter(|a| !a.1)
+                .min_by(|a, b| a.0.heldout_rmse_after.total_cmp(&b.0.heldout_rmse_after));
+            at_coarse = ho_c.as_ref().zip(best).is_some_and(|(h, b)| {
+                beaten_at_coarse((&b.2, &b.0.joints), (h, &group), &opts.policy)
+            });
         }
         // The full fit runs on the screen's data too (its cost does not grow with the log's
         // length); the held-out gate and the training BIC below use all data, and the round's
@@ -348,7 +359,12 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         // coarse fit: the round's winner is fitted there anyway ([`refine`]).
         let start = (cf < base_short).then_some(cp.as_slice());
         let data = if whole { train } else { short };
-        let (p, fit_rmse) = engine.fit_from(data, &applied, (e, &group), start);
+        let (p, fit_rmse) = if at_coarse {
+            (cp.clone(), cf)
+        } else {
+            engine.fit_from(data, &applied, (e, &group), start)
+        };
+        let phase = if at_coarse { Phase::AddCoarse } else { Phase::Add };
         if p.is_empty() || !fit_rmse.is_finite() {
             continue;
         }
@@ -367,7 +383,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         // (One that leaves the whole training set worse explains nothing: logged without a
         // held-out test.)
         let Some((p, tr_a)) = on_whole_set(s, &applied, (e, &group), p.clone(), base_train) else {
-            out.tried.push(not_tested(Phase::Add, p, f64::NAN));
+            out.tried.push(not_tested(phase, p, f64::NAN));
             continue;
         };
         fitted.push(Applied { effect: e, joints: group.clone(), params: p.clone() });
@@ -390,7 +406,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         let keep = keep && beyond_discretisation(engine, heldout, &judged, out);
         let logged = out.log(Tried {
             round,
-            phase: Phase::Add,
+            phase,
             effect: e.id().into(),
             joints: group.clone(),
             params: p.clone(),

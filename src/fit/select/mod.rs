@@ -199,7 +199,8 @@ pub struct Selected {
 #[derive(Debug, Clone, Serialize)]
 pub struct Tried {
     pub round: usize,
-    /// `add` (greedy round), `screen` / `floor` (not fitted fully / not fitted: see
+    /// `add` (greedy round), `add_coarse` (a greedy round's candidate gated at its coarse
+    /// fit: a kept candidate beats it decisively there), `screen` / `floor` (not fitted fully / not fitted: see
     /// docs/fitting.md), `pair`, `joint_pair`, `drop` (removal test: `kept` = the effect
     /// stays), `drop_refit` (removal with the other effects fitted again: `kept` = the effect
     /// stays), `merge` (one effect on two joint sets as one group: `kept` = merged), `fold`

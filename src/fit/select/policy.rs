@@ -374,6 +374,9 @@ pub enum Phase {
     Diagnose,
     /// A candidate of a greedy round fitted in full and put to the held-out gate.
     Add,
+    /// A candidate of a greedy round put to the held-out gate at its coarse fit, not fitted in
+    /// full: a kept candidate of the round beats it there decisively on held-out.
+    AddCoarse,
     /// Not fitted in full: its coarse fit did not reach the round's screen.
     Screen,
     /// Not fitted: a kept candidate with fewer parameters already left a white residual.
@@ -433,6 +436,7 @@ impl Phase {
         match self {
             Phase::Diagnose => "diagnose",
             Phase::Add => "add",
+            Phase::AddCoarse => "add_coarse",
             Phase::Screen => "screen",
             Phase::Floor => "floor",
             Phase::FloorScreen => "floor_screen",

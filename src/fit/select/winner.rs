@@ -3,7 +3,8 @@
 use crate::fit::effects::{self, Applied, Effect};
 use crate::fit::stats::bic;
 
-use super::verdict::verdict;
+use super::policy::SearchPolicy;
+use super::verdict::{Gate, verdict};
 use super::{Errors, Search, Selected};
 
 /// A candidate's fit `p` on the screen's stretch, with its errors on the whole training set,
@@ -32,6 +33,35 @@ pub(super) fn on_whole_set(
     let (q, _) = s.engine.fit_budget(s.train, applied, e, group, evals);
     let t = s.engine.errors(s.train, &with(&q))?;
     (!q.is_empty() && t.rmse() < base_train).then_some((q, t))
+}
+
+/// Whether a candidate, replayed on the held-out set at its coarse fit (`at_coarse`: those
+/// errors, and its joints), is beaten there decisively by a kept candidate of the round
+/// (`kept`: its held-out errors after its fit, and its joints): the kept one's held-out RMSE
+/// over all fitted joints is at most (1 − `decisive_improvement`) times the candidate's, and
+/// on the windows of the two groups more than twice as many are better beyond `window_change`
+/// as worse. Such a candidate is judged at its coarse fit and not fitted in full. A round's
+/// winner has the lowest held-out RMSE, or is a simpler one within `simpler_within` of it; a
+/// full fit goes on from the coarse fit on the same training data, and would have to halve
+/// the held-out error the coarse fit leaves to come near the kept one (on the chain leg's
+/// and pendulum's rivals, the full fit moved it by at most 8 %, either way), where noise cannot halve an unseen error either
+/// (the gate's decisive improvement). Judged at its coarse fit, it is still gated, and when
+/// kept it still partners the round's pair look-ahead.
+pub(super) fn beaten_at_coarse(
+    (kept, kept_joints): (&Errors, &[String]),
+    (at_coarse, joints): (&Errors, &[String]),
+    policy: &SearchPolicy,
+) -> bool {
+    let (best, mine) = (kept.rmse(), at_coarse.rmse());
+    if !(best.is_finite() && mine.is_finite()) || best > (1.0 - policy.decisive_improvement) * mine
+    {
+        return false;
+    }
+    let mut group: Vec<String> = joints.to_vec();
+    group.extend(kept_joints.iter().filter(|j| !joints.contains(j)).cloned());
+    // Only the windows' majority is asked of the verdict (no z test).
+    let gate = Gate { z: f64::INFINITY, ..policy.gate() };
+    verdict(at_coarse, kept, &group, gate).significant
 }
 
 /// The round's winner `w`, fitted on the screen's data, fitted again on the whole training set
@@ -140,6 +170,37 @@ mod tests {
             bic_after: 0.0,
             values: vec![],
         }
+    }
+
+    /// Held-out errors with these per-window RMSEs on joint `j` (one sample per window).
+    fn errs(j: &str, w: &[f64]) -> Errors {
+        Errors {
+            sse: w.iter().map(|v| v * v).sum(),
+            n: w.len(),
+            windows: w.iter().map(|v| (j.to_string(), *v)).collect(),
+            eps: vec![],
+        }
+    }
+
+    #[test]
+    fn a_candidate_is_beaten_at_its_coarse_fit_only_decisively_and_on_most_windows() {
+        let p = SearchPolicy::default();
+        let knee = vec!["knee".to_string()];
+        let coarse = errs("knee", &[4.0, 4.0, 4.0, 4.0, 4.0, 4.0]);
+        // Less than half the candidate's error on every window: it cannot come near.
+        let kept = errs("knee", &[1.5, 1.5, 1.5, 1.5, 1.5, 1.5]);
+        assert!(beaten_at_coarse((&kept, &knee), (&coarse, &knee), &p));
+        // 60 % of it: a full fit could close that.
+        let near = errs("knee", &[2.4, 2.4, 2.4, 2.4, 2.4, 2.4]);
+        assert!(!beaten_at_coarse((&near, &knee), (&coarse, &knee), &p));
+        // Half the RMSE, but from one window, the others worse: not most windows better.
+        let one = errs("knee", &[0.1, 4.2, 4.2, 4.2, 4.2, 4.2]);
+        let coarse1 = errs("knee", &[40.0, 4.0, 4.0, 4.0, 4.0, 4.0]);
+        assert!(one.rmse() <= 0.5 * coarse1.rmse());
+        assert!(!beaten_at_coarse((&one, &knee), (&coarse1, &knee), &p));
+        // A replay that failed proves nothing.
+        let failed = Errors { n: 0, ..errs("knee", &[]) };
+        assert!(!beaten_at_coarse((&kept, &knee), (&failed, &knee), &p));
     }
 
     #[test]
