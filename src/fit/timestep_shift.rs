@@ -10,9 +10,11 @@
 //! [`crate::fit::select::Floor::discretisation`]), the kept effects are re-fitted, told, at the
 //! timestep check's finer step ([`crate::sim2real::replay::REFINE`] times finer), and the
 //! change of every parameter from the reported value is given as a systematic error beside the
-//! ±. No threshold: every kept parameter is listed with its shift in units of its s.e.
+//! ±. No threshold: every kept parameter is listed with its shift in units of its s.e. What the
+//! re-fit replays is added to the search's cost (phase `timestep_shift`), so `search.simulated_s`
+//! is the whole run's.
 
-use crate::fit::select::{FitOptions, FitOutcome, fit};
+use crate::fit::select::{FitOptions, FitOutcome, SearchCost, fit};
 use crate::model::Robot;
 use crate::sim2real::recording::Recording;
 
@@ -43,11 +45,12 @@ pub struct TimestepShift {
 /// The shifts of `out`'s kept parameters between the model's timestep and a finer one; `None`
 /// when nothing is kept, the search did not count the timestep as floor, or the model's
 /// actuators have a MuJoCo `delay` (its history buffer is sized for the model's timestep).
+/// Whenever the re-fit ran, its cost is added to `out.cost` ([`add_cost`]).
 pub fn measure(
     robot: &Robot,
     recs: &[Recording],
     opts: &FitOptions,
-    out: &FitOutcome,
+    out: &mut FitOutcome,
 ) -> Option<TimestepShift> {
     let dt = robot.opt.timestep;
     let delayed = robot.mj.actuator_history().iter().any(|h| h[0] > 0);
@@ -65,6 +68,7 @@ pub fn measure(
     let told = out.selected.iter().map(|s| (s.effect.clone(), s.joints.clone())).collect();
     let o = FitOptions { told, progress: None, ..opts.clone() };
     let b = fit(&fine, recs, &o);
+    add_cost(&mut out.cost, &b.cost);
     let mut shifts = Vec::new();
     for x in &out.selected {
         let Some(y) = b.selected.iter().find(|y| y.effect == x.effect && y.joints == x.joints)
@@ -89,6 +93,20 @@ pub fn measure(
     }
     let simulated_s = b.cost.rollouts.simulated_s;
     Some(TimestepShift { timestep: dt, fine_timestep: fine_dt, shifts, simulated_s })
+}
+
+/// Adds the told re-fit's cost `refit` (all its phases) to the search's `cost`, as phase
+/// `timestep_shift`.
+fn add_cost(cost: &mut SearchCost, refit: &SearchCost) {
+    cost.simulations += refit.simulations;
+    let (c, r) = (&mut cost.rollouts, &refit.rollouts);
+    c.rollouts += r.rollouts;
+    c.batches += r.batches;
+    c.seconds += r.seconds;
+    c.simulated_s += r.simulated_s;
+    *cost.rollouts_by_phase.entry("timestep_shift").or_default() += r.rollouts;
+    let s = cost.simulated_s_by_phase.entry("timestep_shift").or_default();
+    *s = ((*s + r.simulated_s) * 10.0).round() / 10.0;
 }
 
 /// The note: each parameter's value at both timesteps, the change in % and in its s.e.
@@ -158,5 +176,38 @@ mod tests {
             "{n}"
         );
         assert!(n.contains("515 s of recording replayed"), "{n}");
+    }
+
+    /// The re-fit's replays are the run's: every counter of the search's cost grows by the
+    /// re-fit's, and the phase `timestep_shift` holds them.
+    #[test]
+    fn the_refit_cost_is_added_to_the_search_cost() {
+        use crate::fit::rollout::RolloutStats;
+        let stats = |rollouts, batches, simulated_s| RolloutStats {
+            rollouts,
+            batches,
+            seconds: 0.0,
+            simulated_s,
+        };
+        let mut cost = SearchCost {
+            simulations: 10,
+            rollouts: stats(100, 0, 700.0),
+            simulated_s_by_phase: [("add", 700.0)].into(),
+            ..SearchCost::default()
+        };
+        let refit = SearchCost {
+            simulations: 3,
+            rollouts: stats(30, 4, 141.04),
+            simulated_s_by_phase: [("told", 141.04)].into(),
+            ..SearchCost::default()
+        };
+        add_cost(&mut cost, &refit);
+        assert_eq!(cost.simulations, 13);
+        assert_eq!(cost.rollouts.rollouts, 130);
+        assert_eq!(cost.rollouts.batches, 4);
+        assert!((cost.rollouts.simulated_s - 841.04).abs() < 1e-9);
+        assert_eq!(cost.simulated_s_by_phase.get("timestep_shift"), Some(&141.0));
+        assert_eq!(cost.rollouts_by_phase.get("timestep_shift"), Some(&30));
+        assert_eq!(cost.simulated_s_by_phase.get("add"), Some(&700.0));
     }
 }
