@@ -349,7 +349,7 @@ pub fn fit_once(
     let rivals = crate::fit::floor_rival::split_off(robot, &p.recs, &opts, &mut out, &p.unscored);
     out.warnings.extend(rivals);
     // What the model's timestep puts into the kept values (told re-fits at two timesteps).
-    if let Some(s) = crate::fit::timestep_shift::measure(robot, &p.recs, &opts, &out) {
+    if let Some(s) = crate::fit::timestep_shift::measure(robot, &p.recs, &opts, &mut out) {
         out.notes.push(crate::fit::timestep_shift::note(&s));
         let only = crate::fit::timestep_shift::split_off(&s, &mut out.selected);
         out.notes.extend(only);

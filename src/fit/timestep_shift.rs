@@ -20,9 +20,12 @@
 //! as given ([`within_uncertainty`], the rule for any kept effect) was the timestep, not missing
 //! physics: [`split_off`] moves it to a note (a 0.9 ms delay on a leg whose 2 ms model lags its
 //! 0.5 ms recording by 0.9 ms: 0.0 ms at 0.5 ms).
+//!
+//! What the re-fit replays is added to the search's cost (phase `timestep_shift`), so
+//! `search.simulated_s` is the whole run's.
 
 use crate::fit::absent::within_uncertainty;
-use crate::fit::select::{FitOptions, FitOutcome, Selected, fit};
+use crate::fit::select::{FitOptions, FitOutcome, SearchCost, Selected, fit};
 use crate::model::Robot;
 use crate::sim2real::recording::Recording;
 
@@ -60,11 +63,12 @@ pub struct TimestepShift {
 /// when nothing is kept, neither the floors nor a fitted time shorter than the step point at
 /// the timestep, or the model's actuators have a MuJoCo `delay` (its history buffer is sized
 /// for the model's timestep).
+/// Whenever the re-fit ran, its cost is added to `out.cost` ([`add_cost`]).
 pub fn measure(
     robot: &Robot,
     recs: &[Recording],
     opts: &FitOptions,
-    out: &FitOutcome,
+    out: &mut FitOutcome,
 ) -> Option<TimestepShift> {
     let dt = robot.opt.timestep;
     let delayed = robot.mj.actuator_history().iter().any(|h| h[0] > 0);
@@ -81,6 +85,7 @@ pub fn measure(
     let told_start = out.selected.iter().map(|s| s.values.clone()).collect();
     let o = FitOptions { told, told_start, progress: None, ..opts.clone() };
     let b = fit(&fine, recs, &o);
+    add_cost(&mut out.cost, &b.cost);
     let mut shifts = Vec::new();
     let mut timestep_only = Vec::new();
     for x in &out.selected {
@@ -112,6 +117,20 @@ pub fn measure(
     }
     let simulated_s = b.cost.rollouts.simulated_s;
     Some(TimestepShift { timestep: dt, fine_timestep: fine_dt, shifts, simulated_s, timestep_only })
+}
+
+/// Adds the told re-fit's cost `refit` (all its phases) to the search's `cost`, as phase
+/// `timestep_shift`.
+fn add_cost(cost: &mut SearchCost, refit: &SearchCost) {
+    cost.simulations += refit.simulations;
+    let (c, r) = (&mut cost.rollouts, &refit.rollouts);
+    c.rollouts += r.rollouts;
+    c.batches += r.batches;
+    c.seconds += r.seconds;
+    c.simulated_s += r.simulated_s;
+    *cost.rollouts_by_phase.entry("timestep_shift").or_default() += r.rollouts;
+    let s = cost.simulated_s_by_phase.entry("timestep_shift").or_default();
+    *s = ((*s + r.simulated_s) * 10.0).round() / 10.0;
 }
 
 /// Some kept effect has a fitted time (a parameter in seconds) shorter than `dt`.
@@ -277,5 +296,38 @@ mod tests {
             notes[0]
         );
         assert!(notes[0].contains("it is the timestep, not missing physics"), "{}", notes[0]);
+    }
+
+    /// The re-fit's replays are the run's: every counter of the search's cost grows by the
+    /// re-fit's, and the phase `timestep_shift` holds them.
+    #[test]
+    fn the_refit_cost_is_added_to_the_search_cost() {
+        use crate::fit::rollout::RolloutStats;
+        let stats = |rollouts, batches, simulated_s| RolloutStats {
+            rollouts,
+            batches,
+            seconds: 0.0,
+            simulated_s,
+        };
+        let mut cost = SearchCost {
+            simulations: 10,
+            rollouts: stats(100, 0, 700.0),
+            simulated_s_by_phase: [("add", 700.0)].into(),
+            ..SearchCost::default()
+        };
+        let refit = SearchCost {
+            simulations: 3,
+            rollouts: stats(30, 4, 141.04),
+            simulated_s_by_phase: [("told", 141.04)].into(),
+            ..SearchCost::default()
+        };
+        add_cost(&mut cost, &refit);
+        assert_eq!(cost.simulations, 13);
+        assert_eq!(cost.rollouts.rollouts, 130);
+        assert_eq!(cost.rollouts.batches, 4);
+        assert!((cost.rollouts.simulated_s - 841.04).abs() < 1e-9);
+        assert_eq!(cost.simulated_s_by_phase.get("timestep_shift"), Some(&141.0));
+        assert_eq!(cost.rollouts_by_phase.get("timestep_shift"), Some(&30));
+        assert_eq!(cost.simulated_s_by_phase.get("add"), Some(&700.0));
     }
 }

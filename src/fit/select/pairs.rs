@@ -31,8 +31,9 @@ use super::{pair_reach, pair_screen};
 /// with the effects kept in earlier rounds on its joints re-fitted beside it
 /// ([`with_kept_refitted`]) competes as a restart of the winner. With `to_floor` (the early
 /// look-ahead, which keeps a pair only at the floor) a pair whose coarse fit cannot reach the
-/// floor is not fitted in full; in either, one whose coarse fit does not lower the held-out
-/// error below the winner's is not ([`pair_reach`]).
+/// floor is not fitted in full; in either, one whose coarse fit leaves no less on the screen's
+/// data than the winner alone, or does not lower the held-out error below the winner's, is not
+/// ([`pair_reach`]).
 pub(super) fn pair_lookahead(
     s: &Search,
     applied: &[Applied],
@@ -221,6 +222,8 @@ pub(super) fn pair_lookahead(
         let f_single = engine.floors(train, &with_single, &t_single);
         pair_reach::floor_allowance(engine, train, &[&floors, &f_single])
     });
+    // The winner alone on the screen's data: a pair must fit them better ([`pair_reach`]).
+    let f_single = engine.errors(&short, &with_single).map_or(f64::INFINITY, |e| e.rmse());
     let mut restarts: Vec<Vec<Applied>> = Vec::new();
     for (i, ((a, b), c)) in sets.into_iter().zip(coarse).enumerate() {
         let Some((set, f)) = c else { continue };
@@ -231,7 +234,10 @@ pub(super) fn pair_lookahead(
         );
         let group: Vec<String> = a.joints.iter().chain(&b.joints).cloned().collect();
         let full = f <= opts.policy.pair_full_fit_within * best_coarse;
-        if full && let Some(phase) = screened(s, (&short, &set), &h_single, &group, z, allowance) {
+        let judged = (&short[..], &set[..], f);
+        if full
+            && let Some(phase) = screened(s, judged, (&h_single, f_single), &group, z, allowance)
+        {
             let params = set[n..]
                 .iter()
                 .flat_map(|x| x.params.iter().take(x.effect.fitted()).copied())
@@ -399,15 +405,16 @@ pub(super) fn needless(opts: &super::FitOptions, single: &Selected) -> bool {
     single.heldout_improvement >= opts.policy.pair_needless_improvement
 }
 
-/// The phase a pair's coarse fit `set` (its RMSE on the screen's data `short`) is logged with
+/// The phase a pair's coarse fit `set` (RMSE `f` on the screen's data `short`) is logged with
 /// when it is not fitted in full ([`pair_reach`]): `pair_floor` when it leaves more there than
 /// `allowance` (the floor's squared residual on the whole training set; `None`: no floor
-/// asked), `heldout_screen` when, replayed on the held-out set, it does not lower the error
-/// below the single winner's (`h_single`) on the pair's joints `group`.
+/// asked), `pair_screen` when it leaves no less there than the single winner at its values
+/// (RMSE `f_single` there), `heldout_screen` when, replayed on the held-out set, it does not
+/// lower the error below the single winner's (`h_single`) on the pair's joints `group`.
 fn screened(
     s: &Search,
-    (short, set): (&[Recording], &[Applied]),
-    h_single: &Errors,
+    (short, set, f): (&[Recording], &[Applied], f64),
+    (h_single, f_single): (&Errors, f64),
     group: &[String],
     z: f64,
     allowance: Option<f64>,
@@ -417,6 +424,9 @@ fn screened(
         && engine.errors(short, set).is_none_or(|e| e.sse > a)
     {
         return Some(Phase::PairFloor);
+    }
+    if !(f < f_single) {
+        return Some(Phase::PairScreen);
     }
     let gate = engine.opts.policy.gate_z(z);
     let h = engine.errors(s.heldout, set);

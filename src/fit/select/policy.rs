@@ -398,6 +398,9 @@ pub enum Phase {
     /// Not fitted in full: the early pair look-ahead's pair whose coarse fit leaves more on the
     /// screen's data than the floor allows on the whole training set (`pair_reach.rs`).
     PairFloor,
+    /// Not fitted in full: a pair whose coarse fit leaves no less on the screen's data than
+    /// the round's winner alone does there (`pair_reach.rs`).
+    PairScreen,
     /// A single effect re-fitted by a failed pair, competing with the round's winner.
     PairRestart,
     /// The same effect on two joints fitted jointly when no single one passed.
@@ -445,6 +448,7 @@ impl Phase {
             Phase::Discretisation => "discretisation",
             Phase::Pair => "pair",
             Phase::PairFloor => "pair_floor",
+            Phase::PairScreen => "pair_screen",
             Phase::PairRestart => "pair_restart",
             Phase::JointPair => "joint_pair",
             Phase::Polish => "polish",
