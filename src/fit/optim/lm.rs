@@ -148,6 +148,9 @@ pub fn levenberg_marquardt(
     let mut iters = 0usize;
     let mut converged = false;
     let mut jac: Option<DMatrix<f64>> = None;
+    // Whether a step was accepted: a fit that never left its start is widened before it stops
+    // on a bound there.
+    let mut moved = false;
 
     if n == 0 || cost == 0.0 {
         converged = true;
@@ -165,6 +168,18 @@ pub fn levenberg_marquardt(
             (0..n).map(|k| (u[k] <= 0.0 && g[k] > 0.0) || (u[k] >= 1.0 && g[k] < 0.0)).collect();
         let pg = (0..n).map(|k| if active[k] { 0.0 } else { g[k].abs() }).fold(0.0, f64::max);
         if pg <= tol * 1e-4 * cost.max(f64::MIN_POSITIVE) {
+            // Still at the start, held there by a bound its slope pushes against (an added mass
+            // of 0 kg, a damping of 0): on a jagged rollout objective that slope may be the
+            // ripple's, as for a free minimum below — the difference is widened before the
+            // bound is called the minimum. (Unitree H1 with 1 kg in its hand, told link_mass on
+            // the elbow: at 1 % of the box the mass's column pointed out of it and the fit stayed
+            // at 0 kg; at 5 % it pointed in and the fit went to 0.86 kg.)
+            if !moved && h < H_MAX && active.iter().any(|&a| a) {
+                h = (h * 10.0).min(H_MAX);
+                lambda = 1e-3;
+                jac = None;
+                continue 'outer;
+            }
             converged = true;
             break;
         }
@@ -222,6 +237,7 @@ pub fn levenberg_marquardt(
                     .as_ref()
                     .is_some_and(|se| (0..n).all(|k| (un[k] - u[k]).abs() <= o.stat_tol * se[k]));
                 u = un;
+                moved = true;
                 res = trial.unwrap();
                 cost = cn;
                 jac = None;
@@ -448,6 +464,32 @@ mod tests {
         let smooth = |p: &[f64]| ts.iter().map(|&t| (p[0] - 3.0) * t).collect::<Vec<f64>>();
         let fit = levenberg_marquardt(&smooth, &[0.0], &b, &o);
         assert!((fit.x[0] - 3.0).abs() < 1e-6, "{:?}", fit.x);
+    }
+
+    #[test]
+    fn lm_leaves_a_bound_start_whose_slope_is_the_ripples() {
+        // A trend towards x = 0.6 from a start on the lower bound, and a ripple (period 0.04 of
+        // the box) whose residual is not zero at the start: over the rollout difference (1 % of
+        // the box, a quarter period) the ripple's slope points out of the box and outweighs the
+        // trend's, over 5 % (a period and a quarter) it does not. The fit must leave the bound.
+        let r = |p: &[f64]| {
+            vec![p[0] - 0.6, 0.1 + 0.1 * (2.0 * std::f64::consts::PI * p[0] / 0.04).sin()]
+        };
+        let b = Bounds { lo: vec![0.0], hi: vec![1.0] };
+        let o = LmOpts {
+            max_iters: 12,
+            rel_step: ROLLOUT_REL_STEP,
+            tol: 1e-5,
+            final_jacobian: false,
+            stat_tol: ROLLOUT_STAT_TOL,
+            short_step: ROLLOUT_SHORT_STEP,
+        };
+        // The precondition: at the rollout difference the slope J^T r points out of the box.
+        let (r0, r1) = (r(&[0.0]), r(&[ROLLOUT_REL_STEP]));
+        let g: f64 = r0.iter().zip(&r1).map(|(a, b)| a * (b - a) / ROLLOUT_REL_STEP).sum();
+        assert!(g > 0.0, "the ripple's slope must point out of the box at the start: {g}");
+        let fit = levenberg_marquardt(&r, &[0.0], &b, &o);
+        assert!(fit.x[0] > 0.3, "stayed near the bound: {:?} iters {}", fit.x, fit.iters);
     }
 
     #[test]
