@@ -370,6 +370,20 @@ fn damping_caps_speed(
     f
 }
 
+/// The one actuator of a joint whose `actuatorfrcrange` is set, and that range's larger bound.
+fn sole_actuator_and_joint_limit<'a>(
+    cx: &Context,
+    j: &crate::model::Joint,
+    acts: &[&'a crate::model::Actuator],
+) -> Option<(&'a crate::model::Actuator, f64)> {
+    let robot = cx.robot;
+    if !robot.mj.jnt_actfrclimited().get(j.id).copied().unwrap_or(false) || acts.len() != 1 {
+        return None;
+    }
+    let rng = robot.mj.jnt_actfrcrange().as_flattened();
+    Some((acts[0], rng[2 * j.id].abs().max(rng[2 * j.id + 1].abs())))
+}
+
 /// A `<motor>`'s torque command range that disagrees with the joint's `actuatorfrcrange`.
 fn ctrl_contradicts_joint_limit(
     cx: &Context,
@@ -379,15 +393,10 @@ fn ctrl_contradicts_joint_limit(
     unit: &str,
 ) -> Option<Finding> {
     let robot = cx.robot;
-    if !robot.mj.jnt_actfrclimited().get(j.id).copied().unwrap_or(false) || acts.len() != 1 {
-        return None;
-    }
-    let a = acts[0];
+    let (a, jl) = sole_actuator_and_joint_limit(cx, j, acts)?;
     if a.kind != ActuatorKind::Motor || !a.ctrllimited || a.forcelimited {
         return None;
     }
-    let rng = robot.mj.jnt_actfrcrange().as_flattened();
-    let jl = rng[2 * j.id].abs().max(rng[2 * j.id + 1].abs());
     let ml = (a.gear * a.gainprm[0]).abs() * a.ctrlrange[0].abs().max(a.ctrlrange[1].abs());
     if !(jl > 0.0 && ml > 0.0) || (ml - jl).abs() <= tol * jl.max(ml) {
         return None;
@@ -508,15 +517,10 @@ fn force_contradicts_joint_limit(
     unit: &str,
 ) -> Option<Finding> {
     let robot = cx.robot;
-    if !robot.mj.jnt_actfrclimited().get(j.id).copied().unwrap_or(false) || acts.len() != 1 {
-        return None;
-    }
-    let a = acts[0];
+    let (a, jl) = sole_actuator_and_joint_limit(cx, j, acts)?;
     if !a.forcelimited {
         return None;
     }
-    let rng = robot.mj.jnt_actfrcrange().as_flattened();
-    let jl = rng[2 * j.id].abs().max(rng[2 * j.id + 1].abs());
     let arm = robot.moment_at_joint(a, j.id).unwrap_or(a.gear).abs();
     let fl = arm * a.forcerange[0].abs().max(a.forcerange[1].abs());
     if !(jl > 0.0 && fl > 0.0 && jl.is_finite() && fl.is_finite()) {
