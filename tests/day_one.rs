@@ -63,7 +63,7 @@ fn docs_are_printed_by_the_tool() {
     assert!(err.contains("`modellint docs spec`") && !err.contains("docs/spec.md"), "{err}");
 }
 
-/// `gap --report` draws, per worst joint, the error sim − real over time.
+/// `gap --report` draws, per worst joint, the error replayed − recorded over time.
 #[test]
 fn gap_report_has_an_error_over_time_plot() {
     let dir = tmp(&std::env::temp_dir(), "report");
@@ -90,7 +90,7 @@ fn gap_report_has_an_error_over_time_plot() {
     ]);
     assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
     let html = std::fs::read_to_string(rep.join("index.html")).unwrap();
-    assert!(html.contains("error sim − real") && html.contains("error [deg]"));
+    assert!(html.contains("position error, replayed − recorded") && html.contains("error [deg]"));
     let _ = std::fs::remove_dir_all(&dir);
 }
 
