@@ -253,8 +253,8 @@ fn cli_json_write_model_and_actuators() {
     );
     let page = std::fs::read_to_string(rep.join("index.html")).unwrap();
     assert!(
-        page.contains("sim before")
-            && page.contains("sim after")
+        page.contains("replayed before")
+            && page.contains("replayed after")
             && page.contains("Missing physics"),
         "one fit page with before and after"
     );
