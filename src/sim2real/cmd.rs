@@ -31,11 +31,7 @@ pub fn run_gap(a: GapArgs) -> i32 {
         Err(e) => return report_error(&e),
     };
     let out = if a.json {
-        let v = serde_json::to_value(&report).map(|mut v| {
-            crate::output::json::stamp(&mut v, "gap");
-            v
-        });
-        match v.and_then(|v| serde_json::to_string_pretty(&v)) {
+        match gap_json(&report).and_then(|v| serde_json::to_string_pretty(&v)) {
             Ok(s) => s + "\n",
             Err(e) => {
                 eprintln!("modellint: cannot serialise report: {e}");
@@ -64,9 +60,17 @@ pub fn report_error(e: &CmdError) -> i32 {
     2
 }
 
+/// The `gap --format json` document of `report`, stamped like every modellint JSON (the CLI's
+/// and the Python API's).
+pub fn gap_json(report: &GapReport) -> serde_json::Result<serde_json::Value> {
+    let mut v = serde_json::to_value(report)?;
+    crate::output::json::stamp(&mut v, "gap");
+    Ok(v)
+}
+
 /// `modellint gap` without the printing: loads the model, reads and replays the recordings,
 /// measures the gap (and writes the HTML report when asked). What `--format json` prints is
-/// this report, serialised; the Python API returns the same.
+/// this report, serialised by [`gap_json`]; the Python API returns the same.
 pub fn gap(a: &GapArgs, sink: &dyn Sink) -> Result<GapReport, CmdError> {
     let mut loaded = crate::lint::load_for_api(&a.model, a.spec.clone()).map_err(CmdError::Load)?;
     replay::hold_base(&mut loaded.robot, a.replay.base);

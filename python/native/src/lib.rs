@@ -154,7 +154,8 @@ fn gap(py: Python<'_>, argv: Vec<String>, progress: Option<Py<PyAny>>) -> PyResu
         c.raised()?;
     }
     let report = report.map_err(cmd_error)?;
-    serde_json::to_string_pretty(&report)
+    modellint::sim2real::cmd::gap_json(&report)
+        .and_then(|v| serde_json::to_string_pretty(&v))
         .map(|s| s + "\n")
         .map_err(|e| usage(format!("cannot serialise the report: {e}")))
 }
