@@ -9,6 +9,7 @@
 //! its place along and across the trunk within 10 %;
 //! one armature behind every motor of the leg must come out as one group on all three joints;
 //! a gear play behind the knee's motor must come out as backlash on the knee;
+//! a gear play behind every motor must come out as one backlash group on all three joints;
 //! the shank's moment of inertia doubled must come out as a `link_inertia` on the knee within
 //! 10 %;
 //! the same robots with nothing concealed must give nothing. Every expected value is read from the simulator's `truth.json`.
@@ -111,37 +112,22 @@ fn a_gear_play_behind_the_knee_motor_is_found_as_backlash_on_the_knee() {
     assert_eq!(found(&v), [("backlash".into(), r#"["knee"]"#.into())], "{:?}", found(&v));
     let b = v["missing_physics"][0]["params"]["backlash_rad"].as_f64().unwrap();
     assert!((b - play).abs() <= 0.1 * play, "backlash {b} for {play}");
-    // The kept play leaves the knee above its floor, and the pair look-ahead pairs it with the
-    // knee's gain error (the other candidate kept in round 0). That pair's coarse fit, replayed
-    // on the held-out episode, is no better than the play alone there: it is logged
-    // `heldout_screen` with its coarse fit and not fitted in full on the training set (a full
-    // fit left the held-out error 5 % above the play's alone).
+    // The kept play leaves the knee above its floor. The other candidate kept in round 0, the
+    // knee's gain error, is kept at its coarse fit only (below): the look-ahead does not pair it
+    // with the play (no mimicking pair, no group with an exception), and no pair of round 0 is
+    // fitted, coarsely or in full (paired, its coarse fit left the held-out error 15 % above the
+    // play's alone).
     let tried = v["tried"].as_array().unwrap();
-    let pair = |phase: &str| {
-        tried
-            .iter()
-            .filter(|t| {
-                t["round"] == 0
-                    && t["phase"] == phase
-                    && t["effect"].as_str().unwrap().contains('+')
-            })
-            .collect::<Vec<_>>()
-    };
-    assert!(pair("pair").is_empty(), "a pair fitted in full: {:?}", pair("pair"));
-    let screened = pair("heldout_screen");
-    assert!(!screened.is_empty(), "no pair left out by its coarse fit's held-out replay");
-    for t in screened {
-        assert!(
-            t["params"].as_array().is_some_and(|p| !p.is_empty())
-                && t["train_rmse"].as_f64().is_some_and(f64::is_finite),
-            "a pair left out without its coarse fit: {t}"
-        );
-    }
+    let pairs: Vec<_> = tried
+        .iter()
+        .filter(|t| t["round"] == 0 && t["effect"].as_str().unwrap().contains('+'))
+        .collect();
+    assert!(pairs.is_empty(), "round 0 fitted pairs: {pairs:?}");
     // The knee's gain error, replayed on the held-out episode at its coarse fit, leaves over
     // twice the kept play's held-out error (0.40 against 0.85 of it removed, most windows
     // worse): a full fit going on from there could not come near the play. It is judged at its
-    // coarse fit (`add_coarse`, still gated: kept, it partners the play in the look-ahead
-    // above), and the play is round 0's only candidate fitted in full.
+    // coarse fit (`add_coarse`, still gated), and the play is round 0's only candidate fitted in
+    // full.
     let round0 = |phase: &str| {
         tried.iter().filter(|t| t["round"] == 0 && t["phase"] == phase).collect::<Vec<_>>()
     };
@@ -171,6 +157,44 @@ fn a_gear_play_behind_the_knee_motor_is_found_as_backlash_on_the_knee() {
     let shift = phases.get("timestep_shift").and_then(|x| x.as_f64());
     assert!(check.is_some(), "no timestep check: {notes:?}");
     assert!(shift.is_some_and(|s| s > 0.0), "the timestep check's re-fit not counted: {phases:?}");
+}
+
+/// A gear play of 0.03 rad (total) behind every motor comes out as one backlash group on all
+/// three joints, within 10 % of the truth's play. The group leaves every joint above its floor;
+/// its rivals of round 0 are kept at their coarse fits only (`add_coarse`) and the look-ahead
+/// pairs none of them with it but the hip's own play (the group with an exception on the hip),
+/// whose coarse fit leaves 0.2 % less than the group alone on the screen's data, short of
+/// `pair_gain`: no pair is fitted in full (`pair`; two were, 2,861 of the run's 7,460 replayed
+/// seconds, held out within 1 % of the group alone).
+#[test]
+fn a_gear_play_behind_every_motor_is_found_as_one_backlash_group() {
+    let truth = truth("KR7_all_backlash");
+    own_physics(&truth);
+    let joints = &truth["effects"]["joints"];
+    let play = joints["knee"]["backlash"].as_f64().unwrap();
+    for j in ["hip_pitch", "ankle"] {
+        assert_eq!(joints[j]["backlash"].as_f64(), Some(play), "not one play on every joint");
+    }
+    let v = fit("KR7_all_backlash", &[]);
+    assert_eq!(
+        found(&v),
+        [("backlash".into(), r#"["hip_pitch","knee","ankle"]"#.into())],
+        "{:?}",
+        found(&v)
+    );
+    let b = v["missing_physics"][0]["params"]["backlash_rad"].as_f64().unwrap();
+    assert!((b - play).abs() <= 0.1 * play, "backlash {b} for {play}");
+    let tried = v["tried"].as_array().unwrap();
+    let full: Vec<_> = tried.iter().filter(|t| t["phase"] == "pair").collect();
+    assert!(full.is_empty(), "pairs fitted in full: {full:?}");
+    let rounds0 =
+        |phase: &str| tried.iter().filter(|t| t["round"] == 0 && t["phase"] == phase).count();
+    assert!(rounds0("add_coarse") > 0, "no rival kept at its coarse fit: nothing to test");
+    let screened: Vec<_> = tried
+        .iter()
+        .filter(|t| t["phase"] == "pair_screen" && t["effect"] == "backlash+backlash")
+        .collect();
+    assert!(!screened.is_empty(), "the group's exception on the hip not screened: {tried:?}");
 }
 
 /// The same leg with nothing concealed gives nothing: it moves in continuous time (RK4 at

@@ -21,7 +21,8 @@ use super::{pair_reach, pair_screen};
 /// Look-ahead for two effects that only make sense together (extra inertia *and* damping: each
 /// alone is mimicked by a delay or a gain error). The top four kept candidates of the round are
 /// paired when they act on the same joints (not two friction models; one effect on a group and
-/// on one of its members becomes the group with an exception), each pair is fitted
+/// on one of its members becomes the group with an exception; a candidate kept at its coarse
+/// fit pairs only in those two ways, [`gated_at_coarse`]), each pair is fitted
 /// jointly from the two single fits (coarsely first; fully when within 25 % of the best pair's
 /// training RMSE), and the best pair replaces the single winner when it is
 /// ≥ 10 % better on held-out (and beyond noise), and each member is needed in it (removing
@@ -31,9 +32,9 @@ use super::{pair_reach, pair_screen};
 /// with the effects kept in earlier rounds on its joints re-fitted beside it
 /// ([`with_kept_refitted`]) competes as a restart of the winner. With `to_floor` (the early
 /// look-ahead, which keeps a pair only at the floor) a pair whose coarse fit cannot reach the
-/// floor is not fitted in full; in either, one whose coarse fit leaves no less on the screen's
-/// data than the winner alone, or does not lower the held-out error below the winner's, is not
-/// ([`pair_reach`]).
+/// floor is not fitted in full; in either, one whose coarse fit leaves more on the screen's
+/// data than `pair_gain` × the winner alone's RMSE, or does not lower the held-out error below
+/// the winner's, is not ([`pair_reach`]).
 pub(super) fn pair_lookahead(
     s: &Search,
     applied: &[Applied],
@@ -45,7 +46,9 @@ pub(super) fn pair_lookahead(
 ) -> Option<Vec<(Selected, Applied)>> {
     let Search { engine, train, heldout, allowed, .. } = *s;
     let opts = engine.opts;
-    let mut top: Vec<&Selected> = kept.iter().collect();
+    // The best kept candidates of the round, but not one gated at its coarse fit
+    // ([`gated_at_coarse`]): it pairs only as a mimicking partner or a group's exception.
+    let mut top: Vec<&Selected> = kept.iter().filter(|c| !gated_at_coarse(out, round, c)).collect();
     top.sort_by(|a, b| a.heldout_rmse_after.total_cmp(&b.heldout_rmse_after));
     top.truncate(opts.policy.pair_candidates);
     if needless(opts, single) {
@@ -399,6 +402,22 @@ pub(super) fn pair_lookahead(
     Some(res)
 }
 
+/// Whether the kept candidate `c` was judged at its coarse fit in round `round` (`tried`: phase
+/// `add_coarse`, [`super::winner::beaten_at_coarse`]): a kept candidate of the round left at
+/// most (1 − `decisive_improvement`) × its held-out RMSE there. Such a rival is not among the
+/// round's best that the look-ahead pairs whatever their effects: the greedy rounds find a
+/// second effect that adds to the winner; what the look-ahead is for — effects that explain
+/// the data only together — it still finds as a mimicking pair ([`effects::mimicking_pairs`])
+/// or a group with an exception, wherever the members rank.
+fn gated_at_coarse(out: &FitOutcome, round: usize, c: &Selected) -> bool {
+    out.tried.iter().any(|t| {
+        t.round == round
+            && t.phase == Phase::AddCoarse
+            && t.effect == c.effect
+            && t.joints == c.joints
+    })
+}
+
 /// A single effect that leaves under `pair_needless_improvement` of the held-out error needs
 /// no partner.
 pub(super) fn needless(opts: &super::FitOptions, single: &Selected) -> bool {
@@ -408,8 +427,8 @@ pub(super) fn needless(opts: &super::FitOptions, single: &Selected) -> bool {
 /// The phase a pair's coarse fit `set` (RMSE `f` on the screen's data `short`) is logged with
 /// when it is not fitted in full ([`pair_reach`]): `pair_floor` when it leaves more there than
 /// `allowance` (the floor's squared residual on the whole training set; `None`: no floor
-/// asked), `pair_screen` when it leaves no less there than the single winner at its values
-/// (RMSE `f_single` there), `heldout_screen` when, replayed on the held-out set, it does not
+/// asked), `pair_screen` when it leaves more there than `pair_gain` × the single winner's RMSE
+/// at its values (`f_single`), `heldout_screen` when, replayed on the held-out set, it does not
 /// lower the error below the single winner's (`h_single`) on the pair's joints `group`.
 fn screened(
     s: &Search,
@@ -425,7 +444,7 @@ fn screened(
     {
         return Some(Phase::PairFloor);
     }
-    if !(f < f_single) {
+    if !(f < engine.opts.policy.pair_gain * f_single) {
         return Some(Phase::PairScreen);
     }
     let gate = engine.opts.policy.gate_z(z);
