@@ -80,6 +80,9 @@ pub struct Engine<'a> {
     by_phase: std::sync::Mutex<std::collections::BTreeMap<&'static str, (usize, f64)>>,
     /// The same, booked to the greedy round that ran them ([`Engine::rollouts_by_round`]).
     by_round: std::sync::Mutex<std::collections::BTreeMap<String, (usize, f64)>>,
+    /// Per candidate (effect and group), whether round 0's coarse fit confirmed its linear
+    /// model ([`Engine::note_trust`]).
+    trust: std::sync::Mutex<std::collections::HashMap<String, bool>>,
 }
 
 type StartMemo = std::collections::HashMap<String, Option<std::sync::Arc<StartSens>>>;
@@ -209,6 +212,7 @@ impl<'a> Engine<'a> {
             place: Default::default(),
             by_phase: Default::default(),
             by_round: Default::default(),
+            trust: Default::default(),
             screens: Default::default(),
         }
     }
@@ -298,6 +302,29 @@ impl<'a> Engine<'a> {
     pub fn rollouts_by_round(&self) -> std::collections::BTreeMap<String, (usize, f64)> {
         self.account();
         self.by_round.lock().unwrap_or_else(|e| e.into_inner()).clone()
+    }
+
+    /// Records whether the linear model of `effect` on `group` was `trusted` (its coarse fit's
+    /// gain agreed with the one it predicted, [`SearchPolicy::linear_trust`]); the first record
+    /// of a candidate stands.
+    ///
+    /// [`SearchPolicy::linear_trust`]: super::policy::SearchPolicy::linear_trust
+    pub(in crate::fit::select) fn note_trust(
+        &self,
+        (effect, group): (&dyn Effect, &[String]),
+        trusted: bool,
+    ) {
+        let key = format!("{}@{}", effect.id(), group.join(","));
+        self.trust.lock().unwrap_or_else(|e| e.into_inner()).entry(key).or_insert(trusted);
+    }
+
+    /// What [`Engine::note_trust`] recorded for `effect` on `group`, if anything.
+    pub(in crate::fit::select) fn trusted(
+        &self,
+        (effect, group): (&dyn Effect, &[String]),
+    ) -> Option<bool> {
+        let key = format!("{}@{}", effect.id(), group.join(","));
+        self.trust.lock().unwrap_or_else(|e| e.into_inner()).get(&key).copied()
     }
 
     /// Reports the place of the last [`Engine::report`] again with the counts of now (the

@@ -4,8 +4,9 @@
 use rayon::prelude::*;
 
 use crate::fit::diagnose::diagnose;
-use crate::fit::effects::{self, Applied};
+use crate::fit::effects::{self, Applied, Effect};
 use crate::fit::stats::{bic, bic_pieces};
+use crate::sim2real::recording::Recording;
 
 use super::coarse::{self, Coarse};
 use super::discretisation::{Judged, beyond_discretisation};
@@ -144,6 +145,9 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     let mut reach: Option<Reach> = None;
     // The lead's early pair look-ahead, once tried ([`pair_first`]).
     let mut early_tried: Option<Option<EarlyPair>> = None;
+    // The candidates left without a coarse fit by round 0's trust ([`trust_out`]), with the
+    // largest gain their linear model allows.
+    let mut trusted_out: Vec<(&'static dyn Effect, Vec<String>, f64)> = Vec::new();
     let mut ci = 0;
     while ci < cands.len() {
         // The coarse fits of a size's candidates, which are then taken best first
@@ -157,15 +161,55 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
                 Phase::Screen,
                 Some((ci + 1, cands.len(), format!("coarse fits of {} candidates", range.len()))),
             );
+            // After round 0, a candidate whose linear model round 0 confirmed is taken at its
+            // word ([`trust_out`]): no coarse fit when it could not reach the bar.
+            let cut = (opts.policy.screen_share * best_gain).max(opts.policy.min_rel_improvement);
+            let out_of: Vec<Option<f64>> = cands[range.clone()]
+                .iter()
+                .map(|(e, g, _)| {
+                    // (Not the plain variant of a candidate on its joints: the richer model is
+                    // judged from the plain one's coarse fit, [`coarse::deferred`].)
+                    let plain = |(x, h, _): &Cand| {
+                        h == g && x.plain_variant().is_some_and(|p| p.id() == e.id())
+                    };
+                    let needed = cands.iter().any(plain);
+                    if round > 0 && !needed {
+                        trust_out(engine, &screen, (*e, g), cut)
+                    } else {
+                        None
+                    }
+                })
+                .collect();
             let fits: Vec<(Vec<f64>, f64)> = cands[range.clone()]
                 .par_iter()
-                .map(|(e, g, _)| {
+                .zip(&out_of)
+                .map(|((e, g, _), out_of)| {
                     let far = || reach.as_ref()?.out_of_reach(engine, Some(&screen), (*e, g));
+                    let trust = || out_of.map(|_| (vec![], f64::INFINITY));
                     coarse::deferred(s, (*e, g), &cands, &coarse)
                         .or_else(|| far().map(|(p, _)| (p, f64::INFINITY))) // judged below
+                        .or_else(trust) // judged below
                         .unwrap_or_else(|| coarse::fit(engine, &screen, (short, &applied), (*e, g)))
                 })
                 .collect();
+            for ((c, f), o) in cands[range.clone()].iter().zip(&fits).zip(&out_of) {
+                if let Some(upper) = o
+                    && f.0.is_empty()
+                    && f.1.is_infinite()
+                {
+                    trusted_out.push((c.0, c.1.clone(), *upper));
+                }
+                // Round 0's record of which linear models its coarse fits confirm.
+                let pred = screen.predict(c.0.id(), &c.1).map(|p| gain(p.train_rmse));
+                if round == 0
+                    && let Some(want) = pred
+                    && !f.0.is_empty()
+                    && f.1.is_finite()
+                {
+                    let ok = coarse::agrees(gain(f.1), want, &opts.policy);
+                    engine.note_trust((c.0, &c.1), ok);
+                }
+            }
             for f in fits.iter().filter(|f| !coarse::is_deferred(f)) {
                 best_gain = best_gain.max(gain(f.1));
             }
@@ -238,6 +282,11 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         }) && !(deferred && coarse::plain_fitted(s, (short, &applied), (e, &group)))
         {
             out.tried.push(not_tested(Phase::Floor, vec![], f64::NAN));
+            continue;
+        }
+        // Left without a coarse fit: its linear model, trusted, cannot reach the bar.
+        if trusted_out.iter().any(|(x, g, _)| x.id() == e.id() && *g == group) {
+            out.tried.push(not_tested(Phase::TrustScreen, vec![], f64::NAN));
             continue;
         }
         // Not coarse-fitted on the screen's data: first judged on the probes' data ([`Reach`]).
@@ -494,6 +543,10 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     let Some(ib) = (0..accepted.len()).min_by(|&a, &b| {
         accepted[a].0.heldout_rmse_after.total_cmp(&accepted[b].0.heldout_rmse_after)
     }) else {
+        // A joint pair starts from its members' coarse fits: those left out by their trusted
+        // linear model that could start one are coarse-fitted now, as the screen would have.
+        let at = (short, &applied[..]);
+        let fitted = with_pair_starts(engine, &screen, at, &trusted_out, fitted, gain);
         return joint_pairs(
             engine,
             train,
@@ -574,4 +627,66 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     set_uncertainty(engine, train, &mut w, &out.applied, &mut out.warnings);
     out.selected.push(w);
     true
+}
+
+/// After round 0, the largest relative gain (on the screen's data) that the linear model of `e`
+/// on `g` allows when round 0's coarse fit confirmed that model ([`Engine::trusted`]: the gain it
+/// achieved was between `linear_trust` and its inverse times the predicted one) and this round's
+/// prediction divided by `linear_trust` stays below `cut` (the round's bar so far, at least
+/// `min_rel_improvement`); `None` (coarse-fitted as usual) otherwise. Such a candidate's coarse
+/// fit, at most that gain, could admit it to no full fit: the bar only rises during the round,
+/// and a gain below `min_rel_improvement` starts no joint pair.
+///
+/// [`Engine::trusted`]: super::engine::Engine
+fn trust_out(
+    engine: &super::Engine,
+    screen: &Screen,
+    (e, g): (&'static dyn Effect, &[String]),
+    cut: f64,
+) -> Option<f64> {
+    if engine.trusted((e, g)) != Some(true) {
+        return None;
+    }
+    let p = screen.predict(e.id(), g)?;
+    let base = screen.base_rmse();
+    let upper = (1.0 - p.train_rmse / base) / engine.opts.policy.linear_trust;
+    (base > 0.0 && upper.is_finite() && upper < cut).then_some(upper)
+}
+
+/// `fitted` with the coarse fits of the candidates of `out_of` ([`trust_out`]) that could start
+/// a joint pair: a linear model allowing at least `min_rel_improvement`, and a mimicking
+/// partner ([`effects::mimicking_pairs`]) on the same joints fitted or also left out. Each is
+/// coarse-fitted as the screen would have, and joins when its gain (`gain`) reaches
+/// `min_rel_improvement`, as a screened candidate's coarse fit does.
+fn with_pair_starts(
+    engine: &super::Engine,
+    screen: &Screen,
+    (short, applied): (&[Recording], &[Applied]),
+    out_of: &[(&'static dyn Effect, Vec<String>, f64)],
+    mut fitted: Vec<Applied>,
+    gain: impl Fn(f64) -> f64,
+) -> Vec<Applied> {
+    let small = engine.opts.policy.min_rel_improvement;
+    let pairs = effects::mimicking_pairs();
+    let partner = |a: &str, b: &str| {
+        pairs.iter().any(|(x, y)| (x.id() == a && y.id() == b) || (x.id() == b && y.id() == a))
+    };
+    let starts: Vec<(&'static dyn Effect, &Vec<String>)> = out_of
+        .iter()
+        .filter(|(e, g, upper)| {
+            *upper >= small
+                && (fitted.iter().any(|f| f.joints == *g && partner(e.id(), f.effect.id()))
+                    || out_of
+                        .iter()
+                        .any(|(x, h, u)| h == g && *u >= small && partner(e.id(), x.id())))
+        })
+        .map(|(e, g, _)| (*e, g))
+        .collect();
+    for (e, g) in starts {
+        let (p, f) = coarse::fit(engine, screen, (short, applied), (e, g));
+        if !p.is_empty() && gain(f) >= small {
+            fitted.push(Applied { effect: e, joints: g.clone(), params: p });
+        }
+    }
+    fitted
 }

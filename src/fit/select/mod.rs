@@ -531,6 +531,7 @@ fn search_cost(engine: &Engine, out: &FitOutcome) -> SearchCost {
                         | Phase::FloorScreen
                         | Phase::ReachScreen
                         | Phase::HeldoutScreen
+                        | Phase::TrustScreen
                         | Phase::SwapScreen
                 )
             })
