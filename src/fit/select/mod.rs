@@ -46,6 +46,7 @@ mod simplify;
 mod solve;
 mod start;
 mod told;
+mod trust;
 mod verdict;
 mod winner;
 
