@@ -437,9 +437,10 @@ fn replays_are_booked_to_their_round_and_round_zeros_trust_stands() {
     let by_round = engine.rollouts_by_round();
     let rollouts: Vec<(&str, usize)> = by_round.iter().map(|(k, v)| (k.as_str(), v.0)).collect();
     assert_eq!(rollouts, [("0", 2 * n), ("1", n), ("end", n)]);
-    let s = |m: &std::collections::BTreeMap<_, (usize, f64)>| m.values().map(|v| v.1).sum::<f64>();
-    assert!((s(&by_round) - s(&engine.rollouts_by_phase())).abs() < 1e-9);
-    assert!((s(&by_round) - engine.rollout_stats().simulated_s).abs() < 1e-9);
+    let rounds_s: f64 = by_round.values().map(|v| v.1).sum();
+    let phases_s: f64 = engine.rollouts_by_phase().values().map(|v| v.1).sum();
+    assert!((rounds_s - phases_s).abs() < 1e-9);
+    assert!((rounds_s - engine.rollout_stats().simulated_s).abs() < 1e-9);
     let g = ["servo".to_string()];
     assert_eq!(engine.trusted((damping, &g)), None);
     engine.note_trust((damping, &g), true);
