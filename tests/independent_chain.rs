@@ -154,6 +154,20 @@ fn a_gear_play_behind_the_knee_motor_is_found_as_backlash_on_the_knee() {
         (by_phase - total).abs() <= 0.1 * phases.len() as f64,
         "{by_phase} by phase, {total} in all"
     );
+    // Round 1 (the play kept, the residual still above the floors) takes round 0's confirmed
+    // linear models at their word: candidates whose prediction cannot reach the round's bar are
+    // not coarse-fitted again (`trust_screen`), and none of them is kept.
+    let trusted: Vec<_> = tried.iter().filter(|t| t["phase"] == "trust_screen").collect();
+    assert!(!trusted.is_empty(), "round 1 re-screened every candidate");
+    assert!(trusted.iter().all(|t| t["round"].as_u64() >= Some(1) && t["kept"] == false));
+    // The same seconds by round: the greedy rounds' and what ran after them ("end").
+    let rounds = search["simulated_s_by_round"].as_object().unwrap();
+    let by_round: f64 = rounds.values().map(|x| x.as_f64().unwrap()).sum();
+    assert!(
+        (by_round - total).abs() <= 0.1 * rounds.len() as f64,
+        "{by_round} by round, {total} in all: {rounds:?}"
+    );
+    assert!(rounds.contains_key("0") && rounds.contains_key("end"), "{rounds:?}");
     let shift = phases.get("timestep_shift").and_then(|x| x.as_f64());
     assert!(check.is_some(), "no timestep check: {notes:?}");
     assert!(shift.is_some_and(|s| s > 0.0), "the timestep check's re-fit not counted: {phases:?}");

@@ -246,6 +246,5 @@ fn add_cost(out: &mut FitOutcome, simulations: usize, r: &crate::fit::rollout::R
     c.rollouts.batches += r.batches;
     c.rollouts.seconds += r.seconds;
     c.rollouts.simulated_s += r.simulated_s;
-    *c.rollouts_by_phase.entry("floor_rival").or_default() += r.rollouts;
-    *c.simulated_s_by_phase.entry("floor_rival").or_default() += r.simulated_s;
+    c.book_after("floor_rival", r.rollouts, r.simulated_s);
 }

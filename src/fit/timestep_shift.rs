@@ -128,9 +128,7 @@ fn add_cost(cost: &mut SearchCost, refit: &SearchCost) {
     c.batches += r.batches;
     c.seconds += r.seconds;
     c.simulated_s += r.simulated_s;
-    *cost.rollouts_by_phase.entry("timestep_shift").or_default() += r.rollouts;
-    let s = cost.simulated_s_by_phase.entry("timestep_shift").or_default();
-    *s = ((*s + r.simulated_s) * 10.0).round() / 10.0;
+    cost.book_after("timestep_shift", r.rollouts, r.simulated_s);
 }
 
 /// Some kept effect has a fitted time (a parameter in seconds) shorter than `dt`.
@@ -329,5 +327,7 @@ mod tests {
         assert_eq!(cost.simulated_s_by_phase.get("timestep_shift"), Some(&141.0));
         assert_eq!(cost.rollouts_by_phase.get("timestep_shift"), Some(&30));
         assert_eq!(cost.simulated_s_by_phase.get("add"), Some(&700.0));
+        assert_eq!(cost.simulated_s_by_round.get("end"), Some(&141.0));
+        assert_eq!(cost.rollouts_by_round.get("end"), Some(&30));
     }
 }

@@ -116,7 +116,7 @@ fn on_probes(
 /// coarse fit's test, [`Engine::fit_secant`]).
 ///
 /// [`Engine::fit_secant`]: super::engine::Engine
-fn agrees(got: f64, want: f64, pol: &SearchPolicy) -> bool {
+pub(super) fn agrees(got: f64, want: f64, pol: &SearchPolicy) -> bool {
     let small = pol.min_rel_improvement;
     (want.abs() < small && got.abs() < small)
         || (want > 0.0 && got >= pol.linear_trust * want && got * pol.linear_trust <= want)

@@ -78,9 +78,33 @@ pub struct Engine<'a> {
     /// Rollouts and recording seconds replayed, booked to each phase
     /// ([`Engine::rollouts_by_phase`]).
     by_phase: std::sync::Mutex<std::collections::BTreeMap<&'static str, (usize, f64)>>,
+    /// The same, booked to the greedy round that ran them ([`Engine::rollouts_by_round`]).
+    by_round: std::sync::Mutex<std::collections::BTreeMap<String, (usize, f64)>>,
+    /// Per candidate (effect and group), whether round 0's coarse fit confirmed its linear
+    /// model ([`Engine::note_trust`]).
+    trust: std::sync::Mutex<std::collections::HashMap<String, bool>>,
 }
 
 type StartMemo = std::collections::HashMap<String, Option<std::sync::Arc<StartSens>>>;
+
+/// The key a phase's replays are booked to by round: the greedy round's number (`"0"`, `"1"`, …)
+/// for the phases a round runs (its diagnosis and floors, screen, full fits, pairs), `"end"`
+/// for what runs after the rounds (polish, simplify, reshoot, standard errors, the final floors;
+/// a round re-opened by simplify books to its own number).
+pub(in crate::fit) fn round_key(phase: Phase, round: usize) -> String {
+    match phase {
+        Phase::Diagnose
+        | Phase::Screen
+        | Phase::Add
+        | Phase::Pair
+        | Phase::JointPair
+        | Phase::Told => round.to_string(),
+        _ => END_KEY.to_string(),
+    }
+}
+
+/// [`round_key`] of what runs after the greedy rounds.
+pub(in crate::fit) const END_KEY: &str = "end";
 
 /// How many recent simulations [`Engine::errors`] keeps.
 const RECENT: usize = 16;
@@ -187,6 +211,8 @@ impl<'a> Engine<'a> {
             recon: Default::default(),
             place: Default::default(),
             by_phase: Default::default(),
+            by_round: Default::default(),
+            trust: Default::default(),
             screens: Default::default(),
         }
     }
@@ -240,19 +266,29 @@ impl<'a> Engine<'a> {
     }
 
     /// Books the rollouts (and recording seconds) run since the last report to the phase
-    /// reported then.
+    /// reported then, and to its round ([`round_key`]).
     fn account(&self) {
         let now = self.rollouts.stats();
-        let phase = self.place.lock().unwrap_or_else(|e| e.into_inner()).as_ref().map(|p| p.phase);
+        let place = self
+            .place
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .as_ref()
+            .map(|p| (p.phase, p.round));
         let mut b = self.by_phase.lock().unwrap_or_else(|e| e.into_inner());
         let done = b.values().map(|v| v.0).sum::<usize>();
         let done_s = b.values().map(|v| v.1).sum::<f64>();
-        if let Some(ph) = phase
+        if let Some((ph, round)) = place
             && now.rollouts > done
         {
+            let (n, s) = (now.rollouts - done, (now.simulated_s - done_s).max(0.0));
             let e = b.entry(ph.name()).or_default();
-            e.0 += now.rollouts - done;
-            e.1 += (now.simulated_s - done_s).max(0.0);
+            e.0 += n;
+            e.1 += s;
+            let mut r = self.by_round.lock().unwrap_or_else(|e| e.into_inner());
+            let e = r.entry(round_key(ph, round)).or_default();
+            e.0 += n;
+            e.1 += s;
         }
     }
 
@@ -260,6 +296,35 @@ impl<'a> Engine<'a> {
     pub fn rollouts_by_phase(&self) -> std::collections::BTreeMap<&'static str, (usize, f64)> {
         self.account();
         self.by_phase.lock().unwrap_or_else(|e| e.into_inner()).clone()
+    }
+
+    /// Rollouts and recording seconds replayed, by the greedy round that ran them ([`round_key`]).
+    pub fn rollouts_by_round(&self) -> std::collections::BTreeMap<String, (usize, f64)> {
+        self.account();
+        self.by_round.lock().unwrap_or_else(|e| e.into_inner()).clone()
+    }
+
+    /// Records whether the linear model of `effect` on `group` was `trusted` (its coarse fit's
+    /// gain agreed with the one it predicted, [`SearchPolicy::linear_trust`]); the first record
+    /// of a candidate stands.
+    ///
+    /// [`SearchPolicy::linear_trust`]: super::policy::SearchPolicy::linear_trust
+    pub(in crate::fit::select) fn note_trust(
+        &self,
+        (effect, group): (&dyn Effect, &[String]),
+        trusted: bool,
+    ) {
+        let key = format!("{}@{}", effect.id(), group.join(","));
+        self.trust.lock().unwrap_or_else(|e| e.into_inner()).entry(key).or_insert(trusted);
+    }
+
+    /// What [`Engine::note_trust`] recorded for `effect` on `group`, if anything.
+    pub(in crate::fit::select) fn trusted(
+        &self,
+        (effect, group): (&dyn Effect, &[String]),
+    ) -> Option<bool> {
+        let key = format!("{}@{}", effect.id(), group.join(","));
+        self.trust.lock().unwrap_or_else(|e| e.into_inner()).get(&key).copied()
     }
 
     /// Reports the place of the last [`Engine::report`] again with the counts of now (the

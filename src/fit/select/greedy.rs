@@ -4,7 +4,7 @@
 use rayon::prelude::*;
 
 use crate::fit::diagnose::diagnose;
-use crate::fit::effects::{self, Applied};
+use crate::fit::effects::{self, Applied, Effect};
 use crate::fit::stats::{bic, bic_pieces};
 
 use super::coarse::{self, Coarse};
@@ -18,6 +18,7 @@ use super::pairs::{joint_pairs, pair_lookahead, refitted_at_floor};
 use super::policy::Phase;
 use super::reach::Reach;
 use super::screen::{Screen, screen_data};
+use super::trust::{trust_out, with_pair_starts};
 use super::verdict::{at_bound, verdict};
 use super::winner::{beaten_at_coarse, on_whole_set, refine, rival_notes};
 use super::{Errors, FitOutcome, Search, Selected, Tried, set_uncertainty};
@@ -144,6 +145,9 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     let mut reach: Option<Reach> = None;
     // The lead's early pair look-ahead, once tried ([`pair_first`]).
     let mut early_tried: Option<Option<EarlyPair>> = None;
+    // The candidates left without a coarse fit by round 0's trust ([`trust_out`]), with the
+    // largest gain their linear model allows.
+    let mut trusted_out: Vec<(&'static dyn Effect, Vec<String>, f64)> = Vec::new();
     let mut ci = 0;
     while ci < cands.len() {
         // The coarse fits of a size's candidates, which are then taken best first
@@ -157,15 +161,55 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
                 Phase::Screen,
                 Some((ci + 1, cands.len(), format!("coarse fits of {} candidates", range.len()))),
             );
+            // After round 0, a candidate whose linear model round 0 confirmed is taken at its
+            // word ([`trust_out`]): no coarse fit when it could not reach the bar.
+            let cut = (opts.policy.screen_share * best_gain).max(opts.policy.min_rel_improvement);
+            let out_of: Vec<Option<f64>> = cands[range.clone()]
+                .iter()
+                .map(|(e, g, _)| {
+                    // (Not the plain variant of a candidate on its joints: the richer model is
+                    // judged from the plain one's coarse fit, [`coarse::deferred`].)
+                    let plain = |(x, h, _): &Cand| {
+                        h == g && x.plain_variant().is_some_and(|p| p.id() == e.id())
+                    };
+                    let needed = cands.iter().any(plain);
+                    if round > 0 && !needed {
+                        trust_out(engine, &screen, (*e, g), cut)
+                    } else {
+                        None
+                    }
+                })
+                .collect();
             let fits: Vec<(Vec<f64>, f64)> = cands[range.clone()]
                 .par_iter()
-                .map(|(e, g, _)| {
+                .zip(&out_of)
+                .map(|((e, g, _), out_of)| {
                     let far = || reach.as_ref()?.out_of_reach(engine, Some(&screen), (*e, g));
+                    let trust = || out_of.map(|_| (vec![], f64::INFINITY));
                     coarse::deferred(s, (*e, g), &cands, &coarse)
                         .or_else(|| far().map(|(p, _)| (p, f64::INFINITY))) // judged below
+                        .or_else(trust) // judged below
                         .unwrap_or_else(|| coarse::fit(engine, &screen, (short, &applied), (*e, g)))
                 })
                 .collect();
+            for ((c, f), o) in cands[range.clone()].iter().zip(&fits).zip(&out_of) {
+                if let Some(upper) = o
+                    && f.0.is_empty()
+                    && f.1.is_infinite()
+                {
+                    trusted_out.push((c.0, c.1.clone(), *upper));
+                }
+                // Round 0's record of which linear models its coarse fits confirm.
+                let pred = screen.predict(c.0.id(), &c.1).map(|p| gain(p.train_rmse));
+                if round == 0
+                    && let Some(want) = pred
+                    && !f.0.is_empty()
+                    && f.1.is_finite()
+                {
+                    let ok = coarse::agrees(gain(f.1), want, &opts.policy);
+                    engine.note_trust((c.0, &c.1), ok);
+                }
+            }
             for f in fits.iter().filter(|f| !coarse::is_deferred(f)) {
                 best_gain = best_gain.max(gain(f.1));
             }
@@ -238,6 +282,11 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         }) && !(deferred && coarse::plain_fitted(s, (short, &applied), (e, &group)))
         {
             out.tried.push(not_tested(Phase::Floor, vec![], f64::NAN));
+            continue;
+        }
+        // Left without a coarse fit: its linear model, trusted, cannot reach the bar.
+        if trusted_out.iter().any(|(x, g, _)| x.id() == e.id() && *g == group) {
+            out.tried.push(not_tested(Phase::TrustScreen, vec![], f64::NAN));
             continue;
         }
         // Not coarse-fitted on the screen's data: first judged on the probes' data ([`Reach`]).
@@ -494,6 +543,10 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     let Some(ib) = (0..accepted.len()).min_by(|&a, &b| {
         accepted[a].0.heldout_rmse_after.total_cmp(&accepted[b].0.heldout_rmse_after)
     }) else {
+        // A joint pair starts from its members' coarse fits: those left out by their trusted
+        // linear model that could start one are coarse-fitted now, as the screen would have.
+        let at = (short, &applied[..]);
+        let fitted = with_pair_starts(engine, &screen, at, &trusted_out, fitted, gain);
         return joint_pairs(
             engine,
             train,

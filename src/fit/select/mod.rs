@@ -46,6 +46,7 @@ mod simplify;
 mod solve;
 mod start;
 mod told;
+mod trust;
 mod verdict;
 mod winner;
 
@@ -322,6 +323,27 @@ pub struct SearchCost {
     pub rollouts_by_phase: BTreeMap<&'static str, usize>,
     /// Recording seconds replayed by phase (the screen's rollouts are short).
     pub simulated_s_by_phase: BTreeMap<&'static str, f64>,
+    /// Rollouts by the greedy round that ran them (`"0"`, `"1"`, …: its diagnosis and floors,
+    /// screen, full fits and pairs; `"end"`: polish, simplify, reshoot, standard errors, the
+    /// final floors and the checks after the search).
+    pub rollouts_by_round: BTreeMap<String, usize>,
+    /// Recording seconds replayed by round, as `rollouts_by_round`.
+    pub simulated_s_by_round: BTreeMap<String, f64>,
+}
+
+impl SearchCost {
+    /// Adds `rollouts` and `simulated_s` run after the search (`phase`: a check made on its
+    /// outcome, in round `"end"`) to the totals by phase and by round; the caller adds them to
+    /// [`SearchCost::rollouts`].
+    pub(crate) fn book_after(&mut self, phase: &'static str, rollouts: usize, simulated_s: f64) {
+        let tenth = |x: f64| (x * 10.0).round() / 10.0;
+        *self.rollouts_by_phase.entry(phase).or_default() += rollouts;
+        let s = self.simulated_s_by_phase.entry(phase).or_default();
+        *s = tenth(*s + simulated_s);
+        *self.rollouts_by_round.entry(engine::END_KEY.to_string()).or_default() += rollouts;
+        let s = self.simulated_s_by_round.entry(engine::END_KEY.to_string()).or_default();
+        *s = tenth(*s + simulated_s);
+    }
 }
 
 impl FitOutcome {
@@ -495,6 +517,7 @@ pub fn fit(robot: &Robot, recs: &[Recording], opts: &FitOptions) -> FitOutcome {
 /// What the search behind `out` cost.
 fn search_cost(engine: &Engine, out: &FitOutcome) -> SearchCost {
     let by_phase = engine.rollouts_by_phase();
+    let by_round = engine.rollouts_by_round();
     SearchCost {
         simulations: engine.simulations(),
         rollouts: engine.rollout_stats(),
@@ -509,6 +532,7 @@ fn search_cost(engine: &Engine, out: &FitOutcome) -> SearchCost {
                         | Phase::FloorScreen
                         | Phase::ReachScreen
                         | Phase::HeldoutScreen
+                        | Phase::TrustScreen
                         | Phase::SwapScreen
                 )
             })
@@ -517,6 +541,11 @@ fn search_cost(engine: &Engine, out: &FitOutcome) -> SearchCost {
         simulated_s_by_phase: by_phase
             .iter()
             .map(|(k, v)| (*k, (v.1 * 10.0).round() / 10.0))
+            .collect(),
+        rollouts_by_round: by_round.iter().map(|(k, v)| (k.clone(), v.0)).collect(),
+        simulated_s_by_round: by_round
+            .iter()
+            .map(|(k, v)| (k.clone(), (v.1 * 10.0).round() / 10.0))
             .collect(),
     }
 }

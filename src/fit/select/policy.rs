@@ -389,6 +389,10 @@ pub enum Phase {
     /// Not fitted in full: its coarse fit, replayed on the held-out set, does not lower the
     /// held-out error at all.
     HeldoutScreen,
+    /// Not coarse-fitted in a later round: its linear model, which round 0's coarse fit
+    /// confirmed (`linear_trust`), predicts a gain that even at the trust's edge reaches neither
+    /// the round's bar so far nor `min_rel_improvement`.
+    TrustScreen,
     /// Passed the held-out gate at the model's timestep but not at a finer one: the model's
     /// own time discretisation, not physics (a note). Also a merge that failed at the model's
     /// timestep, tested again at the finer one (`kept` = merged there).
@@ -445,6 +449,7 @@ impl Phase {
             Phase::FloorScreen => "floor_screen",
             Phase::ReachScreen => "reach_screen",
             Phase::HeldoutScreen => "heldout_screen",
+            Phase::TrustScreen => "trust_screen",
             Phase::Discretisation => "discretisation",
             Phase::Pair => "pair",
             Phase::PairFloor => "pair_floor",

@@ -414,3 +414,36 @@ fn an_alias_is_judged_within_reach_of_the_floor_on_the_probes_data_alone() {
     let budget = 2 * (opts.policy.screen_evals + 1);
     assert!(after.simulated_s - before.simulated_s <= budget as f64 * probe_s + 1e-9);
 }
+
+/// Replays are booked to the round reported before them (`"end"` after the rounds), and the
+/// totals by round equal those by phase; round 0's trust record of a candidate stands.
+#[test]
+fn replays_are_booked_to_their_round_and_round_zeros_trust_stands() {
+    let (robot, recs) = pendulum_at_ticks(0.0);
+    let opts = FitOptions { estimate_start: false, ..FitOptions::default() };
+    let engine = Engine::new(&robot, &recs, &opts);
+    let damping: &'static dyn Effect = &ViscousDamping;
+    let set =
+        |d: f64| vec![Applied { effect: damping, joints: vec!["servo".into()], params: vec![d] }];
+    let n = recs.len();
+    engine.report(0, Phase::Diagnose, None);
+    engine.errors(&recs, &set(0.01)).expect("replay");
+    engine.report(0, Phase::Screen, None);
+    engine.errors(&recs, &set(0.02)).expect("replay");
+    engine.report(1, Phase::Add, None);
+    engine.errors(&recs, &set(0.03)).expect("replay");
+    engine.report(2, Phase::Reshoot, None);
+    engine.errors(&recs, &set(0.04)).expect("replay");
+    let by_round = engine.rollouts_by_round();
+    let rollouts: Vec<(&str, usize)> = by_round.iter().map(|(k, v)| (k.as_str(), v.0)).collect();
+    assert_eq!(rollouts, [("0", 2 * n), ("1", n), ("end", n)]);
+    let rounds_s: f64 = by_round.values().map(|v| v.1).sum();
+    let phases_s: f64 = engine.rollouts_by_phase().values().map(|v| v.1).sum();
+    assert!((rounds_s - phases_s).abs() < 1e-9);
+    assert!((rounds_s - engine.rollout_stats().simulated_s).abs() < 1e-9);
+    let g = ["servo".to_string()];
+    assert_eq!(engine.trusted((damping, &g)), None);
+    engine.note_trust((damping, &g), true);
+    engine.note_trust((damping, &g), false);
+    assert_eq!(engine.trusted((damping, &g)), Some(true));
+}

@@ -1,0 +1,73 @@
+//! Later rounds from round 0's work: round 0 records which candidates' linear models its coarse
+//! fits confirmed ([`super::engine::Engine::note_trust`]); after it, such a candidate whose
+//! prediction on the round's residual cannot reach the round's bar is not coarse-fitted
+//! ([`trust_out`]), and one that could start a joint pair is coarse-fitted only when the round
+//! ends in the joint pairs ([`with_pair_starts`]).
+
+use crate::fit::effects::{self, Applied, Effect};
+use crate::sim2real::recording::Recording;
+
+use super::coarse;
+use super::screen::Screen;
+
+/// After round 0, the largest relative gain (on the screen's data) that the linear model of `e`
+/// on `g` allows when round 0's coarse fit confirmed that model ([`Engine::trusted`]: the gain it
+/// achieved was between `linear_trust` and its inverse times the predicted one) and this round's
+/// prediction divided by `linear_trust` stays below `cut` (the round's bar so far, at least
+/// `min_rel_improvement`); `None` (coarse-fitted as usual) otherwise. Such a candidate's coarse
+/// fit, at most that gain, could admit it to no full fit: the bar only rises during the round,
+/// and a gain below `min_rel_improvement` starts no joint pair.
+///
+/// [`Engine::trusted`]: super::engine::Engine
+pub(super) fn trust_out(
+    engine: &super::Engine,
+    screen: &Screen,
+    (e, g): (&'static dyn Effect, &[String]),
+    cut: f64,
+) -> Option<f64> {
+    if engine.trusted((e, g)) != Some(true) {
+        return None;
+    }
+    let p = screen.predict(e.id(), g)?;
+    let base = screen.base_rmse();
+    let upper = (1.0 - p.train_rmse / base) / engine.opts.policy.linear_trust;
+    (base > 0.0 && upper.is_finite() && upper < cut).then_some(upper)
+}
+
+/// `fitted` with the coarse fits of the candidates of `out_of` ([`trust_out`]) that could start
+/// a joint pair: a linear model allowing at least `min_rel_improvement`, and a mimicking
+/// partner ([`effects::mimicking_pairs`]) on the same joints fitted or also left out. Each is
+/// coarse-fitted as the screen would have, and joins when its gain (`gain`) reaches
+/// `min_rel_improvement`, as a screened candidate's coarse fit does.
+pub(super) fn with_pair_starts(
+    engine: &super::Engine,
+    screen: &Screen,
+    (short, applied): (&[Recording], &[Applied]),
+    out_of: &[(&'static dyn Effect, Vec<String>, f64)],
+    mut fitted: Vec<Applied>,
+    gain: impl Fn(f64) -> f64,
+) -> Vec<Applied> {
+    let small = engine.opts.policy.min_rel_improvement;
+    let pairs = effects::mimicking_pairs();
+    let partner = |a: &str, b: &str| {
+        pairs.iter().any(|(x, y)| (x.id() == a && y.id() == b) || (x.id() == b && y.id() == a))
+    };
+    let starts: Vec<(&'static dyn Effect, &Vec<String>)> = out_of
+        .iter()
+        .filter(|(e, g, upper)| {
+            *upper >= small
+                && (fitted.iter().any(|f| f.joints == *g && partner(e.id(), f.effect.id()))
+                    || out_of
+                        .iter()
+                        .any(|(x, h, u)| h == g && *u >= small && partner(e.id(), x.id())))
+        })
+        .map(|(e, g, _)| (*e, g))
+        .collect();
+    for (e, g) in starts {
+        let (p, f) = coarse::fit(engine, screen, (short, applied), (e, g));
+        if !p.is_empty() && gain(f) >= small {
+            fitted.push(Applied { effect: e, joints: g.clone(), params: p });
+        }
+    }
+    fitted
+}
