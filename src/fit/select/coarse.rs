@@ -4,8 +4,8 @@
 //! What a coarse fit costs: a smooth candidate goes on from the screen's linear step, which one
 //! replay confirms or not (secant steps for one parameter, [`confirmed_step`] for more); a
 //! non-smooth one (a grid, a simplex) is fitted on the probes' data, a fifth of the screen's,
-//! and replayed once on the screen's ([`on_probes`]). Only where that check fails is the
-//! coarse fit of `screen_evals` replays of the screen's data made.
+//! and replayed once on the screen's ([`on_probes`]; not when it found nothing there). Only
+//! where that check fails is the coarse fit of `screen_evals` replays of the screen's data made.
 
 use crate::fit::effects::{Applied, Effect, model_with};
 use crate::sim2real::recording::Recording;
@@ -77,8 +77,12 @@ fn confirmed_step(
 /// gain of the round is measured on) and starts that fit; the shape of the residual it needs is
 /// where the residual is largest, the data the probes' columns rank on. The fit stands when its
 /// gain on `short` agrees with its gain on the probes' data ([`agrees`]: the probes' fit is the
-/// model, `short` the check, as for the secant step) — both below `min_rel_improvement` included,
-/// a fit that finds nothing where the model is most wrong. Otherwise (a descent along what only
+/// model, `short` the check, as for the secant step). A fit that finds less than
+/// `min_rel_improvement` on the probes' data — nothing where the model is most wrong — is not
+/// replayed on `short`: it is logged at `short`'s base RMSE (no gain), which is what the check
+/// accepts it for (both below `min_rel_improvement`) and what a coarse fit on `short` gave on
+/// the chain cases (its gain there was at most 0.3 %, or the replay made `short` worse and the
+/// fit on `short` found nothing). Otherwise (a descent along what only
 /// the probes' stretches show, or one that explains more of the rest) the coarse fit on `short`
 /// is made as before and the better of the two kept. The fit's `screen_evals` replays cost the
 /// probes' seconds instead of the screen's (2 s for 10 s by default), and the replay on `short`
@@ -100,6 +104,11 @@ fn on_probes(
     let (base_p, base_s) = (engine.score(&probes, applied), engine.score(short, applied));
     if p.is_empty() || !fp.is_finite() || !(base_p > 0.0) || !(base_s > 0.0) {
         return None;
+    }
+    // Nothing found where the model is most wrong (less than `min_rel_improvement` there): no
+    // gain on `short` either, logged at its base RMSE without the replay.
+    if 1.0 - fp / base_p < pol.min_rel_improvement {
+        return Some((p, base_s));
     }
     let m0 = model_with(engine.robot, applied);
     let neutral = neutral_params(engine.robot, &m0, (e, g));
@@ -225,15 +234,24 @@ mod tests {
 
     /// The pendulum servo with a gear play of 0.04 rad, recorded by the synth (3 × 3 s).
     fn pendulum_with_play() -> (crate::model::Robot, Vec<Recording>) {
+        pendulum(Some(0.04))
+    }
+
+    /// The pendulum servo, with a gear play of `play` rad when given, recorded by the synth
+    /// (3 × 3 s).
+    fn pendulum(play: Option<f64>) -> (crate::model::Robot, Vec<Recording>) {
         let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
         let path = root.join("fixtures/synth/pendulum_servo.xml");
         let mut sources = crate::model::source::SourceMap::default();
         let robot = crate::model::load(&mut sources, &path, None).expect("pendulum");
-        let hidden = [crate::synth::truth::Hidden {
-            effect: Backlash.id(),
-            joint: "servo".into(),
-            params: vec![0.04],
-        }];
+        let hidden: Vec<_> = play
+            .map(|w| crate::synth::truth::Hidden {
+                effect: Backlash.id(),
+                joint: "servo".into(),
+                params: vec![w],
+            })
+            .into_iter()
+            .collect();
         let s = crate::synth::Settings {
             episodes: 3,
             duration_s: 3.0,
@@ -242,7 +260,8 @@ mod tests {
         };
         let joints = vec!["servo".to_string()];
         let ds = crate::synth::generate(&robot, &joints, &hidden, &s, &|_, _| {}).expect("synth");
-        let dir = std::env::temp_dir().join(format!("modellint_coarse_{}", std::process::id()));
+        let dir =
+            std::env::temp_dir().join(format!("modellint_coarse_{}_{play:?}", std::process::id()));
         let files = crate::synth::write::write(&ds, &dir).expect("write");
         let recs = files.iter().map(|f| read_csv(f).expect("read")).collect();
         let _ = std::fs::remove_dir_all(&dir);
@@ -276,6 +295,31 @@ mod tests {
         let (q, fq) = engine.fit_budget(&recs, &[], &Backlash, &g, opts.policy.screen_evals);
         assert_eq!((q, fq), (p, f));
         assert!(engine.rollout_stats().simulated_s - before > cost);
+    }
+
+    /// A non-smooth candidate that explains nothing on the probes' data (a play where the
+    /// recordings have none) is not replayed on the screen's data: it costs the probes' fit
+    /// alone and is logged at the screen's base RMSE, no gain.
+    #[test]
+    fn a_non_smooth_coarse_fit_that_finds_nothing_on_the_probes_is_not_replayed() {
+        let (robot, recs) = pendulum(None);
+        let opts = FitOptions::default();
+        let engine = Engine::new(&robot, &recs, &opts);
+        let g = vec!["servo".to_string()];
+        let secs = |r: &[Recording]| r.iter().map(|x| x.t.last().unwrap() - x.t[0]).sum::<f64>();
+        let probes = engine.probe_set(&recs, &[], || vec![recs[1].clone()]);
+        let base = engine.errors_held(&recs, &[]).expect("replay").rmse();
+        let base_p = engine.errors_held(&probes, &[]).expect("replay").rmse();
+        let before = engine.rollout_stats().simulated_s;
+        let (p, f) = on_probes(&engine, (&recs, &[]), (&Backlash, &g)).expect("fitted");
+        let cost = engine.rollout_stats().simulated_s - before;
+        assert_eq!(f, base, "{p:?}");
+        // What the fit found on the probes' data is below the smallest improvement kept.
+        let (_, fp) = engine.fit_budget(&probes, &[], &Backlash, &g, opts.policy.screen_evals);
+        assert!(1.0 - fp / base_p < opts.policy.min_rel_improvement, "{fp} of {base_p}");
+        // Only the probes' fit was replayed, nothing of the screen's data.
+        let budget = opts.policy.screen_evals as f64 * secs(&probes);
+        assert!(cost <= budget + 1e-9, "{cost} s replayed for {budget}");
     }
 
     #[test]
