@@ -48,6 +48,9 @@ declare_rule! {
     }
 }
 
+/// A link with an isotropic inertia: (body, its extents in m, the extents' moment ratio).
+type Placeholder = (usize, [f64; 3], f64);
+
 impl Rule for IsotropicLinkInertia {
     fn meta(&self) -> &'static RuleMeta {
         &Self::META
@@ -59,7 +62,7 @@ impl Rule for IsotropicLinkInertia {
         let bases: Vec<usize> =
             robot.joints.iter().filter(|j| j.jtype == JointType::Free).map(|j| j.body).collect();
         // (moment, [(body, extents, ratio)]), in body order.
-        let mut groups: Vec<(f64, Vec<(usize, [f64; 3], f64)>)> = Vec::new();
+        let mut groups: Vec<(f64, Vec<Placeholder>)> = Vec::new();
         for b in robot.bodies.iter().filter(|b| b.id != 0 && b.weld != 0 && b.mass > 0.0) {
             if bases.contains(&b.id) || inertia_loc(robot, &b.name).is_none() {
                 continue;
@@ -93,7 +96,7 @@ impl Rule for IsotropicLinkInertia {
     }
 }
 
-fn report(cx: &Context, moment: f64, links: &[(usize, [f64; 3], f64)]) -> Finding {
+fn report(cx: &Context, moment: f64, links: &[Placeholder]) -> Finding {
     let robot = cx.robot;
     let (b0, e, ratio) = links[0];
     let name = robot.body_name(b0);

@@ -112,6 +112,10 @@ fn driven(robot: &Robot, j: usize) -> bool {
     })
 }
 
+/// Passive joints that inherit one class attribute: (its location, the class, [(joint, share of
+/// the joint's inertia)]).
+type Group = (crate::model::source::Loc, String, Vec<(usize, f64)>);
+
 impl Rule for PassiveJointArmature {
     fn meta(&self) -> &'static RuleMeta {
         &Self::META
@@ -138,7 +142,7 @@ impl Rule for PassiveJointArmature {
             return;
         }
         // Group the passive joints by the class attribute they inherit.
-        let mut groups: Vec<(crate::model::source::Loc, String, Vec<(usize, f64)>)> = Vec::new();
+        let mut groups: Vec<Group> = Vec::new();
         for j in robot.joints.iter().filter(|j| j.is_scalar() && j.own_armature() > 0.0) {
             if driven(robot, j.id) || cx.facts(&j.name).is_some_and(|f| f.motor.is_some()) {
                 continue;
