@@ -1,5 +1,6 @@
 //! Rules of the `contact` group.
 pub mod feet;
 pub mod foot_collision_geometry;
+pub mod links_without_collision;
 pub mod toe_tilt;
 pub mod torsional_friction;

@@ -3,8 +3,10 @@ pub mod armature_mismatch;
 pub mod copied_inertial;
 pub mod inertia_exceeds_geometry;
 pub mod isotropic_base_inertia;
+pub mod isotropic_link_inertia;
 pub mod mass_budget;
 pub mod parallel_ankle_armature;
+pub mod passive_joint_armature;
 pub mod zero_armature;
 
 use crate::finding::Finding;

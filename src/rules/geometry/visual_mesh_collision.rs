@@ -17,6 +17,9 @@ declare_rule! {
     /// - **in a visual group**: its group holds robot geoms with `contype = conaffinity = 0`,
     ///   the model's visual-only geoms, and its body has no such geom of its own (so the mesh is
     ///   what draws the body); or
+    /// - **the visual mesh again**: its body draws the same mesh asset through a visual-only
+    ///   geom (`contype = conaffinity = 0`) beside it, so the collision geom is that visual
+    ///   mesh drawn a second time, colliding; or
     /// - **no collision set at all**: the model has neither visual-only geoms nor a hidden
     ///   collision group, and the body collides through this mesh alone (no primitive collides
     ///   on the body or on a body welded to it with no joint between: one rigid part).
@@ -83,6 +86,8 @@ enum Case {
     InVisualGroup,
     /// No visual/collision split at all; the body collides only through its drawn meshes.
     NoCollisionSet,
+    /// The body's visual-only geom draws the same mesh: the collision geom is its twin.
+    VisualTwin,
 }
 
 impl Rule for VisualMeshCollision {
@@ -143,7 +148,18 @@ impl Rule for VisualMeshCollision {
             let case = if let Some(h) = hidden_collision {
                 Case::BesideCollisionGroup(h)
             } else if body_has_visual(g.body) {
-                continue; // a drawn collision mesh beside the body's own visual: no evidence
+                // A drawn collision mesh beside the body's own visual is evidence only when
+                // the visual draws the very same mesh.
+                let twin = robot_geoms().any(|v| {
+                    v.body == g.body
+                        && !v.collides()
+                        && v.gtype == GeomType::Mesh
+                        && v.mesh == g.mesh
+                });
+                if !twin {
+                    continue;
+                }
+                Case::VisualTwin
             } else if visual_only.iter().any(|v| v.group == g.group) {
                 Case::InVisualGroup
             } else if visual_only.is_empty() && !body_has_prim(g.body, g.group) {
@@ -205,6 +221,15 @@ impl Rule for VisualMeshCollision {
                     if n == 1 { "s" } else { "" }
                 ),
                 "visual mesh with contact masks set".to_string(),
+            ),
+            Case::VisualTwin => (
+                format!(
+                    "{n} drawn mesh geom{} collide{} through the very mesh {} body draws with a visual-only geom beside it (the visual mesh twice, once colliding): {shown}",
+                    if n == 1 { "" } else { "s" },
+                    if n == 1 { "s" } else { "" },
+                    if n == 1 { "its" } else { "each one's" }
+                ),
+                "the body's visual mesh again, with contact masks set".to_string(),
             ),
             Case::NoCollisionSet => (
                 format!(

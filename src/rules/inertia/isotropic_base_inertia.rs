@@ -60,9 +60,15 @@ fn rotate(q: [f64; 4], v: [f64; 3]) -> [f64; 3] {
 /// Full extents (x, y, z) in body `b`'s frame of its non-plane geoms' bounding boxes and its
 /// children's attachment points; `None` without any of them.
 pub fn body_extents(robot: &Robot, b: usize) -> Option<[f64; 3]> {
+    extents_of(robot, b, false)
+}
+
+/// As [`body_extents`]; with `origin`, the body's own origin (where its joints sit) counts as
+/// one more point of it.
+pub fn extents_of(robot: &Robot, b: usize, origin: bool) -> Option<[f64; 3]> {
     let m = &robot.mj;
     let (aabb, gpos, gquat) = (m.geom_aabb(), m.geom_pos(), m.geom_quat());
-    let mut pts: Vec<[f64; 3]> = Vec::new();
+    let mut pts: Vec<[f64; 3]> = if origin { vec![[0.0; 3]] } else { Vec::new() };
     for g in robot.geoms.iter().filter(|g| g.body == b && g.gtype != GeomType::Plane) {
         let (Some(bb), Some(p), Some(q)) = (aabb.get(g.id), gpos.get(g.id), gquat.get(g.id)) else {
             continue;
