@@ -6,6 +6,7 @@ fn modellint(args: &[&str]) -> (i32, String, String) {
     let out = Command::new(env!("CARGO_BIN_EXE_modellint"))
         .args(args)
         .env_remove("GITHUB_ACTIONS")
+        .env_remove("MUJOCO_PLUGIN_DIR")
         .output()
         .unwrap();
     (
@@ -44,6 +45,18 @@ fn broken_inputs_exit_2_with_location() {
             &["fixtures/broken/massless_body.xml"],
             "fixtures/broken/massless_body.xml:7:19:",
             "Element name 'forearm'",
+        ),
+        // A MuJoCo plugin with no plugin library loaded: where, and what to set.
+        (
+            &["fixtures/broken/plugin_pid.xml"],
+            "fixtures/broken/plugin_pid.xml:",
+            "MUJOCO_PLUGIN_DIR",
+        ),
+        // An unnamed geom in an included file ("line 0"): the attribute MuJoCo rejects.
+        (
+            &["fixtures/broken/shell_inertia_scene.xml"],
+            "fixtures/broken/shell_inertia_robot.xml:9:",
+            "`shellinertia`",
         ),
         (
             &["fixtures/broken/mujoco_rejects.xml"],

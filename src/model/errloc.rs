@@ -133,6 +133,55 @@ pub(super) fn mujoco_element_location(
     Some(LoadError::at(map, Loc { file: first_file, start: k + 1, end: k + 5 }, msg.to_string()))
 }
 
+/// MuJoCo errors about one attribute that MuJoCo does not locate (an unnamed element in an
+/// included file: "line 0"): message fragment, element tag, attribute.
+const ATTRIBUTE_ERRORS: &[(&str, &str, &str)] = &[
+    // `shellinertia` on a mesh geom: MuJoCo 3.2+ takes a mesh's inertia from the mesh asset
+    // (`<mesh inertia="shell">`) and rejects the geom attribute.
+    ("inertia should be specified in the mesh asset", "geom", "shellinertia"),
+];
+
+/// For an error of `ATTRIBUTE_ERRORS`: the first element of that tag that writes the attribute
+/// (preferring one that names a `mesh`), with how many elements write it.
+pub(super) fn attribute_error_location(
+    map: &SourceMap,
+    first_file: usize,
+    msg: &str,
+) -> Option<LoadError> {
+    let &(_, tag, attr) = ATTRIBUTE_ERRORS.iter().find(|(m, _, _)| msg.contains(m))?;
+    let pat = format!("{attr}=");
+    let (mut first, mut with_mesh, mut count) = (None, None, 0usize);
+    for f in first_file..map.files.len() {
+        let text = &map.file(f).text;
+        let mut from = 0;
+        while let Some(k) = text[from..].find(&pat) {
+            let at = from + k;
+            from = at + pat.len();
+            if !text[..at].ends_with(char::is_whitespace) {
+                continue;
+            }
+            let open = text[..at].rfind('<').unwrap_or(0);
+            let name_end = text[open + 1..]
+                .find(|c: char| c.is_whitespace() || c == '>' || c == '/')
+                .map_or(text.len(), |e| open + 1 + e);
+            if &text[open + 1..name_end] != tag {
+                continue;
+            }
+            count += 1;
+            let close = text[at..].find('>').map_or(text.len(), |e| at + e);
+            let loc = Loc { file: f, start: at, end: at + attr.len() };
+            first.get_or_insert(loc);
+            if with_mesh.is_none() && text[open..close].contains(" mesh=") {
+                with_mesh = Some(loc);
+            }
+        }
+    }
+    let loc = with_mesh.or(first)?;
+    let more =
+        if count > 1 { format!("; {count} <{tag}> elements write it") } else { String::new() };
+    Some(LoadError::at(map, loc, format!("{msg} (the <{tag}> attribute `{attr}`{more})")))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

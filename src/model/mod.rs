@@ -10,6 +10,7 @@ mod limbs;
 pub mod mirror;
 pub mod mj;
 pub mod mjcf;
+pub mod plugins;
 pub mod region;
 pub mod source;
 pub mod urdf_packages;
@@ -20,7 +21,9 @@ use mujoco_rs::prelude::*;
 
 use crate::error::LoadError;
 use checks::{check_assets, check_numbers};
-use errloc::{missing_file_location, mujoco_element_location, mujoco_error_location};
+use errloc::{
+    attribute_error_location, missing_file_location, mujoco_element_location, mujoco_error_location,
+};
 use extract::extract;
 pub use extract::key_state;
 use mjcf::{ElemKind, ElemSrc, SourceIndex};
@@ -578,14 +581,16 @@ pub fn load(map: &mut SourceMap, path: &Path, keyframe: Option<&str>) -> Result<
     // URDF `package://` meshes: MuJoCo compiles a resolved copy (same line numbers).
     let resolved =
         if format == Format::Urdf { urdf_packages::resolved_copy(map, first)? } else { None };
+    plugins::load_once();
     let m = MjModel::from_xml(resolved.as_deref().unwrap_or(path));
     if let Some(t) = &resolved {
         let _ = std::fs::remove_file(t);
     }
     let mj = m.map_err(|e| {
-        let msg = format!("MuJoCo could not compile the model: {e}");
+        let msg = plugins::explain(format!("MuJoCo could not compile the model: {e}"));
         mujoco_error_location(map, first, &msg)
             .or_else(|| mujoco_element_location(map, first, format, &msg))
+            .or_else(|| attribute_error_location(map, first, &msg))
             .or_else(|| missing_file_location(map, first, &msg))
             // MuJoCo did not say where: the model's root element, so that the error still
             // names a line of the file.

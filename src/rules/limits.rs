@@ -2,3 +2,4 @@
 pub mod ctrlrange_in_degrees;
 pub mod effort_limit_mismatch;
 pub mod soft_limits;
+pub mod wheel_spring;

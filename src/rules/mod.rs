@@ -322,6 +322,7 @@ pub fn registry() -> Vec<&'static dyn Rule> {
         &control::underdamped_pd_gains::UnderdampedPdGains,
         &control::servo_stall_band::ServoStallBand,
         &limits::effort_limit_mismatch::EffortLimitMismatch,
+        &limits::wheel_spring::WheelSpring,
         &mapping::passive_joint_spring::PassiveJointSpring,
         &mapping::free_passive_joint::FreePassiveJoint,
         &control::gains_unstable_for_timestep::GainsUnstableForTimestep,

@@ -17,7 +17,11 @@ declare_rule! {
     /// when equal or mirrored, `[a, b]` ↔ `[−b, −a]`, as for roll and yaw joints), actuator
     /// kp/kv and gear, actuator force and control ranges (equal or mirrored), centres of mass
     /// that the file states (at the reference pose qpos0 the right one, reflected across the
-    /// plane halfway between the two body origins, lies farther than `com_tolerance` and
+    /// plane halfway between the pair's limb roots — walking up both bodies' parents while they
+    /// differ, the last two distinct ancestors, so a pair whose own origins are not mirror
+    /// images, a bracket mounted turned 180°, is judged against the plane of the hips or
+    /// shoulders it hangs from; a gripper's fingers, on one body, against their own —, lies
+    /// farther than `com_tolerance` and
     /// `com_fraction` of their offsets from the origins from the left one; not reported when it
     /// fits one part turned into the other's frame — a gripper mounted turned 180° — unless the
     /// geoms say the part is mirrored: one side's mesh scaled negatively, or the geoms at
@@ -62,7 +66,7 @@ declare_rule! {
             opt("tolerance", 0.01, "ratio", Domain::NON_NEGATIVE, "relative difference tolerated between mirrored scalars"),
             opt("range_tolerance", 0.005, "rad or m", Domain::NON_NEGATIVE, "absolute difference tolerated between mirrored range ends (0.005 rad ≈ 0.3°: calibrated hardware limits differ by a few mrad)"),
             opt("geom_tolerance", 0.02, "ratio", Domain::NON_NEGATIVE, "relative size difference tolerated between mirrored collision geoms (or 0.5 mm)"),
-            opt("com_tolerance", 0.01, "m", Domain::NON_NEGATIVE, "distance tolerated between a body's centre of mass and its mirror's reflected across the plane halfway between the two bodies' origins at the reference pose (CAD exports of the two halves of a mirrored part and asymmetric wiring place them within millimetres)"),
+            opt("com_tolerance", 0.01, "m", Domain::NON_NEGATIVE, "distance tolerated between a body's centre of mass and its mirror's reflected across the pair's mirror plane (halfway between its limb roots) at the reference pose (CAD exports of the two halves of a mirrored part and asymmetric wiring place them within millimetres)"),
             opt("com_fraction", 0.25, "fraction", Domain::NON_NEGATIVE, "the same distance as a share of the centres of mass' offsets from their body origins: a centre of mass 0.1 m off its joint is also tolerated 25 mm"),
             opt("inertia_tolerance", 0.05, "ratio", Domain::NON_NEGATIVE, "relative difference tolerated between mirrored bodies' principal moments of inertia (CAD exports of the two halves of a mirrored part differ by 1–2 %)"),
         ],
@@ -494,6 +498,24 @@ fn reference_pose(robot: &Robot) -> Pose {
     }
 }
 
+/// The limb roots of a mirror pair: walking up both bodies' parents together while they
+/// differ, the last two distinct ancestors (the pair itself when the two hang on one body, as a
+/// gripper's fingers do). Their origins, mounted on one common body, are placed mirror-
+/// symmetrically even when a pair further down is not: a hip-roll bracket mounted turned 180°
+/// puts its axis ahead of the hip on one side and behind it on the other.
+fn limb_roots(robot: &Robot, l: usize, r: usize) -> (usize, usize) {
+    let parent = |b: usize| robot.bodies.get(b).map_or(0, |x| x.parent);
+    let (mut a, mut b) = (l, r);
+    for _ in 0..robot.bodies.len() {
+        let (pa, pb) = (parent(a), parent(b));
+        if pa == pb || pa == 0 || pb == 0 || pa == a || pb == b {
+            break;
+        }
+        (a, b) = (pa, pb);
+    }
+    (a, b)
+}
+
 /// Whether body `b` draws or collides through a mirrored mesh (a `scale` with an odd number of
 /// negative factors): the file says the part is the mirror image of another.
 fn mirrored_mesh(robot: &Robot, b: usize) -> bool {
@@ -523,7 +545,7 @@ fn com_loc(robot: &Robot, name: &str) -> Option<Loc> {
 }
 
 /// A mirror pair whose stated centres of mass are not mirror images: the right body's centre of
-/// mass reflected across the plane halfway between the two body origins lies farther from the
+/// mass reflected across the pair's mirror plane (halfway between its limb roots) lies farther from the
 /// left's than `com_tolerance`, and than `com_fraction` of their offsets from the origins.
 fn com_differs(cx: &Context, p: &Pair, pose: &Option<Pose>) -> Option<Finding> {
     let robot = cx.robot;
@@ -537,15 +559,22 @@ fn com_differs(cx: &Context, p: &Pair, pose: &Option<Pose>) -> Option<Finding> {
     let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
     let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
     let norm = |a: [f64; 3]| dot(a, a).sqrt();
-    let gap = sub(ol, or);
-    // Origins that coincide define no mirror plane.
+    // The mirror plane: halfway between the pair's limb roots (`limb_roots`), else between
+    // its own origins; origins that coincide define none.
+    let (ra, rb) = limb_roots(robot, p.left.0, p.right.0);
+    let (pa, pb) = (*pose.xpos.get(ra)?, *pose.xpos.get(rb)?);
+    let (pa, pb) = if norm(sub(pa, pb)) > 1e-6 { (pa, pb) } else { (ol, or) };
+    let gap = sub(pa, pb);
     if !(norm(gap) > 1e-6) {
         return None;
     }
     let n = gap.map(|x| x / norm(gap));
-    let mid = [(ol[0] + or[0]) / 2.0, (ol[1] + or[1]) / 2.0, (ol[2] + or[2]) / 2.0];
-    let h = dot(sub(cr, mid), n);
-    let reflected = [cr[0] - 2.0 * h * n[0], cr[1] - 2.0 * h * n[1], cr[2] - 2.0 * h * n[2]];
+    let off = dot([0, 1, 2].map(|k| (pa[k] + pb[k]) / 2.0), n);
+    let reflect = |g: [f64; 3]| {
+        let h = dot(g, n) - off;
+        [g[0] - 2.0 * h * n[0], g[1] - 2.0 * h * n[1], g[2] - 2.0 * h * n[2]]
+    };
+    let reflected = reflect(cr);
     let miss = norm(sub(reflected, cl));
     let reach = (norm(sub(cl, ol)) + norm(sub(cr, or))) / 2.0;
     let allowed = cx.opt("com_tolerance").max(cx.opt("com_fraction") * reach);
@@ -576,10 +605,6 @@ fn com_differs(cx: &Context, p: &Pair, pose: &Option<Pose>) -> Option<Finding> {
             && gl.len() == gr.len()
             && gr.iter().all(|&g| gl.iter().any(|&h| norm(sub(map(g), h)) <= allowed))
     };
-    let reflect = |g: [f64; 3]| {
-        let h = dot(sub(g, mid), n);
-        [g[0] - 2.0 * h * n[0], g[1] - 2.0 * h * n[1], g[2] - 2.0 * h * n[2]]
-    };
     // Right world point → left world point under the rotation between the two body frames.
     let unrotate = |g: [f64; 3]| {
         let local = [0, 1, 2].map(|k| (0..3).map(|i| mr[3 * i + k] * (g[i] - or[i])).sum::<f64>());
@@ -599,7 +624,7 @@ fn com_differs(cx: &Context, p: &Pair, pose: &Option<Pose>) -> Option<Finding> {
         };
     let (lr, ll) = (local(p.right.0)?, local(p.left.0)?);
     let msg = format!(
-        "body `{}`'s centre of mass {lr} m is not the mirror image of `{}`'s ({ll} m): reflected across the plane between the two bodies, it lies {} mm from it",
+        "body `{}`'s centre of mass {lr} m is not the mirror image of `{}`'s ({ll} m): reflected across the mirror plane of its limb, it lies {} mm from it",
         p.right.1,
         p.left.1,
         mm(miss)

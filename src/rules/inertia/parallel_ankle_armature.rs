@@ -257,6 +257,28 @@ fn follows_driver(
     false
 }
 
+fn is_ankle(robot: &Robot, j: usize) -> bool {
+    robot.joints[j].name.to_lowercase().contains("ankle")
+}
+
+/// The other ankle joints of joint `j`'s ankle: ankle joints on its own body, its parent body or
+/// a child body (pitch and roll of one foot).
+fn ankle_partners(robot: &Robot, j: usize) -> Vec<usize> {
+    let parent = robot.mj.body_parentid();
+    let body = robot.joints[j].body;
+    let near = |b: usize| {
+        b == body
+            || parent.get(body).is_some_and(|&p| p as usize == b)
+            || parent.get(b).is_some_and(|&p| p as usize == body)
+    };
+    robot
+        .joints
+        .iter()
+        .filter(|o| o.id != j && o.is_scalar() && is_ankle(robot, o.id) && near(o.body))
+        .map(|o| o.id)
+        .collect()
+}
+
 /// Reuse of the model's own doubled values, for joints the spec gives no motor family (or one
 /// without rotor inertia and gear ratio).
 fn doubled_without_spec(cx: &Context, out: &mut Vec<Finding>) {
@@ -320,13 +342,19 @@ fn doubled_without_spec(cx: &Context, out: &mut Vec<Finding>) {
             &bases.iter().find(|(b, _)| same(*b, base)).map(|x| x.1.clone()).unwrap_or_default();
         // Single-motor joints count only when the model shows which joints are two-motor ones:
         // two tendon actuators reach them, or they are ankles (the parallel RSU ankle is the
-        // design that doubles armature) carrying the doubled value.
+        // design that doubles armature) carrying the doubled value — with the other DoF of the
+        // same ankle: both motors of a parallel ankle drive its pitch and its roll, so an ankle
+        // whose other joint carries a different value (one Dynamixel per axis, each its own
+        // identified value, one happening to be twice the other's) is no parallel ankle.
         let parallel: Vec<usize> = single_ids
             .iter()
             .copied()
             .filter(|&i| {
                 tendon_motor_count(robot, i) >= 2
-                    || robot.joints[i].name.to_lowercase().contains("ankle")
+                    || (is_ankle(robot, i)
+                        && ankle_partners(robot, i)
+                            .iter()
+                            .all(|&o| same(robot.joints[o].armature, robot.joints[i].armature)))
             })
             .collect();
         let flagged_single: Vec<usize> = if parallel.is_empty() {
