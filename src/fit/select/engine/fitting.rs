@@ -567,6 +567,11 @@ impl Engine<'_> {
             return failed();
         };
         let mut cols = Vec::with_capacity(slots.len());
+        // A parameter held by bounds of zero width (a body's place along a direction no
+        // rotation moves it) is no estimate: no column, reported as held (0, identified).
+        let held = |s: &(usize, usize, f64, f64)| s.3 <= s.2;
+        let slots_all = std::mem::take(&mut slots);
+        slots = slots_all.iter().copied().filter(|s| !held(s)).collect();
         for &(ai, i, lo, hi) in &slots {
             let mut h = FD_STEP * (hi - lo).max(1e-9);
             if applied[ai].params[i] + h > hi {
@@ -583,6 +588,10 @@ impl Engine<'_> {
             }
         }
         let k = slots.len();
+        if k == 0 {
+            let n = |ai: usize| slots_all.iter().filter(|s| s.0 == ai).count();
+            return which.iter().map(|&ai| (vec![0.0; n(ai)], vec![true; n(ai)])).collect();
+        }
         let jac: Vec<Vec<f64>> =
             (0..r0.len()).map(|row| cols.iter().map(|c| c[row]).collect()).collect();
         let ranges: Vec<f64> = slots.iter().map(|s| s.3 - s.2).collect();
@@ -600,10 +609,12 @@ impl Engine<'_> {
         which
             .iter()
             .map(|&ai| {
-                let idx: Vec<usize> = (0..k).filter(|&s| slots[s].0 == ai).collect();
+                let pos = |s: &(usize, usize, f64, f64)| slots.iter().position(|x| x == s);
+                let of: Vec<Option<usize>> =
+                    slots_all.iter().filter(|s| s.0 == ai).map(pos).collect();
                 (
-                    idx.iter().map(|&s| u.stderr[s]).collect(),
-                    idx.iter().map(|&s| u.identifiable[s]).collect(),
+                    of.iter().map(|p| p.map_or(0.0, |s| u.stderr[s])).collect(),
+                    of.iter().map(|p| p.is_none_or(|s| u.identifiable[s])).collect(),
                 )
             })
             .collect()
