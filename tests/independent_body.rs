@@ -154,3 +154,44 @@ fn knee_damping_of_a_floating_base_robot_on_a_stand_is_found() {
     let got = v["missing_physics"][0]["params"]["damping"].as_f64().unwrap();
     assert!((got - want).abs() <= 0.1 * want, "knee damping {got} for {want}");
 }
+
+/// A humanoid's arm whose upper arm hangs along its shoulder yaw's axis (`models/arm4y.xml`, the
+/// new-user tryout's kinematics), its centre of mass 4 cm forward — perpendicular to that axis,
+/// where only the carrying shoulder pitch and roll see it through gravity. It must come out as a
+/// `com_offset` on the yaw joint's child body: nothing along the link, 4 cm perpendicular to it
+/// (within 10 %), and the written model's upper arm holds the truth's centre of mass within 10 %
+/// of the shift. (With the directions picked as the link's axis and one perpendicular, the other
+/// perpendicular was no parameter and the shift came out as a 0.007 rad offset on the pitch.)
+#[test]
+fn a_centre_of_mass_moved_off_a_yaw_axis_is_found_in_the_carrying_joints_plane() {
+    let truth = truth("RY1_upper_arm_com_forward");
+    let arm = TruthBody::of(&truth, "upper_arm");
+    let shift = common::indep::v3(&arm.b["com_shift"]);
+    let size = shift.iter().map(|x| x * x).sum::<f64>().sqrt();
+    let out = std::env::temp_dir().join(format!("modellint-indep-yaw-{}", std::process::id()));
+    std::fs::create_dir_all(&out).unwrap();
+    let written = out.join("fitted.xml");
+    let v = fit("RY1_upper_arm_com_forward", &["--write-model", written.to_str().unwrap()]);
+    let found = common::indep::found(&v);
+    assert_eq!(found, [("com_offset".into(), r#"["shoulder_yaw"]"#.into())], "{found:?}");
+    let p = &v["missing_physics"][0]["params"];
+    let get = |k: &str| p[k].as_f64().unwrap_or_else(|| panic!("{k} in {p}"));
+    let (along, across, normal) = (get("along"), get("across"), get("normal"));
+    let (want_along, _) = arm.com_shift();
+    assert!((along - want_along).abs() <= 0.1 * size, "along {along} for {want_along}");
+    let perpendicular = (across * across + normal * normal).sqrt();
+    assert!((perpendicular - size).abs() <= 0.1 * size, "({across}, {normal}) for {size} m");
+    let robot = common::load(&written);
+    let body = robot.mj.jnt_bodyid()[robot.joint("shoulder_yaw").unwrap().id] as usize;
+    let (got, want) = (robot.mj.body_ipos()[body], common::indep::v3(&arm.b["real_body_com"]));
+    let d = (0..3).map(|k| (got[k] - want[k]).powi(2)).sum::<f64>().sqrt();
+    assert!(d <= 0.1 * size, "written centre of mass {got:?} for {want:?}");
+    std::fs::remove_dir_all(&out).ok();
+}
+
+/// The same arm with nothing concealed: nothing (three directions of a body's place where the
+/// carrying joints see three must not find one in the noise).
+#[test]
+fn the_yaw_arm_without_a_shift_gives_nothing() {
+    assert_nothing(&fit("RY0_arm_none", &[]));
+}

@@ -272,3 +272,12 @@ CASES["KFR0s_biped_stiff_floor"] = dict(CHAIN_FR, seed=96, episodes=2, heldout=[
 CASES["KFR1s_trunk_battery_stiff_floor"] = dict(CASES["KFR1_trunk_battery"], ground=dict(k=1e6, c=3000.0))
 CASES["KFR0w_biped_soft_floor"] = dict(CHAIN_FR, seed=96, episodes=2, heldout=[1], effects={},
                                        ground=dict(k=2e4, c=450.0))
+# ---- arm4y: a humanoid's arm whose upper arm hangs along its shoulder yaw's axis (the new-user
+# tryout's 4-joint arm). Its centre of mass moved 4 cm forward, perpendicular to that axis: the
+# shoulder pitch carrying it sees the shift through gravity, the yaw's own plane holds no "along".
+# 4 × 4 s, the last held out (tests/independent_body.rs; committed in fixtures/independent_py/).
+MODELS["arm4y"] = dict(xml="arm4y.xml", joints=["shoulder_pitch", "shoulder_roll", "shoulder_yaw", "elbow"],
+                       robot="arm4y_torso", amp=[0.5, 0.35, 0.5, 0.5], t0_ctrl=0.0043, **STD)
+CASES["RY0_arm_none"] = dict(model="arm4y", seed=63, episodes=4, seconds=4.0, heldout=[3], effects={})
+CASES["RY1_upper_arm_com_forward"] = dict(model="arm4y", seed=64, episodes=4, seconds=4.0, heldout=[3],
+    effects={"bodies": {"upper_arm": {"com_shift": [0.04, 0.0, 0.0]}}})

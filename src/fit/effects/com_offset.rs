@@ -6,9 +6,13 @@ declare_effect! {
     ///
     /// MuJoCo-native: the child body's mass distribution translated in the model copy —
     /// `along` the link's axis (from the joint to the modelled centre of mass, or to its first
-    /// child body) and `across` it in the joint's plane of motion (joint axis × link axis); mass
-    /// and the inertia about the centre of mass unchanged. A shift along the joint's own axis
-    /// moves no torque about it and is not fitted.
+    /// child body), `across` it (joint axis × link axis; where the link lies along its own
+    /// joint's axis, the axis of the nearest joint that swings it × link axis) and `normal` to
+    /// both (along × across: the joint axis, or the second perpendicular to a link lying along
+    /// it); mass and the inertia about the centre of mass unchanged. `normal` is a parameter
+    /// only where a rotation moves the body along it (a carrying joint whose axis is not
+    /// parallel, a ball or free joint): in a planar chain a shift along the joints' axis moves
+    /// no torque and no motion.
     ///
     /// ## Simulation
     /// the child body's `body_ipos` moved (`body_inertia`, `body_iquat` about it kept)
@@ -27,6 +31,7 @@ declare_effect! {
         params: [
             ParamDef { name: "along", unit: "m", lo: -0.25, hi: 0.25, default: 0.0 },
             ParamDef { name: "across", unit: "m", lo: -0.25, hi: 0.25, default: 0.0 },
+            ParamDef { name: "normal", unit: "m", lo: -0.25, hi: 0.25, default: 0.0 },
         ],
     }
 }
@@ -39,28 +44,43 @@ impl Effect for ComOffset {
                 "m the centre of mass moves from where the model has it, along the link (from the \
                  joint towards that centre); mass unchanged",
             ),
-            ("across", "m it moves across the link (joint axis × link axis)"),
+            (
+                "across",
+                "m it moves across the link (joint axis × link axis; where the link lies along \
+                 that axis, the axis of the nearest joint that swings it × link axis)",
+            ),
+            (
+                "normal",
+                "m it moves normal to both (along × across); fixed at 0 where no rotation moves \
+                 the link that way (every joint axis parallel to it)",
+            ),
         ]
     }
     /// At its start no shift ([`super::inertial::shift`] leaves the body as it is).
     fn neutral_start(&self) -> bool {
         true
     }
-    /// Half a link length either way along and across.
+    /// Half a link length either way along, across and normal to the link (normal: none
+    /// where no rotation moves the body that way, [`inertial::BodyAxes::normal_seen`]).
     fn bounds(&self, _m: &MjModel, t: &JointTarget) -> (Vec<f64>, Vec<f64>) {
         let h = t.body.map_or(0.0, |b| 0.5 * b.length);
-        (vec![-h, -h], vec![h, h])
+        let n = t.body.map_or(0.0, |b| b.normal_bound(h));
+        (vec![-h, -h, -n], vec![h, h, n])
     }
     fn apply_model(&self, m: &mut MjModel, t: &JointTarget, p: &[f64]) {
         if let Some(b) = t.body {
-            let d = b.point(p[0], p[1]) - b.point(0.0, 0.0);
+            let normal = p.get(2).copied().unwrap_or(0.0);
+            let d = b.point(p[0], p[1], normal) - b.point(0.0, 0.0, 0.0);
             inertial::shift(m, b.body, d);
         }
     }
-    /// Both directions: on an upright trunk a shift `along` changes only gravity's stiffness
-    /// while one `across` tilts the load, on a hanging shank the reverse dominates.
+    /// Every direction: on an upright trunk a shift `along` changes only gravity's stiffness
+    /// while one `across` tilts the load, on a hanging shank the reverse dominates; below a
+    /// yaw joint whose link hangs along its axis, the carrying pitch sees one perpendicular
+    /// and the roll the other. A direction that is no parameter (bounds of zero width) is not
+    /// probed.
     fn screened(&self) -> usize {
-        2
+        3
     }
     /// Each direction of the shift: on a trunk standing on the feet a centre moved along it
     /// changes gravity's pitch stiffness over them, as a softer floor does.
@@ -70,5 +90,5 @@ impl Effect for ComOffset {
     inertial::body_effect_methods!(tau);
 }
 
-crate::held_variant!(ALONG_HELD, ComOffset, "com_offset~along", 0, [1]);
-crate::held_variant!(ACROSS_HELD, ComOffset, "com_offset~across", 1, [0]);
+crate::held_variant!(ALONG_HELD, ComOffset, "com_offset~along", 0, [1, 2]);
+crate::held_variant!(ACROSS_HELD, ComOffset, "com_offset~across", 1, [0, 2]);

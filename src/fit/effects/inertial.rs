@@ -26,8 +26,19 @@ pub struct BodyAxes {
     /// Unit vector along the link: from the body's origin (the joint) to its centre of mass,
     /// else to its first child body, else perpendicular to the joint axis.
     pub along: [f64; 3],
-    /// Unit vector across the link in the joint's plane of motion: joint axis × `along`.
+    /// Unit vector across the link: joint axis × `along` (in the joint's plane of motion). When
+    /// the link lies along its own joint's axis (a yaw joint whose link hangs along it), the
+    /// axis of the nearest joint that turns the link otherwise (a carrying pitch or roll) ×
+    /// `along`: the direction that joint swings the link's centre.
     pub across: [f64; 3],
+    /// Unit vector `along` × `across`: the joint axis where the link is perpendicular to it,
+    /// the second perpendicular to the link where the link lies along it.
+    pub normal: [f64; 3],
+    /// Whether a rotation moves the body's centre of mass along [`BodyAxes::normal`]: some
+    /// hinge moving the body (its own or a carrying one) has an axis not parallel to `normal`,
+    /// or a ball or free joint carries it. In a planar chain (every hinge parallel) a place
+    /// along `normal` changes no torque and no motion, and it is not a parameter.
+    pub normal_seen: bool,
     /// The joint's axis (unit; `along`'s perpendicular when the model gives none).
     pub axis: [f64; 3],
     /// The link's length scale [m]: the largest of twice the centre of mass's distance, the
@@ -47,6 +58,49 @@ fn v3(a: [f64; 3]) -> Vector3<f64> {
 fn perpendicular(a: Vector3<f64>) -> Vector3<f64> {
     let trial = if a.x.abs() < 0.9 { Vector3::x() } else { Vector3::z() };
     a.cross(&trial).normalize()
+}
+
+/// Sine of the angle below which two axes are taken as parallel: the rounding of a model's
+/// axes, not a physical scale.
+const PARALLEL: f64 = 1e-6;
+
+/// The rotation axes of every joint that moves body `b`, its own first, then each ancestor's,
+/// in `b`'s frame at the model's reference pose (`Some(axis)` of a hinge, `None` of a ball or
+/// free joint, which turns it about every axis; slides turn nothing).
+fn turning_axes(m: &MjModel, b: usize) -> Vec<Option<Vector3<f64>>> {
+    let (adr, num, quat, parent) =
+        (m.body_jntadr(), m.body_jntnum(), m.body_quat(), m.body_parentid());
+    let (types, axes) = (m.jnt_type(), m.jnt_axis());
+    let mut out = Vec::new();
+    // Maps a vector in body `c`'s frame into `b`'s.
+    let mut r = Matrix3::identity();
+    let mut c = b;
+    for _ in 0..parent.len() {
+        if c == 0 {
+            break;
+        }
+        let first = adr.get(c).and_then(|&a| usize::try_from(a).ok()).unwrap_or(0);
+        let n = num.get(c).and_then(|&n| usize::try_from(n).ok()).unwrap_or(0);
+        for j in first..first + n {
+            match types.get(j).map(|&t| t as i32) {
+                Some(3) => {
+                    if let Some(a) = axes.get(j).map(|&a| r * v3(a)).filter(|a| a.norm() > 1e-9) {
+                        out.push(Some(a));
+                    }
+                }
+                Some(0 | 1) => out.push(None),
+                _ => {}
+            }
+        }
+        let Some(q) = quat.get(c) else { break };
+        let q = UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(q[0], q[1], q[2], q[3]));
+        r *= q.to_rotation_matrix().into_inner().transpose();
+        match parent.get(c).and_then(|&p| usize::try_from(p).ok()) {
+            Some(p) if p != c => c = p,
+            _ => break,
+        }
+    }
+    out
 }
 
 impl BodyAxes {
@@ -72,8 +126,24 @@ impl BodyAxes {
         } else {
             Vector3::z()
         };
-        let c = axis.cross(&along);
-        let across = if c.norm() > 1e-6 { c.normalize() } else { perpendicular(along) };
+        let turning = turning_axes(m, b);
+        // The nearest joint whose rotation swings `along` (the own joint first): its axis ×
+        // `along`; a ball or free joint swings it every way.
+        let across = std::iter::once(Some(axis))
+            .chain(turning.iter().copied())
+            .find_map(|a| match a {
+                Some(a) => {
+                    let c = a.cross(&along);
+                    (c.norm() > PARALLEL * a.norm()).then(|| c.normalize())
+                }
+                None => Some(perpendicular(along)),
+            })
+            .unwrap_or_else(|| perpendicular(along));
+        let normal = along.cross(&across).normalize();
+        let normal_seen = turning.iter().any(|a| match a {
+            Some(a) => a.cross(&normal).norm() > PARALLEL * a.norm(),
+            None => true,
+        });
         let length = (2.0 * v3(com).norm()).max(child_len).max(0.05);
         let axis = if axis.norm() > 1e-9 { axis.normalize() } else { perpendicular(along) };
         let finite = |x: f64| if x.is_finite() { x } else { 0.0 };
@@ -96,6 +166,8 @@ impl BodyAxes {
             com,
             along: along.into(),
             across: across.into(),
+            normal: normal.into(),
+            normal_seen,
             axis: axis.into(),
             length: finite(length),
             carried,
@@ -113,10 +185,16 @@ impl BodyAxes {
             && near(self.length, other.length)
     }
 
-    /// A point in the body frame: the nominal centre of mass moved by `a` along the link and
-    /// `c` across it.
-    pub fn point(&self, a: f64, c: f64) -> Vector3<f64> {
-        v3(self.com) + a * v3(self.along) + c * v3(self.across)
+    /// A point in the body frame: the nominal centre of mass moved by `a` along the link, `c`
+    /// across it and `n` along [`BodyAxes::normal`].
+    pub fn point(&self, a: f64, c: f64, n: f64) -> Vector3<f64> {
+        v3(self.com) + a * v3(self.along) + c * v3(self.across) + n * v3(self.normal)
+    }
+
+    /// The bound of a place along [`BodyAxes::normal`] whose half-width is `h`: `h` where a
+    /// rotation moves the body along it, else 0 (the place is no parameter).
+    pub fn normal_bound(&self, h: f64) -> f64 {
+        if self.normal_seen { h } else { 0.0 }
     }
 
     /// A rotation whose last column is the joint axis and whose first two span the plane

@@ -5,13 +5,16 @@ declare_effect! {
     /// A link heavier than modelled: a point mass on the joint's child body (a payload, a battery, cables).
     ///
     /// MuJoCo-native: the child body's mass properties in the model copy. The point mass
-    /// `added_mass` ≥ 0 sits in the joint's plane of motion, `offset` from the modelled centre of
-    /// mass along the link's axis (from the joint to that centre, or to its first child body)
-    /// and `across` it (joint axis × link axis); the body's new mass, centre of mass and inertia
-    /// follow by the parallel-axis theorem ([`super::inertial`]), so every value is a rigid body
-    /// that exists. Gravity sees the composite body's mass and first moment — the mass and both
-    /// in-plane components of the point's place, three numbers — wherever another joint carries
-    /// the link; a place along the joint's own axis moves no torque about it and is not fitted.
+    /// `added_mass` ≥ 0 sits `offset` from the modelled centre of mass along the link's axis
+    /// (from the joint to that centre, or to its first child body), `across` it (joint axis ×
+    /// link axis; where the link lies along its own joint's axis, the axis of the nearest joint
+    /// that swings it × link axis) and `normal` to both (along × across); the body's new mass,
+    /// centre of mass and inertia follow by the parallel-axis theorem ([`super::inertial`]), so
+    /// every value is a rigid body that exists. Gravity sees the composite body's mass and first
+    /// moment — the mass and the components of the point's place a rotation moves — wherever
+    /// another joint carries the link; `normal` is a parameter only where a rotation moves the
+    /// body along it (a carrying joint whose axis is not parallel, a ball or free joint): in a
+    /// planar chain a place along the joints' axis moves no torque and is not fitted.
     /// The place of a mass that comes out as nothing is not determined and is reported as not
     /// identified. The search sees it as any other effect: gravity makes it a pose-dependent
     /// load on the joint and every joint above it, which a joint stiffness (spring to one pose)
@@ -35,6 +38,7 @@ declare_effect! {
             ParamDef { name: "added_mass", unit: "kg", lo: 0.0, hi: 5.0, default: 0.0 },
             ParamDef { name: "offset", unit: "m", lo: -0.5, hi: 0.5, default: 0.0 },
             ParamDef { name: "across", unit: "m", lo: -0.5, hi: 0.5, default: 0.0 },
+            ParamDef { name: "normal", unit: "m", lo: -0.5, hi: 0.5, default: 0.0 },
         ],
     }
 }
@@ -45,18 +49,22 @@ impl Effect for LinkMass {
         true
     }
     /// Added mass up to twice the body's subtree mass (at least 1 kg); the point within one
-    /// link length of the modelled centre of mass, along the link and across it.
+    /// link length of the modelled centre of mass, along the link, across it and normal to it
+    /// (normal: none where no rotation moves the body that way,
+    /// [`inertial::BodyAxes::normal_seen`]).
     fn bounds(&self, _m: &MjModel, t: &JointTarget) -> (Vec<f64>, Vec<f64>) {
         let Some(b) = t.body else {
-            return (vec![0.0; 3], vec![0.0; 3]);
+            return (vec![0.0; 4], vec![0.0; 4]);
         };
         let hi = (2.0 * b.subtree_mass).max(1.0);
-        (vec![0.0, -b.length, -b.length], vec![hi, b.length, b.length])
+        let n = b.normal_bound(b.length);
+        (vec![0.0, -b.length, -b.length, -n], vec![hi, b.length, b.length, n])
     }
     fn apply_model(&self, m: &mut MjModel, t: &JointTarget, p: &[f64]) {
         if let Some(b) = t.body {
             let across = p.get(2).copied().unwrap_or(0.0);
-            inertial::add_point_mass(m, b.body, p[0], b.point(p[1], across));
+            let normal = p.get(3).copied().unwrap_or(0.0);
+            inertial::add_point_mass(m, b.body, p[0], b.point(p[1], across, normal));
         }
     }
     /// The point's place along the link and across it (its mass is no place: held at 0 the
@@ -77,10 +85,20 @@ impl Effect for LinkMass {
                 "m from the body's modelled centre of mass to the added point, along the link \
                  (from the joint towards that centre)",
             ),
-            ("across", "m from the modelled centre of mass, across the link (joint axis × link axis)"),
+            (
+                "across",
+                "m from the modelled centre of mass, across the link (joint axis × link axis; \
+                 where the link lies along that axis, the axis of the nearest joint that swings \
+                 it × link axis)",
+            ),
+            (
+                "normal",
+                "m from the modelled centre of mass, normal to both (along × across); fixed at 0 \
+                 where no rotation moves the link that way (every joint axis parallel to it)",
+            ),
         ]
     }
 }
 
-crate::held_variant!(OFFSET_HELD, LinkMass, "link_mass~offset", 1, [0, 2]);
-crate::held_variant!(ACROSS_HELD, LinkMass, "link_mass~across", 2, [0, 1]);
+crate::held_variant!(OFFSET_HELD, LinkMass, "link_mass~offset", 1, [0, 2, 3]);
+crate::held_variant!(ACROSS_HELD, LinkMass, "link_mass~across", 2, [0, 1, 3]);

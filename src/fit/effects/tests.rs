@@ -266,10 +266,10 @@ fn a_held_component_is_the_effect_with_it_at_its_nominal_value() {
             .q_sim
     };
     let cases = [
-        ("com_offset~along", vec![-0.015], vec![0.0, -0.015]),
-        ("com_offset~across", vec![0.02], vec![0.02, 0.0]),
-        ("link_mass~offset", vec![0.3, 0.03], vec![0.3, 0.0, 0.03]),
-        ("link_mass~across", vec![0.3, 0.07], vec![0.3, 0.07, 0.0]),
+        ("com_offset~along", vec![-0.015, 0.0], vec![0.0, -0.015, 0.0]),
+        ("com_offset~across", vec![0.02, 0.0], vec![0.02, 0.0, 0.0]),
+        ("link_mass~offset", vec![0.3, 0.03, 0.0], vec![0.3, 0.0, 0.03, 0.0]),
+        ("link_mass~across", vec![0.3, 0.07, 0.0], vec![0.3, 0.07, 0.0, 0.0]),
     ];
     for (id, held, full) in cases {
         let h = by_id(id).unwrap_or_else(|| panic!("{id}"));
@@ -391,6 +391,41 @@ fn body_effects_group_alike_links_only() {
         assert!(!e.alike(&fl, &thigh), "{id}: a shank and a thigh");
     }
     assert!(by_id("armature").unwrap().alike(&fl, &thigh));
+}
+
+/// The directions of a body's place span what the joints moving it can see: on the
+/// `arm4y.xml` arm (pitch y → roll x → yaw z, the upper arm hanging along the yaw's axis) the
+/// yaw's link gets the two perpendiculars to its axis besides the link's own direction, and the
+/// third one is a parameter; on the planar arm of [`arm_with`] (two parallel hinges) the third
+/// direction is the joints' axis, which no rotation moves the body along: bounds of zero width.
+#[test]
+fn a_body_place_has_every_direction_its_carrying_joints_see() {
+    use super::{JointTarget, by_id};
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("bench/independent_py/models/arm4y.xml");
+    let mut map = crate::model::source::SourceMap::default();
+    let arm = crate::model::load(&mut map, &path, None).expect("load arm4y");
+    let b = JointTarget::of(&arm, "shoulder_yaw").unwrap().body.unwrap();
+    let dot = |x: [f64; 3], y: [f64; 3]| (0..3).map(|k| x[k] * y[k]).sum::<f64>();
+    assert!((dot(b.along, [0.0, 0.0, -1.0]) - 1.0).abs() < 1e-9, "{:?}", b.along);
+    for d in [b.across, b.normal] {
+        assert!(dot(d, b.axis).abs() < 1e-9 && (dot(d, d) - 1.0).abs() < 1e-9, "{d:?}");
+    }
+    assert!(dot(b.across, b.normal).abs() < 1e-9 && b.normal_seen);
+    let t = JointTarget::of(&arm, "shoulder_yaw").unwrap();
+    for id in ["com_offset", "link_mass"] {
+        let (lo, hi) = by_id(id).unwrap().bounds(&arm.mj, &t);
+        assert!(lo.iter().zip(&hi).skip(1).all(|(l, h)| h > l), "{id}: {lo:?} {hi:?}");
+    }
+    let dir = std::env::temp_dir().join(format!("modellint-planar-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let planar = arm_with(&dir, "planar.xml", "", r#"fromto="0 0 0 0 0 -0.25""#);
+    let t = JointTarget::of(&planar, "elbow").unwrap();
+    let b = t.body.unwrap();
+    assert!((dot(b.normal, b.axis).abs() - 1.0).abs() < 1e-9 && !b.normal_seen);
+    let (lo, hi) = by_id("com_offset").unwrap().bounds(&planar.mj, &t);
+    assert!(lo[2] == 0.0 && hi[2] == 0.0 && hi[0] > lo[0] && hi[1] > lo[1], "{lo:?} {hi:?}");
+    std::fs::remove_dir_all(&dir).ok();
 }
 
 /// A mirror pair shares one body effect only over alike links: the quadruped's front shanks

@@ -142,6 +142,17 @@ struct EffectModel {
     k: usize,
     b: Vec<Vec<f64>>,
     g: Vec<Vec<f64>>,
+    /// Per joint, how many of the effect's fitted parameters its bounds hold (zero width: a
+    /// body's place along a direction no rotation moves the body).
+    held: Vec<usize>,
+}
+
+impl EffectModel {
+    /// The fewest parameters the bounds hold on any joint of `group` (0 for a joint not here).
+    fn held(&self, group: &[String]) -> usize {
+        let at = |j: &String| self.joints.iter().position(|x| x == j).map_or(0, |i| self.held[i]);
+        group.iter().map(at).min().unwrap_or(0)
+    }
 }
 
 /// What the linear model predicts for one candidate (effect, joint group).
@@ -455,7 +466,10 @@ impl Screen {
                     let g: Vec<Vec<f64>> =
                         own.iter().map(|x| own.iter().map(|y| dot(x, y)).collect()).collect();
                     let single = ps.iter().flatten().map(|p| p.explained).fold(0.0, f64::max);
-                    let all = charged(train_ss, combine(&b, &g).0, k, pieces);
+                    // Charged for the parameters probed here (one held by bounds of zero
+                    // width has no column).
+                    let kc = ps.iter().flatten().count();
+                    let all = charged(train_ss, combine(&b, &g).0, kc, pieces);
                     c.evidence.insert("feature_explained_rms".into(), c.explained_rms);
                     let coef = dot_r(&p.column, &r) / dot(&p.column, &p.column) / p.step;
                     c.evidence.insert("sensitivity_coef".into(), coef);
@@ -464,16 +478,19 @@ impl Screen {
                     c.explained_rms =
                         screen_rmse * (single.max(all) / train_ss.max(f64::MIN_POSITIVE)).sqrt();
                 }
-                let room = JointTarget::of(engine.robot, &c.joint).map_or(
-                    (f64::NEG_INFINITY, f64::INFINITY),
+                let (room, held) = JointTarget::of(engine.robot, &c.joint).map_or(
+                    ((f64::NEG_INFINITY, f64::INFINITY), 0),
                     |t| {
                         let (p0, (lo, hi)) = (effect.initial(&m0, &t), effect.bounds(&m0, &t));
+                        let n = effect.fitted().min(lo.len()).min(hi.len());
+                        let held = (0..n).filter(|&i| hi[i] <= lo[i]).count();
                         match (p0.first(), lo.first(), hi.first()) {
-                            (Some(p), Some(l), Some(h)) => (l - p, h - p),
-                            _ => (f64::NEG_INFINITY, f64::INFINITY),
+                            (Some(p), Some(l), Some(h)) => ((l - p, h - p), held),
+                            _ => ((f64::NEG_INFINITY, f64::INFINITY), held),
                         }
                     },
                 );
+                m.held.push(held);
                 m.joints.push(c.joint.clone());
                 m.room.push(room);
                 m.b.push(b);
@@ -501,6 +518,8 @@ impl Screen {
     /// candidates of different sizes compare: the lead's measure ([`super::lead`]).
     pub(super) fn lead_rmse(&self, effect: &str, group: &[String], k: usize) -> Option<f64> {
         let p = self.predict(effect, group)?;
+        // A parameter held by bounds of zero width on the group is not charged.
+        let k = k.saturating_sub(self.models.get(effect).map_or(0, |m| m.held(group)));
         let ss = self.train_ss;
         if !(ss > 0.0) || !(self.screen_rmse > 0.0) {
             return Some(p.train_rmse);
@@ -625,6 +644,7 @@ mod tests {
                 k: 1,
                 b: vec![vec![d(&c, &r)], vec![0.0]],
                 g: vec![vec![d(&c, &c), 0.0], vec![0.0, d(&c, &c)]],
+                held: vec![0, 0],
             };
             let ss = d(&r, &r);
             let screen_rmse = (ss / r.len() as f64).sqrt();

@@ -392,7 +392,10 @@ impl Engine<'_> {
             _ if effect.smooth() => {
                 // Gauss–Newton / Levenberg–Marquardt on the rollout residuals: k + 1 replays per
                 // iteration, converged in a handful (a derivative-free search needs ~40).
-                let method = Method::LeastSquares { max_iters: (max_evals / (k + 2)).clamp(2, 12) };
+                // (A parameter held by bounds of zero width costs no replay.)
+                let free = (0..k).filter(|&i| b.hi[i] > b.lo[i]).count();
+                let method =
+                    Method::LeastSquares { max_iters: (max_evals / (free + 2)).clamp(2, 12) };
                 let first = solve(&problem, &x0, method);
                 // A second basin: a servo gain error of kp × 0.4, kd × 2 on arm3's elbow was
                 // fitted from (1, 1) as kp × 0.99, kd × 5.0 — kd on its bound, 1.16 mrad
@@ -564,6 +567,11 @@ impl Engine<'_> {
             return failed();
         };
         let mut cols = Vec::with_capacity(slots.len());
+        // A parameter held by bounds of zero width (a body's place along a direction no
+        // rotation moves it) is no estimate: no column, reported as held (0, identified).
+        let held = |s: &(usize, usize, f64, f64)| s.3 <= s.2;
+        let slots_all = std::mem::take(&mut slots);
+        slots = slots_all.iter().copied().filter(|s| !held(s)).collect();
         for &(ai, i, lo, hi) in &slots {
             let mut h = FD_STEP * (hi - lo).max(1e-9);
             if applied[ai].params[i] + h > hi {
@@ -580,6 +588,10 @@ impl Engine<'_> {
             }
         }
         let k = slots.len();
+        if k == 0 {
+            let n = |ai: usize| slots_all.iter().filter(|s| s.0 == ai).count();
+            return which.iter().map(|&ai| (vec![0.0; n(ai)], vec![true; n(ai)])).collect();
+        }
         let jac: Vec<Vec<f64>> =
             (0..r0.len()).map(|row| cols.iter().map(|c| c[row]).collect()).collect();
         let ranges: Vec<f64> = slots.iter().map(|s| s.3 - s.2).collect();
@@ -597,10 +609,12 @@ impl Engine<'_> {
         which
             .iter()
             .map(|&ai| {
-                let idx: Vec<usize> = (0..k).filter(|&s| slots[s].0 == ai).collect();
+                let pos = |s: &(usize, usize, f64, f64)| slots.iter().position(|x| x == s);
+                let of: Vec<Option<usize>> =
+                    slots_all.iter().filter(|s| s.0 == ai).map(pos).collect();
                 (
-                    idx.iter().map(|&s| u.stderr[s]).collect(),
-                    idx.iter().map(|&s| u.identifiable[s]).collect(),
+                    of.iter().map(|p| p.map_or(0.0, |s| u.stderr[s])).collect(),
+                    of.iter().map(|p| p.is_none_or(|s| u.identifiable[s])).collect(),
                 )
             })
             .collect()
@@ -617,21 +631,25 @@ pub(super) fn ends_on_bound(x: &[f64], x0: &[f64], b: &Bounds) -> bool {
     })
 }
 
-/// The best point of a grid inside `b` (5 points per parameter for 2 parameters, 3 for more; at
-/// 10–90 % of the range, on a log scale when the lower bound is positive): `None` when every
-/// point fails.
+/// The best point of a grid inside `b` (5 points per parameter for 2 free parameters, 3 for
+/// more; at 10–90 % of the range, on a log scale when the lower bound is positive; a parameter
+/// held by bounds of zero width at its value): `None` when every point fails.
 pub(super) fn grid_best(obj: &dyn Fn(&[f64]) -> f64, b: &Bounds) -> Option<Vec<f64>> {
     let k = b.lo.len();
-    let fr: &[f64] = if k <= 2 { &GRID_FINE } else { &GRID_COARSE };
+    let free = (0..k).filter(|&i| b.hi[i] > b.lo[i]).count();
+    let fr: &[f64] = if free <= 2 { &GRID_FINE } else { &GRID_COARSE };
     let axis = |i: usize| -> Vec<f64> {
         let (lo, hi) = (b.lo[i], b.hi[i]);
+        if hi <= lo {
+            return vec![lo];
+        }
         fr.iter()
             .map(|&f| if lo > 0.0 { lo * (hi / lo).powf(f) } else { lo + f * (hi - lo) })
             .collect()
     };
     let axes: Vec<Vec<f64>> = (0..k).map(axis).collect();
     let mut best: Option<(f64, Vec<f64>)> = None;
-    for n in 0..fr.len().pow(k as u32) {
+    for n in 0..axes.iter().map(Vec::len).product::<usize>() {
         let mut c = n;
         let p: Vec<f64> = axes
             .iter()
