@@ -297,7 +297,7 @@ fn fit_holdout_by_checks_its_input() {
     // A key no log has, a value no log has: exit 2 before any fitting, naming the values.
     let (code, _, err) = modellint(&["fit", rig, d, "--holdout-by", "nokey"]);
     assert_eq!(code, 2, "{err}");
-    assert!(err.contains("at least two values"), "{err}");
+    assert!(err.contains("no recording has the key `nokey`") && err.contains("kp"), "{err}");
     let (code, _, err) = modellint(&["fit", rig, d, "--holdout-by", "kp=300"]);
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("100, 200, 400, 800"), "{err}");

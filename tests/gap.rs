@@ -833,3 +833,29 @@ fn a_joint_at_its_noise_floor_does_not_weigh_on_the_shape_scores() {
     assert!(knee.abs() < 0.2, "the idle joint's correlation is the noise's: {knee}");
     assert!(r.correlation_mean > 0.95, "correlation_mean {}", r.correlation_mean);
 }
+
+/// A bare URDF (no motors) with a recording that holds commands: an error naming the command
+/// columns and what to replay on instead (it used to replay with every command dropped: the
+/// joints fell, MAE tens of degrees, no word said).
+#[test]
+fn cli_commands_for_a_model_without_actuators_are_an_error() {
+    let urdf = root().join("fixtures/rules/urdf-mjcf-drift/urdf/mimic.urdf");
+    let dir = std::env::temp_dir().join(format!("modellint-gap-noact-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let csv = dir.join("run.csv");
+    let mut text = String::from("# control_rate_hz: 100\nt,hip.q,hip.q_cmd,knee.q,knee.q_cmd\n");
+    for i in 0..50 {
+        let t = i as f64 * 0.01;
+        text.push_str(&format!("{t:.2},{:.4},0.2,{:.4},0.6\n", 0.2 * t, 0.5 + 0.2 * t));
+    }
+    std::fs::write(&csv, text).unwrap();
+    let o = bin().arg("gap").arg(&urdf).arg(&csv).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{}", String::from_utf8_lossy(&o.stdout));
+    assert!(err.contains("hip.q_cmd, knee.q_cmd") && err.contains("no actuator"), "{err}");
+    assert!(err.contains("run.csv") && err.contains("<position joint="), "{err}");
+    // Positions only: nothing is dropped, the replay runs.
+    std::fs::write(&csv, "t,hip.q,knee.q\n0,0,0.5\n0.01,0,0.5\n0.02,0,0.5\n").unwrap();
+    let o = bin().arg("gap").arg(&urdf).arg(&csv).output().unwrap();
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("no actuator"));
+}

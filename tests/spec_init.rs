@@ -304,3 +304,24 @@ fn a_model_without_actuators_gets_no_passive_joints() {
     assert!(text.contains("[robot]\nname = \"leg\"\n"), "{text}");
     loads_and_adds_nothing(model, &spec);
 }
+
+/// `init-spec scene.xml` for a scene that includes the robot file writes scene.toml, which
+/// linting robot.xml alone never reads: the message says where that looks.
+#[test]
+fn a_scene_spec_says_where_the_included_robot_file_looks() {
+    let d = tmp("scene");
+    std::fs::write(
+        d.join("robot.xml"),
+        r#"<mujoco><worldbody><body name="arm"><joint name="hinge" axis="0 1 0" range="-1 1"/><geom type="capsule" fromto="0 0 0 0 0 -0.3" size="0.02" mass="1"/></body></worldbody><actuator><position joint="hinge" kp="10"/></actuator></mujoco>"#,
+    )
+    .unwrap();
+    std::fs::write(
+        d.join("scene.xml"),
+        r#"<mujoco><include file="robot.xml"/><worldbody><geom type="plane" size="1 1 0.1"/></worldbody></mujoco>"#,
+    )
+    .unwrap();
+    let (code, _, err) = init(&[d.join("scene.xml").to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    let robot_toml = d.join("robot.toml").display().to_string();
+    assert!(err.contains(&format!("reads {robot_toml} instead")), "{err}");
+}

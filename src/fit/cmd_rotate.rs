@@ -43,6 +43,20 @@ pub fn rotate_run(
         )));
     }
     let values = crate::fit::split::key_values(recs, key);
+    if values.is_empty() {
+        let mut keys: Vec<&str> =
+            recs.iter().flat_map(|r| r.meta.keys().map(String::as_str)).collect();
+        keys.sort_unstable();
+        keys.dedup();
+        let found = if keys.is_empty() {
+            "they have no `# key: value` metadata".to_string()
+        } else {
+            format!("their keys: {}", keys.join(", "))
+        };
+        return Err(CmdError::Message(format!(
+            "--holdout-by {key}: no recording has the key `{key}` ({found})"
+        )));
+    }
     if values.len() < 2 {
         return Err(CmdError::Message(format!(
             "--holdout-by {key}: need at least two values of `{key}` to hold one out (found {})",

@@ -91,6 +91,34 @@ pub struct ReplayInputs {
     pub unscored: Vec<String>,
 }
 
+/// A recording with command columns for a model with no actuator at all (a bare URDF): the
+/// replay would drop every command and let the joints fall, an error naming the columns.
+fn no_actuator_for_commands(robot: &Robot, f: &Path, r: &Recording) -> Result<(), String> {
+    if !robot.actuators.is_empty() {
+        return Ok(());
+    }
+    let cols: Vec<String> = r
+        .joints
+        .iter()
+        .filter(|j| j.q_cmd.is_some())
+        .map(|j| format!("{}.q_cmd", j.name))
+        .collect();
+    if cols.is_empty() {
+        return Ok(());
+    }
+    let more = if cols.len() > 4 { format!(" and {} more", cols.len() - 4) } else { String::new() };
+    Err(format!(
+        "{}: commands {}{more}, but {} has no actuator, so the replay would ignore every \
+         command and let the joints fall (a URDF states no motors). Replay on a model with \
+         actuators: an MJCF that includes the robot and adds one per commanded joint (e.g. \
+         <actuator><position joint=\"{}\" kp=\"...\" kv=\"...\"/></actuator> with the servo's gains)",
+        f.display(),
+        cols.iter().take(4).cloned().collect::<Vec<_>>().join(", "),
+        robot.path.display(),
+        r.joints.iter().find(|j| j.q_cmd.is_some()).map(|j| j.name.as_str()).unwrap_or("")
+    ))
+}
+
 /// Reads `files` for `gap` and `fit`: each recording's joints must be the model's, a joint an
 /// actuator of the model drives must have its command (else an error at the header line, or
 /// with `--no-command` it is left out of the scores: [`ReplayInputs::unscored`]), and its
@@ -165,6 +193,7 @@ pub fn read_for_replay(
         v
     };
     for (f, mut r) in read {
+        no_actuator_for_commands(robot, &f, &r)?;
         for j in &r.joints {
             if j.q_cmd.is_none() && actuated.contains(&j.name) && matcher.is_match(&j.name) {
                 let name = f.file_name().unwrap_or_default().to_string_lossy().into_owned();

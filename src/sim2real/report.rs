@@ -168,7 +168,7 @@ pub fn write(
     html.push_str("</div><h2>Per-joint error</h2>");
     html.push_str(&bars(r));
     html.push_str(
-        "<h2>Power spectral density, worst joints (Welch, 256 Hann, 50 %)</h2><div class=\"grid\">",
+        "<h2>Power spectral density, worst joints (Welch, 4 s Hann, 50 %)</h2><div class=\"grid\">",
     );
     for jn in &worst {
         let Some(i) = r.per_joint.iter().position(|j| j.name == *jn) else { continue };

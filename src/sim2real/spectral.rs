@@ -11,20 +11,33 @@ use std::f64::consts::PI;
 /// single segment of `x.len()` samples is used. Returns (freqs, psd), both `nfft/2 + 1` long;
 /// empty for fewer than 2 samples or a non-positive `fs`.
 pub fn welch_psd(x: &[f64], fs: f64, nperseg: usize, overlap: f64) -> (Vec<f64>, Vec<f64>) {
+    welch_psd_nfft(x, fs, nperseg, None, overlap)
+}
+
+/// [`welch_psd`] with each windowed segment zero-padded to `nfft` samples (as scipy's `nfft`
+/// argument; ignored when `None` or shorter than the segment): the bins are `fs / nfft` apart.
+pub fn welch_psd_nfft(
+    x: &[f64],
+    fs: f64,
+    nperseg: usize,
+    nfft: Option<usize>,
+    overlap: f64,
+) -> (Vec<f64>, Vec<f64>) {
     if x.len() < 2 || !fs.is_finite() || fs <= 0.0 {
         return (Vec::new(), Vec::new());
     }
     let nseg = if nperseg == 0 || nperseg > x.len() { x.len() } else { nperseg.max(2) };
+    let nfft = nfft.unwrap_or(nseg).max(nseg);
     let ov = if overlap.is_finite() { overlap.clamp(0.0, 1.0) } else { 0.5 };
     let noverlap = ((nseg as f64 * ov).floor() as usize).min(nseg - 1);
     let step = nseg - noverlap;
     let window: Vec<f64> =
         (0..nseg).map(|i| 0.5 - 0.5 * (2.0 * PI * i as f64 / nseg as f64).cos()).collect();
     let wss: f64 = window.iter().map(|w| w * w).sum();
-    let nbins = nseg / 2 + 1;
+    let nbins = nfft / 2 + 1;
     let mut psd = vec![0.0; nbins];
     let mut count = 0usize;
-    let mut seg = vec![0.0; nseg];
+    let mut seg = vec![0.0; nfft];
     let mut start = 0;
     while start + nseg <= x.len() {
         let chunk = &x[start..start + nseg];
@@ -41,12 +54,12 @@ pub fn welch_psd(x: &[f64], fs: f64, nperseg: usize, overlap: f64) -> (Vec<f64>,
     let scale = 1.0 / (fs * wss * count.max(1) as f64);
     for (k, p) in psd.iter_mut().enumerate() {
         *p *= scale;
-        let nyquist = nseg % 2 == 0 && k == nseg / 2;
+        let nyquist = nfft % 2 == 0 && k == nfft / 2;
         if k != 0 && !nyquist {
             *p *= 2.0;
         }
     }
-    let freqs = (0..nbins).map(|k| k as f64 * fs / nseg as f64).collect();
+    let freqs = (0..nbins).map(|k| k as f64 * fs / nfft as f64).collect();
     (freqs, psd)
 }
 

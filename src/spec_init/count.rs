@@ -1,4 +1,5 @@
-//! The `count` of a joint in the spec template: how many motors drive it.
+//! Which joints the spec template calls actuated and passive, and the `count` of a joint: how
+//! many motors drive it.
 
 use crate::model::Robot;
 use crate::rules::inertia::parallel_ankle_armature::tendon_motor_count;
@@ -26,4 +27,42 @@ pub(super) fn count_line(robot: &Robot, group: &[&str]) -> String {
             .to_string();
     }
     "count = 1  # motors driving the joint (one actuator in the model)".to_string()
+}
+
+/// Scalar joints reached by at least one actuator.
+pub(super) fn actuated(robot: &Robot) -> Vec<usize> {
+    robot
+        .joints
+        .iter()
+        .filter(|j| j.is_scalar() && !robot.actuators_on_joint(j.id).is_empty())
+        .map(|j| j.id)
+        .collect()
+}
+
+/// MuJoCo's `mjEQ_JOINT`: `joint1 = poly(joint2)`, or a constant with no `joint2`.
+const EQ_JOINT: i32 = 2;
+
+/// Scalar joints no actuator reaches and no joint equality ties to an actuated joint (or holds
+/// at a constant): a URDF `<mimic>` joint (MJCF `<equality><joint>`) follows its leader's motor
+/// and has no spring of its own, so it is not passive.
+pub(super) fn passive(robot: &Robot) -> Vec<usize> {
+    let driven = |j: usize| !robot.actuators_on_joint(j).is_empty();
+    let coupled = |j: usize| {
+        robot.equalities.iter().filter(|e| e.etype == EQ_JOINT).any(|e| {
+            let other = if e.obj1 == j as i32 {
+                e.obj2
+            } else if e.obj2 == j as i32 {
+                e.obj1
+            } else {
+                return false;
+            };
+            other < 0 || driven(other as usize)
+        })
+    };
+    robot
+        .joints
+        .iter()
+        .filter(|j| j.is_scalar() && !driven(j.id) && !coupled(j.id))
+        .map(|j| j.id)
+        .collect()
 }

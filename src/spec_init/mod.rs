@@ -19,6 +19,7 @@ use crate::rules::limits::effort_limit_mismatch::joint_torque_limit;
 use crate::util::fmt_num;
 
 mod count;
+use count::{actuated, passive};
 mod naming;
 
 use naming::{GENERIC_WORDS, class_stem, region};
@@ -47,26 +48,6 @@ const SAME: f64 = 1e-6;
 
 fn same(a: f64, b: f64) -> bool {
     (a - b).abs() <= SAME * a.abs().max(b.abs()).max(1e-12)
-}
-
-/// Scalar joints reached by at least one actuator.
-fn actuated(robot: &Robot) -> Vec<usize> {
-    robot
-        .joints
-        .iter()
-        .filter(|j| j.is_scalar() && !robot.actuators_on_joint(j.id).is_empty())
-        .map(|j| j.id)
-        .collect()
-}
-
-/// Scalar joints no actuator reaches (actuator-mapping counts these as passive).
-fn passive(robot: &Robot) -> Vec<usize> {
-    robot
-        .joints
-        .iter()
-        .filter(|j| j.is_scalar() && robot.actuators_on_joint(j.id).is_empty())
-        .map(|j| j.id)
-        .collect()
 }
 
 /// The motor families of the model's actuated joints.
@@ -632,7 +613,7 @@ tell:
   - [joints."<glob>"]: each actuated joint (left/right pairs as `{left,right}_knee`) with its
     family, count (the number of tendon actuators when two or more drive it, a parallel linkage the
     model shows; else 1, with how to tell a two-motor ankle) and a region guessed from its name;
-    joints no actuator drives as passive = true.
+    joints no actuator drives as passive = true (not a joint an equality ties to a motor: a mimic).
 
 The values are the model's own, so the spec agrees with the model as it is; check each against
 the real robot, fill the placeholders in and uncomment them. A lint run with the spec names the
@@ -676,8 +657,22 @@ pub fn run(model: &std::path::Path, output: Option<&std::path::Path>, force: boo
     }
     let found =
         output.is_none() || crate::spec_use::discover(model).path.as_deref() == Some(out.as_path());
+    // A scene including the robot file: linting that file alone looks beside it, not here.
+    let included = crate::spec_use::includes(model)
+        .into_iter()
+        .map(|f| f.with_extension("toml"))
+        .find(|t| *t != out)
+        .map(|t| {
+            format!(
+                ". Linting the included robot file alone reads {} instead (-o {} writes the spec \
+                 there, where linting this scene finds it too)",
+                t.display(),
+                t.display()
+            )
+        })
+        .unwrap_or_default();
     eprintln!(
-        "modellint: wrote {} ({} motor families); check its values against the robot, fill in the commented placeholders{}",
+        "modellint: wrote {} ({} motor families); check its values against the robot, fill in the commented placeholders{}{included}",
         out.display(),
         families(&robot).len(),
         if found {

@@ -122,3 +122,30 @@ fn a_tendon_actuators_torque_limit_goes_through_its_coefficients() {
         assert_eq!(f.effort, Some(2.5), "{f:?}");
     }
 }
+
+#[test]
+fn a_joint_an_equality_ties_to_a_motor_is_not_passive() {
+    // A hand-written leg: the ankle follows the knee by `<equality><joint>` (a URDF mimic),
+    // the toe is free (a real passive joint). Only the toe is written `passive = true`.
+    let link = |n: &str, inner: &str| {
+        format!(
+            r#"<body name="{n}" pos="0 0 -0.2"><joint name="{n}" axis="0 1 0" range="-1 1"/><geom type="capsule" fromto="0 0 0 0 0 -0.2" size="0.02" mass="0.5"/>{inner}</body>"#
+        )
+    };
+    let xml = format!(
+        r#"<mujoco><worldbody><body name="base"><geom type="box" size="0.05 0.05 0.05" mass="1"/>{}</body></worldbody><equality><joint joint1="ankle" joint2="knee" polycoef="0 -0.5 0 0 0"/></equality><actuator><position name="hip" joint="hip" kp="40"/><position name="knee" joint="knee" kp="40"/></actuator></mujoco>"#,
+        link("hip", &link("knee", &link("ankle", &link("toe", ""))))
+    );
+    let dir =
+        std::env::temp_dir().join(format!("modellint-spec-init-{}-mimic", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let path = dir.join("mimic.xml");
+    std::fs::write(&path, xml).expect("write the test model");
+    let mut map = crate::model::source::SourceMap::default();
+    let robot = crate::model::load(&mut map, &path, None).expect("load the test model");
+    let names: Vec<&str> = passive(&robot).iter().map(|&j| robot.joints[j].name.as_str()).collect();
+    assert_eq!(names, ["toe"]);
+    let spec = template(&robot, "mimic.xml");
+    assert!(spec.contains("[joints.\"toe\"]\npassive = true"), "{spec}");
+    assert_eq!(spec.matches("passive = true").count(), 1, "{spec}");
+}

@@ -16,7 +16,9 @@ declare_rule! {
     /// actuators' `forcerange` (or the joint's `actuatorfrcrange`, or `gear × ctrlrange` of a
     /// torque motor), velocity limits against the spec's motor `velocity_limit`, joint axes
     /// (normalised; a flipped axis is reported as a sign-convention difference), and the masses
-    /// of links and bodies with the same name (relative `tolerance`). A companion URDF that is
+    /// of links and bodies with the same name (relative `tolerance`), and a URDF `<mimic>`'s
+    /// multiplier (relative `tolerance`) and offset (`range_tolerance`) against the MJCF joint
+    /// equality between the same joints. A companion URDF that is
     /// missing or cannot be parsed is itself a finding at the spec line.
     ///
     /// ## Why is this bad?
@@ -74,6 +76,9 @@ fn model_effort(robot: &Robot, j: usize) -> Option<f64> {
         .collect();
     m.into_iter().reduce(f64::max)
 }
+
+/// MuJoCo's `mjEQ_JOINT`.
+const EQ_JOINT: i32 = 2;
 
 fn unit(v: [f64; 3]) -> [f64; 3] {
     let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
@@ -247,6 +252,35 @@ impl Rule for UrdfMjcfDrift {
                             .measured(uj.limit.velocity, "rad/s")
                             .expected(sv, "rad/s")));
                 }
+            }
+        }
+        // Mimic joints: URDF `q = multiplier · q_leader + offset` against the MJCF joint
+        // equality's `polycoef` (`q1 = c0 + c1 · q2 + …`).
+        for uj in &urdf.joints {
+            let Some(m) = &uj.mimic else { continue };
+            let (Some(j), Some(lead)) = (robot.joint(&uj.name), robot.joint(&m.joint)) else {
+                continue;
+            };
+            let (mul, off) = (m.multiplier.unwrap_or(1.0), m.offset.unwrap_or(0.0));
+            let data = robot.mj.eq_data();
+            let eq = robot
+                .equalities
+                .iter()
+                .find(|e| e.etype == EQ_JOINT && e.obj1 == j.id as i32 && e.obj2 == lead.id as i32);
+            let Some((eq, c)) = eq.and_then(|e| data.get(e.id).map(|d| (e, d))) else { continue };
+            if rel_differs(c[1], mul, tol) || (c[0] - off).abs() > rtol {
+                out.push(
+                    cx.at_attr(ElemKind::Equality, eq.id, &eq.name, "polycoef", format!(
+                        "joint `{}` follows `{}` as {} + {}·q in the MJCF but as {} + {}·q in the URDF's mimic",
+                        j.name, lead.name, fmt_num(c[0], 4), fmt_num(c[1], 4), fmt_num(off, 4), fmt_num(mul, 4)))
+                        .label("polycoef")
+                        .secondary(spec_loc, format!("compared with {fname}"))
+                        .note("the coupled joint moves by a different ratio in training and on the hardware (a linkage or belt the URDF's mimic describes): every pose and the load on the leader differ")
+                        .help("use the linkage's measured ratio in both files (MJCF polycoef=\"offset multiplier 0 0 0\")")
+                        .subject(Subject::Joint(j.id))
+                        .measured(c[1], "")
+                        .expected(mul, ""),
+                );
             }
         }
         // Link masses.

@@ -9,7 +9,8 @@
 //! * Gap scores (eqs 6–9) from the pooled position RMSE, velocity RMSE and ρ̄ with
 //!   [`GapConstants`].
 //! * Spectra (eqs 10–12): positions resampled to one uniform rate (the dataset's mean sample
-//!   rate, rounded), Welch PSD with 256-sample Hann windows and 50 % overlap per episode,
+//!   rate, rounded), Welch PSD with 4 s Hann windows ([`SPECTRUM_SEGMENT_S`]) and 50 % overlap
+//!   per episode,
 //!   averaged over episodes weighted by their samples; symmetric KL between the averaged real
 //!   and simulated PSDs, band powers (0–2, 2–10, ≥10 Hz), dominant frequency.
 //! * Localisation: joints and regions ranked by their share of the total squared position
@@ -21,7 +22,10 @@
 
 pub mod cause;
 pub mod motion;
+mod options;
 mod text;
+
+pub use options::{DECOMPOSE_SEGMENT_S, GapOptions, SPECTRUM_SEGMENT_S};
 
 use serde::Serialize;
 
@@ -30,30 +34,6 @@ use crate::sim2real::metrics::{self, Accum, ErrorStats, GapConstants};
 use crate::sim2real::recording::{Recording, derivative};
 use crate::sim2real::replay::Episode;
 use crate::sim2real::spectral::{self, BandPower};
-
-#[derive(Debug, Clone)]
-pub struct GapOptions {
-    pub constants: GapConstants,
-    /// Welch segment length (samples) and overlap fraction.
-    pub nperseg: usize,
-    pub overlap: f64,
-    /// Uniform rate for spectra and decomposition; default: mean sample rate of the dataset.
-    pub uniform_rate_hz: Option<f64>,
-    /// Lag search range of the decomposition [s].
-    pub max_lag_s: f64,
-}
-
-impl Default for GapOptions {
-    fn default() -> Self {
-        GapOptions {
-            constants: GapConstants::default(),
-            nperseg: 256,
-            overlap: 0.5,
-            uniform_rate_hz: None,
-            max_lag_s: 0.25,
-        }
-    }
-}
 
 #[derive(Debug, Clone, Serialize)]
 pub struct BandPowers {
@@ -256,6 +236,8 @@ struct JointAcc {
     motion: (f64, f64),
     psd_w: f64,
     psd: JointPsd,
+    /// `psd` is from episodes at least one Welch segment long.
+    psd_full: bool,
     dec_w: f64,
     bias: f64,
     lag: f64,
@@ -317,6 +299,7 @@ pub fn compute(
         if tot_dur > 0.0 { (tot_int as f64 / tot_dur).round().max(1.0) } else { 100.0 }
     });
 
+    let dec_seg = ((opts.decompose_segment_s * fs).round() as usize).max(2);
     let mut joints: Vec<JointAcc> = Vec::new();
     let mut per_episode = Vec::new();
     let mut diverged = Vec::new();
@@ -376,16 +359,19 @@ pub fn compute(
             // Uniform resampling for spectra and decomposition.
             let (_, ru) = metrics::resample_uniform(&rec.t, &jt.q, fs);
             let (_, su) = metrics::resample_uniform(&rec.t, qs, fs);
-            let (f, pr) = spectral::welch_psd(&ru, fs, opts.nperseg, opts.overlap);
-            let (_, ps) = spectral::welch_psd(&su, fs, opts.nperseg, opts.overlap);
+            let nperseg = ((opts.segment_s * fs).round() as usize).max(2);
+            let nfft = nperseg.min(ru.len()).next_power_of_two();
+            let (f, pr) = spectral::welch_psd_nfft(&ru, fs, nperseg, Some(nfft), opts.overlap);
+            let (_, ps) = spectral::welch_psd_nfft(&su, fs, nperseg, Some(nfft), opts.overlap);
             if !f.is_empty() {
                 let w = ru.len() as f64;
                 // Episodes shorter than a segment have a different grid: they only count when no
                 // full-length episode exists (the longest short one wins).
-                let full = ru.len() >= opts.nperseg;
-                let cur_full = ja.psd.freqs.len() == opts.nperseg / 2 + 1;
+                let full = ru.len() >= nperseg;
+                let cur_full = ja.psd_full;
                 if ja.psd.freqs.is_empty() || (!cur_full && (full || f.len() > ja.psd.freqs.len()))
                 {
+                    ja.psd_full = full;
                     ja.psd = JointPsd {
                         freqs: f,
                         real: pr.iter().map(|x| x * w).collect(),
@@ -402,9 +388,7 @@ pub fn compute(
                     ja.psd_w += w;
                 }
             }
-            for (d, w) in
-                locate::decompose_segments(1.0 / fs, &su, &ru, opts.max_lag_s, opts.nperseg)
-            {
+            for (d, w) in locate::decompose_segments(1.0 / fs, &su, &ru, opts.max_lag_s, dec_seg) {
                 if d.total_rms.is_finite() && w > 0.0 {
                     ja.dec_w += w;
                     ja.bias += d.bias * w;
@@ -668,24 +652,4 @@ pub fn compute(
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn regions_from_t1_names() {
-        for (n, r) in [
-            ("Left_Knee_Pitch", "legs"),
-            ("Right_Hip_Roll", "legs"),
-            ("Left_Elbow_Yaw", "arms"),
-            ("Right_Shoulder_Pitch", "arms"),
-            ("AAHead_yaw", "head"),
-            ("Head_pitch", "head"),
-            ("Waist", "torso"),
-            ("servo", "other"),
-            ("FL_thigh_joint", "legs"),
-            ("FL_calf_joint", "legs"),
-        ] {
-            assert_eq!(region_from_name(n), r, "{n}");
-        }
-    }
-}
+mod tests;

@@ -104,14 +104,28 @@ pub struct OffGrid {
 /// [`OffGrid`] for `rec` under `opts`, `None` when its command is one per tick (or the rows
 /// disagree in fewer than [`MIN_CHANGES`] ticks).
 pub fn off_grid(rec: &Recording, opts: &ReplayOptions) -> Option<OffGrid> {
-    let (Some(rate), _, _) = timing_of(rec, opts) else { return None };
-    let st = super::schedule_of(rec, opts, opts.command_fill).ok()?.stats()?;
+    let (Some(rate), timing, tick0) = timing_of(rec, opts) else { return None };
+    // Only the recorded commands: a joint without one (a passive joint, a mimic) is replayed
+    // on its measured positions, which change on every row whatever the control rate.
+    let cmds: Vec<&[f64]> = rec.joints.iter().filter_map(|j| j.q_cmd.as_deref()).collect();
+    if cmds.is_empty() {
+        return None;
+    }
+    let st = crate::sim2real::commands::reconstruct(
+        &rec.t,
+        &cmds,
+        Some(rate),
+        tick0,
+        timing,
+        opts.command_fill,
+    )
+    .ok()?
+    .stats()?;
     if st.conflicting < MIN_CHANGES
         || (st.conflicting as f64) <= (1.0 - GRID_SHARE) * st.occupied as f64
     {
         return None;
     }
-    let cmds: Vec<&[f64]> = rec.joints.iter().filter_map(|j| j.q_cmd.as_deref()).collect();
     let at: Vec<f64> = (1..rec.t.len())
         .filter(|&i| cmds.iter().any(|c| c[i] != c[i - 1]))
         .map(|i| rec.t[i])
@@ -459,6 +473,20 @@ mod tests {
         let mut r = Recording::at_100hz(t, vec![j]);
         r.control_rate_hz = Some(rate);
         r
+    }
+
+    /// A 100 Hz command logged at ~1 kHz beside a joint with no command (a passive or mimic
+    /// joint: its positions change on every row): the command is on its ticks, no off-grid
+    /// warning. The same rows with that joint's positions as a command column are off grid.
+    #[test]
+    fn a_joint_without_a_command_does_not_make_the_command_off_grid() {
+        let mut r = log_of(0.0, 100.0, 1000.0, 0.6, |x| (3.0 * x).sin());
+        r.control_t0_s = Some(0.0);
+        let free: Vec<f64> = r.t.iter().map(|&x| 0.3 * (7.0 * x).sin()).collect();
+        r.joints.push(JointTrace::new("ankle", free.clone()));
+        assert!(off_grid(&r, &ReplayOptions::default()).is_none());
+        r.joints[1].q_cmd = Some(free);
+        assert!(off_grid(&r, &ReplayOptions::default()).is_some());
     }
 
     /// A ramp of 0.5 rad/s, logged at ~`rec_hz`.
