@@ -219,6 +219,20 @@ pub fn measure_each<M: crate::probe::Measure>(
     }
 }
 
+/// Whether body `b` is `top` or lies beyond it in the kinematic tree (`top` 0: every body).
+pub fn in_subtree(robot: &Robot, top: usize, mut b: usize) -> bool {
+    for _ in 0..=robot.bodies.len() {
+        if b == top {
+            return true;
+        }
+        match robot.bodies.get(b) {
+            Some(x) if b != 0 => b = x.parent,
+            _ => return false,
+        }
+    }
+    false
+}
+
 pub fn kind_word(kind: ElemKind) -> &'static str {
     match kind {
         ElemKind::Body => "body",

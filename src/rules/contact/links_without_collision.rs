@@ -4,7 +4,7 @@ use crate::model::mjcf::ElemKind;
 use crate::model::{Geom, GeomType, JointType, Robot};
 use crate::rules::contact::feet::{FootKind, feet};
 use crate::rules::geometry::shapes::{V3, add, col, norm, scale, sub, to_local_dir};
-use crate::rules::{Context, Domain, Rule, RuleMeta, opt};
+use crate::rules::{Context, Domain, Rule, RuleMeta, in_subtree, opt};
 use crate::util::fmt_num;
 
 declare_rule! {
@@ -70,20 +70,6 @@ declare_rule! {
 fn dist(a: V3, b: V3) -> f64 {
     norm(sub(a, b))
 }
-
-fn in_subtree(robot: &Robot, root: usize, mut b: usize) -> bool {
-    for _ in 0..robot.bodies.len() {
-        if b == root {
-            return true;
-        }
-        if b == 0 {
-            return false;
-        }
-        b = robot.bodies.get(b).map_or(0, |x| x.parent);
-    }
-    false
-}
-
 /// Whether world point `p` lies inside geom `g` at the keyframe: primitives by their shape,
 /// meshes (and anything else) by their bounding sphere, which never leaves out a point of the
 /// mesh.

@@ -2,7 +2,7 @@ use crate::declare_rule;
 use crate::finding::{Finding, Severity, Subject};
 use crate::model::mjcf::ElemKind;
 use crate::model::{PartSource, Robot};
-use crate::rules::{Context, Domain, Rule, RuleMeta, opt};
+use crate::rules::{Context, Domain, Rule, RuleMeta, in_subtree, opt};
 use crate::util::fmt_num;
 
 declare_rule! {
@@ -53,21 +53,6 @@ declare_rule! {
         )],
     }
 }
-
-/// Whether body `b` lies in the subtree of body `root` (itself included).
-fn in_subtree(robot: &Robot, root: usize, mut b: usize) -> bool {
-    for _ in 0..=robot.bodies.len() {
-        if b == root {
-            return true;
-        }
-        if b == 0 {
-            return false;
-        }
-        b = robot.bodies.get(b).map_or(0, |x| x.parent);
-    }
-    false
-}
-
 /// Whether joint `j` is driven: an actuator moves it directly or through a fixed tendon
 /// ([`Robot::actuators_on_joint`]), an actuated spatial tendon has a site or wrapping geom
 /// beyond it, an actuator or tendon adds armature to it, or a joint equality couples it to an

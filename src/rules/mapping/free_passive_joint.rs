@@ -2,7 +2,7 @@ use crate::declare_rule;
 use crate::finding::{Finding, Severity, Subject};
 use crate::model::mjcf::ElemKind;
 use crate::model::{JointType, Robot};
-use crate::rules::{Context, Rule, RuleMeta};
+use crate::rules::{Context, Rule, RuleMeta, in_subtree};
 use crate::util::fmt_num;
 
 declare_rule! {
@@ -43,21 +43,6 @@ declare_rule! {
         options: [],
     }
 }
-
-/// Whether body `b` is `top` or lies beyond it in the tree.
-fn in_subtree(robot: &Robot, top: usize, mut b: usize) -> bool {
-    for _ in 0..=robot.bodies.len() {
-        if b == top {
-            return true;
-        }
-        match robot.bodies.get(b) {
-            Some(x) if b != 0 => b = x.parent,
-            _ => return false,
-        }
-    }
-    false
-}
-
 /// The body just below the world that carries `b` (its kinematic tree).
 fn tree_root(robot: &Robot, mut b: usize) -> usize {
     for _ in 0..=robot.bodies.len() {
