@@ -22,8 +22,9 @@ declare_rule! {
     /// actuator, or `passive = true` in the spec) that carry it — e.g. passive neck joints with
     /// 0.0565056 = 2 × 0.0282528, the parallel ankle's value — and on single-motor joints that
     /// carry it while the model shows elsewhere which joints really are two-motor ones (two
-    /// tendon actuators reach them, or they are ankle joints carrying the doubled value: the
-    /// parallel RSU ankle). A passive joint that joint equalities tie to an actuated joint
+    /// tendon actuators reach them, or both joints of one ankle carry the doubled value: the
+    /// parallel RSU ankle, whose two motors drive pitch and roll together; an ankle whose other
+    /// joint carries a different value has one motor per axis). A passive joint that joint equalities tie to an actuated joint
     /// carrying the same value (the linked fingers of a coupled gripper) carries its driver's
     /// value and is not reported. Armature is the effective value (joint + actuator·gear² +
     /// tendon).
