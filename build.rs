@@ -16,10 +16,20 @@
 /// It also sets `MODELLINT_SOURCE_HASH`, a hash of every file under `src/`, which the lint cache
 /// puts in its keys (`model::cache`): a build whose rules differ never answers from an entry
 /// another build wrote, even at the same package version.
+///
+/// And `MODELLINT_VERSION`, what `modellint --version` prints: the package version and the
+/// commit the binary was built from (`git rev-parse --short HEAD`), or the package version alone
+/// where there is no git or no repository (a source archive, the wheel's sdist).
 fn main() {
     println!("cargo::rerun-if-env-changed=MUJOCO_DYNAMIC_LINK_DIR");
     println!("cargo::rerun-if-changed=src");
     println!("cargo::rustc-env=MODELLINT_SOURCE_HASH={:016x}", source_hash());
+    let pkg = std::env::var("CARGO_PKG_VERSION").unwrap_or_default();
+    let version = match git_commit() {
+        Some(c) => format!("{pkg} (commit {c})"),
+        None => pkg,
+    };
+    println!("cargo::rustc-env=MODELLINT_VERSION={version}");
     let mut paths = Vec::new();
     for minor in 10..=14 {
         for dir in ["site-packages", "dist-packages"] {
@@ -62,4 +72,31 @@ fn source_hash() -> u64 {
         eat(&std::fs::read(&f).unwrap_or_default());
     }
     h
+}
+
+/// `git rev-parse --short HEAD` of the checkout being built, `None` without git or a repository.
+/// Asks cargo to run this again when HEAD moves (the HEAD file, the branch's ref, packed refs).
+fn git_commit() -> Option<String> {
+    let git = |args: &[&str]| -> Option<String> {
+        let o = std::process::Command::new("git").args(args).output().ok()?;
+        let s = String::from_utf8(o.stdout).ok()?.trim().to_string();
+        (o.status.success() && !s.is_empty()).then_some(s)
+    };
+    let commit = git(&["rev-parse", "--short", "HEAD"])?;
+    if !commit.bytes().all(|b| b.is_ascii_hexdigit()) {
+        return None;
+    }
+    let mut watched = vec!["HEAD".to_string(), "packed-refs".to_string()];
+    if let Some(r) = git(&["rev-parse", "--symbolic-full-name", "HEAD"]) {
+        watched.push(r);
+    }
+    for w in watched {
+        // Only files that exist: cargo runs a script that watches a missing one every build.
+        if let Some(p) = git(&["rev-parse", "--git-path", &w])
+            && std::path::Path::new(&p).exists()
+        {
+            println!("cargo::rerun-if-changed={p}");
+        }
+    }
+    Some(commit)
 }

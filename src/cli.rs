@@ -13,7 +13,7 @@ use crate::output::{self, Format};
 #[derive(Parser, Debug)]
 #[command(
     name = "modellint",
-    version,
+    version = env!("MODELLINT_VERSION"),
     about = "Find the robot-model mistakes that break sim-to-real transfer, and prove them in MuJoCo.",
     long_about = "modellint checks a MuJoCo MJCF (or URDF) robot model against the real hardware it stands for:\n\
 armature vs reflected rotor inertia, PD gains that make joints underdamped, tilted toes, mesh feet,\n\

@@ -838,3 +838,23 @@ fn package_is_an_option_only_where_a_model_is_loaded() {
     let (c, _, err) = modellint(&["rules", "--package", "a=b"]);
     assert!(c == 2 && err.contains("--package"), "{err}");
 }
+
+/// `--version` names the commit the binary was built from (`git rev-parse --short HEAD` of the
+/// checkout; cargo rebuilds when HEAD moves), and only the package version without git.
+#[test]
+fn version_names_the_commit() {
+    let (c, out, err) = modellint(&["--version"]);
+    assert_eq!(c, 0, "{err}");
+    let pkg = format!("modellint {}", env!("CARGO_PKG_VERSION"));
+    let head = Command::new("git")
+        .args(["rev-parse", "--short", "HEAD"])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .ok()
+        .filter(|o| o.status.success())
+        .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string());
+    match head {
+        Some(h) => assert_eq!(out.trim(), format!("{pkg} (commit {h})")),
+        None => assert_eq!(out.trim(), pkg),
+    }
+}

@@ -9,7 +9,7 @@ mod common;
 
 use common::{hidden, kept, load, root, synth_into, synth_recordings};
 use modellint::fit::effects;
-use modellint::fit::select::{FitOptions, SearchPolicy, fit};
+use modellint::fit::select::{FitOptions, Phase, SearchPolicy, fit};
 use modellint::synth::Settings;
 
 const JOINTS: [&str; 3] = ["shoulder_pitch", "elbow_pitch", "wrist_pitch"];
@@ -499,6 +499,37 @@ fn multiple_shooting_windows_recover_delay() {
         ("action_delay", "shoulder_pitch")
     );
     assert!((first.values[0] - 0.03).abs() <= 0.001, "{:?}", first.values);
+}
+
+/// A told dry friction gets the blind search's end for a kept one: re-fitted on 1 s windows of
+/// the training episodes (multiple shooting, phase `reshoot`; single shooting bends it to the
+/// start error of a joint that sticks), and the synth's Coulomb friction (0.6 N·m on the elbow)
+/// comes back within 5 %. Fails if the told fit skips the re-fit.
+#[test]
+fn told_coulomb_friction_gets_the_reshoot_and_is_recovered() {
+    let robot = load(&root().join("fixtures/gap/arm3.xml"));
+    let recs = synth_recordings(
+        "fit_told_coulomb",
+        &robot,
+        &joints(),
+        &[hidden("coulomb_friction", "elbow_pitch", &[0.6])],
+        &Settings { episodes: 4, duration_s: 6.0, seed: 3, ..Settings::default() },
+    );
+    let opts = FitOptions {
+        told: vec![("coulomb_friction".into(), vec!["elbow_pitch".into()])],
+        ..Default::default()
+    };
+    let out = fit(&robot, &recs, &opts);
+    let s = out.selected.first().expect("the told effect");
+    assert_eq!((s.effect.as_str(), s.joints[0].as_str()), ("coulomb_friction", "elbow_pitch"));
+    assert!((s.values[0] - 0.6).abs() <= 0.05 * 0.6, "{:?}", s.values);
+    let re: Vec<_> = out.tried.iter().filter(|t| t.phase == Phase::Reshoot).collect();
+    assert!(
+        re.len() == 1 && re[0].effect == "coulomb_friction" && re[0].joints == ["elbow_pitch"],
+        "{:?}",
+        out.tried
+    );
+    assert!(out.cost.simulated_s_by_phase.contains_key("reshoot"), "{:?}", out.cost);
 }
 
 #[test]

@@ -643,6 +643,68 @@ fn cli_base_option_on_a_fixed_base_model_is_said() {
     assert!(!String::from_utf8_lossy(&o.stderr).contains("changes nothing"));
 }
 
+/// `base.*` columns the replay does not use are said once, with why: all of them on a model
+/// without a floating base, all but the first row on a floating base that `--base fixed` (the
+/// default) pins; `--base recorded` reads them, and nothing is said.
+#[test]
+fn cli_unused_base_columns_are_noted_once() {
+    // A fixed-base arm, two recordings with a base pose.
+    let arm = root().join("fixtures/gap/delay_arm2/arm.xml");
+    let text =
+        std::fs::read_to_string(root().join("fixtures/gap/delay_arm2/none_ep0.csv")).unwrap();
+    let with_base: String = text
+        .lines()
+        .map(|l| match l {
+            _ if l.starts_with('#') => l.to_string(),
+            _ if l.starts_with("t,") => {
+                format!("{l},base.x,base.y,base.z,base.qw,base.qx,base.qy,base.qz")
+            }
+            _ => format!("{l},0,0,0.5,1,0,0,0"),
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    let a = tmp("base_a.csv", &with_base);
+    let b = tmp("base_b.csv", &with_base);
+    let o = bin().arg("gap").arg(&arm).arg(&a).arg(&b).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.code() == Some(0) || o.status.code() == Some(1), "{err}");
+    let notes: Vec<&str> = err.lines().filter(|l| l.contains("base.* columns")).collect();
+    assert_eq!(notes.len(), 1, "{err}");
+    assert!(
+        notes[0].contains("note:")
+            && notes[0].contains("of the recordings were ignored: the model has no floating base"),
+        "{err}"
+    );
+    // Without base columns: nothing.
+    let plain = root().join("fixtures/gap/delay_arm2/none_ep0.csv");
+    let o = bin().arg("gap").arg(&arm).arg(&plain).output().unwrap();
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("base.* columns"));
+    // A floating base on a stand (the synth writes its base pose): pinned at the first row.
+    let dir = std::env::temp_dir().join(format!("modellint-gap-base-{}", std::process::id()));
+    let model = root().join("models/asimov.xml");
+    let o = bin()
+        .arg("synth")
+        .arg(&model)
+        .args(["--suspend", "0.5", "--episodes", "2", "--duration", "1", "--out"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+    let eps = dir.join("episodes");
+    let o = bin().arg("gap").arg(&model).arg(&eps).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    let notes: Vec<&str> = err.lines().filter(|l| l.contains("base.* columns")).collect();
+    assert_eq!(notes.len(), 1, "{err}");
+    assert!(
+        notes[0].contains("ignored after their first row") && notes[0].contains("--base recorded"),
+        "{err}"
+    );
+    let o = bin().arg("gap").arg(&model).arg(&eps).args(["--base", "recorded"]).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!err.contains("base.* columns"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// The gap report's position plots say which trace is the recording and which MuJoCo's replay,
 /// and in which unit (legends, axis titles, the section's caption).
 #[test]

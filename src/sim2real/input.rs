@@ -276,6 +276,7 @@ pub fn read_for_replay(
         warnings.push(w);
     }
     warnings.extend(super::input_checks::base_option_warning(robot, opts.base, &recs));
+    notes.extend(super::input_checks::base_columns_note(robot, opts.base, &recs));
     warnings.extend(super::input_checks::out_of_range_warning(robot, &recs));
     Ok(ReplayInputs { recs, notes, warnings, unscored })
 }

@@ -38,6 +38,35 @@ pub fn base_option_warning(robot: &Robot, base: BaseMode, recs: &[Recording]) ->
     ))
 }
 
+/// The note for recordings whose `base.*` columns the replay leaves (nearly) unused, once for
+/// all of them: on a model without a floating base they are not read at all; on a floating base
+/// held by `--base fixed` (the default) only their first row is, the pose the base is pinned at.
+/// `None` without such columns, or when `--base free`/`recorded` reads them (or
+/// [`base_option_warning`] already says the option changes nothing).
+pub fn base_columns_note(robot: &Robot, base: BaseMode, recs: &[Recording]) -> Option<String> {
+    let with_base = recs.iter().filter(|r| r.base.is_some()).count();
+    if with_base == 0 || base != BaseMode::Fixed {
+        return None;
+    }
+    let of = if with_base == recs.len() {
+        "the recordings".to_string()
+    } else {
+        format!("{with_base} of {} recordings", recs.len())
+    };
+    if !robot.joints.iter().any(|j| j.jtype == JointType::Free) {
+        return Some(format!(
+            "the base.* columns of {of} were ignored: the model has no floating base (no \
+             <freejoint>; its root body is fixed to the world), so there is no base to place"
+        ));
+    }
+    Some(format!(
+        "the base.* columns of {of} were ignored after their first row: the replay pins the \
+         floating base at that pose (--base fixed, the default: a robot on a stand). --base \
+         recorded drives the base through every recorded pose, --base free leaves it to the \
+         physics after the first"
+    ))
+}
+
 /// How far past its range, as a fraction of the range's span, a recorded position may go before
 /// it is reported: MuJoCo's soft limit lets the model itself pass its range by a little under
 /// load, and a hardware stop and encoder calibration sit within a few percent of the span

@@ -1,5 +1,6 @@
 //! A told fit (`fit --told EFFECT@JOINTS`): no search — the named effects are fitted on the
-//! training set (one after another, then jointly), and each is judged on the held-out set
+//! training set (one after another, then jointly, then dry friction re-fitted on short windows
+//! as the blind search's kept friction is: `reshoot`), and each is judged on the held-out set
 //! against the set without it. What `mujoco.sysid` does when it is told the parameters; the
 //! speed benchmark's reference for a blind search.
 
@@ -10,6 +11,7 @@ use crate::fit::stats::bic;
 
 use super::policy::Phase;
 use super::polish::fit_jointly;
+use super::reshoot::reshoot_friction;
 use super::verdict::verdict;
 use super::{FitOutcome, Search, Selected, Tried};
 
@@ -37,6 +39,14 @@ pub(super) fn fit_told(s: &Search, told: &[(String, Vec<String>)], out: &mut Fit
     }
     if out.applied.len() >= 2 {
         out.applied = fit_jointly(engine, train, std::mem::take(&mut out.applied), 0);
+    }
+    // The blind search's end for its kept effects: the start model with the sticking effects
+    // (`--start-estimate`), then dry friction re-fitted on short windows (multiple shooting),
+    // kept when the held-out replay is closer beyond noise. Single shooting bends a dry
+    // friction to the start error of a joint that sticks.
+    engine.set_start_model(&out.applied);
+    if engine.opts.shooting_s.is_none() {
+        reshoot_friction(s, train, 0, out);
     }
     let (Some(h_all), Some(t_all)) =
         (engine.errors(heldout, &out.applied), engine.errors(train, &out.applied))

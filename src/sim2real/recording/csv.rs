@@ -42,15 +42,15 @@ pub fn parse_csv_with(
         let (_, idx) = parse_metadata(path, &lines)?;
         if idx < lines.len() {
             let map = opts.log_map.resolve()?;
-            let (mapped, skipped) =
-                super::csv_map::remap(path, &lines, idx, &map, &opts.ignore_columns)?;
+            let mapped = super::csv_map::remap(path, &lines, idx, &map, &opts.ignore_columns)?;
             let mut opts = opts.clone();
             opts.log_map = Default::default();
-            if skipped {
+            if mapped.skipped {
                 opts.ignore_columns.push(format!("*.{}", super::csv_map::SKIPPED));
             }
-            let lines: Vec<(usize, &str)> = mapped.iter().map(|(n, l)| (*n, l.as_str())).collect();
-            return parse_lines(path, &lines, &opts);
+            let lines: Vec<(usize, &str)> =
+                mapped.lines.iter().map(|(n, l)| (*n, l.as_str())).collect();
+            return parse_lines(path, &lines, &opts).map_err(|e| mapped.name_columns_as_written(e));
         }
     }
     parse_lines(path, &lines, opts)

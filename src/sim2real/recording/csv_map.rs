@@ -25,18 +25,42 @@ pub(super) const SKIPPED: &str = "skipped-by-log-map";
 /// Time columns taken when the mapping names none and the file has no `t`.
 const TIME_DEFAULTS: [&str; 4] = ["t", "time", "timestamp", "stamp"];
 
-/// A CSV's lines (1-based number, text) with the header and metadata rewritten under `map`,
-/// (`ignore`: the `--ignore-columns` patterns, columns the mapping need not name) and whether a
-/// joint's columns are skipped (renamed `<index>.`[`SKIPPED`]: the caller
-/// ignores them). `header_idx` is the index of
-/// the header line in `lines`.
+/// A CSV rewritten by [`remap`].
+pub(super) struct Remapped {
+    /// The file's lines (1-based number, text), header and metadata rewritten.
+    pub lines: Vec<(usize, String)>,
+    /// Whether a joint's columns are skipped (renamed `<index>.`[`SKIPPED`]: the caller ignores
+    /// them).
+    pub skipped: bool,
+    /// (modellint's name, the column as the file names it) of every renamed column: an error
+    /// the reader raises on the rewritten text names the column as the user wrote it.
+    pub renamed: Vec<(String, String)>,
+}
+
+impl Remapped {
+    /// `e` with every quoted rewritten column name (`'elbow.q_cmd'`) replaced by the file's own
+    /// (`'target_elbow'`), in the message and in the error's column.
+    pub fn name_columns_as_written(&self, mut e: RecordingError) -> RecordingError {
+        for (new, old) in &self.renamed {
+            e.message = e.message.replace(&format!("'{new}'"), &format!("'{old}'"));
+            if e.column.as_deref() == Some(new.as_str()) {
+                e.column = Some(old.clone());
+            }
+        }
+        e
+    }
+}
+
+/// A CSV's lines with the header and metadata rewritten under `map` (`ignore`: the
+/// `--ignore-columns` patterns, columns the mapping need not name). `header_idx` is the index
+/// of the header line in `lines`.
 pub(super) fn remap(
     path: &Path,
     lines: &[(usize, &str)],
     header_idx: usize,
     map: &LogMap,
     ignore: &[String],
-) -> Result<(Vec<(usize, String)>, bool), RecordingError> {
+) -> Result<Remapped, RecordingError> {
     let (header_ln, header) = lines[header_idx];
     let err = |ln: usize, msg: String| RecordingError::new(path, Some(ln), None, msg);
     let map_err = |msg: String| {
@@ -264,7 +288,13 @@ pub(super) fn remap(
             _ => text.push((n, l.to_string())),
         }
     }
-    Ok((text, skipped))
+    let renamed = cols
+        .iter()
+        .zip(&out)
+        .filter(|(c, o)| **c != o.as_str() && !o.ends_with(SKIPPED))
+        .map(|(c, o)| (o.clone(), c.to_string()))
+        .collect();
+    Ok(Remapped { lines: text, skipped, renamed })
 }
 
 /// The column named `k` exactly.

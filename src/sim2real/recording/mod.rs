@@ -382,14 +382,67 @@ pub fn derivative(t: &[f64], x: &[f64]) -> Vec<f64> {
     d
 }
 
-/// Up to `max` candidates within edit distance max(2, len/3) of `name`, closest first.
+/// The shortest name (in bytes, of its comparable form) looked for inside another: `kne` is part
+/// of a knee's name, `el` of too many.
+const MIN_INSIDE: usize = 3;
+
+/// Up to `max` model joint names that `name` (a log's joint) likely means, closest first:
+/// the same name once case, separators and the words "joint"/"jnt" are set aside and a lone
+/// `l`/`r` is read as left/right (`Elbow_Pitch_joint`, `l_knee`); then one name inside the
+/// other (`elbow` for `elbow_pitch`: every such joint; [`MIN_INSIDE`]); then an edit distance of at most
+/// max(2, len/3) between those forms (`shouldr`).
 fn near_matches(name: &str, candidates: &[String], max: usize) -> Vec<String> {
-    let limit = (name.chars().count() / 3).max(2);
-    let mut scored: Vec<(usize, &String)> = candidates
+    let want = joint_key(name);
+    let limit = (want.chars().count() / 3).max(2);
+    let mut scored: Vec<(usize, usize, &String)> = candidates
         .iter()
-        .map(|c| (strsim::levenshtein(&name.to_lowercase(), &c.to_lowercase()), c))
-        .filter(|(d, _)| *d <= limit)
+        .filter_map(|c| {
+            let key = joint_key(c);
+            let d = strsim::levenshtein(&want, &key);
+            let tier = if key == want {
+                0
+            } else if want.len().min(key.len()) >= MIN_INSIDE
+                && (key.contains(&want) || want.contains(&key))
+            {
+                1
+            } else if d <= limit {
+                2
+            } else {
+                return None;
+            };
+            Some((tier, d, c))
+        })
         .collect();
     scored.sort();
-    scored.into_iter().take(max).map(|(_, c)| c.clone()).collect()
+    scored.into_iter().take(max).map(|(.., c)| c.clone()).collect()
+}
+
+/// A joint name's comparable form: lower case, words split at separators and case changes,
+/// "joint"/"jnt" dropped, a lone `l`/`r` read as left/right, joined without separators.
+fn joint_key(name: &str) -> String {
+    let mut words: Vec<String> = Vec::new();
+    let mut cur = String::new();
+    let mut prev_lower = false;
+    for ch in name.chars() {
+        if !ch.is_alphanumeric() {
+            words.push(std::mem::take(&mut cur));
+            prev_lower = false;
+            continue;
+        }
+        if ch.is_uppercase() && prev_lower {
+            words.push(std::mem::take(&mut cur));
+        }
+        prev_lower = ch.is_lowercase() || ch.is_ascii_digit();
+        cur.extend(ch.to_lowercase());
+    }
+    words.push(cur);
+    words
+        .into_iter()
+        .filter(|w| !w.is_empty() && w != "joint" && w != "jnt")
+        .map(|w| match w.as_str() {
+            "l" => "left".to_string(),
+            "r" => "right".to_string(),
+            _ => w,
+        })
+        .collect()
 }

@@ -183,6 +183,36 @@ fn joint_name_validation_suggests_near_matches() {
     assert!(r3.validate_joint_names(&model).is_ok());
 }
 
+/// A log's joint names as robot software writes them (a `_joint` suffix, CamelCase, `l_`/`r_`
+/// for left/right, a name cut short) are matched to the model's; a name like none of them gets
+/// no suggestion.
+#[test]
+fn joint_name_suggestions_see_through_naming_conventions() {
+    let model: Vec<String> =
+        ["shoulder_pitch", "elbow_pitch", "wrist_pitch", "left_knee", "right_knee"]
+            .iter()
+            .map(|s| s.to_string())
+            .collect();
+    let msg = |log: &str| {
+        let r = parse_csv(p(), &format!("t,{log}.q\n0,0\n1,0\n")).expect("parses");
+        r.validate_joint_names(&model).expect_err("unknown").message
+    };
+    for (log, want) in [
+        ("Elbow_Pitch_joint", "(did you mean 'elbow_pitch'?)"),
+        ("ElbowPitch", "(did you mean 'elbow_pitch'?)"),
+        ("elbow", "(did you mean 'elbow_pitch'?)"),
+        ("l_knee", "(did you mean 'left_knee'?)"),
+        // Both knees contain `knee`: both are offered, the closer first.
+        ("knee", "(did you mean 'left_knee', 'right_knee'?)"),
+        ("gripper", "unknown joint 'gripper'"),
+        // Too short to look inside other names.
+        ("el", "unknown joint 'el'"),
+    ] {
+        let m = msg(log);
+        assert!(m.ends_with(want), "{log}: {m}");
+    }
+}
+
 #[test]
 fn derived_velocities_exact_for_quadratic_on_irregular_grid() {
     let t = vec![0.0, 0.004, 0.011, 0.015, 0.022, 0.03];
@@ -382,4 +412,33 @@ fn csv_columns_through_a_log_map() {
     assert_eq!(r.joints.iter().map(|j| j.name.as_str()).collect::<Vec<_>>(), ["a", "b"]);
     let e = parse_csv_with(Path::new("m.csv"), "stamp,q_a\n0,1\n20,1\n", &opts).unwrap_err();
     assert!(e.line == Some(1) && e.message.contains("did you mean 'stamp'"), "{e}");
+}
+
+/// An error the reader raises on a mapped CSV names the column as the file writes it, not as
+/// the mapping rewrote it (`'target_elbow'`, not `'elbow.q_cmd'`), in the message and in the
+/// error's column.
+#[test]
+fn log_map_errors_name_the_column_as_written() {
+    let opts = ParseOptions {
+        log_map: LogMap {
+            measured: Some("pos".into()),
+            command: Some("target".into()),
+            time: Some("time".into()),
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let head = "time,pos_elbow,target_elbow\n0,0.1,0.1\n";
+    let e =
+        parse_csv_with(Path::new("m.csv"), &format!("{head}0.01,0.1,abc\n"), &opts).unwrap_err();
+    assert_eq!(e.line, Some(3), "{e}");
+    assert!(e.message.contains("column 'target_elbow'"), "{e}");
+    assert!(!e.message.contains("elbow.q_cmd"), "{e}");
+    assert_eq!(e.column.as_deref(), Some("target_elbow"));
+    // Degrees in the measured column.
+    let e = parse_csv_with(Path::new("m.csv"), &format!("{head}0.01,50,0.1\n"), &opts).unwrap_err();
+    assert!(e.message.contains("column 'pos_elbow'") && !e.message.contains("elbow.q'"), "{e}");
+    // Time running backwards: the time column as written.
+    let e = parse_csv_with(Path::new("m.csv"), &format!("{head}-1,0.1,0.1\n"), &opts).unwrap_err();
+    assert_eq!(e.column.as_deref(), Some("time"), "{e}");
 }
