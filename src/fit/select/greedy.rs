@@ -18,7 +18,7 @@ use super::pairs::{joint_pairs, pair_lookahead, refitted_at_floor};
 use super::policy::Phase;
 use super::reach::Reach;
 use super::screen::{Screen, screen_data};
-use super::trust::{trust_out, with_pair_starts};
+use super::trust::{heldout_needed, trust_out, with_pair_starts};
 use super::verdict::{at_bound, verdict};
 use super::winner::{beaten_at_coarse, on_whole_set, refine, rival_notes};
 use super::{Errors, FitOutcome, Search, Selected, Tried, set_uncertainty};
@@ -301,8 +301,10 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         }
         // Either the coarse fit or the linearised step must reach the share: a coarse grid can
         // miss a narrow basin (a torque limit) that the linear step sees, and the linear step
-        // misses what is far from linear (a resonance moved by damping). A smooth effect's step
-        // counts as replayed ([`coarse::replayed_step`]); a coarse fit past it goes on from it.
+        // misses what is far from linear (a resonance moved by damping). The step counts as
+        // replayed ([`coarse::replayed_step`], one replay of the screen's data); a coarse fit
+        // past it goes on from it. Also a non-smooth effect's: its column (a finite difference
+        // across a kink) can promise a gain that no parameter gives.
         let reaches = |g: f64| g > 0.0 && g >= opts.policy.screen_share * best_gain;
         // A deferred candidate judged from its plain variant's coarse fit: the best point that
         // judgement simulated stands in for its linear step ([`coarse::when_taken`]).
@@ -334,7 +336,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
             if sf < cf {
                 (cp, cf) = (sp, sf);
             }
-        } else if e.smooth() && !reaches(gain(cf)) && reaches(linear_gain) {
+        } else if !reaches(gain(cf)) && reaches(linear_gain) {
             let step = coarse::replayed_step(engine, &screen, (short, &applied), (e, &group));
             if let Some((sp, sf)) = step {
                 linear_gain = gain(sf);
@@ -373,9 +375,12 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         // fit, which reached the bar by its own training gain, does not lower the held-out
         // error at all (one held-out replay), the descent explains what the held-out
         // recordings do not share, and no full fit along it is made (`tried`: phase
-        // "heldout_screen"). Not the lead (fitted at once, the likeliest winner), nor a
-        // candidate that only its linear step admits (a coarse fit can miss the narrow basin
-        // that the full fit finds). One that a kept candidate of the round beats decisively on
+        // "heldout_screen"); nor when that coarse fit confirms the candidate's linear model
+        // (the full fit's optimum) and lowers the held-out error by less than the gate's
+        // improvement scaled by that trust ([`heldout_needed`]). Not the lead (fitted at once,
+        // the likeliest winner), nor a candidate that only its linear step admits (a coarse fit
+        // can miss the narrow basin that the full fit finds). One that a kept candidate of the
+        // round beats decisively on
         // held-out there is judged at its coarse fit, not fitted in full ([`beaten_at_coarse`];
         // `tried`: phase "add_coarse").
         let whole = n_lead == 1 && ci == 1;
@@ -385,7 +390,9 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
             t.push(Applied { effect: e, joints: group.clone(), params: cp.clone() });
             let ho_c = engine.errors(heldout, &t);
             let gate = opts.policy.gate_z(z);
-            if ho_c.as_ref().is_none_or(|h| verdict(&ho_err, h, &group, gate).rel <= 0.0) {
+            let needed =
+                heldout_needed(predicted.map(|p| gain(p.train_rmse)), gain(cf), &opts.policy);
+            if ho_c.as_ref().is_none_or(|h| verdict(&ho_err, h, &group, gate).rel <= needed) {
                 // (Its coarse fit still starts a joint pair fit, as a screened one's does.)
                 if gain(cf) >= opts.policy.min_rel_improvement {
                     fitted.push(Applied { effect: e, joints: group.clone(), params: cp.clone() });

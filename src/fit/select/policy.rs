@@ -102,7 +102,9 @@ pub struct SearchPolicy {
     /// of a smooth candidate of several (all screened) parameters, replayed once, as its coarse
     /// fit, and a non-smooth candidate's coarse fit made on the probes' data by its gain on the
     /// screen's data against its gain there; else the coarse fit of `screen_evals` replays of
-    /// the screen's data follows. Default 0.75 (a "very successful" step of a trust-region
+    /// the screen's data follows. A coarse fit the test confirms is fitted in full only when it
+    /// lowers the held-out RMSE by more than this × `min_rel_improvement`
+    /// (`trust::heldout_needed`). Default 0.75 (a "very successful" step of a trust-region
     /// method).
     pub linear_trust: f64,
     /// Once a kept candidate leaves a white training residual (or when a swap is screened), a
@@ -292,12 +294,12 @@ pub const FIELDS: &[(&str, &str, &str)] = &[
     (
         "screen_share",
         "fraction",
-        "a candidate is fitted fully only when its coarse fit, or its linearised step (replayed once on the screen's data for a smooth effect), reaches this share of the round's best training improvement so far (coarse or full)",
+        "a candidate is fitted fully only when its coarse fit, or its linearised step (replayed once on the screen's data), reaches this share of the round's best training improvement so far (coarse or full)",
     ),
     (
         "linear_trust",
         "ratio",
-        "a smooth one-parameter candidate's coarse fit is secant Gauss-Newton steps from the screen's linear step (one replay each), stopping at the first step that achieves between this and its inverse times the relative improvement its linear model predicted (both below min_rel_improvement also agree), or after screen_evals replays; the same test confirms a several-parameter smooth candidate's linear step (one replay) and a non-smooth candidate's coarse fit on the probes' data (its gain on the screen's data against its gain there) as the coarse fit, else screen_evals replays of the screen's data follow",
+        "a smooth one-parameter candidate's coarse fit is secant Gauss-Newton steps from the screen's linear step (one replay each), stopping at the first step that achieves between this and its inverse times the relative improvement its linear model predicted (both below min_rel_improvement also agree), or after screen_evals replays; the same test confirms a several-parameter smooth candidate's linear step (one replay) and a non-smooth candidate's coarse fit on the probes' data (its gain on the screen's data against its gain there) as the coarse fit, else screen_evals replays of the screen's data follow; a coarse fit it confirms is fitted in full only when it lowers the held-out RMSE by more than this × min_rel_improvement",
     ),
     (
         "floor_screen_ratio",
