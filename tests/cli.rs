@@ -39,6 +39,12 @@ fn broken_inputs_exit_2_with_location() {
             "neither MJCF",
         ),
         (&["fixtures/broken/does_not_exist.xml"], "does_not_exist.xml", "file not found"),
+        // A mesh format MuJoCo has no decoder for (a URDF's COLLADA): the filename attribute.
+        (
+            &["fixtures/broken/urdf_dae_collision.urdf"],
+            "fixtures/broken/urdf_dae_collision.urdf:10:",
+            "cannot read this mesh format",
+        ),
         (&["models/asimov.toml"], "models/asimov.toml:1:1", "hardware spec (--spec"),
         // MuJoCo's message is cut before its line number: the element it names.
         (

@@ -149,6 +149,26 @@ fn stance_on_a_floor_records_every_precondition_met() {
 }
 
 #[test]
+fn stance_on_a_floor_body_welded_to_the_world_records_every_precondition_met() {
+    // The floor is a plane on a jointless <body> (MuJoCo welds it to the world): the stance run
+    // must stand on it as on a plane of the world body, load the foot and measure.
+    let fs = probed("fixtures/probes/toe_static_floor_body.xml", "passive-joint-spring");
+    let p = outcome(&fs[0]);
+    assert_eq!(p.status, ProbeStatus::Measured, "{}", p.note);
+    let names: Vec<_> = p.preconditions.iter().map(|c| (c.name, c.met)).collect();
+    assert_eq!(
+        names,
+        [
+            ("floor", true),
+            ("settled", true),
+            ("free_base", true),
+            ("feet_loaded", true),
+            ("upright", true)
+        ]
+    );
+}
+
+#[test]
 fn an_undamped_spring_is_measured_by_a_ring_down_never_refuted() {
     let fs = probed(
         "fixtures/rules/passive-joint-spring/invalid_nospec_spring_ringing.xml",

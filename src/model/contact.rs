@@ -215,7 +215,8 @@ pub fn may_collide(a: &Geom, b: &Geom) -> bool {
     (a.contype & b.conaffinity) != 0 || (b.contype & a.conaffinity) != 0
 }
 
-/// The world body's planes, height fields and boxes that `geom` touches (the floor, terrain:
+/// The planes and height fields of the world and of bodies welded to it, and the world body's
+/// boxes, that `geom` touches (the floor, terrain:
 /// what a foot actually stands on), each with the contact's parameters ([`contact`]: through an
 /// explicit pair, or by the masks and combination).
 pub fn ground_partners(robot: &Robot, geom: usize) -> Vec<(usize, Combined)> {
@@ -224,9 +225,16 @@ pub fn ground_partners(robot: &Robot, geom: usize) -> Vec<(usize, Combined)> {
         .geoms
         .iter()
         .filter(|o| {
-            o.body == 0
-                && o.id != geom
-                && matches!(o.gtype, GeomType::Plane | GeomType::Hfield | GeomType::Box)
+            // A plane or height field may sit on a body welded to the world (a static floor
+            // body); a box is ground only on the world body itself.
+            o.id != geom
+                && match o.gtype {
+                    GeomType::Plane | GeomType::Hfield => {
+                        robot.bodies.get(o.body).is_some_and(|b| b.weld == 0)
+                    }
+                    GeomType::Box => o.body == 0,
+                    _ => false,
+                }
         })
         .filter_map(|o| Some((o.id, contact(robot, geom, o.id)?)))
         .collect()

@@ -5,13 +5,23 @@ use super::Format;
 use super::source::{Loc, SourceMap};
 use crate::error::LoadError;
 
-/// "Error opening file 'X'": the attribute that names X (by its file name), at its file:line.
+/// "Error opening file 'X'" (a missing file) or "no decoder found for mesh file 'X'" (a mesh
+/// format MuJoCo cannot read, e.g. a URDF's COLLADA `.dae`): the attribute that names X (by its
+/// file name), at its file:line.
 pub(super) fn missing_file_location(
     map: &SourceMap,
     first_file: usize,
     msg: &str,
 ) -> Option<LoadError> {
-    let i = msg.find("Error opening file '")? + "Error opening file '".len();
+    const CASES: [(&str, &str); 2] = [
+        ("Error opening file '", "file not found"),
+        (
+            "no decoder found for mesh file '",
+            "MuJoCo cannot read this mesh format: it reads STL, OBJ and MSH meshes; convert the file",
+        ),
+    ];
+    let (i, why) =
+        CASES.iter().find_map(|(pat, why)| msg.find(pat).map(|k| (k + pat.len(), *why)))?;
     let name = msg[i..].split('\'').next()?;
     let base = name.rsplit(['/', '\\']).next().filter(|b| !b.is_empty())?;
     for f in first_file..map.files.len() {
@@ -25,7 +35,7 @@ pub(super) fn missing_file_location(
                     return Some(LoadError::at(
                         map,
                         Loc { file: f, start: vs, end: ve },
-                        format!("{msg} (file not found)"),
+                        format!("{msg} ({why})"),
                     ));
                 }
                 from = ve;

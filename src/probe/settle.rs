@@ -6,8 +6,8 @@
 //!   second over the last 0.5 s), deepest penetration; per passive joint: deflection from the
 //!   keyframe.
 //! * Preconditions every stance verdict records (unmet → inconclusive with the reason): the
-//!   model has a floor (a colliding plane, height field or box on the world body: lint the
-//!   scene, not the bare robot file); the run did not diverge; the base is free-floating; the
+//!   model has a floor (a colliding plane or height field on the world body or a static body,
+//!   or a box on the world body: lint the scene, not the bare robot file); the run did not diverge; the base is free-floating; the
 //!   floor carries at least [`MIN_SUPPORT`] of the robot's weight over the last 0.3 s; the base
 //!   stays upright (tilt ≤ [`MAX_TILT_DEG`]°, drop ≤ [`MAX_DROP`] of its keyframe height or
 //!   [`MIN_DROP_ALLOWED`]).
@@ -185,7 +185,7 @@ pub fn run(robot: &Robot) -> Option<Settle> {
     let load_from = n - (0.3 / dt).ceil() as usize;
     let chatter_from = n - (0.5 / dt).ceil() as usize;
     let nbody = mj::raw(&b.m).nbody as usize;
-    let gbody = b.m.geom_bodyid().to_vec();
+    let gbody = super::stance::ground_side_bodies(robot, b.m.geom_bodyid());
     let x0: Vec<f64> = d.xmat().as_flattened().to_vec();
     let start = super::stance::start(robot);
     let base_z0 = start.base_z0;

@@ -95,7 +95,7 @@ pub fn run(robot: &Robot) -> Option<Slide> {
     let n_push = (PUSH_S / dt).ceil() as usize;
     let load_from = n_settle.saturating_sub((0.2 / dt).ceil() as usize);
     let nbody = mj::raw(&b.m).nbody as usize;
-    let gbody = b.m.geom_bodyid().to_vec();
+    let gbody = super::stance::ground_side_bodies(robot, b.m.geom_bodyid());
     let g = robot.opt.gravity;
     let gmag = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
     let free: Vec<&crate::model::Joint> =

@@ -15,14 +15,33 @@ pub const MAX_DROP: f64 = 0.5;
 /// The drop any robot may show while settling, m.
 pub const MIN_DROP_ALLOWED: f64 = 0.1;
 
-/// A geom the robot can stand on: a plane, height field or box on the world body that takes
-/// part in contacts (by its masks, or named by an explicit `<contact><pair>`).
+/// A geom the robot can stand on, taking part in contacts (by its masks, or named by an
+/// explicit `<contact><pair>`): a plane or height field on the world body or on a body welded
+/// to it (a scene's `<body name="floor">` with no joint: MuJoCo allows these types only on
+/// static bodies), or a box on the world body.
 pub fn is_ground(robot: &Robot, g: usize) -> bool {
     robot.geoms.get(g).is_some_and(|x| {
-        x.body == 0
-            && crate::model::contact::takes_part(robot, g)
-            && matches!(x.gtype, GeomType::Plane | GeomType::Hfield | GeomType::Box)
+        let on_static = robot.bodies.get(x.body).is_some_and(|b| b.weld == 0);
+        crate::model::contact::takes_part(robot, g)
+            && match x.gtype {
+                GeomType::Plane | GeomType::Hfield => on_static,
+                GeomType::Box => x.body == 0,
+                _ => false,
+            }
     })
+}
+
+/// Each geom's body for the stance runs, with the bodies welded to the world (a static floor
+/// body) as the world (0): their contacts are the ground's, not the robot's.
+pub fn ground_side_bodies(robot: &Robot, geom_body: &[i32]) -> Vec<i32> {
+    geom_body
+        .iter()
+        .map(
+            |&b| {
+                if robot.bodies.get(b.max(0) as usize).is_some_and(|x| x.weld == 0) { 0 } else { b }
+            },
+        )
+        .collect()
 }
 
 /// What a stance run knows before it steps.
@@ -114,7 +133,7 @@ pub fn preconditions(f: &Figures, w: &Words) -> super::Preconditions {
             if f.floor {
                 "the model has a floor".to_string()
             } else {
-                "the model has no floor (no colliding plane, height field or box on the world body): lint the scene that includes the robot".to_string()
+                "the model has no floor (no colliding plane or height field on the world or a static body, nor box on the world body): lint the scene that includes the robot".to_string()
             },
         )
         .check("settled", !f.diverged, if f.diverged { w.diverged } else { w.finite })

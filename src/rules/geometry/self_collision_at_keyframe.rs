@@ -6,7 +6,7 @@ use crate::declare_rule;
 use crate::finding::{Finding, Severity, Subject};
 use crate::lint::Loaded;
 use crate::model::mjcf::ElemKind;
-use crate::model::{GeomType, Robot, contact};
+use crate::model::{Format, GeomType, Robot, contact};
 use crate::probe::penetration::{self, Penetration};
 use crate::probe::{Claim, KeyframePenetration, Preconditions, Verdict};
 use crate::rules::{Context, Domain, Rule, RuleMeta, opt};
@@ -19,7 +19,11 @@ declare_rule! {
     /// after `mj_forward` at the keyframe, so every filter MuJoCo applies is honoured: same body,
     /// parent/child bodies (unless `filterparent` is disabled), welded bodies,
     /// contype/conaffinity masks and `<exclude>` pairs. Contacts with the world body (the floor
-    /// plane, terrain) are ignored: ground contact in stance is expected. One case the contact
+    /// plane, terrain) and with planes and height fields are ignored: ground contact in stance
+    /// is expected. In a URDF every geom is the robot's (the importer adds no floor; the root
+    /// link, fixed to the world on import, compiles onto the world body), so the root link's
+    /// geoms are judged against every link but those hung on the root by one joint, which a
+    /// floating root would filter as parent and child. One case the contact
     /// list misses is added: two geoms MuJoCo tests that are the same shape (type, size, mesh)
     /// at exactly the same world pose. Two coincident convex meshes are a degenerate case of
     /// MuJoCo's convex collision (GJK/EPA) and get no contact at the keyframe, while coincident
@@ -65,7 +69,8 @@ pub struct Overlap {
     pub coincident: bool,
 }
 
-/// Deepest penetration per geom pair (geom ids ascending) at the keyframe, floor/world excluded.
+/// Deepest penetration per geom pair (geom ids ascending) at the keyframe, ground excluded
+/// ([`ground_pair`], [`urdf_root_and_link`]).
 pub fn keyframe_penetrations(robot: &Robot) -> BTreeMap<(usize, usize), Overlap> {
     let m = &robot.mj;
     let mut d = MjData::new(m);
@@ -75,8 +80,8 @@ pub fn keyframe_penetrations(robot: &Robot) -> BTreeMap<(usize, usize), Overlap>
     d.forward();
     let cons = d.contact();
     let mut out: BTreeMap<(usize, usize), Overlap> = BTreeMap::new();
-    let ground = |g: &crate::model::Geom| {
-        g.body == 0 || matches!(g.gtype, GeomType::Plane | GeomType::Hfield)
+    let ground = |a: &crate::model::Geom, b: &crate::model::Geom| {
+        ground_pair(robot, a) || ground_pair(robot, b) || urdf_root_and_link(robot, a, b)
     };
     for c in cons {
         let (a, b) = (c.geom1, c.geom2);
@@ -85,7 +90,7 @@ pub fn keyframe_penetrations(robot: &Robot) -> BTreeMap<(usize, usize), Overlap>
         }
         let (a, b) = (a.min(b) as usize, a.max(b) as usize);
         let (ga, gb) = (&robot.geoms[a], &robot.geoms[b]);
-        if ground(ga) || ground(gb) {
+        if ground(ga, gb) {
             continue;
         }
         let depth = -c.dist;
@@ -100,8 +105,7 @@ pub fn keyframe_penetrations(robot: &Robot) -> BTreeMap<(usize, usize), Overlap>
         for gb in &robot.geoms[i + 1..] {
             let (a, b) = (ga.id, gb.id);
             if out.contains_key(&(a, b))
-                || ground(ga)
-                || ground(gb)
+                || ground(ga, gb)
                 || ga.gtype != gb.gtype
                 || ga.size != gb.size
                 || (ga.gtype == GeomType::Mesh && ga.mesh != gb.mesh)
@@ -127,8 +131,54 @@ pub fn keyframe_penetrations(robot: &Robot) -> BTreeMap<(usize, usize), Overlap>
     out
 }
 
+/// A geom whose contacts are the ground's: a plane or height field, or a geom of the world
+/// body in an MJCF (the floor, terrain, scene props). In a URDF every geom is the robot's:
+/// MuJoCo's importer adds no floor, and the root link, fixed to the world on import, compiles
+/// onto the world body.
+fn ground_pair(robot: &Robot, g: &crate::model::Geom) -> bool {
+    matches!(g.gtype, GeomType::Plane | GeomType::Hfield)
+        || (g.body == 0 && robot.format != Format::Urdf)
+}
+
+/// In a URDF, a geom of the root link (welded to the world on import) and a geom of a link
+/// hung on the root by one joint: a floating root would filter them as parent and child, so
+/// the fixed import's contact between them is not the robot's self-collision.
+fn urdf_root_and_link(robot: &Robot, a: &crate::model::Geom, b: &crate::model::Geom) -> bool {
+    if robot.format != Format::Urdf {
+        return false;
+    }
+    let weld = |g: &crate::model::Geom| robot.bodies.get(g.body).map_or(0, |x| x.weld);
+    let on_root = |g: &crate::model::Geom| {
+        let w = weld(g);
+        w != 0
+            && robot
+                .bodies
+                .get(w)
+                .and_then(|x| robot.bodies.get(x.parent))
+                .is_some_and(|p| p.weld == 0)
+    };
+    (weld(a) == 0 && on_root(b)) || (weld(b) == 0 && on_root(a))
+}
+
 fn gdesc(robot: &Robot, g: usize) -> String {
     let geom = &robot.geoms[g];
+    if geom.name.is_empty() && geom.body == 0 && robot.format == Format::Urdf {
+        // The importer compiles the root link (fixed to the world) onto the world body.
+        let child = |l: &str| {
+            robot
+                .tree
+                .children_tagged("joint")
+                .any(|j| j.children_tagged("child").any(|c| c.get("link") == Some(l)))
+        };
+        let root =
+            robot.tree.children_tagged("link").filter_map(|l| l.get("name")).find(|l| !child(l));
+        if let Some(root) = root {
+            return format!(
+                "no. {} of the world body (root link `{root}` and the links fixed to it)",
+                robot.geom_no(g)
+            );
+        }
+    }
     if geom.name.is_empty() {
         return robot.unnamed_geom(g);
     }
@@ -224,6 +274,10 @@ impl Rule for SelfCollisionAtKeyframe {
             None => "qpos0".to_string(),
         };
         for ((a, b), o) in keyframe_penetrations(robot) {
+            // A URDF's root-link geom (on the world body) has no element of its own to point
+            // at: the finding stands on the link's geom, and names the other in its message.
+            let root_geom = |g: usize| robot.format == Format::Urdf && robot.geoms[g].body == 0;
+            let (a, b) = if root_geom(a) { (b, a) } else { (a, b) };
             let depth = o.depth;
             if depth < min_depth {
                 continue;
@@ -249,11 +303,16 @@ impl Rule for SelfCollisionAtKeyframe {
             } else {
                 "overlapping geoms in the initial pose push apart with large contact forces on the first step, so every episode starts with a jolt the hardware never experiences"
             };
+            let mut f = cx.at_elem(ElemKind::Geom, a, &robot.geoms[a].name, msg).label(format!(
+                "penetrates {} by {} mm",
+                gdesc(robot, b),
+                fmt_num(depth * 1000.0, 3)
+            ));
+            if !root_geom(b) {
+                f = f.secondary(robot.elem_loc(ElemKind::Geom, b, &gb.name), "the other geom");
+            }
             out.push(
-                cx.at_elem(ElemKind::Geom, a, &robot.geoms[a].name, msg)
-                    .label(format!("penetrates {} by {} mm", gdesc(robot, b), fmt_num(depth * 1000.0, 3)))
-                    .secondary(robot.elem_loc(ElemKind::Geom, b, &gb.name), "the other geom")
-                    .note(note)
+                f.note(note)
                     .help("shrink or move the geoms so they clear each other in this pose, or filter the pair with <contact><exclude body1=.. body2=../></contact> or contype/conaffinity if the links cannot touch on the hardware")
                     .subject(Subject::Geom(a))
                     .claim(PushedApart { geoms: (a, b) })

@@ -1,6 +1,7 @@
 use crate::declare_rule;
 use crate::finding::{Finding, Severity, Subject};
 use crate::model::mjcf::ElemKind;
+use crate::model::source::XNode;
 use crate::model::{Format, Geom, GeomType};
 use crate::rules::{Context, Rule, RuleMeta};
 
@@ -30,10 +31,15 @@ declare_rule! {
     /// through nothing.
     ///
     /// Everything is read from the compiled model (geom type, group, contype/conaffinity); class
-    /// names are not evidence. A URDF is not judged: it declares its collision geometry, and
-    /// MuJoCo's importer compiles each `<collision>` as a colliding geom and each kept
-    /// `<visual>` with `contype = conaffinity = 0`, so a colliding mesh there is a collision
-    /// mesh by declaration. Not reported: collision primitives beside visual meshes with
+    /// names are not evidence. A URDF declares its collision geometry — MuJoCo's importer
+    /// compiles each `<collision>` as a colliding geom and each kept `<visual>` with `contype =
+    /// conaffinity = 0` — so the cases above do not apply to it; it is read from its own
+    /// `<link>`s instead, and reported when none of its links has a `<collision>` while
+    /// they have `<visual>`s, the robot has a moving joint and contacts are on (the importer
+    /// discards visuals — `discardvisual`, true by default for URDF — or keeps them with
+    /// `contype = conaffinity = 0`, so nothing of the robot collides), and when a link's
+    /// `<collision>` mesh is the very file (and scale) its `<visual>` draws: the visual mesh
+    /// declared again as collision geometry. Not reported: collision primitives beside visual meshes with
     /// `contype = conaffinity = 0`; collision meshes (a convex decomposition) kept in their own
     /// group beside separate visual geoms; a body whose drawn meshes collide beside colliding
     /// primitives of the same group when the model has no visual/collision split (nothing shows
@@ -97,7 +103,11 @@ impl Rule for VisualMeshCollision {
     fn check(&self, cx: &Context, out: &mut Vec<Finding>) {
         let robot = cx.robot;
         if robot.format == Format::Urdf {
-            return; // every colliding geom is a declared <collision> (see the rule's docs)
+            // Every colliding geom is a declared <collision> (see the rule's docs); only a URDF
+            // that declares none is judged.
+            out.extend(urdf_without_collision(cx));
+            out.extend(urdf_visual_twins(cx));
+            return;
         }
         let robot_geoms = || robot.geoms.iter().filter(|g| g.body != 0);
         if let Some(f) = no_collision_geometry(cx) {
@@ -260,6 +270,105 @@ impl Rule for VisualMeshCollision {
             .with("hull_vertices", verts as f64);
         out.push(f);
     }
+}
+
+/// A URDF whose links declare `<visual>` geometry and no `<collision>` at all: MuJoCo's importer
+/// drops the visuals (or keeps them non-colliding), so no geom of the robot collides.
+fn urdf_without_collision(cx: &Context) -> Option<Finding> {
+    let robot = cx.robot;
+    let links: Vec<&XNode> = robot.tree.children_tagged("link").collect();
+    if links.iter().any(|l| l.children_tagged("collision").next().is_some()) {
+        return None;
+    }
+    let drawn: Vec<&XNode> =
+        links.iter().copied().filter(|l| l.children_tagged("visual").next().is_some()).collect();
+    let visuals: usize = drawn.iter().map(|l| l.children_tagged("visual").count()).sum();
+    let moves =
+        robot.joints.iter().any(|j| j.is_scalar() || j.jtype == crate::model::JointType::Free);
+    let in_pair = |g: &Geom| robot.pairs.iter().any(|p| p.geom1 == g.id || p.geom2 == g.id);
+    let first = drawn.first()?;
+    if !moves
+        || robot.geoms.iter().any(|g| g.body != 0 && (g.collides() || in_pair(g)))
+        || crate::model::contact::contacts_disabled(robot)
+    {
+        return None;
+    }
+    let name = first.get("name").unwrap_or("");
+    Some(
+        cx.finding(
+            format!(
+                "no link of the URDF has a <collision>: {} of its {} links draw {visuals} <visual>{}, which MuJoCo's importer does not collide, so no geom of the robot collides",
+                drawn.len(),
+                links.len(),
+                if visuals == 1 { "" } else { "s" }
+            ),
+            first.loc,
+        )
+        .element(format!("link `{name}`"), first.loc)
+        .label("a <visual> only, like every other link")
+        .note("with contacts on and no collision geometry the simulated robot passes through itself, the floor and every object it should touch or avoid: self-collisions, grasps and impacts the hardware has never happen in training")
+        .help("add a <collision> to each link (primitives fitted to the link, or a convex mesh where the shape matters)")
+        .subject(Subject::Model)
+        .measured(0.0, "geoms")
+        .with("visual_geoms", visuals as f64),
+    )
+}
+
+/// The `<mesh>` of a `<visual>` or `<collision>`: its file name and scale (as written).
+fn mesh_of(x: &XNode) -> Option<(&crate::model::source::XAttr, &str)> {
+    let m = x.children_tagged("geometry").flat_map(|g| g.children_tagged("mesh")).next()?;
+    Some((m.attr("filename")?, m.get("scale").unwrap_or("1 1 1")))
+}
+
+/// URDF links whose `<collision>` is a mesh file their own `<visual>` draws (same file, same
+/// scale): the visual mesh declared again as collision geometry.
+fn urdf_visual_twins(cx: &Context) -> Option<Finding> {
+    let robot = cx.robot;
+    let mut twins: Vec<(&str, &crate::model::source::XAttr)> = Vec::new();
+    for l in robot.tree.children_tagged("link") {
+        let drawn: Vec<(String, &str)> = l
+            .children_tagged("visual")
+            .filter_map(mesh_of)
+            .map(|(f, sc)| (f.value.clone(), sc))
+            .collect();
+        let twin = l
+            .children_tagged("collision")
+            .filter_map(mesh_of)
+            .find(|(f, sc)| drawn.iter().any(|(v, vs)| *v == f.value && vs == sc));
+        if let Some((f, _)) = twin {
+            twins.push((l.get("name").unwrap_or(""), f));
+        }
+    }
+    let (first, attr) = *twins.first()?;
+    let n = twins.len();
+    let names: Vec<&str> = twins.iter().map(|t| t.0).collect();
+    let shown = if n > 6 {
+        format!("{}, … ({n} links)", names[..6].join(", "))
+    } else {
+        names.join(", ")
+    };
+    let mut f = cx
+        .finding(
+            format!(
+                "{n} link{} collide{} through the very mesh file {} <visual> draws (the visual mesh declared again as <collision>): {shown}",
+                if n == 1 { "" } else { "s" },
+                if n == 1 { "s" } else { "" },
+                if n == 1 { "its" } else { "each one's" }
+            ),
+            attr.loc,
+        )
+        .element(format!("link `{first}`"), attr.loc)
+        .label("the link's visual mesh again, as its collision geometry");
+    for (_, a) in twins.iter().skip(1).take(3) {
+        f = f.secondary(a.loc, "also the link's visual mesh");
+    }
+    Some(
+        f.note("MuJoCo collides a mesh as its convex hull, with the general convex collider (one contact per pair without multiccd): a visual shell's hull fills every concavity, so links touch where the hardware's clear each other, feet meet the floor at the hull's corners, and contacts chatter")
+            .help("give each link a <collision> of its own: primitives fitted to the link, or a convex decomposition where the shape matters; keep the detailed mesh in <visual>")
+            .subject(Subject::Model)
+            .measured(n as f64, "links")
+            .expected(0.0, "links"),
+    )
 }
 
 /// A robot none of whose geoms can collide (every one has `contype = conaffinity = 0`) while the
