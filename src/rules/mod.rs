@@ -335,6 +335,7 @@ pub fn registry() -> Vec<&'static dyn Rule> {
         &limits::soft_limits::SoftLimits,
         &control::underdamped_pd_gains::UnderdampedPdGains,
         &control::servo_stall_band::ServoStallBand,
+        &control::servo_sag::ServoSag,
         &limits::effort_limit_mismatch::EffortLimitMismatch,
         &limits::wheel_spring::WheelSpring,
         &mapping::passive_joint_spring::PassiveJointSpring,
