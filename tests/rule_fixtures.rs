@@ -645,3 +645,20 @@ fn servo_sag_is_static_load_over_stiffness() {
         assert!(of("servo-sag", v).is_empty(), "{v}");
     }
 }
+
+#[test]
+fn repeated_class_mass_counts_the_class_mass_once_per_geom() {
+    // The tip's 0.02 kg class mass on two geoms (0.04 kg), the proximal link's 0.05 kg on two
+    // capsules (0.1 kg): each body weighs its mass twice, one finding per body.
+    let f = of("repeated-class-mass", "invalid.xml");
+    let got: Vec<(f64, f64)> = f
+        .iter()
+        .map(|f| (f.measured.as_ref().unwrap().value, f.expected.as_ref().unwrap().value))
+        .collect();
+    assert_eq!(got.len(), 2, "{f:?}");
+    assert!((got[0].0 - 0.04).abs() < 1e-12 && (got[0].1 - 0.02).abs() < 1e-12, "{got:?}");
+    assert!((got[1].0 - 0.1).abs() < 1e-12 && (got[1].1 - 0.05).abs() < 1e-12, "{got:?}");
+    for v in ["valid.xml", "valid_inertial_states_mass.xml"] {
+        assert!(of("repeated-class-mass", v).is_empty(), "{v}");
+    }
+}

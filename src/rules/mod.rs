@@ -326,6 +326,7 @@ pub fn registry() -> Vec<&'static dyn Rule> {
         &inertia::isotropic_base_inertia::IsotropicBaseInertia,
         &inertia::isotropic_link_inertia::IsotropicLinkInertia,
         &inertia::mass_budget::MassBudget,
+        &inertia::repeated_class_mass::RepeatedClassMass,
         &inertia::copied_inertial::CopiedInertial,
         &inertia::inertia_exceeds_geometry::InertiaExceedsGeometry,
         &contact::toe_tilt::ToeTilt,
