@@ -619,3 +619,46 @@ fn a_millimetre_mesh_on_a_metre_body_is_named_with_its_file() {
     assert!(f.message.contains("chassis_mm.stl"), "{}", f.message);
     assert!(f.note.as_deref().is_some_and(|n| n.contains("millimetres")), "{f:?}");
 }
+
+#[test]
+fn servo_sag_is_static_load_over_stiffness() {
+    // Shoulder: 2 kg at 0.15 m and 1 kg at 0.4 m against kp 4 → 9.81·0.7 / 4 rad.
+    let f = of("servo-sag", "invalid.xml");
+    assert_eq!(f.len(), 1, "{f:?}");
+    let sag = f[0].measured.as_ref().unwrap().value;
+    assert!((sag - 9.81 * 0.7 / 4.0).abs() < 1e-6, "{sag}");
+    // Spring 20 N·m/rad resting 0.5 rad off the pose, servo kp 50: 10 / 70 rad.
+    let f = of("servo-sag", "invalid_spring.xml");
+    assert_eq!(f.len(), 1, "{f:?}");
+    assert!((f[0].measured.as_ref().unwrap().value - 10.0 / 70.0).abs() < 1e-9);
+    // 5 kg on a vertical slide against 1000 N/m, no keyframe: 5·9.81 / 1000 m down.
+    let f = of("servo-sag", "invalid_slide_no_keyframe.xml");
+    assert!((f[0].measured.as_ref().unwrap().value + 5.0 * 9.81 / 1000.0).abs() < 1e-9);
+    for v in [
+        "valid_stiff.xml",
+        "valid_gravcomp.xml",
+        "valid_actuatorgravcomp.xml",
+        "valid_ctrl_compensates.xml",
+        "valid_rests_on_limit.xml",
+        "valid_torque_motors.xml",
+    ] {
+        assert!(of("servo-sag", v).is_empty(), "{v}");
+    }
+}
+
+#[test]
+fn repeated_class_mass_counts_the_class_mass_once_per_geom() {
+    // The tip's 0.02 kg class mass on two geoms (0.04 kg), the proximal link's 0.05 kg on two
+    // capsules (0.1 kg): each body weighs its mass twice, one finding per body.
+    let f = of("repeated-class-mass", "invalid.xml");
+    let got: Vec<(f64, f64)> = f
+        .iter()
+        .map(|f| (f.measured.as_ref().unwrap().value, f.expected.as_ref().unwrap().value))
+        .collect();
+    assert_eq!(got.len(), 2, "{f:?}");
+    assert!((got[0].0 - 0.04).abs() < 1e-12 && (got[0].1 - 0.02).abs() < 1e-12, "{got:?}");
+    assert!((got[1].0 - 0.1).abs() < 1e-12 && (got[1].1 - 0.05).abs() < 1e-12, "{got:?}");
+    for v in ["valid.xml", "valid_inertial_states_mass.xml"] {
+        assert!(of("repeated-class-mass", v).is_empty(), "{v}");
+    }
+}

@@ -7,6 +7,7 @@ pub mod isotropic_link_inertia;
 pub mod mass_budget;
 pub mod parallel_ankle_armature;
 pub mod passive_joint_armature;
+pub mod repeated_class_mass;
 pub mod zero_armature;
 
 use crate::finding::Finding;
