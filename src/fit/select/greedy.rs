@@ -303,8 +303,10 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         // miss a narrow basin (a torque limit) that the linear step sees, and the linear step
         // misses what is far from linear (a resonance moved by damping). The step counts as
         // replayed ([`coarse::replayed_step`], one replay of the screen's data); a coarse fit
-        // past it goes on from it. Also a non-smooth effect's: its column (a finite difference
-        // across a kink) can promise a gain that no parameter gives.
+        // past it goes on from it. After round 0 also a non-smooth effect's: its column (a finite
+        // difference across a kink) can promise a gain that no parameter gives; in round 0 it is
+        // taken as it is (a heavy knee's torque limit is admitted by its column alone, its
+        // replayed step gaining too little).
         let reaches = |g: f64| g > 0.0 && g >= opts.policy.screen_share * best_gain;
         // A deferred candidate judged from its plain variant's coarse fit: the best point that
         // judgement simulated stands in for its linear step ([`coarse::when_taken`]).
@@ -336,7 +338,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
             if sf < cf {
                 (cp, cf) = (sp, sf);
             }
-        } else if !reaches(gain(cf)) && reaches(linear_gain) {
+        } else if (e.smooth() || round > 0) && !reaches(gain(cf)) && reaches(linear_gain) {
             let step = coarse::replayed_step(engine, &screen, (short, &applied), (e, &group));
             if let Some((sp, sf)) = step {
                 linear_gain = gain(sf);
