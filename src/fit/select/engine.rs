@@ -80,11 +80,14 @@ pub struct Engine<'a> {
     by_phase: std::sync::Mutex<std::collections::BTreeMap<&'static str, (usize, f64)>>,
     /// The same, booked to the greedy round that ran them and the phase
     /// ([`Engine::rollouts_by_round_phase`]).
-    by_round: std::sync::Mutex<std::collections::BTreeMap<(String, &'static str), (usize, f64)>>,
+    by_round: std::sync::Mutex<ByRoundPhase>,
     /// Per candidate (effect and group), whether round 0's coarse fit confirmed its linear
     /// model ([`Engine::note_trust`]).
     trust: std::sync::Mutex<std::collections::HashMap<String, bool>>,
 }
+
+/// Rollouts and recording seconds by round ([`round_key`]) and phase name.
+pub type ByRoundPhase = std::collections::BTreeMap<(String, &'static str), (usize, f64)>;
 
 type StartMemo = std::collections::HashMap<String, Option<std::sync::Arc<StartSens>>>;
 
@@ -317,9 +320,7 @@ impl<'a> Engine<'a> {
     }
 
     /// Rollouts and recording seconds replayed, by round ([`round_key`]) and phase.
-    pub fn rollouts_by_round_phase(
-        &self,
-    ) -> std::collections::BTreeMap<(String, &'static str), (usize, f64)> {
+    pub fn rollouts_by_round_phase(&self) -> ByRoundPhase {
         self.account();
         self.by_round.lock().unwrap_or_else(|e| e.into_inner()).clone()
     }
