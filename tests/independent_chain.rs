@@ -226,6 +226,27 @@ fn a_gear_play_behind_every_motor_is_found_as_one_backlash_group() {
         .filter(|t| t["phase"] == "pair_screen" && t["effect"] == "backlash+backlash")
         .collect();
     assert!(!screened.is_empty(), "the group's exception on the hip not screened: {tried:?}");
+    // Round 0's judging replays (`judge`): the lead's whole-set and held-out replays and its
+    // floors (three training replays: reconstruction, timestep at dt / 2 and dt / 4), and per
+    // rival judged at its coarse fit one training replay and at most two held-out replays at the
+    // finer step — no floors of its own (a kept one leaves under half its held-out error).
+    // Seconds from the recordings' own clocks (ep_03 is declared held out).
+    let dir = common::indep::case("KR7_all_backlash").join("episodes");
+    let secs = |f: &str| {
+        let text = std::fs::read_to_string(dir.join(f)).expect("episode");
+        let t: Vec<f64> = text
+            .lines()
+            .filter(|l| !l.starts_with('#'))
+            .filter_map(|l| l.split(',').next()?.parse().ok())
+            .collect();
+        t.last().unwrap() - t[0]
+    };
+    let (train, held) =
+        (secs("ep_00.csv") + secs("ep_01.csv") + secs("ep_02.csv"), secs("ep_03.csv"));
+    let judge = v["search"]["simulated_s_by_round_phase"]["0"]["judge"].as_f64().unwrap();
+    let n = rounds0("add_coarse") as f64;
+    let bound = 5.0 * train + held + n * (train + 2.0 * held);
+    assert!(judge <= bound, "round 0 judged for {judge} s, above {bound} s ({n} at coarse fits)");
 }
 
 /// The same leg with nothing concealed gives nothing: it moves in continuous time (RK4 at

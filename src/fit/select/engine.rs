@@ -78,12 +78,16 @@ pub struct Engine<'a> {
     /// Rollouts and recording seconds replayed, booked to each phase
     /// ([`Engine::rollouts_by_phase`]).
     by_phase: std::sync::Mutex<std::collections::BTreeMap<&'static str, (usize, f64)>>,
-    /// The same, booked to the greedy round that ran them ([`Engine::rollouts_by_round`]).
-    by_round: std::sync::Mutex<std::collections::BTreeMap<String, (usize, f64)>>,
+    /// The same, booked to the greedy round that ran them and the phase
+    /// ([`Engine::rollouts_by_round_phase`]).
+    by_round: std::sync::Mutex<ByRoundPhase>,
     /// Per candidate (effect and group), whether round 0's coarse fit confirmed its linear
     /// model ([`Engine::note_trust`]).
     trust: std::sync::Mutex<std::collections::HashMap<String, bool>>,
 }
+
+/// Rollouts and recording seconds by round ([`round_key`]) and phase name.
+pub type ByRoundPhase = std::collections::BTreeMap<(String, &'static str), (usize, f64)>;
 
 type StartMemo = std::collections::HashMap<String, Option<std::sync::Arc<StartSens>>>;
 
@@ -96,6 +100,12 @@ pub(in crate::fit) fn round_key(phase: Phase, round: usize) -> String {
         Phase::Diagnose
         | Phase::Screen
         | Phase::Add
+        | Phase::LeadFit
+        | Phase::Judge
+        | Phase::EarlyPair
+        | Phase::Refine
+        | Phase::RoundErrors
+        | Phase::Reach
         | Phase::Pair
         | Phase::JointPair
         | Phase::Told => round.to_string(),
@@ -286,7 +296,7 @@ impl<'a> Engine<'a> {
             e.0 += n;
             e.1 += s;
             let mut r = self.by_round.lock().unwrap_or_else(|e| e.into_inner());
-            let e = r.entry(round_key(ph, round)).or_default();
+            let e = r.entry((round_key(ph, round), ph.name())).or_default();
             e.0 += n;
             e.1 += s;
         }
@@ -300,6 +310,17 @@ impl<'a> Engine<'a> {
 
     /// Rollouts and recording seconds replayed, by the greedy round that ran them ([`round_key`]).
     pub fn rollouts_by_round(&self) -> std::collections::BTreeMap<String, (usize, f64)> {
+        let mut m = std::collections::BTreeMap::<String, (usize, f64)>::new();
+        for ((round, _), (n, s)) in self.rollouts_by_round_phase() {
+            let e = m.entry(round).or_default();
+            e.0 += n;
+            e.1 += s;
+        }
+        m
+    }
+
+    /// Rollouts and recording seconds replayed, by round ([`round_key`]) and phase.
+    pub fn rollouts_by_round_phase(&self) -> ByRoundPhase {
         self.account();
         self.by_round.lock().unwrap_or_else(|e| e.into_inner()).clone()
     }

@@ -180,14 +180,24 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
                     }
                 })
                 .collect();
+            // (The reach's coarse fits on the probes' data are booked apart: `Phase::Reach`.)
+            engine.report(round, Phase::Reach, None);
+            let far: Vec<Option<(Vec<f64>, f64)>> = cands[range.clone()]
+                .par_iter()
+                .map(|(e, g, _)| match coarse::deferred(s, (*e, g), &cands, &coarse) {
+                    Some(_) => None,
+                    None => reach.as_ref()?.out_of_reach(engine, Some(&screen), (*e, g)),
+                })
+                .collect();
+            engine.report(round, Phase::Screen, None);
             let fits: Vec<(Vec<f64>, f64)> = cands[range.clone()]
                 .par_iter()
                 .zip(&out_of)
-                .map(|((e, g, _), out_of)| {
-                    let far = || reach.as_ref()?.out_of_reach(engine, Some(&screen), (*e, g));
+                .zip(&far)
+                .map(|(((e, g, _), out_of), far)| {
                     let trust = || out_of.map(|_| (vec![], f64::INFINITY));
                     coarse::deferred(s, (*e, g), &cands, &coarse)
-                        .or_else(|| far().map(|(p, _)| (p, f64::INFINITY))) // judged below
+                        .or_else(|| far.clone().map(|(p, _)| (p, f64::INFINITY))) // judged below
                         .or_else(trust) // judged below
                         .unwrap_or_else(|| coarse::fit(engine, &screen, (short, &applied), (*e, g)))
                 })
@@ -417,11 +427,15 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         // coarse fit: the round's winner is fitted there anyway ([`refine`]).
         let start = (cf < base_short).then_some(cp.as_slice());
         let data = if whole { train } else { short };
+        if whole {
+            engine.report(round, Phase::LeadFit, None);
+        }
         let (p, fit_rmse) = if at_coarse {
             (cp.clone(), cf)
         } else {
             engine.fit_from(data, &applied, (e, &group), start)
         };
+        engine.report(round, Phase::Judge, None);
         let phase = if at_coarse { Phase::AddCoarse } else { Phase::Add };
         if p.is_empty() || !fit_rmse.is_finite() {
             continue;
@@ -481,7 +495,9 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         // The lead beside effects kept in earlier rounds on its joints, each fitted without it,
         // is judged at the floor with them re-fitted together ([`refitted_at_floor`]); the
         // next round measures the floor again unless the round keeps that set.
-        let white = keep && engine.at_floor(train, &trial, &tr_a);
+        // (Not one judged at its coarse fit: a kept one leaves under half its held-out error, so
+        // it is no answer at the floor, and its floors would cost three training replays.)
+        let white = keep && !at_coarse && engine.at_floor(train, &trial, &tr_a);
         let refitted = (keep && !white && n_lead == 1 && ci == 1)
             .then(|| refitted_at_floor(s, short, &applied, &trial[applied.len()]))
             .flatten();
@@ -539,6 +555,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     {
         for (mut p, a) in p.take(out) {
             out.applied.push(a);
+            engine.report(round, Phase::RoundErrors, None);
             set_uncertainty(engine, train, &mut p, &out.applied, &mut out.warnings);
             out.selected.push(p);
         }
@@ -614,11 +631,13 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     let rivals = rival_notes(&accepted, win, &same);
     let mut w = accepted.swap_remove(win);
     if !std::ptr::eq(short, train) && lead_logged != Some(logged) {
+        engine.report(round, Phase::Refine, None);
         w = refine(s, &applied, w, (&tr_err, &ho_err), z);
     }
     if let Some(pair) = pair_lookahead(s, &applied, &kept_all, &w, (z, round), false, out) {
         for (mut p, a) in pair {
             out.applied.push(a);
+            engine.report(round, Phase::RoundErrors, None);
             set_uncertainty(engine, train, &mut p, &out.applied, &mut out.warnings);
             out.selected.push(p);
         }
@@ -633,6 +652,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     out.at_floor = floored
         .contains(&logged)
         .then(|| (shape_key(&[], &out.applied), out.tried[logged].train_rmse));
+    engine.report(round, Phase::RoundErrors, None);
     set_uncertainty(engine, train, &mut w, &out.applied, &mut out.warnings);
     out.selected.push(w);
     true

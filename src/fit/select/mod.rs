@@ -329,6 +329,8 @@ pub struct SearchCost {
     pub rollouts_by_round: BTreeMap<String, usize>,
     /// Recording seconds replayed by round, as `rollouts_by_round`.
     pub simulated_s_by_round: BTreeMap<String, f64>,
+    /// Recording seconds replayed by round (as `simulated_s_by_round`) and, within it, by phase.
+    pub simulated_s_by_round_phase: BTreeMap<String, BTreeMap<&'static str, f64>>,
 }
 
 impl SearchCost {
@@ -342,6 +344,9 @@ impl SearchCost {
         *s = tenth(*s + simulated_s);
         *self.rollouts_by_round.entry(engine::END_KEY.to_string()).or_default() += rollouts;
         let s = self.simulated_s_by_round.entry(engine::END_KEY.to_string()).or_default();
+        *s = tenth(*s + simulated_s);
+        let end = self.simulated_s_by_round_phase.entry(engine::END_KEY.to_string()).or_default();
+        let s = end.entry(phase).or_default();
         *s = tenth(*s + simulated_s);
     }
 }
@@ -518,6 +523,10 @@ pub fn fit(robot: &Robot, recs: &[Recording], opts: &FitOptions) -> FitOutcome {
 fn search_cost(engine: &Engine, out: &FitOutcome) -> SearchCost {
     let by_phase = engine.rollouts_by_phase();
     let by_round = engine.rollouts_by_round();
+    let mut by_round_phase: BTreeMap<String, BTreeMap<&'static str, f64>> = BTreeMap::new();
+    for ((r, p), (_, s)) in engine.rollouts_by_round_phase() {
+        by_round_phase.entry(r).or_default().insert(p, (s * 10.0).round() / 10.0);
+    }
     SearchCost {
         simulations: engine.simulations(),
         rollouts: engine.rollout_stats(),
@@ -547,6 +556,7 @@ fn search_cost(engine: &Engine, out: &FitOutcome) -> SearchCost {
             .iter()
             .map(|(k, v)| (k.clone(), (v.1 * 10.0).round() / 10.0))
             .collect(),
+        simulated_s_by_round_phase: by_round_phase,
     }
 }
 

@@ -89,6 +89,7 @@ pub(super) fn early_pair(
     out: &mut FitOutcome,
 ) -> Option<EarlyPair> {
     let engine = s.engine;
+    engine.report(round, super::policy::Phase::EarlyPair, None);
     let policy = &engine.opts.policy;
     // (A lead that needs no partner is not paired: no rival is replayed for it.)
     if needless(engine.opts, lead) {

@@ -76,7 +76,9 @@ pub(super) fn pair_lookahead(
     // The round's floors (remembered per set: the greedy round measured them).
     let floors = engine.floors(train, applied, &t_base);
     let mut best: Option<(Vec<Applied>, f64, usize, usize)> = None;
-    engine.report(round, Phase::Pair, None);
+    // (The early look-ahead's replays are booked apart: [`Phase::EarlyPair`].)
+    let booked = if to_floor { Phase::EarlyPair } else { Phase::Pair };
+    engine.report(round, booked, None);
     // The pairs of the top four, and any two kept candidates that mimic each other alone
     // ([`effects::mimicking_pairs`]) wherever they rank: a missing inertia and damping each
     // pass alone, and a third effect can outrank one of them (the pendulum's armature, fifth).
@@ -195,7 +197,7 @@ pub(super) fn pair_lookahead(
         let (a, b) = &sets[i];
         engine.report(
             round,
-            Phase::Pair,
+            booked,
             Some((i + 1, n_sets, format!("coarse {} + {}", a.effect.id(), b.effect.id()))),
         );
         let mut set = applied.to_vec();
@@ -232,7 +234,7 @@ pub(super) fn pair_lookahead(
         let Some((set, f)) = c else { continue };
         engine.report(
             round,
-            Phase::Pair,
+            booked,
             Some((i + 1, n_sets, format!("{} + {}", a.effect.id(), b.effect.id()))),
         );
         let group: Vec<String> = a.joints.iter().chain(&b.joints).cloned().collect();

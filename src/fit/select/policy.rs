@@ -376,6 +376,24 @@ pub enum Phase {
     Diagnose,
     /// A candidate of a greedy round fitted in full and put to the held-out gate.
     Add,
+    /// The round's lead fitted in full on the whole training set ([`super::lead`]); booked
+    /// apart from `add` (never a `tried` phase).
+    LeadFit,
+    /// The replays that judge a candidate's full fit: on the whole training set, on the
+    /// held-out set, at a finer timestep, the floors of the set with it and the reach of a kept
+    /// one (booked apart from `add`; never a `tried` phase).
+    Judge,
+    /// The early pair look-ahead of a kept lead with its coarse-fitted rivals
+    /// ([`super::pair_first`]; booked apart from `pair`, never a `tried` phase).
+    EarlyPair,
+    /// The round's winner re-fitted on the whole training set (`winner::refine`; never a
+    /// `tried` phase).
+    Refine,
+    /// The standard errors of a round's kept effect (never a `tried` phase).
+    RoundErrors,
+    /// The reach's coarse fits on the probes' data before the screen's ([`super::reach`];
+    /// booked apart from `screen`, never a `tried` phase).
+    Reach,
     /// A candidate of a greedy round put to the held-out gate at its coarse fit, not fitted in
     /// full: a kept candidate of the round beats it there decisively on held-out.
     AddCoarse,
@@ -445,6 +463,12 @@ impl Phase {
         match self {
             Phase::Diagnose => "diagnose",
             Phase::Add => "add",
+            Phase::LeadFit => "lead_fit",
+            Phase::Judge => "judge",
+            Phase::EarlyPair => "early_pair",
+            Phase::Refine => "refine",
+            Phase::RoundErrors => "round_standard_errors",
+            Phase::Reach => "reach",
             Phase::AddCoarse => "add_coarse",
             Phase::Screen => "screen",
             Phase::Floor => "floor",

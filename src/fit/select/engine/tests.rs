@@ -437,6 +437,24 @@ fn replays_are_booked_to_their_round_and_round_zeros_trust_stands() {
     let by_round = engine.rollouts_by_round();
     let rollouts: Vec<(&str, usize)> = by_round.iter().map(|(k, v)| (k.as_str(), v.0)).collect();
     assert_eq!(rollouts, [("0", 2 * n), ("1", n), ("end", n)]);
+    let by_round_phase = engine.rollouts_by_round_phase();
+    let by_rp: Vec<(&str, &str, usize)> =
+        by_round_phase.iter().map(|((r, p), v)| (r.as_str(), *p, v.0)).collect();
+    assert_eq!(
+        by_rp,
+        [("0", "diagnose", n), ("0", "screen", n), ("1", "add", n), ("end", "reshoot", n)]
+    );
+    // A round's own steps booked apart from `add` stay in the round.
+    for p in [
+        Phase::LeadFit,
+        Phase::Judge,
+        Phase::EarlyPair,
+        Phase::Refine,
+        Phase::RoundErrors,
+        Phase::Reach,
+    ] {
+        assert_eq!(super::round_key(p, 3), "3", "{}", p.name());
+    }
     let rounds_s: f64 = by_round.values().map(|v| v.1).sum();
     let phases_s: f64 = engine.rollouts_by_phase().values().map(|v| v.1).sum();
     assert!((rounds_s - phases_s).abs() < 1e-9);
