@@ -54,14 +54,6 @@ impl Effect for GainError {
     fn smooth(&self) -> bool {
         true
     }
-    /// Both gains: a servo's stiffness and its damping are directions of equal standing (a kp
-    /// column alone cannot explain what kp and kd together explain, and ranked a gain error by
-    /// whatever kp alone did), and with both probed the screen's two-column least-squares step
-    /// is the gain error's linear step, which one replay confirms as its coarse fit instead of
-    /// a Levenberg–Marquardt fit of `screen_evals` replays (`coarse::confirmed_step`).
-    fn screened(&self) -> usize {
-        2
-    }
     /// At its start both gains scaled by one.
     fn neutral_start(&self) -> bool {
         true

@@ -59,8 +59,8 @@ fn confirmed_step(
     (short, applied): (&[Recording], &[Applied]),
     (e, g): (&'static dyn Effect, &[String]),
 ) -> Option<(Vec<f64>, f64)> {
-    // (Only where the linear model steps every fitted parameter: one of the first parameter
-    // alone can explain nothing that it and the others together explain.)
+    // (Only where the linear model steps every fitted parameter: a gain error's is its kp's
+    // alone, which can explain nothing that kp and kd together explain.)
     if e.screened() < e.fitted() {
         return None;
     }
@@ -224,10 +224,6 @@ pub(super) fn replayed_step(
     let x = screen.steps(e.id(), g)?;
     engine.at_linear_step(short, applied, (e, g), &x)
 }
-
-#[cfg(test)]
-#[path = "coarse_gain_tests.rs"]
-mod gain_tests;
 
 #[cfg(test)]
 mod tests {
