@@ -270,6 +270,11 @@ pub fn missing_spec_note(l: &Loaded) -> Option<String> {
 /// `<robot>` (ROS `package.xml`, launch files, …). `None`: lint it (unreadable files included,
 /// so that the loader reports them).
 pub fn not_a_model(path: &Path) -> Option<String> {
+    if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("toml")) {
+        return Some(
+            "a TOML file (a spec or rule configuration) with no model of its name beside it".into(),
+        );
+    }
     let tag = crate::model::source::root_tag(path)?;
     (tag != "mujoco" && tag != "robot").then(|| {
         format!("root element <{tag}> is not a robot model (MJCF <mujoco> or URDF <robot>)")

@@ -75,6 +75,34 @@ pub fn is_fit_effects(p: &Path) -> bool {
     v.get("effect").is_some_and(|e| e.is_array()) && !v.contains_key("robot")
 }
 
+/// The models to lint for the paths given: a hardware spec given where a model is expected (the
+/// pre-commit hook passes a staged `robot.toml` whose edit changes what the spec-only rules say)
+/// stands for the model of its name beside it, `robot.xml`, else `robot.urdf`; each such swap
+/// has a note for stderr. A `.toml` with no model beside it stays as given (not a model).
+pub fn models_for_args(args: &[PathBuf]) -> (Vec<PathBuf>, Vec<String>) {
+    let mut notes = Vec::new();
+    let models = args
+        .iter()
+        .map(|p| {
+            if !p.extension().is_some_and(|e| e.eq_ignore_ascii_case("toml")) {
+                return p.clone();
+            }
+            match ["xml", "urdf"].iter().map(|e| p.with_extension(e)).find(|m| m.is_file()) {
+                Some(m) => {
+                    notes.push(format!(
+                        "modellint: {} is the spec of {}: linting the model\n",
+                        p.display(),
+                        m.display()
+                    ));
+                    m
+                }
+                None => p.clone(),
+            }
+        })
+        .collect();
+    (models, notes)
+}
+
 /// Every file `model` includes (directly or through other includes), as MuJoCo resolves them.
 pub fn includes(model: &Path) -> Vec<PathBuf> {
     let mut seen = vec![model.to_path_buf()];

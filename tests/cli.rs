@@ -728,6 +728,8 @@ fn a_scene_and_its_robot_file_are_linted_once() {
         hooks.contains("entry: modellint --no-probe --skip-non-models --output-format concise"),
         "{hooks}"
     );
+    // ... and runs on a staged spec too (it lints the model beside it).
+    assert!(hooks.contains("files: \\.(xml|urdf|toml)$"), "{hooks}");
 }
 
 /// The lint cache stays under its cap (least recently used out) and `cache clean`

@@ -302,6 +302,43 @@ fn several_models_per_call() {
     assert_eq!(code, 2);
 }
 
+/// A hardware spec staged alone (the pre-commit hook passes `robot.toml`) lints the model of its
+/// name beside it, exactly as that model given itself; a `.toml` with no model beside it is
+/// skipped with a note under `--skip-non-models`, as the hook runs.
+#[test]
+fn a_spec_given_lints_its_model() {
+    let (c_model, out_model, _) =
+        modellint(&["models/asimov.xml", "--no-probe", "--output-format", "concise"]);
+    let (code, out, err) = modellint(&[
+        "models/asimov.toml",
+        "--no-probe",
+        "--skip-non-models",
+        "--output-format",
+        "concise",
+    ]);
+    assert_eq!((code, &out), (c_model, &out_model), "{err}");
+    assert!(out.contains("models/asimov.xml:"), "{out}");
+    assert!(err.contains("models/asimov.toml is the spec of models/asimov.xml"), "{err}");
+    // Spec and model staged together: linted once.
+    let (code, both, _) = modellint(&[
+        "models/asimov.xml",
+        "models/asimov.toml",
+        "--no-probe",
+        "--output-format",
+        "concise",
+    ]);
+    assert_eq!((code, &both), (c_model, &out_model));
+    let dir = std::env::temp_dir().join(format!("modellint-infra-toml-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let lone = dir.join("modellint.toml");
+    std::fs::write(&lone, "fail_on = \"warning\"\n").unwrap();
+    let (code, out, err) = modellint(&[lone.to_str().unwrap(), "--no-probe", "--skip-non-models"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.is_empty() || !out.contains("error(s)"), "{out}");
+    assert!(err.contains("skipping") && err.contains("a TOML file"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn several_models_in_every_format() {
     let pkg = package_xml();

@@ -129,12 +129,12 @@ fn stance_without_a_floor_is_inconclusive_and_the_fact_keeps_its_level() {
     }
 }
 
-#[test]
-fn stance_on_a_floor_records_every_precondition_met() {
-    // The same passive toe on a floor: the stance run stands, loads the foot and measures.
-    let fs = probed("fixtures/rules/passive-joint-spring/invalid.xml", "passive-joint-spring");
+/// The stance run of `passive-joint-spring` on `model` stood, loaded the foot and measured:
+/// every precondition recorded, in order, and met.
+fn assert_stance_measured(model: &str) {
+    let fs = probed(model, "passive-joint-spring");
     let p = outcome(&fs[0]);
-    assert_eq!(p.status, ProbeStatus::Measured, "{}", p.note);
+    assert_eq!(p.status, ProbeStatus::Measured, "{model}: {}", p.note);
     let names: Vec<_> = p.preconditions.iter().map(|c| (c.name, c.met)).collect();
     assert_eq!(
         names,
@@ -144,28 +144,22 @@ fn stance_on_a_floor_records_every_precondition_met() {
             ("free_base", true),
             ("feet_loaded", true),
             ("upright", true)
-        ]
+        ],
+        "{model}"
     );
+}
+
+#[test]
+fn stance_on_a_floor_records_every_precondition_met() {
+    // The same passive toe on a floor: the stance run stands, loads the foot and measures.
+    assert_stance_measured("fixtures/rules/passive-joint-spring/invalid.xml");
 }
 
 #[test]
 fn stance_on_a_floor_body_welded_to_the_world_records_every_precondition_met() {
     // The floor is a plane on a jointless <body> (MuJoCo welds it to the world): the stance run
     // must stand on it as on a plane of the world body, load the foot and measure.
-    let fs = probed("fixtures/probes/toe_static_floor_body.xml", "passive-joint-spring");
-    let p = outcome(&fs[0]);
-    assert_eq!(p.status, ProbeStatus::Measured, "{}", p.note);
-    let names: Vec<_> = p.preconditions.iter().map(|c| (c.name, c.met)).collect();
-    assert_eq!(
-        names,
-        [
-            ("floor", true),
-            ("settled", true),
-            ("free_base", true),
-            ("feet_loaded", true),
-            ("upright", true)
-        ]
-    );
+    assert_stance_measured("fixtures/probes/toe_static_floor_body.xml");
 }
 
 #[test]
