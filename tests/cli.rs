@@ -52,6 +52,19 @@ fn broken_inputs_exit_2_with_location() {
             "fixtures/broken/massless_body.xml:7:19:",
             "Element name 'forearm'",
         ),
+        // MuJoCo's message outgrows mujoco-rs's 100-byte buffer: the whole message is read, and
+        // the element it names located (a sensor naming a missing joint; a URDF link whose
+        // inertia has a zero moment), not the root element.
+        (
+            &["fixtures/broken/sensor_unknown_joint.xml"],
+            "fixtures/broken/sensor_unknown_joint.xml:12:",
+            "Element name 'arm_left_shoulder_pitch_pos'",
+        ),
+        (
+            &["fixtures/broken/urdf_inertia_not_positive.urdf"],
+            "fixtures/broken/urdf_inertia_not_positive.urdf:11:",
+            "Element name 'lower_link_with_a_long_enough_name'",
+        ),
         // A MuJoCo plugin with no plugin library loaded: where, and what to set.
         (
             &["fixtures/broken/plugin_pid.xml"],

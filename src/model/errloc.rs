@@ -68,6 +68,14 @@ pub(super) fn mujoco_error_location(
             map.file(i).path.file_name().and_then(|f| f.to_str()).is_some_and(|f| msg.contains(f))
         })
         .unwrap_or(first_file);
+    // "Element name 'X', id N, line L" (a compile error, no column): the column of X's
+    // `name` value on that line.
+    let col = col.or_else(|| {
+        let i = msg.find("Element name '")? + "Element name '".len();
+        let name = &msg[i..i + msg[i..].find('\'')?];
+        let text = map.file(file).text.lines().nth(line - 1)?;
+        ['"', '\''].iter().find_map(|q| text.find(&format!("name={q}{name}{q}")).map(|k| k + 7))
+    });
     Some(LoadError::at_line(map, file, line, col.unwrap_or(1), msg.to_string()))
 }
 

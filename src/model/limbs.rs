@@ -156,8 +156,9 @@ impl Robot {
     /// Whether `joint` is a coordinate of a mobile base over the world, written in place of a
     /// free joint (a planar base: slides along x and y and a hinge about the vertical): it sits
     /// on a body whose parent is fixed to the world, and that body has two or more joints, all
-    /// slides or hinges, at least one a slide. Such joints are where the base is on the floor,
-    /// not motor joints: nothing stops them and they have no rotor of their own. A base whose
+    /// slides, hinges or a ball, at least one a slide (a floating base written as three slides
+    /// and a ball, as humanoid-gym's files do, is one too). Such joints are where the base is on
+    /// the floor, not motor joints: nothing stops them and they have no rotor of their own. A base whose
     /// coordinates are split over nested bodies (one joint each) is recognised by
     /// [`Robot::in_nested_planar_base`].
     pub fn is_base_coordinate(&self, joint: usize) -> bool {
@@ -173,7 +174,8 @@ impl Robot {
         let on_body: Vec<JointType> =
             self.joints.iter().filter(|x| x.body == j.body).map(|x| x.jtype).collect();
         (on_body.len() >= 2
-            && on_body.iter().all(|t| scalar(*t))
+            && on_body.iter().all(|t| scalar(*t) || *t == JointType::Ball)
+            && on_body.iter().filter(|t| **t == JointType::Ball).count() <= 1
             && on_body.contains(&JointType::Slide))
             || self.in_nested_planar_base(joint)
     }

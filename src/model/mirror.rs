@@ -126,7 +126,17 @@ pub fn mirror_in(
     exists: impl Fn(&str) -> bool,
 ) -> Option<(Side, String)> {
     if let Some(m) = mirror(name, spec) {
+        // `RLEG_HIP_R`'s marker `_R` names the roll axis, not a side: its partner
+        // `RLEG_HIP_L` does not exist, the side letter fused to the limb word does.
+        if !exists(&m.1)
+            && let Some(fused) = fused_side_letter(name, &exists)
+        {
+            return Some(fused);
+        }
         return Some(m);
+    }
+    if let Some(fused) = fused_side_letter(name, &exists) {
+        return Some(fused);
     }
     for (l, r) in LEG_SIDE_PREFIXES {
         for (from, to, side) in [(l, r, Side::Left), (r, l, Side::Right)] {
@@ -141,6 +151,29 @@ pub fn mirror_in(
         }
     }
     None
+}
+
+/// A side letter fused to the limb word of a name's first token, as in HRP-style names
+/// (`LLEG_HIP_P` ↔ `RLEG_HIP_P`, `LARM_ELBOW` ↔ `RARM_ELBOW`, `lleg_knee` ↔ `rleg_knee`): the
+/// token is `L`/`R` (or `l`/`r`) and a word of letters, and the name with the other letter must
+/// exist (`LEG_x` would need a `REG_x`).
+fn fused_side_letter(name: &str, exists: &impl Fn(&str) -> bool) -> Option<(Side, String)> {
+    let token = name.split('_').next()?;
+    let mut chars = token.chars();
+    let first = chars.next()?;
+    let word: String = chars.collect();
+    if word.chars().count() < 2 || !word.chars().all(|c| c.is_ascii_alphabetic()) {
+        return None;
+    }
+    let (side, other) = match first {
+        'L' => (Side::Left, 'R'),
+        'R' => (Side::Right, 'L'),
+        'l' => (Side::Left, 'r'),
+        'r' => (Side::Right, 'l'),
+        _ => return None,
+    };
+    let partner = format!("{other}{}", &name[first.len_utf8()..]);
+    exists(&partner).then_some((side, partner))
 }
 
 /// The mirror of a name by the built-in markers alone (no spec): `None` when the name carries no
@@ -185,6 +218,25 @@ mod tests {
             mirror_in("left_knee", None, |_| false),
             Some((Side::Left, "right_knee".into()))
         );
+    }
+
+    #[test]
+    fn side_letters_fused_to_the_limb_word_pair_with_their_partner() {
+        let hrp = |n: &str| {
+            ["LLEG_HIP_R", "RLEG_HIP_R", "LARM_ELBOW", "RARM_ELBOW", "lleg_knee", "rleg_knee"]
+                .contains(&n)
+        };
+        // `_R` is the roll axis here: the partner is the other leg, not `RLEG_HIP_L`.
+        assert_eq!(mirror_in("RLEG_HIP_R", None, hrp), Some((Side::Right, "LLEG_HIP_R".into())));
+        assert_eq!(mirror_in("LLEG_HIP_R", None, hrp), Some((Side::Left, "RLEG_HIP_R".into())));
+        assert_eq!(mirror_in("LARM_ELBOW", None, hrp), Some((Side::Left, "RARM_ELBOW".into())));
+        assert_eq!(mirror_in("rleg_knee", None, hrp), Some((Side::Right, "lleg_knee".into())));
+        // No partner, no pairing: a `LEG_` name is not a left `EG`.
+        assert_eq!(mirror_in("LEG_KNEE", None, |n| n == "LEG_KNEE"), None);
+        assert_eq!(mirror_in("LINK_2", None, |_| false), None);
+        // A built-in marker whose partner exists still wins.
+        let both = |n: &str| ["LLEG_hip_l", "LLEG_hip_r"].contains(&n);
+        assert_eq!(mirror_in("LLEG_hip_l", None, both), Some((Side::Left, "LLEG_hip_r".into())));
     }
 
     #[test]

@@ -125,6 +125,39 @@ pub fn contact_normal_force<M: ModelType>(d: &MjData<M>, i: usize) -> f64 {
     d.try_contact_force(i).map(|f| f[0]).unwrap_or(0.0)
 }
 
+/// Room for MuJoCo's load error message: mujoco-rs gives `mj_loadXML` 100 bytes, which cuts
+/// "Element name 'arm_left_shoulder_pitch_pos', id 0" after a few letters of the name.
+const LOAD_ERROR_LEN: usize = 1000;
+
+/// `short` (mujoco-rs's load error, its MuJoCo message cut at 99 bytes) with MuJoCo's whole
+/// message: the load of `path` repeated with [`LOAD_ERROR_LEN`] bytes of room. `short` as it
+/// is when the repeat gives no longer message that starts the same way.
+pub fn full_load_error(path: &std::path::Path, short: &str) -> String {
+    let Some(cpath) = path.to_str().and_then(|p| std::ffi::CString::new(p).ok()) else {
+        return short.to_string();
+    };
+    let mut buf = vec![0 as std::os::raw::c_char; LOAD_ERROR_LEN];
+    // SAFETY: `cpath` is a NUL-terminated string that outlives the call, the VFS pointer may be
+    // null, and `buf` holds `LOAD_ERROR_LEN` writable bytes, the size passed; a model MuJoCo
+    // returns is owned here and freed once.
+    let m = unsafe {
+        c::mj_loadXML(cpath.as_ptr(), std::ptr::null(), buf.as_mut_ptr(), LOAD_ERROR_LEN as i32)
+    };
+    if !m.is_null() {
+        // SAFETY: `m` was returned by mj_loadXML above and is not used after this.
+        unsafe { c::mj_deleteModel(m) };
+    }
+    let bytes: Vec<u8> = buf.iter().take_while(|&&b| b != 0).map(|&b| b as u8).collect();
+    let full = String::from_utf8_lossy(&bytes);
+    let head: String = full.chars().take(30).collect();
+    match short.find(head.as_str()) {
+        Some(k) if !head.is_empty() && full.starts_with(&short[k..]) => {
+            format!("{}{full}", &short[..k])
+        }
+        _ => short.to_string(),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -199,5 +232,23 @@ mod tests {
         assert!(geom_distance(&mut d, 0, 5, 1.0).is_nan());
         assert_eq!(contact_normal_force(&d, 0), 0.0);
         assert_eq!(full_mass_matrix(&d).len(), 1);
+    }
+
+    #[test]
+    fn load_errors_keep_mujocos_whole_message() {
+        let dir = std::env::temp_dir().join(format!("ml-loaderr-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let f = dir.join("m.xml");
+        let xml = r#"<mujoco><worldbody><body><joint name="j"/><geom size="0.1"/></body></worldbody>
+<sensor><jointpos name="a_sensor_with_a_rather_long_name_to_cut" joint="no_such_joint_anywhere"/></sensor></mujoco>"#;
+        std::fs::write(&f, xml).unwrap();
+        let short = MjModel::from_xml(&f).err().map(|e| e.to_string()).unwrap_or_default();
+        assert!(!short.contains("a_sensor_with_a_rather_long_name_to_cut"), "{short}");
+        let full = full_load_error(&f, &short);
+        assert!(full.contains("Element name 'a_sensor_with_a_rather_long_name_to_cut'"), "{full}");
+        assert!(full.starts_with(&short[..short.len().min(20)]), "{full}");
+        // A message that does not come from this load is kept as it is.
+        assert_eq!(full_load_error(&f, "something else"), "something else");
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }

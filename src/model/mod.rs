@@ -582,7 +582,9 @@ pub fn load(map: &mut SourceMap, path: &Path, keyframe: Option<&str>) -> Result<
     let resolved =
         if format == Format::Urdf { urdf_packages::resolved_copy(map, first)? } else { None };
     plugins::load_once();
-    let m = MjModel::from_xml(resolved.as_deref().unwrap_or(path));
+    let load_path = resolved.as_deref().unwrap_or(path);
+    let m =
+        MjModel::from_xml(load_path).map_err(|e| mj::full_load_error(load_path, &e.to_string()));
     if let Some(t) = &resolved {
         let _ = std::fs::remove_file(t);
     }

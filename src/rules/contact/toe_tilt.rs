@@ -30,7 +30,10 @@ declare_rule! {
     /// are its toes.
     ///
     /// Only flat feet are checked: a point foot (quadruped sphere) or a wheel has no sole to
-    /// tilt (robot families: `rules::contact::feet`).
+    /// tilt (robot families: `rules::contact::feet`). A keyframe that holds a foot in the air
+    /// — the model has a floor and the foot's lowest point is above it by more than the foot's
+    /// own height (a lie-down pose dropped onto the belly) — is no stance: that foot is not
+    /// judged there.
     ///
     /// ## Why is this bad?
     /// A toe capsule a few millimetres below the sole turns a flat foot into a rocker: the robot
@@ -97,6 +100,35 @@ fn pose_word(robot: &Robot) -> String {
         Some(_) => "the keyframe".into(),
         None => "qpos0".into(),
     }
+}
+
+/// Whether a keyframe holds the foot in the air, so that it is no stance to judge a sole at:
+/// the model has a floor (a horizontal plane of the world or a body welded to it that a foot
+/// geom touches) and the foot's lowest point is above it by more than the foot's own height
+/// (its collision geoms' vertical extent). A lie-down keyframe dropped from 0.36 m (Unitree
+/// B2's `home`: calves folded level, a shin guard box as low as the foot sphere) is one; a
+/// stance keyframe written a few millimetres above the floor, or `qpos0`, is judged.
+fn in_the_air(robot: &Robot, foot: &Foot, zmin: f64) -> bool {
+    if robot.key.key_name.is_none() {
+        return false;
+    }
+    let floor = foot
+        .geoms
+        .iter()
+        .flat_map(|&g| crate::model::contact::ground_partners(robot, g))
+        .map(|(o, _)| Placed::of(robot, o))
+        .filter(|p| p.gtype == GeomType::Plane && p.mat[8] > 1.0 - 1e-9)
+        .map(|p| p.pos[2])
+        .fold(f64::NEG_INFINITY, f64::max);
+    if !floor.is_finite() {
+        return false;
+    }
+    let top = foot
+        .geoms
+        .iter()
+        .map(|&g| Placed::of(robot, g).support([0.0, 0.0, 1.0])[2])
+        .fold(f64::NEG_INFINITY, f64::max);
+    zmin - floor > top - zmin
 }
 
 /// What the `stance-settle` probe checks: after standing, a contact geom of the foot (the body,
@@ -191,6 +223,9 @@ impl ToeTilt {
             let low: Vec<(usize, f64)> =
                 foot.geoms.iter().map(|&g| (g, Placed::of(robot, g).lowest()[2])).collect();
             let zmin = low.iter().map(|x| x.1).fold(f64::INFINITY, f64::min);
+            if in_the_air(robot, &foot, zmin) {
+                continue;
+            }
             let sole: Vec<(usize, f64)> =
                 low.iter().copied().filter(|x| x.1 <= zmin + window).collect();
             let own: Vec<f64> =

@@ -149,10 +149,16 @@ impl Rule for FreePassiveJoint {
             } else {
                 format!("only {}", has.join(", "))
             };
+            // An unnamed joint by its number among its body's joints (from 1, file order).
+            let label = if j.name.is_empty() {
+                let no = robot.joints[..j.id].iter().filter(|x| x.body == j.body).count() + 1;
+                format!("no. {no} of body `{}`", robot.body_name(j.body))
+            } else {
+                format!("`{}`", j.name)
+            };
             let msg = format!(
-                "{} joint `{}` is held by nothing: no actuator, no spring (stiffness 0), no coupling (equality, tendon or closed loop); {only}",
+                "{} joint {label} is held by nothing: no actuator, no spring (stiffness 0), no coupling (equality, tendon or closed loop); {only}",
                 if slide { "slide" } else { "hinge" },
-                j.name
             );
             let f = cx
                 .at_elem(ElemKind::Joint, j.id, &j.name, msg)
