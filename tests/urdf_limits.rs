@@ -1,6 +1,6 @@
 //! URDF defect classes of issue 45 (audit round six's "Left:"): geared joints with no rotor
-//! inertia (`transmission-without-armature`) and placeholder `<limit>`s
-//! (`placeholder-joint-limits`). Each value is computed here by hand from the fixture's numbers.
+//! inertia (`transmission-without-armature`), placeholder `<limit>`s
+//! (`placeholder-joint-limits`) and legged URDFs welded to the world (`welded-legged-base`). Each value is computed here by hand from the fixture's numbers.
 
 use std::path::Path;
 
@@ -108,5 +108,18 @@ fn mujoco_makes_a_urdf_effort_the_joint_force_range_and_a_zero_range_unlimited()
     let r = load_urdf("invalid_no_range.urdf");
     for j in ["shoulder", "elbow", "rail"] {
         assert!(!r.joint(j).unwrap().limited, "{j}");
+    }
+}
+
+#[test]
+fn a_legged_urdf_welded_to_the_world_is_named_and_arms_and_wheels_are_not() {
+    const ID: &str = "welded-legged-base";
+    // Two legs; each foot sphere (r 0.025) 0.05 + 0.2 + 0.2 m below the trunk's frame.
+    let f = of(ID, "invalid.urdf");
+    assert_eq!(f.len(), 1, "{f:?}");
+    assert_eq!(f[0].measured.as_ref().unwrap().value, 2.0);
+    assert!((data(&f[0], "depth") - 0.475).abs() < 1e-9, "{}", data(&f[0], "depth"));
+    for v in ["valid_ceiling_arm.urdf", "valid_wheeled_base.urdf"] {
+        assert!(of(ID, v).is_empty(), "{v}");
     }
 }

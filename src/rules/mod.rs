@@ -333,6 +333,7 @@ pub fn registry() -> Vec<&'static dyn Rule> {
         &contact::toe_tilt::ToeTilt,
         &contact::foot_collision_geometry::FootCollisionGeometry,
         &contact::links_without_collision::LinksWithoutCollision,
+        &contact::welded_legged_base::WeldedLeggedBase,
         &contact::torsional_friction::TorsionalFriction,
         &limits::soft_limits::SoftLimits,
         &control::underdamped_pd_gains::UnderdampedPdGains,
