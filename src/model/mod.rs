@@ -14,6 +14,7 @@ pub mod plugins;
 pub mod region;
 pub mod source;
 pub mod urdf_packages;
+pub mod urdf_transmissions;
 
 use std::path::{Path, PathBuf};
 

@@ -4,3 +4,4 @@ pub mod foot_collision_geometry;
 pub mod links_without_collision;
 pub mod toe_tilt;
 pub mod torsional_friction;
+pub mod welded_legged_base;

@@ -8,6 +8,7 @@ pub mod mass_budget;
 pub mod parallel_ankle_armature;
 pub mod passive_joint_armature;
 pub mod repeated_class_mass;
+pub mod transmission_armature;
 pub mod zero_armature;
 
 use crate::finding::Finding;

@@ -1,0 +1,147 @@
+use crate::declare_rule;
+use crate::finding::{Finding, Severity, Subject};
+use crate::model::{Format, JointType, Robot};
+use crate::rules::contact::feet::GROUND_WINDOW;
+use crate::rules::geometry::shapes::Placed;
+use crate::rules::{Context, Rule, RuleMeta};
+use crate::util::fmt_num;
+
+declare_rule! {
+    /// ## What it does
+    /// In a URDF with no floating joint, finds a kinematic tree that looks like legs: two or more
+    /// chains, each leaving the root link through a joint of its own and ending, two or more
+    /// hinge/slide joints further out, in a leaf link (not a wheel) whose collision geometry
+    /// reaches the robot's lowest point (within 1 cm) below the root link's frame at qpos0.
+    /// Says that MuJoCo's importer welded the root to the world, so the foot rules
+    /// (`toe-tilt`, `foot-collision-geometry`, `links-without-collision`,
+    /// `torsional-friction-length`) and the stance probes did not judge those feet. A
+    /// fixed-base arm (its chain ends above its base, or in one chain of fingers) and a wheeled
+    /// base (its lowest links are wheels) are not reported.
+    ///
+    /// ## Why is this bad?
+    /// MuJoCo's URDF importer adds no free joint: the root link is fixed where the file puts it,
+    /// so a legged robot loaded from its URDF hangs from its trunk, its feet never carry its
+    /// weight, and nothing a stance or walking run would show (feet sliding, sinking, tipping)
+    /// happens. The foot rules know feet only under a free joint (a fixed-base arm has none),
+    /// so they say nothing about this robot's feet: a clean lint of the URDF is not a clean
+    /// lint of the robot standing.
+    ///
+    /// ## How it is confirmed
+    /// Static: the compiled tree (no free joint, the chains and their joints) and the leaf
+    /// links' collision geometry at qpos0. Information, not a defect of the file: a URDF cannot
+    /// say its base floats.
+    ///
+    /// ## How to fix
+    /// Lint and simulate the robot floating: an MJCF wrapper that attaches the URDF under a
+    /// body with a `<freejoint/>` above a floor (`<mujoco><asset><model name="robot"
+    /// file="robot.urdf"/></asset><worldbody><geom type="plane" size="0 0 1"/><body pos="0 0
+    /// H"><freejoint/><attach model="robot" prefix=""/></body></worldbody></mujoco>`, H the
+    /// standing height), and lint the wrapper.
+    pub WeldedLeggedBase {
+        id: "welded-legged-base",
+        group: "contact",
+        level: Severity::Info,
+        probe: None,
+        options: [],
+    }
+}
+
+/// The leaves of `robot` that stand like feet (see the rule's docs), as (leaf, top-level link
+/// of its chain), and how far below the root link's frame their lowest point is (m).
+fn legs(robot: &Robot) -> (Vec<(usize, usize)>, f64) {
+    let n = robot.bodies.len();
+    let lowest_of = |b: usize| {
+        robot
+            .geoms
+            .iter()
+            .filter(|g| g.body == b && crate::model::contact::takes_part(robot, g.id))
+            .filter(|g| {
+                !matches!(g.gtype, crate::model::GeomType::Plane | crate::model::GeomType::Hfield)
+            })
+            .map(|g| Placed::of(robot, g.id).lowest()[2])
+            .fold(f64::INFINITY, f64::min)
+    };
+    let lows: Vec<f64> = (0..n).map(lowest_of).collect();
+    let zmin = lows.iter().copied().fold(f64::INFINITY, f64::min);
+    // The root link's frame: the world origin, where the importer welds it.
+    let root_z = robot.key.body_xpos.first().map_or(0.0, |p| p[2]);
+    let mut out = Vec::new();
+    for (b, &low) in lows.iter().enumerate().skip(1) {
+        if robot.bodies.iter().any(|c| c.id != 0 && c.parent == b) {
+            continue; // not a leaf
+        }
+        if !(low <= zmin + GROUND_WINDOW && low < root_z) {
+            continue;
+        }
+        // The chain from the leaf up to the world: its scalar joints, and its top link.
+        let (mut joints, mut wheel, mut top, mut x) = (0usize, false, b, b);
+        for _ in 0..n {
+            for j in robot.joints.iter().filter(|j| j.body == x) {
+                if matches!(j.jtype, JointType::Hinge | JointType::Slide) {
+                    joints += 1;
+                }
+                wheel |= robot.is_wheel(j.id);
+            }
+            let p = robot.bodies[x].parent;
+            if p == 0 {
+                top = x;
+                break;
+            }
+            x = p;
+        }
+        if joints >= 2 && !wheel {
+            out.push((b, top));
+        }
+    }
+    (out, root_z - zmin)
+}
+
+impl Rule for WeldedLeggedBase {
+    fn meta(&self) -> &'static RuleMeta {
+        &Self::META
+    }
+    fn check(&self, cx: &Context, out: &mut Vec<Finding>) {
+        let robot = cx.robot;
+        if robot.format != Format::Urdf || robot.joints.iter().any(|j| j.jtype == JointType::Free) {
+            return;
+        }
+        let (legs, depth) = legs(robot);
+        let mut tops: Vec<usize> = legs.iter().map(|l| l.1).collect();
+        tops.sort_unstable();
+        tops.dedup();
+        if tops.len() < 2 {
+            return;
+        }
+        let root = robot.tree.children_tagged("link").find(|l| {
+            let name = l.get("name").unwrap_or("");
+            !robot
+                .tree
+                .children_tagged("joint")
+                .any(|j| j.children_tagged("child").any(|c| c.get("link") == Some(name)))
+        });
+        let root_name = root.and_then(|l| l.get("name")).unwrap_or("");
+        let at = root.map_or(robot.root_loc(), |l| l.attr("name").map_or(l.loc, |a| a.loc));
+        let names: Vec<String> =
+            legs.iter().map(|l| format!("`{}`", robot.body_name(l.0))).collect();
+        let f = cx
+            .finding(
+                format!(
+                    "MuJoCo's importer welds the root link `{root_name}` to the world, and the robot has {} legs ending in its lowest contacts ({}): it hangs from its trunk, and the foot rules and stance probes did not judge these feet",
+                    legs.len(),
+                    names.join(", ")
+                ),
+                at,
+            )
+            .element(format!("link `{root_name}`"), at)
+            .label("root link, fixed to the world by the importer")
+            .note(format!(
+                "a URDF cannot say its base floats: loaded as it is, the robot never stands on its feet (their lowest point {} m below the root link's frame at qpos0), and the foot rules know feet only under a free joint",
+                fmt_num(depth, 3)
+            ))
+            .help("lint and simulate it floating: an MJCF wrapper that attaches the URDF under a body with a <freejoint/> above a floor (<body pos=\"0 0 H\"><freejoint/><attach model=\"robot\" prefix=\"\"/></body>), and lint the wrapper")
+            .subject(Subject::Model)
+            .measured(legs.len() as f64, "legs")
+            .with("depth", depth);
+        out.push(f);
+    }
+}

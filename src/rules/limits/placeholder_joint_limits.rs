@@ -1,0 +1,344 @@
+use crate::declare_rule;
+use crate::finding::{Finding, Severity, Subject};
+use crate::model::source::{Loc, XNode};
+use crate::model::urdf_transmissions::{drives, transmissions};
+use crate::model::{Format, JointType, Robot};
+use crate::rules::{Context, Domain, Rule, RuleMeta, in_subtree, opt};
+use crate::util::fmt_num;
+
+declare_rule! {
+    /// ## What it does
+    /// In a URDF, finds `<limit>`s that cannot be the hardware's, judged from the robot's own
+    /// physics, not from a list of round numbers:
+    /// - **effort**: a joint's `effort` above `weight_multiple` × the torque of the whole
+    ///   robot's weight at the joint's reach (the URDF's link masses summed, root link included,
+    ///   × g × the farthest point of what the joint carries from its anchor, at qpos0; a force
+    ///   of the robot's weight for a prismatic joint). That torque bounds every static load the joint can meet (a leg
+    ///   joint holding the robot on its foot, an arm joint its links), so a motor many times
+    ///   stronger is no motor of this robot (Bolt's `effort="1000"` N·m on a 1.3 kg robot);
+    /// - **velocity**: a joint's `velocity` that would move the farthest point it carries
+    ///   faster than `max_tip_speed` (velocity × reach, or the velocity itself for a prismatic
+    ///   joint);
+    /// - **zero**: `effort="0"` or `velocity="0"` on a joint a `<transmission>` drives (a motor
+    ///   that gives no torque or cannot turn);
+    /// - **beyond a turn**: a revolute joint with a stop more than a full turn (2π, plus the
+    ///   rounding of a value written to two decimals) from its zero: the widest real stops,
+    ///   cable-wound multi-turn axes such as a UR arm's, are ±2π;
+    /// - **no range**: a revolute or prismatic joint with no `<limit>`, or `lower` = `upper` =
+    ///   0 (both absent or written as 0), which MuJoCo compiles as an unlimited joint.
+    ///
+    /// Joints sharing one case are reported together; joints whose subtree has no extent
+    /// beyond the axis are not judged for effort and velocity.
+    ///
+    /// ## Why is this bad?
+    /// MuJoCo's URDF importer makes a positive `effort` the joint's `actuatorfrcrange`, and
+    /// training frameworks read `effort` and `velocity` as the joint's torque and speed limits
+    /// (Isaac Gym's DoF properties; legged_gym clips its torques at the effort): a placeholder
+    /// bounds nothing, and a policy trained against it learns motions that need torque or
+    /// speed the motors do not have. MuJoCo ignores `velocity`. A stop beyond a full turn never
+    /// engages (±10 rad lets a leg swing through itself), and frameworks that scale actions or
+    /// observations by the range spread them over it. A revolute joint whose `lower` and
+    /// `upper` are both 0 is locked at 0 for ROS tools and free without end in MuJoCo (its
+    /// range 0 0 means no limit).
+    ///
+    /// ## How it is confirmed
+    /// Static: the `<limit>` attributes as written, the compiled model's masses, geometry and
+    /// joint ranges at the keyframe. A fact of the file.
+    ///
+    /// ## How to fix
+    /// Write the motor's peak torque at the joint (peak × reduction) as `effort`, its no-load
+    /// speed at the joint (motor speed / reduction) as `velocity`, and the hardware's stops as
+    /// `lower`/`upper`; a joint that turns without end is `type="continuous"`, one that does not
+    /// move is `type="fixed"`.
+    pub PlaceholderJointLimits {
+        id: "placeholder-joint-limits",
+        group: "limits",
+        level: Severity::Warning,
+        probe: None,
+        options: [
+            opt("weight_multiple", 50.0, "× the robot's weight at the joint's reach", Domain::AT_LEAST_ONE, "an effort above this many times the torque of the whole robot's weight at the joint's reach is no motor of the robot"),
+            opt("max_tip_speed", 100.0, "m/s", Domain::POSITIVE, "a velocity moving the farthest point the joint carries faster than this is no motor's"),
+        ],
+    }
+}
+
+/// One full turn of a revolute joint (rad): its stops lie within a turn of its zero.
+const FULL_TURN: f64 = std::f64::consts::TAU;
+/// How far a value of 2π written to two decimals (6.28, 6.29) can lie from it (rad): the
+/// rounding of the last digit written, with a margin for the next one.
+const WRITTEN_ROUNDING: f64 = 0.01;
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+enum Case {
+    Effort,
+    Velocity,
+    Zero,
+    BeyondTurn,
+    NoRange,
+}
+
+/// One joint with a placeholder: where, what the measured quantity is, and the text for it.
+struct Hit {
+    case: Case,
+    joint: usize,
+    at: Loc,
+    /// Effort: effort / weight torque; velocity: tip speed (m/s); beyond a turn: the farthest
+    /// stop (rad); zero / no range: 0.
+    value: f64,
+    detail: String,
+}
+
+/// The farthest point of what joint `j` carries from its anchor at the keyframe (m): the
+/// subtree's body origins and geoms (centre + bounding radius).
+pub fn subtree_reach(robot: &Robot, j: usize) -> f64 {
+    let (Some(joint), Some(anchor)) = (robot.joints.get(j), robot.key.joint_xanchor.get(j)) else {
+        return 0.0;
+    };
+    let d = |p: &[f64; 3]| {
+        ((p[0] - anchor[0]).powi(2) + (p[1] - anchor[1]).powi(2) + (p[2] - anchor[2]).powi(2))
+            .sqrt()
+    };
+    let mut reach: f64 = 0.0;
+    for b in robot.bodies.iter().filter(|b| in_subtree(robot, joint.body, b.id)) {
+        if let Some(p) = robot.key.body_xpos.get(b.id) {
+            reach = reach.max(d(p));
+        }
+    }
+    for g in robot.geoms.iter().filter(|g| g.body != 0 && in_subtree(robot, joint.body, g.body)) {
+        if let Some(p) = robot.key.geom_xpos.get(g.id) {
+            reach = reach.max(d(p) + g.rbound.max(0.0));
+        }
+    }
+    if reach.is_finite() { reach } else { 0.0 }
+}
+
+/// The robot's mass as the URDF states it: the sum of its links' `<inertial><mass>` (kg). The
+/// compiled model loses the root link's (MuJoCo's importer fixes the root to the world and
+/// fuses it, with the links fixed to it, into the world body). `None` when no mass is written.
+fn urdf_mass(root: &XNode) -> Option<f64> {
+    let m: f64 = root
+        .children_tagged("link")
+        .flat_map(|l| l.children_tagged("inertial"))
+        .flat_map(|i| i.children_tagged("mass"))
+        .filter_map(|m| m.get("value")?.trim().parse::<f64>().ok())
+        .filter(|m| m.is_finite() && *m > 0.0)
+        .sum();
+    (m > 0.0).then_some(m)
+}
+
+fn num(limit: Option<&XNode>, attr: &str) -> Option<(f64, Loc)> {
+    let a = limit?.attr(attr)?;
+    a.value.trim().parse::<f64>().ok().filter(|v| v.is_finite()).map(|v| (v, a.loc))
+}
+
+impl Rule for PlaceholderJointLimits {
+    fn meta(&self) -> &'static RuleMeta {
+        &Self::META
+    }
+    fn check(&self, cx: &Context, out: &mut Vec<Finding>) {
+        let robot = cx.robot;
+        if robot.format != Format::Urdf {
+            return;
+        }
+        let multiple = cx.opt("weight_multiple");
+        let max_speed = cx.opt("max_tip_speed");
+        let g = robot.opt.gravity;
+        let g = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
+        let mass = urdf_mass(&robot.tree).unwrap_or_else(|| robot.mass_split().0);
+        let driven = transmissions(cx.sources, &robot.tree);
+        let mut hits: Vec<Hit> = Vec::new();
+        for x in robot.tree.children_tagged("joint") {
+            let Some(name) = x.get("name") else { continue };
+            let jtype = x.get("type").unwrap_or("");
+            let Some(j) = robot.joint(name).filter(|j| j.is_scalar()) else { continue };
+            let limit = x.children_tagged("limit").next();
+            let name_at = x.attr("name").map_or(x.loc, |a| a.loc);
+            let slide = j.jtype == JointType::Slide;
+            // Range: a revolute/prismatic joint states its stops.
+            if matches!(jtype, "revolute" | "prismatic") {
+                let lo = num(limit, "lower");
+                let hi = num(limit, "upper");
+                let (l, h) = (lo.map_or(0.0, |v| v.0), hi.map_or(0.0, |v| v.0));
+                if l == 0.0 && h == 0.0 && !j.limited {
+                    let detail = match limit {
+                        None => format!("`{name}` ({jtype}, no <limit>)"),
+                        Some(_) => format!("`{name}` ({jtype}, lower = upper = 0)"),
+                    };
+                    let at = hi.or(lo).map_or(limit.map_or(name_at, |l| l.loc), |v| v.1);
+                    hits.push(Hit { case: Case::NoRange, joint: j.id, at, value: 0.0, detail });
+                } else if jtype == "revolute" && j.limited {
+                    let far = l.abs().max(h.abs());
+                    if far > FULL_TURN + WRITTEN_ROUNDING {
+                        let at = if l.abs() >= h.abs() { lo } else { hi };
+                        hits.push(Hit {
+                            case: Case::BeyondTurn,
+                            joint: j.id,
+                            at: at.map_or(name_at, |v| v.1),
+                            value: far,
+                            detail: format!(
+                                "`{name}` [{}, {}] rad ({} turns)",
+                                fmt_num(l, 4),
+                                fmt_num(h, 4),
+                                fmt_num(far / FULL_TURN, 3)
+                            ),
+                        });
+                    }
+                }
+            }
+            let effort = num(limit, "effort");
+            let velocity = num(limit, "velocity");
+            // A joint a transmission drives with a zero limit: a motor with no torque or speed.
+            if drives(&driven, name) {
+                for (what, v) in [("effort", effort), ("velocity", velocity)] {
+                    if let Some((x, at)) = v
+                        && x == 0.0
+                    {
+                        hits.push(Hit {
+                            case: Case::Zero,
+                            joint: j.id,
+                            at,
+                            value: 0.0,
+                            detail: format!("`{name}` {what} 0"),
+                        });
+                    }
+                }
+            }
+            // A prismatic joint's load is a force: its "reach" is a unit lever (the weight in N,
+            // the velocity in m/s as it stands).
+            let reach = if slide { 1.0 } else { subtree_reach(robot, j.id) };
+            if !(reach > 0.0) {
+                continue;
+            }
+            let (tu, vu) = if slide { ("N", "m/s") } else { ("N·m", "rad/s") };
+            if let Some((e, at)) = effort.filter(|e| e.0 > 0.0)
+                && mass > 0.0
+                && g > 0.0
+            {
+                let weight = mass * g * reach;
+                let ratio = e.abs() / weight;
+                if ratio > multiple {
+                    let lever =
+                        if slide { String::new() } else { format!(" at {} m", fmt_num(reach, 3)) };
+                    hits.push(Hit {
+                        case: Case::Effort,
+                        joint: j.id,
+                        at,
+                        value: ratio,
+                        detail: format!(
+                            "`{name}` {} {tu} = {}× the robot's weight{lever} ({} {tu})",
+                            fmt_num(e, 4),
+                            fmt_num(ratio, 3),
+                            fmt_num(weight, 3)
+                        ),
+                    });
+                }
+            }
+            if let Some((v, at)) = velocity.filter(|v| v.0 > 0.0) {
+                let tip = v.abs() * reach;
+                if tip > max_speed {
+                    let detail = if slide {
+                        format!("`{name}` {} {vu}", fmt_num(v, 4))
+                    } else {
+                        format!(
+                            "`{name}` {} {vu} × {} m = {} m/s",
+                            fmt_num(v, 4),
+                            fmt_num(reach, 3),
+                            fmt_num(tip, 3)
+                        )
+                    };
+                    hits.push(Hit { case: Case::Velocity, joint: j.id, at, value: tip, detail });
+                }
+            }
+        }
+        for case in [Case::Effort, Case::Velocity, Case::Zero, Case::BeyondTurn, Case::NoRange] {
+            let group: Vec<&Hit> = hits.iter().filter(|h| h.case == case).collect();
+            if let Some(f) = finding(cx, case, &group, multiple, max_speed, mass) {
+                out.push(f);
+            }
+        }
+    }
+}
+
+fn finding(
+    cx: &Context,
+    case: Case,
+    hits: &[&Hit],
+    multiple: f64,
+    max_speed: f64,
+    mass: f64,
+) -> Option<Finding> {
+    // The primary joint: the largest value (the first in the file on a tie).
+    let top = hits.iter().copied().reduce(|a, b| if b.value > a.value { b } else { a })?;
+    let n = hits.len();
+    let s = if n == 1 { "" } else { "s" };
+    let states = if n == 1 { "states" } else { "state" };
+    let list: Vec<&str> = hits.iter().map(|h| h.detail.as_str()).collect();
+    let shown = if n > 6 {
+        format!("{}; and {} more", list[..6].join("; "), n - 6)
+    } else {
+        list.join("; ")
+    };
+    let robot = cx.robot;
+    let j = &robot.joints[top.joint];
+    let (msg, label, note, help) = match case {
+        Case::Effort => (
+            format!(
+                "{n} joint{s} {states} an effort limit over {} times the torque of the whole robot's weight ({} kg) at the joint's reach, no motor of this robot: {shown}",
+                fmt_num(multiple, 3),
+                fmt_num(mass, 3)
+            ),
+            "placeholder effort".to_string(),
+            "MuJoCo's importer makes the effort the joint's actuatorfrcrange, and training frameworks read it as the torque limit (legged_gym clips its torques at it): a bound this far above any load the robot can put on the joint bounds nothing, and a policy trained with it learns motions that need torque the motor does not have",
+            "write the motor's peak torque at the joint (the motor's peak × the reduction, from the datasheet) as effort",
+        ),
+        Case::Velocity => (
+            format!(
+                "{n} joint{s} {states} a velocity limit that would move the farthest point the joint carries faster than {} m/s, no motor's: {shown}",
+                fmt_num(max_speed, 3)
+            ),
+            "placeholder velocity".to_string(),
+            "MuJoCo ignores a URDF's velocity (it has no joint speed limit); training frameworks read it as the joint's speed limit (Isaac Gym's DoF properties) and in observation and reward scales: a placeholder leaves the motor's real speed limit unmodelled",
+            "write the motor's no-load speed at the joint (motor speed / reduction, from the datasheet) as velocity, and apply it in the training environment",
+        ),
+        Case::Zero => (
+            format!(
+                "{n} limit{s} of joints a <transmission> drives {} zero, a motor with no torque or no speed: {shown}",
+                if n == 1 { "is" } else { "are" }
+            ),
+            "zero limit on a driven joint".to_string(),
+            "ROS and training frameworks read effort 0 as a joint that gives no torque and velocity 0 as one that cannot move; MuJoCo's importer treats effort 0 as no force limit at all",
+            "write the motor's peak torque at the joint as effort and its speed at the joint as velocity",
+        ),
+        Case::BeyondTurn => (
+            format!(
+                "{n} revolute joint{s} {} a stop more than a full turn (2π) from the joint's zero, no hardware stop: {shown}",
+                if n == 1 { "places" } else { "place" }
+            ),
+            "beyond a full turn".to_string(),
+            "a revolute joint's stops lie within a turn of its zero (the widest real ones, cable-wound multi-turn axes such as a UR arm's, are ±2π); MuJoCo makes these the joint's range, a limit that never engages (the links swing through each other), and frameworks that scale actions or observations by the range spread them over it",
+            "write the hardware's stops (datasheet or CAD) as lower and upper; a joint that turns without end is type=\"continuous\"",
+        ),
+        Case::NoRange => (
+            format!(
+                "{n} joint{s} declared revolute or prismatic {states} no range: MuJoCo compiles {} unlimited, ROS tools read {} locked at 0: {shown}",
+                if n == 1 { "it" } else { "them" },
+                if n == 1 { "it" } else { "them" }
+            ),
+            "no range".to_string(),
+            "URDF takes a missing lower or upper as 0; a range of 0 0 means no limit to MuJoCo, so the joint turns without end in simulation while ROS tools hold it at 0",
+            "write the hardware's stops as lower and upper; a joint that turns without end is type=\"continuous\", one that does not move type=\"fixed\"",
+        ),
+    };
+    let mut f = cx.finding(msg, top.at).element(format!("joint `{}`", j.name), top.at).label(label);
+    for h in hits.iter().filter(|h| h.joint != top.joint).take(3) {
+        f = f.secondary(h.at, format!("also `{}`", robot.joints[h.joint].name));
+    }
+    let mut f = f.note(note).help(help).subject(Subject::Joint(j.id)).with("joints", n as f64);
+    f = match case {
+        Case::Effort => f.measured(top.value, "×").expected(multiple, "×"),
+        Case::Velocity => f.measured(top.value, "m/s").expected(max_speed, "m/s"),
+        Case::BeyondTurn => f.measured(top.value, "rad").expected(FULL_TURN, "rad"),
+        Case::Zero | Case::NoRange => f.measured(0.0, ""),
+    };
+    Some(f)
+}
