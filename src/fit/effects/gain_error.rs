@@ -54,6 +54,15 @@ impl Effect for GainError {
     fn smooth(&self) -> bool {
         true
     }
+    /// Ranked and predicted on kp's column alone ([`Effect::screened`]), stepped on both: kd's
+    /// column is a viscous damping's on the same joint (the servo's `kv·q̇` scaled), so ranked
+    /// on both a gain error would take a damping's lead with kp's column to spare; but kp's
+    /// step alone cannot explain what kp and kd together explain, and with both probed the
+    /// least-squares step of the two, replayed once, is the gain error's coarse fit where it
+    /// confirms its gain, instead of a Levenberg–Marquardt fit of `screen_evals` replays.
+    fn stepped(&self) -> usize {
+        2
+    }
     /// At its start both gains scaled by one.
     fn neutral_start(&self) -> bool {
         true

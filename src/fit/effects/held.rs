@@ -66,6 +66,9 @@ impl Effect for Held {
     fn screened(&self) -> usize {
         self.inner.screened().min(self.fitted()).max(1)
     }
+    fn stepped(&self) -> usize {
+        self.inner.stepped().min(self.fitted()).max(self.screened())
+    }
     fn write_back(&self, p: &[f64]) -> WriteBack {
         self.inner.write_back(&self.full(p))
     }

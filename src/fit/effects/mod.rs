@@ -340,6 +340,15 @@ pub trait Effect: Declared + Sync {
     fn screened(&self) -> usize {
         1
     }
+    /// How many of the fitted parameters (the first ones, at least [`Effect::screened`]) the
+    /// screen probes for the linear step a coarse fit starts from; only the first
+    /// [`Effect::screened`] columns rank the candidate and predict its gain. When every fitted
+    /// parameter is probed, a smooth candidate's coarse fit is that step replayed once where it
+    /// confirms its gain ([`crate::fit::select`]'s `coarse::confirmed_step`). Default:
+    /// [`Effect::screened`].
+    fn stepped(&self) -> usize {
+        self.screened()
+    }
     fn write_back(&self, p: &[f64]) -> WriteBack;
     /// One `(attribute, value)` of [`WriteBack::Actuator`] as MJCF attributes (name, text) on the
     /// actuator element `act`, or why it cannot be written there. Default: the attribute as is.

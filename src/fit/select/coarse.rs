@@ -48,7 +48,7 @@ pub(super) fn fit(
 }
 
 /// The screen's linear step of a smooth candidate the secant steps do not take (more than one
-/// parameter, every one screened: [`Effect::screened`]; or a group whose members start apart),
+/// parameter, every one probed: [`Effect::stepped`]; or a group whose members start apart),
 /// replayed once on `short` ([`replayed_step`]): its parameters and RMSE when the gain it
 /// achieves confirms the one its linear model predicted ([`agrees`]) — the linearisation error
 /// measured where the fit would start; `None` (a coarse fit of `screen_evals` replays follows)
@@ -59,13 +59,14 @@ fn confirmed_step(
     (short, applied): (&[Recording], &[Applied]),
     (e, g): (&'static dyn Effect, &[String]),
 ) -> Option<(Vec<f64>, f64)> {
-    // (Only where the linear model steps every fitted parameter: a gain error's is its kp's
-    // alone, which can explain nothing that kp and kd together explain.)
-    if e.screened() < e.fitted() {
+    // (Only where the linear model steps every fitted parameter: one of the first parameters
+    // alone can explain nothing that it and the others together explain.)
+    if e.stepped().max(e.screened()) < e.fitted() {
         return None;
     }
-    let want = 1.0 - screen.predict(e.id(), g)?.train_rmse / screen.base_rmse();
-    let (p, f) = replayed_step(engine, screen, (short, applied), (e, g))?;
+    let (pred, x) = screen.steps(e.id(), g)?;
+    let want = 1.0 - pred.train_rmse / screen.base_rmse();
+    let (p, f) = engine.at_linear_step(short, applied, (e, g), &x)?;
     let base = engine.score(short, applied);
     agrees(1.0 - f / base, want, &engine.opts.policy).then_some((p, f))
 }
@@ -221,9 +222,13 @@ pub(super) fn replayed_step(
     (short, applied): (&[Recording], &[Applied]),
     (e, g): (&'static dyn Effect, &[String]),
 ) -> Option<(Vec<f64>, f64)> {
-    let x = screen.steps(e.id(), g)?;
+    let (_, x) = screen.steps(e.id(), g)?;
     engine.at_linear_step(short, applied, (e, g), &x)
 }
+
+#[cfg(test)]
+#[path = "coarse_gain_tests.rs"]
+mod gain_tests;
 
 #[cfg(test)]
 mod tests {

@@ -389,15 +389,15 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         // recordings do not share, and no full fit along it is made (`tried`: phase
         // "heldout_screen"); nor when that coarse fit confirms the candidate's linear model
         // (the full fit's optimum) and lowers the held-out error by less than the gate's
-        // improvement scaled by that trust ([`heldout_needed`]). Not the lead (fitted at once,
-        // the likeliest winner), nor a candidate that only its linear step admits (a coarse fit
-        // can miss the narrow basin that the full fit finds). One that a kept candidate of the
-        // round beats decisively on
+        // improvement scaled by that trust ([`heldout_needed`]). The lead too: its full fit on
+        // the whole training set goes on from a coarse fit that must pass this test first. Not a
+        // candidate that only its linear step admits (a coarse fit can miss the narrow basin
+        // that the full fit finds). One that a kept candidate of the round beats decisively on
         // held-out there is judged at its coarse fit, not fitted in full ([`beaten_at_coarse`];
         // `tried`: phase "add_coarse").
         let whole = n_lead == 1 && ci == 1;
         let mut at_coarse = false;
-        if !whole && reaches(gain(cf)) && !cp.is_empty() {
+        if reaches(gain(cf)) && !cp.is_empty() {
             let mut t = applied.clone();
             t.push(Applied { effect: e, joints: group.clone(), params: cp.clone() });
             let ho_c = engine.errors(heldout, &t);

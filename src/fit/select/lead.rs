@@ -5,7 +5,10 @@
 //! parameters by the information criterion over the screen's windows
 //! ([`super::screen::Screen::lead_rmse`]) — is coarse-fitted, fitted in full (on the whole
 //! training set at once, from its coarse fit: the likeliest winner, and a round's winner is
-//! fitted there anyway) and judged before any other candidate is coarse-fitted. When it is kept
+//! fitted there anyway) and judged before any other candidate is coarse-fitted. Its full fit
+//! waits for its coarse fit to pass the held-out screen any candidate's coarse fit passes (one
+//! held-out replay: a coarse fit that lowers the held-out error not at all, or by less than a
+//! confirmed linear model needs, is logged `heldout_screen`). When it is kept
 //! and leaves a white training residual on every fitted joint (the floor), nothing is left that
 //! a candidate of as many parameters could explain beyond noise: only its aliases — other
 //! effects on exactly its joints, which the data may not tell apart from it — are still

@@ -131,15 +131,17 @@ fn dot_r(a: &[f64], r: &[Option<f64>]) -> f64 {
     a.iter().zip(r).map(|(x, y)| x * y.unwrap_or(0.0)).sum()
 }
 
-/// One effect's linear model: per joint and screened parameter ([`Effect::screened`]) a
-/// column, its dot product with the residual (`b[joint][param]`) and with every other column of
-/// the effect (`g`, indexed `joint × k + param`), per unit of the parameter.
+/// One effect's linear model: per joint and probed parameter ([`Effect::stepped`]) a column,
+/// its dot product with the residual (`b[joint][param]`) and with every other column of the
+/// effect (`g`, indexed `joint × k + param`), per unit of the parameter; the first `ranked`
+/// ([`Effect::screened`]) rank and predict.
 #[derive(Debug, Clone, Default)]
 struct EffectModel {
     joints: Vec<String>,
     /// Per joint, how far the first parameter may step from its start: (lo − p0, hi − p0).
     room: Vec<(f64, f64)>,
     k: usize,
+    ranked: usize,
     b: Vec<Vec<f64>>,
     g: Vec<Vec<f64>>,
     /// Per joint, how many of the effect's fitted parameters its bounds hold (zero width: a
@@ -430,7 +432,8 @@ impl Screen {
         let m0 = model_with(engine.robot, base);
         for id in ids {
             let Some(effect) = effects::by_id(id) else { continue };
-            let k = effect.screened().clamp(1, effect.fitted().max(1));
+            let k = effect.stepped().max(effect.screened()).clamp(1, effect.fitted().max(1));
+            let kr = effect.screened().clamp(1, k);
             let idx: Vec<usize> = (0..diag.len())
                 .filter(|&i| diag[i].effect == id && !covered(id, &diag[i].joint))
                 .collect();
@@ -450,7 +453,7 @@ impl Screen {
             }
             let probes: Vec<Vec<Option<Probe>>> =
                 idx.iter().map(|i| found.remove(i).unwrap_or_default()).collect();
-            let mut m = EffectModel { k, ..Default::default() };
+            let mut m = EffectModel { k, ranked: kr, ..Default::default() };
             let zero = vec![0.0; r.len()];
             let mut cols: Vec<&Vec<f64>> = Vec::new();
             for (&i, ps) in idx.iter().zip(&probes) {
@@ -463,13 +466,14 @@ impl Screen {
                     .collect();
                 let b: Vec<f64> = own.iter().map(|col| dot_r(col, &r)).collect();
                 if train_n > 0 {
+                    let (rk, pr) = (&own[..kr], &ps[..kr.min(ps.len())]);
                     let g: Vec<Vec<f64>> =
-                        own.iter().map(|x| own.iter().map(|y| dot(x, y)).collect()).collect();
-                    let single = ps.iter().flatten().map(|p| p.explained).fold(0.0, f64::max);
-                    // Charged for the parameters probed here (one held by bounds of zero
-                    // width has no column).
-                    let kc = ps.iter().flatten().count();
-                    let all = charged(train_ss, combine(&b, &g).0, kc, pieces);
+                        rk.iter().map(|x| rk.iter().map(|y| dot(x, y)).collect()).collect();
+                    let single = pr.iter().flatten().map(|p| p.explained).fold(0.0, f64::max);
+                    // Charged for the ranking parameters probed here (one held by bounds of
+                    // zero width has no column).
+                    let kc = pr.iter().flatten().count();
+                    let all = charged(train_ss, combine(&b[..kr], &g).0, kc, pieces);
                     c.evidence.insert("feature_explained_rms".into(), c.explained_rms);
                     let coef = dot_r(&p.column, &r) / dot(&p.column, &p.column) / p.step;
                     c.evidence.insert("sensitivity_coef".into(), coef);
@@ -539,23 +543,24 @@ impl Screen {
     /// all screened parameters, uncharged — the fit that follows fits them all); `None` when a
     /// joint of the group has no column.
     pub(super) fn predict(&self, effect: &str, group: &[String]) -> Option<Prediction> {
-        self.linear(effect, group).map(|(p, _)| p)
+        self.linear(effect, group, false).map(|(p, _)| p)
     }
 
-    /// The linear step of every screened parameter of `effect` on `group` (from the effect's
-    /// start; [`Screen::predict`]'s step is the first).
-    pub(super) fn steps(&self, effect: &str, group: &[String]) -> Option<Vec<f64>> {
-        self.linear(effect, group).map(|(_, x)| x)
+    /// The least-squares step of every probed parameter of `effect` on `group` (from the
+    /// effect's start; [`Effect::stepped`]) and what it predicts: [`Screen::predict`]'s when
+    /// the ranking columns are all that is probed.
+    pub(super) fn steps(&self, effect: &str, group: &[String]) -> Option<(Prediction, Vec<f64>)> {
+        self.linear(effect, group, true)
     }
 
-    /// [`Screen::predict`] with the steps of all screened parameters.
-    fn linear(&self, effect: &str, group: &[String]) -> Option<(Prediction, Vec<f64>)> {
+    /// The prediction and steps of the ranking columns, or of every probed one (`all`).
+    fn linear(&self, effect: &str, group: &[String], all: bool) -> Option<(Prediction, Vec<f64>)> {
         let m = self.models.get(effect)?;
         let ix: Vec<usize> = group
             .iter()
             .map(|j| m.joints.iter().position(|x| x == j))
             .collect::<Option<Vec<_>>>()?;
-        let k = m.k;
+        let (k, s) = (if all { m.k } else { m.ranked }, m.k);
         let b: Vec<f64> = (0..k).map(|p| ix.iter().map(|&i| m.b[i][p]).sum()).collect();
         let g: Vec<Vec<f64>> = (0..k)
             .map(|p| {
@@ -563,7 +568,7 @@ impl Screen {
                     .map(|q| {
                         ix.iter()
                             .flat_map(|&i| ix.iter().map(move |&j| (i, j)))
-                            .map(|(i, j)| m.g[i * k + p][j * k + q])
+                            .map(|(i, j)| m.g[i * s + p][j * s + q])
                             .sum()
                     })
                     .collect()
@@ -642,6 +647,7 @@ mod tests {
                 joints: vec!["a".into(), "b".into()],
                 room: vec![room, (room.0, room.1 * 0.5)],
                 k: 1,
+                ranked: 1,
                 b: vec![vec![d(&c, &r)], vec![0.0]],
                 g: vec![vec![d(&c, &c), 0.0], vec![0.0, d(&c, &c)]],
                 held: vec![0, 0],
