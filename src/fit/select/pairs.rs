@@ -209,7 +209,7 @@ pub(super) fn pair_lookahead(
         if let Some(p) = predicted[i] {
             // A pair that holds the winner reaches the winner's RMSE: its gain counts from there.
             let held = pair_screen::holds((&sets[i].0, &sets[i].1), &with_single[n]);
-            let r = if held { p.from_winner(f_single) } else { p }.reachable(&opts.policy);
+            let r = if held { p.beyond_winner(f_single) } else { p }.reachable(&opts.policy);
             let phase = if allowance.is_some_and(|a| r * r * n_short > a) {
                 Some(Phase::PairFloor)
             } else {
