@@ -286,8 +286,7 @@ mod tests {
         let mut out = FitOutcome::empty(String::new());
         let kept = super::super::pairs::joint_pairs(
             &engine,
-            train,
-            heldout,
+            (train, train, heldout),
             (&[], &fitted),
             (&tr, &ho),
             &floors,

@@ -575,8 +575,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         let fitted = with_pair_starts(engine, &screen, at, &trusted_out, fitted, gain);
         return joint_pairs(
             engine,
-            train,
-            heldout,
+            (short, train, heldout),
             (&applied, &fitted),
             (&tr_err, &ho_err),
             &floors,

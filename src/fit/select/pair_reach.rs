@@ -1,5 +1,6 @@
 //! Whether a pair's coarse fit can still lead where the look-ahead needs it, before its full
-//! fit on the whole training set.
+//! fit on the whole training set. (The floor's and the winner's tests are first taken by the
+//! pair's linear prediction at the trust's edge, before its coarse fit: [`super::pair_screen`].)
 //!
 //! **The floor** (the early look-ahead, [`super::pair_first`], keeps a pair only when it
 //! leaves a white residual on every fitted joint: per joint, a mean square within

@@ -13,7 +13,7 @@ use super::engine::Engine;
 use super::pair_restart::{apply_restart, best_restart};
 use super::policy::Phase;
 use super::polish::{fit_jointly, fit_jointly_iters, polish_budget, polish_from, polish_set};
-use super::screen::screen_data;
+use super::screen::{Prediction, screen_data};
 use super::verdict::{Verdict, verdict};
 use super::{Errors, FitOutcome, Floor, Search, Selected, Tried, set_uncertainty, sync_selected};
 use super::{pair_reach, pair_screen};
@@ -183,16 +183,44 @@ pub(super) fn pair_lookahead(
     let smooth = |set: &[Applied]| set[n..].iter().all(|a| a.effect.smooth());
     let short = engine.screen_set(train, applied, || screen_data(engine, train, &t_base));
     let n_sets = sets.len();
+    // What the floor allows on the whole training set ([`pair_reach`]), when the look-ahead
+    // keeps only a pair at the floor.
+    let allowance = to_floor.then(|| {
+        let f_single = engine.floors(train, &with_single, &t_single);
+        pair_reach::floor_allowance(engine, train, &[&floors, &f_single])
+    });
+    // The winner alone on the screen's data: a pair must fit them better ([`pair_reach`]).
+    let f_single = engine.errors(&short, &with_single).map_or(f64::INFINITY, |e| e.rmse());
+    let n_short = engine.errors(&short, applied).map_or(0, |e| e.n) as f64;
     // Best predicted first ([`pair_screen`]); a pair whose prediction cannot come within
-    // `pair_full_fit_within` of the best coarse fit so far is not fitted.
+    // `pair_full_fit_within` of the best coarse fit so far is not fitted, nor one whose
+    // prediction, at the trust's edge, cannot pass the tests its coarse fit would take
+    // ([`pair_reach`]: the floor's allowance, `pair_gain` × the winner there).
     let predicted = pair_screen::predicted(engine, &short, applied, &sets);
     let mut order: Vec<usize> = (0..n_sets).collect();
-    order.sort_by(|&i, &j| predicted[i].unwrap_or(0.0).total_cmp(&predicted[j].unwrap_or(0.0)));
+    let rank = |i: usize| predicted[i].map_or(0.0, |p| p.pair);
+    order.sort_by(|&i, &j| rank(i).total_cmp(&rank(j)));
     let mut coarse: Vec<Option<(Vec<Applied>, f64)>> = vec![None; n_sets];
     let mut best_coarse = f64::INFINITY;
     for i in order {
-        if predicted[i].is_some_and(|p| p > opts.policy.pair_full_fit_within * best_coarse) {
+        if predicted[i].is_some_and(|p| p.pair > opts.policy.pair_full_fit_within * best_coarse) {
             continue;
+        }
+        if let Some(p) = predicted[i] {
+            // A pair that holds the winner reaches the winner's RMSE: its gain counts from there.
+            let held = pair_screen::holds((&sets[i].0, &sets[i].1), &with_single[n]);
+            let r = if held { p.beyond_winner(f_single) } else { p }.reachable(&opts.policy);
+            let phase = if allowance.is_some_and(|a| r * r * n_short > a) {
+                Some(Phase::PairFloor)
+            } else {
+                (r >= opts.policy.pair_gain * f_single).then_some(Phase::PairScreen)
+            };
+            if let Some(phase) = phase {
+                let (a, b) = &sets[i];
+                let group: Vec<String> = a.joints.iter().chain(&b.joints).cloned().collect();
+                out.tried.push(predicted_out((round, phase), (a, b), &group, p));
+                continue;
+            }
         }
         let (a, b) = &sets[i];
         engine.report(
@@ -221,14 +249,6 @@ pub(super) fn pair_lookahead(
         best_coarse = best_coarse.min(f);
         coarse[i] = Some((set, f));
     }
-    // What the floor allows on the whole training set ([`pair_reach`]), when the look-ahead
-    // keeps only a pair at the floor.
-    let allowance = to_floor.then(|| {
-        let f_single = engine.floors(train, &with_single, &t_single);
-        pair_reach::floor_allowance(engine, train, &[&floors, &f_single])
-    });
-    // The winner alone on the screen's data: a pair must fit them better ([`pair_reach`]).
-    let f_single = engine.errors(&short, &with_single).map_or(f64::INFINITY, |e| e.rmse());
     let mut restarts: Vec<Vec<Applied>> = Vec::new();
     for (i, ((a, b), c)) in sets.into_iter().zip(coarse).enumerate() {
         let Some((set, f)) = c else { continue };
@@ -426,6 +446,22 @@ pub(super) fn needless(opts: &super::FitOptions, single: &Selected) -> bool {
     single.heldout_improvement >= opts.policy.pair_needless_improvement
 }
 
+/// The `tried` entry of the pair `(a, b)` left out by its linear prediction `p`
+/// ([`pair_screen`]) in phase `phase`, on `group`: not fitted (no training RMSE), its members'
+/// single-fit values as its parameters and the predicted RMSE on the screen's data.
+fn predicted_out(
+    (round, phase): (usize, Phase),
+    (a, b): (&Applied, &Applied),
+    group: &[String],
+    p: pair_screen::PairPrediction,
+) -> Tried {
+    let id = format!("{}+{}", a.effect.id(), b.effect.id());
+    let params = [a, b].into_iter().flat_map(|x| x.params.iter().take(x.effect.fitted()).copied());
+    let mut t = Tried::not_tested(round, phase, &id, group, params.collect(), f64::NAN);
+    t.predicted = Some(Prediction { train_rmse: p.pair, step: f64::NAN });
+    t
+}
+
 /// The phase a pair's coarse fit `set` (RMSE `f` on the screen's data `short`) is logged with
 /// when it is not fitted in full ([`pair_reach`]): `pair_floor` when it leaves more there than
 /// `allowance` (the floor's squared residual on the whole training set; `None`: no floor
@@ -520,8 +556,7 @@ fn with_kept_refitted(
 #[allow(clippy::too_many_arguments)]
 pub(super) fn joint_pairs(
     engine: &Engine,
-    train: &[Recording],
-    heldout: &[Recording],
+    (short, train, heldout): (&[Recording], &[Recording], &[Recording]),
     (applied, fitted): (&[Applied], &[Applied]),
     (tr_err, ho_err): (&Errors, &Errors),
     floors: &[Floor],
@@ -535,62 +570,67 @@ pub(super) fn joint_pairs(
     let bic_before = bic(tr_err.n, tr_err.sse, k_before);
     let mut best: Option<(Vec<Applied>, Errors, Verdict, f64, usize)> = None;
     engine.report(round, Phase::JointPair, None);
+    let mut sets: Vec<(Applied, Applied)> = Vec::new();
     for (ea, eb) in effects::mimicking_pairs().into_iter().map(|(a, b)| (a.id(), b.id())) {
         for a in fitted.iter().filter(|x| x.effect.id() == ea) {
-            let Some(b) = fitted.iter().find(|x| x.effect.id() == eb && x.joints == a.joints)
-            else {
-                continue;
-            };
-            let mut set = applied.to_vec();
-            set.push(a.clone());
-            set.push(b.clone());
-            let set = fit_jointly(engine, train, set, n);
-            let (Some(h), Some(t)) = (engine.errors(heldout, &set), engine.errors(train, &set))
-            else {
-                continue;
-            };
-            let k = a.effect.fitted() + b.effect.fitted();
-            let v = verdict(ho_err, &h, &a.joints, opts.policy.gate_z(z));
-            let bic_after = bic(t.n, t.sse, k_before + k);
-            let needed = (0..2).all(|m| {
-                let mut wo = set.clone();
-                wo.remove(n + m);
-                engine.errors(heldout, &wo).is_some_and(|hw| {
-                    let vw = verdict(&hw, &h, &a.joints, opts.policy.gate());
-                    vw.significant && vw.rel >= opts.policy.min_rel_improvement
-                })
-            });
-            let judged = |set| Judged {
-                base: applied,
-                trial: set,
-                gate: opts.policy.gate_z(z),
-                floors,
-                round,
-            };
-            let ok = v.significant
-                && v.rel >= opts.policy.min_rel_improvement
-                && bic_after < bic_before
-                && needed
-                && beyond_discretisation(engine, heldout, &judged(&set), out);
-            let logged = out.log(Tried {
-                round,
-                phase: Phase::JointPair,
-                effect: format!("{ea}+{eb}"),
-                joints: a.joints.clone(),
-                params: set[n..]
-                    .iter()
-                    .flat_map(|x| x.params.iter().take(x.effect.fitted()).copied())
-                    .collect(),
-                train_rmse: t.rmse(),
-                heldout_improvement: v.rel,
-                significant: v.significant,
-                bic_decreased: bic_after < bic_before,
-                kept: false,
-                predicted: None,
-            });
-            if ok && best.as_ref().is_none_or(|(_, hb, ..)| h.rmse() < hb.rmse()) {
-                best = Some((set, h, v, bic_after, logged));
+            if let Some(b) = fitted.iter().find(|x| x.effect.id() == eb && x.joints == a.joints) {
+                sets.push((a.clone(), b.clone()));
             }
+        }
+    }
+    // Judged first from the members' own fits ([`pair_screen`]): a pair whose linear
+    // prediction, at the trust's edge, does not lower its better member's RMSE on the screen's
+    // data by `min_rel_improvement` has a member that is not needed, and is not fitted.
+    let predicted = pair_screen::predicted(engine, short, applied, &sets);
+    for ((a, b), p) in sets.iter().zip(predicted) {
+        if let Some(p) = p.filter(|p| p.adds_nothing(&opts.policy)) {
+            out.tried.push(predicted_out((round, Phase::PairScreen), (a, b), &a.joints, p));
+            continue;
+        }
+        let (ea, eb) = (a.effect.id(), b.effect.id());
+        let mut set = applied.to_vec();
+        set.push(a.clone());
+        set.push(b.clone());
+        let set = fit_jointly(engine, train, set, n);
+        let (Some(h), Some(t)) = (engine.errors(heldout, &set), engine.errors(train, &set)) else {
+            continue;
+        };
+        let k = a.effect.fitted() + b.effect.fitted();
+        let v = verdict(ho_err, &h, &a.joints, opts.policy.gate_z(z));
+        let bic_after = bic(t.n, t.sse, k_before + k);
+        let needed = (0..2).all(|m| {
+            let mut wo = set.clone();
+            wo.remove(n + m);
+            engine.errors(heldout, &wo).is_some_and(|hw| {
+                let vw = verdict(&hw, &h, &a.joints, opts.policy.gate());
+                vw.significant && vw.rel >= opts.policy.min_rel_improvement
+            })
+        });
+        let judged =
+            |set| Judged { base: applied, trial: set, gate: opts.policy.gate_z(z), floors, round };
+        let ok = v.significant
+            && v.rel >= opts.policy.min_rel_improvement
+            && bic_after < bic_before
+            && needed
+            && beyond_discretisation(engine, heldout, &judged(&set), out);
+        let logged = out.log(Tried {
+            round,
+            phase: Phase::JointPair,
+            effect: format!("{ea}+{eb}"),
+            joints: a.joints.clone(),
+            params: set[n..]
+                .iter()
+                .flat_map(|x| x.params.iter().take(x.effect.fitted()).copied())
+                .collect(),
+            train_rmse: t.rmse(),
+            heldout_improvement: v.rel,
+            significant: v.significant,
+            bic_decreased: bic_after < bic_before,
+            kept: false,
+            predicted: None,
+        });
+        if ok && best.as_ref().is_none_or(|(_, hb, ..)| h.rmse() < hb.rmse()) {
+            best = Some((set, h, v, bic_after, logged));
         }
     }
     let Some((set, h, v, bic_after, logged)) = best else { return false };

@@ -104,8 +104,10 @@ pub struct SearchPolicy {
     /// screen's data against its gain there; else the coarse fit of `screen_evals` replays of
     /// the screen's data follows. A coarse fit the test confirms is fitted in full only when it
     /// lowers the held-out RMSE by more than this × `min_rel_improvement`
-    /// (`trust::heldout_needed`). Default 0.75 (a "very successful" step of a trust-region
-    /// method).
+    /// (`trust::heldout_needed`). A pair's fit is taken to gain at most 1 / this times what the
+    /// linear combination of its members' columns predicts beyond its better member
+    /// (`pair_screen::PairPrediction::reachable`, before any pair replay). Default 0.75 (a "very
+    /// successful" step of a trust-region method).
     pub linear_trust: f64,
     /// Once a kept candidate leaves a white training residual (or when a swap is screened), a
     /// candidate whose coarse fit leaves more than this times that training RMSE is not fitted;
@@ -299,7 +301,7 @@ pub const FIELDS: &[(&str, &str, &str)] = &[
     (
         "linear_trust",
         "ratio",
-        "a smooth one-parameter candidate's coarse fit is secant Gauss-Newton steps from the screen's linear step (one replay each), stopping at the first step that achieves between this and its inverse times the relative improvement its linear model predicted (both below min_rel_improvement also agree), or after screen_evals replays; the same test confirms a several-parameter smooth candidate's linear step (one replay) and a non-smooth candidate's coarse fit on the probes' data (its gain on the screen's data against its gain there) as the coarse fit, else screen_evals replays of the screen's data follow; a coarse fit it confirms is fitted in full only when it lowers the held-out RMSE by more than this × min_rel_improvement",
+        "a smooth one-parameter candidate's coarse fit is secant Gauss-Newton steps from the screen's linear step (one replay each), stopping at the first step that achieves between this and its inverse times the relative improvement its linear model predicted (both below min_rel_improvement also agree), or after screen_evals replays; the same test confirms a several-parameter smooth candidate's linear step (one replay) and a non-smooth candidate's coarse fit on the probes' data (its gain on the screen's data against its gain there) as the coarse fit, else screen_evals replays of the screen's data follow; a coarse fit it confirms is fitted in full only when it lowers the held-out RMSE by more than this × min_rel_improvement; a pair's fit is taken to gain at most 1 / this times the gain its members' columns predict beyond its better member, judged before any pair replay",
     ),
     (
         "floor_screen_ratio",
@@ -419,11 +421,14 @@ pub enum Phase {
     Discretisation,
     /// Two effects fitted together (the pair look-ahead).
     Pair,
-    /// Not fitted in full: the early pair look-ahead's pair whose coarse fit leaves more on the
+    /// Not fitted in full: the early pair look-ahead's pair whose coarse fit — or, before it,
+    /// its linear prediction at the trust's edge (`pair_screen.rs`) — leaves more on the
     /// screen's data than the floor allows on the whole training set (`pair_reach.rs`).
     PairFloor,
-    /// Not fitted in full: a pair whose coarse fit leaves no less on the screen's data than
-    /// the round's winner alone does there (`pair_reach.rs`).
+    /// Not fitted in full: a pair whose coarse fit (or, before it, its linear prediction at the
+    /// trust's edge) leaves no less on the screen's data than `pair_gain` × the round's winner
+    /// alone does there (`pair_reach.rs`); a joint pair whose prediction at the trust's edge
+    /// does not lower its better member's RMSE there by `min_rel_improvement` (`pairs.rs`).
     PairScreen,
     /// A single effect re-fitted by a failed pair, competing with the round's winner.
     PairRestart,
