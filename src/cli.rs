@@ -76,7 +76,7 @@ pub struct CheckArgs {
     /// Skip an XML file that is not a robot model (ROS package.xml, launch files) with a note
     /// even when it is the only file given (the pre-commit hook passes only the staged files);
     /// without it a lone non-model is an error (exit 2). With several files they are always
-    /// skipped.
+    /// skipped. A hardware spec given with it (a staged `robot.toml`) lints `robot.xml` beside it.
     #[arg(long)]
     pub skip_non_models: bool,
     /// Directory of the lint cache. Default: $MODELLINT_CACHE_DIR, else
@@ -507,7 +507,13 @@ pub fn run() -> i32 {
 }
 
 fn check(a: CheckArgs) -> i32 {
-    let (models, notes) = crate::spec_use::models_for_args(&a.models);
+    // Among several paths, or as the hook runs: a staged spec stands for its model. Alone, a
+    // spec given as the model is the error that says how to pass it (--spec).
+    let (models, notes) = if a.models.len() > 1 || a.skip_non_models {
+        crate::spec_use::models_for_args(&a.models)
+    } else {
+        (a.models.clone(), Vec::new())
+    };
     eprint!("{}", notes.concat());
     let a = CheckArgs { models, ..a };
     let color = use_color(&a.color);

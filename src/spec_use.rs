@@ -75,10 +75,11 @@ pub fn is_fit_effects(p: &Path) -> bool {
     v.get("effect").is_some_and(|e| e.is_array()) && !v.contains_key("robot")
 }
 
-/// The models to lint for the paths given: a hardware spec given where a model is expected (the
-/// pre-commit hook passes a staged `robot.toml` whose edit changes what the spec-only rules say)
-/// stands for the model of its name beside it, `robot.xml`, else `robot.urdf`; each such swap
-/// has a note for stderr. A `.toml` with no model beside it stays as given (not a model).
+/// The models to lint for the paths given (several, or under `--skip-non-models`): a hardware
+/// spec among them (the pre-commit hook passes a staged `robot.toml` whose edit changes what the
+/// spec-only rules say) stands for the model of its name beside it, `robot.xml`, else
+/// `robot.urdf`; each such swap has a note for stderr. A `.toml` with no model beside it stays as
+/// given (not a model).
 pub fn models_for_args(args: &[PathBuf]) -> (Vec<PathBuf>, Vec<String>) {
     let mut notes = Vec::new();
     let models = args
