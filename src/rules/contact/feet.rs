@@ -10,7 +10,8 @@
 //! ankle roll link above the pitch link that holds the sole) hands the foot to that descendant.
 //!
 //! Only a floating-base robot has feet (unless the spec names them): a fixed-base arm or a
-//! test rig gets no foot rules. Each foot is classified by its ground geoms (the collision
+//! test rig gets no foot rules. A legged URDF, which MuJoCo's importer welds to the world,
+//! counts as floating from its root link ([`floating_bases`]). Each foot is classified by its ground geoms (the collision
 //! geoms whose lowest point at the keyframe is within [`GROUND_WINDOW`] of the foot's lowest):
 //! a **point foot** touches down through spheres whose lowest points lie within
 //! [`POINT_SPREAD`] of each other (the quadruped's foot sphere; flat-foot rules do not apply); a
@@ -101,6 +102,25 @@ fn contact_geoms(robot: &Robot, body: usize) -> impl Iterator<Item = usize> + '_
         .map(|g| g.id)
 }
 
+/// The bodies the foot rules take for floating bases: each free joint's body; with none, in a
+/// legged URDF that MuJoCo's importer welded to the world
+/// ([`crate::rules::contact::welded_legged_base::is_welded_legged`]), the world body the
+/// importer fused the root link into (0): its feet are judged as if the root link floated at
+/// its pose in the file (the static geometry at qpos0 is the same). Empty for a fixed-base
+/// robot (an arm, a wheeled base welded by the importer, any MJCF without a free joint).
+pub fn floating_bases(robot: &Robot) -> Vec<usize> {
+    let free: Vec<usize> = robot
+        .joints
+        .iter()
+        .filter(|j| j.jtype == crate::model::JointType::Free)
+        .map(|j| j.body)
+        .collect();
+    if free.is_empty() && crate::rules::contact::welded_legged_base::is_welded_legged(robot) {
+        return vec![0];
+    }
+    free
+}
+
 /// The feet of the model, left before right.
 pub fn feet(robot: &Robot, spec: Option<&Spec>) -> Vec<Foot> {
     let n = robot.bodies.len();
@@ -120,21 +140,15 @@ pub fn feet(robot: &Robot, spec: Option<&Spec>) -> Vec<Foot> {
     // A body welded to the floating base (no joint between them: the trunk, a ROS
     // `base_footprint` frame) is part of the trunk, not a foot, unless the spec names it. The
     // floating body itself may be a foot (a foot dropped alone on a floor, a test rig).
-    let free_bodies: Vec<usize> = robot
-        .joints
-        .iter()
-        .filter(|j| j.jtype == crate::model::JointType::Free)
-        .map(|j| j.body)
-        .collect();
+    let bases = floating_bases(robot);
+    let weld = |b: usize| robot.bodies.get(b).map_or(b, |x| x.weld);
     let on_limb = |b: usize| {
-        from_spec
-            || free_bodies.contains(&b)
-            || !free_bodies.iter().any(|&f| robot.bodies[f].weld == robot.bodies[b].weld)
+        from_spec || (b != 0 && bases.contains(&b)) || !bases.iter().any(|&f| weld(f) == weld(b))
     };
     matched.retain(|&b| on_limb(b));
     // Only a floating-base robot (a legged one) has feet to guess at: a fixed-base arm or a
     // test rig does not.
-    let floating = robot.joints.iter().any(|j| j.jtype == crate::model::JointType::Free);
+    let floating = !bases.is_empty();
     if !floating && !from_spec {
         return Vec::new();
     }

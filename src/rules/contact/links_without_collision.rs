@@ -2,7 +2,7 @@ use crate::declare_rule;
 use crate::finding::{Finding, Severity, Subject};
 use crate::model::mjcf::ElemKind;
 use crate::model::{Geom, GeomType, JointType, Robot};
-use crate::rules::contact::feet::{FootKind, feet};
+use crate::rules::contact::feet::{FootKind, feet, floating_bases};
 use crate::rules::geometry::shapes::{V3, add, col, norm, scale, sub, to_local_dir};
 use crate::rules::{Context, Domain, Rule, RuleMeta, in_subtree, opt};
 use crate::util::fmt_num;
@@ -14,7 +14,9 @@ declare_rule! {
     /// only (`contype = conaffinity = 0`, named by no `<contact><pair>`), so a knee, a hip or
     /// the torso passes through the floor and the legs and arms pass through each other.
     ///
-    /// The robot is the subtree of a body with a free joint that carries hinge or slide joints
+    /// The robot is the subtree of a body with a free joint (or the whole of a legged URDF that
+    /// MuJoCo's importer welded to the world, as if its root link floated: `welded-legged-base`)
+    /// that carries hinge or slide joints
     /// and two or more feet that are not wheels (the foot bodies of the contact rules: by name,
     /// else the leaf bodies that touch down). A link is one of its bodies other than the feet
     /// and their toes (which collide through what touches down); it is **covered** when a geom
@@ -177,7 +179,7 @@ impl Rule for LinksWithoutCollision {
             })
         };
         let share = cx.opt("min_link_share");
-        for base in robot.joints.iter().filter(|j| j.jtype == JointType::Free).map(|j| j.body) {
+        for base in floating_bases(robot) {
             let jointed = robot.joints.iter().any(|j| {
                 j.body != base
                     && matches!(j.jtype, JointType::Hinge | JointType::Slide)

@@ -33,7 +33,8 @@ declare_rule! {
     /// tilt (robot families: `rules::contact::feet`). A keyframe that holds a foot in the air
     /// — the model has a floor and the foot's lowest point is above it by more than the foot's
     /// own height (a lie-down pose dropped onto the belly) — is no stance: that foot is not
-    /// judged there.
+    /// judged there. A legged URDF, which MuJoCo's importer welds to the world, is judged as if
+    /// its root link floated, at qpos0 (`welded-legged-base`); a fixed-base arm is not.
     ///
     /// ## Why is this bad?
     /// A toe capsule a few millimetres below the sole turns a flat foot into a rocker: the robot

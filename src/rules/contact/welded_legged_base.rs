@@ -12,19 +12,24 @@ declare_rule! {
     /// chains, each leaving the root link through a joint of its own and ending, two or more
     /// hinge/slide joints further out, in a leaf link (not a wheel) whose collision geometry
     /// reaches the robot's lowest point (within 1 cm) below the root link's frame at qpos0.
-    /// Says that MuJoCo's importer welded the root to the world, so the foot rules
+    /// Says that MuJoCo's importer welded the root to the world and that the foot rules
     /// (`toe-tilt`, `foot-collision-geometry`, `links-without-collision`,
-    /// `torsional-friction-length`) and the stance probes did not judge those feet. A
+    /// `torsional-friction-length`, and the foot soles of `collision-visual-mismatch`) judged
+    /// those feet as if the root link floated: they take it (the world body the importer fused
+    /// it into, with every link welded to it) as the floating base, at its pose in the file. The
+    /// stance probes need a free base on a floor: their runs on the file are inconclusive with
+    /// that reason (`docs/probes.md`). A
     /// fixed-base arm (its chain ends above its base, or in one chain of fingers) and a wheeled
-    /// base (its lowest links are wheels) are not reported.
+    /// base (its lowest links are wheels) are not reported, and their links are never taken
+    /// for feet.
     ///
     /// ## Why is this bad?
     /// MuJoCo's URDF importer adds no free joint: the root link is fixed where the file puts it,
     /// so a legged robot loaded from its URDF hangs from its trunk, its feet never carry its
     /// weight, and nothing a stance or walking run would show (feet sliding, sinking, tipping)
-    /// happens. The foot rules know feet only under a free joint (a fixed-base arm has none),
-    /// so they say nothing about this robot's feet: a clean lint of the URDF is not a clean
-    /// lint of the robot standing.
+    /// happens. The static geometry of the feet is the same welded or floating (qpos0 is the
+    /// file's pose either way), so the foot rules judge it; a simulation of the robot standing
+    /// needs the robot floated above a floor, which a URDF cannot say.
     ///
     /// ## How it is confirmed
     /// Static: the compiled tree (no free joint, the chains and their joints) and the leaf
@@ -32,11 +37,11 @@ declare_rule! {
     /// say its base floats.
     ///
     /// ## How to fix
-    /// Lint and simulate the robot floating: an MJCF wrapper that attaches the URDF under a
-    /// body with a `<freejoint/>` above a floor (`<mujoco><asset><model name="robot"
-    /// file="robot.urdf"/></asset><worldbody><geom type="plane" size="0 0 1"/><body pos="0 0
-    /// H"><freejoint/><attach model="robot" prefix=""/></body></worldbody></mujoco>`, H the
-    /// standing height), and lint the wrapper.
+    /// To simulate the robot standing (so the stance probes judge its feet): an MJCF wrapper that attaches
+    /// the URDF under a body with a `<freejoint/>` above a floor (`<mujoco><asset><model
+    /// name="robot" file="robot.urdf"/></asset><worldbody><geom type="plane" size="0 0
+    /// 1"/><body pos="0 0 H"><freejoint/><attach model="robot" prefix=""/></body></worldbody></mujoco>`,
+    /// H the standing height), and lint the wrapper.
     pub WeldedLeggedBase {
         id: "welded-legged-base",
         group: "contact",
@@ -96,22 +101,34 @@ fn legs(robot: &Robot) -> (Vec<(usize, usize)>, f64) {
     (out, root_z - zmin)
 }
 
+/// The legs of a URDF that MuJoCo's importer welded to the world (no free joint) and whose
+/// tree is legs — two or more chains leaving the root, each ending in a foot-like leaf (see
+/// the rule's docs) — as in [`legs`]; `None` for any other model (an MJCF, a floating URDF, a
+/// fixed-base arm, a wheeled base).
+fn welded_legs(robot: &Robot) -> Option<(Vec<(usize, usize)>, f64)> {
+    if robot.format != Format::Urdf || robot.joints.iter().any(|j| j.jtype == JointType::Free) {
+        return None;
+    }
+    let (legs, depth) = legs(robot);
+    let mut tops: Vec<usize> = legs.iter().map(|l| l.1).collect();
+    tops.sort_unstable();
+    tops.dedup();
+    (tops.len() >= 2).then_some((legs, depth))
+}
+
+/// Whether `robot` is a legged URDF that MuJoCo's importer welded to the world: the foot rules
+/// judge its feet as if its root link floated ([`crate::rules::contact::feet::floating_bases`]).
+pub fn is_welded_legged(robot: &Robot) -> bool {
+    welded_legs(robot).is_some()
+}
+
 impl Rule for WeldedLeggedBase {
     fn meta(&self) -> &'static RuleMeta {
         &Self::META
     }
     fn check(&self, cx: &Context, out: &mut Vec<Finding>) {
         let robot = cx.robot;
-        if robot.format != Format::Urdf || robot.joints.iter().any(|j| j.jtype == JointType::Free) {
-            return;
-        }
-        let (legs, depth) = legs(robot);
-        let mut tops: Vec<usize> = legs.iter().map(|l| l.1).collect();
-        tops.sort_unstable();
-        tops.dedup();
-        if tops.len() < 2 {
-            return;
-        }
+        let Some((legs, depth)) = welded_legs(robot) else { return };
         let root = robot.tree.children_tagged("link").find(|l| {
             let name = l.get("name").unwrap_or("");
             !robot
@@ -126,19 +143,19 @@ impl Rule for WeldedLeggedBase {
         let f = cx
             .finding(
                 format!(
-                    "MuJoCo's importer welds the root link `{root_name}` to the world, and the robot has {} legs ending in its lowest contacts ({}): it hangs from its trunk, and the foot rules and stance probes did not judge these feet",
+                    "MuJoCo's importer welds the root link `{root_name}` to the world, and the robot has {} legs ending in its lowest contacts ({}): the foot rules judged these feet as if `{root_name}` floated; the stance probes cannot (it hangs from its trunk)",
                     legs.len(),
                     names.join(", ")
                 ),
                 at,
             )
             .element(format!("link `{root_name}`"), at)
-            .label("root link, fixed to the world by the importer")
+            .label("root link, fixed to the world by the importer; floated for the foot rules")
             .note(format!(
-                "a URDF cannot say its base floats: loaded as it is, the robot never stands on its feet (their lowest point {} m below the root link's frame at qpos0), and the foot rules know feet only under a free joint",
+                "a URDF cannot say its base floats: loaded as it is, the robot never stands on its feet (their lowest point {} m below the root link's frame at qpos0). The static foot rules (`toe-tilt`, `foot-collision-geometry`, `links-without-collision`, `torsional-friction-length`) take the root link as a floating base at its pose in the file; the stance probes need a free base on a floor: their runs on this file are inconclusive with that reason",
                 fmt_num(depth, 3)
             ))
-            .help("lint and simulate it floating: an MJCF wrapper that attaches the URDF under a body with a <freejoint/> above a floor (<body pos=\"0 0 H\"><freejoint/><attach model=\"robot\" prefix=\"\"/></body>), and lint the wrapper")
+            .help("to simulate it standing (so the stance probes can judge its feet): an MJCF wrapper that attaches the URDF under a body with a <freejoint/> above a floor (<body pos=\"0 0 H\"><freejoint/><attach model=\"robot\" prefix=\"\"/></body>), and lint the wrapper")
             .subject(Subject::Model)
             .measured(legs.len() as f64, "legs")
             .with("depth", depth);
