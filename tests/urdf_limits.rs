@@ -1,6 +1,6 @@
 //! URDF defect classes of issue 45 (audit round six's "Left:"): geared joints with no rotor
 //! inertia (`transmission-without-armature`), placeholder `<limit>`s
-//! (`placeholder-joint-limits`) and legged URDFs welded to the world (`welded-legged-base`). Each value is computed here by hand from the fixture's numbers.
+//! (`placeholder-joint-limits`) and legged URDFs welded to the world (`welded-legged-base`; their feet judged as if the root floated). Each value is computed here by hand from the fixture's numbers.
 
 use std::path::Path;
 
@@ -122,4 +122,43 @@ fn a_legged_urdf_welded_to_the_world_is_named_and_arms_and_wheels_are_not() {
     for v in ["valid_ceiling_arm.urdf", "valid_wheeled_base.urdf"] {
         assert!(of(ID, v).is_empty(), "{v}");
     }
+}
+
+/// The foot families of `fixture` (under `fixtures/rules/<dir>`), as (foot body, kind).
+fn feet_of(dir: &str, fixture: &str) -> Vec<(String, modellint::rules::contact::feet::FootKind)> {
+    let path = Path::new("fixtures/rules").join(dir).join(fixture);
+    let input =
+        LintInput { model: path.clone(), spec: None, config: None, select: vec![], ignore: vec![] };
+    let loaded = load(&input).unwrap_or_else(|e| panic!("{} failed to load: {e}", path.display()));
+    let r = &loaded.robot;
+    modellint::rules::contact::feet::feet(r, None)
+        .into_iter()
+        .map(|f| (r.body_name(f.root).to_string(), f.kind))
+        .collect()
+}
+
+#[test]
+fn a_welded_legged_urdf_has_its_feet_judged_as_if_it_floated() {
+    use modellint::rules::contact::feet::FootKind::{Flat, Point};
+    // The biped's feet (named `*_foot`, the toes below them), flat; the quadruped's calves
+    // ending in 22 mm spheres, point feet; an arm and a wheeled base have none.
+    let biped = feet_of("toe-tilt", "invalid_welded_urdf_biped.urdf");
+    assert_eq!(biped, vec![("left_foot".into(), Flat), ("right_foot".into(), Flat)]);
+    let quad = feet_of("toe-tilt", "valid_welded_urdf_quadruped.urdf");
+    assert_eq!(quad.len(), 4, "{quad:?}");
+    assert!(quad.iter().all(|(n, k)| n.ends_with("_calf") && *k == Point), "{quad:?}");
+    assert!(feet_of("toe-tilt", "valid_urdf_table_arm.urdf").is_empty());
+    assert!(feet_of("welded-legged-base", "valid_wheeled_base.urdf").is_empty());
+    assert!(feet_of("welded-legged-base", "valid_ceiling_arm.urdf").is_empty());
+    // The left toe box is pitched 0.03 rad in the file: its bottom face 0.03 rad = 1.7189°
+    // from the ground at qpos0; the right toe and both soles are level.
+    let f = of("toe-tilt", "invalid_welded_urdf_biped.urdf");
+    assert_eq!(f.len(), 1, "{f:?}");
+    assert!((data(&f[0], "tilt_deg") - 0.03f64.to_degrees()).abs() < 1e-6, "{f:?}");
+    assert!(of("toe-tilt", "valid_welded_urdf_biped.urdf").is_empty());
+    // The welded robot's legs have no collision geometry: the four 0.3 m thigh and shank
+    // links are bare, the feet collide.
+    let f = of("links-without-collision", "invalid_welded_urdf_biped.urdf");
+    assert_eq!(f.len(), 1, "{f:?}");
+    assert!(f[0].message.starts_with("4 links"), "{}", f[0].message);
 }
