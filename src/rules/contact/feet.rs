@@ -9,8 +9,9 @@
 //! root with no contact geom of its own whose foot's contacts all hang below one descendant (an
 //! ankle roll link above the pitch link that holds the sole) hands the foot to that descendant.
 //!
-//! Only a floating-base robot has feet (unless the spec names them): a fixed-base arm or a
-//! test rig gets no foot rules. Each foot is classified by its ground geoms (the collision
+//! Only a floating-base robot has feet (unless the spec names them; a free joint, or three
+//! slides and a ball: [`Robot::floating_bodies`]): a fixed-base arm or a test rig gets no
+//! foot rules. Each foot is classified by its ground geoms (the collision
 //! geoms whose lowest point at the keyframe is within [`GROUND_WINDOW`] of the foot's lowest):
 //! a **point foot** touches down through spheres whose lowest points lie within
 //! [`POINT_SPREAD`] of each other (the quadruped's foot sphere; flat-foot rules do not apply); a
@@ -120,12 +121,8 @@ pub fn feet(robot: &Robot, spec: Option<&Spec>) -> Vec<Foot> {
     // A body welded to the floating base (no joint between them: the trunk, a ROS
     // `base_footprint` frame) is part of the trunk, not a foot, unless the spec names it. The
     // floating body itself may be a foot (a foot dropped alone on a floor, a test rig).
-    let free_bodies: Vec<usize> = robot
-        .joints
-        .iter()
-        .filter(|j| j.jtype == crate::model::JointType::Free)
-        .map(|j| j.body)
-        .collect();
+    // A floating base written as slides and a ball floats as a free joint does.
+    let free_bodies: Vec<usize> = robot.floating_bodies();
     let on_limb = |b: usize| {
         from_spec
             || free_bodies.contains(&b)
@@ -134,7 +131,7 @@ pub fn feet(robot: &Robot, spec: Option<&Spec>) -> Vec<Foot> {
     matched.retain(|&b| on_limb(b));
     // Only a floating-base robot (a legged one) has feet to guess at: a fixed-base arm or a
     // test rig does not.
-    let floating = robot.joints.iter().any(|j| j.jtype == crate::model::JointType::Free);
+    let floating = !free_bodies.is_empty();
     if !floating && !from_spec {
         return Vec::new();
     }
@@ -268,9 +265,10 @@ pub fn ankle_turning(robot: &Robot, root: usize, pts: &[[f64; 3]]) -> Option<usi
     // The leg's joints, foot first, up to the floating base.
     let mut chain: Vec<usize> = Vec::new();
     let mut b = root;
+    let floating = robot.floating_bodies();
     while b != 0 {
         let js: Vec<&crate::model::Joint> = robot.joints.iter().filter(|j| j.body == b).collect();
-        if js.iter().any(|j| j.jtype == JointType::Free) {
+        if floating.contains(&b) {
             break;
         }
         chain.extend(js.iter().map(|j| j.id));

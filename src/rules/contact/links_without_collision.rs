@@ -14,7 +14,8 @@ declare_rule! {
     /// only (`contype = conaffinity = 0`, named by no `<contact><pair>`), so a knee, a hip or
     /// the torso passes through the floor and the legs and arms pass through each other.
     ///
-    /// The robot is the subtree of a body with a free joint that carries hinge or slide joints
+    /// The robot is the subtree of a body with a free joint (or a floating base written as
+    /// three slides and a ball, as humanoid-gym's files do) that carries hinge or slide joints
     /// and two or more feet that are not wheels (the foot bodies of the contact rules: by name,
     /// else the leaf bodies that touch down). A link is one of its bodies other than the feet
     /// and their toes (which collide through what touches down); it is **covered** when a geom
@@ -177,7 +178,7 @@ impl Rule for LinksWithoutCollision {
             })
         };
         let share = cx.opt("min_link_share");
-        for base in robot.joints.iter().filter(|j| j.jtype == JointType::Free).map(|j| j.body) {
+        for base in robot.floating_bodies() {
             let jointed = robot.joints.iter().any(|j| {
                 j.body != base
                     && matches!(j.jtype, JointType::Hinge | JointType::Slide)

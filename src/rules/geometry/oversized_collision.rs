@@ -117,7 +117,7 @@ fn link_mass(link: &XNode) -> Option<f64> {
 
 /// The URDF `<collision>` shape element that compiled to geom `g` (same type and size), in the
 /// link named like the geom's body when there is one: (link, shape element).
-fn urdf_shape<'a>(robot: &'a Robot, g: usize) -> Option<(&'a XNode, &'a XNode)> {
+fn urdf_shape(robot: &Robot, g: usize) -> Option<(&XNode, &XNode)> {
     let geom = robot.geoms.get(g)?;
     let num = |n: &XNode, a: &str| n.get(a).and_then(|v| v.trim().parse::<f64>().ok());
     let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * (1.0 + a.abs());
