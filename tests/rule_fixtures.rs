@@ -662,3 +662,64 @@ fn repeated_class_mass_counts_the_class_mass_once_per_geom() {
         assert!(of("repeated-class-mass", v).is_empty(), "{v}");
     }
 }
+
+/// A placeholder cylinder (radius 0.8 m, length 1.2 m) on an 8 kg URDF root link: 1.6 m across
+/// against the joints' span √(0.2² + 0.8²) m (left hip to right ankle), and π·0.8²·1.2 m³ at
+/// 10 kg/m³; a box written in millimetres (half-sizes 150 40 30) on a 1.2 kg forearm.
+#[test]
+fn oversized_collision_primitive_against_link_mass_and_joint_span() {
+    let id = "oversized-collision-primitive";
+    let f = of(id, "invalid.urdf");
+    assert_eq!(f.len(), 1, "{f:?}");
+    let volume = std::f64::consts::PI * 0.8 * 0.8 * 1.2;
+    assert!((f[0].measured.as_ref().unwrap().value - 1.6).abs() < 1e-9, "{f:?}");
+    assert!((f[0].data["span"] - 0.68f64.sqrt()).abs() < 1e-9, "{:?}", f[0].data);
+    assert!((f[0].data["volume"] - volume).abs() < 1e-9, "{:?}", f[0].data);
+    assert!((f[0].data["least_mass"] - 10.0 * volume).abs() < 1e-9, "{:?}", f[0].data);
+    assert!((f[0].data["link_mass"] - 8.0).abs() < 1e-12, "{:?}", f[0].data);
+    let f = of(id, "invalid_mm.xml");
+    assert_eq!(f.len(), 1, "{f:?}");
+    assert!((f[0].measured.as_ref().unwrap().value - 300.0).abs() < 1e-9, "{f:?}");
+    assert!((f[0].data["volume"] - 8.0 * 150.0 * 40.0 * 30.0).abs() < 1e-6, "{:?}", f[0].data);
+    assert!((f[0].data["span"] - 0.55).abs() < 1e-9, "{:?}", f[0].data);
+    // A 0.9 m bumper of 0.5 kg inside a 1.07 m span; a 120 kg chassis of 0.384 m³.
+    for v in ["valid_mobile_manipulator.xml", "valid_heavy_base.xml"] {
+        assert!(of(id, v).is_empty(), "{v}");
+    }
+}
+
+/// 1 mm boxes (half-size 0.5 mm) on hips (visual sphere of radius 40 mm: 80 mm, more than the
+/// 60 mm to the hip pitch joint), thighs (capsule 350 mm + 2 × 40 mm) and shins (350 + 2 × 35).
+#[test]
+fn token_collision_geometry_is_judged_against_the_link_it_stands_for() {
+    let id = "token-collision-geometry";
+    let f = of(id, "invalid.xml");
+    assert_eq!(f.len(), 1, "{f:?}");
+    assert!((f[0].measured.as_ref().unwrap().value - 6.0).abs() < 1e-12, "{f:?}");
+    assert!((f[0].data["first_across"] - 0.001).abs() < 1e-12, "{:?}", f[0].data);
+    assert!((f[0].data["first_size"] - 0.08).abs() < 1e-12, "{:?}", f[0].data);
+    assert!((f[0].data["smallest_ratio"] - 80.0).abs() < 1e-6, "{:?}", f[0].data);
+    for l in ["l_hip` (1 mm on a 80 mm", "l_thigh` (1 mm on a 430 mm", "r_shin` (1 mm on a 420 mm"]
+    {
+        assert!(f[0].message.contains(l), "{}", f[0].message);
+    }
+    for v in ["valid_covered_legs.xml", "valid_point_feet.xml"] {
+        assert!(of(id, v).is_empty(), "{v}");
+    }
+}
+
+/// Two arms of 0.3 + 1.5 + 1 kg on free joints of their own beside a 15 + 2 × (4 + 3) kg robot.
+#[test]
+fn a_limb_on_its_own_free_joint_is_named_and_scenes_are_not() {
+    let id = "detached-limb";
+    let f = of(id, "invalid.xml");
+    assert_eq!(f.len(), 2, "{f:?}");
+    for x in &f {
+        assert!((x.measured.as_ref().unwrap().value - 2.8).abs() < 1e-9, "{x:?}");
+        assert!((x.expected.as_ref().unwrap().value - 29.0).abs() < 1e-9, "{x:?}");
+        assert!((x.data["actuated"] - 2.0).abs() < 1e-12, "{:?}", x.data);
+    }
+    for v in ["valid_scene.xml", "valid_two_robots.xml", "valid_held_by_weld.xml"] {
+        assert!(of(id, v).is_empty(), "{v}");
+    }
+}

@@ -153,6 +153,26 @@ fn round_mesh(bb: &[f64; 6], p: &[f64; 3], m: &[f64; 9], a: &[f64; 3], u: [f64; 
 }
 
 impl Robot {
+    /// The bodies that float over the world: a body with a free joint, and a floating base
+    /// written as slides and a ball in place of one (humanoid-gym's files: a ball and a slide on
+    /// the body, and every hinge or slide of it a base coordinate, [`Robot::is_base_coordinate`]).
+    /// A planar base (slides and a hinge about the vertical, no ball) does not float.
+    pub fn floating_bodies(&self) -> Vec<usize> {
+        let on = |b: usize| self.joints.iter().filter(move |j| j.body == b);
+        self.bodies
+            .iter()
+            .filter(|b| b.id != 0)
+            .filter(|b| {
+                let free = on(b.id).any(|j| j.jtype == JointType::Free);
+                let slide_ball = on(b.id).any(|j| j.jtype == JointType::Ball)
+                    && on(b.id).any(|j| j.jtype == JointType::Slide)
+                    && on(b.id).filter(|j| j.is_scalar()).all(|j| self.is_base_coordinate(j.id));
+                free || slide_ball
+            })
+            .map(|b| b.id)
+            .collect()
+    }
+
     /// Whether `joint` is a coordinate of a mobile base over the world, written in place of a
     /// free joint (a planar base: slides along x and y and a hinge about the vertical): it sits
     /// on a body whose parent is fixed to the world, and that body has two or more joints, all

@@ -3,5 +3,6 @@ pub mod feet;
 pub mod foot_collision_geometry;
 pub mod links_without_collision;
 pub mod toe_tilt;
+pub mod token_collision;
 pub mod torsional_friction;
 pub mod welded_legged_base;

@@ -1,5 +1,6 @@
 //! Rules of the `mapping` group.
 pub mod actuator_mapping;
+pub mod detached_limb;
 pub mod free_passive_joint;
 pub mod missing_actuators;
 pub mod passive_joint_spring;

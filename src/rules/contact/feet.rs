@@ -9,9 +9,10 @@
 //! root with no contact geom of its own whose foot's contacts all hang below one descendant (an
 //! ankle roll link above the pitch link that holds the sole) hands the foot to that descendant.
 //!
-//! Only a floating-base robot has feet (unless the spec names them): a fixed-base arm or a
-//! test rig gets no foot rules. A legged URDF, which MuJoCo's importer welds to the world,
-//! counts as floating from its root link ([`floating_bases`]). Each foot is classified by its ground geoms (the collision
+//! Only a floating-base robot has feet (unless the spec names them; a free joint, or three
+//! slides and a ball: [`Robot::floating_bodies`]): a fixed-base arm or a test rig gets no
+//! foot rules. A legged URDF, which MuJoCo's importer welds to the world, counts as floating
+//! from its root link ([`floating_bases`]). Each foot is classified by its ground geoms (the collision
 //! geoms whose lowest point at the keyframe is within [`GROUND_WINDOW`] of the foot's lowest):
 //! a **point foot** touches down through spheres whose lowest points lie within
 //! [`POINT_SPREAD`] of each other (the quadruped's foot sphere; flat-foot rules do not apply); a
@@ -102,19 +103,15 @@ fn contact_geoms(robot: &Robot, body: usize) -> impl Iterator<Item = usize> + '_
         .map(|g| g.id)
 }
 
-/// The bodies the foot rules take for floating bases: each free joint's body; with none, in a
+/// The bodies the foot rules take for floating bases: each free joint's body and each body
+/// floated by three slides and a ball ([`Robot::floating_bodies`]); with none, in a
 /// legged URDF that MuJoCo's importer welded to the world
 /// ([`crate::rules::contact::welded_legged_base::is_welded_legged`]), the world body the
 /// importer fused the root link into (0): its feet are judged as if the root link floated at
 /// its pose in the file (the static geometry at qpos0 is the same). Empty for a fixed-base
 /// robot (an arm, a wheeled base welded by the importer, any MJCF without a free joint).
 pub fn floating_bases(robot: &Robot) -> Vec<usize> {
-    let free: Vec<usize> = robot
-        .joints
-        .iter()
-        .filter(|j| j.jtype == crate::model::JointType::Free)
-        .map(|j| j.body)
-        .collect();
+    let free = robot.floating_bodies();
     if free.is_empty() && crate::rules::contact::welded_legged_base::is_welded_legged(robot) {
         return vec![0];
     }
@@ -140,6 +137,7 @@ pub fn feet(robot: &Robot, spec: Option<&Spec>) -> Vec<Foot> {
     // A body welded to the floating base (no joint between them: the trunk, a ROS
     // `base_footprint` frame) is part of the trunk, not a foot, unless the spec names it. The
     // floating body itself may be a foot (a foot dropped alone on a floor, a test rig).
+    // A floating base written as slides and a ball floats as a free joint does.
     let bases = floating_bases(robot);
     let weld = |b: usize| robot.bodies.get(b).map_or(b, |x| x.weld);
     let on_limb = |b: usize| {
@@ -282,9 +280,10 @@ pub fn ankle_turning(robot: &Robot, root: usize, pts: &[[f64; 3]]) -> Option<usi
     // The leg's joints, foot first, up to the floating base.
     let mut chain: Vec<usize> = Vec::new();
     let mut b = root;
+    let floating = robot.floating_bodies();
     while b != 0 {
         let js: Vec<&crate::model::Joint> = robot.joints.iter().filter(|j| j.body == b).collect();
-        if js.iter().any(|j| j.jtype == JointType::Free) {
+        if floating.contains(&b) {
             break;
         }
         chain.extend(js.iter().map(|j| j.id));

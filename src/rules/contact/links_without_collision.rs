@@ -14,7 +14,8 @@ declare_rule! {
     /// only (`contype = conaffinity = 0`, named by no `<contact><pair>`), so a knee, a hip or
     /// the torso passes through the floor and the legs and arms pass through each other.
     ///
-    /// The robot is the subtree of a body with a free joint (or the whole of a legged URDF that
+    /// The robot is the subtree of a body with a free joint (or a floating base written as
+    /// three slides and a ball, as humanoid-gym's files do, or the whole of a legged URDF that
     /// MuJoCo's importer welded to the world, as if its root link floated: `welded-legged-base`)
     /// that carries hinge or slide joints
     /// and two or more feet that are not wheels (the foot bodies of the contact rules: by name,
