@@ -77,6 +77,12 @@ fn broken_inputs_exit_2_with_location() {
             "fixtures/broken/shell_inertia_robot.xml:9:",
             "`shellinertia`",
         ),
+        // An attribute MuJoCo's schema no longer knows, in an included file ("line 0").
+        (
+            &["fixtures/broken/unknown_attribute_scene.xml"],
+            "fixtures/broken/unknown_attribute_robot.xml:4:",
+            "`apirate`",
+        ),
         (
             &["fixtures/broken/mujoco_rejects.xml"],
             "fixtures/broken/mujoco_rejects.xml",

@@ -628,9 +628,18 @@ fn servo_sag_is_static_load_over_stiffness() {
     let sag = f[0].measured.as_ref().unwrap().value;
     assert!((sag - 9.81 * 0.7 / 4.0).abs() < 1e-6, "{sag}");
     // Spring 20 N·m/rad resting 0.5 rad off the pose, servo kp 50: 10 / 70 rad.
+    // The second turret (spring at the pose) commanded to its ctrlrange end −1 rad reaches
+    // −50 / 70 rad: 20 / 70 short (towards springref).
     let f = of("servo-sag", "invalid_spring.xml");
-    assert_eq!(f.len(), 1, "{f:?}");
+    assert_eq!(f.len(), 2, "{f:?}");
     assert!((f[0].measured.as_ref().unwrap().value - 10.0 / 70.0).abs() < 1e-9);
+    assert!((f[1].measured.as_ref().unwrap().value - 20.0 / 70.0).abs() < 1e-9, "{f:?}");
+    // Joint springs equal to the servos' kp halve every command: hip yaw 0.7 → 0.35 rad,
+    // knee 1.2 → 0.6 rad.
+    let f = of("servo-sag", "invalid_spring_copies_kp.xml");
+    let got: Vec<f64> = f.iter().map(|f| f.measured.as_ref().unwrap().value).collect();
+    assert_eq!(got.len(), 2, "{f:?}");
+    assert!((got[0] - 0.35).abs() < 1e-9 && (got[1] + 0.6).abs() < 1e-9, "{got:?}");
     // 5 kg on a vertical slide against 1000 N/m, no keyframe: 5·9.81 / 1000 m down.
     let f = of("servo-sag", "invalid_slide_no_keyframe.xml");
     assert!((f[0].measured.as_ref().unwrap().value + 5.0 * 9.81 / 1000.0).abs() < 1e-9);
@@ -641,9 +650,61 @@ fn servo_sag_is_static_load_over_stiffness() {
         "valid_ctrl_compensates.xml",
         "valid_rests_on_limit.xml",
         "valid_torque_motors.xml",
+        "valid_soft_return_spring.xml",
     ] {
         assert!(of("servo-sag", v).is_empty(), "{v}");
     }
+}
+
+/// inertiafromgeom="true": the thigh's stated 4 kg becomes its drawn 0.2 × 0.2 × 0.4 m box at
+/// 1000 kg/m³ (16 kg), the pelvis's 3 kg its 0.2 × 0.2 × 0.1 m box (4 kg); the torso, with no
+/// geom in groups 2–3, keeps its stated 7.5 kg. One finding, the bodies by discrepancy.
+#[test]
+fn inertiafromgeom_true_is_named_with_the_masses_it_discards() {
+    let f = of("inertial-overridden", "invalid.xml");
+    assert_eq!(f.len(), 1, "{f:?}");
+    assert!(
+        (f[0].measured.as_ref().unwrap().value - 20.0).abs() < 1e-9
+            && (f[0].expected.as_ref().unwrap().value - 7.0).abs() < 1e-12,
+        "{f:?}"
+    );
+    let m = &f[0].message;
+    let (thigh, pelvis) = (m.find("`thigh`").unwrap(), m.find("`pelvis`").unwrap());
+    assert!(thigh < pelvis && !m.contains("`torso`"), "{m}");
+    assert!(m.contains("`thigh` states 4 kg and weighs 16 kg"), "{m}");
+    for v in ["valid.xml", "valid_true_matches.xml"] {
+        assert!(of("inertial-overridden", v).is_empty(), "{v}");
+    }
+}
+
+/// `_p`/`_v`/`_f` suffixes read by the file's own majority: the knee's `_v` and `_f` slots are
+/// `<actuatorpos>` among `<actuatorvel>`/`<actuatorfrc>` siblings; axis letters, a `_v` the
+/// file uses for positions and a lone `_t` on a position are not judged.
+#[test]
+fn sensor_letter_suffixes_follow_the_files_majority() {
+    let f = of("sensor-quantity", "invalid_letter_suffix.xml");
+    let names: Vec<&str> = f.iter().map(|f| f.message.as_str()).collect();
+    assert_eq!(f.len(), 2, "{names:?}");
+    assert!(names[0].contains("`knee_joint_v`") && names[0].contains("name says velocity"));
+    assert!(names[1].contains("`knee_joint_f`") && names[1].contains("name says force"));
+    assert!(of("sensor-quantity", "valid_letter_suffix.xml").is_empty());
+}
+
+/// A keyframe with the base at the floor's height: both legs' thighs, shanks and soles lie
+/// entirely under the floor plane, the deepest the soles' tops at 0.82 − √0.0117 m; the same
+/// robot standing 1 mm into the floor, a post fixed to the world and a non-colliding marker
+/// below it are not reported.
+#[test]
+fn a_keyframe_that_buries_the_robot_in_the_floor_is_named() {
+    let f: Vec<_> = of("keyframe-state", "invalid_buried_in_floor.xml")
+        .into_iter()
+        .filter(|f| f.message.contains("under the floor plane"))
+        .collect();
+    assert_eq!(f.len(), 1, "{f:?}");
+    let depth = f[0].measured.as_ref().unwrap().value;
+    assert!((depth - (0.82 - 0.0117f64.sqrt())).abs() < 1e-9, "{depth}");
+    assert!(f[0].message.contains("places 6 colliding geoms"), "{}", f[0].message);
+    assert!(of("keyframe-state", "valid_standing_on_floor.xml").is_empty());
 }
 
 #[test]

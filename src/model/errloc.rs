@@ -159,14 +159,29 @@ const ATTRIBUTE_ERRORS: &[(&str, &str, &str)] = &[
     ("inertia should be specified in the mesh asset", "geom", "shellinertia"),
 ];
 
-/// For an error of `ATTRIBUTE_ERRORS`: the first element of that tag that writes the attribute
-/// (preferring one that names a `mesh`), with how many elements write it.
+/// MuJoCo's schema error for an attribute it does not know ("Schema violation: unrecognized
+/// attribute: 'apirate'\nElement 'option', line 0" — an element of an included file): the
+/// element's tag and the attribute.
+fn unrecognized_attribute(msg: &str) -> Option<(&str, &str)> {
+    let quoted = |after: &str| -> Option<&str> {
+        let i = msg.find(after)? + after.len();
+        Some(&msg[i..i + msg[i..].find('\'')?])
+    };
+    Some((quoted("Element '")?, quoted("unrecognized attribute: '")?))
+}
+
+/// For an error of `ATTRIBUTE_ERRORS`, or an attribute MuJoCo's schema does not know: the first
+/// element of that tag that writes the attribute (preferring one that names a `mesh`), with
+/// how many elements write it.
 pub(super) fn attribute_error_location(
     map: &SourceMap,
     first_file: usize,
     msg: &str,
 ) -> Option<LoadError> {
-    let &(_, tag, attr) = ATTRIBUTE_ERRORS.iter().find(|(m, _, _)| msg.contains(m))?;
+    let (tag, attr) = match ATTRIBUTE_ERRORS.iter().find(|(m, _, _)| msg.contains(m)) {
+        Some(&(_, tag, attr)) => (tag, attr),
+        None => unrecognized_attribute(msg)?,
+    };
     let pat = format!("{attr}=");
     let (mut first, mut with_mesh, mut count) = (None, None, 0usize);
     for f in first_file..map.files.len() {
@@ -206,6 +221,13 @@ mod tests {
     use std::path::PathBuf;
 
     /// MuJoCo's "line 0" and its cut messages point at the element they name, not at 0:1.
+    #[test]
+    fn an_unknown_attribute_is_read_from_the_schema_message() {
+        let msg = "XML Error: Schema violation: unrecognized attribute: 'apirate'\nElement 'option', line 0\n";
+        assert_eq!(unrecognized_attribute(msg), Some(("option", "apirate")));
+        assert_eq!(unrecognized_attribute("XML Error: unknown element 'foo'"), None);
+    }
+
     #[test]
     fn line_zero_names_the_element() {
         let text = std::fs::read_to_string("fixtures/broken/massless_unnamed_body.xml").unwrap();

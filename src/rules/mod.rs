@@ -328,6 +328,7 @@ pub fn registry() -> Vec<&'static dyn Rule> {
         &inertia::isotropic_link_inertia::IsotropicLinkInertia,
         &inertia::mass_budget::MassBudget,
         &inertia::repeated_class_mass::RepeatedClassMass,
+        &inertia::inertial_overridden::InertialOverridden,
         &inertia::copied_inertial::CopiedInertial,
         &inertia::inertia_exceeds_geometry::InertiaExceedsGeometry,
         &contact::toe_tilt::ToeTilt,

@@ -16,7 +16,10 @@ declare_rule! {
     ///   range;
     /// - an active joint equality (`<equality><joint>`, joint1 − qpos0 = polycoef(joint2 −
     ///   qpos0)) that the positions miss by more than `tolerance` × joint1's range (× 1 in joint
-    ///   units when joint1 has no range).
+    ///   units when joint1 has no range);
+    /// - a colliding geom of a body that is not fixed to the world lying entirely under a
+    ///   floor plane it can touch (its bounding sphere, `geom_rbound`, below the plane's
+    ///   surface: the base placed at the floor's height, legs and feet in the ground).
     ///
     /// A settled pose rests a little inside a soft limit or equality: within `tolerance` it is
     /// not reported.
@@ -35,8 +38,8 @@ declare_rule! {
     ///
     /// ## How to fix
     /// Write a unit quaternion (`1 0 0 0` for no rotation), positions inside the joint ranges,
-    /// and coupled joints that satisfy their equality; without a keyframe, give the model one
-    /// whose pose is legal (or joint ranges that contain 0).
+    /// and coupled joints that satisfy their equality, with the robot above the floor; without
+    /// a keyframe, give the model one whose pose is legal (or joint ranges that contain 0).
     pub KeyframeState {
         id: "keyframe-state",
         group: "control",
@@ -162,6 +165,9 @@ impl Rule for KeyframeState {
                     _ => {}
                 }
             }
+            if let Some(f) = buried_geoms(cx, s) {
+                out.push(f);
+            }
             for (j1, j2, miss, scale) in equality_misses(robot, s.qpos, qpos0) {
                 if miss.abs() <= tol * scale {
                     continue;
@@ -192,6 +198,82 @@ impl Rule for KeyframeState {
             }
         }
     }
+}
+
+/// The colliding geoms of bodies not fixed to the world that state `s` places entirely under a
+/// floor plane they can touch (their bounding sphere below the plane's surface), reported
+/// once with the deepest: MuJoCo's plane is a half-space, so each is in contact, buried.
+fn buried_geoms(cx: &Context, s: &State) -> Option<Finding> {
+    use crate::model::GeomType;
+    use crate::model::contact::{ground_partners, takes_part};
+    let robot = cx.robot;
+    let m = &robot.mj;
+    let mut d = mujoco_rs::prelude::MjData::new(m);
+    if let Some(k) = s.key {
+        let _ = d.reset_keyframe(k);
+    }
+    d.forward();
+    let (xpos, xmat, rbound) = (d.geom_xpos(), d.geom_xmat(), m.geom_rbound());
+    // (geom, plane, how far its top lies under the plane's surface)
+    let mut buried: Vec<(usize, usize, f64)> = Vec::new();
+    for g in &robot.geoms {
+        let moving = robot.bodies.get(g.body).is_some_and(|b| b.weld != 0);
+        if !moving || g.gtype == GeomType::Plane || !takes_part(robot, g.id) {
+            continue;
+        }
+        let (Some(p), Some(&r)) = (xpos.get(g.id), rbound.get(g.id)) else { continue };
+        for (pl, _) in ground_partners(robot, g.id) {
+            if robot.geoms[pl].gtype != GeomType::Plane {
+                continue;
+            }
+            let (Some(o), Some(x)) = (xpos.get(pl), xmat.get(pl)) else { continue };
+            // The plane's normal is its frame's z axis (the third column, row-major).
+            let n = [x[2], x[5], x[8]];
+            let top = (0..3).map(|i| (p[i] - o[i]) * n[i]).sum::<f64>() + r;
+            if top < 0.0 {
+                buried.push((g.id, pl, -top));
+                break;
+            }
+        }
+    }
+    if buried.is_empty() {
+        return None;
+    }
+    buried.sort_by(|a, b| b.2.total_cmp(&a.2).then(a.0.cmp(&b.0)));
+    let (g0, pl, depth) = buried[0];
+    let gname = |g: usize| {
+        let n = &robot.geoms[g].name;
+        if n.is_empty() { format!("geom {}", robot.unnamed_geom(g)) } else { format!("geom `{n}`") }
+    };
+    let plane = &robot.geoms[pl].name;
+    let plane = if plane.is_empty() {
+        "a floor plane".to_string()
+    } else {
+        format!("the floor plane `{plane}`")
+    };
+    let msg = format!(
+        "{} places {} colliding {} of the robot entirely under {plane}: the deepest, {}, lies {} m below its surface (its whole bounding sphere)",
+        s.label,
+        buried.len(),
+        if buried.len() == 1 { "geom" } else { "geoms" },
+        gname(g0),
+        fmt_num(depth, 3)
+    );
+    let f = match s.key {
+        Some(k) => cx.at_attr(ElemKind::Key, k, &s.name, "qpos", msg),
+        None => {
+            let g = &robot.geoms[g0];
+            cx.at_elem(ElemKind::Geom, g0, &g.name, msg)
+        }
+    };
+    Some(
+        f.label("under the floor")
+            .note("a plane is a half-space to MuJoCo's collision: a geom below it is in contact, and the first step pushes the robot up through the floor with the contact force of that depth")
+            .help("place the base high enough that the feet rest on the floor (its height above the feet's lowest point), or lower the floor")
+            .subject(Subject::Model)
+            .measured(depth, "m")
+            .with("geoms", buried.len() as f64),
+    )
 }
 
 fn unit(robot: &Robot, j: usize) -> &'static str {

@@ -29,6 +29,13 @@ declare_rule! {
     /// load). Torque-controlled joints are not judged; gravity compensation that carries the
     /// weight leaves no load and nothing to report.
     ///
+    /// A joint spring also holds the servo off every target other than its `springref`: a
+    /// servo of stiffness kp·g² commanded to θ settles at (kp·g²·θ + k·springref)/(kp·g² + k)
+    /// against a spring of stiffness k. When the keyframe shows no sag, each end of the
+    /// servo's ctrlrange (as joint positions, within the joint's range) is judged by the same
+    /// thresholds with the spring alone (gravity is the keyframe's business): a joint
+    /// `stiffness` copied from the servo's kp halves every command.
+    ///
     /// ## Why is this bad?
     /// A servo too soft for the weight it carries (an arm's kp stated in the wrong units, a
     /// spring whose `springref` is not the servo's working pose) never reaches the pose a
@@ -204,6 +211,11 @@ impl Rule for ServoSag {
             let span = if j.limited { (j.range[1] - j.range[0]).abs() } else { f64::INFINITY };
             let limit = abs_max.min(cx.opt("max_sag_fraction") * span);
             if !(sag.abs() > limit && off_pose.abs() > limit) {
+                if let Some(f) =
+                    spring_across_ctrlrange(cx, j, &on, servo_k, limit, unit, force_unit)
+                {
+                    out.push(f);
+                }
                 continue;
             }
             let a = on[0];
@@ -266,4 +278,66 @@ impl Rule for ServoSag {
             out.push(f);
         }
     }
+}
+
+/// Where the joint spring alone leaves a joint's servos at the end of their ctrlrange farthest
+/// from the spring's rest position: a finding when that is more than `limit` short of the
+/// commanded position (the servos' commands as joint positions, cut at the joint's range).
+fn spring_across_ctrlrange(
+    cx: &Context,
+    j: &crate::model::Joint,
+    on: &[&crate::model::Actuator],
+    servo_k: f64,
+    limit: f64,
+    unit: &str,
+    force_unit: &str,
+) -> Option<Finding> {
+    let k = j.stiffness;
+    if !(k > 0.0) || on.len() != 1 {
+        return None;
+    }
+    let a = on[0];
+    let [lo, hi] = a.setpoint_range()?;
+    let (rlo, rhi) = (j.range[0].min(j.range[1]), j.range[0].max(j.range[1]));
+    let clamp = |x: f64| if j.limited { x.clamp(rlo, rhi) } else { x };
+    let reach = |t: f64| {
+        let t = clamp(t);
+        (t, clamp((servo_k * t + k * j.springref) / (servo_k + k)))
+    };
+    let ((t, x), (t2, x2)) = (reach(lo), reach(hi));
+    let (t, x) = if (x2 - t2).abs() > (x - t).abs() { (t2, x2) } else { (t, x) };
+    let short = x - t;
+    if !(short.abs() > limit) || !short.is_finite() {
+        return None;
+    }
+    let msg = format!(
+        "position servo {} (stiffness {} {force_unit}/{unit}) reaches {} {unit} when commanded to {} {unit}, the end of its ctrlrange: joint `{}`'s spring (stiffness {} {force_unit}/{unit} towards springref {}) holds it {} {unit} short ({} % of the way from springref)",
+        cx.actuator_label(a.id),
+        fmt_num(servo_k, 3),
+        fmt_num(x, 3),
+        fmt_num(t, 3),
+        j.name,
+        fmt_num(k, 3),
+        fmt_num(j.springref, 3),
+        fmt_num(short.abs(), 3),
+        fmt_num(100.0 * k / (servo_k + k), 3),
+    );
+    let robot = cx.robot;
+    let sloc = robot.attr_loc(ElemKind::Joint, j.id, &j.name, "stiffness").0;
+    Some(
+        cx.at_attr(ElemKind::Actuator, a.id, &a.name, "kp", msg)
+            .label(format!("kp {}", fmt_num(a.servo.map_or(0.0, |s| s.kp), 3)))
+            .secondary(sloc, format!("spring stiffness {} towards springref {}", fmt_num(k, 3), fmt_num(j.springref, 3)))
+            .note("a position servo against a joint spring settles where kp·g²·(target − q) balances k·(q − springref): every target but springref is missed by k/(kp·g² + k) of its distance from springref")
+            .help(format!(
+                "remove the joint's stiffness if the servo alone is the actuator (a stiffness equal to kp is the servo's gain written twice), or raise kp to at least {} so the spring costs at most {} {unit} of the ctrlrange",
+                fmt_num((k * ((t - j.springref).abs() / limit - 1.0)).max(0.0) / (servo_k / a.servo.map_or(1.0, |s| s.kp).max(f64::MIN_POSITIVE)), 3),
+                fmt_num(limit, 3)
+            ))
+            .subject(Subject::Actuator(a.id))
+            .measured(short, unit)
+            .expected(limit, unit)
+            .with("spring_stiffness", k)
+            .with("stiffness", servo_k),
+    )
 }

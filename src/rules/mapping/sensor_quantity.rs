@@ -13,6 +13,14 @@ declare_rule! {
     /// `torque`, `tau`, `effort` say force. A name with none of these words, or with words of
     /// two quantities, is not judged.
     ///
+    /// A name that ends in a one-letter abbreviation (`knee_p`, `knee_v`, `knee_f`) is judged
+    /// by the file's own use of the letter: `p` and `q` may say position, `v` velocity, `f`
+    /// and `t` force, and the letter says it only when more than half of the model's joint,
+    /// actuator and tendon sensors ending in it measure that quantity. A sensor ending in the
+    /// letter that measures another quantity is then reported (`leg_r4_joint_v` an
+    /// `<actuatorpos>` among eleven `*_v` `<actuatorvel>`s). Other letters (`x`, `y`, `z`,
+    /// sides) and letters the file uses otherwise are not judged.
+    ///
     /// ## Why is this bad?
     /// Training stacks read observations by sensor name. A velocity observation that is
     /// really the joint angle (a `<jointpos>` block copied and renamed `*_vel`) trains the
@@ -103,14 +111,60 @@ fn stated(name: &str) -> Option<Quantity> {
     if found.len() == 1 { found.first().copied() } else { None }
 }
 
+/// The quantity a one-letter abbreviation may stand for at the end of a sensor name.
+fn letter_quantity(w: &str) -> Option<Quantity> {
+    match w {
+        "p" | "q" => Some(Quantity::Position),
+        "v" => Some(Quantity::Velocity),
+        "f" | "t" => Some(Quantity::Force),
+        _ => None,
+    }
+}
+
+/// The quantity each sensor's name states: by its words, else by a final one-letter
+/// abbreviation that more than half of the sensors ending in that letter use for the
+/// quantity the letter may stand for (the file's own convention). `sensors`: (name, measured).
+fn stated_all(sensors: &[(Option<&str>, Option<Quantity>)]) -> Vec<Option<Quantity>> {
+    let last = |n: &str| words(n).pop().filter(|w| w.len() == 1);
+    let mut out = Vec::with_capacity(sensors.len());
+    for &(name, _) in sensors {
+        let Some(name) = name else {
+            out.push(None);
+            continue;
+        };
+        if let Some(q) = stated(name) {
+            out.push(Some(q));
+            continue;
+        }
+        let by_letter = last(name).and_then(|letter| {
+            let q = letter_quantity(&letter)?;
+            let same: Vec<Option<Quantity>> = sensors
+                .iter()
+                .filter(|(n, m)| {
+                    m.is_some() && n.and_then(last).as_deref() == Some(letter.as_str())
+                })
+                .map(|&(_, m)| m)
+                .collect();
+            let agree = same.iter().filter(|&&m| m == Some(q)).count();
+            (2 * agree > same.len()).then_some(q)
+        });
+        out.push(by_letter);
+    }
+    out
+}
+
 impl Rule for SensorQuantity {
     fn meta(&self) -> &'static RuleMeta {
         &Self::META
     }
     fn check(&self, cx: &Context, out: &mut Vec<Finding>) {
-        for (i, e) in cx.robot.src.list(ElemKind::Sensor).iter().enumerate() {
+        let list = cx.robot.src.list(ElemKind::Sensor);
+        let sensors: Vec<(Option<&str>, Option<Quantity>)> =
+            list.iter().map(|e| (e.name.as_deref(), measured(&e.tag))).collect();
+        let says_all = stated_all(&sensors);
+        for (i, e) in list.iter().enumerate() {
             let Some(name) = e.name.as_deref() else { continue };
-            let (Some(is), Some(says)) = (measured(&e.tag), stated(name)) else { continue };
+            let (Some(is), Some(says)) = (measured(&e.tag), says_all[i]) else { continue };
             if is == says {
                 continue;
             }
@@ -156,5 +210,32 @@ mod tests {
         assert_eq!(stated("velocimeter"), None);
         assert_eq!(measured("jointpos"), Some(Quantity::Position));
         assert_eq!(measured("gyro"), None);
+    }
+
+    #[test]
+    fn a_final_letter_says_what_most_sensors_ending_in_it_measure() {
+        let p = Some(Quantity::Position);
+        let v = Some(Quantity::Velocity);
+        let s = [
+            (Some("a_p"), p),
+            (Some("b_p"), p),
+            (Some("a_v"), v),
+            (Some("b_v"), v),
+            (Some("c_v"), p),
+            (Some("a_x"), p),
+            (Some("b_x"), v),
+            (Some("c_x"), v),
+            (Some("gyro_v"), None),
+        ];
+        let got = stated_all(&s);
+        assert_eq!(got[4], v, "c_v: 2 of the 3 `_v` sensors are velocities");
+        assert_eq!(got[0], p);
+        assert_eq!(got[5], None, "x is no quantity letter");
+        // A letter most of whose sensors measure another quantity says nothing.
+        let t = [(Some("a_v"), p), (Some("b_v"), p), (Some("c_v"), v)];
+        assert!(stated_all(&t).iter().all(Option::is_none));
+        // Half is not more than half.
+        let h = [(Some("a_f"), Some(Quantity::Force)), (Some("b_f"), p)];
+        assert!(stated_all(&h).iter().all(Option::is_none));
     }
 }
