@@ -46,7 +46,7 @@ fn beyond_range(stderr: f64, range: Option<f64>) -> bool {
 }
 
 /// Relative singular-value cutoff below which a direction counts as null.
-const NULL_SV_REL: f64 = 1e-8;
+pub const NULL_SV_REL: f64 = 1e-8;
 /// A parameter whose component in a null singular vector exceeds this (in
 /// absolute value, vectors being unit-norm) is considered unidentifiable.
 const NULL_COMPONENT: f64 = 0.05;

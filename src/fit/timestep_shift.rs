@@ -25,7 +25,10 @@
 //! `search.simulated_s` is the whole run's.
 
 use crate::fit::absent::within_uncertainty;
-use crate::fit::select::{FitOptions, FitOutcome, SearchCost, Selected, fit};
+use crate::fit::select::{FitOptions, FitOutcome, SearchCost, Selected, chord, fit};
+
+/// The phase the re-fit's replays are booked to.
+const PHASE: &str = "timestep_shift";
 use crate::model::Robot;
 use crate::sim2real::recording::Recording;
 
@@ -51,8 +54,10 @@ pub struct TimestepShift {
     pub timestep: f64,
     pub fine_timestep: f64,
     pub shifts: Vec<Shift>,
-    /// Recording seconds the told re-fit replayed.
+    /// Recording seconds the re-fit replayed.
     pub simulated_s: f64,
+    /// Chord Gauss–Newton steps of the re-fit ([`chord::refit`]); `None`: a told fit.
+    pub chord_steps: Option<usize>,
     /// The kept effects (effect, joints) whose re-fit at the finer step is the model as given
     /// within [`Z_ABSENT`](crate::fit::absent::Z_ABSENT) standard errors, with their values at
     /// the finer step.
@@ -80,17 +85,11 @@ pub fn measure(
     let mut fine = robot.clone();
     fine.mj.opt_mut().timestep = fine_dt;
     fine.opt.timestep = fine_dt;
-    let told = out.selected.iter().map(|s| (s.effect.clone(), s.joints.clone())).collect();
-    // Each re-fit starts at its answer at the model's step: the finer step moves it a little.
-    let told_start = out.selected.iter().map(|s| s.values.clone()).collect();
-    let o = FitOptions { told, told_start, progress: None, ..opts.clone() };
-    let b = fit(&fine, recs, &o);
-    add_cost(&mut out.cost, &b.cost);
+    let (at_fine, chord_steps) = refit(&fine, recs, opts, out);
     let mut shifts = Vec::new();
     let mut timestep_only = Vec::new();
     for x in &out.selected {
-        let Some(y) = b.selected.iter().find(|y| y.effect == x.effect && y.joints == x.joints)
-        else {
+        let Some(y) = at_fine.iter().find(|y| y.effect == x.effect && y.joints == x.joints) else {
             continue;
         };
         if within_uncertainty(&fine, y).is_some() {
@@ -115,8 +114,67 @@ pub fn measure(
     if shifts.is_empty() {
         return None;
     }
-    let simulated_s = b.cost.rollouts.simulated_s;
-    Some(TimestepShift { timestep: dt, fine_timestep: fine_dt, shifts, simulated_s, timestep_only })
+    let simulated_s = out.cost.simulated_s_by_phase.get(PHASE).copied().unwrap_or(0.0);
+    Some(TimestepShift {
+        timestep: dt,
+        fine_timestep: fine_dt,
+        shifts,
+        simulated_s,
+        timestep_only,
+        chord_steps,
+    })
+}
+
+/// The kept effects re-fitted with `fine` (the model at the finer step), as the search's
+/// `selected` records with the values and standard errors there, and the number of chord steps
+/// when the re-fit was [`chord::refit`]. That runs first, from the final standard errors'
+/// Jacobian when it belongs to the kept set as it is; when it does not confirm, the kept
+/// effects are fitted told at the finer step, each from its answer. Every replay is added to
+/// `out.cost` ([`add_cost`]).
+fn refit(
+    fine: &Robot,
+    recs: &[Recording],
+    opts: &FitOptions,
+    out: &mut FitOutcome,
+) -> (Vec<Selected>, Option<usize>) {
+    let o = FitOptions { progress: None, ..opts.clone() };
+    let jac =
+        out.jacobian.take().filter(|j| format!("{:?}", j.applied) == format!("{:?}", out.applied));
+    if let Some(j) = &jac {
+        let (c, cost) = chord::refit(fine, &out.train, &o, j);
+        add_cost(&mut out.cost, &cost);
+        if let Some(c) = c {
+            let at_fine = out
+                .selected
+                .iter()
+                .filter_map(|x| {
+                    let i = c
+                        .applied
+                        .iter()
+                        .position(|a| a.effect.id() == x.effect && a.joints == x.joints)?;
+                    let mut y = x.clone();
+                    y.values = c.applied[i].params.clone();
+                    let names = c.applied[i].effect.params().iter().map(|d| d.name.to_string());
+                    y.params = names
+                        .clone()
+                        .zip(y.values.iter().copied())
+                        .take(c.applied[i].effect.fitted())
+                        .collect();
+                    y.stderr = names.zip(c.stderr[i].0.iter().copied()).collect();
+                    Some(y)
+                })
+                .collect();
+            out.jacobian = jac;
+            return (at_fine, Some(c.steps));
+        }
+    }
+    out.jacobian = jac;
+    let told = out.selected.iter().map(|s| (s.effect.clone(), s.joints.clone())).collect();
+    // Each re-fit starts at its answer at the model's step: the finer step moves it a little.
+    let told_start = out.selected.iter().map(|s| s.values.clone()).collect();
+    let b = fit(fine, recs, &FitOptions { told, told_start, ..o });
+    add_cost(&mut out.cost, &b.cost);
+    (b.selected, None)
 }
 
 /// Adds the told re-fit's cost `refit` (all its phases) to the search's `cost`, as phase
@@ -128,7 +186,7 @@ fn add_cost(cost: &mut SearchCost, refit: &SearchCost) {
     c.batches += r.batches;
     c.seconds += r.seconds;
     c.simulated_s += r.simulated_s;
-    cost.book_after("timestep_shift", r.rollouts, r.simulated_s);
+    cost.book_after(PHASE, r.rollouts, r.simulated_s);
 }
 
 /// Some kept effect has a fitted time (a parameter in seconds) shorter than `dt`.
@@ -208,9 +266,17 @@ pub fn note(s: &TimestepShift) -> String {
             )
         })
         .collect();
+    let how = match s.chord_steps {
+        Some(n) => format!(
+            "by {n} Gauss–Newton step{} from the reported values with their Jacobian at the \
+             model's step",
+            if n == 1 { "" } else { "s" }
+        ),
+        None => "told".to_string(),
+    };
     format!(
         "the fitted values absorb the model's timestep: the recordings move in finer time than \
-         its {:.3} ms step, and the kept effects re-fitted (told) at {:.3} ms give: {}. The \
+         its {:.3} ms step, and the kept effects re-fitted ({how}) at {:.3} ms give: {}. The \
          difference is a systematic error the ± (the data's scatter at the model's step) does \
          not include; a smaller timestep in the model removes it ({:.0} s of recording \
          replayed for this check)",
@@ -241,6 +307,7 @@ mod tests {
             }],
             simulated_s: 515.0,
             timestep_only: Vec::new(),
+            chord_steps: Some(2),
         };
         let n = note(&s);
         assert!(
@@ -248,6 +315,7 @@ mod tests {
             "{n}"
         );
         assert!(n.contains("515 s of recording replayed"), "{n}");
+        assert!(n.contains("re-fitted (by 2 Gauss–Newton steps from the reported values"), "{n}");
     }
 
     fn kept(effect: &str, delay: f64) -> Selected {
@@ -277,6 +345,7 @@ mod tests {
             fine_timestep: 0.0005,
             shifts: vec![],
             simulated_s: 100.0,
+            chord_steps: None,
             timestep_only: vec![(
                 "action_delay".into(),
                 vec!["knee".into()],

@@ -17,7 +17,9 @@ mod fitting;
 mod floors;
 #[cfg(test)]
 mod tests;
+mod uncertainty;
 use super::{Errors, FitOptions, ProgressInfo};
+pub use uncertainty::Jacobian;
 
 /// The fit engine's view of a robot and dataset.
 pub struct Engine<'a> {

@@ -24,6 +24,7 @@
 //! [`improvement_beyond_noise`]: crate::fit::stats::improvement_beyond_noise
 //! [`uncertainty_from_jacobian`]: crate::fit::stats::uncertainty_from_jacobian
 
+pub mod chord;
 mod coarse;
 mod discretisation;
 mod engine;
@@ -62,7 +63,7 @@ use crate::model::Robot;
 use crate::sim2real::recording::Recording;
 use crate::sim2real::replay::{Episode, ReplayOptions};
 
-pub use engine::Engine;
+pub use engine::{Engine, Jacobian};
 pub use policy::{Phase, SearchPolicy};
 pub use verdict::beats_beyond_noise;
 
@@ -304,6 +305,8 @@ pub struct FitOutcome {
     pub notes: Vec<String>,
     /// What the search cost.
     pub cost: SearchCost,
+    /// The final standard errors' Jacobian of every kept parameter at the answer (training set).
+    pub jacobian: Option<Jacobian>,
 }
 
 /// What a search cost: simulations asked for, rollouts run, and the full fits its screens
@@ -375,6 +378,7 @@ impl FitOutcome {
             warnings: vec![],
             notes: vec![],
             cost: SearchCost::default(),
+            jacobian: None,
         }
     }
 }
@@ -565,7 +569,8 @@ fn search_cost(engine: &Engine, out: &FitOutcome) -> SearchCost {
 /// others; a later polish, swap or drop moves the values they belong to).
 fn final_uncertainty(engine: &Engine, train: &[Recording], out: &mut FitOutcome) {
     const UNIDENT: &str = "parameters not identifiable from this data";
-    let all = engine.uncertainty_all(train, &out.applied);
+    let (all, jacobian) = engine.uncertainty_all(train, &out.applied);
+    out.jacobian = jacobian;
     out.warnings.retain(|w| !w.contains(UNIDENT));
     for ((s, a), (se, ident)) in out.selected.iter_mut().zip(&out.applied).zip(all) {
         set_stderr(s, a.effect, &se, &ident);

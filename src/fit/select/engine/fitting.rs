@@ -2,19 +2,16 @@
 
 use crate::fit::effects::{self, Applied, Effect, JointTarget, model_with};
 use crate::fit::optim::Bounds;
-use crate::fit::stats::{ar1_variance_inflation, cluster_robust_stderr, uncertainty_from_jacobian};
 use crate::sim2real::metrics::gap_mask;
 use crate::sim2real::recording::Recording;
 
 use super::super::solve::{Method, Problem, solve};
 use super::{Engine, fit_key, neutral_params, with_candidate};
 
-/// Finite-difference step of the standard errors' Jacobian [fraction of the parameter's range].
-const FD_STEP: f64 = 1e-3;
 /// A fit ends on a bound within this distance of it [fraction of the range].
 const ON_BOUND: f64 = 1e-3;
 /// A secant coarse fit has converged when its step is shorter than this [fraction of the
-/// parameter's range]: a convergence tolerance at the resolution of [`FD_STEP`], not a
+/// parameter's range]: a convergence tolerance at the resolution of [`super::uncertainty::FD_STEP`], not a
 /// decision threshold.
 const SECANT_XTOL: f64 = 1e-3;
 /// Where a restart grid puts its points for two parameters, and for more [fractions of the
@@ -500,124 +497,6 @@ impl Engine<'_> {
                         .zip(&w[1])
                         .all(|(a, b)| (a - b).abs() <= 1e-9 * a.abs().max(b.abs()).max(1.0))
             })
-    }
-
-    /// Linearised standard errors of the fitted parameters of `applied.last()`, the others held
-    /// at their values (used while the search runs; [`Engine::uncertainty_all`] gives the final
-    /// ones).
-    pub(in crate::fit::select) fn uncertainty(
-        &self,
-        train: &[Recording],
-        applied: &[Applied],
-    ) -> (Vec<f64>, Vec<bool>) {
-        let last = applied.len() - 1;
-        self.uncertainty_of(train, applied, &[last]).pop().expect("one effect")
-    }
-
-    /// Linearised standard errors of every applied effect's fitted parameters, from one joint
-    /// Jacobian: a parameter correlated with another effect's (an armature and a gain error on
-    /// one joint) gets the wider marginal error, not the one conditional on the other held fixed.
-    pub(in crate::fit::select) fn uncertainty_all(
-        &self,
-        train: &[Recording],
-        applied: &[Applied],
-    ) -> Vec<(Vec<f64>, Vec<bool>)> {
-        let all: Vec<usize> = (0..applied.len()).collect();
-        self.uncertainty_of(train, applied, &all)
-    }
-
-    /// Standard errors (and identifiability) of the fitted parameters of the effects `which`,
-    /// jointly, from finite-difference columns of the residual on their joints: the larger of
-    /// `s²(JᵀJ)⁺` with s² inflated for serial correlation (AR(1)) and the cluster-robust
-    /// estimate with one cluster per training episode ([`cluster_robust_stderr`]).
-    fn uncertainty_of(
-        &self,
-        train: &[Recording],
-        applied: &[Applied],
-        which: &[usize],
-    ) -> Vec<(Vec<f64>, Vec<bool>)> {
-        // (effect index, parameter index, bound range) of every column.
-        let mut slots: Vec<(usize, usize, f64, f64)> = Vec::new();
-        let mut joints: Vec<String> = Vec::new();
-        for &ai in which {
-            let a = &applied[ai];
-            let t = JointTarget::of(self.robot, &a.joints[0]).expect("joint");
-            let m0 = model_with(self.robot, &applied[..ai]);
-            let (lo, hi) = a.effect.bounds(&m0, &t);
-            for i in 0..a.effect.fitted().min(a.params.len()) {
-                slots.push((ai, i, lo[i], hi[i]));
-            }
-            for j in &a.joints {
-                if !joints.contains(j) {
-                    joints.push(j.clone());
-                }
-            }
-        }
-        let failed = || {
-            which
-                .iter()
-                .map(|&ai| {
-                    let a = &applied[ai];
-                    let k = a.effect.fitted().min(a.params.len());
-                    (vec![f64::INFINITY; k], vec![false; k])
-                })
-                .collect()
-        };
-        let Some((r0, episode)) = self.residuals_by_episode(train, applied, &joints, 20_000) else {
-            return failed();
-        };
-        let mut cols = Vec::with_capacity(slots.len());
-        // A parameter held by bounds of zero width (a body's place along a direction no
-        // rotation moves it) is no estimate: no column, reported as held (0, identified).
-        let held = |s: &(usize, usize, f64, f64)| s.3 <= s.2;
-        let slots_all = std::mem::take(&mut slots);
-        slots = slots_all.iter().copied().filter(|s| !held(s)).collect();
-        for &(ai, i, lo, hi) in &slots {
-            let mut h = FD_STEP * (hi - lo).max(1e-9);
-            if applied[ai].params[i] + h > hi {
-                h = -h;
-            }
-            let mut a = applied.to_vec();
-            a[ai].params[i] += h;
-            match self.residuals(train, &a, &joints, 20_000) {
-                // Residuals are real − sim, so ∂r/∂p = −∂sim/∂p; the sign does not matter for J^T J.
-                Some(r1) if r1.len() == r0.len() => {
-                    cols.push(r1.iter().zip(&r0).map(|(a, b)| (a - b) / h).collect::<Vec<f64>>())
-                }
-                _ => return failed(),
-            }
-        }
-        let k = slots.len();
-        if k == 0 {
-            let n = |ai: usize| slots_all.iter().filter(|s| s.0 == ai).count();
-            return which.iter().map(|&ai| (vec![0.0; n(ai)], vec![true; n(ai)])).collect();
-        }
-        let jac: Vec<Vec<f64>> =
-            (0..r0.len()).map(|row| cols.iter().map(|c| c[row]).collect()).collect();
-        let ranges: Vec<f64> = slots.iter().map(|s| s.3 - s.2).collect();
-        // Serially correlated residuals: scaling them by √inflation scales s² (and so the
-        // covariance s²(JᵀJ)⁺ and the identifiability check) by the AR(1) inflation.
-        let c = ar1_variance_inflation(&r0).sqrt();
-        let scaled: Vec<f64> = r0.iter().map(|x| x * c).collect();
-        let mut u = uncertainty_from_jacobian(&jac, &scaled, k, &ranges);
-        // Episodes that disagree about a parameter (or an error that lasts a whole episode)
-        // widen it beyond what the pooled residuals show: the larger of the two is reported,
-        // and a parameter whose error then exceeds half its range is not identifiable.
-        if let Some(robust) = cluster_robust_stderr(&jac, &r0, &episode, k) {
-            u.widen(&robust, &ranges);
-        }
-        which
-            .iter()
-            .map(|&ai| {
-                let pos = |s: &(usize, usize, f64, f64)| slots.iter().position(|x| x == s);
-                let of: Vec<Option<usize>> =
-                    slots_all.iter().filter(|s| s.0 == ai).map(pos).collect();
-                (
-                    of.iter().map(|p| p.map_or(0.0, |s| u.stderr[s])).collect(),
-                    of.iter().map(|p| p.is_none_or(|s| u.identifiable[s])).collect(),
-                )
-            })
-            .collect()
     }
 }
 
