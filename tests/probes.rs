@@ -129,6 +129,22 @@ fn stance_without_a_floor_is_inconclusive_and_the_fact_keeps_its_level() {
     }
 }
 
+#[test]
+fn stance_under_upward_gravity_is_inconclusive_with_the_gravity_reason() {
+    // A tilted box sole on its floor, but gravity 0 0 0.0001: the floor carries none of a
+    // weight that is not there; the reason is gravity, not the foot.
+    let fs = probed("fixtures/probes/stance_upward_gravity.xml", "toe-tilt");
+    for f in &fs {
+        let p = outcome(f);
+        assert_eq!(p.status, ProbeStatus::Inconclusive, "{}", p.note);
+        let reason = p.reason.as_deref().unwrap_or("");
+        assert!(reason.contains("gravity is 0.0001 m/s² pointing away from the floor"), "{reason}");
+        let names: Vec<_> = p.preconditions.iter().map(|c| (c.name, c.met)).collect();
+        assert_eq!(&names[..2], [("floor", true), ("gravity", false)], "{names:?}");
+        assert!(!f.message.contains("refuted"));
+    }
+}
+
 /// The stance run of `passive-joint-spring` on `model` stood, loaded the foot and measured:
 /// every precondition recorded, in order, and met.
 fn assert_stance_measured(model: &str) {
@@ -140,6 +156,7 @@ fn assert_stance_measured(model: &str) {
         names,
         [
             ("floor", true),
+            ("gravity", true),
             ("settled", true),
             ("free_base", true),
             ("feet_loaded", true),

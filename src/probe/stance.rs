@@ -4,6 +4,7 @@
 //! upright), each probe saying in its own words when it measured them.
 
 use crate::model::{GeomType, JointType, Robot};
+use crate::rules::control::non_earth_gravity as gravity;
 
 /// Smallest share of the robot's weight the floor must carry for a stance verdict.
 pub const MIN_SUPPORT: f64 = 0.5;
@@ -58,6 +59,10 @@ pub struct Start {
     pub weight: f64,
     /// Keyframe height of the (first) free joint's body, m; `None` without a free joint.
     pub base_z0: Option<f64>,
+    /// The gravity MuJoCo applies (zero when disabled), m/s².
+    pub gravity: [f64; 3],
+    /// The floor's outward normal in the world frame (+z without a floor).
+    pub floor_normal: [f64; 3],
 }
 
 impl Start {
@@ -70,13 +75,15 @@ impl Start {
             base_coordinates: self.base_coordinates,
             weight: self.weight,
             base_height: self.base_z0.unwrap_or(0.0),
+            gravity: self.gravity,
+            floor_normal: self.floor_normal,
             ..Default::default()
         }
     }
 }
 
 pub fn start(robot: &Robot) -> Start {
-    let g = robot.opt.gravity;
+    let g = gravity::effective_gravity(robot);
     let gmag = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
     let free = robot.joints.iter().find(|j| j.jtype == JointType::Free);
     Start {
@@ -85,6 +92,8 @@ pub fn start(robot: &Robot) -> Start {
         base_coordinates: free.is_none() && !robot.floating_bodies().is_empty(),
         weight: robot.bodies.iter().map(|b| b.mass).sum::<f64>() * gmag,
         base_z0: free.map(|j| robot.key.qpos.get(j.qposadr + 2).copied().unwrap_or(0.0)),
+        gravity: g,
+        floor_normal: gravity::floor(robot).map_or([0.0, 0.0, 1.0], |f| f.1),
     }
 }
 
@@ -115,6 +124,10 @@ pub struct Figures {
     pub base_drop: f64,
     /// Keyframe height of the base, m.
     pub base_height: f64,
+    /// The gravity the run applies, m/s².
+    pub gravity: [f64; 3],
+    /// The floor's outward normal in the world frame.
+    pub floor_normal: [f64; 3],
 }
 
 /// How a probe words its preconditions: the run's finite / diverged sentences, why a fixed base
@@ -132,11 +145,23 @@ pub struct Words {
 /// runs place, push and read a free joint's base only.
 const BASE_COORDINATES: &str = "the base floats on slides and a ball, which the stance runs do not read (they need a free joint): a wrapper with a free joint on the base body lets them run";
 
-/// The stance preconditions of a run, in order: floor, settled, free_base, feet_loaded, upright.
+/// The stance preconditions of a run, in order: floor, gravity, settled, free_base,
+/// feet_loaded, upright.
 pub fn preconditions(f: &Figures, w: &Words) -> super::Preconditions {
     let share = if f.weight > 0.0 { f.support_load / f.weight } else { 0.0 };
     let max_drop = max_drop(f.base_height);
     let n = crate::util::fmt_num;
+    let off = gravity::off_earth(f.gravity, f.floor_normal);
+    let g = f.gravity;
+    let gmag = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
+    let gravity_detail = match &off {
+        None => format!("gravity is Earth's: {} m/s² towards the floor", n(gmag, 4)),
+        Some(s) => format!(
+            "{s}, not Earth's ({}–{} m/s² towards the floor): nothing pulls the robot onto its feet, so standing does not load them",
+            n(gravity::EARTH_G_MIN, 3),
+            n(gravity::EARTH_G_MAX, 3)
+        ),
+    };
     super::Preconditions::new()
         .check(
             "floor",
@@ -147,6 +172,7 @@ pub fn preconditions(f: &Figures, w: &Words) -> super::Preconditions {
                 "the model has no floor (no colliding plane or height field on the world or a static body, nor box on the world body): lint the scene that includes the robot".to_string()
             },
         )
+        .check("gravity", off.is_none(), gravity_detail)
         .check("settled", !f.diverged, if f.diverged { w.diverged } else { w.finite })
         .check(
             "free_base",

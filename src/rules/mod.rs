@@ -350,6 +350,7 @@ pub fn registry() -> Vec<&'static dyn Rule> {
         &control::gains_unstable_for_timestep::GainsUnstableForTimestep,
         &control::solref_below_timestep::SolrefBelowTimestep,
         &control::solimp_out_of_range::SolimpOutOfRange,
+        &control::non_earth_gravity::NonEarthGravity,
         &geometry::mirror_asymmetry::MirrorAsymmetry,
         &control::missing_action_delay::MissingActionDelay,
         &control::keyframe_motor_ctrl::KeyframeMotorCtrl,

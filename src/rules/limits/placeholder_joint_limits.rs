@@ -1,5 +1,6 @@
 use crate::declare_rule;
 use crate::finding::{Finding, Severity, Subject};
+use crate::model::mjcf::ElemKind;
 use crate::model::source::{Loc, XNode};
 use crate::model::urdf_transmissions::{drives, transmissions};
 use crate::model::{Format, JointType, Robot};
@@ -26,6 +27,10 @@ declare_rule! {
     ///   cable-wound multi-turn axes such as a UR arm's, are ±2π;
     /// - **no range**: a revolute or prismatic joint with no `<limit>`, or `lower` = `upper` =
     ///   0 (both absent or written as 0), which MuJoCo compiles as an unlimited joint.
+    ///
+    /// In an MJCF file the beyond-a-turn case is judged on the compiled `range` of every
+    /// limited hinge (ANYmal C's `range="-9.42478 9.42478"`, 1.5 turns); the other cases are
+    /// URDF `<limit>` attributes.
     ///
     /// Joints sharing one case are reported together; joints whose subtree has no extent
     /// beyond the axis are not judged for effort and velocity.
@@ -126,6 +131,33 @@ fn urdf_mass(root: &XNode) -> Option<f64> {
     (m > 0.0).then_some(m)
 }
 
+/// The limited hinges of an MJCF model whose compiled range places a stop more than a full
+/// turn from the joint's zero.
+fn mjcf_beyond_turn(robot: &Robot) -> Vec<Hit> {
+    let mut hits = Vec::new();
+    for j in robot.joints.iter().filter(|j| j.jtype == JointType::Hinge && j.limited) {
+        let [l, h] = j.range;
+        let far = l.abs().max(h.abs());
+        if far > FULL_TURN + WRITTEN_ROUNDING {
+            let (at, _) = robot.attr_loc(ElemKind::Joint, j.id, &j.name, "range");
+            hits.push(Hit {
+                case: Case::BeyondTurn,
+                joint: j.id,
+                at,
+                value: far,
+                detail: format!(
+                    "`{}` [{}, {}] rad ({} turns)",
+                    j.name,
+                    fmt_num(l, 4),
+                    fmt_num(h, 4),
+                    fmt_num(far / FULL_TURN, 3)
+                ),
+            });
+        }
+    }
+    hits
+}
+
 fn num(limit: Option<&XNode>, attr: &str) -> Option<(f64, Loc)> {
     let a = limit?.attr(attr)?;
     a.value.trim().parse::<f64>().ok().filter(|v| v.is_finite()).map(|v| (v, a.loc))
@@ -137,11 +169,16 @@ impl Rule for PlaceholderJointLimits {
     }
     fn check(&self, cx: &Context, out: &mut Vec<Finding>) {
         let robot = cx.robot;
-        if robot.format != Format::Urdf {
-            return;
-        }
         let multiple = cx.opt("weight_multiple");
         let max_speed = cx.opt("max_tip_speed");
+        if robot.format != Format::Urdf {
+            let hits = mjcf_beyond_turn(robot);
+            let group: Vec<&Hit> = hits.iter().collect();
+            if let Some(f) = finding(cx, Case::BeyondTurn, &group, multiple, max_speed, 0.0) {
+                out.push(f);
+            }
+            return;
+        }
         let g = robot.opt.gravity;
         let g = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
         let mass = urdf_mass(&robot.tree).unwrap_or_else(|| robot.mass_split().0);
@@ -308,6 +345,15 @@ fn finding(
             "zero limit on a driven joint".to_string(),
             "ROS and training frameworks read effort 0 as a joint that gives no torque and velocity 0 as one that cannot move; MuJoCo's importer treats effort 0 as no force limit at all",
             "write the motor's peak torque at the joint as effort and its speed at the joint as velocity",
+        ),
+        Case::BeyondTurn if robot.format != Format::Urdf => (
+            format!(
+                "{n} hinge joint{s} {} a stop more than a full turn (2π) from the joint's zero, no hardware stop: {shown}",
+                if n == 1 { "places" } else { "place" }
+            ),
+            "beyond a full turn".to_string(),
+            "a revolute joint's stops lie within a turn of its zero (the widest real ones, cable-wound multi-turn axes such as a UR arm's, are ±2π); a range beyond a turn is a limit that never engages (the links swing through each other), and frameworks that scale actions or observations by the range spread them over it",
+            "write the hardware's stops (datasheet or CAD) as range=\"lo hi\"; a joint that turns without end has no range (limited=\"false\")",
         ),
         Case::BeyondTurn => (
             format!(
