@@ -145,6 +145,24 @@ fn stance_under_upward_gravity_is_inconclusive_with_the_gravity_reason() {
     }
 }
 
+#[test]
+fn stance_from_a_keyframe_under_the_floor_is_inconclusive_with_that_reason() {
+    // The keyframe starts the foot 0.3 m under the floor plane: the run says so, not only
+    // that the floor carried no weight.
+    let fs = probed("fixtures/probes/stance_buried_keyframe.xml", "toe-tilt");
+    for f in &fs {
+        let p = outcome(f);
+        assert_eq!(p.status, ProbeStatus::Inconclusive, "{}", p.note);
+        let reason = p.reason.as_deref().unwrap_or("");
+        assert!(
+            reason.contains("1 colliding geom of the robot entirely under the floor"),
+            "{reason}"
+        );
+        let names: Vec<_> = p.preconditions.iter().map(|c| (c.name, c.met)).collect();
+        assert_eq!(&names[..3], [("floor", true), ("gravity", true), ("above_floor", false)]);
+    }
+}
+
 /// The stance run of `passive-joint-spring` on `model` stood, loaded the foot and measured:
 /// every precondition recorded, in order, and met.
 fn assert_stance_measured(model: &str) {
@@ -157,6 +175,7 @@ fn assert_stance_measured(model: &str) {
         [
             ("floor", true),
             ("gravity", true),
+            ("above_floor", true),
             ("settled", true),
             ("free_base", true),
             ("feet_loaded", true),

@@ -63,6 +63,9 @@ pub struct Start {
     pub gravity: [f64; 3],
     /// The floor's outward normal in the world frame (+z without a floor).
     pub floor_normal: [f64; 3],
+    /// How many colliding geoms of the robot the keyframe places entirely under a floor plane
+    /// they can touch, and the deepest one's depth (m): see [`buried`].
+    pub buried: (usize, f64),
 }
 
 impl Start {
@@ -77,6 +80,7 @@ impl Start {
             base_height: self.base_z0.unwrap_or(0.0),
             gravity: self.gravity,
             floor_normal: self.floor_normal,
+            buried: self.buried,
             ..Default::default()
         }
     }
@@ -94,7 +98,41 @@ pub fn start(robot: &Robot) -> Start {
         base_z0: free.map(|j| robot.key.qpos.get(j.qposadr + 2).copied().unwrap_or(0.0)),
         gravity: g,
         floor_normal: gravity::floor(robot).map_or([0.0, 0.0, 1.0], |f| f.1),
+        buried: buried(robot),
     }
+}
+
+/// The colliding geoms of bodies not fixed to the world that the keyframe (the pose a stance
+/// run starts from) places entirely under a floor plane they can touch — their bounding
+/// sphere below the plane's surface, `keyframe-state`'s test —: how many, and the deepest
+/// one's depth (m). MuJoCo's plane is a half-space: a robot started inside it is pushed out
+/// or falls through, and stands on nothing either way.
+pub fn buried(robot: &Robot) -> (usize, f64) {
+    use crate::model::contact::{ground_partners, takes_part};
+    let rbound = robot.mj.geom_rbound();
+    let (xpos, xmat) = (&robot.key.geom_xpos, &robot.key.geom_xmat);
+    let (mut n, mut deepest) = (0, 0.0f64);
+    for g in &robot.geoms {
+        let moving = robot.bodies.get(g.body).is_some_and(|b| b.weld != 0);
+        if !moving || g.gtype == GeomType::Plane || !takes_part(robot, g.id) {
+            continue;
+        }
+        let (Some(p), Some(&r)) = (xpos.get(g.id), rbound.get(g.id)) else { continue };
+        for (pl, _) in ground_partners(robot, g.id) {
+            if robot.geoms[pl].gtype != GeomType::Plane {
+                continue;
+            }
+            let (Some(o), Some(x)) = (xpos.get(pl), xmat.get(pl)) else { continue };
+            let normal = [x[2], x[5], x[8]];
+            let top = (0..3).map(|i| (p[i] - o[i]) * normal[i]).sum::<f64>() + r;
+            if top < 0.0 {
+                n += 1;
+                deepest = deepest.max(-top);
+                break;
+            }
+        }
+    }
+    (n, deepest)
 }
 
 /// The largest drop of a base at keyframe height `base_height` that still counts as upright, m.
@@ -128,6 +166,8 @@ pub struct Figures {
     pub gravity: [f64; 3],
     /// The floor's outward normal in the world frame.
     pub floor_normal: [f64; 3],
+    /// Colliding robot geoms the keyframe places under the floor, and the deepest depth (m).
+    pub buried: (usize, f64),
 }
 
 /// How a probe words its preconditions: the run's finite / diverged sentences, why a fixed base
@@ -145,8 +185,8 @@ pub struct Words {
 /// runs place, push and read a free joint's base only.
 const BASE_COORDINATES: &str = "the base floats on slides and a ball, which the stance runs do not read (they need a free joint): a wrapper with a free joint on the base body lets them run";
 
-/// The stance preconditions of a run, in order: floor, gravity, settled, free_base,
-/// feet_loaded, upright.
+/// The stance preconditions of a run, in order: floor, gravity, above_floor, settled,
+/// free_base, feet_loaded, upright.
 pub fn preconditions(f: &Figures, w: &Words) -> super::Preconditions {
     let share = if f.weight > 0.0 { f.support_load / f.weight } else { 0.0 };
     let max_drop = max_drop(f.base_height);
@@ -173,6 +213,20 @@ pub fn preconditions(f: &Figures, w: &Words) -> super::Preconditions {
             },
         )
         .check("gravity", off.is_none(), gravity_detail)
+        .check(
+            "above_floor",
+            f.buried.0 == 0,
+            if f.buried.0 == 0 {
+                "the keyframe places no colliding geom of the robot under the floor".to_string()
+            } else {
+                format!(
+                    "the keyframe places {} colliding geom{} of the robot entirely under the floor (the deepest {} m below its surface, `keyframe-state`): the robot starts inside the floor and stands on nothing",
+                    f.buried.0,
+                    if f.buried.0 == 1 { "" } else { "s" },
+                    n(f.buried.1, 3)
+                )
+            },
+        )
         .check("settled", !f.diverged, if f.diverged { w.diverged } else { w.finite })
         .check(
             "free_base",

@@ -147,7 +147,7 @@ impl Rule for NonEarthGravity {
             cx.finding(msg, gravity_loc(robot))
                 .element("option gravity", gravity_loc(robot))
                 .label(if disabled { "gravity disabled" } else { "not Earth's gravity" })
-                .note("standing, walking and falling are loads of gravity: without Earth's pull towards the floor the robot floats above its feet, its actuators hold no weight and its feet carry no load")
+                .note("standing, walking and falling are loads of gravity: under another gravity the robot's weight, its actuators' loads and its feet's contact forces are not the hardware's (near zero or pointing away from the floor, the robot floats above its feet)")
                 .help("remove the gravity attribute (MuJoCo's default is 0 0 -9.81) or write Earth's gravity towards the floor; a scene of another world says so with a suppression comment")
                 .measured(mag, "m/s²")
                 .expected(9.80665, "m/s²")
