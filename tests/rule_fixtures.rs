@@ -784,3 +784,79 @@ fn a_limb_on_its_own_free_joint_is_named_and_scenes_are_not() {
         assert!(of(id, v).is_empty(), "{v}");
     }
 }
+
+/// Links whose mass MuJoCo computes from their geoms at 1000 kg/m³ (no `<inertial>`), judged by
+/// the torque their weight needs: a forearm cylinder of radius 0.5 m and half-length 0.6 m
+/// (π·0.5²·1.2·1000 kg) centred 0.6 m below the elbow's y axis, at the elbow's π/2 (range 0 to
+/// 2.5 rad), against the elbow motor's 40 N·m; a pelvis cylinder of radius 1 m and half-length
+/// 1 m (2π·1000 kg) tilted on the knees' y axis 0.5 m below its centre, against the four leg
+/// pitch motors' 4 × 100 N·m.
+#[test]
+fn oversized_primitive_with_computed_mass_is_judged_by_the_torque_its_weight_needs() {
+    use std::f64::consts::PI;
+    let id = "oversized-collision-primitive";
+    let g = 9.81;
+    let near = |a: f64, b: f64| (a - b).abs() <= 1e-4 * b.abs();
+    let f = of(id, "invalid_computed_limb.xml");
+    assert_eq!(f.len(), 1, "{f:?}");
+    let m = PI * 0.25 * 1.2 * 1000.0;
+    assert!(near(f[0].data["link_mass"], m), "{:?}", f[0].data);
+    assert!(near(f[0].data["need_torque"], m * g * 0.6), "{:?}", f[0].data);
+    assert!((f[0].data["effort_limit"] - 40.0).abs() < 1e-9, "{:?}", f[0].data);
+    assert!((f[0].measured.as_ref().unwrap().value - 1.2).abs() < 1e-9, "{f:?}");
+    assert!((f[0].data["span"] - 0.3).abs() < 1e-9, "{:?}", f[0].data);
+    assert!(f[0].message.contains("joint `elbow`"), "{}", f[0].message);
+    let f = of(id, "invalid_computed_trunk.xml");
+    assert_eq!(f.len(), 1, "{f:?}");
+    let m = 2.0 * PI * 1000.0;
+    assert!(near(f[0].data["link_mass"], m), "{:?}", f[0].data);
+    assert!(near(f[0].data["need_torque"], m * g * 0.5), "{:?}", f[0].data);
+    assert!((f[0].data["effort_limit"] - 400.0).abs() < 1e-9, "{:?}", f[0].data);
+    assert!((f[0].data["span"] - 0.2f64.hypot(0.4)).abs() < 1e-9, "{:?}", f[0].data);
+    // A heavy planar chassis no joint lifts, a light forearm a little longer than its span, a
+    // rover's shell within its axles, wheels, terrain and a crate: none.
+    assert!(of(id, "valid_computed_masses.xml").is_empty());
+    // The rover beside two robots states its mass on its geom (the mass test's case).
+    assert!(of(id, "../detached-limb/valid_two_robots.xml").is_empty());
+}
+
+/// Leaves whose only collision geom is a 1 mm box at their joint: the head beside a visual
+/// sphere of radius 90 mm, both feet beside visual soles of 200 mm; corner spheres at the
+/// soles' ends, fingertip pads and a camera frame with no visual shape are not reported.
+#[test]
+fn token_collision_geometry_on_leaves_is_judged_against_their_visual_shape() {
+    let id = "token-collision-geometry";
+    let f = of(id, "invalid_leaf.xml");
+    assert_eq!(f.len(), 1, "{f:?}");
+    assert!((f[0].measured.as_ref().unwrap().value - 3.0).abs() < 1e-12, "{f:?}");
+    assert!((f[0].data["first_size"] - 0.18).abs() < 1e-12, "{:?}", f[0].data);
+    assert!((f[0].data["smallest_ratio"] - 180.0).abs() < 1e-6, "{:?}", f[0].data);
+    // Both sides of the mirror-symmetric legs get the same verdict.
+    for l in ["`left_foot` (1 mm on a 200 mm visual", "`right_foot` (1 mm on a 200 mm visual"] {
+        assert!(f[0].message.contains(l), "{}", f[0].message);
+    }
+    assert!(of(id, "valid_leaf_contacts.xml").is_empty());
+}
+
+/// A quadruped's front-left leg (0.35 + 0.05 + 0.6 + 0.2 kg) on a free joint of its own with
+/// no motor, beside a 6 + 3 × 1.6 kg robot; a humanoid's right arm (0.4 + 1.4 + 0.9 kg) 0.7 m
+/// beside the torso (0.22 m above it), past a tenth of the robot's size.
+#[test]
+fn a_passive_or_distant_limb_is_named_by_its_joints() {
+    let id = "detached-limb";
+    let f = of(id, "invalid_passive_leg.xml");
+    assert_eq!(f.len(), 1, "{f:?}");
+    assert!((f[0].measured.as_ref().unwrap().value - 1.2).abs() < 1e-9, "{f:?}");
+    assert!((f[0].expected.as_ref().unwrap().value - 10.8).abs() < 1e-9, "{f:?}");
+    assert_eq!(f[0].data["actuated"], 0.0, "{:?}", f[0].data);
+    assert!(f[0].message.contains("3 joints named for the robot's left side"), "{}", f[0].message);
+    let f = of(id, "invalid_far_arm.xml");
+    assert_eq!(f.len(), 1, "{f:?}");
+    assert!((f[0].measured.as_ref().unwrap().value - 2.7).abs() < 1e-9, "{f:?}");
+    assert!((f[0].expected.as_ref().unwrap().value - 28.3).abs() < 1e-9, "{f:?}");
+    assert!((f[0].data["distance"] - 0.7f64.hypot(0.22)).abs() < 1e-9, "{:?}", f[0].data);
+    assert!((f[0].data["actuated"] - 3.0).abs() < 1e-12, "{:?}", f[0].data);
+    // A strap on ball joints, a chair, a door and a jaw tool (no limb names or one joint), a
+    // payload and a two-sided toy robot: none.
+    assert!(of(id, "valid_scene_passive.xml").is_empty());
+}

@@ -13,10 +13,13 @@ declare_rule! {
     /// larger of the distance from the link's joint to the joints of the links it carries and
     /// the extent of its visual (non-colliding) geometry. Such a link counts as colliding (so
     /// `links-without-collision` is silent) but nothing can touch it: an exporter's
-    /// placeholder (1 mm boxes on hips, thighs and calves) in place of the link's shape. Only
-    /// links that carry another jointed link are judged: a leaf's small geom is where the
-    /// robot touches (a point foot's sphere, a fingertip pad), and a small foot or pad is
-    /// larger than 5 mm anyway. One finding lists every such link.
+    /// placeholder (1 mm boxes on hips, thighs and calves) in place of the link's shape. A
+    /// leaf (a link that carries no jointed link: a foot, a hand, a head) is judged against
+    /// its visual shape alone, and only when its colliding geoms all lie in the half of the
+    /// leaf next to its joint (nearer the joint than half the visual's reach from it): a
+    /// contact sphere at a point foot's or toe's tip and a fingertip pad are where the leaf
+    /// touches, at its far end; a leaf with no visual geometry (a sensor frame) is not judged.
+    /// One finding lists every such link.
     ///
     /// ## Why is this bad?
     /// The legs pass through each other, through obstacles and through the floor in a fall,
@@ -59,6 +62,8 @@ struct Token {
     geom: usize,
     across: f64,
     size: f64,
+    /// A link that carries no jointed link (judged against its visual shape only).
+    leaf: bool,
 }
 
 fn token_links(robot: &Robot, max_size: f64, fraction: f64) -> Vec<Token> {
@@ -102,20 +107,39 @@ fn token_links(robot: &Robot, max_size: f64, fraction: f64) -> Vec<Token> {
             })
             .filter_map(|j| robot.key.joint_xanchor.get(j.id).copied())
             .collect();
-        if children.is_empty() {
-            continue; // a leaf: a foot, a fingertip
-        }
-        let spacing =
-            own.iter().flat_map(|a| children.iter().map(move |c| dist(*a, *c))).fold(0.0, f64::max);
         let visual = geoms
             .iter()
             .filter(|&&g| !colliding.contains(&g))
             .map(|&g| across(robot, g))
             .fold(0.0, f64::max);
-        let size = spacing.max(visual);
         let a = across(robot, largest);
+        if children.is_empty() {
+            // A leaf (a foot, a hand, a head): judged against its visual shape only, and only
+            // when its colliding geoms all lie in the half of it next to its joint: a contact
+            // sphere at a point foot's tip or a fingertip pad is where the leaf touches.
+            let Some(&joint) = own.first() else { continue };
+            let reach = geoms
+                .iter()
+                .filter(|&&g| !colliding.contains(&g))
+                .filter_map(|&g| {
+                    let c = robot.key.geom_xpos.get(g)?;
+                    Some(dist(joint, *c) + across(robot, g) / 2.0)
+                })
+                .fold(0.0, f64::max);
+            let far = colliding
+                .iter()
+                .filter_map(|&g| robot.key.geom_xpos.get(g).map(|c| dist(joint, *c)))
+                .fold(0.0, f64::max);
+            if visual > 0.0 && a < max_size && a < fraction * visual && far < reach / 2.0 {
+                out.push(Token { body: b.id, geom: largest, across: a, size: visual, leaf: true });
+            }
+            continue;
+        }
+        let spacing =
+            own.iter().flat_map(|a| children.iter().map(move |c| dist(*a, *c))).fold(0.0, f64::max);
+        let size = spacing.max(visual);
         if a < max_size && a < fraction * size {
-            out.push(Token { body: b.id, geom: largest, across: a, size });
+            out.push(Token { body: b.id, geom: largest, across: a, size, leaf: false });
         }
     }
     out
@@ -134,10 +158,11 @@ impl Rule for TokenCollisionGeometry {
             .iter()
             .map(|t| {
                 format!(
-                    "`{}` ({} mm on a {} mm link)",
+                    "`{}` ({} mm on a {} mm {})",
                     robot.body_name(t.body),
                     mm(t.across),
-                    mm(t.size)
+                    mm(t.size),
+                    if t.leaf { "visual shape, at its joint" } else { "link" }
                 )
             })
             .collect();

@@ -3,6 +3,7 @@ use crate::finding::{Finding, Severity, Subject};
 use crate::model::mjcf::ElemKind;
 use crate::model::source::{Loc, XNode};
 use crate::model::{Format, GeomType, JointType, Robot};
+use crate::rules::geometry::oversized_weight::{geom_mass_stated, mass_from_geoms, overload};
 use crate::rules::{Context, Domain, Rule, RuleMeta, in_subtree, opt};
 use crate::util::fmt_num;
 
@@ -23,8 +24,21 @@ declare_rule! {
     /// the world, kinematic trees with fewer than two joints (a scene's objects, a door),
     /// wheels (their shape is round about a hinge that turns without end), meshes (see
     /// `mesh-scale`). A large light bumper or shell within the robot's span and a heavy chassis
-    /// larger than its few joints' span are not reported. Not caught: a link whose mass MuJoCo
-    /// computes from the oversized shape itself (no `<inertial>`: 1000 kg/m³ by default).
+    /// larger than its few joints' span are not reported.
+    ///
+    /// A link whose mass MuJoCo computes from its geoms (no `<inertial>`, or `<compiler
+    /// inertiafromgeom="true">`: 1000 kg/m³ by default) weighs what its shape gives, so the
+    /// mass test cannot fail; it is judged by its weight instead: the largest gravity torque
+    /// of the subtree it hangs in, over the range of each hinge that carries it (from the link
+    /// up to its tree's top), against that hinge's actuator effort limit (`forcerange`, or a
+    /// `<motor>`'s ctrlrange × gain, × the moment arm, capped by the joint's
+    /// `actuatorfrcrange`). A floating base is tilted on its legs:
+    /// its own weight about each hinge between it and a foot (not a wheel), against every
+    /// such actuated hinge's limit projected on that axis (more than the legs can give). A
+    /// geom that states its own `mass` is judged by the mass test only. A 2 m cylinder at 1000 kg/m³
+    /// weighs 6.3 t; no joint of a robot built around a link holds that. Not judged this way:
+    /// joints without an actuator or with an unlimited one, models that close a chain with a
+    /// `connect` or `weld` equality (the joints share the load).
     ///
     /// ## Why is this bad?
     /// Collision geometry decides where the robot touches the world and itself. A shape larger
@@ -35,7 +49,9 @@ declare_rule! {
     ///
     /// ## How it is confirmed
     /// Static: the compiled shape's size, the joint anchors at the keyframe (or qpos0) and the
-    /// body masses (a URDF root link's `<inertial><mass>`).
+    /// body masses (a URDF root link's `<inertial><mass>`); for a link whose mass comes from
+    /// its geoms, the subtree masses and centres of mass at the keyframe, the joints' axes and
+    /// ranges, and the actuators' force limits and gears.
     ///
     /// ## How to fix
     /// Write the shape's size in metres as the link's real extent (a millimetre value divided
@@ -196,22 +212,50 @@ impl Rule for OversizedCollisionPrimitive {
                 (robot.body_name(body).to_string(), robot.bodies[body].mass)
             };
             let least = volume * rho;
-            if !(least > link_m && link_m > 0.0) {
-                continue;
-            }
             let kind = format!("{:?}", g.gtype).to_lowercase();
             let named = if g.name.is_empty() { String::new() } else { format!(" `{}`", g.name) };
-            let msg = format!(
-                "collision {kind}{named} of link `{link_name}` is {} m across, {}× the {} m spanned by the robot's joints, and at {} kg/m³ (lighter than any robot part) its {} m³ would weigh {} kg, {}× the link's {} kg",
+            let head = format!(
+                "collision {kind}{named} of link `{link_name}` is {} m across, {}× the {} m spanned by the robot's joints",
                 fmt_num(extent, 3),
                 fmt_num(extent / span, 3),
                 fmt_num(span, 3),
-                fmt_num(rho, 3),
-                fmt_num(volume, 3),
-                fmt_num(least, 3),
-                fmt_num(least / link_m, 3),
-                fmt_num(link_m, 3),
             );
+            // The mass test; for a link whose mass MuJoCo sums from its geoms (which grows
+            // with the shape), the weight test at the joints that hold it.
+            let weight = if least > link_m && link_m > 0.0 {
+                None
+            } else if body != 0 && mass_from_geoms(robot, body) && !geom_mass_stated(robot, g.id) {
+                match overload(robot, body) {
+                    Some(o) => Some(o),
+                    None => continue,
+                }
+            } else {
+                continue;
+            };
+            let msg = match &weight {
+                None => format!(
+                    "{head}, and at {} kg/m³ (lighter than any robot part) its {} m³ would weigh {} kg, {}× the link's {} kg",
+                    fmt_num(rho, 3),
+                    fmt_num(volume, 3),
+                    fmt_num(least, 3),
+                    fmt_num(least / link_m, 3),
+                    fmt_num(link_m, 3),
+                ),
+                Some(o) => format!(
+                    "{head}; the link's mass, which MuJoCo computes from its geoms (no <inertial>), is {} kg, and {} over the range of joint `{}` needs {} N·m, {}× the {} N·m {}",
+                    fmt_num(link_m, 3),
+                    if o.trunk { "tilting it on the legs" } else { "holding it against gravity" },
+                    crate::rules::display_name(&robot.joints[o.joint].name, o.joint),
+                    fmt_num(o.need, 3),
+                    fmt_num(o.need / o.limit, 3),
+                    fmt_num(o.limit, 3),
+                    if o.trunk {
+                        "the legs' actuated joints give about that axis together"
+                    } else {
+                        "its actuators give"
+                    },
+                ),
+            };
             let mut f = match shape {
                 Some((_, s)) => {
                     let at: Loc = s.attrs.first().map_or(s.loc, |a| a.loc);
@@ -230,6 +274,9 @@ impl Rule for OversizedCollisionPrimitive {
                 .with("volume", volume)
                 .with("least_mass", least)
                 .with("link_mass", link_m);
+            if let Some(o) = &weight {
+                f = f.with("need_torque", o.need).with("effort_limit", o.limit);
+            }
             out.push(f);
         }
     }

@@ -13,11 +13,18 @@ declare_rule! {
     /// free tree with the most hinge and slide joints, then the heaviest) and starts inside the
     /// main robot's bounding box at the keyframe (or qpos0), or within a tenth of the robot's
     /// size (the box's diagonal) of it, with no `connect` or
-    /// `weld` equality holding it to anything. An onshape-to-robot or CAD export writes
+    /// `weld` equality holding it to anything. A tree with no actuator (a passive limb, or
+    /// one whose motors are missing), or one placed farther, up to the robot's own size from
+    /// its box, is reported when it is shaped and named like one of the robot's limbs: two or
+    /// more hinge or slide joints in series, no ball joint, fewer joints than the main robot,
+    /// every joint named for a part of a limb (shoulder, elbow, wrist, hand, finger, hip,
+    /// knee, ankle, thigh, calf, foot, head, neck, ...) and for one side (`left_…`, `r_…`,
+    /// `…_L`, `FL_…`), in a robot that names its joints by side. An onshape-to-robot or CAD export writes
     /// detached assemblies this way (both arms as free bodies at the robot's frame). Not
-    /// reported: scene objects (no actuated joint: boxes, balls, a door), a free payload, a
-    /// second complete robot (as heavy as the first, or placed apart from it), a tree held by
-    /// an equality.
+    /// reported: scene objects (no actuated joint and no side in their names: boxes, balls, a
+    /// door, a rope or cable on ball joints), a free payload, a second complete robot (as
+    /// heavy as the first, or as many joints, or joints on both sides, or placed apart from
+    /// it), a tree held by an equality.
     ///
     /// ## Why is this bad?
     /// The limb is not attached: at the first step it falls off the robot (or floats in it,
@@ -83,6 +90,45 @@ fn bounds(robot: &Robot, top: usize) -> Option<Aabb> {
 /// robot's own size (the diagonal of its bounding box). Two robots of a scene stand apart by
 /// about their size; a limb exported at its mounting pose touches or nearly touches its robot.
 const ADJACENT_SHARE: f64 = 0.1;
+
+/// How close a limb named as one of the robot's own (see [`named_limb`]) must start, unactuated
+/// or farther than [`ADJACENT_SHARE`]: within the robot's own size (this share of its box's
+/// diagonal). An exporter places a detached arm at or beside its mount; a second robot or a
+/// scene's object is not named after one side of the robot's body.
+const NAMED_LIMB_SHARE: f64 = 1.0;
+
+/// The side a free tree is named for when it is shaped and named like one of the robot's limbs:
+/// two or more hinge/slide joints in series (one's body below the other's), no ball joint (a
+/// rope or a cable), fewer hinge/slide joints than the main robot, every one of them named for
+/// a limb (a part of the head, an arm or a leg: [`crate::model::region::from_name`]) and for
+/// the same side (`left_…`, `r_…`, `…_L`, `FL_…`: [`crate::model::mirror::side_of`]), in a
+/// model whose main robot names its own joints by side.
+fn named_limb(
+    robot: &Robot,
+    spec: Option<&crate::spec::Spec>,
+    t: &Tree,
+    main: &Tree,
+) -> Option<crate::model::mirror::Side> {
+    use crate::model::mirror::side_of;
+    if t.scalar < 2 || t.scalar >= main.scalar {
+        return None;
+    }
+    let inside = |top: usize| robot.joints.iter().filter(move |j| in_subtree(robot, top, j.body));
+    if inside(t.top).any(|j| j.jtype == JointType::Ball) {
+        return None;
+    }
+    let scalar: Vec<&crate::model::Joint> = inside(t.top).filter(|j| j.is_scalar()).collect();
+    let in_series = scalar
+        .iter()
+        .any(|a| scalar.iter().any(|b| b.body != a.body && in_subtree(robot, a.body, b.body)));
+    let limb_named = scalar.iter().all(|j| {
+        matches!(crate::model::region::from_name(&j.name), Some("arms" | "legs" | "head"))
+    });
+    let side = side_of(&scalar.first()?.name, spec)?;
+    let one_side = scalar.iter().all(|j| side_of(&j.name, spec) == Some(side));
+    let robot_sided = inside(main.top).any(|j| j.is_scalar() && side_of(&j.name, spec).is_some());
+    (in_series && limb_named && one_side && robot_sided).then_some(side)
+}
 
 /// Whether box `a` overlaps box `b` grown by `margin` on every side.
 fn overlap(a: &Aabb, b: &Aabb, margin: f64) -> bool {
@@ -163,11 +209,14 @@ impl Rule for DetachedLimb {
         let diagonal = (0..3).map(|k| (main_box.1[k] - main_box.0[k]).powi(2)).sum::<f64>().sqrt();
         let margin = ADJACENT_SHARE * diagonal;
         for t in trees.iter().filter(|t| t.top != main.top) {
-            if t.actuated.is_empty() || t.mass >= main.mass || held(robot, t.top) {
+            if t.mass >= main.mass || held(robot, t.top) {
                 continue;
             }
             let Some(b) = bounds(robot, t.top) else { continue };
-            if !overlap(&b, &main_box, margin) {
+            let adjacent = !t.actuated.is_empty() && overlap(&b, &main_box, margin);
+            let named = named_limb(robot, cx.spec, t, main)
+                .filter(|_| overlap(&b, &main_box, NAMED_LIMB_SHARE * diagonal));
+            if !adjacent && named.is_none() {
                 continue;
             }
             let Some(free) =
@@ -175,11 +224,30 @@ impl Rule for DetachedLimb {
             else {
                 continue;
             };
-            let names: Vec<String> = t
-                .actuated
-                .iter()
-                .map(|&j| format!("`{}`", crate::rules::display_name(&robot.joints[j].name, j)))
-                .collect();
+            let quote =
+                |j: usize| format!("`{}`", crate::rules::display_name(&robot.joints[j].name, j));
+            let names: Vec<String> = t.actuated.iter().map(|&j| quote(j)).collect();
+            let joints = if names.is_empty() {
+                let all: Vec<String> = robot
+                    .joints
+                    .iter()
+                    .filter(|j| j.is_scalar() && in_subtree(robot, t.top, j.body))
+                    .map(|j| quote(j.id))
+                    .collect();
+                format!(
+                    "with {} joints named for the robot's {} side ({}) and no actuator",
+                    all.len(),
+                    named.map_or("", |s| s.word()),
+                    all.join(", ")
+                )
+            } else {
+                format!(
+                    "with {} actuated joint{} ({})",
+                    names.len(),
+                    if names.len() == 1 { "" } else { "s" },
+                    names.join(", ")
+                )
+            };
             let d = robot.key.body_xpos.get(t.top).zip(robot.key.body_xpos.get(main.top)).map_or(
                 0.0,
                 |(a, b)| {
@@ -192,12 +260,9 @@ impl Rule for DetachedLimb {
                     free.id,
                     &free.name,
                     format!(
-                        "body `{}` ({} kg) floats on a free joint of its own, with {} actuated joint{} ({}), at the robot `{}` ({} kg, {} m from its base): a limb not attached to the robot",
+                        "body `{}` ({} kg) floats on a free joint of its own, {joints}, at the robot `{}` ({} kg, {} m from its base): a limb not attached to the robot",
                         robot.body_name(t.top),
                         fmt_num(t.mass, 3),
-                        names.len(),
-                        if names.len() == 1 { "" } else { "s" },
-                        names.join(", "),
                         robot.body_name(main.top),
                         fmt_num(main.mass, 3),
                         fmt_num(d, 3),
