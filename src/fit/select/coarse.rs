@@ -190,6 +190,9 @@ pub(super) fn when_taken(
             return None;
         }
     } else if let Some((pp, _)) = plain_coarse(s, (e, g), cands, coarse) {
+        if nothing_on_probes(s, (short, applied), (e, g), &pp) {
+            return None;
+        }
         let (could, least) = extension::could_reach(s, (short, applied), (e, g), &pp, reaches);
         if !could {
             return None;
@@ -197,6 +200,38 @@ pub(super) fn when_taken(
         stepped = least;
     }
     Some((fit(s.engine, screen, (short, applied), (e, g)), stepped))
+}
+
+/// Whether the judgement of a deferred candidate from its plain variant's coarse fit `pp`
+/// ([`extension::could_reach`]: that fit taken over, the effect's further starts, the
+/// Gauss–Newton step at the best of them), made on the probes' data of `short` instead of on
+/// `short`, finds nothing there: no point it simulates gains `min_rel_improvement` on the
+/// probes' data against the base there ([`extension::finds_any`]; the step is simulated, its
+/// prediction not counted). It has then found nothing where the model is most wrong, as a
+/// non-smooth candidate's coarse fit that gains as little there ([`on_probes`]), and
+/// is not judged on `short` (it cannot reach the round's bar there: logged `screen`). The
+/// judgement's replays cost the probes' seconds instead of the screen's (2 s for 10 s by
+/// default); where it finds something it is made on `short` as before. `false` when the
+/// probes' data is not held or is `short` itself, the base's replay there fails, or the test
+/// cannot be made.
+fn nothing_on_probes(
+    s: &Search,
+    (short, applied): (&[Recording], &[Applied]),
+    (e, g): (&'static dyn Effect, &[String]),
+    pp: &[f64],
+) -> bool {
+    let engine = s.engine;
+    let Some(probes) = engine.probe_set_held(short, applied).filter(|p| !same_data(p, short))
+    else {
+        return false;
+    };
+    let Some(base) = engine.errors(&probes, applied).filter(|b| b.n > 0 && b.rmse() > 0.0) else {
+        return false;
+    };
+    let (n, rmse0) = (base.n as f64, base.rmse());
+    let min = engine.opts.policy.min_rel_improvement;
+    let gains = |sse: f64| 1.0 - (sse / n).sqrt() / rmse0 >= min;
+    !extension::finds_any(s, (&probes, applied), (e, g), pp, &gains)
 }
 
 /// Whether the plain variant of `e` was fitted in full on `g` on the screen's data this round.
@@ -232,9 +267,9 @@ mod gain_tests;
 
 #[cfg(test)]
 mod tests {
-    use super::{agrees, on_probes};
-    use crate::fit::effects::{Backlash, Effect};
-    use crate::fit::select::{Engine, FitOptions, SearchPolicy};
+    use super::{agrees, nothing_on_probes, on_probes};
+    use crate::fit::effects::{Backlash, CoulombFriction, Effect, StribeckFriction};
+    use crate::fit::select::{Engine, FitOptions, Search, SearchPolicy};
     use crate::sim2real::recording::{Recording, read_csv};
 
     /// The pendulum servo with a gear play of 0.04 rad, recorded by the synth (3 × 3 s).
@@ -325,6 +360,66 @@ mod tests {
         // Only the probes' fit was replayed, nothing of the screen's data.
         let budget = opts.policy.screen_evals as f64 * secs(&probes);
         assert!(cost <= budget + 1e-9, "{cost} s replayed for {budget}");
+    }
+
+    /// The pendulum servo, with a Coulomb friction of `friction` N·m when given, recorded by
+    /// the synth (3 × 3 s).
+    fn pendulum_with_friction(friction: Option<f64>) -> (crate::model::Robot, Vec<Recording>) {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        let path = root.join("fixtures/synth/pendulum_servo.xml");
+        let mut sources = crate::model::source::SourceMap::default();
+        let robot = crate::model::load(&mut sources, &path, None).expect("pendulum");
+        let hidden: Vec<_> = friction
+            .map(|c| crate::synth::truth::Hidden {
+                effect: CoulombFriction.id(),
+                joint: "servo".into(),
+                params: vec![c],
+            })
+            .into_iter()
+            .collect();
+        let s =
+            crate::synth::Settings { episodes: 3, duration_s: 3.0, seed: 11, ..Default::default() };
+        let joints = vec!["servo".to_string()];
+        let ds = crate::synth::generate(&robot, &joints, &hidden, &s, &|_, _| {}).expect("synth");
+        let dir = std::env::temp_dir()
+            .join(format!("modellint_coarse_fr_{}_{friction:?}", std::process::id()));
+        let files = crate::synth::write::write(&ds, &dir).expect("write");
+        let recs = files.iter().map(|f| read_csv(f).expect("read")).collect();
+        let _ = std::fs::remove_dir_all(&dir);
+        (robot, recs)
+    }
+
+    /// A friction extension deferred on its plain variant's coarse fit is first judged on the
+    /// probes' data: where the recordings hold no friction, no point of that judgement gains
+    /// there, and it costs the probes' seconds alone (no replay of the screen's data); where
+    /// they hold the friction, the plain fit taken over gains there and the judgement goes on
+    /// on the screen's data.
+    #[test]
+    fn a_deferred_extension_that_finds_nothing_on_the_probes_is_not_judged_further() {
+        let opts = FitOptions::default();
+        let allowed: Vec<String> =
+            crate::fit::effects::all().iter().map(|e| e.id().into()).collect();
+        let g = vec!["servo".to_string()];
+        for (friction, nothing) in [(None, true), (Some(0.08), false)] {
+            let (robot, recs) = pendulum_with_friction(friction);
+            let engine = Engine::new(&robot, &recs, &opts);
+            let s = Search { engine: &engine, train: &recs, heldout: &recs, allowed: &allowed };
+            // Not held: no screen made the probes' data on this base.
+            assert!(!nothing_on_probes(&s, (&recs, &[]), (&StribeckFriction, &g), &[0.08]));
+            let probes = engine.probe_set(&recs, &[], || vec![recs[1].clone()]);
+            let _ = engine.errors_held(&recs, &[]).expect("replay");
+            let before = engine.rollout_stats().simulated_s;
+            let _ = engine.errors_held(&probes, &[]).expect("replay");
+            let one = engine.rollout_stats().simulated_s - before;
+            let before = engine.rollout_stats().simulated_s;
+            // The plain variant's fit at the truth (or at that level where there is none).
+            let got = nothing_on_probes(&s, (&recs, &[]), (&StribeckFriction, &g), &[0.08]);
+            let cost = engine.rollout_stats().simulated_s - before;
+            assert_eq!(got, nothing, "friction {friction:?}");
+            // Every replay was of the probes' data: a whole number of its replays.
+            let n = cost / one;
+            assert!(one > 0.0 && n >= 1.0 && (n - n.round()).abs() < 1e-6, "{cost} s for {one} s");
+        }
     }
 
     #[test]

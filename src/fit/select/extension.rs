@@ -59,7 +59,7 @@ pub(super) fn adds_nothing(
         return false;
     }
     let beats = |sse: f64| sse.is_finite() && criterion(sse, effect.fitted()) < to_beat;
-    !improves_on(s, (short, applied), (effect, group), (plain, &pp), &beats).0
+    !improves_on(s, (short, applied), (effect, group), (plain, &pp), (&beats, true)).0
 }
 
 /// `false` when `effect` on `group` elaborates a plain variant that the search may fit and
@@ -85,7 +85,22 @@ pub(super) fn could_reach(
     if pp.len() != plain.params().len() {
         return (true, None);
     }
-    improves_on(s, (short, applied), (effect, group), (plain, pp), reaches)
+    improves_on(s, (short, applied), (effect, group), (plain, pp), (reaches, true))
+}
+
+/// [`could_reach`] on `data` that counts only the points it simulates (the starts and the
+/// Gauss–Newton step, which is simulated whatever its prediction): `false` when no simulated
+/// point leaves an SSE for which `gains` holds, `true` otherwise or when the test cannot be made.
+pub(super) fn finds_any(
+    s: &Search,
+    (data, applied): (&[Recording], &[Applied]),
+    (effect, group): (&'static dyn Effect, &[String]),
+    pp: &[f64],
+    gains: &dyn Fn(f64) -> bool,
+) -> bool {
+    let Some(plain) = nested_plain(s, effect, group) else { return true };
+    pp.len() != plain.params().len()
+        || improves_on(s, (data, applied), (effect, group), (plain, pp), (gains, false)).0
 }
 
 /// The plain variant of `effect` when the search may fit it on `group` and `effect` holds it as
@@ -106,15 +121,15 @@ fn nested_plain(
 
 /// Whether some point near the plain variant's fit `pp` taken over by `effect` leaves an SSE
 /// on `short` for which `beats` holds: that start and the effect's further starts replayed,
-/// the Gauss–Newton step on the columns at the best of them predicted and simulated (see the
-/// module docs), and the simulated point of least SSE (its parameters and RMSE on `short`).
-/// `true` whenever the test cannot be made.
+/// the Gauss–Newton step on the columns at the best of them predicted (when `predicted`: its
+/// predicted SSE counts too) and simulated (see the module docs), and the simulated point of
+/// least SSE (its parameters and RMSE on `short`). `true` whenever the test cannot be made.
 fn improves_on(
     s: &Search,
     (short, applied): (&[Recording], &[Applied]),
     (effect, group): (&'static dyn Effect, &[String]),
     (plain, pp): (&'static dyn Effect, &[f64]),
-    beats: &dyn Fn(f64) -> bool,
+    (beats, predicted): (&dyn Fn(f64) -> bool, bool),
 ) -> (bool, Option<(Vec<f64>, f64)>) {
     const UNTESTED: (bool, Option<(Vec<f64>, f64)>) = (true, None);
     let engine = s.engine;
@@ -185,7 +200,7 @@ fn improves_on(
     let b: Vec<f64> = cols.iter().map(|c| dot(c, &rb)).collect();
     let g: Vec<Vec<f64>> = cols.iter().map(|x| cols.iter().map(|y| dot(x, y)).collect()).collect();
     let (explained, step) = combine(&b, &g);
-    if beats(sse_b - explained) {
+    if predicted && beats(sse_b - explained) {
         return (true, least);
     }
     // The linear model does not ask for it; its step is simulated all the same (a kink's

@@ -20,7 +20,7 @@ use super::reach::Reach;
 use super::screen::{Screen, screen_data};
 use super::trust::{heldout_needed, trust_out, with_pair_starts};
 use super::verdict::{at_bound, verdict};
-use super::winner::{beaten_at_coarse, on_whole_set, refine, rival_notes};
+use super::winner::{beaten_at_coarse, may_partner, on_whole_set, refine, rival_notes};
 use super::{Errors, FitOutcome, Search, Selected, Tried, set_uncertainty};
 
 /// One greedy round: diagnose, fit the candidates, keep the best that passes the held-out gate.
@@ -397,10 +397,11 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         // `tried`: phase "add_coarse").
         let whole = n_lead == 1 && ci == 1;
         let mut at_coarse = false;
+        let mut ho_c = None;
         if reaches(gain(cf)) && !cp.is_empty() {
             let mut t = applied.clone();
             t.push(Applied { effect: e, joints: group.clone(), params: cp.clone() });
-            let ho_c = engine.errors(heldout, &t);
+            ho_c = engine.errors(heldout, &t);
             let gate = opts.policy.gate_z(z);
             let needed =
                 heldout_needed(predicted.map(|p| gain(p.train_rmse)), gain(cf), &opts.policy);
@@ -451,6 +452,21 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
             fit_rmse
         };
         best_gain = best_gain.max(gain(short_rmse));
+        // A rival beaten at its coarse fit that no candidate of the round kept or to come could
+        // pair with, nor mirror, is logged with its held-out verdict there ([`may_partner`]).
+        let others = accepted.iter().map(|a| (a.0.effect.as_str(), &a.0.joints));
+        let others = others.filter_map(|(x, g)| Some((effects::by_id(x)?, &g[..])));
+        let others = others.chain(cands[ci..].iter().map(|(x, g, _)| (*x, &g[..])));
+        let mirrored = matches!(group.as_slice(), [j] if partner(j, &engine.joints).is_some());
+        if let Some(h) = ho_c.as_ref().filter(|_| at_coarse && !mirrored)
+            && !may_partner((e, &group), others)
+        {
+            let v = verdict(&ho_err, h, &group, opts.policy.gate_z(z));
+            let (heldout_improvement, significant) = (v.rel, v.significant);
+            let t = Tried { heldout_improvement, significant, ..not_tested(phase, p, f64::NAN) };
+            out.tried.push(t);
+            continue;
+        }
         let full = whole.then(|| p.clone());
         // (One that leaves the whole training set worse explains nothing: logged without a
         // held-out test.)
