@@ -63,9 +63,9 @@ pub fn floated_copy(
     let mut spec = spec?;
     let base_name = match how {
         Float::RootLink(name) => {
-            let body = spec
-                .body_mut(name)
-                .ok_or_else(|| format!("the root link `{name}` is not a body of the parsed model"))?;
+            let body = spec.body_mut(name).ok_or_else(|| {
+                format!("the root link `{name}` is not a body of the parsed model")
+            })?;
             body.add_free_joint();
             name.clone()
         }
@@ -74,8 +74,9 @@ pub fn floated_copy(
             if name.is_empty() {
                 return Err("the base body has no name, so the copy cannot find it in MuJoCo's parse of the file".into());
             }
-            let body =
-                spec.body_mut(&name).ok_or_else(|| format!("no body `{name}` in the parsed model"))?;
+            let body = spec
+                .body_mut(&name)
+                .ok_or_else(|| format!("no body `{name}` in the parsed model"))?;
             mj::replace_joints_by_free(body)?;
             name
         }
@@ -93,8 +94,7 @@ pub fn floated_copy(
         mj::add_floor(spec.world_body_mut(), FLOOR_NAME, z, contact_bits(robot));
     }
     let m = spec.compile().map_err(|e| format!("MuJoCo could not compile it: {e}"))?;
-    let mut copy =
-        extract(&robot.path, robot.format, robot.tree.clone(), robot.src.clone(), m);
+    let mut copy = extract(&robot.path, robot.format, robot.tree.clone(), robot.src.clone(), m);
     let body_map = map_bodies(robot, &copy, &base_name, how)?;
     let geom_map = map_geoms(robot, &copy, &body_map)?;
     let joint_map = map_joints(robot, &copy, how, &base_name)?;

@@ -254,7 +254,9 @@ mod tests {
 }
 
 /// Replaces every joint of spec body `body` (a base's slides and ball) by one free joint.
-pub fn replace_joints_by_free(body: &mut mujoco_rs::wrappers::mj_editing::MjsBody) -> Result<(), String> {
+pub fn replace_joints_by_free(
+    body: &mut mujoco_rs::wrappers::mj_editing::MjsBody,
+) -> Result<(), String> {
     let joints: Vec<*mut c::mjsElement> =
         body.joint_iter_mut(false).map(|j| j.element_mut_pointer()).collect();
     for e in joints {
@@ -274,7 +276,12 @@ pub fn replace_joints_by_free(body: &mut mujoco_rs::wrappers::mj_editing::MjsBod
 /// geom whose contype or conaffinity shares a bit with `bits`. Its friction is zero and its
 /// condim 1, the least MuJoCo allows: MuJoCo takes the larger of the two geoms' values, so
 /// every contact with it has the robot geom's own condim and friction.
-pub fn add_floor(world: &mut mujoco_rs::wrappers::mj_editing::MjsBody, name: &str, z: f64, bits: i32) {
+pub fn add_floor(
+    world: &mut mujoco_rs::wrappers::mj_editing::MjsBody,
+    name: &str,
+    z: f64,
+    bits: i32,
+) {
     let bits = if bits == 0 { 1 } else { bits };
     world
         .add_geom()

@@ -144,8 +144,7 @@ pub struct Words {
 
 /// Why a stance run does not test a base written as three slides and a ball: it floats, but the
 /// runs place, push and read a free joint's base only.
-const BASE_COORDINATES: &str =
-    "the base floats on slides and a ball, which the stance runs do not read (they need a free joint)";
+const BASE_COORDINATES: &str = "the base floats on slides and a ball, which the stance runs do not read (they need a free joint)";
 
 /// The stance preconditions of a run, in order: floor, settled, free_base, feet_loaded, upright.
 pub fn preconditions(f: &Figures, w: &Words) -> super::Preconditions {

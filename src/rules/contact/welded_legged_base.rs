@@ -99,7 +99,9 @@ fn legs(robot: &Robot) -> (Vec<(usize, usize)>, f64) {
     let firsts: std::collections::BTreeSet<usize> =
         chains.iter().filter_map(|c| c.1.last().copied()).collect();
     let hub = match firsts.iter().next() {
-        Some(&w) if firsts.len() == 1 && robot.joints.iter().filter(|j| j.body == w).count() == 1 => {
+        Some(&w)
+            if firsts.len() == 1 && robot.joints.iter().filter(|j| j.body == w).count() == 1 =>
+        {
             w
         }
         _ => 0,
