@@ -124,9 +124,7 @@ fn map_bodies(
 ) -> Result<Vec<Option<usize>>, String> {
     let mut out = Vec::with_capacity(copy.bodies.len());
     for (i, b) in copy.bodies.iter().enumerate() {
-        let to = if i == 0 {
-            Some(0)
-        } else if matches!(how, Float::RootLink(_)) && b.name == base {
+        let to = if i == 0 || (matches!(how, Float::RootLink(_)) && b.name == base) {
             Some(0)
         } else if !b.name.is_empty() {
             robot.bodies.iter().find(|x| x.name == b.name).map(|x| x.id)
