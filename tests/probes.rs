@@ -691,3 +691,96 @@ fn direction_probe_results_attach_only_to_the_sign_claim() {
     let fs = probed("fixtures/probes/locked_flipped_gear.xml", "actuator-mapping");
     assert!(fs.iter().all(|f| f.probe.as_ref().is_some_and(|p| p.name == "actuator-direction")));
 }
+
+/// The stance probes on a floated copy: a legged URDF (its root link welded to the world by
+/// MuJoCo's importer) and a base of three slides and a ball stand on a copy with a free joint,
+/// and the verdict says what the copy added.
+#[test]
+fn a_welded_urdf_biped_stands_on_a_floated_copy_and_its_tilted_toe_is_confirmed() {
+    let fs = probed("fixtures/rules/toe-tilt/invalid_welded_urdf_biped.urdf", "toe-tilt");
+    let p = outcome(&fs[0]);
+    assert_eq!(p.status, ProbeStatus::Confirmed, "{}", p.note);
+    assert!(p.preconditions.iter().all(|c| c.met), "{:?}", p.preconditions);
+    // The lowest point, by hand from the file: hip -0.1, knee -0.3, ankle -0.3, toe joint
+    // -0.04 below the foot; the toe box (0.05 × 0.02, pitched 0.03 rad) reaches
+    // 0.025·sin 0.03 + 0.01·cos 0.03 below its centre.
+    let low = -0.1 - 0.3 - 0.3 - 0.04 - (0.025 * 0.03f64.sin() + 0.01 * 0.03f64.cos());
+    let z = p.measured["floor_added_z_m"];
+    assert!((z - low).abs() < 1e-9, "floor at {z}, lowest point {low}");
+    assert!(p.note.contains("probed on a floated copy: free joint added at `trunk`"), "{}", p.note);
+    assert!(p.note.contains("floor added at z = -0.7507 m"), "{}", p.note);
+    assert!(p.note.contains("its 8 joints held at qpos0"), "{}", p.note);
+    // The copy carries the trunk too: the weight is the file's 8 + 2 × (3 + 2 + 0.8 + 0.1) kg.
+    let w = p.measured["weight_n"];
+    assert!((w - 19.8 * 9.81).abs() < 1e-6, "weight {w}");
+}
+
+#[test]
+fn a_slide_ball_base_stands_on_a_floated_copy_and_its_low_toe_is_confirmed() {
+    let fs = probed("fixtures/rules/toe-tilt/invalid_slide_ball_toe.xml", "toe-tilt");
+    let p = outcome(&fs[0]);
+    assert_eq!(p.status, ProbeStatus::Confirmed, "{}", p.note);
+    assert!(p.note.contains("free joint added at `left_foot`"), "{}", p.note);
+    // The model has its own floor: none added.
+    assert!(!p.measured.contains_key("floor_added_z_m"));
+    assert!(!p.note.contains("floor added"), "{}", p.note);
+}
+
+/// A level foot on the floated copy: every ground geom carries load (what refutes a toe claim).
+fn assert_level_feet_loaded(path: &str) {
+    use modellint::probe::float::{StanceModel, stance_model};
+    let l = loaded(path);
+    let StanceModel::Copy(c) = stance_model(&l) else { panic!("{path}: no floated copy") };
+    let s = settle::run(&c.robot).unwrap();
+    assert!(!s.stance.diverged, "{path}");
+    assert!(s.stance.support_load > 0.9 * s.stance.weight, "{path}: {:?}", s.stance);
+    assert!(s.stance.base_tilt_deg < 1.0 && s.stance.base_drop.abs() < 0.01, "{path}");
+    // The lowest geoms of the copy (those within 1 mm of the floor at the start) all carry load.
+    let floor = c.floor_z.unwrap_or(0.0);
+    let low: Vec<usize> = c
+        .robot
+        .geoms
+        .iter()
+        .filter(|g| g.collides() && g.body != 0)
+        .map(|g| g.id)
+        .filter(|&g| {
+            modellint::rules::geometry::shapes::Placed::of(&c.robot, g).lowest()[2] < floor + 1e-3
+        })
+        .collect();
+    assert!(low.len() >= 2, "{path}: {low:?}");
+    for g in low {
+        let load = s.geom_load.get(&g).copied().unwrap_or(0.0);
+        assert!(load > 0.02 * s.stance.weight / 2.0, "{path}: geom {g} carries {load} N");
+    }
+}
+
+#[test]
+fn level_feet_carry_load_on_the_floated_copies() {
+    assert_level_feet_loaded("fixtures/rules/toe-tilt/valid_welded_urdf_biped.urdf");
+    assert_level_feet_loaded("fixtures/rules/toe-tilt/valid_slide_ball_base.xml");
+}
+
+#[test]
+fn an_arm_and_a_free_robot_are_not_floated() {
+    use modellint::probe::float::needs_float;
+    for path in [
+        "fixtures/rules/toe-tilt/valid_urdf_table_arm.urdf",
+        "fixtures/rules/welded-legged-base/valid_ceiling_arm.urdf",
+        "fixtures/rules/welded-legged-base/valid_wheeled_base.urdf",
+        "fixtures/rules/toe-tilt/invalid.xml",
+    ] {
+        assert!(needs_float(&loaded(path).robot).is_none(), "{path}");
+    }
+}
+
+#[test]
+fn a_base_the_copy_cannot_float_is_inconclusive_with_the_reason() {
+    let fs = probed("fixtures/rules/toe-tilt/invalid_slide_ball_unnamed_base.xml", "toe-tilt");
+    let p = outcome(&fs[0]);
+    assert_eq!(p.status, ProbeStatus::Inconclusive, "{}", p.note);
+    let reason = p.reason.unwrap_or_default();
+    assert!(reason.contains("no floated copy could be built"), "{reason}");
+    assert!(reason.contains("has no name"), "{reason}");
+    let free = p.preconditions.iter().find(|c| c.name == "free_base").unwrap();
+    assert!(!free.met);
+}

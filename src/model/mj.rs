@@ -158,6 +158,79 @@ pub fn full_load_error(path: &std::path::Path, short: &str) -> String {
     }
 }
 
+/// Replaces every joint of spec body `body` (a base's slides and ball) by one free joint.
+pub fn replace_joints_by_free(
+    body: &mut mujoco_rs::wrappers::mj_editing::MjsBody,
+) -> Result<(), String> {
+    let joints: Vec<*mut c::mjsElement> =
+        body.joint_iter_mut(false).map(|j| j.element_mut_pointer()).collect();
+    for e in joints {
+        // SAFETY: `e` points at a joint element of the live spec that owns `body` (collected
+        // above, no handle to it is kept), and each is deleted once; `mjs_getSpec` returns that
+        // spec for any element of it.
+        let failed = unsafe { c::mjs_delete(c::mjs_getSpec(e.cast_const()), e) } != 0;
+        if failed {
+            return Err("MuJoCo would not remove the base's slide and ball joints".into());
+        }
+    }
+    body.add_free_joint();
+    Ok(())
+}
+
+/// Adds a static floor plane named `name` at height `z` to spec body `world`, touching every
+/// geom whose contype or conaffinity shares a bit with `bits`. Its friction is zero and its
+/// condim 1, the least MuJoCo allows: MuJoCo takes the larger of the two geoms' values, so
+/// every contact with it has the robot geom's own condim and friction.
+pub fn add_floor(
+    world: &mut mujoco_rs::wrappers::mj_editing::MjsBody,
+    name: &str,
+    z: f64,
+    bits: i32,
+) {
+    let bits = if bits == 0 { 1 } else { bits };
+    world
+        .add_geom()
+        .with_name(name)
+        .with_type(MjtGeomBase::mjGEOM_PLANE)
+        .with_pos([0.0, 0.0, z])
+        .with_size([0.0, 0.0, 1.0])
+        .with_contype(bits)
+        .with_conaffinity(bits)
+        .with_condim(1)
+        .with_friction([0.0, 0.0, 0.0]);
+}
+
+/// Body `body`'s world position and orientation quaternion at keyframe `key` of `m` (the 7
+/// numbers of a free joint's qpos); `None` when out of range.
+pub fn body_pose_at_key(m: &MjModel, key: usize, body: usize) -> Option<[f64; 7]> {
+    let mut d = MjData::new(m);
+    d.reset_keyframe(key).ok()?;
+    d.forward();
+    let p = d.xpos().get(body)?;
+    let q = d.xquat().get(body)?;
+    Some([p[0], p[1], p[2], q[0], q[1], q[2], q[3]])
+}
+
+/// Writes `values` into keyframe `key`'s qpos from address `adr`; nothing out of range.
+pub fn set_key_qpos(m: &mut MjModel, key: usize, adr: usize, values: &[f64]) {
+    let nq = raw(m).nq.max(0) as usize;
+    let start = key * nq + adr;
+    if adr + values.len() <= nq
+        && let Some(dst) = m.key_qpos_mut().get_mut(start..start + values.len())
+    {
+        dst.copy_from_slice(values);
+    }
+}
+
+/// Adds to `spec` an equality that holds joint `joint` at its qpos0 (`<equality><joint
+/// joint1=…/>`: with no second joint and MuJoCo's default polycoef 0 1 0 0 0, q − q0 = 0).
+pub fn hold_joint(spec: &mut MjSpec, joint: &str) {
+    spec.add_equality()
+        .with_type(MjtEq::mjEQ_JOINT)
+        .with_objtype(MjtObjBase::mjOBJ_JOINT)
+        .with_name1(joint);
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -6,6 +6,7 @@ mod checks;
 pub mod contact;
 mod errloc;
 mod extract;
+pub mod floated;
 mod limbs;
 pub mod mirror;
 pub mod mj;

@@ -11,6 +11,7 @@
 
 pub mod bench;
 pub mod direction;
+pub mod float;
 pub mod impulse;
 pub mod limit;
 pub mod penetration;

@@ -35,7 +35,13 @@ impl super::Probe for StanceSettle {
     }
     type Output = Settle;
     fn run(l: &Loaded, (): ()) -> Option<Settle> {
-        run(&l.robot)
+        let model = super::float::stance_model(l);
+        let mut s = match &model {
+            super::float::StanceModel::Copy(c) => run(&c.robot)?.remapped(c),
+            _ => run(&l.robot)?,
+        };
+        s.stance.floated = model.floated();
+        Some(s)
     }
 }
 
@@ -56,10 +62,11 @@ impl<C: StanceClaim> super::Claim for C {
     }
     fn judge(&self, l: &Loaded, s: &Settle) -> super::Verdict {
         let pre = s.preconditions();
-        if let Some(p) = pre.unmet() {
-            return super::Verdict::inconclusive(&pre, s.stance_measured(), p.detail.clone());
-        }
-        self.judge_settled(l, s, &pre)
+        let v = match pre.unmet() {
+            Some(p) => super::Verdict::inconclusive(&pre, s.stance_measured(), p.detail.clone()),
+            None => self.judge_settled(l, s, &pre),
+        };
+        super::stance::tag_copy(v, &s.stance)
     }
 }
 
@@ -110,6 +117,23 @@ impl Settle {
             ("base_drop_m".to_string(), self.stance.base_drop),
             ("base_tilt_deg".to_string(), self.stance.base_tilt_deg),
         ])
+        .into_iter()
+        .chain(super::stance::floor_added(&self.stance).map(|z| ("floor_added_z_m".to_string(), z)))
+        .collect()
+    }
+
+    /// This run on a floated copy, keyed by the model's ids.
+    fn remapped(self, c: &crate::model::floated::FloatedCopy) -> Settle {
+        use super::float::remap;
+        Settle {
+            steps: self.steps,
+            stance: self.stance,
+            geom_load: remap(self.geom_load, &c.geom_map),
+            chatter_per_s: remap(self.chatter_per_s, &c.body_map),
+            penetration: remap(self.penetration, &c.body_map),
+            body_tilt_deg: remap(self.body_tilt_deg, &c.body_map),
+            joint_deflection: remap(self.joint_deflection, &c.joint_map),
+        }
     }
 
     /// The mean load of one geom, N (0 when it never touched anything).

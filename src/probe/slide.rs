@@ -42,7 +42,20 @@ impl super::Probe for FootSlide {
         out.steps
     }
     fn run(l: &Loaded, (): ()) -> Option<Slide> {
-        run(&l.robot)
+        let model = super::float::stance_model(l);
+        let mut s = match &model {
+            super::float::StanceModel::Copy(c) => {
+                let s = run(&c.robot)?;
+                Slide {
+                    built: super::float::remap(s.built, &c.geom_map),
+                    travel: super::float::remap(s.travel, &c.body_map),
+                    ..s
+                }
+            }
+            _ => run(&l.robot)?,
+        };
+        s.stance.floated = model.floated();
+        Some(s)
     }
 }
 

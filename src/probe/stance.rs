@@ -73,6 +73,7 @@ impl Start {
     /// measured ones zero.
     pub fn figures(&self) -> Figures {
         Figures {
+            floated: None,
             floor: self.floor,
             free_base: self.free_base,
             base_coordinates: self.base_coordinates,
@@ -140,10 +141,23 @@ pub fn max_drop(base_height: f64) -> f64 {
     (MAX_DROP * base_height).max(MIN_DROP_ALLOWED)
 }
 
+/// What a stance run did to a model whose base cannot stand as written ([`super::float`]).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Floated {
+    /// It ran on a floated copy: a free joint added at body `base`, a floor plane at
+    /// `floor_z` (m) when the model has none, and `held` joints (a URDF's, which has no
+    /// actuators in MuJoCo) held at qpos0 by added joint equalities.
+    Copy { base: String, floor_z: Option<f64>, held: usize },
+    /// No floated copy could be built (why): it ran on the model as written.
+    Failed(String),
+}
+
 /// The figures of one run that the stance preconditions judge, held by every stance probe's
 /// output (`Settle::stance`, `Slide::stance`).
-#[derive(Debug, Clone, Copy, Default)]
+#[derive(Debug, Clone, Default)]
 pub struct Figures {
+    /// The run was on a floated copy, or no copy could be built.
+    pub floated: Option<Floated>,
     /// The world body has a colliding plane, height field or box.
     pub floor: bool,
     /// The run did not stay finite.
@@ -183,7 +197,7 @@ pub struct Words {
 
 /// Why a stance run does not test a base written as three slides and a ball: it floats, but the
 /// runs place, push and read a free joint's base only.
-const BASE_COORDINATES: &str = "the base floats on slides and a ball, which the stance runs do not read (they need a free joint): a wrapper with a free joint on the base body lets them run";
+const BASE_COORDINATES: &str = "the base floats on slides and a ball, which the stance runs do not read (they need a free joint)";
 
 /// The stance preconditions of a run, in order: floor, gravity, above_floor, settled,
 /// free_base, feet_loaded, upright.
@@ -206,7 +220,12 @@ pub fn preconditions(f: &Figures, w: &Words) -> super::Preconditions {
         .check(
             "floor",
             f.floor,
-            if f.floor {
+            if let Some(Floated::Copy { floor_z: Some(z), .. }) = &f.floated {
+                format!(
+                    "the model has no floor: the floated copy has a plane added at z = {} m, under the robot's lowest point",
+                    n(*z, 4)
+                )
+            } else if f.floor {
                 "the model has a floor".to_string()
             } else {
                 "the model has no floor (no colliding plane or height field on the world or a static body, nor box on the world body): lint the scene that includes the robot".to_string()
@@ -231,12 +250,17 @@ pub fn preconditions(f: &Figures, w: &Words) -> super::Preconditions {
         .check(
             "free_base",
             f.free_base,
-            if f.free_base {
-                "the base is free-floating"
-            } else if f.base_coordinates {
-                BASE_COORDINATES
-            } else {
-                w.fixed_base
+            match &f.floated {
+                Some(Floated::Copy { base, .. }) => {
+                    format!("probed on a floated copy: free joint added at `{base}`")
+                }
+                Some(Floated::Failed(why)) => format!(
+                    "{}; no floated copy could be built: {why}",
+                    if f.base_coordinates { BASE_COORDINATES } else { w.fixed_base }
+                ),
+                None if f.free_base => "the base is free-floating".to_string(),
+                None if f.base_coordinates => BASE_COORDINATES.to_string(),
+                None => w.fixed_base.to_string(),
             },
         )
         .check(
@@ -261,4 +285,37 @@ pub fn preconditions(f: &Figures, w: &Words) -> super::Preconditions {
                 n(max_drop, 3)
             ),
         )
+}
+
+/// "probed on a floated copy: free joint added at `trunk`; floor added at z = -0.69 m" when the
+/// run was on a floated copy, for a verdict's note.
+pub fn copy_note(f: &Figures) -> Option<String> {
+    let Some(Floated::Copy { base, floor_z, held }) = &f.floated else { return None };
+    let floor = floor_z
+        .map(|z| format!("; floor added at z = {} m", crate::util::fmt_num(z, 4)))
+        .unwrap_or_default();
+    let held = match held {
+        0 => String::new(),
+        n => format!("; its {n} joints held at qpos0 (the URDF has no actuators)"),
+    };
+    Some(format!("probed on a floated copy: free joint added at `{base}`{floor}{held}"))
+}
+
+/// `v` with [`copy_note`] appended to its note (and to an inconclusive verdict's reason).
+pub fn tag_copy(mut v: super::Verdict, f: &Figures) -> super::Verdict {
+    if let Some(c) = copy_note(f) {
+        v.note = format!("{} ({c})", v.note);
+        if let super::Status::Inconclusive(r) = &mut v.status {
+            *r = format!("{r} ({c})");
+        }
+    }
+    v
+}
+
+/// The height of the floor plane a floated copy added, m.
+pub fn floor_added(f: &Figures) -> Option<f64> {
+    match &f.floated {
+        Some(Floated::Copy { floor_z, .. }) => *floor_z,
+        _ => None,
+    }
 }

@@ -683,6 +683,10 @@ impl Measure for ContactAsBuilt {
             fmt_num(PUSH_S, 3),
             fmt_num(1000.0 * travel, 3)
         );
+        let note = match crate::probe::stance::copy_note(&s.stance) {
+            Some(c) => format!("{note} ({c})"),
+            None => note,
+        };
         Measurement::new(&pre, m, note)
     }
 }

@@ -45,12 +45,15 @@ declare_rule! {
     ///
     /// ## How it is confirmed
     /// Static geometry at the keyframe; probe `stance-settle` drops the robot onto the floor in
-    /// the keyframe pose and records which geoms carry the load and how the foot rolls.
+    /// the keyframe pose and records which geoms carry the load and how the foot rolls. A
+    /// legged URDF and a base of three slides and a ball stand on a floated copy (a free joint
+    /// on the base, a floor under the lowest foot when the model has none; `docs/probes.md`).
     ///
     /// ## How to fix
-    /// Move the offending geom (its `pos`/`fromto`) so its lowest point is level with the other
-    /// sole geoms, and make toe capsule axes and box faces horizontal in the standing pose (or
-    /// fix the keyframe if the foot itself is not flat).
+    /// Move the offending geom (its `pos`/`fromto`; in a URDF the `xyz` of the collision's
+    /// `<origin>`) so its lowest point is level with the other sole geoms, and make toe capsule
+    /// axes and box faces horizontal in the standing pose (its `quat`/`euler`; in a URDF the
+    /// `rpy` of the `<origin>`), or fix the keyframe if the foot itself is not flat.
     pub ToeTilt {
         id: "toe-tilt",
         group: "contact",
@@ -267,7 +270,11 @@ impl ToeTilt {
                                 zref * 1000.0 + 0.0,
                                 fmt_num(spread * 1000.0, 3)
                             ))
-                            .help("move the geom (its `pos` or `fromto`) so its lowest point is level with the other sole geoms in the standing pose")
+                            .help(if robot.format == crate::model::Format::Urdf {
+                                "move the collision (the `xyz` of its `<origin>`) so its lowest point is level with the other sole geoms in the standing pose"
+                            } else {
+                                "move the geom (its `pos` or `fromto`) so its lowest point is level with the other sole geoms in the standing pose"
+                            })
                             .subject(Subject::Geom(g))
                             .measured(dz * 1000.0, "mm")
                             .expected(0.0, "mm")
@@ -305,7 +312,11 @@ impl ToeTilt {
                                 fmt_num(deg, 3),
                                 fmt_num(max_tilt, 3)
                             ))
-                            .help("rotate the geom (its `quat`/`euler`/`fromto`) so the feature is horizontal in the standing pose, or fix the keyframe if the whole foot is tilted")
+                            .help(if robot.format == crate::model::Format::Urdf {
+                                "rotate the collision (the `rpy` of its `<origin>`) so the feature is horizontal in the standing pose, or fix the joint origins if the whole foot is tilted"
+                            } else {
+                                "rotate the geom (its `quat`/`euler`/`fromto`) so the feature is horizontal in the standing pose, or fix the keyframe if the whole foot is tilted"
+                            })
                             .subject(Subject::Geom(g))
                             .measured(deg, "°")
                             .expected(max_tilt, "°")

@@ -9,16 +9,18 @@ use crate::util::fmt_num;
 declare_rule! {
     /// ## What it does
     /// In a URDF with no floating joint, finds a kinematic tree that looks like legs: two or more
-    /// chains, each leaving the root link through a joint of its own and ending, two or more
-    /// hinge/slide joints further out, in a leaf link (not a wheel) whose collision geometry
+    /// chains, each leaving the root link (or a body every chain passes through that hangs from
+    /// the root link by one joint: a waist, whose pelvis carries the legs) through a joint of its
+    /// own and ending, two or more hinge/slide joints further out, in a leaf link (not a wheel) whose collision geometry
     /// reaches the robot's lowest point (within 1 cm) below the root link's frame at qpos0.
     /// Says that MuJoCo's importer welded the root to the world and that the foot rules
     /// (`toe-tilt`, `foot-collision-geometry`, `links-without-collision`,
     /// `torsional-friction-length`, and the foot soles of `collision-visual-mismatch`) judged
     /// those feet as if the root link floated: they take it (the world body the importer fused
     /// it into, with every link welded to it) as the floating base, at its pose in the file. The
-    /// stance probes need a free base on a floor: their runs on the file are inconclusive with
-    /// that reason (`docs/probes.md`). A
+    /// stance probes run on a floated copy: a free joint on the root link, a floor plane under
+    /// the lowest foot, every joint held at qpos0 (MuJoCo loads no actuator from a URDF), each
+    /// said in the verdict (`docs/probes.md`). A
     /// fixed-base arm (its chain ends above its base, or in one chain of fingers) and a wheeled
     /// base (its lowest links are wheels) are not reported, and their links are never taken
     /// for feet.
@@ -37,8 +39,8 @@ declare_rule! {
     /// say its base floats.
     ///
     /// ## How to fix
-    /// To simulate the robot standing (so the stance probes judge its feet): an MJCF wrapper that attaches
-    /// the URDF under a body with a `<freejoint/>` above a floor (`<mujoco><asset><model
+    /// Nothing to fix in the URDF. To simulate the robot standing with its own actuators and
+    /// floor (rather than the probes' floated copy): an MJCF wrapper that attaches the URDF under a body with a `<freejoint/>` above a floor (`<mujoco><asset><model
     /// name="robot" file="robot.urdf"/></asset><worldbody><geom type="plane" size="0 0
     /// 1"/><body pos="0 0 H"><freejoint/><attach model="robot" prefix=""/></body></worldbody></mujoco>`,
     /// H the standing height), and lint the wrapper.
@@ -70,7 +72,9 @@ fn legs(robot: &Robot) -> (Vec<(usize, usize)>, f64) {
     let zmin = lows.iter().copied().fold(f64::INFINITY, f64::min);
     // The root link's frame: the world origin, where the importer welds it.
     let root_z = robot.key.body_xpos.first().map_or(0.0, |p| p[2]);
-    let mut out = Vec::new();
+    // Each foot-like leaf with its chain up to the world: the bodies from the leaf to the
+    // root link's child, in order.
+    let mut chains: Vec<(usize, Vec<usize>)> = Vec::new();
     for (b, &low) in lows.iter().enumerate().skip(1) {
         if robot.bodies.iter().any(|c| c.id != 0 && c.parent == b) {
             continue; // not a leaf
@@ -78,24 +82,43 @@ fn legs(robot: &Robot) -> (Vec<(usize, usize)>, f64) {
         if !(low <= zmin + GROUND_WINDOW && low < root_z) {
             continue;
         }
-        // The chain from the leaf up to the world: its scalar joints, and its top link.
-        let (mut joints, mut wheel, mut top, mut x) = (0usize, false, b, b);
+        let mut path = vec![b];
+        let mut x = b;
         for _ in 0..n {
-            for j in robot.joints.iter().filter(|j| j.body == x) {
-                if matches!(j.jtype, JointType::Hinge | JointType::Slide) {
-                    joints += 1;
-                }
-                wheel |= robot.is_wheel(j.id);
-            }
             let p = robot.bodies[x].parent;
             if p == 0 {
-                top = x;
                 break;
             }
+            path.push(p);
             x = p;
         }
+        chains.push((b, path));
+    }
+    // The hub the legs leave: the root link, or a body reached from it through one joint (a
+    // waist) when every chain passes through that body.
+    let firsts: std::collections::BTreeSet<usize> =
+        chains.iter().filter_map(|c| c.1.last().copied()).collect();
+    let hub = match firsts.iter().next() {
+        Some(&w)
+            if firsts.len() == 1 && robot.joints.iter().filter(|j| j.body == w).count() == 1 =>
+        {
+            w
+        }
+        _ => 0,
+    };
+    let mut out = Vec::new();
+    for (leaf, path) in chains {
+        let below: Vec<usize> = path.iter().copied().take_while(|&x| x != hub).collect();
+        let Some(&top) = below.last() else { continue };
+        let (mut joints, mut wheel) = (0usize, false);
+        for j in robot.joints.iter().filter(|j| below.contains(&j.body)) {
+            if matches!(j.jtype, JointType::Hinge | JointType::Slide) {
+                joints += 1;
+            }
+            wheel |= robot.is_wheel(j.id);
+        }
         if joints >= 2 && !wheel {
-            out.push((b, top));
+            out.push((leaf, top));
         }
     }
     (out, root_z - zmin)
@@ -122,6 +145,17 @@ pub fn is_welded_legged(robot: &Robot) -> bool {
     welded_legs(robot).is_some()
 }
 
+/// The URDF's root link: the `<link>` no `<joint>` has as its child.
+pub fn root_link(robot: &Robot) -> Option<&crate::model::source::XNode> {
+    robot.tree.children_tagged("link").find(|l| {
+        let name = l.get("name").unwrap_or("");
+        !robot
+            .tree
+            .children_tagged("joint")
+            .any(|j| j.children_tagged("child").any(|c| c.get("link") == Some(name)))
+    })
+}
+
 impl Rule for WeldedLeggedBase {
     fn meta(&self) -> &'static RuleMeta {
         &Self::META
@@ -129,13 +163,7 @@ impl Rule for WeldedLeggedBase {
     fn check(&self, cx: &Context, out: &mut Vec<Finding>) {
         let robot = cx.robot;
         let Some((legs, depth)) = welded_legs(robot) else { return };
-        let root = robot.tree.children_tagged("link").find(|l| {
-            let name = l.get("name").unwrap_or("");
-            !robot
-                .tree
-                .children_tagged("joint")
-                .any(|j| j.children_tagged("child").any(|c| c.get("link") == Some(name)))
-        });
+        let root = root_link(robot);
         let root_name = root.and_then(|l| l.get("name")).unwrap_or("");
         let at = root.map_or(robot.root_loc(), |l| l.attr("name").map_or(l.loc, |a| a.loc));
         let names: Vec<String> =
@@ -143,19 +171,19 @@ impl Rule for WeldedLeggedBase {
         let f = cx
             .finding(
                 format!(
-                    "MuJoCo's importer welds the root link `{root_name}` to the world, and the robot has {} legs ending in its lowest contacts ({}): the foot rules judged these feet as if `{root_name}` floated; the stance probes cannot (it hangs from its trunk)",
+                    "MuJoCo's importer welds the root link `{root_name}` to the world, and the robot has {} legs ending in its lowest contacts ({}): the foot rules judged these feet as if `{root_name}` floated, and the stance probes stand a floated copy",
                     legs.len(),
                     names.join(", ")
                 ),
                 at,
             )
             .element(format!("link `{root_name}`"), at)
-            .label("root link, fixed to the world by the importer; floated for the foot rules")
+            .label("root link, fixed to the world by the importer; floated for the foot rules and the stance probes")
             .note(format!(
-                "a URDF cannot say its base floats: loaded as it is, the robot never stands on its feet (their lowest point {} m below the root link's frame at qpos0). The static foot rules (`toe-tilt`, `foot-collision-geometry`, `links-without-collision`, `torsional-friction-length`) take the root link as a floating base at its pose in the file; the stance probes need a free base on a floor: their runs on this file are inconclusive with that reason",
+                "a URDF cannot say its base floats: loaded as it is, the robot never stands on its feet (their lowest point {} m below the root link's frame at qpos0). The static foot rules (`toe-tilt`, `foot-collision-geometry`, `links-without-collision`, `torsional-friction-length`) take the root link as a floating base at its pose in the file; the stance probes run on a copy with a free joint on it, a floor under the lowest foot and the joints held at qpos0",
                 fmt_num(depth, 3)
             ))
-            .help("to simulate it standing (so the stance probes can judge its feet): an MJCF wrapper that attaches the URDF under a body with a <freejoint/> above a floor (<body pos=\"0 0 H\"><freejoint/><attach model=\"robot\" prefix=\"\"/></body>), and lint the wrapper")
+            .help("to simulate it standing with its own actuators and floor: an MJCF wrapper that attaches the URDF under a body with a <freejoint/> above a floor (<body pos=\"0 0 H\"><freejoint/><attach model=\"robot\" prefix=\"\"/></body>), and lint the wrapper")
             .subject(Subject::Model)
             .measured(legs.len() as f64, "legs")
             .with("depth", depth);

@@ -7,8 +7,9 @@ use crate::util::fmt_num;
 
 declare_rule! {
     /// ## What it does
-    /// Finds an MJCF whose `<compiler inertiafromgeom="true">` discards the `<inertial>`
-    /// elements its bodies state: MuJoCo then takes every body's mass and inertia from its
+    /// Finds an MJCF whose `<compiler inertiafromgeom="true">` (in a URDF, the same element
+    /// inside its `<mujoco>` extension, which MuJoCo reads) discards the `<inertial>`
+    /// elements its bodies (links) state: MuJoCo then takes every body's mass and inertia from its
     /// geoms (at their `density`, 1000 kg/m³ unless set; only the geoms of
     /// `inertiagrouprange`), whatever the file states. A body is reported when its compiled
     /// mass differs from the `mass` its `<inertial>` states in the digits written (a stated
@@ -57,9 +58,16 @@ fn half_last_digit(text: &str) -> f64 {
 
 /// The `<compiler>` element whose `inertiafromgeom` MuJoCo applies (the last one that sets
 /// it, includes expanded), when it is `"true"`.
-fn inertia_from_geom(tree: &XNode) -> Option<&XNode> {
+fn inertia_from_geom(tree: &XNode, format: Format) -> Option<&XNode> {
     let mut last: Option<&XNode> = None;
-    for c in tree.children_tagged("compiler") {
+    // A URDF's compiler options are in its `<mujoco>` extension element, which MuJoCo reads.
+    let compilers: Vec<&XNode> = match format {
+        Format::Mjcf => tree.children_tagged("compiler").collect(),
+        Format::Urdf => {
+            tree.children_tagged("mujoco").flat_map(|m| m.children_tagged("compiler")).collect()
+        }
+    };
+    for c in compilers {
         if c.get("inertiafromgeom").is_some() {
             last = Some(c);
         }
@@ -95,19 +103,49 @@ fn stated_inertials(tree: &XNode) -> Vec<(usize, &XNode, Option<&XNode>)> {
     out
 }
 
+/// A URDF's links with their `<inertial>`, as (compiled body id, link, inertial): only links
+/// MuJoCo compiled into a body of their own name and into which no other link was fused (every
+/// child link is a body too), so the compiled mass is the link's alone. A root link welded to
+/// the world (fused into it) is not judged.
+fn urdf_inertials(robot: &crate::model::Robot) -> Vec<(usize, &XNode, Option<&XNode>)> {
+    let tree = &robot.tree;
+    let body = |name: &str| robot.bodies.iter().find(|b| b.id != 0 && b.name == name);
+    tree.children_tagged("link")
+        .filter_map(|l| {
+            let name = l.get("name")?;
+            let b = body(name)?;
+            let children_kept = tree
+                .children_tagged("joint")
+                .filter(|j| j.children_tagged("parent").any(|p| p.get("link") == Some(name)))
+                .filter_map(|j| j.children_tagged("child").next()?.get("link"))
+                .all(|c| body(c).is_some());
+            children_kept.then(|| (b.id, l, l.children_tagged("inertial").next()))
+        })
+        .collect()
+}
+
+/// The mass an `<inertial>` states, as written: MJCF's `mass` attribute, URDF's `<mass value>`.
+fn stated_mass(inertial: &XNode, format: Format) -> Option<&str> {
+    match format {
+        Format::Mjcf => inertial.get("mass"),
+        Format::Urdf => inertial.children_tagged("mass").next()?.get("value"),
+    }
+}
+
 impl Rule for InertialOverridden {
     fn meta(&self) -> &'static RuleMeta {
         &Self::META
     }
     fn check(&self, cx: &Context, out: &mut Vec<Finding>) {
         let robot = cx.robot;
-        if robot.format != Format::Mjcf {
-            return;
-        }
-        let Some(compiler) = inertia_from_geom(&robot.tree) else { return };
+        let Some(compiler) = inertia_from_geom(&robot.tree, robot.format) else { return };
         // (compiled body, stated mass, compiled mass, the <inertial>'s mass attribute)
         let mut off: Vec<(usize, f64, f64, &XNode)> = Vec::new();
-        for (id, body, inertial) in stated_inertials(&robot.tree) {
+        let stated_list = match robot.format {
+            Format::Mjcf => stated_inertials(&robot.tree),
+            Format::Urdf => urdf_inertials(robot),
+        };
+        for (id, body, inertial) in stated_list {
             let Some(inertial) = inertial else { continue };
             let Some(b) = robot.bodies.get(id) else { continue };
             // The compiled body must be this element (a name that disagrees means the order
@@ -115,7 +153,7 @@ impl Rule for InertialOverridden {
             if body.name().is_some_and(|n| n != b.name) {
                 return;
             }
-            let Some(text) = inertial.get("mass") else { continue };
+            let Some(text) = stated_mass(inertial, robot.format) else { continue };
             let Ok(stated) = text.trim().parse::<f64>() else { continue };
             if (b.mass - stated).abs() > half_last_digit(text) {
                 off.push((id, stated, b.mass, inertial));

@@ -79,6 +79,10 @@ impl Measure for StanceDeflection {
             fmt_num(defl, 3),
             if at_limit { ", onto its limit" } else { "" }
         );
+        let note = match crate::probe::stance::copy_note(&s.stance) {
+            Some(c) => format!("{note} ({c})"),
+            None => note,
+        };
         Measurement::new(&s.preconditions(), m, note)
     }
 }
