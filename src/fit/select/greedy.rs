@@ -18,7 +18,7 @@ use super::pairs::{joint_pairs, pair_lookahead, refitted_at_floor};
 use super::policy::Phase;
 use super::reach::Reach;
 use super::screen::{Screen, screen_data};
-use super::trust::{heldout_needed, trust_out, with_pair_starts};
+use super::trust::{heldout_needed, heldout_out, train_reach, trust_out, with_pair_starts};
 use super::verdict::{at_bound, verdict};
 use super::winner::{beaten_at_coarse, on_whole_set, refine, rival_notes};
 use super::{Errors, FitOutcome, Search, Selected, Tried, set_uncertainty};
@@ -90,6 +90,11 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     }
     // One-parameter candidates first, in rank order; then the multi-parameter ones.
     cands.sort_by_key(|(e, ..)| e.fitted() >= 2);
+    // After round 0, the held-out set's own linear model ([`heldout_out`]).
+    let ho_screen = (round > 0).then(|| {
+        engine.report(round, Phase::HeldoutLinear, None);
+        Screen::build(engine, heldout, &applied, &ho_err, &mut diag.clone(), &covered)
+    });
     let z = opts.policy.z_needed(cands.len());
     let k_before: usize = applied.iter().map(|a| a.effect.fitted()).sum();
     let bic_before = bic(tr_err.n, tr_err.sse, k_before);
@@ -145,9 +150,11 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     let mut reach: Option<Reach> = None;
     // The lead's early pair look-ahead, once tried ([`pair_first`]).
     let mut early_tried: Option<Option<EarlyPair>> = None;
-    // The candidates left without a coarse fit by round 0's trust ([`trust_out`]), with the
-    // largest gain their linear model allows.
+    // The candidates left without a coarse fit by round 0's trust ([`trust_out`]) or by the
+    // held-out linear model ([`heldout_out`]), with the largest training gain their linear model
+    // allows; and why (the phase logged) with the held-out reach (NaN for round 0's trust).
     let mut trusted_out: Vec<(&'static dyn Effect, Vec<String>, f64)> = Vec::new();
+    let mut out_why: Vec<(Phase, f64)> = Vec::new();
     let mut ci = 0;
     while ci < cands.len() {
         // The coarse fits of a size's candidates, which are then taken best first
@@ -162,9 +169,11 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
                 Some((ci + 1, cands.len(), format!("coarse fits of {} candidates", range.len()))),
             );
             // After round 0, a candidate whose linear model round 0 confirmed is taken at its
-            // word ([`trust_out`]): no coarse fit when it could not reach the bar.
+            // word ([`trust_out`]): no coarse fit when it could not reach the bar; nor one whose
+            // held-out linear optimum could not pass the gate ([`heldout_out`]).
             let cut = (opts.policy.screen_share * best_gain).max(opts.policy.min_rel_improvement);
-            let out_of: Vec<Option<f64>> = cands[range.clone()]
+            let lt = opts.policy.linear_trust;
+            let out_of: Vec<Option<(f64, Phase, f64)>> = cands[range.clone()]
                 .iter()
                 .map(|(e, g, _)| {
                     // (Not the plain variant of a candidate on its joints: the richer model is
@@ -173,11 +182,14 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
                         h == g && x.plain_variant().is_some_and(|p| p.id() == e.id())
                     };
                     let needed = cands.iter().any(plain);
-                    if round > 0 && !needed {
-                        trust_out(engine, &screen, (*e, g), cut)
-                    } else {
-                        None
+                    let trusted = (round > 0 && !needed)
+                        .then(|| trust_out(engine, &screen, (*e, g), cut))
+                        .flatten();
+                    if let Some(u) = trusted {
+                        return Some((u, Phase::TrustScreen, f64::NAN));
                     }
+                    let h = heldout_out(ho_screen.as_ref()?, (*e, g), &opts.policy)?;
+                    Some((train_reach(&screen, (*e, g), lt), Phase::HeldoutLinear, h))
                 })
                 .collect();
             // (The reach's coarse fits on the probes' data are booked apart: `Phase::Reach`.)
@@ -203,11 +215,12 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
                 })
                 .collect();
             for ((c, f), o) in cands[range.clone()].iter().zip(&fits).zip(&out_of) {
-                if let Some(upper) = o
+                if let Some((upper, why, reach)) = o
                     && f.0.is_empty()
                     && f.1.is_infinite()
                 {
                     trusted_out.push((c.0, c.1.clone(), *upper));
+                    out_why.push((*why, *reach));
                 }
                 // Round 0's record of which linear models its coarse fits confirm.
                 let pred = screen.predict(c.0.id(), &c.1).map(|p| gain(p.train_rmse));
@@ -294,9 +307,12 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
             out.tried.push(not_tested(Phase::Floor, vec![], f64::NAN));
             continue;
         }
-        // Left without a coarse fit: its linear model, trusted, cannot reach the bar.
-        if trusted_out.iter().any(|(x, g, _)| x.id() == e.id() && *g == group) {
-            out.tried.push(not_tested(Phase::TrustScreen, vec![], f64::NAN));
+        // Left without a coarse fit: its linear model, trusted, cannot reach the bar, or its
+        // held-out linear optimum the gate (logged with that reach as its held-out improvement).
+        if let Some(k) = trusted_out.iter().position(|(x, g, _)| x.id() == e.id() && *g == group) {
+            let (why, reach) = out_why[k];
+            let t = not_tested(why, vec![], f64::NAN);
+            out.tried.push(Tried { heldout_improvement: reach, ..t });
             continue;
         }
         // Not coarse-fitted on the screen's data: first judged on the probes' data ([`Reach`]).

@@ -4,6 +4,9 @@
 //! ([`trust_out`]), and one that could start a joint pair is coarse-fitted only when the round
 //! ends in the joint pairs ([`with_pair_starts`]). Within a round, a coarse fit that confirms
 //! its candidate's linear model stands for the full fit's held-out gain ([`heldout_needed`]).
+//! After round 0 every candidate is also judged on the held-out set's own linear model before
+//! any coarse fit ([`heldout_out`]): the most any value of its parameters could lower the
+//! held-out error, to first order and at the trust's edge, must reach the gate.
 
 use crate::fit::effects::{self, Applied, Effect};
 use crate::sim2real::recording::Recording;
@@ -54,6 +57,45 @@ pub(super) fn trust_out(
     (base > 0.0 && upper.is_finite() && upper < cut).then_some(upper)
 }
 
+/// After round 0, the largest relative held-out improvement (over every fitted joint, the
+/// gate's measure, [`super::verdict`]) that `e` on `g` could make at any value of its
+/// parameters by the linear model of the held-out set `ho` (a [`Screen`] built on the held-out
+/// recordings: its columns probed on their stretches of largest residual), taken at the trust's
+/// edge: 1 / `linear_trust` times the gain of the held-out least-squares step — the held-out
+/// optimum, not the training step, so a training fit that went anywhere could not do better
+/// to that trust — as a pair's fit is judged before any pair replay
+/// ([`super::pair_screen`]). `Some` (the candidate is not coarse-fitted: whatever its training
+/// fit, it could not pass the held-out gate's `min_rel_improvement`) when that stays below
+/// `min_rel_improvement`; `None` (screened as usual) otherwise, or when the held-out set has no
+/// column for a joint of `g`.
+pub(super) fn heldout_out(
+    ho: &Screen,
+    (e, g): (&'static dyn Effect, &[String]),
+    pol: &SearchPolicy,
+) -> Option<f64> {
+    let p = ho.predict(e.id(), g)?;
+    heldout_reach(p.train_rmse, ho.base_rmse(), pol).filter(|r| *r < pol.min_rel_improvement)
+}
+
+/// [`heldout_out`]'s reach: the relative gain from `base` to the held-out linear optimum
+/// `optimum` [rad RMSE], divided by `linear_trust`; `None` when not finite or `base` is not
+/// positive.
+fn heldout_reach(optimum: f64, base: f64, pol: &SearchPolicy) -> Option<f64> {
+    let reach = (1.0 - optimum / base) / pol.linear_trust;
+    (base > 0.0 && reach.is_finite()).then_some(reach)
+}
+
+/// The largest training gain the linear model of `e` on `g` allows at the trust's edge
+/// (∞ without a prediction): what [`with_pair_starts`] asks of a candidate left out by
+/// [`heldout_out`] to start a joint pair.
+pub(super) fn train_reach(screen: &Screen, (e, g): (&dyn Effect, &[String]), lt: f64) -> f64 {
+    screen.predict(e.id(), g).map_or(f64::INFINITY, |p| {
+        let base = screen.base_rmse();
+        let upper = (1.0 - p.train_rmse / base) / lt;
+        if upper.is_finite() { upper } else { f64::INFINITY }
+    })
+}
+
 /// `fitted` with the coarse fits of the candidates of `out_of` ([`trust_out`]) that could start
 /// a joint pair: a linear model allowing at least `min_rel_improvement`, and a mimicking
 /// partner ([`effects::mimicking_pairs`]) on the same joints fitted or also left out. Each is
@@ -94,8 +136,26 @@ pub(super) fn with_pair_starts(
 
 #[cfg(test)]
 mod tests {
-    use super::heldout_needed;
+    use super::{heldout_needed, heldout_reach};
     use crate::fit::select::SearchPolicy;
+
+    /// The held-out reach is the held-out linear optimum's relative gain at the trust's edge:
+    /// a candidate is left out only when even that stays below the gate's improvement.
+    #[test]
+    fn the_heldout_reach_is_the_linear_optimum_at_the_trust_edge() {
+        let pol = SearchPolicy::default();
+        let (lt, small) = (pol.linear_trust, pol.min_rel_improvement);
+        // 1 % of the held-out RMSE at the optimum: 1.33 % at the trust's edge, short of 2 %.
+        let r = heldout_reach(0.99, 1.0, &pol).expect("finite");
+        assert!((r - 0.01 / lt).abs() < 1e-12 && r < small, "{r}");
+        // Just short of and just past trust × the gate's improvement.
+        assert!(heldout_reach(1.0 - 0.99 * lt * small, 1.0, &pol).unwrap() < small);
+        assert!(heldout_reach(1.0 - 1.01 * lt * small, 1.0, &pol).unwrap() > small);
+        // A column that explains nothing reaches nothing; no base, no reach.
+        assert_eq!(heldout_reach(2.0, 2.0, &pol), Some(0.0));
+        assert_eq!(heldout_reach(1.0, 0.0, &pol), None);
+        assert_eq!(heldout_reach(f64::NAN, 1.0, &pol), None);
+    }
 
     /// A coarse fit that achieved its linear model's gain (within the trust) must lower the
     /// held-out error by the gate's improvement scaled by the trust; one short of or past its
