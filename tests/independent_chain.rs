@@ -189,16 +189,23 @@ fn a_gear_play_behind_the_knee_motor_is_found_as_backlash_on_the_knee() {
     assert!(!trusted.is_empty(), "round 1 re-screened every candidate");
     assert!(trusted.iter().all(|t| t["round"].as_u64() >= Some(1) && t["kept"] == false));
     // Nor is one whose held-out linear optimum, at the trust's edge, cannot lower the held-out
-    // error by the gate's 2 % (`heldout_linear`, its reach logged as `heldout_improvement`):
-    // the knee's armature, which round 1's training columns rank first, among them.
+    // error by the gate's 2 % (`heldout_linear`, its reach logged as `heldout_improvement`)
+    // once a replay of its training step on the held-out probes' data confirmed that linear
+    // model: the knee's armature, which round 1's training columns rank first, among them (9
+    // of round 1's 29 candidates).
     let ho: Vec<_> = tried.iter().filter(|t| t["phase"] == "heldout_linear").collect();
-    assert!(ho.len() >= 10, "round 1 coarse-fitted what the held-out set rules out: {ho:?}");
+    assert!(ho.len() >= 8, "round 1 coarse-fitted what the held-out set rules out: {ho:?}");
+    // Not Coulomb friction where its Stribeck extension is a candidate: the extension is judged
+    // from the plain variant's coarse fit, and without it is coarse-fitted whole.
+    let stribeck = |t: &&serde_json::Value| {
+        tried.iter().any(|x| x["effect"] == "stribeck_friction" && x["joints"] == t["joints"])
+    };
+    assert!(!ho.iter().any(|t| t["effect"] == "coulomb_friction" && stribeck(t)), "{ho:?}");
     assert!(ho.iter().all(|t| t["round"].as_u64() >= Some(1)
         && t["kept"] == false
         && t["heldout_improvement"].as_f64().is_some_and(|h| (0.0..0.02).contains(&h))));
     assert!(ho.iter().any(|t| t["effect"] == "armature" && t["joints"][0] == "knee"), "{ho:?}");
-    // Those held-out probes are booked to round 1, whose cost they cut (1,017 replayed s
-    // before them, 672 with them).
+    // Those held-out probes and replays are booked to round 1, whose cost they cut.
     let r1 = search["simulated_s_by_round_phase"]["1"].as_object().unwrap();
     assert!(r1.get("heldout_linear").and_then(|x| x.as_f64()).is_some_and(|s| s > 0.0), "{r1:?}");
     // The same seconds by round: the greedy rounds' and what ran after them ("end").

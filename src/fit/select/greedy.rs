@@ -18,7 +18,8 @@ use super::pairs::{joint_pairs, pair_lookahead, refitted_at_floor};
 use super::policy::Phase;
 use super::reach::Reach;
 use super::screen::{Screen, screen_data};
-use super::trust::{heldout_needed, heldout_out, train_reach, trust_out, with_pair_starts};
+use super::trust::{heldout_columns, heldout_needed, heldout_out, plain_needed, train_reach};
+use super::trust::{trust_out, with_pair_starts};
 use super::verdict::{at_bound, verdict};
 use super::winner::{beaten_at_coarse, on_whole_set, refine, rival_notes};
 use super::{Errors, FitOutcome, Search, Selected, Tried, set_uncertainty};
@@ -90,10 +91,12 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     }
     // One-parameter candidates first, in rank order; then the multi-parameter ones.
     cands.sort_by_key(|(e, ..)| e.fitted() >= 2);
-    // After round 0, the held-out set's own linear model ([`heldout_out`]).
-    let ho_screen = (round > 0).then(|| {
+    // After round 0, the held-out set's own linear model ([`heldout_out`]), of the candidates
+    // it may leave out ([`heldout_columns`]).
+    let ho_diag = (round > 0).then(|| heldout_columns(engine, &screen, &cands, &diag));
+    let ho_screen = ho_diag.filter(|d| !d.is_empty()).map(|mut d| {
         engine.report(round, Phase::HeldoutLinear, None);
-        Screen::build(engine, heldout, &applied, &ho_err, &mut diag.clone(), &covered)
+        Screen::build(engine, heldout, &applied, &ho_err, &mut d, &covered)
     });
     let z = opts.policy.z_needed(cands.len());
     let k_before: usize = applied.iter().map(|a| a.effect.fitted()).sum();
@@ -170,25 +173,27 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
             );
             // After round 0, a candidate whose linear model round 0 confirmed is taken at its
             // word ([`trust_out`]): no coarse fit when it could not reach the bar; nor one whose
-            // held-out linear optimum could not pass the gate ([`heldout_out`]).
+            // held-out linear optimum could not pass the gate ([`heldout_out`]). Neither is the
+            // plain variant of a candidate on its joints: the richer model is judged from the
+            // plain one's coarse fit ([`coarse::deferred`]); without it, it is coarse-fitted
+            // whole on the screen's data (KR8's Stribeck friction on the hip: 337 replayed s).
             let cut = (opts.policy.screen_share * best_gain).max(opts.policy.min_rel_improvement);
             let lt = opts.policy.linear_trust;
+            // (The held-out replays that confirm a linear model are booked to its probes.)
+            if round > 0 {
+                engine.report(round, Phase::HeldoutLinear, None);
+            }
             let out_of: Vec<Option<(f64, Phase, f64)>> = cands[range.clone()]
-                .iter()
+                .par_iter()
                 .map(|(e, g, _)| {
-                    // (Not the plain variant of a candidate on its joints: the richer model is
-                    // judged from the plain one's coarse fit, [`coarse::deferred`].)
-                    let plain = |(x, h, _): &Cand| {
-                        h == g && x.plain_variant().is_some_and(|p| p.id() == e.id())
-                    };
-                    let needed = cands.iter().any(plain);
-                    let trusted = (round > 0 && !needed)
-                        .then(|| trust_out(engine, &screen, (*e, g), cut))
-                        .flatten();
-                    if let Some(u) = trusted {
+                    if round == 0 || plain_needed(&cands, (*e, g)) {
+                        return None;
+                    }
+                    if let Some(u) = trust_out(engine, &screen, (*e, g), cut) {
                         return Some((u, Phase::TrustScreen, f64::NAN));
                     }
-                    let h = heldout_out(ho_screen.as_ref()?, (*e, g), &opts.policy)?;
+                    let (sh, ho) = ((&screen, ho_screen.as_ref()?), (heldout, &applied[..]));
+                    let h = heldout_out(engine, sh, ho, (*e, g))?;
                     Some((train_reach(&screen, (*e, g), lt), Phase::HeldoutLinear, h))
                 })
                 .collect();

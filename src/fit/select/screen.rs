@@ -36,6 +36,9 @@ use crate::sim2real::recording::Recording;
 
 use super::{Engine, Errors};
 
+#[path = "screen_at.rs"]
+mod at;
+
 /// The residual of one simulated dataset, sample by sample over (episode, fitted joint, scored
 /// sample); `None` where the recording or the replay is not finite or the sample follows a gap.
 fn aligned(engine: &Engine, recs: &[Recording], e: &Errors) -> Vec<Option<f64>> {
