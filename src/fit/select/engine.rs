@@ -110,6 +110,7 @@ pub(in crate::fit) fn round_key(phase: Phase, round: usize) -> String {
         | Phase::Reach
         | Phase::Pair
         | Phase::JointPair
+        | Phase::HeldoutLinear
         | Phase::Told => round.to_string(),
         _ => END_KEY.to_string(),
     }

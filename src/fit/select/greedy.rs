@@ -18,7 +18,8 @@ use super::pairs::{joint_pairs, pair_lookahead, refitted_at_floor};
 use super::policy::Phase;
 use super::reach::Reach;
 use super::screen::{Screen, screen_data};
-use super::trust::{heldout_needed, trust_out, with_pair_starts};
+use super::trust::{heldout_columns, heldout_needed, heldout_out, plain_needed, train_reach};
+use super::trust::{trust_out, with_pair_starts};
 use super::verdict::{at_bound, verdict};
 use super::winner::{beaten_at_coarse, may_partner, on_whole_set, refine, rival_notes};
 use super::{Errors, FitOutcome, Search, Selected, Tried, set_uncertainty};
@@ -90,6 +91,13 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     }
     // One-parameter candidates first, in rank order; then the multi-parameter ones.
     cands.sort_by_key(|(e, ..)| e.fitted() >= 2);
+    // After round 0, the held-out set's own linear model ([`heldout_out`]), of the candidates
+    // it may leave out ([`heldout_columns`]).
+    let ho_diag = (round > 0).then(|| heldout_columns(engine, &screen, &cands, &diag));
+    let ho_screen = ho_diag.filter(|d| !d.is_empty()).map(|mut d| {
+        engine.report(round, Phase::HeldoutLinear, None);
+        Screen::build(engine, heldout, &applied, &ho_err, &mut d, &covered)
+    });
     let z = opts.policy.z_needed(cands.len());
     let k_before: usize = applied.iter().map(|a| a.effect.fitted()).sum();
     let bic_before = bic(tr_err.n, tr_err.sse, k_before);
@@ -145,9 +153,11 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     let mut reach: Option<Reach> = None;
     // The lead's early pair look-ahead, once tried ([`pair_first`]).
     let mut early_tried: Option<Option<EarlyPair>> = None;
-    // The candidates left without a coarse fit by round 0's trust ([`trust_out`]), with the
-    // largest gain their linear model allows.
+    // The candidates left without a coarse fit by round 0's trust ([`trust_out`]) or by the
+    // held-out linear model ([`heldout_out`]), with the largest training gain their linear model
+    // allows; and why (the phase logged) with the held-out reach (NaN for round 0's trust).
     let mut trusted_out: Vec<(&'static dyn Effect, Vec<String>, f64)> = Vec::new();
+    let mut out_why: Vec<(Phase, f64)> = Vec::new();
     let mut ci = 0;
     while ci < cands.len() {
         // The coarse fits of a size's candidates, which are then taken best first
@@ -162,22 +172,29 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
                 Some((ci + 1, cands.len(), format!("coarse fits of {} candidates", range.len()))),
             );
             // After round 0, a candidate whose linear model round 0 confirmed is taken at its
-            // word ([`trust_out`]): no coarse fit when it could not reach the bar.
+            // word ([`trust_out`]): no coarse fit when it could not reach the bar; nor one whose
+            // held-out linear optimum could not pass the gate ([`heldout_out`]). Neither is the
+            // plain variant of a candidate on its joints: the richer model is judged from the
+            // plain one's coarse fit ([`coarse::deferred`]); without it, it is coarse-fitted
+            // whole on the screen's data (KR8's Stribeck friction on the hip: 337 replayed s).
             let cut = (opts.policy.screen_share * best_gain).max(opts.policy.min_rel_improvement);
-            let out_of: Vec<Option<f64>> = cands[range.clone()]
-                .iter()
+            let lt = opts.policy.linear_trust;
+            // (The held-out replays that confirm a linear model are booked to its probes.)
+            if round > 0 {
+                engine.report(round, Phase::HeldoutLinear, None);
+            }
+            let out_of: Vec<Option<(f64, Phase, f64)>> = cands[range.clone()]
+                .par_iter()
                 .map(|(e, g, _)| {
-                    // (Not the plain variant of a candidate on its joints: the richer model is
-                    // judged from the plain one's coarse fit, [`coarse::deferred`].)
-                    let plain = |(x, h, _): &Cand| {
-                        h == g && x.plain_variant().is_some_and(|p| p.id() == e.id())
-                    };
-                    let needed = cands.iter().any(plain);
-                    if round > 0 && !needed {
-                        trust_out(engine, &screen, (*e, g), cut)
-                    } else {
-                        None
+                    if round == 0 || plain_needed(&cands, (*e, g)) {
+                        return None;
                     }
+                    if let Some(u) = trust_out(engine, &screen, (*e, g), cut) {
+                        return Some((u, Phase::TrustScreen, f64::NAN));
+                    }
+                    let (sh, ho) = ((&screen, ho_screen.as_ref()?), (heldout, &applied[..]));
+                    let h = heldout_out(engine, sh, ho, (*e, g))?;
+                    Some((train_reach(&screen, (*e, g), lt), Phase::HeldoutLinear, h))
                 })
                 .collect();
             // (The reach's coarse fits on the probes' data are booked apart: `Phase::Reach`.)
@@ -203,11 +220,12 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
                 })
                 .collect();
             for ((c, f), o) in cands[range.clone()].iter().zip(&fits).zip(&out_of) {
-                if let Some(upper) = o
+                if let Some((upper, why, reach)) = o
                     && f.0.is_empty()
                     && f.1.is_infinite()
                 {
                     trusted_out.push((c.0, c.1.clone(), *upper));
+                    out_why.push((*why, *reach));
                 }
                 // Round 0's record of which linear models its coarse fits confirm.
                 let pred = screen.predict(c.0.id(), &c.1).map(|p| gain(p.train_rmse));
@@ -294,9 +312,12 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
             out.tried.push(not_tested(Phase::Floor, vec![], f64::NAN));
             continue;
         }
-        // Left without a coarse fit: its linear model, trusted, cannot reach the bar.
-        if trusted_out.iter().any(|(x, g, _)| x.id() == e.id() && *g == group) {
-            out.tried.push(not_tested(Phase::TrustScreen, vec![], f64::NAN));
+        // Left without a coarse fit: its linear model, trusted, cannot reach the bar, or its
+        // held-out linear optimum the gate (logged with that reach as its held-out improvement).
+        if let Some(k) = trusted_out.iter().position(|(x, g, _)| x.id() == e.id() && *g == group) {
+            let (why, reach) = out_why[k];
+            let t = not_tested(why, vec![], f64::NAN);
+            out.tried.push(Tried { heldout_improvement: reach, ..t });
             continue;
         }
         // Not coarse-fitted on the screen's data: first judged on the probes' data ([`Reach`]).

@@ -546,6 +546,7 @@ fn search_cost(engine: &Engine, out: &FitOutcome) -> SearchCost {
                         | Phase::ReachScreen
                         | Phase::HeldoutScreen
                         | Phase::TrustScreen
+                        | Phase::HeldoutLinear
                         | Phase::SwapScreen
                 )
             })

@@ -415,6 +415,11 @@ pub enum Phase {
     /// confirmed (`linear_trust`), predicts a gain that even at the trust's edge reaches neither
     /// the round's bar so far nor `min_rel_improvement`.
     TrustScreen,
+    /// Not coarse-fitted after round 0: the held-out set's own linear model (its columns probed
+    /// on the held-out recordings) lets no value of the candidate's parameters lower the held-out
+    /// RMSE by `min_rel_improvement`, even at the trust's edge (1 / `linear_trust` times its
+    /// least-squares gain; `heldout_improvement` holds that reach). Its probes are booked here.
+    HeldoutLinear,
     /// Passed the held-out gate at the model's timestep but not at a finer one: the model's
     /// own time discretisation, not physics (a note). Also a merge that failed at the model's
     /// timestep, tested again at the finer one (`kept` = merged there).
@@ -481,6 +486,7 @@ impl Phase {
             Phase::ReachScreen => "reach_screen",
             Phase::HeldoutScreen => "heldout_screen",
             Phase::TrustScreen => "trust_screen",
+            Phase::HeldoutLinear => "heldout_linear",
             Phase::Discretisation => "discretisation",
             Phase::Pair => "pair",
             Phase::PairFloor => "pair_floor",

@@ -38,6 +38,7 @@ use super::{Engine, Errors};
 
 mod probe;
 use probe::{Probe, Sims, aligned, dot, dot_r, entry_limbs, limb_batches, probe_batch};
+mod at;
 
 /// The screen's data: about `screen_seconds` of `recs` in all, from each episode the stretch
 /// where the residual of `e` (summed over the fitted joints' scored samples) is largest — the

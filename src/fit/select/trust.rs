@@ -4,11 +4,17 @@
 //! ([`trust_out`]), and one that could start a joint pair is coarse-fitted only when the round
 //! ends in the joint pairs ([`with_pair_starts`]). Within a round, a coarse fit that confirms
 //! its candidate's linear model stands for the full fit's held-out gain ([`heldout_needed`]).
+//! After round 0 every candidate is also judged on the held-out set's own linear model before
+//! any coarse fit ([`heldout_out`]): the most any value of its parameters could lower the
+//! held-out error, to first order and at the trust's edge, must reach the gate.
 
-use crate::fit::effects::{self, Applied, Effect};
+use crate::fit::effects::{self, Applied, Effect, JointTarget, model_with};
 use crate::sim2real::recording::Recording;
 
+use crate::fit::diagnose::Candidate;
+
 use super::coarse;
+use super::groups::Cand;
 use super::policy::SearchPolicy;
 use super::screen::Screen;
 
@@ -54,6 +60,123 @@ pub(super) fn trust_out(
     (base > 0.0 && upper.is_finite() && upper < cut).then_some(upper)
 }
 
+/// After round 0, the largest relative held-out improvement (over every fitted joint, the
+/// gate's measure, [`super::verdict`]) that `e` on `g` could make at any value of its
+/// parameters by the linear model of the held-out set `ho` (a [`Screen`] built on the held-out
+/// recordings: its columns probed on their stretches of largest residual), taken at the trust's
+/// edge: 1 / `linear_trust` times the gain of the held-out least-squares step — the held-out
+/// optimum, not the training step, so a training fit that went anywhere could not do better
+/// to that trust — as a pair's fit is judged before any pair replay
+/// ([`super::pair_screen`]). `Some` (the candidate is not coarse-fitted: whatever its training
+/// fit, it could not pass the held-out gate's `min_rel_improvement`) when that stays below
+/// `min_rel_improvement` and the linear model is confirmed for the candidate
+/// ([`heldout_confirmed`]); `None` (screened as usual) otherwise, or when the held-out set has
+/// no column for a joint of `g`.
+pub(super) fn heldout_out(
+    engine: &super::Engine,
+    (screen, ho): (&Screen, &Screen),
+    (heldout, applied): (&[Recording], &[Applied]),
+    (e, g): (&'static dyn Effect, &[String]),
+) -> Option<f64> {
+    let pol = &engine.opts.policy;
+    let p = ho.predict(e.id(), g)?;
+    let reach = heldout_reach(p.train_rmse, ho.base_rmse(), pol)
+        .filter(|r| *r < pol.min_rel_improvement)?;
+    heldout_confirmed(engine, (screen, ho), (heldout, applied), (e, g)).then_some(reach)
+}
+
+/// Whether the linear model of `e` on `g` is confirmed where [`heldout_out`] would take it at
+/// its word (a linearised step is a poor judge of a lightly damped servo, or of a kink): round
+/// 0's coarse fit confirmed its training model ([`Engine::trusted`]), or the training linear
+/// step (`screen`'s least-squares step of every probed parameter, where the training fit goes
+/// to first order), replayed once on the held-out set's probes' data (what `ho` was probed
+/// on), changes that data's RMSE as `ho`'s columns predict for that step ([`Screen::gain_at`])
+/// by the same test ([`confirms`]: the secant coarse fit's and round 0's). `false` when that
+/// step is no step (a zero step or one held at the bounds: nothing to replay) or a replay
+/// fails.
+///
+/// [`Engine::trusted`]: super::engine::Engine
+fn heldout_confirmed(
+    engine: &super::Engine,
+    (screen, ho): (&Screen, &Screen),
+    (heldout, applied): (&[Recording], &[Applied]),
+    (e, g): (&'static dyn Effect, &[String]),
+) -> bool {
+    if engine.trusted((e, g)) == Some(true) {
+        return true;
+    }
+    let confirmed = || {
+        let probes = engine.probe_set_held(heldout, applied)?;
+        let (_, x) = screen.steps(e.id(), g)?;
+        let (p, f) = engine.at_linear_step(&probes, applied, (e, g), &x)?;
+        let base = engine.score(&probes, applied);
+        // The step as replayed (inside the bounds) from the effect's start.
+        let t = JointTarget::of(engine.robot, g.first()?)?;
+        let p0 = e.initial(&model_with(engine.robot, applied), &t);
+        let step: Vec<f64> = p.iter().zip(&p0).map(|(a, b)| a - b).collect();
+        let want = ho.gain_at(e.id(), g, &step)?;
+        Some(base > 0.0 && confirms(1.0 - f / base, want, &engine.opts.policy))
+    };
+    confirmed().unwrap_or(false)
+}
+
+/// Whether a replayed relative gain `got` confirms the `want` a linear model predicted, by the
+/// trust's test ([`coarse::agrees`]) — a loss (a negative gain: the step makes the data worse)
+/// as its size: between `linear_trust` and its inverse times the predicted loss.
+fn confirms(got: f64, want: f64, pol: &SearchPolicy) -> bool {
+    coarse::agrees(got, want, pol) || coarse::agrees(-got, -want, pol)
+}
+
+/// [`heldout_out`]'s reach: the relative gain from `base` to the held-out linear optimum
+/// `optimum` [rad RMSE], divided by `linear_trust`; `None` when not finite or `base` is not
+/// positive.
+fn heldout_reach(optimum: f64, base: f64, pol: &SearchPolicy) -> Option<f64> {
+    let reach = (1.0 - optimum / base) / pol.linear_trust;
+    (base > 0.0 && reach.is_finite()).then_some(reach)
+}
+
+/// The largest training gain the linear model of `e` on `g` allows at the trust's edge
+/// (∞ without a prediction): what [`with_pair_starts`] asks of a candidate left out by
+/// [`heldout_out`] to start a joint pair.
+pub(super) fn train_reach(screen: &Screen, (e, g): (&dyn Effect, &[String]), lt: f64) -> f64 {
+    screen.predict(e.id(), g).map_or(f64::INFINITY, |p| {
+        let base = screen.base_rmse();
+        let upper = (1.0 - p.train_rmse / base) / lt;
+        if upper.is_finite() { upper } else { f64::INFINITY }
+    })
+}
+
+/// Whether `e` is the plain variant ([`Effect::plain_variant`]) of another candidate on `g`:
+/// such a candidate is left out by neither [`trust_out`] nor [`heldout_out`], the richer model
+/// being judged from its coarse fit ([`coarse::deferred`]); without it the richer one is
+/// coarse-fitted whole on the screen's data.
+pub(super) fn plain_needed(cands: &[Cand], (e, g): (&dyn Effect, &[String])) -> bool {
+    cands.iter().any(|(x, h, _)| h == g && x.plain_variant().is_some_and(|p| p.id() == e.id()))
+}
+
+/// The diagnosis entries the held-out linear model is probed on after round 0 ([`heldout_out`]):
+/// those on the joints of a candidate of that effect that [`heldout_out`] may leave out — not
+/// [`plain_needed`], and not left out by round 0's trust ([`trust_out`]) at the lowest bar a
+/// round has (`min_rel_improvement`). Each column is its joint's alone (a probe's change on its
+/// own limb, [`Screen::build`]), so leaving the others out changes none of these.
+pub(super) fn heldout_columns(
+    engine: &super::Engine,
+    screen: &Screen,
+    cands: &[Cand],
+    diag: &[Candidate],
+) -> Vec<Candidate> {
+    let small = engine.opts.policy.min_rel_improvement;
+    let open: Vec<&Cand> = cands
+        .iter()
+        .filter(|(e, g, _)| {
+            !plain_needed(cands, (*e, g)) && trust_out(engine, screen, (*e, g), small).is_none()
+        })
+        .collect();
+    let wanted =
+        |c: &&Candidate| open.iter().any(|(e, g, _)| e.id() == c.effect && g.contains(&c.joint));
+    diag.iter().filter(wanted).cloned().collect()
+}
+
 /// `fitted` with the coarse fits of the candidates of `out_of` ([`trust_out`]) that could start
 /// a joint pair: a linear model allowing at least `min_rel_improvement`, and a mimicking
 /// partner ([`effects::mimicking_pairs`]) on the same joints fitted or also left out. Each is
@@ -94,8 +217,43 @@ pub(super) fn with_pair_starts(
 
 #[cfg(test)]
 mod tests {
-    use super::heldout_needed;
+    use super::{confirms, heldout_needed, heldout_reach};
     use crate::fit::select::SearchPolicy;
+
+    /// The held-out reach is the held-out linear optimum's relative gain at the trust's edge:
+    /// a candidate is left out only when even that stays below the gate's improvement.
+    #[test]
+    fn the_heldout_reach_is_the_linear_optimum_at_the_trust_edge() {
+        let pol = SearchPolicy::default();
+        let (lt, small) = (pol.linear_trust, pol.min_rel_improvement);
+        // 1 % of the held-out RMSE at the optimum: 1.33 % at the trust's edge, short of 2 %.
+        let r = heldout_reach(0.99, 1.0, &pol).expect("finite");
+        assert!((r - 0.01 / lt).abs() < 1e-12 && r < small, "{r}");
+        // Just short of and just past trust × the gate's improvement.
+        assert!(heldout_reach(1.0 - 0.99 * lt * small, 1.0, &pol).unwrap() < small);
+        assert!(heldout_reach(1.0 - 1.01 * lt * small, 1.0, &pol).unwrap() > small);
+        // A column that explains nothing reaches nothing; no base, no reach.
+        assert_eq!(heldout_reach(2.0, 2.0, &pol), Some(0.0));
+        assert_eq!(heldout_reach(1.0, 0.0, &pol), None);
+        assert_eq!(heldout_reach(f64::NAN, 1.0, &pol), None);
+    }
+
+    /// A replay confirms the held-out linear model like a coarse fit its training one: a gain
+    /// within the trust of the predicted one, a loss within the trust of the predicted loss,
+    /// both below the gate's improvement; not a gain where a loss was predicted, nor one far
+    /// from the prediction.
+    #[test]
+    fn a_replay_confirms_a_predicted_gain_or_loss_within_the_trust() {
+        let pol = SearchPolicy::default();
+        let (lt, small) = (pol.linear_trust, pol.min_rel_improvement);
+        assert!(confirms(0.1, 0.1, &pol) && confirms(0.1 * lt, 0.1, &pol));
+        assert!(!confirms(0.99 * lt * 0.1, 0.1, &pol) && !confirms(0.1 / (0.99 * lt), 0.1, &pol));
+        assert!(confirms(-0.1, -0.1, &pol) && confirms(-0.099 / lt, -0.1, &pol));
+        assert!(!confirms(-0.1 / (0.99 * lt), -0.1, &pol) && !confirms(-0.05, -0.1, &pol));
+        assert!(confirms(0.5 * small, -0.5 * small, &pol));
+        assert!(!confirms(0.1, -0.1, &pol) && !confirms(-0.1, 0.1, &pol));
+        assert!(!confirms(f64::NAN, 0.1, &pol));
+    }
 
     /// A coarse fit that achieved its linear model's gain (within the trust) must lower the
     /// held-out error by the gate's improvement scaled by the trust; one short of or past its
