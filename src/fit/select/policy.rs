@@ -418,7 +418,10 @@ pub enum Phase {
     /// Not coarse-fitted after round 0: the held-out set's own linear model (its columns probed
     /// on the held-out recordings) lets no value of the candidate's parameters lower the held-out
     /// RMSE by `min_rel_improvement`, even at the trust's edge (1 / `linear_trust` times its
-    /// least-squares gain; `heldout_improvement` holds that reach). Its probes are booked here.
+    /// least-squares gain; `heldout_improvement` holds that reach), and that linear model is
+    /// confirmed — by round 0's coarse fit, or by one replay of the training linear step on the
+    /// held-out probes' data agreeing with its prediction. Its probes and that replay are
+    /// booked here.
     HeldoutLinear,
     /// Passed the held-out gate at the model's timestep but not at a finer one: the model's
     /// own time discretisation, not physics (a note). Also a merge that failed at the model's
