@@ -210,6 +210,41 @@ pub fn takes_part(robot: &Robot, g: usize) -> bool {
             || robot.pairs.iter().any(|p| p.geom1 == g || p.geom2 == g))
 }
 
+/// The colliding geoms of bodies not fixed to the world that the pose `(xpos, xmat)` (MuJoCo's
+/// geom positions and row-major frames) places entirely under a floor plane they can touch:
+/// their bounding sphere below the plane's surface. MuJoCo's plane is a half-space, so a robot
+/// started inside it is pushed out or falls through. Each as (geom, plane, depth of the
+/// sphere's top under the surface, m), the first such plane of each geom.
+pub fn buried_under_planes(
+    robot: &Robot,
+    xpos: &[[f64; 3]],
+    xmat: &[[f64; 9]],
+) -> Vec<(usize, usize, f64)> {
+    let rbound = robot.mj.geom_rbound();
+    let mut out = Vec::new();
+    for g in &robot.geoms {
+        let moving = robot.bodies.get(g.body).is_some_and(|b| b.weld != 0);
+        if !moving || g.gtype == super::GeomType::Plane || !takes_part(robot, g.id) {
+            continue;
+        }
+        let (Some(p), Some(&r)) = (xpos.get(g.id), rbound.get(g.id)) else { continue };
+        for (pl, _) in ground_partners(robot, g.id) {
+            if robot.geoms[pl].gtype != super::GeomType::Plane {
+                continue;
+            }
+            let (Some(o), Some(x)) = (xpos.get(pl), xmat.get(pl)) else { continue };
+            // The plane's normal is its frame's z axis (the third column, row-major).
+            let n = [x[2], x[5], x[8]];
+            let top = (0..3).map(|i| (p[i] - o[i]) * n[i]).sum::<f64>() + r;
+            if top < 0.0 {
+                out.push((g.id, pl, -top));
+                break;
+            }
+        }
+    }
+    out
+}
+
 /// Masks allow a contact between the two geoms.
 pub fn may_collide(a: &Geom, b: &Geom) -> bool {
     (a.contype & b.conaffinity) != 0 || (b.contype & a.conaffinity) != 0

@@ -109,31 +109,9 @@ pub fn start(robot: &Robot) -> Start {
 /// one's depth (m). MuJoCo's plane is a half-space: a robot started inside it is pushed out
 /// or falls through, and stands on nothing either way.
 pub fn buried(robot: &Robot) -> (usize, f64) {
-    use crate::model::contact::{ground_partners, takes_part};
-    let rbound = robot.mj.geom_rbound();
     let (xpos, xmat) = (&robot.key.geom_xpos, &robot.key.geom_xmat);
-    let (mut n, mut deepest) = (0, 0.0f64);
-    for g in &robot.geoms {
-        let moving = robot.bodies.get(g.body).is_some_and(|b| b.weld != 0);
-        if !moving || g.gtype == GeomType::Plane || !takes_part(robot, g.id) {
-            continue;
-        }
-        let (Some(p), Some(&r)) = (xpos.get(g.id), rbound.get(g.id)) else { continue };
-        for (pl, _) in ground_partners(robot, g.id) {
-            if robot.geoms[pl].gtype != GeomType::Plane {
-                continue;
-            }
-            let (Some(o), Some(x)) = (xpos.get(pl), xmat.get(pl)) else { continue };
-            let normal = [x[2], x[5], x[8]];
-            let top = (0..3).map(|i| (p[i] - o[i]) * normal[i]).sum::<f64>() + r;
-            if top < 0.0 {
-                n += 1;
-                deepest = deepest.max(-top);
-                break;
-            }
-        }
-    }
-    (n, deepest)
+    let buried = crate::model::contact::buried_under_planes(robot, xpos, xmat);
+    (buried.len(), buried.iter().map(|b| b.2).fold(0.0, f64::max))
 }
 
 /// The largest drop of a base at keyframe height `base_height` that still counts as upright, m.

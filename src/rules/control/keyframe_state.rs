@@ -204,8 +204,6 @@ impl Rule for KeyframeState {
 /// floor plane they can touch (their bounding sphere below the plane's surface), reported
 /// once with the deepest: MuJoCo's plane is a half-space, so each is in contact, buried.
 fn buried_geoms(cx: &Context, s: &State) -> Option<Finding> {
-    use crate::model::GeomType;
-    use crate::model::contact::{ground_partners, takes_part};
     let robot = cx.robot;
     let m = &robot.mj;
     let mut d = mujoco_rs::prelude::MjData::new(m);
@@ -213,29 +211,8 @@ fn buried_geoms(cx: &Context, s: &State) -> Option<Finding> {
         let _ = d.reset_keyframe(k);
     }
     d.forward();
-    let (xpos, xmat, rbound) = (d.geom_xpos(), d.geom_xmat(), m.geom_rbound());
-    // (geom, plane, how far its top lies under the plane's surface)
-    let mut buried: Vec<(usize, usize, f64)> = Vec::new();
-    for g in &robot.geoms {
-        let moving = robot.bodies.get(g.body).is_some_and(|b| b.weld != 0);
-        if !moving || g.gtype == GeomType::Plane || !takes_part(robot, g.id) {
-            continue;
-        }
-        let (Some(p), Some(&r)) = (xpos.get(g.id), rbound.get(g.id)) else { continue };
-        for (pl, _) in ground_partners(robot, g.id) {
-            if robot.geoms[pl].gtype != GeomType::Plane {
-                continue;
-            }
-            let (Some(o), Some(x)) = (xpos.get(pl), xmat.get(pl)) else { continue };
-            // The plane's normal is its frame's z axis (the third column, row-major).
-            let n = [x[2], x[5], x[8]];
-            let top = (0..3).map(|i| (p[i] - o[i]) * n[i]).sum::<f64>() + r;
-            if top < 0.0 {
-                buried.push((g.id, pl, -top));
-                break;
-            }
-        }
-    }
+    let mut buried =
+        crate::model::contact::buried_under_planes(robot, d.geom_xpos(), d.geom_xmat());
     if buried.is_empty() {
         return None;
     }
