@@ -15,6 +15,8 @@
 pub mod clock;
 pub mod cmd;
 pub mod excitation;
+#[cfg(test)]
+pub mod recorded;
 pub mod sim;
 pub mod truth;
 pub mod write;

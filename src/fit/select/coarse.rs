@@ -270,7 +270,7 @@ mod tests {
     use super::{agrees, nothing_on_probes, on_probes};
     use crate::fit::effects::{Backlash, CoulombFriction, Effect, StribeckFriction};
     use crate::fit::select::{Engine, FitOptions, Search, SearchPolicy};
-    use crate::sim2real::recording::{Recording, read_csv};
+    use crate::sim2real::recording::Recording;
 
     /// The pendulum servo with a gear play of 0.04 rad, recorded by the synth (3 × 3 s).
     fn pendulum_with_play() -> (crate::model::Robot, Vec<Recording>) {
@@ -280,32 +280,7 @@ mod tests {
     /// The pendulum servo, with a gear play of `play` rad when given, recorded by the synth
     /// (3 × 3 s).
     fn pendulum(play: Option<f64>) -> (crate::model::Robot, Vec<Recording>) {
-        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-        let path = root.join("fixtures/synth/pendulum_servo.xml");
-        let mut sources = crate::model::source::SourceMap::default();
-        let robot = crate::model::load(&mut sources, &path, None).expect("pendulum");
-        let hidden: Vec<_> = play
-            .map(|w| crate::synth::truth::Hidden {
-                effect: Backlash.id(),
-                joint: "servo".into(),
-                params: vec![w],
-            })
-            .into_iter()
-            .collect();
-        let s = crate::synth::Settings {
-            episodes: 3,
-            duration_s: 3.0,
-            seed: 7,
-            ..crate::synth::Settings::default()
-        };
-        let joints = vec!["servo".to_string()];
-        let ds = crate::synth::generate(&robot, &joints, &hidden, &s, &|_, _| {}).expect("synth");
-        let dir =
-            std::env::temp_dir().join(format!("modellint_coarse_{}_{play:?}", std::process::id()));
-        let files = crate::synth::write::write(&ds, &dir).expect("write");
-        let recs = files.iter().map(|f| read_csv(f).expect("read")).collect();
-        let _ = std::fs::remove_dir_all(&dir);
-        (robot, recs)
+        crate::synth::recorded::pendulum(play.map(|w| (Backlash.id(), vec![w])), 3, 7)
     }
 
     /// A non-smooth candidate's coarse fit runs on the probes' data and is replayed once on the
@@ -365,28 +340,7 @@ mod tests {
     /// The pendulum servo, with a Coulomb friction of `friction` N·m when given, recorded by
     /// the synth (3 × 3 s).
     fn pendulum_with_friction(friction: Option<f64>) -> (crate::model::Robot, Vec<Recording>) {
-        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-        let path = root.join("fixtures/synth/pendulum_servo.xml");
-        let mut sources = crate::model::source::SourceMap::default();
-        let robot = crate::model::load(&mut sources, &path, None).expect("pendulum");
-        let hidden: Vec<_> = friction
-            .map(|c| crate::synth::truth::Hidden {
-                effect: CoulombFriction.id(),
-                joint: "servo".into(),
-                params: vec![c],
-            })
-            .into_iter()
-            .collect();
-        let s =
-            crate::synth::Settings { episodes: 3, duration_s: 3.0, seed: 11, ..Default::default() };
-        let joints = vec!["servo".to_string()];
-        let ds = crate::synth::generate(&robot, &joints, &hidden, &s, &|_, _| {}).expect("synth");
-        let dir = std::env::temp_dir()
-            .join(format!("modellint_coarse_fr_{}_{friction:?}", std::process::id()));
-        let files = crate::synth::write::write(&ds, &dir).expect("write");
-        let recs = files.iter().map(|f| read_csv(f).expect("read")).collect();
-        let _ = std::fs::remove_dir_all(&dir);
-        (robot, recs)
+        crate::synth::recorded::pendulum(friction.map(|c| (CoulombFriction.id(), vec![c])), 3, 11)
     }
 
     /// A friction extension deferred on its plain variant's coarse fit is first judged on the

@@ -6,33 +6,12 @@ use crate::fit::diagnose::diagnose;
 use crate::fit::effects::{Effect, GainError};
 use crate::fit::select::screen::Screen;
 use crate::fit::select::{Engine, FitOptions};
-use crate::sim2real::recording::{Recording, read_csv};
+use crate::sim2real::recording::Recording;
 
 /// The pendulum servo (kp 2, kv 0.0335) whose real gains are kp × `sp`, kv × `sd`, recorded by
 /// the synth (3 × 3 s): MuJoCo's replay of the model with those gains, noise and all.
 fn pendulum_with_gains(sp: f64, sd: f64) -> (crate::model::Robot, Vec<Recording>) {
-    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-    let path = root.join("fixtures/synth/pendulum_servo.xml");
-    let mut sources = crate::model::source::SourceMap::default();
-    let robot = crate::model::load(&mut sources, &path, None).expect("pendulum");
-    let hidden = vec![crate::synth::truth::Hidden {
-        effect: GainError.id(),
-        joint: "servo".into(),
-        params: vec![sp, sd],
-    }];
-    let s = crate::synth::Settings {
-        episodes: 3,
-        duration_s: 3.0,
-        seed: 7,
-        ..crate::synth::Settings::default()
-    };
-    let joints = vec!["servo".to_string()];
-    let ds = crate::synth::generate(&robot, &joints, &hidden, &s, &|_, _| {}).expect("synth");
-    let dir = std::env::temp_dir().join(format!("modellint_gain2_{}", std::process::id()));
-    let files = crate::synth::write::write(&ds, &dir).expect("write");
-    let recs = files.iter().map(|f| read_csv(f).expect("read")).collect();
-    let _ = std::fs::remove_dir_all(&dir);
-    (robot, recs)
+    crate::synth::recorded::pendulum(Some((GainError.id(), vec![sp, sd])), 3, 7)
 }
 
 /// Real gains kp × 0.9, kd × 1.4: both columns are probed, the screen's step moves both (kd up,

@@ -85,8 +85,6 @@ fn scored_samples(engine: &Engine, recs: &[Recording], name: &str) -> usize {
 mod tests {
     use super::super::FitOptions;
     use super::*;
-    use crate::model::source::SourceMap;
-    use crate::sim2real::recording::read_csv;
     use crate::synth::{self, Settings};
 
     fn floor(white: f64, reconstruction: f64, discretisation: f64) -> Floor {
@@ -97,17 +95,14 @@ mod tests {
     /// them, dropped rows and masked gaps out) and, per joint, the larger of the floors given.
     #[test]
     fn the_allowance_is_the_larger_floor_over_the_scored_samples() {
-        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-        let path = root.join("fixtures/synth/pendulum_servo.xml");
-        let robot = crate::model::load(&mut SourceMap::default(), &path, None).expect("pendulum");
         let s =
             Settings { episodes: 2, duration_s: 2.0, drop: 0.05, seed: 3, ..Settings::default() };
-        let ds =
-            synth::generate(&robot, &["servo".to_string()], &[], &s, &|_, _| {}).expect("synth");
-        let dir = std::env::temp_dir().join(format!("modellint_pair_reach_{}", std::process::id()));
-        let files = synth::write::write(&ds, &dir).expect("write");
-        let recs: Vec<Recording> = files.iter().map(|f| read_csv(f).expect("read")).collect();
-        let _ = std::fs::remove_dir_all(&dir);
+        let (robot, recs) = synth::recorded::recorded(
+            "fixtures/synth/pendulum_servo.xml",
+            &["servo".to_string()],
+            &[],
+            &s,
+        );
         let opts = FitOptions::default();
         let engine = Engine::new(&robot, &recs, &opts);
         let n = engine.errors(&recs, &[]).expect("replay").n as f64;

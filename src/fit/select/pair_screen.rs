@@ -201,29 +201,9 @@ mod tests {
         use crate::fit::select::policy::Phase;
         use crate::fit::select::verdict::verdict;
         use crate::fit::select::{FitOptions, FitOutcome};
-        use crate::sim2real::recording::read_csv;
-        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-        let path = root.join("fixtures/synth/pendulum_servo.xml");
-        let mut sources = crate::model::source::SourceMap::default();
-        let robot = crate::model::load(&mut sources, &path, None).expect("pendulum");
+        let (robot, recs) =
+            crate::synth::recorded::pendulum(Some((GainError.id(), vec![0.8, 0.7])), 4, 11);
         let j = vec!["servo".to_string()];
-        let hidden = vec![crate::synth::truth::Hidden {
-            effect: GainError.id(),
-            joint: "servo".into(),
-            params: vec![0.8, 0.7],
-        }];
-        let s = crate::synth::Settings {
-            episodes: 4,
-            duration_s: 3.0,
-            seed: 11,
-            ..crate::synth::Settings::default()
-        };
-        let ds = crate::synth::generate(&robot, &j, &hidden, &s, &|_, _| {}).expect("synth");
-        let dir =
-            std::env::temp_dir().join(format!("modellint_pair_screen_{}", std::process::id()));
-        let files = crate::synth::write::write(&ds, &dir).expect("write");
-        let recs: Vec<Recording> = files.iter().map(|f| read_csv(f).expect("read")).collect();
-        let _ = std::fs::remove_dir_all(&dir);
         let (train, heldout) = recs.split_at(3);
         let opts = FitOptions::default();
         let engine = Engine::new(&robot, &recs, &opts);

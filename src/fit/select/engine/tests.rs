@@ -3,9 +3,7 @@ use super::floors::discretisation_part;
 use super::*;
 use crate::fit::effects::{Backlash, CoulombFriction, Effect, StribeckFriction, ViscousDamping};
 use crate::fit::optim::Bounds;
-use crate::model::source::SourceMap;
 use crate::sim2real::commands::pseudo_sign;
-use crate::sim2real::recording::read_csv;
 use crate::synth::{self, Settings};
 
 /// The lightly damped pendulum servo, clean (the exact model), logged exactly at the control
@@ -19,10 +17,6 @@ fn pendulum_with(
     hidden: &[crate::synth::truth::Hidden],
     qd_noise: f64,
 ) -> (crate::model::Robot, Vec<Recording>) {
-    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-    let path = root.join("fixtures/synth/pendulum_servo.xml");
-    let robot = crate::model::load(&mut SourceMap::default(), &path, None).expect("pendulum");
-    let joints = vec!["servo".to_string()];
     let s = Settings {
         episodes: 3,
         duration_s: 3.0,
@@ -34,19 +28,12 @@ fn pendulum_with(
         seed: 5,
         ..Settings::default()
     };
-    let ds = synth::generate(&robot, &joints, hidden, &s, &|_, _| {}).expect("synth");
-    // One directory per call: tests run in parallel, several with the same noise.
-    static CALL: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
-    let dir = std::env::temp_dir().join(format!(
-        "modellint_floor_{}_{}_{}",
-        qd_noise.to_bits(),
-        std::process::id(),
-        CALL.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
-    ));
-    let files = synth::write::write(&ds, &dir).expect("write");
-    let recs: Vec<Recording> = files.iter().map(|f| read_csv(f).expect("read")).collect();
-    let _ = std::fs::remove_dir_all(&dir);
-    (robot, recs)
+    synth::recorded::recorded(
+        "fixtures/synth/pendulum_servo.xml",
+        &["servo".to_string()],
+        hidden,
+        &s,
+    )
 }
 
 /// [`pendulum_at_ticks`]' replay floor [rad RMS] with the replay started at the first row.
@@ -268,10 +255,6 @@ fn the_floor_counts_the_start_state_noise() {
 /// their three (reconstruction, dt / 2, dt / 4).
 #[test]
 fn a_white_residual_is_at_the_floor_without_a_replay() {
-    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-    let path = root.join("fixtures/synth/pendulum_servo.xml");
-    let robot = crate::model::load(&mut SourceMap::default(), &path, None).expect("pendulum");
-    let joints = vec!["servo".to_string()];
     let s = Settings {
         episodes: 2,
         duration_s: 3.0,
@@ -282,11 +265,12 @@ fn a_white_residual_is_at_the_floor_without_a_replay() {
         seed: 5,
         ..Settings::default()
     };
-    let ds = synth::generate(&robot, &joints, &[], &s, &|_, _| {}).expect("synth");
-    let dir = std::env::temp_dir().join(format!("modellint_white_floor_{}", std::process::id()));
-    let files = synth::write::write(&ds, &dir).expect("write");
-    let recs: Vec<Recording> = files.iter().map(|f| read_csv(f).expect("read")).collect();
-    let _ = std::fs::remove_dir_all(&dir);
+    let (robot, recs) = synth::recorded::recorded(
+        "fixtures/synth/pendulum_servo.xml",
+        &["servo".to_string()],
+        &[],
+        &s,
+    );
     let opts = FitOptions { estimate_start: false, ..FitOptions::default() };
     let engine = Engine::new(&robot, &recs, &opts);
     let errs = engine.errors(&recs, &[]).expect("replay");
