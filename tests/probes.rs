@@ -163,6 +163,30 @@ fn stance_from_a_keyframe_under_the_floor_is_inconclusive_with_that_reason() {
     }
 }
 
+#[test]
+fn stance_from_a_keyframe_past_a_joint_stop_is_inconclusive_with_that_reason() {
+    // The keyframe turns the ankle 0.4 rad past its range: the joint limit throws the foot back
+    // at the first step, so the run says the pose is illegal, not that the robot tilted.
+    let fs = probed("fixtures/probes/stance_out_of_range_keyframe.xml", "toe-tilt");
+    assert!(!fs.is_empty());
+    for f in &fs {
+        let p = outcome(f);
+        assert_eq!(p.status, ProbeStatus::Inconclusive, "{}", p.note);
+        let reason = p.reason.as_deref().unwrap_or("");
+        assert!(
+            reason.contains(
+                "1 joint outside its range (`right_ankle_yaw` at 0.6, 0.4 past [-0.2, 0.2]"
+            ),
+            "{reason}"
+        );
+        let names: Vec<_> = p.preconditions.iter().map(|c| (c.name, c.met)).collect();
+        assert_eq!(
+            &names[..4],
+            [("floor", true), ("gravity", true), ("above_floor", true), ("in_range", false)]
+        );
+    }
+}
+
 /// The stance run of `passive-joint-spring` on `model` stood, loaded the foot and measured:
 /// every precondition recorded, in order, and met.
 fn assert_stance_measured(model: &str) {
@@ -176,6 +200,7 @@ fn assert_stance_measured(model: &str) {
             ("floor", true),
             ("gravity", true),
             ("above_floor", true),
+            ("in_range", true),
             ("settled", true),
             ("free_base", true),
             ("feet_loaded", true),

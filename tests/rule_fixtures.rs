@@ -860,3 +860,44 @@ fn a_passive_or_distant_limb_is_named_by_its_joints() {
     // payload and a two-sided toy robot: none.
     assert!(of(id, "valid_scene_passive.xml").is_empty());
 }
+
+/// A floating base left without its `<inertial>` under the torso that states the part's: its
+/// 0.2 × 0.14 × 0.42 m box and 1 cm sphere weigh 11.76 kg at 1000 kg/m³ (computed here from the
+/// shapes, not read back); a shell welded to a stated forearm 1.78 kg. Bodies whose geoms' mass
+/// the writer chose, and a hand on its own joint with no stated mass, are not reported.
+#[test]
+fn default_density_mass_names_the_body_and_the_water_it_weighs() {
+    let pi = std::f64::consts::PI;
+    let base = 1000.0 * (0.2 * 0.14 * 0.42 + 4.0 / 3.0 * pi * 0.01f64.powi(3));
+    let f = of("default-density-mass", "invalid.xml");
+    assert_eq!(f.len(), 1, "{f:?}");
+    assert!((f[0].measured.as_ref().unwrap().value - base).abs() < 1e-6, "{f:?}");
+    assert!(
+        f[0].message.contains("body `floating_base_link` states no <inertial>"),
+        "{}",
+        f[0].message
+    );
+    // Its share of the moving bodies' mass: the base itself, the torso, two legs.
+    let share = 100.0 * base / (base + 13.3 + 2.0 * (3.5 + 2.0));
+    assert!((share - 32.62).abs() < 0.01, "{share}");
+    assert!(f[0].message.contains("32.6 % of the robot's 36.06 kg"), "{}", f[0].message);
+    let shell = 1000.0 * (pi * 0.045f64.powi(2) * 0.22 + 4.0 / 3.0 * pi * 0.045f64.powi(3));
+    let f = of("default-density-mass", "invalid_welded_cover.xml");
+    assert_eq!(f.len(), 1, "{f:?}");
+    assert!((f[0].measured.as_ref().unwrap().value - shell).abs() < 1e-6, "{f:?}");
+    assert!(f[0].message.contains("`forearm`, welded to it"), "{}", f[0].message);
+    for v in ["valid.xml", "valid_all_from_geoms.xml", "valid_jointed_hand.xml"] {
+        assert!(of("default-density-mass", v).is_empty(), "{v}");
+    }
+}
+
+/// Bodies named by part number pair through the side-named joints that move them: the right
+/// upper arm's 0.744 kg against the left's 0.579 kg, once; the forearms agree.
+#[test]
+fn mirror_pairs_part_numbered_bodies_through_their_joints() {
+    let f = of("mirror-asymmetry", "invalid_part_numbered_bodies.xml");
+    assert_eq!(f.len(), 1, "{f:?}");
+    let m = &f[0].message;
+    assert!(m.contains("`KC_202R`") && m.contains("`KC_202L`") && m.contains("0.744"), "{m}");
+    assert!(of("mirror-asymmetry", "valid_part_numbered_bodies.xml").is_empty());
+}

@@ -46,7 +46,7 @@ pub fn ground_side_bodies(robot: &Robot, geom_body: &[i32]) -> Vec<i32> {
 }
 
 /// What a stance run knows before it steps.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub struct Start {
     /// The world body has a geom to stand on ([`is_ground`]).
     pub floor: bool,
@@ -66,6 +66,8 @@ pub struct Start {
     /// How many colliding geoms of the robot the keyframe places entirely under a floor plane
     /// they can touch, and the deepest one's depth (m): see [`buried`].
     pub buried: (usize, f64),
+    /// Joints the keyframe places outside their range: see [`out_of_range`].
+    pub out_of_range: OutOfRange,
 }
 
 impl Start {
@@ -82,6 +84,7 @@ impl Start {
             gravity: self.gravity,
             floor_normal: self.floor_normal,
             buried: self.buried,
+            out_of_range: self.out_of_range.clone(),
             ..Default::default()
         }
     }
@@ -100,7 +103,43 @@ pub fn start(robot: &Robot) -> Start {
         gravity: g,
         floor_normal: gravity::floor(robot).map_or([0.0, 0.0, 1.0], |f| f.1),
         buried: buried(robot),
+        out_of_range: out_of_range(robot),
     }
+}
+
+/// How far past its range a joint may start, as a share of the range: `keyframe-state`'s
+/// default `tolerance` (a pose written to a few digits).
+pub const RANGE_TOLERANCE: f64 = 0.02;
+
+/// The limited hinges and slides the keyframe (or qpos0) places outside their range by more
+/// than [`RANGE_TOLERANCE`] of it: how many, and the farthest one.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct OutOfRange {
+    pub count: usize,
+    /// The farthest joint: name, position, range, distance past it (rad or m).
+    pub worst: Option<(String, f64, [f64; 2], f64)>,
+}
+
+/// `keyframe-state`'s range test on the pose a stance run starts from: the joint-limit
+/// constraints throw such joints back at the first step, so the robot does not stand in the
+/// pose the run means to judge (a URDF copy holds them there against their stops).
+pub fn out_of_range(robot: &Robot) -> OutOfRange {
+    let mut r = OutOfRange::default();
+    for j in &robot.joints {
+        if !j.limited || !matches!(j.jtype, JointType::Hinge | JointType::Slide) {
+            continue;
+        }
+        let Some(&x) = robot.key.qpos.get(j.qposadr) else { continue };
+        let past = (j.range[0] - x).max(x - j.range[1]);
+        if past <= RANGE_TOLERANCE * (j.range[1] - j.range[0]).abs() {
+            continue;
+        }
+        r.count += 1;
+        if r.worst.as_ref().is_none_or(|w| past > w.3) {
+            r.worst = Some((j.name.clone(), x, j.range, past));
+        }
+    }
+    r
 }
 
 /// The colliding geoms of bodies not fixed to the world that the keyframe (the pose a stance
@@ -160,6 +199,8 @@ pub struct Figures {
     pub floor_normal: [f64; 3],
     /// Colliding robot geoms the keyframe places under the floor, and the deepest depth (m).
     pub buried: (usize, f64),
+    /// Joints the keyframe places outside their range.
+    pub out_of_range: OutOfRange,
 }
 
 /// How a probe words its preconditions: the run's finite / diverged sentences, why a fixed base
@@ -177,8 +218,8 @@ pub struct Words {
 /// runs place, push and read a free joint's base only.
 const BASE_COORDINATES: &str = "the base floats on slides and a ball, which the stance runs do not read (they need a free joint)";
 
-/// The stance preconditions of a run, in order: floor, gravity, above_floor, settled,
-/// free_base, feet_loaded, upright.
+/// The stance preconditions of a run, in order: floor, gravity, above_floor, in_range,
+/// settled, free_base, feet_loaded, upright.
 pub fn preconditions(f: &Figures, w: &Words) -> super::Preconditions {
     let share = if f.weight > 0.0 { f.support_load / f.weight } else { 0.0 };
     let max_drop = max_drop(f.base_height);
@@ -224,6 +265,7 @@ pub fn preconditions(f: &Figures, w: &Words) -> super::Preconditions {
                 )
             },
         )
+        .check("in_range", f.out_of_range.count == 0, in_range_detail(&f.out_of_range))
         .check("settled", !f.diverged, if f.diverged { w.diverged } else { w.finite })
         .check(
             "free_base",
@@ -295,5 +337,23 @@ pub fn floor_added(f: &Figures) -> Option<f64> {
     match &f.floated {
         Some(Floated::Copy { floor_z, .. }) => *floor_z,
         _ => None,
+    }
+}
+
+/// The `in_range` precondition's detail.
+fn in_range_detail(r: &OutOfRange) -> String {
+    let n = crate::util::fmt_num;
+    match &r.worst {
+        None => "the keyframe places every limited joint inside its range".to_string(),
+        Some((name, x, range, past)) => format!(
+            "the keyframe places {} joint{} outside {} range (`{name}` at {}, {} past [{}, {}], `keyframe-state`): the joint limits throw the robot out of the pose the run should stand in",
+            r.count,
+            if r.count == 1 { "" } else { "s" },
+            if r.count == 1 { "its" } else { "their" },
+            n(*x, 4),
+            n(*past, 3),
+            n(range[0], 4),
+            n(range[1], 4)
+        ),
     }
 }

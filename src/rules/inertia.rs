@@ -1,6 +1,7 @@
 //! Rules of the `inertia` group.
 pub mod armature_mismatch;
 pub mod copied_inertial;
+pub mod default_density_mass;
 pub mod inertia_exceeds_geometry;
 pub mod inertial_overridden;
 pub mod isotropic_base_inertia;

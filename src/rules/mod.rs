@@ -329,6 +329,7 @@ pub fn registry() -> Vec<&'static dyn Rule> {
         &inertia::mass_budget::MassBudget,
         &inertia::repeated_class_mass::RepeatedClassMass,
         &inertia::inertial_overridden::InertialOverridden,
+        &inertia::default_density_mass::DefaultDensityMass,
         &inertia::copied_inertial::CopiedInertial,
         &inertia::inertia_exceeds_geometry::InertiaExceedsGeometry,
         &contact::toe_tilt::ToeTilt,

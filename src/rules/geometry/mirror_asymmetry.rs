@@ -12,7 +12,9 @@ declare_rule! {
     /// ## What it does
     /// Pairs left and right joints, actuators and bodies by swapping the side markers in their
     /// names (the spec's `robot.left`/`robot.right` first, then `left_`/`right_`, `Left_`/`Right_`,
-    /// `l_`/`r_` prefixes and `_l`/`_r` suffixes, and `Left`/`Right` anywhere) and reports
+    /// `l_`/`r_` prefixes and `_l`/`_r` suffixes, and `Left`/`Right` anywhere; bodies named by
+    /// part number, with no side marker, pair through the mirror-paired joints that move them:
+    /// `dof_left_elbow` moves `KC_C_401L`, `dof_right_elbow` moves `KC_C_401R`) and reports
     /// differences: joint armature, damping, stiffness and frictionloss, joint range (accepted
     /// when equal or mirrored, `[a, b]` ↔ `[−b, −a]`, as for roll and yaw joints), actuator
     /// kp/kv and gear, actuator force and control ranges (equal or mirrored), centres of mass
@@ -255,6 +257,31 @@ fn pairs(names: &[String], cx: &Context) -> Vec<(usize, usize)> {
     v
 }
 
+/// Body pairs that the names of the bodies do not give (part numbers, `KC_C_202R` and
+/// `KC_C_202L`) but the joints that move them do: the bodies of a mirror-paired joint pair,
+/// when neither body's own name carries a side marker and neither is already paired.
+fn pairs_by_joints(cx: &Context, jn: &[String], named: &[(usize, usize)]) -> Vec<(usize, usize)> {
+    let robot = cx.robot;
+    let paired = |b: usize, v: &[(usize, usize)]| v.iter().any(|&(l, r)| l == b || r == b);
+    let unmarked = |b: usize| {
+        let n = &robot.bodies[b].name;
+        !n.is_empty()
+            && mirror_in(n, cx.spec, |x| robot.bodies.iter().any(|o| o.name == x)).is_none()
+    };
+    let mut v: Vec<(usize, usize)> = Vec::new();
+    for (l, r) in pairs(jn, cx) {
+        let (bl, br) = (robot.joints[l].body, robot.joints[r].body);
+        if bl == br || bl == 0 || br == 0 || !unmarked(bl) || !unmarked(br) {
+            continue;
+        }
+        if paired(bl, named) || paired(br, named) || paired(bl, &v) || paired(br, &v) {
+            continue;
+        }
+        v.push((bl, br));
+    }
+    v
+}
+
 fn geom_signature(robot: &Robot, body: usize) -> Vec<(u8, [i64; 3])> {
     let mut v: Vec<(u8, [i64; 3])> = robot
         .geoms
@@ -429,7 +456,8 @@ impl Rule for MirrorAsymmetry {
         }
         // Bodies: mass and collision geometry.
         let bn: Vec<String> = robot.bodies.iter().map(|b| b.name.clone()).collect();
-        let body_pairs = pairs(&bn, cx);
+        let mut body_pairs = pairs(&bn, cx);
+        body_pairs.extend(pairs_by_joints(cx, &jn, &body_pairs));
         let pose = if body_pairs.is_empty() { None } else { Some(reference_pose(robot)) };
         for (l, rr) in body_pairs {
             let (a, b) = (&robot.bodies[l], &robot.bodies[rr]);

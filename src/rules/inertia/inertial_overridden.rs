@@ -77,7 +77,7 @@ fn inertia_from_geom(tree: &XNode, format: Format) -> Option<&XNode> {
 
 /// Bodies in MuJoCo's compiled order (pre-order over the `<worldbody>` sections, frames
 /// flattened), each with its `<inertial>` if it states one: (compiled id, body, inertial).
-fn stated_inertials(tree: &XNode) -> Vec<(usize, &XNode, Option<&XNode>)> {
+pub(crate) fn stated_inertials(tree: &XNode) -> Vec<(usize, &XNode, Option<&XNode>)> {
     fn visit<'a>(
         n: &'a XNode,
         next: &mut usize,
