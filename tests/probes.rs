@@ -345,14 +345,21 @@ fn slide_findings_with(path: &str, config: Option<&str>) -> Vec<modellint::findi
     out
 }
 
+/// A robot file with no floor: the push runs on a copy with a floor added (condim 1, friction
+/// 0: MuJoCo's maximum gives each contact the foot geom's own condim 1), so the frictionless feet
+/// slide ½·(0.05 g)·t² ≈ 61 mm; the fact keeps its level.
 #[test]
-fn slide_without_a_floor_is_inconclusive_with_the_reason() {
+fn slide_without_a_floor_runs_on_an_added_floor() {
     for f in slide_findings("fixtures/rules/foot-collision-geometry/invalid_condim1_no_floor.xml") {
         let p = outcome(&f);
         assert!(f.fact);
-        assert_eq!(p.status, ProbeStatus::Inconclusive, "{}", p.note);
-        assert!(p.reason.as_deref().unwrap_or("").contains("no floor"), "{:?}", p.reason);
-        assert!(!p.preconditions.iter().find(|c| c.name == "floor").unwrap().met);
+        assert_eq!(p.status, ProbeStatus::Measured, "{}", p.note);
+        assert!(p.preconditions.iter().all(|c| c.met), "{:?}", p.preconditions);
+        assert!(p.measured.contains_key("floor_added_z_m"), "{:?}", p.measured);
+        assert_eq!(p.measured["contact_dim"], 1.0);
+        let free_slide = 0.5 * 0.05 * 9.81 * 0.5 * 0.5;
+        let s = p.measured["slide_m"];
+        assert!((s - free_slide).abs() < 0.1 * free_slide, "slid {s} m");
         assert_ne!(f.severity, modellint::finding::Severity::Info);
     }
 }
