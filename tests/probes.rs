@@ -113,20 +113,46 @@ fn outcome(f: &modellint::finding::Finding) -> modellint::finding::ProbeOutcome 
     f.probe.clone().unwrap_or_else(|| panic!("not probed: {}", f.message))
 }
 
+/// A free-floating robot file with no floor (its floor is in a scene) is measured on a copy
+/// with a floor added; the fact keeps its level.
 #[test]
-fn stance_without_a_floor_is_inconclusive_and_the_fact_keeps_its_level() {
+fn stance_without_a_floor_stands_on_an_added_floor_and_the_fact_keeps_its_level() {
     let fs =
         probed("fixtures/rules/passive-joint-spring/invalid_no_floor.xml", "passive-joint-spring");
     for f in &fs {
         let p = outcome(f);
         assert!(f.fact, "{}", f.message);
-        assert_eq!(p.status, ProbeStatus::Inconclusive, "{}", p.note);
-        assert!(p.reason.as_deref().unwrap_or("").contains("no floor"), "{:?}", p.reason);
+        assert_eq!(p.status, ProbeStatus::Measured, "{}", p.note);
         let floor = p.preconditions.iter().find(|c| c.name == "floor").expect("recorded");
-        assert!(!floor.met);
+        assert!(floor.met && floor.detail.contains("the copy has a plane added"), "{floor:?}");
         assert_ne!(f.severity, modellint::finding::Severity::Info);
         assert!(!f.message.contains("refuted"));
     }
+}
+
+/// An MJCF robot file that floats (a free joint) and has no floor, its scene in another file:
+/// the stance run stands it on a copy with only a floor added under its lowest point, and the
+/// toe 3 mm below the sole is confirmed. The scene that includes the file stands it on the
+/// scene's own floor: nothing added.
+#[test]
+fn a_robot_file_without_its_scene_stands_on_an_added_floor() {
+    let fs = probed("fixtures/probes/stance_robot_file.xml", "toe-tilt");
+    let p = outcome(&fs[0]);
+    assert_eq!(p.status, ProbeStatus::Confirmed, "{}", p.note);
+    assert!(p.preconditions.iter().all(|c| c.met), "{:?}", p.preconditions);
+    // By hand from the file: the frame at 0.3 m, the toe capsule's axis 0.043 m below it,
+    // radius 0.01 m.
+    let z = p.measured["floor_added_z_m"];
+    assert!((z - (0.3 - 0.043 - 0.01)).abs() < 1e-9, "floor at {z}");
+    assert!(p.note.contains("probed on a copy with a floor added at z = 0.247 m"), "{}", p.note);
+    assert!(!p.note.contains("free joint added"), "{}", p.note);
+    let free = p.preconditions.iter().find(|c| c.name == "free_base").unwrap();
+    assert_eq!(free.detail, "the base is free-floating");
+    let fs = probed("fixtures/probes/stance_robot_file_scene.xml", "toe-tilt");
+    let p = outcome(&fs[0]);
+    assert_eq!(p.status, ProbeStatus::Confirmed, "{}", p.note);
+    assert!(!p.measured.contains_key("floor_added_z_m"));
+    assert!(!p.note.contains("floor added"), "{}", p.note);
 }
 
 #[test]
@@ -344,14 +370,21 @@ fn slide_findings_with(path: &str, config: Option<&str>) -> Vec<modellint::findi
     out
 }
 
+/// A robot file with no floor: the push runs on a copy with a floor added (condim 1, friction
+/// 0: MuJoCo's maximum gives each contact the foot geom's own condim 1), so the frictionless feet
+/// slide ½·(0.05 g)·t² ≈ 61 mm; the fact keeps its level.
 #[test]
-fn slide_without_a_floor_is_inconclusive_with_the_reason() {
+fn slide_without_a_floor_runs_on_an_added_floor() {
     for f in slide_findings("fixtures/rules/foot-collision-geometry/invalid_condim1_no_floor.xml") {
         let p = outcome(&f);
         assert!(f.fact);
-        assert_eq!(p.status, ProbeStatus::Inconclusive, "{}", p.note);
-        assert!(p.reason.as_deref().unwrap_or("").contains("no floor"), "{:?}", p.reason);
-        assert!(!p.preconditions.iter().find(|c| c.name == "floor").unwrap().met);
+        assert_eq!(p.status, ProbeStatus::Measured, "{}", p.note);
+        assert!(p.preconditions.iter().all(|c| c.met), "{:?}", p.preconditions);
+        assert!(p.measured.contains_key("floor_added_z_m"), "{:?}", p.measured);
+        assert_eq!(p.measured["contact_dim"], 1.0);
+        let free_slide = 0.5 * 0.05 * 9.81 * 0.5 * 0.5;
+        let s = p.measured["slide_m"];
+        assert!((s - free_slide).abs() < 0.1 * free_slide, "slid {s} m");
         assert_ne!(f.severity, modellint::finding::Severity::Info);
     }
 }
@@ -793,6 +826,7 @@ fn an_arm_and_a_free_robot_are_not_floated() {
         "fixtures/rules/welded-legged-base/valid_ceiling_arm.urdf",
         "fixtures/rules/welded-legged-base/valid_wheeled_base.urdf",
         "fixtures/rules/toe-tilt/invalid.xml",
+        "fixtures/probes/stance_robot_file_scene.xml",
     ] {
         assert!(needs_float(&loaded(path).robot).is_none(), "{path}");
     }

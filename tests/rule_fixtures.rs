@@ -901,3 +901,83 @@ fn mirror_pairs_part_numbered_bodies_through_their_joints() {
     assert!(m.contains("`KC_202R`") && m.contains("`KC_202L`") && m.contains("0.744"), "{m}");
     assert!(of("mirror-asymmetry", "valid_part_numbered_bodies.xml").is_empty());
 }
+
+/// A legged URDF's joints that nothing says how they are driven (no `<transmission>`, no spec
+/// motor family) are named in one finding; joints a transmission names or the spec gives a
+/// motor are left to `transmission-without-armature` and `zero-armature`.
+#[test]
+fn legged_urdf_joints_without_a_stated_drive_are_named_once() {
+    let id = "legged-urdf-armature";
+    let names = |f: &modellint::finding::Finding, js: &[&str], not: &[&str]| {
+        for j in js {
+            assert!(f.message.contains(&format!("`{j}`")), "{j}: {}", f.message);
+        }
+        for j in not {
+            assert!(!f.message.contains(&format!("`{j}`")), "{j}: {}", f.message);
+        }
+    };
+    let f = of(id, "invalid_biped.urdf");
+    assert_eq!(f.len(), 1, "{f:?}");
+    assert_eq!(f[0].data["joints"], 8.0);
+    assert_eq!(f[0].data["legs"], 2.0);
+    names(&f[0], &["l_hip_roll", "l_ankle", "r_hip_roll", "r_ankle"], &[]);
+    // The hips have a 6:1 transmission; the knees and the wheels at the shanks' ends none.
+    let f = of(id, "invalid_wheel_legs.urdf");
+    assert_eq!(f.len(), 1, "{f:?}");
+    assert_eq!(f[0].data["joints"], 4.0);
+    names(&f[0], &["left_knee", "left_wheel", "right_knee", "right_wheel"], &["left_hip"]);
+    // The spec gives the four hip abduction joints a motor family.
+    let f = of(id, "invalid_quadruped_part_spec.urdf");
+    assert_eq!(f.len(), 1, "{f:?}");
+    assert_eq!(f[0].data["joints"], 8.0);
+    assert_eq!(f[0].data["legs"], 4.0);
+    names(&f[0], &["FL_HFE", "HR_KFE"], &["FL_HAA", "HR_HAA"]);
+    for v in [
+        "valid_transmissions.urdf",
+        "valid_direct_drive.urdf",
+        "valid_arm_gripper.urdf",
+        "valid_rover.urdf",
+        "valid_mjcf_biped.xml",
+    ] {
+        assert!(of(id, v).is_empty(), "{v}");
+    }
+}
+
+/// A leaf whose only colliding geometry is a speck at its far end (where a leaf touches) is a
+/// token when the speck covers under a twentieth of the visual's width there; corner spheres
+/// spread over a sole, a point foot's sphere across a shin's end and fingertip pads are
+/// contacts.
+#[test]
+fn token_collision_geometry_at_a_leafs_tip_is_judged_against_the_ends_width() {
+    let id = "token-collision-geometry";
+    let f = of(id, "invalid_leaf_tip.xml");
+    assert_eq!(f.len(), 1, "{f:?}");
+    assert_eq!(f[0].measured.as_ref().unwrap().value, 3.0, "{f:?}");
+    // Both feet (mirror images) alike; the left hand's 0.8 mm sphere on a 60 mm wide paddle;
+    // the right hand's 16 mm pad is a contact.
+    for l in [
+        "`left_foot` (1 mm on a 80 mm wide visual end",
+        "`right_foot` (1 mm on a 80 mm wide visual end",
+        "`left_hand` (0.8 mm on a 60 mm wide visual end",
+    ] {
+        assert!(f[0].message.contains(l), "{}", f[0].message);
+    }
+    assert!(!f[0].message.contains("right_hand"), "{}", f[0].message);
+    assert!((f[0].data["smallest_ratio"] - 75.0).abs() < 1e-6, "{:?}", f[0].data);
+    for v in ["valid_tip_contacts.xml", "valid_leaf_contacts.xml", "valid_point_feet.xml"] {
+        assert!(of(id, v).is_empty(), "{v}");
+    }
+}
+
+/// A strap of four equal segments on hinges numbered `left_hand_strap_1..4` is not a limb; an
+/// arm whose joints are numbered `left_arm_1..3` the same way, but whose segments differ in
+/// mass, is.
+#[test]
+fn a_strap_of_equal_segments_is_not_a_limb_but_a_numbered_arm_is() {
+    let id = "detached-limb";
+    assert!(of(id, "valid_hinge_strap.xml").is_empty());
+    let f = of(id, "invalid_numbered_arm.xml");
+    assert_eq!(f.len(), 1, "{f:?}");
+    assert!((f[0].measured.as_ref().unwrap().value - 2.9).abs() < 1e-9, "{f:?}");
+    assert!(f[0].message.contains("3 joints named for the robot's left side"), "{}", f[0].message);
+}

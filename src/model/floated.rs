@@ -2,7 +2,8 @@
 //! probes: a legged URDF (MuJoCo's importer welds its root link to the world) gets a free joint
 //! on its root link; a base written as three slides and a ball gets one free joint in place of
 //! those four, at the same pose. When the model has no floor, the copy gets a plane under the
-//! lowest point of the robot. The copy is re-parsed from the file with MuJoCo's own parser
+//! lowest point of the robot: also a robot that floats as written (an MJCF robot file whose
+//! floor is in the scene that includes it), which gets nothing else. The copy is re-parsed from the file with MuJoCo's own parser
 //! (mjSpec) and compiled like the model; the probes read their results back into the model's
 //! body, geom and joint ids through the maps below.
 
@@ -18,13 +19,17 @@ pub enum Float {
     RootLink(String),
     /// The base body's slide and ball joints replaced by one free joint (body id in the model).
     SlideBall(usize),
+    /// Nothing to float: the robot has a free joint at body (id in the model), and the copy only
+    /// adds the floor it lacks (a robot file whose scene is another file).
+    FloorOnly(usize),
 }
 
 /// The copy and how its ids map back to the model's.
 pub struct FloatedCopy {
     pub robot: Robot,
-    /// Name of the body that carries the added free joint.
-    pub base_name: String,
+    /// Name of the body that carries the added free joint (`None`: the robot floats as
+    /// written, [`Float::FloorOnly`]).
+    pub base_name: Option<String>,
     /// Height of the floor plane the copy added, m (`None`: the model has its own floor).
     pub floor_z: Option<f64>,
     /// Joints the copy holds at qpos0 by an added joint equality (a URDF's, which has no
@@ -80,6 +85,7 @@ pub fn floated_copy(
             mj::replace_joints_by_free(body)?;
             name
         }
+        Float::FloorOnly(b) => robot.body_name(*b).to_string(),
     };
     // A URDF has no actuators in MuJoCo: nothing would hold the pose a driven robot holds with
     // its position targets, so the copy holds each hinge and slide at qpos0.
@@ -92,6 +98,8 @@ pub fn floated_copy(
     }
     if let Some(z) = floor_z {
         mj::add_floor(spec.world_body_mut(), FLOOR_NAME, z, contact_bits(robot));
+    } else if matches!(how, Float::FloorOnly(_)) {
+        return Err("the robot floats and the model has a floor: nothing to add".into());
     }
     let m = spec.compile().map_err(|e| format!("MuJoCo could not compile it: {e}"))?;
     let mut copy = extract(&robot.path, robot.format, robot.tree.clone(), robot.src.clone(), m);
@@ -108,6 +116,7 @@ pub fn floated_copy(
         }
     }
     copy.key = key_state(&copy.mj, key, &copy.keys);
+    let base_name = (!matches!(how, Float::FloorOnly(_))).then_some(base_name);
     Ok(FloatedCopy { robot: copy, base_name, floor_z, held, body_map, geom_map, joint_map })
 }
 
@@ -174,7 +183,11 @@ fn map_joints(
     how: &Float,
     base: &str,
 ) -> Result<Vec<Option<usize>>, String> {
-    let added = |j: &super::Joint| j.jtype == JointType::Free && copy.body_name(j.body) == base;
+    let added = |j: &super::Joint| {
+        j.jtype == JointType::Free
+            && copy.body_name(j.body) == base
+            && !matches!(how, Float::FloorOnly(_))
+    };
     let kept: Vec<usize> = robot
         .joints
         .iter()

@@ -1,4 +1,5 @@
-//! The model a stance run simulates. A robot with a free joint stands as it is. A legged URDF
+//! The model a stance run simulates. A robot with a free joint stands as it is on the model's
+//! floor, or on a copy with a floor added when the model has none (a robot file). A legged URDF
 //! (MuJoCo's importer welds its root link to the world) and a base of three slides and a ball
 //! stand on a floated copy ([`crate::model::floated`]): a free joint on the root link, or in
 //! place of the base's four joints at the same pose, and a floor plane under the robot's lowest
@@ -22,10 +23,12 @@ pub enum StanceModel {
     Failed(String),
 }
 
-/// How the model's base must be floated for a stance run, if at all.
+/// How the model's base must be floated for a stance run, if at all: a robot with a free
+/// joint stands as it is when the model has a floor, and on a copy with a floor added when not.
 pub fn needs_float(robot: &Robot) -> Option<Float> {
-    if robot.joints.iter().any(|j| j.jtype == JointType::Free) {
-        return None;
+    if let Some(free) = robot.joints.iter().find(|j| j.jtype == JointType::Free) {
+        let floor = (0..robot.geoms.len()).any(|g| super::stance::is_ground(robot, g));
+        return (!floor).then_some(Float::FloorOnly(free.body));
     }
     if crate::rules::contact::welded_legged_base::is_welded_legged(robot) {
         let root = crate::rules::contact::welded_legged_base::root_link(robot)?;
@@ -54,6 +57,7 @@ pub fn stance_model(l: &Loaded) -> StanceModel {
     // A URDF's world geoms are its root link's, never a floor.
     let has_floor = matches!(how, Float::SlideBall(_))
         && (0..robot.geoms.len()).any(|g| super::stance::is_ground(robot, g));
+    // (Float::FloorOnly: chosen only when the model has no floor.)
     let floor = (!has_floor).then(|| lowest_point(robot));
     match floated_copy(robot, &l.sources, &how, floor) {
         Ok(c) => StanceModel::Copy(Box::new(c)),

@@ -161,10 +161,10 @@ pub fn max_drop(base_height: f64) -> f64 {
 /// What a stance run did to a model whose base cannot stand as written ([`super::float`]).
 #[derive(Debug, Clone, PartialEq)]
 pub enum Floated {
-    /// It ran on a floated copy: a free joint added at body `base`, a floor plane at
-    /// `floor_z` (m) when the model has none, and `held` joints (a URDF's, which has no
-    /// actuators in MuJoCo) held at qpos0 by added joint equalities.
-    Copy { base: String, floor_z: Option<f64>, held: usize },
+    /// It ran on a floated copy: a free joint added at body `base` (`None`: the robot floats
+    /// as written), a floor plane at `floor_z` (m) when the model has none, and `held` joints
+    /// (a URDF's, which has no actuators in MuJoCo) held at qpos0 by added joint equalities.
+    Copy { base: Option<String>, floor_z: Option<f64>, held: usize },
     /// No floated copy could be built (why): it ran on the model as written.
     Failed(String),
 }
@@ -239,9 +239,10 @@ pub fn preconditions(f: &Figures, w: &Words) -> super::Preconditions {
         .check(
             "floor",
             f.floor,
-            if let Some(Floated::Copy { floor_z: Some(z), .. }) = &f.floated {
+            if let Some(Floated::Copy { floor_z: Some(z), base, .. }) = &f.floated {
                 format!(
-                    "the model has no floor: the floated copy has a plane added at z = {} m, under the robot's lowest point",
+                    "the model has no floor: the {} has a plane added at z = {} m, under the robot's lowest point",
+                    if base.is_some() { "floated copy" } else { "copy" },
                     n(*z, 4)
                 )
             } else if f.floor {
@@ -271,9 +272,10 @@ pub fn preconditions(f: &Figures, w: &Words) -> super::Preconditions {
             "free_base",
             f.free_base,
             match &f.floated {
-                Some(Floated::Copy { base, .. }) => {
+                Some(Floated::Copy { base: Some(base), .. }) => {
                     format!("probed on a floated copy: free joint added at `{base}`")
                 }
+                Some(Floated::Copy { base: None, .. }) => "the base is free-floating".to_string(),
                 Some(Floated::Failed(why)) => format!(
                     "{}; no floated copy could be built: {why}",
                     if f.base_coordinates { BASE_COORDINATES } else { w.fixed_base }
@@ -308,9 +310,17 @@ pub fn preconditions(f: &Figures, w: &Words) -> super::Preconditions {
 }
 
 /// "probed on a floated copy: free joint added at `trunk`; floor added at z = -0.69 m" when the
-/// run was on a floated copy, for a verdict's note.
+/// run was on a floated copy, for a verdict's note ("probed on a copy with a floor added at z =
+/// -0.69 m (the model has none)" when the robot floats as written).
 pub fn copy_note(f: &Figures) -> Option<String> {
     let Some(Floated::Copy { base, floor_z, held }) = &f.floated else { return None };
+    let Some(base) = base else {
+        let z = (*floor_z)?;
+        return Some(format!(
+            "probed on a copy with a floor added at z = {} m (the model has none; lint the scene for its own floor)",
+            crate::util::fmt_num(z, 4)
+        ));
+    };
     let floor = floor_z
         .map(|z| format!("; floor added at z = {} m", crate::util::fmt_num(z, 4)))
         .unwrap_or_default();

@@ -323,6 +323,7 @@ pub fn registry() -> Vec<&'static dyn Rule> {
         &inertia::parallel_ankle_armature::ParallelAnkleArmature,
         &inertia::zero_armature::ZeroArmature,
         &inertia::transmission_armature::TransmissionWithoutArmature,
+        &inertia::legged_urdf_armature::LeggedUrdfArmature,
         &inertia::passive_joint_armature::PassiveJointArmature,
         &inertia::isotropic_base_inertia::IsotropicBaseInertia,
         &inertia::isotropic_link_inertia::IsotropicLinkInertia,

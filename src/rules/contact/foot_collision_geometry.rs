@@ -657,6 +657,9 @@ impl Measure for ContactAsBuilt {
             ("support_load_n".to_string(), s.stance.support_load),
             ("weight_n".to_string(), s.stance.weight),
         ]);
+        if let Some(z) = crate::probe::stance::floor_added(&s.stance) {
+            m.insert("floor_added_z_m".to_string(), z);
+        }
         let Some(&(g0, b0)) = built.first() else {
             return Measurement::new(&pre, m, "no ground contact to measure".to_string());
         };

@@ -15,10 +15,14 @@ declare_rule! {
     /// `links-without-collision` is silent) but nothing can touch it: an exporter's
     /// placeholder (1 mm boxes on hips, thighs and calves) in place of the link's shape. A
     /// leaf (a link that carries no jointed link: a foot, a hand, a head) is judged against
-    /// its visual shape alone, and only when its colliding geoms all lie in the half of the
-    /// leaf next to its joint (nearer the joint than half the visual's reach from it): a
-    /// contact sphere at a point foot's or toe's tip and a fingertip pad are where the leaf
-    /// touches, at its far end; a leaf with no visual geometry (a sensor frame) is not judged.
+    /// its visual shape alone. When its colliding geoms all lie in the half of the leaf next to
+    /// its joint (nearer the joint than half the visual's reach from it), they stand for
+    /// nothing it touches with. When they lie at its far end, where a leaf touches, they are
+    /// its contact unless, all together, they spread over less than `max_token_size` and
+    /// `link_fraction` of the width of the visual (its second dimension): four corner spheres
+    /// spread over a sole, a point foot's sphere across a shin's end and a fingertip pad across
+    /// a finger are contacts; a single 1 mm speck at the toe of a 200 mm sole, 80 mm wide, is
+    /// not. A leaf with no visual geometry (a sensor frame) is not judged.
     /// One finding lists every such link.
     ///
     /// ## Why is this bad?
@@ -62,8 +66,48 @@ struct Token {
     geom: usize,
     across: f64,
     size: f64,
-    /// A link that carries no jointed link (judged against its visual shape only).
-    leaf: bool,
+    /// Whether the link carries no jointed link (judged against its visual shape only), and
+    /// where its colliding geometry is.
+    leaf: Leaf,
+}
+
+/// Where a token link's colliding geometry is, when the link is a leaf.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Leaf {
+    /// The link carries jointed links (judged against their spacing and its visual extent).
+    No,
+    /// A leaf whose colliding geoms lie in the half next to its joint (judged against the
+    /// visual's extent).
+    AtJoint,
+    /// A leaf whose colliding geoms lie at its far end, all within a speck (judged against the
+    /// width of the visual there: its second dimension).
+    AtEnd,
+}
+
+/// Second-largest full dimension of geom `g`'s bounding box in its own frame (m): the width
+/// of a sole, of a shin's end, of a finger.
+fn second_dimension(robot: &Robot, g: usize) -> f64 {
+    robot.mj.geom_aabb().get(g).map_or(0.0, |bb| {
+        let mut d = [bb[3], bb[4], bb[5]];
+        d.sort_by(|x, y| y.partial_cmp(x).unwrap_or(std::cmp::Ordering::Equal));
+        2.0 * d[1]
+    })
+}
+
+/// How far the geoms `gs` spread together (m): the largest side of the world box around them,
+/// each taken as a cube of its size across at its centre (one geom: its size across).
+fn spread(robot: &Robot, gs: &[usize]) -> f64 {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for &g in gs {
+        let Some(c) = robot.key.geom_xpos.get(g) else { continue };
+        let h = across(robot, g) / 2.0;
+        for k in 0..3 {
+            lo[k] = lo[k].min(c[k] - h);
+            hi[k] = hi[k].max(c[k] + h);
+        }
+    }
+    (0..3).map(|k| hi[k] - lo[k]).fold(0.0, f64::max)
 }
 
 fn token_links(robot: &Robot, max_size: f64, fraction: f64) -> Vec<Token> {
@@ -114,9 +158,9 @@ fn token_links(robot: &Robot, max_size: f64, fraction: f64) -> Vec<Token> {
             .fold(0.0, f64::max);
         let a = across(robot, largest);
         if children.is_empty() {
-            // A leaf (a foot, a hand, a head): judged against its visual shape only, and only
-            // when its colliding geoms all lie in the half of it next to its joint: a contact
-            // sphere at a point foot's tip or a fingertip pad is where the leaf touches.
+            // A leaf (a foot, a hand, a head): judged against its visual shape only: by size
+            // when its colliding geoms all lie in the half of it next to its joint; at its far
+            // end, where a leaf touches, by how far they spread across its width.
             let Some(&joint) = own.first() else { continue };
             let reach = geoms
                 .iter()
@@ -130,8 +174,36 @@ fn token_links(robot: &Robot, max_size: f64, fraction: f64) -> Vec<Token> {
                 .iter()
                 .filter_map(|&g| robot.key.geom_xpos.get(g).map(|c| dist(joint, *c)))
                 .fold(0.0, f64::max);
-            if visual > 0.0 && a < max_size && a < fraction * visual && far < reach / 2.0 {
-                out.push(Token { body: b.id, geom: largest, across: a, size: visual, leaf: true });
+            if !(visual > 0.0 && a < max_size && a < fraction * visual) {
+                continue;
+            }
+            if far < reach / 2.0 {
+                out.push(Token {
+                    body: b.id,
+                    geom: largest,
+                    across: a,
+                    size: visual,
+                    leaf: Leaf::AtJoint,
+                });
+                continue;
+            }
+            // At the far end: a contact there stands for the end it touches with only when it
+            // covers a share of the end's width (a point foot's sphere across a shin's end,
+            // pads spread over a sole's corners); a single speck at a sole's toe does not.
+            let width = geoms
+                .iter()
+                .filter(|&&g| !colliding.contains(&g))
+                .map(|&g| second_dimension(robot, g))
+                .fold(0.0, f64::max);
+            let spread = spread(robot, &colliding);
+            if spread < max_size && spread < fraction * width {
+                out.push(Token {
+                    body: b.id,
+                    geom: largest,
+                    across: spread,
+                    size: width,
+                    leaf: Leaf::AtEnd,
+                });
             }
             continue;
         }
@@ -139,7 +211,7 @@ fn token_links(robot: &Robot, max_size: f64, fraction: f64) -> Vec<Token> {
             own.iter().flat_map(|a| children.iter().map(move |c| dist(*a, *c))).fold(0.0, f64::max);
         let size = spacing.max(visual);
         if a < max_size && a < fraction * size {
-            out.push(Token { body: b.id, geom: largest, across: a, size, leaf: false });
+            out.push(Token { body: b.id, geom: largest, across: a, size, leaf: Leaf::No });
         }
     }
     out
@@ -162,7 +234,11 @@ impl Rule for TokenCollisionGeometry {
                     robot.body_name(t.body),
                     mm(t.across),
                     mm(t.size),
-                    if t.leaf { "visual shape, at its joint" } else { "link" }
+                    match t.leaf {
+                        Leaf::No => "link",
+                        Leaf::AtJoint => "visual shape, at its joint",
+                        Leaf::AtEnd => "wide visual end, at its tip",
+                    }
                 )
             })
             .collect();

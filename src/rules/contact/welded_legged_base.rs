@@ -54,8 +54,11 @@ declare_rule! {
 }
 
 /// The leaves of `robot` that stand like feet (see the rule's docs), as (leaf, top-level link
-/// of its chain), and how far below the root link's frame their lowest point is (m).
-fn legs(robot: &Robot) -> (Vec<(usize, usize)>, f64) {
+/// of its chain), and how far below the root link's frame their lowest point is (m). With
+/// `wheel_legs`, a chain that ends in a wheel counts too when it has two or more other
+/// hinge/slide joints above the wheel (a wheel-legged robot's hip and knee; a rover's steered
+/// wheel has one).
+fn legs(robot: &Robot, wheel_legs: bool) -> (Vec<(usize, usize)>, f64) {
     let n = robot.bodies.len();
     let lowest_of = |b: usize| {
         robot
@@ -112,12 +115,13 @@ fn legs(robot: &Robot) -> (Vec<(usize, usize)>, f64) {
         let Some(&top) = below.last() else { continue };
         let (mut joints, mut wheel) = (0usize, false);
         for j in robot.joints.iter().filter(|j| below.contains(&j.body)) {
-            if matches!(j.jtype, JointType::Hinge | JointType::Slide) {
+            if robot.is_wheel(j.id) {
+                wheel = true;
+            } else if matches!(j.jtype, JointType::Hinge | JointType::Slide) {
                 joints += 1;
             }
-            wheel |= robot.is_wheel(j.id);
         }
-        if joints >= 2 && !wheel {
+        if joints >= 2 && (!wheel || wheel_legs) {
             out.push((leaf, top));
         }
     }
@@ -132,11 +136,25 @@ fn welded_legs(robot: &Robot) -> Option<(Vec<(usize, usize)>, f64)> {
     if robot.format != Format::Urdf || robot.joints.iter().any(|j| j.jtype == JointType::Free) {
         return None;
     }
-    let (legs, depth) = legs(robot);
+    let (legs, depth) = legs(robot, false);
     let mut tops: Vec<usize> = legs.iter().map(|l| l.1).collect();
     tops.sort_unstable();
     tops.dedup();
     (tops.len() >= 2).then_some((legs, depth))
+}
+
+/// The legs of a URDF robot, wheel-legs included (a wheel at the end of a hip and a knee), as
+/// the leaf of each; `None` unless two or more legs leave the root (or a one-joint waist) at
+/// separate links: a fixed-base arm, a gripper's one chain of fingers, a wheeled base.
+pub fn urdf_legs(robot: &Robot) -> Option<Vec<usize>> {
+    if robot.format != Format::Urdf {
+        return None;
+    }
+    let (legs, _) = legs(robot, true);
+    let mut tops: Vec<usize> = legs.iter().map(|l| l.1).collect();
+    tops.sort_unstable();
+    tops.dedup();
+    (tops.len() >= 2).then(|| legs.iter().map(|l| l.0).collect())
 }
 
 /// Whether `robot` is a legged URDF that MuJoCo's importer welded to the world: the foot rules

@@ -124,10 +124,41 @@ fn named_limb(
     let limb_named = scalar.iter().all(|j| {
         matches!(crate::model::region::from_name(&j.name), Some("arms" | "legs" | "head"))
     });
+    if copied_segments(robot, &scalar) {
+        return None;
+    }
     let side = side_of(&scalar.first()?.name, spec)?;
     let one_side = scalar.iter().all(|j| side_of(&j.name, spec) == Some(side));
     let robot_sided = inside(main.top).any(|j| j.is_scalar() && side_of(&j.name, spec).is_some());
     (in_series && limb_named && one_side && robot_sided).then_some(side)
+}
+
+/// How far apart the masses of a chain's segments may be for them to be copies of one segment
+/// (relative to the heaviest): a rope or strap cut into equal pieces.
+const SEGMENT_MASS_SPREAD: f64 = 0.01;
+
+/// Whether `joints` are a chain of copies of one segment, not a limb: every joint has one name
+/// but for its number (`left_hand_strap_1` … `_4`, where a limb names each joint for its part:
+/// shoulder, elbow, wrist), and the bodies they move have one mass (within
+/// [`SEGMENT_MASS_SPREAD`]) — a strap, rope or chain of hinges.
+fn copied_segments(robot: &Robot, joints: &[&crate::model::Joint]) -> bool {
+    let stem = |n: &str| -> String {
+        n.chars()
+            .filter(|c| !c.is_ascii_digit())
+            .collect::<String>()
+            .trim_matches(['_', '-', '.'])
+            .to_string()
+    };
+    let Some(first) = joints.first() else { return false };
+    let s0 = stem(&first.name);
+    if joints.len() < 2 || joints.iter().any(|j| stem(&j.name) != s0) {
+        return false;
+    }
+    let masses: Vec<f64> =
+        joints.iter().filter_map(|j| robot.bodies.get(j.body).map(|b| b.mass)).collect();
+    let hi = masses.iter().copied().fold(0.0, f64::max);
+    let lo = masses.iter().copied().fold(f64::INFINITY, f64::min);
+    hi > 0.0 && hi - lo <= SEGMENT_MASS_SPREAD * hi
 }
 
 /// Whether box `a` overlaps box `b` grown by `margin` on every side.
