@@ -38,6 +38,11 @@
 //! A candidate whose linear prediction reaches b is admitted by the screen on that
 //! prediction, and is never judged here.
 //!
+//! **A richer model of a loss** whose plain variant is out of reach on the same joints is
+//! judged from the plain variant's fit there ([`Reach::extension_out`]), in either mode: on
+//! that leg, the two Stribeck and two load-dependent frictions cost 5–7 replays of the probes'
+//! data each where their own coarse fits take 12–25, and are out of reach as those find.
+//!
 //! [`SearchPolicy::probe_seconds`]: super::policy::SearchPolicy::probe_seconds
 
 use std::sync::Arc;
@@ -48,10 +53,10 @@ use crate::sim2real::recording::Recording;
 use super::coarse;
 use super::engine::Engine;
 use super::extension;
-use super::{Errors, Search};
 use super::groups::same_data;
 use super::policy::Phase;
 use super::screen::Screen;
+use super::{Errors, Search};
 
 /// The probes' data of a base model and the bar a candidate's coarse fit there must reach.
 pub(super) struct Reach {

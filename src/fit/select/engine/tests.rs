@@ -389,7 +389,12 @@ fn an_alias_is_judged_within_reach_of_the_floor_on_the_probes_data_alone() {
     let probe_s = probes[0].t.last().unwrap() - probes[0].t[0];
     let reach = Reach::new(&engine, &recs, &[], &floor).expect("probes held");
     let allowed = [ViscousDamping.id().to_string(), PositionOffset.id().to_string()];
-    let s = crate::fit::select::Search { engine: &engine, train: &recs, heldout: &recs, allowed: &allowed };
+    let s = crate::fit::select::Search {
+        engine: &engine,
+        train: &recs,
+        heldout: &recs,
+        allowed: &allowed,
+    };
     let before = engine.rollout_stats();
     assert!(reach.out_of_reach(&s, None, (&ViscousDamping, &g)).is_none());
     let far = reach.out_of_reach(&s, None, (&PositionOffset, &g));
