@@ -203,7 +203,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
                 .par_iter()
                 .map(|(e, g, _)| match coarse::deferred(s, (*e, g), &cands, &coarse) {
                     Some(_) => None,
-                    None => reach.as_ref()?.out_of_reach(engine, Some(&screen), (*e, g)),
+                    None => reach.as_ref()?.out_of_reach(s, Some(&screen), (*e, g)),
                 })
                 .collect();
             engine.report(round, Phase::Screen, None);
@@ -325,7 +325,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
             && (!deferred || coarse::plain_fitted(s, (short, &applied), (e, &group)));
         let far = reach.as_ref().filter(|_| !judged);
         if let Some(r) = far
-            && let Some((p, f)) = r.out_of_reach(engine, Some(&screen), (e, &group))
+            && let Some((p, f)) = r.out_of_reach(s, Some(&screen), (e, &group))
         {
             out.tried.push(not_tested(r.phase, p, f));
             continue;

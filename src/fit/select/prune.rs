@@ -241,7 +241,7 @@ pub(super) fn swap_pass(s: &Search, round: usize, out: &mut FitOutcome) -> bool 
             // the current set's on the same data.
             let known = engine.fit_known(train, &others, e, &targets);
             let far = (!partial && known.is_none()).then(reach).flatten();
-            if let Some((p, f)) = far.and_then(|r| r.out_of_reach(engine, None, (e, &targets))) {
+            if let Some((p, f)) = far.and_then(|r| r.out_of_reach(s, None, (e, &targets))) {
                 out.tried.push(Tried::not_tested(round, Phase::SwapScreen, e.id(), &targets, p, f));
                 continue;
             }

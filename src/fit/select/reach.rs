@@ -38,6 +38,11 @@
 //! A candidate whose linear prediction reaches b is admitted by the screen on that
 //! prediction, and is never judged here.
 //!
+//! **A richer model of a loss** whose plain variant is out of reach on the same joints is
+//! judged from the plain variant's fit there ([`Reach::extension_out`]), in either mode: on
+//! that leg, the two Stribeck and two load-dependent frictions cost 5–7 replays of the probes'
+//! data each where their own coarse fits take 12–25, and are out of reach as those find.
+//!
 //! [`SearchPolicy::probe_seconds`]: super::policy::SearchPolicy::probe_seconds
 
 use std::sync::Arc;
@@ -45,12 +50,13 @@ use std::sync::Arc;
 use crate::fit::effects::{Applied, Effect};
 use crate::sim2real::recording::Recording;
 
-use super::Errors;
 use super::coarse;
 use super::engine::Engine;
+use super::extension;
 use super::groups::same_data;
 use super::policy::Phase;
 use super::screen::Screen;
+use super::{Errors, Search};
 
 /// The probes' data of a base model and the bar a candidate's coarse fit there must reach.
 pub(super) struct Reach {
@@ -58,6 +64,9 @@ pub(super) struct Reach {
     base: Vec<Applied>,
     /// The RMSE on the probes' data above which a candidate is out of reach [rad].
     bar: f64,
+    /// The scored samples of the probes' data (an RMSE `bar` there is a squared residual of
+    /// `n` × `bar`²).
+    n: usize,
     /// Beside a kept lead: the screen's bar (an RMSE on the screen's data [rad]) that a
     /// candidate's linear prediction may reach, which then admits it as the screen would.
     screen_bar: Option<f64>,
@@ -80,12 +89,13 @@ impl Reach {
         if same_data(&probes, short) {
             return None;
         }
-        let rmse = engine.errors(&probes, at_floor)?.rmse();
-        let bar = engine.opts.policy.floor_screen_ratio * rmse;
+        let at = engine.errors(&probes, at_floor)?;
+        let bar = engine.opts.policy.floor_screen_ratio * at.rmse();
         bar.is_finite().then(|| Reach {
             probes,
             base: base.to_vec(),
             bar,
+            n: at.n,
             screen_bar: None,
             phase: Phase::FloorScreen,
         })
@@ -116,6 +126,7 @@ impl Reach {
             probes,
             base: base.to_vec(),
             bar,
+            n: p_err.n,
             screen_bar: Some(screen_bar),
             phase: Phase::ReachScreen,
         })
@@ -131,10 +142,11 @@ impl Reach {
     /// ([`coarse::fit`]: from the linear step when `screen` models it, else a budget of
     /// `screen_evals` replays), remembered by the engine. Beside a lead, a candidate whose
     /// linear prediction reaches the screen's bar is never out of reach (the screen admits it
-    /// on that prediction).
+    /// on that prediction). A richer model of a loss whose plain variant is out of reach is
+    /// first judged from the plain variant's fit there ([`Reach::extension_out`]).
     pub(super) fn out_of_reach(
         &self,
-        engine: &Engine,
+        s: &Search,
         screen: Option<&Screen>,
         (e, g): (&'static dyn Effect, &[String]),
     ) -> Option<(Vec<f64>, f64)> {
@@ -143,15 +155,77 @@ impl Reach {
         {
             return None;
         }
+        if let Some(judged) = self.extension_out(s, screen, (e, g)) {
+            return Some(judged);
+        }
+        let (p, f) = self.fit(s.engine, screen, (e, g));
+        self.out((p, f))
+    }
+
+    /// The coarse fit on the probes' data that judges `e` on `g` (see [`Reach::out_of_reach`]).
+    fn fit(
+        &self,
+        engine: &Engine,
+        screen: Option<&Screen>,
+        (e, g): (&'static dyn Effect, &[String]),
+    ) -> (Vec<f64>, f64) {
         let data = (&self.probes[..], &self.base[..]);
-        let (p, f) = match screen {
+        match screen {
             Some(s) => coarse::fit(engine, s, data, (e, g)),
             None => engine.fit_budget(data.0, data.1, e, g, engine.opts.policy.screen_evals),
-        };
+        }
+    }
+
+    /// `Some` (the fit) when a coarse fit `(p, f)` on the probes' data is out of reach.
+    fn out(&self, (p, f): (Vec<f64>, f64)) -> Option<(Vec<f64>, f64)> {
         // (Beside a lead, a fit that failed on the probes' data proves nothing: the screen
         // judges the candidate.)
         let failed = p.is_empty() || !f.is_finite();
         let out = if self.at_floor() { failed || f > self.bar } else { !failed && f > self.bar };
         out.then_some((p, f))
     }
+
+    /// A richer model of a loss ([`Effect::plain_variant`]: Stribeck, load-dependent or
+    /// external-load friction around Coulomb friction) holds its plain variant as a special
+    /// case, so at the plain variant's fit taken over it leaves what that fit leaves; its extra
+    /// parameters can only bring it nearer where the residual there has their shape. When the
+    /// plain variant on the same joints (not in the base there) is out of reach — its coarse
+    /// fit on the probes' data, the one its own judgement makes, remembered — the richer model
+    /// is judged from that fit as a deferred candidate is judged from the plain variant's
+    /// coarse fit on the screen's data ([`extension::could_reach`]: that fit taken over, the
+    /// model's further starts, the Gauss–Newton step on its columns at the best of them,
+    /// predicted and simulated), here on the probes' data against this reach's bar: `Some`
+    /// (the point of least error it simulated, and that RMSE) when no point reaches the bar,
+    /// which costs k + 2 or so replays of the probes' data instead of the richer model's own
+    /// coarse fit (a simplex of up to 25 on the three-parameter Stribeck friction). `None` —
+    /// its own coarse fit judges it — when the plain variant is within reach, its fit failed,
+    /// or the test cannot be made.
+    ///
+    /// [`Effect::plain_variant`]: crate::fit::effects::Effect::plain_variant
+    fn extension_out(
+        &self,
+        s: &Search,
+        screen: Option<&Screen>,
+        (e, g): (&'static dyn Effect, &[String]),
+    ) -> Option<(Vec<f64>, f64)> {
+        let plain = e.plain_variant()?;
+        let in_base = |j: &String| {
+            self.base.iter().any(|a| a.effect.id() == plain.id() && a.joints.contains(j))
+        };
+        if !s.allowed.iter().any(|id| id == plain.id()) || g.iter().any(in_base) {
+            return None;
+        }
+        let (pp, _) = self.out(self.fit(s.engine, screen, (plain, g)))?;
+        let sse_bar = self.n as f64 * self.bar * self.bar;
+        let reaches = |sse: f64| sse <= sse_bar;
+        let data = (&self.probes[..], &self.base[..]);
+        match extension::could_reach(s, data, (e, g), &pp, &reaches) {
+            (false, Some((p, f))) if f.is_finite() => Some((p, f)),
+            _ => None,
+        }
+    }
 }
+
+#[cfg(test)]
+#[path = "reach_tests.rs"]
+mod tests;

@@ -388,9 +388,16 @@ fn an_alias_is_judged_within_reach_of_the_floor_on_the_probes_data_alone() {
     let probes = engine.probe_set(&recs, &[], || vec![recs[0].clone()]);
     let probe_s = probes[0].t.last().unwrap() - probes[0].t[0];
     let reach = Reach::new(&engine, &recs, &[], &floor).expect("probes held");
+    let allowed = [ViscousDamping.id().to_string(), PositionOffset.id().to_string()];
+    let s = crate::fit::select::Search {
+        engine: &engine,
+        train: &recs,
+        heldout: &recs,
+        allowed: &allowed,
+    };
     let before = engine.rollout_stats();
-    assert!(reach.out_of_reach(&engine, None, (&ViscousDamping, &g)).is_none());
-    let far = reach.out_of_reach(&engine, None, (&PositionOffset, &g));
+    assert!(reach.out_of_reach(&s, None, (&ViscousDamping, &g)).is_none());
+    let far = reach.out_of_reach(&s, None, (&PositionOffset, &g));
     let (_, f) = far.expect("a position offset cannot come near a damping");
     let floor_rmse = engine.errors(&probes, &floor).expect("replay").rmse();
     assert!(f > opts.policy.floor_screen_ratio * floor_rmse, "{f} vs {floor_rmse}");
