@@ -23,23 +23,43 @@ pub(super) type Point = (Vec<f64>, f64);
 pub(super) type Coarse = Option<Point>;
 
 /// The coarse fit of `e` on `g` on `short` (`screen_evals` replays): a smooth one-parameter
-/// candidate goes on from the screen's linear step by secant steps (one replay each); any other
-/// is fitted on the probes' data of `short` ([`on_probes`]) when the screen holds them.
+/// candidate goes on from the screen's linear step by secant steps (one replay each); a smooth
+/// one of several parameters from its linear step when one replay confirms it
+/// ([`confirmed_step`]); a non-smooth one is fitted on the probes' data of `short`
+/// ([`on_probes`]) when the screen holds them.
 pub(super) fn fit(
+    engine: &Engine,
+    screen: &Screen,
+    data: (&[Recording], &[Applied]),
+    cand: (&'static dyn Effect, &[String]),
+) -> (Vec<f64>, f64) {
+    fit_to(engine, screen, data, cand, f64::INFINITY)
+}
+
+/// [`fit`] in a round whose bar for a full fit is a gain of `bar` on `short` (relative to its
+/// base RMSE; infinite before a fit set it): a smooth candidate whose step is not confirmed
+/// is then fitted on the probes' data too, and a point of the probes' fit whose replay on
+/// `short` reaches the bar admits the candidate, and stands ([`on_probes`]).
+pub(super) fn fit_to(
     engine: &Engine,
     screen: &Screen,
     (short, applied): (&[Recording], &[Applied]),
     (e, g): (&'static dyn Effect, &[String]),
+    bar: f64,
 ) -> (Vec<f64>, f64) {
     let linear = screen.predict(e.id(), g).and_then(|p| {
         let gain = 1.0 - p.train_rmse / screen.base_rmse();
         engine.fit_secant(short, applied, (e, g), (p.step, gain))
     });
+    let probes = || on_probes(engine, (short, applied), (e, g), bar);
+    // (A smooth one only once a fit set the bar it is judged against: before, its coarse fit
+    // starts the round's lead's full fit, as it did.)
     let cheap = || {
         if e.smooth() {
             confirmed_step(engine, screen, (short, applied), (e, g))
+                .or_else(|| bar.is_finite().then(probes).flatten())
         } else {
-            on_probes(engine, (short, applied), (e, g))
+            probes()
         }
     };
     linear
@@ -95,6 +115,7 @@ fn on_probes(
     engine: &Engine,
     (short, applied): (&[Recording], &[Applied]),
     (e, g): (&'static dyn Effect, &[String]),
+    bar: f64,
 ) -> Option<(Vec<f64>, f64)> {
     let probes = engine.probe_set_held(short, applied)?;
     if same_data(&probes, short) {
@@ -115,6 +136,11 @@ fn on_probes(
     let neutral = neutral_params(engine.robot, &m0, (e, g));
     let fs = engine.score(short, &with_candidate(applied, (e, g), p.clone(), neutral.as_deref()));
     if fs.is_finite() && agrees(1.0 - fs / base_s, 1.0 - fp / base_p, pol) {
+        return Some((p, fs));
+    }
+    // A point that reaches the round's bar on `short` admits the candidate whatever a fit
+    // there would add (its full fit goes on from it).
+    if fs.is_finite() && 1.0 - fs / base_s >= bar {
         return Some((p, fs));
     }
     let (q, fq) = engine.fit_budget(short, applied, e, g, pol.screen_evals);
@@ -268,7 +294,9 @@ mod gain_tests;
 #[cfg(test)]
 mod tests {
     use super::{agrees, nothing_on_probes, on_probes};
-    use crate::fit::effects::{Backlash, CoulombFriction, Effect, StribeckFriction};
+    use crate::fit::diagnose::diagnose;
+    use crate::fit::effects::{Backlash, CoulombFriction, Effect, GainError, StribeckFriction};
+    use crate::fit::select::screen::Screen;
     use crate::fit::select::{Engine, FitOptions, Search, SearchPolicy};
     use crate::sim2real::recording::Recording;
 
@@ -294,12 +322,13 @@ mod tests {
         let g = vec!["servo".to_string()];
         let secs = |r: &[Recording]| r.iter().map(|x| x.t.last().unwrap() - x.t[0]).sum::<f64>();
         // Not held: no screen made the probes' data on this base.
-        assert!(on_probes(&engine, (&recs, &[]), (&Backlash, &g)).is_none());
+        assert!(on_probes(&engine, (&recs, &[]), (&Backlash, &g), f64::INFINITY).is_none());
         let probes = engine.probe_set(&recs, &[], || vec![recs[1].clone()]);
         let base = engine.errors_held(&recs, &[]).expect("replay").rmse();
         let _ = engine.errors_held(&probes, &[]).expect("replay");
         let before = engine.rollout_stats().simulated_s;
-        let (p, f) = on_probes(&engine, (&recs, &[]), (&Backlash, &g)).expect("fitted");
+        let (p, f) =
+            on_probes(&engine, (&recs, &[]), (&Backlash, &g), f64::INFINITY).expect("fitted");
         let cost = engine.rollout_stats().simulated_s - before;
         // The play explains most of the residual, at the grid's point of the truth.
         assert!((p[0] - 0.04).abs() < 1e-9 && f < 0.5 * base, "{p:?}: {f} of {base}");
@@ -326,7 +355,8 @@ mod tests {
         let base = engine.errors_held(&recs, &[]).expect("replay").rmse();
         let base_p = engine.errors_held(&probes, &[]).expect("replay").rmse();
         let before = engine.rollout_stats().simulated_s;
-        let (p, f) = on_probes(&engine, (&recs, &[]), (&Backlash, &g)).expect("fitted");
+        let (p, f) =
+            on_probes(&engine, (&recs, &[]), (&Backlash, &g), f64::INFINITY).expect("fitted");
         let cost = engine.rollout_stats().simulated_s - before;
         assert_eq!(f, base, "{p:?}");
         // What the fit found on the probes' data is below the smallest improvement kept.
@@ -335,6 +365,39 @@ mod tests {
         // Only the probes' fit was replayed, nothing of the screen's data.
         let budget = opts.policy.screen_evals as f64 * secs(&probes);
         assert!(cost <= budget + 1e-9, "{cost} s replayed for {budget}");
+    }
+
+    /// Where the probes' fit, replayed on the screen's data, does not confirm the gain it made on
+    /// the probes (here: a trust of 1, which confirms no gain but itself), the coarse fit on the
+    /// screen's data follows — unless that replay reaches the round's bar: the point admits the
+    /// candidate and stands, for no more than its one replay of the screen's data.
+    #[test]
+    fn a_probes_fit_whose_replay_reaches_the_bar_stands() {
+        let (robot, recs) = pendulum_with_play();
+        let policy = SearchPolicy { linear_trust: 1.0, ..SearchPolicy::default() };
+        let opts = FitOptions { policy, ..FitOptions::default() };
+        let engine = Engine::new(&robot, &recs, &opts);
+        let g = vec!["servo".to_string()];
+        let secs = |r: &[Recording]| r.iter().map(|x| x.t.last().unwrap() - x.t[0]).sum::<f64>();
+        let probes = engine.probe_set(&recs, &[], || vec![recs[1].clone()]);
+        let base = engine.score(&recs, &[]);
+        let base_p = engine.score(&probes, &[]);
+        let (q, fq) = engine.fit_budget(&probes, &[], &Backlash, &g, opts.policy.screen_evals);
+        let m0 = super::model_with(&robot, &[]);
+        let neutral = super::neutral_params(&robot, &m0, (&Backlash, &g));
+        let at = super::with_candidate(&[], (&Backlash, &g), q.clone(), neutral.as_deref());
+        let fs = engine.score(&recs, &at);
+        let (reached, want) = (1.0 - fs / base, 1.0 - fq / base_p);
+        assert!(reached > opts.policy.min_rel_improvement && reached != want, "{reached} {want}");
+        // Its replay reaches the bar: the probes' fit stands, no fit on the screen's data.
+        let before = engine.rollout_stats().simulated_s;
+        let got = on_probes(&engine, (&recs, &[]), (&Backlash, &g), reached);
+        assert_eq!(got, Some((q.clone(), fs)));
+        assert!(engine.rollout_stats().simulated_s - before <= secs(&recs) + 1e-9);
+        // Just short of it: the coarse fit on the screen's data is made.
+        let before = engine.rollout_stats().simulated_s;
+        let _ = on_probes(&engine, (&recs, &[]), (&Backlash, &g), reached + 1e-9);
+        assert!(engine.rollout_stats().simulated_s - before >= secs(&recs));
     }
 
     /// The pendulum servo, with a Coulomb friction of `friction` N·m when given, recorded by
@@ -374,6 +437,43 @@ mod tests {
             let n = cost / one;
             assert!(one > 0.0 && n >= 1.0 && (n - n.round()).abs() < 1e-6, "{cost} s for {one} s");
         }
+    }
+
+    /// A smooth candidate whose linear step does not confirm (here: a gain error under a trust
+    /// of 1, which confirms no gain but itself) is coarse-fitted on the probes' data once a fit
+    /// set the round's bar, as a non-smooth one, and that fit, replayed once on the screen's
+    /// data, stands where it reaches the bar: the step's replay and that one are all it costs
+    /// of the screen's data. Before a bar is set (the round's lead) it is coarse-fitted on the
+    /// screen's data, as it was.
+    #[test]
+    fn a_smooth_coarse_fit_without_a_confirmed_step_runs_on_the_probes_data() {
+        let (robot, recs) =
+            crate::synth::recorded::pendulum(Some((GainError.id(), vec![0.9, 1.4])), 3, 7);
+        let policy = SearchPolicy { linear_trust: 1.0, ..SearchPolicy::default() };
+        let opts = FitOptions { policy, ..FitOptions::default() };
+        let engine = Engine::new(&robot, &recs, &opts);
+        let g = vec!["servo".to_string()];
+        let evals = opts.policy.screen_evals;
+        let secs = |r: &[Recording]| r.iter().map(|x| x.t.last().unwrap() - x.t[0]).sum::<f64>();
+        let base = engine.errors_held(&recs, &[]).expect("replay");
+        let allowed = vec![GainError.id().to_string()];
+        let mut diag =
+            diagnose(&robot, &recs, &base.eps, &engine.joints, &allowed, opts.gap_mask_s);
+        let screen = Screen::build(&engine, &recs, &[], &base, &mut diag, &|_, _| false);
+        let probes = engine.probe_set_held(&recs, &[]).expect("made by the screen");
+        let (q, _) = engine.fit_budget(&probes, &[], &GainError, &g, evals);
+        let bar = opts.policy.min_rel_improvement;
+        let before = engine.rollout_stats().simulated_s;
+        let (p, f) = super::fit_to(&engine, &screen, (&recs, &[]), (&GainError, &g), bar);
+        let cost = engine.rollout_stats().simulated_s - before;
+        assert_eq!(p, q, "the probes' fit stands");
+        assert!(1.0 - f / base.rmse() >= bar, "{f} of {}", base.rmse());
+        assert!(cost <= 2.0 * secs(&recs) + 1e-9, "{cost} s replayed");
+        // No bar yet: the coarse fit on the screen's data.
+        let before = engine.rollout_stats().simulated_s;
+        let (p0, _) = super::fit(&engine, &screen, (&recs, &[]), (&GainError, &g));
+        assert!(engine.rollout_stats().simulated_s - before > 2.0 * secs(&recs));
+        assert_eq!(p0, engine.fit_budget(&recs, &[], &GainError, &g, evals).0);
     }
 
     #[test]

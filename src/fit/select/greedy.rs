@@ -207,6 +207,9 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
                 })
                 .collect();
             engine.report(round, Phase::Screen, None);
+            // (A replayed point that reaches the bar a fit set admits the candidate.)
+            let admits = if best_gain > 0.0 { cut } else { f64::INFINITY };
+            let at = (short, &applied[..]);
             let fits: Vec<(Vec<f64>, f64)> = cands[range.clone()]
                 .par_iter()
                 .zip(&out_of)
@@ -216,7 +219,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
                     coarse::deferred(s, (*e, g), &cands, &coarse)
                         .or_else(|| far.clone().map(|(p, _)| (p, f64::INFINITY))) // judged below
                         .or_else(trust) // judged below
-                        .unwrap_or_else(|| coarse::fit(engine, &screen, (short, &applied), (*e, g)))
+                        .unwrap_or_else(|| coarse::fit_to(engine, &screen, at, (*e, g), admits))
                 })
                 .collect();
             for ((c, f), o) in cands[range.clone()].iter().zip(&fits).zip(&out_of) {

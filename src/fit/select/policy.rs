@@ -100,9 +100,10 @@ pub struct SearchPolicy {
     /// predicted (the model held as far as the step; both below `min_rel_improvement` also
     /// agree), or after `screen_evals` replays [ratio]. The same test confirms the linear step
     /// of a smooth candidate of several (all screened) parameters, replayed once, as its coarse
-    /// fit, and a non-smooth candidate's coarse fit made on the probes' data by its gain on the
-    /// screen's data against its gain there; else the coarse fit of `screen_evals` replays of
-    /// the screen's data follows. A coarse fit the test confirms is fitted in full only when it
+    /// fit, and the coarse fit made on the probes' data of a non-smooth candidate, or of a
+    /// smooth one without a confirmed step, by its gain on the screen's data against its gain
+    /// there (or its reaching `screen_share`'s bar); else the coarse fit of `screen_evals`
+    /// replays of the screen's data follows. A coarse fit the test confirms is fitted in full only when it
     /// lowers the held-out RMSE by more than this × `min_rel_improvement`
     /// (`trust::heldout_needed`). A pair's fit is taken to gain at most 1 / this times what the
     /// linear combination of its members' columns predicts beyond its better member
@@ -301,7 +302,7 @@ pub const FIELDS: &[(&str, &str, &str)] = &[
     (
         "linear_trust",
         "ratio",
-        "a smooth one-parameter candidate's coarse fit is secant Gauss-Newton steps from the screen's linear step (one replay each), stopping at the first step that achieves between this and its inverse times the relative improvement its linear model predicted (both below min_rel_improvement also agree), or after screen_evals replays; the same test confirms a several-parameter smooth candidate's linear step (one replay) and a non-smooth candidate's coarse fit on the probes' data (its gain on the screen's data against its gain there) as the coarse fit, else screen_evals replays of the screen's data follow; a coarse fit it confirms is fitted in full only when it lowers the held-out RMSE by more than this × min_rel_improvement; a pair's fit is taken to gain at most 1 / this times the gain its members' columns predict beyond its better member, judged before any pair replay",
+        "a smooth one-parameter candidate's coarse fit is secant Gauss-Newton steps from the screen's linear step (one replay each), stopping at the first step that achieves between this and its inverse times the relative improvement its linear model predicted (both below min_rel_improvement also agree), or after screen_evals replays; the same test confirms a several-parameter smooth candidate's linear step (one replay) and the coarse fit on the probes' data of a non-smooth candidate or of a smooth one without a confirmed step (its gain on the screen's data against its gain there) as the coarse fit, else screen_evals replays of the screen's data follow; a coarse fit it confirms is fitted in full only when it lowers the held-out RMSE by more than this × min_rel_improvement; a pair's fit is taken to gain at most 1 / this times the gain its members' columns predict beyond its better member, judged before any pair replay",
     ),
     (
         "floor_screen_ratio",
