@@ -201,7 +201,7 @@ fn stance_from_a_keyframe_past_a_joint_stop_is_inconclusive_with_that_reason() {
         let reason = p.reason.as_deref().unwrap_or("");
         assert!(
             reason.contains(
-                "1 joint outside its range (`right_ankle_yaw` at 0.6, 0.4 past [-0.2, 0.2]"
+                "the keyframe places 1 joint outside its range (`right_ankle_yaw` at 0.6, 0.4 past [-0.2, 0.2]"
             ),
             "{reason}"
         );

@@ -115,6 +115,9 @@ pub const RANGE_TOLERANCE: f64 = 0.02;
 /// than [`RANGE_TOLERANCE`] of it: how many, and the farthest one.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct OutOfRange {
+    /// The pose the run starts from, as the detail names it: "the keyframe" or "the default
+    /// pose qpos0 (no keyframe)" (`keyframe-state`'s words).
+    pub pose: &'static str,
     pub count: usize,
     /// The farthest joint: name, position, range, distance past it (rad or m).
     pub worst: Option<(String, f64, [f64; 2], f64)>,
@@ -124,7 +127,12 @@ pub struct OutOfRange {
 /// constraints throw such joints back at the first step, so the robot does not stand in the
 /// pose the run means to judge (a URDF copy holds them there against their stops).
 pub fn out_of_range(robot: &Robot) -> OutOfRange {
-    let mut r = OutOfRange::default();
+    let pose = if robot.key.key.is_some() {
+        "the keyframe"
+    } else {
+        "the default pose qpos0 (no keyframe)"
+    };
+    let mut r = OutOfRange { pose, ..OutOfRange::default() };
     for j in &robot.joints {
         if !j.limited || !matches!(j.jtype, JointType::Hinge | JointType::Slide) {
             continue;
@@ -354,9 +362,10 @@ pub fn floor_added(f: &Figures) -> Option<f64> {
 fn in_range_detail(r: &OutOfRange) -> String {
     let n = crate::util::fmt_num;
     match &r.worst {
-        None => "the keyframe places every limited joint inside its range".to_string(),
+        None => format!("{} places every limited joint inside its range", r.pose),
         Some((name, x, range, past)) => format!(
-            "the keyframe places {} joint{} outside {} range (`{name}` at {}, {} past [{}, {}], `keyframe-state`): the joint limits throw the robot out of the pose the run should stand in",
+            "{} places {} joint{} outside {} range (`{name}` at {}, {} past [{}, {}], `keyframe-state`): the joint limits throw the robot out of the pose the run should stand in",
+            r.pose,
             r.count,
             if r.count == 1 { "" } else { "s" },
             if r.count == 1 { "its" } else { "their" },
@@ -365,5 +374,45 @@ fn in_range_detail(r: &OutOfRange) -> String {
             n(range[0], 4),
             n(range[1], 4)
         ),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn load_xml(tag: &str, xml: &str) -> Robot {
+        let dir = std::env::temp_dir().join(format!("modellint_stance_{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        let p = dir.join(format!("{tag}.xml"));
+        std::fs::write(&p, xml).expect("write");
+        crate::model::load(&mut crate::model::source::SourceMap::default(), &p, None)
+            .expect("loads")
+    }
+
+    /// A knee limited to [0.2, 1.5] rad: qpos0 (0) lies 0.2 rad below it, 15 % of the range,
+    /// beyond the 2 % tolerance; a keyframe at 0.6 rad lies inside.
+    fn knee(key: &str) -> String {
+        format!(
+            r#"<mujoco><compiler angle="radian"/><worldbody>
+            <geom type="plane" size="1 1 .1"/>
+            <body pos="0 0 .5"><freejoint/><geom size=".05"/>
+              <body><joint name="knee" axis="0 1 0" range="0.2 1.5"/><geom size=".03"/></body>
+            </body></worldbody>{key}</mujoco>"#
+        )
+    }
+
+    /// The detail names the pose the run starts from: qpos0 when the model has no keyframe.
+    #[test]
+    fn the_detail_names_the_default_pose_without_a_keyframe() {
+        let r = out_of_range(&load_xml("nokey", &knee("")));
+        assert_eq!(r.count, 1, "{r:?}");
+        let d = in_range_detail(&r);
+        assert!(d.starts_with("the default pose qpos0 (no keyframe) places 1 joint"), "{d}");
+        let key = r#"<keyframe><key name="stand" qpos="0 0 .5 1 0 0 0 0.6"/></keyframe>"#;
+        let r = out_of_range(&load_xml("key", &knee(key)));
+        assert_eq!(r.count, 0, "{r:?}");
+        let d = in_range_detail(&r);
+        assert_eq!(d, "the keyframe places every limited joint inside its range");
     }
 }
