@@ -381,13 +381,11 @@ fn in_range_detail(r: &OutOfRange) -> String {
 mod tests {
     use super::*;
 
+    /// The robot of `xml` (the replay tests' loader) and its temporary directory, removed.
     fn load_xml(tag: &str, xml: &str) -> Robot {
-        let dir = std::env::temp_dir().join(format!("modellint_stance_{}", std::process::id()));
-        std::fs::create_dir_all(&dir).expect("temp dir");
-        let p = dir.join(format!("{tag}.xml"));
-        std::fs::write(&p, xml).expect("write");
-        crate::model::load(&mut crate::model::source::SourceMap::default(), &p, None)
-            .expect("loads")
+        let (robot, dir) = crate::sim2real::replay::tests::robot_from_xml(tag, xml);
+        std::fs::remove_dir_all(dir).ok();
+        robot
     }
 
     /// A knee limited to [0.2, 1.5] rad: qpos0 (0) lies 0.2 rad below it, 15 % of the range,
@@ -405,12 +403,12 @@ mod tests {
     /// The detail names the pose the run starts from: qpos0 when the model has no keyframe.
     #[test]
     fn the_detail_names_the_default_pose_without_a_keyframe() {
-        let r = out_of_range(&load_xml("nokey", &knee("")));
+        let r = out_of_range(&load_xml("stance-nokey", &knee("")));
         assert_eq!(r.count, 1, "{r:?}");
         let d = in_range_detail(&r);
         assert!(d.starts_with("the default pose qpos0 (no keyframe) places 1 joint"), "{d}");
         let key = r#"<keyframe><key name="stand" qpos="0 0 .5 1 0 0 0 0.6"/></keyframe>"#;
-        let r = out_of_range(&load_xml("key", &knee(key)));
+        let r = out_of_range(&load_xml("stance-key", &knee(key)));
         assert_eq!(r.count, 0, "{r:?}");
         let d = in_range_detail(&r);
         assert_eq!(d, "the keyframe places every limited joint inside its range");
