@@ -8,6 +8,12 @@ use crate::rules::inertia::isotropic_base_inertia::inertia_loc;
 use crate::rules::{Context, Domain, Rule, RuleMeta, opt};
 use crate::util::fmt_num;
 
+use super::mirror_places::{com_differs, geoms_misplaced, reference_pose};
+
+/// Size difference tolerated between mirrored collision geoms whatever their size, m: the
+/// 0.1–0.2 mm export noise of mesh-derived sizes, with a margin.
+pub(super) const SIZE_NOISE: f64 = 0.0005;
+
 declare_rule! {
     /// ## What it does
     /// Pairs left and right joints, actuators and bodies by swapping the side markers in their
@@ -33,8 +39,15 @@ declare_rule! {
     /// agree and whose `<inertial>` the file states — moments MuJoCo computes from the geoms
     /// follow the collision geometry, compared on its own; when the masses differ too, the
     /// moments are in the mass finding's note, so every differing quantity of a pair is
-    /// reported whatever the tolerances), and the types and sizes of
-    /// each body pair's collision geoms (which covers the feet).
+    /// reported whatever the tolerances), and the types, sizes and places of
+    /// each body pair's collision geoms (which covers the feet): when they match in type and
+    /// size, each right geom's place on its body (its centre's offset from the body's origin at
+    /// qpos0), reflected across the pair's mirror plane, must lie within `place_tolerance` (or
+    /// `geom_tolerance` of the geom's bounding radius) of a partner's — or, for one part
+    /// mounted turned on both sides, within it with the same local coordinates in the other
+    /// body's frame. Body frames whose convention differs between the sides (a foot frame turned
+    /// 180° about its axis, the geom placed accordingly) are mirror images in the world and
+    /// pass; a sole box moved 13 mm on one side is reported.
     /// Quadruped legs pair by their `FL_`/`FR_`, `RL_`/`RR_` or `HL_`/`HR_` (Spot-style hind
     /// legs; and ANYmal-style `LF_`/`RF_`, `LH_`/`RH_`) prefixes, in either case; a biped's
     /// `LL_`/`LR_` (leg left, leg right) prefixes pair when the partner name exists (the same
@@ -68,6 +81,7 @@ declare_rule! {
             opt("tolerance", 0.01, "ratio", Domain::NON_NEGATIVE, "relative difference tolerated between mirrored scalars"),
             opt("range_tolerance", 0.005, "rad or m", Domain::NON_NEGATIVE, "absolute difference tolerated between mirrored range ends (0.005 rad ≈ 0.3°: calibrated hardware limits differ by a few mrad)"),
             opt("geom_tolerance", 0.02, "ratio", Domain::NON_NEGATIVE, "relative size difference tolerated between mirrored collision geoms (or 0.5 mm)"),
+            opt("place_tolerance", 0.005, "m", Domain::NON_NEGATIVE, "distance tolerated between a collision geom's place on its body and its mirror partner's, mirrored (or geom_tolerance of the geom's bounding radius, if larger): CAD exports of the two halves of a mirrored part place their shapes within a millimetre or two, a shape moved or mistyped by a digit lies centimetres off"),
             opt("com_tolerance", 0.01, "m", Domain::NON_NEGATIVE, "distance tolerated between a body's centre of mass and its mirror's reflected across the pair's mirror plane (halfway between its limb roots) at the reference pose (CAD exports of the two halves of a mirrored part and asymmetric wiring place them within millimetres)"),
             opt("com_fraction", 0.25, "fraction", Domain::NON_NEGATIVE, "the same distance as a share of the centres of mass' offsets from their body origins: a centre of mass 0.1 m off its joint is also tolerated 25 mm"),
             opt("inertia_tolerance", 0.05, "ratio", Domain::NON_NEGATIVE, "relative difference tolerated between mirrored bodies' principal moments of inertia (CAD exports of the two halves of a mirrored part differ by 1–2 %)"),
@@ -89,14 +103,14 @@ fn r(v: [f64; 2]) -> String {
     format!("[{}, {}]", fmt_num(v[0], 4), fmt_num(v[1], 4))
 }
 
-struct Pair<'a> {
-    kind: ElemKind,
-    left: (usize, &'a str),
-    right: (usize, &'a str),
+pub(super) struct Pair<'a> {
+    pub(super) kind: ElemKind,
+    pub(super) left: (usize, &'a str),
+    pub(super) right: (usize, &'a str),
 }
 
 impl Pair<'_> {
-    fn finding(
+    pub(super) fn finding(
         &self,
         cx: &Context,
         attr: &str,
@@ -328,7 +342,7 @@ pub fn same_geoms(robot: &Robot, a: &[usize], b: &[usize], rel: f64, abs: f64) -
     true
 }
 
-fn colliders(robot: &Robot, body: usize) -> Vec<usize> {
+pub(super) fn colliders(robot: &Robot, body: usize) -> Vec<usize> {
     robot.geoms.iter().filter(|g| g.body == body && g.collides()).map(|g| g.id).collect()
 }
 
@@ -494,190 +508,15 @@ impl Rule for MirrorAsymmetry {
                 out.push(f);
             }
             let (sa, sb) = (geom_signature(robot, l), geom_signature(robot, rr));
-            if !same_geoms(robot, &colliders(robot, l), &colliders(robot, rr), gtol, 0.0005) {
+            if !same_geoms(robot, &colliders(robot, l), &colliders(robot, rr), gtol, SIZE_NOISE) {
                 out.push(
                     p.finding(cx, "name", "collision geoms", sig_str(&sa), sig_str(&sb), "")
                         .label("collision geometry differs from the mirror body")
                         .note("the mirrored bodies' collision geoms differ in number, type or size by more than mesh export noise (matched one to one, sizes within 2 % or 0.5 mm); one side then collides, or touches the ground, differently from the other"),
                 );
+            } else if let Some(f) = geoms_misplaced(cx, &p, &pose) {
+                out.push(f);
             }
         }
     }
-}
-
-/// Body origins and centres of mass in the world at the reference pose (qpos0), where a
-/// mirror-symmetric model is posed symmetrically.
-struct Pose {
-    xpos: Vec<[f64; 3]>,
-    xipos: Vec<[f64; 3]>,
-    /// Row-major body orientation.
-    xmat: Vec<[f64; 9]>,
-    geom_xpos: Vec<[f64; 3]>,
-}
-
-fn reference_pose(robot: &Robot) -> Pose {
-    let mut d = mujoco_rs::prelude::MjData::new(&robot.mj);
-    d.forward();
-    Pose {
-        xpos: d.xpos().to_vec(),
-        xipos: d.xipos().to_vec(),
-        xmat: d.xmat().to_vec(),
-        geom_xpos: d.geom_xpos().to_vec(),
-    }
-}
-
-/// The limb roots of a mirror pair: walking up both bodies' parents together while they
-/// differ, the last two distinct ancestors (the pair itself when the two hang on one body, as a
-/// gripper's fingers do). Their origins, mounted on one common body, are placed mirror-
-/// symmetrically even when a pair further down is not: a hip-roll bracket mounted turned 180°
-/// puts its axis ahead of the hip on one side and behind it on the other.
-fn limb_roots(robot: &Robot, l: usize, r: usize) -> (usize, usize) {
-    let parent = |b: usize| robot.bodies.get(b).map_or(0, |x| x.parent);
-    let (mut a, mut b) = (l, r);
-    for _ in 0..robot.bodies.len() {
-        let (pa, pb) = (parent(a), parent(b));
-        if pa == pb || pa == 0 || pb == 0 || pa == a || pb == b {
-            break;
-        }
-        (a, b) = (pa, pb);
-    }
-    (a, b)
-}
-
-/// Whether body `b` draws or collides through a mirrored mesh (a `scale` with an odd number of
-/// negative factors): the file says the part is the mirror image of another.
-fn mirrored_mesh(robot: &Robot, b: usize) -> bool {
-    let scale = robot.mj.mesh_scale();
-    robot.geoms.iter().filter(|g| g.body == b && g.mesh >= 0).any(|g| {
-        scale.get(g.mesh as usize).is_some_and(|s| s.iter().filter(|x| **x < 0.0).count() % 2 == 1)
-    })
-}
-
-/// Where the file writes body `name`'s `<inertial pos>` (the centre of mass).
-fn com_loc(robot: &Robot, name: &str) -> Option<Loc> {
-    let mut found = None;
-    robot.tree.walk(&mut |n: &crate::model::source::XNode| {
-        if found.is_none()
-            && (n.tag == "body" || n.tag == "link")
-            && n.name() == Some(name)
-            && let Some(i) = n.children_tagged("inertial").next()
-        {
-            found = Some(
-                i.attr("pos")
-                    .or(i.children_tagged("origin").next().and_then(|o| o.attr("xyz")))
-                    .map_or(i.loc, |a| a.loc),
-            );
-        }
-    });
-    found
-}
-
-/// A mirror pair whose stated centres of mass are not mirror images: the right body's centre of
-/// mass reflected across the pair's mirror plane (halfway between its limb roots) lies farther from the
-/// left's than `com_tolerance`, and than `com_fraction` of their offsets from the origins.
-fn com_differs(cx: &Context, p: &Pair, pose: &Option<Pose>) -> Option<Finding> {
-    let robot = cx.robot;
-    let pose = pose.as_ref()?;
-    // Stated inertials only: a centre of mass MuJoCo computes from the geoms follows the
-    // collision geometry, compared on its own.
-    let loc = com_loc(robot, p.right.1)?;
-    let lloc = com_loc(robot, p.left.1)?;
-    let (ol, or) = (*pose.xpos.get(p.left.0)?, *pose.xpos.get(p.right.0)?);
-    let (cl, cr) = (*pose.xipos.get(p.left.0)?, *pose.xipos.get(p.right.0)?);
-    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-    let norm = |a: [f64; 3]| dot(a, a).sqrt();
-    // The mirror plane: halfway between the pair's limb roots (`limb_roots`), else between
-    // its own origins; origins that coincide define none.
-    let (ra, rb) = limb_roots(robot, p.left.0, p.right.0);
-    let (pa, pb) = (*pose.xpos.get(ra)?, *pose.xpos.get(rb)?);
-    let (pa, pb) = if norm(sub(pa, pb)) > 1e-6 { (pa, pb) } else { (ol, or) };
-    let gap = sub(pa, pb);
-    if !(norm(gap) > 1e-6) {
-        return None;
-    }
-    let n = gap.map(|x| x / norm(gap));
-    let off = dot([0, 1, 2].map(|k| (pa[k] + pb[k]) / 2.0), n);
-    let reflect = |g: [f64; 3]| {
-        let h = dot(g, n) - off;
-        [g[0] - 2.0 * h * n[0], g[1] - 2.0 * h * n[1], g[2] - 2.0 * h * n[2]]
-    };
-    let reflected = reflect(cr);
-    let miss = norm(sub(reflected, cl));
-    let reach = (norm(sub(cl, ol)) + norm(sub(cr, or))) / 2.0;
-    let allowed = cx.opt("com_tolerance").max(cx.opt("com_fraction") * reach);
-    if !(miss > allowed) {
-        return None;
-    }
-    // One part mounted on both sides (a gripper turned 180°) is no mirror image: its centre of
-    // mass follows the rotation between the two body frames. Unless one side's mesh is the
-    // mirrored copy of the other's, a centre of mass that fits that rotation is not reported.
-    let (ml, mr) = (*pose.xmat.get(p.left.0)?, *pose.xmat.get(p.right.0)?);
-    let local_l = [0, 1, 2].map(|k| (0..3).map(|i| ml[3 * i + k] * (cl[i] - ol[i])).sum::<f64>());
-    let rotated =
-        [0, 1, 2].map(|i| or[i] + (0..3).map(|k| mr[3 * i + k] * local_l[k]).sum::<f64>());
-    let miss_rotated = norm(sub(rotated, cr));
-    // The geoms say which: each right geom's centre at the reflection of a left geom's centre
-    // (a mirrored part), or at its image under the frames' rotation (the same part).
-    let geoms = |b: usize| -> Vec<[f64; 3]> {
-        robot
-            .geoms
-            .iter()
-            .filter(|g| g.body == b)
-            .filter_map(|g| pose.geom_xpos.get(g.id).copied())
-            .collect()
-    };
-    let (gl, gr) = (geoms(p.left.0), geoms(p.right.0));
-    let fits = |map: &dyn Fn([f64; 3]) -> [f64; 3]| {
-        !gl.is_empty()
-            && gl.len() == gr.len()
-            && gr.iter().all(|&g| gl.iter().any(|&h| norm(sub(map(g), h)) <= allowed))
-    };
-    // Right world point → left world point under the rotation between the two body frames.
-    let unrotate = |g: [f64; 3]| {
-        let local = [0, 1, 2].map(|k| (0..3).map(|i| mr[3 * i + k] * (g[i] - or[i])).sum::<f64>());
-        [0, 1, 2].map(|i| ol[i] + (0..3).map(|k| ml[3 * i + k] * local[k]).sum::<f64>())
-    };
-    let mirrored = mirrored_mesh(robot, p.left.0) != mirrored_mesh(robot, p.right.0)
-        || (fits(&reflect) && !fits(&unrotate));
-    if !mirrored && !(miss_rotated > allowed) {
-        return None;
-    }
-    let mm = |x: f64| fmt_num(1000.0 * x, 3);
-    let local =
-        |b: usize| {
-            robot.mj.body_ipos().get(b).map(|v| {
-                format!("({}, {}, {})", fmt_num(v[0], 4), fmt_num(v[1], 4), fmt_num(v[2], 4))
-            })
-        };
-    let (lr, ll) = (local(p.right.0)?, local(p.left.0)?);
-    let msg = format!(
-        "body `{}`'s centre of mass {lr} m is not the mirror image of `{}`'s ({ll} m): reflected across the mirror plane of its limb, it lies {} mm from it",
-        p.right.1,
-        p.left.1,
-        mm(miss)
-    );
-    let rloc = robot.elem_loc(ElemKind::Body, p.right.0, p.right.1);
-    Some(
-        cx.finding(msg, loc)
-            .element(format!("body {}", p.right.1), rloc)
-            .label(format!("centre of mass {lr} m"))
-            .secondary(lloc, format!("mirror `{}` has {ll} m", p.left.1))
-            .note(format!(
-                "at the reference pose (qpos0) the two bodies' origins are mirror images; their centres of mass are {} mm apart once mirrored, beyond {} mm (com_tolerance, or com_fraction of their {} mm offset from the origins); {}: one side's inertial was copied from the other without flipping the lateral coordinate, so one limb swings and loads differently and the policy learns the asymmetry",
-                mm(miss),
-                mm(allowed),
-                mm(reach),
-                if mirrored {
-                    "the two parts' geoms are mirror images (a mirrored mesh, or geoms at mirrored places), so the centre of mass must be mirrored too".to_string()
-                } else {
-                    format!("as one part turned into the other's frame they are {} mm apart too", mm(miss_rotated))
-                }
-            ))
-            .help("mirror the centre of mass of the copied side (negate its lateral coordinate in the body's frame), or take both inertials from the CAD of each part")
-            .subject(Subject::Body(p.right.0))
-            .measured(miss, "m")
-            .expected(allowed, "m")
-            .with("com_mismatch", miss),
-    )
 }
