@@ -27,6 +27,9 @@ pub struct Loaded {
     pub config: Config,
     /// Where the spec was looked for (empty `searched` when given with --spec).
     pub spec_search: SpecSearch,
+    /// The model the stance runs simulate, built by the first of them
+    /// ([`crate::probe::float::stance_model`]) and shared by the others.
+    pub stance: std::sync::OnceLock<crate::probe::float::StanceModel>,
 }
 
 /// Loads everything a lint run needs; every failure is a located `LoadError` (exit 2).
@@ -67,7 +70,7 @@ pub fn load(input: &LintInput) -> Result<Loaded, LoadError> {
         Some(p) => Some(crate::spec::load(&mut sources, &p, &names)?),
         None => None,
     };
-    Ok(Loaded { sources, robot, spec, config, spec_search })
+    Ok(Loaded { sources, robot, spec, config, spec_search, stance: std::sync::OnceLock::new() })
 }
 
 /// The spec's `[robot] keyframe` and where its value is (1-based line and column).
@@ -131,20 +134,39 @@ pub fn run_rules(l: &Loaded) -> Vec<Finding> {
             );
         }
     }
+    // The static foot rules of a model whose qpos0 places joints past their stops (no
+    // keyframe) judge it there and at the nearest pose the robot can take, and report what
+    // holds at both (`rules::contact::pose`): the clamped copy is built once, for them only.
+    let mut foot_robot: Option<Option<Robot>> = None;
     for rule in registry() {
         let meta = rule.meta();
         if !l.config.enabled(meta) {
             continue;
         }
-        let cx = Context {
-            robot: &l.robot,
+        let cx = |robot| Context {
+            robot,
             spec: l.spec.as_ref(),
             sources: &l.sources,
             options: l.config.options(meta),
             meta,
             level: l.config.level(meta),
         };
-        rule.check(&cx, &mut findings);
+        let clamped = if crate::rules::contact::pose::FOOT_RULES.contains(&meta.id) {
+            foot_robot
+                .get_or_insert_with(|| crate::rules::contact::pose::foot_rules_robot(&l.robot))
+                .as_ref()
+        } else {
+            None
+        };
+        match clamped {
+            None => rule.check(&cx(&l.robot), &mut findings),
+            Some(c) => {
+                let (mut at_qpos0, mut at_clamped) = (Vec::new(), Vec::new());
+                rule.check(&cx(&l.robot), &mut at_qpos0);
+                rule.check(&cx(c), &mut at_clamped);
+                findings.extend(crate::rules::contact::pose::at_both(at_qpos0, at_clamped));
+            }
+        }
     }
     apply_suppressions(l, findings)
 }

@@ -356,6 +356,20 @@ pub fn key_state(m: &MjModel, key: Option<usize>, keys: &[String]) -> KeyState {
     if let Some(k) = key {
         let _ = d.reset_keyframe(k);
     }
+    state_of(m, d, key, keys)
+}
+
+/// As [`key_state`] at the pose `qpos` (with no keyframe): the model's qpos0 with `clamped`
+/// joints moved into their ranges. `qpos` of the wrong length leaves qpos0.
+pub fn pose_state(m: &MjModel, qpos: &[f64], clamped: usize) -> KeyState {
+    let mut d = MjData::new(m);
+    if d.qpos().len() == qpos.len() {
+        d.qpos_mut().copy_from_slice(qpos);
+    }
+    KeyState { clamped, ..state_of(m, d, None, &[]) }
+}
+
+fn state_of(m: &MjModel, mut d: MjData<&MjModel>, key: Option<usize>, keys: &[String]) -> KeyState {
     d.forward();
     let nv = mj::raw(m).nv.max(0) as usize;
     let full = mj::full_mass_matrix(&d);
@@ -371,5 +385,6 @@ pub fn key_state(m: &MjModel, key: Option<usize>, keys: &[String]) -> KeyState {
         body_xpos: d.xpos().to_vec(),
         joint_xanchor: d.xanchor().to_vec(),
         joint_xaxis: d.xaxis().to_vec(),
+        clamped: 0,
     }
 }

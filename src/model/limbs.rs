@@ -65,8 +65,15 @@ impl Robot {
     /// wheel ends its chain: a round actuator housing on a thigh, concentric with the hip, is
     /// not a wheel). Wheels turn without end by design: they need no range and are not feet.
     pub fn is_wheel(&self, joint: usize) -> bool {
+        self.joints.get(joint).is_some_and(|j| !j.limited) && self.turns_a_wheel(joint)
+    }
+
+    /// Whether hinge `joint` is shaped as a wheel's, limited or not: the geometry test of
+    /// [`Robot::is_wheel`] (a round colliding geom centred on the axis, at the end of its chain).
+    /// A wheel written with a range (a URDF's `revolute` wheel) turns about itself all the same.
+    pub fn turns_a_wheel(&self, joint: usize) -> bool {
         let Some(j) = self.joints.get(joint) else { return false };
-        if j.jtype != JointType::Hinge || j.limited {
+        if j.jtype != JointType::Hinge {
             return false;
         }
         let beyond = |mut b: usize| {

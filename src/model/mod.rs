@@ -27,7 +27,7 @@ use errloc::{
     attribute_error_location, missing_file_location, mujoco_element_location, mujoco_error_location,
 };
 use extract::extract;
-pub use extract::key_state;
+pub use extract::{key_state, pose_state};
 use mjcf::{ElemKind, ElemSrc, SourceIndex};
 use source::{Loc, SourceMap, XNode};
 
@@ -292,6 +292,10 @@ pub struct KeyState {
     /// World position of each joint's anchor and its unit world axis (hinge, slide) at the key.
     pub joint_xanchor: Vec<[f64; 3]>,
     pub joint_xaxis: Vec<[f64; 3]>,
+    /// With no keyframe, how many limited joints qpos0 placed outside their range and this
+    /// state moved to their nearest stop (the static foot rules' pose: `rules::contact::pose`);
+    /// 0 at a keyframe or at qpos0 as written.
+    pub clamped: usize,
 }
 
 /// Gravity, timestep, integrator, disabled features.

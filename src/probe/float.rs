@@ -50,8 +50,15 @@ fn lowest_point(robot: &Robot) -> f64 {
     if z.is_finite() { z } else { 0.0 }
 }
 
-/// The model a stance run on `l` simulates (built afresh for each run: each run has its own).
-pub fn stance_model(l: &Loaded) -> StanceModel {
+/// The model the stance runs on `l` simulate: built by the first run that asks (`stance-settle`
+/// or `foot-slide`, which may run at once: the second waits) and shared by every later one of
+/// the lint. Each run makes its own `MjData`, so sharing the model shares no state.
+pub fn stance_model(l: &Loaded) -> &StanceModel {
+    l.stance.get_or_init(|| build(l))
+}
+
+/// The model a stance run on `l` simulates, built afresh.
+fn build(l: &Loaded) -> StanceModel {
     let robot = &l.robot;
     let Some(how) = needs_float(robot) else { return StanceModel::Own };
     // A URDF's world geoms are its root link's, never a floor.

@@ -264,10 +264,14 @@ pub fn preconditions(f: &Figures, w: &Words) -> super::Preconditions {
             "above_floor",
             f.buried.0 == 0,
             if f.buried.0 == 0 {
-                "the keyframe places no colliding geom of the robot under the floor".to_string()
+                format!(
+                    "{} places no colliding geom of the robot under the floor",
+                    start_pose(&f.out_of_range)
+                )
             } else {
                 format!(
-                    "the keyframe places {} colliding geom{} of the robot entirely under the floor (the deepest {} m below its surface, `keyframe-state`): the robot starts inside the floor and stands on nothing",
+                    "{} places {} colliding geom{} of the robot entirely under the floor (the deepest {} m below its surface, `keyframe-state`): the robot starts inside the floor and stands on nothing",
+                    start_pose(&f.out_of_range),
                     f.buried.0,
                     if f.buried.0 == 1 { "" } else { "s" },
                     n(f.buried.1, 3)
@@ -358,14 +362,20 @@ pub fn floor_added(f: &Figures) -> Option<f64> {
     }
 }
 
+/// The pose a stance run starts from, in the preconditions' words ("the keyframe", "the default
+/// pose qpos0 (no keyframe)"); "the keyframe" for figures made without a start.
+fn start_pose(r: &OutOfRange) -> &'static str {
+    if r.pose.is_empty() { "the keyframe" } else { r.pose }
+}
+
 /// The `in_range` precondition's detail.
 fn in_range_detail(r: &OutOfRange) -> String {
     let n = crate::util::fmt_num;
     match &r.worst {
-        None => format!("{} places every limited joint inside its range", r.pose),
+        None => format!("{} places every limited joint inside its range", start_pose(r)),
         Some((name, x, range, past)) => format!(
             "{} places {} joint{} outside {} range (`{name}` at {}, {} past [{}, {}], `keyframe-state`): the joint limits throw the robot out of the pose the run should stand in",
-            r.pose,
+            start_pose(r),
             r.count,
             if r.count == 1 { "" } else { "s" },
             if r.count == 1 { "its" } else { "their" },
@@ -413,4 +423,41 @@ mod tests {
         let d = in_range_detail(&r);
         assert_eq!(d, "the keyframe places every limited joint inside its range");
     }
+
+    /// `above_floor` names the same pose as `in_range`: qpos0 for a model without a keyframe,
+    /// whether or not a geom starts under the floor.
+    #[test]
+    fn above_floor_names_the_start_pose() {
+        let above = |r: &Robot| {
+            let s = start(r);
+            let p = preconditions(&s.figures(), &WORDS_FOR_TEST);
+            p.list().iter().find(|p| p.name == "above_floor").map(|p| (p.met, p.detail.clone()))
+        };
+        let (met, d) = above(&load_xml("stance-above-nokey", &knee(""))).unwrap();
+        assert!(met, "{d}");
+        assert_eq!(
+            d,
+            "the default pose qpos0 (no keyframe) places no colliding geom of the robot under the floor"
+        );
+        // The base 0.4 m under the floor (its 5 cm sphere entirely below it).
+        let key = r#"<keyframe><key name="stand" qpos="0 0 -.4 1 0 0 0 0.6"/></keyframe>"#;
+        let (met, d) = above(&load_xml("stance-above-key", &knee(key))).unwrap();
+        assert!(!met, "{d}");
+        assert!(d.starts_with("the keyframe places 2 colliding geoms"), "{d}");
+        let buried = knee("").replace(r#"<body pos="0 0 .5">"#, r#"<body pos="0 0 -.4">"#);
+        let (met, d) = above(&load_xml("stance-above-buried", &buried)).unwrap();
+        assert!(!met, "{d}");
+        assert!(
+            d.starts_with("the default pose qpos0 (no keyframe) places 2 colliding geoms"),
+            "{d}"
+        );
+    }
+
+    const WORDS_FOR_TEST: Words = Words {
+        finite: "finite",
+        diverged: "diverged",
+        fixed_base: "fixed",
+        loaded_when: "",
+        upright_when: "",
+    };
 }

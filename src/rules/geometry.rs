@@ -3,6 +3,7 @@ pub mod collision_visual_mismatch;
 pub mod mesh_scale;
 pub mod mirror_asymmetry;
 mod mirror_com;
+mod mirror_places;
 pub mod oversized_collision;
 pub mod oversized_weight;
 pub mod self_collision_at_keyframe;

@@ -12,7 +12,11 @@ use crate::util::fmt_num;
 
 declare_rule! {
     /// ## What it does
-    /// At the standing keyframe (or `qpos0` when the model has none), checks that every foot's
+    /// At the standing keyframe (or `qpos0` when the model has none; when `qpos0` places limited
+    /// joints past their stops, a pose the robot cannot take, both at `qpos0` and at `qpos0`
+    /// with those joints moved to their nearest stop, reporting what holds at both, named "qpos0
+    /// clamped into the joint ranges" — as every static foot rule: `foot-collision-geometry`,
+    /// `links-without-collision`, `torsional-friction-length` too), checks that every foot's
     /// collision geoms form one flat sole: the lowest points of the foot and toe geoms that touch
     /// down (those within `contact_window` of the foot's lowest point) lie within
     /// `max_height_spread` of the sole height (the median of the foot body's own geoms), and every
@@ -95,14 +99,6 @@ fn median(mut v: Vec<f64>) -> f64 {
         v[n / 2]
     } else {
         0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
-}
-
-fn pose_word(robot: &Robot) -> String {
-    match &robot.key.key_name {
-        Some(k) if !k.is_empty() => format!("keyframe `{k}`"),
-        Some(_) => "the keyframe".into(),
-        None => "qpos0".into(),
     }
 }
 
@@ -221,7 +217,7 @@ impl ToeTilt {
         let spread = cx.opt("max_height_spread");
         let max_tilt = cx.opt("max_tilt");
         let window = cx.opt("contact_window");
-        let pose = pose_word(robot);
+        let pose = super::pose::pose_word(robot);
         // A point foot or a wheel has no sole to tilt.
         for foot in feet(robot, cx.spec).into_iter().filter(|f| f.kind == FootKind::Flat) {
             let low: Vec<(usize, f64)> =

@@ -12,7 +12,11 @@ declare_rule! {
     /// chains, each leaving the root link (or a body every chain passes through that hangs from
     /// the root link by one joint: a waist, whose pelvis carries the legs) through a joint of its
     /// own and ending, two or more hinge/slide joints further out, in a leaf link (not a wheel) whose collision geometry
-    /// reaches the robot's lowest point (within 1 cm) below the root link's frame at qpos0.
+    /// reaches the robot's lowest point (within 1 cm) below the root link's frame at qpos0, two
+    /// of which swing side by side (each has a hinge whose axis lies within 45° of the line
+    /// between the two feet, as hip pitch and knee axes do; a gripper's fingers close on each
+    /// other about axes across that line, so a palm with two two-joint fingers below it is no
+    /// robot with legs).
     /// Says that MuJoCo's importer welded the root to the world and that the foot rules
     /// (`toe-tilt`, `foot-collision-geometry`, `links-without-collision`,
     /// `torsional-friction-length`, and the foot soles of `collision-visual-mismatch`) judged
@@ -128,6 +132,51 @@ fn legs(robot: &Robot, wheel_legs: bool) -> (Vec<(usize, usize)>, f64) {
     (out, root_z - zmin)
 }
 
+/// Whether two of the `legs` (as (leaf, top of chain)) swing side by side, as legs do: each
+/// has a hinge whose axis at qpos0 lies nearer the line between the two leaves than across it
+/// (within 45°). A biped's or quadruped's hip pitch and knee axes point from one leg to the
+/// other (the legs swing fore and aft beside each other); a gripper's fingers close on each
+/// other, about axes across the line between their tips, so two fingers of two joints each
+/// hanging below a palm are no legs.
+fn side_by_side(robot: &Robot, legs: &[(usize, usize)]) -> bool {
+    let axes = |leaf: usize, top: usize| -> Vec<[f64; 3]> {
+        let mut chain = vec![leaf];
+        let mut b = leaf;
+        while b != top && b != 0 {
+            b = robot.bodies[b].parent;
+            chain.push(b);
+        }
+        robot
+            .joints
+            .iter()
+            .filter(|j| j.jtype == JointType::Hinge && chain.contains(&j.body))
+            .filter(|j| !robot.is_wheel(j.id))
+            .filter_map(|j| robot.key.joint_xaxis.get(j.id).copied())
+            .collect()
+    };
+    let at = |b: usize| robot.key.body_xpos.get(b).copied().unwrap_or([0.0; 3]);
+    let along = |axes: &[[f64; 3]], d: [f64; 3]| {
+        axes.iter().any(|a| {
+            let n = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+            n > 0.0
+                && (a[0] * d[0] + a[1] * d[1] + a[2] * d[2]).abs() / n
+                    >= std::f64::consts::FRAC_1_SQRT_2
+        })
+    };
+    legs.iter().enumerate().any(|(i, &(la, ta))| {
+        legs.iter().skip(i + 1).filter(|l| l.1 != ta).any(|&(lb, tb)| {
+            let (pa, pb) = (at(la), at(lb));
+            let d = [pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]];
+            let n = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+            if !(n > 1e-9) {
+                return false;
+            }
+            let d = d.map(|x| x / n);
+            along(&axes(la, ta), d) && along(&axes(lb, tb), d)
+        })
+    })
+}
+
 /// The legs of a URDF that MuJoCo's importer welded to the world (no free joint) and whose
 /// tree is legs — two or more chains leaving the root, each ending in a foot-like leaf (see
 /// the rule's docs) — as in [`legs`]; `None` for any other model (an MJCF, a floating URDF, a
@@ -140,7 +189,7 @@ fn welded_legs(robot: &Robot) -> Option<(Vec<(usize, usize)>, f64)> {
     let mut tops: Vec<usize> = legs.iter().map(|l| l.1).collect();
     tops.sort_unstable();
     tops.dedup();
-    (tops.len() >= 2).then_some((legs, depth))
+    (tops.len() >= 2 && side_by_side(robot, &legs)).then_some((legs, depth))
 }
 
 /// The legs of a URDF robot, wheel-legs included (a wheel at the end of a hip and a knee), as
@@ -154,7 +203,7 @@ pub fn urdf_legs(robot: &Robot) -> Option<Vec<usize>> {
     let mut tops: Vec<usize> = legs.iter().map(|l| l.1).collect();
     tops.sort_unstable();
     tops.dedup();
-    (tops.len() >= 2).then(|| legs.iter().map(|l| l.0).collect())
+    (tops.len() >= 2 && side_by_side(robot, &legs)).then(|| legs.iter().map(|l| l.0).collect())
 }
 
 /// Whether `robot` is a legged URDF that MuJoCo's importer welded to the world: the foot rules

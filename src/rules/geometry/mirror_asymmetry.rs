@@ -9,6 +9,11 @@ use crate::rules::{Context, Domain, Rule, RuleMeta, opt};
 use crate::util::fmt_num;
 
 use super::mirror_com::{com_differs, reference_pose};
+use super::mirror_places::geoms_misplaced;
+
+/// Size difference tolerated between mirrored collision geoms whatever their size, m: the
+/// 0.1–0.2 mm export noise of mesh-derived sizes, with a margin.
+pub(super) const SIZE_NOISE: f64 = 0.0005;
 
 declare_rule! {
     /// ## What it does
@@ -41,8 +46,15 @@ declare_rule! {
     /// agree and whose `<inertial>` the file states — moments MuJoCo computes from the geoms
     /// follow the collision geometry, compared on its own; when the masses differ too, the
     /// moments are in the mass finding's note, so every differing quantity of a pair is
-    /// reported whatever the tolerances), and the types and sizes of
-    /// each body pair's collision geoms (which covers the feet).
+    /// reported whatever the tolerances), and the types, sizes and places of
+    /// each body pair's collision geoms (which covers the feet): when they match in type and
+    /// size, each right geom's place on its body (its centre's offset from the body's origin at
+    /// qpos0), reflected across the pair's mirror plane, must lie within `place_tolerance` (or
+    /// `geom_tolerance` of the geom's bounding radius) of a partner's — or, for one part
+    /// mounted turned on both sides, within it with the same local coordinates in the other
+    /// body's frame. Body frames whose convention differs between the sides (a foot frame turned
+    /// 180° about its axis, the geom placed accordingly) are mirror images in the world and
+    /// pass; a sole box moved 13 mm on one side is reported.
     /// Quadruped legs pair by their `FL_`/`FR_`, `RL_`/`RR_` or `HL_`/`HR_` (Spot-style hind
     /// legs; and ANYmal-style `LF_`/`RF_`, `LH_`/`RH_`) prefixes, in either case; a biped's
     /// `LL_`/`LR_` (leg left, leg right) prefixes pair when the partner name exists (the same
@@ -76,6 +88,7 @@ declare_rule! {
             opt("tolerance", 0.01, "ratio", Domain::NON_NEGATIVE, "relative difference tolerated between mirrored scalars"),
             opt("range_tolerance", 0.005, "rad or m", Domain::NON_NEGATIVE, "absolute difference tolerated between mirrored range ends (0.005 rad ≈ 0.3°: calibrated hardware limits differ by a few mrad)"),
             opt("geom_tolerance", 0.02, "ratio", Domain::NON_NEGATIVE, "relative size difference tolerated between mirrored collision geoms (or 0.5 mm)"),
+            opt("place_tolerance", 0.005, "m", Domain::NON_NEGATIVE, "distance tolerated between a collision geom's place on its body and its mirror partner's, mirrored (or geom_tolerance of the geom's bounding radius, if larger): CAD exports of the two halves of a mirrored part place their shapes within a millimetre or two, a shape moved or mistyped by a digit lies centimetres off"),
             opt("com_tolerance", 0.01, "m", Domain::NON_NEGATIVE, "distance tolerated between a body's centre of mass and its mirror's reflected across the pair's mirror plane (halfway between its limb roots) at the reference pose (CAD exports of the two halves of a mirrored part and asymmetric wiring place them within millimetres)"),
             opt("com_fraction", 0.25, "fraction", Domain::NON_NEGATIVE, "the same distance as a share of the centres of mass' offsets from their body origins: a centre of mass 0.1 m off its joint is also tolerated 25 mm"),
             opt("pose_tolerance", 5.0, "deg", Domain::NON_NEGATIVE, "angle within which a mirror pair's centre of mass and carried bodies must share one turn about the pair's hinge, and beyond which that turn counts as a differing joint zero (CAD exports place mirrored parts a fraction of a degree apart)"),
@@ -105,7 +118,7 @@ pub(super) struct Pair<'a> {
 }
 
 impl Pair<'_> {
-    fn finding(
+    pub(super) fn finding(
         &self,
         cx: &Context,
         attr: &str,
@@ -337,7 +350,7 @@ pub fn same_geoms(robot: &Robot, a: &[usize], b: &[usize], rel: f64, abs: f64) -
     true
 }
 
-fn colliders(robot: &Robot, body: usize) -> Vec<usize> {
+pub(super) fn colliders(robot: &Robot, body: usize) -> Vec<usize> {
     robot.geoms.iter().filter(|g| g.body == body && g.collides()).map(|g| g.id).collect()
 }
 
@@ -503,12 +516,14 @@ impl Rule for MirrorAsymmetry {
                 out.push(f);
             }
             let (sa, sb) = (geom_signature(robot, l), geom_signature(robot, rr));
-            if !same_geoms(robot, &colliders(robot, l), &colliders(robot, rr), gtol, 0.0005) {
+            if !same_geoms(robot, &colliders(robot, l), &colliders(robot, rr), gtol, SIZE_NOISE) {
                 out.push(
                     p.finding(cx, "name", "collision geoms", sig_str(&sa), sig_str(&sb), "")
                         .label("collision geometry differs from the mirror body")
                         .note("the mirrored bodies' collision geoms differ in number, type or size by more than mesh export noise (matched one to one, sizes within 2 % or 0.5 mm); one side then collides, or touches the ground, differently from the other"),
                 );
+            } else if let Some(f) = geoms_misplaced(cx, &p, &pose) {
+                out.push(f);
             }
         }
     }

@@ -25,12 +25,19 @@ declare_rule! {
     /// - **beyond a turn**: a revolute joint with a stop more than a full turn (2π, plus the
     ///   rounding of a value written to two decimals) from its zero: the widest real stops,
     ///   cable-wound multi-turn axes such as a UR arm's, are ±2π;
+    /// - **a leg joint turning a full turn**: a hinge of a leg (the joints between a foot, or
+    ///   a URDF leg's lowest link, and the body the legs leave) whose range spans a full turn
+    ///   or more (2π, less the rounding of a value written to two decimals: Mini Cheetah's
+    ///   ±6.28 rad): a hip or knee cannot turn a full turn, its leg would pass through the body
+    ///   or its own thigh, so the range is a placeholder. A wheel at a leg's end (a round geom
+    ///   centred on the hinge, ending the chain) turns about itself and is not judged, nor is
+    ///   an arm's multi-turn axis (a UR arm's ±2π is the hardware's);
     /// - **no range**: a revolute or prismatic joint with no `<limit>`, or `lower` = `upper` =
     ///   0 (both absent or written as 0), which MuJoCo compiles as an unlimited joint.
     ///
-    /// In an MJCF file the beyond-a-turn case is judged on the compiled `range` of every
-    /// limited hinge (ANYmal C's `range="-9.42478 9.42478"`, 1.5 turns); the other cases are
-    /// URDF `<limit>` attributes.
+    /// In an MJCF file the beyond-a-turn and leg cases are judged on the compiled `range` of
+    /// every limited hinge (ANYmal C's `range="-9.42478 9.42478"`, 1.5 turns); the other cases
+    /// are URDF `<limit>` attributes.
     ///
     /// Joints sharing one case are reported together; joints whose subtree has no extent
     /// beyond the axis are not judged for effort and velocity.
@@ -79,6 +86,7 @@ enum Case {
     Velocity,
     Zero,
     BeyondTurn,
+    LegTurn,
     NoRange,
 }
 
@@ -131,15 +139,106 @@ fn urdf_mass(root: &XNode) -> Option<f64> {
     (m > 0.0).then_some(m)
 }
 
+/// The hinges of the robot's legs: the joints on the chain from each foot (a URDF leg's lowest
+/// link, `welded_legged_base::urdf_legs`; in an MJCF with a floating base, the foot rules'
+/// feet) up to, not including, the first body that carries another foot too (the trunk, or a
+/// waist's pelvis), and that do not turn a wheel.
+fn leg_hinges(cx: &Context) -> Vec<usize> {
+    let robot = cx.robot;
+    let leaves: Vec<usize> = if robot.format == Format::Urdf {
+        crate::rules::contact::welded_legged_base::urdf_legs(robot).unwrap_or_default()
+    } else if crate::rules::contact::feet::floating_bases(robot).is_empty() {
+        Vec::new()
+    } else {
+        crate::rules::contact::feet::feet(robot, cx.spec).iter().map(|f| f.root).collect()
+    };
+    if leaves.len() < 2 {
+        return Vec::new();
+    }
+    let mut chain: Vec<usize> = Vec::new();
+    for &leaf in &leaves {
+        let mut b = leaf;
+        for _ in 0..robot.bodies.len() {
+            let carries_other = leaves.iter().any(|&o| o != leaf && in_subtree(robot, b, o));
+            if b == 0 || carries_other {
+                break;
+            }
+            chain.push(b);
+            b = robot.bodies[b].parent;
+        }
+    }
+    robot
+        .joints
+        .iter()
+        .filter(|j| j.jtype == JointType::Hinge && chain.contains(&j.body))
+        .filter(|j| !wheel(robot, j.id))
+        .map(|j| j.id)
+        .collect()
+}
+
+/// Whether hinge `j` turns a wheel, limited or not: shaped as one ([`Robot::turns_a_wheel`])
+/// and every colliding geom of its body centred on the axis (within 10 % of the geom's
+/// bounding radius, the wheel test's tolerance), so the body turns about itself. A shank with
+/// a round knee housing concentric with the knee and a foot at its end swings the foot out on
+/// a lever: a leg joint.
+fn wheel(robot: &Robot, j: usize) -> bool {
+    let (Some(joint), Some(a), Some(u)) =
+        (robot.joints.get(j), robot.key.joint_xanchor.get(j), robot.key.joint_xaxis.get(j))
+    else {
+        return false;
+    };
+    robot.turns_a_wheel(j)
+        && robot
+            .geoms
+            .iter()
+            .filter(|g| g.body == joint.body && crate::model::contact::takes_part(robot, g.id))
+            .all(|g| {
+                let Some(p) = robot.key.geom_xpos.get(g.id) else { return false };
+                let d = [p[0] - a[0], p[1] - a[1], p[2] - a[2]];
+                let along = d[0] * u[0] + d[1] * u[1] + d[2] * u[2];
+                let off = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2] - along * along).max(0.0).sqrt();
+                off <= 0.1 * g.rbound.max(0.0)
+            })
+}
+
+/// A leg hinge limited to `[l, h]` whose range spans a full turn or more (and no stop lies
+/// beyond a turn: that case is reported as such).
+fn leg_turn(robot: &Robot, legs: &[usize], j: usize, l: f64, h: f64, at: Loc) -> Option<Hit> {
+    let far = l.abs().max(h.abs());
+    if !legs.contains(&j) || far > FULL_TURN + WRITTEN_ROUNDING {
+        return None;
+    }
+    let span = h - l;
+    let turns = fmt_num(span / FULL_TURN, 3);
+    (span >= FULL_TURN - WRITTEN_ROUNDING).then(|| Hit {
+        case: Case::LegTurn,
+        joint: j,
+        at,
+        value: span,
+        detail: format!(
+            "`{}` [{}, {}] rad ({turns} turn{})",
+            robot.joints[j].name,
+            fmt_num(l, 4),
+            fmt_num(h, 4),
+            if turns == "1" { "" } else { "s" }
+        ),
+    })
+}
+
 /// The limited hinges of an MJCF model whose compiled range places a stop more than a full
-/// turn from the joint's zero.
-fn mjcf_beyond_turn(robot: &Robot) -> Vec<Hit> {
+/// turn from the joint's zero, or spans a full turn on a leg.
+fn mjcf_beyond_turn(cx: &Context) -> Vec<Hit> {
+    let robot = cx.robot;
+    let legs = leg_hinges(cx);
     let mut hits = Vec::new();
     for j in robot.joints.iter().filter(|j| j.jtype == JointType::Hinge && j.limited) {
         let [l, h] = j.range;
         let far = l.abs().max(h.abs());
+        let (at, _) = robot.attr_loc(ElemKind::Joint, j.id, &j.name, "range");
+        if let Some(hit) = leg_turn(robot, &legs, j.id, l, h, at) {
+            hits.push(hit);
+        }
         if far > FULL_TURN + WRITTEN_ROUNDING {
-            let (at, _) = robot.attr_loc(ElemKind::Joint, j.id, &j.name, "range");
             hits.push(Hit {
                 case: Case::BeyondTurn,
                 joint: j.id,
@@ -172,13 +271,16 @@ impl Rule for PlaceholderJointLimits {
         let multiple = cx.opt("weight_multiple");
         let max_speed = cx.opt("max_tip_speed");
         if robot.format != Format::Urdf {
-            let hits = mjcf_beyond_turn(robot);
-            let group: Vec<&Hit> = hits.iter().collect();
-            if let Some(f) = finding(cx, Case::BeyondTurn, &group, multiple, max_speed, 0.0) {
-                out.push(f);
+            let hits = mjcf_beyond_turn(cx);
+            for case in [Case::BeyondTurn, Case::LegTurn] {
+                let group: Vec<&Hit> = hits.iter().filter(|h| h.case == case).collect();
+                if let Some(f) = finding(cx, case, &group, multiple, max_speed, 0.0) {
+                    out.push(f);
+                }
             }
             return;
         }
+        let legs = leg_hinges(cx);
         let g = robot.opt.gravity;
         let g = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
         let mass = urdf_mass(&robot.tree).unwrap_or_else(|| robot.mass_split().0);
@@ -205,6 +307,12 @@ impl Rule for PlaceholderJointLimits {
                     hits.push(Hit { case: Case::NoRange, joint: j.id, at, value: 0.0, detail });
                 } else if jtype == "revolute" && j.limited {
                     let far = l.abs().max(h.abs());
+                    let at = if l.abs() >= h.abs() { lo } else { hi };
+                    if let Some(hit) =
+                        leg_turn(robot, &legs, j.id, l, h, at.map_or(name_at, |v| v.1))
+                    {
+                        hits.push(hit);
+                    }
                     if far > FULL_TURN + WRITTEN_ROUNDING {
                         let at = if l.abs() >= h.abs() { lo } else { hi };
                         hits.push(Hit {
@@ -287,7 +395,14 @@ impl Rule for PlaceholderJointLimits {
                 }
             }
         }
-        for case in [Case::Effort, Case::Velocity, Case::Zero, Case::BeyondTurn, Case::NoRange] {
+        for case in [
+            Case::Effort,
+            Case::Velocity,
+            Case::Zero,
+            Case::BeyondTurn,
+            Case::LegTurn,
+            Case::NoRange,
+        ] {
             let group: Vec<&Hit> = hits.iter().filter(|h| h.case == case).collect();
             if let Some(f) = finding(cx, case, &group, multiple, max_speed, mass) {
                 out.push(f);
@@ -364,6 +479,19 @@ fn finding(
             "a revolute joint's stops lie within a turn of its zero (the widest real ones, cable-wound multi-turn axes such as a UR arm's, are ±2π); MuJoCo makes these the joint's range, a limit that never engages (the links swing through each other), and frameworks that scale actions or observations by the range spread them over it",
             "write the hardware's stops (datasheet or CAD) as lower and upper; a joint that turns without end is type=\"continuous\"",
         ),
+        Case::LegTurn => (
+            format!(
+                "{n} leg joint{s} {} a range of a full turn (2π) or more, which no hip or knee can turn: {shown}",
+                if n == 1 { "has" } else { "have" }
+            ),
+            "a leg joint turning a full turn".to_string(),
+            "a leg's hinges (hip, knee, ankle) swing links that hit the body or the next link long before a full turn: a range of a turn or more (±6.28 rad is a full turn each way) is a placeholder, a limit that never engages, so the simulated leg swings through the body, and frameworks that scale actions or observations by the range spread them over it. A wheel at a leg's end turns about itself and is not judged, nor an arm's multi-turn axis",
+            if robot.format == Format::Urdf {
+                "write the hardware's stops (datasheet or CAD) as lower and upper"
+            } else {
+                "write the hardware's stops (datasheet or CAD) as range=\"lo hi\""
+            },
+        ),
         Case::NoRange => (
             format!(
                 "{n} joint{s} declared revolute or prismatic {states} no range: MuJoCo compiles {} unlimited, ROS tools read {} locked at 0: {shown}",
@@ -384,6 +512,7 @@ fn finding(
         Case::Effort => f.measured(top.value, "×").expected(multiple, "×"),
         Case::Velocity => f.measured(top.value, "m/s").expected(max_speed, "m/s"),
         Case::BeyondTurn => f.measured(top.value, "rad").expected(FULL_TURN, "rad"),
+        Case::LegTurn => f.measured(top.value, "rad").expected(FULL_TURN, "rad"),
         Case::Zero | Case::NoRange => f.measured(0.0, ""),
     };
     Some(f)
