@@ -18,8 +18,8 @@ use super::pairs::{joint_pairs, pair_lookahead, refitted_at_floor};
 use super::policy::Phase;
 use super::reach::Reach;
 use super::screen::{Screen, screen_data};
-use super::trust::{heldout_columns, heldout_needed, heldout_out, plain_needed, train_reach};
-use super::trust::{trust_out, with_pair_starts};
+use super::trust::{heldout_columns, heldout_out, heldout_short, plain_needed, train_reach};
+use super::trust::{one_line_descent, trust_out, with_pair_starts};
 use super::verdict::{at_bound, verdict};
 use super::winner::{beaten_at_coarse, may_partner, on_whole_set, refine, rival_notes};
 use super::{Errors, FitOutcome, Search, Selected, Tried, set_uncertainty};
@@ -413,7 +413,8 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         // recordings do not share, and no full fit along it is made (`tried`: phase
         // "heldout_screen"); nor when that coarse fit confirms the candidate's linear model
         // (the full fit's optimum) and lowers the held-out error by less than the gate's
-        // improvement scaled by that trust ([`heldout_needed`]). The lead too: its full fit on
+        // improvement scaled by that trust; nor, after round 0, a smooth one-parameter one whose
+        // coarse fit fails the gate at the trust's edge ([`heldout_short`]). The lead too: its full fit on
         // the whole training set goes on from a coarse fit that must pass this test first. Not a
         // candidate that only its linear step admits (a coarse fit can miss the narrow basin
         // that the full fit finds). One that a kept candidate of the round beats decisively on
@@ -426,10 +427,9 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
             let mut t = applied.clone();
             t.push(Applied { effect: e, joints: group.clone(), params: cp.clone() });
             ho_c = engine.errors(heldout, &t);
-            let gate = opts.policy.gate_z(z);
-            let needed =
-                heldout_needed(predicted.map(|p| gain(p.train_rmse)), gain(cf), &opts.policy);
-            if ho_c.as_ref().is_none_or(|h| verdict(&ho_err, h, &group, gate).rel <= needed) {
+            let gate = (opts.policy.gate_z(z), one_line_descent(e, round));
+            let gains = (predicted.map(|p| gain(p.train_rmse)), gain(cf));
+            if heldout_short((&ho_err, ho_c.as_ref()), &group, gains, gate, &opts.policy) {
                 // (Its coarse fit still starts a joint pair fit, as a screened one's does.)
                 if gain(cf) >= opts.policy.min_rel_improvement {
                     fitted.push(Applied { effect: e, joints: group.clone(), params: cp.clone() });
