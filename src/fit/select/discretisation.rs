@@ -119,6 +119,7 @@ fn finer_step_holds(
         bic_decreased: false,
         kept: false,
         predicted: None,
+        simulated_s: None,
     });
     let dt = engine.robot.mj.opt().timestep;
     // Beside a winner, the note names the partner (the winner stays).

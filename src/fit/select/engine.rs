@@ -86,6 +86,9 @@ pub struct Engine<'a> {
     /// Per candidate (effect and group), whether round 0's coarse fit confirmed its linear
     /// model ([`Engine::note_trust`]).
     trust: std::sync::Mutex<std::collections::HashMap<String, bool>>,
+    /// Recording seconds of the counted simulations by the effects they ran with (their
+    /// [`effects_key`], the dataset left out): [`Engine::spent_with`].
+    spent: std::sync::Mutex<std::collections::HashMap<String, u64>>,
 }
 
 /// Rollouts and recording seconds by round ([`round_key`]) and phase name.
@@ -180,6 +183,11 @@ pub(in crate::fit::select) fn shape_key(recs: &[Recording], applied: &[Applied])
     k
 }
 
+/// The effects of a simulation with their joints, without the values or the dataset.
+fn effects_key(applied: &[Applied]) -> String {
+    applied.iter().map(|a| format!("|{}@{}", a.effect.id(), a.joints.join(","))).collect()
+}
+
 /// The memo key of a fit: the training set (by address: the search holds one for its whole
 /// run), the base effects with their parameters' exact bits, the effect, its joints and budget.
 pub(super) fn fit_key(
@@ -226,6 +234,7 @@ impl<'a> Engine<'a> {
             by_phase: Default::default(),
             by_round: Default::default(),
             trust: Default::default(),
+            spent: Default::default(),
             screens: Default::default(),
         }
     }
@@ -340,6 +349,20 @@ impl<'a> Engine<'a> {
     ) {
         let key = format!("{}@{}", effect.id(), group.join(","));
         self.trust.lock().unwrap_or_else(|e| e.into_inner()).entry(key).or_insert(trusted);
+    }
+
+    /// Recording seconds of the simulations counted so far (as the rollout counts are,
+    /// [`Engine::first_time`]) that ran `base` with `effect` on `group` added, at any values,
+    /// on any dataset: what that candidate cost on that base.
+    pub(in crate::fit::select) fn spent_with(
+        &self,
+        base: &[Applied],
+        (effect, group): (&'static dyn Effect, &[String]),
+    ) -> f64 {
+        let mut set = base.to_vec();
+        set.push(Applied { effect, joints: group.to_vec(), params: vec![] });
+        let spent = self.spent.lock().unwrap_or_else(|e| e.into_inner());
+        spent.get(&effects_key(&set)).map_or(0.0, |&us| us as f64 * 1e-6)
     }
 
     /// What [`Engine::note_trust`] recorded for `effect` on `group`, if anything.
@@ -527,6 +550,17 @@ impl<'a> Engine<'a> {
     ) -> Option<Errors> {
         if first {
             self.sims.fetch_add(refine.max(1) as usize, std::sync::atomic::Ordering::Relaxed);
+            // (In whole microseconds, as the rollout service counts them: a sum that does not
+            // depend on the order in which parallel fits reach their simulations.)
+            let us: u64 = recs
+                .iter()
+                .map(|r| match (r.t.first(), r.t.last()) {
+                    (Some(a), Some(b)) if b > a => ((b - a) * 1e6).round() as u64,
+                    _ => 0,
+                })
+                .sum();
+            let mut spent = self.spent.lock().unwrap_or_else(|e| e.into_inner());
+            *spent.entry(effects_key(applied)).or_default() += us;
         }
         let set = SetSpec { applied, refine: refine.max(1) };
         let eps = self.service(first).run_one(set, recs, &self.opts.replay);

@@ -528,6 +528,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
             bic_decreased: bic_after < bic_before,
             kept: false,
             predicted,
+            simulated_s: None,
         });
         if full.as_ref() == Some(&p) {
             lead_logged = Some(logged);

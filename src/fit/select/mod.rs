@@ -224,6 +224,13 @@ pub struct Tried {
     /// only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub predicted: Option<screen::Prediction>,
+    /// Recording seconds replayed with this candidate on its round's base, in every phase of
+    /// the round (its probes, coarse and full fits, held-out and other judging replays; a
+    /// simulation counted once, as `search.simulated_s` counts it: [`Engine::spent_with`]).
+    /// Greedy rounds' single candidates only; several entries of one candidate in a round
+    /// (`discretisation` beside `add`) show the same total.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub simulated_s: Option<f64>,
 }
 
 impl Tried {
@@ -249,6 +256,7 @@ impl Tried {
             bic_decreased: false,
             kept: false,
             predicted: None,
+            simulated_s: None,
         }
     }
 }
@@ -482,7 +490,13 @@ pub fn fit(robot: &Robot, recs: &[Recording], opts: &FitOptions) -> FitOutcome {
         while round < opts.policy.max_rounds {
             engine.set_start_model(&out.applied);
             engine.report(round, Phase::Diagnose, None);
+            let (base, logged) = (out.applied.clone(), out.tried.len());
             let added = greedy_round(&search, round, &mut out);
+            for t in &mut out.tried[logged..] {
+                t.simulated_s = effects::by_id(&t.effect)
+                    .map(|e| engine.spent_with(&base, (e, &t.joints)))
+                    .map(|s| (s * 10.0).round() / 10.0);
+            }
             round += 1;
             if !added {
                 break;

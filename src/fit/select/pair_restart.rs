@@ -83,6 +83,7 @@ pub(super) fn best_restart(
             bic_decreased: bic_a < bic_single,
             kept: false,
             predicted: None,
+            simulated_s: None,
         });
         if ok && best.as_ref().is_none_or(|(_, hb, ..)| h.rmse() < hb.rmse()) {
             best = Some((set, h, t, logged));

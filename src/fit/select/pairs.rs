@@ -341,6 +341,7 @@ pub(super) fn pair_lookahead(
             bic_decreased: bic_ok,
             kept: false,
             predicted: None,
+            simulated_s: None,
         });
         if !ok {
             continue;
@@ -628,6 +629,7 @@ pub(super) fn joint_pairs(
             bic_decreased: bic_after < bic_before,
             kept: false,
             predicted: None,
+            simulated_s: None,
         });
         if ok && best.as_ref().is_none_or(|(_, hb, ..)| h.rmse() < hb.rmse()) {
             best = Some((set, h, v, bic_after, logged));

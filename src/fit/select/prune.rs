@@ -48,6 +48,7 @@ pub(super) fn drop_pass(s: &Search, round: usize, out: &mut FitOutcome) -> bool 
             bic_decreased: bic_dec,
             kept: keep,
             predicted: None,
+            simulated_s: None,
         });
         if !keep {
             out.notes.push(format!(
@@ -117,6 +118,7 @@ pub(super) fn refit_drop_pass(s: &Search, round: usize, out: &mut FitOutcome) ->
             bic_decreased: bic_ok,
             kept: !ok,
             predicted: None,
+            simulated_s: None,
         });
         if ok && best.as_ref().is_none_or(|(_, _, r)| h1.rmse() < *r) {
             best = Some((i, rest, h1.rmse()));
@@ -314,6 +316,7 @@ pub(super) fn swap_pass(s: &Search, round: usize, out: &mut FitOutcome) -> bool 
                 bic_decreased: bic_ok,
                 kept: false,
                 predicted: None,
+                simulated_s: None,
             });
             let better = match &best {
                 None => true,

@@ -375,6 +375,7 @@ fn tested(
         bic_decreased: bic_ok,
         kept: ok,
         predicted: None,
+        simulated_s: None,
     }
 }
 

@@ -89,6 +89,7 @@ pub(super) fn fit_told(s: &Search, told: &[(String, Vec<String>)], out: &mut Fit
             bic_decreased: bics.1 < bics.0,
             kept: true,
             predicted: None,
+            simulated_s: None,
         });
         out.selected.push(sel);
     }

@@ -456,3 +456,39 @@ fn replays_are_booked_to_their_round_and_round_zeros_trust_stands() {
     engine.note_trust((damping, &g), false);
     assert_eq!(engine.trusted((damping, &g)), Some(true));
 }
+
+/// What a candidate cost on a base ([`Engine::spent_with`]) is the rollout service's own count
+/// of the simulations that ran it, on any dataset and at any values: each counted once (a
+/// simulation asked for again is not), the base's replay and another candidate's not at all.
+#[test]
+fn a_candidate_costs_the_seconds_of_its_own_simulations_counted_once() {
+    let (robot, recs) = pendulum_at_ticks(0.0);
+    let opts = FitOptions::default();
+    let engine = Engine::new(&robot, &recs, &opts);
+    let g = vec!["servo".to_string()];
+    let with = |e: &'static dyn Effect, p: f64| {
+        vec![Applied { effect: e, joints: g.clone(), params: vec![p] }]
+    };
+    let secs = |r: &[Recording]| r.iter().map(|x| x.t.last().unwrap() - x.t[0]).sum::<f64>();
+    // The base's replay (and whatever it measures once per recording) is not the candidate's.
+    let _ = engine.errors(&recs, &[]);
+    assert_eq!(engine.spent_with(&[], (&ViscousDamping, &g)), 0.0);
+    let before = engine.rollout_stats().simulated_s;
+    for p in [0.1, 0.2, 0.1] {
+        let _ = engine.errors(&recs, &with(&ViscousDamping, p));
+    }
+    let _ = engine.errors(&recs[..1], &with(&ViscousDamping, 0.3));
+    let cost = engine.rollout_stats().simulated_s - before;
+    // Two values on the whole set (the third is the first again) and one on a part of it.
+    let want = 2.0 * secs(&recs) + secs(&recs[..1]);
+    assert!((cost - want).abs() < 1e-3, "{cost} s replayed for {want}");
+    let spent = engine.spent_with(&[], (&ViscousDamping, &g));
+    assert!((spent - cost).abs() < 1e-3, "{spent} s for {cost} s replayed");
+    // Another candidate, or the same one on the candidate's base, has its own count.
+    assert_eq!(engine.spent_with(&[], (&CoulombFriction, &g)), 0.0);
+    let on = with(&ViscousDamping, 0.1);
+    let _ = engine.errors(&recs, &[on.clone(), with(&CoulombFriction, 0.05)].concat());
+    assert_eq!(engine.spent_with(&[], (&ViscousDamping, &g)), spent);
+    let other = engine.spent_with(&on, (&CoulombFriction, &g));
+    assert!((other - secs(&recs)).abs() < 1e-3, "{other} s");
+}
