@@ -71,7 +71,10 @@ pub(super) fn least_rmse(
         cols.iter().map(|a| cols.iter().map(|c| dot(a, c)).collect()).collect();
     let ss = dot(&r, &r);
     let (explained, _) = combine(&b, &gram);
-    (ss > 0.0 && fp.is_finite()).then(|| fp * ((ss - explained).max(0.0) / ss).sqrt())
+    if !(ss > 0.0) || !fp.is_finite() {
+        return None;
+    }
+    Some(fp * ((ss - explained).max(0.0) / ss).sqrt())
 }
 
 #[cfg(test)]
