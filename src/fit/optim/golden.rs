@@ -4,6 +4,9 @@ use rayon::prelude::*;
 
 use super::sanitize;
 
+/// Points of [`golden_section`]'s first grid, ends included [count].
+pub const GRID_POINTS: usize = 9;
+
 /// 1-D bounded minimisation on `[lo, hi]` returning `(x, f(x))`.
 ///
 /// A 9-point uniform grid (endpoints included) is scanned first so a
@@ -48,7 +51,7 @@ pub fn golden_section(
         return (lo, v);
     }
     let tol = if tol.is_finite() && tol > 0.0 { tol } else { (hi - lo) * 1e-9 };
-    let n_grid = max_evals.min(9);
+    let n_grid = max_evals.min(GRID_POINTS);
     if n_grid == 1 {
         let x = 0.5 * (lo + hi);
         let v = ev(x, &mut evals, &mut best);
@@ -63,30 +66,56 @@ pub fn golden_section(
         grid.iter().zip(raw).map(|(&x, v)| ev_known(x, v, &mut evals, &mut best)).collect();
     // First index of the minimum (deterministic on ties).
     let ib = (0..n_grid).fold(0, |b, i| if gf[i] < gf[b] { i } else { b });
-    let mut a = grid[ib.saturating_sub(1)];
-    let mut bb = grid[(ib + 1).min(n_grid - 1)];
+    let a = grid[ib.saturating_sub(1)];
+    let bb = grid[(ib + 1).min(n_grid - 1)];
 
-    let invphi = (5f64.sqrt() - 1.0) / 2.0; // 0.618...
     if evals + 2 > max_evals {
         return best;
     }
+    golden_refine(f, (a, bb), tol, max_evals - evals, best)
+}
+
+/// Golden-section refinement of the bracket `[a, b]` (which holds a minimum: no point inside is
+/// known lower than its best end) until it is narrower than `tol` or `max_evals` evaluations
+/// have been spent; returns the best point evaluated, or `best` (a point known already, e.g.
+/// the grid's) when none is lower. Fewer than two evaluations return `best` unevaluated.
+pub fn golden_refine(
+    f: &(dyn Fn(f64) -> f64 + Sync),
+    (mut a, mut bb): (f64, f64),
+    tol: f64,
+    max_evals: usize,
+    mut best: (f64, f64),
+) -> (f64, f64) {
+    if max_evals < 2 {
+        return best;
+    }
+    let ev = |x: f64, best: &mut (f64, f64)| -> f64 {
+        let v = sanitize(f(x));
+        if v < best.1 {
+            *best = (x, v);
+        }
+        v
+    };
+    let invphi = (5f64.sqrt() - 1.0) / 2.0; // 0.618...
     let mut x1 = bb - invphi * (bb - a);
     let mut x2 = a + invphi * (bb - a);
-    let mut f1 = ev(x1, &mut evals, &mut best);
-    let mut f2 = ev(x2, &mut evals, &mut best);
-    while (bb - a) > tol && evals < max_evals {
+    let mut f1 = ev(x1, &mut best);
+    let mut f2 = ev(x2, &mut best);
+    let mut n = 2;
+    while (bb - a) > tol && n < max_evals {
+        n += 1;
         if f1 <= f2 {
             bb = x2;
             x2 = x1;
             f2 = f1;
             x1 = bb - invphi * (bb - a);
-            f1 = ev(x1, &mut evals, &mut best);
+            f1 = ev(x1, &mut best);
         } else {
             a = x1;
             x1 = x2;
             f1 = f2;
             x2 = a + invphi * (bb - a);
-            f2 = ev(x2, &mut evals, &mut best);
+            f2 = ev(x2, &mut best);
         }
     }
     best

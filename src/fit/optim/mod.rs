@@ -29,7 +29,7 @@ use serde::Serialize;
 pub(crate) use crate::util::Rng;
 
 pub use cmaes::{CmaesOpts, cmaes};
-pub use golden::golden_section;
+pub use golden::{GRID_POINTS, golden_refine, golden_section};
 pub use lm::{
     LmOpts, LmResult, ROLLOUT_REL_STEP, ROLLOUT_SHORT_STEP, ROLLOUT_STAT_TOL, levenberg_marquardt,
 };

@@ -29,6 +29,7 @@ mod coarse;
 mod discretisation;
 mod engine;
 mod extension;
+mod further;
 mod greedy;
 mod groups;
 mod lead;

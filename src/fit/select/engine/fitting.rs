@@ -415,8 +415,16 @@ impl Engine<'_> {
                 }
             }
             1 => {
-                let method =
-                    Method::Line { log: effect.log_search(), max_evals: max_evals.min(40) };
+                let (log, max_evals) = (effect.log_search(), max_evals.min(40));
+                // A full fit from a coarse fit's point refines the bracket around it
+                // ([`Method::LineFrom`]) when it holds a minimum.
+                let method = match start.filter(|p| full_fit && !p.is_empty()) {
+                    Some(s) => {
+                        x0 = clamp(s);
+                        Method::LineFrom { log, max_evals }
+                    }
+                    None => Method::Line { log, max_evals },
+                };
                 let s = solve(&problem, &x0, method);
                 (s.x, s.f)
             }

@@ -1,0 +1,120 @@
+//! What a further coarse fit of a smooth candidate could add at a point already replayed on
+//! the screen's data: the largest gain the candidate's own least-squares model predicts there.
+//!
+//! A smooth candidate's coarse fit on the screen's data is Levenberg–Marquardt: each iteration
+//! differentiates the rollout residual at its point (one replay per free parameter) and steps
+//! to the minimum of the Gauss–Newton model it makes of the residual there. Where the
+//! candidate's coarse fit on the probes' data was replayed once on the screen's data, at
+//! `p`, that replay's gain is what the candidate gains there at that point (a lower bound on
+//! its coarse fit's); the Gauss–Newton model at `p` — the columns of a forward difference at
+//! `p` (the step of the least-squares fit's own Jacobian, [`ROLLOUT_REL_STEP`] of each
+//! parameter's range) and the secant through the round's base model, whose replay the screen
+//! holds — predicts the most any step from `p` can add, unbounded by the parameters' box and
+//! by a trust region (both would only shorten the step). When even that prediction cannot
+//! reach the round's bar for a full fit, no coarse fit on the screen's data is made
+//! ([`super::coarse`]): it would end below the bar, as the point itself does. The prediction
+//! costs one replay per free parameter of the screen's data; the coarse fit it replaces, two
+//! iterations of k + 1 replays or more.
+
+use rayon::prelude::*;
+
+use crate::fit::effects::{Applied, Effect, JointTarget, model_with};
+use crate::fit::optim::ROLLOUT_REL_STEP;
+use crate::sim2real::recording::Recording;
+
+use super::engine::{Engine, neutral_params, with_candidate};
+use super::screen::combine;
+
+/// The lowest RMSE on `short` that the Gauss–Newton model of `e` on `g` at `p` (RMSE `fp`
+/// there, replayed) predicts: `fp` scaled by the root of the share of the residual's sum of
+/// squares that the model's columns — one forward difference per free fitted parameter and the
+/// secant from the base `applied` — leave unexplained. `None` when a replay fails, the
+/// candidate has no free parameter or its residuals do not line up.
+pub(super) fn least_rmse(
+    engine: &Engine,
+    (short, applied): (&[Recording], &[Applied]),
+    (e, g): (&'static dyn Effect, &[String]),
+    (p, fp): (&[f64], f64),
+) -> Option<f64> {
+    let t = JointTarget::of(engine.robot, g.first()?)?;
+    let m0 = model_with(engine.robot, applied);
+    let (lo, hi) = e.bounds(&m0, &t);
+    let neutral = neutral_params(engine.robot, &m0, (e, g));
+    let k = e.fitted().min(p.len()).min(lo.len()).min(hi.len());
+    let set = |x: Vec<f64>| with_candidate(applied, (e, g), x, neutral.as_deref());
+    let resid = |a: &[Applied]| engine.residuals(short, a, &engine.joints, usize::MAX);
+    let r = resid(&set(p.to_vec()))?;
+    let free: Vec<usize> = (0..k).filter(|&i| hi[i] > lo[i]).collect();
+    if free.is_empty() || r.is_empty() {
+        return None;
+    }
+    let cols: Vec<Option<Vec<f64>>> = free
+        .par_iter()
+        .map(|&i| {
+            let mut h = ROLLOUT_REL_STEP * (hi[i] - lo[i]);
+            if p[i] + h > hi[i] {
+                h = -h;
+            }
+            let mut x = p.to_vec();
+            x[i] += h;
+            let ri = resid(&set(x)).filter(|v| v.len() == r.len())?;
+            Some(ri.iter().zip(&r).map(|(a, b)| (a - b) / h).collect())
+        })
+        .collect();
+    let mut cols: Vec<Vec<f64>> = cols.into_iter().collect::<Option<_>>()?;
+    if let Some(rb) = resid(applied).filter(|v| v.len() == r.len()) {
+        cols.push(r.iter().zip(&rb).map(|(a, b)| a - b).collect());
+    }
+    let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+    let b: Vec<f64> = cols.iter().map(|c| dot(c, &r)).collect();
+    let gram: Vec<Vec<f64>> =
+        cols.iter().map(|a| cols.iter().map(|c| dot(a, c)).collect()).collect();
+    let ss = dot(&r, &r);
+    let (explained, _) = combine(&b, &gram);
+    if !(ss > 0.0) || !fp.is_finite() {
+        return None;
+    }
+    Some(fp * ((ss - explained).max(0.0) / ss).sqrt())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::least_rmse;
+    use crate::fit::effects::{Applied, Effect, GainError};
+    use crate::fit::select::{Engine, FitOptions};
+    use crate::sim2real::recording::Recording;
+
+    /// On a servo whose gains are off (kp × 0.9, kd × 1.4), recorded by the synth: from a point
+    /// off the truth, the Gauss–Newton model predicts about what the full least-squares fit
+    /// from there reaches, for one replay per parameter; at that fit's answer it predicts
+    /// nothing more.
+    #[test]
+    fn the_model_at_a_point_predicts_what_a_fit_from_it_reaches() {
+        let (robot, recs) =
+            crate::synth::recorded::pendulum(Some((GainError.id(), vec![0.9, 1.4])), 3, 7);
+        let opts = FitOptions::default();
+        let engine = Engine::new(&robot, &recs, &opts);
+        let g = vec!["servo".to_string()];
+        let e: &'static dyn Effect = &GainError;
+        let secs: f64 = recs.iter().map(|r| r.t.last().unwrap() - r.t[0]).sum();
+        let at = |p: &[f64]| {
+            let a = Applied { effect: e, joints: g.clone(), params: p.to_vec() };
+            engine.score(&recs, &[a])
+        };
+        let _ = engine.score(&recs, &[]);
+        let p = [1.0, 1.1];
+        let fp = at(&p);
+        let before = engine.rollout_stats().simulated_s;
+        let most = least_rmse(&engine, (&recs, &[]), (e, &g), (&p, fp)).expect("modelled");
+        let cost = engine.rollout_stats().simulated_s - before;
+        assert!(cost <= 2.0 * secs + 1e-9, "{cost} s replayed for two parameters");
+        let (q, fq) = engine.fit_from(&recs, &[], (e, &g), Some(&p));
+        assert!(fq < 0.5 * fp, "the fit closes most of it: {fq} from {fp}");
+        assert!(most < fp && (most - fq).abs() <= 0.25 * (fp - fq), "{most}: fit {fq}, {fp}");
+        let at_q = least_rmse(&engine, (&recs, &[]), (e, &g), (&q, fq)).expect("modelled");
+        assert!(at_q >= 0.9 * fq && at_q <= fq, "{at_q} at the fit's {fq}");
+        // Nothing to step: no prediction.
+        let none: &[Recording] = &[];
+        assert!(least_rmse(&engine, (none, &[]), (e, &g), (&p, fp)).is_none());
+    }
+}
