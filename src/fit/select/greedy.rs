@@ -35,10 +35,6 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         out.warnings.push("the training replay diverged with the current model; stopping".into());
         return false;
     };
-    let Some(ho_err) = engine.errors_held(heldout, &applied) else {
-        out.warnings.push("the held-out replay diverged with the current model; stopping".into());
-        return false;
-    };
     // The last round's winner was judged at the floor with these effects, and the set's
     // training error is no higher now: nothing is left to explain.
     if let Some((kept, rmse)) = out.at_floor.take()
@@ -48,16 +44,6 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         out.stopped_at_floor = true;
         return false;
     }
-    // The screen's data (the stretch of every training episode where the residual is
-    // largest): the training set itself when that is short.
-    let short_set = engine.screen_set(train, &applied, || screen_data(engine, train, &tr_err));
-    // (When the training set is not longer than the screen's, it is the training set itself,
-    // so that coarse and full fits share the memo.)
-    let short = if same_data(&short_set, train) { train } else { &short_set[..] };
-    let Some(sh_err) = engine.errors_held(short, &applied) else {
-        out.warnings.push("the training replay diverged with the current model; stopping".into());
-        return false;
-    };
     // Nothing left to explain: on every fitted joint the training residual is (nearly) white,
     // at the floor that noise, quantisation and command reconstruction impose on this dataset.
     let floors = engine.floors(train, &applied, &tr_err);
@@ -68,6 +54,19 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         out.stopped_at_floor = true;
         return false;
     }
+    // Only now the held-out set and the screen's data (a round at the floor needs neither).
+    let Some(ho_err) = engine.errors_held(heldout, &applied) else {
+        out.warnings.push("the held-out replay diverged with the current model; stopping".into());
+        return false;
+    };
+    // The screen's data (the stretch of every training episode where the residual is largest):
+    // the training set itself when that is short (one slice: coarse and full fits share the memo).
+    let short_set = engine.screen_set(train, &applied, || screen_data(engine, train, &tr_err));
+    let short = if same_data(&short_set, train) { train } else { &short_set[..] };
+    let Some(sh_err) = engine.errors_held(short, &applied) else {
+        out.warnings.push("the training replay diverged with the current model; stopping".into());
+        return false;
+    };
     let diag = diagnose(robot, train, &tr_err.eps, &engine.joints, allowed, opts.gap_mask_s);
     let covered = |id: &str, j: &str| {
         applied.iter().any(|a| a.effect.id() == id && a.joints.iter().any(|x| x == j))

@@ -267,7 +267,7 @@ impl Screen {
                     c.evidence.insert("feature_explained_rms".into(), c.explained_rms);
                     let coef = dot_r(&p.column, &r) / dot(&p.column, &p.column) / p.step;
                     c.evidence.insert("sensitivity_coef".into(), coef);
-                    c.evidence.insert("probe".into(), p.v);
+                    c.evidence.insert(probe::CHOSEN_PROBE.into(), p.v);
                     // On the screen's data's scale: its RMSE times the share of the probes'.
                     c.explained_rms =
                         screen_rmse * (single.max(all) / train_ss.max(f64::MIN_POSITIVE)).sqrt();

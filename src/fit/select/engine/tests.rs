@@ -491,4 +491,21 @@ fn a_candidate_costs_the_seconds_of_its_own_simulations_counted_once() {
     assert_eq!(engine.spent_with(&[], (&ViscousDamping, &g)), spent);
     let other = engine.spent_with(&on, (&CoulombFriction, &g));
     assert!((other - secs(&recs)).abs() < 1e-3, "{other} s");
+
+/// A round that stops at the floor replays the training set and its floors only (the
+/// reconstruction replay and the two finer discretisation replays): neither the held-out set nor
+/// the screen's data, which only a round with something left to explain needs.
+#[test]
+fn a_round_at_the_floor_replays_neither_the_heldout_set_nor_the_screens_data() {
+    let (robot, recs) = pendulum_at_ticks(0.0);
+    let opts = FitOptions { estimate_start: false, ..FitOptions::default() };
+    let out = crate::fit::select::fit(&robot, &recs, &opts);
+    assert!(out.stopped_at_floor && out.applied.is_empty(), "{:?}", out.warnings);
+    let secs = |r: &[Recording]| r.iter().map(|x| x.t.last().unwrap() - x.t[0]).sum::<f64>();
+    let (train, heldout) = (secs(&out.train), secs(&out.heldout));
+    assert!(train > 0.0 && heldout > 0.0);
+    let round0 = &out.cost.simulated_s_by_round_phase["0"];
+    assert_eq!(round0.keys().copied().collect::<Vec<_>>(), ["diagnose"]);
+    let diagnose = round0["diagnose"];
+    assert!((diagnose - 4.0 * train).abs() <= 0.1, "{diagnose} s for {train} s of training");
 }

@@ -65,6 +65,13 @@ pub(super) fn dot_r(a: &[f64], r: &[Option<f64>]) -> f64 {
     a.iter().zip(r).map(|(x, y)| x * y.unwrap_or(0.0)).sum()
 }
 
+/// The diagnosis evidence naming the value of its first parameter at which a candidate's
+/// best probe was made ([`super::Screen::build`]); a later screen of the same candidate (the
+/// held-out set's, on the same base) probes that value alone, not each of [`Effect::probes`].
+///
+/// [`Effect::probes`]: crate::fit::effects::Effect::probes
+pub(in crate::fit::select) const CHOSEN_PROBE: &str = "probe";
+
 /// One probe of a candidate's parameter: the probe value, its step from the start, the
 /// training column (per unit of the parameter).
 pub(super) struct Probe {
@@ -155,7 +162,13 @@ pub(super) fn probe_batch(
             .iter()
             .map(|(i, p0, (lo, hi))| {
                 if j == 0 {
-                    effect.probes(p0[0], lo[0], hi[0], &diag[*i].evidence)
+                    // A candidate the round's training screen probed (the held-out set's
+                    // linear model, [`super::super::trust::heldout_columns`]): at the value
+                    // chosen there.
+                    match diag[*i].evidence.get(CHOSEN_PROBE) {
+                        Some(&v) if v.is_finite() => vec![v],
+                        _ => effect.probes(p0[0], lo[0], hi[0], &diag[*i].evidence),
+                    }
                 } else {
                     vec![effects::probe_step(p0[j], lo[j], hi[j])]
                 }
@@ -225,4 +238,42 @@ pub(super) fn probe_batch(
         }
     }
     members.iter().map(|m| m.0).zip(best).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::CHOSEN_PROBE;
+    use crate::fit::diagnose::diagnose;
+    use crate::fit::effects::{Effect, ViscousDamping};
+    use crate::fit::select::screen::Screen;
+    use crate::fit::select::{Engine, FitOptions};
+    use crate::sim2real::recording::Recording;
+
+    /// A candidate that a screen probed already carries the value of its best probe, and a later
+    /// screen of it (the held-out set's) probes that value alone: one replay of the probes' data
+    /// at the value named, whatever the effect's own probe would be.
+    #[test]
+    fn a_candidate_probed_before_is_probed_at_its_chosen_value_alone() {
+        let (robot, recs) =
+            crate::synth::recorded::pendulum(Some((ViscousDamping.id(), vec![0.05])), 3, 7);
+        let opts = FitOptions::default();
+        let engine = Engine::new(&robot, &recs, &opts);
+        let base = engine.errors_held(&recs, &[]).expect("replay");
+        let allowed = vec![ViscousDamping.id().to_string()];
+        let mut diag =
+            diagnose(&robot, &recs, &base.eps, &engine.joints, &allowed, opts.gap_mask_s);
+        let _ = Screen::build(&engine, &recs, &[], &base, &mut diag, &|_, _| false);
+        let first = diag[0].evidence[CHOSEN_PROBE];
+        assert!(first.is_finite() && first != 0.0, "{first}");
+        // The same candidate named at twice that value, screened on the same data again.
+        let chosen = 2.0 * first;
+        diag[0].evidence.insert(CHOSEN_PROBE.into(), chosen);
+        let secs = |r: &[Recording]| r.iter().map(|x| x.t.last().unwrap() - x.t[0]).sum::<f64>();
+        let probes = engine.probe_set_held(&recs, &[]).expect("made by the screen");
+        let before = engine.rollout_stats().simulated_s;
+        let _ = Screen::build(&engine, &recs, &[], &base, &mut diag, &|_, _| false);
+        let cost = engine.rollout_stats().simulated_s - before;
+        assert_eq!(diag[0].evidence[CHOSEN_PROBE], chosen);
+        assert!((cost - secs(&probes)).abs() < 1e-6, "{cost} s for one probe of {}", secs(&probes));
+    }
 }
