@@ -491,6 +491,7 @@ fn a_candidate_costs_the_seconds_of_its_own_simulations_counted_once() {
     assert_eq!(engine.spent_with(&[], (&ViscousDamping, &g)), spent);
     let other = engine.spent_with(&on, (&CoulombFriction, &g));
     assert!((other - secs(&recs)).abs() < 1e-3, "{other} s");
+}
 
 /// A round that stops at the floor replays the training set and its floors only (the
 /// reconstruction replay and the two finer discretisation replays): neither the held-out set nor
