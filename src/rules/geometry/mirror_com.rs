@@ -41,7 +41,7 @@ pub(super) fn reference_pose(robot: &Robot) -> Pose {
 /// gripper's fingers do). Their origins, mounted on one common body, are placed mirror-
 /// symmetrically even when a pair further down is not: a hip-roll bracket mounted turned 180°
 /// puts its axis ahead of the hip on one side and behind it on the other.
-pub(super) fn limb_roots(robot: &Robot, l: usize, r: usize) -> (usize, usize) {
+fn limb_roots(robot: &Robot, l: usize, r: usize) -> (usize, usize) {
     let parent = |b: usize| robot.bodies.get(b).map_or(0, |x| x.parent);
     let (mut a, mut b) = (l, r);
     for _ in 0..robot.bodies.len() {
@@ -82,6 +82,34 @@ fn com_loc(robot: &Robot, name: &str) -> Option<Loc> {
     found
 }
 
+pub(super) fn v_sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+pub(super) fn v_dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+pub(super) fn v_norm(a: [f64; 3]) -> f64 {
+    v_dot(a, a).sqrt()
+}
+
+/// The mirror plane of pair `p` at the reference pose, as its unit normal and offset along it:
+/// halfway between the pair's limb roots ([`limb_roots`]), else between its own origins;
+/// origins that coincide define none.
+pub(super) fn mirror_plane(robot: &Robot, pose: &Pose, p: &Pair) -> Option<([f64; 3], f64)> {
+    let (ol, or) = (*pose.xpos.get(p.left.0)?, *pose.xpos.get(p.right.0)?);
+    let (ra, rb) = limb_roots(robot, p.left.0, p.right.0);
+    let (pa, pb) = (*pose.xpos.get(ra)?, *pose.xpos.get(rb)?);
+    let (pa, pb) = if v_norm(v_sub(pa, pb)) > 1e-6 { (pa, pb) } else { (ol, or) };
+    let gap = v_sub(pa, pb);
+    if !(v_norm(gap) > 1e-6) {
+        return None;
+    }
+    let n = gap.map(|x| x / v_norm(gap));
+    Some((n, v_dot([0, 1, 2].map(|k| (pa[k] + pb[k]) / 2.0), n)))
+}
+
 /// A mirror pair whose stated centres of mass are not mirror images: the right body's centre of
 /// mass reflected across the pair's mirror plane (halfway between its limb roots) lies farther from the
 /// left's than `com_tolerance`, and than `com_fraction` of their offsets from the origins.
@@ -97,17 +125,7 @@ pub(super) fn com_differs(cx: &Context, p: &Pair, pose: &Option<Pose>) -> Option
     let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
     let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
     let norm = |a: [f64; 3]| dot(a, a).sqrt();
-    // The mirror plane: halfway between the pair's limb roots (`limb_roots`), else between
-    // its own origins; origins that coincide define none.
-    let (ra, rb) = limb_roots(robot, p.left.0, p.right.0);
-    let (pa, pb) = (*pose.xpos.get(ra)?, *pose.xpos.get(rb)?);
-    let (pa, pb) = if norm(sub(pa, pb)) > 1e-6 { (pa, pb) } else { (ol, or) };
-    let gap = sub(pa, pb);
-    if !(norm(gap) > 1e-6) {
-        return None;
-    }
-    let n = gap.map(|x| x / norm(gap));
-    let off = dot([0, 1, 2].map(|k| (pa[k] + pb[k]) / 2.0), n);
+    let (n, off) = mirror_plane(robot, pose, p)?;
     let reflect = |g: [f64; 3]| {
         let h = dot(g, n) - off;
         [g[0] - 2.0 * h * n[0], g[1] - 2.0 * h * n[1], g[2] - 2.0 * h * n[2]]

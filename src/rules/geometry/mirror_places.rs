@@ -2,41 +2,12 @@
 //! across the pair's mirror plane at the reference pose (the centres of mass: `mirror_com`).
 
 use crate::finding::{Finding, Subject};
-use crate::model::Robot;
 use crate::model::mjcf::ElemKind;
 use crate::rules::Context;
 use crate::util::fmt_num;
 
 use super::mirror_asymmetry::{Pair, SIZE_NOISE, colliders};
-use super::mirror_com::{Pose, limb_roots};
-
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn norm(a: [f64; 3]) -> f64 {
-    dot(a, a).sqrt()
-}
-
-/// The mirror plane of pair `p` at the reference pose, as its unit normal and offset along it:
-/// halfway between the pair's limb roots ([`limb_roots`]), else between its own origins;
-/// origins that coincide define none.
-fn mirror_plane(robot: &Robot, pose: &Pose, p: &Pair) -> Option<([f64; 3], f64)> {
-    let (ol, or) = (*pose.xpos.get(p.left.0)?, *pose.xpos.get(p.right.0)?);
-    let (ra, rb) = limb_roots(robot, p.left.0, p.right.0);
-    let (pa, pb) = (*pose.xpos.get(ra)?, *pose.xpos.get(rb)?);
-    let (pa, pb) = if norm(sub(pa, pb)) > 1e-6 { (pa, pb) } else { (ol, or) };
-    let gap = sub(pa, pb);
-    if !(norm(gap) > 1e-6) {
-        return None;
-    }
-    let n = gap.map(|x| x / norm(gap));
-    Some((n, dot([0, 1, 2].map(|k| (pa[k] + pb[k]) / 2.0), n)))
-}
+use super::mirror_com::{Pose, mirror_plane, v_dot as dot, v_norm as norm, v_sub as sub};
 
 /// A mirror pair whose collision geoms match one to one in type and size but not in place: at
 /// the reference pose, a right geom's offset from its body's origin, reflected across the
