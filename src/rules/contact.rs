@@ -3,6 +3,7 @@ pub mod feet;
 pub mod foot_collision_geometry;
 pub mod links_without_collision;
 pub mod pose;
+pub mod robot_never_collides;
 pub mod toe_tilt;
 pub mod token_collision;
 pub mod torsional_friction;

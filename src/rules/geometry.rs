@@ -2,6 +2,7 @@
 pub mod collision_visual_mismatch;
 pub mod mesh_scale;
 pub mod mirror_asymmetry;
+mod mirror_axes;
 mod mirror_com;
 mod mirror_places;
 pub mod oversized_collision;

@@ -12,6 +12,7 @@ pub mod parallel_ankle_armature;
 pub mod passive_joint_armature;
 pub mod repeated_class_mass;
 pub mod transmission_armature;
+pub mod visual_geom_mass;
 pub mod zero_armature;
 
 use crate::finding::Finding;

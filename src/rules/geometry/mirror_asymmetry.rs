@@ -8,6 +8,7 @@ use crate::rules::inertia::isotropic_base_inertia::inertia_loc;
 use crate::rules::{Context, Domain, Rule, RuleMeta, opt};
 use crate::util::fmt_num;
 
+use super::mirror_axes::{axis_angle, axis_finding};
 use super::mirror_com::{com_differs, reference_pose};
 use super::mirror_places::geoms_misplaced;
 
@@ -66,7 +67,13 @@ declare_rule! {
     /// agree within `geom_tolerance` (relative) or 0.5 mm: enough for the 0.1–0.2 mm export noise
     /// of mesh-derived sizes (meshes are compared by their own compiled size), while a box 28 %
     /// larger or an extra duplicated cylinder on one side is reported. Joint armature and
-    /// damping are the effective values (joint + actuator·gear² + tendon).
+    /// damping are the effective values (joint + actuator·gear² + tendon). A pair of hinges (or
+    /// slides) on two bodies compares axes too: at qpos0 the right joint's world axis, reflected
+    /// across the pair's mirror plane (halfway between the bodies' limb roots; the coordinate
+    /// plane of the body both limbs hang from when the line between the roots lies within 5° of
+    /// that body's axis: a root placed a few millimetres off must not tilt every axis), must lie within
+    /// `axis_tolerance` of the left one's line (an axis and its opposite are one line) — a
+    /// hip axis written (0.9992, −0.0388, 0), 2.2° off its mirror's (1, 0, 0), is reported.
     ///
     /// ## Why is this bad?
     /// Real humanoids are built mirror-symmetric; an asymmetry in the model is almost always a
@@ -92,6 +99,7 @@ declare_rule! {
             opt("com_tolerance", 0.01, "m", Domain::NON_NEGATIVE, "distance tolerated between a body's centre of mass and its mirror's reflected across the pair's mirror plane (halfway between its limb roots) at the reference pose (CAD exports of the two halves of a mirrored part and asymmetric wiring place them within millimetres)"),
             opt("com_fraction", 0.25, "fraction", Domain::NON_NEGATIVE, "the same distance as a share of the centres of mass' offsets from their body origins: a centre of mass 0.1 m off its joint is also tolerated 25 mm"),
             opt("pose_tolerance", 5.0, "deg", Domain::NON_NEGATIVE, "angle within which a mirror pair's centre of mass and carried bodies must share one turn about the pair's hinge, and beyond which that turn counts as a differing joint zero (CAD exports place mirrored parts a fraction of a degree apart)"),
+            opt("axis_tolerance", 1.0, "deg", Domain::NON_NEGATIVE, "angle tolerated between a joint's axis and its mirror's reflected across the pair's mirror plane: CAD exports of mirrored halves place axes within hundredths of a degree, a hand-edited or rounded axis or frame lies degrees off"),
             opt("inertia_tolerance", 0.05, "ratio", Domain::NON_NEGATIVE, "relative difference tolerated between mirrored bodies' principal moments of inertia (CAD exports of the two halves of a mirrored part differ by 1–2 %)"),
         ],
     }
@@ -388,7 +396,14 @@ impl Rule for MirrorAsymmetry {
         let n4 = |x: f64| fmt_num(x, 4);
         // Joints.
         let jn: Vec<String> = robot.joints.iter().map(|j| j.name.clone()).collect();
-        for (l, rr) in pairs(&jn, cx) {
+        let joint_pairs = pairs(&jn, cx);
+        let bn: Vec<String> = robot.bodies.iter().map(|b| b.name.clone()).collect();
+        let mut body_pairs = pairs(&bn, cx);
+        body_pairs.extend(pairs_by_joints(cx, &jn, &body_pairs));
+        let any = !body_pairs.is_empty() || !joint_pairs.is_empty();
+        let pose = if any { Some(reference_pose(robot)) } else { None };
+        let atol = cx.opt("axis_tolerance");
+        for (l, rr) in joint_pairs {
             let (a, b) = (&robot.joints[l], &robot.joints[rr]);
             let p = Pair { kind: ElemKind::Joint, left: (l, &a.name), right: (rr, &b.name) };
             for (attr, what, x, y, unit) in [
@@ -410,6 +425,11 @@ impl Rule for MirrorAsymmetry {
                     p.finding(cx, "range", "range", r(a.range), r(b.range), " rad")
                         .note("ranges of mirrored joints must be equal (pitch) or mirrored, [a, b] ↔ [−b, −a] (roll, yaw); this one is neither, so one leg can move further than the other"),
                 );
+            }
+            if let Some(pose) = &pose
+                && let Some(deg) = axis_angle(cx, pose, l, rr).filter(|d| *d > atol)
+            {
+                out.push(axis_finding(cx, &p, pose, deg, atol));
             }
         }
         // Actuators.
@@ -477,10 +497,6 @@ impl Rule for MirrorAsymmetry {
             }
         }
         // Bodies: mass and collision geometry.
-        let bn: Vec<String> = robot.bodies.iter().map(|b| b.name.clone()).collect();
-        let mut body_pairs = pairs(&bn, cx);
-        body_pairs.extend(pairs_by_joints(cx, &jn, &body_pairs));
-        let pose = if body_pairs.is_empty() { None } else { Some(reference_pose(robot)) };
         for (l, rr) in body_pairs {
             let (a, b) = (&robot.bodies[l], &robot.bodies[rr]);
             let p = Pair { kind: ElemKind::Body, left: (l, &a.name), right: (rr, &b.name) };

@@ -41,7 +41,7 @@ pub(super) fn reference_pose(robot: &Robot) -> Pose {
 /// gripper's fingers do). Their origins, mounted on one common body, are placed mirror-
 /// symmetrically even when a pair further down is not: a hip-roll bracket mounted turned 180°
 /// puts its axis ahead of the hip on one side and behind it on the other.
-fn limb_roots(robot: &Robot, l: usize, r: usize) -> (usize, usize) {
+pub(super) fn limb_roots(robot: &Robot, l: usize, r: usize) -> (usize, usize) {
     let parent = |b: usize| robot.bodies.get(b).map_or(0, |x| x.parent);
     let (mut a, mut b) = (l, r);
     for _ in 0..robot.bodies.len() {

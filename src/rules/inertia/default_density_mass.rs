@@ -14,8 +14,13 @@ declare_rule! {
     /// the part's, and whose whole compiled mass MuJoCo took from its geoms at the default
     /// density, 1000 kg/m³: none of the body's geoms writes a `mass` or a `density`, itself or
     /// through its `<default class>`. The geoms' mass then comes on top of the part's stated
-    /// one. Reported when it is at least `min_fraction` of the robot's (the moving bodies'),
-    /// with the mass, the geoms it came from and the body that states the part's. Not judged:
+    /// one. Also a floating base (a body on a free joint) in the same state while every other
+    /// moving body states its `<inertial>`: the file has its parts' masses (a CAD export) and
+    /// leaves the heaviest part to water's density, a solid of its shapes (Stompy Pro's torso
+    /// from its meshes; a hollow shell of CAD shapes weighs a fraction of that, a stand-in box
+    /// several times it). Reported when it is at least `min_fraction` of the robot's (the
+    /// moving bodies'), with the mass, the geoms it came from and the body that states the
+    /// part's. Not judged:
     /// a body that states an `<inertial>`, a body one of whose geoms sets `mass` or `density`
     /// (the writer chose the geoms' mass), a body on a joint of its own whose part states no
     /// mass elsewhere (a foot or hand that takes its mass from its shapes: the modeller's
@@ -113,6 +118,9 @@ impl Rule for DefaultDensityMass {
             let Some(&part) =
                 with_inertial.iter().find(|&&o| o != id && robot.bodies[o].weld == b.weld)
             else {
+                if let Some(f) = base_from_water(cx, id, &stated, robot_mass, geoms.len()) {
+                    out.push(f);
+                }
                 continue;
             };
             let msg = format!(
@@ -150,4 +158,51 @@ impl Rule for DefaultDensityMass {
             );
         }
     }
+}
+
+/// A floating base `id` weighed from its geoms at the default density while every other moving
+/// body states its `<inertial>` (checked by the caller: no `<inertial>`, every geom defaulted).
+fn base_from_water(
+    cx: &Context,
+    id: usize,
+    stated: &[(usize, &XNode, Option<&XNode>)],
+    robot_mass: f64,
+    ngeoms: usize,
+) -> Option<Finding> {
+    let robot = cx.robot;
+    let free =
+        robot.joints.iter().any(|j| j.body == id && j.jtype == crate::model::JointType::Free);
+    let moving = |o: usize| robot.bodies.get(o).is_some_and(|b| b.id != 0 && b.weld != 0);
+    let others: Vec<&(usize, &XNode, Option<&XNode>)> =
+        stated.iter().filter(|(o, _, _)| *o != id && moving(*o)).collect();
+    if !free || others.is_empty() || others.iter().any(|(_, _, i)| i.is_none()) {
+        return None;
+    }
+    let b = &robot.bodies[id];
+    let rest = robot_mass - b.mass;
+    let msg = format!(
+        "floating base `{}` states no <inertial> while the robot's other {} moving bodies state theirs: MuJoCo weighs it {} kg from its {} geom{} at the default density 1000 kg/m³ (no mass or density written), {} % of the robot's {} kg against {} kg stated for all the rest",
+        b.name,
+        others.len(),
+        fmt_num(b.mass, 4),
+        ngeoms,
+        if ngeoms == 1 { "" } else { "s" },
+        fmt_num(b.mass / robot_mass * 100.0, 3),
+        fmt_num(robot_mass, 4),
+        fmt_num(rest, 4)
+    );
+    let f = cx
+        .at_elem(ElemKind::Body, id, &b.name, msg)
+        .label("no <inertial>: weighed as water")
+        .note("with inertiafromgeom=\"auto\" MuJoCo infers a body's mass and inertia from its geoms, visual ones included, when it states no <inertial>; a geom with no mass or density weighs as much water as its shape holds: a solid of the base's shapes, which a hollow CAD shell is not, and a stand-in box is not the base's shape at all")
+        .help(format!(
+            "state the <inertial> of `{}` (the CAD mass, centre of mass and inertia of the base)",
+            b.name
+        ))
+        .subject(Subject::Body(id))
+        .measured(b.mass, "kg")
+        .with("robot_mass_kg", robot_mass)
+        .with("stated_rest_kg", rest)
+        .with("geoms", ngeoms as f64);
+    Some(f)
 }

@@ -5,6 +5,8 @@ use crate::model::source::{Loc, XNode};
 use crate::model::urdf_transmissions::{drives, transmissions};
 use crate::model::{Format, JointType, Robot};
 use crate::rules::{Context, Domain, Rule, RuleMeta, in_subtree, opt};
+
+use super::legs::{below_hip, leg_hinges};
 use crate::util::fmt_num;
 
 declare_rule! {
@@ -32,6 +34,13 @@ declare_rule! {
     ///   or its own thigh, so the range is a placeholder. A wheel at a leg's end (a round geom
     ///   centred on the hinge, ending the chain) turns about itself and is not judged, nor is
     ///   an arm's multi-turn axis (a UR arm's ±2π is the hardware's);
+    /// - **a knee or ankle turning half a turn**: a leg hinge below the hip (its anchor farther
+    ///   than a quarter of the leg's length from the leg's top hinge: the knee, the ankle)
+    ///   whose range spans half a turn (π, less the rounding of two decimals) or more but less
+    ///   than a full turn: a shank or foot swung half a turn folds onto the link above it
+    ///   whichever way it turns (Stompy Micro's ±π/2 knees and ankles), so the range is a
+    ///   placeholder. Hips (within a quarter of the leg's length of its top hinge) and arms
+    ///   are not judged: a hip pitch may swing the leg through more than half a turn;
     /// - **no range**: a revolute or prismatic joint with no `<limit>`, or `lower` = `upper` =
     ///   0 (both absent or written as 0), which MuJoCo compiles as an unlimited joint.
     ///
@@ -87,6 +96,7 @@ enum Case {
     Zero,
     BeyondTurn,
     LegTurn,
+    LegFold,
     NoRange,
 }
 
@@ -139,68 +149,6 @@ fn urdf_mass(root: &XNode) -> Option<f64> {
     (m > 0.0).then_some(m)
 }
 
-/// The hinges of the robot's legs: the joints on the chain from each foot (a URDF leg's lowest
-/// link, `welded_legged_base::urdf_legs`; in an MJCF with a floating base, the foot rules'
-/// feet) up to, not including, the first body that carries another foot too (the trunk, or a
-/// waist's pelvis), and that do not turn a wheel.
-fn leg_hinges(cx: &Context) -> Vec<usize> {
-    let robot = cx.robot;
-    let leaves: Vec<usize> = if robot.format == Format::Urdf {
-        crate::rules::contact::welded_legged_base::urdf_legs(robot).unwrap_or_default()
-    } else if crate::rules::contact::feet::floating_bases(robot).is_empty() {
-        Vec::new()
-    } else {
-        crate::rules::contact::feet::feet(robot, cx.spec).iter().map(|f| f.root).collect()
-    };
-    if leaves.len() < 2 {
-        return Vec::new();
-    }
-    let mut chain: Vec<usize> = Vec::new();
-    for &leaf in &leaves {
-        let mut b = leaf;
-        for _ in 0..robot.bodies.len() {
-            let carries_other = leaves.iter().any(|&o| o != leaf && in_subtree(robot, b, o));
-            if b == 0 || carries_other {
-                break;
-            }
-            chain.push(b);
-            b = robot.bodies[b].parent;
-        }
-    }
-    robot
-        .joints
-        .iter()
-        .filter(|j| j.jtype == JointType::Hinge && chain.contains(&j.body))
-        .filter(|j| !wheel(robot, j.id))
-        .map(|j| j.id)
-        .collect()
-}
-
-/// Whether hinge `j` turns a wheel, limited or not: shaped as one ([`Robot::turns_a_wheel`])
-/// and every colliding geom of its body centred on the axis (within 10 % of the geom's
-/// bounding radius, the wheel test's tolerance), so the body turns about itself. A shank with
-/// a round knee housing concentric with the knee and a foot at its end swings the foot out on
-/// a lever: a leg joint.
-fn wheel(robot: &Robot, j: usize) -> bool {
-    let (Some(joint), Some(a), Some(u)) =
-        (robot.joints.get(j), robot.key.joint_xanchor.get(j), robot.key.joint_xaxis.get(j))
-    else {
-        return false;
-    };
-    robot.turns_a_wheel(j)
-        && robot
-            .geoms
-            .iter()
-            .filter(|g| g.body == joint.body && crate::model::contact::takes_part(robot, g.id))
-            .all(|g| {
-                let Some(p) = robot.key.geom_xpos.get(g.id) else { return false };
-                let d = [p[0] - a[0], p[1] - a[1], p[2] - a[2]];
-                let along = d[0] * u[0] + d[1] * u[1] + d[2] * u[2];
-                let off = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2] - along * along).max(0.0).sqrt();
-                off <= 0.1 * g.rbound.max(0.0)
-            })
-}
-
 /// A leg hinge limited to `[l, h]` whose range spans a full turn or more (and no stop lies
 /// beyond a turn: that case is reported as such).
 fn leg_turn(robot: &Robot, legs: &[usize], j: usize, l: f64, h: f64, at: Loc) -> Option<Hit> {
@@ -225,11 +173,42 @@ fn leg_turn(robot: &Robot, legs: &[usize], j: usize, l: f64, h: f64, at: Loc) ->
     })
 }
 
+/// A leg hinge below the hip limited to `[l, h]` whose range spans half a turn or more, and
+/// less than a full turn (that is [`leg_turn`]'s).
+fn leg_fold(
+    robot: &Robot,
+    below: &[(usize, f64)],
+    j: usize,
+    l: f64,
+    h: f64,
+    at: Loc,
+) -> Option<Hit> {
+    let span = h - l;
+    let half = FULL_TURN / 2.0;
+    let in_leg = below.iter().any(|b| b.0 == j);
+    (in_leg && span >= half - WRITTEN_ROUNDING && span < FULL_TURN - WRITTEN_ROUNDING).then(|| {
+        Hit {
+            case: Case::LegFold,
+            joint: j,
+            at,
+            value: span,
+            detail: format!(
+                "`{}` [{}, {}] rad ({}°)",
+                robot.joints[j].name,
+                fmt_num(l, 4),
+                fmt_num(h, 4),
+                fmt_num(span.to_degrees(), 3)
+            ),
+        }
+    })
+}
+
 /// The limited hinges of an MJCF model whose compiled range places a stop more than a full
 /// turn from the joint's zero, or spans a full turn on a leg.
 fn mjcf_beyond_turn(cx: &Context) -> Vec<Hit> {
     let robot = cx.robot;
     let legs = leg_hinges(cx);
+    let below = below_hip(cx);
     let mut hits = Vec::new();
     for j in robot.joints.iter().filter(|j| j.jtype == JointType::Hinge && j.limited) {
         let [l, h] = j.range;
@@ -238,6 +217,7 @@ fn mjcf_beyond_turn(cx: &Context) -> Vec<Hit> {
         if let Some(hit) = leg_turn(robot, &legs, j.id, l, h, at) {
             hits.push(hit);
         }
+        hits.extend(leg_fold(robot, &below, j.id, l, h, at));
         if far > FULL_TURN + WRITTEN_ROUNDING {
             hits.push(Hit {
                 case: Case::BeyondTurn,
@@ -272,7 +252,7 @@ impl Rule for PlaceholderJointLimits {
         let max_speed = cx.opt("max_tip_speed");
         if robot.format != Format::Urdf {
             let hits = mjcf_beyond_turn(cx);
-            for case in [Case::BeyondTurn, Case::LegTurn] {
+            for case in [Case::BeyondTurn, Case::LegTurn, Case::LegFold] {
                 let group: Vec<&Hit> = hits.iter().filter(|h| h.case == case).collect();
                 if let Some(f) = finding(cx, case, &group, multiple, max_speed, 0.0) {
                     out.push(f);
@@ -281,6 +261,7 @@ impl Rule for PlaceholderJointLimits {
             return;
         }
         let legs = leg_hinges(cx);
+        let below = below_hip(cx);
         let g = robot.opt.gravity;
         let g = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
         let mass = urdf_mass(&robot.tree).unwrap_or_else(|| robot.mass_split().0);
@@ -313,6 +294,8 @@ impl Rule for PlaceholderJointLimits {
                     {
                         hits.push(hit);
                     }
+                    let at_far = at.map_or(name_at, |v| v.1);
+                    hits.extend(leg_fold(robot, &below, j.id, l, h, at_far));
                     if far > FULL_TURN + WRITTEN_ROUNDING {
                         let at = if l.abs() >= h.abs() { lo } else { hi };
                         hits.push(Hit {
@@ -401,6 +384,7 @@ impl Rule for PlaceholderJointLimits {
             Case::Zero,
             Case::BeyondTurn,
             Case::LegTurn,
+            Case::LegFold,
             Case::NoRange,
         ] {
             let group: Vec<&Hit> = hits.iter().filter(|h| h.case == case).collect();
@@ -492,6 +476,19 @@ fn finding(
                 "write the hardware's stops (datasheet or CAD) as range=\"lo hi\""
             },
         ),
+        Case::LegFold => (
+            format!(
+                "{n} leg joint{s} below the hip (knee, ankle) {} a range of half a turn (π) or more, which folds the link below onto the one above: {shown}",
+                if n == 1 { "has" } else { "have" }
+            ),
+            "a knee or ankle turning half a turn".to_string(),
+            "a knee or an ankle swings a shank or a foot that meets the thigh or the shin before half a turn, whichever way it turns (a knee bends from straight to folded, about 150°, one way only): a range of half a turn or more (±π/2 is a quarter turn each way) is a placeholder, a limit that never engages, and frameworks that scale actions or observations by the range spread them over it. Hips and arms are not judged",
+            if robot.format == Format::Urdf {
+                "write the hardware's stops (datasheet or CAD) as lower and upper"
+            } else {
+                "write the hardware's stops (datasheet or CAD) as range=\"lo hi\""
+            },
+        ),
         Case::NoRange => (
             format!(
                 "{n} joint{s} declared revolute or prismatic {states} no range: MuJoCo compiles {} unlimited, ROS tools read {} locked at 0: {shown}",
@@ -513,6 +510,7 @@ fn finding(
         Case::Velocity => f.measured(top.value, "m/s").expected(max_speed, "m/s"),
         Case::BeyondTurn => f.measured(top.value, "rad").expected(FULL_TURN, "rad"),
         Case::LegTurn => f.measured(top.value, "rad").expected(FULL_TURN, "rad"),
+        Case::LegFold => f.measured(top.value, "rad").expected(FULL_TURN / 2.0, "rad"),
         Case::Zero | Case::NoRange => f.measured(0.0, ""),
     };
     Some(f)
