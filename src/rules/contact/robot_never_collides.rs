@@ -16,7 +16,8 @@ declare_rule! {
     /// - **never touches itself**: the robot's geoms on bodies that MuJoCo would let touch (not
     ///   welded together, not a body and its parent, no `<exclude>` between them) are all kept
     ///   apart by their bits — AgiBot X1's collision class writes contype 1 and inherits
-    ///   conaffinity 0, so no robot geom accepts another's — and no `<pair>` joins two of them.
+    ///   conaffinity 0, so no robot geom accepts another's. A model that declares any
+    ///   `<contact><pair>` lists the contacts it wants and is not judged for this case.
     ///
     /// Not judged: a model with `<flag contact="disable"/>` (no contact by choice), a robot
     /// whose geoms never collide at all (`links-without-collision` and the foot rules say
@@ -72,7 +73,7 @@ fn masks(robot: &Robot, geoms: &[usize]) -> String {
             None => seen.push((m, 1)),
         }
     }
-    seen.sort_by(|a, b| b.1.cmp(&a.1));
+    seen.sort_by_key(|s| std::cmp::Reverse(s.1));
     let v: Vec<String> = seen
         .iter()
         .take(4)
@@ -106,7 +107,11 @@ impl Rule for RobotNeverCollides {
         if !floors.is_empty() && !touches_floor {
             out.push(falls_through(cx, &parts, floors[0]));
         }
-        // Pairs of robot geoms MuJoCo would test but for the bits.
+        // Pairs of robot geoms MuJoCo would test but for the bits; a model that lists its
+        // contacts in <pair>s chose them itself.
+        if !robot.pairs.is_empty() {
+            return;
+        }
         let mut candidates = 0usize;
         let mut touching = false;
         for (i, &a) in parts.iter().enumerate() {

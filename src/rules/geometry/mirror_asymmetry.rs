@@ -71,7 +71,8 @@ declare_rule! {
     /// slides) on two bodies compares axes too: at qpos0 the right joint's world axis, reflected
     /// across the pair's mirror plane (halfway between the bodies' limb roots; the coordinate
     /// plane of the body both limbs hang from when the line between the roots lies within 5° of
-    /// that body's axis: a root placed a few millimetres off must not tilt every axis), must lie within
+    /// that body's axis: a root placed a few millimetres off must not tilt every axis; roots
+    /// farther off define no plane, and the axes are not compared), must lie within
     /// `axis_tolerance` of the left one's line (an axis and its opposite are one line) — a
     /// hip axis written (0.9992, −0.0388, 0), 2.2° off its mirror's (1, 0, 0), is reported.
     ///

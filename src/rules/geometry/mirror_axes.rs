@@ -17,20 +17,20 @@ use super::mirror_com::{Pose, limb_roots, mirror_plane, v_dot, v_norm};
 const FRAME_SNAP_DEG: f64 = 5.0;
 
 /// The mirror plane's normal for axes: the axis of the common parent of the pair's limb roots
-/// nearest the plane's normal `n`, when within [`FRAME_SNAP_DEG`]; else `n`.
-fn snapped(cx: &Context, pose: &Pose, l: usize, r: usize, n: [f64; 3]) -> [f64; 3] {
+/// nearest the plane's normal `n`, when within [`FRAME_SNAP_DEG`]; `n` when the roots hang
+/// from different bodies; `None` when the line between the roots lies farther than that from
+/// every axis of their parent (the limbs are not placed as mirror images: a detached or
+/// misplaced limb, which other rules judge).
+fn snapped(cx: &Context, pose: &Pose, l: usize, r: usize, n: [f64; 3]) -> Option<[f64; 3]> {
     let robot = cx.robot;
     let (ra, rb) = limb_roots(robot, l, r);
     let parent = |b: usize| robot.bodies.get(b).map(|x| x.parent);
-    let Some(common) = parent(ra).filter(|p| Some(*p) == parent(rb)) else { return n };
-    let Some(x) = pose.xmat.get(common) else { return n };
+    let Some(common) = parent(ra).filter(|p| Some(*p) == parent(rb)) else { return Some(n) };
+    let x = pose.xmat.get(common)?;
     let axes = [0, 1, 2].map(|k| [x[k], x[3 + k], x[6 + k]]);
     let best =
         axes.iter().copied().max_by(|a, b| v_dot(*a, n).abs().total_cmp(&v_dot(*b, n).abs()));
-    match best {
-        Some(a) if v_dot(a, n).abs() >= FRAME_SNAP_DEG.to_radians().cos() => a,
-        _ => n,
-    }
+    best.filter(|a| v_dot(*a, n).abs() >= FRAME_SNAP_DEG.to_radians().cos())
 }
 
 /// The angle (degrees) between joint `l`'s axis and joint `r`'s reflected across the pair's
@@ -49,7 +49,7 @@ pub(super) fn axis_angle(cx: &Context, pose: &Pose, l: usize, r: usize) -> Optio
     }
     let bodies = Pair { kind: ElemKind::Body, left: (a.body, ""), right: (b.body, "") };
     let (n, _) = mirror_plane(robot, pose, &bodies)?;
-    let n = snapped(cx, pose, a.body, b.body, n);
+    let n = snapped(cx, pose, a.body, b.body, n)?;
     let (ua, ub) = (*pose.xaxis.get(l)?, *pose.xaxis.get(r)?);
     let (na, nb) = (v_norm(ua), v_norm(ub));
     if !(na > 0.0 && nb > 0.0) {

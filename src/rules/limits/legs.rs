@@ -4,11 +4,6 @@
 use crate::model::{Format, JointType, Robot};
 use crate::rules::{Context, in_subtree};
 
-/// The share of a leg's length (its top hinge's anchor to its foot) within which a hinge's
-/// anchor counts as the hip's: a hip's two or three hinges sit at one point, the knee about
-/// halfway down the leg, the ankle at its end.
-pub(super) const HIP_SHARE: f64 = 0.25;
-
 /// The hinges of the robot's legs: the joints on the chain from each foot (a URDF leg's lowest
 /// link, `welded_legged_base::urdf_legs`; in an MJCF with a floating base, the foot rules'
 /// feet) up to, not including, the first body that carries another foot too (the trunk, or a
@@ -83,11 +78,13 @@ fn wheel(robot: &Robot, j: usize) -> bool {
             })
 }
 
-/// The leg hinges below the hip, each with its leg's length (m): on a leg's chain, an anchor
-/// (at the keyframe) farther than [`HIP_SHARE`] of the leg's length from the top hinge's anchor
-/// (the knee, the ankle). The leg's length runs from that anchor to the farthest of the foot's
-/// origin and its geoms' centres.
-pub(super) fn below_hip(cx: &Context) -> Vec<(usize, f64)> {
+/// The leg hinges at and below the knee: on each leg's chain of hinges (top to bottom), the
+/// segments between consecutive anchors (at the keyframe; rigid links, so any pose gives the
+/// same lengths) and from the last anchor to the farthest of the foot's origin and geom
+/// centres; the two longest are the thigh and the shank, and the hinge that ends the upper of
+/// them is the knee. The hip's hinges, above the thigh, are not returned (Go2's thigh joint
+/// sits a 96 mm hip offset below its abduction joint, above a 213 mm thigh).
+pub(super) fn knee_and_below(cx: &Context) -> Vec<usize> {
     let robot = cx.robot;
     let (anchor, bpos, gpos) =
         (&robot.key.joint_xanchor, &robot.key.body_xpos, &robot.key.geom_xpos);
@@ -95,25 +92,25 @@ pub(super) fn below_hip(cx: &Context) -> Vec<(usize, f64)> {
         ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
     };
     let mut out = Vec::new();
-    for (leaf, hinges) in leg_chains(cx) {
-        let Some(top) = hinges.iter().copied().min_by_key(|&j| robot.joints[j].body) else {
+    for (leaf, mut hinges) in leg_chains(cx) {
+        hinges.sort_by_key(|&j| (robot.joints[j].body, j));
+        let pts: Vec<[f64; 3]> = hinges.iter().filter_map(|&j| anchor.get(j).copied()).collect();
+        let (Some(last), true) = (pts.last(), pts.len() == hinges.len() && hinges.len() >= 2)
+        else {
             continue;
         };
-        let Some(t) = anchor.get(top) else { continue };
-        let mut length = bpos.get(leaf).map_or(0.0, |p| dist(t, p));
+        let mut foot = bpos.get(leaf).map_or(0.0, |p| dist(last, p));
         for g in robot.geoms.iter().filter(|g| g.body == leaf) {
             if let Some(p) = gpos.get(g.id) {
-                length = length.max(dist(t, p));
+                foot = foot.max(dist(last, p));
             }
         }
-        if !(length > 0.0) {
-            continue;
-        }
-        for &j in &hinges {
-            if anchor.get(j).is_some_and(|a| dist(t, a) > HIP_SHARE * length) {
-                out.push((j, length));
-            }
-        }
+        let mut segs: Vec<(usize, f64)> =
+            pts.windows(2).enumerate().map(|(i, w)| (i, dist(&w[0], &w[1]))).collect();
+        segs.push((pts.len() - 1, foot));
+        segs.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+        let upper = segs[0].0.min(segs[1].0);
+        out.extend(hinges.iter().skip(upper + 1).copied());
     }
     out
 }

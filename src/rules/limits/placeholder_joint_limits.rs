@@ -6,7 +6,7 @@ use crate::model::urdf_transmissions::{drives, transmissions};
 use crate::model::{Format, JointType, Robot};
 use crate::rules::{Context, Domain, Rule, RuleMeta, in_subtree, opt};
 
-use super::legs::{below_hip, leg_hinges};
+use super::legs::{knee_and_below, leg_hinges};
 use crate::util::fmt_num;
 
 declare_rule! {
@@ -34,13 +34,14 @@ declare_rule! {
     ///   or its own thigh, so the range is a placeholder. A wheel at a leg's end (a round geom
     ///   centred on the hinge, ending the chain) turns about itself and is not judged, nor is
     ///   an arm's multi-turn axis (a UR arm's ±2π is the hardware's);
-    /// - **a knee or ankle turning half a turn**: a leg hinge below the hip (its anchor farther
-    ///   than a quarter of the leg's length from the leg's top hinge: the knee, the ankle)
-    ///   whose range spans half a turn (π, less the rounding of two decimals) or more but less
-    ///   than a full turn: a shank or foot swung half a turn folds onto the link above it
-    ///   whichever way it turns (Stompy Micro's ±π/2 knees and ankles), so the range is a
-    ///   placeholder. Hips (within a quarter of the leg's length of its top hinge) and arms
-    ///   are not judged: a hip pitch may swing the leg through more than half a turn;
+    /// - **a knee or ankle turning half a turn**: a leg's knee (the hinge between the two
+    ///   longest links of its chain, thigh and shank) or a hinge below it (the ankle) whose
+    ///   range is symmetric about its zero (`[−a, a]`, within the rounding of two decimals) and
+    ///   spans half a turn (π, less that rounding) or more but less than a full turn: a knee
+    ///   bends one way from straight, and a shank or foot swung a quarter turn or more each way
+    ///   folds onto the link above it on one side (Stompy Micro's ±π/2 knees), so the range is
+    ///   a placeholder. Hips and arms are not judged (Go2's thigh joint, beside the body,
+    ///   swings 290°), nor a knee whose range is one-sided;
     /// - **no range**: a revolute or prismatic joint with no `<limit>`, or `lower` = `upper` =
     ///   0 (both absent or written as 0), which MuJoCo compiles as an unlimited joint.
     ///
@@ -173,19 +174,12 @@ fn leg_turn(robot: &Robot, legs: &[usize], j: usize, l: f64, h: f64, at: Loc) ->
     })
 }
 
-/// A leg hinge below the hip limited to `[l, h]` whose range spans half a turn or more, and
-/// less than a full turn (that is [`leg_turn`]'s).
-fn leg_fold(
-    robot: &Robot,
-    below: &[(usize, f64)],
-    j: usize,
-    l: f64,
-    h: f64,
-    at: Loc,
-) -> Option<Hit> {
+/// A knee or a hinge below it limited to a symmetric `[−a, a]` that spans half a turn or more,
+/// and less than a full turn (that is [`leg_turn`]'s).
+fn leg_fold(robot: &Robot, below: &[usize], j: usize, l: f64, h: f64, at: Loc) -> Option<Hit> {
     let span = h - l;
     let half = FULL_TURN / 2.0;
-    let in_leg = below.iter().any(|b| b.0 == j);
+    let in_leg = below.contains(&j) && (l + h).abs() <= WRITTEN_ROUNDING;
     (in_leg && span >= half - WRITTEN_ROUNDING && span < FULL_TURN - WRITTEN_ROUNDING).then(|| {
         Hit {
             case: Case::LegFold,
@@ -208,7 +202,7 @@ fn leg_fold(
 fn mjcf_beyond_turn(cx: &Context) -> Vec<Hit> {
     let robot = cx.robot;
     let legs = leg_hinges(cx);
-    let below = below_hip(cx);
+    let below = knee_and_below(cx);
     let mut hits = Vec::new();
     for j in robot.joints.iter().filter(|j| j.jtype == JointType::Hinge && j.limited) {
         let [l, h] = j.range;
@@ -261,7 +255,7 @@ impl Rule for PlaceholderJointLimits {
             return;
         }
         let legs = leg_hinges(cx);
-        let below = below_hip(cx);
+        let below = knee_and_below(cx);
         let g = robot.opt.gravity;
         let g = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
         let mass = urdf_mass(&robot.tree).unwrap_or_else(|| robot.mass_split().0);
@@ -478,11 +472,11 @@ fn finding(
         ),
         Case::LegFold => (
             format!(
-                "{n} leg joint{s} below the hip (knee, ankle) {} a range of half a turn (π) or more, which folds the link below onto the one above: {shown}",
+                "{n} knee or ankle joint{s} {} a range symmetric about the zero that spans half a turn (π) or more, which folds the link below onto the one above: {shown}",
                 if n == 1 { "has" } else { "have" }
             ),
             "a knee or ankle turning half a turn".to_string(),
-            "a knee or an ankle swings a shank or a foot that meets the thigh or the shin before half a turn, whichever way it turns (a knee bends from straight to folded, about 150°, one way only): a range of half a turn or more (±π/2 is a quarter turn each way) is a placeholder, a limit that never engages, and frameworks that scale actions or observations by the range spread them over it. Hips and arms are not judged",
+            "a knee or an ankle swings a shank or a foot that meets the thigh or the shin before half a turn, whichever way it turns (a knee bends from straight to folded, about 150°, one way only): a range of ±π/2 or more (a quarter turn each way) is a placeholder, a limit that never engages on one side, and frameworks that scale actions or observations by the range spread them over it. Hips, arms and one-sided ranges are not judged",
             if robot.format == Format::Urdf {
                 "write the hardware's stops (datasheet or CAD) as lower and upper"
             } else {
