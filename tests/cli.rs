@@ -885,3 +885,35 @@ fn version_names_the_commit() {
         None => assert_eq!(out.trim(), pkg),
     }
 }
+
+/// A URDF with several inertias MuJoCo rejects: MuJoCo names one; the load error lists every
+/// one with its line and why (a negative principal moment, A + B < C, a moving link with mass
+/// and no inertia), and not the foot whose zero inertia the fixed sole makes up for.
+#[test]
+fn urdf_load_error_lists_every_rejected_inertia() {
+    let input = modellint::lint::LintInput {
+        model: "fixtures/broken/urdf_inertia_many_rejected.urdf".into(),
+        spec: None,
+        config: None,
+        select: vec![],
+        ignore: vec![],
+    };
+    let Err(e) = modellint::lint::load(&input) else { panic!("the fixture must not load") };
+    let m = e.to_string();
+    for want in [
+        "the file states 3 inertials it rejects",
+        "link `thigh` (line 13): principal moments -",
+        "link `shin` (line 20): principal moments 4.400e-6 + 4.400e-6 < 4.000e-5 kg·m² (A + B ≥ C fails",
+        "link `ankle` (line 27): moves on a joint with mass 0.3 kg and no inertia",
+    ] {
+        assert!(m.contains(want), "load error lacks `{want}`:\n{m}");
+    }
+    assert!(!m.contains("link `foot`"), "the foot's fused sole carries inertia:\n{m}");
+    // One rejected inertia: MuJoCo's own message, no list.
+    let one = modellint::lint::LintInput {
+        model: "fixtures/broken/urdf_inertia_not_positive.urdf".into(),
+        ..input
+    };
+    let Err(e) = modellint::lint::load(&one) else { panic!("the fixture must not load") };
+    assert!(!e.to_string().contains("inertials it rejects"), "{e}");
+}

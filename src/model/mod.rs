@@ -14,6 +14,7 @@ pub mod mjcf;
 pub mod plugins;
 pub mod region;
 pub mod source;
+pub mod urdf_inertia;
 pub mod urdf_packages;
 pub mod urdf_transmissions;
 
@@ -596,13 +597,17 @@ pub fn load(map: &mut SourceMap, path: &Path, keyframe: Option<&str>) -> Result<
     }
     let mj = m.map_err(|e| {
         let msg = plugins::explain(format!("MuJoCo could not compile the model: {e}"));
-        mujoco_error_location(map, first, &msg)
+        let mut err = mujoco_error_location(map, first, &msg)
             .or_else(|| mujoco_element_location(map, first, format, &msg))
             .or_else(|| attribute_error_location(map, first, &msg))
             .or_else(|| missing_file_location(map, first, &msg))
             // MuJoCo did not say where: the model's root element, so that the error still
             // names a line of the file.
-            .unwrap_or_else(|| LoadError::at(map, tree.loc, msg))
+            .unwrap_or_else(|| LoadError::at(map, tree.loc, msg));
+        if format == Format::Urdf {
+            err.message = urdf_inertia::explain(map, &tree, err.message);
+        }
+        err
     })?;
     let mut robot = extract(path, format, tree, src, mj);
     let key = choose_key(&robot.keys, keyframe);

@@ -6,7 +6,7 @@ use crate::model::{GeomType, Robot};
 use crate::probe::settle::{Settle, StanceClaim};
 use crate::probe::{Preconditions, StanceSettle, Verdict};
 use crate::rules::contact::feet::{Foot, FootKind, feet};
-use crate::rules::geometry::shapes::{Placed, tilt};
+use crate::rules::geometry::shapes::{Placed, convex_hull, in_hull, tilt};
 use crate::rules::{Context, Domain, Rule, RuleMeta, claim_each, opt};
 use crate::util::fmt_num;
 
@@ -24,6 +24,12 @@ declare_rule! {
     /// a box's bottom face, a standing cylinder's cap — is parallel to the ground within
     /// `max_tilt`. Lowest points are computed analytically from the compiled pose and size
     /// (capsule, sphere, box, cylinder, ellipsoid) or from the compiled mesh vertices.
+    ///
+    /// A geom above the sole whose footprint (its lowest point, and a box's bottom face or a
+    /// capsule's ends) lies inside the support polygon the level sole geoms already span adds
+    /// no support in stance — a backup box a few millimetres above four point-contact corner
+    /// spheres — and is not reported; above the sole and outside that polygon (a raised toe that
+    /// shortens the foot in stance) it is.
     ///
     /// Heel-to-toe capsules on the foot body itself may be sloped on purpose (an arch, as in the
     /// Unitree H1's V-shaped sole capsules); only their lowest points are held to the band.
@@ -192,6 +198,10 @@ impl StanceClaim for ContactGeomUnloaded {
     }
 }
 
+/// How far outside the sole's support polygon a footprint point may lie and still count as
+/// inside it: the rounding of compiled positions (m), not a tolerance of the design.
+const ROUNDING_SLACK: f64 = 1e-9;
+
 /// Smallest share of the robot's weight one foot must carry for its geoms' loads to count.
 pub const FOOT_MIN_SHARE: f64 = 0.05;
 
@@ -236,11 +246,29 @@ impl ToeTilt {
                 median(own)
             };
             let others = |g: usize| sole.iter().filter(|x| x.0 != g).count();
+            // The support polygon of the geoms level with the sole, and whether a geom's
+            // footprint lies inside it (then raising it changes nothing in stance).
+            let footprint = |g: usize| -> Vec<[f64; 2]> {
+                let p = Placed::of(robot, g);
+                let mut pts = p.ground_points(spread);
+                pts.push(p.lowest());
+                pts.extend(p.sole_points(max_tilt.to_radians()));
+                pts.iter().map(|q| [q[0], q[1]]).collect()
+            };
+            let support = convex_hull(
+                &sole
+                    .iter()
+                    .filter(|x| (x.1 - zref).abs() <= spread)
+                    .flat_map(|x| footprint(x.0))
+                    .collect::<Vec<_>>(),
+            );
+            let covered =
+                |g: usize| footprint(g).iter().all(|&q| in_hull(&support, q, ROUNDING_SLACK));
             for &(g, z) in &sole {
                 let geom = &robot.geoms[g];
                 let dz = z - zref;
                 let what = kind_name(robot, &foot, g);
-                if dz.abs() > spread && others(g) > 0 {
+                if dz.abs() > spread && others(g) > 0 && !(dz > 0.0 && covered(g)) {
                     let (dir, effect) = if dz < 0.0 {
                         (
                             "below",

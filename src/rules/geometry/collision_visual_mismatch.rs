@@ -5,6 +5,7 @@ use parry3d::shape::ConvexPolyhedron;
 use crate::declare_rule;
 use crate::finding::{Finding, Severity, Subject};
 use crate::model::mjcf::ElemKind;
+use crate::model::source::XNode;
 use crate::model::{Geom, GeomType, Robot};
 use crate::rules::contact::feet::{FootKind, feet};
 use crate::rules::geometry::shapes::{Placed, V3, add, hull_area, norm, scale, sub, to_local_dir};
@@ -27,7 +28,13 @@ declare_rule! {
     /// the collision geoms (the xy hull of their ground points) with the xy hull of the visual
     /// sole (visual vertices within 5 mm of its bottom); coverage below `min_sole_coverage` is
     /// reported. Bodies without a visual mesh are skipped, and a collision mesh that is the
-    /// visual mesh itself always matches.
+    /// visual mesh itself, placed where the visual draws it, always matches; the same mesh file
+    /// placed elsewhere (a URDF `<collision>` whose `<origin>` differs from its `<visual>`'s,
+    /// such as a visual's `rpy` typed into the collision's `xyz`) is measured like any geom.
+    /// MuJoCo's importer drops a URDF's `<visual>`s by default, so in a URDF the same test
+    /// reads the file: a link's `<collision>` mesh that is the very file (and scale) its
+    /// `<visual>` draws, with an `<origin>` `xyz` more than `tolerance` from the visual's, is
+    /// that mesh moved by that distance (a warning from `misplaced`).
     ///
     /// ## Why is this bad?
     /// Collision geometry is what the simulator feels. A collision primitive that is larger than
@@ -148,6 +155,78 @@ fn gname(robot: &Robot, g: usize) -> String {
     if n.is_empty() { format!("no. {}", robot.geom_no(g)) } else { format!("`{n}`") }
 }
 
+/// The `xyz` of an element's `<origin>` (zero when absent or unreadable).
+fn origin_xyz(x: &XNode) -> V3 {
+    let v: Vec<f64> = x
+        .children_tagged("origin")
+        .next()
+        .and_then(|o| o.get("xyz"))
+        .map(|t| t.split_whitespace().filter_map(|w| w.parse().ok()).collect())
+        .unwrap_or_default();
+    if v.len() == 3 { [v[0], v[1], v[2]] } else { [0.0; 3] }
+}
+
+/// The mesh file and scale of a `<visual>` or `<collision>`, as written.
+fn urdf_mesh(x: &XNode) -> Option<(&str, &str)> {
+    let m = x.children_tagged("geometry").flat_map(|g| g.children_tagged("mesh")).next()?;
+    Some((m.get("filename")?, m.get("scale").unwrap_or("1 1 1")))
+}
+
+/// URDF `<collision>` meshes that are their link's `<visual>` mesh (same file and scale) with an
+/// `<origin>` `xyz` more than `tol` from the visual's: the visual mesh moved.
+fn urdf_same_mesh_moved(cx: &Context, tol: f64, misplaced: f64) -> Vec<Finding> {
+    let mut out = Vec::new();
+    for l in cx.robot.tree.children_tagged("link") {
+        let drawn: Vec<(&XNode, (&str, &str))> =
+            l.children_tagged("visual").filter_map(|v| Some((v, urdf_mesh(v)?))).collect();
+        for c in l.children_tagged("collision") {
+            let Some(mesh) = urdf_mesh(c) else { continue };
+            let twins: Vec<&XNode> =
+                drawn.iter().filter(|(_, m)| *m == mesh).map(|(v, _)| *v).collect();
+            let at = origin_xyz(c);
+            let Some(d) = twins.iter().map(|v| norm(sub(at, origin_xyz(v)))).reduce(f64::min)
+            else {
+                continue;
+            };
+            if d <= tol {
+                continue;
+            }
+            let name = l.get("name").unwrap_or("");
+            let mut f = cx
+                .finding(
+                    format!(
+                        "link `{name}` collides through its visual mesh `{}` moved {} mm from where its <visual> draws it (<origin> xyz {} against the visual's)",
+                        mesh.0,
+                        fmt_num(d * 1000.0, 3),
+                        c.children_tagged("origin").next().and_then(|o| o.get("xyz")).unwrap_or("0 0 0")
+                    ),
+                    c.loc,
+                )
+                .element(format!("link `{name}`"), c.loc)
+                .label(format!("the visual mesh, {} mm away", fmt_num(d * 1000.0, 3)))
+                .note("the same mesh file as the link's <visual> at another <origin>: the simulated link collides where no part of it is (an edit that typed the visual's rpy into the collision's xyz, a copied origin)")
+                .help("give the <collision> the <origin> of its <visual> (or geometry fitted to the link)")
+                .subject(Subject::Model)
+                .measured(d, "m")
+                .expected(tol, "m");
+            if d < misplaced {
+                f.severity = Severity::Info;
+            }
+            out.push(f);
+        }
+    }
+    out
+}
+
+/// Whether two geoms sit at the same place and orientation at the keyframe, to the rounding of
+/// compiled positions (a mesh drawn once and collided once at one spot).
+fn same_place(robot: &Robot, a: usize, b: usize) -> bool {
+    const ROUNDING: f64 = 1e-9;
+    let (k, l) = (&robot.key, (a, b));
+    (0..3).all(|i| (k.geom_xpos[l.0][i] - k.geom_xpos[l.1][i]).abs() <= ROUNDING)
+        && (0..9).all(|i| (k.geom_xmat[l.0][i] - k.geom_xmat[l.1][i]).abs() <= ROUNDING)
+}
+
 impl Rule for CollisionVisualMismatch {
     fn meta(&self) -> &'static RuleMeta {
         &Self::META
@@ -156,6 +235,9 @@ impl Rule for CollisionVisualMismatch {
         let robot = cx.robot;
         let tol = cx.opt("tolerance");
         let misplaced = cx.opt("misplaced");
+        if robot.format == crate::model::Format::Urdf {
+            out.extend(urdf_same_mesh_moved(cx, tol, misplaced));
+        }
         let min_cov = cx.opt("min_sole_coverage");
         let dirs = directions();
         let foot_bodies: Vec<usize> = feet(robot, cx.spec)
@@ -187,7 +269,9 @@ impl Rule for CollisionVisualMismatch {
                 })
                 .collect();
             for g in &colliders {
-                if g.gtype == GeomType::Mesh && visuals.iter().any(|v| v.mesh == g.mesh) {
+                if g.gtype == GeomType::Mesh
+                    && visuals.iter().any(|v| v.mesh == g.mesh && same_place(robot, v.id, g.id))
+                {
                     continue;
                 }
                 let p = Placed::of(robot, g.id);

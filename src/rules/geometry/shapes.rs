@@ -239,33 +239,56 @@ pub fn tilt(gtype: GeomType, mat: &[f64; 9]) -> Option<f64> {
     }
 }
 
-/// Area of the convex hull of 2-D points (monotone chain).
-pub fn hull_area(pts: &[[f64; 2]]) -> f64 {
+/// Convex hull of 2-D points, counter-clockwise (monotone chain); fewer than 3 distinct points
+/// are returned as they are.
+pub fn convex_hull(pts: &[[f64; 2]]) -> Vec<[f64; 2]> {
     let mut p: Vec<[f64; 2]> = pts.to_vec();
     p.sort_by(|a, b| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1])));
     p.dedup();
     if p.len() < 3 {
-        return 0.0;
+        return p;
     }
-    let cross = |o: [f64; 2], a: [f64; 2], b: [f64; 2]| {
-        (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
-    };
     let mut h: Vec<[f64; 2]> = Vec::new();
     for pass in 0..2 {
         let start = h.len();
         let it: Box<dyn Iterator<Item = &[f64; 2]>> =
             if pass == 0 { Box::new(p.iter()) } else { Box::new(p.iter().rev()) };
         for &q in it {
-            while h.len() >= start + 2 && cross(h[h.len() - 2], h[h.len() - 1], q) <= 0.0 {
+            while h.len() >= start + 2 && cross2(h[h.len() - 2], h[h.len() - 1], q) <= 0.0 {
                 h.pop();
             }
             h.push(q);
         }
         h.pop();
     }
+    h
+}
+
+fn cross2(o: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+    (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+}
+
+/// Area of the convex hull of 2-D points.
+pub fn hull_area(pts: &[[f64; 2]]) -> f64 {
+    let h = convex_hull(pts);
     let n = h.len();
+    if n < 3 {
+        return 0.0;
+    }
     (0..n).map(|i| h[i][0] * h[(i + 1) % n][1] - h[(i + 1) % n][0] * h[i][1]).sum::<f64>().abs()
         / 2.0
+}
+
+/// Whether `q` lies inside or on a counter-clockwise convex hull of three or more points (as
+/// [`convex_hull`] returns), to within `slack` metres of its edges.
+pub fn in_hull(h: &[[f64; 2]], q: [f64; 2], slack: f64) -> bool {
+    let n = h.len();
+    n >= 3
+        && (0..n).all(|i| {
+            let (a, b) = (h[i], h[(i + 1) % n]);
+            let len = ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt();
+            len > 0.0 && cross2(a, b, q) / len >= -slack
+        })
 }
 
 #[cfg(test)]
@@ -335,6 +358,17 @@ mod tests {
         );
         // Local x (0.1) now points down.
         assert!((e.lowest()[2] - 0.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn in_hull_square() {
+        let h = convex_hull(&[[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0], [0.5, 0.5]]);
+        assert_eq!(h.len(), 4);
+        assert!(in_hull(&h, [0.5, 0.5], 0.0));
+        assert!(in_hull(&h, [1.0, 0.5], 0.0));
+        assert!(!in_hull(&h, [1.01, 0.5], 0.0));
+        assert!(in_hull(&h, [1.01, 0.5], 0.02));
+        assert!(!in_hull(&convex_hull(&[[0.0, 0.0], [1.0, 0.0]]), [0.5, 0.0], 0.1));
     }
 
     #[test]
