@@ -323,6 +323,8 @@ fn search_cost(engine: &Engine, out: &FitOutcome) -> SearchCost {
                         | Phase::FloorScreen
                         | Phase::ReachScreen
                         | Phase::HeldoutScreen
+                        | Phase::DiscretisationScreen
+                        | Phase::HeldoutBound
                         | Phase::TrustScreen
                         | Phase::HeldoutLinear
                         | Phase::SwapScreen
