@@ -42,7 +42,8 @@ pub(super) fn short_of_keep(
     s: &Search,
     (applied, at_coarse): (&[Applied], &[Applied]),
     (ho_err, ho_c): (&Errors, Option<&Errors>),
-    ((gains, gate, round), floors): (((Option<f64>, f64), Gate, usize), &[Floor]),
+    (gains, gate, round): ((Option<f64>, f64), Gate, usize),
+    floors: &[Floor],
     out: &mut FitOutcome,
 ) -> Option<(Phase, f64)> {
     let engine = s.engine;
