@@ -28,7 +28,7 @@ use crate::sim2real::recording::Recording;
 
 use super::engine::Engine;
 use super::policy::Phase;
-use super::verdict::{Gate, verdict};
+use super::verdict::{Gate, Verdict, verdict};
 use super::{FitOutcome, Floor, Tried};
 
 /// What [`beyond_discretisation`] judges: the round's base set, the base with the candidate
@@ -94,15 +94,10 @@ fn finer_step_holds(
     {
         return true;
     }
-    let r = engine.opts.policy.discretisation_refine.max(2);
-    let k = (r * r) as u32;
-    let (Some(before), Some(after)) =
-        (engine.errors_at(heldout, before_set, k), engine.errors_at(heldout, j.trial, k))
-    else {
-        // Not measurable at the finer step: the gate at `dt` stands.
+    // Not measurable at the finer step: the gate at `dt` stands.
+    let Some(v) = at_finer_step(engine, heldout, (before_set, j.trial), first, j.gate) else {
         return true;
     };
-    let v = verdict(&before, &after, &first.joints, j.gate);
     if v.significant && v.rel >= engine.opts.policy.min_rel_improvement {
         return true;
     }
@@ -121,6 +116,67 @@ fn finer_step_holds(
         predicted: None,
         simulated_s: None,
     });
+    note_within(engine, cands, single, v.rel, out);
+    false
+}
+
+/// The held-out verdict (`gate`, on `first`'s joints) of `trial` against `before_set`, both
+/// replayed on `heldout` at `dt / r²`; `None` when either replay fails.
+fn at_finer_step(
+    engine: &Engine,
+    heldout: &[Recording],
+    (before_set, trial): (&[Applied], &[Applied]),
+    first: &Applied,
+    gate: Gate,
+) -> Option<Verdict> {
+    let r = engine.opts.policy.discretisation_refine.max(2);
+    let k = (r * r) as u32;
+    let before = engine.errors_at(heldout, before_set, k)?;
+    let after = engine.errors_at(heldout, trial, k)?;
+    Some(verdict(&before, &after, &first.joints, gate))
+}
+
+/// Before the full fit of a one-line descent ([`super::trust::one_line_descent`]: after round 0,
+/// a smooth candidate of one fitted parameter, whose full fit goes on from its coarse fit along
+/// the same line), the finer-step test on its coarse fit (the entry of `j.trial` after
+/// `j.base`) with every bar at the trust's edge ([`super::trust::at_trust_edge`]: `j.gate`'s z and
+/// decisive improvement, and `min_rel_improvement`, × `linear_trust`): a full fit moves each
+/// measure at most 1 / `linear_trust` times further than the coarse fit, so a coarse fit short
+/// of the edge at `dt / r²` leaves the full fit short of the gate there, and the full fit cannot
+/// be kept ([`beyond_discretisation`] would stop it after its fit). `Some` (the relative held-out
+/// improvement at the finer step; the note is added) when it is short; `None` when it passes
+/// or cannot be measured.
+pub(super) fn coarse_within_discretisation(
+    engine: &Engine,
+    heldout: &[Recording],
+    j: &Judged,
+    out: &mut FitOutcome,
+) -> Option<f64> {
+    let cands = &j.trial[j.base.len().min(j.trial.len())..];
+    let first = cands.first()?;
+    let pol = &engine.opts.policy;
+    let lt = pol.linear_trust;
+    let edge = Gate { z: lt * j.gate.z, decisive: lt * j.gate.decisive, ..j.gate };
+    let v = at_finer_step(engine, heldout, (j.base, j.trial), first, edge)?;
+    if v.significant && v.rel >= lt * pol.min_rel_improvement {
+        return None;
+    }
+    note_within(engine, cands, None, v.rel, out);
+    Some(v.rel)
+}
+
+/// The note that `cands` (beside the winner `single`, when a pair's partner) are within the
+/// model's time discretisation: `rel`, their relative held-out improvement at the finer step.
+/// One note per effect and joint group.
+fn note_within(
+    engine: &Engine,
+    cands: &[Applied],
+    single: Option<&Applied>,
+    rel: f64,
+    out: &mut FitOutcome,
+) {
+    let r = engine.opts.policy.discretisation_refine.max(2);
+    let k = (r * r) as u32;
     let dt = engine.robot.mj.opt().timestep;
     // Beside a winner, the note names the partner (the winner stays).
     let winner = |c: &Applied| {
@@ -151,14 +207,13 @@ fn finer_step_holds(
         named[0].joints.join(","),
         params.join(", "),
         num(dt),
-        100.0 * v.rel,
+        100.0 * rel,
     );
     // One note per effect and joint group (a later round may fit it again).
     let head = format!("{what} on {} (", named[0].joints.join(","));
     if !out.notes.iter().any(|n| n.starts_with(&head) && n.contains("time discretisation")) {
         out.notes.push(note);
     }
-    false
 }
 
 #[cfg(test)]
@@ -243,19 +298,28 @@ mod tests {
             let mut out = FitOutcome::empty(String::new());
             let j = Judged { base: &[], trial: &trial, gate, floors: &floors, round: 0 };
             let beyond = beyond_discretisation(&engine, heldout, &j, &mut out);
-            (floors[0].discretisation, trial[0].params[0], at_dt, beyond, out)
+            // The same test before a full fit, at the trust's edge, on this point.
+            let mut early = FitOutcome::empty(String::new());
+            let short = coarse_within_discretisation(&engine, heldout, &j, &mut early);
+            assert_eq!(short.is_some(), !early.notes.is_empty(), "{:?}", early.notes);
+            assert!(early.tried.is_empty(), "{:?}", early.tried);
+            (floors[0].discretisation, trial[0].params[0], at_dt, beyond, (out, short))
         };
         let clean = record(&clean);
-        let (disc, delay, at_dt, beyond, out) = judge(&clean, &clean, &ActionDelay);
+        let (disc, delay, at_dt, beyond, (out, short)) = judge(&clean, &clean, &ActionDelay);
         assert!(disc > 0.0, "no discretisation part");
         assert!(delay > 0.0 && at_dt, "delay {delay} does not pass at dt: nothing to test");
         assert!(!beyond, "delay {delay} kept");
+        // Short at the edge too: its full fit from this point would not be made.
+        assert!(short.is_some_and(|r| r < 0.02), "delay {delay} passes at the edge: {short:?}");
         assert_eq!(out.notes.len(), 1, "{:?}", out.notes);
         assert!(out.notes[0].contains("within the model's time discretisation at dt = 0.005 s"));
         assert!(out.tried.iter().any(|t| t.phase == Phase::Discretisation && !t.kept));
-        let (disc, damping, at_dt, beyond, out) = judge(&record(&damped), &clean, &ViscousDamping);
+        let (disc, damping, at_dt, beyond, (out, short)) =
+            judge(&record(&damped), &clean, &ViscousDamping);
         assert!(disc > 0.0 && at_dt, "damping {damping}: part {disc}, passes at dt {at_dt}");
         assert!(beyond && out.notes.is_empty(), "damping {damping}: {:?}", out.notes);
+        assert!(short.is_none(), "damping {damping} stopped before its full fit: {short:?}");
         for d in [dir, dir2, dir3] {
             std::fs::remove_dir_all(&d).ok();
         }

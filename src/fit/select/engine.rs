@@ -6,7 +6,6 @@ use rayon::prelude::*;
 use crate::fit::effects::{Applied, Effect};
 use crate::fit::rollout::{RolloutStats, Rollouts, SetSpec};
 use crate::model::Robot;
-use crate::sim2real::metrics::gap_mask;
 use crate::sim2real::recording::Recording;
 use crate::sim2real::replay::{BaseMode, Episode};
 
@@ -18,6 +17,7 @@ mod floors;
 #[cfg(test)]
 mod tests;
 mod uncertainty;
+mod windows;
 use super::{Errors, FitOptions, ProgressInfo};
 pub use uncertainty::Jacobian;
 
@@ -590,47 +590,7 @@ impl<'a> Engine<'a> {
                 }
             });
         }
-        let mut sse = 0.0;
-        let mut n = 0usize;
-        let mut win = Vec::new();
-        for (rec, ep) in recs.iter().zip(&eps) {
-            let scored = gap_mask(&rec.t, self.opts.gap_mask_s);
-            for (k, jt) in rec.joints.iter().enumerate() {
-                if !self.joints.contains(&jt.name) {
-                    continue;
-                }
-                let t0 = rec.t[0];
-                let mut w = (0usize, 0.0, 0usize);
-                // One sample index into four parallel arrays (t, mask, real, sim).
-                #[allow(clippy::needless_range_loop)]
-                for i in 0..rec.t.len() {
-                    if !scored[i] {
-                        continue;
-                    }
-                    let e = jt.q[i] - ep.q_sim[k][i];
-                    if !e.is_finite() {
-                        if jt.q[i].is_finite() {
-                            return None;
-                        }
-                        continue;
-                    }
-                    let wi = ((rec.t[i] - t0) / self.opts.window_s) as usize;
-                    if wi != w.0 && w.2 > 0 {
-                        win.push((jt.name.clone(), (w.1 / w.2 as f64).sqrt()));
-                        w = (wi, 0.0, 0);
-                    }
-                    w.0 = wi;
-                    w.1 += e * e;
-                    w.2 += 1;
-                    sse += e * e;
-                    n += 1;
-                }
-                if w.2 > 0 {
-                    win.push((jt.name.clone(), (w.1 / w.2 as f64).sqrt()));
-                }
-            }
-        }
-        Some(Errors { sse, n, windows: win, eps })
+        self.errors_of(recs, eps)
     }
 
     /// The start-state sensitivities of `recs` ([`StartSens`]) on the start model, measured

@@ -7,6 +7,7 @@ use crate::fit::diagnose::diagnose;
 use crate::fit::effects::{self, Applied, Effect};
 use crate::fit::stats::{bic, bic_pieces};
 
+use super::before_full::short_of_keep;
 use super::coarse::{self, Coarse};
 use super::discretisation::{Judged, beyond_discretisation};
 use super::engine::shape_key;
@@ -18,8 +19,8 @@ use super::pairs::{joint_pairs, pair_lookahead, refitted_at_floor};
 use super::policy::Phase;
 use super::reach::Reach;
 use super::screen::{Screen, screen_data};
-use super::trust::{heldout_columns, heldout_out, heldout_short, plain_needed, train_reach};
-use super::trust::{one_line_descent, trust_out, with_pair_starts};
+use super::trust::{heldout_columns, heldout_out, plain_needed, train_reach};
+use super::trust::{trust_out, with_pair_starts};
 use super::verdict::{at_bound, verdict};
 use super::winner::{beaten_at_coarse, may_partner, on_whole_set, refine, rival_notes};
 use super::{Errors, FitOutcome, Search, Selected, Tried, set_uncertainty};
@@ -406,19 +407,14 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
             out.tried.push(not_tested(Phase::Screen, cp, cf));
             continue;
         }
-        // A full fit goes on from the coarse fit on the same training data: when the coarse
-        // fit, which reached the bar by its own training gain, does not lower the held-out
-        // error at all (one held-out replay), the descent explains what the held-out
-        // recordings do not share, and no full fit along it is made (`tried`: phase
-        // "heldout_screen"); nor when that coarse fit confirms the candidate's linear model
-        // (the full fit's optimum) and lowers the held-out error by less than the gate's
-        // improvement scaled by that trust; nor, after round 0, a smooth one-parameter one whose
-        // coarse fit fails the gate at the trust's edge ([`heldout_short`]). The lead too: its full fit on
-        // the whole training set goes on from a coarse fit that must pass this test first. Not a
-        // candidate that only its linear step admits (a coarse fit can miss the narrow basin
-        // that the full fit finds). One that a kept candidate of the round beats decisively on
-        // held-out there is judged at its coarse fit, not fitted in full ([`beaten_at_coarse`];
-        // `tried`: phase "add_coarse").
+        // A full fit goes on from the coarse fit on the same training data; it is not made
+        // where the coarse fit (one held-out replay) shows it cannot be kept ([`short_of_keep`]:
+        // the held-out screen, `heldout_screen`; after round 0 the finer-step test at the
+        // trust's edge, `discretisation_screen`, and a several-parameter one's held-out
+        // Gauss–Newton optimum, `heldout_bound`). The lead too. Not a candidate that only its
+        // linear step admits (a coarse fit can miss the narrow basin the full fit finds). One
+        // that a kept candidate of the round beats decisively on held-out there is judged at
+        // its coarse fit, not fitted in full ([`beaten_at_coarse`]; `tried`: "add_coarse").
         let whole = n_lead == 1 && ci == 1;
         let mut at_coarse = false;
         let mut ho_c = None;
@@ -426,14 +422,16 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
             let mut t = applied.clone();
             t.push(Applied { effect: e, joints: group.clone(), params: cp.clone() });
             ho_c = engine.errors(heldout, &t);
-            let gate = (opts.policy.gate_z(z), one_line_descent(e, round));
             let gains = (predicted.map(|p| gain(p.train_rmse)), gain(cf));
-            if heldout_short((&ho_err, ho_c.as_ref()), &group, gains, gate, &opts.policy) {
+            let at = (gains, opts.policy.gate_z(z), round);
+            if let Some((why, h)) =
+                short_of_keep(s, (&applied, &t), (&ho_err, ho_c.as_ref()), at, &floors, out)
+            {
                 // (Its coarse fit still starts a joint pair fit, as a screened one's does.)
                 if gain(cf) >= opts.policy.min_rel_improvement {
                     fitted.push(Applied { effect: e, joints: group.clone(), params: cp.clone() });
                 }
-                out.tried.push(not_tested(Phase::HeldoutScreen, cp, cf));
+                out.tried.push(Tried { heldout_improvement: h, ..not_tested(why, cp, cf) });
                 continue;
             }
             let best = accepted

@@ -24,6 +24,7 @@
 //! [`improvement_beyond_noise`]: crate::fit::stats::improvement_beyond_noise
 //! [`uncertainty_from_jacobian`]: crate::fit::stats::uncertainty_from_jacobian
 
+mod before_full;
 pub mod chord;
 mod coarse;
 mod discretisation;
@@ -322,6 +323,8 @@ fn search_cost(engine: &Engine, out: &FitOutcome) -> SearchCost {
                         | Phase::FloorScreen
                         | Phase::ReachScreen
                         | Phase::HeldoutScreen
+                        | Phase::DiscretisationScreen
+                        | Phase::HeldoutBound
                         | Phase::TrustScreen
                         | Phase::HeldoutLinear
                         | Phase::SwapScreen

@@ -169,7 +169,8 @@ pub struct SearchCost {
     #[serde(flatten)]
     pub rollouts: RolloutStats,
     /// Candidates left without a full nonlinear fit by a screen (phases `screen`, `floor`,
-    /// `floor_screen`, `swap_screen`).
+    /// `floor_screen`, `reach_screen`, `heldout_screen`, `discretisation_screen`,
+    /// `heldout_bound`, `trust_screen`, `heldout_linear`, `swap_screen`).
     pub fits_saved_by_screens: usize,
     /// Rollouts by the phase that ran them (`diagnose` includes the floors and the
     /// linearised ranking's probes; `add` the candidates' fits and held-out tests).

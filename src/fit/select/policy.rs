@@ -415,6 +415,17 @@ pub enum Phase {
     /// Not fitted in full: its coarse fit, replayed on the held-out set, does not lower the
     /// held-out error at all.
     HeldoutScreen,
+    /// Not fitted in full after round 0: a smooth candidate of one fitted parameter whose coarse
+    /// fit, replayed on the held-out set at the finer timestep (`discretisation_refine`), does
+    /// not pass the round's gate there at the trust's edge (`linear_trust`; `before_full.rs`):
+    /// its gain at the model's step is the integration step's (a note says so);
+    /// `heldout_improvement` holds its relative improvement at the finer step.
+    DiscretisationScreen,
+    /// Not fitted in full after round 0: a smooth candidate of several fitted parameters whose
+    /// held-out optimum by the Gauss–Newton model at its coarse fit (one held-out replay per
+    /// parameter) does not pass the round's gate at the trust's edge (`before_full.rs`);
+    /// `heldout_improvement` holds that optimum's relative improvement.
+    HeldoutBound,
     /// Not coarse-fitted in a later round: its linear model, which round 0's coarse fit
     /// confirmed (`linear_trust`), predicts a gain that even at the trust's edge reaches neither
     /// the round's bar so far nor `min_rel_improvement`.
@@ -492,6 +503,8 @@ impl Phase {
             Phase::FloorScreen => "floor_screen",
             Phase::ReachScreen => "reach_screen",
             Phase::HeldoutScreen => "heldout_screen",
+            Phase::DiscretisationScreen => "discretisation_screen",
+            Phase::HeldoutBound => "heldout_bound",
             Phase::TrustScreen => "trust_screen",
             Phase::HeldoutLinear => "heldout_linear",
             Phase::Discretisation => "discretisation",
