@@ -157,7 +157,9 @@ fn on_probes(
     if most.is_some_and(|m| 1.0 - m / base_s < bar) {
         return Some((p, fs));
     }
-    let (q, fq) = engine.fit_budget(short, applied, e, g, pol.screen_evals);
+    // (A non-smooth one-parameter candidate's grid on `short` goes on from the probes' grid
+    // point: the grid around it, the whole grid when that holds no minimum of it.)
+    let (q, fq) = engine.fit_budget_from(short, applied, (e, g), pol.screen_evals, &p);
     Some(if fs < fq || q.is_empty() { (p, fs) } else { (q, fq) })
 }
 
@@ -412,6 +414,35 @@ mod tests {
         let before = engine.rollout_stats().simulated_s;
         let _ = on_probes(&engine, (&recs, &[]), (&Backlash, &g), reached + 1e-9);
         assert!(engine.rollout_stats().simulated_s - before >= secs(&recs));
+    }
+
+    /// Where the probes' fit of a non-smooth one-parameter candidate does not confirm its gain on
+    /// the screen's data (a trust of 1) and no bar admits it, the coarse fit on the screen's
+    /// data goes on from the probes' grid point: only the grid points around it are replayed
+    /// (three beside the one replayed already, of the grid's five others), and it finds what
+    /// the whole grid there finds (a fresh engine's coarse fit on the screen's data).
+    #[test]
+    fn a_non_smooth_fallback_replays_the_grid_around_the_probes_point() {
+        let (robot, recs) = pendulum_with_play();
+        let policy = SearchPolicy { linear_trust: 1.0, ..SearchPolicy::default() };
+        let opts = FitOptions { policy, ..FitOptions::default() };
+        let engine = Engine::new(&robot, &recs, &opts);
+        let g = vec!["servo".to_string()];
+        let evals = opts.policy.screen_evals;
+        let secs = |r: &[Recording]| r.iter().map(|x| x.t.last().unwrap() - x.t[0]).sum::<f64>();
+        let probes = engine.probe_set(&recs, &[], || vec![recs[1].clone()]);
+        let _ = engine.errors_held(&recs, &[]).expect("replay");
+        let _ = engine.errors_held(&probes, &[]).expect("replay");
+        let (q, _) = engine.fit_budget(&probes, &[], &Backlash, &g, evals);
+        let before = engine.rollout_stats().simulated_s;
+        let got = on_probes(&engine, (&recs, &[]), (&Backlash, &g), f64::INFINITY).expect("fit");
+        let cost = engine.rollout_stats().simulated_s - before;
+        // The probes' point replayed on the screen's data, then three more points of the grid.
+        assert!(cost <= 4.0 * secs(&recs) + 1e-9, "{cost} s replayed for {}", secs(&recs));
+        assert!(cost >= 2.0 * secs(&recs) - 1e-9, "{cost} s replayed: no fit on the screen's data");
+        let fresh = Engine::new(&robot, &recs, &opts);
+        let whole = fresh.fit_budget(&recs, &[], &Backlash, &g, evals);
+        assert_eq!(got, whole, "from the probes' point {q:?}");
     }
 
     /// A smooth candidate whose probes' fit, replayed on the screen's data, neither confirms its

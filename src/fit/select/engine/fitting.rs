@@ -157,6 +157,22 @@ impl Engine<'_> {
         self.fit_memo(train, base, (effect, group), max_evals, None)
     }
 
+    /// [`Engine::fit_budget`] from `start`, a point of the same line search's grid made on
+    /// other data (the probes' coarse fit of a non-smooth one-parameter candidate, re-made on
+    /// the screen's data): only the grid points around it are replayed ([`Method::LineFrom`]),
+    /// the same answer as the whole grid whenever the grid's best point is among them, else
+    /// the whole grid. Any other effect is fitted as by [`Engine::fit_budget`]. Memoised as it.
+    pub(in crate::fit::select) fn fit_budget_from(
+        &self,
+        train: &[Recording],
+        base: &[Applied],
+        (effect, group): (&'static dyn Effect, &[String]),
+        max_evals: usize,
+        start: &[f64],
+    ) -> (Vec<f64>, f64) {
+        self.fit_memo(train, base, (effect, group), max_evals, Some(start))
+    }
+
     /// The coarse fit of a smooth one-parameter `effect` on `group`, started from the screen's
     /// linear model: secant Gauss–Newton steps on the rollout residuals, one replay each. The
     /// first step is the screen's predicted `step` from the effect's start (its probe column is
@@ -416,9 +432,10 @@ impl Engine<'_> {
             }
             1 => {
                 let (log, max_evals) = (effect.log_search(), max_evals.min(40));
-                // A full fit from a coarse fit's point refines the bracket around it
-                // ([`Method::LineFrom`]) when it holds a minimum.
-                let method = match start.filter(|p| full_fit && !p.is_empty()) {
+                // A fit from a point of its grid made on other data (a full fit from a coarse
+                // fit's point; a coarse fit from the probes' one) replays the grid around it
+                // and refines its bracket ([`Method::LineFrom`]) when it holds a minimum.
+                let method = match start.filter(|p| !p.is_empty()) {
                     Some(s) => {
                         x0 = clamp(s);
                         Method::LineFrom { log, max_evals }
