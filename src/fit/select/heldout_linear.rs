@@ -48,8 +48,9 @@ pub(super) fn out_of(
             && coarse::deferred(s, (c.0, &c.1), cands, coarse).is_none()
     };
     if let Some(h) = ho.as_mut() {
-        let ids: Vec<&'static str> = block.iter().filter(|c| asked(c)).map(|c| c.0.id()).collect();
-        h.ensure(engine, &ids, covered);
+        let these: Vec<(&'static str, &[String])> =
+            block.iter().filter(|c| asked(c)).map(|c| (c.0.id(), &c.1[..])).collect();
+        h.ensure(engine, &these, covered);
     }
     let ho = ho.as_ref().and_then(|h| h.screen());
     block

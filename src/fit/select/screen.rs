@@ -268,37 +268,61 @@ impl<'a> Probes<'a> {
         diag: &mut [Candidate],
         covered: &(dyn Fn(&str, &str) -> bool + Sync),
     ) -> Option<EffectModel> {
+        let batches = batches(engine, id, diag, covered);
+        let found: BTreeMap<usize, Vec<Option<Probe>>> =
+            self.probe(engine, id, diag, &batches).into_iter().collect();
+        self.assemble(engine, id, diag, covered, &found)
+    }
+
+    /// The best probes of every candidate of `batches` (of [`batches`]), the batches in
+    /// parallel ([`probe_batch`]).
+    fn probe(
+        &self,
+        engine: &Engine,
+        id: &'static str,
+        diag: &[Candidate],
+        batches: &[Vec<usize>],
+    ) -> Vec<(usize, Vec<Option<Probe>>)> {
+        let Some(effect) = effects::by_id(id) else { return vec![] };
         let (train, tr_err) = self.data();
-        let (r, limbs, m0) = (&self.r, &self.limbs, &self.m0);
-        let (train_ss, train_n, screen_rmse) = (self.train_ss, self.train_n, self.screen_rmse);
-        let base = self.base;
-        let pieces = tr_err.windows.len();
-        let effect = effects::by_id(id)?;
-        let k = effect.stepped().max(effect.screened()).clamp(1, effect.fitted().max(1));
-        let kr = effect.screened().clamp(1, k);
-        let idx: Vec<usize> = (0..diag.len())
-            .filter(|&i| diag[i].effect == id && !covered(id, &diag[i].joint))
-            .collect();
-        // One simulation probes one candidate joint of every limb at once: a column is
-        // the change on its own limb's samples ([`limb_batches`]).
-        let batches = limb_batches(engine.robot, &idx, diag);
+        let (r, limbs, base) = (&self.r, &self.limbs, self.base);
+        let k = probed_params(effect);
         let probed: Vec<Vec<(usize, Vec<Option<Probe>>)>> = batches
             .par_iter()
             .map(|batch| {
                 let sims = Sims { engine, train, base, tr_err, r, limbs };
-                probe_batch(&sims, (effect, m0), diag, batch, k)
+                probe_batch(&sims, (effect, &self.m0), diag, batch, k)
             })
             .collect();
-        let mut found: BTreeMap<usize, Vec<Option<Probe>>> = BTreeMap::new();
-        for (i, p) in probed.into_iter().flatten() {
-            found.insert(i, p);
-        }
-        let probes: Vec<Vec<Option<Probe>>> =
-            idx.iter().map(|i| found.remove(i).unwrap_or_default()).collect();
+        probed.into_iter().flatten().collect()
+    }
+
+    /// The linear model of effect `id` from the probes `found` (by diagnosis entry) of its
+    /// uncovered candidates in `diag` (an entry without probes is not modelled); sets each
+    /// modelled candidate's `explained_rms` and evidence. `None` when no joint has a column.
+    fn assemble(
+        &self,
+        engine: &Engine,
+        id: &'static str,
+        diag: &mut [Candidate],
+        covered: &(dyn Fn(&str, &str) -> bool + Sync),
+        found: &BTreeMap<usize, Vec<Option<Probe>>>,
+    ) -> Option<EffectModel> {
+        let (_, tr_err) = self.data();
+        let (r, m0) = (&self.r, &self.m0);
+        let (train_ss, train_n, screen_rmse) = (self.train_ss, self.train_n, self.screen_rmse);
+        let pieces = tr_err.windows.len();
+        let effect = effects::by_id(id)?;
+        let k = probed_params(effect);
+        let kr = effect.screened().clamp(1, k);
+        let idx = entries(id, diag, covered);
+        let none = vec![];
+        let probes: Vec<&Vec<Option<Probe>>> =
+            idx.iter().map(|i| found.get(i).unwrap_or(&none)).collect();
         let mut m = EffectModel { k, ranked: kr, ..Default::default() };
         let zero = vec![0.0; r.len()];
         let mut cols: Vec<&Vec<f64>> = Vec::new();
-        for (&i, ps) in idx.iter().zip(&probes) {
+        for (&i, ps) in idx.iter().zip(probes) {
             let c = &mut diag[i];
             // A joint whose first parameter has no column is not modelled (as before the
             // other parameters were screened).
@@ -353,6 +377,34 @@ impl<'a> Probes<'a> {
         }
         (!m.joints.is_empty()).then_some(m)
     }
+}
+
+/// How many of `effect`'s parameters are probed ([`Effect::stepped`], at least the screened).
+///
+/// [`Effect::stepped`]: crate::fit::effects::Effect::stepped
+fn probed_params(effect: &dyn effects::Effect) -> usize {
+    effect.stepped().max(effect.screened()).clamp(1, effect.fitted().max(1))
+}
+
+/// The uncovered entries of effect `id` in `diag`.
+fn entries(
+    id: &str,
+    diag: &[Candidate],
+    covered: &(dyn Fn(&str, &str) -> bool + Sync),
+) -> Vec<usize> {
+    (0..diag.len()).filter(|&i| diag[i].effect == id && !covered(id, &diag[i].joint)).collect()
+}
+
+/// The probe simulations of effect `id`'s uncovered entries in `diag`: one simulation probes
+/// one candidate joint of every limb at once, a column being the change on its own limb's
+/// samples ([`limb_batches`]).
+fn batches(
+    engine: &Engine,
+    id: &str,
+    diag: &[Candidate],
+    covered: &(dyn Fn(&str, &str) -> bool + Sync),
+) -> Vec<Vec<usize>> {
+    limb_batches(engine.robot, &entries(id, diag, covered), diag)
 }
 
 impl Screen {
