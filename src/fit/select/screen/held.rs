@@ -23,6 +23,9 @@ use super::{Probes, Screen, batches};
 /// simulations ([`batches`]) were made.
 type Made = (BTreeMap<usize, Vec<Option<Probe>>>, BTreeSet<usize>);
 
+/// One effect's probe simulations ([`batches`]) and which of them are still to make.
+type Work = (&'static str, Vec<Vec<usize>>, Vec<usize>);
+
 /// The held-out set's screen of the diagnosis entries `diag`, its columns probed on demand
 /// ([`HeldoutScreen::ensure`]).
 pub(in crate::fit::select) struct HeldoutScreen<'a> {
@@ -68,7 +71,7 @@ impl<'a> HeldoutScreen<'a> {
         ids.sort_unstable();
         ids.dedup();
         // Per effect, its probe simulations and which of them are still to make.
-        let mut work: Vec<(&'static str, Vec<Vec<usize>>, Vec<usize>)> = Vec::new();
+        let mut work: Vec<Work> = Vec::new();
         for id in ids {
             let all = batches(engine, id, &self.diag, covered);
             let joints: Vec<&String> =
