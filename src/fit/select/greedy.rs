@@ -13,14 +13,14 @@ use super::discretisation::{Judged, beyond_discretisation};
 use super::engine::shape_key;
 use super::extension;
 use super::groups::{Cand, candidate_list, has_group, partner, same_data, sorted_pair};
+use super::heldout_linear::out_of;
 use super::lead;
 use super::pair_first::{EarlyPair, early_pair, rivals};
 use super::pairs::{joint_pairs, pair_lookahead, refitted_at_floor};
 use super::policy::Phase;
 use super::reach::Reach;
-use super::screen::{Screen, screen_data};
-use super::trust::{heldout_columns, heldout_out, plain_needed, train_reach};
-use super::trust::{trust_out, with_pair_starts};
+use super::screen::{HeldoutScreen, Screen, screen_data};
+use super::trust::{heldout_columns, with_pair_starts};
 use super::verdict::{at_bound, verdict};
 use super::winner::{beaten_at_coarse, may_partner, on_whole_set, refine, rival_notes};
 use super::{Errors, FitOutcome, Search, Selected, Tried, set_uncertainty};
@@ -91,13 +91,10 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     }
     // One-parameter candidates first, in rank order; then the multi-parameter ones.
     cands.sort_by_key(|(e, ..)| e.fitted() >= 2);
-    // After round 0, the held-out set's own linear model ([`heldout_out`]), of the candidates
-    // it may leave out ([`heldout_columns`]).
+    // After round 0, the held-out set's own linear model ([`heldout_out`]) of the candidates it
+    // may leave out ([`heldout_columns`]), an effect's probed when first asked ([`out_of`]).
     let ho_diag = (round > 0).then(|| heldout_columns(engine, &screen, &cands, &diag));
-    let ho_screen = ho_diag.filter(|d| !d.is_empty()).map(|mut d| {
-        engine.report(round, Phase::HeldoutLinear, None);
-        Screen::build(engine, heldout, &applied, &ho_err, &mut d, &covered)
-    });
+    let mut ho_screen = ho_diag.and_then(|d| HeldoutScreen::new((heldout, &applied, &ho_err), d));
     let z = opts.policy.z_needed(cands.len());
     let k_before: usize = applied.iter().map(|a| a.effect.fitted()).sum();
     let bic_before = bic(tr_err.n, tr_err.sse, k_before);
@@ -178,25 +175,9 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
             // plain one's coarse fit ([`coarse::deferred`]); without it, it is coarse-fitted
             // whole on the screen's data (KR8's Stribeck friction on the hip: 337 replayed s).
             let cut = (opts.policy.screen_share * best_gain).max(opts.policy.min_rel_improvement);
-            let lt = opts.policy.linear_trust;
-            // (The held-out replays that confirm a linear model are booked to its probes.)
-            if round > 0 {
-                engine.report(round, Phase::HeldoutLinear, None);
-            }
-            let out_of: Vec<Option<(f64, Phase, f64)>> = cands[range.clone()]
-                .par_iter()
-                .map(|(e, g, _)| {
-                    if round == 0 || plain_needed(&cands, (*e, g)) {
-                        return None;
-                    }
-                    if let Some(u) = trust_out(engine, &screen, (*e, g), cut) {
-                        return Some((u, Phase::TrustScreen, f64::NAN));
-                    }
-                    let (sh, ho) = ((&screen, ho_screen.as_ref()?), (heldout, &applied[..]));
-                    let h = heldout_out(engine, sh, ho, (*e, g))?;
-                    Some((train_reach(&screen, (*e, g), lt), Phase::HeldoutLinear, h))
-                })
-                .collect();
+            let (ho, block) =
+                ((&screen, &mut ho_screen), (&cands[..], &coarse[..], &cands[range.clone()]));
+            let out_of = out_of(s, (round, cut), ho, &applied, &covered, block);
             // (The reach's coarse fits on the probes' data are booked apart: `Phase::Reach`.)
             engine.report(round, Phase::Reach, None);
             let far: Vec<Option<(Vec<f64>, f64)>> = cands[range.clone()]

@@ -33,6 +33,7 @@ mod extension;
 mod further;
 mod greedy;
 mod groups;
+mod heldout_linear;
 mod lead;
 mod outcome;
 mod pair_first;

@@ -39,6 +39,8 @@ use super::{Engine, Errors};
 mod probe;
 use probe::{Probe, Sims, aligned, dot, dot_r, entry_limbs, limb_batches, probe_batch};
 mod at;
+mod held;
+pub(super) use held::HeldoutScreen;
 
 /// The screen's data: about `screen_seconds` of `recs` in all, from each episode the stretch
 /// where the residual of `e` (summed over the fitted joints' scored samples) is largest — the
@@ -176,6 +178,235 @@ pub(super) fn charged(ss: f64, explained: f64, k: usize, m: usize) -> f64 {
     (ss - left).max(0.0)
 }
 
+/// What the probes of every effect share ([`Screen::build`]): the probes' data (the stretches
+/// of the screen's data where its residual is largest, `probe_seconds` in all: the screen's data
+/// itself when not longer, or when the base replay of the stretches fails), its residual with
+/// the base, and the scale of the screen's data. One effect's linear model is made from it by
+/// [`Probes::model`], independently of every other effect's.
+struct Probes<'a> {
+    /// The probes' data when it is not the screen's data itself.
+    held: Option<std::sync::Arc<Vec<Recording>>>,
+    screen: &'a [Recording],
+    base: &'a [Applied],
+    /// The probes' data's residual with `base` (`None`: the screen's, `sc_err`).
+    own_err: Option<Errors>,
+    sc_err: &'a Errors,
+    r: Vec<Option<f64>>,
+    limbs: Vec<Option<usize>>,
+    screen_rmse: f64,
+    train_ss: f64,
+    train_n: usize,
+    m0: mujoco_rs::prelude::MjModel,
+}
+
+impl<'a> Probes<'a> {
+    /// The probes' data of `screen` (`sc_err` its residual with `base`) and its base replay.
+    fn new(
+        engine: &Engine,
+        screen: &'a [Recording],
+        base: &'a [Applied],
+        sc_err: &'a Errors,
+    ) -> Probes<'a> {
+        let seconds = engine.opts.policy.probe_seconds;
+        let held = engine.probe_set(screen, base, || stretches(engine, screen, sc_err, seconds));
+        let own_err = if same_data(&held, screen) { None } else { engine.errors(&held, base) };
+        let held = own_err.is_some().then_some(held);
+        let mut p = Probes {
+            held,
+            screen,
+            base,
+            own_err,
+            sc_err,
+            r: vec![],
+            limbs: vec![],
+            screen_rmse: 0.0,
+            train_ss: 0.0,
+            train_n: 0,
+            m0: model_with(engine.robot, base),
+        };
+        let (train, tr_err) = p.data();
+        let r = aligned(engine, train, tr_err);
+        p.limbs = entry_limbs(engine, train);
+        p.screen_rmse = {
+            let rs = aligned(engine, screen, sc_err);
+            let n = rs.iter().flatten().count();
+            (rs.iter().flatten().map(|x| x * x).sum::<f64>() / n as f64).sqrt()
+        };
+        p.train_ss = r.iter().flatten().map(|x| x * x).sum();
+        p.train_n = r.iter().flatten().count();
+        p.r = r;
+        p
+    }
+
+    /// The probes' data and its residual with the base.
+    fn data(&self) -> (&[Recording], &Errors) {
+        match (&self.held, &self.own_err) {
+            (Some(h), Some(e)) => (&h[..], e),
+            _ => (self.screen, self.sc_err),
+        }
+    }
+
+    /// A screen without any effect's model yet, on these probes.
+    fn screen(&self) -> Screen {
+        Screen {
+            models: BTreeMap::new(),
+            train_ss: self.train_ss,
+            train_n: self.train_n,
+            screen_rmse: self.screen_rmse,
+            pieces: self.sc_err.windows.len(),
+        }
+    }
+
+    /// The linear model of effect `id` from the probes of its uncovered candidates in `diag`,
+    /// one candidate joint of every limb at once, its joints in parallel, keeping for each
+    /// screened parameter the best of its probe values; sets each probed candidate's
+    /// `explained_rms` and evidence ([`Screen::build`]). `None` when no joint has a column.
+    fn model(
+        &self,
+        engine: &Engine,
+        id: &'static str,
+        diag: &mut [Candidate],
+        covered: &(dyn Fn(&str, &str) -> bool + Sync),
+    ) -> Option<EffectModel> {
+        let batches = batches(engine, id, diag, covered);
+        let found: BTreeMap<usize, Vec<Option<Probe>>> =
+            self.probe(engine, id, diag, &batches).into_iter().collect();
+        self.assemble(engine, id, diag, covered, &found)
+    }
+
+    /// The best probes of every candidate of `batches` (of [`batches`]), the batches in
+    /// parallel ([`probe_batch`]).
+    fn probe(
+        &self,
+        engine: &Engine,
+        id: &'static str,
+        diag: &[Candidate],
+        batches: &[Vec<usize>],
+    ) -> Vec<(usize, Vec<Option<Probe>>)> {
+        let Some(effect) = effects::by_id(id) else { return vec![] };
+        let (train, tr_err) = self.data();
+        let (r, limbs, base) = (&self.r, &self.limbs, self.base);
+        let k = probed_params(effect);
+        let probed: Vec<Vec<(usize, Vec<Option<Probe>>)>> = batches
+            .par_iter()
+            .map(|batch| {
+                let sims = Sims { engine, train, base, tr_err, r, limbs };
+                probe_batch(&sims, (effect, &self.m0), diag, batch, k)
+            })
+            .collect();
+        probed.into_iter().flatten().collect()
+    }
+
+    /// The linear model of effect `id` from the probes `found` (by diagnosis entry) of its
+    /// uncovered candidates in `diag` (an entry without probes is not modelled); sets each
+    /// modelled candidate's `explained_rms` and evidence. `None` when no joint has a column.
+    fn assemble(
+        &self,
+        engine: &Engine,
+        id: &'static str,
+        diag: &mut [Candidate],
+        covered: &(dyn Fn(&str, &str) -> bool + Sync),
+        found: &BTreeMap<usize, Vec<Option<Probe>>>,
+    ) -> Option<EffectModel> {
+        let (_, tr_err) = self.data();
+        let (r, m0) = (&self.r, &self.m0);
+        let (train_ss, train_n, screen_rmse) = (self.train_ss, self.train_n, self.screen_rmse);
+        let pieces = tr_err.windows.len();
+        let effect = effects::by_id(id)?;
+        let k = probed_params(effect);
+        let kr = effect.screened().clamp(1, k);
+        let idx = entries(id, diag, covered);
+        let none = vec![];
+        let probes: Vec<&Vec<Option<Probe>>> =
+            idx.iter().map(|i| found.get(i).unwrap_or(&none)).collect();
+        let mut m = EffectModel { k, ranked: kr, ..Default::default() };
+        let zero = vec![0.0; r.len()];
+        let mut cols: Vec<&Vec<f64>> = Vec::new();
+        for (&i, ps) in idx.iter().zip(probes) {
+            let c = &mut diag[i];
+            // A joint whose first parameter has no column is not modelled (as before the
+            // other parameters were screened).
+            let Some(Some(p)) = ps.first() else { continue };
+            let own: Vec<&Vec<f64>> = (0..k)
+                .map(|j| ps.get(j).and_then(|p| p.as_ref()).map_or(&zero, |p| &p.column))
+                .collect();
+            let b: Vec<f64> = own.iter().map(|col| dot_r(col, r)).collect();
+            if train_n > 0 {
+                let (rk, pr) = (&own[..kr], &ps[..kr.min(ps.len())]);
+                let g: Vec<Vec<f64>> =
+                    rk.iter().map(|x| rk.iter().map(|y| dot(x, y)).collect()).collect();
+                let single = pr.iter().flatten().map(|p| p.explained).fold(0.0, f64::max);
+                // Charged for the ranking parameters probed here (one held by bounds of
+                // zero width has no column).
+                let kc = pr.iter().flatten().count();
+                let all = charged(train_ss, combine(&b[..kr], &g).0, kc, pieces);
+                c.evidence.insert("feature_explained_rms".into(), c.explained_rms);
+                let coef = dot_r(&p.column, r) / dot(&p.column, &p.column) / p.step;
+                c.evidence.insert("sensitivity_coef".into(), coef);
+                c.evidence.insert(probe::CHOSEN_PROBE.into(), p.v);
+                // On the screen's data's scale: its RMSE times the share of the probes'.
+                c.explained_rms =
+                    screen_rmse * (single.max(all) / train_ss.max(f64::MIN_POSITIVE)).sqrt();
+            }
+            let (room, held) = JointTarget::of(engine.robot, &c.joint).map_or(
+                ((f64::NEG_INFINITY, f64::INFINITY), 0),
+                |t| {
+                    let (p0, (lo, hi)) = (effect.initial(m0, &t), effect.bounds(m0, &t));
+                    let n = effect.fitted().min(lo.len()).min(hi.len());
+                    let held = (0..n).filter(|&i| hi[i] <= lo[i]).count();
+                    match (p0.first(), lo.first(), hi.first()) {
+                        (Some(p), Some(l), Some(h)) => ((l - p, h - p), held),
+                        _ => ((f64::NEG_INFINITY, f64::INFINITY), held),
+                    }
+                },
+            );
+            m.held.push(held);
+            m.joints.push(c.joint.clone());
+            m.room.push(room);
+            m.b.push(b);
+            cols.extend(own);
+        }
+        let n = cols.len();
+        m.g = vec![vec![0.0; n]; n];
+        for a in 0..n {
+            for b in a..n {
+                let g = dot(cols[a], cols[b]);
+                m.g[a][b] = g;
+                m.g[b][a] = g;
+            }
+        }
+        (!m.joints.is_empty()).then_some(m)
+    }
+}
+
+/// How many of `effect`'s parameters are probed ([`Effect::stepped`], at least the screened).
+///
+/// [`Effect::stepped`]: crate::fit::effects::Effect::stepped
+fn probed_params(effect: &dyn effects::Effect) -> usize {
+    effect.stepped().max(effect.screened()).clamp(1, effect.fitted().max(1))
+}
+
+/// The uncovered entries of effect `id` in `diag`.
+fn entries(
+    id: &str,
+    diag: &[Candidate],
+    covered: &(dyn Fn(&str, &str) -> bool + Sync),
+) -> Vec<usize> {
+    (0..diag.len()).filter(|&i| diag[i].effect == id && !covered(id, &diag[i].joint)).collect()
+}
+
+/// The probe simulations of effect `id`'s uncovered entries in `diag`: one simulation probes
+/// one candidate joint of every limb at once, a column being the change on its own limb's
+/// samples ([`limb_batches`]).
+fn batches(
+    engine: &Engine,
+    id: &str,
+    diag: &[Candidate],
+    covered: &(dyn Fn(&str, &str) -> bool + Sync),
+) -> Vec<Vec<usize>> {
+    limb_batches(engine.robot, &entries(id, diag, covered), diag)
+}
+
 impl Screen {
     /// Probes every uncovered candidate of `diag` on the probes' data — from the screen's data
     /// `screen` (`sc_err` its residual with `base`) the stretches of largest residual,
@@ -195,115 +426,17 @@ impl Screen {
         diag: &mut [Candidate],
         covered: &(dyn Fn(&str, &str) -> bool + Sync),
     ) -> Screen {
-        // The probes replay the stretches of the screen's data where its residual is largest
-        // (`probe_seconds` in all): the screen's data itself when not longer, or when the base
-        // replay of the stretches fails.
-        let seconds = engine.opts.policy.probe_seconds;
-        let held = engine.probe_set(screen, base, || stretches(engine, screen, sc_err, seconds));
-        let own_err = if same_data(&held, screen) { None } else { engine.errors(&held, base) };
-        let (train, tr_err): (&[Recording], &Errors) = match &own_err {
-            Some(e) => (&held, e),
-            None => (screen, sc_err),
-        };
-        let r = aligned(engine, train, tr_err);
-        let screen_rmse = {
-            let rs = aligned(engine, screen, sc_err);
-            let n = rs.iter().flatten().count();
-            (rs.iter().flatten().map(|x| x * x).sum::<f64>() / n as f64).sqrt()
-        };
-        let limbs = entry_limbs(engine, train);
-        let train_ss: f64 = r.iter().flatten().map(|x| x * x).sum();
-        let train_n = r.iter().flatten().count();
-        let pieces = tr_err.windows.len();
-        let mut models: BTreeMap<&'static str, EffectModel> = BTreeMap::new();
+        let probes = Probes::new(engine, screen, base, sc_err);
         let mut ids: Vec<&'static str> = diag.iter().map(|c| c.effect).collect();
         ids.sort_unstable();
         ids.dedup();
-        let m0 = model_with(engine.robot, base);
+        let mut out = probes.screen();
         for id in ids {
-            let Some(effect) = effects::by_id(id) else { continue };
-            let k = effect.stepped().max(effect.screened()).clamp(1, effect.fitted().max(1));
-            let kr = effect.screened().clamp(1, k);
-            let idx: Vec<usize> = (0..diag.len())
-                .filter(|&i| diag[i].effect == id && !covered(id, &diag[i].joint))
-                .collect();
-            // One simulation probes one candidate joint of every limb at once: a column is
-            // the change on its own limb's samples ([`limb_batches`]).
-            let batches = limb_batches(engine.robot, &idx, diag);
-            let probed: Vec<Vec<(usize, Vec<Option<Probe>>)>> = batches
-                .par_iter()
-                .map(|batch| {
-                    let sims = Sims { engine, train, base, tr_err, r: &r, limbs: &limbs };
-                    probe_batch(&sims, (effect, &m0), diag, batch, k)
-                })
-                .collect();
-            let mut found: BTreeMap<usize, Vec<Option<Probe>>> = BTreeMap::new();
-            for (i, p) in probed.into_iter().flatten() {
-                found.insert(i, p);
-            }
-            let probes: Vec<Vec<Option<Probe>>> =
-                idx.iter().map(|i| found.remove(i).unwrap_or_default()).collect();
-            let mut m = EffectModel { k, ranked: kr, ..Default::default() };
-            let zero = vec![0.0; r.len()];
-            let mut cols: Vec<&Vec<f64>> = Vec::new();
-            for (&i, ps) in idx.iter().zip(&probes) {
-                let c = &mut diag[i];
-                // A joint whose first parameter has no column is not modelled (as before the
-                // other parameters were screened).
-                let Some(Some(p)) = ps.first() else { continue };
-                let own: Vec<&Vec<f64>> = (0..k)
-                    .map(|j| ps.get(j).and_then(|p| p.as_ref()).map_or(&zero, |p| &p.column))
-                    .collect();
-                let b: Vec<f64> = own.iter().map(|col| dot_r(col, &r)).collect();
-                if train_n > 0 {
-                    let (rk, pr) = (&own[..kr], &ps[..kr.min(ps.len())]);
-                    let g: Vec<Vec<f64>> =
-                        rk.iter().map(|x| rk.iter().map(|y| dot(x, y)).collect()).collect();
-                    let single = pr.iter().flatten().map(|p| p.explained).fold(0.0, f64::max);
-                    // Charged for the ranking parameters probed here (one held by bounds of
-                    // zero width has no column).
-                    let kc = pr.iter().flatten().count();
-                    let all = charged(train_ss, combine(&b[..kr], &g).0, kc, pieces);
-                    c.evidence.insert("feature_explained_rms".into(), c.explained_rms);
-                    let coef = dot_r(&p.column, &r) / dot(&p.column, &p.column) / p.step;
-                    c.evidence.insert("sensitivity_coef".into(), coef);
-                    c.evidence.insert(probe::CHOSEN_PROBE.into(), p.v);
-                    // On the screen's data's scale: its RMSE times the share of the probes'.
-                    c.explained_rms =
-                        screen_rmse * (single.max(all) / train_ss.max(f64::MIN_POSITIVE)).sqrt();
-                }
-                let (room, held) = JointTarget::of(engine.robot, &c.joint).map_or(
-                    ((f64::NEG_INFINITY, f64::INFINITY), 0),
-                    |t| {
-                        let (p0, (lo, hi)) = (effect.initial(&m0, &t), effect.bounds(&m0, &t));
-                        let n = effect.fitted().min(lo.len()).min(hi.len());
-                        let held = (0..n).filter(|&i| hi[i] <= lo[i]).count();
-                        match (p0.first(), lo.first(), hi.first()) {
-                            (Some(p), Some(l), Some(h)) => ((l - p, h - p), held),
-                            _ => ((f64::NEG_INFINITY, f64::INFINITY), held),
-                        }
-                    },
-                );
-                m.held.push(held);
-                m.joints.push(c.joint.clone());
-                m.room.push(room);
-                m.b.push(b);
-                cols.extend(own);
-            }
-            let n = cols.len();
-            m.g = vec![vec![0.0; n]; n];
-            for a in 0..n {
-                for b in a..n {
-                    let g = dot(cols[a], cols[b]);
-                    m.g[a][b] = g;
-                    m.g[b][a] = g;
-                }
-            }
-            if !m.joints.is_empty() {
-                models.insert(id, m);
+            if let Some(m) = probes.model(engine, id, diag, covered) {
+                out.models.insert(id, m);
             }
         }
-        Screen { models, train_ss, train_n, screen_rmse, pieces: sc_err.windows.len() }
+        out
     }
 
     /// The training RMSE [`Screen::predict`] gives `effect` on `group` (on the screen's data's

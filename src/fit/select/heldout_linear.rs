@@ -1,0 +1,70 @@
+//! After round 0, which candidates of a block of the screen are taken without a coarse fit
+//! ([`out_of`]): those round 0's trust leaves out ([`trust_out`]) and those the held-out set's
+//! own linear model leaves out ([`heldout_out`]), that model's effects probed only for the
+//! candidates it is asked about ([`HeldoutScreen::ensure`]).
+
+use rayon::prelude::*;
+
+use crate::fit::effects::Applied;
+
+use super::Search;
+use super::coarse::{self, Coarse};
+use super::groups::Cand;
+use super::policy::Phase;
+use super::screen::{HeldoutScreen, Screen};
+use super::trust::{heldout_out, plain_needed, train_reach, trust_out};
+
+/// Per candidate of `block` (of `cands`, whose coarse fits so far are `coarse`) in round
+/// `round` with the bar `cut`: why it is taken without a coarse fit — (the largest training gain
+/// its linear model allows, the phase logged, the held-out reach; NaN for round 0's trust) —
+/// or `None` (screened as usual). Never in round 0, never the plain variant of another
+/// candidate on its joints ([`plain_needed`]); a candidate that waits for its plain variant's
+/// fit ([`coarse::deferred`]) takes that fit's stand-in whatever this says, and is not asked
+/// about on the held-out set: only the effects of the candidates asked about are probed there
+/// ([`HeldoutScreen::ensure`], booked to `heldout_linear` with the held-out replays that
+/// confirm a linear model).
+pub(super) fn out_of(
+    s: &Search,
+    (round, cut): (usize, f64),
+    (screen, ho): (&Screen, &mut Option<HeldoutScreen>),
+    applied: &[Applied],
+    covered: &(dyn Fn(&str, &str) -> bool + Sync),
+    (cands, coarse, block): (&[Cand], &[Coarse], &[Cand]),
+) -> Vec<Option<(f64, Phase, f64)>> {
+    let engine = s.engine;
+    if round == 0 {
+        return vec![None; block.len()];
+    }
+    engine.report(round, Phase::HeldoutLinear, None);
+    let lt = engine.opts.policy.linear_trust;
+    let trusted = |(e, g, _): &Cand| {
+        if plain_needed(cands, (*e, g)) {
+            return None;
+        }
+        Some(trust_out(engine, screen, (*e, g), cut).map(|u| (u, Phase::TrustScreen, f64::NAN)))
+    };
+    let asked = |c: &Cand| {
+        matches!(trusted(c), Some(None))
+            && coarse::deferred(s, (c.0, &c.1), cands, coarse).is_none()
+    };
+    if let Some(h) = ho.as_mut() {
+        let these: Vec<(&'static str, &[String])> =
+            block.iter().filter(|c| asked(c)).map(|c| (c.0.id(), &c.1[..])).collect();
+        h.ensure(engine, &these, covered);
+    }
+    let ho = ho.as_ref().and_then(|h| h.screen());
+    block
+        .par_iter()
+        .map(|c| {
+            if let Some(t) = trusted(c)? {
+                return Some(t);
+            }
+            if !asked(c) {
+                return None;
+            }
+            let (e, g) = (c.0, &c.1);
+            let h = heldout_out(engine, (screen, ho?), (s.heldout, applied), (e, g))?;
+            Some((train_reach(screen, (e, g), lt), Phase::HeldoutLinear, h))
+        })
+        .collect()
+}
