@@ -2,28 +2,9 @@
 //! written from the class: the expected numbers are worked out here from the fixtures'
 //! geometry, not read from the tool.
 
-use std::process::Command;
+mod common;
 
-/// The findings of `modellint FILE --no-probe --format json`.
-fn findings(file: &str) -> Vec<serde_json::Value> {
-    let out = Command::new(env!("CARGO_BIN_EXE_modellint"))
-        .args([file, "--no-probe", "--format", "json", "--no-cache"])
-        .env_remove("GITHUB_ACTIONS")
-        .output()
-        .unwrap();
-    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap_or_else(|e| {
-        panic!("{file}: no JSON ({e}): {}", String::from_utf8_lossy(&out.stderr))
-    });
-    json["findings"].as_array().cloned().unwrap_or_default()
-}
-
-fn of<'a>(all: &'a [serde_json::Value], rule: &str) -> Vec<&'a serde_json::Value> {
-    all.iter().filter(|f| f["rule"] == rule).collect()
-}
-
-fn message(f: &serde_json::Value) -> &str {
-    f["message"].as_str().unwrap_or("")
-}
+use common::lint::{findings, message, of};
 
 const MIRROR: &str = "fixtures/rules/mirror-asymmetry/";
 

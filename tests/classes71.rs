@@ -2,32 +2,9 @@
 //! written from the class: the expected numbers are worked out here from the fixtures'
 //! geometry (volumes, angles, ranges), not read from the tool.
 
-use std::process::Command;
+mod common;
 
-/// The findings of `modellint FILE --no-probe --format json`.
-fn findings(file: &str) -> Vec<serde_json::Value> {
-    let out = Command::new(env!("CARGO_BIN_EXE_modellint"))
-        .args([file, "--no-probe", "--format", "json", "--no-cache"])
-        .env_remove("GITHUB_ACTIONS")
-        .output()
-        .unwrap();
-    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap_or_else(|e| {
-        panic!("{file}: no JSON ({e}): {}", String::from_utf8_lossy(&out.stderr))
-    });
-    json["findings"].as_array().cloned().unwrap_or_default()
-}
-
-fn of<'a>(all: &'a [serde_json::Value], rule: &str) -> Vec<&'a serde_json::Value> {
-    all.iter().filter(|f| f["rule"] == rule).collect()
-}
-
-fn message(f: &serde_json::Value) -> &str {
-    f["message"].as_str().unwrap_or("")
-}
-
-fn measured(f: &serde_json::Value) -> f64 {
-    f["measured"]["value"].as_f64().unwrap_or(f64::NAN)
-}
+use common::lint::{findings, measured, message, of};
 
 fn none_of(file: &str, rule: &str) {
     let all = findings(file);

@@ -2,6 +2,7 @@
 #![allow(dead_code)]
 
 pub mod indep;
+pub mod lint;
 
 use std::path::{Path, PathBuf};
 

@@ -321,6 +321,18 @@ mod tests {
         pendulum(Some(0.04))
     }
 
+    /// The options with a linear trust of 1: no gain is confirmed on the screen's data but a
+    /// replay's own.
+    fn trusting_no_linear_step() -> FitOptions {
+        let policy = SearchPolicy { linear_trust: 1.0, ..SearchPolicy::default() };
+        FitOptions { policy, ..FitOptions::default() }
+    }
+
+    /// Recording seconds of a dataset.
+    fn seconds(r: &[Recording]) -> f64 {
+        r.iter().map(|x| x.t.last().unwrap() - x.t[0]).sum::<f64>()
+    }
+
     /// The pendulum servo, with a gear play of `play` rad when given, recorded by the synth
     /// (3 × 3 s).
     fn pendulum(play: Option<f64>) -> (crate::model::Robot, Vec<Recording>) {
@@ -336,7 +348,6 @@ mod tests {
         let opts = FitOptions::default();
         let engine = Engine::new(&robot, &recs, &opts);
         let g = vec!["servo".to_string()];
-        let secs = |r: &[Recording]| r.iter().map(|x| x.t.last().unwrap() - x.t[0]).sum::<f64>();
         // Not held: no screen made the probes' data on this base.
         assert!(on_probes(&engine, (&recs, &[]), (&Backlash, &g), f64::INFINITY).is_none());
         let probes = engine.probe_set(&recs, &[], || vec![recs[1].clone()]);
@@ -348,7 +359,7 @@ mod tests {
         let cost = engine.rollout_stats().simulated_s - before;
         // The play explains most of the residual, at the grid's point of the truth.
         assert!((p[0] - 0.04).abs() < 1e-9 && f < 0.5 * base, "{p:?}: {f} of {base}");
-        let budget = opts.policy.screen_evals as f64 * secs(&probes) + secs(&recs);
+        let budget = opts.policy.screen_evals as f64 * seconds(&probes) + seconds(&recs);
         assert!(cost <= budget + 1e-9, "{cost} s replayed for {budget}");
         // The coarse fit on the screen's data finds the same, for more.
         let before = engine.rollout_stats().simulated_s;
@@ -366,7 +377,6 @@ mod tests {
         let opts = FitOptions::default();
         let engine = Engine::new(&robot, &recs, &opts);
         let g = vec!["servo".to_string()];
-        let secs = |r: &[Recording]| r.iter().map(|x| x.t.last().unwrap() - x.t[0]).sum::<f64>();
         let probes = engine.probe_set(&recs, &[], || vec![recs[1].clone()]);
         let base = engine.errors_held(&recs, &[]).expect("replay").rmse();
         let base_p = engine.errors_held(&probes, &[]).expect("replay").rmse();
@@ -379,7 +389,7 @@ mod tests {
         let (_, fp) = engine.fit_budget(&probes, &[], &Backlash, &g, opts.policy.screen_evals);
         assert!(1.0 - fp / base_p < opts.policy.min_rel_improvement, "{fp} of {base_p}");
         // Only the probes' fit was replayed, nothing of the screen's data.
-        let budget = opts.policy.screen_evals as f64 * secs(&probes);
+        let budget = opts.policy.screen_evals as f64 * seconds(&probes);
         assert!(cost <= budget + 1e-9, "{cost} s replayed for {budget}");
     }
 
@@ -390,11 +400,9 @@ mod tests {
     #[test]
     fn a_probes_fit_whose_replay_reaches_the_bar_stands() {
         let (robot, recs) = pendulum_with_play();
-        let policy = SearchPolicy { linear_trust: 1.0, ..SearchPolicy::default() };
-        let opts = FitOptions { policy, ..FitOptions::default() };
+        let opts = trusting_no_linear_step();
         let engine = Engine::new(&robot, &recs, &opts);
         let g = vec!["servo".to_string()];
-        let secs = |r: &[Recording]| r.iter().map(|x| x.t.last().unwrap() - x.t[0]).sum::<f64>();
         let probes = engine.probe_set(&recs, &[], || vec![recs[1].clone()]);
         let base = engine.score(&recs, &[]);
         let base_p = engine.score(&probes, &[]);
@@ -409,11 +417,11 @@ mod tests {
         let before = engine.rollout_stats().simulated_s;
         let got = on_probes(&engine, (&recs, &[]), (&Backlash, &g), reached);
         assert_eq!(got, Some((q.clone(), fs)));
-        assert!(engine.rollout_stats().simulated_s - before <= secs(&recs) + 1e-9);
+        assert!(engine.rollout_stats().simulated_s - before <= seconds(&recs) + 1e-9);
         // Just short of it: the coarse fit on the screen's data is made.
         let before = engine.rollout_stats().simulated_s;
         let _ = on_probes(&engine, (&recs, &[]), (&Backlash, &g), reached + 1e-9);
-        assert!(engine.rollout_stats().simulated_s - before >= secs(&recs));
+        assert!(engine.rollout_stats().simulated_s - before >= seconds(&recs));
     }
 
     /// Where the probes' fit of a non-smooth one-parameter candidate does not confirm its gain on
@@ -424,12 +432,10 @@ mod tests {
     #[test]
     fn a_non_smooth_fallback_replays_the_grid_around_the_probes_point() {
         let (robot, recs) = pendulum_with_play();
-        let policy = SearchPolicy { linear_trust: 1.0, ..SearchPolicy::default() };
-        let opts = FitOptions { policy, ..FitOptions::default() };
+        let opts = trusting_no_linear_step();
         let engine = Engine::new(&robot, &recs, &opts);
         let g = vec!["servo".to_string()];
         let evals = opts.policy.screen_evals;
-        let secs = |r: &[Recording]| r.iter().map(|x| x.t.last().unwrap() - x.t[0]).sum::<f64>();
         let probes = engine.probe_set(&recs, &[], || vec![recs[1].clone()]);
         let _ = engine.errors_held(&recs, &[]).expect("replay");
         let _ = engine.errors_held(&probes, &[]).expect("replay");
@@ -438,8 +444,11 @@ mod tests {
         let got = on_probes(&engine, (&recs, &[]), (&Backlash, &g), f64::INFINITY).expect("fit");
         let cost = engine.rollout_stats().simulated_s - before;
         // The probes' point replayed on the screen's data, then three more points of the grid.
-        assert!(cost <= 4.0 * secs(&recs) + 1e-9, "{cost} s replayed for {}", secs(&recs));
-        assert!(cost >= 2.0 * secs(&recs) - 1e-9, "{cost} s replayed: no fit on the screen's data");
+        assert!(cost <= 4.0 * seconds(&recs) + 1e-9, "{cost} s replayed for {}", seconds(&recs));
+        assert!(
+            cost >= 2.0 * seconds(&recs) - 1e-9,
+            "{cost} s replayed: no fit on the screen's data"
+        );
         let fresh = Engine::new(&robot, &recs, &opts);
         let whole = fresh.fit_budget(&recs, &[], &Backlash, &g, evals);
         assert_eq!(got, whole, "from the probes' point {q:?}");
@@ -458,7 +467,6 @@ mod tests {
         let opts = FitOptions { policy, ..FitOptions::default() };
         let engine = Engine::new(&robot, &recs, &opts);
         let g = vec!["servo".to_string()];
-        let secs = |r: &[Recording]| r.iter().map(|x| x.t.last().unwrap() - x.t[0]).sum::<f64>();
         let probes = engine.probe_set(&recs, &[], || vec![recs[1].clone()]);
         let base = engine.errors_held(&recs, &[]).expect("replay").rmse();
         let _ = engine.errors_held(&probes, &[]).expect("replay");
@@ -475,12 +483,12 @@ mod tests {
         let before = engine.rollout_stats().simulated_s;
         let got = on_probes(&engine, (&recs, &[]), (&GainError, &g), reach + 1e-3);
         assert_eq!(got, Some((q.clone(), fs)));
-        assert!(engine.rollout_stats().simulated_s - before <= 2.0 * secs(&recs) + 1e-9);
+        assert!(engine.rollout_stats().simulated_s - before <= 2.0 * seconds(&recs) + 1e-9);
         // Within it: the coarse fit on the screen's data is made (and kept where better).
         let before = engine.rollout_stats().simulated_s;
         let bar = 0.5 * (reached + reach);
         let (p, f) = on_probes(&engine, (&recs, &[]), (&GainError, &g), bar).expect("fitted");
-        assert!(engine.rollout_stats().simulated_s - before >= secs(&recs));
+        assert!(engine.rollout_stats().simulated_s - before >= seconds(&recs));
         let (r, fr) = engine.fit_budget(&recs, &[], &GainError, &g, opts.policy.screen_evals);
         assert_eq!((p, f), if fs < fr { (q, fs) } else { (r, fr) });
     }
@@ -539,7 +547,6 @@ mod tests {
         let engine = Engine::new(&robot, &recs, &opts);
         let g = vec!["servo".to_string()];
         let evals = opts.policy.screen_evals;
-        let secs = |r: &[Recording]| r.iter().map(|x| x.t.last().unwrap() - x.t[0]).sum::<f64>();
         let base = engine.errors_held(&recs, &[]).expect("replay");
         let allowed = vec![GainError.id().to_string()];
         let mut diag =
@@ -553,11 +560,11 @@ mod tests {
         let cost = engine.rollout_stats().simulated_s - before;
         assert_eq!(p, q, "the probes' fit stands");
         assert!(1.0 - f / base.rmse() >= bar, "{f} of {}", base.rmse());
-        assert!(cost <= 2.0 * secs(&recs) + 1e-9, "{cost} s replayed");
+        assert!(cost <= 2.0 * seconds(&recs) + 1e-9, "{cost} s replayed");
         // No bar yet: the coarse fit on the screen's data.
         let before = engine.rollout_stats().simulated_s;
         let (p0, _) = super::fit(&engine, &screen, (&recs, &[]), (&GainError, &g));
-        assert!(engine.rollout_stats().simulated_s - before > 2.0 * secs(&recs));
+        assert!(engine.rollout_stats().simulated_s - before > 2.0 * seconds(&recs));
         assert_eq!(p0, engine.fit_budget(&recs, &[], &GainError, &g, evals).0);
     }
 

@@ -114,10 +114,29 @@ impl<'a> HeldoutScreen<'a> {
 #[cfg(test)]
 mod tests {
     use super::HeldoutScreen;
-    use crate::fit::diagnose::diagnose;
+    use crate::fit::diagnose::{Candidate, diagnose};
     use crate::fit::effects::{CoulombFriction, Effect, ViscousDamping};
     use crate::fit::select::screen::Screen;
     use crate::fit::select::{Engine, FitOptions};
+    use crate::model::Robot;
+    use crate::sim2real::recording::Recording;
+
+    /// The diagnosis of `recs` with the `allowed` effects, a screen of every effect at once on
+    /// an engine of its own, and the recording seconds that screen replayed.
+    fn whole_screen(
+        robot: &Robot,
+        recs: &[Recording],
+        opts: &FitOptions,
+        allowed: &[String],
+    ) -> (Vec<Candidate>, Screen, f64) {
+        let no = |_: &str, _: &str| false;
+        let whole = Engine::new(robot, recs, opts);
+        let base = whole.errors_held(recs, &[]).expect("replay");
+        let diag = diagnose(robot, recs, &base.eps, &whole.joints, allowed, opts.gap_mask_s);
+        let start = whole.rollout_stats().simulated_s;
+        let all = Screen::build(&whole, recs, &[], &base, &mut diag.clone(), &no);
+        (diag, all, whole.rollout_stats().simulated_s - start)
+    }
 
     /// The held-out screen probes an effect only when asked about one of its candidates, once,
     /// and its model is the one a screen of every effect at once makes: the same predictions,
@@ -130,14 +149,8 @@ mod tests {
         let opts = FitOptions::default();
         let allowed = vec![ViscousDamping.id().to_string(), CoulombFriction.id().to_string()];
         let no = |_: &str, _: &str| false;
-        // Every effect at once, on an engine of its own.
-        let whole = Engine::new(&robot, &recs, &opts);
-        let base = whole.errors_held(&recs, &[]).expect("replay");
-        let diag = diagnose(&robot, &recs, &base.eps, &whole.joints, &allowed, opts.gap_mask_s);
+        let (diag, all, full) = whole_screen(&robot, &recs, &opts, &allowed);
         assert_eq!(diag.len(), 2, "{diag:?}");
-        let start = whole.rollout_stats().simulated_s;
-        let all = Screen::build(&whole, &recs, &[], &base, &mut diag.clone(), &no);
-        let full = whole.rollout_stats().simulated_s - start;
         // On demand, on a fresh engine (no replay remembered).
         let engine = Engine::new(&robot, &recs, &opts);
         let base = engine.errors_held(&recs, &[]).expect("replay");
@@ -188,14 +201,9 @@ mod tests {
         let opts = FitOptions::default();
         let allowed = vec![ViscousDamping.id().to_string()];
         let no = |_: &str, _: &str| false;
-        let whole = Engine::new(&robot, &recs, &opts);
-        let base = whole.errors_held(&recs, &[]).expect("replay");
-        let diag = diagnose(&robot, &recs, &base.eps, &whole.joints, &allowed, opts.gap_mask_s);
+        let (diag, all, full) = whole_screen(&robot, &recs, &opts, &allowed);
         let joints: Vec<String> = diag.iter().map(|c| c.joint.clone()).collect();
         assert_eq!(joints.len(), 3, "{joints:?}");
-        let start = whole.rollout_stats().simulated_s;
-        let all = Screen::build(&whole, &recs, &[], &base, &mut diag.clone(), &no);
-        let full = whole.rollout_stats().simulated_s - start;
         let engine = Engine::new(&robot, &recs, &opts);
         let base = engine.errors_held(&recs, &[]).expect("replay");
         let before = engine.rollout_stats().simulated_s;

@@ -1,0 +1,30 @@
+//! `modellint FILE --no-probe --format json` from the CLI, and the findings' fields.
+
+use std::process::Command;
+
+/// The findings of `modellint FILE --no-probe --format json`.
+pub fn findings(file: &str) -> Vec<serde_json::Value> {
+    let out = Command::new(env!("CARGO_BIN_EXE_modellint"))
+        .args([file, "--no-probe", "--format", "json", "--no-cache"])
+        .env_remove("GITHUB_ACTIONS")
+        .output()
+        .unwrap();
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap_or_else(|e| {
+        panic!("{file}: no JSON ({e}): {}", String::from_utf8_lossy(&out.stderr))
+    });
+    json["findings"].as_array().cloned().unwrap_or_default()
+}
+
+/// The findings of one rule.
+pub fn of<'a>(all: &'a [serde_json::Value], rule: &str) -> Vec<&'a serde_json::Value> {
+    all.iter().filter(|f| f["rule"] == rule).collect()
+}
+
+pub fn message(f: &serde_json::Value) -> &str {
+    f["message"].as_str().unwrap_or("")
+}
+
+/// The finding's measured value (NaN when it has none).
+pub fn measured(f: &serde_json::Value) -> f64 {
+    f["measured"]["value"].as_f64().unwrap_or(f64::NAN)
+}
