@@ -14,7 +14,11 @@
 //! reach the round's bar for a full fit, no coarse fit on the screen's data is made
 //! ([`super::coarse`]): it would end below the bar, as the point itself does. The prediction
 //! costs one replay per free parameter of the screen's data; the coarse fit it replaces, two
-//! iterations of k + 1 replays or more.
+//! iterations of k + 1 replays or more. When it can reach the bar, the same differences give the
+//! step the fit's first iteration at `p` would take (Gauss–Newton, undamped, held inside the
+//! box; [`Model::step`]): one more replay tells whether it gains what the model predicts, and
+//! where it does (or reaches the bar) it is the coarse fit, for k + 1 replays instead of the
+//! fit's.
 
 use rayon::prelude::*;
 
@@ -25,17 +29,44 @@ use crate::sim2real::recording::Recording;
 use super::engine::{Engine, neutral_params, with_candidate};
 use super::screen::combine;
 
+/// The Gauss–Newton model of a smooth candidate at a point replayed on the screen's data
+/// ([`model_at`]): what it predicts any step can reach, and the step it takes.
+#[derive(Debug, Clone, PartialEq)]
+pub(super) struct Model {
+    /// The lowest RMSE the model predicts (its columns: the forward differences and the secant
+    /// from the base), unbounded by the box.
+    pub(super) least: f64,
+    /// The Gauss–Newton step of the forward differences alone — the step Levenberg–Marquardt's
+    /// first iteration at the point takes, undamped — held inside the box: its parameters and
+    /// the RMSE that model predicts there. `None` when it moves nothing.
+    pub(super) step: Option<(Vec<f64>, f64)>,
+}
+
 /// The lowest RMSE on `short` that the Gauss–Newton model of `e` on `g` at `p` (RMSE `fp`
-/// there, replayed) predicts: `fp` scaled by the root of the share of the residual's sum of
-/// squares that the model's columns — one forward difference per free fitted parameter and the
-/// secant from the base `applied` — leave unexplained. `None` when a replay fails, the
-/// candidate has no free parameter or its residuals do not line up.
+/// there, replayed) predicts ([`Model::least`]). `None` when a replay fails, the candidate has
+/// no free parameter or its residuals do not line up.
+#[cfg(test)]
 pub(super) fn least_rmse(
+    engine: &Engine,
+    data: (&[Recording], &[Applied]),
+    cand: (&'static dyn Effect, &[String]),
+    at: (&[f64], f64),
+) -> Option<f64> {
+    model_at(engine, data, cand, at).map(|m| m.least)
+}
+
+/// The Gauss–Newton model of `e` on `g` at `p` (RMSE `fp` on `short` there, replayed): its
+/// least RMSE, `fp` scaled by the root of the share of the residual's sum of squares that its
+/// columns — one forward difference per free fitted parameter and the secant from the base
+/// `applied` — leave unexplained; and the step of the differences alone ([`Model::step`]).
+/// `None` when a replay fails, the candidate has no free parameter or its residuals do not
+/// line up.
+pub(super) fn model_at(
     engine: &Engine,
     (short, applied): (&[Recording], &[Applied]),
     (e, g): (&'static dyn Effect, &[String]),
     (p, fp): (&[f64], f64),
-) -> Option<f64> {
+) -> Option<Model> {
     let t = JointTarget::of(engine.robot, g.first()?)?;
     let m0 = model_with(engine.robot, applied);
     let (lo, hi) = e.bounds(&m0, &t);
@@ -62,24 +93,41 @@ pub(super) fn least_rmse(
         })
         .collect();
     let mut cols: Vec<Vec<f64>> = cols.into_iter().collect::<Option<_>>()?;
-    if let Some(rb) = resid(applied).filter(|v| v.len() == r.len()) {
-        cols.push(r.iter().zip(&rb).map(|(a, b)| a - b).collect());
-    }
-    let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
-    let b: Vec<f64> = cols.iter().map(|c| dot(c, &r)).collect();
-    let gram: Vec<Vec<f64>> =
-        cols.iter().map(|a| cols.iter().map(|c| dot(a, c)).collect()).collect();
     let ss = dot(&r, &r);
-    let (explained, _) = combine(&b, &gram);
     if !(ss > 0.0) || !fp.is_finite() {
         return None;
     }
-    Some(fp * ((ss - explained).max(0.0) / ss).sqrt())
+    let left = |explained: f64| fp * ((ss - explained).max(0.0) / ss).sqrt();
+    // The step: the differences' least-squares coefficients, negated (r + Σ aᵢ cᵢ least).
+    let (explained, x) = explain(&cols, &r);
+    let mut q = p.to_vec();
+    for (&i, a) in free.iter().zip(&x) {
+        q[i] = (p[i] - a).clamp(lo[i], hi[i]);
+    }
+    let step = (q.as_slice() != p && q.iter().all(|v| v.is_finite())).then(|| (q, left(explained)));
+    if let Some(rb) = resid(applied).filter(|v| v.len() == r.len()) {
+        cols.push(r.iter().zip(&rb).map(|(a, b)| a - b).collect());
+    }
+    let (explained, _) = explain(&cols, &r);
+    Some(Model { least: left(explained), step })
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>()
+}
+
+/// The residual `r`'s sum of squares that the columns `cols` explain in least squares, and
+/// their coefficients ([`combine`]).
+fn explain(cols: &[Vec<f64>], r: &[f64]) -> (f64, Vec<f64>) {
+    let b: Vec<f64> = cols.iter().map(|c| dot(c, r)).collect();
+    let gram: Vec<Vec<f64>> =
+        cols.iter().map(|a| cols.iter().map(|c| dot(a, c)).collect()).collect();
+    combine(&b, &gram)
 }
 
 #[cfg(test)]
 mod tests {
-    use super::least_rmse;
+    use super::{least_rmse, model_at};
     use crate::fit::effects::{Applied, Effect, GainError};
     use crate::fit::select::{Engine, FitOptions};
     use crate::sim2real::recording::Recording;
@@ -111,6 +159,11 @@ mod tests {
         let (q, fq) = engine.fit_from(&recs, &[], (e, &g), Some(&p));
         assert!(fq < 0.5 * fp, "the fit closes most of it: {fq} from {fp}");
         assert!(most < fp && (most - fq).abs() <= 0.25 * (fp - fq), "{most}: fit {fq}, {fp}");
+        // Its step (the differences' alone), replayed, gains on the point about what it predicts.
+        let m = model_at(&engine, (&recs, &[]), (e, &g), (&p, fp)).expect("modelled");
+        let (x, want) = m.step.expect("a step");
+        let fx = at(&x);
+        assert!(fx < fp && (fx - want).abs() <= 0.25 * (fp - want), "{fx}: {want} from {fp}");
         let at_q = least_rmse(&engine, (&recs, &[]), (e, &g), (&q, fq)).expect("modelled");
         assert!(at_q >= 0.9 * fq && at_q <= fq, "{at_q} at the fit's {fq}");
         // Nothing to step: no prediction.

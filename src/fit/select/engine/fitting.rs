@@ -157,11 +157,13 @@ impl Engine<'_> {
         self.fit_memo(train, base, (effect, group), max_evals, None)
     }
 
-    /// [`Engine::fit_budget`] from `start`, a point of the same line search's grid made on
-    /// other data (the probes' coarse fit of a non-smooth one-parameter candidate, re-made on
-    /// the screen's data): only the grid points around it are replayed ([`Method::LineFrom`]),
-    /// the same answer as the whole grid whenever the grid's best point is among them, else
-    /// the whole grid. Any other effect is fitted as by [`Engine::fit_budget`]. Memoised as it.
+    /// [`Engine::fit_budget`] from `start`: for a non-smooth one-parameter candidate a point of
+    /// the same line search's grid made on other data (its probes' coarse fit, re-made on the
+    /// screen's data): only the grid points around it are replayed ([`Method::LineFrom`]), the
+    /// same answer as the whole grid whenever the grid's best point is among them, else the
+    /// whole grid; for a smooth one a point on `train` better than its start (the Gauss–Newton
+    /// step at its probes' fit), where Levenberg–Marquardt starts, with the same budget. Any
+    /// other effect is fitted as by [`Engine::fit_budget`]. Memoised as it.
     pub(in crate::fit::select) fn fit_budget_from(
         &self,
         train: &[Recording],
@@ -394,6 +396,12 @@ impl Engine<'_> {
             {
                 x0 = clamp(&p);
             }
+        } else if effect.smooth()
+            && let Some(p) = start.filter(|p| p.len() >= k && k > 0)
+        {
+            // A coarse fit from a point of the same candidate on these data that improved on
+            // its start (the probes' fit or the Gauss–Newton step from it, `coarse::on_probes`).
+            x0 = clamp(p);
         }
         let b = Bounds { lo: lo[..k].to_vec(), hi: hi[..k].to_vec() };
         let res = |x: &[f64]| {
