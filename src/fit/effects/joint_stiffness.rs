@@ -43,6 +43,11 @@ impl Effect for JointStiffness {
     fn smooth(&self) -> bool {
         true
     }
+    /// At its start the model's own stiffness, written back — with the spring's reference moved
+    /// to the keyframe, which changes nothing only where that stiffness is zero.
+    fn neutral_at(&self, m: &MjModel, t: &JointTarget) -> bool {
+        self.initial(m, t)[0] == 0.0
+    }
     fn signature(&self, s: &Samples) -> Signature {
         Signature { implied: Some("implied_stiffness"), ..Signature::centred(s.qrel.clone()) }
     }

@@ -270,6 +270,12 @@ pub trait Effect: Declared + Sync {
     fn neutral_start(&self) -> bool {
         false
     }
+    /// [`Effect::neutral_start`] on the joint `t` of the model `m`: an effect whose start acts
+    /// on some models only (a spring of zero stiffness pulls nowhere, wherever its reference
+    /// is put) says so here.
+    fn neutral_at(&self, _m: &MjModel, _t: &JointTarget) -> bool {
+        self.neutral_start()
+    }
     /// `true` for the friction models (Coulomb, Stribeck, load-dependent): alternative
     /// descriptions of one loss, never a pair that only makes sense together.
     fn friction(&self) -> bool {

@@ -137,7 +137,7 @@ fn arm_with(dir: &std::path::Path, name: &str, extra: &str, forearm: &str) -> cr
         r#"<mujoco><option gravity="0 0 -9.81" timestep="0.002"/>
   <worldbody><body name="upper"><joint name="shoulder" type="hinge" axis="0 1 0"/>
     <geom type="capsule" fromto="0 0 0 0 0 -0.3" size="0.03" mass="1.2"/>
-    <body name="fore" pos="0 0 -0.3"><joint name="elbow" type="hinge" axis="0 1 0"/>
+    <body name="fore" pos="0 0 -0.3"><joint name="elbow" type="hinge" axis="0 1 0" stiffness="0.8" springref="0.3"/>
       <geom type="capsule" {forearm} size="0.025" mass="0.8"/>{extra}
     </body></body></worldbody>
   <actuator><position joint="shoulder" kp="60" kv="2"/><position joint="elbow" kp="30" kv="1"/></actuator>
@@ -581,7 +581,9 @@ fn link_inertia_is_a_candidate_only_where_armature_cannot_stand_in_for_it() {
 /// start on either joint, bit for bit as the model without it — on an arm whose joints carry
 /// armature, damping and friction of their own, so that a native parameter is written back at
 /// the model's value. Stribeck friction's start (a guess of 0.1 / 0.05 N·m) is no such start:
-/// it moves the arm, and the comparison tells.
+/// it moves the arm, and the comparison tells. A joint stiffness is neutral only where the
+/// model's own is zero ([`super::Effect::neutral_at`]): on the elbow's own spring (0.8 N·m/rad
+/// towards 0.3 rad) its start moves the spring's reference to the keyframe, and the arm.
 #[test]
 fn a_neutral_start_replays_exactly_as_the_model_without_the_effect() {
     use super::{Applied, Effect, JointTarget, all, by_id, model_with, simulate};
@@ -592,7 +594,7 @@ fn a_neutral_start_replays_exactly_as_the_model_without_the_effect() {
   <default><joint armature="0.013" damping="0.31" frictionloss="0.07"/></default>
   <worldbody><body name="upper"><joint name="shoulder" type="hinge" axis="0 1 0"/>
     <geom type="capsule" fromto="0 0 0 0 0 -0.3" size="0.03" mass="1.2"/>
-    <body name="fore" pos="0 0 -0.3"><joint name="elbow" type="hinge" axis="0 1 0"/>
+    <body name="fore" pos="0 0 -0.3"><joint name="elbow" type="hinge" axis="0 1 0" stiffness="0.8" springref="0.3"/>
       <geom type="capsule" fromto="0 0 0 0 0 -0.25" size="0.025" mass="0.8"/>
     </body></body></worldbody>
   <actuator><position joint="shoulder" kp="60" kv="2"/><position joint="elbow" kp="30" kv="1"/></actuator>
@@ -614,14 +616,21 @@ fn a_neutral_start_replays_exactly_as_the_model_without_the_effect() {
         let t = JointTarget::of(&robot, j).expect("a joint");
         Applied { effect: e, joints: vec![j.into()], params: e.initial(&m0, &t) }
     };
+    let target = |j: &str| JointTarget::of(&robot, j).expect("a joint");
     let mut neutral = 0;
-    for e in all().into_iter().filter(|e| e.neutral_start()) {
+    for e in all() {
         for j in ["shoulder", "elbow"] {
-            assert!(bits(run(&[at_start(e, j)])) == base, "{} at its start on {j}", e.id());
+            if e.neutral_at(&m0, &target(j)) {
+                assert!(bits(run(&[at_start(e, j)])) == base, "{} at its start on {j}", e.id());
+                neutral += 1;
+            }
         }
-        neutral += 1;
     }
-    assert!(neutral >= 5, "{neutral} effects declare a neutral start");
+    assert!(neutral >= 11, "{neutral} (effect, joint) starts declared neutral");
+    let stiffness = by_id("joint_stiffness").expect("known");
+    assert!(stiffness.neutral_at(&m0, &target("shoulder")));
+    assert!(!stiffness.neutral_at(&m0, &target("elbow")));
+    assert!(bits(run(&[at_start(stiffness, "elbow")])) != base, "the elbow's spring moves");
     let stribeck = by_id("stribeck_friction").expect("known");
     assert!(!stribeck.neutral_start());
     assert!(bits(run(&[at_start(stribeck, "elbow")])) != base, "Stribeck's start acts");

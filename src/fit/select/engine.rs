@@ -141,18 +141,16 @@ pub(in crate::fit::select) fn set_key(recs: &[Recording], applied: &[Applied]) -
 
 /// The parameters at which `effect` on `group` changes nothing on a model whose compiled form
 /// is `m0` (the base's): its start ([`Effect::initial`]) when that is the same on every joint
-/// of the group and the effect is neutral there ([`Effect::neutral_start`]).
+/// of the group and the effect is neutral on each of its joints ([`Effect::neutral_at`]).
 pub(in crate::fit::select) fn neutral_params(
     robot: &Robot,
     m0: &mujoco_rs::prelude::MjModel,
     (effect, group): (&dyn Effect, &[String]),
 ) -> Option<Vec<f64>> {
-    if !effect.neutral_start() {
-        return None;
-    }
-    let mut starts = group
-        .iter()
-        .map(|j| crate::fit::effects::JointTarget::of(robot, j).map(|t| effect.initial(m0, &t)));
+    let mut starts = group.iter().map(|j| {
+        let t = crate::fit::effects::JointTarget::of(robot, j)?;
+        effect.neutral_at(m0, &t).then(|| effect.initial(m0, &t))
+    });
     let first = starts.next()??;
     starts.all(|s| s.as_ref() == Some(&first)).then_some(first)
 }

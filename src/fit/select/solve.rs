@@ -58,13 +58,15 @@ pub(super) struct Solution {
     pub(super) converged: bool,
 }
 
-/// [`Method::LineFrom`]: the points of [`Method::Line`]'s grid around `x0` — the two that
-/// enclose it and one more either side (on ln p when `log` and the bounds are positive) —
-/// replayed at once; when the best of them has both its grid neighbours among them (or is an
-/// end of the range), the grid has a minimum there, and the golden section refines the bracket
-/// of its neighbours exactly as the whole search does from that grid point: the same answer
-/// for four evaluations of the grid's nine, whenever the grid's best point is among them.
-/// Else the whole line search of [`Method::Line`], whose grid then holds those four points.
+/// [`Method::LineFrom`]: the two points of [`Method::Line`]'s grid that enclose `x0` (on ln p
+/// when `log` and the bounds are positive), then the grid neighbour beyond the lower of them —
+/// three points, one replayed already when `x0` is a point of the grid (a coarse fit's on the
+/// probes' data). When the best of them has both its grid neighbours among them (or is an end
+/// of the range), the grid has a minimum there, and the golden section refines the bracket of
+/// its neighbours exactly as the whole search does from that grid point: the same answer for
+/// three evaluations of the grid's nine, whenever the grid's best point is among them. Else
+/// (the lowest at their edge) the whole search of [`Method::Line`], whose grid then holds
+/// those three points.
 fn line_from(p: &Problem<'_>, x0: &[f64], log: bool, max_evals: usize) -> Solution {
     use rayon::prelude::*;
     let (lo, hi) = (p.bounds.lo[0], p.bounds.hi[0]);
@@ -83,10 +85,18 @@ fn line_from(p: &Problem<'_>, x0: &[f64], log: bool, max_evals: usize) -> Soluti
     let grid = |i: usize| a + (c - a) * i as f64 / (n - 1) as f64;
     let u0 = if logs { start.clamp(lo, hi).ln() } else { start.clamp(lo, hi) };
     let i0 = (((u0 - a) / (c - a) * (n - 1) as f64).floor().max(0.0) as usize).min(n - 2);
-    let window: Vec<usize> = (i0.saturating_sub(1)..=(i0 + 2).min(n - 1)).collect();
-    let f: Vec<f64> = window.par_iter().map(|&i| obj(grid(i))).collect();
-    // First index of the minimum (the grid's rule on ties).
-    let k = (0..f.len()).fold(0, |b, i| if f[i] < f[b] { i } else { b });
+    // The two grid points enclosing the start, then the neighbour beyond the lower one (the
+    // grid's rule on ties: the first index of the minimum), which a minimum there needs.
+    let first_min = |f: &[f64]| (0..f.len()).fold(0, |b, i| if f[i] < f[b] { i } else { b });
+    let mut window: Vec<usize> = vec![i0, i0 + 1];
+    let mut f: Vec<f64> = window.par_iter().map(|&i| obj(grid(i))).collect();
+    let beyond = if first_min(&f) == 0 { i0.checked_sub(1) } else { Some(i0 + 2) };
+    if let Some(j) = beyond.filter(|&j| j < n) {
+        let at = usize::from(j > i0) * 2;
+        window.insert(at, j);
+        f.insert(at, obj(grid(j)));
+    }
+    let k = first_min(&f);
     let ib = window[k];
     let inside = (k > 0 || ib == 0) && (k + 1 < window.len() || ib == n - 1);
     if !inside || !f[k].is_finite() {
@@ -195,9 +205,10 @@ mod tests {
     }
 
     /// From a start near the minimum (a coarse fit's point), the line search replays only the
-    /// four grid points around it and refines as the whole search does: the same answer, bit
-    /// for bit, for five evaluations fewer. From a start whose grid points hold no minimum of
-    /// the grid (the lowest at their edge), the whole search, after those four.
+    /// two grid points enclosing it and the neighbour beyond the lower one, and refines as the
+    /// whole search does: the same answer, bit for bit, for six evaluations fewer — whichever
+    /// of the two enclosing points is the lower. From a start whose grid points hold no minimum
+    /// of the grid (the lowest at their edge), the whole search, after those three.
     #[test]
     fn a_line_search_from_a_start_refines_the_bracket_around_it() {
         use std::sync::atomic::{AtomicUsize, Ordering};
@@ -223,12 +234,20 @@ mod tests {
         let (near, nn) = count(Method::LineFrom { log: false, max_evals: 40 }, 0.04);
         assert!((whole.x[0] - truth).abs() < tol, "{whole:?}");
         assert_eq!((near.x[0], near.f), (whole.x[0], whole.f));
-        assert_eq!(nn + 5, nw, "{nn} evaluations from the start, {nw} for the whole range");
+        assert_eq!(nn + 6, nw, "{nn} evaluations from the start, {nw} for the whole range");
+        // From either side of the grid point 0.05 (enclosed by 0.025 and 0.05, or by 0.05 and
+        // 0.075: the upper or the lower one is the lower), and from 0.05 itself: the far side of
+        // the lower enclosing point is replayed, three evaluations each time.
+        for x0 in [0.03, 0.045, 0.05, 0.06] {
+            let (s, k) = count(Method::LineFrom { log: false, max_evals: 40 }, x0);
+            assert_eq!((s.x[0], s.f), (whole.x[0], whole.f), "from {x0}");
+            assert_eq!(k + 6, nw, "from {x0}: {k} evaluations");
+        }
         // Far from it: the lowest of its grid points is the one nearest the minimum, at their
         // edge.
         let (far, nf) = count(Method::LineFrom { log: false, max_evals: 40 }, 0.16);
         assert_eq!((far.x[0], far.f), (whole.x[0], whole.f));
-        assert_eq!(nf, nw + 4);
+        assert_eq!(nf, nw + 3);
         // On ln p, and from a start on the range's end.
         for (log, x0) in [(true, 0.04), (false, 0.0), (false, 0.2)] {
             let (w, _) = count(Method::Line { log, max_evals: 40 }, x0);
