@@ -17,7 +17,7 @@ use super::engine::{Engine, neutral_params, with_candidate};
 use super::groups::{Cand, same_data};
 use super::policy::SearchPolicy;
 use super::screen::Screen;
-use super::{Search, extension, further};
+use super::{Search, ext_bound, extension, further};
 
 /// A point of a candidate's parameters and its training RMSE on the screen's data.
 pub(super) type Point = (Vec<f64>, f64);
@@ -262,6 +262,9 @@ pub(super) fn when_taken(
         }
     } else if let Some((pp, _)) = plain_coarse(s, (e, g), cands, coarse) {
         if nothing_on_probes(s, (short, applied), (e, g), &pp) {
+            return None;
+        }
+        if ext_bound::short_of_bar(s, (short, applied), (e, g), &pp, reaches) {
             return None;
         }
         let (could, least) = extension::could_reach(s, (short, applied), (e, g), &pp, reaches);

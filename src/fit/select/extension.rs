@@ -119,6 +119,144 @@ fn nested_plain(
     Some(plain)
 }
 
+/// The extension's points near the plain variant's fit taken over, replayed on one dataset: the
+/// plain fit taken over by the richer model (from its parameters' defaults) and the model's own
+/// further starts from it, each's SSE and RMSE (infinite where the replay failed), and how many
+/// of the first parameters are fitted (`k`) inside the box `lo`..`hi`.
+struct Near {
+    starts: Vec<Vec<f64>>,
+    errs: Vec<(f64, f64)>,
+    best: usize,
+    k: usize,
+    lo: Vec<f64>,
+    hi: Vec<f64>,
+}
+
+impl Near {
+    /// The starts of `effect` on `group` from the plain variant's fit `pp` (see [`Near`]),
+    /// replayed on `data` with `applied`; `None` when the fit cannot be taken over.
+    fn at(
+        s: &Search,
+        (data, applied): (&[Recording], &[Applied]),
+        (effect, group): (&'static dyn Effect, &[String]),
+        (plain, pp): (&'static dyn Effect, &[f64]),
+    ) -> Option<Near> {
+        let engine = s.engine;
+        let zero: Vec<f64> = effect.params().iter().map(|d| d.default).collect();
+        let t = JointTarget::of(engine.robot, &group[0])?;
+        let m0 = model_with(engine.robot, applied);
+        let delta: Vec<f64> = pp.iter().zip(plain.initial(&m0, &t)).map(|(a, b)| a - b).collect();
+        let x0 = effect.absorb(plain, &zero, &delta)?;
+        let (lo, hi) = effect.bounds(&m0, &t);
+        let k = effect.fitted().min(x0.len()).min(lo.len());
+        if k == 0 {
+            return None;
+        }
+        let clamp = |a: &[f64]| -> Vec<f64> {
+            a.iter()
+                .enumerate()
+                .map(|(i, v)| if i < k { v.clamp(lo[i], hi[i]) } else { *v })
+                .collect()
+        };
+        let x0 = clamp(&x0);
+        let mut starts = vec![x0.clone()];
+        starts.extend(
+            effect.nested_alternatives(&x0).iter().filter(|a| a.len() >= k).map(|a| clamp(a)),
+        );
+        let errs: Vec<(f64, f64)> = starts
+            .par_iter()
+            .map(|a| {
+                engine
+                    .errors(data, &with(applied, (effect, group), a))
+                    .map_or((f64::INFINITY, f64::INFINITY), |e| (e.sse, e.rmse()))
+            })
+            .collect();
+        let best = (0..starts.len()).fold(0, |b, i| if errs[i].0 < errs[b].0 { i } else { b });
+        Some(Near { starts, errs, best, k, lo, hi })
+    }
+
+    /// The least SSE of the starts.
+    fn least_sse(&self) -> f64 {
+        self.errs[self.best].0
+    }
+
+    /// The Gauss–Newton model at the best start on `data`: one replay per fitted parameter
+    /// gives its finite-difference column, and the least-squares combination of the columns
+    /// ([`combine`]) the SSE it explains of that start's residual and its step. `None` when a
+    /// replay fails or a parameter cannot move.
+    fn gauss_newton(
+        &self,
+        s: &Search,
+        (data, applied): (&[Recording], &[Applied]),
+        (effect, group): (&'static dyn Effect, &[String]),
+    ) -> Option<(f64, Vec<f64>)> {
+        let engine = s.engine;
+        let resid = |p: &[f64]| {
+            engine.residuals(data, &with(applied, (effect, group), p), &engine.joints, usize::MAX)
+        };
+        let (xb, (lo, hi)) = (&self.starts[self.best], (&self.lo, &self.hi));
+        let rb = resid(xb)?;
+        let cols: Vec<Option<Vec<f64>>> = (0..self.k)
+            .into_par_iter()
+            .map(|i| {
+                let v = effects::probe_step(xb[i], lo[i], hi[i]);
+                let h = v - xb[i];
+                if h == 0.0 {
+                    return None;
+                }
+                let mut x = xb.clone();
+                x[i] = v;
+                let r1 = resid(&x)?;
+                // Residuals are real − sim: the column of the simulation is −Δr / h.
+                (r1.len() == rb.len())
+                    .then(|| r1.iter().zip(&rb).map(|(b, a)| (a - b) / h).collect())
+            })
+            .collect();
+        let cols = cols.into_iter().collect::<Option<Vec<Vec<f64>>>>()?;
+        let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+        let b: Vec<f64> = cols.iter().map(|c| dot(c, &rb)).collect();
+        let g: Vec<Vec<f64>> =
+            cols.iter().map(|x| cols.iter().map(|y| dot(x, y)).collect()).collect();
+        Some(combine(&b, &g))
+    }
+}
+
+/// `applied` with `effect` on `group` at `p`.
+fn with(
+    applied: &[Applied],
+    (effect, group): (&'static dyn Effect, &[String]),
+    p: &[f64],
+) -> Vec<Applied> {
+    let mut set = applied.to_vec();
+    set.push(Applied { effect, joints: group.to_vec(), params: p.to_vec() });
+    set
+}
+
+/// The least SSE on `data` (with `applied`) that the judgement's linear model near the plain
+/// variant's fit `pp` taken over by `effect` allows ([`Near`]: that start and the effect's
+/// further starts replayed; the Gauss–Newton model of every fitted parameter's column at the
+/// best of them): the least of the starts' SSEs and of the best start's SSE less what its
+/// columns explain. The columns are the extension's own parameters moved one at a time at that
+/// start, so they hold the shape of every extra parameter whatever the screen probed
+/// ([`super::ext_bound`] bounds the judgement by it). `None` when the effect does not hold the
+/// plain variant, or a replay fails.
+pub(super) fn linear_least(
+    s: &Search,
+    (data, applied): (&[Recording], &[Applied]),
+    (effect, group): (&'static dyn Effect, &[String]),
+    pp: &[f64],
+) -> Option<f64> {
+    let plain = nested_plain(s, effect, group)?;
+    if pp.len() != plain.params().len() {
+        return None;
+    }
+    let near = Near::at(s, (data, applied), (effect, group), (plain, pp))?;
+    let (explained, _) = near.gauss_newton(s, (data, applied), (effect, group))?;
+    let sse_b = near.least_sse();
+    let least = sse_b.min((sse_b - explained).max(0.0));
+    least.is_finite().then_some(least)
+}
+
 /// Whether some point near the plain variant's fit `pp` taken over by `effect` leaves an SSE
 /// on `short` for which `beats` holds: that start and the effect's further starts replayed,
 /// the Gauss–Newton step on the columns at the best of them predicted (when `predicted`: its
@@ -133,43 +271,12 @@ fn improves_on(
 ) -> (bool, Option<(Vec<f64>, f64)>) {
     const UNTESTED: (bool, Option<(Vec<f64>, f64)>) = (true, None);
     let engine = s.engine;
-    let zero: Vec<f64> = effect.params().iter().map(|d| d.default).collect();
-    let Some(t) = JointTarget::of(engine.robot, &group[0]) else { return UNTESTED };
-    let m0 = model_with(engine.robot, applied);
-    let with = |p: &[f64]| {
-        let mut set = applied.to_vec();
-        set.push(Applied { effect, joints: group.to_vec(), params: p.to_vec() });
-        set
-    };
-    // The plain fit taken over by the richer model, from its parameters' defaults.
-    let delta: Vec<f64> = pp.iter().zip(plain.initial(&m0, &t)).map(|(a, b)| a - b).collect();
-    let Some(x0) = effect.absorb(plain, &zero, &delta) else { return UNTESTED };
-    let (lo, hi) = effect.bounds(&m0, &t);
-    let k = effect.fitted().min(x0.len()).min(lo.len());
-    if k == 0 {
-        return UNTESTED;
-    }
-    let clamp = |a: &[f64]| -> Vec<f64> {
-        a.iter().enumerate().map(|(i, v)| if i < k { v.clamp(lo[i], hi[i]) } else { *v }).collect()
-    };
-    let x0 = clamp(&x0);
-    let resid = |p: &[f64]| engine.residuals(short, &with(p), &engine.joints, usize::MAX);
-    // The plain fit taken over, then the model's own further starts from it.
-    let mut starts = vec![x0.clone()];
-    starts
-        .extend(effect.nested_alternatives(&x0).iter().filter(|a| a.len() >= k).map(|a| clamp(a)));
-    let errs: Vec<(f64, f64)> = starts
-        .par_iter()
-        .map(|a| {
-            engine
-                .errors(short, &with(a))
-                .map_or((f64::INFINITY, f64::INFINITY), |e| (e.sse, e.rmse()))
-        })
-        .collect();
-    let sse: Vec<f64> = errs.iter().map(|e| e.0).collect();
-    let best = (0..starts.len()).fold(0, |b, i| if sse[i] < sse[b] { i } else { b });
-    let mut least = Some((starts[best].clone(), errs[best].1)).filter(|p| p.1.is_finite());
-    if sse.iter().any(|&f| beats(f)) {
+    let data = (short, applied);
+    let Some(near) = Near::at(s, data, (effect, group), (plain, pp)) else { return UNTESTED };
+    let (best, k) = (near.best, near.k);
+    let mut least =
+        Some((near.starts[best].clone(), near.errs[best].1)).filter(|p| p.1.is_finite());
+    if near.errs.iter().any(|&(f, _)| beats(f)) {
         return (true, least);
     }
     // The columns of its fitted parameters at the best of the starts. Where the extra
@@ -178,40 +285,23 @@ fn improves_on(
     // stays near it; from the best start the step reaches the level. KR2 (Stribeck truth):
     // from (c, c, 0.1) the step explains 5 % of that start's residual, predicted SSE 9.4e-3
     // against the 5.4e-3 that beats the plain fit's BIC; from (2c, c, 0.05) 24 %, 4.5e-3.
-    let (xb, sse_b) = (&starts[best], sse[best]);
-    let Some(rb) = resid(xb) else { return UNTESTED };
-    let cols: Vec<Option<Vec<f64>>> = (0..k)
-        .into_par_iter()
-        .map(|i| {
-            let v = effects::probe_step(xb[i], lo[i], hi[i]);
-            let h = v - xb[i];
-            if h == 0.0 {
-                return None;
-            }
-            let mut x = xb.clone();
-            x[i] = v;
-            let r1 = resid(&x)?;
-            // Residuals are real − sim: the column of the simulation is −Δr / h.
-            (r1.len() == rb.len()).then(|| r1.iter().zip(&rb).map(|(b, a)| (a - b) / h).collect())
-        })
-        .collect();
-    let Some(cols) = cols.into_iter().collect::<Option<Vec<Vec<f64>>>>() else { return UNTESTED };
-    let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
-    let b: Vec<f64> = cols.iter().map(|c| dot(c, &rb)).collect();
-    let g: Vec<Vec<f64>> = cols.iter().map(|x| cols.iter().map(|y| dot(x, y)).collect()).collect();
-    let (explained, step) = combine(&b, &g);
+    let (xb, sse_b) = (&near.starts[best], near.least_sse());
+    let Some((explained, step)) = near.gauss_newton(s, data, (effect, group)) else {
+        return UNTESTED;
+    };
     if predicted && beats(sse_b - explained) {
         return (true, least);
     }
     // The linear model does not ask for it; its step is simulated all the same (a kink's
     // column can under-state what the step does).
+    let (lo, hi) = (&near.lo, &near.hi);
     let x1: Vec<f64> = xb
         .iter()
         .enumerate()
         .map(|(i, v)| if i < k { (v + step[i]).clamp(lo[i], hi[i]) } else { *v })
         .collect();
     let (sse1, rmse1) = engine
-        .errors(short, &with(&x1))
+        .errors(short, &with(applied, (effect, group), &x1))
         .map_or((f64::INFINITY, f64::INFINITY), |e| (e.sse, e.rmse()));
     if sse1 < sse_b && rmse1.is_finite() {
         least = Some((x1, rmse1));

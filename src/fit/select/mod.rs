@@ -29,6 +29,7 @@ pub mod chord;
 mod coarse;
 mod discretisation;
 mod engine;
+mod ext_bound;
 mod extension;
 mod further;
 mod greedy;
