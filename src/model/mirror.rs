@@ -138,6 +138,9 @@ pub fn mirror_in(
     if let Some(fused) = fused_side_letter(name, &exists) {
         return Some(fused);
     }
+    if let Some(infix) = infix_side_letter(name, &exists) {
+        return Some(infix);
+    }
     for (l, r) in LEG_SIDE_PREFIXES {
         for (from, to, side) in [(l, r, Side::Left), (r, l, Side::Right)] {
             if let Some(rest) = name.strip_prefix(from)
@@ -173,6 +176,29 @@ fn fused_side_letter(name: &str, exists: &impl Fn(&str) -> bool) -> Option<(Side
         _ => return None,
     };
     let partner = format!("{other}{}", &name[first.len_utf8()..]);
+    exists(&partner).then_some((side, partner))
+}
+
+/// A side letter standing alone between two underscores inside a name (`J_hip_l_roll` ↔
+/// `J_hip_r_roll`, `Link_arm_L_03` ↔ `Link_arm_R_03`, OpenLoong's convention): the first
+/// middle token that is `l`/`r` (or `L`/`R`), swapped, when the name with the other letter
+/// exists. A letter at either end is the `l_`/`_l` markers' case; requiring the partner keeps a
+/// lone `r` that means something else (a roll axis) unpaired.
+fn infix_side_letter(name: &str, exists: &impl Fn(&str) -> bool) -> Option<(Side, String)> {
+    let tokens: Vec<&str> = name.split('_').collect();
+    if tokens.len() < 3 {
+        return None;
+    }
+    let k = (1..tokens.len() - 1).find(|&k| matches!(tokens[k], "l" | "r" | "L" | "R"))?;
+    let (side, other) = match tokens[k] {
+        "l" => (Side::Left, "r"),
+        "r" => (Side::Right, "l"),
+        "L" => (Side::Left, "R"),
+        _ => (Side::Right, "L"),
+    };
+    let mut t = tokens.clone();
+    t[k] = other;
+    let partner = t.join("_");
     exists(&partner).then_some((side, partner))
 }
 
@@ -237,6 +263,25 @@ mod tests {
         // A built-in marker whose partner exists still wins.
         let both = |n: &str| ["LLEG_hip_l", "LLEG_hip_r"].contains(&n);
         assert_eq!(mirror_in("LLEG_hip_l", None, both), Some((Side::Left, "LLEG_hip_r".into())));
+    }
+
+    #[test]
+    fn side_letters_between_underscores_pair_with_their_partner() {
+        let names = ["J_hip_l_roll", "J_hip_r_roll", "Link_arm_L_03", "Link_arm_R_03", "J_x_r_y"];
+        let has = |n: &str| names.contains(&n);
+        assert_eq!(mirror_in("J_hip_l_roll", None, has), Some((Side::Left, "J_hip_r_roll".into())));
+        assert_eq!(
+            mirror_in("J_hip_r_roll", None, has),
+            Some((Side::Right, "J_hip_l_roll".into()))
+        );
+        assert_eq!(
+            mirror_in("Link_arm_R_03", None, has),
+            Some((Side::Right, "Link_arm_L_03".into()))
+        );
+        // No partner (`J_x_l_y` does not exist): the letter is no side.
+        assert_eq!(mirror_in("J_x_r_y", None, has), None);
+        // Without the model's names, no guess.
+        assert_eq!(mirror("J_hip_l_roll", None), None);
     }
 
     #[test]

@@ -15,7 +15,10 @@
 //! from its root link ([`floating_bases`]). Each foot is classified by its ground geoms (the collision
 //! geoms whose lowest point at the keyframe is within [`GROUND_WINDOW`] of the foot's lowest):
 //! a **point foot** touches down through spheres whose lowest points lie within
-//! [`POINT_SPREAD`] of each other (the quadruped's foot sphere; flat-foot rules do not apply); a
+//! [`POINT_SPREAD`] of each other (the quadruped's foot sphere; flat-foot rules do not apply; a
+//! geom whose ground points all lie inside a lower-reaching sphere of the foot — a shank box
+//! ending inside the foot sphere a URDF's fixed foot link was fused onto — touches nothing
+//! before that sphere and is no ground geom); a
 //! **wheel** touches down through a geom of a body that an unlimited hinge turns about the
 //! geom's own round axis ([`Robot::is_wheel`]: sphere, or cylinder, capsule or ellipsoid on its
 //! axle; no foot rules apply); anything else is a **flat foot**. A body welded to the floating
@@ -215,8 +218,14 @@ pub fn feet(robot: &Robot, spec: Option<&Spec>) -> Vec<Foot> {
         let low: Vec<(usize, [f64; 3])> =
             f.geoms.iter().map(|&g| (g, Placed::of(robot, g).lowest())).collect();
         let zmin = low.iter().map(|x| x.1[2]).fold(f64::INFINITY, f64::min);
-        let ground: Vec<(usize, [f64; 3])> =
+        let mut ground: Vec<(usize, [f64; 3])> =
             low.into_iter().filter(|x| x.1[2] <= zmin + GROUND_WINDOW).collect();
+        let spheres_down: Vec<(usize, [f64; 3])> = ground
+            .iter()
+            .copied()
+            .filter(|&(g, _)| robot.geoms[g].gtype == GeomType::Sphere)
+            .collect();
+        ground.retain(|&(g, z)| !spheres_down.iter().any(|&(s, zs)| shadowed(robot, g, z, s, zs)));
         f.ground = ground.iter().map(|x| x.0).collect();
         let spread = ground
             .iter()
@@ -239,6 +248,26 @@ pub fn feet(robot: &Robot, spec: Option<&Spec>) -> Vec<Foot> {
     out.retain(|f| !f.geoms.is_empty());
     out.sort_by_key(|f| (f.side.map(|s| s as u8).unwrap_or(2), f.root));
     out
+}
+
+/// Whether ground geom `g` (lowest point `low`) lies, where it reaches the ground, inside the
+/// foot's sphere `s` (lowest point `s_low`): every point of `g` within [`GROUND_WINDOW`] of its
+/// lowest ([`Placed::ground_points`]) is inside the sphere, and the sphere reaches lower. Such a
+/// geom cannot touch a flat floor before the sphere does — the lower end of a shank box or
+/// capsule that ends inside a point foot's sphere (a URDF's fixed foot link, which MuJoCo's
+/// importer fuses into the shank) — so it is no ground contact of the foot.
+fn shadowed(robot: &Robot, g: usize, low: [f64; 3], s: usize, s_low: [f64; 3]) -> bool {
+    if g == s || s_low[2] >= low[2] {
+        return false;
+    }
+    let ball = Placed::of(robot, s);
+    let r = robot.geoms[s].size[0];
+    let inside = |p: [f64; 3]| {
+        let d = [p[0] - ball.pos[0], p[1] - ball.pos[1], p[2] - ball.pos[2]];
+        (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt() <= r
+    };
+    let pts = Placed::of(robot, g).ground_points(GROUND_WINDOW);
+    !pts.is_empty() && pts.into_iter().all(inside)
 }
 
 /// Largest angle between a joint axis and a contact line for the joint to roll the foot about

@@ -40,7 +40,9 @@ declare_rule! {
     /// are its toes.
     ///
     /// Only flat feet are checked: a point foot (quadruped sphere) or a wheel has no sole to
-    /// tilt (robot families: `rules::contact::feet`). A keyframe that holds a foot in the air
+    /// tilt (robot families: `rules::contact::feet`). The lower end of a shank box or capsule
+    /// that lies inside the foot sphere (a URDF's fixed foot link fused into the shank) cannot
+    /// touch the floor before the sphere does and does not make the foot a sole. A keyframe that holds a foot in the air
     /// — the model has a floor and the foot's lowest point is above it by more than the foot's
     /// own height (a lie-down pose dropped onto the belly) — is no stance: that foot is not
     /// judged there. A legged URDF, which MuJoCo's importer welds to the world, is judged as if

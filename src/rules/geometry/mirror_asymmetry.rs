@@ -8,7 +8,7 @@ use crate::rules::inertia::isotropic_base_inertia::inertia_loc;
 use crate::rules::{Context, Domain, Rule, RuleMeta, opt};
 use crate::util::fmt_num;
 
-use super::mirror_axes::{axis_angle, axis_finding};
+use super::mirror_axes::{axis_angle, axis_cos, axis_finding};
 use super::mirror_com::{com_differs, reference_pose};
 use super::mirror_places::geoms_misplaced;
 
@@ -20,11 +20,17 @@ declare_rule! {
     /// ## What it does
     /// Pairs left and right joints, actuators and bodies by swapping the side markers in their
     /// names (the spec's `robot.left`/`robot.right` first, then `left_`/`right_`, `Left_`/`Right_`,
-    /// `l_`/`r_` prefixes and `_l`/`_r` suffixes, and `Left`/`Right` anywhere; bodies named by
+    /// `l_`/`r_` prefixes and `_l`/`_r` suffixes, and `Left`/`Right` anywhere; a side letter
+    /// alone between underscores, `J_hip_l_roll` ↔ `J_hip_r_roll`, when the partner exists; bodies named by
     /// part number, with no side marker, pair through the mirror-paired joints that move them:
     /// `dof_left_elbow` moves `KC_C_401L`, `dof_right_elbow` moves `KC_C_401R`) and reports
     /// differences: joint armature, damping, stiffness and frictionloss, joint range (accepted
-    /// when equal or mirrored, `[a, b]` ↔ `[−b, −a]`, as for roll and yaw joints), actuator
+    /// when equal or mirrored, `[a, b]` ↔ `[−b, −a]`, as for roll and yaw joints; when the two
+    /// axes are mirror lines within `axis_tolerance`, their sense decides which of the two: a
+    /// right hinge axis that is the left one's mirror image turns a mirrored motion the
+    /// opposite way and needs the mirrored range, its opposite needs the equal one — a hip roll
+    /// range `[−0.17, 0.44]` copied onto both sides about the same `+x` axis is reported; a
+    /// reflection keeps a translation's sign, so for slides the other way round), actuator
     /// kp/kv and gear, actuator force and control ranges (equal or mirrored), centres of mass
     /// that the file states (at the reference pose qpos0 the right one, reflected across the
     /// plane halfway between the pair's limb roots — walking up both bodies' parents while they
@@ -114,6 +120,55 @@ fn range_matches(a: [f64; 2], b: [f64; 2], tol: f64) -> bool {
     let same = (a[0] - b[0]).abs() <= tol && (a[1] - b[1]).abs() <= tol;
     let mirrored = (a[0] + b[1]).abs() <= tol && (a[1] + b[0]).abs() <= tol;
     same || mirrored
+}
+
+/// A mirror pair's range written the wrong one of the two forms [`range_matches`] accepts:
+/// equal to its mirror's while the axes say the mirrored motion has the opposite sign
+/// (`opposite`: a mirrored motion is the opposite coordinate on the right joint, so the
+/// range must be `[−b, −a]`), or mirrored while the axes say the same sign. A range symmetric about 0 is
+/// both and passes.
+fn unmirrored_range(
+    cx: &Context,
+    p: &Pair,
+    [a, b]: [[f64; 2]; 2],
+    opposite: bool,
+    slide: bool,
+    tol: f64,
+) -> Option<Finding> {
+    let same = (a[0] - b[0]).abs() <= tol && (a[1] - b[1]).abs() <= tol;
+    let mirrored = (a[0] + b[1]).abs() <= tol && (a[1] + b[0]).abs() <= tol;
+    let want = if opposite { [-a[1], -a[0]] } else { a };
+    if (opposite && mirrored) || (!opposite && same) {
+        return None;
+    }
+    let unit = if slide { "m" } else { "rad" };
+    let form = if opposite { "equals" } else { "is the mirror image of" };
+    let sense = if opposite {
+        "the two axes make the mirror image of a motion of the left joint the opposite coordinate of this one"
+    } else {
+        "the two axes make the mirror image of a motion of the left joint the same coordinate of this one"
+    };
+    let (lo, hi) = (a[0].abs().min(a[1].abs()), a[0].abs().max(a[1].abs()));
+    let mut f = p.finding(cx, "range", "range", r(a), r(b), &format!(" {unit}"));
+    f.message = format!(
+        "joint `{}` range {} {unit} {form} its mirror `{}`'s, but the axes make the mirrored range {} {unit}",
+        p.right.1,
+        r(b),
+        p.left.1,
+        r(want)
+    );
+    Some(
+        f.note(format!(
+            "the range {form} `{}`'s, but {sense}: the mirrored range is {}; as written, the limb can move {} {unit} to the side where its mirror stops at {} {unit}, and the other way round",
+            p.left.1,
+            r(want),
+            fmt_num(hi, 4),
+            fmt_num(lo, 4)
+        ))
+        .help("write the mirrored range [−b, −a] for a hinge whose axis is the mirror image of its partner's (roll, yaw with the same axis), the equal range for one whose axis is the opposite (pitch written with the same axis); for slides the other way round")
+        .measured(b[0], unit)
+        .expected(want[0], unit),
+    )
 }
 
 fn r(v: [f64; 2]) -> String {
@@ -421,11 +476,26 @@ impl Rule for MirrorAsymmetry {
                     );
                 }
             }
+            // With the axes mirror lines of each other, their sense decides which of the two
+            // a mirrored range is: for hinges equal when the right axis is the opposite of the
+            // left's mirror image, mirrored when it is that image; a reflection keeps a
+            // translation's sign (R·(d·a) = d·(R·a)), so for slides the other way round.
+            let slide = a.jtype == crate::model::JointType::Slide;
+            let sense = pose
+                .as_ref()
+                .and_then(|pose| axis_cos(cx, pose, l, rr))
+                .filter(|c| c.abs() >= atol.to_radians().cos());
             if (a.limited || b.limited) && !range_matches(a.range, b.range, rtol) {
                 out.push(
                     p.finding(cx, "range", "range", r(a.range), r(b.range), " rad")
                         .note("ranges of mirrored joints must be equal (pitch) or mirrored, [a, b] ↔ [−b, −a] (roll, yaw); this one is neither, so one leg can move further than the other"),
                 );
+            } else if (a.limited || b.limited)
+                && let Some(c) = sense
+                && let Some(f) =
+                    unmirrored_range(cx, &p, [a.range, b.range], (c > 0.0) != slide, slide, rtol)
+            {
+                out.push(f);
             }
             if let Some(pose) = &pose
                 && let Some(deg) = axis_angle(cx, pose, l, rr).filter(|d| *d > atol)

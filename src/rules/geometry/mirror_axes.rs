@@ -41,6 +41,16 @@ fn snapped(cx: &Context, pose: &Pose, l: usize, r: usize, n: [f64; 3]) -> Option
 /// convention: a mirrored hinge often turns the other way). `None` when the pair is not two
 /// hinges or two slides on two bodies, or no plane or axis is defined.
 pub(super) fn axis_angle(cx: &Context, pose: &Pose, l: usize, r: usize) -> Option<f64> {
+    let deg = axis_cos(cx, pose, l, r)?.abs().min(1.0).acos().to_degrees();
+    deg.is_finite().then_some(deg)
+}
+
+/// The cosine between joint `l`'s axis and joint `r`'s reflected across the pair's mirror
+/// plane (as [`axis_angle`], with its sign): near 1 when the right axis is the mirror image of
+/// the left one — then a mirrored motion turns the right joint by the opposite angle
+/// (reflection R: R·Rot(a, θ)·R = Rot(R·a, −θ)), so its range must be the mirrored `[−b, −a]`
+/// —, near −1 when it is the opposite of that image — the same angle, the same range.
+pub(super) fn axis_cos(cx: &Context, pose: &Pose, l: usize, r: usize) -> Option<f64> {
     let robot = cx.robot;
     let (a, b) = (robot.joints.get(l)?, robot.joints.get(r)?);
     let scalar = |t: JointType| matches!(t, JointType::Hinge | JointType::Slide);
@@ -57,9 +67,8 @@ pub(super) fn axis_angle(cx: &Context, pose: &Pose, l: usize, r: usize) -> Optio
     }
     let h = v_dot(ub, n);
     let reflected = [0, 1, 2].map(|k| ub[k] - 2.0 * h * n[k]);
-    let cos = (v_dot(ua, reflected) / (na * nb)).abs().min(1.0);
-    let deg = cos.acos().to_degrees();
-    deg.is_finite().then_some(deg)
+    let cos = v_dot(ua, reflected) / (na * nb);
+    cos.is_finite().then_some(cos)
 }
 
 /// A finding on the right joint of pair `p` whose axis lies `deg` degrees off its mirror's

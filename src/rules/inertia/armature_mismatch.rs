@@ -19,7 +19,10 @@ declare_rule! {
     /// armature that is identical on every actuated joint while the spec's families expect
     /// different values — the sign of one number copy-pasted everywhere. Without a spec, one
     /// armature on every actuated hinge is reported when their force limits span `effort_spread`
-    /// × or more; between √(1 + `tolerance`) × and that, as info: peak torque scales with the
+    /// × or more; between √(1 + `tolerance`) × and that, as info; in a model whose joints do
+    /// not all share one value, one value shared by three or more actuated hinges (the arms
+    /// that keep a `<default>`'s armature while the legs set their own) is reported when their
+    /// force limits span `effort_spread` × or more: peak torque scales with the
     /// gear and reflected inertia with its square, so a gear stage of r× needs armatures r²×
     /// apart, while a software derating of one motor keeps one value right. A model that
     /// drives any actuated hinge through a tendon (a tendon-driven hand: the motors sit in the
@@ -244,6 +247,7 @@ fn uniform_without_spec(cx: &Context, out: &mut Vec<Finding>) {
     }
     let a0 = joints[0].armature;
     if !(a0 > 0.0) || !joints.iter().all(|j| (j.armature - a0).abs() <= 1e-9 * a0) {
+        shared_without_spec(cx, &joints, spread_min, out);
         return;
     }
     let limits: Vec<(usize, f64)> = joints
@@ -315,4 +319,87 @@ fn uniform_without_spec(cx: &Context, out: &mut Vec<Finding>) {
         f.severity = Severity::Info;
     }
     out.push(f);
+}
+
+/// Fewest actuated hinges one armature value must be shared by, in a model whose other joints
+/// have their own values, to be judged as a group: a limb's worth (a shoulder, an elbow and a
+/// wrist), not a pair that happens to match.
+const GROUP_MIN: usize = 3;
+
+/// The copy-paste sign inside a model whose joints do not all share one value: one armature
+/// (exactly equal, > 0, typically the top `<default>`'s that the joints without their own take)
+/// on [`GROUP_MIN`] or more actuated hinges whose torque limits span `effort_spread` × or more
+/// (warning only: within a group, a derating of one motor is no sign of anything). AzureLoong's
+/// 14 arm joints keep the default 0.01 kg·m² on 80, 48 and 12.4 N·m motors while its legs,
+/// waist and head set their own.
+fn shared_without_spec(
+    cx: &Context,
+    joints: &[&crate::model::Joint],
+    spread_min: f64,
+    out: &mut Vec<Finding>,
+) {
+    let robot = cx.robot;
+    let mut groups: BTreeMap<u64, Vec<&crate::model::Joint>> = BTreeMap::new();
+    for j in joints.iter().filter(|j| j.armature > 0.0) {
+        groups.entry(j.armature.to_bits()).or_default().push(j);
+    }
+    for group in groups.values().filter(|g| g.len() >= GROUP_MIN) {
+        let limits: Vec<(usize, f64)> = group
+            .iter()
+            .filter_map(|j| joint_torque_limit(robot, j.id).map(|(l, _)| (j.id, l)))
+            .filter(|(_, l)| *l > 0.0)
+            .collect();
+        if limits.len() < GROUP_MIN {
+            continue;
+        }
+        let (lo, hi) = limits
+            .iter()
+            .fold((f64::INFINITY, 0.0f64), |(lo, hi), (_, l)| (lo.min(*l), hi.max(*l)));
+        let spread = hi / lo;
+        if !(spread >= spread_min) {
+            continue;
+        }
+        let name = |l: f64| {
+            limits
+                .iter()
+                .find(|(_, x)| *x == l)
+                .map(|(j, _)| robot.joints[*j].name.as_str())
+                .unwrap_or("")
+        };
+        let j = group[0];
+        let a = j.armature;
+        let names: Vec<&str> = group.iter().map(|j| j.name.as_str()).collect();
+        let f = crate::rules::inertia::at_armature(
+            cx,
+            j,
+            format!(
+                "{} of the {} actuated hinge joints share the armature {} kg·m² ({}), while their torque limits span {}–{} N·m ({}×, `{}` to `{}`)",
+                group.len(),
+                joints.len(),
+                fmt_num(a, 4),
+                if names.len() > 6 {
+                    format!("`{}`, … ({} joints)", names[..6].join("`, `"), names.len())
+                } else {
+                    format!("`{}`", names.join("`, `"))
+                },
+                fmt_num(lo, 4),
+                fmt_num(hi, 4),
+                fmt_num(spread, 3),
+                name(lo),
+                name(hi)
+            ),
+        )
+        .label("one value for motors of different sizes")
+        .note(format!(
+            "reflected inertia is rotor_inertia × gear², peak torque ∝ gear: motors {}× apart in torque cannot share one reflected inertia, so the shared number is a copied placeholder (often a `<default>` value the joints without their own inherit); the model's other joints have their own values",
+            fmt_num(spread, 3)
+        ))
+        .help("give each motor family its own default class with armature = rotor_inertia × gear_ratio² × count; a spec with the families lets this rule check each value")
+        .subject(Subject::Joint(j.id))
+        .measured(spread, "ratio")
+        .expected(spread_min, "ratio")
+        .with("armature", a)
+        .with("effort_spread", spread);
+        out.push(f);
+    }
 }
