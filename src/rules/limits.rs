@@ -1,7 +1,7 @@
 //! Rules of the `limits` group.
 pub mod ctrlrange_in_degrees;
 pub mod effort_limit_mismatch;
-mod legs;
+pub(crate) mod legs;
 pub mod placeholder_joint_limits;
 pub mod soft_limits;
 pub mod wheel_spring;

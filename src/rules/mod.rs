@@ -356,6 +356,7 @@ pub fn registry() -> Vec<&'static dyn Rule> {
         &control::solimp_out_of_range::SolimpOutOfRange,
         &control::non_earth_gravity::NonEarthGravity,
         &geometry::mirror_asymmetry::MirrorAsymmetry,
+        &geometry::root_frame::RootFrameConvention,
         &control::missing_action_delay::MissingActionDelay,
         &control::keyframe_motor_ctrl::KeyframeMotorCtrl,
         &control::keyframe_servo_ctrl::KeyframeServoCtrl,

@@ -10,6 +10,7 @@ use crate::util::fmt_num;
 
 use super::mirror_axes::{axis_angle, axis_cos, axis_finding};
 use super::mirror_com::{com_differs, reference_pose};
+use super::mirror_limits::limits_differ;
 use super::mirror_places::geoms_misplaced;
 
 /// Size difference tolerated between mirrored collision geoms whatever their size, m: the
@@ -24,7 +25,11 @@ declare_rule! {
     /// alone between underscores, `J_hip_l_roll` ↔ `J_hip_r_roll`, when the partner exists; bodies named by
     /// part number, with no side marker, pair through the mirror-paired joints that move them:
     /// `dof_left_elbow` moves `KC_C_401L`, `dof_right_elbow` moves `KC_C_401R`) and reports
-    /// differences: joint armature, damping, stiffness and frictionloss, joint range (accepted
+    /// differences: joint armature, damping, stiffness and frictionloss, the joints' force
+    /// limits (an MJCF joint's `actuatorfrcrange`; a URDF `<limit>`'s `effort`, and its
+    /// `velocity`, which MuJoCo ignores and training frameworks read: Alex's right arm at 1000
+    /// N·m and 100 rad/s against the left's 80–150 N·m and 9–11.5 rad/s), reported together,
+    /// one finding per quantity, joint range (accepted
     /// when equal or mirrored, `[a, b]` ↔ `[−b, −a]`, as for roll and yaw joints; when the two
     /// axes are mirror lines within `axis_tolerance`, their sense decides which of the two: a
     /// right hinge axis that is the left one's mirror image turns a mirrored motion the
@@ -459,6 +464,7 @@ impl Rule for MirrorAsymmetry {
         let any = !body_pairs.is_empty() || !joint_pairs.is_empty();
         let pose = if any { Some(reference_pose(robot)) } else { None };
         let atol = cx.opt("axis_tolerance");
+        out.extend(limits_differ(cx, &joint_pairs, tol));
         for (l, rr) in joint_pairs {
             let (a, b) = (&robot.joints[l], &robot.joints[rr]);
             let p = Pair { kind: ElemKind::Joint, left: (l, &a.name), right: (rr, &b.name) };

@@ -3,7 +3,7 @@ use crate::finding::{Finding, Severity, Subject};
 use crate::model::GeomType;
 use crate::model::mjcf::ElemKind;
 use crate::rules::inertia::isotropic_base_inertia::inertia_loc;
-use crate::rules::{Context, Rule, RuleMeta};
+use crate::rules::{Context, Domain, Rule, RuleMeta, opt};
 use crate::util::fmt_num;
 
 declare_rule! {
@@ -17,6 +17,14 @@ declare_rule! {
     /// smaller than the part. Bodies without geoms (other than planes), bodies fixed to the
     /// world, and bodies welded to another body with geoms (whose geoms might carry the mass)
     /// are not judged.
+    ///
+    /// A URDF link fixed to another (MuJoCo's importer fuses them into one body, so the bound
+    /// above judges only the fused body) is judged against its partner: the lighter of the two
+    /// whose radius of gyration √(I_max/m) exceeds the heavier one's while its smallest
+    /// principal moment is at least `min_share` of the heavier one's smallest (what it adds,
+    /// about any axis, to the fused body) carries a placeholder inertia — a 1 g board with
+    /// 1e-5 kg·m² on every axis (0.1 m) fused into a 0.108 kg frame of 0.046 m. The lighter
+    /// links fixed to one link are reported together.
     ///
     /// ## Why is this bad?
     /// A moment larger than the part's geometry allows is a placeholder or a unit slip (a
@@ -39,7 +47,10 @@ declare_rule! {
         group: "inertia",
         level: Severity::Warning,
         probe: None,
-        options: [],
+        options: [
+            opt("max_mass_share", 0.1, "fraction", Domain::NON_NEGATIVE, "largest mass of a link fixed to another, as a share of the other's, judged as a part mounted on it (a sensor, a board, a camera) for the fused case"),
+            opt("min_share", 0.05, "fraction", Domain::NON_NEGATIVE, "least share of a link's smallest principal moment that a lighter, more spread-out link fixed to it must add to be reported as a fused placeholder"),
+        ],
     }
 }
 
@@ -51,6 +62,11 @@ impl Rule for InertiaExceedsGeometry {
         let robot = cx.robot;
         let m = &robot.mj;
         let (inertia, ipos, gpos) = (m.body_inertia(), m.body_ipos(), m.geom_pos());
+        out.extend(super::fused_placeholder::fused_placeholders(
+            cx,
+            cx.opt("min_share"),
+            cx.opt("max_mass_share"),
+        ));
         for b in robot.bodies.iter().filter(|b| b.id != 0 && b.weld != 0 && b.mass > 0.0) {
             if b.weld != b.id {
                 continue; // welded to its parent: the parent's geoms may carry its mass

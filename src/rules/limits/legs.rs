@@ -17,7 +17,7 @@ pub(super) fn leg_hinges(cx: &Context) -> Vec<usize> {
 
 /// Each leg as (its foot or lowest link, its hinges from the body down: the joints of
 /// [`leg_hinges`] on that foot's chain, in body order).
-pub(super) fn leg_chains(cx: &Context) -> Vec<(usize, Vec<usize>)> {
+pub(crate) fn leg_chains(cx: &Context) -> Vec<(usize, Vec<usize>)> {
     let robot = cx.robot;
     let leaves: Vec<usize> = if robot.format == Format::Urdf {
         crate::rules::contact::welded_legged_base::urdf_legs(robot).unwrap_or_default()

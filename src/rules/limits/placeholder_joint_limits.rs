@@ -42,6 +42,14 @@ declare_rule! {
     ///   folds onto the link above it on one side (Stompy Micro's ±π/2 knees), so the range is
     ///   a placeholder. Hips and arms are not judged (Go2's thigh joint, beside the body,
     ///   swings 290°), nor a knee whose range is one-sided;
+    /// - **one value on every joint**: every moving joint (revolute, continuous, prismatic;
+    ///   at least `copied_min_joints` of them) states the same `velocity` while their `effort`s
+    ///   span a factor of `motor_spread` or more (or the same `effort` while their
+    ///   `velocity`s do): joints that differ that much in torque have different motors or
+    ///   reductions, and a reduction that multiplies the torque divides the speed, so one
+    ///   speed written on all of them is a value copied across the file, not the motors'
+    ///   (iCub's `velocity="100"` on every joint, efforts 0.45–84 N·m). A robot whose joints
+    ///   all state one effort and one velocity (one servo everywhere) is not judged;
     /// - **no range**: a revolute or prismatic joint with no `<limit>`, or `lower` = `upper` =
     ///   0 (both absent or written as 0), which MuJoCo compiles as an unlimited joint.
     ///
@@ -80,6 +88,8 @@ declare_rule! {
         options: [
             opt("weight_multiple", 50.0, "× the robot's weight at the joint's reach", Domain::AT_LEAST_ONE, "an effort above this many times the torque of the whole robot's weight at the joint's reach is no motor of the robot"),
             opt("max_tip_speed", 100.0, "m/s", Domain::POSITIVE, "a velocity moving the farthest point the joint carries faster than this is no motor's"),
+            opt("motor_spread", 3.0, "ratio", Domain::AT_LEAST_ONE, "largest / smallest effort (or velocity) of the moving joints from which they cannot share one motor and reduction, so one velocity (or effort) written on all of them is copied"),
+            opt("copied_min_joints", 6.0, "joints", Domain::AT_LEAST_ONE, "fewest moving joints stating one value for the one-value case to judge them"),
         ],
     }
 }
@@ -98,6 +108,7 @@ enum Case {
     BeyondTurn,
     LegTurn,
     LegFold,
+    OneValue,
     NoRange,
 }
 
@@ -261,6 +272,7 @@ impl Rule for PlaceholderJointLimits {
         let mass = urdf_mass(&robot.tree).unwrap_or_else(|| robot.mass_split().0);
         let driven = transmissions(cx.sources, &robot.tree);
         let mut hits: Vec<Hit> = Vec::new();
+        let mut stated: Vec<Stated> = Vec::new();
         for x in robot.tree.children_tagged("joint") {
             let Some(name) = x.get("name") else { continue };
             let jtype = x.get("type").unwrap_or("");
@@ -309,6 +321,9 @@ impl Rule for PlaceholderJointLimits {
             }
             let effort = num(limit, "effort");
             let velocity = num(limit, "velocity");
+            if matches!(jtype, "revolute" | "continuous" | "prismatic") {
+                stated.push(Stated { joint: j.id, effort, velocity });
+            }
             // A joint a transmission drives with a zero limit: a motor with no torque or speed.
             if drives(&driven, name) {
                 for (what, v) in [("effort", effort), ("velocity", velocity)] {
@@ -372,6 +387,7 @@ impl Rule for PlaceholderJointLimits {
                 }
             }
         }
+        hits.extend(one_value(&stated, cx.opt("motor_spread"), cx.opt("copied_min_joints")));
         for case in [
             Case::Effort,
             Case::Velocity,
@@ -379,6 +395,7 @@ impl Rule for PlaceholderJointLimits {
             Case::BeyondTurn,
             Case::LegTurn,
             Case::LegFold,
+            Case::OneValue,
             Case::NoRange,
         ] {
             let group: Vec<&Hit> = hits.iter().filter(|h| h.case == case).collect();
@@ -387,6 +404,57 @@ impl Rule for PlaceholderJointLimits {
             }
         }
     }
+}
+
+/// A moving URDF joint's written `effort` and `velocity` (value, where).
+struct Stated {
+    joint: usize,
+    effort: Option<(f64, Loc)>,
+    velocity: Option<(f64, Loc)>,
+}
+
+/// The one-value case: every moving joint (at least `min_joints`) states one positive velocity
+/// while their positive efforts span `spread` or more, or one effort while their velocities do.
+/// One hit for the first joint, its detail naming the value, the other quantity's span and the
+/// count; `value` is that span.
+fn one_value(stated: &[Stated], spread: f64, min_joints: f64) -> Option<Hit> {
+    type Get = fn(&Stated) -> Option<(f64, Loc)>;
+    let quantities: [(&str, &str, &str, &str, Get, Get); 2] = [
+        ("velocity", "efforts", "rad/s", "N·m", |s| s.velocity, |s| s.effort),
+        ("effort", "velocities", "N·m", "rad/s", |s| s.effort, |s| s.velocity),
+    ];
+    if (stated.len() as f64) < min_joints {
+        return None;
+    }
+    for (what, others, unit, ounit, one, other) in quantities {
+        let vals: Vec<(f64, Loc)> =
+            stated.iter().filter_map(|s| one(s).filter(|v| v.0 > 0.0)).collect();
+        if vals.len() != stated.len() || vals.iter().any(|v| v.0 != vals[0].0) {
+            continue;
+        }
+        let spans: Vec<f64> =
+            stated.iter().filter_map(|s| other(s).map(|v| v.0)).filter(|v| *v > 0.0).collect();
+        let lo = spans.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = spans.iter().copied().fold(0.0, f64::max);
+        if spans.len() < 2 || !(hi >= spread * lo) {
+            continue;
+        }
+        return Some(Hit {
+            case: Case::OneValue,
+            joint: stated[0].joint,
+            at: vals[0].1,
+            value: hi / lo,
+            detail: format!(
+                "{what} {} {unit} on all {} moving joints, whose {others} range from {} to {} {ounit} ({}×)",
+                fmt_num(vals[0].0, 4),
+                stated.len(),
+                fmt_num(lo, 4),
+                fmt_num(hi, 4),
+                fmt_num(hi / lo, 3)
+            ),
+        });
+    }
+    None
 }
 
 fn finding(
@@ -483,6 +551,14 @@ fn finding(
                 "write the hardware's stops (datasheet or CAD) as range=\"lo hi\""
             },
         ),
+        Case::OneValue => (
+            format!(
+                "one limit copied onto every joint: {shown}; joints this different in torque (or speed) have different motors or reductions, so the value is not the motors'",
+            ),
+            "one value on every joint".to_string(),
+            "a reduction that multiplies a motor's torque divides its speed: joints whose efforts differ several-fold cannot all have one speed limit (nor joints whose speeds differ, one torque). Training frameworks read the URDF's velocity and effort as the joints' limits (Isaac Gym's DoF properties) and in observation and reward scales; a value copied onto joints with different motors is the limit of one of them at most",
+            "write each joint's motor speed at the joint (motor speed / reduction) as velocity and its peak torque at the joint as effort, from the datasheets",
+        ),
         Case::NoRange => (
             format!(
                 "{n} joint{s} declared revolute or prismatic {states} no range: MuJoCo compiles {} unlimited, ROS tools read {} locked at 0: {shown}",
@@ -505,6 +581,7 @@ fn finding(
         Case::BeyondTurn => f.measured(top.value, "rad").expected(FULL_TURN, "rad"),
         Case::LegTurn => f.measured(top.value, "rad").expected(FULL_TURN, "rad"),
         Case::LegFold => f.measured(top.value, "rad").expected(FULL_TURN / 2.0, "rad"),
+        Case::OneValue => f.measured(top.value, "×").expected(cx.opt("motor_spread"), "×"),
         Case::Zero | Case::NoRange => f.measured(0.0, ""),
     };
     Some(f)
