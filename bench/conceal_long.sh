@@ -1,6 +1,6 @@
 #!/bin/sh
 # The long concealed-effect cases of tests/conceal.rs (12-joint Asimov legs, minutes each on two
-# cores, and three arm3 Stribeck cases), which `make test` skips (#[ignore]): each case's figures on stderr, pass/fail at the
+# cores, three arm3 Stribeck cases and the arm3 backlash + position offset pair), which `make test` skips (#[ignore]): each case's figures on stderr, pass/fail at the
 # end. Usage: bench/conceal_long.sh [NAME-FILTER]
 set -e
 cd "$(dirname "$0")/.."

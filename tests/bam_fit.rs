@@ -1,8 +1,8 @@
 //! Servo identification with the general fit engine (no servo-specific mode): a synthetic
 //! recovery of external-load friction held out by a metadata key (no data needed), and the
 //! leave-one-gain-out experiment on the 16 real BAM XL330 logs from the CLI (skipped with a
-//! visible message when ../shared/data is absent; ~37 min wall on 2 cores shared with other
-//! builds, 21 min CPU).
+//! visible message when ../shared/data is absent): `make test` runs the kp-200 fold, the kp-400
+//! fold is `#[ignore]`d as long (`bench/long_tests.sh`), `bench/bam.sh` runs the whole rotation.
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -158,7 +158,10 @@ fn bam_fold(kp: &str, before_deg: f64, after_deg: f64) {
     assert!(after <= after_deg * 1.05, "held-out {after:.2}° vs {after_deg}°");
 }
 
+/// Long (ten times the kp-200 fold: the longest test of the suite): the kp-200 fold below keeps
+/// the class (one held-out gain from the CLI, load friction kept, held-out MAE) in `make test`.
 #[test]
+#[ignore = "long (minutes on two cores): bench/long_tests.sh runs it"]
 fn bam_logs_one_gain_held_out_from_the_cli() {
     bam_fold("400", 11.49, 2.55);
 }

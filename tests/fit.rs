@@ -119,7 +119,11 @@ fn gain_error_recovered() {
     check("gain_error", &[0.6, 1.0], &[(0.1, false), (0.1, false)], &[]);
 }
 
+/// Long (about three times any other test here): `make test` keeps the Stribeck class in
+/// tests/conceal.rs (`conceal_pendulum_stribeck_friction`: three parameters within 10 %, blind)
+/// and tests/independent_chain.rs (`a_stribeck_curve_on_a_light_servo_is_found_with_its_levels`).
 #[test]
+#[ignore = "long (over a minute on two cores): bench/long_tests.sh runs it"]
 fn stribeck_friction_recovered() {
     check("stribeck_friction", &[0.3, 0.1, 0.2], &[(0.1, false), (0.1, false), (0.1, false)], &[]);
 }
@@ -143,7 +147,11 @@ fn joint_stiffness_recovered() {
     check("joint_stiffness", &[2.0], &[(0.1, false)], &[]);
 }
 
+/// Long: `make test` keeps the same truth (0.05, 0.1) on the same elbow, seed and logging setup
+/// blind, with 1 % drops and a held-out MAE check, in tests/conceal.rs
+/// (`conceal_arm3_load_dependent_friction`); the diagnosis-rank check stays on the other effects here.
 #[test]
+#[ignore = "long (about a minute on two cores): bench/long_tests.sh runs it"]
 fn load_dependent_friction_recovered() {
     check("load_dependent_friction", &[0.05, 0.1], &[(0.1, false), (0.1, false)], &[]);
 }
