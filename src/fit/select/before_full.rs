@@ -14,13 +14,16 @@
 //!   at the model's step was the integration step's (KR8's action delay after the armature);
 //! - after round 0, a smooth candidate of several parameters whose held-out optimum by the
 //!   Gauss–Newton model at its coarse fit does not pass the gate at the trust's edge
-//!   ([`heldout_optimum`]; phase `heldout_bound`): no value of its parameters lowers the held-out
-//!   error enough to first order, whatever the training fit finds.
+//!   ([`HeldoutModel::optimum`]; phase `heldout_bound`): no value of its parameters lowers the
+//!   held-out error enough to first order, whatever the training fit finds; nor one whose coarse
+//!   fit is where its full fit stops ([`stationary`]: the Gauss–Newton step of the fit's first
+//!   Jacobian is under the fit's statistical stop) and whose coarse fit's held-out replay does
+//!   not pass the gate at the trust's edge (KR8's gain error on all joints after the armature).
 
 use rayon::prelude::*;
 
 use crate::fit::effects::{Applied, JointTarget, model_with};
-use crate::fit::optim::ROLLOUT_REL_STEP;
+use crate::fit::optim::{ROLLOUT_REL_STEP, ROLLOUT_STAT_TOL};
 use crate::sim2real::metrics::gap_mask;
 use crate::sim2real::recording::Recording;
 
@@ -37,13 +40,13 @@ use super::{Errors, FitOutcome, Floor, Search};
 /// the relative held-out improvement that decided it (NaN for the held-out screen); `None` when
 /// it is fitted in full. `ho` holds the round's held-out errors and the coarse fit's (`None`:
 /// its replay failed); `gains` the predicted and achieved relative gains on the screen's data,
-/// `gate` the round's, `floors` the round's floors.
+/// `gate` the round's, `floors` the round's floors, `data` what its full fit would run on.
 pub(super) fn short_of_keep(
     s: &Search,
     (applied, at_coarse): (&[Applied], &[Applied]),
     (ho_err, ho_c): (&Errors, Option<&Errors>),
     (gains, gate, round): ((Option<f64>, f64), Gate, usize),
-    floors: &[Floor],
+    (floors, data): (&[Floor], &[Recording]),
     out: &mut FitOutcome,
 ) -> Option<(Phase, f64)> {
     let engine = s.engine;
@@ -62,76 +65,174 @@ pub(super) fn short_of_keep(
     if round == 0 || !e.smooth() || e.fitted() < 2 {
         return None;
     }
-    let best = heldout_optimum(engine, s.heldout, (applied, at_coarse), (ho_err, ho_c?))?;
-    let rel = verdict(ho_err, &best, group, gate).rel;
-    (!at_trust_edge((ho_err, &best), group, gate, pol)).then_some((Phase::HeldoutBound, rel))
+    let ho_c = ho_c?;
+    let ho = HeldoutModel::at(engine, s.heldout, (applied, at_coarse), (ho_err, ho_c))?;
+    let best = ho.errors_at(engine, s.heldout, &ho.optimum())?;
+    if !at_trust_edge((ho_err, &best), group, gate, pol) {
+        return Some((Phase::HeldoutBound, verdict(ho_err, &best, group, gate).rel));
+    }
+    // A coarse fit where the full fit stops at its first step: judged as a one-line descent's.
+    let stays = stationary(engine, data, (applied, at_coarse))?;
+    (stays && !at_trust_edge((ho_err, ho_c), group, gate, pol))
+        .then(|| (Phase::HeldoutBound, verdict(ho_err, ho_c, group, gate).rel))
 }
 
-/// The held-out errors the Gauss–Newton model of the candidate (the last entry of `trial`) at
-/// its point predicts at that model's least-squares optimum on `heldout`: the candidate's
-/// replay there (`at`) moved along the columns of one forward difference per free fitted
-/// parameter (the step of its fit's own Jacobian, [`ROLLOUT_REL_STEP`] of each range) and the
-/// secant from the base (`base`, the replay without it), with the combination that leaves the
-/// least sum of squares over the fitted joints' scored samples — the most any value of its
-/// parameters lowers the held-out error to first order, unbounded by their box. One held-out
-/// replay per free parameter. `None` when a replay fails or nothing is free.
-pub(super) fn heldout_optimum(
-    engine: &Engine,
-    heldout: &[Recording],
-    (base_set, trial): (&[Applied], &[Applied]),
-    (base, at): (&Errors, &Errors),
-) -> Option<Errors> {
-    let a = trial.last()?;
-    let (e, g, p) = (a.effect, &a.joints, &a.params);
-    let t = JointTarget::of(engine.robot, g.first()?)?;
-    let (lo, hi) = e.bounds(&model_with(engine.robot, base_set), &t);
-    let k = e.fitted().min(p.len()).min(lo.len()).min(hi.len());
-    let free: Vec<usize> = (0..k).filter(|&i| hi[i] > lo[i]).collect();
-    if free.is_empty() || at.eps.len() != heldout.len() {
+/// The Gauss–Newton model of a candidate's replay on a dataset at its point (the last entry of
+/// a set `trial`): the columns along which the simulated positions move — one forward
+/// difference per free fitted parameter (the step of its fit's own Jacobian,
+/// [`ROLLOUT_REL_STEP`] of each range) and, when given, the secant from the base (the replay
+/// without it) — on the samples [`Engine::errors_of`] scores, and the residual real − sim there. A
+/// combination `x` of the columns is a move of the parameters to first order (its parameters
+/// unbounded by their box).
+struct PointModel {
+    cols: Vec<Vec<f64>>,
+    resid: Vec<f64>,
+}
+
+impl PointModel {
+    /// The model of `trial`'s last entry on `recs`, whose replays with `trial` and with
+    /// `base_set` (its base) are `at` and `base` (`None`: no secant column); one replay of
+    /// `recs` per free parameter.
+    /// Also the replays moved along each column, for [`HeldoutModel::errors_at`]. `None` when a
+    /// replay fails or nothing is free.
+    fn at(
+        engine: &Engine,
+        recs: &[Recording],
+        (base_set, trial): (&[Applied], &[Applied]),
+        (base, at): (Option<&Errors>, &Errors),
+    ) -> Option<(PointModel, Vec<Errors>)> {
+        let a = trial.last()?;
+        let (e, g, p) = (a.effect, &a.joints, &a.params);
+        let t = JointTarget::of(engine.robot, g.first()?)?;
+        let (lo, hi) = e.bounds(&model_with(engine.robot, base_set), &t);
+        let k = e.fitted().min(p.len()).min(lo.len()).min(hi.len());
+        let free: Vec<usize> = (0..k).filter(|&i| hi[i] > lo[i]).collect();
+        if free.is_empty() || at.eps.len() != recs.len() {
+            return None;
+        }
+        let replays: Vec<Option<Errors>> = free
+            .par_iter()
+            .map(|&i| {
+                let mut h = ROLLOUT_REL_STEP * (hi[i] - lo[i]);
+                if p[i] + h > hi[i] {
+                    h = -h;
+                }
+                let mut set = trial.to_vec();
+                set.last_mut()?.params[i] += h;
+                engine.errors(recs, &set)
+            })
+            .collect();
+        let mut moved: Vec<Errors> = replays.into_iter().collect::<Option<_>>()?;
+        if let Some(b) = base {
+            moved.push(b.clone());
+        }
+        let sim0 = scored(engine, recs, at, |_, sim| sim)?;
+        let cols: Vec<Vec<f64>> = moved
+            .iter()
+            .map(|m| {
+                let c = scored(engine, recs, m, |_, sim| sim).filter(|c| c.len() == sim0.len())?;
+                Some(c.iter().zip(&sim0).map(|(x, y)| x - y).collect())
+            })
+            .collect::<Option<_>>()?;
+        let resid = scored(engine, recs, at, |real, sim| real - sim)?;
+        Some((PointModel { cols, resid }, moved))
+    }
+
+    /// Gram matrix `CᵀC` and `Cᵀr` of the columns.
+    fn normal(&self) -> (Vec<Vec<f64>>, Vec<f64>) {
+        let c = &self.cols;
+        let gram = c.iter().map(|a| c.iter().map(|b| dot(a, b)).collect()).collect();
+        (gram, c.iter().map(|a| dot(a, &self.resid)).collect())
+    }
+}
+
+/// Whether the full fit of the candidate (the last entry of `sets.1`, its base `sets.0`) on
+/// `data` stops where its coarse fit stands: the Gauss–Newton step of its Levenberg–Marquardt
+/// fit there — the forward differences of its own first Jacobian ([`PointModel`], one replay of
+/// `data` per free parameter, no secant) — is shorter than [`ROLLOUT_STAT_TOL`] standard errors
+/// on every parameter (`s² (JᵀJ)⁻¹`, `s² = Σr² / (m − n)`: the fit's statistical stop, which
+/// ends it at its first accepted step, and a damped step is shorter still). `None` when a
+/// replay fails.
+fn stationary(engine: &Engine, data: &[Recording], sets: (&[Applied], &[Applied])) -> Option<bool> {
+    let at = engine.errors(data, sets.1)?;
+    let (train, _) = PointModel::at(engine, data, sets, (None, &at))?;
+    let (gram, b) = train.normal();
+    let (n, m) = (b.len(), train.resid.len());
+    if m <= n {
         return None;
     }
-    let replays: Vec<Option<Errors>> = free
-        .par_iter()
-        .map(|&i| {
-            let mut h = ROLLOUT_REL_STEP * (hi[i] - lo[i]);
-            if p[i] + h > hi[i] {
-                h = -h;
-            }
-            let mut set = trial.to_vec();
-            set.last_mut()?.params[i] += h;
-            engine.errors(heldout, &set)
-        })
-        .collect();
-    let mut moved: Vec<Errors> = replays.into_iter().collect::<Option<_>>()?;
-    moved.push(base.clone());
-    // The columns: each replay's simulated positions less `at`'s, on the samples the errors
-    // score; the residual real − sim at `at`, which the combination lowers.
-    let sim0 = scored(engine, heldout, at, |_, sim| sim)?;
-    let cols: Vec<Vec<f64>> = moved
-        .iter()
-        .map(|m| {
-            let c = scored(engine, heldout, m, |_, sim| sim).filter(|c| c.len() == sim0.len())?;
-            Some(c.iter().zip(&sim0).map(|(x, y)| x - y).collect())
-        })
-        .collect::<Option<_>>()?;
-    let resid = scored(engine, heldout, at, |real, sim| real - sim)?;
-    let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
-    let b: Vec<f64> = cols.iter().map(|c| dot(c, &resid)).collect();
-    let gram: Vec<Vec<f64>> =
-        cols.iter().map(|a| cols.iter().map(|c| dot(a, c)).collect()).collect();
-    let (_, x) = combine(&b, &gram);
-    // The predicted episodes: `at`'s simulated positions moved by the combination.
-    let mut eps = at.eps.clone();
-    for (m, xc) in moved.iter().zip(&x).filter(|(_, xc)| **xc != 0.0) {
-        for ((ep, em), e0) in eps.iter_mut().zip(&m.eps).zip(&at.eps) {
-            for ((q, qm), q0) in ep.q_sim.iter_mut().zip(&em.q_sim).zip(&e0.q_sim) {
-                for ((v, vm), v0) in q.iter_mut().zip(qm).zip(q0) {
-                    *v += xc * (vm - v0);
+    let s2 = dot(&train.resid, &train.resid) / (m - n) as f64;
+    let step = combine(&b, &gram).1;
+    let within = (0..n).all(|i| {
+        let mut unit = vec![0.0; n];
+        unit[i] = 1.0;
+        let se = (s2 * combine(&unit, &gram).1[i]).max(0.0).sqrt();
+        step[i].abs() <= ROLLOUT_STAT_TOL * se
+    });
+    Some(within)
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// The held-out set's Gauss–Newton model of a candidate at its coarse fit ([`PointModel`]),
+/// with the replays it was made from, to put the episodes a combination predicts together.
+struct HeldoutModel {
+    model: PointModel,
+    at: Errors,
+    moved: Vec<Errors>,
+}
+
+impl HeldoutModel {
+    /// The model of `trial`'s last entry on `heldout` (replays `base` without it, `at` with it):
+    /// one held-out replay per free parameter.
+    fn at(
+        engine: &Engine,
+        heldout: &[Recording],
+        sets: (&[Applied], &[Applied]),
+        (base, at): (&Errors, &Errors),
+    ) -> Option<HeldoutModel> {
+        let (model, moved) = PointModel::at(engine, heldout, sets, (Some(base), at))?;
+        Some(HeldoutModel { model, at: at.clone(), moved })
+    }
+
+    /// The least-squares combination on the held-out set: the most any value of the
+    /// parameters lowers the held-out error to first order, whatever the training fit finds.
+    fn optimum(&self) -> Vec<f64> {
+        let (gram, b) = self.model.normal();
+        combine(&b, &gram).1
+    }
+
+    /// The held-out errors the model predicts at combination `x`: the coarse fit's replay moved
+    /// along the columns, scored by the same windows as a replay.
+    fn errors_at(&self, engine: &Engine, heldout: &[Recording], x: &[f64]) -> Option<Errors> {
+        let mut eps = self.at.eps.clone();
+        for (m, xc) in self.moved.iter().zip(x).filter(|(_, xc)| **xc != 0.0) {
+            for ((ep, em), e0) in eps.iter_mut().zip(&m.eps).zip(&self.at.eps) {
+                for ((q, qm), q0) in ep.q_sim.iter_mut().zip(&em.q_sim).zip(&e0.q_sim) {
+                    for ((v, vm), v0) in q.iter_mut().zip(qm).zip(q0) {
+                        *v += xc * (vm - v0);
+                    }
                 }
             }
         }
+        engine.errors_of(heldout, eps)
     }
-    engine.errors_of(heldout, eps)
+}
+
+/// The held-out errors at the held-out optimum of the Gauss–Newton model of the candidate (the
+/// last entry of `trial`) at its point ([`HeldoutModel::optimum`]). One held-out replay per
+/// free parameter. `None` when a replay fails or nothing is free.
+#[cfg(test)]
+pub(super) fn heldout_optimum(
+    engine: &Engine,
+    heldout: &[Recording],
+    sets: (&[Applied], &[Applied]),
+    errs: (&Errors, &Errors),
+) -> Option<Errors> {
+    let m = HeldoutModel::at(engine, heldout, sets, errs)?;
+    m.errors_at(engine, heldout, &m.optimum())
 }
 
 /// `f(real, simulated)` of every sample [`Engine::errors_of`] scores for `errs` (the fitted
@@ -166,9 +267,34 @@ fn scored(
 
 #[cfg(test)]
 mod tests {
-    use super::heldout_optimum;
+    use super::{heldout_optimum, stationary};
     use crate::fit::effects::{Applied, Effect, GainError};
     use crate::fit::select::{Engine, FitOptions};
+    use crate::synth::recorded::pendulum;
+
+    /// A least-squares fit stops where it starts only at its own answer (a servo whose gains
+    /// are off, kp × 0.9 and kd × 1.4, recorded by the synth): from a point off the truth its
+    /// Gauss–Newton step is many standard errors long, and a fit from there moves; from the
+    /// fit's answer it is a fraction of the statistical stop, and a fit from there stays.
+    #[test]
+    fn a_coarse_fit_is_stationary_only_where_the_full_fit_stops() {
+        let (robot, recs) = pendulum(Some((GainError.id(), vec![0.9, 1.4])), 3, 11);
+        let opts = FitOptions::default();
+        let engine = Engine::new(&robot, &recs, &opts);
+        let g = vec!["servo".to_string()];
+        let e: &'static dyn Effect = &GainError;
+        let set = |p: &[f64]| vec![Applied { effect: e, joints: g.clone(), params: p.to_vec() }];
+        for p in [[1.0, 1.1], [0.95, 1.6], [0.8, 1.2]] {
+            assert_eq!(stationary(&engine, &recs, (&[], &set(&p))), Some(false), "{p:?}");
+            let (q, _) = engine.fit_from(&recs, &[], (e, &g), Some(&p));
+            let moved = q.iter().zip(&p).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+            assert!(moved > 0.01, "{q:?} from {p:?}");
+            assert_eq!(stationary(&engine, &recs, (&[], &set(&q))), Some(true), "{q:?}");
+            let (r, _) = engine.fit_from(&recs, &[], (e, &g), Some(&q));
+            let again = r.iter().zip(&q).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+            assert!(again < 1e-3, "{r:?} from {q:?}");
+        }
+    }
 
     /// On a servo whose gains are off (kp × 0.9, kd × 1.4), recorded by the synth: from a point
     /// off the truth, the held-out optimum the Gauss–Newton model predicts there is about what a

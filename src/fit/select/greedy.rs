@@ -405,8 +405,9 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
             ho_c = engine.errors(heldout, &t);
             let gains = (predicted.map(|p| gain(p.train_rmse)), gain(cf));
             let at = (gains, opts.policy.gate_z(z), round);
+            let fl = (&floors[..], if whole { train } else { short });
             if let Some((why, h)) =
-                short_of_keep(s, (&applied, &t), (&ho_err, ho_c.as_ref()), at, &floors, out)
+                short_of_keep(s, (&applied, &t), (&ho_err, ho_c.as_ref()), at, fl, out)
             {
                 // (Its coarse fit still starts a joint pair fit, as a screened one's does.)
                 if gain(cf) >= opts.policy.min_rel_improvement {

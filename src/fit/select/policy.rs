@@ -426,8 +426,10 @@ pub enum Phase {
     DiscretisationScreen,
     /// Not fitted in full after round 0: a smooth candidate of several fitted parameters whose
     /// held-out optimum by the Gauss–Newton model at its coarse fit (one held-out replay per
-    /// parameter) does not pass the round's gate at the trust's edge (`before_full.rs`);
-    /// `heldout_improvement` holds that optimum's relative improvement.
+    /// parameter) does not pass the round's gate at the trust's edge (`before_full.rs`), or whose
+    /// full fit would stop at its coarse fit (its Gauss–Newton step there under the fit's
+    /// statistical stop) where the coarse fit's held-out replay does not pass that edge;
+    /// `heldout_improvement` holds that optimum's (or the coarse fit's) relative improvement.
     HeldoutBound,
     /// Not coarse-fitted in a later round: its linear model, which round 0's coarse fit
     /// confirmed (`linear_trust`), predicts a gain that even at the trust's edge reaches neither
