@@ -250,16 +250,10 @@ fn uniform_without_spec(cx: &Context, out: &mut Vec<Finding>) {
         shared_without_spec(cx, &joints, spread_min, out);
         return;
     }
-    let limits: Vec<(usize, f64)> = joints
-        .iter()
-        .filter_map(|j| joint_torque_limit(robot, j.id).map(|(l, _)| (j.id, l)))
-        .filter(|(_, l)| *l > 0.0)
-        .collect();
-    if limits.len() < 2 {
+    let Some(span) = TorqueSpan::of(robot, &joints).filter(|s| s.count >= 2) else {
         return;
-    }
-    let (lo, hi) =
-        limits.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), (_, l)| (lo.min(*l), hi.max(*l)));
+    };
+    let (lo, hi) = (span.lo, span.hi);
     let spread = hi / lo;
     // Torque ∝ gear and reflected inertia ∝ gear²: were the spread a gear stage of one motor,
     // the armatures would differ by spread², more than `tolerance` once spread > √(1+tolerance).
@@ -270,13 +264,6 @@ fn uniform_without_spec(cx: &Context, out: &mut Vec<Finding>) {
         return;
     }
     let derating_possible = spread < spread_min;
-    let name = |l: f64| {
-        limits
-            .iter()
-            .find(|(_, x)| *x == l)
-            .map(|(j, _)| robot.joints[*j].name.as_str())
-            .unwrap_or("")
-    };
     let j = joints[0];
     let why = if derating_possible {
         format!(
@@ -300,8 +287,8 @@ fn uniform_without_spec(cx: &Context, out: &mut Vec<Finding>) {
                 fmt_num(lo, 4),
                 fmt_num(hi, 4),
                 fmt_num(spread, 3),
-                name(lo),
-                name(hi)
+                span.lo_joint,
+                span.hi_joint
             ),
         )
         .label("one value for every motor")
@@ -319,6 +306,43 @@ fn uniform_without_spec(cx: &Context, out: &mut Vec<Finding>) {
         f.severity = Severity::Info;
     }
     out.push(f);
+}
+
+/// The positive torque limits of some joints: how many, the lowest and highest (N·m), and the
+/// first joint carrying each.
+struct TorqueSpan<'a> {
+    count: usize,
+    lo: f64,
+    hi: f64,
+    lo_joint: &'a str,
+    hi_joint: &'a str,
+}
+
+impl<'a> TorqueSpan<'a> {
+    fn of(robot: &'a crate::model::Robot, joints: &[&crate::model::Joint]) -> Option<Self> {
+        let limits: Vec<(usize, f64)> = joints
+            .iter()
+            .filter_map(|j| joint_torque_limit(robot, j.id).map(|(l, _)| (j.id, l)))
+            .filter(|(_, l)| *l > 0.0)
+            .collect();
+        let (lo, hi) = limits
+            .iter()
+            .fold((f64::INFINITY, 0.0f64), |(lo, hi), (_, l)| (lo.min(*l), hi.max(*l)));
+        let name = |l: f64| {
+            limits
+                .iter()
+                .find(|(_, x)| *x == l)
+                .map(|(j, _)| robot.joints[*j].name.as_str())
+                .unwrap_or("")
+        };
+        (!limits.is_empty()).then(|| Self {
+            count: limits.len(),
+            lo,
+            hi,
+            lo_joint: name(lo),
+            hi_joint: name(hi),
+        })
+    }
 }
 
 /// Fewest actuated hinges one armature value must be shared by, in a model whose other joints
@@ -344,28 +368,14 @@ fn shared_without_spec(
         groups.entry(j.armature.to_bits()).or_default().push(j);
     }
     for group in groups.values().filter(|g| g.len() >= GROUP_MIN) {
-        let limits: Vec<(usize, f64)> = group
-            .iter()
-            .filter_map(|j| joint_torque_limit(robot, j.id).map(|(l, _)| (j.id, l)))
-            .filter(|(_, l)| *l > 0.0)
-            .collect();
-        if limits.len() < GROUP_MIN {
+        let Some(span) = TorqueSpan::of(robot, group).filter(|s| s.count >= GROUP_MIN) else {
             continue;
-        }
-        let (lo, hi) = limits
-            .iter()
-            .fold((f64::INFINITY, 0.0f64), |(lo, hi), (_, l)| (lo.min(*l), hi.max(*l)));
+        };
+        let (lo, hi) = (span.lo, span.hi);
         let spread = hi / lo;
         if !(spread >= spread_min) {
             continue;
         }
-        let name = |l: f64| {
-            limits
-                .iter()
-                .find(|(_, x)| *x == l)
-                .map(|(j, _)| robot.joints[*j].name.as_str())
-                .unwrap_or("")
-        };
         let j = group[0];
         let a = j.armature;
         let names: Vec<&str> = group.iter().map(|j| j.name.as_str()).collect();
@@ -385,8 +395,8 @@ fn shared_without_spec(
                 fmt_num(lo, 4),
                 fmt_num(hi, 4),
                 fmt_num(spread, 3),
-                name(lo),
-                name(hi)
+                span.lo_joint,
+                span.hi_joint
             ),
         )
         .label("one value for motors of different sizes")
