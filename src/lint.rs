@@ -7,7 +7,7 @@ use crate::config::Config;
 use crate::error::LoadError;
 use crate::finding::{Finding, Severity};
 use crate::model::Robot;
-use crate::model::source::SourceMap;
+use crate::model::source::{SourceMap, UndeclaredName};
 use crate::rules::{Context, meta_rules, registry};
 use crate::spec::Spec;
 use crate::spec_use::SpecSearch;
@@ -117,6 +117,71 @@ crate::declare_rule! {
     pub TrailingXmlContent { id: "trailing-xml-content", group: "engine", level: Severity::Warning, probe: None, options: [] }
 }
 
+crate::declare_rule! {
+    /// ## What it does
+    /// Reports elements whose namespace prefix no `xmlns` declares, such as `<xacro:include>`
+    /// and `<xacro:my_camera>` left in a URDF that was never run through xacro (or was edited
+    /// after). MuJoCo reads XML without namespaces and its URDF reader skips elements it does not
+    /// know, so it loads the model without them; modellint reads the file the same way (each
+    /// undeclared `prefix:` of a tag or attribute name taken as part of the name) and points at
+    /// the first such element of each prefix, naming the others.
+    ///
+    /// ## Why is this bad?
+    /// Whatever the element stands for (a macro call that adds a camera, a sensor mount, a leg)
+    /// is not in the model MuJoCo simulates: its mass and geometry are missing. XML tools that
+    /// follow the namespace rules (`xmllint`, most editors and XML libraries) reject the file.
+    ///
+    /// ## How it is confirmed
+    /// Static: the file parses as XML only once the undeclared prefixes are read as part of the
+    /// names (at most `MAX_UNDECLARED_PREFIXES`, 8, distinct prefixes per file).
+    ///
+    /// ## How to fix
+    /// Expand the file with xacro (`xacro robot.urdf.xacro > robot.urdf`), or delete the
+    /// leftover elements and write what they stood for as links and joints.
+    pub UndeclaredXmlPrefix { id: "undeclared-xml-prefix", group: "engine", level: Severity::Warning, probe: None, options: [] }
+}
+
+/// One finding per file and prefix, at the first element, naming the others.
+fn undeclared_prefix_findings(l: &Loaded, findings: &mut Vec<Finding>) {
+    let meta = &UndeclaredXmlPrefix::META;
+    if !l.config.enabled(meta) {
+        return;
+    }
+    let mut groups: Vec<(usize, &str, Vec<&UndeclaredName>)> = Vec::new();
+    for u in &l.sources.undeclared {
+        match groups.iter_mut().find(|g| g.0 == u.0.file && g.1 == u.2) {
+            Some(g) => g.2.push(u),
+            None => groups.push((u.0.file, &u.2, vec![u])),
+        }
+    }
+    for (_, prefix, tags) in groups {
+        let names: Vec<String> = tags.iter().take(4).map(|t| format!("`<{}>`", t.1)).collect();
+        let more =
+            if tags.len() > 4 { format!(" and {} more", tags.len() - 4) } else { String::new() };
+        let msg = format!(
+            "{} element{} use{} the prefix `{prefix}:`, which no xmlns declares: {}{more}; MuJoCo does not read {} (what {} stand{} for is not in the model)",
+            tags.len(),
+            if tags.len() == 1 { "" } else { "s" },
+            if tags.len() == 1 { "s" } else { "" },
+            names.join(", "),
+            if tags.len() == 1 { "it" } else { "them" },
+            if tags.len() == 1 { "it" } else { "they" },
+            if tags.len() == 1 { "s" } else { "" },
+        );
+        let note = if prefix == "xacro" {
+            "an unexpanded xacro macro: the file was not (or not entirely) produced by a xacro run"
+        } else {
+            "MuJoCo reads XML without namespaces and skips elements it does not know"
+        };
+        findings.push(
+            Finding::new(meta.id, l.config.level(meta), msg, tags[0].0)
+                .label(format!("prefix `{prefix}:` declared nowhere"))
+                .note(note)
+                .help("expand the file with xacro, or write what the elements stand for as links and joints"),
+        );
+    }
+}
+
 /// Runs the static rules and applies inline suppressions.
 pub fn run_rules(l: &Loaded) -> Vec<Finding> {
     let mut findings = Vec::new();
@@ -134,6 +199,7 @@ pub fn run_rules(l: &Loaded) -> Vec<Finding> {
             );
         }
     }
+    undeclared_prefix_findings(l, &mut findings);
     // The static foot rules of a model whose qpos0 places joints past their stops (no
     // keyframe) judge it there and at the nearest pose the robot can take, and report what
     // holds at both (`rules::contact::pose`): the clamped copy is built once, for them only.

@@ -17,6 +17,7 @@ pub mod source;
 pub mod urdf_inertia;
 pub mod urdf_packages;
 pub mod urdf_transmissions;
+pub mod xml_prefix;
 
 use std::path::{Path, PathBuf};
 

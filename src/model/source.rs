@@ -47,7 +47,13 @@ pub struct SourceMap {
     pub files: Vec<SourceFile>,
     /// Content after a file's root element (MuJoCo ignores it; modellint reports it).
     pub trailing: Vec<Loc>,
+    /// Start tags whose prefix no `xmlns` declares (MuJoCo skips them; modellint reports them
+    /// and reads the file as MuJoCo does, `crate::model::xml_prefix`): name loc, name, prefix.
+    pub undeclared: Vec<UndeclaredName>,
 }
+
+/// A start tag with an undeclared prefix: the name's location, the name, the prefix.
+pub type UndeclaredName = (Loc, String, String);
 
 impl SourceMap {
     pub fn add(&mut self, path: PathBuf, text: String) -> usize {
@@ -179,7 +185,18 @@ fn parse_file(
             format!("include cycle: {} includes itself (directly or indirectly)", path.display()),
         ));
     }
-    let text = map.file(file_id).text.clone();
+    let mut text = map.file(file_id).text.clone();
+    if let Some((copy, tags)) = crate::model::xml_prefix::renamed_undeclared(&text) {
+        // Same length as the file: every range of the copy is a range of the file.
+        text = copy;
+        for t in tags {
+            map.undeclared.push((
+                Loc { file: file_id, start: t.start, end: t.end },
+                t.name,
+                t.prefix,
+            ));
+        }
+    }
     let opts = || roxmltree::ParsingOptions { allow_dtd: true, ..Default::default() };
     let doc = match roxmltree::Document::parse_with_options(&text, opts()) {
         Ok(doc) => doc,

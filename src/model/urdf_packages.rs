@@ -60,7 +60,12 @@ pub fn resolved_copy(map: &SourceMap, file: usize) -> Result<Option<PathBuf>, Lo
     }
     let model_dir = src.path.parent().map(Path::to_path_buf).unwrap_or_default();
     let opts = roxmltree::ParsingOptions { allow_dtd: true, ..Default::default() };
-    let Ok(doc) = roxmltree::Document::parse_with_options(&text, opts) else { return Ok(None) };
+    // Read as the model was (`xml_prefix`): the copy has the file's length and offsets.
+    let parsed = crate::model::xml_prefix::renamed_undeclared(&text).map(|(copy, _)| copy);
+    let Ok(doc) = roxmltree::Document::parse_with_options(parsed.as_deref().unwrap_or(&text), opts)
+    else {
+        return Ok(None);
+    };
     let mut edits: Vec<(std::ops::Range<usize>, String)> = Vec::new();
     for n in doc.descendants().filter(|n| n.has_tag_name("mesh")) {
         let Some(a) = n.attributes().find(|a| a.name() == "filename") else { continue };

@@ -413,6 +413,7 @@ pub mod meta_rules {
             &InvalidSuppression::META,
             &control::unstable_simulation::UnstableSimulation::META,
             &crate::lint::TrailingXmlContent::META,
+            &crate::lint::UndeclaredXmlPrefix::META,
         ]
     }
 }
