@@ -49,12 +49,13 @@ pub fn markers(spec: Option<&Spec>) -> Vec<(String, String)> {
     v
 }
 
-/// Quadruped leg prefixes, by naming convention: front/rear (or fore/hind) left ↔ right. Only
-/// ever a name's prefix. Hind legs are `RL_`/`RR_` or `HL_`/`HR_` (Spot's `hl_`/`hr_`) beside
-/// `FL_`/`FR_`; `LH_`/`RH_` beside `LF_`/`RF_` (ANYmal).
+/// Quadruped leg prefixes, by naming convention: front/rear (or fore/hind, front/back) left ↔
+/// right. Only ever a name's prefix. Hind legs are `RL_`/`RR_`, `HL_`/`HR_` (Spot's `hl_`/`hr_`)
+/// or `BL_`/`BR_` (back: Stoch 3's `bl_`/`br_`) beside `FL_`/`FR_`; `LH_`/`RH_` beside
+/// `LF_`/`RF_` (ANYmal).
 const LEG_CONVENTIONS: [&[(&str, &str)]; 4] = [
-    &[("FL_", "FR_"), ("RL_", "RR_"), ("HL_", "HR_")],
-    &[("fl_", "fr_"), ("rl_", "rr_"), ("hl_", "hr_")],
+    &[("FL_", "FR_"), ("RL_", "RR_"), ("HL_", "HR_"), ("BL_", "BR_")],
+    &[("fl_", "fr_"), ("rl_", "rr_"), ("hl_", "hr_"), ("bl_", "br_")],
     &[("LF_", "RF_"), ("LH_", "RH_")],
     &[("lf_", "rf_"), ("lh_", "rh_")],
 ];
@@ -227,6 +228,10 @@ mod tests {
         assert_eq!(mirror("hl_kn", None), Some((Side::Left, "hr_kn".into())));
         assert_eq!(mirror("hr_uleg", None), Some((Side::Right, "hl_uleg".into())));
         assert_eq!(mirror("HL_hip", None), Some((Side::Left, "HR_hip".into())));
+        // Back legs (Stoch 3's `bl_`/`br_`): a prefix only.
+        assert_eq!(mirror("bl_thigh_link", None), Some((Side::Left, "br_thigh_link".into())));
+        assert_eq!(mirror("BR_KNEE", None), Some((Side::Right, "BL_KNEE".into())));
+        assert_eq!(mirror("cable_br_clip", None), None);
         assert_eq!(mirror("LL_HR", None), None);
     }
 

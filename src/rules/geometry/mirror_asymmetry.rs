@@ -67,8 +67,9 @@ declare_rule! {
     /// body's frame. Body frames whose convention differs between the sides (a foot frame turned
     /// 180° about its axis, the geom placed accordingly) are mirror images in the world and
     /// pass; a sole box moved 13 mm on one side is reported.
-    /// Quadruped legs pair by their `FL_`/`FR_`, `RL_`/`RR_` or `HL_`/`HR_` (Spot-style hind
-    /// legs; and ANYmal-style `LF_`/`RF_`, `LH_`/`RH_`) prefixes, in either case; a biped's
+    /// Quadruped legs pair by their `FL_`/`FR_`, `RL_`/`RR_`, `HL_`/`HR_` (Spot-style hind
+    /// legs) or `BL_`/`BR_` (back legs; and ANYmal-style `LF_`/`RF_`, `LH_`/`RH_`) prefixes, in
+    /// either case; a biped's
     /// `LL_`/`LR_` (leg left, leg right) prefixes pair when the partner name exists (the same
     /// letters name a quadruped's left-rear leg, which has no `LL_` partner). Two actuators that
     /// both take their ctrlrange from mirror-paired joints through the same `inheritrange` are

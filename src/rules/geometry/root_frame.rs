@@ -18,7 +18,7 @@ declare_rule! {
     /// (qpos0: the file's own pose, whatever a keyframe does with the legs or the base). A leg
     /// is left or right, and front or rear, by the names of its links and joints: the side
     /// markers `mirror-asymmetry` pairs by (`left`, `l_`, `_R`, …), `front`/`fore` and
-    /// `rear`/`hind`/`back`, and the quadruped prefixes `FL_` `RR_` `HL_`, `LF_` `RH_`. Three
+    /// `rear`/`hind`/`back`, and the quadruped prefixes `FL_` `RR_` `HL_` `BL_`, `LF_` `RH_`. Three
     /// directions are measured when the legs give them: forward (front hips less rear hips on
     /// the same side, averaged over the sides), left (left hips less right hips at the same
     /// end, averaged over the ends: a front-left and a rear-right leg alone give neither) and
@@ -69,11 +69,11 @@ fn end_of(name: &str) -> Option<bool> {
         return Some(false);
     }
     let (c, _) = leg_joint(name)?;
-    // `FL_` `RL_` `HL_` (conventions 0, 1): the end first; `LF_` `LH_` (2, 3): second.
+    // `FL_` `RL_` `HL_` `BL_` (conventions 0, 1): the end first; `LF_` `LH_` (2, 3): second.
     let letter = name.chars().nth(if c < 2 { 0 } else { 1 })?.to_ascii_lowercase();
     match letter {
         'f' => Some(true),
-        'r' | 'h' => Some(false),
+        'r' | 'h' | 'b' => Some(false),
         _ => None,
     }
 }
