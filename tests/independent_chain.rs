@@ -269,9 +269,10 @@ fn a_gear_play_behind_every_motor_is_found_as_one_backlash_group() {
         .collect();
     assert!(!screened.is_empty(), "the group's exception on the hip not screened: {tried:?}");
     // Round 0's judging replays (`judge`): the lead's whole-set and held-out replays and its
-    // floors (three training replays: reconstruction, timestep at dt / 2 and dt / 4), and per
-    // rival judged at its coarse fit one training replay and at most two held-out replays at the
-    // finer step — no floors of its own (a kept one leaves under half its held-out error).
+    // floors (at most three training replays: reconstruction, timestep at dt / 2 and, when its
+    // decision needs it, dt / 4), and per rival judged at its coarse fit one training replay and
+    // at most two held-out replays at the finer step — no floors of its own (a kept one leaves
+    // under half its held-out error).
     // Seconds from the recordings' own clocks (ep_03 is declared held out).
     let dir = common::indep::case("KR7_all_backlash").join("episodes");
     let secs = |f: &str| {

@@ -196,7 +196,7 @@ impl Engine<'_> {
     /// Per fitted joint, the model's own timestep's part of the residual mean square when the
     /// recordings move in finer time than the model, as hardware moves in continuous time.
     /// Each dataset is replayed with `applied` at the model's timestep ("coarse") and, by
-    /// extrapolation from two finer replays, in continuous time ("fine",
+    /// extrapolation from one or two finer replays, in continuous time ("fine",
     /// [`Engine::measure_discretisation`]). The recordings count as finer than the model when
     /// on more than half of the joints the fine replay comes closer to them at all
     /// (`ms(coarse) − ms(fine) > 0`), counting only joints whose residual noise plus the two
@@ -235,8 +235,8 @@ impl Engine<'_> {
         if let Some(d) = memo(&key) {
             return d;
         }
-        let d = match self.measure_discretisation(recs, applied) {
-            Some(sums) => discretisation_part(&sums, base),
+        let d = match self.measure_discretisation(recs, applied, base) {
+            Some(d) => d,
             None => memo(&latest).unwrap_or_else(|| vec![0.0; self.joints.len()]),
         };
         let mut m = self.disc.lock().unwrap_or_else(|e| e.into_inner());
@@ -246,9 +246,10 @@ impl Engine<'_> {
         d
     }
 
-    /// Per fitted joint, the mean squares (coarse − real, continuous − real, coarse −
-    /// continuous) of the replay at the model's timestep and of its continuous-time limit with
-    /// `applied`; `None` when they cannot be made.
+    /// Per fitted joint, the model's own timestep's part of the residual mean square with
+    /// `applied` ([`discretisation_part`] of the replay at the model's timestep and of its
+    /// continuous-time limit; `base`: the joints' white and reconstruction floors); `None` when
+    /// it cannot be measured.
     ///
     /// The continuous-time limit is measured, not assumed: the dataset is replayed at dt, dt/r
     /// and dt/r² (r: [`SearchPolicy::discretisation_refine`]), and the two refinements' RMS
@@ -261,25 +262,31 @@ impl Engine<'_> {
     /// that left 3/8 of the discretisation outside the floor, and the search fitted it as
     /// an action delay.
     ///
+    /// The dt/r² replay only sets how far beyond q(dt/r) the limit lies: for any ratio ρ ≤ 1/r
+    /// the extrapolation is q∞ = q(dt/r) + t · (q(dt/r) − q(dt)) with t = ρ / (1 − ρ) in
+    /// [0, 1/(r − 1)]. When no joint's vote could turn on t ([`zero_at_every_order`]: the part
+    /// is zero for every t there), the part is zero without it (one replay of the dataset
+    /// saved; on chainsim's round-0 bases, whose missing effect leaves no joint explainable by
+    /// the timestep, every time).
+    ///
     /// [`SearchPolicy::discretisation_refine`]: super::super::policy::SearchPolicy::discretisation_refine
     fn measure_discretisation(
         &self,
         recs: &[Recording],
         applied: &[Applied],
-    ) -> Option<Vec<[f64; 3]>> {
+        base: &[f64],
+    ) -> Option<Vec<f64>> {
         let m = model_with(self.robot, applied);
         let dt = m.opt().timestep;
         let r = self.opts.policy.discretisation_refine.max(2);
         if !(dt > 0.0) || recs.is_empty() || m.actuator_history().iter().any(|h| h[0] > 0) {
             return None;
         }
-        // One batch: dt / r and dt / r², and the model's own timestep unless the search has
-        // that replay already (without a start estimate, it is the replay of `errors`).
+        // One batch: dt / r, and the model's own timestep unless the search has that replay
+        // already (without a start estimate, it is the replay of `errors`); dt / r² after it,
+        // when the decision needs it.
         let known = if self.estimates_start() { None } else { self.errors(recs, applied) };
-        let mut sets = vec![
-            SetSpec { applied, refine: r as u32 },
-            SetSpec { applied, refine: (r * r) as u32 },
-        ];
+        let mut sets = vec![SetSpec { applied, refine: r as u32 }];
         if known.is_none() {
             sets.insert(0, SetSpec::of(applied));
         }
@@ -291,15 +298,13 @@ impl Engine<'_> {
             Some(e) => e.eps,
             None => whole()?,
         };
-        let (half, fine) = (whole()?, whole()?);
+        let half = whole()?;
         if first {
-            self.sims.fetch_add(
-                sets.len().saturating_sub(2) + r + r * r,
-                std::sync::atomic::Ordering::Relaxed,
-            );
+            self.sims.fetch_add(sets.len() - 1 + r, std::sync::atomic::Ordering::Relaxed);
         }
-        // The scored samples of a joint: (recording index, joint index, sample index).
-        let samples = |name: &String| -> Vec<(usize, usize, usize)> {
+        // The scored samples of a joint where every replay of `reps` is finite: (recording
+        // index, joint index, sample index).
+        let samples = |name: &String, reps: &[&Vec<Episode>]| -> Vec<(usize, usize, usize)> {
             let mut v = Vec::new();
             for (e, rec) in recs.iter().enumerate() {
                 let Some(k) = rec.joints.iter().position(|j| &j.name == name) else { continue };
@@ -307,7 +312,7 @@ impl Engine<'_> {
                 // The first sample is the start state in every replay: not counted.
                 for (i, &s) in scored.iter().enumerate().skip(1) {
                     let q = rec.joints[k].q.get(i).copied().unwrap_or(f64::NAN);
-                    let ok = [&coarse, &half, &fine].iter().all(|eps| {
+                    let ok = reps.iter().all(|eps| {
                         eps[e].q_sim.get(k).and_then(|v| v.get(i)).is_some_and(|x| x.is_finite())
                     });
                     if s && q.is_finite() && ok {
@@ -317,7 +322,41 @@ impl Engine<'_> {
             }
             v
         };
-        let per_joint: Vec<Vec<(usize, usize, usize)>> = self.joints.iter().map(samples).collect();
+        // Per joint, on the replays at dt and dt / r: [ms(coarse − real), ms(half − real),
+        // mean((real − half)(half − coarse)), ms(half − coarse)].
+        let bracket: Vec<[f64; 4]> = self
+            .joints
+            .iter()
+            .map(|name| {
+                let idx = samples(name, &[&coarse, &half]);
+                let mut s = [0.0; 4];
+                for &(e, k, i) in &idx {
+                    let q = recs[e].joints[k].q[i];
+                    let (a, b) = (coarse[e].q_sim[k][i], half[e].q_sim[k][i]);
+                    s[0] += (q - a) * (q - a);
+                    s[1] += (q - b) * (q - b);
+                    s[2] += (q - b) * (b - a);
+                    s[3] += (b - a) * (b - a);
+                }
+                let n = idx.len().max(1) as f64;
+                s.map(|x| x / n)
+            })
+            .collect();
+        if zero_at_every_order(&bracket, base, r) {
+            return Some(vec![0.0; self.joints.len()]);
+        }
+        let fine_set = [SetSpec { applied, refine: (r * r) as u32 }];
+        let fine: Vec<Episode> = self
+            .service(first)
+            .run(&fine_set, recs, &self.opts.replay)
+            .pop()?
+            .into_iter()
+            .collect::<Option<_>>()?;
+        if first {
+            self.sims.fetch_add(r * r, std::sync::atomic::Ordering::Relaxed);
+        }
+        let per_joint: Vec<Vec<(usize, usize, usize)>> =
+            self.joints.iter().map(|n| samples(n, &[&coarse, &half, &fine])).collect();
         // The observed convergence ratio over every joint.
         let (mut d1, mut d2) = (0.0, 0.0);
         for &(e, k, i) in per_joint.iter().flatten() {
@@ -327,7 +366,7 @@ impl Engine<'_> {
         }
         let rho = if d1 > 0.0 { (d2 / d1).sqrt().min(1.0 / r as f64) } else { 0.0 };
         let ext = rho / (1.0 - rho);
-        let sums = per_joint
+        let sums: Vec<[f64; 3]> = per_joint
             .iter()
             .map(|idx| {
                 let (mut sc, mut sf, mut scf) = (0.0, 0.0, 0.0);
@@ -344,7 +383,7 @@ impl Engine<'_> {
                 [sc / n, sf / n, scf / n]
             })
             .collect();
-        Some(sums)
+        Some(discretisation_part(&sums, base))
     }
 
     /// `true` when every fitted joint's residual of `recs` simulated with `applied` as `errs` is within
@@ -378,4 +417,36 @@ pub(super) fn discretisation_part(sums: &[[f64; 3]], base: &[f64]) -> Vec<f64> {
     } else {
         vec![0.0; sums.len()]
     }
+}
+
+/// Whether [`discretisation_part`] is zero whatever the replay at dt / r² shows, for an
+/// integrator of order one or more refined by `r`: then the continuous-time limit is
+/// q∞ = q(dt/r) + t · (q(dt/r) − q(dt)) for some t in [0, 1/(r − 1)], and `bracket` gives,
+/// per joint, [c, f₀, x, d] = [ms(q(dt) − real), ms(q(dt/r) − real), mean((real − q(dt/r)) ·
+/// (q(dt/r) − q(dt))), ms(q(dt/r) − q(dt))], so that at t the fine replay's mean square is
+/// f(t) = f₀ − 2 t x + t² d and the replays' difference (1 + t)² d. A joint can vote only when
+/// some t makes it explainable (c ≤ 4 (base + (1 + t)² d), from some t on) and closer to the
+/// fine replay (f(t) ≤ c, least at t = x / d); the part is zero when no joint moved or those
+/// that can vote are at most half of the joints that moved.
+pub(super) fn zero_at_every_order(bracket: &[[f64; 4]], base: &[f64], r: usize) -> bool {
+    let top = 1.0 / (r.max(2) as f64 - 1.0);
+    let moved = bracket.iter().filter(|s| s[3] > 0.0).count();
+    let can_vote = bracket
+        .iter()
+        .zip(base)
+        .filter(|([c, f0, x, d], b)| {
+            if !(*d > 0.0) {
+                return false;
+            }
+            // The first t at which the joint is explainable.
+            let need = c / EXPLAINABLE - *b;
+            let from = if need > 0.0 { ((need / d).sqrt() - 1.0).max(0.0) } else { 0.0 };
+            if from > top {
+                return false;
+            }
+            let t = (x / d).clamp(from, top);
+            f0 - 2.0 * t * x + t * t * d <= *c
+        })
+        .count();
+    moved == 0 || 2 * can_vote <= moved
 }
