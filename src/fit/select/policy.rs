@@ -410,6 +410,10 @@ pub enum Phase {
     Screen,
     /// Not fitted: a kept candidate with fewer parameters already left a white residual.
     Floor,
+    /// Not screened after round 0: every joint of the candidate is at its floor (its training
+    /// residual within `white_ratio` of it, the search's stop applied joint by joint;
+    /// `joint_floor.rs`).
+    JointFloor,
     /// Not fitted in full: its coarse fit could not come near a kept white-residual candidate.
     FloorScreen,
     /// Not coarse-fitted on the screen's data: beside a kept lead, its coarse fit on the
@@ -505,6 +509,7 @@ impl Phase {
             Phase::AddCoarse => "add_coarse",
             Phase::Screen => "screen",
             Phase::Floor => "floor",
+            Phase::JointFloor => "joint_floor",
             Phase::FloorScreen => "floor_screen",
             Phase::ReachScreen => "reach_screen",
             Phase::HeldoutScreen => "heldout_screen",
