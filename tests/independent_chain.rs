@@ -152,11 +152,18 @@ fn one_armature_on_every_joint_is_found_as_one_group() {
     assert!(tried.iter().any(|t| t["round"] == 1
         && t["phase"] != "joint_floor"
         && t["joints"] == serde_json::json!(["hip_pitch", "knee", "ankle"])));
+    // A body on the hip's link loads every joint between it and the base: its candidates are
+    // screened as before, the hip at its floor or not.
+    let bodies = ["com_offset", "link_mass", "link_inertia"];
+    assert!(at_floor.iter().all(|t| !bodies.contains(&t["effect"].as_str().unwrap())));
+    assert!(tried.iter().any(|t| t["round"] == 1
+        && bodies.contains(&t["effect"].as_str().unwrap())
+        && t["joints"] == serde_json::json!(["hip_pitch"])));
     // Round 1's lead (the first candidate it screens) is fitted in full only once its coarse fit
     // lowers the held-out error, as every other candidate's must: the hip's `com_offset`, whose
     // full fit (134 replayed s) left the held-out error 0.9 % worse, is left out by its held-out
     // linear optimum (`heldout_linear`) or stops at its coarse fit's held-out replay
-    // (`heldout_screen`) — or, the hip at its floor, is not screened at all.
+    // (`heldout_screen`).
     let lead =
         tried.iter().find(|t| t["round"] == 1 && t["phase"] != "joint_floor").expect("a round 1");
     assert!(

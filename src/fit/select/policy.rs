@@ -60,8 +60,9 @@ pub struct SearchPolicy {
 
     // ---- when to stop ----
     /// Every fitted joint's training residual mean square within this factor of its floor
-    /// (white + reconstruction + discretisation) stops the search [ratio of mean squares].
-    /// Default 1.5.
+    /// (white + reconstruction + discretisation) stops the search; after round 0 a candidate of
+    /// a joint-local effect whose joints all are is not screened (`joint_floor.rs`)
+    /// [ratio of mean squares]. Default 1.5.
     pub white_ratio: f64,
     /// Ratio r between the timesteps of the replays that measure the model's own time
     /// discretisation: dt, dt / r and dt / r², extrapolated to continuous time (the
@@ -272,7 +273,7 @@ pub const FIELDS: &[(&str, &str, &str)] = &[
     (
         "white_ratio",
         "ratio of mean squares",
-        "stop when every joint's training residual is within this factor of its floor",
+        "stop when every joint's training residual is within this factor of its floor; after round 0, a joint effect's candidate whose joints all are is not screened",
     ),
     (
         "discretisation_refine",
