@@ -18,6 +18,33 @@ mod common;
 
 use common::indep::{TruthBody, assert_nothing, assert_payload_found, fit, found, truth};
 
+/// The candidates a round after round 0 left out because each of their joints was at its floor
+/// (`joint_floor`), checked against the fit's own report: never in round 0, never fitted or
+/// kept, and never on a joint the report lists as above its floor (`unexplained`: the training
+/// residual of the fitted model more than `white_ratio` of its floor; the model of round 1's
+/// base when a later round keeps nothing).
+fn joint_floor_entries(v: &serde_json::Value) -> Vec<serde_json::Value> {
+    let above: Vec<&str> =
+        v["unexplained"].as_array().unwrap().iter().filter_map(|u| u["joint"].as_str()).collect();
+    let out: Vec<serde_json::Value> = v["tried"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|t| t["phase"] == "joint_floor")
+        .cloned()
+        .collect();
+    for t in &out {
+        assert!(t["round"].as_u64() >= Some(1), "left out in round 0: {t}");
+        assert!(t["kept"] == false && t["params"].as_array().is_some_and(|p| p.is_empty()));
+        let joints = t["joints"].as_array().unwrap();
+        assert!(
+            joints.iter().all(|j| !above.contains(&j.as_str().unwrap())),
+            "left out on a joint above its floor ({above:?}): {t}"
+        );
+    }
+    out
+}
+
 fn own_physics(truth: &serde_json::Value) {
     assert_eq!(truth["simulator"], "chainsim.py", "not the own-physics simulator's recording");
 }
@@ -114,12 +141,31 @@ fn one_armature_on_every_joint_is_found_as_one_group() {
     for t in kinks {
         assert_ne!(t["phase"], "add", "fitted in full on its linear step alone: {t}");
     }
-    // Round 1's lead (the first candidate it logs) is fitted in full only once its coarse fit
+    // Beside the kept group the hip's residual is within `white_ratio` of its floor (the knee's
+    // and the ankle's are not): round 1 screens no candidate on the hip alone (`joint_floor`,
+    // without a fit), and screens the group and the other joints as before.
+    let at_floor = joint_floor_entries(&v);
+    assert!(
+        at_floor.iter().any(|t| t["joints"] == serde_json::json!(["hip_pitch"])),
+        "round 1 screened the hip, at its floor: {at_floor:?}"
+    );
+    assert!(tried.iter().any(|t| t["round"] == 1
+        && t["phase"] != "joint_floor"
+        && t["joints"] == serde_json::json!(["hip_pitch", "knee", "ankle"])));
+    // A body on the hip's link loads every joint between it and the base: its candidates are
+    // screened as before, the hip at its floor or not.
+    let bodies = ["com_offset", "link_mass", "link_inertia"];
+    assert!(at_floor.iter().all(|t| !bodies.contains(&t["effect"].as_str().unwrap())));
+    assert!(tried.iter().any(|t| t["round"] == 1
+        && bodies.contains(&t["effect"].as_str().unwrap())
+        && t["joints"] == serde_json::json!(["hip_pitch"])));
+    // Round 1's lead (the first candidate it screens) is fitted in full only once its coarse fit
     // lowers the held-out error, as every other candidate's must: the hip's `com_offset`, whose
     // full fit (134 replayed s) left the held-out error 0.9 % worse, is left out by its held-out
     // linear optimum (`heldout_linear`) or stops at its coarse fit's held-out replay
     // (`heldout_screen`).
-    let lead = tried.iter().find(|t| t["round"] == 1).expect("a round 1");
+    let lead =
+        tried.iter().find(|t| t["round"] == 1 && t["phase"] != "joint_floor").expect("a round 1");
     assert!(
         ["heldout_screen", "heldout_linear"].contains(&lead["phase"].as_str().unwrap_or(""))
             || lead["heldout_improvement"].as_f64().is_some_and(|h| h > 0.0),
@@ -257,6 +303,10 @@ fn a_gear_play_behind_every_motor_is_found_as_one_backlash_group() {
     );
     let b = v["missing_physics"][0]["params"]["backlash_rad"].as_f64().unwrap();
     assert!((b - play).abs() <= 0.1 * play, "backlash {b} for {play}");
+    // Every joint stays above its floor beside the play (its rigid flank, the rotor's soft
+    // one): round 1 leaves no candidate out for its joints being at the floor.
+    let at_floor = joint_floor_entries(&v);
+    assert!(at_floor.is_empty(), "candidates left out on joints above their floor: {at_floor:?}");
     let tried = v["tried"].as_array().unwrap();
     let full: Vec<_> = tried.iter().filter(|t| t["phase"] == "pair").collect();
     assert!(full.is_empty(), "pairs fitted in full: {full:?}");

@@ -106,6 +106,10 @@ impl Effect for GroundContact {
     fn acts_on(&self, t: &JointTarget) -> bool {
         !t.ground.is_empty()
     }
+    /// The floor pushes on the whole standing chain, not on the foot's joint alone.
+    fn joint_local(&self) -> bool {
+        false
+    }
     /// A group only of feet: a joint whose body touches no ground has no contact to share.
     fn alike(&self, a: &JointTarget, b: &JointTarget) -> bool {
         self.acts_on(a) && self.acts_on(b)

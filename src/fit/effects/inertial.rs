@@ -230,6 +230,9 @@ macro_rules! body_effect_methods {
         fn alike(&self, a: &JointTarget, b: &JointTarget) -> bool {
             inertial::alike_targets(a, b)
         }
+        fn joint_local(&self) -> bool {
+            false
+        }
     };
 }
 pub(crate) use body_effect_methods;

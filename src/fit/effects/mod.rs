@@ -407,6 +407,15 @@ pub trait Effect: Declared + Sync {
     fn acts_on(&self, _t: &JointTarget) -> bool {
         true
     }
+    /// Whether the effect changes the motion first at the joints it is fitted on — a torque, a
+    /// transmission, a command or a reading of those joints — so that where their residual is
+    /// at its floor it has nothing of its own left to explain there (the search's joint floor,
+    /// `fit::select::joint_floor`). Default `true`; `false` for the body effects, whose mass
+    /// every joint between the body and the base carries (a trunk's mass above the hip's axis
+    /// loads the knee and the ankle, not the hip), and for the ground contact.
+    fn joint_local(&self) -> bool {
+        true
+    }
     /// Whether one parameter vector means the same thing on targets `a` and `b`, so that the
     /// two may share it in a group (mirror links, every leg). Default: the effect acts on both
     /// ([`Effect::acts_on`]: a servo's gain error is not shared with the passive joint an

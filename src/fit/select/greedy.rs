@@ -14,6 +14,7 @@ use super::engine::shape_key;
 use super::extension;
 use super::groups::{Cand, candidate_list, has_group, partner, same_data, sorted_pair};
 use super::heldout_linear::out_of;
+use super::joint_floor;
 use super::lead;
 use super::pair_first::{EarlyPair, early_pair, rivals};
 use super::pairs::{joint_pairs, pair_lookahead, refitted_at_floor};
@@ -91,11 +92,20 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     }
     // One-parameter candidates first, in rank order; then the multi-parameter ones.
     cands.sort_by_key(|(e, ..)| e.fitted() >= 2);
+    let z = opts.policy.z_needed(cands.len());
+    // After round 0, none whose joints are all at their floor ([`joint_floor`]).
+    if joint_floor::leave_at_floor(
+        &mut cands,
+        (&floors, opts.policy.white_ratio, round),
+        &screen,
+        out,
+    ) {
+        return false;
+    }
     // After round 0, the held-out set's own linear model ([`heldout_out`]) of the candidates it
     // may leave out ([`heldout_columns`]), an effect's probed when first asked ([`out_of`]).
     let ho_diag = (round > 0).then(|| heldout_columns(engine, &screen, &cands, &diag));
     let mut ho_screen = ho_diag.and_then(|d| HeldoutScreen::new((heldout, &applied, &ho_err), d));
-    let z = opts.policy.z_needed(cands.len());
     let k_before: usize = applied.iter().map(|a| a.effect.fitted()).sum();
     let bic_before = bic(tr_err.n, tr_err.sse, k_before);
     // Each kept candidate: its record, whether it sits on a bound, its held-out errors, its log

@@ -35,6 +35,7 @@ mod further;
 mod greedy;
 mod groups;
 mod heldout_linear;
+mod joint_floor;
 mod lead;
 mod outcome;
 mod pair_first;
@@ -322,6 +323,7 @@ fn search_cost(engine: &Engine, out: &FitOutcome) -> SearchCost {
                     t.phase,
                     Phase::Screen
                         | Phase::Floor
+                        | Phase::JointFloor
                         | Phase::FloorScreen
                         | Phase::ReachScreen
                         | Phase::HeldoutScreen

@@ -169,7 +169,7 @@ pub struct SearchCost {
     #[serde(flatten)]
     pub rollouts: RolloutStats,
     /// Candidates left without a full nonlinear fit by a screen (phases `screen`, `floor`,
-    /// `floor_screen`, `reach_screen`, `heldout_screen`, `discretisation_screen`,
+    /// `joint_floor`, `floor_screen`, `reach_screen`, `heldout_screen`, `discretisation_screen`,
     /// `heldout_bound`, `trust_screen`, `heldout_linear`, `swap_screen`).
     pub fits_saved_by_screens: usize,
     /// Rollouts by the phase that ran them (`diagnose` includes the floors and the

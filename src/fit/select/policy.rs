@@ -60,8 +60,9 @@ pub struct SearchPolicy {
 
     // ---- when to stop ----
     /// Every fitted joint's training residual mean square within this factor of its floor
-    /// (white + reconstruction + discretisation) stops the search [ratio of mean squares].
-    /// Default 1.5.
+    /// (white + reconstruction + discretisation) stops the search; after round 0 a candidate of
+    /// a joint-local effect whose joints all are is not screened (`joint_floor.rs`)
+    /// [ratio of mean squares]. Default 1.5.
     pub white_ratio: f64,
     /// Ratio r between the timesteps of the replays that measure the model's own time
     /// discretisation: dt, dt / r and dt / r², extrapolated to continuous time (the
@@ -272,7 +273,7 @@ pub const FIELDS: &[(&str, &str, &str)] = &[
     (
         "white_ratio",
         "ratio of mean squares",
-        "stop when every joint's training residual is within this factor of its floor",
+        "stop when every joint's training residual is within this factor of its floor; after round 0, a joint effect's candidate whose joints all are is not screened",
     ),
     (
         "discretisation_refine",
@@ -410,6 +411,10 @@ pub enum Phase {
     Screen,
     /// Not fitted: a kept candidate with fewer parameters already left a white residual.
     Floor,
+    /// Not screened after round 0: every joint of the candidate is at its floor (its training
+    /// residual within `white_ratio` of it, the search's stop applied joint by joint;
+    /// `joint_floor.rs`).
+    JointFloor,
     /// Not fitted in full: its coarse fit could not come near a kept white-residual candidate.
     FloorScreen,
     /// Not coarse-fitted on the screen's data: beside a kept lead, its coarse fit on the
@@ -505,6 +510,7 @@ impl Phase {
             Phase::AddCoarse => "add_coarse",
             Phase::Screen => "screen",
             Phase::Floor => "floor",
+            Phase::JointFloor => "joint_floor",
             Phase::FloorScreen => "floor_screen",
             Phase::ReachScreen => "reach_screen",
             Phase::HeldoutScreen => "heldout_screen",
