@@ -113,7 +113,10 @@ pub struct SearchPolicy {
     /// (`pair_screen::PairPrediction::reachable`, before any pair replay). A friction extension
     /// deferred on its plain variant's coarse fit is not judged on the screen's data when the gain
     /// the judgement's own columns allow on the probes' data, taken 1 / this times, cannot reach
-    /// the round's bar (`ext_bound::short_of_bar`). Default 0.75 (a "very successful" step of a
+    /// the round's bar (`ext_bound::short_of_bar`). In round 0, once a fit set the bar, a smooth
+    /// one-parameter candidate whose linear step, replayed on the probes' data, confirms its
+    /// prediction there by this test is not coarse-fitted when that prediction, taken 1 / this
+    /// times, cannot reach the bar (`probe_trust::out`). Default 0.75 (a "very successful" step of a
     /// trust-region method).
     pub linear_trust: f64,
     /// Once a kept candidate leaves a white training residual (or when a swap is screened), a
