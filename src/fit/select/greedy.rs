@@ -187,7 +187,8 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
             let cut = (opts.policy.screen_share * best_gain).max(opts.policy.min_rel_improvement);
             let (ho, block) =
                 ((&screen, &mut ho_screen), (&cands[..], &coarse[..], &cands[range.clone()]));
-            let out_of = out_of(s, (round, cut), ho, &applied, &covered, block);
+            let set = (round, cut, best_gain > 0.0);
+            let out_of = out_of(s, set, ho, (short, &applied), &covered, block);
             // (The reach's coarse fits on the probes' data are booked apart: `Phase::Reach`.)
             engine.report(round, Phase::Reach, None);
             let far: Vec<Option<(Vec<f64>, f64)>> = cands[range.clone()]

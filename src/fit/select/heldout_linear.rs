@@ -1,39 +1,50 @@
-//! After round 0, which candidates of a block of the screen are taken without a coarse fit
-//! ([`out_of`]): those round 0's trust leaves out ([`trust_out`]) and those the held-out set's
-//! own linear model leaves out ([`heldout_out`]), that model's effects probed only for the
-//! candidates it is asked about ([`HeldoutScreen::ensure`]).
+//! Which candidates of a block of the screen are taken without a coarse fit ([`out_of`]): in
+//! round 0, once a fit set the bar, those whose linear step the probes' data confirms
+//! ([`probe_trust::out`]); after round 0, those round 0's trust leaves out ([`trust_out`]) and
+//! those the held-out set's own linear model leaves out ([`heldout_out`]), that model's effects
+//! probed only for the candidates it is asked about ([`HeldoutScreen::ensure`]).
 
 use rayon::prelude::*;
 
 use crate::fit::effects::Applied;
+use crate::sim2real::recording::Recording;
 
 use super::Search;
 use super::coarse::{self, Coarse};
 use super::groups::Cand;
 use super::policy::Phase;
+use super::probe_trust;
 use super::screen::{HeldoutScreen, Screen};
 use super::trust::{heldout_out, plain_needed, train_reach, trust_out};
 
 /// Per candidate of `block` (of `cands`, whose coarse fits so far are `coarse`) in round
-/// `round` with the bar `cut`: why it is taken without a coarse fit — (the largest training gain
-/// its linear model allows, the phase logged, the held-out reach; NaN for round 0's trust) —
-/// or `None` (screened as usual). Never in round 0, never the plain variant of another
-/// candidate on its joints ([`plain_needed`]); a candidate that waits for its plain variant's
+/// `round` with the bar `cut` (`set`: a fit of the round set it): why it is taken without a
+/// coarse fit — (the largest training gain its linear model allows, the phase logged, the
+/// held-out reach; NaN for round 0's trust) — or `None` (screened as usual). In round 0 only
+/// once a fit set the bar, by the probes' data's test ([`probe_trust::out`], on the screen's
+/// data `short`); never the plain variant of another candidate on its joints ([`plain_needed`]); a candidate that waits for its plain variant's
 /// fit ([`coarse::deferred`]) takes that fit's stand-in whatever this says, and is not asked
 /// about on the held-out set: only the effects of the candidates asked about are probed there
 /// ([`HeldoutScreen::ensure`], booked to `heldout_linear` with the held-out replays that
 /// confirm a linear model).
 pub(super) fn out_of(
     s: &Search,
-    (round, cut): (usize, f64),
+    (round, cut, set): (usize, f64, bool),
     (screen, ho): (&Screen, &mut Option<HeldoutScreen>),
-    applied: &[Applied],
+    (short, applied): (&[Recording], &[Applied]),
     covered: &(dyn Fn(&str, &str) -> bool + Sync),
     (cands, coarse, block): (&[Cand], &[Coarse], &[Cand]),
 ) -> Vec<Option<(f64, Phase, f64)>> {
     let engine = s.engine;
     if round == 0 {
-        return vec![None; block.len()];
+        let at = (short, applied);
+        let out = |(e, g, _): &Cand| {
+            let own = plain_needed(cands, (*e, g))
+                || coarse::deferred(s, (*e, g), cands, coarse).is_some();
+            let u = (set && !own).then(|| probe_trust::out(engine, screen, at, (*e, g), cut));
+            u.flatten().map(|u| (u, Phase::TrustScreen, f64::NAN))
+        };
+        return block.par_iter().map(out).collect();
     }
     engine.report(round, Phase::HeldoutLinear, None);
     let lt = engine.opts.policy.linear_trust;

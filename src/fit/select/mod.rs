@@ -45,6 +45,7 @@ mod pair_screen;
 mod pairs;
 mod policy;
 mod polish;
+mod probe_trust;
 mod prune;
 mod reach;
 mod reshoot;

@@ -114,7 +114,10 @@ pub struct SearchPolicy {
     /// (`pair_screen::PairPrediction::reachable`, before any pair replay). A friction extension
     /// deferred on its plain variant's coarse fit is not judged on the screen's data when the gain
     /// the judgement's own columns allow on the probes' data, taken 1 / this times, cannot reach
-    /// the round's bar (`ext_bound::short_of_bar`). Default 0.75 (a "very successful" step of a
+    /// the round's bar (`ext_bound::short_of_bar`). In round 0, once a fit set the bar, a smooth
+    /// one-parameter candidate whose linear step, replayed on the probes' data, confirms its
+    /// prediction there by this test is not coarse-fitted when that prediction, taken 1 / this
+    /// times, cannot reach the bar (`probe_trust::out`). Default 0.75 (a "very successful" step of a
     /// trust-region method).
     pub linear_trust: f64,
     /// Once a kept candidate leaves a white training residual (or when a swap is screened), a
@@ -309,7 +312,7 @@ pub const FIELDS: &[(&str, &str, &str)] = &[
     (
         "linear_trust",
         "ratio",
-        "a smooth one-parameter candidate's coarse fit is secant Gauss-Newton steps from the screen's linear step (one replay each), stopping at the first step that achieves between this and its inverse times the relative improvement its linear model predicted (both below min_rel_improvement also agree), or after screen_evals replays; the same test confirms a several-parameter smooth candidate's linear step (one replay) and the coarse fit on the probes' data of a non-smooth candidate or of a smooth one without a confirmed step (its gain on the screen's data against its gain there) as the coarse fit, else screen_evals replays of the screen's data follow; a coarse fit it confirms is fitted in full only when it lowers the held-out RMSE by more than this × min_rel_improvement, and after round 0 a smooth one-parameter candidate's coarse fit only when it passes the round's held-out gate with its z, decisive improvement and min_rel_improvement taken × this; a pair's fit is taken to gain at most 1 / this times the gain its members' columns predict beyond its better member, judged before any pair replay; a friction extension deferred on its plain variant's coarse fit is not judged on the screen's data when the gain its own columns allow on the probes' data, taken 1 / this times, cannot reach the round's bar",
+        "a smooth one-parameter candidate's coarse fit is secant Gauss-Newton steps from the screen's linear step (one replay each), stopping at the first step that achieves between this and its inverse times the relative improvement its linear model predicted (both below min_rel_improvement also agree), or after screen_evals replays; the same test confirms a several-parameter smooth candidate's linear step (one replay) and the coarse fit on the probes' data of a non-smooth candidate or of a smooth one without a confirmed step (its gain on the screen's data against its gain there) as the coarse fit, else screen_evals replays of the screen's data follow; a coarse fit it confirms is fitted in full only when it lowers the held-out RMSE by more than this × min_rel_improvement, and after round 0 a smooth one-parameter candidate's coarse fit only when it passes the round's held-out gate with its z, decisive improvement and min_rel_improvement taken × this; a pair's fit is taken to gain at most 1 / this times the gain its members' columns predict beyond its better member, judged before any pair replay; a friction extension deferred on its plain variant's coarse fit is not judged on the screen's data when the gain its own columns allow on the probes' data, taken 1 / this times, cannot reach the round's bar; in round 0, once a fit set the bar, a smooth one-parameter candidate whose linear step replayed on the probes' data confirms its prediction there is not coarse-fitted when that prediction, taken 1 / this times, cannot reach the bar",
     ),
     (
         "floor_screen_ratio",
