@@ -88,3 +88,83 @@ fn real_mirrored_robots_have_no_tensor_finding() {
         none_of(&f, "mirror-asymmetry", "inertia tensor");
     }
 }
+
+const IEG: &str = "fixtures/rules/inertia-exceeds-geometry/";
+
+fn expected(f: &serde_json::Value) -> f64 {
+    f["expected"]["value"].as_f64().unwrap_or(f64::NAN)
+}
+
+/// The light case's findings of `file`: (message, measured mass, expected floor).
+fn light(file: &str) -> Vec<(String, f64, f64)> {
+    let all = findings(&format!("{IEG}{file}"));
+    of(&all, "inertia-exceeds-geometry")
+        .into_iter()
+        .filter(|f| message(f).contains(" weighs "))
+        .map(|f| (message(f).to_string(), measured(f), expected(f)))
+        .collect()
+}
+
+/// Floors worked out from the written shapes: the lighter of 15 kg/m³ × volume and
+/// 0.3 kg/m² × area. A box 80 × 60 × 50 mm; a cylinder of radius 30 mm, 150 mm long; a capsule
+/// of radius 25 mm whose end centres lie 250 mm apart.
+#[test]
+fn a_mass_below_its_own_shape_in_any_material_is_reported() {
+    use std::f64::consts::PI;
+    let floor = |v: f64, a: f64| (15.0 * v).min(0.3 * a);
+    let (x, y, z) = (0.08, 0.06, 0.05);
+    let cover = floor(x * y * z, 2.0 * (x * y + y * z + z * x));
+    let (r, l) = (0.03, 0.15);
+    let tail = floor(PI * r * r * l, 2.0 * PI * r * r + 2.0 * PI * r * l);
+    let found = light("invalid_urdf_light_links.urdf");
+    assert_eq!(found.len(), 2, "{found:#?}");
+    for ((msg, m, e), (name, mass, want)) in
+        found.iter().zip([("sensor_cover", 0.002, cover), ("tail", 0.001, tail)])
+    {
+        assert!(msg.starts_with(&format!("link `{name}` weighs")), "{msg}");
+        assert!((m - mass).abs() < 1e-12, "{name}: {m}");
+        assert!((e - want).abs() < 1e-9, "{name}: {e} vs {want}");
+    }
+    let (r, l) = (0.025, 0.25);
+    let forearm =
+        floor(PI * r * r * l + 4.0 / 3.0 * PI * r.powi(3), 4.0 * PI * r * r + 2.0 * PI * r * l);
+    let found = light("invalid_mjcf_light_body.xml");
+    assert_eq!(found.len(), 1, "{found:#?}");
+    assert!(found[0].0.starts_with("body `forearm` weighs 1 g"), "{}", found[0].0);
+    assert!((found[0].2 - forearm).abs() < 1e-9, "{} vs {forearm}", found[0].2);
+}
+
+/// An honest thin cover, a foam bumper, a marker, frames without shapes, a probe whose drawn
+/// box is larger than its collision sphere; the earlier fixtures of the rule and of the
+/// millimetre rules (their shapes are larger than the robot) have no light finding.
+#[test]
+fn light_parts_modelled_honestly_are_not_reported() {
+    for f in [
+        "valid_urdf_shells_and_frames.urdf",
+        "valid_urdf_fused_parts.urdf",
+        "valid.xml",
+        "valid_welded_shell.xml",
+        "invalid_urdf_fused_boards.urdf",
+    ] {
+        assert!(light(f).is_empty(), "{f}: {:#?}", light(f));
+    }
+    for f in [
+        "fixtures/rules/mesh-scale/invalid.xml",
+        "fixtures/rules/mesh-scale/invalid_urdf_fixed_root.urdf",
+        "fixtures/rules/oversized-collision-primitive/invalid_mm.xml",
+    ] {
+        none_of(f, "inertia-exceeds-geometry", " weighs ");
+    }
+    let mut files = vec!["models/asimov.xml".to_string()];
+    for m in ["booster_t1/t1.xml", "unitree_h1/h1.xml"] {
+        let p = format!("../shared/data/models/{m}");
+        if std::path::Path::new(&p).exists() {
+            files.push(p);
+        } else {
+            eprintln!("skipped {p}: ../shared absent");
+        }
+    }
+    for f in files {
+        none_of(&f, "inertia-exceeds-geometry", " weighs ");
+    }
+}
