@@ -168,3 +168,31 @@ fn light_parts_modelled_honestly_are_not_reported() {
         none_of(&f, "inertia-exceeds-geometry", " weighs ");
     }
 }
+
+/// An MJCF with three inertials MuJoCo rejects (a negative diagonal moment, A + B < C, a full
+/// tensor with products larger than its diagonal: eigenvalues −0.001, 0.001, 0.003): MuJoCo
+/// names the first; the load error lists the three with their lines, not the hip (a rigid
+/// body's full tensor) nor the toe (A + B = C, a thin rod).
+#[test]
+fn mjcf_load_error_lists_every_rejected_inertia() {
+    let input = modellint::lint::LintInput {
+        model: "fixtures/broken/mjcf_inertia_many_rejected.xml".into(),
+        spec: None,
+        config: None,
+        select: vec![],
+        ignore: vec![],
+    };
+    let Err(e) = modellint::lint::load(&input) else { panic!("the fixture must not load") };
+    let m = e.to_string();
+    for want in [
+        "the file states 3 inertials it rejects",
+        "body `thigh` (line 12): principal moments -3.000e-2, 5.000e-3, 3.000e-2 kg·m² (not all positive",
+        "body `shin` (line 15): principal moments 1.000e-4 + 1.000e-4 < 1.000e-3 kg·m² (A + B ≥ C fails",
+        "body `foot` (line 18): principal moments -1.000e-3, 1.000e-3, 3.000e-3 kg·m² (not all positive",
+    ] {
+        assert!(m.contains(want), "load error lacks `{want}`:\n{m}");
+    }
+    for not in ["body `hip`", "body `toe`"] {
+        assert!(!m.contains(not), "{not} is a rigid body's inertia:\n{m}");
+    }
+}
