@@ -605,9 +605,7 @@ pub fn load(map: &mut SourceMap, path: &Path, keyframe: Option<&str>) -> Result<
             // MuJoCo did not say where: the model's root element, so that the error still
             // names a line of the file.
             .unwrap_or_else(|| LoadError::at(map, tree.loc, msg));
-        if format == Format::Urdf {
-            err.message = urdf_inertia::explain(map, &tree, err.message);
-        }
+        err.message = urdf_inertia::explain(map, &tree, err.message, format == Format::Urdf);
         err
     })?;
     let mut robot = extract(path, format, tree, src, mj);

@@ -1,7 +1,7 @@
-//! URDF `<inertial>`s that MuJoCo's compiler rejects. MuJoCo stops at the first body it cannot
-//! accept and names that one; an export that wrote placeholder or broken inertias usually wrote
-//! several (a whole leg of zeros, every servo horn's tensor), so the load error lists all of them
-//! with their lines, and one edit fixes the file.
+//! URDF and MJCF `<inertial>`s that MuJoCo's compiler rejects. MuJoCo stops at the first body it
+//! cannot accept and names that one; an export that wrote placeholder or broken inertias usually
+//! wrote several (a whole leg of zeros, every servo horn's tensor), so the load error lists all of
+//! them with their lines, and one edit fixes the file.
 
 use nalgebra::{Matrix3, SymmetricEigen};
 
@@ -72,17 +72,8 @@ pub fn rejected(map: &SourceMap, tree: &XNode) -> Vec<String> {
     for l in &links {
         let name = l.node.name().unwrap_or("");
         let line = map.file(l.node.loc.file).line_col(l.node.loc.start).0;
-        let [a, b, c] = l.moments;
-        let why = if (l.full && a <= 0.0) || a < -MJ_MINVAL.max(ROUNDING * c.abs()) {
-            Some(format!(
-                "principal moments {:.3e}, {:.3e}, {:.3e} kg·m² (not all positive: not an inertia)",
-                a, b, c
-            ))
-        } else if !balance && a + b < c * (1.0 - ROUNDING) - MJ_MINVAL {
-            Some(format!(
-                "principal moments {:.3e} + {:.3e} < {:.3e} kg·m² (A + B ≥ C fails: no rigid body has them)",
-                a, b, c
-            ))
+        let why = if let Some(why) = moments_rejected(l.moments, l.full, balance) {
+            Some(why)
         } else {
             let moving =
                 parent_joint(name).is_some_and(|j| !matches!(j.get("type"), Some("fixed") | None));
@@ -107,13 +98,77 @@ pub fn rejected(map: &SourceMap, tree: &XNode) -> Vec<String> {
     out
 }
 
+/// Why MuJoCo rejects principal moments `[a, b, c]` (ascending): one not positive when `full`
+/// (a tensor MuJoCo diagonalises) or negative beyond rounding, or A + B < C unless `balance`.
+fn moments_rejected([a, b, c]: [f64; 3], full: bool, balance: bool) -> Option<String> {
+    if (full && a <= 0.0) || a < -MJ_MINVAL.max(ROUNDING * c.abs()) {
+        Some(format!(
+            "principal moments {:.3e}, {:.3e}, {:.3e} kg·m² (not all positive: not an inertia)",
+            a, b, c
+        ))
+    } else if !balance && a + b < c * (1.0 - ROUNDING) - MJ_MINVAL {
+        Some(format!(
+            "principal moments {:.3e} + {:.3e} < {:.3e} kg·m² (A + B ≥ C fails: no rigid body has them)",
+            a, b, c
+        ))
+    } else {
+        None
+    }
+}
+
+/// Each MJCF body of `tree` whose `<inertial>` MuJoCo rejects, as "body `name` (line N): why":
+/// its `diaginertia` or `fullinertia` (principal moments: the written diagonal, or the full
+/// tensor's eigenvalues) with a negative moment (not positive for `fullinertia`, which MuJoCo
+/// diagonalises), or moments breaking A + B ≥ C unless `<compiler balanceinertia="true">`.
+pub fn mjcf_rejected(map: &SourceMap, tree: &XNode) -> Vec<String> {
+    let mut balance = false;
+    tree.walk(&mut |n: &XNode| {
+        if n.tag == "compiler" && n.get("balanceinertia") == Some("true") {
+            balance = true;
+        }
+    });
+    let nums = |v: &str| -> Vec<f64> {
+        v.split_whitespace().filter_map(|x| x.parse::<f64>().ok()).collect()
+    };
+    let mut out = Vec::new();
+    tree.walk(&mut |n: &XNode| {
+        if n.tag != "body" {
+            return;
+        }
+        let Some(i) = n.children_tagged("inertial").next() else { return };
+        let (moments, full) = if let Some(d) = i.get("diaginertia").map(nums) {
+            if d.len() < 3 {
+                return;
+            }
+            let mut e = [d[0], d[1], d[2]];
+            e.sort_by(f64::total_cmp);
+            (e, false)
+        } else if let Some(f) = i.get("fullinertia").map(nums) {
+            if f.len() < 6 {
+                return;
+            }
+            let m = Matrix3::new(f[0], f[3], f[4], f[3], f[1], f[5], f[4], f[5], f[2]);
+            let mut e: Vec<f64> = SymmetricEigen::new(m).eigenvalues.iter().copied().collect();
+            e.sort_by(f64::total_cmp);
+            ([e[0], e[1], e[2]], true)
+        } else {
+            return;
+        };
+        if let Some(why) = moments_rejected(moments, full, balance) {
+            let line = map.file(i.loc.file).line_col(i.loc.start).0;
+            out.push(format!("body `{}` (line {line}): {why}", n.name().unwrap_or("")));
+        }
+    });
+    out
+}
+
 /// `msg` with the list of rejected inertials appended, when MuJoCo's error is about an inertia
-/// and the file states more than the one it names.
-pub fn explain(map: &SourceMap, tree: &XNode, msg: String) -> String {
+/// and the file states more than the one it names (`urdf`: a URDF `<robot>`, else an MJCF).
+pub fn explain(map: &SourceMap, tree: &XNode, msg: String, urdf: bool) -> String {
     if !msg.contains("inertia") {
         return msg;
     }
-    let all = rejected(map, tree);
+    let all = if urdf { rejected(map, tree) } else { mjcf_rejected(map, tree) };
     if all.len() < 2 {
         return msg;
     }

@@ -6,6 +6,7 @@ mod mirror_axes;
 mod mirror_com;
 mod mirror_limits;
 mod mirror_places;
+mod mirror_tensor;
 pub mod oversized_collision;
 pub mod oversized_weight;
 pub mod root_frame;

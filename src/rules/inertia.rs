@@ -8,6 +8,7 @@ pub mod inertial_overridden;
 pub mod isotropic_base_inertia;
 pub mod isotropic_link_inertia;
 pub mod legged_urdf_armature;
+mod light_placeholder;
 pub mod mass_budget;
 pub mod parallel_ankle_armature;
 pub mod passive_joint_armature;

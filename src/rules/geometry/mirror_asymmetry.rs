@@ -12,6 +12,7 @@ use super::mirror_axes::{axis_angle, axis_cos, axis_finding};
 use super::mirror_com::{com_differs, reference_pose};
 use super::mirror_limits::limits_differ;
 use super::mirror_places::geoms_misplaced;
+use super::mirror_tensor::tensor_differs;
 
 /// Size difference tolerated between mirrored collision geoms whatever their size, m: the
 /// 0.1–0.2 mm export noise of mesh-derived sizes, with a margin.
@@ -58,7 +59,15 @@ declare_rule! {
     /// agree and whose `<inertial>` the file states — moments MuJoCo computes from the geoms
     /// follow the collision geometry, compared on its own; when the masses differ too, the
     /// moments are in the mass finding's note, so every differing quantity of a pair is
-    /// reported whatever the tolerances), and the types, sizes and places of
+    /// reported whatever the tolerances), the stated inertia tensors when masses, moments and
+    /// centres of mass agree (sorted moments cannot see two principal axes swapped on one side,
+    /// DEEP Robotics Lite3's `FR_HIP` diagonal written `Izz Iyy Ixx` against its mirror's
+    /// `Ixx Iyy Izz`: at the reference pose, in the world frame, the right tensor with the left's
+    /// moments on its own axes, reflected through the pair's mirror plane, M·I·M, must lie within
+    /// `tensor_tolerance` of the left's, relative Frobenius difference — products of inertia
+    /// copied without negating the lateral ones are reported too; one part mounted turned on
+    /// both sides, the same tensor and centre of mass in each body's own frame, passes), and
+    /// the types, sizes and places of
     /// each body pair's collision geoms (which covers the feet): when they match in type and
     /// size, each right geom's place on its body (its centre's offset from the body's origin at
     /// qpos0), reflected across the pair's mirror plane, must lie within `place_tolerance` (or
@@ -113,6 +122,7 @@ declare_rule! {
             opt("com_fraction", 0.25, "fraction", Domain::NON_NEGATIVE, "the same distance as a share of the centres of mass' offsets from their body origins: a centre of mass 0.1 m off its joint is also tolerated 25 mm"),
             opt("pose_tolerance", 5.0, "deg", Domain::NON_NEGATIVE, "angle within which a mirror pair's centre of mass and carried bodies must share one turn about the pair's hinge, and beyond which that turn counts as a differing joint zero (CAD exports place mirrored parts a fraction of a degree apart)"),
             opt("axis_tolerance", 1.0, "deg", Domain::NON_NEGATIVE, "angle tolerated between a joint's axis and its mirror's reflected across the pair's mirror plane: CAD exports of mirrored halves place axes within hundredths of a degree, a hand-edited or rounded axis or frame lies degrees off"),
+            opt("tensor_tolerance", 0.07, "ratio", Domain::NON_NEGATIVE, "relative Frobenius difference tolerated between a mirror pair's inertia tensors in the world frame at the reference pose, the right one reflected through the mirror plane and given the left's principal moments (‖I_left − M·I_right·M‖ / ‖I‖; it bounds the moment error about any axis): the CAD halves of a mirrored part turn their axes a few degrees where two moments lie close (4.5 % measured on a public humanoid's forearm), while a swap of two principal axes whose moments differ by 8.6 % or more of the largest always exceeds it (√2·Δ ≥ 0.07·√3·I_max)"),
             opt("inertia_tolerance", 0.05, "ratio", Domain::NON_NEGATIVE, "relative difference tolerated between mirrored bodies' principal moments of inertia (CAD exports of the two halves of a mirrored part differ by 1–2 %)"),
         ],
     }
@@ -605,9 +615,14 @@ impl Rule for MirrorAsymmetry {
                 out.push(f);
             } else if let Some(f) = inertia_differs(cx, &p, itol) {
                 out.push(f);
-            }
-            if let Some(f) = com_differs(cx, &p, &pose) {
+            } else if let Some(f) = com_differs(cx, &p, &pose) {
                 out.push(f);
+            } else if let Some(f) = tensor_differs(cx, &p, &pose) {
+                // Masses, moments and centres of mass agree: the axes alone can differ.
+                out.push(f);
+            }
+            if differs(a.mass, b.mass, tol) || moments_differ(cx, &p, itol).is_some() {
+                out.extend(com_differs(cx, &p, &pose));
             }
             let (sa, sb) = (geom_signature(robot, l), geom_signature(robot, rr));
             if !same_geoms(robot, &colliders(robot, l), &colliders(robot, rr), gtol, SIZE_NOISE) {

@@ -18,6 +18,8 @@ pub(super) struct Pose {
     pub(super) xipos: Vec<[f64; 3]>,
     /// Row-major body orientation.
     pub(super) xmat: Vec<[f64; 9]>,
+    /// Row-major orientation of each body's principal axes of inertia (its columns).
+    pub(super) ximat: Vec<[f64; 9]>,
     pub(super) geom_xpos: Vec<[f64; 3]>,
     pub(super) xanchor: Vec<[f64; 3]>,
     pub(super) xaxis: Vec<[f64; 3]>,
@@ -30,6 +32,7 @@ pub(super) fn reference_pose(robot: &Robot) -> Pose {
         xpos: d.xpos().to_vec(),
         xipos: d.xipos().to_vec(),
         xmat: d.xmat().to_vec(),
+        ximat: d.ximat().to_vec(),
         geom_xpos: d.geom_xpos().to_vec(),
         xanchor: d.xanchor().to_vec(),
         xaxis: d.xaxis().to_vec(),
@@ -144,13 +147,8 @@ pub(super) fn com_differs(cx: &Context, p: &Pair, pose: &Option<Pose>) -> Option
     if let Some(t) = turned_pair(robot, pose, p.left.0, p.right.0, plane, allowed, tol) {
         return Some(turned(cx, p, &t, tol));
     }
-    let parent = |b: usize| robot.bodies.get(b).map_or(0, |x| x.parent);
-    let (mut a, mut b) = (parent(p.left.0), parent(p.right.0));
-    while a != b && a != 0 && b != 0 {
-        if turned_pair(robot, pose, a, b, plane, allowed, tol).is_some() {
-            return None;
-        }
-        (a, b) = (parent(a), parent(b));
+    if turned_above(robot, pose, p, plane, allowed, tol) {
+        return None;
     }
     // One part mounted on both sides (a gripper turned 180°) is no mirror image: its centre of
     // mass follows the rotation between the two body frames. Unless one side's mesh is the
@@ -223,6 +221,49 @@ pub(super) fn com_differs(cx: &Context, p: &Pair, pose: &Option<Pose>) -> Option
             .expected(allowed, "m")
             .with("com_mismatch", miss),
     )
+}
+
+/// Whether a pair of ancestors of pair `p` (walking up both bodies' parents while they differ)
+/// is one part turned about its hinge ([`turned_pair`]): the bodies below inherit the turn.
+fn turned_above(
+    robot: &Robot,
+    pose: &Pose,
+    p: &Pair,
+    plane: Plane,
+    allowed: f64,
+    tol: f64,
+) -> bool {
+    let parent = |b: usize| robot.bodies.get(b).map_or(0, |x| x.parent);
+    let (mut a, mut b) = (parent(p.left.0), parent(p.right.0));
+    while a != b && a != 0 && b != 0 {
+        if turned_pair(robot, pose, a, b, plane, allowed, tol).is_some() {
+            return true;
+        }
+        (a, b) = (parent(a), parent(b));
+    }
+    false
+}
+
+/// Whether mirror pair `p` is posed as mirror images at the reference pose as far as its
+/// centres of mass tell: neither it nor a pair of its ancestors is one part turned about its
+/// hinge (joints whose zeros differ, reported by [`com_differs`]), judged with the same
+/// distance allowance as [`com_differs`].
+pub(super) fn posed_mirrored(cx: &Context, p: &Pair, pose: &Pose) -> bool {
+    let robot = cx.robot;
+    let Some((n, off)) = mirror_plane(robot, pose, p) else { return false };
+    let (Some(ol), Some(or), Some(cl), Some(cr)) = (
+        pose.xpos.get(p.left.0),
+        pose.xpos.get(p.right.0),
+        pose.xipos.get(p.left.0),
+        pose.xipos.get(p.right.0),
+    ) else {
+        return false;
+    };
+    let reach = (v_norm(v_sub(*cl, *ol)) + v_norm(v_sub(*cr, *or))) / 2.0;
+    let allowed = cx.opt("com_tolerance").max(cx.opt("com_fraction") * reach);
+    let (plane, tol) = (Plane { n, off }, cx.opt("pose_tolerance"));
+    turned_pair(robot, pose, p.left.0, p.right.0, plane, allowed, tol).is_none()
+        && !turned_above(robot, pose, p, plane, allowed, tol)
 }
 
 /// A mirror plane: unit normal `n`, at `off` along it from the origin.

@@ -26,17 +26,31 @@ declare_rule! {
     /// 1e-5 kg·m² on every axis (0.1 m) fused into a 0.108 kg frame of 0.046 m. The lighter
     /// links fixed to one link are reported together.
     ///
+    /// A link (URDF, fused or moving) or a body (MJCF, not fixed to the world) whose stated mass
+    /// is less than its own shapes could weigh in any material carries a placeholder mass
+    /// (Xiaomi CyberDog2's `head`: 1 g behind a box of 76 × 60 × 40 mm). Each shape's floor is
+    /// the lighter of a solid of `min_density` (the lightest foam) and a closed shell of
+    /// `min_areal_density` (the thinnest cover) of its volume and surface area (primitives from
+    /// their sizes, meshes from their compiled faces); the link's floor is its largest shape's,
+    /// over the colliding shapes and over the drawn ones, whichever set gives the lower floor.
+    /// An honest hollow cover (a 0.12 kg box of 0.22 m²) or a foam bumper passes; links
+    /// without shapes (fused frames, an IMU) and massless links are not judged, nor shapes
+    /// larger than the robot's joint span (a length in millimetres, `mesh-scale`'s and
+    /// `oversized-collision-primitive`'s) or models with fewer than two joints.
+    ///
     /// ## Why is this bad?
     /// A moment larger than the part's geometry allows is a placeholder or a unit slip (a
     /// `diaginertia="0.001 0.001 0.001"` on a 26 g finger is a 190 mm radius of gyration on a
     /// part a few centimetres long). The joints that move the part then accelerate far slower
     /// in simulation than on the hardware — a finger or wrist that feels many times heavier
-    /// — so gains, gripper timing and contact forces learned on it do not transfer. MuJoCo XML
-    /// reference, `body/inertial`.
+    /// — so gains, gripper timing and contact forces learned on it do not transfer. A mass
+    /// lighter than the part's shape is the reverse slip: the part swings, and loads the joints
+    /// carrying it, as if it were not there. MuJoCo XML reference, `body/inertial`.
     ///
     /// ## How it is confirmed
     /// Static: compiled `body_mass`, `body_inertia`, `body_ipos` and the body's geoms'
-    /// positions and bounding radii. The bound is geometry, not a prediction a simulation could
+    /// positions and bounding radii; for the light case, the stated `<inertial>` mass and the
+    /// shapes' volumes and areas. The bound is geometry, not a prediction a simulation could
     /// refute.
     ///
     /// ## How to fix
@@ -49,6 +63,8 @@ declare_rule! {
         probe: None,
         options: [
             opt("max_mass_share", 0.1, "fraction", Domain::NON_NEGATIVE, "largest mass of a link fixed to another, as a share of the other's, judged as a part mounted on it (a sensor, a board, a camera) for the fused case"),
+            opt("min_density", 15.0, "kg/m³", Domain::POSITIVE, "the lightest solid a robot part is made of (expanded polystyrene foam, 15–30 kg/m³): a link lighter than its largest shape filled with it, and than that shape's shell, carries a placeholder mass"),
+            opt("min_areal_density", 0.3, "kg/m²", Domain::POSITIVE, "the lightest closed shell a robot part is made of (0.3 mm of plastic at 1000 kg/m³; printed and moulded covers are 1–3 mm): a hollow part weighs at least its shape's surface area times this"),
             opt("min_share", 0.05, "fraction", Domain::NON_NEGATIVE, "least share of a link's smallest principal moment that a lighter, more spread-out link fixed to it must add to be reported as a fused placeholder"),
         ],
     }
@@ -66,6 +82,11 @@ impl Rule for InertiaExceedsGeometry {
             cx,
             cx.opt("min_share"),
             cx.opt("max_mass_share"),
+        ));
+        out.extend(super::light_placeholder::light_placeholders(
+            cx,
+            cx.opt("min_density"),
+            cx.opt("min_areal_density"),
         ));
         for b in robot.bodies.iter().filter(|b| b.id != 0 && b.weld != 0 && b.mass > 0.0) {
             if b.weld != b.id {
