@@ -404,12 +404,17 @@ pub fn analyse(
         -l / (std::f64::consts::PI.powi(2) + l * l).sqrt()
     };
     if loop_overshoot > floor {
-        zeta = Some(zeta_of(loop_overshoot));
+        // OS = exp(−πζ/√(1−ζ²)) reaches 100 % at ζ = 0: a first swing past that (dry friction
+        // shifting the equilibrium it is measured from, or a loop that gains energy) has no
+        // damping ratio ≥ 0, and 0 is the most it tells (`zeta_text` says which).
+        zeta = Some(zeta_of(loop_overshoot).max(0.0));
     }
+    // The ω_n estimate below keeps the formula's ζ (negative past 100 %), as it always has.
+    let zeta_raw = (loop_overshoot > floor).then(|| zeta_of(loop_overshoot));
     if overshoot > floor {
         // ζ for the damped period: the loop's, else (a response too distorted for a first
         // swing) the settled level's overshoot.
-        let z = zeta.unwrap_or_else(|| zeta_of(overshoot));
+        let z = zeta_raw.unwrap_or_else(|| zeta_of(overshoot));
         if peaks.len() >= 2 && peaks[1].1 > floor * 2.0 {
             let dl = (peaks[0].1 / peaks[1].1).ln();
             zeta_decrement = Some(dl / (4.0 * std::f64::consts::PI.powi(2) + dl * dl).sqrt());
@@ -442,13 +447,42 @@ pub fn analyse(
     }
 }
 
+/// The overshoot of an undamped second-order loop (ζ = 0), as a fraction of the step: 100 %.
+/// A damped loop's first swing stays under it.
+pub const UNDAMPED_OVERSHOOT: f64 = 1.0;
+
 /// What a diverged step response says.
 pub const DIVERGED: &str = "the step response diverged (NaN, MuJoCo warning or unbounded growth)";
 
 impl StepResponse {
-    /// ζ as shown: the number, or "≥ 1 (no overshoot)".
+    /// The first swing overshoots the loop's equilibrium by [`UNDAMPED_OVERSHOOT`] or more: no
+    /// damping ratio ≥ 0 gives that swing, and `zeta` is 0.
+    pub fn past_undamped(&self) -> bool {
+        self.zeta.is_some() && self.loop_overshoot >= UNDAMPED_OVERSHOOT
+    }
+
+    /// ζ as shown: the number, or "≥ 1 (no overshoot)"; past an undamped loop's overshoot, 0
+    /// with what the peaks then did — decayed (the log decrement's ζ) or grew, or no second peak
+    /// to tell (a growing oscillation: unstable).
     pub fn zeta_text(&self) -> String {
-        self.zeta.map(|z| crate::util::fmt_num(z, 3)).unwrap_or_else(|| "≥ 1 (no overshoot)".into())
+        let n = crate::util::fmt_num;
+        if self.past_undamped() {
+            let os = format!(
+                "0: the first swing overshoots {:.1} %, past the {} % of an undamped loop",
+                100.0 * self.loop_overshoot,
+                n(100.0 * UNDAMPED_OVERSHOOT, 3)
+            );
+            return match self.zeta_decrement {
+                Some(d) if d > 0.0 => {
+                    format!(
+                        "{os}, and the later peaks decay (ζ {} by their log decrement)",
+                        n(d, 3)
+                    )
+                }
+                _ => format!("{os} — a growing oscillation (unstable)"),
+            };
+        }
+        self.zeta.map(|z| n(z, 3)).unwrap_or_else(|| "≥ 1 (no overshoot)".into())
     }
 }
 
@@ -524,6 +558,31 @@ mod tests {
         let pre = r.preconditions();
         let p = pre.list().iter().find(|p| p.name == "decaying").unwrap();
         assert!(!p.met && p.detail.contains("peaks grow"), "{}", p.detail);
+    }
+
+    #[test]
+    fn a_swing_past_the_undamped_overshoot_reports_no_negative_zeta() {
+        // A loop with negative damping (ζ = −0.02): each swing grows, the first overshoots
+        // past 100 %. The equilibrium is the settled level (no friction band).
+        let dt = 0.001;
+        let y = second_order(-0.02, 10.0, dt, 700);
+        let r = analyse(&y, dt, 100.0, 1.0, 700, 0.0, 1.0);
+        assert!(r.loop_overshoot >= UNDAMPED_OVERSHOOT, "{}", r.loop_overshoot);
+        assert_eq!(r.zeta, Some(0.0));
+        assert!(r.zeta_text().starts_with("0: the first swing overshoots"), "{}", r.zeta_text());
+        // Built directly: a first swing of 101 % whose later peaks decay (dry friction shifted
+        // the equilibrium the swing is measured from), and one with no second peak.
+        let mut r = analyse(&second_order(0.1, 10.0, dt, 4000), dt, 100.0, 1.0, 4000, 0.0, 1.0);
+        r.loop_overshoot = 1.01;
+        r.zeta = Some(0.0);
+        r.zeta_decrement = Some(0.084);
+        let t = r.zeta_text();
+        assert!(t.contains("101.0 %") && t.contains("decay (ζ 0.084") && !t.contains('-'), "{t}");
+        r.zeta_decrement = None;
+        assert!(r.zeta_text().ends_with("a growing oscillation (unstable)"), "{}", r.zeta_text());
+        r.loop_overshoot = 0.5;
+        r.zeta = Some(0.2157);
+        assert_eq!(r.zeta_text(), "0.216");
     }
 
     #[test]

@@ -1,5 +1,6 @@
 //! Rules of the `control` group.
 pub mod gains_unstable_for_timestep;
+pub mod keyframe_floor;
 pub mod keyframe_motor_ctrl;
 pub mod keyframe_scan;
 pub mod keyframe_servo_ctrl;

@@ -2,6 +2,7 @@ use crate::declare_rule;
 use crate::finding::{Finding, Severity, Subject};
 use crate::model::mjcf::ElemKind;
 use crate::model::{JointType, Robot};
+use crate::rules::control::keyframe_floor;
 use crate::rules::control::keyframe_scan::keyframes;
 use crate::rules::{Context, Domain, Rule, RuleMeta, opt};
 use crate::util::fmt_num;
@@ -19,7 +20,17 @@ declare_rule! {
     ///   units when joint1 has no range);
     /// - a colliding geom of a body that is not fixed to the world lying entirely under a
     ///   floor plane it can touch (its bounding sphere, `geom_rbound`, below the plane's
-    ///   surface: the base placed at the floor's height, legs and feet in the ground).
+    ///   surface: the base placed at the floor's height, legs and feet in the ground);
+    /// - the floating-base robot (of the free bodies whose subtrees hold two or more hinges or
+    ///   slides, the one with the most actuated joints: not a chair or cabinet of the scene)
+    ///   whose lowest colliding geom lies more than `sink_depth` into the floor plane it
+    ///   touches (a geom's exact lowest point along the plane's normal), or — when no
+    ///   keyframe (or, without one, `qpos0`) brings it within `drop_height` of that plane —
+    ///   more than `drop_height` above it: every reset drops the robot, landing at √(2·g·h).
+    ///   Not judged: a model without a floor plane the robot touches, without gravity, with a
+    ///   body held to the world by a connect or weld equality (a gantry), or with a colliding
+    ///   world geom other than a plane reaching more than `drop_height` above the floor (a
+    ///   platform or stairs it may stand on).
     ///
     /// A settled pose rests a little inside a soft limit or equality: within `tolerance` it is
     /// not reported.
@@ -29,7 +40,9 @@ declare_rule! {
     /// identity, so the base starts in an orientation the file does not state. A joint past its
     /// stop, or off the joint it is coupled to, is kicked back by the limit or equality
     /// constraint at the first step: the robot starts with a jolt the real one never sees, and
-    /// every episode reset to that state begins with it. MuJoCo XML reference,
+    /// every episode reset to that state begins with it. A robot started in the air falls at
+    /// every reset, and one started into the floor is thrown out of it: episodes begin with a
+    /// fall or a kick the real robot never sees. MuJoCo XML reference,
     /// `keyframe/key/qpos` and `equality/joint`.
     ///
     /// ## How it is confirmed
@@ -48,6 +61,8 @@ declare_rule! {
         options: [
             opt("tolerance", 0.02, "fraction of joint range", Domain::FRACTION_BELOW_ONE, "how far past its range, or off its joint equality, a position must be to count"),
             opt("quat_tolerance", 0.01, "", Domain::NON_NEGATIVE, "how far a free or ball joint's quaternion length may be from 1"),
+            opt("drop_height", 0.25, "m", Domain::POSITIVE, "how far above its floor plane a floating-base robot's lowest geom may start: a drop of 0.25 m lands at 2.2 m/s under Earth gravity, a fall rather than a settle"),
+            opt("sink_depth", 0.02, "m", Domain::POSITIVE, "how deep into its floor plane a floating-base robot's lowest geom may start: with MuJoCo's default solref (0.02 s, critically damped) and solimp (0.95) a contact's reference acceleration out of the floor is about 2770 s⁻² × the depth: 5.6 g at 0.02 m, against the millimetres a robot at rest sinks"),
         ],
     }
 }
@@ -98,6 +113,7 @@ impl Rule for KeyframeState {
                 written: None,
             });
         }
+        let mut buried = Vec::new();
         for s in &states {
             let at = |j: usize, msg: String| match s.key {
                 Some(k) => cx.at_attr(ElemKind::Key, k, &s.name, "qpos", msg),
@@ -165,9 +181,9 @@ impl Rule for KeyframeState {
                     _ => {}
                 }
             }
-            if let Some(f) = buried_geoms(cx, s) {
-                out.push(f);
-            }
+            let b = buried_geoms(cx, s);
+            buried.push(b.is_some());
+            out.extend(b);
             for (j1, j2, miss, scale) in equality_misses(robot, s.qpos, qpos0) {
                 if miss.abs() <= tol * scale {
                     continue;
@@ -197,6 +213,18 @@ impl Rule for KeyframeState {
                 );
             }
         }
+        let starts: Vec<keyframe_floor::Start> = states
+            .into_iter()
+            .map(|s| keyframe_floor::Start { key: s.key, name: s.name, label: s.label })
+            .collect();
+        keyframe_floor::check(
+            cx,
+            &starts,
+            &buried,
+            cx.opt("drop_height"),
+            cx.opt("sink_depth"),
+            out,
+        );
     }
 }
 

@@ -128,10 +128,19 @@ impl Claim for Underdamped {
                     &pre,
                     m,
                     format!(
-                        "measured ζ = {zs}{pred}, overshoot {:.1} % on a {} {unit} step{}",
-                        100.0 * r.loop_overshoot,
+                        "measured ζ = {zs}{pred}{} on a {} {unit} step{}",
+                        if r.past_undamped() {
+                            String::new()
+                        } else {
+                            format!(", overshoot {:.1} %", 100.0 * r.loop_overshoot)
+                        },
                         fmt_num(r.step, 3),
-                        if r.frictionloss > 0.0 {
+                        if r.frictionloss > 0.0 && r.past_undamped() {
+                            format!(
+                                " (the swing measured from the equilibrium dry friction shifts it to; {:.1} % past where it stopped)",
+                                100.0 * r.overshoot
+                            )
+                        } else if r.frictionloss > 0.0 {
                             format!(
                                 " (of the equilibrium dry friction shifts it to; {:.1} % past where it stopped)",
                                 100.0 * r.overshoot

@@ -152,6 +152,12 @@ impl Rule for IsotropicBaseInertia {
                 fmt_num(e[2], 3),
                 if ratio.is_finite() { fmt_num(ratio, 2) } else { "∞".into() }
             );
+            let balanced = super::isotropic_link_inertia::balances_inertia(robot);
+            let msg = if balanced {
+                format!("{msg}{}", super::isotropic_link_inertia::BALANCED)
+            } else {
+                msg
+            };
             let eloc = robot.elem_loc(ElemKind::Body, b, name);
             let loc = inertia_loc(robot, name).unwrap_or(eloc);
             let f = cx

@@ -1,7 +1,7 @@
 use crate::declare_rule;
 use crate::finding::{Finding, Severity, Subject};
-use crate::model::JointType;
 use crate::model::mjcf::ElemKind;
+use crate::model::{JointType, Robot};
 use crate::rules::inertia::isotropic_base_inertia::{extents_of, inertia_loc};
 use crate::rules::{Context, Domain, Rule, RuleMeta, opt};
 use crate::util::fmt_num;
@@ -96,6 +96,19 @@ impl Rule for IsotropicLinkInertia {
     }
 }
 
+/// The model compiles with `balanceinertia="true"` (the last `<compiler>` that sets it: the
+/// MJCF's own, or the one in a URDF's `<mujoco>` block). MuJoCo then replaces every inertia
+/// that breaks the triangle inequality (A + B ≥ C) by the mean of its moments about every axis:
+/// an isotropic inertia the compiler made, from a tensor no body can have.
+pub fn balances_inertia(robot: &Robot) -> bool {
+    let top = robot.tree.children_tagged("compiler");
+    let urdf = robot.tree.children_tagged("mujoco").flat_map(|m| m.children_tagged("compiler"));
+    top.chain(urdf).filter_map(|c| c.get("balanceinertia")).last().map(str::trim) == Some("true")
+}
+
+/// The words a finding of isotropic inertia adds under `balanceinertia="true"`.
+pub const BALANCED: &str = "; the model compiles with `balanceinertia=\"true\"`, which makes any tensor breaking A + B ≥ C isotropic (the mean of its moments): where the stated tensor breaks it, the isotropy is the compiler's and the tensor written is one no body can have";
+
 fn report(cx: &Context, moment: f64, links: &[Placeholder]) -> Finding {
     let robot = cx.robot;
     let (b0, e, ratio) = links[0];
@@ -132,6 +145,8 @@ fn report(cx: &Context, moment: f64, links: &[Placeholder]) -> Finding {
             names.join(", ")
         )
     };
+    let balanced = balances_inertia(robot);
+    let msg = if balanced { format!("{msg}{BALANCED}") } else { msg };
     let eloc = robot.elem_loc(ElemKind::Body, b0, name);
     let loc = inertia_loc(robot, name).unwrap_or(eloc);
     let mut f = cx
@@ -146,7 +161,11 @@ fn report(cx: &Context, moment: f64, links: &[Placeholder]) -> Finding {
         );
     }
     f = f.note("extents from the link's geoms (as compiled), its origin and the points where its child bodies attach; a measured inertia of a long link has moments across it several times the one along it")
-        .help("use the link's inertia from CAD or the manufacturer's URDF (with quat or fullinertia), or drop <inertial> so MuJoCo computes it from geoms of the link's shape")
+        .help(if balanced {
+            "state a physical tensor (A + B ≥ C: the link's inertia from CAD, with quat or fullinertia) so that balanceinertia leaves it as written, or drop <inertial> so MuJoCo computes it from geoms of the link's shape"
+        } else {
+            "use the link's inertia from CAD or the manufacturer's URDF (with quat or fullinertia), or drop <inertial> so MuJoCo computes it from geoms of the link's shape"
+        })
         .subject(Subject::Body(b0))
         .measured(1.0, "ratio")
         .with("links", links.len() as f64);
