@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::lint::{findings, measured, message, of};
+use common::lint::{findings, measured, message, of, real_robot_files};
 
 fn none_of(file: &str, rule: &str) {
     let all = findings(file);
@@ -56,16 +56,7 @@ fn a_root_frame_off_rep103_is_reported_with_its_axes() {
 /// The shared real models and the shipped model are x-forward, y-left, z-up.
 #[test]
 fn x_forward_robots_are_not_reported() {
-    let mut files = vec!["models/asimov.xml".to_string()];
-    for m in ["booster_t1/t1.xml", "unitree_h1/h1.xml"] {
-        let p = format!("../shared/data/models/{m}");
-        if std::path::Path::new(&p).exists() {
-            files.push(p);
-        } else {
-            eprintln!("skipped {p}: ../shared absent");
-        }
-    }
-    for f in files {
+    for f in real_robot_files() {
         none_of(&f, "root-frame-convention");
     }
 }

@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::lint::{findings, measured, message, of};
+use common::lint::{findings, measured, message, of, real_robot_files};
 
 fn none_of(file: &str, rule: &str, what: &str) {
     let all = findings(file);
@@ -75,16 +75,7 @@ fn mirrored_inertia_tensors_are_not_reported() {
 /// The shared real models and the shipped model are mirrored to CAD precision.
 #[test]
 fn real_mirrored_robots_have_no_tensor_finding() {
-    let mut files = vec!["models/asimov.xml".to_string()];
-    for m in ["booster_t1/t1.xml", "unitree_h1/h1.xml"] {
-        let p = format!("../shared/data/models/{m}");
-        if std::path::Path::new(&p).exists() {
-            files.push(p);
-        } else {
-            eprintln!("skipped {p}: ../shared absent");
-        }
-    }
-    for f in files {
+    for f in real_robot_files() {
         none_of(&f, "mirror-asymmetry", "inertia tensor");
     }
 }
@@ -155,16 +146,7 @@ fn light_parts_modelled_honestly_are_not_reported() {
     ] {
         none_of(f, "inertia-exceeds-geometry", " weighs ");
     }
-    let mut files = vec!["models/asimov.xml".to_string()];
-    for m in ["booster_t1/t1.xml", "unitree_h1/h1.xml"] {
-        let p = format!("../shared/data/models/{m}");
-        if std::path::Path::new(&p).exists() {
-            files.push(p);
-        } else {
-            eprintln!("skipped {p}: ../shared absent");
-        }
-    }
-    for f in files {
+    for f in real_robot_files() {
         none_of(&f, "inertia-exceeds-geometry", " weighs ");
     }
 }

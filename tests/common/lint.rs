@@ -28,3 +28,18 @@ pub fn message(f: &serde_json::Value) -> &str {
 pub fn measured(f: &serde_json::Value) -> f64 {
     f["measured"]["value"].as_f64().unwrap_or(f64::NAN)
 }
+
+/// `models/asimov.xml` and the shared real robots (Booster T1, Unitree H1) when `../shared` is
+/// there (each absent one is named on stderr): the robot files a class must not fire on.
+pub fn real_robot_files() -> Vec<String> {
+    let mut files = vec!["models/asimov.xml".to_string()];
+    for m in ["booster_t1/t1.xml", "unitree_h1/h1.xml"] {
+        let p = format!("../shared/data/models/{m}");
+        if std::path::Path::new(&p).exists() {
+            files.push(p);
+        } else {
+            eprintln!("skipped {p}: ../shared absent");
+        }
+    }
+    files
+}
