@@ -32,7 +32,7 @@ struct Part {
 
 /// Volume, area and largest extent of a compiled mesh (its faces, in the mesh's compiled
 /// scale; the extent along its principal axes).
-fn mesh_measure(robot: &Robot, mesh: usize) -> Option<(f64, f64, f64)> {
+pub(super) fn mesh_measure(robot: &Robot, mesh: usize) -> Option<(f64, f64, f64)> {
     let m = &robot.mj;
     let vadr = usize::try_from(*m.mesh_vertadr().get(mesh)?).ok()?;
     let fadr = usize::try_from(*m.mesh_faceadr().get(mesh)?).ok()?;

@@ -61,25 +61,10 @@ fn compiler(tree: &XNode, attr: &str) -> Option<String> {
         .map(|s| s.trim().to_string())
 }
 
-/// Volume of a compiled mesh (m³): the divergence theorem over its faces.
+/// Volume of a compiled mesh (m³): the divergence theorem over its faces
+/// (`light_placeholder::mesh_measure`, which also gives its area and extent).
 fn mesh_volume(robot: &Robot, mesh: usize) -> Option<f64> {
-    let m = &robot.mj;
-    let vadr = usize::try_from(*m.mesh_vertadr().get(mesh)?).ok()?;
-    let fadr = usize::try_from(*m.mesh_faceadr().get(mesh)?).ok()?;
-    let fnum = usize::try_from(*m.mesh_facenum().get(mesh)?).ok()?;
-    let (verts, faces) = (m.mesh_vert(), m.mesh_face());
-    let mut v6 = 0.0;
-    for f in faces.get(fadr..fadr + fnum)? {
-        let p = |k: usize| -> Option<[f64; 3]> {
-            let i = vadr + usize::try_from(f[k]).ok()?;
-            verts.get(i).map(|v| v.map(f64::from))
-        };
-        let (a, b, c) = (p(0)?, p(1)?, p(2)?);
-        v6 += a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
-            + a[2] * (b[0] * c[1] - b[1] * c[0]);
-    }
-    let v = (v6 / 6.0).abs();
-    (v.is_finite() && v > 0.0).then_some(v)
+    super::light_placeholder::mesh_measure(robot, mesh).map(|(v, _, _)| v)
 }
 
 /// A geom's weight in the body's mass: `Mass(m)` for a written mass, `Density(d)` otherwise
