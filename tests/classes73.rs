@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::lint::{findings, measured, message, of, real_robot_files};
+use common::lint::{findings, load_error, measured, message, of, real_robot_files};
 
 fn none_of(file: &str, rule: &str, what: &str) {
     let all = findings(file);
@@ -157,15 +157,7 @@ fn light_parts_modelled_honestly_are_not_reported() {
 /// body's full tensor) nor the toe (A + B = C, a thin rod).
 #[test]
 fn mjcf_load_error_lists_every_rejected_inertia() {
-    let input = modellint::lint::LintInput {
-        model: "fixtures/broken/mjcf_inertia_many_rejected.xml".into(),
-        spec: None,
-        config: None,
-        select: vec![],
-        ignore: vec![],
-    };
-    let Err(e) = modellint::lint::load(&input) else { panic!("the fixture must not load") };
-    let m = e.to_string();
+    let m = load_error("fixtures/broken/mjcf_inertia_many_rejected.xml");
     for want in [
         "the file states 3 inertials it rejects",
         "body `thigh` (line 12): principal moments -3.000e-2, 5.000e-3, 3.000e-2 kg·m² (not all positive",

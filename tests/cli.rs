@@ -1,5 +1,8 @@
 //! End-to-end CLI behaviour: exit codes, precise errors on bad input, output formats.
 
+mod common;
+
+use common::lint::load_error;
 use std::process::Command;
 
 fn modellint(args: &[&str]) -> (i32, String, String) {
@@ -891,15 +894,7 @@ fn version_names_the_commit() {
 /// and no inertia), and not the foot whose zero inertia the fixed sole makes up for.
 #[test]
 fn urdf_load_error_lists_every_rejected_inertia() {
-    let input = modellint::lint::LintInput {
-        model: "fixtures/broken/urdf_inertia_many_rejected.urdf".into(),
-        spec: None,
-        config: None,
-        select: vec![],
-        ignore: vec![],
-    };
-    let Err(e) = modellint::lint::load(&input) else { panic!("the fixture must not load") };
-    let m = e.to_string();
+    let m = load_error("fixtures/broken/urdf_inertia_many_rejected.urdf");
     for want in [
         "the file states 3 inertials it rejects",
         "link `thigh` (line 13): principal moments -",
@@ -910,10 +905,6 @@ fn urdf_load_error_lists_every_rejected_inertia() {
     }
     assert!(!m.contains("link `foot`"), "the foot's fused sole carries inertia:\n{m}");
     // One rejected inertia: MuJoCo's own message, no list.
-    let one = modellint::lint::LintInput {
-        model: "fixtures/broken/urdf_inertia_not_positive.urdf".into(),
-        ..input
-    };
-    let Err(e) = modellint::lint::load(&one) else { panic!("the fixture must not load") };
-    assert!(!e.to_string().contains("inertials it rejects"), "{e}");
+    let one = load_error("fixtures/broken/urdf_inertia_not_positive.urdf");
+    assert!(!one.contains("inertials it rejects"), "{one}");
 }

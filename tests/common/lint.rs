@@ -43,3 +43,18 @@ pub fn real_robot_files() -> Vec<String> {
     }
     files
 }
+
+/// The text of the load error `modellint::lint::load` gives for `model` (panics if it loads).
+pub fn load_error(model: &str) -> String {
+    let input = modellint::lint::LintInput {
+        model: model.into(),
+        spec: None,
+        config: None,
+        select: vec![],
+        ignore: vec![],
+    };
+    match modellint::lint::load(&input) {
+        Err(e) => e.to_string(),
+        Ok(_) => panic!("{model} must not load"),
+    }
+}
