@@ -20,7 +20,9 @@ declare_rule! {
     /// contradicts the same joint's `actuatorfrcrange` by more than `tolerance` (no spec needed:
     /// e.g. ±139 N·m of command on a joint clamped at ±60), an actuator's `forcerange` (× gear)
     /// that does (MuJoCo applies both, so one of them never acts: e.g. servos bounded at ±72 N·m
-    /// on joints clamped at ±10), two or more actuators on one joint (a position, a velocity and
+    /// on joints clamped at ±10) — an actuator bound below the joint's clamp by no more than
+    /// `derating` (±30 N·m of command on a joint clamped at ±32.4: 7.4 % under it) is a command
+    /// held under the motor's peak on purpose and is not reported; two or more actuators on one joint (a position, a velocity and
     /// a torque mode of one motor) whose force bounds at the joint differ by more than
     /// `tolerance` while no `actuatorfrcrange` bounds their sum (no spec needed: they cannot all
     /// be the motor's peak), and limits that differ from the spec's motor
@@ -48,7 +50,10 @@ declare_rule! {
         group: "limits",
         level: Severity::Warning,
         probe: None,
-        options: [opt("tolerance", 0.05, "fraction", Domain::NON_NEGATIVE, "allowed relative difference between two statements of one motor's force limit: the model's and the spec's peak_torque, or two actuators of one joint")],
+        options: [
+            opt("tolerance", 0.05, "fraction", Domain::NON_NEGATIVE, "allowed relative difference between two statements of one motor's force limit: the model's and the spec's peak_torque, or two actuators of one joint"),
+            opt("derating", 0.2, "fraction", Domain::FRACTION_BELOW_ONE, "largest fraction by which an actuator's own bound (a motor's ctrlrange × gear, a forcerange × gear) may sit below its joint's actuatorfrcrange and be taken as a command held under the motor's peak on purpose (a derating margin), not a contradiction"),
+        ],
     }
 }
 
@@ -384,6 +389,13 @@ fn sole_actuator_and_joint_limit<'a>(
     Some((acts[0], rng[2 * j.id].abs().max(rng[2 * j.id + 1].abs())))
 }
 
+/// An actuator's own bound `act` under its joint's clamp `joint` by at most the `derating`
+/// fraction: a command held below the motor's peak on purpose (both are the same motor, the
+/// actuator's the tighter by a margin), not two statements of its peak that disagree.
+fn derated(cx: &Context, act: f64, joint: f64) -> bool {
+    act < joint && act >= (1.0 - cx.opt("derating")) * joint
+}
+
 /// A `<motor>`'s torque command range that disagrees with the joint's `actuatorfrcrange`.
 fn ctrl_contradicts_joint_limit(
     cx: &Context,
@@ -398,7 +410,7 @@ fn ctrl_contradicts_joint_limit(
         return None;
     }
     let ml = (a.gear * a.gainprm[0]).abs() * a.ctrlrange[0].abs().max(a.ctrlrange[1].abs());
-    if !(jl > 0.0 && ml > 0.0) || (ml - jl).abs() <= tol * jl.max(ml) {
+    if !(jl > 0.0 && ml > 0.0) || (ml - jl).abs() <= tol * jl.max(ml) || derated(cx, ml, jl) {
         return None;
     }
     let above = ml > jl;
@@ -526,7 +538,7 @@ fn force_contradicts_joint_limit(
     if !(jl > 0.0 && fl > 0.0 && jl.is_finite() && fl.is_finite()) {
         return None;
     }
-    if (fl - jl).abs() <= tol * jl.max(fl) {
+    if (fl - jl).abs() <= tol * jl.max(fl) || derated(cx, fl, jl) {
         return None;
     }
     let (act, joint) = (fl.min(jl), fl.max(jl));
