@@ -369,6 +369,7 @@ pub fn registry() -> Vec<&'static dyn Rule> {
         &mapping::urdf_mjcf_drift::UrdfMjcfDrift,
         &limits::ctrlrange_in_degrees::CtrlrangeInDegrees,
         &mapping::sensor_quantity::SensorQuantity,
+        &mapping::touch_sensor_site::TouchSensorSite,
     ]
 }
 
