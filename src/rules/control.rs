@@ -1,4 +1,5 @@
 //! Rules of the `control` group.
+pub mod drive_friction_mismatch;
 pub mod gains_unstable_for_timestep;
 pub mod keyframe_floor;
 pub mod keyframe_motor_ctrl;

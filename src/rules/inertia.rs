@@ -2,6 +2,7 @@
 pub mod armature_mismatch;
 pub mod copied_inertial;
 pub mod default_density_mass;
+pub mod drive_family;
 mod fused_placeholder;
 pub mod inertia_exceeds_geometry;
 pub mod inertial_overridden;

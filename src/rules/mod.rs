@@ -321,6 +321,7 @@ pub fn registry() -> Vec<&'static dyn Rule> {
         &mapping::missing_actuators::MissingActuators,
         &inertia::armature_mismatch::ArmatureMismatch,
         &inertia::parallel_ankle_armature::ParallelAnkleArmature,
+        &control::drive_friction_mismatch::DriveFrictionMismatch,
         &inertia::zero_armature::ZeroArmature,
         &inertia::transmission_armature::TransmissionWithoutArmature,
         &inertia::legged_urdf_armature::LeggedUrdfArmature,

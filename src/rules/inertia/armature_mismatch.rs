@@ -4,6 +4,7 @@ use crate::declare_rule;
 use crate::finding::{Finding, Severity, Subject};
 use crate::model::describe_parts;
 use crate::model::mjcf::ElemKind;
+use crate::rules::inertia::drive_family::{GROUP_MIN, motor_driven};
 use crate::rules::inertia::parallel_ankle_armature::parallel_issue;
 use crate::rules::limits::effort_limit_mismatch::joint_torque_limit;
 use crate::rules::{Context, Domain, Rule, RuleMeta, opt};
@@ -215,22 +216,14 @@ fn uniform_without_spec(cx: &Context, out: &mut Vec<Finding>) {
     let spread_min = cx.opt("effort_spread");
     // A joint that a joint equality couples to others drives (or follows) a linkage — a
     // gripper's linked fingers —: its armature is the linkage's, not one gear stage's, so it
-    // takes no part in the comparison.
-    const JOINT_EQUALITY: i32 = 2;
-    let coupled = |j: usize| {
-        robot
-            .equalities
-            .iter()
-            .any(|e| e.etype == JOINT_EQUALITY && (e.obj1 == j as i32 || e.obj2 == j as i32))
-    };
+    // takes no part in the comparison (`drive_family::motor_driven`).
     let joints: Vec<&crate::model::Joint> = robot
         .joints
         .iter()
         .filter(|j| {
             j.jtype == crate::model::JointType::Hinge
                 && !robot.actuators_on_joint(j.id).is_empty()
-                && !cx.facts(&j.name).is_some_and(|f| f.passive)
-                && !coupled(j.id)
+                && motor_driven(cx, j)
         })
         .collect();
     if joints.len() < 3 {
@@ -344,11 +337,6 @@ impl<'a> TorqueSpan<'a> {
         })
     }
 }
-
-/// Fewest actuated hinges one armature value must be shared by, in a model whose other joints
-/// have their own values, to be judged as a group: a limb's worth (a shoulder, an elbow and a
-/// wrist), not a pair that happens to match.
-const GROUP_MIN: usize = 3;
 
 /// The copy-paste sign inside a model whose joints do not all share one value: one armature
 /// (exactly equal, > 0, typically the top `<default>`'s that the joints without their own take)
