@@ -53,6 +53,7 @@ mod screen;
 mod simplify;
 mod solve;
 mod start;
+mod start_bound;
 mod told;
 mod trust;
 mod verdict;
