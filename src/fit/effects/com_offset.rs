@@ -116,7 +116,7 @@ mod tests {
     /// judged so; on a link with mass it is not judged so, and it changes the replay.
     #[test]
     fn a_massless_body_is_judged_unmoved_and_replays_unchanged() {
-        let (pendulum, recs) = crate::synth::recorded::pendulum(None, 1, 3);
+        let (pendulum, recs) = crate::synth::recorded::pendulum(None, 2, 3);
         let dir = std::env::temp_dir().join(format!("modellint-massless-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let link = hinge_robot(&dir, "link.xml", "", "", r#"kp="50" kv="2""#);
