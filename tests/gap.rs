@@ -887,6 +887,7 @@ fn a_joint_at_its_noise_floor_does_not_weigh_on_the_shape_scores() {
         q_sim: vec![motion.clone(), drift],
         qd_sim: vec![vec![0.0; n], vec![0.0; n]],
         diverged: None,
+        peaks: Default::default(),
     };
     let r = gap::compute(&[rec], &[ep], &gap::region_from_name, &GapOptions::default());
     let share = |name: &str| r.per_joint.iter().find(|j| j.name == name).unwrap().motion_share;

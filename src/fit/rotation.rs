@@ -190,6 +190,7 @@ mod tests {
             q_sim: vec![vec![0.1, 0.25, 0.3, f64::NAN]],
             qd_sim: vec![vec![0.0; 4]],
             diverged: None,
+            peaks: Default::default(),
         };
         // |0| + |−0.05| + 1 over three counted samples.
         assert!((episode_mae(&rec, &ep, &[]) - 1.05 / 3.0).abs() < 1e-12);

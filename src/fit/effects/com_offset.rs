@@ -88,7 +88,62 @@ impl Effect for ComOffset {
         vec![(0, &ALONG_HELD), (1, &ACROSS_HELD)]
     }
     inertial::body_effect_methods!(tau);
+    /// A body of neither mass nor inertia: its centre of mass moves nothing
+    /// ([`unmoved::massless`]).
+    fn unmoved(
+        &self,
+        m: &MjModel,
+        t: &JointTarget,
+        _start: &[f64],
+        _jv: (usize, f64),
+        _seen: Seen,
+    ) -> Option<Unmoved> {
+        unmoved::massless(m, t).then_some(Unmoved::MasslessBody)
+    }
 }
 
 crate::held_variant!(ALONG_HELD, ComOffset, "com_offset~along", 0, [1, 2]);
 crate::held_variant!(ACROSS_HELD, ComOffset, "com_offset~across", 1, [0, 2]);
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fit::effects::{Applied, hinge_recording, hinge_robot, simulate};
+    use crate::sim2real::replay::ReplayOptions;
+
+    /// A shift of a body's centre of mass changes no replay where the body has neither mass nor
+    /// inertia (the pendulum fixture's arm: a massless capsule carrying the bob's body), and is
+    /// judged so; on a link with mass it is not judged so, and it changes the replay.
+    #[test]
+    fn a_massless_body_is_judged_unmoved_and_replays_unchanged() {
+        let (pendulum, recs) = crate::synth::recorded::pendulum(None, 2, 3);
+        let dir = std::env::temp_dir().join(format!("modellint-massless-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let link = hinge_robot(&dir, "link.xml", "", "", r#"kp="50" kv="2""#);
+        let t: Vec<f64> = (0..200).map(|i| i as f64 * 0.005).collect();
+        let cmd: Vec<f64> = t.iter().map(|&t| if t < 0.1 { 0.0 } else { 0.4 }).collect();
+        let link_recs = vec![hinge_recording(t, cmd)];
+        let o = ReplayOptions::default();
+        let seen = Seen { servo: None, speed: f64::INFINITY };
+        for (robot, joint, recs, massless) in
+            [(&pendulum, "servo", &recs, true), (&link, "j", &link_recs, false)]
+        {
+            let target = JointTarget::of(robot, joint).unwrap();
+            let start = ComOffset.initial(&robot.mj, &target);
+            for (j, v) in [(0, 0.01), (1, -0.01)] {
+                let judged = ComOffset.unmoved(&robot.mj, &target, &start, (j, v), seen);
+                assert_eq!(judged.is_some(), massless, "{joint}");
+                let mut p = start.clone();
+                p[j] = v;
+                let shift = Applied { effect: &ComOffset, joints: vec![joint.into()], params: p };
+                let base = simulate(robot, recs, &[], &o);
+                let moved = simulate(robot, recs, &[shift], &o);
+                let same = base.iter().zip(&moved).all(|(a, b)| {
+                    a.as_ref().unwrap().q_sim == b.as_ref().unwrap().q_sim
+                });
+                assert_eq!(same, massless, "{joint}: parameter {j} at {v}");
+            }
+        }
+        std::fs::remove_dir_all(&dir).ok();
+    }
+}

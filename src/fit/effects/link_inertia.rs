@@ -55,4 +55,16 @@ impl Effect for LinkInertia {
     fn acts_on(&self, t: &JointTarget) -> bool {
         t.body.is_some_and(|b| b.carried)
     }
+    /// A body of neither mass nor inertia: no scale of its inertia is any
+    /// ([`unmoved::massless`]).
+    fn unmoved(
+        &self,
+        m: &MjModel,
+        t: &JointTarget,
+        _start: &[f64],
+        _jv: (usize, f64),
+        _seen: Seen,
+    ) -> Option<Unmoved> {
+        unmoved::massless(m, t).then_some(Unmoved::MasslessBody)
+    }
 }

@@ -28,7 +28,9 @@ pub mod docs;
 pub mod held;
 pub mod inertial;
 mod target;
+pub mod unmoved;
 pub use target::{JointTarget, bounds_for_drive};
+pub use unmoved::{Seen, Unmoved};
 
 /// The effect registry: one `module::Type` per effect, in the fit engine's preference order
 /// (simpler first). Declares each module and [`all`].
@@ -415,6 +417,20 @@ pub trait Effect: Declared + Sync {
     /// loads the knee and the ankle, not the hip), and for the ground contact.
     fn joint_local(&self) -> bool {
         true
+    }
+    /// Why moving parameter `j` from `start` to `v` on `t` leaves a replay of `m` as it was, to
+    /// the last bit, given what the base replay reached on the joint (`seen`); `None` (the
+    /// default) when it may change it. The screen does not replay such a probe ([`unmoved`]).
+    fn unmoved(
+        &self,
+        m: &MjModel,
+        t: &JointTarget,
+        start: &[f64],
+        jv: (usize, f64),
+        seen: Seen,
+    ) -> Option<Unmoved> {
+        let _ = (m, t, start, jv, seen);
+        None
     }
     /// Whether one parameter vector means the same thing on targets `a` and `b`, so that the
     /// two may share it in a group (mirror links, every leg). Default: the effect acts on both

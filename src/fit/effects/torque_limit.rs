@@ -165,6 +165,24 @@ impl Effect for TorqueLimit {
         v.dedup();
         v
     }
+    /// An effort limit `v` above every force the joint's actuators applied at a step of the
+    /// base replay clamps nothing: MuJoCo's `forcerange` clamp leaves each force inside (strictly,
+    /// so no implicit derivative drops a clamped actuator) and this effect's hook adds exactly
+    /// 0 (`raw.clamp(−e, e) − raw.clamp(−e, e)`) while the torque–speed line at its start values
+    /// lies beyond ±v at the joint's peak speed. Only the effort is judged so.
+    fn unmoved(
+        &self,
+        _m: &MjModel,
+        _t: &JointTarget,
+        start: &[f64],
+        (j, v): (usize, f64),
+        seen: Seen,
+    ) -> Option<Unmoved> {
+        let (sat, vl) = (*start.get(1)?, *start.get(2)?);
+        let line_clear = vl > 0.0 && sat * (1.0 - seen.speed / vl) >= v;
+        (j == 0 && line_clear && seen.servo.is_some_and(|f| f < v))
+            .then_some(Unmoved::LimitAboveServoForce)
+    }
     fn write_back(&self, p: &[f64]) -> WriteBack {
         WriteBack::Actuator(vec![("forcerange", p[0])])
     }
@@ -238,6 +256,55 @@ mod tests {
         assert!(diff(&b.q_sim[0], &c.q_sim[0]) > 0.02, "the limit never acted");
         let worst = diff(&a.q_sim[0], &b.q_sim[0]);
         assert!(worst < 1e-9, "torque_limit vs MJCF forcerange differ by {worst} rad");
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    /// A limit above every force the servo applied in the base replay (its `StepPeaks`) is
+    /// judged to change nothing, and replaying it gives the base replay to the last bit; a limit
+    /// below that peak is not so judged, and it changes the replay. Under Euler and (a geared
+    /// servo with a force range of its own) `implicitfast`; under RK4 the peak is not measured
+    /// and nothing is judged; nor with a hook on the joint, nor another parameter.
+    #[test]
+    fn a_limit_above_the_servo_peak_changes_no_replay() {
+        let dir = std::env::temp_dir().join(format!("modellint-tpeak-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let t: Vec<f64> = (0..200).map(|i| i as f64 * 0.005).collect();
+        let cmd: Vec<f64> =
+            t.iter().map(|&t| if t < 0.1 { 0.0 } else if t < 0.5 { 0.4 } else { -0.2 }).collect();
+        let rec = hinge_recording(t, cmd);
+        let (recs, o) = (std::slice::from_ref(&rec), ReplayOptions::default());
+        let cases = [
+            ("euler.xml", "", ""),
+            ("implicit.xml", r#"integrator="implicitfast""#, r#"gear="2" forcelimited="true" forcerange="-30 30""#),
+            ("rk4.xml", r#"integrator="RK4""#, ""),
+        ];
+        for (name, option, force) in cases {
+            let r = hinge_robot(&dir, name, option, "", &format!(r#"kp="50" kv="2" {force}"#));
+            let base = simulate(&r, recs, &[], &o).remove(0).unwrap();
+            let seen = Seen::of([(&base.peaks, 0)], false);
+            let target = JointTarget::of(&r, "j").unwrap();
+            let start = TorqueLimit.initial(&r.mj, &target);
+            let judge = |v: f64, seen: Seen| TorqueLimit.unmoved(&r.mj, &target, &start, (0, v), seen);
+            if name == "rk4.xml" {
+                assert!(base.peaks.servo.is_empty() && seen.servo.is_none(), "{:?}", base.peaks);
+                assert_eq!(judge(1e3, seen), None);
+                continue;
+            }
+            let peak = base.peaks.servo[0];
+            assert!(peak > 5.0 && base.peaks.speed[0] > 0.1, "{name}: {:?}", base.peaks);
+            for (v, unchanged) in [(1.01 * peak, true), (0.9 * peak, false)] {
+                let judged = judge(v, seen);
+                assert_eq!(judged.is_some(), unchanged, "{name}: limit {v} of peak {peak}");
+                let mut p = start.clone();
+                p[0] = v;
+                let limit = Applied { effect: &TorqueLimit, joints: vec!["j".into()], params: p };
+                let ep = simulate(&r, recs, &[limit], &o).remove(0).unwrap();
+                assert_eq!(ep.q_sim == base.q_sim, unchanged, "{name}: limit {v} of peak {peak}");
+            }
+            assert_eq!(judge(2.0 * peak, Seen::of([(&base.peaks, 0)], true)), None, "hooked");
+            let other = TorqueLimit.unmoved(&r.mj, &target, &start, (1, 2.0 * peak), seen);
+            assert_eq!(other, None, "only the effort is judged");
+        }
         std::fs::remove_dir_all(&dir).ok();
     }
 

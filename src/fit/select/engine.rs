@@ -89,6 +89,8 @@ pub struct Engine<'a> {
     /// Recording seconds of the counted simulations by the effects they ran with (their
     /// [`effects_key`], the dataset left out): [`Engine::spent_with`].
     spent: std::sync::Mutex<std::collections::HashMap<String, u64>>,
+    /// The probes the screen did not replay ([`Engine::note_unprobed`]).
+    unprobed: std::sync::Mutex<Vec<super::Unprobed>>,
 }
 
 /// Rollouts and recording seconds by round ([`round_key`]) and phase name.
@@ -233,6 +235,7 @@ impl<'a> Engine<'a> {
             by_round: Default::default(),
             trust: Default::default(),
             spent: Default::default(),
+            unprobed: Default::default(),
             screens: Default::default(),
         }
     }
@@ -361,6 +364,23 @@ impl<'a> Engine<'a> {
         set.push(Applied { effect, joints: group.to_vec(), params: vec![] });
         let spent = self.spent.lock().unwrap_or_else(|e| e.into_inner());
         spent.get(&effects_key(&set)).map_or(0.0, |&us| us as f64 * 1e-6)
+    }
+
+    /// Notes a probe the screen did not replay, at the place last reported ([`Engine::report`]).
+    pub(in crate::fit::select) fn note_unprobed(&self, mut u: super::Unprobed) {
+        if let Some(p) = self.place.lock().unwrap_or_else(|e| e.into_inner()).as_ref() {
+            (u.round, u.phase) = (round_key(p.phase, p.round), p.phase.name());
+        }
+        self.unprobed.lock().unwrap_or_else(|e| e.into_inner()).push(u);
+    }
+
+    /// The probes noted by [`Engine::note_unprobed`], in (round, effect, joint, parameter,
+    /// value) order (the screen notes them from parallel batches).
+    pub(in crate::fit::select) fn unprobed(&self) -> Vec<super::Unprobed> {
+        let mut v = self.unprobed.lock().unwrap_or_else(|e| e.into_inner()).clone();
+        let key = |u: &super::Unprobed| (u.round.clone(), u.effect, u.joint.clone(), u.param);
+        v.sort_by(|a, b| key(a).cmp(&key(b)).then(a.value.total_cmp(&b.value)));
+        v
     }
 
     /// What [`Engine::note_trust`] recorded for `effect` on `group`, if anything.

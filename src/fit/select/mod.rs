@@ -68,7 +68,7 @@ use crate::sim2real::recording::Recording;
 use crate::sim2real::replay::ReplayOptions;
 
 pub use engine::{Engine, Jacobian};
-pub use outcome::{Errors, FitOutcome, Floor, SearchCost, Selected, Tried};
+pub use outcome::{Errors, FitOutcome, Floor, SearchCost, Selected, Tried, Unprobed};
 pub use policy::{Phase, SearchPolicy};
 pub use verdict::beats_beyond_noise;
 
@@ -348,6 +348,7 @@ fn search_cost(engine: &Engine, out: &FitOutcome) -> SearchCost {
             .map(|(k, v)| (k.clone(), (v.1 * 10.0).round() / 10.0))
             .collect(),
         simulated_s_by_round_phase: by_round_phase,
+        unprobed: engine.unprobed(),
     }
 }
 

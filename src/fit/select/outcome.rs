@@ -185,6 +185,44 @@ pub struct SearchCost {
     pub simulated_s_by_round: BTreeMap<String, f64>,
     /// Recording seconds replayed by round (as `simulated_s_by_round`) and, within it, by phase.
     pub simulated_s_by_round_phase: BTreeMap<String, BTreeMap<&'static str, f64>>,
+    /// The screen's probes not replayed because their move provably changes nothing
+    /// ([`Unprobed`]), in (round, effect, joint, parameter, value) order.
+    pub unprobed: Vec<Unprobed>,
+}
+
+/// A probe of the linearised screen not replayed: its move of the parameter provably leaves
+/// the replay as it was ([`Effect::unmoved`]), so its column is the zero column a replay would
+/// give and no probe is kept for it.
+///
+/// [`Effect::unmoved`]: crate::fit::effects::Effect::unmoved
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Unprobed {
+    /// The round (as `simulated_s_by_round`) and the phase whose screen asked for it.
+    pub round: String,
+    pub phase: &'static str,
+    pub effect: &'static str,
+    pub joint: String,
+    /// The parameter moved and the probe's value.
+    pub param: &'static str,
+    pub value: f64,
+    pub why: crate::fit::effects::Unmoved,
+    /// Recording seconds the probe would have replayed (its data's length) [s].
+    pub seconds: f64,
+}
+
+impl Unprobed {
+    /// A probe of `effect`'s `param` at `value` on `joint`, not replayed for `why`; its place
+    /// is set when noted ([`super::Engine::note_unprobed`]).
+    pub fn new(
+        effect: &'static str,
+        joint: String,
+        param: &'static str,
+        value: f64,
+        why: crate::fit::effects::Unmoved,
+        seconds: f64,
+    ) -> Unprobed {
+        Unprobed { round: String::new(), phase: "", effect, joint, param, value, why, seconds }
+    }
 }
 
 impl SearchCost {

@@ -32,6 +32,7 @@ fn spectra_do_not_depend_on_the_log_rate() {
             q_sim: vec![sim],
             qd_sim: vec![qd],
             diverged: None,
+            peaks: Default::default(),
         };
         let g = compute(&[rec], &[ep], &|_| "legs".into(), &GapOptions::default());
         let j = &g.per_joint[0];

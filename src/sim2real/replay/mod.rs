@@ -132,6 +132,23 @@ pub struct Episode {
     pub qd_sim: Vec<Vec<f64>>,
     /// Why the simulation stopped early (samples after it are NaN); `None` when it completed.
     pub diverged: Option<String>,
+    /// What the physics steps reached on each recorded joint ([`StepPeaks`]).
+    pub peaks: StepPeaks,
+}
+
+/// What the physics steps of a replay reached, per recorded joint (the recording's order):
+/// facts a model change can be tested against without replaying it (a torque limit above
+/// every force the servo applied clamps nothing). Empty when not measured.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct StepPeaks {
+    /// The largest |force| any of the joint's actuators applied at a physics step, in joint
+    /// units (MuJoCo's `actuator_force` after the model's own `forcerange` clamp, × |gear|, a
+    /// gear of 0 counted as 1) [N·m or N]. Empty with the RK4 integrator: its inner stages
+    /// evaluate forces the replay does not see.
+    pub servo: Vec<f64>,
+    /// The largest |q̇| at the start of a physics step (the velocity an actuator hook sees)
+    /// [rad/s or m/s].
+    pub speed: Vec<f64>,
 }
 
 #[derive(Debug, Clone, thiserror::Error)]

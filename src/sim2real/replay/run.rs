@@ -5,6 +5,7 @@ use mujoco_rs::wrappers::mj_model::traits::ModelType;
 
 use super::{
     ActuatorHook, BLOWUP, BaseMode, Episode, ReplayError, ReplayOptions, Replayer, StepIo,
+    StepPeaks,
 };
 use crate::model::ActuatorKind;
 use crate::sim2real::commands::Schedule;
@@ -244,7 +245,16 @@ impl Replayer<'_> {
         // step edge (the usual case, the steps sitting on the ticks' grid) is unaffected.
         // Without a rate each goal still takes effect at the first step at or after its time.
         let probe = if rate.is_some() { 0.5 * dt } else { 0.0 };
+        // The peaks of every physics step ([`StepPeaks`]); no servo peak under RK4, whose inner
+        // stages' forces are not left in `actuator_force`.
+        let rk4 =
+            d.model().opt().integrator == mujoco_rs::mujoco_c::mjtIntegrator::mjINT_RK4 as i32;
+        let mut peaks =
+            StepPeaks { servo: if rk4 { vec![] } else { vec![0.0; nj] }, speed: vec![0.0; nj] };
         for k in 0..nsteps {
+            for (p, qd) in peaks.speed.iter_mut().zip(&cur_qd) {
+                *p = p.max(qd.abs());
+            }
             let tk = ts + k as f64 * dt;
             for (i, x) in target.iter_mut().enumerate() {
                 *x = schedule.at(i, tk + probe);
@@ -360,6 +370,18 @@ impl Replayer<'_> {
             }
             set_base(&mut d, tk);
             d.step();
+            if !peaks.servo.is_empty() {
+                let (force, gear) = (d.actuator_force(), d.model().actuator_gear());
+                for (i, &ji) in jm.iter().enumerate() {
+                    for &(a, _) in &self.joints[ji].acts {
+                        let g =
+                            gear.get(a).map_or(1.0, |g| if g[0] != 0.0 { g[0].abs() } else { 1.0 });
+                        let f = force.get(a).map_or(f64::INFINITY, |f| (f * g).abs());
+                        peaks.servo[i] =
+                            peaks.servo[i].max(if f.is_nan() { f64::INFINITY } else { f });
+                    }
+                }
+            }
             if base_mode == BaseMode::Fixed {
                 set_base(&mut d, tk + dt);
             }
@@ -387,6 +409,7 @@ impl Replayer<'_> {
             q_sim,
             qd_sim,
             diverged,
+            peaks,
         })
     }
 }

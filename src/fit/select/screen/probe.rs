@@ -3,11 +3,11 @@
 //! is the change on its own limb's samples of the probes' data.
 
 use crate::fit::diagnose::Candidate;
-use crate::fit::effects::{self, Applied, JointTarget};
+use crate::fit::effects::{self, Applied, Entry, JointTarget, Seen};
 use crate::sim2real::metrics::gap_mask;
 use crate::sim2real::recording::Recording;
 
-use super::super::{Engine, Errors};
+use super::super::{Engine, Errors, Unprobed};
 
 /// The residual of one simulated dataset, sample by sample over (episode, fitted joint, scored
 /// sample); `None` where the recording or the replay is not finite or the sample follows a gap.
@@ -130,11 +130,25 @@ pub(super) struct Sims<'a> {
     pub(super) limbs: &'a [Option<usize>],
 }
 
+/// What the base replay `tr_err` reached on `joint` ([`Seen`]): the servo's peak only when no
+/// actuator hook of `base` acts on the joint.
+fn seen(tr_err: &Errors, base: &[Applied], joint: &str) -> Seen {
+    let hooked = base.iter().any(|a| {
+        matches!(a.effect.entry(), Entry::Command | Entry::Torque)
+            && a.joints.iter().any(|j| j == joint)
+    });
+    let at = |ep: &crate::sim2real::replay::Episode| ep.joints.iter().position(|j| j == joint);
+    let peaks = tr_err.eps.iter().map(|ep| (&ep.peaks, at(ep).unwrap_or(usize::MAX)));
+    Seen::of(peaks, hooked)
+}
+
 /// Probes the candidates `batch` of one effect together, each of its first `k` parameters in
 /// turn: for each parameter and probe index, one simulation with every member's parameter moved
 /// to its own probe value; a member's column is the change on the samples of its limb (all
 /// samples when it is probed alone). When a joint simulation fails, the members are probed one
-/// by one. Returns each member's best probe per parameter (empty for a joint without a target).
+/// by one. A move that provably changes nothing ([`effects::Effect::unmoved`]: its column is
+/// exactly zero, which no probe keeps) is not replayed and is noted ([`Engine::note_unprobed`]).
+/// Returns each member's best probe per parameter (empty for a joint without a target).
 pub(super) fn probe_batch(
     sims: &Sims,
     (effect, m0): (&'static dyn effects::Effect, &mujoco_rs::prelude::MjModel),
@@ -145,13 +159,16 @@ pub(super) fn probe_batch(
     let Sims { engine, train, base, tr_err, r, limbs } = *sims;
     // (candidate, start values, bounds) of the members with a target.
     type Member = (usize, Vec<f64>, (Vec<f64>, Vec<f64>));
-    let members: Vec<Member> = batch
+    let (members, targets): (Vec<Member>, Vec<JointTarget>) = batch
         .iter()
         .filter_map(|&i| {
             let t = JointTarget::of(engine.robot, &diag[i].joint)?;
-            Some((i, effect.initial(m0, &t), effect.bounds(m0, &t)))
+            Some(((i, effect.initial(m0, &t), effect.bounds(m0, &t)), t))
         })
-        .collect();
+        .unzip();
+    let seen: Vec<Seen> = members.iter().map(|m| seen(tr_err, base, &diag[m.0].joint)).collect();
+    let seconds: f64 =
+        train.iter().map(|r| r.t.last().unwrap_or(&0.0) - r.t.first().unwrap_or(&0.0)).sum();
     let alone = members.len() == 1;
     let kk = members.iter().map(|m| m.1.len()).min().unwrap_or(0).min(k);
     let mut best: Vec<Vec<Option<Probe>>> =
@@ -184,7 +201,21 @@ pub(super) fn probe_batch(
                     let v = *values[n].get(d)?;
                     (v != p0[j]).then_some((n, v, v - p0[j]))
                 })
+                .filter(|&(n, v, _)| {
+                    let (i, p0, _) = &members[n];
+                    let Some(why) = effect.unmoved(m0, &targets[n], p0, (j, v), seen[n]) else {
+                        return true;
+                    };
+                    let param = effect.params().get(j).map_or("", |p| p.name);
+                    let joint = diag[*i].joint.clone();
+                    let (effect, value) = (effect.id(), v);
+                    engine.note_unprobed(Unprobed::new(effect, joint, param, value, why, seconds));
+                    false
+                })
                 .collect();
+            if moved.is_empty() {
+                continue;
+            }
             let set = |which: &[(usize, f64, f64)]| {
                 let mut a = base.to_vec();
                 for &(n, v, _) in which {
