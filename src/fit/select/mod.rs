@@ -53,6 +53,7 @@ mod screen;
 mod simplify;
 mod solve;
 mod start;
+mod swap;
 mod told;
 mod trust;
 mod verdict;
