@@ -124,7 +124,7 @@ mod tests {
                 }
             }
             // Not a swap: nothing kept, or the plain variant kept on another joint set.
-            let other = vec![Applied { joints: vec![], ..applied[0].clone() }];
+            let other = [Applied { joints: vec![], ..applied[0].clone() }];
             for a in [&[][..], &other[..]] {
                 assert_eq!(adds_nothing_to_kept(&s, (&recs, a), (&StribeckFriction, &g)), None);
             }
