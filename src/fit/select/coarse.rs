@@ -294,18 +294,37 @@ fn nothing_on_probes(
     (e, g): (&'static dyn Effect, &[String]),
     pp: &[f64],
 ) -> bool {
+    finds_nothing_on_probes(s, short, (applied, &[applied.to_vec()]), (e, g), pp)
+}
+
+/// [`nothing_on_probes`] with the points simulated on `base` and their gains measured against
+/// the least RMSE of the `references` on the probes' data of `short` (held for the first
+/// reference, the round's model): for a deferred candidate the one reference is `base`; a swap
+/// of a kept plain fit ([`super::swap`]) simulates its points without that fit and measures
+/// them against the round's model and the kept fit taken over.
+pub(super) fn finds_nothing_on_probes(
+    s: &Search,
+    short: &[Recording],
+    (base, references): (&[Applied], &[Vec<Applied>]),
+    (e, g): (&'static dyn Effect, &[String]),
+    pp: &[f64],
+) -> bool {
     let engine = s.engine;
-    let Some(probes) = engine.probe_set_held(short, applied).filter(|p| !same_data(p, short))
+    let Some(held) = references.first() else { return false };
+    let Some(probes) = engine.probe_set_held(short, held).filter(|p| !same_data(p, short)) else {
+        return false;
+    };
+    let errs: Option<Vec<_>> = references.iter().map(|r| engine.errors(&probes, r)).collect();
+    let Some(r) = errs
+        .and_then(|v| v.into_iter().min_by(|a, b| a.rmse().total_cmp(&b.rmse())))
+        .filter(|b| b.n > 0 && b.rmse() > 0.0)
     else {
         return false;
     };
-    let Some(base) = engine.errors(&probes, applied).filter(|b| b.n > 0 && b.rmse() > 0.0) else {
-        return false;
-    };
-    let (n, rmse0) = (base.n as f64, base.rmse());
+    let (n, rmse0) = (r.n as f64, r.rmse());
     let min = engine.opts.policy.min_rel_improvement;
     let gains = |sse: f64| 1.0 - (sse / n).sqrt() / rmse0 >= min;
-    !extension::finds_any(s, (&probes, applied), (e, g), pp, &gains)
+    !extension::finds_any(s, (&probes, base), (e, g), pp, &gains)
 }
 
 /// Whether the plain variant of `e` was fitted in full on `g` on the screen's data this round.

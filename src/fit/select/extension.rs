@@ -119,6 +119,21 @@ fn nested_plain(
     Some(plain)
 }
 
+/// The plain variant's fit `pp` on `group` (beside `applied`) taken over by `effect` from its
+/// parameters' defaults ([`Effect::absorb`]); `None` when `effect` does not hold it.
+pub(super) fn taken_over(
+    s: &Search,
+    applied: &[Applied],
+    (effect, group): (&'static dyn Effect, &[String]),
+    (plain, pp): (&'static dyn Effect, &[f64]),
+) -> Option<Vec<f64>> {
+    let zero: Vec<f64> = effect.params().iter().map(|d| d.default).collect();
+    let t = JointTarget::of(s.engine.robot, group.first()?)?;
+    let m0 = model_with(s.engine.robot, applied);
+    let delta: Vec<f64> = pp.iter().zip(plain.initial(&m0, &t)).map(|(a, b)| a - b).collect();
+    effect.absorb(plain, &zero, &delta)
+}
+
 /// The extension's points near the plain variant's fit taken over, replayed on one dataset: the
 /// plain fit taken over by the richer model (from its parameters' defaults) and the model's own
 /// further starts from it, each's SSE and RMSE (infinite where the replay failed), and how many
@@ -142,11 +157,9 @@ impl Near {
         (plain, pp): (&'static dyn Effect, &[f64]),
     ) -> Option<Near> {
         let engine = s.engine;
-        let zero: Vec<f64> = effect.params().iter().map(|d| d.default).collect();
         let t = JointTarget::of(engine.robot, &group[0])?;
         let m0 = model_with(engine.robot, applied);
-        let delta: Vec<f64> = pp.iter().zip(plain.initial(&m0, &t)).map(|(a, b)| a - b).collect();
-        let x0 = effect.absorb(plain, &zero, &delta)?;
+        let x0 = taken_over(s, applied, (effect, group), (plain, pp))?;
         let (lo, hi) = effect.bounds(&m0, &t);
         let k = effect.fitted().min(x0.len()).min(lo.len());
         if k == 0 {

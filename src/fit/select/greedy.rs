@@ -21,6 +21,7 @@ use super::pairs::{joint_pairs, pair_lookahead, refitted_at_floor};
 use super::policy::Phase;
 use super::reach::Reach;
 use super::screen::{HeldoutScreen, Screen, screen_data};
+use super::swap;
 use super::trust::{heldout_columns, with_pair_starts};
 use super::verdict::{at_bound, verdict};
 use super::winner::{beaten_at_coarse, may_partner, on_whole_set, refine, rival_notes};
@@ -213,6 +214,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
                     coarse::deferred(s, (*e, g), &cands, &coarse)
                         .or_else(|| far.clone().map(|(p, _)| (p, f64::INFINITY))) // judged below
                         .or_else(trust) // judged below
+                        .or_else(|| swap::adds_nothing_to_kept(s, at, (*e, g)))
                         .unwrap_or_else(|| coarse::fit_to(engine, &screen, at, (*e, g), admits))
                 })
                 .collect();
