@@ -32,7 +32,8 @@ declare_rule! {
     /// 0.5 mm, so mesh export noise does not count). Problems are reported once per foot, listing
     /// the geoms, at the first offending geom's attribute. The support polygon counts a box's
     /// bottom face and a lying capsule's two ends whole when they are within 15° of the ground at
-    /// the keyframe: the foot settles onto its sole, and the tilt is `toe-tilt`'s finding.
+    /// the keyframe: the foot settles onto its sole, and the tilt is `toe-tilt`'s finding. With no
+    /// keyframe (qpos0, no stance stated) a box lying on its largest face counts whole at any tilt.
     ///
     /// condim and friction are judged as MuJoCo combines them for each foot geom with the ground
     /// geoms it may touch (world-body geoms whose contype/conaffinity allow the pair): the larger
@@ -259,6 +260,8 @@ impl FootCollisionGeometry {
             .collect();
         let has_floor = (0..robot.geoms.len()).any(|g| crate::probe::stance::is_ground(robot, g));
         let humanoid = is_humanoid(robot, &all_feet);
+        // No keyframe: qpos0, no stance stated (Digit v3's soles 23.5° off the ground there).
+        let any_tilt = robot.keys.is_empty();
         for foot in &all_feet {
             let label = foot.label(robot);
             let subj = Subject::Foot(foot.root);
@@ -514,7 +517,8 @@ impl FootCollisionGeometry {
                     pts.push(p.lowest());
                     // A box sole or lying capsule a few degrees off the ground at the keyframe
                     // settles onto its whole flat feature (the tilt is toe-tilt's finding).
-                    pts.extend(p.sole_points(SOLE_TILT));
+                    let plate = any_tilt && p.plate_face_down();
+                    pts.extend(p.sole_points(if plate { f64::INFINITY } else { SOLE_TILT }));
                 }
             }
             let xs: Vec<f64> = placed

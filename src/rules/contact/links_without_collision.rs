@@ -18,8 +18,10 @@ declare_rule! {
     /// three slides and a ball, as humanoid-gym's files do, or the whole of a legged URDF that
     /// MuJoCo's importer welded to the world, as if its root link floated: `welded-legged-base`)
     /// that carries hinge or slide joints
-    /// and two or more feet that are not wheels (the foot bodies of the contact rules: by name,
-    /// else the leaf bodies that touch down). A link is one of its bodies other than the feet
+    /// and two or more feet (the foot bodies of the contact rules: by name, else the leaf
+    /// bodies that touch down); a wheel counts as a foot when it ends a leg, a hinge or slide
+    /// between it and the base besides its axle (a wheel-legged robot: DDT Diablo, the wheeled
+    /// Pupper v3), not on a rover whose wheels turn on the base. A link is one of its bodies other than the feet
     /// and their toes (which collide through what touches down); it is **covered** when a geom
     /// of its rigid part (the body or a body welded to it, no joint between: MuJoCo's weld
     /// body) takes part in contacts. An uncovered link is reported when
@@ -68,6 +70,26 @@ declare_rule! {
             "an uncovered link is reported when a stretch of its skeleton (origin to child bodies' origins and geoms' centres) this share of the robot's size (largest distance between two of its bodies' origins at the keyframe) long lies outside every collision geom"
         )],
     }
+}
+
+/// Whether wheel body `wheel` ends a leg: a hinge or slide on a body between it and `base`
+/// besides its own axle (a wheel-legged robot: DDT Diablo, the wheeled Pupper v3, Unitree
+/// Go2-W). A wheel on the base itself (a rover's) does not make the robot legged.
+fn ends_a_leg(robot: &Robot, base: usize, wheel: usize) -> bool {
+    let mut b = robot.bodies[wheel].parent;
+    let mut steps = 0;
+    while b != base && b != 0 && steps <= robot.bodies.len() {
+        if robot
+            .joints
+            .iter()
+            .any(|j| j.body == b && matches!(j.jtype, JointType::Hinge | JointType::Slide))
+        {
+            return true;
+        }
+        b = robot.bodies[b].parent;
+        steps += 1;
+    }
+    false
 }
 
 fn dist(a: V3, b: V3) -> f64 {
@@ -193,7 +215,10 @@ impl Rule for LinksWithoutCollision {
                 .collect();
             let n_feet = feet
                 .iter()
-                .filter(|f| f.kind != FootKind::Wheel && in_subtree(robot, base, f.root))
+                .filter(|f| {
+                    in_subtree(robot, base, f.root)
+                        && (f.kind != FootKind::Wheel || ends_a_leg(robot, base, f.root))
+                })
                 .count();
             if !jointed || n_feet < 2 {
                 continue;

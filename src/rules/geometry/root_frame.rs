@@ -18,7 +18,9 @@ declare_rule! {
     /// (qpos0: the file's own pose, whatever a keyframe does with the legs or the base). A leg
     /// is left or right, and front or rear, by the names of its links and joints: the side
     /// markers `mirror-asymmetry` pairs by (`left`, `l_`, `_R`, …), `front`/`fore` and
-    /// `rear`/`hind`/`back`, and the quadruped prefixes `FL_` `RR_` `HL_` `BL_`, `LF_` `RH_`. Three
+    /// `rear`/`hind`/`back`, and the quadruped prefixes `FL_` `RR_` `HL_` `BL_`, `LF_` `RH_`;
+    /// the side (and the end) most of the leg's names carry, a tie giving none (one link
+    /// exported under the other side's name, as DDT Diablo's wheels, does not move the leg). Three
     /// directions are measured when the legs give them: forward (front hips less rear hips on
     /// the same side, averaged over the sides), left (left hips less right hips at the same
     /// end, averaged over the ends: a front-left and a rear-right leg alone give neither) and
@@ -74,6 +76,24 @@ fn end_of(name: &str) -> Option<bool> {
     match letter {
         'f' => Some(true),
         'r' | 'h' | 'b' => Some(false),
+        _ => None,
+    }
+}
+
+/// The value most of a leg's names give (its side, its end); a tie gives none: one misnamed
+/// link (a wheel exported under the other side's name) does not turn the leg over.
+fn majority<T: PartialEq + Copy>(votes: impl Iterator<Item = T>) -> Option<T> {
+    let mut tally: Vec<(T, usize)> = Vec::new();
+    for v in votes {
+        match tally.iter_mut().find(|(t, _)| *t == v) {
+            Some((_, n)) => *n += 1,
+            None => tally.push((v, 1)),
+        }
+    }
+    let best = tally.iter().map(|&(_, n)| n).max()?;
+    let mut top = tally.iter().filter(|&&(_, n)| n == best);
+    match (top.next(), top.next()) {
+        (Some(&(t, _)), None) => Some(t),
         _ => None,
     }
 }
@@ -202,8 +222,8 @@ impl Rule for RootFrameConvention {
                 b = robot.bodies[b].parent;
             }
             names.extend(hinges.iter().map(|&j| robot.joints[j].name.as_str()));
-            let side = names.iter().find_map(|n| side_of(n, cx.spec));
-            let front = names.iter().find_map(|n| end_of(n));
+            let side = majority(names.iter().filter_map(|n| side_of(n, cx.spec)));
+            let front = majority(names.iter().filter_map(|n| end_of(n)));
             legs.push(Leg { hip, low, side, front });
         }
         let end_key = |l: &Leg| match l.front {

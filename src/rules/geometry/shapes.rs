@@ -163,6 +163,16 @@ impl Placed {
         cands.into_iter().filter(|p| p[2] <= zmin + window).collect()
     }
 
+    /// Whether this is a box lying on its largest face: the face nearest the ground (across the
+    /// box axis closest to vertical) is the one across its thinnest dimension — a plate, a sole.
+    /// A shank or bar box standing on an end face is none, at any tilt.
+    pub fn plate_face_down(&self) -> bool {
+        let m = &self.mat;
+        let k = (0..3).max_by(|&a, &b| col(m, a)[2].abs().total_cmp(&col(m, b)[2].abs()));
+        let thin = (0..3).min_by(|&a, &b| self.size[a].total_cmp(&self.size[b]));
+        self.gtype == GeomType::Box && k.is_some() && k == thin
+    }
+
     /// The points of the shape's flat contact feature when it faces the ground within
     /// `max_tilt` radians ([`tilt`]): a box's four corners of the face closest to facing down,
     /// a lying capsule's or cylinder's two ends. The sole the shape stands on once it settles
