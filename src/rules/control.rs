@@ -8,6 +8,7 @@ pub mod keyframe_servo_ctrl;
 pub mod keyframe_state;
 pub mod missing_action_delay;
 pub mod non_earth_gravity;
+pub mod passive_joint_friction;
 pub mod servo_sag;
 pub mod servo_stall_band;
 pub mod solimp_out_of_range;

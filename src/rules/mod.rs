@@ -326,6 +326,7 @@ pub fn registry() -> Vec<&'static dyn Rule> {
         &inertia::transmission_armature::TransmissionWithoutArmature,
         &inertia::legged_urdf_armature::LeggedUrdfArmature,
         &inertia::passive_joint_armature::PassiveJointArmature,
+        &control::passive_joint_friction::PassiveJointFriction,
         &inertia::isotropic_base_inertia::IsotropicBaseInertia,
         &inertia::isotropic_link_inertia::IsotropicLinkInertia,
         &inertia::mass_budget::MassBudget,

@@ -32,6 +32,15 @@ declare_rule! {
     ///   world geom other than a plane reaching more than `drop_height` above the floor (a
     ///   platform or stairs it may stand on).
     ///
+    /// In a model with keyframes, the default pose `qpos0` is judged too, at level info: each
+    /// limited hinge or slide that `qpos0` places outside its range by more than `tolerance` ×
+    /// the range is reported, naming the first keyframe that places it inside (or that none
+    /// does). A user who resets to that keyframe (`mj_resetDataKeyframe`) never meets it; one
+    /// who resets by `mj_resetData` — as Gymnasium's MuJoCo environments do, their `init_qpos`
+    /// being `qpos0` — starts every episode with the joint past its stop. Menagerie's Unitree
+    /// Go2 is such a model (knees −2.7227..−0.83776 rad, qpos0 0, keyframe `home` inside):
+    /// told at level info, not warned.
+    ///
     /// A settled pose rests a little inside a soft limit or equality: within `tolerance` it is
     /// not reported.
     ///
@@ -40,7 +49,16 @@ declare_rule! {
     /// identity, so the base starts in an orientation the file does not state. A joint past its
     /// stop, or off the joint it is coupled to, is kicked back by the limit or equality
     /// constraint at the first step: the robot starts with a jolt the real one never sees, and
-    /// every episode reset to that state begins with it. A robot started in the air falls at
+    /// every episode reset to that state begins with it. Measured with MuJoCo's default
+    /// joint-limit `solref`/`solimp` from `qpos0`, on two quadrupeds whose knees start past
+    /// their stops (armature 0.01, timestep 0.002 s, no control):
+    ///
+    /// | knee past its stop | limit torque, step 1 | peak knee speed | back in range |
+    /// |---|---|---|---|
+    /// | 0.349 rad (DEEP Robotics X30) | 25.2 N·m | 6.4 rad/s | at 0.070 s, at 4.7 rad/s |
+    /// | 0.92 rad (a cat-like quadruped) | 24.4 N·m | 17.1 rad/s | at 0.070 s, at 10.0 rad/s |
+    ///
+    /// A robot started in the air falls at
     /// every reset, and one started into the floor is thrown out of it: episodes begin with a
     /// fall or a kick the real robot never sees. MuJoCo XML reference,
     /// `keyframe/key/qpos` and `equality/joint`.
@@ -52,7 +70,9 @@ declare_rule! {
     /// ## How to fix
     /// Write a unit quaternion (`1 0 0 0` for no rotation), positions inside the joint ranges,
     /// and coupled joints that satisfy their equality, with the robot above the floor; without
-    /// a keyframe, give the model one whose pose is legal (or joint ranges that contain 0).
+    /// a keyframe, give the model one whose pose is legal (or joint ranges that contain 0). For
+    /// a default pose past a stop in a model with a legal keyframe, reset to the keyframe
+    /// (`mj_resetDataKeyframe`), or write the bodies in a pose inside the ranges.
     pub KeyframeState {
         id: "keyframe-state",
         group: "control",
@@ -104,7 +124,9 @@ impl Rule for KeyframeState {
                 qpos: k.qpos,
             })
             .collect();
-        if states.is_empty() {
+        if !states.is_empty() {
+            default_pose_past_stops(cx, &states, tol, out);
+        } else {
             states.push(State {
                 key: None,
                 name: String::new(),
@@ -225,6 +247,56 @@ impl Rule for KeyframeState {
             cx.opt("sink_depth"),
             out,
         );
+    }
+}
+
+/// In a model with keyframes: each limited hinge or slide that the default pose `qpos0` (what
+/// `mj_resetData` starts from) places more than `tol` × its range outside that range, at level
+/// info — a user who resets to a keyframe never sees it, one who resets by `mj_resetData` starts
+/// every episode with the joint thrown back by its limit.
+fn default_pose_past_stops(cx: &Context, keys: &[State], tol: f64, out: &mut Vec<Finding>) {
+    let robot = cx.robot;
+    let qpos0 = robot.mj.qpos0();
+    for j in &robot.joints {
+        if !(j.limited && matches!(j.jtype, JointType::Hinge | JointType::Slide)) {
+            continue;
+        }
+        let a = j.qposadr;
+        let span = (j.range[1] - j.range[0]).abs();
+        let past = |x: f64| (j.range[0] - x).max(x - j.range[1]);
+        let Some(&x) = qpos0.get(a) else { continue };
+        if past(x) <= tol * span {
+            continue;
+        }
+        let inside: Vec<&str> = keys
+            .iter()
+            .filter(|k| k.qpos.get(a).is_some_and(|&y| past(y) <= tol * span))
+            .map(|k| k.label.as_str())
+            .collect();
+        let keyed = match inside.first() {
+            Some(l) => format!(
+                "; keyframe {l} places it inside, a reset by `mj_resetDataKeyframe` to it does not start past the stop"
+            ),
+            None => "; no keyframe places it inside either".to_string(),
+        };
+        let u = if j.jtype == JointType::Slide { "m" } else { "rad" };
+        let msg = format!(
+            "the default pose qpos0, which `mj_resetData` starts from, places joint `{}` at {} {u}, {} {u} outside its range [{}, {}] {u}{keyed}",
+            j.name,
+            fmt_num(x, 4),
+            fmt_num(past(x), 3),
+            fmt_num(j.range[0], 4),
+            fmt_num(j.range[1], 4)
+        );
+        let mut f = cx
+            .at_elem(ElemKind::Joint, j.id, &j.name, msg)
+            .label("default pose outside the joint range")
+            .note("qpos0 is the pose the bodies are written in (each joint at its `ref`): every reset by `mj_resetData` starts with the joint past its stop, and the joint-limit constraint throws it back over the first steps")
+            .help("reset to a keyframe whose pose is legal (`mj_resetDataKeyframe`), or write the bodies in a pose inside the joint's range")
+            .subject(Subject::Joint(j.id))
+            .measured(past(x), u);
+        f.severity = Severity::Info;
+        out.push(f);
     }
 }
 

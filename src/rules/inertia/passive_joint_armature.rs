@@ -57,7 +57,7 @@ declare_rule! {
 /// ([`Robot::actuators_on_joint`]), an actuated spatial tendon has a site or wrapping geom
 /// beyond it, an actuator or tendon adds armature to it, or a joint equality couples it to an
 /// actuated joint.
-fn driven(robot: &Robot, j: usize) -> bool {
+pub(crate) fn driven(robot: &Robot, j: usize) -> bool {
     let joint = &robot.joints[j];
     if !robot.actuators_on_joint(j).is_empty()
         || joint.armature_parts.iter().any(|p| p.source != PartSource::Joint)
