@@ -432,6 +432,13 @@ pub trait Effect: Declared + Sync {
         let _ = (m, t, start, jv, seen);
         None
     }
+    /// Whether [`Effect::unmoved`] reads `seen` (the base replay's peaks on the joint): the
+    /// search then hands it the peaks of the base replay of the data a fit runs on, so that a
+    /// fit's point judged unmoved is not replayed (`fit::select::at_base`). Default `false`:
+    /// the judgement needs only the model (a massless body), and is made without them.
+    fn unmoved_reads_peaks(&self) -> bool {
+        false
+    }
     /// Whether one parameter vector means the same thing on targets `a` and `b`, so that the
     /// two may share it in a group (mirror links, every leg). Default: the effect acts on both
     /// ([`Effect::acts_on`]: a servo's gain error is not shared with the passive joint an
