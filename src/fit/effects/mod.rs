@@ -432,10 +432,7 @@ pub trait Effect: Declared + Sync {
         let _ = (m, t, start, jv, seen);
         None
     }
-    /// Whether [`Effect::unmoved`] reads `seen` (the base replay's peaks on the joint): the
-    /// search then hands it the peaks of the base replay of the data a fit runs on, so that a
-    /// fit's point judged unmoved is not replayed (`fit::select::at_base`). Default `false`:
-    /// the judgement needs only the model (a massless body), and is made without them.
+    /// Whether [`Effect::unmoved`] reads `seen` (the base replay's peaks, `select::at_base`).
     fn unmoved_reads_peaks(&self) -> bool {
         false
     }
