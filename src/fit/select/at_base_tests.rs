@@ -9,8 +9,8 @@ use crate::fit::select::{Engine, FitOptions};
 use crate::model::Robot;
 use crate::sim2real::recording::Recording;
 
-/// A servo (kp 50, kv 2) stepped by 0.1 rad and back: its force peaks near 5 N·m, well inside
-/// the torque limit's range (0.05–50 N·m), under the integrator `option`.
+/// A servo (kp 50, kv 2; `force`: its gear and force range) stepped by 0.1 rad and back: its
+/// force peaks inside the torque limit's range (0.05–50 N·m), under the integrator `option`.
 fn case(name: &str, option: &str, force: &str) -> (Robot, Vec<Recording>) {
     let dir = std::env::temp_dir().join(format!("modellint-atbase-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
@@ -67,7 +67,7 @@ fn a_point_judged_to_replay_as_the_base_does_so_to_the_last_bit() {
         let judge = AtBase::new(&engine, &recs, &[], (&TorqueLimit, &g), &m0);
         let base = simulate(&robot, &recs, &[], &opts.replay).remove(0).unwrap();
         let peak = base.peaks.servo[0];
-        assert!(peak > 2.0 && peak < 10.0, "{name}: peak {peak}");
+        assert!(peak > 2.0 && peak < 40.0, "{name}: peak {peak}");
         let mut judged = 0;
         for i in 0..=24 {
             let v = 0.05 * 1000f64.powf(i as f64 / 24.0);
