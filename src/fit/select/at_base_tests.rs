@@ -85,7 +85,7 @@ fn a_point_judged_to_replay_as_the_base_does_so_to_the_last_bit() {
         assert!((3..25).contains(&judged), "{name}: {judged} of 25 judged");
         // Two parameters moved: not judged.
         let mut two = at(&start, 49.0);
-        two[1] = 0.5 * two[1];
+        two[1] *= 0.5;
         assert!(!judge.replays_base(&two), "{name}: two parameters moved");
         // A hook of the base on the joint: its servo torque is not MuJoCo's actuator force.
         let hooked = vec![Applied { effect: &ActionDelay, joints: g.clone(), params: vec![0.01] }];
