@@ -432,6 +432,10 @@ pub trait Effect: Declared + Sync {
         let _ = (m, t, start, jv, seen);
         None
     }
+    /// Whether [`Effect::unmoved`] reads `seen` (the base replay's peaks, `select::at_base`).
+    fn unmoved_reads_peaks(&self) -> bool {
+        false
+    }
     /// Whether one parameter vector means the same thing on targets `a` and `b`, so that the
     /// two may share it in a group (mirror links, every leg). Default: the effect acts on both
     /// ([`Effect::acts_on`]: a servo's gain error is not shared with the passive joint an

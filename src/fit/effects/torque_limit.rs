@@ -183,6 +183,10 @@ impl Effect for TorqueLimit {
         (j == 0 && line_clear && seen.servo.is_some_and(|f| f < v))
             .then_some(Unmoved::LimitAboveServoForce)
     }
+    /// The judgement reads the servo's peak force and the joint's peak speed.
+    fn unmoved_reads_peaks(&self) -> bool {
+        true
+    }
     fn write_back(&self, p: &[f64]) -> WriteBack {
         WriteBack::Actuator(vec![("forcerange", p[0])])
     }

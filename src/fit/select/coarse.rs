@@ -13,7 +13,8 @@
 use crate::fit::effects::{Applied, Effect, model_with};
 use crate::sim2real::recording::Recording;
 
-use super::engine::{Engine, neutral_params, with_candidate};
+use super::at_base::AtBase;
+use super::engine::Engine;
 use super::groups::{Cand, same_data};
 use super::policy::SearchPolicy;
 use super::screen::Screen;
@@ -147,8 +148,8 @@ fn on_probes(
         return Some((p, base_s));
     }
     let m0 = model_with(engine.robot, applied);
-    let neutral = neutral_params(engine.robot, &m0, (e, g));
-    let fs = engine.score(short, &with_candidate(applied, (e, g), p.clone(), neutral.as_deref()));
+    let at = AtBase::new(engine, short, applied, (e, g), &m0);
+    let fs = engine.score(short, &at.set(applied, g, p.clone()));
     if fs.is_finite() && agrees(1.0 - fs / base_s, 1.0 - fp / base_p, pol) {
         return Some((p, fs));
     }
@@ -178,7 +179,7 @@ fn on_probes(
     // Else that model's Gauss–Newton step, replayed once: it stands where it gains on the point
     // what the model predicted ([`agrees`]) or reaches the bar; else the coarse fit on `short`
     // starts from the best of the step, the point and the effect's start.
-    let fx = engine.score(short, &with_candidate(applied, (e, g), x.clone(), neutral.as_deref()));
+    let fx = engine.score(short, &at.set(applied, g, x.clone()));
     let (got, pred) = (1.0 - fx / fs, 1.0 - want / fs);
     if fx < fs && (agrees(got, pred, pol) || 1.0 - fx / base_s >= bar) {
         return Some((x, fx));
@@ -463,8 +464,13 @@ mod tests {
         let base_p = engine.score(&probes, &[]);
         let (q, fq) = engine.fit_budget(&probes, &[], &Backlash, &g, opts.policy.screen_evals);
         let m0 = super::model_with(&robot, &[]);
-        let neutral = super::neutral_params(&robot, &m0, (&Backlash, &g));
-        let at = super::with_candidate(&[], (&Backlash, &g), q.clone(), neutral.as_deref());
+        let neutral = crate::fit::select::engine::neutral_params(&robot, &m0, (&Backlash, &g));
+        let at = crate::fit::select::engine::with_candidate(
+            &[],
+            (&Backlash, &g),
+            q.clone(),
+            neutral.as_deref(),
+        );
         let fs = engine.score(&recs, &at);
         let (reached, want) = (1.0 - fs / base, 1.0 - fq / base_p);
         assert!(reached > opts.policy.min_rel_improvement && reached != want, "{reached} {want}");
@@ -528,8 +534,13 @@ mod tests {
         let _ = engine.errors_held(&probes, &[]).expect("replay");
         let (q, _) = engine.fit_budget(&probes, &[], &GainError, &g, opts.policy.screen_evals);
         let m0 = super::model_with(&robot, &[]);
-        let neutral = super::neutral_params(&robot, &m0, (&GainError, &g));
-        let at = super::with_candidate(&[], (&GainError, &g), q.clone(), neutral.as_deref());
+        let neutral = crate::fit::select::engine::neutral_params(&robot, &m0, (&GainError, &g));
+        let at = crate::fit::select::engine::with_candidate(
+            &[],
+            (&GainError, &g),
+            q.clone(),
+            neutral.as_deref(),
+        );
         let fs = engine.score(&recs, &at);
         let most = super::further::least_rmse(&engine, (&recs, &[]), (&GainError, &g), (&q, fs))
             .expect("modelled");

@@ -495,6 +495,18 @@ impl<'a> Engine<'a> {
         e
     }
 
+    /// [`Engine::errors`] of a simulation this search has counted already (a replay of it, if
+    /// the memo let it go, is not counted again); `None`, without a replay, for one never asked.
+    pub(in crate::fit::select) fn errors_counted(
+        &self,
+        recs: &[Recording],
+        applied: &[Applied],
+    ) -> Option<Errors> {
+        let key = set_key(recs, applied) + &self.start_tag();
+        let known = self.counted.lock().unwrap_or_else(|e| e.into_inner()).contains(&key);
+        if known { self.errors(recs, applied) } else { None }
+    }
+
     /// [`Engine::errors`] with the model's timestep divided by `refine`.
     pub fn errors_at(
         &self,

@@ -26,7 +26,8 @@ use crate::fit::effects::{Applied, Effect, JointTarget, model_with};
 use crate::fit::optim::ROLLOUT_REL_STEP;
 use crate::sim2real::recording::Recording;
 
-use super::engine::{Engine, neutral_params, with_candidate};
+use super::at_base::AtBase;
+use super::engine::Engine;
 use super::screen::combine;
 
 /// The Gauss–Newton model of a smooth candidate at a point replayed on the screen's data
@@ -70,9 +71,9 @@ pub(super) fn model_at(
     let t = JointTarget::of(engine.robot, g.first()?)?;
     let m0 = model_with(engine.robot, applied);
     let (lo, hi) = e.bounds(&m0, &t);
-    let neutral = neutral_params(engine.robot, &m0, (e, g));
+    let at = AtBase::new(engine, short, applied, (e, g), &m0);
     let k = e.fitted().min(p.len()).min(lo.len()).min(hi.len());
-    let set = |x: Vec<f64>| with_candidate(applied, (e, g), x, neutral.as_deref());
+    let set = |x: Vec<f64>| at.set(applied, g, x);
     let resid = |a: &[Applied]| engine.residuals(short, a, &engine.joints, usize::MAX);
     let r = resid(&set(p.to_vec()))?;
     let free: Vec<usize> = (0..k).filter(|&i| hi[i] > lo[i]).collect();

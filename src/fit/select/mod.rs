@@ -24,6 +24,7 @@
 //! [`improvement_beyond_noise`]: crate::fit::stats::improvement_beyond_noise
 //! [`uncertainty_from_jacobian`]: crate::fit::stats::uncertainty_from_jacobian
 
+mod at_base;
 mod before_full;
 pub mod chord;
 mod coarse;

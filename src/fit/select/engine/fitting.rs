@@ -5,8 +5,9 @@ use crate::fit::optim::Bounds;
 use crate::sim2real::metrics::gap_mask;
 use crate::sim2real::recording::Recording;
 
+use super::super::at_base::AtBase;
 use super::super::solve::{Method, Problem, solve};
-use super::{Engine, fit_key, neutral_params, with_candidate};
+use super::{Engine, fit_key};
 
 /// A fit ends on a bound within this distance of it [fraction of the range].
 const ON_BOUND: f64 = 1e-3;
@@ -109,12 +110,11 @@ impl Engine<'_> {
         }
         let m0 = model_with(self.robot, base);
         let (lo, hi) = effect.bounds(&m0, &t);
+        let at = AtBase::new(self, train, base, (effect, group), &m0);
         let make = |x: &[f64]| {
             let mut p = start.to_vec();
             p[..k].copy_from_slice(&x[..k]);
-            let mut a = base.to_vec();
-            a.push(Applied { effect, joints: group.to_vec(), params: p });
-            a
+            at.set(base, group, p)
         };
         let obj = |x: &[f64]| self.score(train, &make(x));
         let x0: Vec<f64> = (0..k).map(|i| start[i].clamp(lo[i], hi[i])).collect();
@@ -215,11 +215,11 @@ impl Engine<'_> {
         let (lo, hi) = effect.bounds(&m0, &t);
         let (lo, hi) = (lo[0], hi[0]);
         let pol = &self.opts.policy;
-        let neutral = neutral_params(self.robot, &m0, (effect, group));
+        let at = AtBase::new(self, train, base, (effect, group), &m0);
         let make = |x: f64| {
             let mut p = full0.clone();
             p[0] = x;
-            with_candidate(base, (effect, group), p, neutral.as_deref())
+            at.set(base, group, p)
         };
         let resid = |set: &[Applied]| self.residuals(train, set, &self.joints, usize::MAX);
         let (mut x, mut f) =
@@ -304,8 +304,7 @@ impl Engine<'_> {
         if p == p0 {
             return None;
         }
-        let mut set = base.to_vec();
-        set.push(Applied { effect, joints: group.to_vec(), params: p.clone() });
+        let set = AtBase::new(self, train, base, (effect, group), &m0).set(base, group, p.clone());
         let f = self.score(train, &set);
         f.is_finite().then_some((p, f))
     }
@@ -347,11 +346,11 @@ impl Engine<'_> {
         let full0 = effect.initial(&m0, &t);
         let (lo, hi) = effect.bounds(&m0, &t);
         let k = effect.fitted().min(full0.len());
-        let neutral = neutral_params(self.robot, &m0, (effect, group));
+        let at = AtBase::new(self, train, base, (effect, group), &m0);
         let make = |x: &[f64]| {
             let mut p = full0.clone();
             p[..k].copy_from_slice(&x[..k]);
-            with_candidate(base, (effect, group), p, neutral.as_deref())
+            at.set(base, group, p)
         };
         let obj = |x: &[f64]| self.score(train, &make(x));
         let clamp = |p: &[f64]| -> Vec<f64> { (0..k).map(|i| p[i].clamp(lo[i], hi[i])).collect() };

@@ -3,10 +3,11 @@
 //! is the change on its own limb's samples of the probes' data.
 
 use crate::fit::diagnose::Candidate;
-use crate::fit::effects::{self, Applied, Entry, JointTarget, Seen};
+use crate::fit::effects::{self, Applied, JointTarget, Seen};
 use crate::sim2real::metrics::gap_mask;
 use crate::sim2real::recording::Recording;
 
+use super::super::at_base::seen;
 use super::super::{Engine, Errors, Unprobed};
 
 /// The residual of one simulated dataset, sample by sample over (episode, fitted joint, scored
@@ -128,18 +129,6 @@ pub(super) struct Sims<'a> {
     pub(super) tr_err: &'a Errors,
     pub(super) r: &'a [Option<f64>],
     pub(super) limbs: &'a [Option<usize>],
-}
-
-/// What the base replay `tr_err` reached on `joint` ([`Seen`]): the servo's peak only when no
-/// actuator hook of `base` acts on the joint.
-fn seen(tr_err: &Errors, base: &[Applied], joint: &str) -> Seen {
-    let hooked = base.iter().any(|a| {
-        matches!(a.effect.entry(), Entry::Command | Entry::Torque)
-            && a.joints.iter().any(|j| j == joint)
-    });
-    let at = |ep: &crate::sim2real::replay::Episode| ep.joints.iter().position(|j| j == joint);
-    let peaks = tr_err.eps.iter().map(|ep| (&ep.peaks, at(ep).unwrap_or(usize::MAX)));
-    Seen::of(peaks, hooked)
 }
 
 /// Probes the candidates `batch` of one effect together, each of its first `k` parameters in
