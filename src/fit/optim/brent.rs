@@ -126,6 +126,9 @@ mod tests {
     use super::brent_refine;
     use std::sync::atomic::{AtomicUsize, Ordering};
 
+    /// A named profile: the function, its minimiser, and whether it is smooth there.
+    type Profile = (&'static str, Box<dyn Fn(f64) -> f64 + Sync>, f64, bool);
+
     /// Counts the evaluations of `f` made by `search`, and returns its answer with the count.
     fn counted(
         f: &(dyn Fn(f64) -> f64 + Sync),
@@ -151,7 +154,7 @@ mod tests {
         let (lo, hi) = (0.0, 0.2);
         let h = (hi - lo) / 8.0;
         let tol = 2e-4 * (hi - lo);
-        let profiles: Vec<(&str, Box<dyn Fn(f64) -> f64 + Sync>, f64, bool)> = vec![
+        let profiles: Vec<Profile> = vec![
             ("bowl", Box::new(|x: f64| (x - 0.0413).powi(2) + 1e-3), 0.0413, true),
             (
                 "skewed bowl",
