@@ -9,6 +9,15 @@
 //! cycling on a kink or a ripple) the step is golden section's. So the bracket still shrinks at
 //! worst geometrically, and the answer meets the same guarantee as golden section's: the best
 //! point evaluated, with the minimum of a unimodal profile within `tol` of it.
+//!
+//! Two rules make it hold on a replayed RMSE. A point as low as the best one becomes the best
+//! (Brent's `fu <= fx`): on a plateau — an effect inert over part of its range, such as a
+//! torque limit above the largest torque the recording asks for, where every point replays the
+//! same motion and the RMSE is equal to the last bit — a tie says nothing about where a lower
+//! point lies, and keeping the old best would cut away the side the new point was taken on,
+//! the side away from the plateau. And a parabolic step is taken only through three points
+//! whose parabola is convex (a positive second divided difference): the vertex of a concave
+//! one is its maximum.
 
 use super::sanitize;
 
@@ -17,9 +26,9 @@ use super::sanitize;
 /// values (the grid's neighbours of `best`: the first step is then the parabola through the
 /// three, no golden step needed to start one). Stops when the minimum of a unimodal profile is
 /// within `tol` of the best point (the bracket around it no wider than `tol` on either side)
-/// or after `max_evals` evaluations; returns the best point evaluated, or `best` when none is
-/// lower. Fewer than two evaluations, a non-finite `best` or one outside the bracket return
-/// `best` unevaluated.
+/// or after `max_evals` evaluations; returns the best point evaluated (of equal ones, the last:
+/// see the module's note on plateaus), or `best` when none is as low. Fewer than two
+/// evaluations, a non-finite `best` or one outside the bracket return `best` unevaluated.
 pub fn brent_refine(
     f: &(dyn Fn(f64) -> f64 + Sync),
     (a, b): (f64, f64),
@@ -57,7 +66,12 @@ pub fn brent_refine(
             break;
         }
         let mut parabolic = false;
-        if e.abs() > tol1 {
+        // A convex parabola through the three points: a positive second divided difference.
+        let convex = v != w && w != x && v != x && {
+            let (s_xw, s_wv) = ((fx - fw) / (x - w), (fw - fv) / (w - v));
+            (s_xw - s_wv) / (x - v) > 0.0
+        };
+        if e.abs() > tol1 && convex {
             // The vertex of the parabola through (v, fv), (w, fw), (x, fx): x + p / q.
             let r = (x - w) * (fx - fv);
             let mut q = (x - v) * (fx - fw);
@@ -94,7 +108,8 @@ pub fn brent_refine(
         let u = if d.abs() >= tol1 { x + d } else { x + tol1.copysign(d) };
         let fu = sanitize(f(u));
         n += 1;
-        if fu < fx {
+        // Brent's rule: a tie moves the best point (a plateau's tie cuts nothing away).
+        if fu <= fx {
             if u < x {
                 b = x;
             } else {
@@ -188,6 +203,39 @@ mod tests {
             if *smooth {
                 assert!(2 * nb <= ng, "{name}: Brent {nb} evaluations, golden section {ng}");
             }
+        }
+    }
+
+    /// A torque limit's profile: a dip (the limit) narrower than the grid's spacing, steep
+    /// below it (the limit clips), and a plateau above it where the limit never binds — every
+    /// point there replays the same motion, the same RMSE to the last bit. The grid's best point
+    /// is the plateau's end of the range, and the first step inside its bracket lands on the
+    /// plateau: a tie, which must not cut away the dip's side. On the range's either end (the
+    /// profile mirrored: a play below which nothing moves), from the grid on [−1, 1].
+    #[test]
+    fn a_tie_on_a_plateau_keeps_the_dip_beside_it() {
+        for side in [1.0, -1.0] {
+            let dip = |x: f64| {
+                let x = side * x;
+                if x >= 0.9 {
+                    1.0
+                } else if x >= 0.85 {
+                    0.7 + 6.0 * (x - 0.85)
+                } else {
+                    0.7 + 100.0 * (x - 0.85).powi(2)
+                }
+            };
+            let tol = 2e-4 * 2.0;
+            let ((x, fx), n) = counted(&dip, |g| super::super::line_search(g, -1.0, 1.0, tol, 40));
+            assert!((x - side * 0.85).abs() <= tol, "side {side}: {x} ({fx}) after {n}");
+            assert!(fx < 0.71 && n <= 40, "side {side}: {x} ({fx}) after {n}");
+            // From the grid's bracket around its best point, the range's end (ends unknown).
+            let (a, b) = if side > 0.0 { (0.75, 1.0) } else { (-1.0, -0.75) };
+            let ((xb, _), nb) =
+                counted(&dip, |g| brent_refine(g, (a, b), tol, 31, (side, 1.0), None));
+            let ((xg, _), ng) = counted(&dip, |g| golden_refine(g, (a, b), tol, 31, (side, 1.0)));
+            assert!((xb - side * 0.85).abs() <= tol, "side {side}: Brent {xb} after {nb}");
+            assert!((xg - side * 0.85).abs() <= tol, "side {side}: golden {xg} after {ng}");
         }
     }
 
