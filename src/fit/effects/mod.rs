@@ -257,8 +257,8 @@ pub trait Effect: Declared + Sync {
     fn smooth(&self) -> bool {
         false
     }
-    /// `true` when the one fitted parameter is searched on a log scale (grid and golden
-    /// section on ln p): a scale spanning decades whose optimum is narrow, such as a torque
+    /// `true` when the one fitted parameter is searched on a log scale (the line search's
+    /// grid and Brent steps on ln p): a scale spanning decades whose optimum is narrow, such as a torque
     /// limit. Only for one-parameter derivative-free fits, and only with a positive lower bound.
     fn log_search(&self) -> bool {
         false

@@ -1,21 +1,26 @@
-//! 1-D bounded minimisation: a coarse grid, then golden-section refinement.
+//! 1-D bounded minimisation: a coarse grid, then Brent's refinement of the bracket around its
+//! best point ([`super::brent_refine`]: parabolic steps, golden-section steps where those are
+//! not trusted). Golden-section refinement alone ([`golden_refine`]) is kept as the reference
+//! the tests compare it with.
 
 use rayon::prelude::*;
 
+use super::brent::brent_refine;
 use super::sanitize;
 
-/// Points of [`golden_section`]'s first grid, ends included [count].
+/// Points of [`line_search`]'s first grid, ends included [count].
 pub const GRID_POINTS: usize = 9;
 
 /// 1-D bounded minimisation on `[lo, hi]` returning `(x, f(x))`.
 ///
 /// A 9-point uniform grid (endpoints included) is scanned first so a
 /// multimodal objective is refined around the globally best grid point; the
-/// bracket between its neighbours is then refined by golden-section search
-/// until it is narrower than `tol` or `max_evals` evaluations have been spent.
+/// bracket between its neighbours is then refined by Brent's method (the first
+/// step the parabola through the grid's three points) until the minimum is
+/// within `tol` of the best point or `max_evals` evaluations have been spent.
 /// The best point ever evaluated is returned. `lo > hi` is swapped;
 /// non-finite bounds or `max_evals == 0` return `f = +∞` without evaluating.
-pub fn golden_section(
+pub fn line_search(
     f: &(dyn Fn(f64) -> f64 + Sync),
     lo: f64,
     hi: f64,
@@ -72,7 +77,8 @@ pub fn golden_section(
     if evals + 2 > max_evals {
         return best;
     }
-    golden_refine(f, (a, bb), tol, max_evals - evals, best)
+    let ends = (ib > 0 && ib + 1 < n_grid).then(|| (gf[ib - 1], gf[ib + 1]));
+    brent_refine(f, (a, bb), tol, max_evals - evals, (grid[ib], gf[ib]), ends)
 }
 
 /// Golden-section refinement of the bracket `[a, b]` (which holds a minimum: no point inside is
@@ -137,17 +143,17 @@ mod tests {
             assert!((-4.0..=4.0).contains(&x));
             f(x)
         };
-        let (x, fx) = golden_section(&fc, -4.0, 4.0, 1e-7, 100);
+        let (x, fx) = line_search(&fc, -4.0, 4.0, 1e-7, 100);
         assert!((x - 2.1).abs() < 1e-5, "x = {x}");
         assert!((fx - f(x)).abs() == 0.0 && fx < -1.99);
         assert!(count.load(Ordering::Relaxed) <= 100);
         // Budget respected when tiny.
         count.store(0, Ordering::Relaxed);
-        let (x5, _) = golden_section(&fc, -4.0, 4.0, 1e-7, 5);
+        let (x5, _) = line_search(&fc, -4.0, 4.0, 1e-7, 5);
         assert!(count.load(Ordering::Relaxed) <= 5);
         assert_eq!(x5, 2.0);
         // Reversed bounds and a bound-active minimum.
-        let (xb, fb) = golden_section(&|x: f64| x, 3.0, 1.0, 1e-9, 50);
+        let (xb, fb) = line_search(&|x: f64| x, 3.0, 1.0, 1e-9, 50);
         assert_eq!((xb, fb), (1.0, 1.0));
     }
 }

@@ -16,9 +16,10 @@
 
 //!
 //! This module owns the shared types ([`Bounds`], [`OptResult`]), the RNG and the normalised
-//! search space; each method has its own file: [`nelder_mead()`], [`cmaes()`], [`golden_section`]
-//! (in `golden`) and [`levenberg_marquardt`] (in `lm`).
+//! search space; each method has its own file: [`nelder_mead()`], [`cmaes()`], [`line_search`]
+//! (in `golden`, refined by [`brent_refine`] in `brent`) and [`levenberg_marquardt`] (in `lm`).
 
+mod brent;
 mod cmaes;
 mod golden;
 mod lm;
@@ -28,8 +29,9 @@ use serde::Serialize;
 
 pub(crate) use crate::util::Rng;
 
+pub use brent::brent_refine;
 pub use cmaes::{CmaesOpts, cmaes};
-pub use golden::{GRID_POINTS, golden_refine, golden_section};
+pub use golden::{GRID_POINTS, golden_refine, line_search};
 pub use lm::{
     LmOpts, LmResult, ROLLOUT_REL_STEP, ROLLOUT_SHORT_STEP, ROLLOUT_STAT_TOL, levenberg_marquardt,
 };
@@ -180,7 +182,7 @@ mod tests {
         let cm = cmaes(&f, &[-1.0, 0.0], &b, &CmaesOpts { max_evals: 3000, ..Default::default() });
         assert!(cm.f.is_finite() && cm.x[0] + cm.x[1] <= 1.5, "{cm:?}");
         assert!(cm.f < 0.125 + 1e-3, "{cm:?}");
-        let (gx, gf) = golden_section(&|x: f64| f(&[x, x]), -2.0, 2.0, 1e-9, 60);
+        let (gx, gf) = line_search(&|x: f64| f(&[x, x]), -2.0, 2.0, 1e-9, 60);
         assert!(gf.is_finite() && (gx - 0.75).abs() < 1e-6, "{gx} {gf}");
         // Objective that is NaN everywhere: no panic, infinite f, not converged.
         let all_nan = |_: &[f64]| f64::NAN;
@@ -264,11 +266,11 @@ mod tests {
         let lr = levenberg_marquardt(&rf, &[9.0, 9.0], &fixed, &LmOpts::default());
         assert_eq!(lr.x, vec![0.3, 0.4]);
         assert!(lr.converged);
-        // golden_section degenerate bounds.
-        assert_eq!(golden_section(&|x| x * x, 2.0, 2.0, 1e-6, 10), (2.0, 4.0));
-        assert!(golden_section(&|x| x, f64::NAN, 1.0, 1e-6, 10).1.is_infinite());
-        assert!(golden_section(&|x| x, 0.0, 1.0, 1e-6, 0).1.is_infinite());
-        let (x1, _) = golden_section(&|x: f64| (x - 0.3).abs(), 0.0, 1.0, 0.0, 1);
+        // line_search degenerate bounds.
+        assert_eq!(line_search(&|x| x * x, 2.0, 2.0, 1e-6, 10), (2.0, 4.0));
+        assert!(line_search(&|x| x, f64::NAN, 1.0, 1e-6, 10).1.is_infinite());
+        assert!(line_search(&|x| x, 0.0, 1.0, 1e-6, 0).1.is_infinite());
+        let (x1, _) = line_search(&|x: f64| (x - 0.3).abs(), 0.0, 1.0, 0.0, 1);
         assert_eq!(x1, 0.5);
     }
 }

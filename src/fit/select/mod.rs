@@ -6,8 +6,8 @@
 //!    replay starts from the recorded state).
 //! 2. Each round: replay the training set with the effects kept so far, [`diagnose`] the
 //!    residuals, take the top-ranked (effect, joint group) candidates, and fit each one's
-//!    parameters (golden section for one parameter, Nelder–Mead for two or three, CMA-ES above)
-//!    to minimise the position RMSE over the training episodes.
+//!    parameters (a line search — grid, then Brent's method — for one parameter, Nelder–Mead
+//!    for two or three, CMA-ES above) to minimise the position RMSE over the training episodes.
 //! 3. A candidate is kept only when, on the held-out episodes, the paired per-window RMSE
 //!    improvement is beyond noise ([`improvement_beyond_noise`]), the relative RMSE improvement
 //!    is at least `min_rel_improvement`, and the training BIC decreases. Of the kept candidates the

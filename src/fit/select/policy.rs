@@ -18,7 +18,7 @@ pub struct SearchPolicy {
     /// Candidates taken from the top of the linearised ranking each round [count]. Default 4.
     pub candidates_per_round: usize,
     /// Objective evaluations of one candidate's full fit [rollouts of the data fitted].
-    /// Golden section uses at most 40 of them, the simplex 2 × (k − 1) × this on k = 2 or 3
+    /// A line search uses at most 40 of them, the simplex 2 × (k − 1) × this on k = 2 or 3
     /// parameters, Levenberg–Marquardt this / (k + 2) iterations (2–12). Default 60.
     pub max_evals: usize,
     /// Objective evaluations of a coarse screening fit [rollouts of the screen's data]. Default 6.

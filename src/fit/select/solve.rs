@@ -4,12 +4,13 @@
 //! Which method a fit uses follows from the effect, not from the phase of the search: smooth
 //! effects ([`crate::fit::effects::Effect::smooth`]) are least-squares problems on the rollout
 //! residuals (Levenberg–Marquardt, k + 1 rollouts of the training set per iteration); one
-//! non-smooth parameter is a line search (golden section, on ln p for a scale spanning
-//! decades); two or three a simplex (Nelder–Mead); more an evolution strategy (CMA-ES).
+//! non-smooth parameter is a line search (a grid, then Brent's parabolic steps with
+//! golden-section fallback, on ln p for a scale spanning decades); two or three a simplex
+//! (Nelder–Mead); more an evolution strategy (CMA-ES).
 
 use crate::fit::optim::{
     Bounds, CmaesOpts, GRID_POINTS, LmOpts, NelderMeadOpts, ROLLOUT_REL_STEP, ROLLOUT_SHORT_STEP,
-    ROLLOUT_STAT_TOL, cmaes, golden_refine, golden_section, levenberg_marquardt, nelder_mead,
+    ROLLOUT_STAT_TOL, brent_refine, cmaes, levenberg_marquardt, line_search, nelder_mead,
 };
 
 /// Relative tolerance of a line search [fraction of the bracket].
@@ -24,8 +25,9 @@ const SIMPLEX_FTOL: f64 = 1e-12;
 pub(super) enum Method {
     /// Levenberg–Marquardt on the residual vector, at most `max_iters` iterations.
     LeastSquares { max_iters: usize },
-    /// Golden section on one parameter (on ln p when `log` and the bracket is positive), at
-    /// most `max_evals` evaluations.
+    /// A line search on one parameter (on ln p when `log` and the bracket is positive): a
+    /// 9-point grid, then Brent's refinement around its best point, at most `max_evals`
+    /// evaluations.
     Line { log: bool, max_evals: usize },
     /// [`Method::Line`] from a start (a coarse fit's point): only the line search's grid
     /// points around it are replayed, and refined as the whole search refines its grid's best
@@ -62,7 +64,7 @@ pub(super) struct Solution {
 /// when `log` and the bounds are positive), then the grid neighbour beyond the lower of them —
 /// three points, one replayed already when `x0` is a point of the grid (a coarse fit's on the
 /// probes' data). When the best of them has both its grid neighbours among them (or is an end
-/// of the range), the grid has a minimum there, and the golden section refines the bracket of
+/// of the range), the grid has a minimum there, and Brent's method refines the bracket of
 /// its neighbours exactly as the whole search does from that grid point: the same answer for
 /// three evaluations of the grid's nine, whenever the grid's best point is among them. Else
 /// (the lowest at their edge) the whole search of [`Method::Line`], whose grid then holds
@@ -81,7 +83,7 @@ fn line_from(p: &Problem<'_>, x0: &[f64], log: bool, max_evals: usize) -> Soluti
         let v = if logs { (p.objective)(&[u.exp()]) } else { (p.objective)(&[u]) };
         if v.is_nan() { f64::INFINITY } else { v }
     };
-    // The grid of `golden_section` on [a, c], point for point.
+    // The grid of `line_search` on [a, c], point for point.
     let grid = |i: usize| a + (c - a) * i as f64 / (n - 1) as f64;
     let u0 = if logs { start.clamp(lo, hi).ln() } else { start.clamp(lo, hi) };
     let i0 = (((u0 - a) / (c - a) * (n - 1) as f64).floor().max(0.0) as usize).min(n - 2);
@@ -108,7 +110,8 @@ fn line_from(p: &Problem<'_>, x0: &[f64], log: bool, max_evals: usize) -> Soluti
     }
     let bracket = (grid(ib.saturating_sub(1)), grid((ib + 1).min(n - 1)));
     let tol = LINE_TOL * (c - a);
-    let (u, fu) = golden_refine(&obj, bracket, tol, max_evals - n, (grid(ib), f[k]));
+    let ends = (k > 0 && k + 1 < window.len()).then(|| (f[k - 1], f[k + 1]));
+    let (u, fu) = brent_refine(&obj, bracket, tol, max_evals - n, (grid(ib), f[k]), ends);
     Solution { x: vec![x_of(u)], f: fu, converged: true }
 }
 
@@ -142,12 +145,10 @@ pub(super) fn solve(p: &Problem<'_>, x0: &[f64], method: Method) -> Solution {
                 // On ln v: a narrow optimum a decade below the top of the range falls between
                 // two points of a uniform grid.
                 let (a, c) = (lo.ln(), hi.ln());
-                let (u, f) =
-                    golden_section(&|u| obj(&[u.exp()]), a, c, LINE_TOL * (c - a), max_evals);
+                let (u, f) = line_search(&|u| obj(&[u.exp()]), a, c, LINE_TOL * (c - a), max_evals);
                 Solution { x: vec![u.exp().clamp(lo, hi)], f, converged: true }
             } else {
-                let (x, f) =
-                    golden_section(&|v| obj(&[v]), lo, hi, LINE_TOL * (hi - lo), max_evals);
+                let (x, f) = line_search(&|v| obj(&[v]), lo, hi, LINE_TOL * (hi - lo), max_evals);
                 Solution { x: vec![x], f, converged: true }
             }
         }

@@ -144,7 +144,7 @@ impl Engine<'_> {
     }
 
     /// [`Engine::fit_one`] with a budget of `max_evals` objective evaluations for one parameter
-    /// (golden section stops earlier at its tolerance), 2 × (k − 1) times that for the simplex on
+    /// (the line search stops earlier at its tolerance), 2 × (k − 1) times that for the simplex on
     /// k = 2 or 3 parameters; Levenberg–Marquardt iterations take k + 1 replays each.
     pub fn fit_budget(
         &self,
