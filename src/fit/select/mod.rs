@@ -54,6 +54,7 @@ mod simplify;
 mod solve;
 mod start;
 mod swap;
+mod start_bound;
 mod told;
 mod trust;
 mod verdict;
