@@ -91,7 +91,7 @@ mod tests {
         (robot, recs, held)
     }
 
-    const E: &'static dyn Effect = &GainError;
+    const E: &dyn Effect = &GainError;
 
     /// Where the servo's gains are off (kp × 0.9 and kd × 1.4; kp × 1.12 and kd × 0.75), the
     /// held-out optimum at the gain error's start passes the gate at the trust's edge: not
