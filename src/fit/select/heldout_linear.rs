@@ -3,8 +3,9 @@
 //! ([`probe_trust::out`]); after round 0, those round 0's trust leaves out ([`trust_out`]) and
 //! those the held-out set's own linear model leaves out ([`heldout_out`]), that model's effects
 //! probed only for the candidates it is asked about ([`HeldoutScreen::ensure`]), and the smooth
-//! candidates of several parameters whose held-out optimum at their start cannot pass the gate
-//! at the trust's edge ([`start_bound::short_at_start`]: `heldout_bound`).
+//! candidates of several parameters whose held-out optimum at their start cannot lower the
+//! held-out RMSE by the trust's edge of `min_rel_improvement` ([`start_bound::short_at_start`]:
+//! `heldout_bound`).
 
 use rayon::prelude::*;
 
@@ -18,14 +19,13 @@ use super::probe_trust;
 use super::screen::{HeldoutScreen, Screen};
 use super::start_bound;
 use super::trust::{heldout_out, plain_needed, train_reach, trust_out};
-use super::verdict::Gate;
 use super::{Errors, Search};
 
 /// Per candidate of `block` (of `cands`, whose coarse fits so far are `coarse`) in round
 /// `round` with the bar `cut` (`set`: a fit of the round set it): why it is taken without a
 /// coarse fit — (the largest training gain its linear model allows, the phase logged, the
 /// held-out reach; NaN for round 0's trust; the held-out optimum's relative improvement for
-/// [`start_bound`], against the round's held-out errors `ho_err` and its `gate`) — or `None`
+/// [`start_bound`], against the round's held-out errors `ho_err`) — or `None`
 /// (screened as usual). In round 0 only
 /// once a fit set the bar, by the probes' data's test ([`probe_trust::out`], on the screen's
 /// data `short`); never the plain variant of another candidate on its joints ([`plain_needed`]); a candidate that waits for its plain variant's
@@ -35,7 +35,7 @@ use super::{Errors, Search};
 /// confirm a linear model).
 pub(super) fn out_of(
     s: &Search,
-    (round, cut, set, gate): (usize, f64, bool, Gate),
+    (round, cut, set): (usize, f64, bool),
     (screen, ho): (&Screen, &mut Option<HeldoutScreen>),
     (short, applied, ho_err): (&[Recording], &[Applied], &Errors),
     covered: &(dyn Fn(&str, &str) -> bool + Sync),
@@ -88,7 +88,7 @@ pub(super) fn out_of(
             }
             // A several-parameter smooth one: the held-out bound of its full fit, at its start.
             let at = (s.heldout, applied, ho_err);
-            let h = start_bound::short_at_start(engine, at, (e, g), (gate, round))?;
+            let h = start_bound::short_at_start(engine, at, (e, g), round)?;
             Some((upper, Phase::HeldoutBound, h))
         })
         .collect()
