@@ -224,7 +224,6 @@ impl HeldoutModel {
 /// The held-out errors at the held-out optimum of the Gauss–Newton model of the candidate (the
 /// last entry of `trial`) at its point ([`HeldoutModel::optimum`]). One held-out replay per
 /// free parameter. `None` when a replay fails or nothing is free.
-#[cfg(test)]
 pub(super) fn heldout_optimum(
     engine: &Engine,
     heldout: &[Recording],

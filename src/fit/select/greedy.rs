@@ -181,7 +181,10 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
             );
             // After round 0, a candidate whose linear model round 0 confirmed is taken at its
             // word ([`trust_out`]): no coarse fit when it could not reach the bar; nor one whose
-            // held-out linear optimum could not pass the gate ([`heldout_out`]). Neither is the
+            // held-out linear optimum could not pass the gate ([`heldout_out`]), nor a smooth one
+            // of several parameters whose held-out optimum at its start could not lower the
+            // held-out RMSE by the trust's edge of the bar ([`super::start_bound`],
+            // `heldout_bound`). Neither is the
             // plain variant of a candidate on its joints: the richer model is judged from the
             // plain one's coarse fit ([`coarse::deferred`]); without it, it is coarse-fitted
             // whole on the screen's data (KR8's Stribeck friction on the hip: 337 replayed s).
@@ -189,7 +192,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
             let (ho, block) =
                 ((&screen, &mut ho_screen), (&cands[..], &coarse[..], &cands[range.clone()]));
             let set = (round, cut, best_gain > 0.0);
-            let out_of = out_of(s, set, ho, (short, &applied), &covered, block);
+            let out_of = out_of(s, set, ho, (short, &applied, &ho_err), &covered, block);
             // (The reach's coarse fits on the probes' data are booked apart: `Phase::Reach`.)
             engine.report(round, Phase::Reach, None);
             let far: Vec<Option<(Vec<f64>, f64)>> = cands[range.clone()]

@@ -2,25 +2,31 @@
 //! round 0, once a fit set the bar, those whose linear step the probes' data confirms
 //! ([`probe_trust::out`]); after round 0, those round 0's trust leaves out ([`trust_out`]) and
 //! those the held-out set's own linear model leaves out ([`heldout_out`]), that model's effects
-//! probed only for the candidates it is asked about ([`HeldoutScreen::ensure`]).
+//! probed only for the candidates it is asked about ([`HeldoutScreen::ensure`]), and the smooth
+//! candidates of several parameters whose held-out optimum at their start cannot lower the
+//! held-out RMSE by the trust's edge of `min_rel_improvement` ([`start_bound::short_at_start`]:
+//! `heldout_bound`).
 
 use rayon::prelude::*;
 
 use crate::fit::effects::Applied;
 use crate::sim2real::recording::Recording;
 
-use super::Search;
 use super::coarse::{self, Coarse};
 use super::groups::Cand;
 use super::policy::Phase;
 use super::probe_trust;
 use super::screen::{HeldoutScreen, Screen};
+use super::start_bound;
 use super::trust::{heldout_out, plain_needed, train_reach, trust_out};
+use super::{Errors, Search};
 
 /// Per candidate of `block` (of `cands`, whose coarse fits so far are `coarse`) in round
 /// `round` with the bar `cut` (`set`: a fit of the round set it): why it is taken without a
 /// coarse fit — (the largest training gain its linear model allows, the phase logged, the
-/// held-out reach; NaN for round 0's trust) — or `None` (screened as usual). In round 0 only
+/// held-out reach; NaN for round 0's trust; the held-out optimum's relative improvement for
+/// [`start_bound`], against the round's held-out errors `ho_err`) — or `None`
+/// (screened as usual). In round 0 only
 /// once a fit set the bar, by the probes' data's test ([`probe_trust::out`], on the screen's
 /// data `short`); never the plain variant of another candidate on its joints ([`plain_needed`]); a candidate that waits for its plain variant's
 /// fit ([`coarse::deferred`]) takes that fit's stand-in whatever this says, and is not asked
@@ -31,7 +37,7 @@ pub(super) fn out_of(
     s: &Search,
     (round, cut, set): (usize, f64, bool),
     (screen, ho): (&Screen, &mut Option<HeldoutScreen>),
-    (short, applied): (&[Recording], &[Applied]),
+    (short, applied, ho_err): (&[Recording], &[Applied], &Errors),
     covered: &(dyn Fn(&str, &str) -> bool + Sync),
     (cands, coarse, block): (&[Cand], &[Coarse], &[Cand]),
 ) -> Vec<Option<(f64, Phase, f64)>> {
@@ -74,8 +80,16 @@ pub(super) fn out_of(
                 return None;
             }
             let (e, g) = (c.0, &c.1);
-            let h = heldout_out(engine, (screen, ho?), (s.heldout, applied), (e, g))?;
-            Some((train_reach(screen, (e, g), lt), Phase::HeldoutLinear, h))
+            let upper = train_reach(screen, (e, g), lt);
+            let linear =
+                ho.and_then(|ho| heldout_out(engine, (screen, ho), (s.heldout, applied), (e, g)));
+            if let Some(h) = linear {
+                return Some((upper, Phase::HeldoutLinear, h));
+            }
+            // A several-parameter smooth one: the held-out bound of its full fit, at its start.
+            let at = (s.heldout, applied, ho_err);
+            let h = start_bound::short_at_start(engine, at, (e, g), round)?;
+            Some((upper, Phase::HeldoutBound, h))
         })
         .collect()
 }

@@ -54,6 +54,7 @@ mod screen;
 mod simplify;
 mod solve;
 mod start;
+mod start_bound;
 mod swap;
 mod told;
 mod trust;
