@@ -323,14 +323,8 @@ pub trait Effect: Declared + Sync {
     fn nested_alternatives(&self, _start: &[f64]) -> Vec<Vec<f64>> {
         vec![]
     }
-    /// Whether parameter `i` takes no part in the simulation while the others hold their values
-    /// in `p`: at any value of `p[i]` the model replays exactly (bit for bit) as at `p`, so the
-    /// parameter's finite-difference column there is exactly zero and two points that differ in
-    /// it alone are one replay (Stribeck friction's velocity scale where static and sliding
-    /// levels are equal: the breakaway it shapes has zero height). The search's judgement of a
-    /// friction extension replays neither (`fit::select`'s `extension`). Default: `false`.
-    fn idle(&self, p: &[f64], i: usize) -> bool {
-        let _ = (p, i);
+    /// Whether the replay is bit for bit the same at any `p[i]`, the rest held. Default: no.
+    fn idle(&self, _p: &[f64], _i: usize) -> bool {
         false
     }
     /// The diagnosis: this effect's signature feature, computed from one joint's samples (the
