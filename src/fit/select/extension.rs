@@ -384,7 +384,7 @@ mod tests {
         let opts = FitOptions::default();
         let allowed: Vec<String> =
             crate::fit::effects::all().iter().map(|e| e.id().into()).collect();
-        let g = vec!["servo".to_string()];
+        let g = ["servo".to_string()];
         let cand = (&StribeckFriction as &'static dyn Effect, &g[..]);
         let secs = |r: &[Recording]| r.iter().map(|x| x.t.last().unwrap() - x.t[0]).sum::<f64>();
         let engine = Engine::new(&robot, &recs, &opts);
