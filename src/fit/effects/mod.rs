@@ -27,8 +27,10 @@ use crate::sim2real::replay::{
 pub mod docs;
 pub mod held;
 pub mod inertial;
+mod probe;
 mod target;
 pub mod unmoved;
+pub use probe::{PROBE_STEP, probe_step};
 pub use target::{JointTarget, bounds_for_drive};
 pub use unmoved::{Seen, Unmoved};
 
@@ -205,16 +207,6 @@ pub enum IsaacLab {
     Comment(String),
 }
 
-/// The linearised re-ranking's probe step [fraction of a parameter's range].
-pub const PROBE_STEP: f64 = 0.05;
-
-/// A parameter's default probe value: `start` moved by [`PROBE_STEP`] of `[lo, hi]`, up, or
-/// down when up would leave the bounds.
-pub fn probe_step(start: f64, lo: f64, hi: f64) -> f64 {
-    let step = PROBE_STEP * (hi - lo);
-    if start + step <= hi { start + step } else { start - step }
-}
-
 pub trait Effect: Declared + Sync {
     fn id(&self) -> &'static str {
         self.meta().id
@@ -322,6 +314,10 @@ pub trait Effect: Declared + Sync {
     /// lower training error. Empty (the default): none.
     fn nested_alternatives(&self, _start: &[f64]) -> Vec<Vec<f64>> {
         vec![]
+    }
+    /// Whether the replay is bit for bit the same at any `p[i]`, the rest held. Default: no.
+    fn idle(&self, _p: &[f64], _i: usize) -> bool {
+        false
     }
     /// The diagnosis: this effect's signature feature, computed from one joint's samples (the
     /// residual is least-squares fitted on it, see [`crate::fit::diagnose`]).

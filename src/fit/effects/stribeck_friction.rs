@@ -80,6 +80,12 @@ impl Effect for StribeckFriction {
         let [_, c, ..] = start else { return vec![] };
         [(2.0, 0.05), (3.0, 0.05), (4.0, 0.03)].iter().map(|&(r, vs)| vec![r * c, *c, vs]).collect()
     }
+    /// The velocity scale where static and sliding levels are equal (as the hook reads them,
+    /// clamped at zero): the budget `Fd + (Fs − Fd)·exp(−(q̇/v_s)²)` is `Fd + 0·e`, with `e` in
+    /// [0, 1] for every finite q̇ (NaN alike at every v_s), and `Fd` to the last bit.
+    fn idle(&self, p: &[f64], i: usize) -> bool {
+        matches!(p, [fs, fd, _, ..] if i == 2 && fs.max(0.0) == fd.max(0.0))
+    }
     fn signature(&self, s: &Samples) -> Signature {
         let vs = 0.2 * s.qd_rms;
         Signature::centred(s.qd.iter().map(|v| v.signum() * (-(v / vs).powi(2)).exp()).collect())
@@ -102,6 +108,31 @@ mod tests {
         let cx = HookCtx { st: &mut st, q: 0.0, qd, q_target: 0.0, io: &mut io, dt: 0.001, p: &p };
         StribeckFriction.torque(cx);
         io.tau - drive
+    }
+
+    /// The velocity scale is idle exactly where static and sliding levels are equal (as the
+    /// hook clamps them): one step's torque is then the same to the last bit at every scale,
+    /// moving or at rest; anywhere else, or for another parameter, it is not idle.
+    #[test]
+    fn the_velocity_scale_is_idle_where_the_breakaway_has_no_height() {
+        let tau = |p: [f64; 3], qd: f64| {
+            let mut st = EffectState::default();
+            let mut io = StepIo { enabled: false, tau: 0.01, inertia: 0.005, ..Default::default() };
+            let cx = HookCtx { st: &mut st, q: 0.0, qd, q_target: 0.0, io: &mut io, dt: 0.001, p: &p };
+            StribeckFriction.torque(cx);
+            io.tau
+        };
+        for (fs, fd) in [(0.03, 0.03), (0.0, 0.0), (-0.2, 0.0)] {
+            assert!(StribeckFriction.idle(&[fs, fd, 0.1], 2), "{fs} {fd}");
+            assert!(!StribeckFriction.idle(&[fs, fd, 0.1], 0) && !StribeckFriction.idle(&[fs, fd, 0.1], 1));
+            for qd in [0.0, 1e-3, -0.05, 0.3, 40.0] {
+                let at = |vs: f64| tau([fs, fd, vs], qd).to_bits();
+                assert!([0.01, 0.05, 2.0, 1e-9].iter().all(|&vs| at(vs) == at(0.1)), "{fs} {fd} {qd}");
+            }
+        }
+        // A breakaway of some height: the scale shapes it.
+        assert!(!StribeckFriction.idle(&[0.06, 0.03, 0.1], 2));
+        assert_ne!(tau([0.06, 0.03, 0.2], 0.1), tau([0.06, 0.03, 0.05], 0.1));
     }
 
     #[test]

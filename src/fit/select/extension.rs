@@ -16,9 +16,17 @@
 //! information criterion counted per window ([`bic_pieces`]) below the plain fit's — its extra
 //! parameters buy nothing there — the full fit is left out (`tried`: phase "screen").
 //!
+//! What provably replays as a point replayed already is not replayed ([`Effect::idle`]: a
+//! parameter the simulation does not depend on at a point). The plain fit taken over by
+//! Stribeck friction has static = sliding level, where the velocity scale shapes a breakaway
+//! of zero height: that parameter's column there is exactly zero, and where the plain level is
+//! zero every further start (a multiple of it, at another velocity scale) is the same point.
+//! The judgement's decisions are those of every replay made.
+//!
 //! [`Effect::plain_variant`]: crate::fit::effects::Effect::plain_variant
 //! [`Effect::absorb`]: crate::fit::effects::Effect::absorb
 //! [`Effect::nested_alternatives`]: crate::fit::effects::Effect::nested_alternatives
+//! [`Effect::idle`]: crate::fit::effects::Effect::idle
 //! [`bic_pieces`]: crate::fit::stats::bic_pieces
 
 use rayon::prelude::*;
@@ -176,14 +184,25 @@ impl Near {
         starts.extend(
             effect.nested_alternatives(&x0).iter().filter(|a| a.len() >= k).map(|a| clamp(a)),
         );
-        let errs: Vec<(f64, f64)> = starts
-            .par_iter()
-            .map(|a| {
+        // A start that provably replays as an earlier one replayed ([`same_replay`]) is not.
+        let mut first: Vec<usize> = Vec::with_capacity(starts.len());
+        for i in 0..starts.len() {
+            let same = |&j: &usize| first[j] == j && same_replay(effect, &starts[j], &starts[i]);
+            let f = (0..i).find(same).unwrap_or(i);
+            first.push(f);
+        }
+        let own: Vec<(f64, f64)> = (0..starts.len())
+            .into_par_iter()
+            .map(|i| {
+                if first[i] != i {
+                    return (f64::NAN, f64::NAN);
+                }
                 engine
-                    .errors(data, &with(applied, (effect, group), a))
+                    .errors(data, &with(applied, (effect, group), &starts[i]))
                     .map_or((f64::INFINITY, f64::INFINITY), |e| (e.sse, e.rmse()))
             })
             .collect();
+        let errs: Vec<(f64, f64)> = first.iter().map(|&j| own[j]).collect();
         let best = (0..starts.len()).fold(0, |b, i| if errs[i].0 < errs[b].0 { i } else { b });
         Some(Near { starts, errs, best, k, lo, hi })
     }
@@ -217,6 +236,10 @@ impl Near {
                 if h == 0.0 {
                     return None;
                 }
+                // A parameter idle at the start: its column is exactly zero, as a replay gives.
+                if effect.idle(xb, i) {
+                    return Some(vec![0.0; rb.len()]);
+                }
                 let mut x = xb.clone();
                 x[i] = v;
                 let r1 = resid(&x)?;
@@ -231,6 +254,24 @@ impl Near {
         let g: Vec<Vec<f64>> =
             cols.iter().map(|x| cols.iter().map(|y| dot(x, y)).collect()).collect();
         Some(combine(&b, &g))
+    }
+}
+
+/// Whether `effect` replays exactly (bit for bit) at `b` as at `a`: the two are equal, or
+/// differ in one parameter that is idle at `a` ([`Effect::idle`]: the simulation does not
+/// depend on it while the others hold their values, which are `b`'s). Only one parameter:
+/// each of two idle alone at `a` need not be idle together.
+///
+/// [`Effect::idle`]: crate::fit::effects::Effect::idle
+fn same_replay(effect: &dyn Effect, a: &[f64], b: &[f64]) -> bool {
+    if a.len() != b.len() {
+        return false;
+    }
+    let mut apart = (0..a.len()).filter(|&i| a[i].to_bits() != b[i].to_bits());
+    match (apart.next(), apart.next()) {
+        (None, _) => true,
+        (Some(i), None) => effect.idle(a, i),
+        _ => false,
     }
 }
 
@@ -320,4 +361,55 @@ fn improves_on(
         least = Some((x1, rmse1));
     }
     (beats(sse1), least)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{Near, could_reach, with};
+    use crate::fit::effects::{CoulombFriction, Effect, StribeckFriction, probe_step};
+    use crate::fit::select::{Engine, FitOptions, Search};
+    use crate::sim2real::recording::Recording;
+
+    /// Judged from a plain Coulomb level of zero (on a servo whose recordings hold Coulomb
+    /// friction), Stribeck friction's starts — the level taken over and the further starts at
+    /// other velocity scales — are one point, and there the velocity scale's column is zero: the
+    /// judgement replays that point, the two levels' columns and the step, at most four replays
+    /// where every point replayed would be seven. What it skips is what a replay gives: every
+    /// start, and the start with its velocity scale moved to its probe value, replayed by a
+    /// fresh engine, leave the same error to the last bit.
+    #[test]
+    fn points_that_provably_replay_alike_are_replayed_once() {
+        let (robot, recs) =
+            crate::synth::recorded::pendulum(Some((CoulombFriction.id(), vec![0.05])), 3, 11);
+        let opts = FitOptions::default();
+        let allowed: Vec<String> =
+            crate::fit::effects::all().iter().map(|e| e.id().into()).collect();
+        let g = ["servo".to_string()];
+        let cand = (&StribeckFriction as &'static dyn Effect, &g[..]);
+        let secs = |r: &[Recording]| r.iter().map(|x| x.t.last().unwrap() - x.t[0]).sum::<f64>();
+        let engine = Engine::new(&robot, &recs, &opts);
+        let s = Search { engine: &engine, train: &recs, heldout: &recs, allowed: &allowed };
+        let _ = engine.errors_held(&recs, &[]).expect("replay");
+        let before = engine.rollout_stats().simulated_s;
+        let (could, _) = could_reach(&s, (&recs, &[]), cand, &[0.0], &|_| false);
+        let cost = engine.rollout_stats().simulated_s - before;
+        assert!(!could);
+        assert!(cost <= 4.0 * secs(&recs) + 1e-6, "{cost} s for {} s a replay", secs(&recs));
+        let near = Near::at(&s, (&recs, &[]), cand, (&CoulombFriction, &[0.0])).expect("starts");
+        let scales: Vec<f64> = near.starts.iter().map(|p| p[2]).collect();
+        assert!(near.starts.len() == 4 && scales.iter().any(|&v| v != scales[0]), "{scales:?}");
+        let fresh = Engine::new(&robot, &recs, &opts);
+        let sse = |p: &[f64]| fresh.errors(&recs, &with(&[], cand, p)).expect("replay").sse;
+        let x0 = &near.starts[0];
+        assert!(x0[0] == 0.0 && x0[1] == 0.0, "{x0:?}");
+        for p in &near.starts {
+            assert_eq!(sse(p).to_bits(), sse(x0).to_bits(), "{p:?}");
+        }
+        let mut moved = x0.clone();
+        moved[2] = probe_step(x0[2], near.lo[2], near.hi[2]);
+        assert!(moved[2] != x0[2] && sse(&moved).to_bits() == sse(x0).to_bits());
+        // A level of some height: its starts are apart (each replayed).
+        let near = Near::at(&s, (&recs, &[]), cand, (&CoulombFriction, &[0.05])).expect("starts");
+        assert!(near.errs.iter().skip(1).all(|e| e.0 != near.errs[0].0), "{:?}", near.errs);
+    }
 }
