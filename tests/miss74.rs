@@ -6,21 +6,9 @@
 mod common;
 
 use common::lint::{findings, message, of, real_robot_files};
+use common::xml_text::{attr, tags};
 
 const DF: &str = "fixtures/rules/drive-friction-mismatch/";
-
-/// The value of `attr="…"` inside `tag` (a start tag's text), if written.
-fn attr<'a>(tag: &'a str, name: &str) -> Option<&'a str> {
-    let key = format!(" {name}=\"");
-    let i = tag.find(&key)? + key.len();
-    Some(&tag[i..i + tag[i..].find('"')?])
-}
-
-/// Every `<tag …>` start tag of `text`, as written.
-fn tags<'a>(text: &'a str, tag: &str) -> Vec<&'a str> {
-    let open = format!("<{tag} ");
-    text.match_indices(&open).map(|(i, _)| &text[i..i + text[i..].find('>').unwrap()]).collect()
-}
 
 /// The joint list a finding names after `which` ("on 4 (" or "none on 2 ("), unquoted.
 fn named(msg: &str, which: &str) -> Vec<String> {

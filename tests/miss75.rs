@@ -6,22 +6,10 @@
 mod common;
 
 use common::lint::{findings, measured, message, of, real_robot_files};
+use common::xml_text::{attr, tags};
 
 const KS: &str = "fixtures/rules/keyframe-state/";
 const PF: &str = "fixtures/rules/passive-joint-friction/";
-
-/// The value of `attr="…"` inside `tag` (a start tag's text), if written.
-fn attr<'a>(tag: &'a str, name: &str) -> Option<&'a str> {
-    let key = format!(" {name}=\"");
-    let i = tag.find(&key)? + key.len();
-    Some(&tag[i..i + tag[i..].find('"')?])
-}
-
-/// Every `<tag …>` start tag of `text`, as written.
-fn tags<'a>(text: &'a str, tag: &str) -> Vec<&'a str> {
-    let open = format!("<{tag} ");
-    text.match_indices(&open).map(|(i, _)| &text[i..i + text[i..].find('>').unwrap()]).collect()
-}
 
 fn nums(s: &str) -> Vec<f64> {
     s.split_whitespace().map(|x| x.parse().unwrap()).collect()

@@ -3,6 +3,7 @@
 
 pub mod indep;
 pub mod lint;
+pub mod xml_text;
 
 use std::path::{Path, PathBuf};
 

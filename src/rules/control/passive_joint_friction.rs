@@ -3,7 +3,7 @@ use crate::finding::{Finding, Severity, Subject};
 use crate::model::mjcf::ElemKind;
 use crate::model::{JointType, Robot};
 use crate::rules::geometry::oversized_weight::worst_gravity_torque;
-use crate::rules::inertia::passive_joint_armature::driven;
+use crate::rules::inertia::passive_joint_armature::{class_sources, driven};
 use crate::rules::{Context, Domain, Rule, RuleMeta, opt};
 use crate::util::fmt_num;
 
@@ -103,16 +103,7 @@ impl Rule for PassiveJointFriction {
         let factor = cx.opt("load_factor");
         let source =
             |j: usize| robot.attr_loc(ElemKind::Joint, j, &robot.joints[j].name, "frictionloss");
-        let motor_sources: Vec<_> = robot
-            .joints
-            .iter()
-            .filter(|j| j.is_scalar() && j.frictionloss > 0.0)
-            .filter(|j| !robot.actuators_on_joint(j.id).is_empty())
-            .filter_map(|j| {
-                let (loc, class) = source(j.id);
-                class.map(|_| loc)
-            })
-            .collect();
+        let motor_sources = class_sources(robot, |j| j.frictionloss > 0.0, source);
         if motor_sources.is_empty() {
             return;
         }

@@ -1,9 +1,30 @@
 use crate::declare_rule;
 use crate::finding::{Finding, Severity, Subject};
 use crate::model::mjcf::ElemKind;
-use crate::model::{PartSource, Robot};
+use crate::model::source::Loc;
+use crate::model::{Joint, PartSource, Robot};
 use crate::rules::{Context, Domain, Rule, RuleMeta, in_subtree, opt};
 use crate::util::fmt_num;
+
+/// The class attributes the actuated joints inherit a quantity from: the locations `source`
+/// gives (where a joint's attribute is written, and the class it inherits from) of the scalar,
+/// actuated joints for which `set` holds, when the value comes from a class.
+pub(crate) fn class_sources(
+    robot: &Robot,
+    set: impl Fn(&Joint) -> bool,
+    source: impl Fn(usize) -> (Loc, Option<String>),
+) -> Vec<Loc> {
+    robot
+        .joints
+        .iter()
+        .filter(|j| j.is_scalar() && set(j))
+        .filter(|j| !robot.actuators_on_joint(j.id).is_empty())
+        .filter_map(|j| {
+            let (loc, class) = source(j.id);
+            class.map(|_| loc)
+        })
+        .collect()
+}
 
 declare_rule! {
     /// ## What it does
@@ -113,16 +134,7 @@ impl Rule for PassiveJointArmature {
             let jt = &robot.joints[j];
             robot.attr_loc(ElemKind::Joint, j, &jt.name, "armature")
         };
-        let motor_sources: Vec<_> = robot
-            .joints
-            .iter()
-            .filter(|j| j.is_scalar() && j.own_armature() > 0.0)
-            .filter(|j| !robot.actuators_on_joint(j.id).is_empty())
-            .filter_map(|j| {
-                let (loc, class) = source(j.id);
-                class.map(|_| loc)
-            })
-            .collect();
+        let motor_sources = class_sources(robot, |j| j.own_armature() > 0.0, source);
         if motor_sources.is_empty() {
             return;
         }
