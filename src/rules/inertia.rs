@@ -15,6 +15,7 @@ pub mod parallel_ankle_armature;
 pub mod passive_joint_armature;
 pub mod repeated_class_mass;
 pub mod transmission_armature;
+mod urdf_no_inertial;
 pub mod visual_geom_mass;
 pub mod zero_armature;
 

@@ -4,10 +4,13 @@
 //! Foot bodies come from the spec's `robot.foot_bodies` globs; without them, from body names
 //! containing `foot`, `ankle_roll`, `toe` or `sole`; failing that, the leaf bodies whose
 //! collision geoms reach within 3 cm of the robot's lowest collision point at the keyframe.
+//! A push rod of a closed-loop linkage ([`linkage_bodies`]: on ball joints only, tied by a
+//! `connect` or `weld` equality) and what hangs below it is never matched, whatever its name.
 //! Each matched body that has no matched ancestor is a foot root; its descendants (and any
 //! other matched body on the same side, e.g. a separately matched toe) are its toe bodies. A
 //! root with no contact geom of its own whose foot's contacts all hang below one descendant (an
-//! ankle roll link above the pitch link that holds the sole) hands the foot to that descendant.
+//! ankle roll link above the pitch link that holds the sole), or below another matched body of
+//! its side (a toe motor's crank matched before the toe links), hands the foot to that body.
 //!
 //! Only a floating-base robot has feet (unless the spec names them; a free joint, or three
 //! slides and a ball: [`Robot::floating_bodies`]): a fixed-base arm or a test rig gets no
@@ -147,6 +150,11 @@ pub fn feet(robot: &Robot, spec: Option<&Spec>) -> Vec<Foot> {
         from_spec || (b != 0 && bases.contains(&b)) || !bases.iter().any(|&f| weld(f) == weld(b))
     };
     matched.retain(|&b| on_limb(b));
+    // A push rod of a closed-loop linkage (and what hangs below it) is no foot and no toe,
+    // whatever its name, unless the spec names it.
+    let rods = linkage_bodies(robot);
+    let in_rod = |b: usize| !from_spec && rods.iter().any(|&r| r == b || is_ancestor(robot, r, b));
+    matched.retain(|&b| !in_rod(b));
     // Only a floating-base robot (a legged one) has feet to guess at: a fixed-base arm or a
     // test rig does not.
     let floating = !bases.is_empty();
@@ -166,6 +174,7 @@ pub fn feet(robot: &Robot, spec: Option<&Spec>) -> Vec<Foot> {
                 !robot.bodies.iter().any(|c| c.id != 0 && c.parent == b)
                     && lowest(b) <= zmin + 0.03
                     && on_limb(b)
+                    && !in_rod(b)
             })
             .collect();
     }
@@ -180,7 +189,8 @@ pub fn feet(robot: &Robot, spec: Option<&Spec>) -> Vec<Foot> {
             robot.bodies.iter().any(|b| b.name == n)
         })
         .map(|(s, _)| s);
-        let toes: Vec<usize> = (1..n).filter(|&b| is_ancestor(robot, root, b)).collect();
+        let toes: Vec<usize> =
+            (1..n).filter(|&b| is_ancestor(robot, root, b) && !in_rod(b)).collect();
         // A second root on the same side (a separately matched toe) joins the first.
         if let Some(f) = out.iter_mut().find(|f| side.is_some() && f.side == side) {
             let toe_named = robot.body_name(root).to_lowercase().contains("toe");
@@ -206,12 +216,18 @@ pub fn feet(robot: &Robot, spec: Option<&Spec>) -> Vec<Foot> {
         f.geoms.sort();
         // The foot is the body that carries its contacts: a matched body with no contact geom
         // of its own whose contacts all hang below one descendant (an ankle roll link above the
-        // pitch link that holds the sole) hands the foot to that descendant.
+        // pitch link that holds the sole) hands the foot to that descendant; one whose contacts
+        // all hang below another matched body of its side (a motor crank matched first, beside
+        // the toe pitch and roll links that hold the sole) hands it to that body, which keeps
+        // its own descendants as toes.
         if !f.geoms.is_empty() && !f.geoms.iter().any(|&g| robot.geoms[g].body == f.root) {
             let carriers: Vec<usize> = f.geoms.iter().map(|&g| robot.geoms[g].body).collect();
             let c = common_ancestor(robot, &carriers);
             if c != f.root && is_ancestor(robot, f.root, c) {
                 f.toes.retain(|&b| b != c && !is_ancestor(robot, b, c));
+                f.root = c;
+            } else if c != f.root && f.toes.contains(&c) {
+                f.toes.retain(|&b| is_ancestor(robot, c, b));
                 f.root = c;
             }
         }
@@ -248,6 +264,42 @@ pub fn feet(robot: &Robot, spec: Option<&Spec>) -> Vec<Foot> {
     out.retain(|f| !f.geoms.is_empty());
     out.sort_by_key(|f| (f.side.map(|s| s as u8).unwrap_or(2), f.root));
     out
+}
+
+/// The push rods of closed-loop linkages: bodies that a `connect` or `weld` equality ties to
+/// another body (its body or site, MuJoCo >= 3.1) and whose own joints are all ball joints
+/// (one or more) — a two-force member with a spherical end at each side, like Digit's toe rods
+/// from the toe motors' cranks to the toe roll link or Cassie's plantar rod. Such a body
+/// transmits a motor's force to the foot; it is never a foot or a toe, and its geoms (a capsule
+/// along the rod, reaching up the shin) do not outline a sole.
+pub fn linkage_bodies(robot: &Robot) -> Vec<usize> {
+    use crate::model::JointType;
+    let objtype = robot.mj.eq_objtype();
+    let site_body = robot.mj.site_bodyid();
+    let body_of = |e: &crate::model::Equality, o: i32| -> Option<usize> {
+        if o < 0 {
+            return None;
+        }
+        match objtype.get(e.id).map(|&t| t as i32) {
+            Some(6) => site_body.get(o as usize).map(|&b| b.max(0) as usize),
+            _ => Some(o as usize),
+        }
+    };
+    let mut tied: Vec<usize> = robot
+        .equalities
+        .iter()
+        .filter(|e| e.etype == 0 || e.etype == 1)
+        .flat_map(|e| [body_of(e, e.obj1), body_of(e, e.obj2)])
+        .flatten()
+        .filter(|&b| b != 0 && b < robot.bodies.len())
+        .collect();
+    tied.sort();
+    tied.dedup();
+    tied.retain(|&b| {
+        let mut js = robot.joints.iter().filter(|j| j.body == b).peekable();
+        js.peek().is_some() && js.all(|j| j.jtype == JointType::Ball)
+    });
+    tied
 }
 
 /// Whether ground geom `g` (lowest point `low`) lies, where it reaches the ground, inside the

@@ -24,9 +24,9 @@ declare_rule! {
     /// spheres, Menagerie's Unitree G1 1 mm corner points). Spheres below `min_radius` are a
     /// sole's corner points, not a slip, when three or more of them span a support polygon of
     /// at least 1 mm² (Atlas: eight 0.1 mm spheres over 26 × 13 cm): a sphere's radius only
-    /// lifts its point contact, and a foot scaled down by a unit error spans no polygon; no frictionless (condim 1) ground
-    /// contact, and the stated `condim`; sliding friction within `friction_tolerance` of the stated
-    /// `friction`; at least three non-collinear
+    /// lifts its point contact, and a foot scaled down by a unit error spans no polygon; no
+    /// frictionless (condim 1) ground contact, and the stated `condim`; sliding friction within
+    /// `friction_tolerance` of the stated `friction`; at least three non-collinear
     /// ground contact points whose support polygon reaches both the heel and the toe third of the
     /// foot; and left and right feet with the same number and sizes of geoms (sizes within 2 % or
     /// 0.5 mm, so mesh export noise does not count). Problems are reported once per foot, listing
@@ -48,21 +48,22 @@ declare_rule! {
     ///
     /// Friction and condim are matters of intent: MuJoCo's default sliding friction 1 (its
     /// default condim is 3), and condim 6 (rolling friction, common on quadruped feet), are
-    /// deliberate choices in many public models.
-    /// Sliding friction is judged only against an intended value the user states — `friction` /
-    /// `friction_tolerance` under `[rules.foot-collision-geometry]` in modellint.toml: one
-    /// robot's identified friction (the Asimov 0.6) is no expectation for another robot's feet
-    /// on another floor. Likewise condim: torsional and rolling friction (condim 4/6, a point-foot
-    /// quadruped's usual choice) are judged only against a `condim` the user states; condim 1
-    /// (frictionless feet: the foot slides under any sideways force) is a warning whatever the
-    /// intent.
+    /// deliberate choices in many public models. Sliding friction is judged only against an
+    /// intended value the user states — `friction` / `friction_tolerance` under
+    /// `[rules.foot-collision-geometry]` in modellint.toml: one robot's identified friction (the
+    /// Asimov 0.6) is no expectation for another robot's feet on another floor. Likewise condim:
+    /// torsional and rolling friction (condim 4/6, a point-foot quadruped's usual choice) are
+    /// judged only against a `condim` the user states; condim 1 (frictionless feet: the foot
+    /// slides under any sideways force) is a warning whatever the intent.
     ///
     /// Foot bodies come from the spec's `robot.foot_bodies` globs; without them, from body names
     /// containing `foot`, `ankle_roll`, `toe` or `sole`; failing that, the leaf bodies whose
-    /// collision geoms reach within 3 cm of the robot's lowest point. Only floating-base robots
-    /// have feet (a fixed-base arm gets no foot rule unless the spec names feet). Robot
-    /// families: a wheel (a sphere, cylinder or ellipsoid on an unlimited hinge) is not a foot;
-    /// a point foot (spheres touching down within 2 cm of each other, as on quadrupeds) is judged
+    /// collision geoms reach within 3 cm of the robot's lowest point; never a push rod (a body on
+    /// ball joints only that a `connect` or `weld` equality ties to another body, such as Digit's
+    /// toe rods, whatever its name). Only floating-base robots have feet (a fixed-base arm gets
+    /// no foot rule unless the spec names feet). Families: a wheel (a sphere, cylinder or
+    /// ellipsoid on an unlimited hinge) is not a foot; a point foot (spheres touching down
+    /// within 2 cm of each other, as on quadrupeds) is judged
     /// by its ground geoms only — a shank geom above the foot sphere is not a foot — and gets no
     /// support-polygon finding. A foot that touches down along a line or at one point is
     /// reported only when a joint at the foot could turn it about that contact (an ankle roll
@@ -71,10 +72,10 @@ declare_rule! {
     /// meant to stand on a sole that was modelled too thin. Without such a joint the line or
     /// point is the design — an underactuated biped's blade foot whose ankle only pitches and
     /// that the hip roll balances (Cassie), a stilt, a quadruped's foot bar — and is not
-    /// reported, except on a humanoid (a left and a right foot and at least two limbs off the
-    /// legs with two or more joints: arms; a jointed branch off one leg, such as Cassie's push
-    /// rods, cranks and heel springs, is that leg's mechanism), which stands on soles: an ankle-pitch-only humanoid
-    /// (H1 style) whose sole is modelled as a line is reported. On a flat foot, geom types and radii are judged on the ground
+    /// reported, except on a humanoid (a left and a right foot and at least two limbs off the legs
+    /// with two or more joints: arms; a jointed branch off one leg, such as Cassie's push rods,
+    /// cranks and heel springs, is that leg's mechanism), which stands on soles: an ankle-pitch-only
+    /// humanoid (H1 style) whose sole is a line is reported. On a flat foot, geom types and radii are judged on the ground
     /// geoms too (within 10 mm of the foot's lowest point at the keyframe: an ankle housing above
     /// the sole is not a foot contact); meshes on any of the foot's geoms.
     ///
@@ -84,8 +85,8 @@ declare_rule! {
     /// artifacts of the mesh; mesh-vs-mesh contact is worse. A foot with fewer than three
     /// non-collinear contact points, or none at heel or toe, has a degenerate support polygon.
     /// condim ≠ 3 changes the friction model (1: frictionless, 4/6: torsional and rolling
-    /// friction), and friction other than the real feet's on the real floor changes slip. Mismatched left and
-    /// right feet make the gait asymmetric.
+    /// friction), and friction other than the real feet's on the real floor changes slip.
+    /// Mismatched left and right feet make the gait asymmetric.
     ///
     /// ## How it is confirmed
     /// Probe `stance-settle` (on a floor, feet loaded, robot upright: otherwise inconclusive)

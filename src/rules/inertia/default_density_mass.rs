@@ -25,8 +25,13 @@ declare_rule! {
     /// (the writer chose the geoms' mass), a body on a joint of its own whose part states no
     /// mass elsewhere (a foot or hand that takes its mass from its shapes: the modeller's
     /// choice), bodies welded to the world (furniture, a fixed base's mount), and
-    /// `<compiler inertiafromgeom>` `"true"` (rule `inertial-overridden`) or `"false"`. URDF
-    /// links are not judged.
+    /// `<compiler inertiafromgeom>` `"true"` (rule `inertial-overridden`) or `"false"`.
+    ///
+    /// In a URDF, the moving links that state no `<inertial>` (nor does any link a fixed joint
+    /// fuses into the same body), reported together with the mass MuJoCo made up for each when
+    /// they hold at least `min_fraction` of the robot's mass: the URDF specification makes such
+    /// a link massless, MuJoCo's importer fills its collision geoms (visual ones are discarded)
+    /// with water (myCobot 280: no link states one). Links welded to the world are not judged.
     ///
     /// ## Why is this bad?
     /// With `inertiafromgeom="auto"` (the default) MuJoCo uses each stated `<inertial>` and
@@ -70,6 +75,10 @@ impl Rule for DefaultDensityMass {
     }
     fn check(&self, cx: &Context, out: &mut Vec<Finding>) {
         let robot = cx.robot;
+        if robot.format == Format::Urdf {
+            out.extend(super::urdf_no_inertial::urdf_no_inertial(cx, cx.opt("min_fraction")));
+            return;
+        }
         if robot.format != Format::Mjcf
             || matches!(inertiafromgeom(&robot.tree), Some("true" | "false"))
         {

@@ -23,7 +23,9 @@ declare_rule! {
     ///   faster than `max_tip_speed` (velocity × reach, or the velocity itself for a prismatic
     ///   joint);
     /// - **zero**: `effort="0"` or `velocity="0"` on a joint a `<transmission>` drives (a motor
-    ///   that gives no torque or cannot turn);
+    ///   that gives no torque or cannot turn), and `velocity="0"` with a positive `effort` on
+    ///   any moving joint (a motor's torque with no speed: myCobot 280's six joints); a passive
+    ///   joint's `effort="0" velocity="0"` (no motor) is not judged;
     /// - **beyond a turn**: a revolute joint with a stop more than a full turn (2π, plus the
     ///   rounding of a value written to two decimals) from its zero: the widest real stops,
     ///   cable-wound multi-turn axes such as a UR arm's, are ±2π;
@@ -105,6 +107,7 @@ enum Case {
     Effort,
     Velocity,
     Zero,
+    Stalled,
     BeyondTurn,
     LegTurn,
     LegFold,
@@ -339,6 +342,21 @@ impl Rule for PlaceholderJointLimits {
                         });
                     }
                 }
+            } else if matches!(jtype, "revolute" | "continuous" | "prismatic")
+                && let (Some((v, at)), Some((e, _))) = (velocity, effort)
+                && v == 0.0
+                && e > 0.0
+            {
+                // No transmission, but a motor's torque and a speed of 0: a joint that cannot
+                // move. A passive joint's effort 0 and velocity 0 (no motor) is not judged.
+                let unit = if slide { "N" } else { "N·m" };
+                hits.push(Hit {
+                    case: Case::Stalled,
+                    joint: j.id,
+                    at,
+                    value: 0.0,
+                    detail: format!("`{name}` effort {} {unit}, velocity 0", fmt_num(e, 4)),
+                });
             }
             // A prismatic joint's load is a force: its "reach" is a unit lever (the weight in N,
             // the velocity in m/s as it stands).
@@ -392,6 +410,7 @@ impl Rule for PlaceholderJointLimits {
             Case::Effort,
             Case::Velocity,
             Case::Zero,
+            Case::Stalled,
             Case::BeyondTurn,
             Case::LegTurn,
             Case::LegFold,
@@ -507,6 +526,15 @@ fn finding(
             "ROS and training frameworks read effort 0 as a joint that gives no torque and velocity 0 as one that cannot move; MuJoCo's importer treats effort 0 as no force limit at all",
             "write the motor's peak torque at the joint as effort and its speed at the joint as velocity",
         ),
+        Case::Stalled => (
+            format!(
+                "{n} joint{s} {states} a motor's torque (effort > 0) and a speed limit of 0 (velocity=\"0\"): the file claims {} that cannot move: {shown}",
+                if n == 1 { "a motor" } else { "motors" }
+            ),
+            "velocity 0 with an effort".to_string(),
+            "a URDF's velocity is the joint's speed limit (rad/s; m/s for a prismatic joint), so 0 claims the joint cannot move while its effort claims a motor: the file states no speed for it. MuJoCo's importer ignores velocity (its model moves at any speed); a tool that reads the URDF's limits (a ROS joint-limits interface, a training framework's DoF velocity limit) holds the joint still or, reading 0 as unset, limits nothing, by the tool. A passive joint (effort 0) is not judged",
+            "write the motor's no-load speed at the joint (motor speed / reduction, from the datasheet) as velocity",
+        ),
         Case::BeyondTurn if robot.format != Format::Urdf => (
             format!(
                 "{n} hinge joint{s} {} a stop more than a full turn (2π) from the joint's zero, no hardware stop: {shown}",
@@ -582,7 +610,7 @@ fn finding(
         Case::LegTurn => f.measured(top.value, "rad").expected(FULL_TURN, "rad"),
         Case::LegFold => f.measured(top.value, "rad").expected(FULL_TURN / 2.0, "rad"),
         Case::OneValue => f.measured(top.value, "×").expected(cx.opt("motor_spread"), "×"),
-        Case::Zero | Case::NoRange => f.measured(0.0, ""),
+        Case::Zero | Case::Stalled | Case::NoRange => f.measured(0.0, ""),
     };
     Some(f)
 }
