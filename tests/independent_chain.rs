@@ -214,6 +214,12 @@ fn a_gear_play_behind_the_knee_motor_is_found_as_backlash_on_the_knee() {
             && t["heldout_improvement"].as_f64().is_some_and(|h| h > 0.0)),
         "the gain error not judged at its coarse fit: {coarse:?}"
     );
+    // ... and, nothing it could pair with kept (no delay, no Coulomb friction on the knee), it
+    // is not judged further: no replay on the whole training set.
+    assert!(
+        coarse.iter().filter(|t| t["effect"] == "gain_error").all(|t| t["train_rmse"].is_null()),
+        "the unpaired gain error judged further: {coarse:?}"
+    );
     // The knee's play absorbs part of the model's timestep, so its value is re-fitted, told, at
     // a finer step (a note says how many seconds that replayed): those replays are the run's
     // cost, in `search.simulated_s` and by phase as `timestep_shift`.
@@ -331,6 +337,26 @@ fn a_gear_play_behind_every_motor_is_found_as_one_backlash_group() {
         .filter(|t| t["phase"] == "pair_screen" && t["effect"] == "backlash+backlash")
         .collect();
     assert!(!screened.is_empty(), "the group's exception on the hip not screened: {tried:?}");
+    // A rival at its coarse fit is judged further (its whole-set replay: a training RMSE) only
+    // where the look-ahead could pair it: the hip's play, the group's exception, is; the gain
+    // error on all three joints, whose mimicking partners (a delay, Coulomb friction) the
+    // screen left out beside a winner of one parameter, is not.
+    let coarse0 = |effect: &str, n: usize| {
+        tried
+            .iter()
+            .find(|t| {
+                t["round"] == 0
+                    && t["phase"] == "add_coarse"
+                    && t["effect"] == effect
+                    && t["joints"].as_array().is_some_and(|j| j.len() == n)
+            })
+            .unwrap_or_else(|| panic!("no {effect} on {n} joints at its coarse fit: {tried:?}"))
+    };
+    let hip = coarse0("backlash", 1);
+    assert!(hip["train_rmse"].as_f64().is_some(), "the hip's play not judged: {hip}");
+    let gain = coarse0("gain_error", 3);
+    assert!(gain["train_rmse"].is_null(), "the unpaired gain error judged: {gain}");
+    assert!(gain["heldout_improvement"].as_f64().is_some(), "no held-out verdict: {gain}");
     // Round 0's judging replays (`judge`): the lead's whole-set and held-out replays and its
     // floors (at most three training replays: reconstruction, timestep at dt / 2 and, when its
     // decision needs it, dt / 4), and per rival judged at its coarse fit one training replay and

@@ -20,11 +20,12 @@ use super::pair_first::{EarlyPair, early_pair, rivals};
 use super::pairs::{joint_pairs, pair_lookahead, refitted_at_floor};
 use super::policy::Phase;
 use super::reach::Reach;
+use super::rival::{Beaten, RoundAt, judge_beaten};
 use super::screen::{HeldoutScreen, Screen, screen_data};
 use super::swap;
 use super::trust::{heldout_columns, with_pair_starts};
 use super::verdict::{at_bound, verdict};
-use super::winner::{beaten_at_coarse, may_partner, on_whole_set, refine, rival_notes};
+use super::winner::{beaten_at_coarse, on_whole_set, refine, rival_notes};
 use super::{Errors, FitOutcome, Search, Selected, Tried, set_uncertainty};
 
 /// One greedy round: diagnose, fit the candidates, keep the best that passes the held-out gate.
@@ -114,6 +115,8 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     let mut accepted: Vec<(Selected, bool, Errors, usize, f64)> = Vec::new();
     // Every single fit of the round, for the joint pairs when no single one passes.
     let mut fitted: Vec<Applied> = Vec::new();
+    // The rivals beaten at their coarse fit, judged at the round's end ([`rival`]).
+    let mut beaten: Vec<Beaten> = Vec::new();
     // The screen: a coarse fit (`screen_evals` rollouts of the training set) of every candidate
     // of one size (one parameter; then more), those candidates in parallel. Only a candidate
     // whose coarse training improvement reaches `screen_share` of the round's best improvement
@@ -471,19 +474,16 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
             fit_rmse
         };
         best_gain = best_gain.max(gain(short_rmse));
-        // A rival beaten at its coarse fit that no candidate of the round kept or to come could
-        // pair with, nor mirror, is logged with its held-out verdict there ([`may_partner`]).
-        let others = accepted.iter().map(|a| (a.0.effect.as_str(), &a.0.joints));
-        let others = others.filter_map(|(x, g)| Some((effects::by_id(x)?, &g[..])));
-        let others = others.chain(cands[ci..].iter().map(|(x, g, _)| (*x, &g[..])));
+        // A rival beaten at its coarse fit (not one a mirror completes) is logged with its
+        // held-out verdict there, and judged at the round's end only where the pair
+        // look-ahead could pair it ([`rival`]).
         let mirrored = matches!(group.as_slice(), [j] if partner(j, &engine.joints).is_some());
-        if let Some(h) = ho_c.as_ref().filter(|_| at_coarse && !mirrored)
-            && !may_partner((e, &group), others)
-        {
+        if let Some(h) = ho_c.as_ref().filter(|_| at_coarse && !mirrored) {
             let v = verdict(&ho_err, h, &group, opts.policy.gate_z(z));
             let (heldout_improvement, significant) = (v.rel, v.significant);
-            let t = Tried { heldout_improvement, significant, ..not_tested(phase, p, f64::NAN) };
-            out.tried.push(t);
+            let t = not_tested(phase, p.clone(), f64::NAN);
+            let logged = out.log(Tried { heldout_improvement, significant, ..t });
+            beaten.push(Beaten { cand: (e, group, ev), params: p, predicted, logged });
             continue;
         }
         let full = whole.then(|| p.clone());
@@ -597,7 +597,8 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         }
         return true;
     }
-    let kept_all: Vec<Selected> = accepted.iter().map(|(s, ..)| s.clone()).collect();
+    let kept_all: Vec<(usize, Selected)> =
+        accepted.iter().map(|(s, _, _, i, _)| (*i, s.clone())).collect();
     // A candidate with a parameter on its bound only wins when no interior one is kept.
     if accepted.iter().any(|(_, b, ..)| !b) {
         accepted.retain(|(_, b, ..)| !b);
@@ -669,6 +670,8 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
         engine.report(round, Phase::Refine, None);
         w = refine(s, &applied, w, (&tr_err, &ho_err), z);
     }
+    let at = RoundAt { applied: &applied, errs: (&tr_err, &ho_err), floors: &floors, z, round };
+    let kept_all = judge_beaten(s, &at, (kept_all, &w), beaten, out);
     if let Some(pair) = pair_lookahead(s, &applied, &kept_all, &w, (z, round), false, out) {
         for (mut p, a) in pair {
             out.applied.push(a);

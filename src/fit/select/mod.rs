@@ -50,6 +50,7 @@ mod probe_trust;
 mod prune;
 mod reach;
 mod reshoot;
+mod rival;
 mod screen;
 mod simplify;
 mod solve;

@@ -45,8 +45,9 @@ pub(super) fn on_whole_set(
 /// full fit goes on from the coarse fit on the same training data, and would have to halve
 /// the held-out error the coarse fit leaves to come near the kept one (on the chain leg's
 /// and pendulum's rivals, the full fit moved it by at most 8 %, either way), where noise cannot halve an unseen error either
-/// (the gate's decisive improvement). Judged at its coarse fit, it is still gated, and when
-/// kept it still partners the round's pair look-ahead.
+/// (the gate's decisive improvement). Judged at its coarse fit, it is still gated where the
+/// round's pair look-ahead could pair it, and when kept it partners the look-ahead
+/// ([`super::rival`]).
 pub(super) fn beaten_at_coarse(
     (kept, kept_joints): (&Errors, &[String]),
     (at_coarse, joints): (&Errors, &[String]),
@@ -62,32 +63,6 @@ pub(super) fn beaten_at_coarse(
     // Only the windows' majority is asked of the verdict (no z test).
     let gate = Gate { z: f64::INFINITY, ..policy.gate() };
     verdict(at_coarse, kept, &group, gate).significant
-}
-
-/// Whether a rival beaten at its coarse fit ([`beaten_at_coarse`]), `e` on `group`, could take
-/// part in the round's pair look-ahead, the only place a kept one of them plays a part: it
-/// cannot win the round (a full fit would have to halve its held-out error to come near the
-/// kept one that beat it, and the winner is the best on held-out or within `simpler_within` of
-/// it), so it names no rival, and the pair look-ahead pairs it only as a mimicking partner
-/// ([`effects::mimicking_pairs`]) or as one effect on a group and on a member of it
-/// ([`super::pairs::pair_lookahead`]). `others` are the effects and groups of the round's
-/// candidates that are kept already or not yet taken: `true` when its effect is one of a
-/// mimicking pair and one of `others` shares a joint with it (a partner, or a winner of two
-/// parameters that the pair's members may replace on its joints), or one of `others` is the
-/// same effect on a group that holds its group or that it holds. When `false` it is not judged
-/// further: its gate verdict on the held-out set at its coarse fit (which the screen replayed)
-/// is logged without its replay on the whole training set and its finer-step test.
-pub(super) fn may_partner<'a>(
-    (e, group): (&dyn Effect, &[String]),
-    mut others: impl Iterator<Item = (&'static dyn Effect, &'a [String])>,
-) -> bool {
-    let mimics =
-        effects::mimicking_pairs().iter().any(|(a, b)| a.id() == e.id() || b.id() == e.id());
-    let nested = |g: &[String], h: &[String]| g.len() < h.len() && g.iter().all(|j| h.contains(j));
-    others.any(|(x, g)| {
-        (mimics && g.iter().any(|j| group.contains(j)))
-            || (x.id() == e.id() && (nested(g, group) || nested(group, g)))
-    })
 }
 
 /// The round's winner `w`, fitted on the screen's data, fitted again on the whole training set
@@ -175,8 +150,7 @@ mod tests {
 
     use super::*;
     use crate::fit::effects::{
-        Armature, Backlash, CoulombFriction, GainError, PositionOffset, StribeckFriction,
-        TorqueLimit, ViscousDamping,
+        Armature, Backlash, CoulombFriction, StribeckFriction, ViscousDamping,
     };
 
     fn sel(effect: &str, joints: &[&str], p: &[(&str, f64)], heldout: f64) -> Selected {
@@ -228,30 +202,6 @@ mod tests {
         // A replay that failed proves nothing.
         let failed = Errors { n: 0, ..errs("knee", &[]) };
         assert!(!beaten_at_coarse((&kept, &knee), (&failed, &knee), &p));
-    }
-
-    #[test]
-    fn a_beaten_rival_is_judged_further_only_where_the_pair_look_ahead_could_pair_it() {
-        let j = |g: &[&str]| g.iter().map(|x| x.to_string()).collect::<Vec<String>>();
-        let (knee, hip, both, ankle) =
-            (j(&["knee"]), j(&["hip"]), j(&["hip", "knee"]), j(&["ankle"]));
-        let may = |e: &dyn Effect, g: &[String], others: &[(&'static dyn Effect, &Vec<String>)]| {
-            may_partner((e, g), others.iter().map(|(x, h)| (*x, &h[..])))
-        };
-        // An effect of no mimicking pair, beside others on its joint: nothing to pair with.
-        assert!(!may(&TorqueLimit, &knee, &[(&Armature, &knee), (&Backlash, &both)]));
-        assert!(!may(&TorqueLimit, &knee, &[]));
-        // The same effect on a group holding its joint, or on a member of its group: a group
-        // with an exception.
-        assert!(may(&TorqueLimit, &knee, &[(&TorqueLimit, &both)]));
-        assert!(may(&TorqueLimit, &both, &[(&TorqueLimit, &hip)]));
-        // ... but not on a group apart from it.
-        assert!(!may(&TorqueLimit, &knee, &[(&TorqueLimit, &ankle)]));
-        // One of a mimicking pair, beside a candidate on a joint of its group.
-        assert!(may(&Backlash, &knee, &[(&PositionOffset, &both)]));
-        assert!(may(&Armature, &both, &[(&GainError, &hip)]));
-        // ... not beside candidates on other joints only.
-        assert!(!may(&Backlash, &knee, &[(&PositionOffset, &ankle), (&Armature, &hip)]));
     }
 
     #[test]
