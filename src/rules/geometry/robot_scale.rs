@@ -17,9 +17,9 @@ declare_rule! {
     /// the tree's body origins, at the keyframe (without one, at qpos0). A robot's parts fill
     /// a share of that box, the rest is air: a rigid robot weighs more than the 1.2 kg/m³ of
     /// the air its box encloses. Measured on the 569 robot trees of this repository's fixtures,
-    /// examples and shared models, the lightest for its box is 28.5 kg/m³ (a 0.78 kg arm
-    /// stretched over 0.06 × 1.62 × 0.28 m; the shared Unitree H1 94.5) but for the models
-    /// written in the wrong unit. A model whose lengths are ten times too large (decimetres
+    /// examples and shared models, the lightest for its box is 28.5 kg/m³ (a fixture's 0.78 kg
+    /// hand whose collision mesh sits 1.57 m to its side; the shared Unitree H1 94.5) but for
+    /// the models written in the wrong unit. A model whose lengths are ten times too large (decimetres
     /// read as metres: a 0.3 m robot modelled 3 m tall, its masses the real ones) is 1000 times
     /// lighter per volume than the robot (the Kayra lower body's copy: 0.59 kg/m³). Not
     /// judged: trees without geoms or of zero volume (a planar chain), massless trees.
