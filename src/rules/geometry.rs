@@ -9,6 +9,7 @@ mod mirror_places;
 mod mirror_tensor;
 pub mod oversized_collision;
 pub mod oversized_weight;
+pub mod robot_scale;
 pub mod root_frame;
 pub mod self_collision_at_keyframe;
 pub mod shapes;

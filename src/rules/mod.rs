@@ -368,6 +368,7 @@ pub fn registry() -> Vec<&'static dyn Rule> {
         &geometry::oversized_collision::OversizedCollisionPrimitive,
         &geometry::visual_mesh_collision::VisualMeshCollision,
         &geometry::mesh_scale::MeshScale,
+        &geometry::robot_scale::RobotScale,
         &mapping::urdf_mjcf_drift::UrdfMjcfDrift,
         &limits::ctrlrange_in_degrees::CtrlrangeInDegrees,
         &mapping::sensor_quantity::SensorQuantity,
