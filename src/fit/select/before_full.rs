@@ -13,26 +13,33 @@
 //!   ([`coarse_within_discretisation`]; `tried` phase `discretisation_screen`): the gain it made
 //!   at the model's step was the integration step's (KR8's action delay after the armature);
 //! - after round 0, a smooth candidate of several parameters whose held-out optimum by the
-//!   Gauss–Newton model at its coarse fit does not pass the gate at the trust's edge
-//!   ([`HeldoutModel::optimum`]; phase `heldout_bound`): no value of its parameters lowers the
-//!   held-out error enough to first order, whatever the training fit finds; nor one whose coarse
-//!   fit is where its full fit stops ([`stationary`]: the Gauss–Newton step of the fit's first
-//!   Jacobian is under the fit's statistical stop) and whose coarse fit's held-out replay does
-//!   not pass the gate at the trust's edge (KR8's gain error on all joints after the armature).
+//!   Gauss–Newton model at its coarse fit ([`HeldoutModel::optimum`]; phase `heldout_bound`)
+//!   does not lower the held-out RMSE by `linear_trust` × `min_rel_improvement` (the gate's
+//!   relative improvement at the trust's edge): to first order no value of its parameters
+//!   lowers it enough, whatever the training fit finds. Only the RMSE is judged there, as at
+//!   the candidate's start ([`super::start_bound`]): the least-squares optimum is the largest
+//!   fall of the RMSE, not the most significant one — the paired per-window tests can pass at
+//!   a point of smaller gain spread over more windows, and the full fit lands at the training
+//!   optimum, not the held-out one (BAM kp-400's round-2 motor constants);
+//! - past that bound, the full fit's own first iteration, made first
+//!   ([`short_after_first_step`]; phase `heldout_bound`): where it confirms its Gauss–Newton
+//!   model up to the model's optimum, the held-out replay of its step must pass the gate at the
+//!   trust's edge for the fit to go on.
 
 use rayon::prelude::*;
 
 use crate::fit::effects::{Applied, JointTarget, model_with};
-use crate::fit::optim::{ROLLOUT_REL_STEP, ROLLOUT_STAT_TOL};
+use crate::fit::optim::ROLLOUT_REL_STEP;
 use crate::sim2real::metrics::gap_mask;
 use crate::sim2real::recording::Recording;
 
 use super::discretisation::{Judged, coarse_within_discretisation};
 use super::engine::Engine;
+use super::first_step::short_after_first_step;
 use super::policy::Phase;
 use super::screen::combine;
-use super::trust::{at_trust_edge, heldout_short, one_line_descent};
-use super::verdict::{Gate, verdict};
+use super::trust::{heldout_short, one_line_descent};
+use super::verdict::Gate;
 use super::{Errors, FitOutcome, Floor, Search};
 
 /// Why the full fit of the candidate at its coarse fit (the last entry of `at_coarse`, the
@@ -68,13 +75,13 @@ pub(super) fn short_of_keep(
     let ho_c = ho_c?;
     let ho = HeldoutModel::at(engine, s.heldout, (applied, at_coarse), (ho_err, ho_c))?;
     let best = ho.errors_at(engine, s.heldout, &ho.optimum())?;
-    if !at_trust_edge((ho_err, &best), group, gate, pol) {
-        return Some((Phase::HeldoutBound, verdict(ho_err, &best, group, gate).rel));
+    let rel = 1.0 - best.rmse() / ho_err.rmse();
+    if !(rel >= pol.linear_trust * pol.min_rel_improvement) {
+        return Some((Phase::HeldoutBound, rel));
     }
-    // A coarse fit where the full fit stops at its first step: judged as a one-line descent's.
-    let stays = stationary(engine, data, (applied, at_coarse))?;
-    (stays && !at_trust_edge((ho_err, ho_c), group, gate, pol))
-        .then(|| (Phase::HeldoutBound, verdict(ho_err, ho_c, group, gate).rel))
+    let sets = (applied, at_coarse);
+    short_after_first_step(engine, (s.heldout, data), sets, ho_err, gate)
+        .map(|r| (Phase::HeldoutBound, r))
 }
 
 /// The Gauss–Newton model of a candidate's replay on a dataset at its point (the last entry of
@@ -144,32 +151,6 @@ impl PointModel {
         let gram = c.iter().map(|a| c.iter().map(|b| dot(a, b)).collect()).collect();
         (gram, c.iter().map(|a| dot(a, &self.resid)).collect())
     }
-}
-
-/// Whether the full fit of the candidate (the last entry of `sets.1`, its base `sets.0`) on
-/// `data` stops where its coarse fit stands: the Gauss–Newton step of its Levenberg–Marquardt
-/// fit there — the forward differences of its own first Jacobian ([`PointModel`], one replay of
-/// `data` per free parameter, no secant) — is shorter than [`ROLLOUT_STAT_TOL`] standard errors
-/// on every parameter (`s² (JᵀJ)⁻¹`, `s² = Σr² / (m − n)`: the fit's statistical stop, which
-/// ends it at its first accepted step, and a damped step is shorter still). `None` when a
-/// replay fails.
-fn stationary(engine: &Engine, data: &[Recording], sets: (&[Applied], &[Applied])) -> Option<bool> {
-    let at = engine.errors(data, sets.1)?;
-    let (train, _) = PointModel::at(engine, data, sets, (None, &at))?;
-    let (gram, b) = train.normal();
-    let (n, m) = (b.len(), train.resid.len());
-    if m <= n {
-        return None;
-    }
-    let s2 = dot(&train.resid, &train.resid) / (m - n) as f64;
-    let step = combine(&b, &gram).1;
-    let within = (0..n).all(|i| {
-        let mut unit = vec![0.0; n];
-        unit[i] = 1.0;
-        let se = (s2 * combine(&unit, &gram).1[i]).max(0.0).sqrt();
-        step[i].abs() <= ROLLOUT_STAT_TOL * se
-    });
-    Some(within)
 }
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {
@@ -266,34 +247,9 @@ fn scored(
 
 #[cfg(test)]
 mod tests {
-    use super::{heldout_optimum, stationary};
+    use super::heldout_optimum;
     use crate::fit::effects::{Applied, Effect, GainError};
     use crate::fit::select::{Engine, FitOptions};
-    use crate::synth::recorded::pendulum;
-
-    /// A least-squares fit stops where it starts only at its own answer (a servo whose gains
-    /// are off, kp × 0.9 and kd × 1.4, recorded by the synth): from a point off the truth its
-    /// Gauss–Newton step is many standard errors long, and a fit from there moves; from the
-    /// fit's answer it is a fraction of the statistical stop, and a fit from there stays.
-    #[test]
-    fn a_coarse_fit_is_stationary_only_where_the_full_fit_stops() {
-        let (robot, recs) = pendulum(Some((GainError.id(), vec![0.9, 1.4])), 3, 11);
-        let opts = FitOptions::default();
-        let engine = Engine::new(&robot, &recs, &opts);
-        let g = vec!["servo".to_string()];
-        let e: &'static dyn Effect = &GainError;
-        let set = |p: &[f64]| vec![Applied { effect: e, joints: g.clone(), params: p.to_vec() }];
-        for p in [[1.0, 1.1], [0.95, 1.6], [0.8, 1.2]] {
-            assert_eq!(stationary(&engine, &recs, (&[], &set(&p))), Some(false), "{p:?}");
-            let (q, _) = engine.fit_from(&recs, &[], (e, &g), Some(&p));
-            let moved = q.iter().zip(&p).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
-            assert!(moved > 0.01, "{q:?} from {p:?}");
-            assert_eq!(stationary(&engine, &recs, (&[], &set(&q))), Some(true), "{q:?}");
-            let (r, _) = engine.fit_from(&recs, &[], (e, &g), Some(&q));
-            let again = r.iter().zip(&q).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
-            assert!(again < 1e-3, "{r:?} from {q:?}");
-        }
-    }
 
     /// On a servo whose gains are off (kp × 0.9, kd × 1.4), recorded by the synth: from a point
     /// off the truth, the held-out optimum the Gauss–Newton model predicts there is about what a

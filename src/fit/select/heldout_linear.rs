@@ -87,7 +87,7 @@ pub(super) fn out_of(
                 return Some((upper, Phase::HeldoutLinear, h));
             }
             // A several-parameter smooth one: the held-out bound of its full fit, at its start.
-            let at = (s.heldout, applied, ho_err);
+            let at = (s.heldout, short, applied, ho_err);
             let h = start_bound::short_at_start(engine, at, (e, g), round)?;
             Some((upper, Phase::HeldoutBound, h))
         })

@@ -32,6 +32,7 @@ mod discretisation;
 mod engine;
 mod ext_bound;
 mod extension;
+mod first_step;
 mod further;
 mod greedy;
 mod groups;

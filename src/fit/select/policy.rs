@@ -314,7 +314,7 @@ pub const FIELDS: &[(&str, &str, &str)] = &[
     (
         "linear_trust",
         "ratio",
-        "a smooth one-parameter candidate's coarse fit is secant Gauss-Newton steps from the screen's linear step (one replay each), stopping at the first step that achieves between this and its inverse times the relative improvement its linear model predicted (both below min_rel_improvement also agree), or after screen_evals replays; the same test confirms a several-parameter smooth candidate's linear step (one replay) and the coarse fit on the probes' data of a non-smooth candidate or of a smooth one without a confirmed step (its gain on the screen's data against its gain there) as the coarse fit, else screen_evals replays of the screen's data follow; a coarse fit it confirms is fitted in full only when it lowers the held-out RMSE by more than this × min_rel_improvement, and after round 0 a smooth one-parameter candidate's coarse fit only when it passes the round's held-out gate with its z, decisive improvement and min_rel_improvement taken × this; a pair's fit is taken to gain at most 1 / this times the gain its members' columns predict beyond its better member, judged before any pair replay; a friction extension deferred on its plain variant's coarse fit is not judged on the screen's data when the gain its own columns allow on the probes' data, taken 1 / this times, cannot reach the round's bar; in round 0, once a fit set the bar, a smooth one-parameter candidate whose linear step replayed on the probes' data confirms its prediction there is not coarse-fitted when that prediction, taken 1 / this times, cannot reach the bar; after round 0 a smooth several-parameter candidate is left out at its start, before its coarse fit, when its held-out Gauss-Newton optimum cannot lower the held-out RMSE by this × min_rel_improvement (start_bound.rs)",
+        "a smooth one-parameter candidate's coarse fit is secant Gauss-Newton steps from the screen's linear step (one replay each), stopping at the first step that achieves between this and its inverse times the relative improvement its linear model predicted (both below min_rel_improvement also agree), or after screen_evals replays; the same test confirms a several-parameter smooth candidate's linear step (one replay) and the coarse fit on the probes' data of a non-smooth candidate or of a smooth one without a confirmed step (its gain on the screen's data against its gain there) as the coarse fit, else screen_evals replays of the screen's data follow; a coarse fit it confirms is fitted in full only when it lowers the held-out RMSE by more than this × min_rel_improvement, and after round 0 a smooth one-parameter candidate's coarse fit only when it passes the round's held-out gate with its z, decisive improvement and min_rel_improvement taken × this; a pair's fit is taken to gain at most 1 / this times the gain its members' columns predict beyond its better member, judged before any pair replay; a friction extension deferred on its plain variant's coarse fit is not judged on the screen's data when the gain its own columns allow on the probes' data, taken 1 / this times, cannot reach the round's bar; in round 0, once a fit set the bar, a smooth one-parameter candidate whose linear step replayed on the probes' data confirms its prediction there is not coarse-fitted when that prediction, taken 1 / this times, cannot reach the bar; after round 0 a smooth several-parameter candidate is left out at its start, before its coarse fit, when its held-out Gauss-Newton optimum cannot lower the held-out RMSE by this × min_rel_improvement (start_bound.rs), or at its coarse fit by the same model there (before_full.rs), and its full fit's first iteration, when it confirms its Gauss-Newton model up to that model's optimum, is continued only when its step's held-out replay passes the round's held-out gate with its z, decisive improvement and min_rel_improvement taken × this (first_step.rs)",
     ),
     (
         "floor_screen_ratio",
@@ -435,11 +435,13 @@ pub enum Phase {
     /// `heldout_improvement` holds its relative improvement at the finer step.
     DiscretisationScreen,
     /// Not fitted in full after round 0: a smooth candidate of several fitted parameters whose
-    /// held-out optimum by the Gauss–Newton model at its coarse fit (one held-out replay per
-    /// parameter) does not pass the round's gate at the trust's edge (`before_full.rs`), or whose
-    /// full fit would stop at its coarse fit (its Gauss–Newton step there under the fit's
-    /// statistical stop) where the coarse fit's held-out replay does not pass that edge;
-    /// `heldout_improvement` holds that optimum's (or the coarse fit's) relative improvement.
+    /// held-out optimum by the Gauss–Newton model at its start (`start_bound.rs`, no coarse fit
+    /// made) or its coarse fit (`before_full.rs`; one held-out replay per parameter) does not
+    /// lower the held-out RMSE by `linear_trust` × `min_rel_improvement`, or whose full fit's
+    /// first iteration confirms its Gauss–Newton model up to the model's optimum at a step whose
+    /// held-out replay does not pass the round's gate at the trust's edge (`first_step.rs`: the
+    /// fit is not continued); `heldout_improvement` holds that optimum's (or that step's)
+    /// relative improvement.
     HeldoutBound,
     /// Not coarse-fitted in a later round: its linear model, which round 0's coarse fit
     /// confirmed (`linear_trust`), predicts a gain that even at the trust's edge reaches neither

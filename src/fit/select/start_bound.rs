@@ -54,7 +54,7 @@ pub(super) fn judged(e: &dyn Effect, round: usize) -> bool {
 /// the start changes the motion.
 pub(super) fn short_at_start(
     engine: &Engine,
-    (heldout, applied, ho_err): (&[Recording], &[Applied], &Errors),
+    (heldout, short, applied, ho_err): (&[Recording], &[Recording], &[Applied], &Errors),
     (e, g): (&'static dyn Effect, &[String]),
     round: usize,
 ) -> Option<f64> {
@@ -65,23 +65,44 @@ pub(super) fn short_at_start(
     let t = JointTarget::of(engine.robot, g.first()?)?;
     let p0 = e.initial(&m0, &t);
     let neutral = neutral_params(engine.robot, &m0, (e, g));
+    // (At a start that changes nothing the replay is the base's, held.)
+    let moves = neutral.as_deref() != Some(p0.as_slice());
+    let (lo, hi) = e.bounds(&m0, &t);
+    let free = (0..e.fitted().min(lo.len()).min(hi.len())).filter(|&i| hi[i] > lo[i]).count();
+    let replays = free + usize::from(moves);
+    if !worth_asking(replays, (heldout, short), engine.opts.policy.screen_evals) {
+        return None;
+    }
     let mut trial = applied.to_vec();
     trial.push(Applied { effect: e, joints: g.to_vec(), params: p0.clone() });
-    // (At a start that changes nothing the replay is the base's, held.)
-    let at = if neutral.as_deref() == Some(p0.as_slice()) {
-        ho_err.clone()
-    } else {
-        engine.errors(heldout, &trial)?
-    };
+    let at = if moves { engine.errors(heldout, &trial)? } else { ho_err.clone() };
     let best = heldout_optimum(engine, heldout, (applied, &trial), (ho_err, &at))?;
     let rel = 1.0 - best.rmse() / ho_err.rmse();
     let pol = &engine.opts.policy;
     (rel.is_finite() && rel < pol.linear_trust * pol.min_rel_improvement).then_some(rel)
 }
 
+/// Whether the bound's `replays` held-out replays (of `heldout`, the recording seconds
+/// counted as `search.simulated_s` counts them) cost less than the coarse fit they can spare
+/// at most: `screen_evals` replays of the screen's data `short`. A candidate the bound does
+/// not judge is coarse-fitted, and judged by the same bound at its coarse fit
+/// ([`super::before_full`]) if that reaches a full fit.
+fn worth_asking(
+    replays: usize,
+    (heldout, short): (&[Recording], &[Recording]),
+    evals: usize,
+) -> bool {
+    replays as f64 * seconds(heldout) < evals as f64 * seconds(short)
+}
+
+/// The recording seconds of `recs`.
+fn seconds(recs: &[Recording]) -> f64 {
+    recs.iter().filter_map(|r| Some(r.t.last()? - r.t.first()?)).sum()
+}
+
 #[cfg(test)]
 mod tests {
-    use super::short_at_start;
+    use super::{seconds, short_at_start, worth_asking};
     use crate::fit::effects::{Applied, Effect, GainError, JointTarget, model_with};
     use crate::fit::select::verdict::verdict;
     use crate::fit::select::{Engine, FitOptions};
@@ -117,7 +138,7 @@ mod tests {
                 let ho = engine.errors(&held, &[]).expect("replay");
                 let g = vec!["servo".to_string()];
                 for round in [0, 1] {
-                    let got = short_at_start(&engine, (&held, &[], &ho), (E, &g), round);
+                    let got = short_at_start(&engine, (&held, &train, &[], &ho), (E, &g), round);
                     assert_eq!(got, None, "{p:?}, round {round}, z {}", opts.policy.z_decision);
                 }
             }
@@ -141,7 +162,7 @@ mod tests {
             let g = vec!["servo".to_string()];
             let secs: f64 = held.iter().map(|r| r.t.last().unwrap() - r.t[0]).sum();
             let before = engine.rollout_stats().simulated_s;
-            let got = short_at_start(&engine, (&held, &[], &ho), (E, &g), 1);
+            let got = short_at_start(&engine, (&held, &train, &[], &ho), (E, &g), 1);
             let cost = engine.rollout_stats().simulated_s - before;
             let rel = got.unwrap_or_else(|| panic!("seed {seed}: not left out"));
             assert!(rel < pol.linear_trust * pol.min_rel_improvement, "seed {seed}: {rel}");
@@ -163,5 +184,35 @@ mod tests {
             let kept = v.significant && v.rel >= pol.min_rel_improvement;
             assert!(!kept, "seed {seed}: the full fit {q:?} passes ({} held-out)", v.rel);
         }
+    }
+
+    /// The bound is asked only where its held-out replays cost less than the coarse fit it can
+    /// spare (`screen_evals` replays of the screen's data): with a screen of 9 s and 3 s held
+    /// out, two replays are asked for; as many replays of the held-out set as the coarse fit's
+    /// budget, not. Where it is not asked, a gain error that is not there — which it leaves out
+    /// when asked (above) — is not judged, and nothing is replayed.
+    #[test]
+    fn the_bound_is_asked_only_where_it_costs_less_than_the_coarse_fit_it_spares() {
+        let (robot, train, held) = split(None, 3);
+        let (t, h) = (seconds(&train), seconds(&held));
+        assert!((t - 3.0 * h).abs() < 0.1 * h && h > 2.0, "{t} s, {h} s");
+        let evals = FitOptions::default().policy.screen_evals;
+        assert!(worth_asking(2, (&held, &train), evals));
+        assert!(worth_asking(evals - 1, (&held, &held), evals));
+        assert!(!worth_asking(evals, (&held, &held), evals));
+        assert!(!worth_asking(3 * evals, (&train, &held), evals));
+        let opts = FitOptions::default();
+        let engine = Engine::new(&robot, &train, &opts);
+        let ho = engine.errors(&held, &[]).expect("replay");
+        let g = vec!["servo".to_string()];
+        let before = engine.rollout_stats().simulated_s;
+        assert!(short_at_start(&engine, (&held, &train, &[], &ho), (E, &g), 1).is_some());
+        assert!(engine.rollout_stats().simulated_s > before);
+        let fresh = Engine::new(&robot, &train, &opts);
+        let ho = fresh.errors(&held, &[]).expect("replay");
+        let before = fresh.rollout_stats().simulated_s;
+        let tiny = &held[..0];
+        assert_eq!(short_at_start(&fresh, (&held, tiny, &[], &ho), (E, &g), 1), None);
+        assert_eq!(fresh.rollout_stats().simulated_s, before);
     }
 }
