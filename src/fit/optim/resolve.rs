@@ -95,7 +95,8 @@ impl Resolution<'_> {
 fn curvature((x, fx): (f64, f64), [(w, fw), (v, fv)]: [(f64, f64); 2]) -> Option<f64> {
     let finite = [x, fx, w, fw, v, fv].iter().all(|t| t.is_finite());
     let between = (w < x && x < v) || (v < x && x < w);
-    if !finite || !between || !(0.0 <= fx && fx < fw && fx < fv) {
+    let lowest = 0.0 <= fx && fx < fw && fx < fv;
+    if !finite || !between || !lowest {
         return None;
     }
     let (gx, gw, gv) = (fx * fx, fw * fw, fv * fv);
