@@ -18,7 +18,12 @@
 //! the side away from the plateau. And a parabolic step is taken only through three points
 //! whose parabola is convex (a positive second divided difference): the vertex of a concave
 //! one is its maximum.
+//!
+//! Where the data stop telling, it stops before its tolerance when given a [`Resolution`]: once
+//! the bracket locates the minimum within a fraction of the parameter's own standard error,
+//! that error from the curvature of the parabola through the three points (`resolve`).
 
+use super::resolve::{Resolution, Resolved};
 use super::sanitize;
 
 /// Brent refinement of the bracket `[a, b]` around `best` (a point inside it, evaluated
@@ -29,6 +34,9 @@ use super::sanitize;
 /// or after `max_evals` evaluations; returns the best point evaluated (of equal ones, the last:
 /// see the module's note on plateaus), or `best` when none is as low. Fewer than two
 /// evaluations, a non-finite `best` or one outside the bracket return `best` unevaluated.
+/// With a `resolution` it also stops once the bracket locates the minimum within its fraction
+/// of the parameter's standard error ([`Resolution::stop`]: from the parabolas through the
+/// best point and the two others kept, where convex with the best strictly lowest between).
 pub fn brent_refine(
     f: &(dyn Fn(f64) -> f64 + Sync),
     (a, b): (f64, f64),
@@ -36,6 +44,7 @@ pub fn brent_refine(
     max_evals: usize,
     best: (f64, f64),
     ends: Option<(f64, f64)>,
+    resolution: Option<&Resolution<'_>>,
 ) -> (f64, f64) {
     let (mut a, mut b) = if a <= b { (a, b) } else { (b, a) };
     let (mut x, mut fx) = best;
@@ -60,9 +69,14 @@ pub fn brent_refine(
     let mut d: f64 = 0.0;
     let mut e: f64 = if ends.is_some() { b - a } else { 0.0 };
     let mut n = 0;
+    // What the resolution learnt of the parameter's standard error so far.
+    let mut resolved = Resolved::default();
     while n < max_evals {
         let m = 0.5 * (a + b);
         if (x - m).abs() <= 2.0 * tol1 - 0.5 * (b - a) {
+            break;
+        }
+        if resolution.is_some_and(|r| r.stop((a, b), (x, fx), [(w, fw), (v, fv)], &mut resolved)) {
             break;
         }
         let mut parabolic = false;
@@ -193,7 +207,8 @@ mod tests {
             let (a, b) = (grid[ib - 1], grid[ib + 1]);
             let best = (grid[ib], f(grid[ib]));
             let ends = Some((f(a), f(b)));
-            let (rb, nb) = counted(f.as_ref(), |g| brent_refine(g, (a, b), tol, 31, best, ends));
+            let (rb, nb) =
+                counted(f.as_ref(), |g| brent_refine(g, (a, b), tol, 31, best, ends, None));
             let (rg, ng) = counted(f.as_ref(), |g| golden_refine(g, (a, b), tol, 31, best));
             let off = if *name == "ripple" { 3e-4 * std::f64::consts::TAU } else { tol };
             assert!((rb.0 - truth).abs() <= off, "{name}: {rb:?} for {truth}");
@@ -232,7 +247,7 @@ mod tests {
             // From the grid's bracket around its best point, the range's end (ends unknown).
             let (a, b) = if side > 0.0 { (0.75, 1.0) } else { (-1.0, -0.75) };
             let ((xb, _), nb) =
-                counted(&dip, |g| brent_refine(g, (a, b), tol, 31, (side, 1.0), None));
+                counted(&dip, |g| brent_refine(g, (a, b), tol, 31, (side, 1.0), None, None));
             let ((xg, _), ng) = counted(&dip, |g| golden_refine(g, (a, b), tol, 31, (side, 1.0)));
             assert!((xb - side * 0.85).abs() <= tol, "side {side}: Brent {xb} after {nb}");
             assert!((xg - side * 0.85).abs() <= tol, "side {side}: golden {xg} after {ng}");
@@ -245,18 +260,21 @@ mod tests {
     #[test]
     fn brent_keeps_its_budget_and_its_bounds() {
         let f = |x: f64| (x - 0.3).powi(2);
-        let ((x, _), n) = counted(&f, |g| brent_refine(g, (0.0, 1.0), 1e-6, 50, (0.5, 0.04), None));
+        let ((x, _), n) =
+            counted(&f, |g| brent_refine(g, (0.0, 1.0), 1e-6, 50, (0.5, 0.04), None, None));
         assert!((x - 0.3).abs() < 1e-6 && n <= 50, "{x} after {n}");
-        let (_, n) = counted(&f, |g| brent_refine(g, (0.0, 1.0), 1e-12, 5, (0.5, 0.04), None));
+        let (_, n) =
+            counted(&f, |g| brent_refine(g, (0.0, 1.0), 1e-12, 5, (0.5, 0.04), None, None));
         assert_eq!(n, 5);
         // The minimum on the bound: every step lands inside and is worse.
         let up = |x: f64| x + 1.0;
-        let ((x, fx), n) =
-            counted(&up, |g| brent_refine(g, (0.0, 0.25), 5e-5, 40, (0.0, 1.0), Some((1.0, 1.25))));
+        let ((x, fx), n) = counted(&up, |g| {
+            brent_refine(g, (0.0, 0.25), 5e-5, 40, (0.0, 1.0), Some((1.0, 1.25)), None)
+        });
         assert_eq!((x, fx), (0.0, 1.0));
         assert!(n < 20, "{n} evaluations to close on the bound");
         for (best, m) in [((0.5, 0.04), 1), ((2.0, 1.0), 10), ((0.5, f64::INFINITY), 10)] {
-            let (r, n) = counted(&f, |g| brent_refine(g, (0.0, 1.0), 1e-6, m, best, None));
+            let (r, n) = counted(&f, |g| brent_refine(g, (0.0, 1.0), 1e-6, m, best, None, None));
             assert_eq!((r, n), (best, 0));
         }
     }

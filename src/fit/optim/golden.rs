@@ -6,6 +6,7 @@
 use rayon::prelude::*;
 
 use super::brent::brent_refine;
+use super::resolve::Resolution;
 use super::sanitize;
 
 /// Points of [`line_search`]'s first grid, ends included [count].
@@ -26,6 +27,18 @@ pub fn line_search(
     hi: f64,
     tol: f64,
     max_evals: usize,
+) -> (f64, f64) {
+    line_search_resolved(f, (lo, hi), tol, max_evals, None)
+}
+
+/// [`line_search`] whose refinement also stops once the minimum is located within the
+/// `resolution`'s fraction of the parameter's standard error ([`Resolution`]).
+pub fn line_search_resolved(
+    f: &(dyn Fn(f64) -> f64 + Sync),
+    (lo, hi): (f64, f64),
+    tol: f64,
+    max_evals: usize,
+    resolution: Option<&Resolution<'_>>,
 ) -> (f64, f64) {
     if !lo.is_finite() || !hi.is_finite() || max_evals == 0 {
         let x = if lo.is_finite() {
@@ -78,7 +91,7 @@ pub fn line_search(
         return best;
     }
     let ends = (ib > 0 && ib + 1 < n_grid).then(|| (gf[ib - 1], gf[ib + 1]));
-    brent_refine(f, (a, bb), tol, max_evals - evals, (grid[ib], gf[ib]), ends)
+    brent_refine(f, (a, bb), tol, max_evals - evals, (grid[ib], gf[ib]), ends, resolution)
 }
 
 /// Golden-section refinement of the bracket `[a, b]` (which holds a minimum: no point inside is

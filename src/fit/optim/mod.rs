@@ -17,13 +17,15 @@
 //!
 //! This module owns the shared types ([`Bounds`], [`OptResult`]), the RNG and the normalised
 //! search space; each method has its own file: [`nelder_mead()`], [`cmaes()`], [`line_search`]
-//! (in `golden`, refined by [`brent_refine`] in `brent`) and [`levenberg_marquardt`] (in `lm`).
+//! (in `golden`, refined by [`brent_refine`] in `brent`, which stops early at a [`Resolution`]
+//! of the parameter's standard error: `resolve`) and [`levenberg_marquardt`] (in `lm`).
 
 mod brent;
 mod cmaes;
 mod golden;
 mod lm;
 mod nelder_mead;
+mod resolve;
 
 use serde::Serialize;
 
@@ -31,11 +33,12 @@ pub(crate) use crate::util::Rng;
 
 pub use brent::brent_refine;
 pub use cmaes::{CmaesOpts, cmaes};
-pub use golden::{GRID_POINTS, golden_refine, line_search};
+pub use golden::{GRID_POINTS, golden_refine, line_search, line_search_resolved};
 pub use lm::{
     LmOpts, LmResult, ROLLOUT_REL_STEP, ROLLOUT_SHORT_STEP, ROLLOUT_STAT_TOL, levenberg_marquardt,
 };
 pub use nelder_mead::{NelderMeadOpts, nelder_mead};
+pub use resolve::{Noise, Resolution, profile_stderr};
 
 /// Box bounds, one entry per parameter. `lo[i] <= hi[i]`, both finite.
 #[derive(Debug, Clone, Serialize)]

@@ -21,6 +21,17 @@ pub struct SearchPolicy {
     /// A line search uses at most 40 of them, the simplex 2 × (k − 1) × this on k = 2 or 3
     /// parameters, Levenberg–Marquardt this / (k + 2) iterations (2–12). Default 60.
     pub max_evals: usize,
+    /// How finely a one-parameter line search resolves its parameter relative to the
+    /// parameter's own uncertainty: Brent's refinement stops once its bracket locates the
+    /// minimum within this many standard errors of the best point (strictly lower than the two
+    /// next-best points: never on a plateau's tie). The standard error is the profile's: the
+    /// parabola through the three best points (where it is convex, the best strictly lowest
+    /// between the others; the largest measured so far — below the RMSE's ripple the parabola
+    /// measures the ripple) with the training residual's sample count and AR(1) inflation, the
+    /// noise model of the reported standard errors. Until a parabola is usable (a plateau, a flat
+    /// or non-convex profile) the line search's own tolerance; 0 never stops early
+    /// [standard errors]. Default 0.1.
+    pub line_resolution: f64,
     /// Objective evaluations of a coarse screening fit [rollouts of the screen's data]. Default 6.
     pub screen_evals: usize,
     /// Seconds of recording the screen simulates for each evaluation: from each of the n
@@ -175,6 +186,7 @@ impl Default for SearchPolicy {
             max_rounds: 4,
             candidates_per_round: 4,
             max_evals: 60,
+            line_resolution: 0.1,
             screen_evals: 6,
             screen_seconds: 10.0,
             probe_seconds: 2.0,
@@ -246,6 +258,11 @@ pub const FIELDS: &[(&str, &str, &str)] = &[
         "max_evals",
         "rollouts of the data fitted",
         "budget of one candidate's full fit: line search ≤ 40, simplex 2 (k − 1) × this, Levenberg–Marquardt this / (k + 2) iterations (2–12)",
+    ),
+    (
+        "line_resolution",
+        "standard errors",
+        "a one-parameter line search stops once its bracket locates the minimum within this many standard errors of its best point (strictly lower than the next two); the standard error from the parabola through the three best points (convex, the best strictly lowest between the others; the largest so far) and the training residual's sample count and AR(1) inflation; until such a parabola (a plateau, a flat or non-convex profile) its tolerance; 0: never early",
     ),
     ("screen_evals", "rollouts of the screen's data", "budget of a coarse screening fit"),
     (

@@ -9,9 +9,11 @@
 //! (Nelder–Mead); more an evolution strategy (CMA-ES).
 
 use crate::fit::optim::{
-    Bounds, CmaesOpts, GRID_POINTS, LmOpts, NelderMeadOpts, ROLLOUT_REL_STEP, ROLLOUT_SHORT_STEP,
-    ROLLOUT_STAT_TOL, brent_refine, cmaes, levenberg_marquardt, line_search, nelder_mead,
+    Bounds, CmaesOpts, GRID_POINTS, LmOpts, NelderMeadOpts, Noise, ROLLOUT_REL_STEP,
+    ROLLOUT_SHORT_STEP, ROLLOUT_STAT_TOL, Resolution, brent_refine, cmaes, levenberg_marquardt,
+    line_search_resolved, nelder_mead,
 };
+use crate::fit::stats::ar1_variance_inflation;
 
 /// Relative tolerance of a line search [fraction of the bracket].
 const LINE_TOL: f64 = 2e-4;
@@ -27,12 +29,14 @@ pub(super) enum Method {
     LeastSquares { max_iters: usize },
     /// A line search on one parameter (on ln p when `log` and the bracket is positive): a
     /// 9-point grid, then Brent's refinement around its best point, at most `max_evals`
-    /// evaluations.
-    Line { log: bool, max_evals: usize },
+    /// evaluations; the refinement stops early once the minimum is located within `resolve`
+    /// standard errors of the parameter (from the profile's curvature and the noise of the
+    /// problem's residual: [`Resolution`]; 0: never).
+    Line { log: bool, max_evals: usize, resolve: f64 },
     /// [`Method::Line`] from a start (a coarse fit's point): only the line search's grid
     /// points around it are replayed, and refined as the whole search refines its grid's best
     /// point when they hold a minimum of the grid; else the whole line search.
-    LineFrom { log: bool, max_evals: usize },
+    LineFrom { log: bool, max_evals: usize, resolve: f64 },
     /// Nelder–Mead from an initial simplex of `step` × each parameter's range, stopping at
     /// `xtol` (normalised) or after `max_evals` evaluations.
     Simplex { max_evals: usize, xtol: f64, step: f64 },
@@ -69,10 +73,10 @@ pub(super) struct Solution {
 /// three evaluations of the grid's nine, whenever the grid's best point is among them. Else
 /// (the lowest at their edge) the whole search of [`Method::Line`], whose grid then holds
 /// those three points.
-fn line_from(p: &Problem<'_>, x0: &[f64], log: bool, max_evals: usize) -> Solution {
+fn line_from(p: &Problem<'_>, x0: &[f64], log: bool, max_evals: usize, resolve: f64) -> Solution {
     use rayon::prelude::*;
     let (lo, hi) = (p.bounds.lo[0], p.bounds.hi[0]);
-    let whole = || solve(p, x0, Method::Line { log, max_evals });
+    let whole = || solve(p, x0, Method::Line { log, max_evals, resolve });
     let n = max_evals.min(GRID_POINTS);
     let Some(&start) = x0.first().filter(|x| x.is_finite() && lo < hi && n >= 3) else {
         return whole();
@@ -111,8 +115,20 @@ fn line_from(p: &Problem<'_>, x0: &[f64], log: bool, max_evals: usize) -> Soluti
     let bracket = (grid(ib.saturating_sub(1)), grid((ib + 1).min(n - 1)));
     let tol = LINE_TOL * (c - a);
     let ends = (k > 0 && k + 1 < window.len()).then(|| (f[k - 1], f[k + 1]));
-    let (u, fu) = brent_refine(&obj, bracket, tol, max_evals - n, (grid(ib), f[k]), ends);
+    let noise = |u: f64| noise_at(p, if logs { u.exp() } else { u });
+    let r = Resolution { fraction: resolve, noise: &noise };
+    let best = (grid(ib), f[k]);
+    let (u, fu) = brent_refine(&obj, bracket, tol, max_evals - n, best, ends, Some(&r));
     Solution { x: vec![x_of(u)], f: fu, converged: true }
+}
+
+/// The noise of `p`'s objective at the parameter `x` (evaluated already: its replay is
+/// remembered) for a line search's [`Resolution`]: the count of its residuals and their AR(1)
+/// variance inflation, the noise model of the reported standard errors
+/// (`engine::uncertainty`). `None` without a residual vector.
+fn noise_at(p: &Problem<'_>, x: f64) -> Option<Noise> {
+    let r = (p.residuals?)(&[x]);
+    (r.len() >= 2).then(|| Noise { n: r.len(), inflation: ar1_variance_inflation(&r) })
 }
 
 /// Minimises `p` from `x0` with `method`.
@@ -138,21 +154,29 @@ pub(super) fn solve(p: &Problem<'_>, x0: &[f64], method: Method) -> Solution {
             let f = if n > 0 { (2.0 * r.cost / n as f64).sqrt() } else { f64::INFINITY };
             Solution { x: r.x, f, converged: r.converged }
         }
-        Method::Line { log, max_evals } => {
+        Method::Line { log, max_evals, resolve } => {
             let (lo, hi) = (b.lo[0], b.hi[0]);
             let obj = p.objective;
             if log && lo > 0.0 && hi > lo {
                 // On ln v: a narrow optimum a decade below the top of the range falls between
                 // two points of a uniform grid.
                 let (a, c) = (lo.ln(), hi.ln());
-                let (u, f) = line_search(&|u| obj(&[u.exp()]), a, c, LINE_TOL * (c - a), max_evals);
+                let noise = |u: f64| noise_at(p, u.exp());
+                let r = Resolution { fraction: resolve, noise: &noise };
+                let f = |u: f64| obj(&[u.exp()]);
+                let (u, f) =
+                    line_search_resolved(&f, (a, c), LINE_TOL * (c - a), max_evals, Some(&r));
                 Solution { x: vec![u.exp().clamp(lo, hi)], f, converged: true }
             } else {
-                let (x, f) = line_search(&|v| obj(&[v]), lo, hi, LINE_TOL * (hi - lo), max_evals);
+                let noise = |v: f64| noise_at(p, v);
+                let r = Resolution { fraction: resolve, noise: &noise };
+                let f = |v: f64| obj(&[v]);
+                let (x, f) =
+                    line_search_resolved(&f, (lo, hi), LINE_TOL * (hi - lo), max_evals, Some(&r));
                 Solution { x: vec![x], f, converged: true }
             }
         }
-        Method::LineFrom { log, max_evals } => line_from(p, x0, log, max_evals),
+        Method::LineFrom { log, max_evals, resolve } => line_from(p, x0, log, max_evals, resolve),
         Method::Simplex { max_evals, xtol, step } => {
             let o = NelderMeadOpts { max_evals, xtol, ftol: SIMPLEX_FTOL, initial_step: step };
             let r = nelder_mead(p.objective, x0, b, &o);
@@ -200,7 +224,7 @@ mod tests {
             bounds: Bounds { lo: vec![1e-3], hi: vec![10.0] },
         };
         for log in [false, true] {
-            let s = solve(&p1, &[1.0], Method::Line { log, max_evals: 60 });
+            let s = solve(&p1, &[1.0], Method::Line { log, max_evals: 60, resolve: 0.0 });
             assert!((s.x[0] / 0.04 - 1.0).abs() < 0.1, "log {log}: {:?}", s.x);
         }
     }
@@ -231,8 +255,8 @@ mod tests {
             let s = solve(&p, &[x0], m);
             (s, n.load(Ordering::Relaxed))
         };
-        let (whole, nw) = count(Method::Line { log: false, max_evals: 40 }, 0.0);
-        let (near, nn) = count(Method::LineFrom { log: false, max_evals: 40 }, 0.04);
+        let (whole, nw) = count(Method::Line { log: false, max_evals: 40, resolve: 0.0 }, 0.0);
+        let (near, nn) = count(Method::LineFrom { log: false, max_evals: 40, resolve: 0.0 }, 0.04);
         assert!((whole.x[0] - truth).abs() < tol, "{whole:?}");
         assert_eq!((near.x[0], near.f), (whole.x[0], whole.f));
         assert_eq!(nn + 6, nw, "{nn} evaluations from the start, {nw} for the whole range");
@@ -240,20 +264,69 @@ mod tests {
         // 0.075: the upper or the lower one is the lower), and from 0.05 itself: the far side of
         // the lower enclosing point is replayed, three evaluations each time.
         for x0 in [0.03, 0.045, 0.05, 0.06] {
-            let (s, k) = count(Method::LineFrom { log: false, max_evals: 40 }, x0);
+            let (s, k) = count(Method::LineFrom { log: false, max_evals: 40, resolve: 0.0 }, x0);
             assert_eq!((s.x[0], s.f), (whole.x[0], whole.f), "from {x0}");
             assert_eq!(k + 6, nw, "from {x0}: {k} evaluations");
         }
         // Far from it: the lowest of its grid points is the one nearest the minimum, at their
         // edge.
-        let (far, nf) = count(Method::LineFrom { log: false, max_evals: 40 }, 0.16);
+        let (far, nf) = count(Method::LineFrom { log: false, max_evals: 40, resolve: 0.0 }, 0.16);
         assert_eq!((far.x[0], far.f), (whole.x[0], whole.f));
         assert_eq!(nf, nw + 3);
         // On ln p, and from a start on the range's end.
         for (log, x0) in [(true, 0.04), (false, 0.0), (false, 0.2)] {
-            let (w, _) = count(Method::Line { log, max_evals: 40 }, x0);
-            let (s, _) = count(Method::LineFrom { log, max_evals: 40 }, x0);
+            let (w, _) = count(Method::Line { log, max_evals: 40, resolve: 0.0 }, x0);
+            let (s, _) = count(Method::LineFrom { log, max_evals: 40, resolve: 0.0 }, x0);
             assert_eq!((s.x[0], s.f), (w.x[0], w.f), "log {log} from {x0}");
+        }
+    }
+
+    /// A line search takes the noise of its stop from the problem's residual vector: on n
+    /// residuals `σ zᵢ − gᵢ (p − p*)` (white noise of known size, a fixed sensitivity; on ln p
+    /// too) the stop at a tenth of a standard error ends within 0.11 closed-form standard errors
+    /// (`σ / √Σ gᵢ²`; the residual's AR(1) factor is near 1) of the least-squares answer; at ten
+    /// standard errors the grid's own parabola stops it — no Brent step after the grid's nine
+    /// points, nor after a start's three; without a residual vector there is no stop.
+    #[test]
+    fn a_line_search_stops_at_its_resolution_of_the_residuals_standard_error() {
+        use std::sync::atomic::{AtomicUsize, Ordering};
+        let n = 2000;
+        let mut rng = crate::util::Rng::from_state(11);
+        let z: Vec<f64> = (0..n).map(|_| rng.normal()).collect();
+        let g: Vec<f64> = (0..n).map(|i| 1.0 + 0.5 * (0.21 * i as f64).sin()).collect();
+        let (sigma, truth) = (1.0, 0.137);
+        let res = |x: &[f64]| -> Vec<f64> {
+            z.iter().zip(&g).map(|(z, g)| sigma * z - g * (x[0] - truth)).collect()
+        };
+        let evals = AtomicUsize::new(0);
+        let obj = |x: &[f64]| {
+            evals.fetch_add(1, Ordering::Relaxed);
+            let r = res(x);
+            (r.iter().map(|v| v * v).sum::<f64>() / r.len() as f64).sqrt()
+        };
+        let gg: f64 = g.iter().map(|g| g * g).sum();
+        let gz: f64 = g.iter().zip(&z).map(|(g, z)| g * sigma * z).sum();
+        let (answer, se) = (truth + gz / gg, sigma / gg.sqrt());
+        let bounds = Bounds { lo: vec![0.01], hi: vec![1.0] };
+        let with = Problem { objective: &obj, residuals: Some(&res), bounds: bounds.clone() };
+        let without = Problem { objective: &obj, residuals: None, bounds };
+        let run = |p: &Problem<'_>, m: Method| {
+            evals.store(0, Ordering::Relaxed);
+            let start = if matches!(m, Method::LineFrom { .. }) { 0.14 } else { 0.5 };
+            let s = solve(p, &[start], m);
+            (s.x[0], evals.load(Ordering::Relaxed))
+        };
+        for log in [false, true] {
+            let (x0, n0) = run(&with, Method::Line { log, max_evals: 40, resolve: 0.0 });
+            assert!(n0 > GRID_POINTS + 2, "log {log}: {n0} evaluations");
+            let (x, _) = run(&with, Method::Line { log, max_evals: 40, resolve: 0.1 });
+            assert!((x - answer).abs() <= 0.11 * se, "log {log}: {x} for {answer} ± {se}");
+            let (_, k) = run(&with, Method::Line { log, max_evals: 40, resolve: 10.0 });
+            assert_eq!(k, GRID_POINTS, "log {log}: stopped by the grid's parabola");
+            let (_, ks) = run(&with, Method::LineFrom { log, max_evals: 40, resolve: 10.0 });
+            assert_eq!(ks, 3, "log {log}: stopped by the start's three grid points");
+            let (x1, k1) = run(&without, Method::Line { log, max_evals: 40, resolve: 10.0 });
+            assert_eq!((x1, k1), (x0, n0), "log {log}: no residuals, no stop");
         }
     }
 }

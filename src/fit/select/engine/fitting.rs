@@ -439,15 +439,18 @@ impl Engine<'_> {
             }
             1 => {
                 let (log, max_evals) = (effect.log_search(), max_evals.min(40));
+                // Refined until the minimum is located within `line_resolution` standard
+                // errors of the parameter (or the line search's tolerance).
+                let resolve = self.opts.policy.line_resolution;
                 // A fit from a point of its grid made on other data (a full fit from a coarse
                 // fit's point; a coarse fit from the probes' one) replays the grid around it
                 // and refines its bracket ([`Method::LineFrom`]) when it holds a minimum.
                 let method = match start.filter(|p| !p.is_empty()) {
                     Some(s) => {
                         x0 = clamp(s);
-                        Method::LineFrom { log, max_evals }
+                        Method::LineFrom { log, max_evals, resolve }
                     }
-                    None => Method::Line { log, max_evals },
+                    None => Method::Line { log, max_evals, resolve },
                 };
                 let s = solve(&problem, &x0, method);
                 (s.x, s.f)
