@@ -151,26 +151,12 @@ pub fn brent_refine(
 
 #[cfg(test)]
 mod tests {
+    use super::super::counted;
     use super::super::golden_refine;
     use super::brent_refine;
-    use std::sync::atomic::{AtomicUsize, Ordering};
 
     /// A named profile: the function, its minimiser, and whether it is smooth there.
     type Profile = (&'static str, Box<dyn Fn(f64) -> f64 + Sync>, f64, bool);
-
-    /// Counts the evaluations of `f` made by `search`, and returns its answer with the count.
-    fn counted(
-        f: &(dyn Fn(f64) -> f64 + Sync),
-        search: impl Fn(&(dyn Fn(f64) -> f64 + Sync)) -> (f64, f64),
-    ) -> ((f64, f64), usize) {
-        let n = AtomicUsize::new(0);
-        let g = |x: f64| {
-            n.fetch_add(1, Ordering::Relaxed);
-            f(x)
-        };
-        let r = search(&g);
-        (r, n.load(Ordering::Relaxed))
-    }
 
     /// Profiles of the shapes a one-parameter fit meets, each with its minimiser: a smooth bowl
     /// (off-centre and skewed), a kink (|x − m|, a play's RMSE near its width), a square-root

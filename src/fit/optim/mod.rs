@@ -154,6 +154,23 @@ fn clamp01(u: f64) -> f64 {
     if u.is_nan() { 0.5 } else { u.clamp(0.0, 1.0) }
 }
 
+/// Counts the evaluations of `f` made by `search`, and returns its answer with the count (the
+/// line searches' tests, brent.rs and resolve.rs).
+#[cfg(test)]
+fn counted(
+    f: &(dyn Fn(f64) -> f64 + Sync),
+    search: impl Fn(&(dyn Fn(f64) -> f64 + Sync)) -> (f64, f64),
+) -> ((f64, f64), usize) {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    let n = AtomicUsize::new(0);
+    let g = |x: f64| {
+        n.fetch_add(1, Ordering::Relaxed);
+        f(x)
+    };
+    let r = search(&g);
+    (r, n.load(Ordering::Relaxed))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

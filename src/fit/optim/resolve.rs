@@ -120,9 +120,9 @@ pub fn profile_stderr(best: (f64, f64), others: [(f64, f64); 2], noise: Noise) -
 
 #[cfg(test)]
 mod tests {
+    use super::super::counted;
     use super::super::{line_search, line_search_resolved, seeded_rng};
     use super::{Noise, Resolution, profile_stderr};
-    use std::sync::atomic::{AtomicUsize, Ordering};
 
     /// A least-squares problem whose answer and standard error are known in closed form: n
     /// residuals `rᵢ(p) = σ zᵢ − gᵢ (p − p*)` (white noise of size σ, a sensitivity gᵢ), so the
@@ -156,20 +156,6 @@ mod tests {
             let gz: f64 = self.g.iter().zip(&self.z).map(|(g, z)| g * self.sigma * z).sum();
             (self.truth + gz / gg, self.sigma / gg.sqrt())
         }
-    }
-
-    /// Counts the evaluations of `f` made by `search`, and returns its answer with the count.
-    fn counted(
-        f: &(dyn Fn(f64) -> f64 + Sync),
-        search: impl Fn(&(dyn Fn(f64) -> f64 + Sync)) -> (f64, f64),
-    ) -> ((f64, f64), usize) {
-        let n = AtomicUsize::new(0);
-        let g = |x: f64| {
-            n.fetch_add(1, Ordering::Relaxed);
-            f(x)
-        };
-        let r = search(&g);
-        (r, n.load(Ordering::Relaxed))
     }
 
     /// On the exact parabola the three-point curvature is exact: the standard error from any
