@@ -12,6 +12,10 @@ use super::{Bounds, Space, clamp01};
 /// 0.04 % of the damping box, which stopped a 1e-3 difference at 2.48 for a true 3.0).
 pub const ROLLOUT_REL_STEP: f64 = 1e-2;
 
+/// The widest forward difference (fraction of the parameter box) a Levenberg–Marquardt fit
+/// widens to when no step along its narrower one descends (a rollout's jagged error).
+pub const WIDEST_REL_STEP: f64 = 0.05;
+
 /// [`LmOpts::stat_tol`] for rollout fits: stop once a step moves every parameter by less than a
 /// tenth of its standard error.
 pub const ROLLOUT_STAT_TOL: f64 = 0.1;
@@ -118,7 +122,7 @@ pub fn levenberg_marquardt(
     // solver's tolerance): a forward difference that small can point uphill. When no step
     // along it descends, the difference is widened (×10, up to `H_MAX` of the box) before
     // the point is called a minimum.
-    const H_MAX: f64 = 0.05;
+    const H_MAX: f64 = WIDEST_REL_STEP;
     let mut h = h0;
     let tol = if o.tol.is_finite() && o.tol >= 0.0 { o.tol } else { 1e-8 };
 

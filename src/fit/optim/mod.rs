@@ -35,7 +35,8 @@ pub use brent::brent_refine;
 pub use cmaes::{CmaesOpts, cmaes};
 pub use golden::{GRID_POINTS, golden_refine, line_search, line_search_resolved};
 pub use lm::{
-    LmOpts, LmResult, ROLLOUT_REL_STEP, ROLLOUT_SHORT_STEP, ROLLOUT_STAT_TOL, levenberg_marquardt,
+    LmOpts, LmResult, ROLLOUT_REL_STEP, ROLLOUT_SHORT_STEP, ROLLOUT_STAT_TOL, WIDEST_REL_STEP,
+    levenberg_marquardt,
 };
 pub use nelder_mead::{NelderMeadOpts, nelder_mead};
 pub use resolve::{Noise, Resolution, profile_stderr};

@@ -27,7 +27,7 @@
 //! constant of its own.
 
 use crate::fit::effects::{Applied, JointTarget, model_with};
-use crate::fit::optim::{Bounds, ROLLOUT_REL_STEP};
+use crate::fit::optim::{Bounds, ROLLOUT_REL_STEP, WIDEST_REL_STEP};
 use crate::sim2real::recording::Recording;
 
 use super::Errors;
@@ -79,7 +79,7 @@ pub(super) fn short_after_first_step(
     // The iterations up to the first that moves: a fit that has not moved yet widens its
     // difference once, to the widest, when its step is below what the difference resolves.
     let mut moved = None;
-    for (iters, h) in [(1, ROLLOUT_REL_STEP), (2, WIDEST_STEP)] {
+    for (iters, h) in [(1, ROLLOUT_REL_STEP), (2, WIDEST_REL_STEP)] {
         let s = solve(&problem, &x0, Method::LeastSquares { max_iters: iters });
         if s.converged || !s.f.is_finite() {
             return None;
@@ -128,11 +128,6 @@ fn believed((got, want, optimum): (f64, f64, f64), pol: &SearchPolicy) -> bool {
     let lt = pol.linear_trust;
     want > 0.0 && got >= lt * want && got * lt <= want && want >= lt * optimum
 }
-
-/// The widest forward difference of the fit's Levenberg–Marquardt iterations (`H_MAX` of
-/// `optim/lm.rs`) [fraction of the box]: the one a fit that has not moved differences at after
-/// its first iteration. The same value, so that this module replays the fit's own points.
-const WIDEST_STEP: f64 = 0.05;
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
