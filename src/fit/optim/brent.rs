@@ -151,8 +151,8 @@ pub fn brent_refine(
 
 #[cfg(test)]
 mod tests {
-    use super::super::counted;
     use super::super::golden_refine;
+    use super::super::{counted, plateau_dip};
     use super::brent_refine;
 
     /// A named profile: the function, its minimiser, and whether it is smooth there.
@@ -216,16 +216,7 @@ mod tests {
     #[test]
     fn a_tie_on_a_plateau_keeps_the_dip_beside_it() {
         for side in [1.0, -1.0] {
-            let dip = |x: f64| {
-                let x = side * x;
-                if x >= 0.9 {
-                    1.0
-                } else if x >= 0.85 {
-                    0.7 + 6.0 * (x - 0.85)
-                } else {
-                    0.7 + 100.0 * (x - 0.85).powi(2)
-                }
-            };
+            let dip = plateau_dip(side);
             let tol = 2e-4 * 2.0;
             let ((x, fx), n) = counted(&dip, |g| super::super::line_search(g, -1.0, 1.0, tol, 40));
             assert!((x - side * 0.85).abs() <= tol, "side {side}: {x} ({fx}) after {n}");

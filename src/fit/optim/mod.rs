@@ -172,6 +172,23 @@ fn counted(
     (r, n.load(Ordering::Relaxed))
 }
 
+/// A torque limit's RMSE profile on [−1, 1] (the line searches' tests): a plateau from 0.9 on
+/// (above every torque the recording asks for, every point replays alike), a kink down to a
+/// dip at 0.85 beside it; `side` −1 mirrors it (a play below which nothing moves).
+#[cfg(test)]
+fn plateau_dip(side: f64) -> impl Fn(f64) -> f64 + Sync {
+    move |x: f64| {
+        let x = side * x;
+        if x >= 0.9 {
+            1.0
+        } else if x >= 0.85 {
+            0.7 + 6.0 * (x - 0.85)
+        } else {
+            0.7 + 100.0 * (x - 0.85).powi(2)
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

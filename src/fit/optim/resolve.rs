@@ -120,7 +120,7 @@ pub fn profile_stderr(best: (f64, f64), others: [(f64, f64); 2], noise: Noise) -
 
 #[cfg(test)]
 mod tests {
-    use super::super::counted;
+    use super::super::{counted, plateau_dip};
     use super::super::{line_search, line_search_resolved, seeded_rng};
     use super::{Noise, Resolution, profile_stderr};
 
@@ -246,16 +246,7 @@ mod tests {
         let white = |_: f64| Some(Noise { n: 1000, inflation: 1.0 });
         let coarse = Resolution { fraction: 1e6, noise: &white };
         for side in [1.0, -1.0] {
-            let dip = |x: f64| {
-                let x = side * x;
-                if x >= 0.9 {
-                    1.0
-                } else if x >= 0.85 {
-                    0.7 + 6.0 * (x - 0.85)
-                } else {
-                    0.7 + 100.0 * (x - 0.85).powi(2)
-                }
-            };
+            let dip = plateau_dip(side);
             let (a, b) = if side > 0.0 { (0.75, 1.0) } else { (-1.0, -0.75) };
             let refine = |g: &(dyn Fn(f64) -> f64 + Sync)| {
                 super::super::brent_refine(g, (a, b), 4e-4, 31, (side, 1.0), None, Some(&coarse))
