@@ -85,6 +85,116 @@ pub(super) fn check_numbers(map: &SourceMap, n: &XNode) -> Result<(), LoadError>
     Ok(())
 }
 
+/// The numeric attributes of the URDF specification, by element: (tag, attribute, how many
+/// numbers; 0 = any count). MuJoCo's URDF compiler reads most of them and rejects a value it
+/// cannot read ("bad format in attribute", "does not have enough data", "has too much data");
+/// modellint's own readers read some MuJoCo ignores (`<limit velocity>`), and ROS's parser
+/// (urdfdom) rejects all of them, so none may pass as "not stated".
+const URDF_NUMBERS: &[(&str, &str, usize)] = &[
+    ("origin", "xyz", 3),
+    ("origin", "rpy", 3),
+    ("axis", "xyz", 3),
+    ("mass", "value", 1),
+    ("inertia", "ixx", 1),
+    ("inertia", "ixy", 1),
+    ("inertia", "ixz", 1),
+    ("inertia", "iyy", 1),
+    ("inertia", "iyz", 1),
+    ("inertia", "izz", 1),
+    ("limit", "lower", 1),
+    ("limit", "upper", 1),
+    ("limit", "effort", 1),
+    ("limit", "velocity", 1),
+    ("dynamics", "damping", 1),
+    ("dynamics", "friction", 1),
+    ("safety_controller", "soft_lower_limit", 1),
+    ("safety_controller", "soft_upper_limit", 1),
+    ("safety_controller", "k_position", 1),
+    ("safety_controller", "k_velocity", 1),
+    ("calibration", "rising", 1),
+    ("calibration", "falling", 1),
+    ("mimic", "multiplier", 1),
+    ("mimic", "offset", 1),
+    ("box", "size", 3),
+    ("cylinder", "radius", 1),
+    ("cylinder", "length", 1),
+    ("capsule", "radius", 1),
+    ("capsule", "length", 1),
+    ("sphere", "radius", 1),
+    ("mesh", "scale", 0),
+    ("color", "rgba", 4),
+];
+
+/// URDF elements whose children [`URDF_NUMBERS`] covers: a `<gazebo>` or `<transmission>` block
+/// (free-form, another tool's) is not walked.
+const URDF_WALKED: &[&str] =
+    &["robot", "link", "joint", "inertial", "visual", "collision", "geometry", "material"];
+
+/// One number as MuJoCo's compiler reads it (C `strtod`, the whole token): Rust's decimal
+/// syntax, or a C hexadecimal float (`0x1p-3`).
+pub(crate) fn c_number(tok: &str) -> Option<f64> {
+    if let Ok(v) = tok.parse::<f64>() {
+        return Some(v);
+    }
+    let (neg, body) = match tok.as_bytes().first() {
+        Some(b'-') => (true, &tok[1..]),
+        Some(b'+') => (false, &tok[1..]),
+        _ => (false, tok),
+    };
+    let hex = body.strip_prefix("0x").or_else(|| body.strip_prefix("0X"))?;
+    let (mant, exp) = match hex.find(['p', 'P']) {
+        Some(k) => (&hex[..k], hex[k + 1..].parse::<i32>().ok()?),
+        None => (hex, 0),
+    };
+    let (int, frac) = mant.split_once('.').unwrap_or((mant, ""));
+    if int.is_empty() && frac.is_empty() {
+        return None;
+    }
+    let mut v = 0.0f64;
+    for c in int.chars() {
+        v = v * 16.0 + f64::from(c.to_digit(16)?);
+    }
+    let mut scale = 1.0 / 16.0;
+    for c in frac.chars() {
+        v += f64::from(c.to_digit(16)?) * scale;
+        scale /= 16.0;
+    }
+    let v = v * 2f64.powi(exp);
+    Some(if neg { -v } else { v })
+}
+
+/// URDF: every attribute of [`URDF_NUMBERS`] holds numbers, as many as the specification
+/// takes; an error at the attribute otherwise. An empty value is not stated, as MuJoCo reads it.
+pub(super) fn check_urdf_numbers(map: &SourceMap, n: &XNode) -> Result<(), LoadError> {
+    for &(tag, name, count) in URDF_NUMBERS.iter().filter(|(t, _, _)| *t == n.tag) {
+        let Some(a) = n.attr(name) else { continue };
+        let toks: Vec<&str> = a.value.split_whitespace().collect();
+        if toks.is_empty() {
+            continue;
+        }
+        let value = &a.value;
+        let n_toks = toks.len();
+        let why = if let Some(bad) = toks.iter().find(|t| c_number(t).is_none()) {
+            let of = if n_toks > 1 { format!(" in \"{value}\"") } else { String::new() };
+            format!("bad format in attribute '{name}': \"{bad}\"{of} is not a number")
+        } else if count > 0 && n_toks != count {
+            let what = if n_toks < count { "does not have enough" } else { "has too much" };
+            format!(
+                "attribute '{name}' {what} data: \"{value}\" is {n_toks} numbers, URDF takes {count}"
+            )
+        } else {
+            continue;
+        };
+        return Err(LoadError::at(map, a.loc, format!("URDF <{tag}>: {why}")));
+    }
+    if URDF_WALKED.contains(&n.tag.as_str()) {
+        for c in &n.children {
+            check_urdf_numbers(map, c)?;
+        }
+    }
+    Ok(())
+}
+
 /// URDF: two `<link>`s (or two `<joint>`s) with one name. MuJoCo rejects
 /// it as "repeated URDF name" without saying which or where; here it is the second one's `name`.
 pub(super) fn check_urdf_names(map: &SourceMap, root: &XNode) -> Result<(), LoadError> {

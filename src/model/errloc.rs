@@ -151,6 +151,80 @@ pub(super) fn mujoco_element_location(
     Some(LoadError::at(map, Loc { file: first_file, start: k + 1, end: k + 5 }, msg.to_string()))
 }
 
+/// MuJoCo's value errors ("bad format in attribute 'X'", "attribute 'X' does not have enough
+/// data", "… has too much data", then "Element 'T', line L"): the attribute X of the `<T>` on
+/// line L (MuJoCo gives the element's line only), or, with no usable line, the first `<T>` whose
+/// X does not read as numbers. The message gains the written value.
+pub(super) fn bad_value_location(
+    map: &SourceMap,
+    first_file: usize,
+    msg: &str,
+) -> Option<LoadError> {
+    if !["bad format in attribute", "does not have enough data", "has too much data"]
+        .iter()
+        .any(|p| msg.contains(p))
+    {
+        return None;
+    }
+    let quoted = |after: &str| -> Option<&str> {
+        let i = msg.find(after)? + after.len();
+        Some(&msg[i..i + msg[i..].find('\'')?])
+    };
+    let (attr, tag) = (quoted("attribute '")?, quoted("Element '")?);
+    let line: Option<usize> = msg
+        .find("', line ")
+        .and_then(|k| msg[k + 8..].split(|c: char| !c.is_ascii_digit()).next()?.parse().ok())
+        .filter(|&l| l > 0);
+    let named = (first_file..map.files.len()).find(|&i| {
+        map.file(i).path.file_name().and_then(|f| f.to_str()).is_some_and(|f| msg.contains(f))
+    });
+    let mut unread = None;
+    for f in first_file..map.files.len() {
+        let file = map.file(f);
+        let text = &file.text;
+        for q in ['"', '\''] {
+            let pat = format!("{attr}={q}");
+            let mut from = 0;
+            while let Some(k) = text[from..].find(&pat) {
+                let at = from + k;
+                from = at + pat.len();
+                let vs = from;
+                let ve = text[vs..].find(q).map_or(text.len(), |e| vs + e);
+                if !text[..at].ends_with(char::is_whitespace) {
+                    continue;
+                }
+                let open = text[..at].rfind('<').unwrap_or(0);
+                let own = text[open + 1..]
+                    .split(|c: char| c.is_whitespace() || c == '>' || c == '/')
+                    .next()
+                    .unwrap_or("");
+                if own != tag || text[open..at].contains('>') {
+                    continue;
+                }
+                let loc = Loc { file: f, start: vs, end: ve };
+                let value = &text[vs..ve];
+                let found = || {
+                    let tail = format!(" (the <{tag}> attribute `{attr}` = \"{value}\")");
+                    Some(LoadError::at(map, loc, format!("{}{tail}", msg.trim_end())))
+                };
+                let on_line = line.is_some_and(|l| {
+                    named.is_none_or(|n| n == f)
+                        && file.line_col(open).0 <= l
+                        && file.line_col(at).0 >= l
+                });
+                if on_line {
+                    return found();
+                }
+                let reads = value.split_whitespace().all(|t| super::checks::c_number(t).is_some());
+                if line.is_none() && !reads && unread.is_none() {
+                    unread = found();
+                }
+            }
+        }
+    }
+    unread
+}
+
 /// MuJoCo errors about one attribute that MuJoCo does not locate (an unnamed element in an
 /// included file: "line 0"): message fragment, element tag, attribute.
 const ATTRIBUTE_ERRORS: &[(&str, &str, &str)] = &[

@@ -142,6 +142,9 @@ pub fn mirror_in(
     if let Some(infix) = infix_side_letter(name, &exists) {
         return Some(infix);
     }
+    if let Some(numbered) = numbered_side_letter(name, &exists) {
+        return Some(numbered);
+    }
     for (l, r) in LEG_SIDE_PREFIXES {
         for (from, to, side) in [(l, r, Side::Left), (r, l, Side::Right)] {
             if let Some(rest) = name.strip_prefix(from)
@@ -201,6 +204,38 @@ fn infix_side_letter(name: &str, exists: &impl Fn(&str) -> bool) -> Option<(Side
     t[k] = other;
     let partner = t.join("_");
     exists(&partner).then_some((side, partner))
+}
+
+/// A side letter standing alone beside a part number (`5R_Link` ↔ `5L_Link`, `leg_2l` ↔
+/// `leg_2r`, `hip-R3` ↔ `hip-L3`, Kayra's convention): an `L`/`R` (or `l`/`r`) with a digit on
+/// one side and a digit, a separator (`_`, `-`, `.`, space) or the name's end on the other,
+/// swapped, when the name with the other letter exists. A letter inside a word (`3BRU_Link`'s
+/// `R`, between `B` and `U`) is no side, and neither is one between two separators or at an end
+/// beside a separator, the markers' and [`infix_side_letter`]'s cases.
+fn numbered_side_letter(name: &str, exists: &impl Fn(&str) -> bool) -> Option<(Side, String)> {
+    let b = name.as_bytes();
+    let sep = |c: u8| matches!(c, b'_' | b'-' | b'.' | b' ');
+    for (i, &c) in b.iter().enumerate() {
+        let (side, other) = match c {
+            b'L' => (Side::Left, "R"),
+            b'R' => (Side::Right, "L"),
+            b'l' => (Side::Left, "r"),
+            b'r' => (Side::Right, "l"),
+            _ => continue,
+        };
+        let before = i.checked_sub(1).map(|k| b[k]);
+        let after = b.get(i + 1).copied();
+        let digit = |x: Option<u8>| x.is_some_and(|x| x.is_ascii_digit());
+        let bound = |x: Option<u8>| x.is_none_or(|x| x.is_ascii_digit() || sep(x));
+        if !(digit(before) && bound(after) || digit(after) && bound(before)) {
+            continue;
+        }
+        let partner = format!("{}{other}{}", &name[..i], &name[i + 1..]);
+        if exists(&partner) {
+            return Some((side, partner));
+        }
+    }
+    None
 }
 
 /// The mirror of a name by the built-in markers alone (no spec): `None` when the name carries no
@@ -287,6 +322,42 @@ mod tests {
         assert_eq!(mirror_in("J_x_r_y", None, has), None);
         // Without the model's names, no guess.
         assert_eq!(mirror("J_hip_l_roll", None), None);
+    }
+
+    #[test]
+    fn side_letters_beside_part_numbers_pair_with_their_partner() {
+        let names = [
+            "5R_Link",
+            "5L_Link",
+            "3BRU_Link",
+            "3BLU_Link",
+            "leg_2l",
+            "leg_2r",
+            "hip-R3",
+            "hip-L3",
+            "Rod1",
+            "Lod1",
+            "x_R_y",
+            "x_L_y",
+            "FL_calf",
+            "FR_calf",
+            "RL_calf",
+            "RR_calf",
+        ];
+        let has = |n: &str| names.contains(&n);
+        assert_eq!(mirror_in("5R_Link", None, has), Some((Side::Right, "5L_Link".into())));
+        assert_eq!(mirror_in("5L_Link", None, has), Some((Side::Left, "5R_Link".into())));
+        assert_eq!(mirror_in("leg_2l", None, has), Some((Side::Left, "leg_2r".into())));
+        assert_eq!(mirror_in("hip-R3", None, has), Some((Side::Right, "hip-L3".into())));
+        // A letter inside a word is no side, even when the swapped name exists.
+        assert_eq!(mirror_in("3BRU_Link", None, has), None);
+        assert_eq!(mirror_in("Rod1", None, has), None);
+        // Quadruped legs still pair by side, front with front and rear with rear.
+        assert_eq!(mirror_in("RL_calf", None, has), Some((Side::Left, "RR_calf".into())));
+        assert_eq!(mirror_in("FR_calf", None, has), Some((Side::Right, "FL_calf".into())));
+        // No partner, no pairing.
+        assert_eq!(mirror_in("7R_Link", None, has), None);
+        assert_eq!(mirror("5R_Link", None), None);
     }
 
     #[test]

@@ -577,6 +577,7 @@ pub fn load(map: &mut SourceMap, path: &Path, keyframe: Option<&str>) -> Result<
     check_numbers(map, &tree)?;
     if format == Format::Urdf {
         checks::check_urdf_names(map, &tree)?;
+        checks::check_urdf_numbers(map, &tree)?;
     }
     let model_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     if format == Format::Mjcf {
@@ -598,7 +599,8 @@ pub fn load(map: &mut SourceMap, path: &Path, keyframe: Option<&str>) -> Result<
     }
     let mj = m.map_err(|e| {
         let msg = plugins::explain(format!("MuJoCo could not compile the model: {e}"));
-        let mut err = mujoco_error_location(map, first, &msg)
+        let mut err = errloc::bad_value_location(map, first, &msg)
+            .or_else(|| mujoco_error_location(map, first, &msg))
             .or_else(|| mujoco_element_location(map, first, format, &msg))
             .or_else(|| attribute_error_location(map, first, &msg))
             .or_else(|| missing_file_location(map, first, &msg))

@@ -4,6 +4,7 @@ pub mod mesh_scale;
 pub mod mirror_asymmetry;
 mod mirror_axes;
 mod mirror_com;
+mod mirror_filter;
 mod mirror_limits;
 mod mirror_places;
 mod mirror_tensor;

@@ -107,13 +107,7 @@ fn gap(
         {
             continue;
         }
-        let (Some(&pos), Some(&mat)) = (xpos.get(g.id), xmat.get(g.id)) else { continue };
-        let verts = if g.gtype == GeomType::Mesh {
-            mesh_world_vertices(robot, g.mesh, pos, &mat)
-        } else {
-            Vec::new()
-        };
-        let shape = Placed { gtype: g.gtype, size: g.size, pos, mat, verts };
+        let Some(shape) = placed(robot, g.id, xpos, xmat) else { continue };
         for p in planes(robot, g.id, up, xmat) {
             let x = &xmat[p];
             let n = [x[2], x[5], x[8]];
@@ -123,6 +117,55 @@ fn gap(
             if best.as_ref().is_none_or(|b| h < b.height) {
                 best = Some(Gap { geom: g.id, plane: p, height: h });
             }
+        }
+    }
+    best
+}
+
+/// Geom `g` placed at the pose, for its support points.
+fn placed(robot: &Robot, g: usize, xpos: &[[f64; 3]], xmat: &[[f64; 9]]) -> Option<Placed> {
+    let geom = robot.geoms.get(g)?;
+    let (&pos, &mat) = (xpos.get(g)?, xmat.get(g)?);
+    let verts = if geom.gtype == GeomType::Mesh {
+        mesh_world_vertices(robot, geom.mesh, pos, &mat)
+    } else {
+        Vec::new()
+    };
+    Some(Placed { gtype: geom.gtype, size: geom.size, pos, mat, verts })
+}
+
+/// Gravity along −z within this angle, degrees, for a model with no floor to be judged against
+/// the plane z = 0 (the ground a training scene adds to a legged robot's MJCF file).
+const IMPLIED_FLOOR_TILT: f64 = 1.0;
+
+/// A model with no floor at all — no plane or height field anywhere, the robot file a training
+/// scene adds the ground to, at z = 0 by convention — under gravity along −z: the robot
+/// `bodies`' colliding geom whose lowest point lies lowest, with its height above z = 0 (m).
+/// `None` when the model has a floor (judged against it), or gravity is not along −z.
+fn implied_floor_gap(
+    robot: &Robot,
+    bodies: &[usize],
+    up: V3,
+    xpos: &[[f64; 3]],
+    xmat: &[[f64; 9]],
+) -> Option<(usize, f64)> {
+    if up[2] < IMPLIED_FLOOR_TILT.to_radians().cos()
+        || robot.geoms.iter().any(|g| matches!(g.gtype, GeomType::Plane | GeomType::Hfield))
+    {
+        return None;
+    }
+    let mut best: Option<(usize, f64)> = None;
+    for g in &robot.geoms {
+        if !bodies.contains(&g.body)
+            || matches!(g.gtype, GeomType::Sdf | GeomType::Other)
+            || !crate::model::contact::takes_part(robot, g.id)
+        {
+            continue;
+        }
+        let Some(shape) = placed(robot, g.id, xpos, xmat) else { continue };
+        let z = shape.support([0.0, 0.0, -1.0])[2];
+        if best.is_none_or(|b| z < b.1) {
+            best = Some((g.id, z));
         }
     }
     best
@@ -193,6 +236,28 @@ pub fn check(
                 let _ = d.reset_keyframe(k);
             }
             d.forward();
+            if let Some((g, z)) =
+                implied_floor_gap(robot, &bodies, up, d.geom_xpos(), d.geom_xmat())
+                && z < -sink
+            {
+                let msg = format!(
+                    "{} puts the robot's lowest colliding geom, {}, {} m below z = 0: the file has no floor, and the scene a training setup adds puts the ground at z = 0",
+                    s.label,
+                    gname(g),
+                    fmt_num(-z, 3)
+                );
+                let f = match s.key {
+                    Some(k) => cx.at_attr(ElemKind::Key, k, &s.name, "qpos", msg),
+                    None => cx.at_elem(ElemKind::Joint, free.id, &free.name, msg),
+                };
+                out.push(
+                    f.label("below z = 0")
+                        .note("a robot file without a floor is placed in a scene whose ground plane is z = 0 (the convention of legged-robot MJCF files and the frameworks that load them): reset to this state, the robot starts that deep in the ground, and MuJoCo's contact throws it out at the first step")
+                        .help("raise the base's `pos` (or the free joint's height in a keyframe) until the lowest foot is at z = 0, or set the base height your training code starts from in a keyframe")
+                        .subject(Subject::Joint(free.id))
+                        .measured(-z, "m"),
+                );
+            }
             let Some(gp) = gap(robot, &bodies, up, d.geom_xpos(), d.geom_xmat()) else { continue };
             let raised = raised_ground(robot, gp.plane, drop, d.geom_xpos(), d.geom_xmat());
             if gp.height < -sink && !buried.get(i).copied().unwrap_or(false) {

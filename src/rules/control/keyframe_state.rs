@@ -30,7 +30,13 @@ declare_rule! {
     ///   Not judged: a model without a floor plane the robot touches, without gravity, with a
     ///   body held to the world by a connect or weld equality (a gantry), or with a colliding
     ///   world geom other than a plane reaching more than `drop_height` above the floor (a
-    ///   platform or stairs it may stand on).
+    ///   platform or stairs it may stand on). A model with no floor at all — no plane or height
+    ///   field anywhere: a legged robot's file, to which a training scene adds the ground at
+    ///   z = 0 by convention — under gravity along −z (within 1°) is judged against z = 0 for
+    ///   sinking alone: its lowest colliding geom more than `sink_depth` below z = 0 is
+    ///   reported (a base written at the origin with the legs below it); a robot the file
+    ///   places above z = 0 is not (the training code sets the start height). A robot fixed to
+    ///   the world (an arm on its pedestal) has no free joint and is not judged.
     ///
     /// In a model with keyframes, the default pose `qpos0` is judged too, at level info: each
     /// limited hinge or slide that `qpos0` places outside its range by more than `tolerance` ×

@@ -10,6 +10,7 @@ use crate::util::fmt_num;
 
 use super::mirror_axes::{axis_angle, axis_cos, axis_finding};
 use super::mirror_com::{com_differs, reference_pose};
+use super::mirror_filter::filtering_differs;
 use super::mirror_limits::limits_differ;
 use super::mirror_places::geoms_misplaced;
 use super::mirror_tensor::tensor_differs;
@@ -23,7 +24,8 @@ declare_rule! {
     /// Pairs left and right joints, actuators and bodies by swapping the side markers in their
     /// names (the spec's `robot.left`/`robot.right` first, then `left_`/`right_`, `Left_`/`Right_`,
     /// `l_`/`r_` prefixes and `_l`/`_r` suffixes, and `Left`/`Right` anywhere; a side letter
-    /// alone between underscores, `J_hip_l_roll` ↔ `J_hip_r_roll`, when the partner exists; bodies named by
+    /// alone between underscores, `J_hip_l_roll` ↔ `J_hip_r_roll`, or beside a part number, `5R_Link` ↔
+    /// `5L_Link` (a letter inside a word, `3BRU_Link`'s, is no side), when the partner exists; bodies named by
     /// part number, with no side marker, pair through the mirror-paired joints that move them:
     /// `dof_left_elbow` moves `KC_C_401L`, `dof_right_elbow` moves `KC_C_401R`) and reports
     /// differences: joint armature, damping, stiffness and frictionloss, the joints' force
@@ -76,6 +78,13 @@ declare_rule! {
     /// body's frame. Body frames whose convention differs between the sides (a foot frame turned
     /// 180° about its axis, the geom placed accordingly) are mirror images in the world and
     /// pass; a sole box moved 13 mm on one side is reported.
+    /// The collision filtering too: what each body of a pair can touch as MuJoCo filters contacts
+    /// (`contype`/`conaffinity` masks, `<exclude>`, explicit `<contact><pair>`s, welded and parent
+    /// bodies), the other bodies taken through their mirrors (a body on no side — the torso, the
+    /// world, scenery — through itself; a side's part the names do not pair is left out), must
+    /// be what its mirror can touch: the first pair that differs is reported, naming both bodies,
+    /// what only one of them touches and their masks, with how many other pairs differ (a right
+    /// leg at `conaffinity` 3 touches the hip and its own parts, the left at 4 only the floor).
     /// Quadruped legs pair by their `FL_`/`FR_`, `RL_`/`RR_`, `HL_`/`HR_` (Spot-style hind
     /// legs) or `BL_`/`BR_` (back legs; and ANYmal-style `LF_`/`RF_`, `LH_`/`RH_`) prefixes, in
     /// either case; a biped's
@@ -585,6 +594,7 @@ impl Rule for MirrorAsymmetry {
             }
         }
         // Bodies: mass and collision geometry.
+        out.extend(filtering_differs(cx, &body_pairs));
         for (l, rr) in body_pairs {
             let (a, b) = (&robot.bodies[l], &robot.bodies[rr]);
             let p = Pair { kind: ElemKind::Body, left: (l, &a.name), right: (rr, &b.name) };
