@@ -273,3 +273,21 @@ pub(super) fn check_assets(
     }
     Ok(files)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::c_number;
+
+    /// C `strtod` syntax, the whole token: decimal and hexadecimal floats; nothing after them.
+    #[test]
+    fn numbers_read_as_mujoco_reads_them() {
+        for (t, v) in [("1.5", 1.5), ("+2.", 2.0), (".3", 0.3), ("-12e-1", -1.2), ("0x10", 16.0)] {
+            assert_eq!(c_number(t), Some(v), "{t}");
+        }
+        assert_eq!(c_number("0x1.4p2"), Some(5.0));
+        assert_eq!(c_number("-0X.8"), Some(-0.5));
+        for t in ["abc", "1.5x", "2,", "0x", "0x1p", "--1", "1..2", "", "e5", "0xg"] {
+            assert_eq!(c_number(t), None, "{t}");
+        }
+    }
+}

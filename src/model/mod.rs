@@ -24,6 +24,7 @@ use std::path::{Path, PathBuf};
 use mujoco_rs::prelude::*;
 
 use crate::error::LoadError;
+pub(crate) use checks::c_number;
 use checks::{check_assets, check_numbers};
 use errloc::{
     attribute_error_location, missing_file_location, mujoco_element_location, mujoco_error_location,

@@ -25,9 +25,9 @@ declare_rule! {
     /// names (the spec's `robot.left`/`robot.right` first, then `left_`/`right_`, `Left_`/`Right_`,
     /// `l_`/`r_` prefixes and `_l`/`_r` suffixes, and `Left`/`Right` anywhere; a side letter
     /// alone between underscores, `J_hip_l_roll` ↔ `J_hip_r_roll`, or beside a part number, `5R_Link` ↔
-    /// `5L_Link` (a letter inside a word, `3BRU_Link`'s, is no side), when the partner exists; bodies named by
-    /// part number, with no side marker, pair through the mirror-paired joints that move them:
-    /// `dof_left_elbow` moves `KC_C_401L`, `dof_right_elbow` moves `KC_C_401R`) and reports
+    /// `5L_Link` (a letter inside a word, `3BRU_Link`'s, is no side), when the partner exists; bodies whose
+    /// names carry no side marker pair through the mirror-paired joints that move them:
+    /// `dof_left_elbow` moves `KC_C_401A`, `dof_right_elbow` moves `KC_C_402A`) and reports
     /// differences: joint armature, damping, stiffness and frictionloss, the joints' force
     /// limits (an MJCF joint's `actuatorfrcrange`; a URDF `<limit>`'s `effort`, and its
     /// `velocity`, which MuJoCo ignores and training frameworks read: Alex's right arm at 1000
@@ -81,7 +81,9 @@ declare_rule! {
     /// The collision filtering too: what each body of a pair can touch as MuJoCo filters contacts
     /// (`contype`/`conaffinity` masks, `<exclude>`, explicit `<contact><pair>`s, welded and parent
     /// bodies), the other bodies taken through their mirrors (a body on no side — the torso, the
-    /// world, scenery — through itself; a side's part the names do not pair is left out), must
+    /// world, scenery — through itself; a side's part the names do not pair is left out, and so
+    /// is a body pair the tree's structure keeps apart, one weld body or a parent's, since two
+    /// sides' trees may differ by a bracket), must
     /// be what its mirror can touch: the first pair that differs is reported, naming both bodies,
     /// what only one of them touches and their masks, with how many other pairs differ (a right
     /// leg at `conaffinity` 3 touches the hip and its own parts, the left at 4 only the floor).

@@ -26,7 +26,8 @@ fn limits(cx: &Context, j: usize) -> (Side, Side) {
         let limit = x.children_tagged("limit").next();
         let get = |a: &str| {
             let at = limit?.attr(a)?;
-            let v = at.value.trim().parse::<f64>().ok().filter(|v| v.is_finite() && *v > 0.0)?;
+            let v =
+                crate::model::c_number(at.value.trim()).filter(|v| v.is_finite() && *v > 0.0)?;
             Some((v, at.loc))
         };
         return (get("effort"), get("velocity"));

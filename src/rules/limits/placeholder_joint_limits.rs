@@ -247,7 +247,7 @@ fn mjcf_beyond_turn(cx: &Context) -> Vec<Hit> {
 
 fn num(limit: Option<&XNode>, attr: &str) -> Option<(f64, Loc)> {
     let a = limit?.attr(attr)?;
-    a.value.trim().parse::<f64>().ok().filter(|v| v.is_finite()).map(|v| (v, a.loc))
+    crate::model::c_number(a.value.trim()).filter(|v| v.is_finite()).map(|v| (v, a.loc))
 }
 
 impl Rule for PlaceholderJointLimits {
