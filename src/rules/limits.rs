@@ -4,4 +4,5 @@ pub mod effort_limit_mismatch;
 pub(crate) mod legs;
 pub mod placeholder_joint_limits;
 pub mod soft_limits;
+pub(crate) mod urdf_damping_speed;
 pub mod wheel_spring;

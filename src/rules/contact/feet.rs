@@ -3,7 +3,9 @@
 //!
 //! Foot bodies come from the spec's `robot.foot_bodies` globs; without them, from body names
 //! containing `foot`, `ankle_roll`, `toe` or `sole`; failing that, the leaf bodies whose
-//! collision geoms reach within 3 cm of the robot's lowest collision point at the keyframe.
+//! collision geoms reach within 3 cm of the robot's lowest collision point at the keyframe (a
+//! leaf of the colliding tree: a body may carry links that collide nowhere, as a shank holds
+//! the rod of an open knee linkage, [`collides_below`]).
 //! A push rod of a closed-loop linkage ([`linkage_bodies`]: on ball joints only, tied by a
 //! `connect` or `weld` equality) and what hangs below it is never matched, whatever its name.
 //! Each matched body that has no matched ancestor is a foot root; its descendants (and any
@@ -97,6 +99,19 @@ fn common_ancestor(robot: &Robot, bodies: &[usize]) -> usize {
     c
 }
 
+/// Whether a body below `body` has a collision geom: `body` is then no end of a limb. A body
+/// whose descendants collide nowhere ends its limb's contact even when it carries links (a
+/// shank holding the open rod of a knee linkage, a sensor mount), so it is a leaf for the
+/// feet found by geometry.
+pub fn collides_below(robot: &Robot, body: usize) -> bool {
+    robot.geoms.iter().any(|g| {
+        g.body != body
+            && is_ancestor(robot, body, g.body)
+            && crate::model::contact::takes_part(robot, g.id)
+            && !matches!(g.gtype, GeomType::Plane | GeomType::Hfield)
+    })
+}
+
 fn contact_geoms(robot: &Robot, body: usize) -> impl Iterator<Item = usize> + '_ {
     robot
         .geoms
@@ -171,10 +186,7 @@ pub fn feet(robot: &Robot, spec: Option<&Spec>) -> Vec<Foot> {
         let zmin = (1..n).map(lowest).fold(f64::INFINITY, f64::min);
         matched = (1..n)
             .filter(|&b| {
-                !robot.bodies.iter().any(|c| c.id != 0 && c.parent == b)
-                    && lowest(b) <= zmin + 0.03
-                    && on_limb(b)
-                    && !in_rod(b)
+                !collides_below(robot, b) && lowest(b) <= zmin + 0.03 && on_limb(b) && !in_rod(b)
             })
             .collect();
     }

@@ -57,10 +57,10 @@ declare_rule! {
     /// slides under any sideways force) is a warning whatever the intent.
     ///
     /// Foot bodies come from the spec's `robot.foot_bodies` globs; without them, from body names
-    /// containing `foot`, `ankle_roll`, `toe` or `sole`; failing that, the leaf bodies whose
-    /// collision geoms reach within 3 cm of the robot's lowest point; never a push rod (a body on
-    /// ball joints only that a `connect` or `weld` equality ties to another body, such as Digit's
-    /// toe rods, whatever its name). Only floating-base robots have feet (a fixed-base arm gets
+    /// containing `foot`, `ankle_roll`, `toe` or `sole`; failing that, the leaf bodies (no body
+    /// below them collides) whose collision geoms reach within 3 cm of the robot's lowest
+    /// point; never a push rod (a body on ball joints only that a `connect` or `weld` equality
+    /// ties to another body, such as Digit's toe rods, whatever its name). Only floating-base robots have feet (a fixed-base arm gets
     /// no foot rule unless the spec names feet). Families: a wheel (a sphere, cylinder or
     /// ellipsoid on an unlimited hinge) is not a foot; a point foot (spheres touching down
     /// within 2 cm of each other, as on quadrupeds) is judged

@@ -35,9 +35,9 @@ declare_rule! {
     /// Unitree H1's V-shaped sole capsules); only their lowest points are held to the band.
     ///
     /// Foot bodies come from the spec's `robot.foot_bodies` globs; without them, from body names
-    /// containing `foot`, `ankle_roll`, `toe` or `sole`; failing that, the leaf bodies whose
-    /// collision geoms reach within 3 cm of the robot's lowest point. Bodies below a foot body
-    /// are its toes.
+    /// containing `foot`, `ankle_roll`, `toe` or `sole`; failing that, the leaf bodies (no body
+    /// below them collides) whose collision geoms reach within 3 cm of the robot's lowest
+    /// point. Bodies below a foot body are its toes.
     ///
     /// Only flat feet are checked: a point foot (quadruped sphere) or a wheel has no sole to
     /// tilt (robot families: `rules::contact::feet`). The lower end of a shank box or capsule

@@ -11,8 +11,12 @@ declare_rule! {
     /// In a URDF with no floating joint, finds a kinematic tree that looks like legs: two or more
     /// chains, each leaving the root link (or a body every chain passes through that hangs from
     /// the root link by one joint: a waist, whose pelvis carries the legs) through a joint of its
-    /// own and ending, two or more hinge/slide joints further out, in a leaf link (not a wheel) whose collision geometry
-    /// reaches the robot's lowest point (within 1 cm) below the root link's frame at qpos0, two
+    /// own and ending, two or more hinge/slide joints further out, in a leaf link (not a wheel;
+    /// no link below it collides: a shank may carry an open linkage's rod) whose collision
+    /// geometry reaches the robot's lowest point (within 1 cm) at qpos0 below the root link's
+    /// frame or below the joint the chain leaves the root through (a root frame at the ground
+    /// under the trunk, a ROS `base_footprint`: Darwin-OP's `base_link`, 0.35 m below the body
+    /// it is fixed to, is not where the legs hang from), two
     /// of which swing side by side (each has a hinge whose axis lies within 45° of the line
     /// between the two feet, as hip pitch and knee axes do; a gripper's fingers close on each
     /// other about axes across that line, so a palm with two two-joint fingers below it is no
@@ -58,7 +62,8 @@ declare_rule! {
 }
 
 /// The leaves of `robot` that stand like feet (see the rule's docs), as (leaf, top-level link
-/// of its chain), and how far below the root link's frame their lowest point is (m). With
+/// of its chain), and how far below the root link's frame their lowest point is (m; negative
+/// when the root frame lies at the ground below it). With
 /// `wheel_legs`, a chain that ends in a wheel counts too when it has two or more other
 /// hinge/slide joints above the wheel (a wheel-legged robot's hip and knee; a rover's steered
 /// wheel has one).
@@ -83,10 +88,9 @@ fn legs(robot: &Robot, wheel_legs: bool) -> (Vec<(usize, usize)>, f64) {
     // root link's child, in order.
     let mut chains: Vec<(usize, Vec<usize>)> = Vec::new();
     for (b, &low) in lows.iter().enumerate().skip(1) {
-        if robot.bodies.iter().any(|c| c.id != 0 && c.parent == b) {
-            continue; // not a leaf
-        }
-        if !(low <= zmin + GROUND_WINDOW && low < root_z) {
+        // A leaf of the colliding tree: no body below it collides (a shank may carry the rod
+        // of an open knee linkage).
+        if crate::rules::contact::feet::collides_below(robot, b) || low > zmin + GROUND_WINDOW {
             continue;
         }
         let mut path = vec![b];
@@ -98,6 +102,20 @@ fn legs(robot: &Robot, wheel_legs: bool) -> (Vec<(usize, usize)>, f64) {
             }
             path.push(p);
             x = p;
+        }
+        // The leaf hangs below the root link's frame, or below the joint its chain leaves the
+        // root through: a root frame at the ground under the trunk (a ROS `base_footprint`,
+        // Darwin-OP's `base_link` 0.35 m below the body it is fixed to) is not where the
+        // legs hang from.
+        let top = path.last().copied().unwrap_or(b);
+        let hip_z = robot
+            .joints
+            .iter()
+            .filter(|j| j.body == top)
+            .filter_map(|j| robot.key.joint_xanchor.get(j.id).map(|a| a[2]))
+            .fold(f64::NEG_INFINITY, f64::max);
+        if !(low < root_z || low < hip_z) {
+            continue;
         }
         chains.push((b, path));
     }
@@ -247,8 +265,9 @@ impl Rule for WeldedLeggedBase {
             .element(format!("link `{root_name}`"), at)
             .label("root link, fixed to the world by the importer; floated for the foot rules and the stance probes")
             .note(format!(
-                "a URDF cannot say its base floats: loaded as it is, the robot never stands on its feet (their lowest point {} m below the root link's frame at qpos0). The static foot rules (`toe-tilt`, `foot-collision-geometry`, `links-without-collision`, `torsional-friction-length`) take the root link as a floating base at its pose in the file; the stance probes run on a copy with a free joint on it, a floor under the lowest foot and the joints held at qpos0",
-                fmt_num(depth, 3)
+                "a URDF cannot say its base floats: loaded as it is, the robot never stands on its feet (their lowest point {} m {} the root link's frame at qpos0). The static foot rules (`toe-tilt`, `foot-collision-geometry`, `links-without-collision`, `torsional-friction-length`) take the root link as a floating base at its pose in the file; the stance probes run on a copy with a free joint on it, a floor under the lowest foot and the joints held at qpos0",
+                fmt_num(depth.abs(), 3),
+                if depth >= 0.0 { "below" } else { "above" }
             ))
             .help("to simulate it standing with its own actuators and floor: an MJCF wrapper that attaches the URDF under a body with a <freejoint/> above a floor (<body pos=\"0 0 H\"><freejoint/><attach model=\"robot\" prefix=\"\"/></body>), and lint the wrapper")
             .subject(Subject::Model)

@@ -31,7 +31,11 @@ declare_rule! {
     /// express the speed–torque curve, so the training stack must apply it; and a joint whose
     /// damping takes its whole force limit below that `velocity_limit` (damping × velocity
     /// limit > force limit: at full torque the simulated joint stops accelerating at force
-    /// limit / damping, so it can never reach the motor's rated speed).
+    /// limit / damping, so it can never reach the motor's rated speed). In a URDF, which states
+    /// both, a joint whose `<dynamics damping>` × `<limit velocity>` exceeds its `<limit
+    /// effort>` (no spec needed: the Unitree Qmini's `damping="1"` on 20 N·m joints rated
+    /// 30 rad/s stops them at 20 rad/s); a joint with no positive effort, velocity or damping,
+    /// or with a spec motor family, is not judged there.
     ///
     /// ## Why is this bad?
     /// Effort limits are part of the identified actuator model (Asimov system identification §4). A joint without a
@@ -218,6 +222,7 @@ impl Rule for EffortLimitMismatch {
                 .with("peak_torque", peak);
             out.push(f);
         }
+        crate::rules::limits::urdf_damping_speed::urdf_damping_caps_speed(cx, out);
         // Missing limits: one finding when no actuated joint has one, else one per joint.
         let n_act = robot
             .joints
