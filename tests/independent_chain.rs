@@ -266,9 +266,17 @@ fn a_gear_play_behind_the_knee_motor_is_found_as_backlash_on_the_knee() {
         tried.iter().any(|x| x["effect"] == "stribeck_friction" && x["joints"] == t["joints"])
     };
     assert!(!ho.iter().any(|t| t["effect"] == "coulomb_friction" && stribeck(t)), "{ho:?}");
+    // (A reach below zero: no value lowers the held-out error — the armature group on all three
+    // joints, whose one shared value moves each member from its own start, at best leaves it
+    // higher.)
     assert!(ho.iter().all(|t| t["round"].as_u64() >= Some(1)
         && t["kept"] == false
-        && t["heldout_improvement"].as_f64().is_some_and(|h| (0.0..0.02).contains(&h))));
+        && t["heldout_improvement"].as_f64().is_some_and(|h| h.is_finite() && h < 0.02)));
+    assert!(
+        ho.iter().all(|t| t["heldout_improvement"].as_f64() >= Some(0.0)
+            || (t["effect"] == "armature" && t["joints"].as_array().is_some_and(|j| j.len() > 1))),
+        "{ho:?}"
+    );
     assert!(ho.iter().any(|t| t["effect"] == "armature" && t["joints"][0] == "knee"), "{ho:?}");
     // Those held-out probes and replays are booked to round 1, whose cost they cut.
     let r1 = search["simulated_s_by_round_phase"]["1"].as_object().unwrap();

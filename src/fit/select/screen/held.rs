@@ -19,6 +19,8 @@ use super::super::{Engine, Errors};
 use super::probe::Probe;
 use super::{Probes, Screen, batches};
 
+mod line;
+
 /// One effect's probes made so far: by diagnosis entry its best probes, and which probe
 /// simulations ([`batches`]) were made.
 type Made = (BTreeMap<usize, Vec<Option<Probe>>>, BTreeSet<usize>);
