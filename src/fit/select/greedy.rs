@@ -79,7 +79,8 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     // residual projected on the simulated sensitivity to a probe step of the effect
     // ([`Screen`]), which also predicts every candidate group below.
     let mut diag = diag;
-    let screen = Screen::build(engine, short, &applied, &sh_err, &mut diag, &covered);
+    let at = (short, &applied[..], &sh_err);
+    let screen = Screen::build_after(engine, at, &mut diag, &covered, &out.diagnosis);
     for c in diag.iter_mut().filter(|c| covered(c.effect, &c.joint)) {
         c.explained_rms = 0.0;
     }

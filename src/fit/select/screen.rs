@@ -40,6 +40,7 @@ mod probe;
 use probe::{Probe, Sims, aligned, dot, dot_r, entry_limbs, limb_batches, probe_batch};
 mod at;
 mod held;
+mod seeded;
 pub(super) use held::HeldoutScreen;
 
 /// The screen's data: about `screen_seconds` of `recs` in all, from each episode the stretch
@@ -261,16 +262,24 @@ impl<'a> Probes<'a> {
     /// one candidate joint of every limb at once, its joints in parallel, keeping for each
     /// screened parameter the best of its probe values; sets each probed candidate's
     /// `explained_rms` and evidence ([`Screen::build`]). `None` when no joint has a column.
+    /// The entries `seeded` (of [`seeded::seed`]) that its value leaves without a column are
+    /// probed again at their own probe values.
     fn model(
         &self,
         engine: &Engine,
         id: &'static str,
         diag: &mut [Candidate],
         covered: &(dyn Fn(&str, &str) -> bool + Sync),
+        seeded: &[usize],
     ) -> Option<EffectModel> {
         let batches = batches(engine, id, diag, covered);
-        let found: BTreeMap<usize, Vec<Option<Probe>>> =
+        let mut found: BTreeMap<usize, Vec<Option<Probe>>> =
             self.probe(engine, id, diag, &batches).into_iter().collect();
+        let again = seeded::unanswered(id, diag, covered, seeded, &found);
+        if !again.is_empty() {
+            let batches = limb_batches(engine.robot, &again, diag);
+            found.extend(self.probe(engine, id, diag, &batches));
+        }
         self.assemble(engine, id, diag, covered, &found)
     }
 
@@ -418,6 +427,7 @@ impl Screen {
     /// the probes' data.
     ///
     /// [`SearchPolicy::probe_seconds`]: super::policy::SearchPolicy::probe_seconds
+    #[cfg(test)]
     pub(super) fn build(
         engine: &Engine,
         screen: &[Recording],
@@ -426,13 +436,27 @@ impl Screen {
         diag: &mut [Candidate],
         covered: &(dyn Fn(&str, &str) -> bool + Sync),
     ) -> Screen {
+        Screen::build_after(engine, (screen, base, sc_err), diag, covered, &[])
+    }
+
+    /// [`Screen::build`] after an earlier round's screen, whose diagnosis `earlier` names the
+    /// value of each candidate's best probe: an effect of several probe values is probed at
+    /// that value alone where it still gives a column ([`seeded`]).
+    pub(super) fn build_after(
+        engine: &Engine,
+        (screen, base, sc_err): (&[Recording], &[Applied], &Errors),
+        diag: &mut [Candidate],
+        covered: &(dyn Fn(&str, &str) -> bool + Sync),
+        earlier: &[Candidate],
+    ) -> Screen {
         let probes = Probes::new(engine, screen, base, sc_err);
+        let seeded = seeded::seed(engine, &probes.m0, diag, covered, earlier);
         let mut ids: Vec<&'static str> = diag.iter().map(|c| c.effect).collect();
         ids.sort_unstable();
         ids.dedup();
         let mut out = probes.screen();
         for id in ids {
-            if let Some(m) = probes.model(engine, id, diag, covered) {
+            if let Some(m) = probes.model(engine, id, diag, covered, &seeded) {
                 out.models.insert(id, m);
             }
         }
