@@ -192,7 +192,9 @@ mod tests {
         }
         // Nothing: disjoint joints, an unlisted pair, the same group twice.
         assert!(rival_sets(&gain, &[on(&ActionDelay, &["hip"], 0.01)], 0).is_empty());
-        assert!(rival_sets(&on(&Backlash, &["knee"], 0.04), &[hip.clone()], 0).is_empty());
+        assert!(
+            rival_sets(&on(&Backlash, &["knee"], 0.04), std::slice::from_ref(&hip), 0).is_empty()
+        );
         let stribeck = on(&StribeckFriction, &["knee"], 0.1);
         assert!(rival_sets(&on(&CoulombFriction, &["knee"], 0.1), &[stribeck], 0).is_empty());
         assert!(rival_sets(&hip, std::slice::from_ref(&hip), 0).is_empty());
