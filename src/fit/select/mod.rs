@@ -52,6 +52,7 @@ mod prune;
 mod reach;
 mod reshoot;
 mod rival;
+mod rival_pairs;
 mod screen;
 mod simplify;
 mod solve;

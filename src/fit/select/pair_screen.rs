@@ -136,6 +136,14 @@ impl PairPrediction {
         PairPrediction { member, ..self }
     }
 
+    /// The least RMSE the look-ahead takes the pair's fit to leave on the screen's data
+    /// ([`PairPrediction::reachable`]), its gain counted from the winner's RMSE there
+    /// (`f_single`) when the pair holds the winner (`held`, [`holds`]:
+    /// [`PairPrediction::beyond_winner`]) [rad RMSE].
+    pub(super) fn reach(self, held: bool, f_single: f64, pol: &SearchPolicy) -> f64 {
+        if held { self.beyond_winner(f_single) } else { self }.reachable(pol)
+    }
+
     /// Whether, by [`PairPrediction::reachable`], the pair's fit cannot lower the better
     /// member's RMSE on the screen's data by `min_rel_improvement`: the weaker member is not
     /// needed in it (removing it is worse by less than the gate asks).

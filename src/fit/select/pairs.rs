@@ -209,7 +209,7 @@ pub(super) fn pair_lookahead(
         if let Some(p) = predicted[i] {
             // A pair that holds the winner reaches the winner's RMSE: its gain counts from there.
             let held = pair_screen::holds((&sets[i].0, &sets[i].1), &with_single[n]);
-            let r = if held { p.beyond_winner(f_single) } else { p }.reachable(&opts.policy);
+            let r = p.reach(held, f_single, &opts.policy);
             let phase = if allowance.is_some_and(|a| r * r * n_short > a) {
                 Some(Phase::PairFloor)
             } else {
@@ -450,7 +450,7 @@ pub(super) fn needless(opts: &super::FitOptions, single: &Selected) -> bool {
 /// The `tried` entry of the pair `(a, b)` left out by its linear prediction `p`
 /// ([`pair_screen`]) in phase `phase`, on `group`: not fitted (no training RMSE), its members'
 /// single-fit values as its parameters and the predicted RMSE on the screen's data.
-fn predicted_out(
+pub(super) fn predicted_out(
     (round, phase): (usize, Phase),
     (a, b): (&Applied, &Applied),
     group: &[String],

@@ -20,7 +20,8 @@
 //! pair it with, its judgement could not change: the round's answer and every kept set are
 //! those of judging it at once. (On the chain leg whose three motors carry gear play, the
 //! gain error on all three joints beside the kept play: its partners, a delay and Coulomb
-//! friction, are left out by the screen.)
+//! friction, are left out by the screen.) Nor is one judged whose every pair the look-ahead
+//! would leave out by its members' linear screen ([`super::rival_pairs`]).
 
 use crate::fit::effects::{self, Applied, Effect};
 use crate::fit::stats::bic;
@@ -29,6 +30,7 @@ use super::discretisation::{Judged, beyond_discretisation};
 use super::groups::Cand;
 use super::pairs::needless;
 use super::policy::Phase;
+use super::rival_pairs;
 use super::screen::Prediction;
 use super::verdict::verdict;
 use super::winner::on_whole_set;
@@ -109,6 +111,25 @@ pub(super) fn judge_beaten(
         if needless(s.engine.opts, w)
             || winner.is_none_or(|x| !may_pair((e, group), (x, &w.joints), others))
         {
+            continue;
+        }
+        // Not where every pair it could form is one the look-ahead leaves out by its linear
+        // screen ([`rival_pairs`]): its pairs are logged so.
+        let pol = &s.engine.opts.policy;
+        let coarse = &out.tried[b.logged];
+        let passed = coarse.significant && coarse.heldout_improvement >= pol.min_rel_improvement;
+        let beaten_others = beaten.iter().enumerate().filter(|(k, _)| *k != i);
+        let pairs_beaten = winner.is_some_and(|x| {
+            may_pair(
+                (e, group),
+                (x, &w.joints),
+                beaten_others.map(|(_, o)| (o.cand.0.id(), &o.cand.1[..])),
+            )
+        });
+        s.engine.report(at.round, Phase::Pair, None);
+        let flags = (passed, pairs_beaten);
+        if let Some(left) = rival_pairs::judgement_needless(s, at, b, (w, &kept), flags) {
+            out.tried.extend(left);
             continue;
         }
         s.engine.report(at.round, Phase::Judge, None);
