@@ -581,36 +581,46 @@ mod tests {
         assert_eq!(charged(10.0, 0.0, 2, 100), 0.0);
     }
 
+    /// A screen of one one-parameter effect `e` on members `a` and `b` (for the tests): member
+    /// a's column `c` against the residual `r`, member b's column of the same norm and
+    /// orthogonal to both, each member within its room (step bounds from its start); returns
+    /// the screen and the residual's sum of squares.
+    pub(in crate::fit::select) fn two_member_screen(
+        c: &[f64],
+        r: &[f64],
+        room: [(f64, f64); 2],
+    ) -> (Screen, f64) {
+        let d = |x: &[f64], y: &[f64]| x.iter().zip(y).map(|(p, q)| p * q).sum::<f64>();
+        let m = EffectModel {
+            joints: vec!["a".into(), "b".into()],
+            room: room.to_vec(),
+            k: 1,
+            ranked: 1,
+            b: vec![vec![d(c, r)], vec![0.0]],
+            g: vec![vec![d(c, c), 0.0], vec![0.0, d(c, c)]],
+            held: vec![0, 0],
+        };
+        let ss = d(r, r);
+        let screen_rmse = (ss / r.len() as f64).sqrt();
+        let s = Screen {
+            models: [("e", m)].into(),
+            train_ss: ss,
+            train_n: r.len(),
+            screen_rmse,
+            pieces: 1,
+        };
+        (s, ss)
+    }
+
     /// A one-parameter prediction stays inside the parameter's bounds: a residual that asks for
     /// a step below the lower bound (negative friction) is explained only as far as the bound
     /// allows; a group's shared value keeps inside every member's bounds.
     #[test]
     fn a_one_parameter_prediction_respects_the_bounds() {
         let c = [1.0, -0.5, 0.25, 2.0];
-        let d = |x: &[f64], y: &[f64]| x.iter().zip(y).map(|(p, q)| p * q).sum::<f64>();
         let screen = |step: f64, room: (f64, f64)| {
             let r: Vec<f64> = c.iter().map(|x| step * x).collect();
-            let m = EffectModel {
-                joints: vec!["a".into(), "b".into()],
-                room: vec![room, (room.0, room.1 * 0.5)],
-                k: 1,
-                ranked: 1,
-                b: vec![vec![d(&c, &r)], vec![0.0]],
-                g: vec![vec![d(&c, &c), 0.0], vec![0.0, d(&c, &c)]],
-                held: vec![0, 0],
-            };
-            let ss = d(&r, &r);
-            let screen_rmse = (ss / r.len() as f64).sqrt();
-            (
-                Screen {
-                    models: [("e", m)].into(),
-                    train_ss: ss,
-                    train_n: r.len(),
-                    screen_rmse,
-                    pieces: 1,
-                },
-                ss,
-            )
+            two_member_screen(&c, &r, [room, (room.0, room.1 * 0.5)])
         };
         let rmse = |ss: f64| (ss / c.len() as f64).sqrt();
         // Inside the bounds: the residual explained whole, the step the one asked for.

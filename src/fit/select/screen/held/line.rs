@@ -69,6 +69,7 @@ impl Screen {
 
 #[cfg(test)]
 mod tests {
+    use super::super::super::tests::two_member_screen;
     use super::super::super::{EffectModel, Screen};
 
     /// Three members with columns c_a, c_b, c_c (apart) and a residual made by moving them
@@ -138,26 +139,9 @@ mod tests {
     #[test]
     fn a_shared_value_keeps_inside_every_members_bounds() {
         let c = [1.0, -0.5, 0.25, 2.0];
-        let d = |x: &[f64], y: &[f64]| x.iter().zip(y).map(|(p, q)| p * q).sum::<f64>();
         let r: Vec<f64> = c.iter().map(|x| 3.0 * x).collect();
-        let m = EffectModel {
-            joints: vec!["a".into(), "b".into()],
-            // Member a from 1.0 within [0, 2]; b from 0.5 within [0, 1.5].
-            room: vec![(-1.0, 1.0), (-0.5, 1.0)],
-            k: 1,
-            ranked: 1,
-            b: vec![vec![d(&c, &r)], vec![0.0]],
-            g: vec![vec![d(&c, &c), 0.0], vec![0.0, d(&c, &c)]],
-            held: vec![0, 0],
-        };
-        let ss = d(&r, &r);
-        let mut s = Screen {
-            models: [("e", m)].into(),
-            train_ss: ss,
-            train_n: r.len(),
-            screen_rmse: (ss / r.len() as f64).sqrt(),
-            pieces: 1,
-        };
+        // Member a from 1.0 within [0, 2]; b from 0.5 within [0, 1.5].
+        let (mut s, _) = two_member_screen(&c, &r, [(-1.0, 1.0), (-0.5, 1.0)]);
         let g = vec!["a".to_string(), "b".to_string()];
         let (_, v) = s.line_gain("e", &g, &[1.0, 0.5], None).expect("modelled");
         assert_eq!(v, 1.5);
