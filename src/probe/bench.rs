@@ -194,6 +194,30 @@ pub fn set_ctrl(d: &mut MjData<&MjModel>, a: usize, v: f64) {
     }
 }
 
+/// Holds a filtered actuator's activation at `v` (its `dyntype` filter or filterexact: its force
+/// acts on the activation, which follows ctrl with the time constant `dynprm[0]`), so a step
+/// written to ctrl and to the activation is the servo loop's own step, not one the filter
+/// smooths first. Any other actuator: nothing.
+pub fn set_filtered_act(d: &mut MjData<&MjModel>, a: usize, v: f64) {
+    use mujoco_rs::mujoco_c::mjtDyn;
+    let (dyntype, adr, num) = {
+        let m = d.model();
+        (
+            m.actuator_dyntype().get(a).copied(),
+            m.actuator_actadr().get(a).copied().unwrap_or(-1),
+            m.actuator_actnum().get(a).copied().unwrap_or(0),
+        )
+    };
+    if !matches!(dyntype, Some(mjtDyn::mjDYN_FILTER | mjtDyn::mjDYN_FILTEREXACT)) || adr < 0 {
+        return;
+    }
+    // The filter's state is the actuator's last activation.
+    let i = usize::try_from(adr + num.max(1) - 1).unwrap_or(usize::MAX);
+    if let Some(x) = d.act_mut().get_mut(i) {
+        *x = v;
+    }
+}
+
 pub fn ctrl(d: &MjData<&MjModel>, a: usize) -> f64 {
     d.ctrl().get(a).copied().unwrap_or(f64::NAN)
 }

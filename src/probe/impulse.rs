@@ -1,7 +1,9 @@
 //! Probe `impulse-response`: a small step in one joint's position target on a fixed test stand.
 //!
 //! * Drives: the joint's own actuator (a position servo, or the spec's PD gains applied through
-//!   a motor), target stepped by δ after a 1 s settle; every other DoF frozen (the probed joint
+//!   a motor), target stepped by δ after a 1 s settle (a servo whose ctrl passes through a
+//!   first-order filter, `dyntype` filter, has its activation stepped with it: the loop's
+//!   step, not the filter's smoothed one); every other DoF frozen (the probed joint
 //!   sees its own row of MuJoCo's mass matrix, armature included), contacts off, gravity on.
 //! * Measures: overshoot; the first peak's overshoot of the loop's equilibrium (dry friction's
 //!   band taken off) → damping ratio ζ; the logarithmic decrement between the first two peaks
@@ -223,6 +225,8 @@ pub fn step_response(
     for _ in 0..resp {
         if is_position {
             bench::set_ctrl(&mut d, act, new_target);
+            // A filtered servo (dyntype filter) steps its activation too: the loop's step.
+            bench::set_filtered_act(&mut d, act, new_target);
         } else {
             pd(&mut d, new_target);
         }

@@ -9,7 +9,8 @@
 //! A push rod of a closed-loop linkage ([`linkage_bodies`]: on ball joints only, tied by a
 //! `connect` or `weld` equality) and what hangs below it is never matched, whatever its name.
 //! Each matched body that has no matched ancestor is a foot root; its descendants (and any
-//! other matched body on the same side, e.g. a separately matched toe) are its toe bodies. A
+//! other toe-named matched body on the same side and the same leg, e.g. a separately matched
+//! toe; not one whose branch leaves the trunk apart, a quadruped's other leg) are its toe bodies. A
 //! root with no contact geom of its own whose foot's contacts all hang below one descendant (an
 //! ankle roll link above the pitch link that holds the sole), or below another matched body of
 //! its side (a toe motor's crank matched before the toe links), hands the foot to that body.
@@ -62,7 +63,7 @@ pub struct Foot {
     pub side: Option<Side>,
     /// The foot body (subject of findings).
     pub root: usize,
-    /// Toe bodies: the root's descendants and other matched bodies on the same side.
+    /// Toe bodies: the root's descendants and other matched bodies on the same side and leg.
     pub toes: Vec<usize>,
     /// Collision geoms (non-plane) of the root and its toes.
     pub geoms: Vec<usize>,
@@ -203,8 +204,17 @@ pub fn feet(robot: &Robot, spec: Option<&Spec>) -> Vec<Foot> {
         .map(|(s, _)| s);
         let toes: Vec<usize> =
             (1..n).filter(|&b| is_ancestor(robot, root, b) && !in_rod(b)).collect();
-        // A second root on the same side (a separately matched toe) joins the first.
-        if let Some(f) = out.iter_mut().find(|f| side.is_some() && f.side == side) {
+        // A second root on the same side (a separately matched toe) joins the first — on the
+        // same leg: two roots whose common ancestor is the trunk (a floating base and what is
+        // welded to it) or the world end two legs (a quadruped's `toe_front_left` and
+        // `toe_back_left`), two feet.
+        let same_leg = |a: usize| {
+            let c = common_ancestor(robot, &[a, root]);
+            c != 0 && !bases.iter().any(|&f| weld(f) == weld(c))
+        };
+        if let Some(f) =
+            out.iter_mut().find(|f| side.is_some() && f.side == side && same_leg(f.root))
+        {
             let toe_named = robot.body_name(root).to_lowercase().contains("toe");
             if toe_named {
                 f.toes.push(root);

@@ -20,7 +20,10 @@ declare_rule! {
     /// of which swing side by side (each has a hinge whose axis lies within 45° of the line
     /// between the two feet, as hip pitch and knee axes do; a gripper's fingers close on each
     /// other about axes across that line, so a palm with two two-joint fingers below it is no
-    /// robot with legs).
+    /// robot with legs). A chain through a link named as a hand's digit (`finger`, `thumb`,
+    /// `gripper`) is no leg: a manipulator's fingers hanging from a stage above its root link
+    /// (TriFinger's three fingers, fixed 0.29 m up, their tips below the root's frame) stand
+    /// like legs, and their tips are no feet.
     /// Says that MuJoCo's importer welded the root to the world and that the foot rules
     /// (`toe-tilt`, `foot-collision-geometry`, `links-without-collision`,
     /// `torsional-friction-length`, and the foot soles of `collision-visual-mismatch`) judged
@@ -135,6 +138,10 @@ fn legs(robot: &Robot, wheel_legs: bool) -> (Vec<(usize, usize)>, f64) {
     for (leaf, path) in chains {
         let below: Vec<usize> = path.iter().copied().take_while(|&x| x != hub).collect();
         let Some(&top) = below.last() else { continue };
+        // A hand's digit is no leg, however it hangs: a chain through a link named as one.
+        if below.iter().any(|&b| is_digit_name(robot.body_name(b))) {
+            continue;
+        }
         let (mut joints, mut wheel) = (0usize, false);
         for j in robot.joints.iter().filter(|j| below.contains(&j.body)) {
             if robot.is_wheel(j.id) {
@@ -148,6 +155,15 @@ fn legs(robot: &Robot, wheel_legs: bool) -> (Vec<(usize, usize)>, f64) {
         }
     }
     (out, root_z - zmin)
+}
+
+/// Name parts of a hand's digits (any case): a link named with one is a finger, never a leg.
+pub const DIGIT_NAME_PARTS: [&str; 3] = ["finger", "thumb", "gripper"];
+
+/// Whether a link's name names a hand's digit ([`DIGIT_NAME_PARTS`]).
+fn is_digit_name(name: &str) -> bool {
+    let l = name.to_lowercase();
+    DIGIT_NAME_PARTS.iter().any(|p| l.contains(p))
 }
 
 /// Whether two of the `legs` (as (leaf, top of chain)) swing side by side, as legs do: each

@@ -114,3 +114,27 @@ pub(super) fn knee_and_below(cx: &Context) -> Vec<usize> {
     }
     out
 }
+
+/// Whether hinge `j` is a fixed-base arm's flange roll: the robot has no floating base and no
+/// hinge or slide turns below it (it ends its chain: nothing it carries can swing through
+/// another link), and it is no leg's joint.
+pub(super) fn flange_roll(robot: &Robot, legs: &[usize], j: usize) -> bool {
+    let Some(joint) = robot.joints.get(j) else { return false };
+    if legs.contains(&j) || !robot.floating_bodies().is_empty() {
+        return false;
+    }
+    let below = |mut b: usize| loop {
+        if b == joint.body {
+            return true;
+        }
+        if b == 0 {
+            return false;
+        }
+        b = robot.bodies[b].parent;
+    };
+    !robot.joints.iter().any(|k| {
+        k.id != j
+            && matches!(k.jtype, JointType::Hinge | JointType::Slide)
+            && (below(k.body) && (k.body != joint.body || k.id > j))
+    })
+}

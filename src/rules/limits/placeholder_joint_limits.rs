@@ -6,7 +6,7 @@ use crate::model::urdf_transmissions::{drives, transmissions};
 use crate::model::{Format, JointType, Robot};
 use crate::rules::{Context, Domain, Rule, RuleMeta, in_subtree, opt};
 
-use super::legs::{knee_and_below, leg_hinges};
+use super::legs::{flange_roll, knee_and_below, leg_hinges};
 use crate::util::fmt_num;
 
 declare_rule! {
@@ -27,8 +27,15 @@ declare_rule! {
     ///   any moving joint (a motor's torque with no speed: myCobot 280's six joints); a passive
     ///   joint's `effort="0" velocity="0"` (no motor) is not judged;
     /// - **beyond a turn**: a revolute joint with a stop more than a full turn (2π, plus the
-    ///   rounding of a value written to two decimals) from its zero: the widest real stops,
-    ///   cable-wound multi-turn axes such as a UR arm's, are ±2π;
+    ///   rounding of a value written to two decimals) from its zero: cable-wound multi-turn
+    ///   axes such as a UR arm's are ±2π. The one wider real stop is a fixed-base arm's flange
+    ///   roll, the last moving joint of its chain (nothing below it turns, so no link swings
+    ///   through another): industrial wrists turn their last axis up to ±455° (ABB IRB 2400
+    ///   ±400°); it is judged against `flange_max_turns` (1.3 turns) instead;
+    /// - **effort 0 everywhere**: every moving joint states `effort="0"` while stating a speed
+    ///   (`velocity` > 0) on one or more, with no `<transmission>`: motors with speeds and no
+    ///   torque (a ROS-Industrial arm's `effort="0"` on all six axes); a passive joint among
+    ///   motors (the others state torque) is not judged;
     /// - **a leg joint turning a full turn**: a hinge of a leg (the joints between a foot, or
     ///   a URDF leg's lowest link, and the body the legs leave) whose range spans a full turn
     ///   or more (2π, less the rounding of a value written to two decimals: Mini Cheetah's
@@ -92,6 +99,7 @@ declare_rule! {
             opt("max_tip_speed", 100.0, "m/s", Domain::POSITIVE, "a velocity moving the farthest point the joint carries faster than this is no motor's"),
             opt("motor_spread", 3.0, "ratio", Domain::AT_LEAST_ONE, "largest / smallest effort (or velocity) of the moving joints from which they cannot share one motor and reduction, so one velocity (or effort) written on all of them is copied"),
             opt("copied_min_joints", 6.0, "joints", Domain::AT_LEAST_ONE, "fewest moving joints stating one value for the one-value case to judge them"),
+            opt("flange_max_turns", 1.3, "turns", Domain::AT_LEAST_ONE, "widest stop, in turns from the joint's zero, of a fixed-base arm's flange roll (the last moving joint of its chain): industrial wrists' data sheets give the last axis up to ±455° (ABB IRB 2400 ±400°, FANUC LR Mate 200iD ±450°, Yaskawa GP7 ±455°)"),
         ],
     }
 }
@@ -102,12 +110,57 @@ const FULL_TURN: f64 = std::f64::consts::TAU;
 /// rounding of the last digit written, with a margin for the next one.
 const WRITTEN_ROUNDING: f64 = 0.01;
 
+/// Every moving joint states `effort="0"` and one or more a speed (`velocity` > 0), none driven
+/// by a `<transmission>` (those are [`Case::Zero`]'s): motors with speeds and no torque. One
+/// hit per joint with a speed.
+fn unpowered(
+    robot: &Robot,
+    stated: &[Stated],
+    driven: &[crate::model::urdf_transmissions::Drive],
+) -> Vec<Hit> {
+    let name = |s: &Stated| robot.joints.get(s.joint).map_or("", |j| j.name.as_str());
+    let all_zero = !stated.is_empty()
+        && stated.iter().all(|s| s.effort.is_some_and(|e| e.0 == 0.0) && !drives(driven, name(s)));
+    if !all_zero {
+        return Vec::new();
+    }
+    stated
+        .iter()
+        .filter_map(|s| {
+            let (v, _) = s.velocity.filter(|v| v.0 > 0.0)?;
+            let (_, at) = s.effort?;
+            let slide = robot.joints.get(s.joint)?.jtype == JointType::Slide;
+            Some(Hit {
+                case: Case::Unpowered,
+                joint: s.joint,
+                at,
+                value: 0.0,
+                detail: format!(
+                    "`{}` effort 0, velocity {} {}",
+                    name(s),
+                    fmt_num(v, 4),
+                    if slide { "m/s" } else { "rad/s" }
+                ),
+            })
+        })
+        .collect()
+}
+
+/// Whether a stop `far` rad from the zero of hinge `j` is beyond what the joint can have: a
+/// full turn (and the rounding of 2π written to two decimals), or a flange roll's
+/// `flange_max_turns`.
+fn beyond_stops(robot: &Robot, legs: &[usize], j: usize, far: f64, flange_turns: f64) -> bool {
+    far > FULL_TURN + WRITTEN_ROUNDING
+        && !(flange_roll(robot, legs, j) && far <= flange_turns * FULL_TURN + WRITTEN_ROUNDING)
+}
+
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
 enum Case {
     Effort,
     Velocity,
     Zero,
     Stalled,
+    Unpowered,
     BeyondTurn,
     LegTurn,
     LegFold,
@@ -226,7 +279,7 @@ fn mjcf_beyond_turn(cx: &Context) -> Vec<Hit> {
             hits.push(hit);
         }
         hits.extend(leg_fold(robot, &below, j.id, l, h, at));
-        if far > FULL_TURN + WRITTEN_ROUNDING {
+        if beyond_stops(robot, &legs, j.id, far, cx.opt("flange_max_turns")) {
             hits.push(Hit {
                 case: Case::BeyondTurn,
                 joint: j.id,
@@ -305,7 +358,7 @@ impl Rule for PlaceholderJointLimits {
                     }
                     let at_far = at.map_or(name_at, |v| v.1);
                     hits.extend(leg_fold(robot, &below, j.id, l, h, at_far));
-                    if far > FULL_TURN + WRITTEN_ROUNDING {
+                    if beyond_stops(robot, &legs, j.id, far, cx.opt("flange_max_turns")) {
                         let at = if l.abs() >= h.abs() { lo } else { hi };
                         hits.push(Hit {
                             case: Case::BeyondTurn,
@@ -406,11 +459,13 @@ impl Rule for PlaceholderJointLimits {
             }
         }
         hits.extend(one_value(&stated, cx.opt("motor_spread"), cx.opt("copied_min_joints")));
+        hits.extend(unpowered(robot, &stated, &driven));
         for case in [
             Case::Effort,
             Case::Velocity,
             Case::Zero,
             Case::Stalled,
+            Case::Unpowered,
             Case::BeyondTurn,
             Case::LegTurn,
             Case::LegFold,
@@ -535,6 +590,16 @@ fn finding(
             "a URDF's velocity is the joint's speed limit (rad/s; m/s for a prismatic joint), so 0 claims the joint cannot move while its effort claims a motor: the file states no speed for it. MuJoCo's importer ignores velocity (its model moves at any speed); a tool that reads the URDF's limits (a ROS joint-limits interface, a training framework's DoF velocity limit) holds the joint still or, reading 0 as unset, limits nothing, by the tool. A passive joint (effort 0) is not judged",
             "write the motor's no-load speed at the joint (motor speed / reduction, from the datasheet) as velocity",
         ),
+        Case::Unpowered => (
+            format!(
+                "every moving joint states effort=\"0\" while {n} state{} a speed (velocity > 0): the file claims {} with no torque: {shown}",
+                if n == 1 { "s" } else { "" },
+                if n == 1 { "a motor" } else { "motors" }
+            ),
+            "effort 0 on every joint".to_string(),
+            "a URDF's effort is the joint's torque limit (N·m; N for a prismatic joint): 0 on every joint while the velocities state motors' speeds is a value never filled in. MuJoCo's importer reads effort 0 as no force limit at all; a tool that reads the URDF's limits (a ROS joint-limits interface, a training framework's torque limit) gets motors that give no torque or, reading 0 as unset, limits nothing, by the tool. A passive joint among motors (the others state torque) is not judged",
+            "write the motor's peak torque at each joint (the motor's peak × the reduction, from the datasheet) as effort",
+        ),
         Case::BeyondTurn if robot.format != Format::Urdf => (
             format!(
                 "{n} hinge joint{s} {} a stop more than a full turn (2π) from the joint's zero, no hardware stop: {shown}",
@@ -610,7 +675,7 @@ fn finding(
         Case::LegTurn => f.measured(top.value, "rad").expected(FULL_TURN, "rad"),
         Case::LegFold => f.measured(top.value, "rad").expected(FULL_TURN / 2.0, "rad"),
         Case::OneValue => f.measured(top.value, "×").expected(cx.opt("motor_spread"), "×"),
-        Case::Zero | Case::Stalled | Case::NoRange => f.measured(0.0, ""),
+        Case::Zero | Case::Stalled | Case::Unpowered | Case::NoRange => f.measured(0.0, ""),
     };
     Some(f)
 }

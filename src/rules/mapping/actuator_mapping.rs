@@ -19,8 +19,9 @@ declare_rule! {
     /// `robot.actuated` / `robot.passive`; the gear sign agrees with the spec `direction`.
     /// Without a spec it still checks that actuator targets exist and that a position
     /// actuator's ctrlrange does not reach outside its joint's range, or, on a fixed tendon, the
-    /// lengths its joints' ranges allow it (Σ coef × range; a ctrlrange covering the whole range
-    /// is `soft-limits`' finding), and that no actuator drives a joint that moves nothing of the
+    /// lengths its joints' ranges allow it (Σ coef × range; a ctrlrange covering a joint's whole
+    /// range is `soft-limits`' finding, a tendon's whole reach and past it this rule's: soft-limits
+    /// does not judge tendons), and that no actuator drives a joint that moves nothing of the
     /// robot: a body hung on the world body with no geometry and no child bodies (a placeholder
     /// degree of freedom padded into the model). Missing force limits are
     /// `effort-limit-mismatch`'s.
@@ -275,7 +276,10 @@ impl ActuatorMapping {
             let below = c[0] < r[0] - near;
             let above = c[1] > r[1] + near;
             let covers = c[0] <= r[0] + near && c[1] >= r[1] - near;
-            if (below || above) && !covers {
+            // A ctrlrange past both ends of a joint's range is soft-limits' finding; soft-limits
+            // does not judge a tendon's length, so a tendon servo's is this rule's either way.
+            let tendon = a.trn == Transmission::Tendon;
+            if (below || above) && (!covers || tendon) {
                 let f = cx
                     .at_attr(
                         ElemKind::Actuator,
