@@ -1,4 +1,5 @@
 //! Rules of the `limits` group.
+mod actuator_effort;
 pub mod ctrlrange_in_degrees;
 pub mod effort_limit_mismatch;
 pub(crate) mod legs;

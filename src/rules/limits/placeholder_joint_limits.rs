@@ -6,6 +6,7 @@ use crate::model::urdf_transmissions::{drives, transmissions};
 use crate::model::{Format, JointType, Robot};
 use crate::rules::{Context, Domain, Rule, RuleMeta, in_subtree, opt};
 
+use super::actuator_effort::actuator_efforts;
 use super::legs::{knee_and_below, leg_hinges};
 use crate::util::fmt_num;
 
@@ -56,8 +57,16 @@ declare_rule! {
     ///   0 (both absent or written as 0), which MuJoCo compiles as an unlimited joint.
     ///
     /// In an MJCF file the beyond-a-turn and leg cases are judged on the compiled `range` of
-    /// every limited hinge (ANYmal C's `range="-9.42478 9.42478"`, 1.5 turns); the other cases
-    /// are URDF `<limit>` attributes.
+    /// every limited hinge (ANYmal C's `range="-9.42478 9.42478"`, 1.5 turns), and the effort
+    /// case on the force bound of the actuators that drive each hinge or slide, as compiled:
+    /// each actuator's `forcerange` (its larger end in magnitude, so a bound in either
+    /// direction is judged), or a `<motor>`'s `ctrlrange` × gain, × its gear, summed over the
+    /// joint's actuators and no more than the joint's `actuatorfrcrange`, against the torque of
+    /// the weight of the joint's kinematic tree (the bodies below the one hanging from the
+    /// world: scenery and other robots in the scene are not the robot) on Earth (9.81 m/s²,
+    /// whatever gravity the file simulates: the motors are the hardware's) at the joint's reach —
+    /// the Koch v1.0 arm's `forcerange="-87 87"` on a 0.24 kg arm; joints with no bound are not
+    /// judged. The other cases are URDF `<limit>` attributes.
     ///
     /// Joints sharing one case are reported together; joints whose subtree has no extent
     /// beyond the axis are not judged for effort and velocity.
@@ -74,8 +83,8 @@ declare_rule! {
     /// range 0 0 means no limit).
     ///
     /// ## How it is confirmed
-    /// Static: the `<limit>` attributes as written, the compiled model's masses, geometry and
-    /// joint ranges at the keyframe. A fact of the file.
+    /// Static: the `<limit>` attributes as written, the compiled model's masses, geometry,
+    /// joint ranges and actuator force bounds at the keyframe. A fact of the file.
     ///
     /// ## How to fix
     /// Write the motor's peak torque at the joint (peak × reduction) as `effort`, its no-load
@@ -259,10 +268,19 @@ impl Rule for PlaceholderJointLimits {
         let multiple = cx.opt("weight_multiple");
         let max_speed = cx.opt("max_tip_speed");
         if robot.format != Format::Urdf {
-            let hits = mjcf_beyond_turn(cx);
-            for case in [Case::BeyondTurn, Case::LegTurn, Case::LegFold] {
+            let mut hits = mjcf_beyond_turn(cx);
+            let efforts = actuator_efforts(cx, multiple);
+            let mass = efforts.first().map_or(0.0, |e| e.mass);
+            hits.extend(efforts.into_iter().map(|e| Hit {
+                case: Case::Effort,
+                joint: e.joint,
+                at: e.at,
+                value: e.ratio,
+                detail: e.detail,
+            }));
+            for case in [Case::Effort, Case::BeyondTurn, Case::LegTurn, Case::LegFold] {
                 let group: Vec<&Hit> = hits.iter().filter(|h| h.case == case).collect();
-                if let Some(f) = finding(cx, case, &group, multiple, max_speed, 0.0) {
+                if let Some(f) = finding(cx, case, &group, multiple, max_speed, mass) {
                     out.push(f);
                 }
             }
@@ -498,6 +516,17 @@ fn finding(
     let robot = cx.robot;
     let j = &robot.joints[top.joint];
     let (msg, label, note, help) = match case {
+        Case::Effort if robot.format != Format::Urdf => (
+            format!(
+                "{n} joint{s} {} actuators that can apply over {} times the torque of the whole robot's weight ({} kg) at the joint's reach, no motor of this robot: {shown}",
+                if n == 1 { "has" } else { "have" },
+                fmt_num(multiple, 3),
+                fmt_num(mass, 3)
+            ),
+            "placeholder force bound".to_string(),
+            "the actuators' force bound (forcerange, or a motor's ctrlrange × gear) is the torque MuJoCo lets them apply: a bound this far above any load the robot can put on the joint bounds nothing, so a policy trained with it learns motions that need torque the motor does not have",
+            "write the motor's peak torque at the joint (the motor's peak × the reduction, from the datasheet) as the actuator's forcerange (÷ gear), or as the joint's actuatorfrcrange",
+        ),
         Case::Effort => (
             format!(
                 "{n} joint{s} {states} an effort limit over {} times the torque of the whole robot's weight ({} kg) at the joint's reach, no motor of this robot: {shown}",
