@@ -121,7 +121,8 @@ const URDF_NUMBERS: &[(&str, &str, usize)] = &[
     ("capsule", "radius", 1),
     ("capsule", "length", 1),
     ("sphere", "radius", 1),
-    ("mesh", "scale", 0),
+    // MuJoCo 3.17 reads exactly three (one or two: "does not have enough data"), as urdfdom does.
+    ("mesh", "scale", 3),
     ("color", "rgba", 4),
 ];
 

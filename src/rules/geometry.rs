@@ -5,6 +5,7 @@ pub mod mirror_asymmetry;
 mod mirror_axes;
 mod mirror_com;
 mod mirror_filter;
+mod mirror_hub;
 mod mirror_limits;
 mod mirror_places;
 mod mirror_tensor;

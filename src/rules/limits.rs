@@ -1,8 +1,10 @@
 //! Rules of the `limits` group.
+mod actuator_effort;
 pub mod ctrlrange_in_degrees;
 pub mod effort_limit_mismatch;
 pub(crate) mod legs;
 pub mod placeholder_joint_limits;
 pub mod soft_limits;
+mod stated_limits;
 pub(crate) mod urdf_damping_speed;
 pub mod wheel_spring;

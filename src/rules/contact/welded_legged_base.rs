@@ -11,7 +11,8 @@ declare_rule! {
     /// In a URDF with no floating joint, finds a kinematic tree that looks like legs: two or more
     /// chains, each leaving the root link (or a body every chain passes through that hangs from
     /// the root link by one joint: a waist, whose pelvis carries the legs) through a joint of its
-    /// own and ending, two or more hinge/slide joints further out, in a leaf link (not a wheel;
+    /// own, below the top quarter of that body's colliding height (an arm leaves a torso at its
+    /// top: a humanoid upper body's hands hanging below the torso are no feet), and ending, two or more hinge/slide joints further out, in a leaf link (not a wheel;
     /// no link below it collides: a shank may carry an open linkage's rod) whose collision
     /// geometry reaches the robot's lowest point (within 1 cm) at qpos0 below the root link's
     /// frame or below the joint the chain leaves the root through (a root frame at the ground
@@ -134,12 +135,19 @@ fn legs(robot: &Robot, wheel_legs: bool) -> (Vec<(usize, usize)>, f64) {
         }
         _ => 0,
     };
+    let height = hub_height(robot, hub);
     let mut out = Vec::new();
     for (leaf, path) in chains {
         let below: Vec<usize> = path.iter().copied().take_while(|&x| x != hub).collect();
         let Some(&top) = below.last() else { continue };
         // A hand's digit is no leg, however it hangs: a chain through a link named as one.
         if below.iter().any(|&b| is_digit_name(robot.body_name(b))) {
+            continue;
+        }
+        // An arm hanging below the body: it leaves through the top of the body.
+        if let (Some((lo, hi)), Some(exit)) = (height, exit_anchor(robot, top))
+            && exit[2] > lo + ARM_EXIT_HEIGHT * (hi - lo)
+        {
             continue;
         }
         let (mut joints, mut wheel) = (0usize, false);
@@ -229,15 +237,143 @@ fn welded_legs(robot: &Robot) -> Option<(Vec<(usize, usize)>, f64)> {
 /// The legs of a URDF robot, wheel-legs included (a wheel at the end of a hip and a knee), as
 /// the leaf of each; `None` unless two or more legs leave the root (or a one-joint waist) at
 /// separate links: a fixed-base arm, a gripper's one chain of fingers, a wheeled base.
+///
+/// A robot whose pose at qpos0 hides its legs (Qmini's zero is each leg folded up behind its
+/// hip, the feet above the hips) is told by its structure instead ([`legs_by_structure`]).
 pub fn urdf_legs(robot: &Robot) -> Option<Vec<usize>> {
     if robot.format != Format::Urdf {
         return None;
     }
-    let (legs, _) = legs(robot, true);
-    let mut tops: Vec<usize> = legs.iter().map(|l| l.1).collect();
-    tops.sort_unstable();
-    tops.dedup();
-    (tops.len() >= 2 && side_by_side(robot, &legs)).then(|| legs.iter().map(|l| l.0).collect())
+    let found = |legs: &[(usize, usize)]| {
+        let mut tops: Vec<usize> = legs.iter().map(|l| l.1).collect();
+        tops.sort_unstable();
+        tops.dedup();
+        (tops.len() >= 2 && side_by_side(robot, legs)).then(|| legs.iter().map(|l| l.0).collect())
+    };
+    found(&legs(robot, true).0).or_else(|| found(&legs_by_structure(robot)))
+}
+
+/// The hub's colliding height at qpos0: the lowest and highest points of its colliding geoms
+/// (m); `None` when it has none.
+fn hub_height(robot: &Robot, hub: usize) -> Option<(f64, f64)> {
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for g in robot.geoms.iter().filter(|g| {
+        g.body == hub
+            && crate::model::contact::takes_part(robot, g.id)
+            && !matches!(g.gtype, crate::model::GeomType::Plane | crate::model::GeomType::Hfield)
+    }) {
+        let p = Placed::of(robot, g.id);
+        lo = lo.min(p.lowest()[2]);
+        hi = hi.max(p.support([0.0, 0.0, 1.0])[2]);
+    }
+    (hi > lo).then_some((lo, hi))
+}
+
+/// Where a chain leaves the hub: the anchor of the joint on its first body, at qpos0.
+fn exit_anchor(robot: &Robot, top: usize) -> Option<[f64; 3]> {
+    let j = robot.joints.iter().find(|j| j.body == top)?;
+    robot.key.joint_xanchor.get(j.id).copied()
+}
+
+/// The share of the hub's colliding height above which a chain leaves it as an arm, not a leg,
+/// whatever its pose: shoulders sit at the top of a torso (a humanoid upper body's hands hang
+/// below its torso at qpos0), hips low on a pelvis or at mid-height on a quadruped's trunk.
+const ARM_EXIT_HEIGHT: f64 = 0.75;
+
+/// The share of the hub's colliding height below which a chain must leave it to be a leg
+/// told by structure: legs leave a body through its lower half (a biped's hips under the
+/// pelvis, a quadruped's at the trunk's bottom), arms through its upper half (shoulders at the
+/// top of a torso, a head's neck on it).
+const LEG_EXIT_HEIGHT: f64 = 0.5;
+
+/// Legs told by the tree's structure whatever the pose at qpos0: two or more chains from the
+/// root link (or a one-joint waist every chain passes through, as in [`legs`]) to leaves of
+/// the colliding tree (contact-capable ends), each with two or more hinge/slide joints and no
+/// wheel, that leave the hub through a joint whose anchor lies in the lower half
+/// ([`LEG_EXIT_HEIGHT`]) of the hub's colliding geometry, and are long enough, stretched
+/// straight, to reach below the hub's lowest point. The positions are the root's own frame
+/// (the root does not move with the joints); the chain's length is the sum of the distances
+/// between its joints' anchors and from the last anchor to the farthest point of its end's
+/// colliding geoms, which no joint angle changes. A humanoid upper body's arms leave the torso
+/// at its top, so they are no legs.
+fn legs_by_structure(robot: &Robot) -> Vec<(usize, usize)> {
+    use crate::model::contact::takes_part;
+    let n = robot.bodies.len();
+    let colliding = |b: usize| {
+        robot.geoms.iter().filter(move |g| {
+            g.body == b
+                && takes_part(robot, g.id)
+                && !matches!(
+                    g.gtype,
+                    crate::model::GeomType::Plane | crate::model::GeomType::Hfield
+                )
+        })
+    };
+    let mut chains: Vec<(usize, Vec<usize>)> = Vec::new();
+    for b in 1..n {
+        if colliding(b).next().is_none() || crate::rules::contact::feet::collides_below(robot, b) {
+            continue;
+        }
+        let mut path = vec![b];
+        let mut x = b;
+        for _ in 0..n {
+            let p = robot.bodies[x].parent;
+            if p == 0 {
+                break;
+            }
+            path.push(p);
+            x = p;
+        }
+        chains.push((b, path));
+    }
+    let firsts: std::collections::BTreeSet<usize> =
+        chains.iter().filter_map(|c| c.1.last().copied()).collect();
+    let hub = match firsts.iter().next() {
+        Some(&w)
+            if firsts.len() == 1 && robot.joints.iter().filter(|j| j.body == w).count() == 1 =>
+        {
+            w
+        }
+        _ => 0,
+    };
+    let Some((lo, hi)) = hub_height(robot, hub) else { return Vec::new() };
+    let exit_below = lo + LEG_EXIT_HEIGHT * (hi - lo);
+    let anchor = |j: usize| robot.key.joint_xanchor.get(j).copied();
+    let dist = |a: [f64; 3], b: [f64; 3]| {
+        ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+    };
+    let mut out = Vec::new();
+    for (leaf, path) in chains {
+        let below: Vec<usize> = path.iter().copied().take_while(|&x| x != hub).collect();
+        let Some(&top) = below.last() else { continue };
+        let mut joints: Vec<usize> = robot
+            .joints
+            .iter()
+            .filter(|j| below.contains(&j.body))
+            .filter(|j| matches!(j.jtype, JointType::Hinge | JointType::Slide))
+            .map(|j| j.id)
+            .collect();
+        if joints.len() < 2 || joints.iter().any(|&j| robot.is_wheel(j)) {
+            continue;
+        }
+        // Top down: the body order of the tree, ancestors first.
+        joints.sort_by_key(|&j| (robot.joints[j].body, j));
+        let Some(exit) = exit_anchor(robot, top) else { continue };
+        if !(exit[2] < exit_below) {
+            continue;
+        }
+        let pts: Vec<[f64; 3]> = joints.iter().filter_map(|&j| anchor(j)).collect();
+        let Some(&last) = pts.last() else { continue };
+        let mut length: f64 = pts.windows(2).map(|w| dist(w[0], w[1])).sum();
+        length += dist(exit, pts[0]);
+        let end = colliding(leaf)
+            .map(|g| dist(last, robot.key.geom_xpos[g.id]) + g.rbound.max(0.0))
+            .fold(0.0, f64::max);
+        if exit[2] - (length + end) < lo {
+            out.push((leaf, top));
+        }
+    }
+    out
 }
 
 /// Whether `robot` is a legged URDF that MuJoCo's importer welded to the world: the foot rules

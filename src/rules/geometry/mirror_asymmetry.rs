@@ -11,6 +11,7 @@ use crate::util::fmt_num;
 use super::mirror_axes::{axis_angle, axis_cos, axis_finding};
 use super::mirror_com::{com_differs, reference_pose};
 use super::mirror_filter::filtering_differs;
+use super::mirror_hub::hub_com_off;
 use super::mirror_limits::limits_differ;
 use super::mirror_places::geoms_misplaced;
 use super::mirror_tensor::tensor_differs;
@@ -55,7 +56,15 @@ declare_rule! {
     /// turned about it by one angle (within `pose_tolerance`) beyond `pose_tolerance`, is the
     /// same part on joints whose zeros differ: reported as that turn — "turned 159° about joint
     /// `right_knee_pitch`" — not as a centre of mass, and the bodies below it, which only follow
-    /// the turn, are not reported), body masses, body
+    /// the turn, are not reported), the centre of mass of a body on the mirror plane (a body
+    /// with no side marker, in no pair, that carries mirror pairs — both limb roots of each
+    /// hang from it: a trunk, a pelvis — must lie on the plane they mirror across, the widest
+    /// pair's, within `com_tolerance` or `plane_com_fraction` of the half spacing of that pair's
+    /// roots; every pair it carries must mirror across that plane, normals within 5° and
+    /// midpoints within `com_tolerance`, else it is not judged; the centre of mass its own
+    /// `<inertial>` states, so a URDF payload written as its own fixed link, which MuJoCo fuses
+    /// into it, is not counted; a trunk whose centre of mass sits forward or low lies on the plane
+    /// and passes: Darwin-OP's trunk 38.7 mm right of the centre line is reported), body masses, body
     /// principal moments of inertia (sorted, so independent of the frames the two sides'
     /// inertials are written in; compared with `inertia_tolerance`, for bodies whose masses
     /// agree and whose `<inertial>` the file states — moments MuJoCo computes from the geoms
@@ -130,6 +139,7 @@ declare_rule! {
             opt("geom_tolerance", 0.02, "ratio", Domain::NON_NEGATIVE, "relative size difference tolerated between mirrored collision geoms (or 0.5 mm)"),
             opt("place_tolerance", 0.005, "m", Domain::NON_NEGATIVE, "distance tolerated between a collision geom's place on its body and its mirror partner's, mirrored (or geom_tolerance of the geom's bounding radius, if larger): CAD exports of the two halves of a mirrored part place their shapes within a millimetre or two, a shape moved or mistyped by a digit lies centimetres off"),
             opt("com_tolerance", 0.01, "m", Domain::NON_NEGATIVE, "distance tolerated between a body's centre of mass and its mirror's reflected across the pair's mirror plane (halfway between its limb roots) at the reference pose (CAD exports of the two halves of a mirrored part and asymmetric wiring place them within millimetres)"),
+            opt("plane_com_fraction", 0.2, "fraction", Domain::NON_NEGATIVE, "distance tolerated between the centre of mass of a body on the mirror plane (one with no side that carries mirror pairs: a trunk, a pelvis) and that plane, as a share of the half spacing of the widest pair's limb roots (or com_tolerance, if larger): a body's weight that far to one side rests 60/40 on the two sides' limbs"),
             opt("com_fraction", 0.25, "fraction", Domain::NON_NEGATIVE, "the same distance as a share of the centres of mass' offsets from their body origins: a centre of mass 0.1 m off its joint is also tolerated 25 mm"),
             opt("pose_tolerance", 5.0, "deg", Domain::NON_NEGATIVE, "angle within which a mirror pair's centre of mass and carried bodies must share one turn about the pair's hinge, and beyond which that turn counts as a differing joint zero (CAD exports place mirrored parts a fraction of a degree apart)"),
             opt("axis_tolerance", 1.0, "deg", Domain::NON_NEGATIVE, "angle tolerated between a joint's axis and its mirror's reflected across the pair's mirror plane: CAD exports of mirrored halves place axes within hundredths of a degree, a hand-edited or rounded axis or frame lies degrees off"),
@@ -597,6 +607,7 @@ impl Rule for MirrorAsymmetry {
         }
         // Bodies: mass and collision geometry.
         out.extend(filtering_differs(cx, &body_pairs));
+        out.extend(hub_com_off(cx, &body_pairs, &pose));
         for (l, rr) in body_pairs {
             let (a, b) = (&robot.bodies[l], &robot.bodies[rr]);
             let p = Pair { kind: ElemKind::Body, left: (l, &a.name), right: (rr, &b.name) };

@@ -67,7 +67,7 @@ fn mirrored_mesh(robot: &Robot, b: usize) -> bool {
 }
 
 /// Where the file writes body `name`'s `<inertial pos>` (the centre of mass).
-fn com_loc(robot: &Robot, name: &str) -> Option<Loc> {
+pub(super) fn com_loc(robot: &Robot, name: &str) -> Option<Loc> {
     let mut found = None;
     robot.tree.walk(&mut |n: &crate::model::source::XNode| {
         if found.is_none()

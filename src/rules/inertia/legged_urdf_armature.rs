@@ -9,7 +9,12 @@ declare_rule! {
     /// ## What it does
     /// In a URDF robot with legs (two or more chains leaving the root link, each ending two or
     /// more hinge/slide joints further out in its lowest contact: a foot, or a wheel at the end
-    /// of a hip and a knee), finds the hinge and slide joints whose compiled armature is zero
+    /// of a hip and a knee, leaving the root link below the top quarter of its colliding height,
+    /// where arms leave a torso; or, when qpos0 hides them — Qmini's zero folds each leg up behind
+    /// its hip, the feet above the hips — two or more chains of two or more hinge/slide joints,
+    /// no wheel, that leave the root link through the lower half of its colliding height, end
+    /// in a colliding link and, stretched straight, reach below the root link's lowest point:
+    /// a humanoid upper body's arms leave the torso at its top and are no legs), finds the hinge and slide joints whose compiled armature is zero
     /// while nothing says what drives them: no `<transmission>` names the joint and the spec
     /// gives it no motor family (nor marks it passive). They are reported in one finding. Not
     /// judged: an MJCF (`zero-armature` judges its actuated joints), a URDF arm or gripper (one

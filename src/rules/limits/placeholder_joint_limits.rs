@@ -6,7 +6,9 @@ use crate::model::urdf_transmissions::{drives, transmissions};
 use crate::model::{Format, JointType, Robot};
 use crate::rules::{Context, Domain, Rule, RuleMeta, in_subtree, opt};
 
+use super::actuator_effort::actuator_efforts;
 use super::legs::{flange_roll, knee_and_below, leg_hinges};
+use super::stated_limits::{Stated, one_value, unpowered};
 use crate::util::fmt_num;
 
 declare_rule! {
@@ -63,8 +65,16 @@ declare_rule! {
     ///   0 (both absent or written as 0), which MuJoCo compiles as an unlimited joint.
     ///
     /// In an MJCF file the beyond-a-turn and leg cases are judged on the compiled `range` of
-    /// every limited hinge (ANYmal C's `range="-9.42478 9.42478"`, 1.5 turns); the other cases
-    /// are URDF `<limit>` attributes.
+    /// every limited hinge (ANYmal C's `range="-9.42478 9.42478"`, 1.5 turns), and the effort
+    /// case on the force bound of the actuators that drive each hinge or slide, as compiled:
+    /// each actuator's `forcerange` (its larger end in magnitude, so a bound in either
+    /// direction is judged), or a `<motor>`'s `ctrlrange` × gain, × its gear, summed over the
+    /// joint's actuators and no more than the joint's `actuatorfrcrange`, against the torque of
+    /// the weight of the joint's kinematic tree (the bodies below the one hanging from the
+    /// world: scenery and other robots in the scene are not the robot) on Earth (9.81 m/s²,
+    /// whatever gravity the file simulates: the motors are the hardware's) at the joint's reach —
+    /// the Koch v1.0 arm's `forcerange="-87 87"` on a 0.24 kg arm; joints with no bound are not
+    /// judged. The other cases are URDF `<limit>` attributes.
     ///
     /// Joints sharing one case are reported together; joints whose subtree has no extent
     /// beyond the axis are not judged for effort and velocity.
@@ -81,8 +91,8 @@ declare_rule! {
     /// range 0 0 means no limit).
     ///
     /// ## How it is confirmed
-    /// Static: the `<limit>` attributes as written, the compiled model's masses, geometry and
-    /// joint ranges at the keyframe. A fact of the file.
+    /// Static: the `<limit>` attributes as written, the compiled model's masses, geometry,
+    /// joint ranges and actuator force bounds at the keyframe. A fact of the file.
     ///
     /// ## How to fix
     /// Write the motor's peak torque at the joint (peak × reduction) as `effort`, its no-load
@@ -110,42 +120,6 @@ const FULL_TURN: f64 = std::f64::consts::TAU;
 /// rounding of the last digit written, with a margin for the next one.
 const WRITTEN_ROUNDING: f64 = 0.01;
 
-/// Every moving joint states `effort="0"` and one or more a speed (`velocity` > 0), none driven
-/// by a `<transmission>` (those are [`Case::Zero`]'s): motors with speeds and no torque. One
-/// hit per joint with a speed.
-fn unpowered(
-    robot: &Robot,
-    stated: &[Stated],
-    driven: &[crate::model::urdf_transmissions::Drive],
-) -> Vec<Hit> {
-    let name = |s: &Stated| robot.joints.get(s.joint).map_or("", |j| j.name.as_str());
-    let all_zero = !stated.is_empty()
-        && stated.iter().all(|s| s.effort.is_some_and(|e| e.0 == 0.0) && !drives(driven, name(s)));
-    if !all_zero {
-        return Vec::new();
-    }
-    stated
-        .iter()
-        .filter_map(|s| {
-            let (v, _) = s.velocity.filter(|v| v.0 > 0.0)?;
-            let (_, at) = s.effort?;
-            let slide = robot.joints.get(s.joint)?.jtype == JointType::Slide;
-            Some(Hit {
-                case: Case::Unpowered,
-                joint: s.joint,
-                at,
-                value: 0.0,
-                detail: format!(
-                    "`{}` effort 0, velocity {} {}",
-                    name(s),
-                    fmt_num(v, 4),
-                    if slide { "m/s" } else { "rad/s" }
-                ),
-            })
-        })
-        .collect()
-}
-
 /// Whether a stop `far` rad from the zero of hinge `j` is beyond what the joint can have: a
 /// full turn (and the rounding of 2π written to two decimals), or a flange roll's
 /// `flange_max_turns`.
@@ -155,7 +129,7 @@ fn beyond_stops(robot: &Robot, legs: &[usize], j: usize, far: f64, flange_turns:
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
-enum Case {
+pub(super) enum Case {
     Effort,
     Velocity,
     Zero,
@@ -169,14 +143,14 @@ enum Case {
 }
 
 /// One joint with a placeholder: where, what the measured quantity is, and the text for it.
-struct Hit {
-    case: Case,
-    joint: usize,
-    at: Loc,
+pub(super) struct Hit {
+    pub(super) case: Case,
+    pub(super) joint: usize,
+    pub(super) at: Loc,
     /// Effort: effort / weight torque; velocity: tip speed (m/s); beyond a turn: the farthest
     /// stop (rad); zero / no range: 0.
-    value: f64,
-    detail: String,
+    pub(super) value: f64,
+    pub(super) detail: String,
 }
 
 /// The farthest point of what joint `j` carries from its anchor at the keyframe (m): the
@@ -312,10 +286,19 @@ impl Rule for PlaceholderJointLimits {
         let multiple = cx.opt("weight_multiple");
         let max_speed = cx.opt("max_tip_speed");
         if robot.format != Format::Urdf {
-            let hits = mjcf_beyond_turn(cx);
-            for case in [Case::BeyondTurn, Case::LegTurn, Case::LegFold] {
+            let mut hits = mjcf_beyond_turn(cx);
+            let efforts = actuator_efforts(cx, multiple);
+            let mass = efforts.first().map_or(0.0, |e| e.mass);
+            hits.extend(efforts.into_iter().map(|e| Hit {
+                case: Case::Effort,
+                joint: e.joint,
+                at: e.at,
+                value: e.ratio,
+                detail: e.detail,
+            }));
+            for case in [Case::Effort, Case::BeyondTurn, Case::LegTurn, Case::LegFold] {
                 let group: Vec<&Hit> = hits.iter().filter(|h| h.case == case).collect();
-                if let Some(f) = finding(cx, case, &group, multiple, max_speed, 0.0) {
+                if let Some(f) = finding(cx, case, &group, multiple, max_speed, mass) {
                     out.push(f);
                 }
             }
@@ -480,57 +463,6 @@ impl Rule for PlaceholderJointLimits {
     }
 }
 
-/// A moving URDF joint's written `effort` and `velocity` (value, where).
-struct Stated {
-    joint: usize,
-    effort: Option<(f64, Loc)>,
-    velocity: Option<(f64, Loc)>,
-}
-
-/// The one-value case: every moving joint (at least `min_joints`) states one positive velocity
-/// while their positive efforts span `spread` or more, or one effort while their velocities do.
-/// One hit for the first joint, its detail naming the value, the other quantity's span and the
-/// count; `value` is that span.
-fn one_value(stated: &[Stated], spread: f64, min_joints: f64) -> Option<Hit> {
-    type Get = fn(&Stated) -> Option<(f64, Loc)>;
-    let quantities: [(&str, &str, &str, &str, Get, Get); 2] = [
-        ("velocity", "efforts", "rad/s", "N·m", |s| s.velocity, |s| s.effort),
-        ("effort", "velocities", "N·m", "rad/s", |s| s.effort, |s| s.velocity),
-    ];
-    if (stated.len() as f64) < min_joints {
-        return None;
-    }
-    for (what, others, unit, ounit, one, other) in quantities {
-        let vals: Vec<(f64, Loc)> =
-            stated.iter().filter_map(|s| one(s).filter(|v| v.0 > 0.0)).collect();
-        if vals.len() != stated.len() || vals.iter().any(|v| v.0 != vals[0].0) {
-            continue;
-        }
-        let spans: Vec<f64> =
-            stated.iter().filter_map(|s| other(s).map(|v| v.0)).filter(|v| *v > 0.0).collect();
-        let lo = spans.iter().copied().fold(f64::INFINITY, f64::min);
-        let hi = spans.iter().copied().fold(0.0, f64::max);
-        if spans.len() < 2 || !(hi >= spread * lo) {
-            continue;
-        }
-        return Some(Hit {
-            case: Case::OneValue,
-            joint: stated[0].joint,
-            at: vals[0].1,
-            value: hi / lo,
-            detail: format!(
-                "{what} {} {unit} on all {} moving joints, whose {others} range from {} to {} {ounit} ({}×)",
-                fmt_num(vals[0].0, 4),
-                stated.len(),
-                fmt_num(lo, 4),
-                fmt_num(hi, 4),
-                fmt_num(hi / lo, 3)
-            ),
-        });
-    }
-    None
-}
-
 fn finding(
     cx: &Context,
     case: Case,
@@ -553,6 +485,17 @@ fn finding(
     let robot = cx.robot;
     let j = &robot.joints[top.joint];
     let (msg, label, note, help) = match case {
+        Case::Effort if robot.format != Format::Urdf => (
+            format!(
+                "{n} joint{s} {} actuators that can apply over {} times the torque of the whole robot's weight ({} kg) at the joint's reach, no motor of this robot: {shown}",
+                if n == 1 { "has" } else { "have" },
+                fmt_num(multiple, 3),
+                fmt_num(mass, 3)
+            ),
+            "placeholder force bound".to_string(),
+            "the actuators' force bound (forcerange, or a motor's ctrlrange × gear) is the torque MuJoCo lets them apply: a bound this far above any load the robot can put on the joint bounds nothing, so a policy trained with it learns motions that need torque the motor does not have",
+            "write the motor's peak torque at the joint (the motor's peak × the reduction, from the datasheet) as the actuator's forcerange (÷ gear), or as the joint's actuatorfrcrange",
+        ),
         Case::Effort => (
             format!(
                 "{n} joint{s} {states} an effort limit over {} times the torque of the whole robot's weight ({} kg) at the joint's reach, no motor of this robot: {shown}",
