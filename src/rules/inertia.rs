@@ -3,6 +3,7 @@ pub mod armature_mismatch;
 pub mod copied_inertial;
 pub mod default_density_mass;
 pub mod drive_family;
+mod floated_root_inertia;
 mod fused_placeholder;
 pub mod inertia_exceeds_geometry;
 pub mod inertial_overridden;

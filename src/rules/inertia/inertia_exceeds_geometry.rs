@@ -16,7 +16,12 @@ declare_rule! {
     /// (`geom_rbound`, drawn and colliding geoms alike, meshes included), so R is never
     /// smaller than the part. Bodies without geoms (other than planes), bodies fixed to the
     /// world, and bodies welded to another body with geoms (whose geoms might carry the mass)
-    /// are not judged.
+    /// are not judged. The root link of a legged URDF that MuJoCo's importer welds to the
+    /// world (`welded-legged-base`) is judged although the importer fuses it into the world
+    /// body: the robot floats on it for the foot rules and the stance probes, so it is judged
+    /// as the stance probes' floated copy compiles it (a free joint on the root link, which
+    /// MuJoCo then compiles with the links fixed to it into one moving body) — PhantomX's
+    /// `MP_BODY`, 6.4 kg·m² on 0.98 kg.
     ///
     /// A URDF link fixed to another (MuJoCo's importer fuses them into one body, so the bound
     /// above judges only the fused body) is judged against its partner: the lighter of the two
@@ -88,6 +93,7 @@ impl Rule for InertiaExceedsGeometry {
             cx.opt("min_density"),
             cx.opt("min_areal_density"),
         ));
+        out.extend(super::floated_root_inertia::floated_root(cx));
         for b in robot.bodies.iter().filter(|b| b.id != 0 && b.weld != 0 && b.mass > 0.0) {
             if b.weld != b.id {
                 continue; // welded to its parent: the parent's geoms may carry its mass
