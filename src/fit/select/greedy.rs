@@ -139,7 +139,7 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
     // The linear model's favourite first, alone ([`lead`]), whatever its size: `cands[..n_lead]`
     // (a lead of more parameters joins the one-parameter block at its front).
     let predicted_rmse: Vec<Option<f64>> =
-        cands.iter().map(|(e, g, _)| screen.lead_rmse(e.id(), g, e.fitted())).collect();
+        cands.iter().map(|(e, g, _)| screen.lead_rmse_beside(engine, &applied, (*e, g))).collect();
     let n_lead = match lead::lead(&predicted_rmse) {
         // Only when the lead at the floor would leave some candidate unscreened.
         Some(i) if opts.policy.lead_first && cands.iter().any(|c| c.1 != cands[i].1) => {

@@ -463,21 +463,21 @@ impl Screen {
         out
     }
 
-    /// The training RMSE [`Screen::predict`] gives `effect` on `group` (on the screen's data's
+    /// The training RMSE of the prediction `p` of `effect` on `group` (on the screen's data's
     /// scale), charged for its `k` fitted parameters by the information criterion over the
     /// screen's data's m windows ([`charged`]: what is left grows by m^((k − 1)/m)), so that
-    /// candidates of different sizes compare: the lead's measure ([`super::lead`]).
-    pub(super) fn lead_rmse(&self, effect: &str, group: &[String], k: usize) -> Option<f64> {
-        let p = self.predict(effect, group)?;
+    /// candidates of different sizes compare: the lead's measure ([`super::lead`]) of
+    /// [`Screen::predict_from`]'s prediction ([`Screen::lead_rmse_beside`]).
+    pub(super) fn lead_rmse(&self, effect: &str, group: &[String], k: usize, p: Prediction) -> f64 {
         // A parameter held by bounds of zero width on the group is not charged.
         let k = k.saturating_sub(self.models.get(effect).map_or(0, |m| m.held(group)));
         let ss = self.train_ss;
         if !(ss > 0.0) || !(self.screen_rmse > 0.0) {
-            return Some(p.train_rmse);
+            return p.train_rmse;
         }
         let left = ss * (p.train_rmse / self.screen_rmse).powi(2);
         let explained = charged(ss, (ss - left).max(0.0), k, self.pieces);
-        Some(self.screen_rmse * ((ss - explained).max(0.0) / ss).sqrt())
+        self.screen_rmse * ((ss - explained).max(0.0) / ss).sqrt()
     }
 
     /// The RMSE of the screen's residual before any step [rad].

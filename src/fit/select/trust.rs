@@ -206,7 +206,7 @@ fn heldout_confirmed(
 /// `applied`) when they differ ([`Screen::line_gain`]: the group's shared value then moves each
 /// member by its own amount, which the summed columns of [`Screen::predict`] do not model);
 /// `None` when they are one value, `e` fits more than one parameter, or a member is no joint.
-fn starts_apart(
+pub(super) fn starts_apart(
     engine: &super::Engine,
     applied: &[Applied],
     (e, g): (&dyn Effect, &[String]),

@@ -9,7 +9,10 @@
 //! direction no shared value takes when the starts differ, and through the round's base, which
 //! no shared value replays). This model uses the same columns and costs no replay.
 
-use super::super::Screen;
+use super::super::{Prediction, Screen};
+use crate::fit::effects::{Applied, Effect};
+use crate::fit::select::Engine;
+use crate::fit::select::trust::starts_apart;
 
 impl Screen {
     /// The relative RMSE gain on the probes' data (1 − √(left / before), negative where the
@@ -64,6 +67,40 @@ impl Screen {
         let left = (self.train_ss - explained(v)).max(0.0);
         let gain = 1.0 - (left / self.train_ss).sqrt();
         (gain.is_finite() && v.is_finite()).then_some((gain, v))
+    }
+}
+
+impl Screen {
+    /// The linear prediction of `effect` on `group` whose members start its one parameter at
+    /// `apart` when they differ: the linear model of the group's one shared value at its
+    /// least-squares value inside every member's bounds ([`Screen::line_gain`]; the RMSE on
+    /// the screen's data's scale, the step from the first member's start, where the group's
+    /// value starts) — the summed columns of [`Screen::predict`] model each member moved by one
+    /// step from its own start, a direction no shared value takes —; [`Screen::predict`]'s
+    /// when `apart` is `None`. `None` when the model cannot be made.
+    pub(in crate::fit::select) fn predict_from(
+        &self,
+        effect: &str,
+        group: &[String],
+        apart: Option<&[f64]>,
+    ) -> Option<Prediction> {
+        let Some(a) = apart else { return self.predict(effect, group) };
+        let (gain, v) = self.line_gain(effect, group, a, None)?;
+        Some(Prediction { train_rmse: self.base_rmse() * (1.0 - gain), step: v - a.first()? })
+    }
+
+    /// The lead's measure ([`Screen::lead_rmse`]) of `e` on `g` beside `applied`: of the
+    /// shared value's model where the group's members start its parameter apart
+    /// ([`starts_apart`], [`Screen::predict_from`]), else of the summed columns.
+    pub(in crate::fit::select) fn lead_rmse_beside(
+        &self,
+        engine: &Engine,
+        applied: &[Applied],
+        (e, g): (&dyn Effect, &[String]),
+    ) -> Option<f64> {
+        let apart = starts_apart(engine, applied, (e, g));
+        let p = self.predict_from(e.id(), g, apart.as_deref())?;
+        Some(self.lead_rmse(e.id(), g, e.fitted(), p))
     }
 }
 
@@ -148,5 +185,76 @@ mod tests {
         assert!(s.line_gain("e", &g, &[1.0], None).is_none());
         s.models.get_mut("e").expect("model").k = 2;
         assert!(s.line_gain("e", &g, &[1.0, 0.5], None).is_none());
+    }
+
+    /// The lead's measure of a group whose members start apart is the shared value's. Members
+    /// a, b, c (starts 0.04, 0.03, 0.012, as a leg's armature) and d (start 0), four columns
+    /// apart; the residual asks each member to move by 0.01 from its own start — which the
+    /// summed columns of a, b, c explain for the most part, and no one shared value does. By a
+    /// scan of the shared value, each residual worked out from the columns themselves: the
+    /// prediction from the starts is that scan's best, and leaves more than d alone does (its
+    /// least-squares residual, also worked out from the columns); without starts it is the
+    /// summed columns' ([`Screen::predict`]); and the lead (the least charged RMSE,
+    /// [`Screen::lead_rmse`]) is d alone, where the summed columns would take the group.
+    #[test]
+    fn a_group_starting_apart_leads_by_its_shared_value() {
+        let cols = [
+            vec![1.0, 0.2, 0.0, -0.3, 0.1, 0.0],
+            vec![0.0, 1.0, 0.5, 0.0, -0.2, 0.3],
+            vec![0.3, 0.0, 1.0, 0.4, 0.0, -0.1],
+            vec![0.0, 0.1, -0.2, 0.0, 1.0, 0.6],
+        ];
+        let starts = [0.04, 0.03, 0.012, 0.0];
+        let dot = |x: &[f64], y: &[f64]| x.iter().zip(y).map(|(p, q)| p * q).sum::<f64>();
+        let r: Vec<f64> = (0..6).map(|t| cols.iter().map(|c| 0.01 * c[t]).sum()).collect();
+        let names: Vec<String> = ["a", "b", "c", "d"].iter().map(|s| s.to_string()).collect();
+        let m = EffectModel {
+            joints: names.clone(),
+            room: starts.iter().map(|a| (-1.0 - a, 1.0 - a)).collect(),
+            k: 1,
+            ranked: 1,
+            b: cols.iter().map(|c| vec![dot(c, &r)]).collect(),
+            g: cols.iter().map(|x| cols.iter().map(|y| dot(x, y)).collect()).collect(),
+            held: vec![0; 4],
+        };
+        let ss = dot(&r, &r);
+        let base = (ss / r.len() as f64).sqrt();
+        let s = Screen {
+            models: [("e", m)].into(),
+            train_ss: ss,
+            train_n: r.len(),
+            screen_rmse: base,
+            pieces: 1,
+        };
+        let group = names[..3].to_vec();
+        // The scan: the residual left with a, b, c all at v, from each column and start.
+        let left = |v: f64| {
+            let l: Vec<f64> = (0..6)
+                .map(|t| r[t] - (0..3).map(|i| (v - starts[i]) * cols[i][t]).sum::<f64>())
+                .collect();
+            dot(&l, &l)
+        };
+        let (v_best, l_best) = (0..=20_000)
+            .map(|i| -0.1 + 0.2 * i as f64 / 20_000.0)
+            .map(|v| (v, left(v)))
+            .fold((f64::NAN, f64::INFINITY), |b, x| if x.1 < b.1 { x } else { b });
+        let p = s.predict_from("e", &group, Some(&starts[..3])).expect("modelled");
+        let want = base * (l_best / ss).sqrt();
+        assert!((p.train_rmse - want).abs() < 1e-6 * base, "{p:?} vs {want}");
+        // d alone: the residual less its projection on d's column.
+        let d_left = ss - dot(&cols[3], &r).powi(2) / dot(&cols[3], &cols[3]);
+        assert!(d_left < l_best, "{d_left} vs {l_best}");
+        assert!((p.step - (v_best - starts[0])).abs() < 2e-5, "{p:?} vs {v_best}");
+        // Without starts: the summed columns, which explain a, b, c's part whole.
+        let q = s.predict_from("e", &group, None).expect("modelled");
+        let summed = s.predict("e", &group).expect("modelled");
+        assert!(q.train_rmse == summed.train_rmse && q.step == summed.step, "{q:?}");
+        let d = s.predict_from("e", &names[3..], None).expect("modelled");
+        assert!((d.train_rmse - base * (d_left / ss).sqrt()).abs() < 1e-9 * base, "{d:?}");
+        assert!(summed.train_rmse < d.train_rmse, "{summed:?} {d:?}");
+        // The lead: d alone by the shared value's measure; the group by the summed columns'.
+        let lead = |g: &[String], p| s.lead_rmse("e", g, 1, p);
+        assert!(lead(&names[3..], d) < lead(&group, p));
+        assert!(lead(&group, summed) < lead(&names[3..], d));
     }
 }
