@@ -51,10 +51,7 @@ pub(super) fn fit_to(
     (e, g): (&'static dyn Effect, &[String]),
     bar: f64,
 ) -> (Vec<f64>, f64) {
-    let linear = screen.predict(e.id(), g).and_then(|p| {
-        let gain = 1.0 - p.train_rmse / screen.base_rmse();
-        engine.fit_secant(short, applied, (e, g), (p.step, gain))
-    });
+    let linear = secant(engine, screen, (short, applied), (e, g));
     let probes = || on_probes(engine, (short, applied), (e, g), bar);
     // (A smooth one only once a fit set the bar it is judged against: before, its coarse fit
     // starts the round's lead's full fit, as it did.)
@@ -69,6 +66,21 @@ pub(super) fn fit_to(
     linear
         .or_else(cheap)
         .unwrap_or_else(|| engine.fit_budget(short, applied, e, g, engine.opts.policy.screen_evals))
+}
+
+/// A smooth one-parameter candidate's coarse fit on `short`: the screen's linear step, then
+/// secant steps ([`Engine::fit_secant`]); `None` where those do not apply.
+///
+/// [`Engine::fit_secant`]: super::engine::Engine
+pub(super) fn secant(
+    engine: &Engine,
+    screen: &Screen,
+    (short, applied): (&[Recording], &[Applied]),
+    (e, g): (&'static dyn Effect, &[String]),
+) -> Option<(Vec<f64>, f64)> {
+    let p = screen.predict(e.id(), g)?;
+    let gain = 1.0 - p.train_rmse / screen.base_rmse();
+    engine.fit_secant(short, applied, (e, g), (p.step, gain))
 }
 
 /// The screen's linear step of a smooth candidate the secant steps do not take (more than one

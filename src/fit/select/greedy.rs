@@ -22,7 +22,7 @@ use super::policy::Phase;
 use super::reach::Reach;
 use super::rival::{Beaten, RoundAt, judge_beaten};
 use super::screen::{HeldoutScreen, Screen, screen_data};
-use super::swap;
+use super::secant_bar;
 use super::trust::{heldout_columns, with_pair_starts};
 use super::verdict::{at_bound, verdict};
 use super::winner::{beaten_at_coarse, on_whole_set, refine, rival_notes};
@@ -207,22 +207,12 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
                 })
                 .collect();
             engine.report(round, Phase::Screen, None);
-            // (A replayed point that reaches the bar a fit set admits the candidate.)
+            // (A replayed point that reaches the bar a fit set admits the candidate; before any
+            // did, the block's secant coarse fits set it, [`secant_bar`].)
             let admits = if best_gain > 0.0 { cut } else { f64::INFINITY };
             let at = (short, &applied[..]);
-            let fits: Vec<(Vec<f64>, f64)> = cands[range.clone()]
-                .par_iter()
-                .zip(&out_of)
-                .zip(&far)
-                .map(|(((e, g, _), out_of), far)| {
-                    let trust = || out_of.map(|_| (vec![], f64::INFINITY));
-                    coarse::deferred(s, (*e, g), &cands, &coarse)
-                        .or_else(|| far.clone().map(|(p, _)| (p, f64::INFINITY))) // judged below
-                        .or_else(trust) // judged below
-                        .or_else(|| swap::adds_nothing_to_kept(s, at, (*e, g)))
-                        .unwrap_or_else(|| coarse::fit_to(engine, &screen, at, (*e, g), admits))
-                })
-                .collect();
+            let block = (&cands[..], &coarse[..], range.clone());
+            let fits = secant_bar::block_fits(s, &screen, at, block, (&out_of, &far), admits);
             for ((c, f), o) in cands[range.clone()].iter().zip(&fits).zip(&out_of) {
                 if let Some((upper, why, reach)) = o
                     && f.0.is_empty()

@@ -54,6 +54,7 @@ mod reshoot;
 mod rival;
 mod rival_pairs;
 mod screen;
+mod secant_bar;
 mod simplify;
 mod solve;
 mod start;
