@@ -47,10 +47,11 @@ pub struct LmOpts {
     /// (the Jacobian does not resolve it), and the first rejection at a small damping goes
     /// straight to half the Gauss–Newton step (below 1 the damping barely shortens it).
     pub short_step: f64,
-    /// The resolution stop (0 disables) [standard errors]: a rejected trial step that, with
-    /// the Gauss–Newton model's own optimum, lies within `resolution` standard errors of the
-    /// point on every free parameter ends the fit there, converged — no shorter step is
-    /// replayed and the difference is not widened. The standard errors are the model's at its
+    /// The resolution stop (0 disables) [standard errors]: a rejected trial step (replayed and
+    /// worse, or, at the start, under `short_step` and not replayed) that, with the
+    /// Gauss–Newton model's own optimum, lies within `resolution` standard errors of the point
+    /// on every free parameter ends the fit there, converged — no shorter step is replayed and
+    /// the difference is not widened. The standard errors are the model's at its
     /// optimum: `s² (JᵀJ)⁻¹` with `s²` the noise of the residual it predicts there (`r + J s_GN`),
     /// inflated for that residual's serial correlation as AR(1) (`lm_resolution`). The search
     /// passes its `line_resolution`: a least-squares fit locates its minimum as finely as a
@@ -257,6 +258,13 @@ pub fn levenberg_marquardt(
             // it proposed steps of 0.7 and 2 standard errors, 0.5 % and 6 % of the difference,
             // and replayed both to find them worse.)
             if o.short_step > 0.0 && !moved && du < o.short_step * h {
+                // (Below the resolution too, with the model's optimum: the start is the answer
+                // at the data's resolution, and no wider difference is taken: `resolution`.)
+                let d: Vec<f64> = (0..n).map(|k| un[k] - u[k]).collect();
+                if optimum.as_ref().is_some_and(|mo| mo.within(&d, o.resolution)) {
+                    converged = true;
+                    break 'outer;
+                }
                 if h < H_MAX {
                     h = (h * 10.0).min(H_MAX);
                     lambda = 1e-3;

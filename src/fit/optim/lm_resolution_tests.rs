@@ -166,3 +166,33 @@ fn a_rejected_step_far_from_the_models_optimum_does_not_stop_the_fit() {
     assert!(evals.load(Ordering::Relaxed) > 3);
     assert!((fit.x[0] - p_hat).abs() <= ROLLOUT_RESOLUTION * se, "{fit:?} {p_hat} {se}");
 }
+
+/// At its start (a re-fit from a coarse fit's point), a step too short for the Jacobian to
+/// resolve is not replayed; where it and the model's optimum lie within the resolution (0.05
+/// standard errors, the box ten times wider than above: under `short_step` of the difference),
+/// the start is the answer without the difference widened — the start's residual and one column,
+/// where the fit without the stop differences again at 5 %. Half a standard error out (the box a
+/// hundred times wider: still under `short_step`) the optimum is beyond the resolution, and the
+/// difference is widened as before.
+#[test]
+fn a_short_first_step_within_the_resolution_is_not_differenced_again() {
+    let (noise, g, p_hat, se) = problem(9, 0.4);
+    let evals = AtomicUsize::new(0);
+    let r = |p: &[f64]| {
+        evals.fetch_add(1, Ordering::Relaxed);
+        residual(&noise, &g, p[0], 0.4)
+    };
+    for (hi, off, with, without) in [(10.0, 0.05, 2, 3), (100.0, 0.5, 3, 3)] {
+        let b = Bounds { lo: vec![0.0], hi: vec![hi] };
+        let x0 = p_hat + off * se;
+        assert!(off * se / hi < ROLLOUT_SHORT_STEP * ROLLOUT_REL_STEP, "{hi} {off}");
+        for (res, n) in [(ROLLOUT_RESOLUTION, with), (0.0, without)] {
+            evals.store(0, Ordering::Relaxed);
+            let fit = levenberg_marquardt(&r, &[x0], &b, &rollout(res));
+            // (At the start, up to the unit box's rounding.)
+            let at_start = (fit.x[0] - x0).abs() <= 1e-12 * hi;
+            assert!(fit.converged && at_start, "{hi} {res}: {fit:?} from {x0}");
+            assert_eq!(evals.load(Ordering::Relaxed), n, "box {hi}, resolution {res}");
+        }
+    }
+}
