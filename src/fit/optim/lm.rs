@@ -4,6 +4,7 @@ use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 use serde::Serialize;
 
+use super::lm_resolution::model_optimum;
 use super::{Bounds, Space, clamp01};
 
 /// Forward-difference step (fraction of the parameter box) for objectives that are MuJoCo
@@ -46,6 +47,16 @@ pub struct LmOpts {
     /// (the Jacobian does not resolve it), and the first rejection at a small damping goes
     /// straight to half the Gauss–Newton step (below 1 the damping barely shortens it).
     pub short_step: f64,
+    /// The resolution stop (0 disables) [standard errors]: a rejected trial step (replayed and
+    /// worse, or, at the start, under `short_step` and not replayed) that, with the
+    /// Gauss–Newton model's own optimum, lies within `resolution` standard errors of the point
+    /// on every free parameter ends the fit there, converged — no shorter step is replayed and
+    /// the difference is not widened. The standard errors are the model's at its
+    /// optimum: `s² (JᵀJ)⁻¹` with `s²` the noise of the residual it predicts there (`r + J s_GN`),
+    /// inflated for that residual's serial correlation as AR(1) (`lm_resolution`). The search
+    /// passes its `line_resolution`: a least-squares fit locates its minimum as finely as a
+    /// line search does.
+    pub resolution: f64,
 }
 
 impl Default for LmOpts {
@@ -57,6 +68,7 @@ impl Default for LmOpts {
             final_jacobian: true,
             stat_tol: 0.0,
             short_step: 0.0,
+            resolution: 0.0,
         }
     }
 }
@@ -194,6 +206,10 @@ pub fn levenberg_marquardt(
                 let s2 = 2.0 * cost / (m - n) as f64;
                 (0..n).map(|k| (s2 * inv[(k, k)]).max(0.0).sqrt()).collect()
             });
+        // The model's optimum and its standard errors, for the resolution stop.
+        let optimum = (o.resolution > 0.0)
+            .then(|| jac.as_ref().and_then(|j| model_optimum(j, &res, &active)))
+            .flatten();
         let maxdiag = (0..n).map(|k| a[(k, k)]).fold(0.0, f64::max);
         let dfloor = (maxdiag * 1e-9).max(1e-300);
         loop {
@@ -242,6 +258,13 @@ pub fn levenberg_marquardt(
             // it proposed steps of 0.7 and 2 standard errors, 0.5 % and 6 % of the difference,
             // and replayed both to find them worse.)
             if o.short_step > 0.0 && !moved && du < o.short_step * h {
+                // (Below the resolution too, with the model's optimum: the start is the answer
+                // at the data's resolution, and no wider difference is taken: `resolution`.)
+                let d: Vec<f64> = (0..n).map(|k| un[k] - u[k]).collect();
+                if optimum.as_ref().is_some_and(|mo| mo.within(&d, o.resolution)) {
+                    converged = true;
+                    break 'outer;
+                }
                 if h < H_MAX {
                     h = (h * 10.0).min(H_MAX);
                     lambda = 1e-3;
@@ -268,6 +291,14 @@ pub fn levenberg_marquardt(
                     converged = true;
                 }
                 break;
+            }
+            // The rejected step and the model's optimum both within `resolution` standard errors
+            // of the point: the minimum is located at the data's resolution, and more damping
+            // (or a wider difference) would hunt for it below that (`lm_resolution`).
+            let d: Vec<f64> = (0..n).map(|k| un[k] - u[k]).collect();
+            if cn.is_finite() && optimum.as_ref().is_some_and(|mo| mo.within(&d, o.resolution)) {
+                converged = true;
+                break 'outer;
             }
             lambda = if o.short_step > 0.0 && lambda < 0.1 { 1.0 } else { lambda * 10.0 };
             if lambda > 1e16 || du < o.short_step * h {
@@ -313,10 +344,19 @@ pub fn levenberg_marquardt(
 
 #[cfg(test)]
 #[allow(clippy::needless_range_loop)]
-mod tests {
+pub(super) mod tests {
     use super::super::tests::{exp_data, exp_model};
     use super::super::{NelderMeadOpts, nelder_mead, seeded_rng};
     use super::*;
+
+    /// The resolution the search passes a rollout fit (`SearchPolicy::line_resolution`).
+    pub(in crate::fit::optim) const ROLLOUT_RESOLUTION: f64 = 0.1;
+
+    #[test]
+    fn the_rollout_resolution_is_the_searchs_line_resolution() {
+        let line = crate::fit::select::SearchPolicy::default().line_resolution;
+        assert_eq!(ROLLOUT_RESOLUTION, line);
+    }
 
     #[test]
     fn lm_exp_fit_and_uncertainty_calibration() {
@@ -472,6 +512,7 @@ mod tests {
             final_jacobian: true,
             stat_tol: ROLLOUT_STAT_TOL,
             short_step: ROLLOUT_SHORT_STEP,
+            resolution: ROLLOUT_RESOLUTION,
         };
         let fit = levenberg_marquardt(&r, &[0.0], &b, &o);
         assert!(
@@ -511,6 +552,7 @@ mod tests {
             final_jacobian: false,
             stat_tol: ROLLOUT_STAT_TOL,
             short_step: ROLLOUT_SHORT_STEP,
+            resolution: ROLLOUT_RESOLUTION,
         };
         let fit = levenberg_marquardt(&r, &[0.3], &b, &o);
         assert!(fit.converged && fit.x == vec![0.3], "{fit:?}");
@@ -537,6 +579,7 @@ mod tests {
             final_jacobian: false,
             stat_tol: ROLLOUT_STAT_TOL,
             short_step: ROLLOUT_SHORT_STEP,
+            resolution: ROLLOUT_RESOLUTION,
         };
         // The precondition: at the rollout difference the slope J^T r points out of the box.
         let (r0, r1) = (r(&[0.0]), r(&[ROLLOUT_REL_STEP]));
@@ -570,6 +613,7 @@ mod tests {
             final_jacobian: false,
             stat_tol: ROLLOUT_STAT_TOL,
             short_step: ROLLOUT_SHORT_STEP,
+            resolution: ROLLOUT_RESOLUTION,
         };
         let quick = levenberg_marquardt(&r, &[1.0, 0.5, 0.0], &b, &o);
         let n_quick = evals.load(Ordering::Relaxed);

@@ -24,6 +24,7 @@ mod brent;
 mod cmaes;
 mod golden;
 mod lm;
+mod lm_resolution;
 mod nelder_mead;
 mod resolve;
 

@@ -80,7 +80,8 @@ pub(super) fn short_after_first_step(
     // difference once, to the widest, when its step is below what the difference resolves.
     let mut moved = None;
     for (iters, h) in [(1, ROLLOUT_REL_STEP), (2, WIDEST_REL_STEP)] {
-        let s = solve(&problem, &x0, Method::LeastSquares { max_iters: iters });
+        let resolve = engine.opts.policy.line_resolution;
+        let s = solve(&problem, &x0, Method::LeastSquares { max_iters: iters, resolve });
         if s.converged || !s.f.is_finite() {
             return None;
         }

@@ -29,8 +29,11 @@ pub struct SearchPolicy {
     /// between the others; the largest measured so far — below the RMSE's ripple the parabola
     /// measures the ripple) with the training residual's sample count and AR(1) inflation, the
     /// noise model of the reported standard errors. Until a parabola is usable (a plateau, a flat
-    /// or non-convex profile) the line search's own tolerance; 0 never stops early
-    /// [standard errors]. Default 0.1.
+    /// or non-convex profile) the line search's own tolerance. A Levenberg–Marquardt fit stops
+    /// at a rejected trial step when that step and its Gauss–Newton model's optimum both lie
+    /// within this many standard errors of its point, the model's at its optimum (the noise of
+    /// the residual it predicts there, AR(1)-inflated). 0 never stops early [standard errors].
+    /// Default 0.1.
     pub line_resolution: f64,
     /// Objective evaluations of a coarse screening fit [rollouts of the screen's data]. Default 6.
     pub screen_evals: usize,
@@ -262,7 +265,7 @@ pub const FIELDS: &[(&str, &str, &str)] = &[
     (
         "line_resolution",
         "standard errors",
-        "a one-parameter line search stops once its bracket locates the minimum within this many standard errors of its best point (strictly lower than the next two); the standard error from the parabola through the three best points (convex, the best strictly lowest between the others; the largest so far) and the training residual's sample count and AR(1) inflation; until such a parabola (a plateau, a flat or non-convex profile) its tolerance; 0: never early",
+        "a one-parameter line search stops once its bracket locates the minimum within this many standard errors of its best point (strictly lower than the next two); the standard error from the parabola through the three best points (convex, the best strictly lowest between the others; the largest so far) and the training residual's sample count and AR(1) inflation; until such a parabola (a plateau, a flat or non-convex profile) its tolerance; a Levenberg–Marquardt fit stops at a rejected step when it and its Gauss–Newton model's optimum lie within this many of the model's standard errors at that optimum (the noise of the residual it predicts there, AR(1)-inflated); 0: never early",
     ),
     ("screen_evals", "rollouts of the screen's data", "budget of a coarse screening fit"),
     (

@@ -69,7 +69,10 @@ pub(super) fn polish_from(
     };
     let smooth = !slots.is_empty() && applied[first..].iter().all(|a| a.effect.smooth());
     let method = if smooth {
-        Method::LeastSquares { max_iters: (max_evals / (slots.len() + 2)).clamp(2, 12) }
+        Method::LeastSquares {
+            max_iters: (max_evals / (slots.len() + 2)).clamp(2, 12),
+            resolve: engine.opts.policy.line_resolution,
+        }
     } else {
         Method::Simplex { max_evals, xtol: 1e-4, step }
     };
@@ -156,7 +159,7 @@ pub(super) fn fit_jointly_iters(
     };
     let problem = Problem { objective: &obj, residuals: Some(&res), bounds: b };
     let method = if set[first..].iter().all(|a| a.effect.smooth()) {
-        Method::LeastSquares { max_iters: lm_iters }
+        Method::LeastSquares { max_iters: lm_iters, resolve: engine.opts.policy.line_resolution }
     } else {
         Method::Simplex { max_evals: engine.opts.policy.max_evals * 3, xtol: 1e-4, step: 0.1 }
     };

@@ -25,8 +25,10 @@ const SIMPLEX_FTOL: f64 = 1e-12;
 /// How to search a problem's parameters.
 #[derive(Debug, Clone, Copy)]
 pub(super) enum Method {
-    /// Levenberg–Marquardt on the residual vector, at most `max_iters` iterations.
-    LeastSquares { max_iters: usize },
+    /// Levenberg–Marquardt on the residual vector, at most `max_iters` iterations; a rejected
+    /// step that, with the Gauss–Newton model's optimum, lies within `resolve` standard errors
+    /// of the point ends it there (`LmOpts::resolution`; 0: never).
+    LeastSquares { max_iters: usize, resolve: f64 },
     /// A line search on one parameter (on ln p when `log` and the bracket is positive): a
     /// 9-point grid, then Brent's refinement around its best point, at most `max_evals`
     /// evaluations; the refinement stops early once the minimum is located within `resolve`
@@ -135,7 +137,7 @@ fn noise_at(p: &Problem<'_>, x: f64) -> Option<Noise> {
 pub(super) fn solve(p: &Problem<'_>, x0: &[f64], method: Method) -> Solution {
     let b = &p.bounds;
     match method {
-        Method::LeastSquares { max_iters } => {
+        Method::LeastSquares { max_iters, resolve } => {
             let Some(res) = p.residuals else {
                 // No residual vector: the simplex on the objective instead.
                 let m = Method::Simplex { max_evals: 20 * max_iters, xtol: 1e-4, step: 0.1 };
@@ -148,6 +150,7 @@ pub(super) fn solve(p: &Problem<'_>, x0: &[f64], method: Method) -> Solution {
                 final_jacobian: false,
                 stat_tol: ROLLOUT_STAT_TOL,
                 short_step: ROLLOUT_SHORT_STEP,
+                resolution: resolve,
             };
             let r = levenberg_marquardt(res, x0, b, &o);
             let n = r.n_resid;
@@ -209,7 +212,7 @@ mod tests {
             bounds: Bounds { lo: vec![0.0, 0.5], hi: vec![1.0, 5.0] },
         };
         for m in [
-            Method::LeastSquares { max_iters: 20 },
+            Method::LeastSquares { max_iters: 20, resolve: 0.1 },
             Method::Simplex { max_evals: 400, xtol: 1e-6, step: 0.1 },
             Method::Evolution { max_evals: 2000 },
         ] {

@@ -414,8 +414,10 @@ impl Engine<'_> {
                 // iteration, converged in a handful (a derivative-free search needs ~40).
                 // (A parameter held by bounds of zero width costs no replay.)
                 let free = (0..k).filter(|&i| b.hi[i] > b.lo[i]).count();
-                let method =
-                    Method::LeastSquares { max_iters: (max_evals / (free + 2)).clamp(2, 12) };
+                let method = Method::LeastSquares {
+                    max_iters: (max_evals / (free + 2)).clamp(2, 12),
+                    resolve: self.opts.policy.line_resolution,
+                };
                 let first = solve(&problem, &x0, method);
                 // A second basin: a servo gain error of kp × 0.4, kd × 2 on arm3's elbow was
                 // fitted from (1, 1) as kp × 0.99, kd × 5.0 — kd on its bound, 1.16 mrad
