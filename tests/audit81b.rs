@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::lint::{findings, message, of, real_robot_files};
+use common::lint::{findings, message, of, of_message, real_robot_files};
 use common::xml_text::{attr, tags};
 
 const FC: &str = "fixtures/rules/foot-collision-geometry/";
@@ -132,20 +132,25 @@ fn flange_roll_beyond_a_turn() {
             .map(|j| j.0.as_str())
             .collect();
         assert_eq!(!expected.is_empty(), named, "{file}: {expected:?}");
-        let all = findings(&path);
-        let beyond: Vec<_> = of(&all, "placeholder-joint-limits")
-            .into_iter()
-            .filter(|f| message(f).contains("more than a full turn"))
-            .collect();
-        if expected.is_empty() {
-            assert!(beyond.is_empty(), "{file}: {beyond:?}");
-            continue;
-        }
-        assert_eq!(beyond.len(), 1, "{file}: {beyond:?}");
-        let m = message(beyond[0]);
-        for j in &joints {
-            assert_eq!(m.contains(&format!("`{}`", j.0)), expected.contains(&j.0.as_str()), "{m}");
-        }
+        let names: Vec<&str> = joints.iter().map(|j| j.0.as_str()).collect();
+        names_exactly(&path, |m| m.contains("more than a full turn"), &names, &expected);
+    }
+}
+
+/// The `placeholder-joint-limits` findings of `path` whose message `case` picks: none when
+/// `expected` is empty, else one naming exactly the `expected` of `joints`.
+fn names_exactly(path: &str, case: impl Fn(&str) -> bool, joints: &[&str], expected: &[&str]) {
+    let all = findings(path);
+    let hits: Vec<_> =
+        of(&all, "placeholder-joint-limits").into_iter().filter(|f| case(message(f))).collect();
+    if expected.is_empty() {
+        assert!(hits.is_empty(), "{path}: {hits:?}");
+        return;
+    }
+    assert_eq!(hits.len(), 1, "{path}: {hits:?}");
+    let m = message(hits[0]);
+    for j in joints {
+        assert_eq!(m.contains(&format!("`{j}`")), expected.contains(j), "{m}");
     }
 }
 
@@ -163,20 +168,9 @@ fn effort_zero_on_every_joint() {
         assert_eq!(all_zero, named, "{file}");
         let expected: Vec<&str> =
             joints.iter().filter(|j| all_zero && j.4 > 0.0).map(|j| j.0.as_str()).collect();
-        let all = findings(&path);
-        let zero: Vec<_> = of(&all, "placeholder-joint-limits")
-            .into_iter()
-            .filter(|f| message(f).starts_with("every moving joint states effort"))
-            .collect();
-        if expected.is_empty() {
-            assert!(zero.is_empty(), "{file}: {zero:?}");
-            continue;
-        }
-        assert_eq!(zero.len(), 1, "{file}: {zero:?}");
-        let m = message(zero[0]);
-        for j in &joints {
-            assert_eq!(m.contains(&format!("`{}`", j.0)), expected.contains(&j.0.as_str()), "{m}");
-        }
+        let names: Vec<&str> = joints.iter().map(|j| j.0.as_str()).collect();
+        let case = |m: &str| m.starts_with("every moving joint states effort");
+        names_exactly(&path, case, &names, &expected);
     }
 }
 
@@ -209,11 +203,7 @@ fn tendon_servo_past_both_ends() {
         let c = nums(attr(servo, "ctrlrange").unwrap());
         let past = c[0] < lo - 1e-3 && c[1] > hi + 1e-3;
         assert_eq!(past, named, "{file}: reach [{lo}, {hi}], ctrlrange {c:?}");
-        let all = findings(&path);
-        let reach: Vec<_> = of(&all, "actuator-mapping")
-            .into_iter()
-            .filter(|f| message(f).contains("reachable length"))
-            .collect();
+        let reach = of_message(&path, "actuator-mapping", "reachable length");
         assert_eq!(reach.len(), usize::from(named), "{file}: {reach:?}");
     }
 }

@@ -10,7 +10,7 @@ mod common;
 use std::path::PathBuf;
 use std::process::Command;
 
-use common::lint::{findings, measured, message, of};
+use common::lint::{findings, measured, message, of, of_message};
 use common::xml_text::{attr, tags};
 
 /// A small URDF: every numeric attribute the URDF specification defines, each once, written so
@@ -229,12 +229,7 @@ const KS: &str = "fixtures/rules/keyframe-state/";
 
 /// The `mirror-asymmetry` findings about collision filtering.
 fn filtering(file: &str) -> Vec<serde_json::Value> {
-    let all = findings(file);
-    of(&all, "mirror-asymmetry")
-        .into_iter()
-        .filter(|f| message(f).contains("collides differently"))
-        .cloned()
-        .collect()
+    of_message(file, "mirror-asymmetry", "collides differently")
 }
 
 /// Each `<body name=…>` of the text, in order, with the `conaffinity` of the first geom written
@@ -333,12 +328,7 @@ fn leg_reach(text: &str) -> f64 {
 }
 
 fn below_zero(file: &str) -> Vec<serde_json::Value> {
-    let all = findings(file);
-    of(&all, "keyframe-state")
-        .into_iter()
-        .filter(|f| message(f).contains("below z = 0"))
-        .cloned()
-        .collect()
+    of_message(file, "keyframe-state", "below z = 0")
 }
 
 /// A robot file with no floor: the feet start below z = 0 by the legs' reach less the base

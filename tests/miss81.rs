@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::lint::{findings, measured, message, of, real_robot_files};
+use common::lint::{findings, measured, message, of, of_message, real_robot_files};
 use common::xml_text::{attr, tags};
 
 const MA: &str = "fixtures/rules/mirror-asymmetry/";
@@ -19,12 +19,7 @@ fn nums(s: &str) -> Vec<f64> {
 
 /// The `mirror-asymmetry` findings about a body on the mirror plane.
 fn hub_findings(file: &str) -> Vec<serde_json::Value> {
-    let all = findings(file);
-    of(&all, "mirror-asymmetry")
-        .into_iter()
-        .filter(|f| message(f).contains("carries mirror pairs"))
-        .cloned()
-        .collect()
+    of_message(file, "mirror-asymmetry", "carries mirror pairs")
 }
 
 /// The rule's documented defaults the tolerance is made of: `com_tolerance` (m) and
@@ -267,16 +262,13 @@ fn mjcf_force_bounds_judged_against_the_arms_weight() {
     for (j, b) in &bs_text {
         assert!(ratio(j, *b, arm_mass + table_mass) < 50.0, "{j}: the table would not hide it");
     }
-    let all = findings(&file);
-    let effort: Vec<_> = of(&all, "placeholder-joint-limits")
-        .into_iter()
-        .filter(|f| message(f).contains("the torque of the whole robot's weight"))
-        .collect();
+    let effort =
+        of_message(&file, "placeholder-joint-limits", "the torque of the whole robot's weight");
     assert_eq!(effort.len(), 1, "{effort:#?}");
     for j in &over {
-        assert!(message(effort[0]).contains(&format!("`{j}`")), "{j}: {}", message(effort[0]));
+        assert!(message(&effort[0]).contains(&format!("`{j}`")), "{j}: {}", message(&effort[0]));
     }
-    assert!((measured(effort[0]) / top - 1.0).abs() < 1e-3, "{} vs {top}", measured(effort[0]));
+    assert!((measured(&effort[0]) / top - 1.0).abs() < 1e-3, "{} vs {top}", measured(&effort[0]));
 
     // The servo arm: every written bound, the wrist's capped by its joint, under 50×.
     let valid = format!("{PJ}valid_mjcf_forcerange_servo_arm.xml");

@@ -520,47 +520,28 @@ fn dry_friction_makes_the_step_response_inconclusive_not_a_refutation() {
     assert!(p.preconditions.iter().any(|c| c.name == "friction_small"));
 }
 
-/// One link of inertia `i` on a vertical hinge (gravity exerts no torque), position servo kp,
-/// kv chosen for damping ratio `zeta` (kv = 2ζ√(kp·I)), dry friction `friction` N·m: written
-/// here, not by the code under test, so ζ is known in closed form.
-fn hand_built_servo(name: &str, zeta: f64, friction: f64) -> Loaded {
-    let (kp, i) = (100.0f64, 0.1f64);
+/// One link of inertia `i` kg·m² on a vertical hinge (gravity exerts no torque), a position
+/// servo of stiffness `kp` with kv chosen for damping ratio `zeta` from the closed form
+/// kv = 2ζ√(kp·I): written here, not by the code under test, so ζ is known. `joint` and
+/// `actuator` are extra attributes of the hinge and of the servo.
+fn servo_file(
+    name: &str,
+    (kp, i, zeta): (f64, f64, f64),
+    timestep: &str,
+    joint: &str,
+    actuator: &str,
+) -> std::path::PathBuf {
     let kv = 2.0 * zeta * (kp * i).sqrt();
     let xml = format!(
         r#"<mujoco model="{name}">
-  <option timestep="0.0002" integrator="implicitfast"/>
+  <option timestep="{timestep}" integrator="implicitfast"/>
   <worldbody>
     <body name="link">
-      <joint name="hinge" axis="0 0 1" frictionloss="{friction}"/>
+      <joint name="hinge" axis="0 0 1"{joint}/>
       <inertial pos="0 0 0" mass="1" diaginertia="{i} {i} {i}"/>
     </body>
   </worldbody>
-  <actuator><position name="hinge" joint="hinge" kp="{kp}" kv="{kv}"/></actuator>
-</mujoco>
-"#
-    );
-    let dir = std::env::temp_dir().join(format!("modellint-probes-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join(format!("{name}.xml"));
-    std::fs::write(&path, xml).unwrap();
-    loaded(path.to_str().unwrap())
-}
-
-/// A slow, lightly damped servo (inertia 1 kg·m², kp 30: ω_n 5.48 rad/s) with kv set for
-/// damping ratio `zeta`, written here from the closed form kv = 2ζ√(kp·I).
-fn slow_servo(name: &str, zeta: f64) -> std::path::PathBuf {
-    let (kp, i) = (30.0f64, 1.0f64);
-    let kv = 2.0 * zeta * (kp * i).sqrt();
-    let xml = format!(
-        r#"<mujoco model="{name}">
-  <option timestep="0.002" integrator="implicitfast"/>
-  <worldbody>
-    <body name="link">
-      <joint name="hinge" axis="0 0 1" range="-1 1"/>
-      <inertial pos="0 0 0" mass="1" diaginertia="{i} {i} {i}"/>
-    </body>
-  </worldbody>
-  <actuator><position name="hinge" joint="hinge" kp="{kp}" kv="{kv}" ctrlrange="-1 1"/></actuator>
+  <actuator><position name="hinge" joint="hinge" kp="{kp}" kv="{kv}"{actuator}/></actuator>
 </mujoco>
 "#
     );
@@ -569,6 +550,20 @@ fn slow_servo(name: &str, zeta: f64) -> std::path::PathBuf {
     let path = dir.join(format!("{name}.xml"));
     std::fs::write(&path, xml).unwrap();
     path
+}
+
+/// A servo of kp 100 on 0.1 kg·m² (ω_n 31.6 rad/s) at damping ratio `zeta`, with dry friction
+/// `friction` N·m, at a 0.2 ms step ([`servo_file`]).
+fn hand_built_servo(name: &str, zeta: f64, friction: f64) -> Loaded {
+    let joint = format!(" frictionloss=\"{friction}\"");
+    let path = servo_file(name, (100.0, 0.1, zeta), "0.0002", &joint, "");
+    loaded(path.to_str().unwrap())
+}
+
+/// A slow, lightly damped servo (inertia 1 kg·m², kp 30: ω_n 5.48 rad/s) at damping ratio
+/// `zeta`, range and ctrlrange ±1 ([`servo_file`]).
+fn slow_servo(name: &str, zeta: f64) -> std::path::PathBuf {
+    servo_file(name, (30.0, 1.0, zeta), "0.002", " range=\"-1 1\"", " ctrlrange=\"-1 1\"")
 }
 
 /// A joint that still rings when the 2 s run ends (envelope exp(−ζω_n t): ζ 0.05 keeps 58 % of

@@ -1,6 +1,7 @@
 //! Rules of the `inertia` group.
 pub mod armature_mismatch;
 pub mod copied_inertial;
+mod copied_mass;
 pub mod default_density_mass;
 pub mod drive_family;
 mod floated_root_inertia;

@@ -20,6 +20,11 @@ pub fn of<'a>(all: &'a [serde_json::Value], rule: &str) -> Vec<&'a serde_json::V
     all.iter().filter(|f| f["rule"] == rule).collect()
 }
 
+/// The findings of `rule` for `file` whose message contains `part`.
+pub fn of_message(file: &str, rule: &str, part: &str) -> Vec<serde_json::Value> {
+    findings(file).into_iter().filter(|f| f["rule"] == rule && message(f).contains(part)).collect()
+}
+
 pub fn message(f: &serde_json::Value) -> &str {
     f["message"].as_str().unwrap_or("")
 }

@@ -71,6 +71,36 @@ declare_rule! {
 /// `wheel_legs`, a chain that ends in a wheel counts too when it has two or more other
 /// hinge/slide joints above the wheel (a wheel-legged robot's hip and knee; a rover's steered
 /// wheel has one).
+/// The bodies from `b` up to the root link's child (the body hanging from the world), in order.
+fn chain_up(robot: &Robot, b: usize) -> Vec<usize> {
+    let mut path = vec![b];
+    let mut x = b;
+    for _ in 0..robot.bodies.len() {
+        let p = robot.bodies[x].parent;
+        if p == 0 {
+            break;
+        }
+        path.push(p);
+        x = p;
+    }
+    path
+}
+
+/// The hub the chains (leaf, [`chain_up`] path) leave: the body all of them pass through when
+/// it is reached from the root link through one joint (a waist), else the root link (0).
+fn waist_hub(robot: &Robot, chains: &[(usize, Vec<usize>)]) -> usize {
+    let firsts: std::collections::BTreeSet<usize> =
+        chains.iter().filter_map(|c| c.1.last().copied()).collect();
+    match firsts.iter().next() {
+        Some(&w)
+            if firsts.len() == 1 && robot.joints.iter().filter(|j| j.body == w).count() == 1 =>
+        {
+            w
+        }
+        _ => 0,
+    }
+}
+
 fn legs(robot: &Robot, wheel_legs: bool) -> (Vec<(usize, usize)>, f64) {
     let n = robot.bodies.len();
     let lowest_of = |b: usize| {
@@ -97,16 +127,7 @@ fn legs(robot: &Robot, wheel_legs: bool) -> (Vec<(usize, usize)>, f64) {
         if crate::rules::contact::feet::collides_below(robot, b) || low > zmin + GROUND_WINDOW {
             continue;
         }
-        let mut path = vec![b];
-        let mut x = b;
-        for _ in 0..n {
-            let p = robot.bodies[x].parent;
-            if p == 0 {
-                break;
-            }
-            path.push(p);
-            x = p;
-        }
+        let path = chain_up(robot, b);
         // The leaf hangs below the root link's frame, or below the joint its chain leaves the
         // root through: a root frame at the ground under the trunk (a ROS `base_footprint`,
         // Darwin-OP's `base_link` 0.35 m below the body it is fixed to) is not where the
@@ -125,16 +146,7 @@ fn legs(robot: &Robot, wheel_legs: bool) -> (Vec<(usize, usize)>, f64) {
     }
     // The hub the legs leave: the root link, or a body reached from it through one joint (a
     // waist) when every chain passes through that body.
-    let firsts: std::collections::BTreeSet<usize> =
-        chains.iter().filter_map(|c| c.1.last().copied()).collect();
-    let hub = match firsts.iter().next() {
-        Some(&w)
-            if firsts.len() == 1 && robot.joints.iter().filter(|j| j.body == w).count() == 1 =>
-        {
-            w
-        }
-        _ => 0,
-    };
+    let hub = waist_hub(robot, &chains);
     let height = hub_height(robot, hub);
     let mut out = Vec::new();
     for (leaf, path) in chains {
@@ -314,28 +326,10 @@ fn legs_by_structure(robot: &Robot) -> Vec<(usize, usize)> {
         if colliding(b).next().is_none() || crate::rules::contact::feet::collides_below(robot, b) {
             continue;
         }
-        let mut path = vec![b];
-        let mut x = b;
-        for _ in 0..n {
-            let p = robot.bodies[x].parent;
-            if p == 0 {
-                break;
-            }
-            path.push(p);
-            x = p;
-        }
+        let path = chain_up(robot, b);
         chains.push((b, path));
     }
-    let firsts: std::collections::BTreeSet<usize> =
-        chains.iter().filter_map(|c| c.1.last().copied()).collect();
-    let hub = match firsts.iter().next() {
-        Some(&w)
-            if firsts.len() == 1 && robot.joints.iter().filter(|j| j.body == w).count() == 1 =>
-        {
-            w
-        }
-        _ => 0,
-    };
+    let hub = waist_hub(robot, &chains);
     let Some((lo, hi)) = hub_height(robot, hub) else { return Vec::new() };
     let exit_below = lo + LEG_EXIT_HEIGHT * (hi - lo);
     let anchor = |j: usize| robot.key.joint_xanchor.get(j).copied();

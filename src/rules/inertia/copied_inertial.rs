@@ -6,7 +6,9 @@ use crate::model::mirror::mirror_in;
 use crate::model::mjcf::ElemKind;
 use crate::model::{GeomType, Robot};
 use crate::rules::inertia::isotropic_base_inertia::inertia_loc;
-use crate::rules::{Context, Rule, RuleMeta};
+use crate::rules::{Context, Domain, Rule, RuleMeta, opt};
+
+use super::copied_mass::copied_masses;
 use crate::util::fmt_num;
 
 declare_rule! {
@@ -25,6 +27,20 @@ declare_rule! {
     /// files of one part (vertex count and extents in the mesh's principal frame agreeing to
     /// float noise, 1e-6 m) are one part.
     ///
+    /// Also reports one mass copied over parts of different sizes: a compiled mass that, to
+    /// the last digit, `copied_mass_min_bodies` (3) or more bodies with geometry share,
+    /// together `copied_mass_share` (10 %) or more of the robot's mass, while their parts
+    /// differ in size by `size_factor` (1.5) or more — the largest over the smallest of their
+    /// radii of gyration about their principal axis of largest moment (√(I_max / m)), or of
+    /// their collision extents (the cube root of their collision geoms' summed bounding-box
+    /// volumes; of all their geoms when none collides). The KUKA LWR URDF's 2.0 kg on all
+    /// seven links, radii of gyration 0.05–0.41 m; the Mini Pupper's 25 g on all 24 leg
+    /// links. Parts that are one part (a mirrored pair, a hexapod's six legs, a modular arm's
+    /// identical segments) have one size, and a group whose bodies all have one compiled
+    /// inertial is the exact case above. A length 1.5× another's is a part 3.4× the volume
+    /// (2.25× the moment at one mass): not one part made to a tolerance. Below the share, a
+    /// copied mass moves little of the robot (sensor frames' 1 g).
+    ///
     /// ## Why is this bad?
     /// An `<inertial>` block pasted from the body above (a common URDF/MJCF export or hand-edit
     /// slip) puts the wrong mass at the wrong place: its centre of mass sits where the other
@@ -35,7 +51,8 @@ declare_rule! {
     ///
     /// ## How it is confirmed
     /// Static comparison of the compiled `body_mass`, `body_ipos`, `body_iquat` and
-    /// `body_inertia`, and of the bodies' geoms (`geom_type`, `geom_size`, `geom_dataid`).
+    /// `body_inertia`, and of the bodies' geoms (`geom_type`, `geom_size`, `geom_dataid`,
+    /// `geom_aabb`).
     ///
     /// ## How to fix
     /// Take the body's own inertial from CAD or the manufacturer's URDF; if the two bodies
@@ -45,7 +62,11 @@ declare_rule! {
         group: "inertia",
         level: Severity::Warning,
         probe: None,
-        options: [],
+        options: [
+            opt("size_factor", 1.5, "ratio", Domain::AT_LEAST_ONE, "largest / smallest size (radius of gyration, or cube root of the collision bounding volume) of bodies sharing one mass from which they are different parts"),
+            opt("copied_mass_min_bodies", 3.0, "bodies", Domain::AT_LEAST_ONE, "fewest bodies sharing one mass for the copied-mass case to judge them"),
+            opt("copied_mass_share", 0.1, "fraction", Domain::FRACTION, "smallest share of the robot's mass the bodies sharing one mass carry for the copied-mass case to judge them"),
+        ],
     }
 }
 
@@ -152,6 +173,13 @@ impl Rule for CopiedInertial {
                 out.push(finding(cx, a, b));
             }
         }
+        out.extend(copied_masses(
+            cx,
+            cx.opt("size_factor"),
+            cx.opt("copied_mass_min_bodies"),
+            cx.opt("copied_mass_share"),
+            |a, b| key(robot, a).is_some() && key(robot, a) == key(robot, b),
+        ));
     }
 }
 

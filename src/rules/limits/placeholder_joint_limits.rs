@@ -8,7 +8,7 @@ use crate::rules::{Context, Domain, Rule, RuleMeta, in_subtree, opt};
 
 use super::actuator_effort::actuator_efforts;
 use super::legs::{flange_roll, knee_and_below, leg_hinges};
-use super::stated_limits::{Stated, one_value, unpowered};
+use super::stated_limits::{Stated, one_value, overpowered, unpowered};
 use crate::util::fmt_num;
 
 declare_rule! {
@@ -61,6 +61,17 @@ declare_rule! {
     ///   speed written on all of them is a value copied across the file, not the motors'
     ///   (iCub's `velocity="100"` on every joint, efforts 0.45–84 N·m). A robot whose joints
     ///   all state one effort and one velocity (one servo everywhere) is not judged;
+    /// - **more power than the robot's mass holds**: the moving joints' stated limits claim a
+    ///   peak power, Σ `effort` × `velocity` / 4 (a DC motor's peak mechanical power is a
+    ///   quarter of its stall torque × its no-load speed), above `max_specific_power` W per kg
+    ///   of the robot's stated mass (the URDF's link masses; not judged when none is written).
+    ///   The motors weigh less than the robot that carries them, and a legged robot's actuator
+    ///   gives about 350 W per kg of its own mass by this measure (MIT Mini Cheetah's: 17 N·m
+    ///   peak, 40 rad/s, 0.48 kg; Katz et al., ICRA 2019), so a file claiming more per kg of
+    ///   the whole robot than that states no motors of it (the Ghost Vision 60's and Stoch 3's
+    ///   100 N·m at 100 rad/s on every joint: 5,450 and 1,200 W/kg). URDFs with their
+    ///   motors' values state 10–360 W/kg (measured: Mini Pupper 9.5, Darwin-OP 25, PhantomX
+    ///   46, KUKA LWR 75, Qmini 135, CyberDog 2 142, the MIT humanoid 355);
     /// - **no range**: a revolute or prismatic joint with no `<limit>`, or `lower` = `upper` =
     ///   0 (both absent or written as 0), which MuJoCo compiles as an unlimited joint.
     ///
@@ -109,6 +120,7 @@ declare_rule! {
             opt("max_tip_speed", 100.0, "m/s", Domain::POSITIVE, "a velocity moving the farthest point the joint carries faster than this is no motor's"),
             opt("motor_spread", 3.0, "ratio", Domain::AT_LEAST_ONE, "largest / smallest effort (or velocity) of the moving joints from which they cannot share one motor and reduction, so one velocity (or effort) written on all of them is copied"),
             opt("copied_min_joints", 6.0, "joints", Domain::AT_LEAST_ONE, "fewest moving joints stating one value for the one-value case to judge them"),
+            opt("max_specific_power", 1000.0, "W/kg", Domain::POSITIVE, "peak power the joints' limits may claim (Σ effort × velocity / 4) per kg of the robot's stated mass: about 3× a legged robot's actuator's own 350 W/kg (MIT Mini Cheetah), which the whole robot, heavier than its motors, cannot exceed"),
             opt("flange_max_turns", 1.3, "turns", Domain::AT_LEAST_ONE, "widest stop, in turns from the joint's zero, of a fixed-base arm's flange roll (the last moving joint of its chain): industrial wrists' data sheets give the last axis up to ±455° (ABB IRB 2400 ±400°, FANUC LR Mate 200iD ±450°, Yaskawa GP7 ±455°)"),
         ],
     }
@@ -139,6 +151,7 @@ pub(super) enum Case {
     LegTurn,
     LegFold,
     OneValue,
+    Power,
     NoRange,
 }
 
@@ -443,6 +456,9 @@ impl Rule for PlaceholderJointLimits {
         }
         hits.extend(one_value(&stated, cx.opt("motor_spread"), cx.opt("copied_min_joints")));
         hits.extend(unpowered(robot, &stated, &driven));
+        if let Some(stated_mass) = urdf_mass(&robot.tree) {
+            hits.extend(overpowered(robot, &stated, stated_mass, cx.opt("max_specific_power")));
+        }
         for case in [
             Case::Effort,
             Case::Velocity,
@@ -453,6 +469,7 @@ impl Rule for PlaceholderJointLimits {
             Case::LegTurn,
             Case::LegFold,
             Case::OneValue,
+            Case::Power,
             Case::NoRange,
         ] {
             let group: Vec<&Hit> = hits.iter().filter(|h| h.case == case).collect();
@@ -484,11 +501,16 @@ fn finding(
     };
     let robot = cx.robot;
     let j = &robot.joints[top.joint];
+    let (has, places) = if n == 1 { ("has", "places") } else { ("have", "place") };
+    let write_stops = if robot.format == Format::Urdf {
+        "write the hardware's stops (datasheet or CAD) as lower and upper"
+    } else {
+        "write the hardware's stops (datasheet or CAD) as range=\"lo hi\""
+    };
     let (msg, label, note, help) = match case {
         Case::Effort if robot.format != Format::Urdf => (
             format!(
-                "{n} joint{s} {} actuators that can apply over {} times the torque of the whole robot's weight ({} kg) at the joint's reach, no motor of this robot: {shown}",
-                if n == 1 { "has" } else { "have" },
+                "{n} joint{s} {has} actuators that can apply over {} times the torque of the whole robot's weight ({} kg) at the joint's reach, no motor of this robot: {shown}",
                 fmt_num(multiple, 3),
                 fmt_num(mass, 3)
             ),
@@ -545,8 +567,7 @@ fn finding(
         ),
         Case::BeyondTurn if robot.format != Format::Urdf => (
             format!(
-                "{n} hinge joint{s} {} a stop more than a full turn (2π) from the joint's zero, no hardware stop: {shown}",
-                if n == 1 { "places" } else { "place" }
+                "{n} hinge joint{s} {places} a stop more than a full turn (2π) from the joint's zero, no hardware stop: {shown}"
             ),
             "beyond a full turn".to_string(),
             "a revolute joint's stops lie within a turn of its zero (the widest real ones, cable-wound multi-turn axes such as a UR arm's, are ±2π); a range beyond a turn is a limit that never engages (the links swing through each other), and frameworks that scale actions or observations by the range spread them over it",
@@ -554,8 +575,7 @@ fn finding(
         ),
         Case::BeyondTurn => (
             format!(
-                "{n} revolute joint{s} {} a stop more than a full turn (2π) from the joint's zero, no hardware stop: {shown}",
-                if n == 1 { "places" } else { "place" }
+                "{n} revolute joint{s} {places} a stop more than a full turn (2π) from the joint's zero, no hardware stop: {shown}"
             ),
             "beyond a full turn".to_string(),
             "a revolute joint's stops lie within a turn of its zero (the widest real ones, cable-wound multi-turn axes such as a UR arm's, are ±2π); MuJoCo makes these the joint's range, a limit that never engages (the links swing through each other), and frameworks that scale actions or observations by the range spread them over it",
@@ -563,29 +583,19 @@ fn finding(
         ),
         Case::LegTurn => (
             format!(
-                "{n} leg joint{s} {} a range of a full turn (2π) or more, which no hip or knee can turn: {shown}",
-                if n == 1 { "has" } else { "have" }
+                "{n} leg joint{s} {has} a range of a full turn (2π) or more, which no hip or knee can turn: {shown}"
             ),
             "a leg joint turning a full turn".to_string(),
             "a leg's hinges (hip, knee, ankle) swing links that hit the body or the next link long before a full turn: a range of a turn or more (±6.28 rad is a full turn each way) is a placeholder, a limit that never engages, so the simulated leg swings through the body, and frameworks that scale actions or observations by the range spread them over it. A wheel at a leg's end turns about itself and is not judged, nor an arm's multi-turn axis",
-            if robot.format == Format::Urdf {
-                "write the hardware's stops (datasheet or CAD) as lower and upper"
-            } else {
-                "write the hardware's stops (datasheet or CAD) as range=\"lo hi\""
-            },
+            write_stops,
         ),
         Case::LegFold => (
             format!(
-                "{n} knee or ankle joint{s} {} a range symmetric about the zero that spans half a turn (π) or more, which folds the link below onto the one above: {shown}",
-                if n == 1 { "has" } else { "have" }
+                "{n} knee or ankle joint{s} {has} a range symmetric about the zero that spans half a turn (π) or more, which folds the link below onto the one above: {shown}"
             ),
             "a knee or ankle turning half a turn".to_string(),
             "a knee or an ankle swings a shank or a foot that meets the thigh or the shin before half a turn, whichever way it turns (a knee bends from straight to folded, about 150°, one way only): a range of ±π/2 or more (a quarter turn each way) is a placeholder, a limit that never engages on one side, and frameworks that scale actions or observations by the range spread them over it. Hips, arms and one-sided ranges are not judged",
-            if robot.format == Format::Urdf {
-                "write the hardware's stops (datasheet or CAD) as lower and upper"
-            } else {
-                "write the hardware's stops (datasheet or CAD) as range=\"lo hi\""
-            },
+            write_stops,
         ),
         Case::OneValue => (
             format!(
@@ -595,6 +605,21 @@ fn finding(
             "a reduction that multiplies a motor's torque divides its speed: joints whose efforts differ several-fold cannot all have one speed limit (nor joints whose speeds differ, one torque). Training frameworks read the URDF's velocity and effort as the joints' limits (Isaac Gym's DoF properties) and in observation and reward scales; a value copied onto joints with different motors is the limit of one of them at most",
             "write each joint's motor speed at the joint (motor speed / reduction) as velocity and its peak torque at the joint as effort, from the datasheets",
         ),
+        Case::Power => {
+            let total: f64 = hits.iter().map(|h| h.value).sum();
+            (
+                format!(
+                    "the moving joints' effort and velocity limits claim {} W of peak motor power (Σ effort × velocity / 4), {} W per kg of the robot's {} kg, over {} W/kg: more than motors as heavy as the whole robot give: {shown}",
+                    fmt_num(total, 4),
+                    fmt_num(total / mass, 4),
+                    fmt_num(mass, 4),
+                    fmt_num(cx.opt("max_specific_power"), 4)
+                ),
+                "more power than the robot's mass holds".to_string(),
+                "a DC motor's peak mechanical power is a quarter of its stall torque × its no-load speed, and the best legged-robot actuators give about 350 W per kg of their own mass by that measure (MIT Mini Cheetah's 17 N·m, 40 rad/s, 0.48 kg): limits claiming more per kg of the whole robot, motors included, than a few times that are placeholders, and a policy trained against them learns torques at speeds no motor of the robot reaches together",
+                "write each joint's peak torque (motor peak × reduction) as effort and no-load speed (motor speed / reduction) as velocity, from the motors' datasheets",
+            )
+        }
         Case::NoRange => (
             format!(
                 "{n} joint{s} declared revolute or prismatic {states} no range: MuJoCo compiles {} unlimited, ROS tools read {} locked at 0: {shown}",
@@ -618,6 +643,9 @@ fn finding(
         Case::LegTurn => f.measured(top.value, "rad").expected(FULL_TURN, "rad"),
         Case::LegFold => f.measured(top.value, "rad").expected(FULL_TURN / 2.0, "rad"),
         Case::OneValue => f.measured(top.value, "×").expected(cx.opt("motor_spread"), "×"),
+        Case::Power => f
+            .measured(hits.iter().map(|h| h.value).sum::<f64>() / mass, "W/kg")
+            .expected(cx.opt("max_specific_power"), "W/kg"),
         Case::Zero | Case::Stalled | Case::Unpowered | Case::NoRange => f.measured(0.0, ""),
     };
     Some(f)

@@ -95,3 +95,42 @@ pub(super) fn one_value(stated: &[Stated], spread: f64, min_joints: f64) -> Opti
     }
     None
 }
+
+/// The power case: the peak power the moving joints' stated limits claim, Σ effort × velocity / 4
+/// (a motor's peak mechanical power, at half its stall torque and half its no-load speed), above
+/// `max_specific` W per kg of the robot's stated mass (`mass`, the URDF's link masses: no motors
+/// weigh more than the robot that carries them). One hit per joint stating both, its `value`
+/// that joint's power (W).
+pub(super) fn overpowered(
+    robot: &Robot,
+    stated: &[Stated],
+    mass: f64,
+    max_specific: f64,
+) -> Vec<Hit> {
+    let hits: Vec<Hit> = stated
+        .iter()
+        .filter_map(|s| {
+            let (e, at) = s.effort.filter(|e| e.0 > 0.0)?;
+            let (v, _) = s.velocity.filter(|v| v.0 > 0.0)?;
+            let j = robot.joints.get(s.joint)?;
+            let (tu, vu) =
+                if j.jtype == JointType::Slide { ("N", "m/s") } else { ("N·m", "rad/s") };
+            let power = e * v / 4.0;
+            Some(Hit {
+                case: Case::Power,
+                joint: s.joint,
+                at,
+                value: power,
+                detail: format!(
+                    "`{}` {} {tu} × {} {vu} / 4 = {} W",
+                    j.name,
+                    fmt_num(e, 4),
+                    fmt_num(v, 4),
+                    fmt_num(power, 4)
+                ),
+            })
+        })
+        .collect();
+    let total: f64 = hits.iter().map(|h| h.value).sum();
+    if mass > 0.0 && total > max_specific * mass { hits } else { Vec::new() }
+}
