@@ -33,7 +33,8 @@ fn num(tag: &str, name: &str) -> f64 {
 /// Σ effort × velocity / 4 (W).
 fn mass_and_power(text: &str) -> (f64, f64) {
     let mass = tags(text, "mass").iter().map(|t| num(t, "value")).sum();
-    let power = tags(text, "limit").iter().map(|t| num(t, "effort") * num(t, "velocity") / 4.0).sum();
+    let power =
+        tags(text, "limit").iter().map(|t| num(t, "effort") * num(t, "velocity") / 4.0).sum();
     (mass, power)
 }
 
@@ -179,6 +180,36 @@ fn one_mass_written_on_leg_links_of_different_shapes() {
             assert!(message(&hits[0]).starts_with(&format!("{n} bodies")), "{hits:#?}");
         }
     }
+}
+
+/// One mass on bodies of different robots or props of one scene (an arm's 0.5 kg forearm and
+/// three 0.5 kg objects of different sizes, each its own kinematic tree) is no copy: not named,
+/// while the same bodies hung from one tree are.
+#[test]
+fn one_mass_across_kinematic_trees_is_not_a_copy() {
+    let path = format!("{CI}valid_scene_objects_one_mass.xml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let n = tags(&text, "geom").iter().filter(|t| attr(t, "mass") == Some("0.5")).count();
+    assert_eq!(n, 4);
+    assert!(of_message(&path, "copied-inertial", "bodies state one mass").is_empty());
+    // The three objects welded under the forearm: one tree, one mass on four parts.
+    let joined = text.replace("<freejoint/>", "").replace(
+        "      </body>\n    </body>\n    <body name=\"cube\"",
+        "      <body name=\"cube\"",
+    );
+    let joined = joined.replacen(
+        "    </body>\n  </worldbody>",
+        "    </body>\n      </body>\n    </body>\n  </worldbody>",
+        1,
+    );
+    assert_ne!(joined, text);
+    let dir = std::env::temp_dir().join(format!("modellint_miss82b_tree_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let copy = dir.join("one_tree.xml");
+    std::fs::write(&copy, &joined).unwrap();
+    let hits = of_message(copy.to_str().unwrap(), "copied-inertial", "bodies state one mass");
+    assert_eq!(hits.len(), 1, "{joined}\n{hits:#?}");
+    assert!(message(&hits[0]).starts_with("4 bodies"), "{hits:#?}");
 }
 
 /// The shared real robots and Asimov: no copied mass named.

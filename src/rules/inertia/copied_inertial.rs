@@ -28,12 +28,14 @@ declare_rule! {
     /// float noise, 1e-6 m) are one part.
     ///
     /// Also reports one mass copied over parts of different sizes: a compiled mass that, to
-    /// the last digit, `copied_mass_min_bodies` (3) or more bodies with geometry share,
-    /// together `copied_mass_share` (10 %) or more of the robot's mass, while their parts
-    /// differ in size by `size_factor` (1.5) or more — the largest over the smallest of their
-    /// radii of gyration about their principal axis of largest moment (√(I_max / m)), or of
-    /// their collision extents (the cube root of their collision geoms' summed bounding-box
-    /// volumes; of all their geoms when none collides). The KUKA LWR URDF's 2.0 kg on all
+    /// the last digit, `copied_mass_min_bodies` (3) or more bodies with geometry of one robot
+    /// (a URDF; an MJCF kinematic tree) share, together `copied_mass_share` (10 %) or more of
+    /// that robot's mass, while their parts differ in size by `size_factor` (1.5) or more — the
+    /// largest over the smallest of their radii of gyration about their principal axis of
+    /// largest moment (√(I_max / m)), or of their extents (the cube root of the summed
+    /// bounding-box volumes of their colliding geoms or of their other geoms, whichever is
+    /// larger: a foot drawn as a box that collides through tip spheres is the box's size). Two
+    /// robots of one scene are not compared. The KUKA LWR URDF's 2.0 kg on all
     /// seven links, radii of gyration 0.05–0.41 m; the Mini Pupper's 25 g on all 24 leg
     /// links. Parts that are one part (a mirrored pair, a hexapod's six legs, a modular arm's
     /// identical segments) have one size, and a group whose bodies all have one compiled

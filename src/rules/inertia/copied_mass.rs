@@ -4,9 +4,9 @@
 use std::collections::BTreeMap;
 
 use crate::finding::{Finding, Subject};
-use crate::model::Robot;
 use crate::model::mjcf::ElemKind;
 use crate::model::source::{Loc, XNode};
+use crate::model::{Format, Robot};
 use crate::rules::Context;
 use crate::util::fmt_num;
 
@@ -15,8 +15,9 @@ struct Sized {
     body: usize,
     /// Radius of gyration about the principal axis of largest moment, √(I_max / m).
     gyration: f64,
-    /// Cube root of the summed bounding-box volumes of its collision geoms (of all its geoms
-    /// when none collides).
+    /// Cube root of the summed bounding-box volumes of its colliding geoms or of its other
+    /// geoms, whichever is larger (a foot drawn as a box and colliding through tip spheres is
+    /// the box's size).
     extent: f64,
 }
 
@@ -48,11 +49,14 @@ fn sized(robot: &Robot, b: usize) -> Option<Sized> {
     if own.is_empty() || !(mass > 0.0) {
         return None;
     }
-    let colliding: Vec<usize> =
-        own.iter().copied().filter(|&g| robot.geoms[g].collides()).collect();
-    let shapes = if colliding.is_empty() { own } else { colliding };
-    let volume: f64 =
-        shapes.iter().filter_map(|&g| aabb.get(g)).map(|a| 8.0 * a[3] * a[4] * a[5]).sum();
+    let volume = |collides: bool| -> f64 {
+        own.iter()
+            .filter(|&&g| robot.geoms[g].collides() == collides)
+            .filter_map(|&g| aabb.get(g))
+            .map(|a| 8.0 * a[3] * a[4] * a[5])
+            .sum()
+    };
+    let volume = volume(true).max(volume(false));
     let imax = inertia[0].max(inertia[1]).max(inertia[2]);
     Some(Sized { body: b, gyration: (imax / mass).sqrt(), extent: volume.cbrt() })
 }
@@ -64,7 +68,20 @@ fn spread(group: &[Sized], size: fn(&Sized) -> f64) -> Option<(f64, usize, usize
     Some((size(hi) / size(lo), lo.body, hi.body))
 }
 
-/// One finding per mass that at least `min_bodies` bodies with geometry state, carrying
+/// The robot body `b` belongs to: a URDF is one robot (MuJoCo's importer hangs each chain of a
+/// welded root from the world); in an MJCF, the kinematic tree (the body below the world).
+fn robot_of(robot: &Robot, b: usize) -> usize {
+    if robot.format == Format::Urdf {
+        return 0;
+    }
+    let mut x = b;
+    while let Some(p) = robot.bodies.get(x).map(|y| y.parent).filter(|&p| p != 0 && p != x) {
+        x = p;
+    }
+    x
+}
+
+/// One finding per mass that at least `min_bodies` bodies with geometry of one robot state, carrying
 /// `min_share` of the robot's mass or more, whose parts differ in size by `size_factor` or more
 /// (radius of gyration or geometry extent). A group whose bodies all have one compiled inertial
 /// is the exact copy's (reported per pair, or one part) and not judged here.
@@ -76,17 +93,20 @@ pub(super) fn copied_masses(
     same_inertial: impl Fn(usize, usize) -> bool,
 ) -> Vec<Finding> {
     let robot = cx.robot;
-    let total: f64 = robot.bodies.iter().filter(|b| b.id != 0).map(|b| b.mass).sum();
-    let mut groups: BTreeMap<u64, Vec<Sized>> = BTreeMap::new();
+    let mut totals: BTreeMap<usize, f64> = BTreeMap::new();
+    let mut groups: BTreeMap<(usize, u64), Vec<Sized>> = BTreeMap::new();
     for b in robot.bodies.iter().filter(|b| b.id != 0) {
+        let tree = robot_of(robot, b.id);
+        *totals.entry(tree).or_default() += b.mass;
         if let Some(s) = sized(robot, b.id) {
-            groups.entry((b.mass + 0.0).to_bits()).or_default().push(s);
+            groups.entry((tree, (b.mass + 0.0).to_bits())).or_default().push(s);
         }
     }
     let mut out = Vec::new();
-    for group in groups.values() {
+    for (&(tree, _), group) in &groups {
         let n = group.len();
         let mass = robot.bodies[group[0].body].mass;
+        let total = totals.get(&tree).copied().unwrap_or(0.0);
         if (n as f64) < min_bodies || !(total > 0.0) || mass * n as f64 / total < min_share {
             continue;
         }
@@ -98,7 +118,7 @@ pub(super) fn copied_masses(
         let (ratio, lo, hi, what) = if g.0 >= e.0 {
             (g.0, g.1, g.2, "radius of gyration")
         } else {
-            (e.0, e.1, e.2, "collision extent")
+            (e.0, e.1, e.2, "extent")
         };
         if !(ratio >= size_factor) {
             continue;
