@@ -13,5 +13,6 @@ pub mod servo_sag;
 pub mod servo_stall_band;
 pub mod solimp_out_of_range;
 pub mod solref_below_timestep;
+pub mod spring_overpowers_actuator;
 pub mod underdamped_pd_gains;
 pub mod unstable_simulation;

@@ -347,6 +347,7 @@ pub fn registry() -> Vec<&'static dyn Rule> {
         &control::underdamped_pd_gains::UnderdampedPdGains,
         &control::servo_stall_band::ServoStallBand,
         &control::servo_sag::ServoSag,
+        &control::spring_overpowers_actuator::SpringOverpowersActuator,
         &limits::effort_limit_mismatch::EffortLimitMismatch,
         &limits::placeholder_joint_limits::PlaceholderJointLimits,
         &limits::wheel_spring::WheelSpring,

@@ -63,9 +63,9 @@ declare_rule! {
     /// ties to another body, such as Digit's toe rods, whatever its name). Only floating-base robots have feet (a fixed-base arm gets
     /// no foot rule unless the spec names feet). Families: a wheel (a sphere, cylinder or
     /// ellipsoid on an unlimited hinge) is not a foot; a point foot (spheres touching down
-    /// within 2 cm of each other, as on quadrupeds) is judged
-    /// by its ground geoms only — a shank geom above the foot sphere is not a foot — and gets no
-    /// support-polygon finding. A foot that touches down along a line or at one point is
+    /// within 2 cm of each other, as on quadrupeds) is judged by its ground geoms only — a shank
+    /// geom above the foot sphere is not a foot — and gets no support-polygon finding, except on
+    /// a humanoid with two feet (Gymnasium's Humanoid, a sphere per foot). A foot that touches down along a line or at one point is
     /// reported only when a joint at the foot could turn it about that contact (an ankle roll
     /// within 30° of the line, any tilting joint for a point, a ball joint; its axis at the
     /// keyframe passing within a third of the leg's length of the contact): then the foot is
@@ -504,8 +504,8 @@ impl FootCollisionGeometry {
                         .expected(mu, ""),
                 );
             }
-            // Support polygon (a point foot touches down at one spot by design).
-            if foot.kind == FootKind::Point {
+            // Support polygon (a point foot touches down at one spot by design; not a biped's).
+            if foot.kind == FootKind::Point && !(humanoid && all_feet.len() == 2) {
                 continue;
             }
             let placed: Vec<(usize, Placed)> =

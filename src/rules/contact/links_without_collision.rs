@@ -40,6 +40,14 @@ declare_rule! {
     /// them); a robot none of whose geoms collides (`visual-mesh-collision` reports it); a
     /// model with `<flag contact="disable"/>`.
     ///
+    /// Outside a floating robot (a fixed arm, a torso on a pedestal) one case is reported: a
+    /// body whose collision geometry the file switched off — a geom that its own name or its
+    /// mesh's name calls collision geometry (`collision` in it) compiles with `contype =
+    /// conaffinity = 0` (a visual class's defaults: robosuite's Baxter torso, mesh
+    /// `base_link_collision` in class `viz`), and no geom of the body (of its weld body, for a
+    /// moving one) takes part in contacts, while geoms of jointed links do: those links pass
+    /// through it.
+    ///
     /// ## Why is this bad?
     /// Training puts a legged robot through falls, kneeling, crossed legs and arm swings. With
     /// only the feet colliding, a falling robot lands on its feet or sinks its knees and torso
@@ -254,6 +262,67 @@ impl Rule for LinksWithoutCollision {
             }
             out.push(report(cx, &bare, size, share, n_feet));
         }
+        switched_off(cx, out);
+    }
+}
+
+/// Whether the geom's name or its mesh's name calls it collision geometry.
+fn named_collision(robot: &Robot, g: &Geom) -> bool {
+    let mesh = usize::try_from(g.mesh).ok().and_then(|m| robot.meshes.get(m));
+    [Some(&g.name), mesh].into_iter().flatten().any(|n| n.to_lowercase().contains("collision"))
+}
+
+/// Bodies outside every floating robot whose collision-named geometry compiles with no contact
+/// bits while jointed links collide (the rule's docs).
+fn switched_off(cx: &Context, out: &mut Vec<Finding>) {
+    let robot = cx.robot;
+    let takes_part = |g: usize| crate::model::contact::takes_part(robot, g);
+    let solid = |g: &Geom| g.body != 0 && !matches!(g.gtype, GeomType::Plane | GeomType::Hfield);
+    // A static body (weld 0) is its own group; a moving one is its weld body.
+    let group = |b: usize| match robot.bodies.get(b).map_or(0, |x| x.weld) {
+        0 => b,
+        w => w,
+    };
+    let jointed_collide =
+        robot.geoms.iter().any(|g| solid(g) && robot.bodies[g.body].weld != 0 && takes_part(g.id));
+    let floating = floating_bases(robot);
+    if !jointed_collide || floating.contains(&0) {
+        return;
+    }
+    let mut seen: Vec<usize> = Vec::new();
+    for g in robot.geoms.iter().filter(|g| solid(g) && !takes_part(g.id)) {
+        let key = group(g.body);
+        if seen.contains(&key)
+            || !named_collision(robot, g)
+            || floating.iter().any(|&fb| in_subtree(robot, fb, g.body))
+            || robot.geoms.iter().any(|h| solid(h) && group(h.body) == key && takes_part(h.id))
+        {
+            continue;
+        }
+        seen.push(key);
+        let mesh = usize::try_from(g.mesh).ok().and_then(|m| robot.meshes.get(m));
+        let what = match (g.name.is_empty(), mesh) {
+            (false, _) => format!("geom `{}`", g.name),
+            (true, Some(m)) => format!("geom no. {} (mesh `{m}`)", g.id),
+            (true, None) => format!("geom no. {}", g.id),
+        };
+        let body = robot.body_name(g.body);
+        out.push(
+            cx.at_elem(
+                ElemKind::Geom,
+                g.id,
+                &g.name,
+                format!(
+                    "body `{body}`'s collision geometry collides with nothing: {what}, named as collision geometry, compiles with contype = conaffinity = 0 and no geom of the body takes part in contacts, while the model's jointed links collide and pass through it"
+                ),
+            )
+            .label("contype = conaffinity = 0")
+            .note("a class meant for visual geoms (contype=\"0\" conaffinity=\"0\") given to the collision mesh switches it off: the arms sweep through the body in training, and reach poses the hardware's body blocks")
+            .help("give the collision geom the contact bits of the model's other collision geoms (a collision class, or contype=\"1\" conaffinity=\"1\"), or exclude the pairs that must not touch with <contact><exclude>")
+            .subject(Subject::Body(g.body))
+            .measured(0.0, "contact bits")
+            .expected(1.0, "contact bits"),
+        );
     }
 }
 
