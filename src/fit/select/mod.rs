@@ -50,6 +50,7 @@ mod polish;
 mod probe_trust;
 mod prune;
 mod reach;
+mod reach_model;
 mod reshoot;
 mod rival;
 mod rival_pairs;

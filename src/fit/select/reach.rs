@@ -55,6 +55,7 @@ use super::engine::Engine;
 use super::extension;
 use super::groups::same_data;
 use super::policy::Phase;
+use super::reach_model;
 use super::screen::Screen;
 use super::{Errors, Search};
 
@@ -143,7 +144,9 @@ impl Reach {
     /// `screen_evals` replays), remembered by the engine. Beside a lead, a candidate whose
     /// linear prediction reaches the screen's bar is never out of reach (the screen admits it
     /// on that prediction). A richer model of a loss whose plain variant is out of reach is
-    /// first judged from the plain variant's fit there ([`Reach::extension_out`]).
+    /// first judged from the plain variant's fit there ([`Reach::extension_out`]); beside a
+    /// lead, a smooth one of several parameters by the Gauss–Newton model at its replayed
+    /// linear step ([`reach_model::beyond`]).
     pub(super) fn out_of_reach(
         &self,
         s: &Search,
@@ -156,6 +159,15 @@ impl Reach {
             return None;
         }
         if let Some(judged) = self.extension_out(s, screen, (e, g)) {
+            return Some(judged);
+        }
+        // Beside a lead, a smooth rival of several parameters whose Gauss–Newton model at its
+        // replayed linear step cannot reach the bar ([`reach_model`]).
+        if self.screen_bar.is_some()
+            && let Some(sc) = screen
+            && let Some(judged) =
+                reach_model::beyond(s.engine, sc, (&self.probes, &self.base), (e, g), self.bar)
+        {
             return Some(judged);
         }
         let (p, f) = self.fit(s.engine, screen, (e, g));
