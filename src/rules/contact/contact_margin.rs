@@ -62,6 +62,9 @@ fn half_size(gtype: GeomType, s: [f64; 3], rbound: f64) -> f64 {
     }
 }
 
+/// A geom judged: (geom, its active distance margin − gap in m, its smallest half-size in m).
+type Judged = (usize, f64, f64);
+
 impl Rule for ContactMargin {
     fn meta(&self) -> &'static RuleMeta {
         &Self::META
@@ -81,7 +84,7 @@ impl Rule for ContactMargin {
         let m = &robot.mj;
         let (margin, gap) = (m.geom_margin(), m.geom_gap());
         // margin attribute's location → [(geom, active distance, half size)]
-        let mut groups: BTreeMap<(usize, usize, usize), Vec<(usize, f64, f64)>> = BTreeMap::new();
+        let mut groups: BTreeMap<(usize, usize, usize), Vec<Judged>> = BTreeMap::new();
         for g in &robot.geoms {
             let moving = robot.bodies.get(g.body).is_some_and(|b| b.id != 0 && b.weld != 0);
             if !moving || !takes_part(robot, g.id) {
@@ -109,7 +112,7 @@ impl Rule for ContactMargin {
     }
 }
 
-fn report(cx: &Context, gs: &[(usize, f64, f64)]) -> Finding {
+fn report(cx: &Context, gs: &[Judged]) -> Finding {
     let robot = cx.robot;
     let (g0, active, half) = gs[0];
     let geom = &robot.geoms[g0];

@@ -59,7 +59,7 @@ fn report(cx: &Context, js: &[Judged], judged: usize, max_ratio: f64) -> Finding
     let ratio = |x: &Judged| x.1 / x.2;
     let lo = js.iter().map(ratio).fold(f64::INFINITY, f64::min);
     let hi = js.iter().map(ratio).fold(0.0, f64::max);
-    let sci = |x: f64| if x >= 1e4 || x < 1e-3 { format!("{x:.2e}") } else { fmt_num(x, 3) };
+    let sci = |x: f64| if (1e-3..1e4).contains(&x) { fmt_num(x, 3) } else { format!("{x:.2e}") };
     let n = js.len();
     let who = if n == 1 {
         format!("joint `{}`", first.name)
