@@ -1,4 +1,5 @@
 //! Rules of the `contact` group.
+pub mod contact_margin;
 pub mod feet;
 pub mod foot_collision_geometry;
 pub mod links_without_collision;

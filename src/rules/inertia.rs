@@ -1,5 +1,6 @@
 //! Rules of the `inertia` group.
 pub mod armature_mismatch;
+mod armature_over_link;
 pub mod copied_inertial;
 mod copied_mass;
 pub mod default_density_mass;
@@ -11,6 +12,7 @@ pub mod inertial_overridden;
 pub mod isotropic_base_inertia;
 pub mod isotropic_link_inertia;
 pub mod legged_urdf_armature;
+mod light_density;
 mod light_placeholder;
 pub mod mass_budget;
 pub mod parallel_ankle_armature;

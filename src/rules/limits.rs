@@ -7,4 +7,5 @@ pub mod placeholder_joint_limits;
 pub mod soft_limits;
 mod stated_limits;
 pub(crate) mod urdf_damping_speed;
+mod urdf_soft_limits;
 pub mod wheel_spring;

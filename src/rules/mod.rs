@@ -343,6 +343,7 @@ pub fn registry() -> Vec<&'static dyn Rule> {
         &contact::welded_legged_base::WeldedLeggedBase,
         &contact::torsional_friction::TorsionalFriction,
         &contact::robot_never_collides::RobotNeverCollides,
+        &contact::contact_margin::ContactMargin,
         &limits::soft_limits::SoftLimits,
         &control::underdamped_pd_gains::UnderdampedPdGains,
         &control::servo_stall_band::ServoStallBand,

@@ -32,6 +32,16 @@ declare_rule! {
     /// out of the comparison. Joints driven by
     /// several motors (count > 1) are left to `parallel-ankle-armature`.
     ///
+    /// With or without a spec (for the joints whose motor it does not name), an actuated hinge
+    /// or slide whose armature exceeds `max_link_ratio` × the inertia the joint moves — the
+    /// diagonal of the joint-space inertia at the standing keyframe or qpos0 (the joint's
+    /// subtree about its axis; its mass along a slide) less the armature — is reported; joints
+    /// that share the value through one `<default class>` together. Armature is gear² × the
+    /// rotor's inertia: a gear-288 servo (Dynamixel XC330-M288, ~1.6e-8 kg·m² rotor) reflects
+    /// ~1.3e-3 kg·m², 10–100× a light finger link and ~2e3× the lightest part it can turn (its
+    /// horn and a bracket, ~3 g at 15 mm, 7e-7 kg·m²); 10⁴× is beyond any drive (the gym Ant's
+    /// `armature="1"` kept on a hexapod whose leg links have 1e-7–1e-3 kg·m²).
+    ///
     /// ## Why is this bad?
     /// Armature here is the reflected inertia of motor and gearbox seen at the joint (Asimov system identification
     /// §2). It often dominates the link inertia of distal joints and sets their closed-loop
@@ -52,6 +62,7 @@ declare_rule! {
         probe: None,
         options: [
             opt("tolerance", 0.05, "fraction", Domain::NON_NEGATIVE, "allowed relative difference from the expected reflected inertia"),
+            opt("max_link_ratio", 1e4, "ratio", Domain::AT_LEAST_ONE, "largest armature as a multiple of the inertia the joint moves (its subtree about its axis, armature left out) that a real drive reflects: a gear-288 hobby servo on the lightest part it turns is ~2e3×"),
             opt("effort_spread", 5.0, "ratio", Domain::AT_LEAST_ONE, "without a spec: largest / smallest force limit from which one shared armature value is a warning (above √(1 + tolerance) it is info)"),
         ],
     }
@@ -68,6 +79,7 @@ impl Rule for ArmatureMismatch {
         &Self::META
     }
     fn check(&self, cx: &Context, out: &mut Vec<Finding>) {
+        super::armature_over_link::armature_over_link(cx, cx.opt("max_link_ratio"), out);
         let Some(spec) = cx.spec else {
             uniform_without_spec(cx, out);
             return;

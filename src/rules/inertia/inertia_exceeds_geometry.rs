@@ -43,6 +43,14 @@ declare_rule! {
     /// larger than the robot's joint span (a length in millimetres, `mesh-scale`'s and
     /// `oversized-collision-primitive`'s) or models with fewer than two joints.
     ///
+    /// An MJCF body that states no mass (no `<inertial>`, or `inertiafromgeom="true"`; no geom
+    /// of it writes `mass`) weighs what MuJoCo makes of its geoms' `density`: its compiled mass
+    /// is judged against the same floor, its largest mass-carrying shape's (geoms of density 0
+    /// or outside `inertiagrouprange` carry none; `shellinertia` geoms, whose density is per
+    /// area, are not judged). The bodies whose geoms take one `density` value are reported
+    /// together, with their effective density (compiled mass over summed geom volume): the gym
+    /// Ant's `density="5"` on a Trossen hexapod, 7.5 g for a 1.5 l torso, a 0.21 kg robot.
+    ///
     /// ## Why is this bad?
     /// A moment larger than the part's geometry allows is a placeholder or a unit slip (a
     /// `diaginertia="0.001 0.001 0.001"` on a 26 g finger is a 190 mm radius of gyration on a
@@ -89,6 +97,11 @@ impl Rule for InertiaExceedsGeometry {
             cx.opt("max_mass_share"),
         ));
         out.extend(super::light_placeholder::light_placeholders(
+            cx,
+            cx.opt("min_density"),
+            cx.opt("min_areal_density"),
+        ));
+        out.extend(super::light_density::light_from_density(
             cx,
             cx.opt("min_density"),
             cx.opt("min_areal_density"),

@@ -11,12 +11,12 @@ use crate::rules::geometry::oversized_collision::{joint_span, primitive_extent, 
 use crate::util::fmt_num;
 
 /// One shape of a link: what it is, its volume (m³) and surface area (m²).
-struct Shape {
-    what: String,
-    volume: f64,
-    area: f64,
+pub(super) struct Shape {
+    pub(super) what: String,
+    pub(super) volume: f64,
+    pub(super) area: f64,
     /// Largest dimension, m.
-    extent: f64,
+    pub(super) extent: f64,
 }
 
 /// A link's stated mass, where it is written, its colliding and its drawn shapes, and the body
@@ -84,7 +84,7 @@ fn mm(x: f64) -> String {
 }
 
 /// A compiled geom as a [`Shape`].
-fn geom_shape(robot: &Robot, g: usize) -> Option<Shape> {
+pub(super) fn geom_shape(robot: &Robot, g: usize) -> Option<Shape> {
     let geom = robot.geoms.get(g)?;
     if geom.gtype == GeomType::Mesh {
         let k = usize::try_from(geom.mesh).ok()?;
@@ -237,7 +237,7 @@ fn mjcf_parts(robot: &Robot) -> Vec<Part> {
 
 /// The least mass a shape can have: the lighter of a solid of `density` and a closed shell of
 /// `areal` density.
-fn floor(s: &Shape, density: f64, areal: f64) -> f64 {
+pub(super) fn floor(s: &Shape, density: f64, areal: f64) -> f64 {
     (density * s.volume).min(areal * s.area)
 }
 

@@ -29,6 +29,14 @@ declare_rule! {
     /// (±31.415 written for ±3.1415). Actuators that share the problem through one `<default
     /// class>` are reported once.
     ///
+    /// In a URDF, a revolute or prismatic joint's `<safety_controller>` whose written
+    /// `soft_lower_limit` lies below its `<limit lower>`, or `soft_upper_limit` above its
+    /// `upper`, by more than `tolerance` of the range: the specification has the safety
+    /// controller start limiting the joint at its soft limits, inside the hard range, so a soft
+    /// limit beyond the hard one never acts and one of the two ranges is not the joint's (the
+    /// KUKA LWR's `kuka_arm_1_joint`: ±1.5708 rad "reduced … to avoid contact with table"
+    /// inside soft limits of ±2.0595 rad). A fact of the file; no probe runs on it.
+    ///
     /// ## Why is this bad?
     /// Training is meant to use soft limits, typically 0.9 of the hardware range (Asimov system identification §8):
     /// commanding the hard stops produces hard-stop impacts, exploitation of boundary states and
@@ -266,6 +274,7 @@ impl Rule for SoftLimits {
         let first = out.len();
         self.check_ranges(cx, out);
         measure_hard_stops(cx, &mut out[first..]);
+        super::urdf_soft_limits::urdf_soft_limits(cx, cx.opt("tolerance"), out);
     }
 }
 
