@@ -149,9 +149,9 @@ mod tests {
             3,
             &[5.0, 4.99, 4.0],
         );
-        for k in 0..3 {
+        for (k, se) in u.stderr.iter().enumerate() {
             let off = (whole_held.x[k] - whole.x[k]).abs();
-            assert!(off <= 0.2 * u.stderr[k], "param {k}: {whole_held:?} {whole:?}");
+            assert!(off <= 0.2 * se, "param {k}: {whole_held:?} {whole:?}");
         }
     }
 
