@@ -25,7 +25,7 @@ use super::screen::{HeldoutScreen, Screen, screen_data};
 use super::secant_bar;
 use super::trust::{heldout_columns, with_pair_starts};
 use super::verdict::{at_bound, verdict};
-use super::winner::{beaten_at_coarse, on_whole_set, refine, rejected_on_heldout, rival_notes};
+use super::winner::{beaten_at_coarse, on_whole_set, refine, rival_notes};
 use super::{Errors, FitOutcome, Search, Selected, Tried, set_uncertainty};
 
 /// One greedy round: diagnose, fit the candidates, keep the best that passes the held-out gate.
@@ -478,17 +478,6 @@ pub(super) fn greedy_round(s: &Search, round: usize, out: &mut FitOutcome) -> bo
             continue;
         }
         let full = whole.then(|| p.clone());
-        // A fit on the screen's stretch that the gate rejects without making the held-out set
-        // worse is logged without a replay of the whole training set ([`rejected_on_heldout`]).
-        let gate = (&ho_err, opts.policy.gate_z(z));
-        if !std::ptr::eq(data, train)
-            && let Some(v) = rejected_on_heldout(s, &applied, (e, &group), &p, gate)
-        {
-            fitted.push(Applied { effect: e, joints: group.clone(), params: p.clone() });
-            let t = not_tested(phase, p, f64::NAN);
-            out.tried.push(Tried { heldout_improvement: v.rel, significant: v.significant, ..t });
-            continue;
-        }
         // (One that leaves the whole training set worse explains nothing: logged without a
         // held-out test.)
         let Some((p, tr_a)) = on_whole_set(s, &applied, (e, &group), p.clone(), base_train) else {

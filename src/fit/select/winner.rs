@@ -4,7 +4,7 @@ use crate::fit::effects::{self, Applied, Effect};
 use crate::fit::stats::bic;
 
 use super::policy::SearchPolicy;
-use super::verdict::{Gate, Verdict, verdict};
+use super::verdict::{Gate, verdict};
 use super::{Errors, Search, Selected};
 
 /// A candidate's fit `p` on the screen's stretch, with its errors on the whole training set,
@@ -33,29 +33,6 @@ pub(super) fn on_whole_set(
     let (q, _) = s.engine.fit_budget(s.train, applied, e, group, evals);
     let t = s.engine.errors(s.train, &with(&q))?;
     (!q.is_empty() && t.rmse() < base_train).then_some((q, t))
-}
-
-/// The held-out verdict of a candidate's fit `p` on the screen's stretch when the gate rejects it
-/// there and it leaves the held-out set no worse than without it (`v.rel >= 0`): such a fit is
-/// logged as rejected without its replay on the whole training set ([`on_whole_set`]), which
-/// serves only the BIC of a candidate that could be kept and the stretch-led fit that leaves
-/// the training set worse — a fit that gains on recordings it never saw was not led by the
-/// stretch alone. `None` (the whole set is replayed first, as before) when the gate passes, the
-/// fit makes the held-out set worse (a stretch-led fit's coarse fit on the whole training set
-/// may still pass: BAM kp-200's load friction) or a replay fails.
-pub(super) fn rejected_on_heldout(
-    s: &Search,
-    applied: &[Applied],
-    (e, group): (&'static dyn Effect, &[String]),
-    p: &[f64],
-    (ho_err, gate): (&Errors, Gate),
-) -> Option<Verdict> {
-    let mut trial = applied.to_vec();
-    trial.push(Applied { effect: e, joints: group.to_vec(), params: p.to_vec() });
-    let ho = s.engine.errors(s.heldout, &trial)?;
-    let v = verdict(ho_err, &ho, group, gate);
-    let passes = v.significant && v.rel >= s.engine.opts.policy.min_rel_improvement;
-    (!passes && v.rel >= 0.0).then_some(v)
 }
 
 /// Whether a candidate, replayed on the held-out set at its coarse fit (`at_coarse`: those
