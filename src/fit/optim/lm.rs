@@ -4,6 +4,7 @@ use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 use serde::Serialize;
 
+use super::lm_held::HeldJacobian;
 use super::lm_resolution::model_optimum;
 use super::{Bounds, Space, clamp01};
 
@@ -104,6 +105,21 @@ pub fn levenberg_marquardt(
     b: &Bounds,
     o: &LmOpts,
 ) -> LmResult {
+    levenberg_marquardt_from(r, x0, b, o, None)
+}
+
+/// [`levenberg_marquardt`] whose first iteration takes the Jacobian `held` the caller already
+/// has of the same residual (the same data and model: the caller's to tell) where it applies
+/// ([`HeldJacobian::unit_columns`]: the same box and difference step, differenced within one
+/// step of `x0`), instead of differencing at `x0`; every later iteration differences as before.
+pub fn levenberg_marquardt_from(
+    r: &(dyn Fn(&[f64]) -> Vec<f64> + Sync),
+    x0: &[f64],
+    b: &Bounds,
+    o: &LmOpts,
+    held: Option<&HeldJacobian>,
+) -> LmResult {
+    let mut held = held;
     let fail = |x: Vec<f64>| LmResult {
         x,
         cost: f64::INFINITY,
@@ -171,8 +187,15 @@ pub fn levenberg_marquardt(
     if n == 0 || cost == 0.0 {
         converged = true;
     }
+    // Whether the Jacobian of the current iteration is the held one (not reported as the fit's).
+    let mut from_held = false;
     'outer: while !converged && iters < o.max_iters {
-        let j = jac_unit(&u, &res, h);
+        let given = held.take().and_then(|hj| hj.unit_columns(b, &u, h, m));
+        from_held = given.is_some();
+        let j = match given {
+            Some(cols) => DMatrix::from_fn(m, n, |i, k| cols[k][i]),
+            None => jac_unit(&u, &res, h),
+        };
         iters += 1;
         let jt = j.transpose();
         let a = &jt * &j;
@@ -330,7 +353,7 @@ pub fn levenberg_marquardt(
     }
     // The reported Jacobian (for the uncertainty) uses the requested difference step.
     let j = match jac {
-        Some(j) if h == h0 => j,
+        Some(j) if h == h0 && !from_held => j,
         _ => jac_unit(&u, &res, h0),
     };
     let mut jacobian = vec![vec![0.0; np]; m];
@@ -351,6 +374,20 @@ pub(super) mod tests {
 
     /// The resolution the search passes a rollout fit (`SearchPolicy::line_resolution`).
     pub(in crate::fit::optim) const ROLLOUT_RESOLUTION: f64 = 0.1;
+
+    /// The options the search gives a rollout fit (`select::solve`: no final Jacobian), at most
+    /// 12 iterations, its resolution stop at `resolution` standard errors (0: off).
+    pub(in crate::fit::optim) fn rollout_opts(resolution: f64) -> LmOpts {
+        LmOpts {
+            max_iters: 12,
+            rel_step: ROLLOUT_REL_STEP,
+            tol: 1e-5,
+            final_jacobian: false,
+            stat_tol: ROLLOUT_STAT_TOL,
+            short_step: ROLLOUT_SHORT_STEP,
+            resolution,
+        }
+    }
 
     #[test]
     fn the_rollout_resolution_is_the_searchs_line_resolution() {
@@ -505,15 +542,7 @@ pub(super) mod tests {
         };
         let b = Bounds { lo: vec![0.0], hi: vec![5.0] };
         // (The options the fit uses on rollouts.)
-        let o = LmOpts {
-            max_iters: 12,
-            rel_step: ROLLOUT_REL_STEP,
-            tol: 1e-5,
-            final_jacobian: true,
-            stat_tol: ROLLOUT_STAT_TOL,
-            short_step: ROLLOUT_SHORT_STEP,
-            resolution: ROLLOUT_RESOLUTION,
-        };
+        let o = LmOpts { final_jacobian: true, ..rollout_opts(ROLLOUT_RESOLUTION) };
         let fit = levenberg_marquardt(&r, &[0.0], &b, &o);
         assert!(
             (fit.x[0] - 3.0).abs() < 0.05,
@@ -545,15 +574,7 @@ pub(super) mod tests {
                 .collect::<Vec<f64>>()
         };
         let b = Bounds { lo: vec![0.0], hi: vec![1.0] };
-        let o = LmOpts {
-            max_iters: 12,
-            rel_step: ROLLOUT_REL_STEP,
-            tol: 1e-5,
-            final_jacobian: false,
-            stat_tol: ROLLOUT_STAT_TOL,
-            short_step: ROLLOUT_SHORT_STEP,
-            resolution: ROLLOUT_RESOLUTION,
-        };
+        let o = rollout_opts(ROLLOUT_RESOLUTION);
         let fit = levenberg_marquardt(&r, &[0.3], &b, &o);
         assert!(fit.converged && fit.x == vec![0.3], "{fit:?}");
         assert_eq!(evals.load(Ordering::Relaxed), 3);
@@ -572,15 +593,7 @@ pub(super) mod tests {
             vec![p[0] - 0.6, 0.1 + 0.1 * (2.0 * std::f64::consts::PI * p[0] / 0.04).sin()]
         };
         let b = Bounds { lo: vec![0.0], hi: vec![1.0] };
-        let o = LmOpts {
-            max_iters: 12,
-            rel_step: ROLLOUT_REL_STEP,
-            tol: 1e-5,
-            final_jacobian: false,
-            stat_tol: ROLLOUT_STAT_TOL,
-            short_step: ROLLOUT_SHORT_STEP,
-            resolution: ROLLOUT_RESOLUTION,
-        };
+        let o = rollout_opts(ROLLOUT_RESOLUTION);
         // The precondition: at the rollout difference the slope J^T r points out of the box.
         let (r0, r1) = (r(&[0.0]), r(&[ROLLOUT_REL_STEP]));
         let g: f64 = r0.iter().zip(&r1).map(|(a, b)| a * (b - a) / ROLLOUT_REL_STEP).sum();
@@ -610,10 +623,7 @@ pub(super) mod tests {
             max_iters: 100,
             rel_step: 1e-3,
             tol: 1e-8,
-            final_jacobian: false,
-            stat_tol: ROLLOUT_STAT_TOL,
-            short_step: ROLLOUT_SHORT_STEP,
-            resolution: ROLLOUT_RESOLUTION,
+            ..rollout_opts(ROLLOUT_RESOLUTION)
         };
         let quick = levenberg_marquardt(&r, &[1.0, 0.5, 0.0], &b, &o);
         let n_quick = evals.load(Ordering::Relaxed);

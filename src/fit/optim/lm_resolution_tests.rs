@@ -8,10 +8,9 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use nalgebra::DMatrix;
 
 use super::model_optimum;
-use crate::fit::optim::lm::tests::ROLLOUT_RESOLUTION;
+use crate::fit::optim::lm::tests::{ROLLOUT_RESOLUTION, rollout_opts as rollout};
 use crate::fit::optim::{
-    Bounds, LmOpts, ROLLOUT_REL_STEP, ROLLOUT_SHORT_STEP, ROLLOUT_STAT_TOL, levenberg_marquardt,
-    seeded_rng,
+    Bounds, ROLLOUT_REL_STEP, ROLLOUT_SHORT_STEP, levenberg_marquardt, seeded_rng,
 };
 use crate::fit::stats::ar1_variance_inflation;
 
@@ -87,19 +86,6 @@ fn a_misfit_the_model_cannot_explain_does_not_shrink_the_standard_error() {
     assert!(m.step[0].abs() < 1e-9 * se && m.step[1] == 0.0 && m.se[1] == 0.0, "{m:?}");
     assert!(m.within(&[0.05 * m.se[0], 0.0], 0.1) && !m.within(&[0.2 * m.se[0], 0.0], 0.1));
     assert!(model_optimum(&j, &residual(&noise, &g, p_hat, 0.4), &[true, true]).is_none());
-}
-
-/// The rollout options with the search's resolution.
-fn rollout(resolution: f64) -> LmOpts {
-    LmOpts {
-        max_iters: 12,
-        rel_step: ROLLOUT_REL_STEP,
-        tol: 1e-5,
-        final_jacobian: false,
-        stat_tol: ROLLOUT_STAT_TOL,
-        short_step: ROLLOUT_SHORT_STEP,
-        resolution,
-    }
 }
 
 /// The problem seen through a staircase `q(p) = Δ ⌊p / Δ⌋` of treads `Δ` of a twentieth of a

@@ -24,6 +24,7 @@ mod brent;
 mod cmaes;
 mod golden;
 mod lm;
+mod lm_held;
 mod lm_resolution;
 mod nelder_mead;
 mod resolve;
@@ -37,8 +38,9 @@ pub use cmaes::{CmaesOpts, cmaes};
 pub use golden::{GRID_POINTS, golden_refine, line_search, line_search_resolved};
 pub use lm::{
     LmOpts, LmResult, ROLLOUT_REL_STEP, ROLLOUT_SHORT_STEP, ROLLOUT_STAT_TOL, WIDEST_REL_STEP,
-    levenberg_marquardt,
+    levenberg_marquardt, levenberg_marquardt_from,
 };
+pub use lm_held::HeldJacobian;
 pub use nelder_mead::{NelderMeadOpts, nelder_mead};
 pub use resolve::{Noise, Resolution, profile_stderr};
 

@@ -91,6 +91,9 @@ pub struct Engine<'a> {
     spent: std::sync::Mutex<std::collections::HashMap<String, u64>>,
     /// The probes the screen did not replay ([`Engine::note_unprobed`]).
     unprobed: std::sync::Mutex<Vec<super::Unprobed>>,
+    /// Jacobians of a candidate's residual made outside its fits, by dataset, base and
+    /// candidate ([`Engine::hold_jacobian`]).
+    jacobians: std::sync::Mutex<std::collections::HashMap<String, crate::fit::optim::HeldJacobian>>,
 }
 
 /// Rollouts and recording seconds by round ([`round_key`]) and phase name.
@@ -236,6 +239,7 @@ impl<'a> Engine<'a> {
             trust: Default::default(),
             spent: Default::default(),
             unprobed: Default::default(),
+            jacobians: Default::default(),
             screens: Default::default(),
         }
     }

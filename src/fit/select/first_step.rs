@@ -73,7 +73,13 @@ pub(super) fn short_after_first_step(
     let res_or_empty = |x: &[f64]| res(x).unwrap_or_default();
     let b = Bounds { lo: lo[..k].to_vec(), hi: hi[..k].to_vec() };
     let x0: Vec<f64> = (0..k).map(|i| a.params[i].clamp(lo[i], hi[i])).collect();
-    let problem = Problem { objective: &obj, residuals: Some(&res_or_empty), bounds: b.clone() };
+    let held = engine.held_jacobian((data, applied), (e, g));
+    let problem = Problem {
+        objective: &obj,
+        residuals: Some(&res_or_empty),
+        bounds: b.clone(),
+        held: held.as_ref(),
+    };
     let unit = Unit::new(&b);
     let u0 = unit.to_unit(&x0);
     // The iterations up to the first that moves: a fit that has not moved yet widens its
@@ -95,9 +101,14 @@ pub(super) fn short_after_first_step(
     // The Gauss–Newton model of the iteration's Jacobian (its replays, made already).
     let r0 = res(&unit.params_of(&u0)).filter(|r| !r.is_empty())?;
     let r1 = res(&first.x).filter(|r| r.len() == r0.len())?;
-    let cols: Vec<Vec<f64>> = (0..u0.len())
-        .map(|j| unit.column((&u0, j, h), |x| res(x).filter(|r| r.len() == r0.len()), &r0))
-        .collect::<Option<_>>()?;
+    // (The held Jacobian where the fit's first iteration took it: `HeldJacobian`.)
+    let given = held.as_ref().and_then(|hj| hj.unit_columns(&b, &u0, h, r0.len()));
+    let cols: Vec<Vec<f64>> = match given {
+        Some(cols) => cols,
+        None => (0..u0.len())
+            .map(|j| unit.column((&u0, j, h), |x| res(x).filter(|r| r.len() == r0.len()), &r0))
+            .collect::<Option<_>>()?,
+    };
     let gram: Vec<Vec<f64>> =
         cols.iter().map(|c| cols.iter().map(|d| dot(c, d)).collect()).collect();
     let minus_b: Vec<f64> = cols.iter().map(|c| -dot(c, &r0)).collect();

@@ -23,7 +23,7 @@
 use rayon::prelude::*;
 
 use crate::fit::effects::{Applied, Effect, JointTarget, model_with};
-use crate::fit::optim::ROLLOUT_REL_STEP;
+use crate::fit::optim::{Bounds, HeldJacobian, ROLLOUT_REL_STEP};
 use crate::sim2real::recording::Recording;
 
 use super::at_base::AtBase;
@@ -94,6 +94,20 @@ pub(super) fn model_at(
         })
         .collect();
     let mut cols: Vec<Vec<f64>> = cols.into_iter().collect::<Option<_>>()?;
+    // The differences are a least-squares fit's first Jacobian at `p` (the same residual, step
+    // and box): held for the candidate's fit on `short` (`HeldJacobian`), which starts at `p` or
+    // within a step of it (the model's step below, replayed) — when `p` beyond its fitted
+    // parameters is the effect's start, as a fit's point is.
+    let start = e.initial(&m0, &t);
+    if p.len() == start.len() && p[k..] == start[k..] {
+        let mut columns = vec![None; k];
+        for (&i, c) in free.iter().zip(&cols) {
+            columns[i] = Some(c.clone());
+        }
+        let bounds = Bounds { lo: lo[..k].to_vec(), hi: hi[..k].to_vec() };
+        let j = HeldJacobian { at: p[..k].to_vec(), rel_step: ROLLOUT_REL_STEP, bounds, columns };
+        engine.hold_jacobian((short, applied), (e, g), j);
+    }
     let ss = dot(&r, &r);
     if !(ss > 0.0) || !fp.is_finite() {
         return None;
@@ -170,5 +184,38 @@ mod tests {
         // Nothing to step: no prediction.
         let none: &[Recording] = &[];
         assert!(least_rmse(&engine, (none, &[]), (e, &g), (&p, fp)).is_none());
+    }
+
+    /// The model's differences are held as the first Jacobian of a least-squares fit of the
+    /// candidate on the same data and base from its point: the point's replay, the model and a
+    /// coarse fit from the point replay at most two sets more (the point and the base) than the
+    /// same coarse fit on an engine that holds nothing, where the model's two columns, replayed
+    /// again by the fit, would make it four — and they are held for that data and base alone.
+    #[test]
+    fn the_models_differences_start_a_fit_from_its_point() {
+        let (robot, recs) =
+            crate::synth::recorded::pendulum(Some((GainError.id(), vec![0.9, 1.4])), 3, 7);
+        let opts = FitOptions::default();
+        let g = vec!["servo".to_string()];
+        let e: &'static dyn Effect = &GainError;
+        let secs: f64 = recs.iter().map(|r| r.t.last().unwrap() - r.t[0]).sum();
+        let p = [1.0, 1.1];
+        let evals = opts.policy.screen_evals;
+        let fit = |engine: &Engine| engine.fit_budget_from(&recs, &[], (e, &g), evals, &p);
+        let plain = Engine::new(&robot, &recs, &opts);
+        let alone = fit(&plain);
+        let cost_alone = plain.rollout_stats().simulated_s;
+        let engine = Engine::new(&robot, &recs, &opts);
+        let a = Applied { effect: e, joints: g.clone(), params: p.to_vec() };
+        let fp = engine.score(&recs, &[a]);
+        model_at(&engine, (&recs, &[]), (e, &g), (&p, fp)).expect("modelled");
+        assert!(engine.held_jacobian((&recs, &[]), (e, &g)).is_some());
+        let other = recs[..1].to_vec();
+        assert!(engine.held_jacobian((&other, &[]), (e, &g)).is_none());
+        let held = fit(&engine);
+        let cost = engine.rollout_stats().simulated_s;
+        assert!(cost <= cost_alone + 2.0 * secs + 1e-9, "{cost} s, {cost_alone} s alone");
+        let (ga, gh) = (1.0 - alone.1 / fp, 1.0 - held.1 / fp);
+        assert!((gh - ga).abs() <= 0.1 * ga.abs(), "{held:?} {alone:?} from {fp}");
     }
 }

@@ -76,7 +76,8 @@ pub(super) fn polish_from(
     } else {
         Method::Simplex { max_evals, xtol: 1e-4, step }
     };
-    let problem = Problem { objective: &obj, residuals: smooth.then_some(&res), bounds: b };
+    let problem =
+        Problem { objective: &obj, residuals: smooth.then_some(&res), bounds: b, held: None };
     let r = solve(&problem, &x0, method);
     if r.f.is_nan() || r.f >= f0 {
         return applied;
@@ -157,7 +158,7 @@ pub(super) fn fit_jointly_iters(
     let res = |x: &[f64]| {
         engine.residuals(train, &make(x), &engine.joints, usize::MAX).unwrap_or_default()
     };
-    let problem = Problem { objective: &obj, residuals: Some(&res), bounds: b };
+    let problem = Problem { objective: &obj, residuals: Some(&res), bounds: b, held: None };
     let method = if set[first..].iter().all(|a| a.effect.smooth()) {
         Method::LeastSquares { max_iters: lm_iters, resolve: engine.opts.policy.line_resolution }
     } else {

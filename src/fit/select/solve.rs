@@ -9,9 +9,9 @@
 //! (Nelder–Mead); more an evolution strategy (CMA-ES).
 
 use crate::fit::optim::{
-    Bounds, CmaesOpts, GRID_POINTS, LmOpts, NelderMeadOpts, Noise, ROLLOUT_REL_STEP,
-    ROLLOUT_SHORT_STEP, ROLLOUT_STAT_TOL, Resolution, brent_refine, cmaes, levenberg_marquardt,
-    line_search_resolved, nelder_mead,
+    Bounds, CmaesOpts, GRID_POINTS, HeldJacobian, LmOpts, NelderMeadOpts, Noise, ROLLOUT_REL_STEP,
+    ROLLOUT_SHORT_STEP, ROLLOUT_STAT_TOL, Resolution, brent_refine, cmaes,
+    levenberg_marquardt_from, line_search_resolved, nelder_mead,
 };
 use crate::fit::stats::ar1_variance_inflation;
 
@@ -55,6 +55,9 @@ pub(super) struct Problem<'p> {
     pub(super) objective: &'p (dyn Fn(&[f64]) -> f64 + Sync),
     pub(super) residuals: Option<Residuals<'p>>,
     pub(super) bounds: Bounds,
+    /// A Jacobian of the residuals the caller already has (the same data and model), for
+    /// least squares' first iteration where it applies ([`HeldJacobian`]).
+    pub(super) held: Option<&'p HeldJacobian>,
 }
 
 /// The optimiser's answer: the parameters, their objective (training RMSE) and whether a
@@ -152,7 +155,7 @@ pub(super) fn solve(p: &Problem<'_>, x0: &[f64], method: Method) -> Solution {
                 short_step: ROLLOUT_SHORT_STEP,
                 resolution: resolve,
             };
-            let r = levenberg_marquardt(res, x0, b, &o);
+            let r = levenberg_marquardt_from(res, x0, b, &o, p.held);
             let n = r.n_resid;
             let f = if n > 0 { (2.0 * r.cost / n as f64).sqrt() } else { f64::INFINITY };
             Solution { x: r.x, f, converged: r.converged }
@@ -210,6 +213,7 @@ mod tests {
             objective: &obj,
             residuals: Some(&res),
             bounds: Bounds { lo: vec![0.0, 0.5], hi: vec![1.0, 5.0] },
+            held: None,
         };
         for m in [
             Method::LeastSquares { max_iters: 20, resolve: 0.1 },
@@ -225,6 +229,7 @@ mod tests {
             objective: &one,
             residuals: None,
             bounds: Bounds { lo: vec![1e-3], hi: vec![10.0] },
+            held: None,
         };
         for log in [false, true] {
             let s = solve(&p1, &[1.0], Method::Line { log, max_evals: 60, resolve: 0.0 });
@@ -251,6 +256,7 @@ mod tests {
             objective: &obj,
             residuals: None,
             bounds: Bounds { lo: vec![0.0], hi: vec![0.2] },
+            held: None,
         };
         let tol = LINE_TOL * 0.2;
         let count = |m: Method, x0: f64| {
@@ -311,8 +317,9 @@ mod tests {
         let gz: f64 = g.iter().zip(&z).map(|(g, z)| g * sigma * z).sum();
         let (answer, se) = (truth + gz / gg, sigma / gg.sqrt());
         let bounds = Bounds { lo: vec![0.01], hi: vec![1.0] };
-        let with = Problem { objective: &obj, residuals: Some(&res), bounds: bounds.clone() };
-        let without = Problem { objective: &obj, residuals: None, bounds };
+        let with =
+            Problem { objective: &obj, residuals: Some(&res), bounds: bounds.clone(), held: None };
+        let without = Problem { objective: &obj, residuals: None, bounds, held: None };
         let run = |p: &Problem<'_>, m: Method| {
             evals.store(0, Ordering::Relaxed);
             let start = if matches!(m, Method::LineFrom { .. }) { 0.14 } else { 0.5 };

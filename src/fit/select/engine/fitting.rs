@@ -1,7 +1,7 @@
 //! Fitting one candidate on top of a kept set, and the standard errors of a fit.
 
 use crate::fit::effects::{self, Applied, Effect, JointTarget, model_with};
-use crate::fit::optim::Bounds;
+use crate::fit::optim::{Bounds, HeldJacobian};
 use crate::sim2real::metrics::gap_mask;
 use crate::sim2real::recording::Recording;
 
@@ -122,6 +122,7 @@ impl Engine<'_> {
             objective: &obj,
             residuals: None,
             bounds: Bounds { lo: lo[..k].to_vec(), hi: hi[..k].to_vec() },
+            held: None,
         };
         // The same simplex as a full fit's (`fit_fresh`), from the answer.
         let r = solve(&problem, &x0, full_fit_simplex(self.opts.policy.max_evals, k));
@@ -309,6 +310,31 @@ impl Engine<'_> {
         f.is_finite().then_some((p, f))
     }
 
+    /// Holds `j`, forward differences of the residual of `effect` on `group` on top of `base`
+    /// on `train` (the residual [`Engine::residuals`] of every scored joint, as a least-squares
+    /// fit's), for the first iteration of a later least-squares fit of that candidate on the same
+    /// data and base ([`HeldJacobian`]: where it applies). The latest held per candidate stands.
+    pub(in crate::fit::select) fn hold_jacobian(
+        &self,
+        (train, base): (&[Recording], &[Applied]),
+        (effect, group): (&dyn Effect, &[String]),
+        j: HeldJacobian,
+    ) {
+        let key = fit_key(train, base, effect, group, 0) + &self.start_tag();
+        self.jacobians.lock().unwrap_or_else(|e| e.into_inner()).insert(key, j);
+    }
+
+    /// The Jacobian held for `effect` on `group` on top of `base` on `train`
+    /// ([`Engine::hold_jacobian`]).
+    pub(in crate::fit::select) fn held_jacobian(
+        &self,
+        (train, base): (&[Recording], &[Applied]),
+        (effect, group): (&dyn Effect, &[String]),
+    ) -> Option<HeldJacobian> {
+        let key = fit_key(train, base, effect, group, 0) + &self.start_tag();
+        self.jacobians.lock().unwrap_or_else(|e| e.into_inner()).get(&key).cloned()
+    }
+
     /// A fit with `max_evals` from `start` (see [`Engine::fit_from`]), remembered by
     /// [`fit_key`]: the first fit of a candidate on a base answers every later request.
     fn fit_memo(
@@ -406,7 +432,14 @@ impl Engine<'_> {
         let res = |x: &[f64]| {
             self.residuals(train, &make(x), &self.joints, usize::MAX).unwrap_or_default()
         };
-        let problem = Problem { objective: &obj, residuals: Some(&res), bounds: b.clone() };
+        // (Its first Jacobian where one is held for the candidate here: `further::model_at`'s.)
+        let held = self.held_jacobian((train, base), (effect, group));
+        let problem = Problem {
+            objective: &obj,
+            residuals: Some(&res),
+            bounds: b.clone(),
+            held: held.as_ref(),
+        };
         let (x, f) = match k {
             0 => (vec![], obj(&[])),
             _ if effect.smooth() => {
