@@ -60,7 +60,7 @@ fn transmission_reduction_squared_is_the_missing_factor() {
 fn placeholder_limits_are_judged_from_weight_reach_and_a_turn() {
     const ID: &str = "placeholder-joint-limits";
     let f = of(ID, "invalid.urdf");
-    assert_eq!(f.len(), 3, "{f:?}");
+    assert_eq!(f.len(), 4, "{f:?}");
     // Effort: the robot weighs 1 + 0.5 + 0.5 kg; the knee carries the foot sphere 0.2 m below
     // it, radius 0.02 → reach 0.22 m; 1000 N·m over 2 · 9.81 · 0.22 N·m (the knee's ratio is
     // the larger of the two: the hip's reach is 0.42 m).
@@ -71,6 +71,9 @@ fn placeholder_limits_are_judged_from_weight_reach_and_a_turn() {
     // Velocity: the hip's 1000 rad/s × its 0.42 m reach.
     let tip = in_unit(&f, "m/s").measured.as_ref().unwrap().value;
     assert!((tip - 1000.0 * 0.42).abs() < 1e-6, "{tip}");
+    // Power: 1000 N·m × 1000 rad/s / 4 on each of the two joints, over the URDF's stated 2 kg.
+    let power = in_unit(&f, "W/kg").measured.as_ref().unwrap().value;
+    assert!((power - 2.0 * 1000.0 * 1000.0 / 4.0 / 2.0).abs() < 1e-6, "{power}");
     // Stops at ±10 rad, more than a turn (2π) from zero.
     let turn = in_unit(&f, "rad");
     assert_eq!(turn.measured.as_ref().unwrap().value, 10.0);
