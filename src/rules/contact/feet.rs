@@ -142,6 +142,13 @@ pub fn floating_bases(robot: &Robot) -> Vec<usize> {
 
 /// The feet of the model, left before right.
 pub fn feet(robot: &Robot, spec: Option<&Spec>) -> Vec<Foot> {
+    feet_over(robot, spec, &floating_bases(robot))
+}
+
+/// The feet of the model under the given bases (the floating bases, or with them the bodies a
+/// rule also takes for a base, as `links-without-collision` does a planar locomotor's), left
+/// before right.
+pub fn feet_over(robot: &Robot, spec: Option<&Spec>, bases: &[usize]) -> Vec<Foot> {
     let n = robot.bodies.len();
     let globs = spec.map(|s| s.foot_matchers()).unwrap_or_default();
     // A spec that sets `foot_bodies` (even to []) is authoritative.
@@ -160,7 +167,6 @@ pub fn feet(robot: &Robot, spec: Option<&Spec>) -> Vec<Foot> {
     // `base_footprint` frame) is part of the trunk, not a foot, unless the spec names it. The
     // floating body itself may be a foot (a foot dropped alone on a floor, a test rig).
     // A floating base written as slides and a ball floats as a free joint does.
-    let bases = floating_bases(robot);
     let weld = |b: usize| robot.bodies.get(b).map_or(b, |x| x.weld);
     let on_limb = |b: usize| {
         from_spec || (b != 0 && bases.contains(&b)) || !bases.iter().any(|&f| weld(f) == weld(b))

@@ -2,7 +2,7 @@ use crate::declare_rule;
 use crate::finding::{Finding, Severity, Subject};
 use crate::model::mjcf::ElemKind;
 use crate::model::{Geom, GeomType, JointType, Robot};
-use crate::rules::contact::feet::{FootKind, feet, floating_bases};
+use crate::rules::contact::feet::{FootKind, feet_over, floating_bases};
 use crate::rules::geometry::shapes::{V3, add, col, norm, scale, sub, to_local_dir};
 use crate::rules::{Context, Domain, Rule, RuleMeta, in_subtree, opt};
 use crate::util::fmt_num;
@@ -18,7 +18,10 @@ declare_rule! {
     /// three slides and a ball, as humanoid-gym's files do, or the whole of a legged URDF that
     /// MuJoCo's importer welded to the world, as if its root link floated: `welded-legged-base`)
     /// that carries hinge or slide joints
-    /// and two or more feet (the foot bodies of the contact rules: by name, else the leaf
+    /// and two or more feet; or of a body that moves in a vertical plane in place of floating
+    /// (the planar locomotors of Gym, Brax and dm_control: its joints all base coordinates, one
+    /// of them a slide with a vertical part, so it falls onto the floor), with one foot or more
+    /// (a hopper stands on one). Feet are the foot bodies of the contact rules: by name, else the leaf
     /// bodies that touch down); a wheel counts as a foot when it ends a leg, a hinge or slide
     /// between it and the base besides its axle (a wheel-legged robot: DDT Diablo, the wheeled
     /// Pupper v3), not on a rover whose wheels turn on the base. A link is one of its bodies other than the feet
@@ -98,6 +101,32 @@ fn ends_a_leg(robot: &Robot, base: usize, wheel: usize) -> bool {
         steps += 1;
     }
     false
+}
+
+/// Feet a robot on a floating base needs to count as legged here (one foot alone is a foot
+/// dropped on a floor or a test rig, whose only body is that foot).
+const MIN_FEET_FLOATING: usize = 2;
+/// Feet a locomotor moving in a vertical plane needs: a one-legged hopper stands on one.
+const MIN_FEET_VERTICAL_PLANE: usize = 1;
+
+/// The bodies that move in a vertical plane over the floor in place of floating (the planar
+/// locomotors of Gym, Brax and dm_control: a horizontal slide, a vertical slide and a pitch
+/// hinge on a body under the world): a body under a world-fixed parent whose joints are all
+/// base coordinates ([`Robot::is_base_coordinate`]), no ball among them, with a slide whose
+/// axis has a vertical part — the body rises and falls onto the floor, so its links can strike
+/// it. A planar base on the floor (slides along x and y, a yaw hinge) has no such slide.
+fn vertical_plane_bases(robot: &Robot) -> Vec<usize> {
+    (1..robot.bodies.len())
+        .filter(|&b| {
+            let on: Vec<_> = robot.joints.iter().filter(|j| j.body == b).collect();
+            !on.is_empty()
+                && on.iter().all(|j| j.is_scalar() && robot.is_base_coordinate(j.id))
+                && on.iter().any(|j| {
+                    j.jtype == JointType::Slide
+                        && robot.key.joint_xaxis.get(j.id).is_some_and(|a| a[2] != 0.0)
+                })
+        })
+        .collect()
 }
 
 fn dist(a: V3, b: V3) -> f64 {
@@ -200,7 +229,6 @@ impl Rule for LinksWithoutCollision {
         if !robot_collides {
             return; // no collision geometry at all: visual-mesh-collision
         }
-        let feet = feet(robot, cx.spec);
         let weld = |b: usize| robot.bodies.get(b).map_or(b, |x| x.weld);
         let covered = |b: usize| {
             robot.geoms.iter().any(|g| {
@@ -210,7 +238,15 @@ impl Rule for LinksWithoutCollision {
             })
         };
         let share = cx.opt("min_link_share");
-        for base in floating_bases(robot) {
+        let planar = vertical_plane_bases(robot);
+        let mut bases = floating_bases(robot);
+        for &b in &planar {
+            if !bases.contains(&b) {
+                bases.push(b);
+            }
+        }
+        let feet = feet_over(robot, cx.spec, &bases);
+        for base in bases {
             let jointed = robot.joints.iter().any(|j| {
                 j.body != base
                     && matches!(j.jtype, JointType::Hinge | JointType::Slide)
@@ -228,7 +264,9 @@ impl Rule for LinksWithoutCollision {
                         && (f.kind != FootKind::Wheel || ends_a_leg(robot, base, f.root))
                 })
                 .count();
-            if !jointed || n_feet < 2 {
+            let min_feet =
+                if planar.contains(&base) { MIN_FEET_VERTICAL_PLANE } else { MIN_FEET_FLOATING };
+            if !jointed || n_feet < min_feet {
                 continue;
             }
             let bodies: Vec<usize> =
@@ -346,9 +384,14 @@ fn report(cx: &Context, bare: &[(usize, f64)], size: f64, share: f64, n_feet: us
             b0,
             name,
             format!(
-                "{n} link{} of the legged robot {} no collision geometry while its {n_feet} feet collide: {shown}",
+                "{n} link{} of the legged robot {} no collision geometry while its {}: {shown}",
                 if n == 1 { "" } else { "s" },
-                if n == 1 { "has" } else { "have" }
+                if n == 1 { "has" } else { "have" },
+                if n_feet == 1 {
+                    "foot collides".to_string()
+                } else {
+                    format!("{n_feet} feet collide")
+                }
             ),
         )
         .label("no geom of this link takes part in contacts");
