@@ -14,6 +14,10 @@ use crate::util::fmt_num;
 /// Tilt at which the rolling distance of a large contact sphere is stated (rad): 10°.
 const ROLL_TILT: f64 = std::f64::consts::PI / 18.0;
 
+/// The wording when no joint carries the foot (a loose body taken for a foot): nothing to
+/// measure the radius against.
+const NO_LEG: &str = "no leg carries this foot to measure the radius against, so nothing shows a unit slip: the size is read as the foot's design";
+
 /// The finding for `bad` (the foot's ground geoms whose radius is outside the band; the first
 /// one is the finding's place), worded as a unit or scale error only when the radius is out of
 /// proportion with the leg (`unit_max_leg_fraction`, `unit_min_leg_fraction` of its length).
@@ -60,8 +64,8 @@ pub fn radius_finding(
     } else if r > rmax {
         (
             format!(
-                "{}, in proportion with the robot: the size is the foot's design, not a unit slip. A foot that touches down on a sphere of this radius rolls on it: its contact point travels {} mm along the floor for each 10° the foot tilts, and the foot stands on that one point",
-                share.unwrap_or_else(|| "the robot states no leg to compare with".into()),
+                "{}. A foot that touches down on a sphere of this radius rolls on it: its contact point travels {} mm along the floor for each 10° the foot tilts, and the foot stands on that one point",
+                share.map_or(NO_LEG.to_string(), |s| format!("{s}, in proportion with the robot: the size is the foot's design, not a unit slip")),
                 mm(r * ROLL_TILT)
             ),
             "model the contact the foot has: a sole of capsules or corner spheres of a few millimetres at heel and toe, or a radius matching the hardware's rubber tip".to_string(),
@@ -69,9 +73,8 @@ pub fn radius_finding(
     } else {
         (
             format!(
-                "{}, not below {} % of it: the robot's size gives no sign of a unit slip, the size is the foot's design. A sphere this small that spans no support polygon with the foot's other contacts is a single point of contact, whose depth the solver resolves over a fraction of a millimetre",
-                share.unwrap_or_else(|| "the robot states no leg to compare with".into()),
-                fmt_num(100.0 * lo, 3)
+                "{}. A sphere this small that spans no support polygon with the foot's other contacts is a single point of contact, whose depth the solver resolves over a fraction of a millimetre",
+                share.map_or(NO_LEG.to_string(), |s| format!("{s}, not below {} % of it: the robot's size gives no sign of a unit slip, the size is the foot's design", fmt_num(100.0 * lo, 3))),
             ),
             "give the foot its sole: three or more spheres spread over heel and toe (corner points), or capsules of a few millimetres".to_string(),
         )
