@@ -2,6 +2,7 @@
 pub mod contact_margin;
 pub mod feet;
 pub mod foot_collision_geometry;
+pub mod foot_radius;
 pub mod links_without_collision;
 pub mod pose;
 pub mod robot_never_collides;

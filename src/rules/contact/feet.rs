@@ -429,6 +429,24 @@ pub fn ankle_turning(robot: &Robot, root: usize, pts: &[[f64; 3]]) -> Option<usi
     })
 }
 
+/// The length of the leg that carries foot body `root`, measured to `point` (world, keyframe):
+/// the straight distance from the anchor of the leg's top joint — the last joint on the chain
+/// from the foot up to the floating base (or the world) — to the point. `None` when no joint
+/// lies on that chain (a foot welded to its base): no leg to measure.
+pub fn leg_length(robot: &Robot, root: usize, point: [f64; 3]) -> Option<f64> {
+    let floating = robot.floating_bodies();
+    let mut top = None;
+    let mut b = root;
+    while b != 0 && !floating.contains(&b) {
+        if let Some(j) = robot.joints.iter().rfind(|j| j.body == b) {
+            top = Some(j.id);
+        }
+        b = robot.bodies[b].parent;
+    }
+    let a = robot.key.joint_xanchor.get(top?).copied()?;
+    Some(((a[0] - point[0]).powi(2) + (a[1] - point[1]).powi(2) + (a[2] - point[2]).powi(2)).sqrt())
+}
+
 /// Fewest hinge or ball joints a limb off the legs needs to count as an arm (a shoulder and an
 /// elbow; a head's pan and tilt count too, a single waist or tail joint does not).
 pub const ARM_JOINTS: usize = 2;

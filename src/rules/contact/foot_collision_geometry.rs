@@ -10,6 +10,7 @@ use crate::probe::{Measure, Measurement, Preconditions, StanceSettle, Verdict};
 use crate::rules::contact::feet::{
     Foot, FootKind, MIN_SOLE_AREA, ankle_turning, corner_points, feet, is_humanoid,
 };
+use crate::rules::contact::foot_radius::radius_finding;
 use crate::rules::geometry::shapes::{Placed, hull_area};
 use crate::rules::{Context, Domain, Rule, RuleMeta, claim_each, opt, opt_one_of};
 use crate::util::fmt_num;
@@ -114,6 +115,8 @@ declare_rule! {
             opt_one_of("allow_boxes", 1.0, "bool", "1: box feet are acceptable primitives; 0: only capsules and spheres", &[0.0, 1.0]),
             opt("min_radius", 0.0005, "m", Domain::NON_NEGATIVE, "smallest capsule/sphere radius"),
             opt("max_radius", 0.05, "m", Domain::POSITIVE, "largest capsule/sphere radius"),
+            opt("unit_max_leg_fraction", 0.5, "", Domain::POSITIVE, "a contact radius above this fraction of its leg's length (a sphere as wide as the leg is long) is worded as a unit or scale error"),
+            opt("unit_min_leg_fraction", 0.0001, "", Domain::POSITIVE, "a contact radius below this fraction of its leg's length (0.1 mm per metre of leg) is worded as a unit or scale error"),
             opt("friction", 0.6, "", Domain::NON_NEGATIVE, "intended sliding friction of foot geoms; judged only when this or `friction_tolerance` is set"),
             opt("friction_tolerance", 0.2, "", Domain::NON_NEGATIVE, "allowed deviation from `friction`"),
             opt_one_of("condim", 3.0, "", "intended contact dimension of the feet's ground contacts; other than 1 (frictionless, always reported) judged only when set", &[1.0, 3.0, 4.0, 6.0]),
@@ -343,18 +346,8 @@ impl FootCollisionGeometry {
                     (r < rmin && !corners.contains(&g)) || r > rmax
                 })
                 .collect();
-            if let Some(&g0) = bad_r.first() {
-                let r = robot.geoms[g0].size[0];
-                out.push(
-                    cx.at_attr(ElemKind::Geom, g0, &robot.geoms[g0].name, "size", format!("{label} has contact radius {} mm outside {}–{} mm: {}", fmt_num(r * 1000.0, 3), fmt_num(rmin * 1000.0, 3), fmt_num(rmax * 1000.0, 3), list(robot, &bad_r)))
-                        .label(format!("radius {} mm", fmt_num(r * 1000.0, 3)))
-                        .note("the contact radius sets where the contact point sits and how the foot rolls over an edge; a radius this far outside the usual millimetre-to-centimetre range is usually a unit or scale error")
-                        .help("check the geom's size (MuJoCo sizes are in metres; a sphere's size is its radius)")
-                        .subject(subj)
-                        .fact()
-                        .measured(r, "m")
-                        .expected(0.5 * (rmin + rmax), "m"),
-                );
+            if !bad_r.is_empty() {
+                out.push(radius_finding(cx, foot, &bad_r, &label, &list(robot, &bad_r)));
             }
             // condim and friction as MuJoCo builds them against the ground the foot touches
             // (model::contact): an explicit <pair>'s own values, else the combination — a

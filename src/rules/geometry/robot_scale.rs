@@ -3,6 +3,7 @@ use crate::finding::{Finding, Severity, Subject};
 use crate::model::mjcf::ElemKind;
 use crate::model::{GeomType, Robot};
 use crate::rules::control::keyframe_floor::MIN_ROBOT_JOINTS;
+use crate::rules::geometry::oversized_collision::primitive_volume;
 use crate::rules::{Context, Domain, Rule, RuleMeta, in_subtree, opt};
 use crate::util::fmt_num;
 
@@ -23,6 +24,14 @@ declare_rule! {
     /// read as metres: a 0.3 m robot modelled 3 m tall, its masses the real ones) is 1000 times
     /// lighter per volume than the robot (the Kayra lower body's copy: 0.59 kg/m³). Not
     /// judged: trees without geoms or of zero volume (a planar chain), massless trees.
+    ///
+    /// When at least half of the robot's mass is weighed by MuJoCo from the `density` its geoms
+    /// write or inherit (bodies with no `<inertial>` whose compiled mass is their primitive
+    /// geoms' volumes × their densities within 2 %, no geom stating a `mass`), and that mass over
+    /// those geoms' volume is below `min_material_density` (15 kg/m³, the lightest expanded
+    /// polystyrene), the finding names the density (gym's Ant: `density="5"` on every geom) as
+    /// the evidence instead of the lengths' unit: the lengths and the density are then the
+    /// file's two numbers, and only the density is below any solid's.
     ///
     /// ## Why is this bad?
     /// A model built at ten times its size with the real masses falls, swings and tips on
@@ -48,15 +57,70 @@ declare_rule! {
         probe: None,
         options: [
             opt("min_bulk_density", 2.0, "kg/m³", Domain::POSITIVE, "a robot's mass over the volume of its bounding box below this is no rigid robot: the air the box encloses weighs 1.2 kg/m³, the repository's robots 28.5 or more"),
+            opt("min_material_density", 15.0, "kg/m³", Domain::POSITIVE, "a `density` MuJoCo weighs the robot's geoms at below this (the lightest expanded polystyrene) is named as the cause when those geoms carry at least half the robot's mass"),
         ],
     }
 }
 
-/// One robot: its top body, mass (kg), bounding-box extents (m) at the keyframe.
+/// One robot: its top body, mass (kg), bounding-box extents (m) at the keyframe, bodies.
 struct Tree {
     top: usize,
     mass: f64,
     extents: [f64; 3],
+    bodies: Vec<usize>,
+}
+
+/// Agreement of a body's compiled mass with its geoms' volume × density for the mass to count
+/// as weighed from the density (relative).
+const DENSITY_AGREEMENT: f64 = 0.02;
+
+/// MuJoCo's default geom density (kg/m³): water.
+const DEFAULT_DENSITY: f64 = 1000.0;
+
+/// The part of a tree's mass MuJoCo weighed from its geoms' densities: (that mass in kg, those
+/// geoms' summed volume in m³, the distinct densities written, in order of first appearance).
+/// A body counts when every mass-carrying geom is a primitive stating no `mass` and the body's
+/// compiled mass is their volumes × densities within [`DENSITY_AGREEMENT`].
+fn density_weighed(robot: &Robot, bodies: &[usize]) -> (f64, f64, Vec<f64>) {
+    let (mut mass, mut volume, mut seen) = (0.0, 0.0, Vec::new());
+    'body: for &b in bodies {
+        let body_mass = robot.bodies[b].mass;
+        if !(body_mass > 0.0) {
+            continue;
+        }
+        let (mut m, mut v, mut rhos) = (0.0, 0.0, Vec::new());
+        for g in robot.geoms.iter().filter(|g| g.body == b) {
+            if matches!(g.gtype, GeomType::Plane | GeomType::Hfield) {
+                continue;
+            }
+            let Some(e) = robot.elem(ElemKind::Geom, g.id, &g.name) else { continue 'body };
+            let attr = |a: &str| e.attrs.get(a).map(|o| o.value.trim());
+            if attr("mass").is_some() || attr("shellinertia") == Some("true") {
+                continue 'body;
+            }
+            let rho = match attr("density").map(str::parse::<f64>) {
+                Some(Ok(x)) => x,
+                Some(Err(_)) => continue 'body,
+                None => DEFAULT_DENSITY,
+            };
+            let Some(gv) = primitive_volume(g.gtype, g.size) else { continue 'body };
+            if rho > 0.0 {
+                m += rho * gv;
+                v += gv;
+                rhos.push(rho);
+            }
+        }
+        if v > 0.0 && (m - body_mass).abs() <= DENSITY_AGREEMENT * body_mass {
+            mass += body_mass;
+            volume += v;
+            for r in rhos {
+                if !seen.contains(&r) {
+                    seen.push(r);
+                }
+            }
+        }
+    }
+    (mass, volume, seen)
 }
 
 /// The kinematic trees on the world body holding at least [`MIN_ROBOT_JOINTS`] hinges or
@@ -110,7 +174,7 @@ fn trees(robot: &Robot) -> Vec<Tree> {
         let extents = [hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]];
         let mass = bodies.iter().map(|&b| robot.bodies[b].mass).sum();
         if extents.iter().all(|e| e.is_finite()) {
-            out.push(Tree { top, mass, extents });
+            out.push(Tree { top, mass, extents, bodies });
         }
     }
     out
@@ -144,8 +208,24 @@ impl Rule for RobotScale {
                 format!("the robot under body `{name}`")
             };
             let e = t.extents.map(|x| fmt_num(x, 3));
+            let (dm, dv, rhos) = density_weighed(robot, &t.bodies);
+            let material = cx.opt("min_material_density");
+            let by_density = dm >= 0.5 * t.mass && dv > 0.0 && dm / dv < material;
+            let cause = if by_density {
+                let listed: Vec<String> = rhos.iter().take(3).map(|r| fmt_num(*r, 4)).collect();
+                format!(
+                    "{} kg of it ({} %) is weighed by MuJoCo from its geoms at density {} kg/m³, {} kg/m³ over their own volume, below any solid's {} kg/m³: the density is the evidence, not the lengths",
+                    fmt_num(dm, 3),
+                    fmt_num(100.0 * dm / t.mass, 3),
+                    listed.join(", "),
+                    fmt_num(dm / dv, 3),
+                    fmt_num(material, 3)
+                )
+            } else {
+                "its lengths are likely written in a unit too small".to_string()
+            };
             let msg = format!(
-                "{who} weighs {} kg but spans {} × {} × {} m {pose}: {} kg/m³ over its bounding box, below {} kg/m³ (the air in that box weighs {} kg): its lengths are likely written in a unit too small",
+                "{who} weighs {} kg but spans {} × {} × {} m {pose}: {} kg/m³ over its bounding box, below {} kg/m³ (the air in that box weighs {} kg): {cause}",
                 fmt_num(t.mass, 3),
                 e[0],
                 e[1],
@@ -154,13 +234,18 @@ impl Rule for RobotScale {
                 fmt_num(min, 3),
                 fmt_num(AIR_DENSITY * volume, 3),
             );
+            let help = if by_density {
+                "write the geoms' `density` of the parts' material (kg/m³: about 1000–2700 for plastics and aluminium, lower for hollow parts), or state each body's mass in an `<inertial>`"
+            } else {
+                "write lengths in metres (divide positions, sizes and mesh scale by the factor the model is too large), or check the unit of the masses"
+            };
             let loc = robot.elem_loc(ElemKind::Body, t.top, name);
             out.push(
                 cx.finding(msg, loc)
                     .element(format!("body {name}"), loc)
                     .label("a robot lighter than the space it spans")
                     .note("mass: the compiled mass of the tree's bodies; box: world-aligned, around every geom's compiled bounding box (drawn and colliding) and every body origin of the tree at the pose named")
-                    .help("write lengths in metres (divide positions, sizes and mesh scale by the factor the model is too large), or check the unit of the masses")
+                    .help(help)
                     .subject(Subject::Body(t.top))
                     .measured(density, "kg/m³")
                     .expected(min, "kg/m³"),
