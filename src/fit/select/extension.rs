@@ -111,6 +111,24 @@ pub(super) fn finds_any(
         || improves_on(s, (data, applied), (effect, group), (plain, pp), (gains, false)).0
 }
 
+/// The start of `effect` on `group` (beside `applied`, on `train`) that its plain variant's
+/// full fit gives, taken over ([`taken_over`]): where the search may fit the plain variant
+/// and `effect` holds it as a special case, the richer model there replays as the plain fit
+/// (up to how each is applied) and its own full fit starts from it. `None` otherwise, or when
+/// that fit fails. Costs the plain variant's fit (a one-parameter line search, memoised).
+pub(super) fn plain_start(
+    s: &Search,
+    (train, applied): (&[Recording], &[Applied]),
+    (effect, group): (&'static dyn Effect, &[String]),
+) -> Option<Vec<f64>> {
+    let plain = nested_plain(s, effect, group)?;
+    let (pp, f) = s.engine.fit_one(train, applied, plain, group);
+    if pp.is_empty() || !f.is_finite() {
+        return None;
+    }
+    taken_over(s, applied, (effect, group), (plain, &pp))
+}
+
 /// The plain variant of `effect` when the search may fit it on `group` and `effect` holds it as
 /// a special case ([`Effect::absorb`]).
 fn nested_plain(
@@ -365,7 +383,7 @@ fn improves_on(
 
 #[cfg(test)]
 mod tests {
-    use super::{Near, could_reach, with};
+    use super::{Near, could_reach, plain_start, with};
     use crate::fit::effects::{CoulombFriction, Effect, StribeckFriction, probe_step};
     use crate::fit::select::{Engine, FitOptions, Search};
     use crate::sim2real::recording::Recording;
@@ -411,5 +429,34 @@ mod tests {
         // A level of some height: its starts are apart (each replayed).
         let near = Near::at(&s, (&recs, &[]), cand, (&CoulombFriction, &[0.05])).expect("starts");
         assert!(near.errs.iter().skip(1).all(|e| e.0 != near.errs[0].0), "{:?}", near.errs);
+    }
+
+    /// The pair look-ahead's start of Stribeck friction on a servo whose recordings hold
+    /// Coulomb friction 0.05 N·m is Coulomb friction's full fit taken over — both levels at
+    /// that fit, the velocity scale at its default — and costs exactly what that fit costs on a
+    /// fresh engine: no replay with Stribeck friction (its own full fit is a simplex of whole-set
+    /// replays). Where Coulomb friction may not be fitted, there is no such start.
+    #[test]
+    fn an_extension_starts_from_its_plain_fit_taken_over_at_no_cost_of_its_own() {
+        let (robot, recs) =
+            crate::synth::recorded::pendulum(Some((CoulombFriction.id(), vec![0.05])), 3, 11);
+        let opts = FitOptions::default();
+        let all: Vec<String> = crate::fit::effects::all().iter().map(|e| e.id().into()).collect();
+        let g = ["servo".to_string()];
+        let cand = (&StribeckFriction as &'static dyn Effect, &g[..]);
+        let engine = Engine::new(&robot, &recs, &opts);
+        let s = Search { engine: &engine, train: &recs, heldout: &recs, allowed: &all };
+        let start = plain_start(&s, (&recs, &[]), cand).expect("a start");
+        let cost = engine.rollout_stats().simulated_s;
+        let fresh = Engine::new(&robot, &recs, &opts);
+        let (c, f) = fresh.fit_one(&recs, &[], &CoulombFriction, &g);
+        assert!(f.is_finite() && (c[0] - 0.05).abs() < 0.02, "{c:?}");
+        assert!((cost - fresh.rollout_stats().simulated_s).abs() < 1e-9, "{cost} s");
+        let default_vs = StribeckFriction.params()[2].default;
+        assert_eq!(start, vec![c[0], c[0], default_vs], "{start:?} from {c:?}");
+        let no_plain: Vec<String> =
+            all.iter().filter(|id| *id != CoulombFriction.id()).cloned().collect();
+        let s = Search { engine: &engine, train: &recs, heldout: &recs, allowed: &no_plain };
+        assert!(plain_start(&s, (&recs, &[]), cand).is_none());
     }
 }

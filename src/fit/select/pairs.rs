@@ -10,6 +10,7 @@ use crate::sim2real::recording::Recording;
 
 use super::discretisation::{Judged, beyond_discretisation, pair_beyond_discretisation};
 use super::engine::Engine;
+use super::extension;
 use super::pair_restart::{apply_restart, best_restart};
 use super::policy::Phase;
 use super::polish::{fit_jointly, fit_jointly_iters, polish_budget, polish_from, polish_set};
@@ -153,6 +154,13 @@ pub(super) fn pair_lookahead(
         let member = |e: &'static dyn effects::Effect| -> Option<Applied> {
             if let Some(k) = kept.iter().find(|k| k.effect == e.id() && &k.joints == joints) {
                 return Some(as_applied(k));
+            }
+            // A richer model of a loss starts from its plain variant's fit taken over: the pair
+            // is judged from its members' columns there and fitted from there, and the member's
+            // own full fit (a simplex of 2 (k - 1) x `max_evals` whole-set replays; K7's
+            // Stribeck friction on the ankle 6,114 s) would serve only as that start.
+            if let Some(params) = extension::plain_start(s, (train, applied), (e, joints)) {
+                return Some(Applied { effect: e, joints: joints.clone(), params });
             }
             let (params, f) = engine.fit_one(train, applied, e, joints);
             f.is_finite().then(|| Applied { effect: e, joints: joints.clone(), params })
