@@ -8,6 +8,7 @@ mod mirror_filter;
 mod mirror_hub;
 mod mirror_limits;
 mod mirror_places;
+mod mirror_sites;
 mod mirror_tensor;
 pub mod oversized_collision;
 pub mod oversized_weight;

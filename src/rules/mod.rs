@@ -373,6 +373,7 @@ pub fn registry() -> Vec<&'static dyn Rule> {
         &geometry::robot_scale::RobotScale,
         &mapping::urdf_mjcf_drift::UrdfMjcfDrift,
         &limits::ctrlrange_in_degrees::CtrlrangeInDegrees,
+        &limits::range_in_radians::RangeInRadians,
         &mapping::sensor_quantity::SensorQuantity,
         &mapping::touch_sensor_site::TouchSensorSite,
     ]

@@ -14,6 +14,7 @@ use super::mirror_filter::filtering_differs;
 use super::mirror_hub::hub_com_off;
 use super::mirror_limits::limits_differ;
 use super::mirror_places::geoms_misplaced;
+use super::mirror_sites::sites_differ;
 use super::mirror_tensor::tensor_differs;
 
 /// Size difference tolerated between mirrored collision geoms whatever their size, m: the
@@ -86,7 +87,16 @@ declare_rule! {
     /// mounted turned on both sides, within it with the same local coordinates in the other
     /// body's frame. Body frames whose convention differs between the sides (a foot frame turned
     /// 180° about its axis, the geom placed accordingly) are mirror images in the world and
-    /// pass; a sole box moved 13 mm on one side is reported.
+    /// pass; a sole box moved 13 mm on one side is reported. The sites a sensor reads (its
+    /// object or its reference frame: a force-torque, touch or IMU site) pair by their names'
+    /// side markers (or, unmarked, as the one sensed site on each body of a pair) and are
+    /// judged the same way: one type and size, the place on the body within `place_tolerance`
+    /// (or `geom_tolerance` of its bounding radius) and the axes its shape shows (a capsule's or
+    /// cylinder's long axis, a box's or ellipsoid's axes of distinct half-sizes) within
+    /// `axis_tolerance`, as mirror images or as one part turned into the other body's frame — a
+    /// knee force-torque site 20 mm higher on one side, a touch capsule across the forearm
+    /// against its mirror's along it. Sites no sensor reads (markers, drawn frames) measure
+    /// nothing and are not compared, nor two sites on one body (no limb roots to mirror across).
     /// The collision filtering too: what each body of a pair can touch as MuJoCo filters contacts
     /// (`contype`/`conaffinity` masks, `<exclude>`, explicit `<contact><pair>`s, welded and parent
     /// bodies), the other bodies taken through their mirrors (a body on no side — the torso, the
@@ -364,7 +374,7 @@ fn inherited_from_mirror_joints(cx: &Context, a: usize, b: usize) -> bool {
 }
 
 /// (left id, right id) pairs among `names`.
-fn pairs(names: &[String], cx: &Context) -> Vec<(usize, usize)> {
+pub(super) fn pairs(names: &[String], cx: &Context) -> Vec<(usize, usize)> {
     let mut v = Vec::new();
     for (i, n) in names.iter().enumerate() {
         if n.is_empty() {
@@ -608,6 +618,7 @@ impl Rule for MirrorAsymmetry {
         // Bodies: mass and collision geometry.
         out.extend(filtering_differs(cx, &body_pairs));
         out.extend(hub_com_off(cx, &body_pairs, &pose));
+        out.extend(sites_differ(cx, &body_pairs, &pose));
         for (l, rr) in body_pairs {
             let (a, b) = (&robot.bodies[l], &robot.bodies[rr]);
             let p = Pair { kind: ElemKind::Body, left: (l, &a.name), right: (rr, &b.name) };

@@ -23,6 +23,9 @@ pub(super) struct Pose {
     pub(super) geom_xpos: Vec<[f64; 3]>,
     pub(super) xanchor: Vec<[f64; 3]>,
     pub(super) xaxis: Vec<[f64; 3]>,
+    pub(super) site_xpos: Vec<[f64; 3]>,
+    /// Row-major site orientation.
+    pub(super) site_xmat: Vec<[f64; 9]>,
 }
 
 pub(super) fn reference_pose(robot: &Robot) -> Pose {
@@ -36,6 +39,8 @@ pub(super) fn reference_pose(robot: &Robot) -> Pose {
         geom_xpos: d.geom_xpos().to_vec(),
         xanchor: d.xanchor().to_vec(),
         xaxis: d.xaxis().to_vec(),
+        site_xpos: d.site_xpos().to_vec(),
+        site_xmat: d.site_xmat().to_vec(),
     }
 }
 
