@@ -6,25 +6,13 @@
 mod common;
 
 use common::lint::{findings, message, of, real_robot_files};
-use common::xml_text::{attr, tags};
+use common::xml_text::{attr, bodies_with_geoms, tags};
 
 const LW: &str = "fixtures/rules/links-without-collision/";
 const WL: &str = "fixtures/rules/welded-legged-base/";
 
 fn nums(s: &str) -> Vec<f64> {
     s.split_whitespace().map(|x| x.parse().unwrap()).collect()
-}
-
-/// Each body of an MJCF text with its own geoms' start tags (up to its first child body).
-fn bodies_with_geoms(text: &str) -> Vec<(String, Vec<&str>)> {
-    let mut out = Vec::new();
-    for (i, _) in text.match_indices("<body name=\"") {
-        let name = attr(&text[i..], "name").unwrap().to_string();
-        let rest = &text[i + 1..];
-        let end = [rest.find("<body "), rest.find("</body>")].into_iter().flatten().min().unwrap();
-        out.push((name, tags(&rest[..end], "geom")));
-    }
-    out
 }
 
 /// A geom's longest extent from its written size: a box's longest side, a capsule's length

@@ -8,22 +8,10 @@
 mod common;
 
 use common::lint::{findings, measured, message, of};
-use common::xml_text::{attr, tags};
+use common::xml_text::{attr, bodies_with_geoms};
 
 const LW: &str = "fixtures/rules/links-without-collision/";
 const RULE: &str = "links-without-collision";
-
-/// Each body of an MJCF text with its own geoms' start tags (up to its first child body).
-fn bodies_with_geoms(text: &str) -> Vec<(String, Vec<&str>)> {
-    let mut out = Vec::new();
-    for (i, _) in text.match_indices("<body name=\"") {
-        let name = attr(&text[i..], "name").unwrap().to_string();
-        let rest = &text[i + 1..];
-        let end = [rest.find("<body "), rest.find("</body>")].into_iter().flatten().min().unwrap();
-        out.push((name, tags(&rest[..end], "geom")));
-    }
-    out
-}
 
 /// The bodies of a fixture none of whose geoms the text gives contact bits (an explicit
 /// `contype="1"` or the colliding class `col`; the fixtures' defaults switch contacts off).

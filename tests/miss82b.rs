@@ -5,25 +5,11 @@
 
 mod common;
 
-use common::lint::{measured, message, of_message, real_robot_files};
+use common::lint::{measured, message, of_message, option, real_robot_files};
 use common::xml_text::{attr, tags};
 
 const PJ: &str = "fixtures/rules/placeholder-joint-limits/";
 const CI: &str = "fixtures/rules/copied-inertial/";
-
-/// A rule option's documented default, read from `modellint rule RULE`'s options table.
-fn option(rule: &str, name: &str) -> f64 {
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_modellint"))
-        .args(["rule", rule])
-        .output()
-        .unwrap();
-    let text = String::from_utf8_lossy(&out.stdout).to_string();
-    let line = text
-        .lines()
-        .find(|l| l.starts_with(&format!("| `{name}` |")))
-        .unwrap_or_else(|| panic!("option {name} not in the table:\n{text}"));
-    line.split('|').nth(2).unwrap().trim().parse().unwrap()
-}
 
 fn num(tag: &str, name: &str) -> f64 {
     attr(tag, name).unwrap_or_else(|| panic!("{tag}: no {name}")).parse().unwrap()

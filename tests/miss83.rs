@@ -5,25 +5,11 @@
 
 mod common;
 
-use common::lint::{findings, measured, message, of};
+use common::lint::{findings, measured, message, of, option};
 use common::xml_text::{attr, tags};
 
 const RR: &str = "fixtures/rules/range-in-radians/";
 const MA: &str = "fixtures/rules/mirror-asymmetry/";
-
-/// A rule option's documented default, read from `modellint rule RULE`'s options table.
-fn option(rule: &str, name: &str) -> f64 {
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_modellint"))
-        .args(["rule", rule])
-        .output()
-        .unwrap();
-    let text = String::from_utf8_lossy(&out.stdout).to_string();
-    let line = text
-        .lines()
-        .find(|l| l.starts_with(&format!("| `{name}` |")))
-        .unwrap_or_else(|| panic!("option {name} not in the table:\n{text}"));
-    line.split('|').nth(2).unwrap().trim().parse().unwrap()
-}
 
 fn nums(s: &str) -> Vec<f64> {
     s.split_whitespace().map(|x| x.parse().unwrap()).collect()

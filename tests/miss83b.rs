@@ -6,25 +6,11 @@
 
 mod common;
 
-use common::lint::{findings, message, of};
+use common::lint::{findings, message, of, option};
 use common::xml_text::{attr, tags};
 
 const FC: &str = "fixtures/rules/foot-collision-geometry/";
 const RS: &str = "fixtures/rules/robot-scale/";
-
-/// A rule option's documented default, read from `modellint rule RULE`'s options table.
-fn option(rule: &str, name: &str) -> f64 {
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_modellint"))
-        .args(["rule", rule])
-        .output()
-        .unwrap();
-    let text = String::from_utf8_lossy(&out.stdout).to_string();
-    let line = text
-        .lines()
-        .find(|l| l.starts_with(&format!("| `{name}` |")))
-        .unwrap_or_else(|| panic!("option {name} not in the table:\n{text}"));
-    line.split('|').nth(2).unwrap().trim().parse().unwrap()
-}
 
 fn nums(tag: &str, name: &str) -> Vec<f64> {
     attr(tag, name)

@@ -63,3 +63,17 @@ pub fn load_error(model: &str) -> String {
         Ok(_) => panic!("{model} must not load"),
     }
 }
+
+/// A rule option's documented default, read from `modellint rule RULE`'s options table.
+pub fn option(rule: &str, name: &str) -> f64 {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_modellint"))
+        .args(["rule", rule])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout).to_string();
+    let line = text
+        .lines()
+        .find(|l| l.starts_with(&format!("| `{name}` |")))
+        .unwrap_or_else(|| panic!("option {name} not in the table:\n{text}"));
+    line.split('|').nth(2).unwrap().trim().parse().unwrap()
+}

@@ -13,3 +13,15 @@ pub fn tags<'a>(text: &'a str, tag: &str) -> Vec<&'a str> {
     let open = format!("<{tag} ");
     text.match_indices(&open).map(|(i, _)| &text[i..i + text[i..].find('>').unwrap()]).collect()
 }
+
+/// Each body of an MJCF text with its own geoms' start tags (up to its first child body).
+pub fn bodies_with_geoms(text: &str) -> Vec<(String, Vec<&str>)> {
+    let mut out = Vec::new();
+    for (i, _) in text.match_indices("<body name=\"") {
+        let name = attr(&text[i..], "name").unwrap().to_string();
+        let rest = &text[i + 1..];
+        let end = [rest.find("<body "), rest.find("</body>")].into_iter().flatten().min().unwrap();
+        out.push((name, tags(&rest[..end], "geom")));
+    }
+    out
+}

@@ -102,6 +102,19 @@ pub(super) fn v_norm(a: [f64; 3]) -> f64 {
     v_dot(a, a).sqrt()
 }
 
+/// `v` reflected through the plane through the origin with unit normal `n`.
+pub(super) fn v_reflect(v: [f64; 3], n: [f64; 3]) -> [f64; 3] {
+    let h = v_dot(v, n);
+    [v[0] - 2.0 * h * n[0], v[1] - 2.0 * h * n[1], v[2] - 2.0 * h * n[2]]
+}
+
+/// A world vector of the right body (frame `mr`, row-major) turned into the left body's frame
+/// (`ml`) with the same local coordinates: the same part mounted the same way on both sides.
+pub(super) fn v_turn(v: [f64; 3], ml: &[f64; 9], mr: &[f64; 9]) -> [f64; 3] {
+    let local = [0, 1, 2].map(|k| (0..3).map(|i| mr[3 * i + k] * v[i]).sum::<f64>());
+    [0, 1, 2].map(|i| (0..3).map(|k| ml[3 * i + k] * local[k]).sum::<f64>())
+}
+
 /// The mirror plane of pair `p` at the reference pose, as its unit normal and offset along it:
 /// halfway between the pair's limb roots ([`limb_roots`]), else between its own origins;
 /// origins that coincide define none.

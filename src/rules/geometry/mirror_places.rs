@@ -7,7 +7,7 @@ use crate::rules::Context;
 use crate::util::fmt_num;
 
 use super::mirror_asymmetry::{Pair, SIZE_NOISE, colliders};
-use super::mirror_com::{Pose, mirror_plane, v_dot as dot, v_norm as norm, v_sub as sub};
+use super::mirror_com::{Pose, mirror_plane, v_norm as norm, v_reflect, v_sub as sub, v_turn};
 
 /// A mirror pair whose collision geoms match one to one in type and size but not in place: at
 /// the reference pose, a right geom's offset from its body's origin, reflected across the
@@ -31,15 +31,9 @@ pub(super) fn geoms_misplaced(cx: &Context, p: &Pair, pose: &Option<Pose>) -> Op
         return None;
     }
     let offset = |g: usize, o: [f64; 3]| pose.geom_xpos.get(g).map(|x| sub(*x, o));
-    let reflect = |v: [f64; 3]| {
-        let h = dot(v, n);
-        [v[0] - 2.0 * h * n[0], v[1] - 2.0 * h * n[1], v[2] - 2.0 * h * n[2]]
-    };
+    let reflect = |v: [f64; 3]| v_reflect(v, n);
     // A right offset in the world → the left body's frame, the same local coordinates.
-    let turn = |v: [f64; 3]| {
-        let local = [0, 1, 2].map(|k| (0..3).map(|i| mr[3 * i + k] * v[i]).sum::<f64>());
-        [0, 1, 2].map(|i| (0..3).map(|k| ml[3 * i + k] * local[k]).sum::<f64>())
-    };
+    let turn = |v: [f64; 3]| v_turn(v, &ml, &mr);
     let close = |x: f64, y: f64| (x - y).abs() <= SIZE_NOISE.max(gtol * x.abs().max(y.abs()));
     let partners = |g: usize| -> Vec<usize> {
         let a = &robot.geoms[g];

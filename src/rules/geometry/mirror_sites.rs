@@ -9,7 +9,9 @@ use crate::rules::Context;
 use crate::util::fmt_num;
 
 use super::mirror_asymmetry::{Pair, SIZE_NOISE, pairs};
-use super::mirror_com::{Pose, mirror_plane, reference_pose, v_dot as dot, v_norm as norm};
+use super::mirror_com::{
+    Pose, mirror_plane, reference_pose, v_dot as dot, v_norm as norm, v_reflect, v_turn,
+};
 
 /// MuJoCo's `mjOBJ_SITE`: a sensor's object or reference frame is a site.
 const OBJ_SITE: i32 = 6;
@@ -189,15 +191,9 @@ pub(super) fn sites_differ(
         } else {
             vec![]
         };
-        let reflect = |v: [f64; 3]| {
-            let h = dot(v, n);
-            [v[0] - 2.0 * h * n[0], v[1] - 2.0 * h * n[1], v[2] - 2.0 * h * n[2]]
-        };
+        let reflect = |v: [f64; 3]| v_reflect(v, n);
         // A right vector in the world → the left body's frame, the same local coordinates.
-        let turn = |v: [f64; 3]| {
-            let local = [0, 1, 2].map(|k| (0..3).map(|i| mr[3 * i + k] * v[i]).sum::<f64>());
-            [0, 1, 2].map(|i| (0..3).map(|k| ml[3 * i + k] * local[k]).sum::<f64>())
-        };
+        let turn = |v: [f64; 3]| v_turn(v, &ml, &mr);
         let allowed = ptol.max(gtol * bound(tr, zr));
         let fits = |(d, deg): (f64, f64)| d <= allowed && deg <= atol;
         let (mirrored, turned) = (compare(vl, vr, &axes, &reflect), compare(vl, vr, &axes, &turn));
