@@ -193,7 +193,7 @@ pub(super) fn sites_differ(
         };
         let reflect = |v: [f64; 3]| v_reflect(v, n);
         // A right vector in the world → the left body's frame, the same local coordinates.
-        let turn = |v: [f64; 3]| v_turn(v, &ml, &mr);
+        let turn = |v: [f64; 3]| v_turn(v, ml, mr);
         let allowed = ptol.max(gtol * bound(tr, zr));
         let fits = |(d, deg): (f64, f64)| d <= allowed && deg <= atol;
         let (mirrored, turned) = (compare(vl, vr, &axes, &reflect), compare(vl, vr, &axes, &turn));
